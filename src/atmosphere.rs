@@ -1,0 +1,106 @@
+//! International Standard Atmosphere (ICAO Doc 7488), troposphere and lower
+//! stratosphere (0–20 km geopotential, taken equal to geometric altitude on
+//! a flat earth). A temperature offset shifts temperature at constant
+//! pressure, so density follows from the gas law: ρ = p / (R·(T_ISA + ΔT)).
+
+pub const SEA_LEVEL_TEMPERATURE: f64 = 288.15;
+pub const SEA_LEVEL_PRESSURE: f64 = 101_325.0;
+pub const SEA_LEVEL_DENSITY: f64 = 1.225;
+pub const GAS_CONSTANT: f64 = 287.052_87;
+pub const HEAT_CAPACITY_RATIO: f64 = 1.4;
+const LAPSE_RATE: f64 = 0.0065;
+const TROPOPAUSE: f64 = 11_000.0;
+const GRAVITY: f64 = crate::units::STANDARD_GRAVITY;
+
+/// Air properties at one altitude.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Air {
+    pub temperature: f64,
+    pub pressure: f64,
+    pub density: f64,
+    pub speed_of_sound: f64,
+}
+
+/// ISA with a temperature offset `temperature_offset` (K).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Atmosphere {
+    pub temperature_offset: f64,
+}
+
+impl Atmosphere {
+    pub fn new(temperature_offset: f64) -> Self {
+        Atmosphere { temperature_offset }
+    }
+
+    /// Standard temperature and pressure at `altitude` (m).
+    pub fn standard(altitude: f64) -> (f64, f64) {
+        let exponent = GRAVITY / (GAS_CONSTANT * LAPSE_RATE);
+        if altitude <= TROPOPAUSE {
+            let temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * altitude;
+            let pressure = SEA_LEVEL_PRESSURE * (temperature / SEA_LEVEL_TEMPERATURE).powf(exponent);
+            (temperature, pressure)
+        } else {
+            let temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * TROPOPAUSE;
+            let tropopause_pressure =
+                SEA_LEVEL_PRESSURE * (temperature / SEA_LEVEL_TEMPERATURE).powf(exponent);
+            let pressure = tropopause_pressure
+                * (-GRAVITY * (altitude - TROPOPAUSE) / (GAS_CONSTANT * temperature)).exp();
+            (temperature, pressure)
+        }
+    }
+
+    pub fn at(&self, altitude: f64) -> Air {
+        let (standard_temperature, pressure) = Self::standard(altitude);
+        let temperature = standard_temperature + self.temperature_offset;
+        Air {
+            temperature,
+            pressure,
+            density: pressure / (GAS_CONSTANT * temperature),
+            speed_of_sound: (HEAT_CAPACITY_RATIO * GAS_CONSTANT * temperature).sqrt(),
+        }
+    }
+
+    /// Pressure altitude: the ISA altitude at which the standard pressure equals `pressure`.
+    pub fn pressure_altitude(pressure: f64) -> f64 {
+        let exponent = GAS_CONSTANT * LAPSE_RATE / GRAVITY;
+        let (tropopause_temperature, tropopause_pressure) = Self::standard(TROPOPAUSE);
+        if pressure >= tropopause_pressure {
+            (SEA_LEVEL_TEMPERATURE / LAPSE_RATE) * (1.0 - (pressure / SEA_LEVEL_PRESSURE).powf(exponent))
+        } else {
+            TROPOPAUSE - GAS_CONSTANT * tropopause_temperature / GRAVITY * (pressure / tropopause_pressure).ln()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// ICAO standard atmosphere table values (Doc 7488): 0, 5 000, 11 000, 15 000 m.
+    #[test]
+    fn matches_icao_table() {
+        let atmosphere = Atmosphere::default();
+        let cases = [
+            (0.0, 288.15, 101_325.0, 1.2250, 340.29),
+            (5_000.0, 255.65, 54_019.9, 0.736_12, 320.53),
+            (11_000.0, 216.65, 22_632.0, 0.363_91, 295.07),
+            (15_000.0, 216.65, 12_044.6, 0.193_67, 295.07),
+        ];
+        for (h, t, p, rho, a) in cases {
+            let air = atmosphere.at(h);
+            assert!((air.temperature - t).abs() < 0.01, "T at {h}");
+            assert!((air.pressure / p - 1.0).abs() < 2e-4, "p at {h}: {}", air.pressure);
+            assert!((air.density / rho - 1.0).abs() < 2e-4, "rho at {h}: {}", air.density);
+            assert!((air.speed_of_sound - a).abs() < 0.02, "a at {h}");
+            assert!((Atmosphere::pressure_altitude(air.pressure) - h).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn temperature_offset_keeps_pressure_and_lowers_density() {
+        let hot = Atmosphere::new(15.0).at(2000.0);
+        let standard = Atmosphere::default().at(2000.0);
+        assert_eq!(hot.pressure, standard.pressure);
+        assert!((hot.density * hot.temperature - standard.density * standard.temperature).abs() < 1e-9);
+    }
+}

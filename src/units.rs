@@ -1,0 +1,190 @@
+//! Units. Inside aeroid everything is SI with angles in radians. Files may
+//! write any quantity either as a plain number (taken as SI / radians) or as a
+//! string with a unit, e.g. `"5 deg"`, `"250 kt"`, `"16000 ft"`; the unit is
+//! checked against the dimension the field expects.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+pub const DEG: f64 = std::f64::consts::PI / 180.0;
+pub const FOOT: f64 = 0.3048;
+pub const KNOT: f64 = 1852.0 / 3600.0;
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// The physical dimension a field expects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    Dimensionless,
+    Angle,
+    AngularRate,
+    Length,
+    Area,
+    Speed,
+    Acceleration,
+    Time,
+    Frequency,
+    Mass,
+    Force,
+    Inertia,
+    TemperatureDifference,
+}
+
+impl Dimension {
+    /// Units accepted for this dimension with their factor to SI.
+    fn units(self) -> &'static [(&'static str, f64)] {
+        use Dimension::*;
+        match self {
+            Dimensionless => &[("", 1.0), ("%", 0.01)],
+            Angle => &[("rad", 1.0), ("deg", DEG), ("°", DEG)],
+            AngularRate => &[("rad/s", 1.0), ("deg/s", DEG)],
+            Length => &[("m", 1.0), ("km", 1000.0), ("ft", FOOT), ("nmi", 1852.0)],
+            Area => &[("m2", 1.0), ("m^2", 1.0), ("m²", 1.0), ("ft2", FOOT * FOOT), ("ft^2", FOOT * FOOT)],
+            Speed => &[
+                ("m/s", 1.0),
+                ("kt", KNOT),
+                ("kts", KNOT),
+                ("km/h", 1.0 / 3.6),
+                ("ft/s", FOOT),
+                ("ft/min", FOOT / 60.0),
+            ],
+            Acceleration => &[("m/s2", 1.0), ("m/s^2", 1.0), ("g", STANDARD_GRAVITY)],
+            Time => &[("s", 1.0), ("ms", 1e-3), ("min", 60.0), ("h", 3600.0)],
+            Frequency => &[("Hz", 1.0), ("1/s", 1.0)],
+            Mass => &[("kg", 1.0), ("t", 1000.0), ("lb", 0.453_592_37)],
+            Force => &[("N", 1.0), ("kN", 1000.0), ("lbf", 4.448_221_615_260_5)],
+            Inertia => &[
+                ("kg*m2", 1.0),
+                ("kg m^2", 1.0),
+                ("kg*m^2", 1.0),
+                ("kg m2", 1.0),
+                ("slug*ft2", 1.355_817_948_331_4),
+            ],
+            TemperatureDifference => &[("K", 1.0), ("degC", 1.0)],
+        }
+    }
+
+    /// The SI unit this dimension is stored in, for messages and CSV headers.
+    pub fn si_unit(self) -> &'static str {
+        self.units()[0].0
+    }
+
+    fn accepted(self) -> String {
+        self.units()
+            .iter()
+            .map(|(u, _)| if u.is_empty() { "(none)" } else { u })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// Factor from `unit` to SI for a dimension, or an error listing accepted units.
+pub fn unit_factor(unit: &str, dimension: Dimension) -> Result<f64, String> {
+    let unit = unit.trim();
+    dimension
+        .units()
+        .iter()
+        .find(|(name, _)| name.eq_ignore_ascii_case(unit) && (unit == *name || !is_case_sensitive(name)))
+        .map(|(_, factor)| *factor)
+        .ok_or_else(|| {
+            format!(
+                "unit '{unit}' is not a unit of {dimension:?}; accepted: {}",
+                dimension.accepted()
+            )
+        })
+}
+
+/// Units whose case carries meaning (`g` vs `G`, `kN`, `Hz`): compared exactly.
+fn is_case_sensitive(name: &str) -> bool {
+    matches!(name, "t" | "g" | "kN" | "N" | "Hz" | "K")
+}
+
+/// A quantity as written in a file: a plain number (SI) or `"value unit"`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Quantity {
+    Number(f64),
+    Text(String),
+}
+
+impl Default for Quantity {
+    fn default() -> Self {
+        Quantity::Number(0.0)
+    }
+}
+
+impl From<f64> for Quantity {
+    fn from(value: f64) -> Self {
+        Quantity::Number(value)
+    }
+}
+
+impl fmt::Display for Quantity {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Quantity::Number(v) => write!(f, "{v}"),
+            Quantity::Text(t) => write!(f, "\"{t}\""),
+        }
+    }
+}
+
+impl Quantity {
+    /// The value in SI units (radians for angles). Rejects NaN and infinities.
+    pub fn si(&self, dimension: Dimension) -> Result<f64, String> {
+        let value = match self {
+            Quantity::Number(v) => *v,
+            Quantity::Text(text) => parse_with_unit(text, dimension)?,
+        };
+        if value.is_finite() {
+            Ok(value)
+        } else {
+            Err(format!("{self} is not a finite number"))
+        }
+    }
+}
+
+fn parse_with_unit(text: &str, dimension: Dimension) -> Result<f64, String> {
+    let text = text.trim();
+    let split = text
+        .char_indices()
+        .find(|&(i, c)| !(c.is_ascii_digit() || matches!(c, '.' | '+' | '-') || (matches!(c, 'e' | 'E') && is_exponent(text, i))))
+        .map_or(text.len(), |(i, _)| i);
+    let (number, unit) = text.split_at(split);
+    let value: f64 = number
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' does not start with a number"))?;
+    Ok(value * unit_factor(unit, dimension)?)
+}
+
+/// An `e` at byte `i` is an exponent when a digit or sign follows it.
+fn is_exponent(text: &str, i: usize) -> bool {
+    text[i + 1..]
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_digit() || c == '-' || c == '+')
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_si_and_strings_carry_units() {
+        assert_eq!(Quantity::Number(2.0).si(Dimension::Angle), Ok(2.0));
+        let deg = Quantity::Text("5 deg".into()).si(Dimension::Angle).unwrap();
+        assert!((deg - 5.0 * DEG).abs() < 1e-15);
+        let kt = Quantity::Text("100kt".into()).si(Dimension::Speed).unwrap();
+        assert!((kt - 51.444_444_444_444_44).abs() < 1e-9);
+        let ft = Quantity::Text("-1.5e3 ft".into()).si(Dimension::Length).unwrap();
+        assert!((ft + 457.2).abs() < 1e-9);
+        assert_eq!(Quantity::Text("3 g".into()).si(Dimension::Acceleration), Ok(3.0 * STANDARD_GRAVITY));
+    }
+
+    #[test]
+    fn wrong_unit_and_nan_are_rejected() {
+        let err = Quantity::Text("5 kt".into()).si(Dimension::Angle).unwrap_err();
+        assert!(err.contains("'kt'") && err.contains("deg"), "{err}");
+        assert!(Quantity::Number(f64::NAN).si(Dimension::Length).is_err());
+        assert!(Quantity::Text("abc".into()).si(Dimension::Length).is_err());
+    }
+}
