@@ -37,7 +37,8 @@ impl Atmosphere {
         let exponent = GRAVITY / (GAS_CONSTANT * LAPSE_RATE);
         if altitude <= TROPOPAUSE {
             let temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * altitude;
-            let pressure = SEA_LEVEL_PRESSURE * (temperature / SEA_LEVEL_TEMPERATURE).powf(exponent);
+            let pressure =
+                SEA_LEVEL_PRESSURE * (temperature / SEA_LEVEL_TEMPERATURE).powf(exponent);
             (temperature, pressure)
         } else {
             let temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * TROPOPAUSE;
@@ -65,9 +66,12 @@ impl Atmosphere {
         let exponent = GAS_CONSTANT * LAPSE_RATE / GRAVITY;
         let (tropopause_temperature, tropopause_pressure) = Self::standard(TROPOPAUSE);
         if pressure >= tropopause_pressure {
-            (SEA_LEVEL_TEMPERATURE / LAPSE_RATE) * (1.0 - (pressure / SEA_LEVEL_PRESSURE).powf(exponent))
+            (SEA_LEVEL_TEMPERATURE / LAPSE_RATE)
+                * (1.0 - (pressure / SEA_LEVEL_PRESSURE).powf(exponent))
         } else {
-            TROPOPAUSE - GAS_CONSTANT * tropopause_temperature / GRAVITY * (pressure / tropopause_pressure).ln()
+            TROPOPAUSE
+                - GAS_CONSTANT * tropopause_temperature / GRAVITY
+                    * (pressure / tropopause_pressure).ln()
         }
     }
 }
@@ -89,8 +93,16 @@ mod tests {
         for (h, t, p, rho, a) in cases {
             let air = atmosphere.at(h);
             assert!((air.temperature - t).abs() < 0.01, "T at {h}");
-            assert!((air.pressure / p - 1.0).abs() < 2e-4, "p at {h}: {}", air.pressure);
-            assert!((air.density / rho - 1.0).abs() < 2e-4, "rho at {h}: {}", air.density);
+            assert!(
+                (air.pressure / p - 1.0).abs() < 2e-4,
+                "p at {h}: {}",
+                air.pressure
+            );
+            assert!(
+                (air.density / rho - 1.0).abs() < 2e-4,
+                "rho at {h}: {}",
+                air.density
+            );
             assert!((air.speed_of_sound - a).abs() < 0.02, "a at {h}");
             assert!((Atmosphere::pressure_altitude(air.pressure) - h).abs() < 1e-6);
         }
@@ -101,6 +113,8 @@ mod tests {
         let hot = Atmosphere::new(15.0).at(2000.0);
         let standard = Atmosphere::default().at(2000.0);
         assert_eq!(hot.pressure, standard.pressure);
-        assert!((hot.density * hot.temperature - standard.density * standard.temperature).abs() < 1e-9);
+        assert!(
+            (hot.density * hot.temperature - standard.density * standard.temperature).abs() < 1e-9
+        );
     }
 }

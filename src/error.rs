@@ -95,7 +95,7 @@ pub enum Error {
         time: f64,
         reason: String,
         /// The trace up to the last step before departure, so that nothing computed is lost.
-        partial: Box<()>,
+        partial: Box<crate::trace::TruthTrace>,
     },
 
     #[error("{0}")]

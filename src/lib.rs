@@ -1,10 +1,23 @@
 //! aeroid: a simulation-based validation harness for aircraft aerodynamic
 //! parameter estimators. See README.md for the data flow.
 
+pub mod aero;
+pub mod aircraft;
 pub mod atmosphere;
+pub mod catalog;
+pub mod check;
+pub mod dynamics;
 pub mod error;
+pub mod inputs;
+pub mod integrator;
+pub mod params;
 pub mod random;
+pub mod scenario;
+pub mod sim;
 pub mod state;
+pub mod trace;
+pub mod trim;
 pub mod units;
+pub mod wind;
 
 pub use error::{Error, Result};

@@ -105,7 +105,12 @@ pub struct EulerAngles {
 
 /// The attitude quaternion stored in a state vector.
 pub fn attitude(x: &StateVector) -> UnitQuaternion<f64> {
-    UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(x[Q0], x[Q0 + 1], x[Q0 + 2], x[Q0 + 3]))
+    UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+        x[Q0],
+        x[Q0 + 1],
+        x[Q0 + 2],
+        x[Q0 + 3],
+    ))
 }
 
 pub fn set_attitude(x: &mut StateVector, attitude: &UnitQuaternion<f64>) {
@@ -163,7 +168,11 @@ mod tests {
 
     #[test]
     fn rotation_matches_nalgebra_and_euler_round_trips() {
-        let e = EulerAngles { roll: 0.3, pitch: -0.2, yaw: 2.5 };
+        let e = EulerAngles {
+            roll: 0.3,
+            pitch: -0.2,
+            yaw: 2.5,
+        };
         let q = quaternion_from_euler(e);
         let mut x = StateVector::zeros();
         set_attitude(&mut x, &q);

@@ -38,7 +38,13 @@ impl Dimension {
             Angle => &[("rad", 1.0), ("deg", DEG), ("°", DEG)],
             AngularRate => &[("rad/s", 1.0), ("deg/s", DEG)],
             Length => &[("m", 1.0), ("km", 1000.0), ("ft", FOOT), ("nmi", 1852.0)],
-            Area => &[("m2", 1.0), ("m^2", 1.0), ("m²", 1.0), ("ft2", FOOT * FOOT), ("ft^2", FOOT * FOOT)],
+            Area => &[
+                ("m2", 1.0),
+                ("m^2", 1.0),
+                ("m²", 1.0),
+                ("ft2", FOOT * FOOT),
+                ("ft^2", FOOT * FOOT),
+            ],
             Speed => &[
                 ("m/s", 1.0),
                 ("kt", KNOT),
@@ -83,7 +89,9 @@ pub fn unit_factor(unit: &str, dimension: Dimension) -> Result<f64, String> {
     dimension
         .units()
         .iter()
-        .find(|(name, _)| name.eq_ignore_ascii_case(unit) && (unit == *name || !is_case_sensitive(name)))
+        .find(|(name, _)| {
+            name.eq_ignore_ascii_case(unit) && (unit == *name || !is_case_sensitive(name))
+        })
         .map(|(_, factor)| *factor)
         .ok_or_else(|| {
             format!(
@@ -146,7 +154,11 @@ fn parse_with_unit(text: &str, dimension: Dimension) -> Result<f64, String> {
     let text = text.trim();
     let split = text
         .char_indices()
-        .find(|&(i, c)| !(c.is_ascii_digit() || matches!(c, '.' | '+' | '-') || (matches!(c, 'e' | 'E') && is_exponent(text, i))))
+        .find(|&(i, c)| {
+            !(c.is_ascii_digit()
+                || matches!(c, '.' | '+' | '-')
+                || (matches!(c, 'e' | 'E') && is_exponent(text, i)))
+        })
         .map_or(text.len(), |(i, _)| i);
     let (number, unit) = text.split_at(split);
     let value: f64 = number
@@ -175,14 +187,21 @@ mod tests {
         assert!((deg - 5.0 * DEG).abs() < 1e-15);
         let kt = Quantity::Text("100kt".into()).si(Dimension::Speed).unwrap();
         assert!((kt - 51.444_444_444_444_44).abs() < 1e-9);
-        let ft = Quantity::Text("-1.5e3 ft".into()).si(Dimension::Length).unwrap();
+        let ft = Quantity::Text("-1.5e3 ft".into())
+            .si(Dimension::Length)
+            .unwrap();
         assert!((ft + 457.2).abs() < 1e-9);
-        assert_eq!(Quantity::Text("3 g".into()).si(Dimension::Acceleration), Ok(3.0 * STANDARD_GRAVITY));
+        assert_eq!(
+            Quantity::Text("3 g".into()).si(Dimension::Acceleration),
+            Ok(3.0 * STANDARD_GRAVITY)
+        );
     }
 
     #[test]
     fn wrong_unit_and_nan_are_rejected() {
-        let err = Quantity::Text("5 kt".into()).si(Dimension::Angle).unwrap_err();
+        let err = Quantity::Text("5 kt".into())
+            .si(Dimension::Angle)
+            .unwrap_err();
         assert!(err.contains("'kt'") && err.contains("deg"), "{err}");
         assert!(Quantity::Number(f64::NAN).si(Dimension::Length).is_err());
         assert!(Quantity::Text("abc".into()).si(Dimension::Length).is_err());

@@ -1,0 +1,701 @@
+//! Aerodynamic models: linear stability and control derivatives, and the
+//! quasi-steady stall model with Kirchhoff flow separation.
+//!
+//! One [`AeroModel`] evaluates both the truth model of an aircraft file and
+//! any postulated model of an estimator. Each coefficient is a sum of named
+//! terms `C_term · regressor`; parameters are named `{coefficient}_{term}`
+//! (`CL_alpha`, `Cm_q`, `CD_0`), plus `e` (Oswald factor) and the stall
+//! parameters `a1`, `alpha_star`, `tau1`, `tau2`.
+//!
+//! Regressors (the keys of a coefficient table):
+//! `0` (constant), `alpha`, `beta` (rad), `p`, `q`, `r` (normalised rates
+//! p·b/(kV), q·c̄/(kV), r·b/(kV) with k = 2 or 1 and V the airspeed or the
+//! reference airspeed V0, as the file says), `alpha_dot` (α̇·c̄/(kV)), `de`, `da`,
+//! `dr`, `df` (rad), `dV` = V/V0 − 1, `dMach` = M − M0, `chi` = 1 − χ
+//! (stall model), and `CL2` = CL² (drag only, wind axes).
+//!
+//! Quasi-steady stall (seed 001, Verma & Peyada 2020, Eqs. 2–4, after
+//! Fischenberg):
+//! `τ1·dχ/dt + χ = ½·(1 − tanh(a1·(α − τ2·α̇ − α*)))`            (Eq. 2; Eq. 3 when τ1 = 0)
+//! `CL = CL0 + CLα·((1 + √χ)/2)²·α`,
+//! `CD = CD0 + CL²/(e·π·Λ) + CDχ·(1 − χ)`,
+//! `Cm = Cm0 + Cmα·α + Cmq·q̂ + Cmδe·δe + Cmχ·(1 − χ)`            (Eq. 4).
+//! Here the Kirchhoff factor multiplies the `alpha` term of CL; any other
+//! term may be added to any coefficient. χ is a simulator state when τ1 > 0
+//! and algebraic (Eq. 3) when τ1 = 0.
+//!
+//! Force axes: "wind" gives CL and CD in stability axes (rotated by α only)
+//! and CY along the body y axis, the usual flight-test convention:
+//! `CX = −CD·cos α + CL·sin α`, `CZ = −CD·sin α − CL·cos α`.
+//! "body" gives CX, CY, CZ directly. Moments are body-axis, about the centre
+//! of gravity.
+
+use crate::error::Problems;
+use crate::params::ParameterSet;
+use crate::state::{Control, Controls};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// A regressor: the variable a derivative multiplies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Regressor {
+    Constant,
+    Alpha,
+    Beta,
+    RollRate,
+    PitchRate,
+    YawRate,
+    AlphaDot,
+    Elevator,
+    Aileron,
+    Rudder,
+    Flap,
+    SpeedRatio,
+    Mach,
+    Separation,
+    LiftSquared,
+}
+
+const REGRESSOR_COUNT: usize = 15;
+
+impl Regressor {
+    pub const ALL: [Regressor; REGRESSOR_COUNT] = [
+        Regressor::Constant,
+        Regressor::Alpha,
+        Regressor::Beta,
+        Regressor::RollRate,
+        Regressor::PitchRate,
+        Regressor::YawRate,
+        Regressor::AlphaDot,
+        Regressor::Elevator,
+        Regressor::Aileron,
+        Regressor::Rudder,
+        Regressor::Flap,
+        Regressor::SpeedRatio,
+        Regressor::Mach,
+        Regressor::Separation,
+        Regressor::LiftSquared,
+    ];
+
+    /// The key used in files and in parameter names.
+    pub fn key(self) -> &'static str {
+        match self {
+            Regressor::Constant => "0",
+            Regressor::Alpha => "alpha",
+            Regressor::Beta => "beta",
+            Regressor::RollRate => "p",
+            Regressor::PitchRate => "q",
+            Regressor::YawRate => "r",
+            Regressor::AlphaDot => "alpha_dot",
+            Regressor::Elevator => "de",
+            Regressor::Aileron => "da",
+            Regressor::Rudder => "dr",
+            Regressor::Flap => "df",
+            Regressor::SpeedRatio => "dV",
+            Regressor::Mach => "dMach",
+            Regressor::Separation => "chi",
+            Regressor::LiftSquared => "CL2",
+        }
+    }
+
+    pub fn from_key(key: &str) -> Option<Regressor> {
+        Regressor::ALL.into_iter().find(|r| r.key() == key)
+    }
+
+    fn keys() -> String {
+        Regressor::ALL.map(Regressor::key).join(", ")
+    }
+}
+
+/// Which axes the force coefficients are written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ForceAxes {
+    /// CD, CY, CL (stability axes for CD and CL, body y for CY).
+    #[default]
+    Wind,
+    /// CX, CY, CZ.
+    Body,
+}
+
+/// The six coefficients in evaluation order: lift-type first so that drag can use CL².
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coefficient {
+    Lift,
+    Side,
+    Drag,
+    Roll,
+    Pitch,
+    Yaw,
+}
+
+impl Coefficient {
+    pub const ALL: [Coefficient; 6] = [
+        Coefficient::Lift,
+        Coefficient::Side,
+        Coefficient::Drag,
+        Coefficient::Roll,
+        Coefficient::Pitch,
+        Coefficient::Yaw,
+    ];
+
+    /// Name in files: CL/CD in wind axes, CZ/CX in body axes.
+    pub fn name(self, axes: ForceAxes) -> &'static str {
+        match (self, axes) {
+            (Coefficient::Lift, ForceAxes::Wind) => "CL",
+            (Coefficient::Lift, ForceAxes::Body) => "CZ",
+            (Coefficient::Drag, ForceAxes::Wind) => "CD",
+            (Coefficient::Drag, ForceAxes::Body) => "CX",
+            (Coefficient::Side, _) => "CY",
+            (Coefficient::Roll, _) => "Cl",
+            (Coefficient::Pitch, _) => "Cm",
+            (Coefficient::Yaw, _) => "Cn",
+        }
+    }
+}
+
+/// How body rates are made non-dimensional.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum RateNormalization {
+    /// p·b/(2V), q·c̄/(2V), r·b/(2V).
+    #[default]
+    #[serde(rename = "2V")]
+    TwiceSpeed,
+    /// p·b/V, q·c̄/V, r·b/V.
+    #[serde(rename = "V")]
+    Speed,
+}
+
+/// Which speed the rate normalisation divides by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RateSpeed {
+    /// The instantaneous true airspeed V.
+    #[default]
+    Airspeed,
+    /// The constant reference airspeed V0 of the model.
+    Reference,
+}
+
+/// Kind of model written in a file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelKind {
+    #[default]
+    Linear,
+    Stall,
+}
+
+/// Stall parameters of the Kirchhoff flow-separation model.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StallSpec {
+    /// Static stall sharpness a1 (1/rad).
+    pub a1: f64,
+    /// Break-point angle of attack α* (rad).
+    pub alpha_star: f64,
+    /// Transient time constant τ1 (s); 0 makes χ algebraic.
+    pub tau1: f64,
+    /// Quasi-steady hysteresis time constant τ2 (s).
+    pub tau2: f64,
+}
+
+/// The `[aero]` table of an aircraft or model-structure file. Unknown keys
+/// are taken as coefficient tables and reported as unknown coefficients.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct AeroSpec {
+    #[serde(default)]
+    pub model: ModelKind,
+    #[serde(default)]
+    pub force_axes: ForceAxes,
+    #[serde(default)]
+    pub rate_normalization: RateNormalization,
+    #[serde(default)]
+    pub rate_speed: RateSpeed,
+    /// V0 (m/s): needed by `dV` terms and by `rate_speed = "reference"`.
+    #[serde(default)]
+    pub reference_airspeed: Option<f64>,
+    /// M0: needed by `dMach` terms.
+    #[serde(default)]
+    pub reference_mach: Option<f64>,
+    /// Oswald factor e: adds CL²/(e·π·Λ) to CD (wind axes).
+    #[serde(default)]
+    pub oswald_efficiency: Option<f64>,
+    #[serde(default)]
+    pub stall: Option<StallSpec>,
+    /// Coefficient tables, keyed by coefficient name then regressor key.
+    #[serde(flatten)]
+    pub coefficients: BTreeMap<String, BTreeMap<String, f64>>,
+}
+
+/// Reference geometry the model normalises with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferenceGeometry {
+    pub span: f64,
+    pub chord: f64,
+    pub aspect_ratio: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Term {
+    regressor: Regressor,
+    parameter: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StallIndices {
+    a1: usize,
+    alpha_star: usize,
+    tau1: usize,
+    tau2: usize,
+}
+
+/// The flight variables a model is evaluated at (SI, rad, rad/s).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AeroInput {
+    pub alpha: f64,
+    pub beta: f64,
+    pub airspeed: f64,
+    pub mach: f64,
+    pub rates: Vector3<f64>,
+    pub alpha_dot: f64,
+    pub controls: Controls,
+    /// Flow separation point χ (1 attached, 0 separated); ignored by linear models.
+    pub chi: f64,
+}
+
+/// Coefficients a model produced, in body axes and in wind axes.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AeroCoefficients {
+    /// CX, CY, CZ.
+    pub force: Vector3<f64>,
+    /// Cl, Cm, Cn.
+    pub moment: Vector3<f64>,
+    pub lift: f64,
+    pub drag: f64,
+}
+
+/// An aerodynamic model with named parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AeroModel {
+    pub kind: ModelKind,
+    pub force_axes: ForceAxes,
+    pub rate_normalization: RateNormalization,
+    pub rate_speed: RateSpeed,
+    pub reference_airspeed: f64,
+    pub reference_mach: f64,
+    pub geometry: ReferenceGeometry,
+    pub parameters: ParameterSet,
+    terms: [Vec<Term>; 6],
+    oswald: Option<usize>,
+    stall: Option<StallIndices>,
+}
+
+impl AeroModel {
+    /// Builds a model from its file table, collecting every problem under `prefix` (e.g. "aero").
+    pub fn from_spec(
+        spec: &AeroSpec,
+        geometry: ReferenceGeometry,
+        prefix: &str,
+        problems: &mut Problems,
+    ) -> AeroModel {
+        let mut model = AeroModel {
+            kind: spec.model,
+            force_axes: spec.force_axes,
+            rate_normalization: spec.rate_normalization,
+            rate_speed: spec.rate_speed,
+            reference_airspeed: spec.reference_airspeed.unwrap_or(f64::NAN),
+            reference_mach: spec.reference_mach.unwrap_or(f64::NAN),
+            geometry,
+            parameters: ParameterSet::default(),
+            terms: Default::default(),
+            oswald: None,
+            stall: None,
+        };
+        model.read_coefficients(spec, prefix, problems);
+        model.read_extras(spec, prefix, problems);
+        model
+    }
+
+    fn read_coefficients(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+        let known: Vec<&str> = Coefficient::ALL
+            .iter()
+            .map(|c| c.name(self.force_axes))
+            .collect();
+        for (name, table) in &spec.coefficients {
+            let Some(position) = known.iter().position(|k| k == name) else {
+                problems.push(
+                    format!("{prefix}.{name}"),
+                    format!(
+                        "unknown coefficient for {:?} force axes; known: {}",
+                        self.force_axes,
+                        known.join(", ")
+                    ),
+                );
+                continue;
+            };
+            for (key, &value) in table {
+                let field = format!("{prefix}.{name}.{key}");
+                match self.check_term(Coefficient::ALL[position], key, value) {
+                    Ok(regressor) => {
+                        let parameter =
+                            self.add_parameter(&format!("{name}_{key}"), value, &field, problems);
+                        self.terms[position].push(Term {
+                            regressor,
+                            parameter,
+                        });
+                    }
+                    Err(message) => problems.push(field, message),
+                }
+            }
+        }
+    }
+
+    fn check_term(
+        &self,
+        coefficient: Coefficient,
+        key: &str,
+        value: f64,
+    ) -> Result<Regressor, String> {
+        let regressor = Regressor::from_key(key)
+            .ok_or_else(|| format!("unknown term '{key}'; known: {}", Regressor::keys()))?;
+        if !value.is_finite() {
+            return Err(format!("{value} is not a finite number"));
+        }
+        match regressor {
+            Regressor::LiftSquared
+                if coefficient != Coefficient::Drag || self.force_axes != ForceAxes::Wind =>
+            {
+                Err("CL2 is a drag term of a wind-axis model".into())
+            }
+            Regressor::Separation if self.kind != ModelKind::Stall => {
+                Err("chi terms need model = \"stall\"".into())
+            }
+            _ => Ok(regressor),
+        }
+    }
+
+    fn add_parameter(
+        &mut self,
+        name: &str,
+        value: f64,
+        field: &str,
+        problems: &mut Problems,
+    ) -> usize {
+        self.parameters.add(name, value).unwrap_or_else(|message| {
+            problems.push(field, message);
+            self.parameters.index(name).unwrap_or(0)
+        })
+    }
+
+    fn read_extras(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+        if let Some(e) = spec.oswald_efficiency {
+            if !(e.is_finite() && e > 0.0) || self.force_axes != ForceAxes::Wind {
+                problems.push(
+                    format!("{prefix}.oswald_efficiency"),
+                    "must be a positive number, in a wind-axis model",
+                );
+            }
+            self.oswald = Some(self.add_parameter("e", e, prefix, problems));
+        }
+        self.read_stall(spec, prefix, problems);
+        self.check_references(spec, prefix, problems);
+    }
+
+    fn read_stall(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+        match (self.kind, &spec.stall) {
+            (ModelKind::Stall, Some(stall)) => {
+                if self.force_axes != ForceAxes::Wind {
+                    problems.push(
+                        format!("{prefix}.force_axes"),
+                        "the stall model is written in wind axes",
+                    );
+                }
+                let field = format!("{prefix}.stall");
+                for (name, value) in [
+                    ("a1", stall.a1),
+                    ("alpha_star", stall.alpha_star),
+                    ("tau1", stall.tau1),
+                    ("tau2", stall.tau2),
+                ] {
+                    if !value.is_finite() {
+                        problems.push(
+                            format!("{field}.{name}"),
+                            format!("{value} is not a finite number"),
+                        );
+                    }
+                }
+                if stall.tau1 < 0.0 {
+                    problems.push(format!("{field}.tau1"), "must be ≥ 0 (0 makes χ algebraic)");
+                }
+                self.stall = Some(StallIndices {
+                    a1: self.add_parameter("a1", stall.a1, &field, problems),
+                    alpha_star: self.add_parameter(
+                        "alpha_star",
+                        stall.alpha_star,
+                        &field,
+                        problems,
+                    ),
+                    tau1: self.add_parameter("tau1", stall.tau1, &field, problems),
+                    tau2: self.add_parameter("tau2", stall.tau2, &field, problems),
+                });
+            }
+            (ModelKind::Stall, None) => problems.push(
+                format!("{prefix}.stall"),
+                "model = \"stall\" needs a [stall] table",
+            ),
+            (ModelKind::Linear, Some(_)) => problems.push(
+                format!("{prefix}.stall"),
+                "a [stall] table needs model = \"stall\"",
+            ),
+            (ModelKind::Linear, None) => {}
+        }
+    }
+
+    fn check_references(&self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+        let uses = |regressor: Regressor| {
+            self.terms
+                .iter()
+                .flatten()
+                .any(|t| t.regressor == regressor)
+        };
+        let needs_speed = uses(Regressor::SpeedRatio) || self.rate_speed == RateSpeed::Reference;
+        match spec.reference_airspeed {
+            Some(v) if !(v.is_finite() && v > 0.0) => problems.push(
+                format!("{prefix}.reference_airspeed"),
+                "must be a positive speed (m/s)",
+            ),
+            None if needs_speed => problems.push(
+                format!("{prefix}.reference_airspeed"),
+                "needed by dV terms and rate_speed = \"reference\"",
+            ),
+            _ => {}
+        }
+        match spec.reference_mach {
+            Some(m) if !(m.is_finite() && m > 0.0) => problems.push(
+                format!("{prefix}.reference_mach"),
+                "must be a positive Mach number",
+            ),
+            None if uses(Regressor::Mach) => {
+                problems.push(format!("{prefix}.reference_mach"), "needed by dMach terms")
+            }
+            _ => {}
+        }
+    }
+
+    /// True when χ is integrated as a state (stall model with τ1 > 0).
+    pub fn chi_is_state(&self) -> bool {
+        self.stall
+            .is_some_and(|s| self.parameters.values()[s.tau1] > 0.0)
+    }
+
+    /// True when the forces depend on α̇ algebraically (α̇ terms, or algebraic χ with τ2 ≠ 0),
+    /// so the equations of motion must be solved for α̇.
+    pub fn forces_depend_on_alpha_dot(&self) -> bool {
+        let values = self.parameters.values();
+        let stall = self
+            .stall
+            .is_some_and(|s| values[s.tau1] == 0.0 && values[s.tau2] != 0.0);
+        stall
+            || self
+                .terms
+                .iter()
+                .flatten()
+                .any(|t| t.regressor == Regressor::AlphaDot)
+    }
+
+    /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (seed 001, Eq. 3); 1 without stall model.
+    pub fn separation_target(&self, alpha: f64, alpha_dot: f64) -> f64 {
+        match self.stall {
+            Some(s) => {
+                let v = self.parameters.values();
+                0.5 * (1.0 - (v[s.a1] * (alpha - v[s.tau2] * alpha_dot - v[s.alpha_star])).tanh())
+            }
+            None => 1.0,
+        }
+    }
+
+    /// dχ/dt = (χ∞ − χ)/τ1 (seed 001, Eq. 2); 0 when χ is not a state.
+    pub fn separation_rate(&self, alpha: f64, alpha_dot: f64, chi: f64) -> f64 {
+        match self.stall {
+            Some(s) if self.chi_is_state() => {
+                (self.separation_target(alpha, alpha_dot) - chi) / self.parameters.values()[s.tau1]
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The χ the forces use: the state when τ1 > 0, Eq. 3 when τ1 = 0, 1 without stall.
+    pub fn effective_chi(&self, input: &AeroInput) -> f64 {
+        if self.chi_is_state() {
+            input.chi
+        } else {
+            self.separation_target(input.alpha, input.alpha_dot)
+        }
+    }
+
+    /// Normalising speed for rates: the airspeed or V0, times 2 or 1.
+    fn rate_divisor(&self, airspeed: f64) -> f64 {
+        let speed = match self.rate_speed {
+            RateSpeed::Airspeed => airspeed,
+            RateSpeed::Reference => self.reference_airspeed,
+        };
+        match self.rate_normalization {
+            RateNormalization::TwiceSpeed => 2.0 * speed,
+            RateNormalization::Speed => speed,
+        }
+    }
+
+    fn regressors(&self, input: &AeroInput, chi: f64) -> [f64; REGRESSOR_COUNT] {
+        let divisor = self.rate_divisor(input.airspeed);
+        let (b, c) = (self.geometry.span, self.geometry.chord);
+        let u = &input.controls;
+        [
+            1.0,
+            input.alpha,
+            input.beta,
+            input.rates.x * b / divisor,
+            input.rates.y * c / divisor,
+            input.rates.z * b / divisor,
+            input.alpha_dot * c / divisor,
+            u[Control::Elevator.index()],
+            u[Control::Aileron.index()],
+            u[Control::Rudder.index()],
+            u[Control::Flap.index()],
+            input.airspeed / self.reference_airspeed - 1.0,
+            input.mach - self.reference_mach,
+            1.0 - chi,
+            0.0,
+        ]
+    }
+
+    fn sum(
+        &self,
+        coefficient: Coefficient,
+        regressors: &[f64; REGRESSOR_COUNT],
+        alpha_factor: f64,
+    ) -> f64 {
+        let values = self.parameters.values();
+        self.terms[coefficient as usize]
+            .iter()
+            .map(|t| {
+                let factor = if t.regressor == Regressor::Alpha {
+                    alpha_factor
+                } else {
+                    1.0
+                };
+                values[t.parameter] * regressors[t.regressor as usize] * factor
+            })
+            .sum()
+    }
+
+    /// Evaluates all six coefficients. Allocation-free.
+    pub fn coefficients(&self, input: &AeroInput) -> AeroCoefficients {
+        let chi = self.effective_chi(input);
+        let mut regressors = self.regressors(input, chi);
+        let kirchhoff = match self.kind {
+            ModelKind::Stall => {
+                let root = 0.5 * (1.0 + chi.max(0.0).sqrt());
+                root * root
+            }
+            ModelKind::Linear => 1.0,
+        };
+        let lift_type = self.sum(Coefficient::Lift, &regressors, kirchhoff);
+        regressors[Regressor::LiftSquared as usize] = lift_type * lift_type;
+        let mut drag_type = self.sum(Coefficient::Drag, &regressors, 1.0);
+        if let Some(e) = self.oswald {
+            drag_type += lift_type * lift_type
+                / (self.parameters.values()[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
+        }
+        let side = self.sum(Coefficient::Side, &regressors, 1.0);
+        let moment = Vector3::new(
+            self.sum(Coefficient::Roll, &regressors, 1.0),
+            self.sum(Coefficient::Pitch, &regressors, 1.0),
+            self.sum(Coefficient::Yaw, &regressors, 1.0),
+        );
+        let (sin_alpha, cos_alpha) = input.alpha.sin_cos();
+        match self.force_axes {
+            ForceAxes::Wind => AeroCoefficients {
+                force: Vector3::new(
+                    -drag_type * cos_alpha + lift_type * sin_alpha,
+                    side,
+                    -drag_type * sin_alpha - lift_type * cos_alpha,
+                ),
+                moment,
+                lift: lift_type,
+                drag: drag_type,
+            },
+            ForceAxes::Body => AeroCoefficients {
+                force: Vector3::new(drag_type, side, lift_type),
+                moment,
+                lift: -lift_type * cos_alpha + drag_type * sin_alpha,
+                drag: -drag_type * cos_alpha - lift_type * sin_alpha,
+            },
+        }
+    }
+
+    /// Names of the terms of one coefficient, in file order (for reports and model-structure code).
+    pub fn term_names(&self, coefficient: Coefficient) -> Vec<String> {
+        self.terms[coefficient as usize]
+            .iter()
+            .map(|t| self.parameters.names()[t.parameter].clone())
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn geometry() -> ReferenceGeometry {
+        ReferenceGeometry {
+            span: 21.5,
+            chord: 3.159,
+            aspect_ratio: 21.5 * 21.5 / 64.0,
+        }
+    }
+
+    fn parse(text: &str) -> (AeroModel, Problems) {
+        let spec: AeroSpec = toml::from_str(text).unwrap();
+        let mut problems = Problems::default();
+        let model = AeroModel::from_spec(&spec, geometry(), "aero", &mut problems);
+        (model, problems)
+    }
+
+    #[test]
+    fn linear_terms_are_named_and_summed() {
+        let (model, problems) = parse(
+            "[CL]\n0 = 0.2\nalpha = 5.0\nq = 10.0\n[Cm]\nde = -1.0\n[CD]\n0 = 0.03\nCL2 = 0.05\n",
+        );
+        assert!(problems.is_empty(), "{problems:?}");
+        assert_eq!(model.parameters.get("CL_alpha"), Some(5.0));
+        let mut input = AeroInput {
+            alpha: 0.1,
+            airspeed: 100.0,
+            ..Default::default()
+        };
+        input.rates.y = 0.2;
+        input.controls[Control::Elevator.index()] = 0.05;
+        let c = model.coefficients(&input);
+        let q_hat = 0.2 * 3.159 / 200.0;
+        let lift = 0.2 + 0.5 + 10.0 * q_hat;
+        assert!((c.lift - lift).abs() < 1e-15);
+        assert!((c.drag - (0.03 + 0.05 * lift * lift)).abs() < 1e-15);
+        assert!((c.moment.y + 0.05).abs() < 1e-15);
+        let cz = -c.drag * 0.1f64.sin() - lift * 0.1f64.cos();
+        assert!((c.force.z - cz).abs() < 1e-15);
+    }
+
+    #[test]
+    fn every_problem_is_reported() {
+        let (_, problems) =
+            parse("[CL]\nalpha = nan\nbogus = 1.0\n[CQ]\n0 = 1.0\n[Cm]\nchi = 0.1\n");
+        let fields: Vec<&str> = problems.0.iter().map(|p| p.field.as_str()).collect();
+        assert_eq!(
+            fields,
+            ["aero.CL.alpha", "aero.CL.bogus", "aero.CQ", "aero.Cm.chi"],
+            "{problems:?}"
+        );
+    }
+}

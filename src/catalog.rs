@@ -1,0 +1,65 @@
+//! Where bundled aircraft and scenario files are found, so that adding one
+//! never needs a recompile: the folder named by `AEROID_DATA`, else the
+//! current folder if it holds `aircraft/` or `scenarios/`, else the source
+//! tree aeroid was built from.
+
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+pub const AIRCRAFT_FOLDER: &str = "aircraft";
+pub const SCENARIO_FOLDER: &str = "scenarios";
+
+/// The data folder holding `aircraft/` and `scenarios/`.
+pub fn data_folder() -> PathBuf {
+    if let Some(folder) = std::env::var_os("AEROID_DATA") {
+        return PathBuf::from(folder);
+    }
+    let current = PathBuf::from(".");
+    if current.join(AIRCRAFT_FOLDER).is_dir() || current.join(SCENARIO_FOLDER).is_dir() {
+        return current;
+    }
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Names (file stems) of the `.toml` files in a data sub-folder, sorted.
+pub fn bundled(folder: &str) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(data_folder().join(folder))
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|entry| entry.path())
+        .filter(|path| path.extension().is_some_and(|e| e == "toml"))
+        .filter_map(|path| path.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    names.sort();
+    names
+}
+
+/// Resolves a file reference: an existing path (relative to `base` when given,
+/// then to the current folder), or a bundled name in `folder`.
+pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<PathBuf> {
+    let direct = PathBuf::from(reference);
+    let mut candidates = Vec::new();
+    if let Some(base) = base {
+        candidates.push(base.join(&direct));
+        candidates.push(
+            base.join("..")
+                .join(folder)
+                .join(format!("{reference}.toml")),
+        );
+    }
+    candidates.push(direct);
+    candidates.push(data_folder().join(folder).join(format!("{reference}.toml")));
+    candidates
+        .into_iter()
+        .find(|c| c.is_file())
+        .ok_or_else(|| Error::Unknown {
+            kind: if folder == AIRCRAFT_FOLDER {
+                "aircraft"
+            } else {
+                "scenario"
+            },
+            name: reference.to_string(),
+            known: bundled(folder),
+        })
+}

@@ -1,0 +1,90 @@
+//! `aeroid check`: validates an aircraft or scenario file, reporting every
+//! problem at once; a valid scenario is also trimmed, so that a flight
+//! condition with no trim is found before a long run.
+
+use crate::aircraft::Aircraft;
+use crate::error::{Error, Result, parse_toml, read_text};
+use crate::scenario::{Scenario, ScenarioFile};
+use crate::sim::Simulation;
+use std::path::Path;
+
+/// What a valid file holds, in a few lines for the user.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckReport {
+    pub kind: &'static str,
+    pub lines: Vec<String>,
+}
+
+/// Validates the file at `path`, telling an aircraft from a scenario by its tables.
+pub fn check_file(path: &Path) -> Result<CheckReport> {
+    let text = read_text(path)?;
+    let table: toml::Table = parse_toml(path, &text)?;
+    if table.contains_key("trim") {
+        let file: ScenarioFile = parse_toml(path, &text)?;
+        check_scenario(&Scenario::from_file(&file, path)?)
+    } else if table.contains_key("aero") {
+        Ok(describe_aircraft(&Aircraft::load(path)?))
+    } else {
+        Err(Error::Invalid {
+            path: path.to_path_buf(),
+            problems: vec![crate::error::Problem {
+                field: "(file)".into(),
+                message: "neither a scenario (no [trim] table) nor an aircraft (no [aero] table)"
+                    .into(),
+            }],
+        })
+    }
+}
+
+fn describe_aircraft(aircraft: &Aircraft) -> CheckReport {
+    let names = aircraft.aero.parameters.names().join(", ");
+    CheckReport {
+        kind: "aircraft",
+        lines: vec![
+            format!(
+                "{}: mass {:.1} kg, S {:.3} m², b {:.3} m, c̄ {:.3} m",
+                aircraft.name,
+                aircraft.mass.mass,
+                aircraft.wing_area,
+                aircraft.geometry.span,
+                aircraft.geometry.chord
+            ),
+            format!(
+                "{:?} aerodynamic model, {} parameters: {names}",
+                aircraft.aero.kind,
+                aircraft.aero.parameters.len()
+            ),
+        ],
+    }
+}
+
+fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
+    let simulation = Simulation::prepare(scenario)?;
+    let trim = &simulation.trim;
+    let c = &trim.controls;
+    Ok(CheckReport {
+        kind: "scenario",
+        lines: vec![
+            format!(
+                "{}: aircraft {} ({}), {} s at {} s steps, seed {}",
+                scenario.name,
+                scenario.aircraft.name,
+                scenario.aircraft_path.display(),
+                scenario.duration,
+                scenario.step,
+                scenario.seed
+            ),
+            format!(
+                "trim: α {:.3}°, θ {:.3}°, elevator {:.3}°, aileron {:.3}°, rudder {:.3}°, throttle {:.4}; residual {:.1e} after {} iterations",
+                trim.alpha.to_degrees(),
+                trim.pitch.to_degrees(),
+                c[0].to_degrees(),
+                c[1].to_degrees(),
+                c[2].to_degrees(),
+                c[4],
+                trim.residual,
+                trim.iterations
+            ),
+        ],
+    })
+}

@@ -1,0 +1,334 @@
+//! Rigid-body six-degree-of-freedom equations of motion over a flat,
+//! non-rotating earth, in body axes with quaternion attitude (the standard
+//! form, e.g. Stevens, Lewis & Johnson, "Aircraft Control and Simulation",
+//! 3rd ed., §1.7, and seed 004 Eqs. 1–8 in their decoupled form):
+//!
+//! `m·(V̇ + ω × V) = F_aero + F_thrust + m·C_bn·g`,
+//! `I·ω̇ + ω × (I·ω) = M_aero + r_T × F_thrust`,
+//! `q̇ = ½·q ⊗ (0, ω)`, `ṗ_NED = C_nb·V`, `τ1·χ̇ = χ∞(α − τ2·α̇) − χ`.
+//!
+//! V is the inertial velocity in body axes; air data (V, α, β, q̄, Mach) are
+//! taken relative to the air mass moving with the wind. α̇ comes from the
+//! state derivative (never from differencing outputs); when the forces depend
+//! on α̇ (α̇ terms, or χ algebraic with τ2 ≠ 0) the equations are solved for α̇
+//! by secant iteration.
+//!
+//! [`FlightModel::evaluate`] is usable outside the integrator, state by state,
+//! as the filter estimators need.
+
+use crate::aero::{AeroCoefficients, AeroInput};
+use crate::aircraft::Aircraft;
+use crate::atmosphere::{Air, Atmosphere, SEA_LEVEL_DENSITY};
+use crate::integrator::Interpolation;
+use crate::state::{
+    self, CHI, CONTROL_COUNT, Control, Controls, DOWN, NORTH, P, Q0, StateVector, U,
+};
+use crate::wind::WindSample;
+use nalgebra::{SVector, Vector3};
+
+/// The environment the aircraft flies in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Environment {
+    pub atmosphere: Atmosphere,
+    /// Gravitational acceleration (m/s²); 0 switches gravity off.
+    pub gravity: f64,
+}
+
+impl Default for Environment {
+    fn default() -> Self {
+        Environment {
+            atmosphere: Atmosphere::default(),
+            gravity: crate::units::STANDARD_GRAVITY,
+        }
+    }
+}
+
+/// Everything from outside the state at one instant: controls and wind, and
+/// their rates within the step (zero under a zero-order hold).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Exogenous {
+    pub controls: Controls,
+    pub wind: WindSample,
+    pub wind_rate: WindSample,
+}
+
+/// Exogenous signals packed as one vector for interpolation: controls, wind NED, turbulence body.
+pub const EXOGENOUS_SIZE: usize = CONTROL_COUNT + 6;
+pub type ExogenousVector = SVector<f64, EXOGENOUS_SIZE>;
+
+impl Exogenous {
+    pub fn pack(controls: &Controls, wind: &WindSample) -> ExogenousVector {
+        let mut v = ExogenousVector::zeros();
+        v.fixed_rows_mut::<CONTROL_COUNT>(0).copy_from(controls);
+        v.fixed_rows_mut::<3>(CONTROL_COUNT).copy_from(&wind.ned);
+        v.fixed_rows_mut::<3>(CONTROL_COUNT + 3)
+            .copy_from(&wind.body);
+        v
+    }
+
+    /// The exogenous signals at stage fraction θ of a step between two packed samples.
+    pub fn at_stage(
+        start: &ExogenousVector,
+        end: &ExogenousVector,
+        theta: f64,
+        interpolation: Interpolation,
+        step: f64,
+    ) -> Exogenous {
+        let value = interpolation.blend(start, end, theta);
+        let rate = interpolation.rate(start, end, step);
+        Exogenous {
+            controls: value.fixed_rows::<CONTROL_COUNT>(0).into(),
+            wind: unpack_wind(&value),
+            wind_rate: unpack_wind(&rate),
+        }
+    }
+}
+
+fn unpack_wind(v: &ExogenousVector) -> WindSample {
+    WindSample {
+        ned: v.fixed_rows::<3>(CONTROL_COUNT).into(),
+        body: v.fixed_rows::<3>(CONTROL_COUNT + 3).into(),
+    }
+}
+
+/// Air data relative to the moving air mass.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AirData {
+    pub airspeed: f64,
+    pub alpha: f64,
+    pub beta: f64,
+    pub mach: f64,
+    pub dynamic_pressure: f64,
+    /// Air-relative velocity in body axes.
+    pub velocity: Vector3<f64>,
+}
+
+/// The state derivative together with every intermediate quantity a truth
+/// trace or a recorder needs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Evaluation {
+    pub derivative: StateVector,
+    pub air: Air,
+    pub air_data: AirData,
+    pub alpha_dot: f64,
+    pub beta_dot: f64,
+    /// χ the forces used (state, algebraic value, or 1).
+    pub chi: f64,
+    pub coefficients: AeroCoefficients,
+    /// Controls after saturation.
+    pub controls: Controls,
+    pub thrust: f64,
+    /// Specific force (what an accelerometer at the CG reads), body axes, m/s².
+    pub specific_force: Vector3<f64>,
+    pub angular_acceleration: Vector3<f64>,
+}
+
+/// An aircraft in an environment: the right-hand side of the equations of motion.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlightModel {
+    pub aircraft: Aircraft,
+    pub environment: Environment,
+}
+
+/// Forces of one α̇ guess.
+struct Translational {
+    coefficients: AeroCoefficients,
+    chi: f64,
+    velocity_rate: Vector3<f64>,
+    specific_force: Vector3<f64>,
+    alpha_dot: f64,
+    beta_dot: f64,
+}
+
+impl FlightModel {
+    pub fn new(aircraft: Aircraft, environment: Environment) -> Self {
+        FlightModel {
+            aircraft,
+            environment,
+        }
+    }
+
+    /// Air data for a state and wind.
+    pub fn air_data(&self, x: &StateVector, wind: &WindSample, air: &Air) -> AirData {
+        let ned_to_body = state::body_to_ned(x).transpose();
+        let velocity = state::velocity(x) - ned_to_body * wind.ned - wind.body;
+        let airspeed = velocity.norm();
+        AirData {
+            airspeed,
+            alpha: velocity.z.atan2(velocity.x),
+            beta: (velocity.y / airspeed).clamp(-1.0, 1.0).asin(),
+            mach: airspeed / air.speed_of_sound,
+            dynamic_pressure: 0.5 * air.density * airspeed * airspeed,
+            velocity,
+        }
+    }
+
+    /// ẋ = f(x, u). Allocation-free.
+    pub fn derivative(&self, x: &StateVector, exogenous: &Exogenous) -> StateVector {
+        self.evaluate(x, exogenous).derivative
+    }
+
+    /// The state derivative and all intermediate quantities at one state.
+    pub fn evaluate(&self, x: &StateVector, exogenous: &Exogenous) -> Evaluation {
+        let aircraft = &self.aircraft;
+        let mut controls = exogenous.controls;
+        aircraft.saturate(&mut controls);
+        let air = self.environment.atmosphere.at(state::altitude(x));
+        let air_data = self.air_data(x, &exogenous.wind, &air);
+        let body_to_ned = state::body_to_ned(x);
+        let omega = state::rates(x);
+        let thrust = aircraft.propulsion.thrust(
+            controls[Control::Throttle.index()],
+            air.density / SEA_LEVEL_DENSITY,
+        );
+        let thrust_force = aircraft.propulsion.direction * thrust;
+        let wind_rate_body = body_to_ned.transpose() * exogenous.wind_rate.ned
+            - omega.cross(&(body_to_ned.transpose() * exogenous.wind.ned))
+            + exogenous.wind_rate.body;
+        let context = TranslationalContext {
+            x,
+            air_data: &air_data,
+            controls: &controls,
+            omega: &omega,
+            gravity_body: body_to_ned.transpose()
+                * Vector3::new(0.0, 0.0, self.environment.gravity),
+            thrust_force: &thrust_force,
+            wind_rate_body: &wind_rate_body,
+        };
+        let translational = if aircraft.aero.forces_depend_on_alpha_dot() {
+            self.solve_alpha_dot(&context)
+        } else {
+            self.translational(&context, 0.0)
+        };
+        let scale = air_data.dynamic_pressure * aircraft.wing_area;
+        let geometry = &aircraft.geometry;
+        let c = &translational.coefficients;
+        let aero_moment = Vector3::new(
+            c.moment.x * geometry.span,
+            c.moment.y * geometry.chord,
+            c.moment.z * geometry.span,
+        ) * scale;
+        let moment = aero_moment + aircraft.propulsion.position.cross(&thrust_force);
+        let inertia = &aircraft.mass.inertia;
+        let angular_acceleration =
+            aircraft.mass.inertia_inverse * (moment - omega.cross(&(inertia * omega)));
+
+        let mut derivative = StateVector::zeros();
+        derivative
+            .fixed_rows_mut::<3>(U)
+            .copy_from(&translational.velocity_rate);
+        derivative
+            .fixed_rows_mut::<3>(P)
+            .copy_from(&angular_acceleration);
+        derivative
+            .fixed_rows_mut::<4>(Q0)
+            .copy_from(&quaternion_rate(x, &omega));
+        derivative
+            .fixed_rows_mut::<3>(NORTH)
+            .copy_from(&(body_to_ned * state::velocity(x)));
+        derivative[CHI] =
+            aircraft
+                .aero
+                .separation_rate(air_data.alpha, translational.alpha_dot, x[CHI]);
+        debug_assert_eq!(DOWN, NORTH + 2);
+        Evaluation {
+            derivative,
+            air,
+            air_data,
+            alpha_dot: translational.alpha_dot,
+            beta_dot: translational.beta_dot,
+            chi: translational.chi,
+            coefficients: translational.coefficients,
+            controls,
+            thrust,
+            specific_force: translational.specific_force,
+            angular_acceleration,
+        }
+    }
+
+    /// Translational acceleration for a guess of α̇ (used by the aero model),
+    /// returning the α̇ that acceleration implies.
+    fn translational(&self, context: &TranslationalContext, alpha_dot_guess: f64) -> Translational {
+        let aircraft = &self.aircraft;
+        let air_data = context.air_data;
+        let input = AeroInput {
+            alpha: air_data.alpha,
+            beta: air_data.beta,
+            airspeed: air_data.airspeed,
+            mach: air_data.mach,
+            rates: *context.omega,
+            alpha_dot: alpha_dot_guess,
+            controls: *context.controls,
+            chi: context.x[CHI],
+        };
+        let coefficients = aircraft.aero.coefficients(&input);
+        let aero_force = coefficients.force * (air_data.dynamic_pressure * aircraft.wing_area);
+        let specific_force = (aero_force + context.thrust_force) / aircraft.mass.mass;
+        let velocity = state::velocity(context.x);
+        let velocity_rate = specific_force + context.gravity_body - context.omega.cross(&velocity);
+        let air_rate = velocity_rate - context.wind_rate_body;
+        let (u, v, w) = (
+            air_data.velocity.x,
+            air_data.velocity.y,
+            air_data.velocity.z,
+        );
+        let alpha_dot = (u * air_rate.z - w * air_rate.x) / (u * u + w * w);
+        let speed_rate = air_data.velocity.dot(&air_rate) / air_data.airspeed;
+        let beta_dot = (air_rate.y * air_data.airspeed - v * speed_rate)
+            / (air_data.airspeed * (u * u + w * w).sqrt());
+        Translational {
+            coefficients,
+            chi: aircraft.aero.effective_chi(&input),
+            velocity_rate,
+            specific_force,
+            alpha_dot,
+            beta_dot,
+        }
+    }
+
+    /// Solves α̇ = g(α̇) by the secant method: the forces depend on α̇ and α̇ on the forces.
+    fn solve_alpha_dot(&self, context: &TranslationalContext) -> Translational {
+        const TOLERANCE: f64 = 1e-13;
+        let mut guess = 0.0;
+        let mut result = self.translational(context, guess);
+        let mut previous: Option<(f64, f64)> = None;
+        for _ in 0..50 {
+            let residual = result.alpha_dot - guess;
+            if residual.abs() <= TOLERANCE * (1.0 + guess.abs()) {
+                break;
+            }
+            let next = match previous {
+                Some((old_guess, old_residual)) if residual != old_residual => {
+                    guess - residual * (guess - old_guess) / (residual - old_residual)
+                }
+                _ => result.alpha_dot,
+            };
+            previous = Some((guess, residual));
+            guess = next;
+            result = self.translational(context, guess);
+        }
+        result
+    }
+}
+
+struct TranslationalContext<'a> {
+    x: &'a StateVector,
+    air_data: &'a AirData,
+    controls: &'a Controls,
+    omega: &'a Vector3<f64>,
+    gravity_body: Vector3<f64>,
+    thrust_force: &'a Vector3<f64>,
+    wind_rate_body: &'a Vector3<f64>,
+}
+
+/// q̇ = ½·q ⊗ (0, ω), scalar-first quaternion.
+fn quaternion_rate(x: &StateVector, omega: &Vector3<f64>) -> nalgebra::Vector4<f64> {
+    let (q0, q1, q2, q3) = (x[Q0], x[Q0 + 1], x[Q0 + 2], x[Q0 + 3]);
+    let (p, q, r) = (omega.x, omega.y, omega.z);
+    0.5 * nalgebra::Vector4::new(
+        -q1 * p - q2 * q - q3 * r,
+        q0 * p + q2 * r - q3 * q,
+        q0 * q + q3 * p - q1 * r,
+        q0 * r + q1 * q - q2 * p,
+    )
+}
