@@ -15,4 +15,7 @@ impl InputSchedule {
     pub fn deviation(&self, _t: f64) -> Controls {
         Controls::zeros()
     }
+    pub fn is_empty(&self) -> bool {
+        true
+    }
 }
