@@ -290,6 +290,8 @@ pub struct AeroModel {
     terms: [Vec<Term>; 6],
     oswald: Option<usize>,
     stall: Option<StallIndices>,
+    /// Whether any coefficient has an α̇ term (fixed by the structure, not the values).
+    has_alpha_dot_terms: bool,
 }
 
 impl AeroModel {
@@ -312,9 +314,15 @@ impl AeroModel {
             terms: Default::default(),
             oswald: None,
             stall: None,
+            has_alpha_dot_terms: false,
         };
         model.read_coefficients(spec, prefix, problems);
         model.read_extras(spec, prefix, problems);
+        model.has_alpha_dot_terms = model
+            .terms
+            .iter()
+            .flatten()
+            .any(|t| t.regressor == Regressor::AlphaDot);
         model
     }
 
@@ -570,23 +578,11 @@ impl AeroModel {
         ]
     }
 
-    fn sum(
-        &self,
-        coefficient: Coefficient,
-        regressors: &[f64; REGRESSOR_COUNT],
-        alpha_factor: f64,
-    ) -> f64 {
+    fn sum(&self, coefficient: Coefficient, regressors: &[f64; REGRESSOR_COUNT]) -> f64 {
         let values = self.parameters.values();
         self.terms[coefficient as usize]
             .iter()
-            .map(|t| {
-                let factor = if t.regressor == Regressor::Alpha {
-                    alpha_factor
-                } else {
-                    1.0
-                };
-                values[t.parameter] * regressors[t.regressor as usize] * factor
-            })
+            .map(|t| values[t.parameter] * regressors[t.regressor as usize])
             .sum()
     }
 
@@ -601,18 +597,20 @@ impl AeroModel {
             }
             ModelKind::Linear => 1.0,
         };
-        let lift_type = self.sum(Coefficient::Lift, &regressors, kirchhoff);
+        let mut lift_regressors = regressors;
+        lift_regressors[Regressor::Alpha as usize] *= kirchhoff;
+        let lift_type = self.sum(Coefficient::Lift, &lift_regressors);
         regressors[Regressor::LiftSquared as usize] = lift_type * lift_type;
-        let mut drag_type = self.sum(Coefficient::Drag, &regressors, 1.0);
+        let mut drag_type = self.sum(Coefficient::Drag, &regressors);
         if let Some(e) = self.oswald {
             drag_type += lift_type * lift_type
                 / (self.parameters.values()[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
         }
-        let side = self.sum(Coefficient::Side, &regressors, 1.0);
+        let side = self.sum(Coefficient::Side, &regressors);
         let moment = Vector3::new(
-            self.sum(Coefficient::Roll, &regressors, 1.0),
-            self.sum(Coefficient::Pitch, &regressors, 1.0),
-            self.sum(Coefficient::Yaw, &regressors, 1.0),
+            self.sum(Coefficient::Roll, &regressors),
+            self.sum(Coefficient::Pitch, &regressors),
+            self.sum(Coefficient::Yaw, &regressors),
         );
         let (sin_alpha, cos_alpha) = input.alpha.sin_cos();
         match self.force_axes {
