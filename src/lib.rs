@@ -3,6 +3,7 @@
 
 pub mod atmosphere;
 pub mod error;
+pub mod inputs;
 pub mod random;
 pub mod state;
 pub mod units;
