@@ -6,5 +6,6 @@ pub mod error;
 pub mod random;
 pub mod state;
 pub mod units;
+pub mod wind;
 
 pub use error::{Error, Result};
