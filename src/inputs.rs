@@ -152,7 +152,7 @@ fn default_time_column() -> String {
 }
 
 /// Signals built from the specs, evaluated at any time.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct InputSchedule {
     signals: Vec<Signal>,
 }

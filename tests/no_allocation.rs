@@ -4,15 +4,18 @@
 use aeroid::scenario::Scenario;
 use aeroid::sim::Simulation;
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 struct CountingAllocator;
 
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    /// Allocations made by this thread (the test harness's own threads are not counted).
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
 
 unsafe impl GlobalAlloc for CountingAllocator {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        ALLOCATIONS.with(|count| count.set(count.get() + 1));
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
@@ -29,11 +32,18 @@ fn rk4_step_does_not_allocate() {
     scenario.duration = 1.0;
     let simulation = Simulation::prepare(&scenario).unwrap();
     let mut x = simulation.trim.state;
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = ALLOCATIONS.with(Cell::get);
     for k in 0..100 {
         x = simulation.advance(&x, k);
     }
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    let after = ALLOCATIONS.with(Cell::get);
+    let probe = Box::new(std::hint::black_box(7u64));
+    drop(probe);
+    assert_eq!(
+        ALLOCATIONS.with(Cell::get),
+        after + 1,
+        "the counter sees this thread's allocations"
+    );
     assert!(x.iter().all(|v| v.is_finite()));
     assert_eq!(after - before, 0, "heap allocations inside 100 RK4 steps");
 }
