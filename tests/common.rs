@@ -20,6 +20,7 @@ pub fn write(folder: &std::path::Path, name: &str, text: &str) -> PathBuf {
 
 /// The bundled ATTAS aircraft file with `edit` applied to its text.
 pub fn attas_with(edit: impl Fn(String) -> String) -> String {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/aircraft/attas.toml")).unwrap();
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/aircraft/attas.toml"))
+        .unwrap();
     edit(text)
 }

@@ -20,7 +20,9 @@ fn stall_aircraft(tau1: f64, tau2: f64) -> Aircraft {
         text.replace("model = \"linear\"", "model = \"stall\"")
             .replace("[aero.CD]", "[aero.CD]\nchi = 0.079")
             .replace("[aero.Cm]", "[aero.Cm]\nchi = -0.126")
-            + &format!("\n[aero.stall]\na1 = {A1}\nalpha_star = {ALPHA_STAR}\ntau1 = {tau1}\ntau2 = {tau2}\n")
+            + &format!(
+                "\n[aero.stall]\na1 = {A1}\nalpha_star = {ALPHA_STAR}\ntau1 = {tau1}\ntau2 = {tau2}\n"
+            )
     });
     let file = toml::from_str(&text).unwrap();
     Aircraft::from_file(&file, std::path::Path::new("attas-stall-test")).unwrap()
@@ -32,7 +34,14 @@ fn closed_form_chi(alpha: f64) -> f64 {
 
 fn input(model: &AeroModel, alpha: f64, alpha_dot: f64, chi: f64) -> AeroInput {
     let _ = model;
-    AeroInput { alpha, alpha_dot, chi, airspeed: 85.0, mach: 0.26, ..Default::default() }
+    AeroInput {
+        alpha,
+        alpha_dot,
+        chi,
+        airspeed: 85.0,
+        mach: 0.26,
+        ..Default::default()
+    }
 }
 
 /// With τ1 = 0 the static CL(α) curve equals CL0 + CLα·((1+√χ)/2)²·α with
@@ -46,8 +55,13 @@ fn static_lift_curve_matches_closed_form() {
         let alpha = -0.1 + 0.6 * i as f64 / 400.0;
         let chi = closed_form_chi(alpha);
         let expected = CL0 + CL_ALPHA * (0.5 * (1.0 + chi.sqrt())).powi(2) * alpha;
-        let lift = model.coefficients(&input(&model, alpha, 0.0, f64::NAN)).lift;
-        assert!((lift - expected).abs() < 1e-12, "α = {alpha}: {lift} vs {expected}");
+        let lift = model
+            .coefficients(&input(&model, alpha, 0.0, f64::NAN))
+            .lift;
+        assert!(
+            (lift - expected).abs() < 1e-12,
+            "α = {alpha}: {lift} vs {expected}"
+        );
     }
     // The curve really stalls: lift falls past α*.
     let lift = |alpha| model.coefficients(&input(&model, alpha, 0.0, 0.0)).lift;
@@ -68,13 +82,19 @@ fn separation_point_lags_alpha_step_with_tau1() {
     let step = tau1 / 100.0;
     let (mut times, mut logs) = (Vec::new(), Vec::new());
     for k in 1..=300 {
-        chi = rk4_step(&chi, step, |c, _| Vector1::new(model.separation_rate(alpha_after, 0.0, c[0])));
+        chi = rk4_step(&chi, step, |c, _| {
+            Vector1::new(model.separation_rate(alpha_after, 0.0, c[0]))
+        });
         times.push(k as f64 * step);
         logs.push((chi[0] - target).abs().ln());
     }
     let n = times.len() as f64;
     let (mean_t, mean_l) = (times.iter().sum::<f64>() / n, logs.iter().sum::<f64>() / n);
-    let slope = times.iter().zip(&logs).map(|(t, l)| (t - mean_t) * (l - mean_l)).sum::<f64>()
+    let slope = times
+        .iter()
+        .zip(&logs)
+        .map(|(t, l)| (t - mean_t) * (l - mean_l))
+        .sum::<f64>()
         / times.iter().map(|t| (t - mean_t).powi(2)).sum::<f64>();
     let fitted = -1.0 / slope;
     assert!((fitted / tau1 - 1.0).abs() < 0.01, "fitted τ1 = {fitted}");
@@ -100,12 +120,19 @@ fn slow_sweep_shows_tau2_hysteresis() {
     while alpha < 0.45 {
         let up = model.coefficients(&input(&model, alpha, rate, 0.0)).lift;
         let down = model.coefficients(&input(&model, alpha, -rate, 0.0)).lift;
-        assert!(up >= down, "at α = {alpha}: upstroke {up} below downstroke {down}");
+        assert!(
+            up >= down,
+            "at α = {alpha}: upstroke {up} below downstroke {down}"
+        );
         area += (up - down) * d_alpha;
-        expected_area += alpha * (static_lift(alpha - tau2 * rate) - static_lift(alpha + tau2 * rate)) * d_alpha;
+        expected_area +=
+            alpha * (static_lift(alpha - tau2 * rate) - static_lift(alpha + tau2 * rate)) * d_alpha;
         alpha += d_alpha;
     }
-    assert!((area - expected_area).abs() < 1e-9, "{area} vs {expected_area}");
+    assert!(
+        (area - expected_area).abs() < 1e-9,
+        "{area} vs {expected_area}"
+    );
     assert!(area > 0.01, "loop area {area}");
 }
 
@@ -138,10 +165,22 @@ fn simulator_solves_alpha_dot_loop_from_state_derivative() {
         let differenced = (alpha[k + 1] - alpha[k - 1]) / (2.0 * step);
         largest_difference = largest_difference.max((differenced - alpha_dot[k]).abs());
         let eq3 = closed_form_chi(alpha[k] - 0.9 * alpha_dot[k]);
-        assert!((chi[k] - eq3).abs() < 1e-12, "t = {}: χ {} vs Eq. 3 {}", k as f64 * step, chi[k], eq3);
+        assert!(
+            (chi[k] - eq3).abs() < 1e-12,
+            "t = {}: χ {} vs Eq. 3 {}",
+            k as f64 * step,
+            chi[k],
+            eq3
+        );
     }
-    assert!(largest_difference < 1e-4, "α̇ differs from differenced α by {largest_difference}");
+    assert!(
+        largest_difference < 1e-4,
+        "α̇ differs from differenced α by {largest_difference}"
+    );
     let peak_alpha = alpha.iter().cloned().fold(f64::MIN, f64::max);
     let lowest_chi = chi.iter().cloned().fold(f64::MAX, f64::min);
-    assert!(peak_alpha > ALPHA_STAR && lowest_chi < 0.3, "the ramp reached the stall: α {peak_alpha}, χ {lowest_chi}");
+    assert!(
+        peak_alpha > ALPHA_STAR && lowest_chi < 0.3,
+        "the ramp reached the stall: α {peak_alpha}, χ {lowest_chi}"
+    );
 }

@@ -30,7 +30,9 @@ fn trim_holds_for_sixty_seconds() {
     let mut worst = (0.0, "", 0.0);
     for sample in &trace.samples {
         let mut expected = x0;
-        expected.fixed_rows_mut::<3>(state::NORTH).copy_from(&(x0.fixed_rows::<3>(state::NORTH) + ground_velocity * sample.time));
+        expected
+            .fixed_rows_mut::<3>(state::NORTH)
+            .copy_from(&(x0.fixed_rows::<3>(state::NORTH) + ground_velocity * sample.time));
         for (i, (name, _)) in state::STATE_NAMES.iter().enumerate() {
             let scale = expected[i].abs().max(1.0);
             let error = (sample.state[i] - expected[i]).abs() / scale;
@@ -39,7 +41,13 @@ fn trim_holds_for_sixty_seconds() {
             }
         }
     }
-    assert!(worst.0 < 1e-6, "state {} drifted by {:.3e} (relative) at t = {} s", worst.1, worst.0, worst.2);
+    assert!(
+        worst.0 < 1e-6,
+        "state {} drifted by {:.3e} (relative) at t = {} s",
+        worst.1,
+        worst.0,
+        worst.2
+    );
     assert!(simulation.trim.residual < 1e-10);
 }
 
@@ -61,14 +69,23 @@ ixz = 35.0
 "#;
     let file = toml::from_str(text).unwrap();
     let aircraft = Aircraft::from_file(&file, std::path::Path::new("torque-free")).unwrap();
-    FlightModel::new(aircraft, Environment { gravity: 0.0, ..Default::default() })
+    FlightModel::new(
+        aircraft,
+        Environment {
+            gravity: 0.0,
+            ..Default::default()
+        },
+    )
 }
 
 /// Angular momentum in inertial (NED) axes and rotational kinetic energy.
 fn momentum_and_energy(model: &FlightModel, x: &StateVector) -> (Vector3<f64>, f64) {
     let omega = state::rates(x);
     let body_momentum = model.aircraft.mass.inertia * omega;
-    (state::body_to_ned(x) * body_momentum, 0.5 * omega.dot(&body_momentum))
+    (
+        state::body_to_ned(x) * body_momentum,
+        0.5 * omega.dot(&body_momentum),
+    )
 }
 
 /// Torque-free rigid body with an asymmetric inertia including Ixz, tumbling
@@ -86,35 +103,72 @@ fn torque_free_body_conserves_momentum_and_energy() {
     x[state::P] = 0.7;
     x[state::Q] = -1.1;
     x[state::R] = 0.4;
-    state::set_attitude(&mut x, &state::quaternion_from_euler(state::EulerAngles { roll: 0.2, pitch: 0.1, yaw: -0.3 }));
+    state::set_attitude(
+        &mut x,
+        &state::quaternion_from_euler(state::EulerAngles {
+            roll: 0.2,
+            pitch: 0.1,
+            yaw: -0.3,
+        }),
+    );
     x[state::DOWN] = -1000.0;
     let (momentum0, energy0) = momentum_and_energy(&model, &x);
     let steps = 100_000;
     let simulation = Simulation {
         name: "torque-free".into(),
         model,
-        trim: Trim { state: x, controls: Default::default(), alpha: 0.0, beta: 0.0, pitch: 0.0, residual: 0.0, iterations: 0 },
+        trim: Trim {
+            state: x,
+            controls: Default::default(),
+            alpha: 0.0,
+            beta: 0.0,
+            pitch: 0.0,
+            residual: 0.0,
+            iterations: 0,
+        },
         step: 0.001,
         interpolation: Interpolation::ZeroOrderHold,
-        departure: DepartureLimits { max_alpha: 10.0, max_beta: 10.0, min_airspeed: 0.0, max_airspeed: 1e9, min_altitude: -1e9 },
+        departure: DepartureLimits {
+            max_alpha: 10.0,
+            max_beta: 10.0,
+            min_airspeed: 0.0,
+            max_airspeed: 1e9,
+            min_altitude: -1e9,
+        },
         exogenous: vec![Exogenous::pack(&Default::default(), &WindSample::default()); steps + 1],
         winds: vec![WindSample::default(); steps + 1],
     };
     let mut worst_norm = 0.0f64;
     for k in 0..steps {
-        let raw = aeroid::integrator::rk4_step(&x, simulation.step, |x, _| simulation.model.derivative(x, &Exogenous::default()));
+        let raw = aeroid::integrator::rk4_step(&x, simulation.step, |x, _| {
+            simulation.model.derivative(x, &Exogenous::default())
+        });
         worst_norm = worst_norm.max((raw.fixed_rows::<4>(state::Q0).norm() - 1.0).abs());
         x = simulation.advance(&x, k);
     }
     let (momentum, energy) = momentum_and_energy(&simulation.model, &x);
     let momentum_error = (momentum - momentum0).norm() / momentum0.norm();
     let energy_error = (energy - energy0).abs() / energy0;
-    assert!(momentum_error < 1e-9, "angular momentum changed by {momentum_error:.3e}");
-    assert!(energy_error < 1e-9, "kinetic energy changed by {energy_error:.3e}");
-    assert!(worst_norm < 1e-12, "quaternion norm drifted by {worst_norm:.3e} in one step");
+    assert!(
+        momentum_error < 1e-9,
+        "angular momentum changed by {momentum_error:.3e}"
+    );
+    assert!(
+        energy_error < 1e-9,
+        "kinetic energy changed by {energy_error:.3e}"
+    );
+    assert!(
+        worst_norm < 1e-12,
+        "quaternion norm drifted by {worst_norm:.3e} in one step"
+    );
     // The body kept tumbling: the test exercised all three axes.
     assert!(state::rates(&x).iter().all(|w| w.abs() > 1e-3));
     // With no force the inertial velocity is constant too.
     let ground_velocity = state::body_to_ned(&x) * state::velocity(&x);
-    assert!((ground_velocity - state::body_to_ned(&simulation.trim.state) * Vector3::new(50.0, 0.0, 0.0)).norm() < 1e-9);
+    assert!(
+        (ground_velocity
+            - state::body_to_ned(&simulation.trim.state) * Vector3::new(50.0, 0.0, 0.0))
+        .norm()
+            < 1e-9
+    );
 }
