@@ -513,22 +513,24 @@ impl FieldReader<'_> {
     }
 }
 
-/// A rate as written in a profile: a number (Hz), `"25 Hz"`, or a fraction `"1/64 Hz"`.
+/// A rate as written in a profile: a number (Hz), `"25 Hz"`, `"0.5"`, or a fraction `"1/64 Hz"`.
 pub fn parse_rate(q: &Quantity) -> Result<f64, String> {
-    if let Quantity::Text(text) = q {
-        let text = text.trim();
-        let (number, unit) = text.split_once(char::is_whitespace).unwrap_or((text, "Hz"));
-        if let Some((numerator, denominator)) = number.split_once('/') {
-            let parse = |s: &str| {
-                s.trim()
-                    .parse::<f64>()
-                    .map_err(|_| format!("'{text}' is not a rate such as \"1/64 Hz\""))
-            };
-            let factor = unit_factor(unit, Dimension::Frequency)?;
-            return Ok(parse(numerator)? / parse(denominator)? * factor);
+    let Quantity::Text(text) = q else {
+        return q.si(Dimension::Frequency);
+    };
+    let text = text.trim();
+    let (number, unit) = text.split_once(char::is_whitespace).unwrap_or((text, "Hz"));
+    let parse = |s: &str| s.trim().parse::<f64>().ok();
+    let value = match number.split_once('/') {
+        Some((numerator, denominator)) => {
+            parse(numerator).zip(parse(denominator)).map(|(n, d)| n / d)
         }
+        None => parse(number),
+    };
+    match value {
+        Some(value) => Ok(value * unit_factor(unit, Dimension::Frequency)?),
+        None => q.si(Dimension::Frequency),
     }
-    q.si(Dimension::Frequency)
 }
 
 impl ChannelModel {
