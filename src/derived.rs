@@ -109,9 +109,9 @@ pub const MEASURANDS: &[Measurand] = &[
     measurand!("roll", "rad", Angle, |s, _c| s.euler.roll),
     measurand!("pitch", "rad", Angle, |s, _c| s.euler.pitch),
     measurand!("yaw", "rad", Angle, true, |s, _c| s.euler.yaw),
-    measurand!("nx", "-", Dimensionless, |s, c| load_factor(s, c).x),
-    measurand!("ny", "-", Dimensionless, |s, c| load_factor(s, c).y),
-    measurand!("nz", "-", Dimensionless, |s, c| load_factor(s, c).z),
+    measurand!("nx", "-", LoadFactor, |s, c| load_factor(s, c).x),
+    measurand!("ny", "-", LoadFactor, |s, c| load_factor(s, c).y),
+    measurand!("nz", "-", LoadFactor, |s, c| load_factor(s, c).z),
     measurand!("altitude", "m", Length, |s, _c| -s.state[DOWN]),
     measurand!("pressure_altitude", "m", Length, |s, _c| {
         Atmosphere::pressure_altitude(s.evaluation.air.pressure)

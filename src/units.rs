@@ -29,11 +29,13 @@ pub enum Dimension {
     TemperatureDifference,
     MassFlow,
     Pressure,
+    /// Load factor: specific force in units of standard gravity (dimensionless).
+    LoadFactor,
 }
 
 impl Dimension {
     /// Every dimension, for finding the one a unit belongs to.
-    pub const ALL: [Dimension; 15] = [
+    pub const ALL: [Dimension; 16] = [
         Dimension::Dimensionless,
         Dimension::Angle,
         Dimension::AngularRate,
@@ -49,6 +51,7 @@ impl Dimension {
         Dimension::TemperatureDifference,
         Dimension::MassFlow,
         Dimension::Pressure,
+        Dimension::LoadFactor,
     ];
 
     /// Units accepted for this dimension with their factor to SI.
@@ -99,6 +102,12 @@ impl Dimension {
                 ("mbar", 100.0),
                 ("psi", 6_894.757_293_168),
                 ("inHg", 3_386.389),
+            ],
+            LoadFactor => &[
+                ("", 1.0),
+                ("g", 1.0),
+                ("m/s2", 1.0 / STANDARD_GRAVITY),
+                ("m/s^2", 1.0 / STANDARD_GRAVITY),
             ],
         }
     }

@@ -372,3 +372,25 @@ fn check_accepts_a_profile() {
     let error = aeroid::check::check_file(&bad).unwrap_err().to_string();
     assert!(error.contains("channels.pitch.rate"), "{error}");
 }
+
+/// Load factors may come in g or m/s²: both are read as multiples of g0.
+#[test]
+fn import_load_factor_in_g_or_acceleration() {
+    let csv = "t,NZ,AZ\n0,1.02,10.0\n1,0.98,9.0\n";
+    let map = r#"
+        [time]
+        column = "t"
+        [[channels]]
+        name = "nz"
+        column = "NZ"
+        unit = "g"
+        [[channels]]
+        name = "ny"
+        column = "AZ"
+        unit = "m/s^2"
+    "#;
+    let record = import_case("load-factor", csv, map).unwrap().record;
+    assert_eq!(record.channel("nz").unwrap().values, [1.02, 0.98]);
+    let ny = &record.channel("ny").unwrap().values;
+    assert!((ny[0] - 10.0 / aeroid::units::STANDARD_GRAVITY).abs() < 1e-15);
+}
