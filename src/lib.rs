@@ -10,6 +10,7 @@ pub mod derived;
 pub mod dynamics;
 pub mod engine;
 pub mod error;
+pub mod estimation;
 pub mod import;
 pub mod inputs;
 pub mod integrator;

@@ -70,6 +70,37 @@ impl Channel {
             .count()
     }
 
+    /// The value at time `t` by linear interpolation between the nearest
+    /// valid samples (dropouts are skipped); held constant outside the record.
+    /// None when the channel has no valid sample.
+    pub fn value_at(&self, t: f64) -> Option<f64> {
+        let after = self.times.partition_point(|&time| time < t);
+        let previous = self.times[..after.min(self.times.len())]
+            .iter()
+            .zip(&self.values)
+            .rposition(|(_, v)| !v.is_nan());
+        let next = (after..self.times.len()).find(|&k| !self.values[k].is_nan());
+        match (previous, next) {
+            (Some(i), Some(j)) if self.times[j] > self.times[i] => {
+                let weight = (t - self.times[i]) / (self.times[j] - self.times[i]);
+                Some(self.values[i] + weight * (self.values[j] - self.values[i]))
+            }
+            (Some(i), _) => Some(self.values[i]),
+            (None, Some(j)) => Some(self.values[j]),
+            (None, None) => None,
+        }
+    }
+
+    /// Values at many instants (see [`Channel::value_at`]); an error names the
+    /// channel when it holds no valid sample.
+    pub fn values_at(&self, times: &[f64]) -> Result<Vec<f64>> {
+        times
+            .iter()
+            .map(|&t| self.value_at(t))
+            .collect::<Option<Vec<f64>>>()
+            .ok_or_else(|| Error::Other(format!("channel '{}' has no valid sample", self.name)))
+    }
+
     /// Smallest and largest value present, if any.
     pub fn range(&self) -> Option<(f64, f64)> {
         self.values
