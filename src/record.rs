@@ -91,6 +91,37 @@ impl Channel {
         }
     }
 
+    /// The value of the last valid sample at or before `t` (a zero-order
+    /// hold; times within 1e-9 s count as equal), the first valid one before
+    /// the record starts.
+    pub fn value_held_at(&self, t: f64) -> Option<f64> {
+        let after = self.times.partition_point(|&time| time <= t + 1e-9);
+        let valid = |k: &usize| !self.values[*k].is_nan();
+        (0..after)
+            .rev()
+            .find(valid)
+            .or_else(|| (after..self.times.len()).find(valid))
+            .map(|k| self.values[k])
+    }
+
+    /// Values at many instants, held or linearly interpolated between samples.
+    pub fn sampled_at(
+        &self,
+        times: &[f64],
+        interpolation: crate::integrator::Interpolation,
+    ) -> Result<Vec<f64>> {
+        match interpolation {
+            crate::integrator::Interpolation::Linear => self.values_at(times),
+            crate::integrator::Interpolation::ZeroOrderHold => times
+                .iter()
+                .map(|&t| self.value_held_at(t))
+                .collect::<Option<Vec<f64>>>()
+                .ok_or_else(|| {
+                    Error::Other(format!("channel '{}' has no valid sample", self.name))
+                }),
+        }
+    }
+
     /// Values at many instants (see [`Channel::value_at`]); an error names the
     /// channel when it holds no valid sample.
     pub fn values_at(&self, times: &[f64]) -> Result<Vec<f64>> {
