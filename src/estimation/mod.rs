@@ -5,4 +5,5 @@ pub mod driven;
 pub mod estimate;
 pub mod gauss_newton;
 pub mod output_error;
+pub mod score;
 pub mod structure;
