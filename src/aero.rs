@@ -57,7 +57,7 @@ pub enum Regressor {
     LiftSquared,
 }
 
-const REGRESSOR_COUNT: usize = 15;
+pub const REGRESSOR_COUNT: usize = 15;
 
 impl Regressor {
     pub const ALL: [Regressor; REGRESSOR_COUNT] = [
@@ -290,6 +290,8 @@ pub struct AeroModel {
     terms: [Vec<Term>; 6],
     oswald: Option<usize>,
     stall: Option<StallIndices>,
+    /// Whether any coefficient has an α̇ term (fixed by the structure, not the values).
+    has_alpha_dot_terms: bool,
 }
 
 impl AeroModel {
@@ -312,9 +314,15 @@ impl AeroModel {
             terms: Default::default(),
             oswald: None,
             stall: None,
+            has_alpha_dot_terms: false,
         };
         model.read_coefficients(spec, prefix, problems);
         model.read_extras(spec, prefix, problems);
+        model.has_alpha_dot_terms = model
+            .terms
+            .iter()
+            .flatten()
+            .any(|t| t.regressor == Regressor::AlphaDot);
         model
     }
 
@@ -547,7 +555,9 @@ impl AeroModel {
         }
     }
 
-    fn regressors(&self, input: &AeroInput, chi: f64) -> [f64; REGRESSOR_COUNT] {
+    /// The value of every regressor (indexed by `Regressor as usize`) at a
+    /// flight condition; `CL2` is left 0 (it needs the lift coefficient).
+    pub fn regressors(&self, input: &AeroInput, chi: f64) -> [f64; REGRESSOR_COUNT] {
         let divisor = self.rate_divisor(input.airspeed);
         let (b, c) = (self.geometry.span, self.geometry.chord);
         let u = &input.controls;
@@ -570,23 +580,11 @@ impl AeroModel {
         ]
     }
 
-    fn sum(
-        &self,
-        coefficient: Coefficient,
-        regressors: &[f64; REGRESSOR_COUNT],
-        alpha_factor: f64,
-    ) -> f64 {
+    fn sum(&self, coefficient: Coefficient, regressors: &[f64; REGRESSOR_COUNT]) -> f64 {
         let values = self.parameters.values();
         self.terms[coefficient as usize]
             .iter()
-            .map(|t| {
-                let factor = if t.regressor == Regressor::Alpha {
-                    alpha_factor
-                } else {
-                    1.0
-                };
-                values[t.parameter] * regressors[t.regressor as usize] * factor
-            })
+            .map(|t| values[t.parameter] * regressors[t.regressor as usize])
             .sum()
     }
 
@@ -601,18 +599,20 @@ impl AeroModel {
             }
             ModelKind::Linear => 1.0,
         };
-        let lift_type = self.sum(Coefficient::Lift, &regressors, kirchhoff);
+        let mut lift_regressors = regressors;
+        lift_regressors[Regressor::Alpha as usize] *= kirchhoff;
+        let lift_type = self.sum(Coefficient::Lift, &lift_regressors);
         regressors[Regressor::LiftSquared as usize] = lift_type * lift_type;
-        let mut drag_type = self.sum(Coefficient::Drag, &regressors, 1.0);
+        let mut drag_type = self.sum(Coefficient::Drag, &regressors);
         if let Some(e) = self.oswald {
             drag_type += lift_type * lift_type
                 / (self.parameters.values()[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
         }
-        let side = self.sum(Coefficient::Side, &regressors, 1.0);
+        let side = self.sum(Coefficient::Side, &regressors);
         let moment = Vector3::new(
-            self.sum(Coefficient::Roll, &regressors, 1.0),
-            self.sum(Coefficient::Pitch, &regressors, 1.0),
-            self.sum(Coefficient::Yaw, &regressors, 1.0),
+            self.sum(Coefficient::Roll, &regressors),
+            self.sum(Coefficient::Pitch, &regressors),
+            self.sum(Coefficient::Yaw, &regressors),
         );
         let (sin_alpha, cos_alpha) = input.alpha.sin_cos();
         match self.force_axes {
@@ -633,6 +633,13 @@ impl AeroModel {
                 drag: -drag_type * cos_alpha - lift_type * sin_alpha,
             },
         }
+    }
+
+    /// The terms of one coefficient as (regressor, parameter index), in file order.
+    pub fn terms(&self, coefficient: Coefficient) -> impl Iterator<Item = (Regressor, usize)> + '_ {
+        self.terms[coefficient as usize]
+            .iter()
+            .map(|t| (t.regressor, t.parameter))
     }
 
     /// Names of the terms of one coefficient, in file order (for reports and model-structure code).

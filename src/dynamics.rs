@@ -24,7 +24,7 @@ use crate::state::{
     self, CHI, CONTROL_COUNT, Control, Controls, DOWN, NORTH, P, Q0, StateVector, U,
 };
 use crate::wind::WindSample;
-use nalgebra::{SVector, Vector3};
+use nalgebra::{Matrix3, SVector, Vector3};
 
 /// The environment the aircraft flies in.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -148,9 +148,13 @@ impl FlightModel {
         }
     }
 
-    /// Air data for a state and wind.
-    pub fn air_data(&self, x: &StateVector, wind: &WindSample, air: &Air) -> AirData {
-        let ned_to_body = state::body_to_ned(x).transpose();
+    /// Air data for a state and wind, given the state's NED→body rotation.
+    pub fn air_data(
+        x: &StateVector,
+        ned_to_body: &Matrix3<f64>,
+        wind: &WindSample,
+        air: &Air,
+    ) -> AirData {
         let velocity = state::velocity(x) - ned_to_body * wind.ned - wind.body;
         let airspeed = velocity.norm();
         AirData {
@@ -169,13 +173,15 @@ impl FlightModel {
     }
 
     /// The state derivative and all intermediate quantities at one state.
+    #[inline]
     pub fn evaluate(&self, x: &StateVector, exogenous: &Exogenous) -> Evaluation {
         let aircraft = &self.aircraft;
         let mut controls = exogenous.controls;
         aircraft.saturate(&mut controls);
         let air = self.environment.atmosphere.at(state::altitude(x));
-        let air_data = self.air_data(x, &exogenous.wind, &air);
         let body_to_ned = state::body_to_ned(x);
+        let ned_to_body = body_to_ned.transpose();
+        let air_data = Self::air_data(x, &ned_to_body, &exogenous.wind, &air);
         let omega = state::rates(x);
         let thrust = aircraft.propulsion.thrust(
             controls[Control::Throttle.index()],

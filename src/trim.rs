@@ -86,13 +86,15 @@ pub fn trim(model: &FlightModel, condition: &TrimCondition, wind: &WindSample) -
 }
 
 fn check_condition(condition: &TrimCondition) -> Result<()> {
-    if !(condition.airspeed > 0.0) {
+    if condition.airspeed.is_nan() || condition.airspeed <= 0.0 {
         return Err(Error::Trim(format!(
             "airspeed must be positive, is {}",
             condition.airspeed
         )));
     }
-    if !(condition.flight_path_angle.abs() < std::f64::consts::FRAC_PI_2) {
+    if condition.flight_path_angle.is_nan()
+        || condition.flight_path_angle.abs() >= std::f64::consts::FRAC_PI_2
+    {
         return Err(Error::Trim(
             "the flight-path angle must be within ±90°".into(),
         ));

@@ -1,0 +1,6 @@
+//! Parameter estimation: the shared Gauss–Newton / Levenberg–Marquardt core,
+//! the postulated model structure, the estimators and what they return.
+
+pub mod estimate;
+pub mod gauss_newton;
+pub mod structure;

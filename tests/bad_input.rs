@@ -1,0 +1,201 @@
+//! Bad input gets a clear error naming the file, field, line or time — never
+//! a panic — and a departing simulation keeps the trace computed so far.
+
+mod common;
+
+use aeroid::Error;
+use aeroid::aircraft::Aircraft;
+use aeroid::scenario::Scenario;
+use std::path::Path;
+
+fn load_aircraft_text(test: &str, text: &str) -> (std::path::PathBuf, Error) {
+    let folder = common::temp_folder(test);
+    let path = common::write(&folder, "plane.toml", text);
+    let error = Aircraft::load(&path).unwrap_err();
+    (path, error)
+}
+
+fn problem_fields(error: &Error) -> Vec<String> {
+    match error {
+        Error::Invalid { problems, .. } => problems.iter().map(|p| p.field.clone()).collect(),
+        other => panic!("expected a validation error, got {other}"),
+    }
+}
+
+#[test]
+fn malformed_toml_names_file_and_line() {
+    let text = common::attas_with(|t| t.replace("span = \"21.5 m\"", "span = = 21.5"));
+    let line = 1 + text
+        .lines()
+        .position(|l| l.starts_with("span = ="))
+        .unwrap();
+    let (path, error) = load_aircraft_text("malformed", &text);
+    let message = error.to_string();
+    assert!(matches!(error, Error::Toml { .. }), "{message}");
+    assert!(
+        message.contains(&path.display().to_string())
+            && message.contains(&format!("line {line}, column 8")),
+        "{message}"
+    );
+}
+
+#[test]
+fn unknown_aircraft_lists_the_known_ones() {
+    let folder = common::temp_folder("unknown-aircraft");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/attas-trim.toml"
+    ))
+    .unwrap();
+    let path = common::write(
+        &folder,
+        "s.toml",
+        &text.replace("aircraft = \"attas\"", "aircraft = \"concorde\""),
+    );
+    let error = Scenario::load(path.to_str().unwrap()).unwrap_err();
+    let message = error.to_string();
+    assert!(
+        message.contains("unknown aircraft 'concorde'") && message.contains("attas"),
+        "{message}"
+    );
+}
+
+#[test]
+fn negative_mass_nan_and_bad_unit_are_all_reported_at_once() {
+    let text = common::attas_with(|t| {
+        t.replace("mass = \"17631 kg\"", "mass = \"-17631 kg\"")
+            .replace("span = \"21.5 m\"", "span = nan")
+            .replace("chord = \"3.159 m\"", "chord = \"3.159 parsec\"")
+    });
+    let (path, error) = load_aircraft_text("negative-mass", &text);
+    assert_eq!(
+        problem_fields(&error),
+        ["geometry.span", "geometry.chord", "mass.mass"]
+    );
+    let message = error.to_string();
+    assert!(
+        message.starts_with(&path.display().to_string()),
+        "{message}"
+    );
+    assert!(
+        message.contains("not a finite number")
+            && message.contains("'parsec'")
+            && message.contains("must be positive"),
+        "{message}"
+    );
+}
+
+#[test]
+fn inertia_must_be_positive_definite() {
+    let (_, error) = load_aircraft_text(
+        "inertia",
+        &common::attas_with(|t| t.replace("1.14420e4 kg*m2", "3.0e5 kg*m2")),
+    );
+    assert_eq!(problem_fields(&error), ["mass"]);
+    assert!(
+        error.to_string().contains("not positive definite"),
+        "{error}"
+    );
+}
+
+#[test]
+fn unknown_parameter_names_are_rejected() {
+    let (_, error) = load_aircraft_text(
+        "unknown-term",
+        &common::attas_with(|t| t.replace("[aero.Cm]", "[aero.Cm]\nalpha_squared = 0.3")),
+    );
+    assert_eq!(problem_fields(&error), ["aero.Cm.alpha_squared"]);
+    assert!(error.to_string().contains("unknown term 'alpha_squared'"));
+
+    let mut aircraft = Aircraft::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/aircraft/attas.toml"
+    )))
+    .unwrap();
+    let error = aircraft
+        .aero
+        .parameters
+        .set("Cm_alpha_squared", 1.0)
+        .unwrap_err();
+    assert!(
+        error
+            .to_string()
+            .contains("unknown parameter 'Cm_alpha_squared'")
+            && error.to_string().contains("Cm_alpha")
+    );
+    aircraft.aero.parameters.set("Cm_alpha", -0.5).unwrap();
+    assert_eq!(aircraft.aero.parameters.get("Cm_alpha"), Some(-0.5));
+}
+
+#[test]
+fn impossible_trim_is_reported_with_what_it_would_need() {
+    let mut scenario = Scenario::load("attas-trim").unwrap();
+    scenario.trim.airspeed = 400.0;
+    let error = aeroid::sim::Simulation::prepare(&scenario).unwrap_err();
+    let message = error.to_string();
+    assert!(
+        message.starts_with("no trim") && message.contains("throttle"),
+        "{message}"
+    );
+}
+
+/// A statically unstable aircraft (Cmα > 0) trims, then diverges in pitch;
+/// the error gives the time and the trace up to departure.
+#[test]
+fn departing_simulation_reports_time_and_keeps_the_trace() {
+    let mut scenario = Scenario::load("attas-trim").unwrap();
+    scenario
+        .aircraft
+        .aero
+        .parameters
+        .set("Cm_alpha", 0.05)
+        .unwrap();
+    scenario.aircraft.aero.parameters.set("Cm_q", 0.0).unwrap();
+    let simulation = aeroid::sim::Simulation::prepare(&scenario).unwrap();
+    let mut simulation = simulation;
+    simulation.exogenous[0][0] += 0.01;
+    match simulation.run() {
+        Err(Error::Departed {
+            time,
+            reason,
+            partial,
+        }) => {
+            assert!(time > 0.0 && time < 60.0, "{time}");
+            assert!(!partial.samples.is_empty());
+            let last = partial.samples.last().unwrap().time;
+            assert!(
+                (time - last - scenario.step).abs() < 1e-9,
+                "trace ends one step before departure"
+            );
+            assert!(
+                reason.contains('α') || reason.contains("airspeed"),
+                "{reason}"
+            );
+        }
+        other => panic!("expected a departure, got {other:?}"),
+    }
+}
+
+/// The CLI explains every problem and exits non-zero; a departure still writes the partial trace.
+#[test]
+fn cli_check_explains_problems_and_fails() {
+    let text = common::attas_with(|t| {
+        t.replace("mass = \"17631 kg\"", "mass = 0")
+            .replace("[aero.CL]", "[aero.CL]\nbogus = 1")
+    });
+    let folder = common::temp_folder("cli-check");
+    let path = common::write(&folder, "plane.toml", &text);
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_aeroid"))
+        .arg("check")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("2 problem(s)")
+            && stderr.contains("mass.mass")
+            && stderr.contains("aero.CL.bogus"),
+        "{stderr}"
+    );
+}

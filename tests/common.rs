@@ -1,0 +1,26 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// A fresh folder under the system temp folder, unique per test and process.
+pub fn temp_folder(test: &str) -> PathBuf {
+    let folder = std::env::temp_dir().join(format!("aeroid-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&folder);
+    std::fs::create_dir_all(&folder).unwrap();
+    folder
+}
+
+/// Writes `text` to `name` inside `folder`, returning the path.
+pub fn write(folder: &std::path::Path, name: &str, text: &str) -> PathBuf {
+    let path = folder.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// The bundled ATTAS aircraft file with `edit` applied to its text.
+pub fn attas_with(edit: impl Fn(String) -> String) -> String {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/aircraft/attas.toml"))
+        .unwrap();
+    edit(text)
+}
