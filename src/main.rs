@@ -66,6 +66,30 @@ enum Command {
         /// The record folder.
         record: PathBuf,
     },
+    /// Estimate a postulated model's parameters from a record; print the
+    /// estimates with Cramér–Rao standard errors, scored against the truth
+    /// when the record came from a scenario (its truth.toml); write
+    /// estimate.json and estimate.csv.
+    Estimate {
+        /// The record folder.
+        record: PathBuf,
+        /// The model structure: a bundled name (models/) or a path.
+        #[arg(long)]
+        model: String,
+        /// The estimator.
+        #[arg(long, value_enum)]
+        method: Method,
+        /// The folder to write estimate.json and estimate.csv into (created).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+/// Estimators the CLI can run.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum Method {
+    /// Output error, maximum likelihood (Gauss–Newton on det R).
+    Oem,
 }
 
 fn main() -> ExitCode {
@@ -101,6 +125,12 @@ fn run(cli: Cli) -> Result<()> {
             out,
         } => record(&scenario, profile.as_deref(), &out),
         Command::Import { data, map, out } => import(&data, &map, &out),
+        Command::Estimate {
+            record,
+            model,
+            method,
+            out,
+        } => estimate(&record, &model, method, out.as_deref()),
         Command::Inspect { record } => {
             print!(
                 "{}",
@@ -182,6 +212,56 @@ fn import(data: &std::path::Path, map: &std::path::Path, out: &std::path::Path) 
         println!(
             "columns not in the map (not imported): {}",
             outcome.unmapped.join(", ")
+        );
+    }
+    Ok(())
+}
+
+fn estimate(
+    record_folder: &std::path::Path,
+    model: &str,
+    method: Method,
+    out: Option<&std::path::Path>,
+) -> Result<()> {
+    use aeroid::estimation::{output_error, score, structure::ModelStructure};
+    let record = aeroid::record::FlightRecord::read(record_folder)?;
+    let structure = ModelStructure::load(model)?;
+    let estimate = match method {
+        Method::Oem => output_error::output_error(&[&record], &structure, &Default::default())?,
+    };
+    let truth_path = record_folder.join(aeroid::truth::TRUTH_FILE);
+    let truth = truth_path
+        .is_file()
+        .then(|| aeroid::truth::RunTruth::read(&truth_path))
+        .transpose()?;
+    let scores = score::score(&estimate, truth.as_ref());
+    println!(
+        "{} on {} with model {}: {:?} after {} iterations, {:.3} s",
+        estimate.method,
+        estimate.record,
+        estimate.model,
+        estimate.status,
+        estimate.iterations,
+        estimate.wall_time
+    );
+    print!("{}", score::table(&scores));
+    for fit in &estimate.fits {
+        println!(
+            "  fit {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}",
+            fit.channel, fit.rms, fit.r_squared, fit.theil
+        );
+    }
+    for note in &estimate.notes {
+        println!("  note: {note}");
+    }
+    if let Some(out) = out {
+        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+        estimate.write_json(&out.join("estimate.json"))?;
+        score::write_csv(&scores, &out.join("estimate.csv"))?;
+        println!(
+            "written: {}/estimate.json, {}/estimate.csv",
+            out.display(),
+            out.display()
         );
     }
     Ok(())
