@@ -505,12 +505,7 @@ impl AeroModel {
         let stall = self
             .stall
             .is_some_and(|s| values[s.tau1] == 0.0 && values[s.tau2] != 0.0);
-        stall
-            || self
-                .terms
-                .iter()
-                .flatten()
-                .any(|t| t.regressor == Regressor::AlphaDot)
+        stall || self.has_alpha_dot_terms
     }
 
     /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (seed 001, Eq. 3); 1 without stall model.

@@ -76,9 +76,10 @@ pub struct Propulsion {
 }
 
 impl Propulsion {
-    /// Thrust magnitude (N) for a throttle fraction at density ratio σ = ρ/ρ0.
-    pub fn thrust(&self, throttle: f64, density_ratio: f64) -> f64 {
-        throttle * self.max_thrust * density_ratio.powf(self.density_exponent)
+    /// Thrust magnitude (N) for a throttle fraction at ln(σ), σ = ρ/ρ0:
+    /// T = δT·Tmax·σ^n, evaluated as exp(n·ln σ).
+    pub fn thrust(&self, throttle: f64, log_density_ratio: f64) -> f64 {
+        throttle * self.max_thrust * (self.density_exponent * log_density_ratio).exp()
     }
 }
 

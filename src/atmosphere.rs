@@ -19,6 +19,8 @@ pub struct Air {
     pub pressure: f64,
     pub density: f64,
     pub speed_of_sound: f64,
+    /// ln(ρ/ρ0), for power laws in density without `powf`.
+    pub log_density_ratio: f64,
 }
 
 /// ISA with a temperature offset `temperature_offset` (K).
@@ -34,30 +36,44 @@ impl Atmosphere {
 
     /// Standard temperature and pressure at `altitude` (m).
     pub fn standard(altitude: f64) -> (f64, f64) {
+        let (temperature, log_pressure_ratio) = Self::standard_log(altitude);
+        (temperature, SEA_LEVEL_PRESSURE * log_pressure_ratio.exp())
+    }
+
+    /// Standard temperature and ln(p/p0) at `altitude`: one logarithm, no `powf`.
+    fn standard_log(altitude: f64) -> (f64, f64) {
         let exponent = GRAVITY / (GAS_CONSTANT * LAPSE_RATE);
+        let tropopause_temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * TROPOPAUSE;
         if altitude <= TROPOPAUSE {
             let temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * altitude;
-            let pressure =
-                SEA_LEVEL_PRESSURE * (temperature / SEA_LEVEL_TEMPERATURE).powf(exponent);
-            (temperature, pressure)
+            (
+                temperature,
+                exponent * (temperature / SEA_LEVEL_TEMPERATURE).ln(),
+            )
         } else {
-            let temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * TROPOPAUSE;
-            let tropopause_pressure =
-                SEA_LEVEL_PRESSURE * (temperature / SEA_LEVEL_TEMPERATURE).powf(exponent);
-            let pressure = tropopause_pressure
-                * (-GRAVITY * (altitude - TROPOPAUSE) / (GAS_CONSTANT * temperature)).exp();
-            (temperature, pressure)
+            let tropopause = exponent * (tropopause_temperature / SEA_LEVEL_TEMPERATURE).ln();
+            let above =
+                -GRAVITY * (altitude - TROPOPAUSE) / (GAS_CONSTANT * tropopause_temperature);
+            (tropopause_temperature, tropopause + above)
         }
     }
 
     pub fn at(&self, altitude: f64) -> Air {
-        let (standard_temperature, pressure) = Self::standard(altitude);
+        let (standard_temperature, log_pressure_ratio) = Self::standard_log(altitude);
         let temperature = standard_temperature + self.temperature_offset;
+        let pressure = SEA_LEVEL_PRESSURE * log_pressure_ratio.exp();
+        // ρ/ρ0 = (p/p0)·(T0/T); the logarithm serves power laws such as thrust lapse.
+        let log_density_ratio = if self.temperature_offset == 0.0 {
+            log_pressure_ratio - (standard_temperature / SEA_LEVEL_TEMPERATURE).ln()
+        } else {
+            log_pressure_ratio - (temperature / SEA_LEVEL_TEMPERATURE).ln()
+        };
         Air {
             temperature,
             pressure,
             density: pressure / (GAS_CONSTANT * temperature),
             speed_of_sound: (HEAT_CAPACITY_RATIO * GAS_CONSTANT * temperature).sqrt(),
+            log_density_ratio,
         }
     }
 
@@ -105,6 +121,7 @@ mod tests {
             );
             assert!((air.speed_of_sound - a).abs() < 0.02, "a at {h}");
             assert!((Atmosphere::pressure_altitude(air.pressure) - h).abs() < 1e-6);
+            assert!((air.log_density_ratio.exp() - air.density / SEA_LEVEL_DENSITY).abs() < 1e-4);
         }
     }
 

@@ -18,7 +18,7 @@
 
 use crate::aero::{AeroCoefficients, AeroInput};
 use crate::aircraft::Aircraft;
-use crate::atmosphere::{Air, Atmosphere, SEA_LEVEL_DENSITY};
+use crate::atmosphere::{Air, Atmosphere};
 use crate::integrator::Interpolation;
 use crate::state::{
     self, CHI, CONTROL_COUNT, Control, Controls, DOWN, NORTH, P, Q0, StateVector, U,
@@ -183,21 +183,19 @@ impl FlightModel {
         let ned_to_body = body_to_ned.transpose();
         let air_data = Self::air_data(x, &ned_to_body, &exogenous.wind, &air);
         let omega = state::rates(x);
-        let thrust = aircraft.propulsion.thrust(
-            controls[Control::Throttle.index()],
-            air.density / SEA_LEVEL_DENSITY,
-        );
+        let thrust = aircraft
+            .propulsion
+            .thrust(controls[Control::Throttle.index()], air.log_density_ratio);
         let thrust_force = aircraft.propulsion.direction * thrust;
-        let wind_rate_body = body_to_ned.transpose() * exogenous.wind_rate.ned
-            - omega.cross(&(body_to_ned.transpose() * exogenous.wind.ned))
+        let wind_rate_body = ned_to_body * exogenous.wind_rate.ned
+            - omega.cross(&(ned_to_body * exogenous.wind.ned))
             + exogenous.wind_rate.body;
         let context = TranslationalContext {
             x,
             air_data: &air_data,
             controls: &controls,
             omega: &omega,
-            gravity_body: body_to_ned.transpose()
-                * Vector3::new(0.0, 0.0, self.environment.gravity),
+            gravity_body: ned_to_body.column(2) * self.environment.gravity,
             thrust_force: &thrust_force,
             wind_rate_body: &wind_rate_body,
         };
