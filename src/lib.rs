@@ -10,6 +10,8 @@ pub mod dynamics;
 pub mod error;
 pub mod inputs;
 pub mod integrator;
+pub mod linearize;
+pub mod modal_fit;
 pub mod params;
 pub mod random;
 pub mod scenario;
