@@ -17,7 +17,10 @@ fn prepared(reference: &str) -> Simulation {
 fn bench_steps(c: &mut Criterion) {
     let mut group = c.benchmark_group("rk4_steps");
     group.throughput(Throughput::Elements(STEPS as u64));
-    for (label, reference) in [("linear_attas", "attas-elevator-3211"), ("stall_attas", "attas-stall")] {
+    for (label, reference) in [
+        ("linear_attas", "attas-elevator-3211"),
+        ("stall_attas", "attas-stall"),
+    ] {
         let simulation = prepared(reference);
         group.bench_function(label, |b| {
             b.iter(|| {
