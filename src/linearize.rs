@@ -653,6 +653,43 @@ mod tests {
         assert!(error < 1e-8, "{} vs {expected}", linear.a[(Q, W)]);
     }
 
+    /// With the stall model's χ as a state (τ1 > 0, τ2 = 0) the linear model
+    /// has eleven states, and χ̇ = (χ∞(α) − χ)/τ1 with
+    /// χ∞ = ½(1 − tanh(a1(α − α*))) gives ∂χ̇/∂χ = −1/τ1 and
+    /// ∂χ̇/∂w = χ∞'(α)·u/(u² + w²)/τ1 in closed form; the fast lag it adds is
+    /// classified as "other".
+    #[test]
+    fn separation_point_state_matches_closed_form() {
+        let (a1, alpha_star, tau1) = (23.7, 0.309, 0.2);
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("aircraft/attas.toml");
+        let text = std::fs::read_to_string(path)
+            .unwrap()
+            .replace("model = \"linear\"", "model = \"stall\"")
+            + &format!(
+                "\n[aero.stall]\na1 = {a1}\nalpha_star = {alpha_star}\ntau1 = {tau1}\ntau2 = 0.0\n"
+            );
+        let file = toml::from_str(&text).unwrap();
+        let aircraft = Aircraft::from_file(&file, std::path::Path::new("stall")).unwrap();
+        let model = FlightModel::new(aircraft, Environment::default());
+        let trimmed = trim(&model, &condition(), &WindSample::default()).unwrap();
+        let linear = linearize(&model, &trimmed, &WindSample::default());
+        assert_eq!(linear.a.nrows(), 11);
+        assert_eq!(linear.state_names[CHI_E], "chi");
+        assert!((linear.a[(CHI_E, CHI_E)] + 1.0 / tau1).abs() < 1e-8);
+        let (u, w) = (trimmed.state[state::U], trimmed.state[state::W]);
+        let slope = -0.5 * a1 / (a1 * (trimmed.alpha - alpha_star)).cosh().powi(2);
+        let expected = slope * u / (u * u + w * w) / tau1;
+        let error = (linear.a[(CHI_E, W)] - expected).abs() / expected.abs();
+        assert!(error < 1e-7, "{} vs {expected}", linear.a[(CHI_E, W)]);
+        let modes = linear.modes();
+        let lag = modes
+            .iter()
+            .find(|m| (m.eigenvalue.re + 1.0 / tau1).abs() < 0.5)
+            .unwrap();
+        assert_eq!(lag.kind, ModeKind::Other);
+        assert!(find(&modes, ModeKind::ShortPeriod).is_some());
+    }
+
     /// A linear oscillator embedded in a matrix: participation factors find
     /// its states, and the two slowest longitudinal pairs are ordered.
     #[test]
