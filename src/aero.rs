@@ -57,7 +57,7 @@ pub enum Regressor {
     LiftSquared,
 }
 
-const REGRESSOR_COUNT: usize = 15;
+pub const REGRESSOR_COUNT: usize = 15;
 
 impl Regressor {
     pub const ALL: [Regressor; REGRESSOR_COUNT] = [
@@ -555,7 +555,9 @@ impl AeroModel {
         }
     }
 
-    fn regressors(&self, input: &AeroInput, chi: f64) -> [f64; REGRESSOR_COUNT] {
+    /// The value of every regressor (indexed by `Regressor as usize`) at a
+    /// flight condition; `CL2` is left 0 (it needs the lift coefficient).
+    pub fn regressors(&self, input: &AeroInput, chi: f64) -> [f64; REGRESSOR_COUNT] {
         let divisor = self.rate_divisor(input.airspeed);
         let (b, c) = (self.geometry.span, self.geometry.chord);
         let u = &input.controls;
@@ -631,6 +633,13 @@ impl AeroModel {
                 drag: -drag_type * cos_alpha - lift_type * sin_alpha,
             },
         }
+    }
+
+    /// The terms of one coefficient as (regressor, parameter index), in file order.
+    pub fn terms(&self, coefficient: Coefficient) -> impl Iterator<Item = (Regressor, usize)> + '_ {
+        self.terms[coefficient as usize]
+            .iter()
+            .map(|t| (t.regressor, t.parameter))
     }
 
     /// Names of the terms of one coefficient, in file order (for reports and model-structure code).

@@ -13,7 +13,7 @@ const TROPOPAUSE: f64 = 11_000.0;
 const GRAVITY: f64 = crate::units::STANDARD_GRAVITY;
 
 /// Air properties at one altitude.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Air {
     pub temperature: f64,
     pub pressure: f64,

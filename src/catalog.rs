@@ -1,4 +1,4 @@
-//! Where bundled aircraft and scenario files are found, so that adding one
+//! Where bundled aircraft, scenario and recorder files are found, so that adding one
 //! never needs a recompile: the folder named by `AEROID_DATA`, else the
 //! current folder if it holds `aircraft/` or `scenarios/`, else the source
 //! tree aeroid was built from.
@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 pub const AIRCRAFT_FOLDER: &str = "aircraft";
 pub const SCENARIO_FOLDER: &str = "scenarios";
+/// Recorder (sensor) profiles, `recorders/*.toml`.
+pub const RECORDER_FOLDER: &str = "recorders";
 
 /// The data folder holding `aircraft/` and `scenarios/`.
 pub fn data_folder() -> PathBuf {
@@ -54,10 +56,10 @@ pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<Pat
         .into_iter()
         .find(|c| c.is_file())
         .ok_or_else(|| Error::Unknown {
-            kind: if folder == AIRCRAFT_FOLDER {
-                "aircraft"
-            } else {
-                "scenario"
+            kind: match folder {
+                AIRCRAFT_FOLDER => "aircraft",
+                RECORDER_FOLDER => "recorder profile",
+                _ => "scenario",
             },
             name: reference.to_string(),
             known: bundled(folder),

@@ -1,9 +1,10 @@
-//! `aeroid check`: validates an aircraft or scenario file, reporting every
-//! problem at once; a valid scenario is also trimmed, so that a flight
-//! condition with no trim is found before a long run.
+//! `aeroid check`: validates an aircraft, scenario or recorder-profile file,
+//! reporting every problem at once; a valid scenario is also trimmed, so that
+//! a flight condition with no trim is found before a long run.
 
 use crate::aircraft::Aircraft;
 use crate::error::{Error, Result, parse_toml, read_text};
+use crate::recorder::{Profile, ProfileFile};
 use crate::scenario::{Scenario, ScenarioFile};
 use crate::sim::Simulation;
 use std::path::Path;
@@ -15,7 +16,8 @@ pub struct CheckReport {
     pub lines: Vec<String>,
 }
 
-/// Validates the file at `path`, telling an aircraft from a scenario by its tables.
+/// Validates the file at `path`, telling an aircraft, a scenario and a
+/// recorder profile apart by their tables (`[aero]`, `[trim]`, `[[channels]]`).
 pub fn check_file(path: &Path) -> Result<CheckReport> {
     let text = read_text(path)?;
     let table: toml::Table = parse_toml(path, &text)?;
@@ -24,12 +26,16 @@ pub fn check_file(path: &Path) -> Result<CheckReport> {
         check_scenario(&Scenario::from_file(&file, path)?)
     } else if table.contains_key("aero") {
         Ok(describe_aircraft(&Aircraft::load(path)?))
+    } else if table.get("channels").is_some_and(|c| c.is_array()) && !table.contains_key("time") {
+        let file: ProfileFile = parse_toml(path, &text)?;
+        Ok(describe_profile(&Profile::from_file(&file, path)?))
     } else {
         Err(Error::Invalid {
             path: path.to_path_buf(),
             problems: vec![crate::error::Problem {
                 field: "(file)".into(),
-                message: "neither a scenario (no [trim] table) nor an aircraft (no [aero] table)"
+                message: "neither a scenario (no [trim] table), an aircraft (no [aero] table) \
+                          nor a recorder profile (no [[channels]])"
                     .into(),
             }],
         })
@@ -54,6 +60,32 @@ fn describe_aircraft(aircraft: &Aircraft) -> CheckReport {
                 aircraft.aero.kind,
                 aircraft.aero.parameters.len()
             ),
+        ],
+    }
+}
+
+fn describe_profile(profile: &Profile) -> CheckReport {
+    let channels: Vec<String> = profile
+        .channels
+        .iter()
+        .map(|c| {
+            format!(
+                "{} {} Hz",
+                c.measurand.name,
+                crate::record::rate_text(c.rate)
+            )
+        })
+        .collect();
+    let absent = match profile.absent.is_empty() {
+        true => "none".to_string(),
+        false => profile.absent.join(", "),
+    };
+    CheckReport {
+        kind: "recorder profile",
+        lines: vec![
+            format!("{}: {} channels", profile.name, profile.channels.len()),
+            channels.join(", "),
+            format!("absent: {absent}"),
         ],
     }
 }

@@ -105,7 +105,7 @@ pub struct AirData {
 
 /// The state derivative together with every intermediate quantity a truth
 /// trace or a recorder needs.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Evaluation {
     pub derivative: StateVector,
     pub air: Air,

@@ -29,13 +29,42 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
-    /// List the bundled aircraft and scenarios.
+    /// List the bundled aircraft, scenarios and recorder profiles.
     List,
-    /// Validate an aircraft or scenario file and explain every problem; a
-    /// scenario is also trimmed.
+    /// Validate an aircraft, scenario or recorder-profile file and explain
+    /// every problem; a scenario is also trimmed.
     Check {
         /// The file to check.
         file: PathBuf,
+    },
+    /// Fly a scenario and record it with a recorder profile: write the flight
+    /// record (record.toml + CSV per time base) and the run's truth.toml.
+    Record {
+        /// A bundled scenario name or a path to a scenario file.
+        scenario: String,
+        /// A bundled recorder profile (recorders/) or a path; default: the
+        /// scenario's `recorder`, else `ideal`.
+        #[arg(long)]
+        profile: Option<String>,
+        /// The record folder to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Bring real flight data in: a CSV and a column map (TOML) become a record folder.
+    Import {
+        /// The CSV file with a time column.
+        data: PathBuf,
+        /// The column map: time column, and per channel its column, unit, scale and offset.
+        #[arg(long)]
+        map: PathBuf,
+        /// The record folder to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Print a record's channels with rates, units, ranges, dropouts and gaps.
+    Inspect {
+        /// The record folder.
+        record: PathBuf,
     },
 }
 
@@ -54,12 +83,29 @@ fn run(cli: Cli) -> Result<()> {
         Command::Simulate { scenario, out } => simulate(&scenario, &out),
         Command::List => {
             println!("data folder: {}", catalog::data_folder().display());
-            for folder in [catalog::AIRCRAFT_FOLDER, catalog::SCENARIO_FOLDER] {
+            for folder in [
+                catalog::AIRCRAFT_FOLDER,
+                catalog::SCENARIO_FOLDER,
+                catalog::RECORDER_FOLDER,
+            ] {
                 println!("{folder}:");
                 for name in catalog::bundled(folder) {
                     println!("  {name}");
                 }
             }
+            Ok(())
+        }
+        Command::Record {
+            scenario,
+            profile,
+            out,
+        } => record(&scenario, profile.as_deref(), &out),
+        Command::Import { data, map, out } => import(&data, &map, &out),
+        Command::Inspect { record } => {
+            print!(
+                "{}",
+                aeroid::record::FlightRecord::read(&record)?.describe()
+            );
             Ok(())
         }
         Command::Check { file } => {
@@ -105,4 +151,38 @@ fn simulate(reference: &str, out: &std::path::Path) -> Result<()> {
         }
         Err(error) => Err(error.into()),
     }
+}
+
+fn record(reference: &str, profile: Option<&str>, out: &std::path::Path) -> Result<()> {
+    let scenario = Scenario::load(reference)?;
+    let profile = aeroid::recorder::profile_for(&scenario, profile)?;
+    let (record, truth) = aeroid::recorder::record_scenario(&scenario, &profile)?;
+    record.write(out)?;
+    truth.write(&out.join(aeroid::truth::TRUTH_FILE))?;
+    println!(
+        "{}: recorded with profile {} ({} channels); record and truth written to {}",
+        scenario.name,
+        profile.name,
+        record.channels.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+fn import(data: &std::path::Path, map: &std::path::Path, out: &std::path::Path) -> Result<()> {
+    let outcome = aeroid::import::import(data, map)?;
+    outcome.record.write(out)?;
+    println!(
+        "{}: {} channels imported into {}",
+        data.display(),
+        outcome.record.channels.len(),
+        out.display()
+    );
+    if !outcome.unmapped.is_empty() {
+        println!(
+            "columns not in the map (not imported): {}",
+            outcome.unmapped.join(", ")
+        );
+    }
+    Ok(())
 }

@@ -39,6 +39,10 @@ pub struct ScenarioFile {
     pub wind: WindSpec,
     #[serde(default)]
     pub departure: DepartureSpec,
+    /// The recorder profile `aeroid record` uses when no `--profile` is given
+    /// (a bundled name in `recorders/` or a path relative to this file).
+    #[serde(default)]
+    pub recorder: Option<String>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -107,6 +111,8 @@ pub struct Scenario {
     pub inputs: InputSchedule,
     pub wind: WindSpec,
     pub departure: DepartureLimits,
+    /// The default recorder profile reference, if the file names one.
+    pub recorder: Option<String>,
 }
 
 impl Scenario {
@@ -189,6 +195,7 @@ impl Scenario {
             inputs,
             wind: file.wind.clone(),
             departure,
+            recorder: file.recorder.clone(),
         };
         problems.finish(path, scenario)
     }

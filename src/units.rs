@@ -27,9 +27,33 @@ pub enum Dimension {
     Force,
     Inertia,
     TemperatureDifference,
+    MassFlow,
+    Pressure,
+    /// Load factor: specific force in units of standard gravity (dimensionless).
+    LoadFactor,
 }
 
 impl Dimension {
+    /// Every dimension, for finding the one a unit belongs to.
+    pub const ALL: [Dimension; 16] = [
+        Dimension::Dimensionless,
+        Dimension::Angle,
+        Dimension::AngularRate,
+        Dimension::Length,
+        Dimension::Area,
+        Dimension::Speed,
+        Dimension::Acceleration,
+        Dimension::Time,
+        Dimension::Frequency,
+        Dimension::Mass,
+        Dimension::Force,
+        Dimension::Inertia,
+        Dimension::TemperatureDifference,
+        Dimension::MassFlow,
+        Dimension::Pressure,
+        Dimension::LoadFactor,
+    ];
+
     /// Units accepted for this dimension with their factor to SI.
     fn units(self) -> &'static [(&'static str, f64)] {
         use Dimension::*;
@@ -66,6 +90,25 @@ impl Dimension {
                 ("slug*ft2", 1.355_817_948_331_4),
             ],
             TemperatureDifference => &[("K", 1.0), ("degC", 1.0)],
+            MassFlow => &[
+                ("kg/s", 1.0),
+                ("kg/h", 1.0 / 3600.0),
+                ("lb/h", 0.453_592_37 / 3600.0),
+            ],
+            Pressure => &[
+                ("Pa", 1.0),
+                ("hPa", 100.0),
+                ("kPa", 1000.0),
+                ("mbar", 100.0),
+                ("psi", 6_894.757_293_168),
+                ("inHg", 3_386.389),
+            ],
+            LoadFactor => &[
+                ("", 1.0),
+                ("g", 1.0),
+                ("m/s2", 1.0 / STANDARD_GRAVITY),
+                ("m/s^2", 1.0 / STANDARD_GRAVITY),
+            ],
         }
     }
 
@@ -103,7 +146,10 @@ pub fn unit_factor(unit: &str, dimension: Dimension) -> Result<f64, String> {
 
 /// Units whose case carries meaning (`g` vs `G`, `kN`, `Hz`): compared exactly.
 fn is_case_sensitive(name: &str) -> bool {
-    matches!(name, "t" | "g" | "kN" | "N" | "Hz" | "K")
+    matches!(
+        name,
+        "t" | "g" | "kN" | "N" | "Hz" | "K" | "Pa" | "hPa" | "kPa"
+    )
 }
 
 /// A quantity as written in a file: a plain number (SI) or `"value unit"`.

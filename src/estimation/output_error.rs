@@ -1,0 +1,433 @@
+//! Output error, maximum likelihood (seeds 001 Eqs. 5–10, 002, 004; Maine &
+//! Iliff; Jategaonkar, "Flight Vehicle System Identification", ch. 4).
+//!
+//! The postulated model is simulated with the recorded inputs (and, for
+//! decoupled models, the recorded pseudo-controls; see [`driven`]); its
+//! outputs y(θ) are compared with the recorded outputs z at each channel's
+//! own sample instants, the prediction on the integration grid being
+//! interpolated linearly to them. The negative log-likelihood with unknown
+//! residual covariance R reduces to the cost det(R) (seed 001 Eq. 7), which is
+//! minimised by relaxation: at every iteration R is re-estimated from the
+//! residuals at the current θ, R = (1/N)·Σ e·eᵀ (Eq. 8), and a Gauss–Newton
+//! step is taken on ½·Σ eᵀR⁻¹e with R fixed (Eqs. 9–10), by the shared core
+//! [`gauss_newton`]. R is diagonal: channels may have different time bases,
+//! so cross-covariances are undefined, and with independent sensor noise the
+//! diagonal R is the maximum-likelihood one. Sensitivities ∂y/∂θ are central
+//! finite differences with relative step 10⁻⁶·max(|θ|, 10⁻³). Cramér–Rao
+//! bounds are the square roots of the diagonal of M⁻¹, M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ).
+//! Options: initial states and output biases as unknowns; several manoeuvres
+//! at once (shared aerodynamic parameters, initial states per manoeuvre).
+
+use crate::dynamics::FlightModel;
+use crate::error::{Error, Result};
+use crate::estimation::driven::{self, DrivenSimulation, FlightPathState};
+use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
+use crate::estimation::gauss_newton::{self, LeastSquaresProblem, Options};
+use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
+use crate::record::FlightRecord;
+use nalgebra::DVector;
+
+/// Settings of an output-error run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputErrorOptions {
+    pub max_iterations: usize,
+    /// Fit only this time window (s) of every record; default the whole record.
+    pub window: Option<(f64, f64)>,
+}
+
+impl Default for OutputErrorOptions {
+    fn default() -> Self {
+        OutputErrorOptions {
+            max_iterations: 30,
+            window: None,
+        }
+    }
+}
+
+/// An unknown of the fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Unknown {
+    Aero(usize),
+    Initial { segment: usize, state: usize },
+    Bias { output: usize },
+}
+
+/// Recorded samples of one output in one manoeuvre.
+#[derive(Debug, Clone)]
+struct Measured {
+    times: Vec<f64>,
+    values: Vec<f64>,
+}
+
+/// One manoeuvre: its driven simulation, initial state and measured outputs.
+#[derive(Debug, Clone)]
+struct Segment {
+    simulation: DrivenSimulation,
+    initial: FlightPathState,
+    outputs: Vec<Measured>,
+}
+
+struct Problem {
+    model: FlightModel,
+    segments: Vec<Segment>,
+    unknowns: Vec<Unknown>,
+    outputs: Vec<String>,
+    /// 1/σ per output (R = diag(σ²)).
+    weights: Vec<f64>,
+}
+
+/// Fits `structure` to one or more records by output error.
+pub fn output_error(
+    records: &[&FlightRecord],
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+) -> Result<Estimate> {
+    let started = std::time::Instant::now();
+    for name in &structure.outputs {
+        if !driven::is_observable(name) {
+            return Err(Error::Other(format!(
+                "model '{}': output '{name}' is not a model output",
+                structure.name
+            )));
+        }
+    }
+    let segments = records
+        .iter()
+        .map(|record| segment(record, structure, options))
+        .collect::<Result<Vec<_>>>()?;
+    let mut problem = Problem {
+        model: FlightModel::new(structure.aircraft.clone(), Default::default()),
+        unknowns: unknowns(structure, &segments),
+        segments,
+        outputs: structure.outputs.clone(),
+        weights: vec![1.0; structure.outputs.len()],
+    };
+    let start = problem.current();
+    let mut solver_options = Options::new(start.len());
+    solver_options.max_iterations = options.max_iterations;
+    for (j, unknown) in problem.unknowns.iter().enumerate() {
+        if let Unknown::Aero(i) = unknown {
+            solver_options.bounds[j] = structure.bounds[*i];
+        }
+    }
+    let solution = gauss_newton::solve(&mut problem, &start, &solver_options);
+    Ok(problem.estimate(
+        structure,
+        records,
+        &start,
+        &solution,
+        started.elapsed().as_secs_f64(),
+    ))
+}
+
+/// The fitting window of a record: where every output channel has samples.
+fn window(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+) -> Result<(f64, f64)> {
+    let mut range = options.window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+    for name in &structure.outputs {
+        let channel = record.channel(name)?;
+        let (first, last) = (
+            channel.times.first().copied(),
+            channel.times.last().copied(),
+        );
+        let (Some(first), Some(last)) = (first, last) else {
+            return Err(Error::Other(format!("channel '{name}' is empty")));
+        };
+        range = (range.0.max(first), range.1.min(last));
+    }
+    if range.1 <= range.0 {
+        return Err(Error::Other(format!(
+            "record '{}': the output channels share no time window",
+            record.scenario
+        )));
+    }
+    Ok(range)
+}
+
+/// The integration step: the structure's, else the fastest output channel's period.
+fn step(record: &FlightRecord, structure: &ModelStructure) -> Result<f64> {
+    if let Some(step) = structure.step {
+        return Ok(step);
+    }
+    let mut fastest: f64 = 0.0;
+    for name in &structure.outputs {
+        fastest = fastest.max(record.channel(name)?.rate);
+    }
+    Ok(1.0 / fastest)
+}
+
+fn segment(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+) -> Result<Segment> {
+    let window = window(record, structure, options)?;
+    let step = step(record, structure)?;
+    let simulation = DrivenSimulation::from_record(
+        record,
+        &structure.integrate,
+        structure.interpolation,
+        step,
+        window,
+    )?;
+    let end = simulation.time(simulation.len() - 1);
+    let mut initial = simulation.measured[0];
+    for &i in &structure.integrate {
+        initial[i] = record
+            .channel(FLIGHT_PATH_STATES[i])
+            .ok()
+            .and_then(|c| c.value_at(window.0))
+            .unwrap_or(0.0);
+    }
+    let aero = &structure.aircraft.aero;
+    initial[10] = aero.separation_target(initial[1], 0.0);
+    let outputs = structure
+        .outputs
+        .iter()
+        .map(|name| {
+            let channel = record.channel(name)?;
+            let (times, values) = channel
+                .times
+                .iter()
+                .zip(&channel.values)
+                .filter(|(t, v)| **t >= window.0 && **t <= end && v.is_finite())
+                .map(|(t, v)| (*t, *v))
+                .unzip();
+            Ok(Measured { times, values })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Segment {
+        simulation,
+        initial,
+        outputs,
+    })
+}
+
+fn unknowns(structure: &ModelStructure, segments: &[Segment]) -> Vec<Unknown> {
+    let mut unknowns: Vec<Unknown> = (0..structure.free.len())
+        .filter(|&i| structure.free[i])
+        .map(Unknown::Aero)
+        .collect();
+    if structure.estimate_initial_state {
+        for segment in 0..segments.len() {
+            unknowns.extend(
+                structure
+                    .integrate
+                    .iter()
+                    .filter(|&&s| s != 10)
+                    .map(|&state| Unknown::Initial { segment, state }),
+            );
+        }
+    }
+    for name in &structure.output_biases {
+        if let Some(output) = structure.outputs.iter().position(|o| o == name) {
+            unknowns.push(Unknown::Bias { output });
+        }
+    }
+    unknowns
+}
+
+impl Problem {
+    /// The current values of the unknowns.
+    fn current(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.unknowns.len(),
+            self.unknowns.iter().map(|unknown| match *unknown {
+                Unknown::Aero(i) => self.model.aircraft.aero.parameters.values()[i],
+                Unknown::Initial { segment, state } => self.segments[segment].initial[state],
+                Unknown::Bias { .. } => 0.0,
+            }),
+        )
+    }
+
+    fn name(&self, unknown: Unknown) -> String {
+        match unknown {
+            Unknown::Aero(i) => self.model.aircraft.aero.parameters.names()[i].clone(),
+            Unknown::Initial { segment, state } => {
+                format!("x0[{segment}].{}", FLIGHT_PATH_STATES[state])
+            }
+            Unknown::Bias { output } => format!("bias.{}", self.outputs[output]),
+        }
+    }
+
+    /// Sets θ, returning the output biases.
+    fn apply(&mut self, theta: &DVector<f64>) -> Vec<f64> {
+        let mut biases = vec![0.0; self.outputs.len()];
+        for (unknown, &value) in self.unknowns.iter().zip(theta.iter()) {
+            match *unknown {
+                Unknown::Aero(i) => self.model.aircraft.aero.parameters.values_mut()[i] = value,
+                Unknown::Initial { segment, state } => {
+                    self.segments[segment].initial[state] = value
+                }
+                Unknown::Bias { output } => biases[output] = value,
+            }
+        }
+        biases
+    }
+
+    /// Model outputs at every recorded sample: [segment][output][sample].
+    fn predictions(
+        &mut self,
+        theta: &DVector<f64>,
+    ) -> std::result::Result<Vec<Vec<Vec<f64>>>, String> {
+        let biases = self.apply(theta);
+        let mut all = Vec::with_capacity(self.segments.len());
+        for segment in &self.segments {
+            let mut grid = vec![Vec::with_capacity(segment.simulation.len()); self.outputs.len()];
+            segment
+                .simulation
+                .simulate(&self.model, &segment.initial, |_, x, evaluation| {
+                    for (values, name) in grid.iter_mut().zip(&self.outputs) {
+                        values.push(driven::observe(name, x, evaluation).unwrap_or(f64::NAN));
+                    }
+                })?;
+            let simulation = &segment.simulation;
+            all.push(
+                segment
+                    .outputs
+                    .iter()
+                    .zip(&grid)
+                    .zip(&biases)
+                    .map(|((measured, grid), bias)| {
+                        measured
+                            .times
+                            .iter()
+                            .map(|&t| interpolate(grid, simulation, t) + bias)
+                            .collect()
+                    })
+                    .collect(),
+            );
+        }
+        Ok(all)
+    }
+
+    /// Unweighted residuals z − y per output, all segments concatenated.
+    fn errors(&mut self, theta: &DVector<f64>) -> std::result::Result<Vec<Vec<f64>>, String> {
+        let predictions = self.predictions(theta)?;
+        let mut errors = vec![Vec::new(); self.outputs.len()];
+        for (segment, predicted) in self.segments.iter().zip(&predictions) {
+            for (o, (measured, predicted)) in segment.outputs.iter().zip(predicted).enumerate() {
+                errors[o].extend(measured.values.iter().zip(predicted).map(|(z, y)| z - y));
+            }
+        }
+        Ok(errors)
+    }
+
+    fn estimate(
+        &mut self,
+        structure: &ModelStructure,
+        records: &[&FlightRecord],
+        start: &DVector<f64>,
+        solution: &gauss_newton::Solution,
+        wall_time: f64,
+    ) -> Estimate {
+        let covariance = solution.covariance();
+        let parameters = self
+            .unknowns
+            .iter()
+            .enumerate()
+            .map(|(j, &unknown)| ParameterEstimate {
+                name: self.name(unknown),
+                value: solution.theta[j],
+                standard_error: covariance[(j, j)].sqrt(),
+                start: start[j],
+            })
+            .collect();
+        let mut notes: Vec<String> = self
+            .segments
+            .iter()
+            .flat_map(|s| s.simulation.notes.clone())
+            .collect();
+        notes.sort();
+        notes.dedup();
+        let fits = self.fits(&solution.theta);
+        let determinant: f64 = self.weights.iter().map(|w| w.powi(-2)).product();
+        notes.push(format!(
+            "R is diagonal; det(R) = {determinant:.4e} at the solution"
+        ));
+        Estimate {
+            method: "oem".into(),
+            model: structure.name.clone(),
+            record: records
+                .iter()
+                .map(|r| r.scenario.clone())
+                .collect::<Vec<_>>()
+                .join(", "),
+            status: solution.status.clone(),
+            parameters,
+            covariance: (0..covariance.nrows())
+                .map(|i| covariance.row(i).iter().copied().collect())
+                .collect(),
+            fits,
+            iterations: solution.history.len(),
+            cost_history: solution.history.iter().map(|i| i.cost).collect(),
+            wall_time,
+            notes,
+        }
+    }
+
+    fn fits(&mut self, theta: &DVector<f64>) -> Vec<OutputFit> {
+        let Ok(predictions) = self.predictions(theta) else {
+            return Vec::new();
+        };
+        (0..self.outputs.len())
+            .map(|o| {
+                let measured: Vec<f64> = self
+                    .segments
+                    .iter()
+                    .flat_map(|s| s.outputs[o].values.clone())
+                    .collect();
+                let predicted: Vec<f64> = predictions.iter().flat_map(|p| p[o].clone()).collect();
+                OutputFit::new(&self.outputs[o], &measured, &predicted)
+            })
+            .collect()
+    }
+}
+
+/// Linear interpolation of a grid series at time t.
+fn interpolate(grid: &[f64], simulation: &DrivenSimulation, t: f64) -> f64 {
+    let position = ((t - simulation.start) / simulation.step).max(0.0);
+    let k = (position.floor() as usize).min(grid.len().saturating_sub(2));
+    let fraction = (position - k as f64).clamp(0.0, 1.0);
+    if grid.len() < 2 {
+        return grid.first().copied().unwrap_or(f64::NAN);
+    }
+    grid[k] + fraction * (grid[k + 1] - grid[k])
+}
+
+impl LeastSquaresProblem for Problem {
+    fn residuals(&mut self, theta: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
+        let errors = self.errors(theta)?;
+        let weighted = errors
+            .iter()
+            .zip(&self.weights)
+            .flat_map(|(e, w)| e.iter().map(move |v| v * w));
+        Ok(DVector::from_iterator(
+            errors.iter().map(Vec::len).sum(),
+            weighted,
+        ))
+    }
+
+    /// R = diag(mean square residual per output) at θ (seed 001 Eq. 8), with a
+    /// floor of 10⁻¹² of the output's RMS so that a noise-free fit stays finite.
+    fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
+        let errors = self.errors(theta)?;
+        for (o, error) in errors.iter().enumerate() {
+            let count = error.len().max(1) as f64;
+            let variance = error.iter().map(|e| e * e).sum::<f64>() / count;
+            let scale = self
+                .segments
+                .iter()
+                .flat_map(|s| s.outputs[o].values.iter())
+                .map(|z| z * z)
+                .sum::<f64>()
+                / count;
+            let floor = 1e-24 * scale.max(1e-300);
+            self.weights[o] = 1.0 / variance.max(floor).sqrt();
+        }
+        Ok(true)
+    }
+}

@@ -1,0 +1,222 @@
+//! The postulated model an estimator fits (`models/*.toml`): which terms
+//! each coefficient has (the `[aero]` table, same schema as an aircraft
+//! file, its values being start values), which parameters are fixed, their
+//! bounds, and for simulating estimators which flight-path states are
+//! integrated and which measured signals are fed in as pseudo-controls
+//! (decoupled longitudinal or lateral models, seed 004 Eqs. 1–8), and which
+//! recorded channels are compared.
+//!
+//! ```toml
+//! name = "attas-lateral"
+//! aircraft = "attas"              # mass, inertia, geometry, propulsion of the fitted model
+//! integrate = ["beta", "p", "r", "roll"]   # the rest comes from measured channels
+//! outputs = ["beta", "p", "r", "roll", "ny"]
+//! interpolation = "linear"        # inputs inside an integration step
+//! step = "0.04 s"                 # optional; default: the fastest compared channel's period
+//! estimate_initial_state = true
+//! output_biases = ["ny"]
+//! [aero]
+//! rate_normalization = "2V"
+//! [aero.Cl]
+//! beta = -0.05                    # start value of Cl_beta
+//! p = -0.3
+//! [parameters.Cl_0]
+//! fixed = true
+//! [parameters.Cn_beta]
+//! lower = 0.0
+//! upper = 1.0
+//! ```
+
+use crate::aero::{AeroModel, AeroSpec};
+use crate::aircraft::Aircraft;
+use crate::catalog;
+use crate::error::{Problems, Result, parse_toml, read_text};
+use crate::integrator::Interpolation;
+use crate::units::{Dimension, Quantity};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Folder of bundled model structures.
+pub const MODEL_FOLDER: &str = "models";
+
+/// Flight-path states a simulating estimator can integrate, named as record channels.
+pub const FLIGHT_PATH_STATES: [&str; 11] = [
+    "airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch", "yaw", "altitude", "chi",
+];
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StructureFile {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    pub aircraft: String,
+    #[serde(default)]
+    pub integrate: Vec<String>,
+    #[serde(default)]
+    pub outputs: Vec<String>,
+    #[serde(default)]
+    pub interpolation: Interpolation,
+    #[serde(default)]
+    pub step: Option<Quantity>,
+    #[serde(default)]
+    pub estimate_initial_state: bool,
+    #[serde(default)]
+    pub output_biases: Vec<String>,
+    pub aero: AeroSpec,
+    #[serde(default)]
+    pub parameters: BTreeMap<String, ParameterSpec>,
+}
+
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParameterSpec {
+    #[serde(default)]
+    pub fixed: bool,
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+}
+
+/// A validated model structure.
+#[derive(Debug, Clone)]
+pub struct ModelStructure {
+    pub name: String,
+    pub path: PathBuf,
+    /// The aircraft whose mass, inertia, geometry and propulsion the model uses,
+    /// with its aerodynamic model replaced by the postulated one.
+    pub aircraft: Aircraft,
+    /// Indices (into [`FLIGHT_PATH_STATES`]) of the integrated states.
+    pub integrate: Vec<usize>,
+    pub outputs: Vec<String>,
+    pub interpolation: Interpolation,
+    pub step: Option<f64>,
+    pub estimate_initial_state: bool,
+    pub output_biases: Vec<String>,
+    /// Per aero parameter (same order as `aircraft.aero.parameters`): free?
+    pub free: Vec<bool>,
+    pub bounds: Vec<(f64, f64)>,
+}
+
+impl ModelStructure {
+    /// Loads a structure by bundled name (`models/NAME.toml`) or path.
+    pub fn load(reference: &str) -> Result<ModelStructure> {
+        let path = catalog::resolve(reference, MODEL_FOLDER, None)?;
+        let text = read_text(&path)?;
+        let file: StructureFile = parse_toml(&path, &text)?;
+        ModelStructure::from_file(&file, &path)
+    }
+
+    pub fn from_file(file: &StructureFile, path: &Path) -> Result<ModelStructure> {
+        let base = path.parent().unwrap_or(Path::new("."));
+        let aircraft_path = catalog::resolve(&file.aircraft, catalog::AIRCRAFT_FOLDER, Some(base))?;
+        let mut aircraft = Aircraft::load(&aircraft_path)?;
+        let mut problems = Problems::default();
+        aircraft.aero = AeroModel::from_spec(&file.aero, aircraft.geometry, "aero", &mut problems);
+        let integrate = state_indices(&file.integrate, "integrate", &mut problems);
+        for (i, name) in file.output_biases.iter().enumerate() {
+            if !file.outputs.contains(name) {
+                problems.push(
+                    format!("output_biases[{i}]"),
+                    format!("'{name}' is not among the outputs"),
+                );
+            }
+        }
+        let step = file
+            .step
+            .as_ref()
+            .and_then(|q| match q.si(Dimension::Time) {
+                Ok(step) if step > 0.0 => Some(step),
+                Ok(_) => {
+                    problems.push("step", "must be positive");
+                    None
+                }
+                Err(message) => {
+                    problems.push("step", message);
+                    None
+                }
+            });
+        let (free, bounds) = parameter_settings(&aircraft.aero, &file.parameters, &mut problems);
+        let structure = ModelStructure {
+            name: file.name.clone(),
+            path: path.to_path_buf(),
+            aircraft,
+            integrate,
+            outputs: file.outputs.clone(),
+            interpolation: file.interpolation,
+            step,
+            estimate_initial_state: file.estimate_initial_state,
+            output_biases: file.output_biases.clone(),
+            free,
+            bounds,
+        };
+        problems.finish(path, structure)
+    }
+
+    /// Names of the free aerodynamic parameters.
+    pub fn free_names(&self) -> Vec<String> {
+        let names = self.aircraft.aero.parameters.names();
+        (0..names.len())
+            .filter(|&i| self.free[i])
+            .map(|i| names[i].clone())
+            .collect()
+    }
+}
+
+fn state_indices(names: &[String], field: &str, problems: &mut Problems) -> Vec<usize> {
+    names
+        .iter()
+        .enumerate()
+        .filter_map(|(i, name)| {
+            let index = FLIGHT_PATH_STATES.iter().position(|s| s == name);
+            if index.is_none() {
+                problems.push(
+                    format!("{field}[{i}]"),
+                    format!(
+                        "unknown state '{name}'; known: {}",
+                        FLIGHT_PATH_STATES.join(", ")
+                    ),
+                );
+            }
+            index
+        })
+        .collect()
+}
+
+fn parameter_settings(
+    aero: &AeroModel,
+    settings: &BTreeMap<String, ParameterSpec>,
+    problems: &mut Problems,
+) -> (Vec<bool>, Vec<(f64, f64)>) {
+    let count = aero.parameters.len();
+    let (mut free, mut bounds) = (
+        vec![true; count],
+        vec![(f64::NEG_INFINITY, f64::INFINITY); count],
+    );
+    for (name, spec) in settings {
+        let Some(index) = aero.parameters.index(name) else {
+            problems.push(
+                format!("parameters.{name}"),
+                format!(
+                    "unknown parameter; known: {}",
+                    aero.parameters.names().join(", ")
+                ),
+            );
+            continue;
+        };
+        free[index] = !spec.fixed;
+        bounds[index] = (
+            spec.lower.unwrap_or(f64::NEG_INFINITY),
+            spec.upper.unwrap_or(f64::INFINITY),
+        );
+        let value = aero.parameters.values()[index];
+        if bounds[index].0 >= bounds[index].1 || value < bounds[index].0 || value > bounds[index].1
+        {
+            problems.push(
+                format!("parameters.{name}"),
+                "the bounds must be ordered and contain the start value",
+            );
+        }
+    }
+    (free, bounds)
+}

@@ -1,0 +1,101 @@
+//! The truth of a run, `truth.toml` beside a simulated record: the
+//! aircraft's true aerodynamic parameters by name, the kind of truth, the
+//! trim point, the scenario and its seed. Estimator scoring reads it back; a
+//! record imported from real flight data has none.
+//!
+//! Kind `exact`: the parameters are the ones the simulator used. Kind
+//! `local_derivative` (for truth models whose structure differs from the
+//! estimator's, see DESIGN.md) will be written by the scoring side.
+
+use crate::error::{Error, Result, parse_toml, read_text};
+use crate::scenario::Scenario;
+use crate::trim::Trim;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The truth file's name inside a record folder.
+pub const TRUTH_FILE: &str = "truth.toml";
+
+/// What kind of truth the parameter values are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TruthKind {
+    /// The values the simulator itself used.
+    Exact,
+    /// Local derivatives of the truth model at the trim point.
+    LocalDerivative,
+}
+
+/// The trim point the run started from, SI and radians.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrimPoint {
+    pub airspeed: f64,
+    pub altitude: f64,
+    pub flight_path_angle: f64,
+    pub heading: f64,
+    pub alpha: f64,
+    pub beta: f64,
+    pub pitch: f64,
+    /// Trim controls by name (`elevator`, …, `throttle`).
+    pub controls: BTreeMap<String, f64>,
+}
+
+/// The truth of one simulated run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunTruth {
+    pub kind: TruthKind,
+    pub scenario: String,
+    pub seed: u64,
+    pub aircraft: String,
+    pub trim: TrimPoint,
+    /// True aerodynamic parameters by name (`CL_alpha`, `Cm_q`, …).
+    pub parameters: BTreeMap<String, f64>,
+}
+
+impl RunTruth {
+    /// The exact truth of a scenario flown from `trim`.
+    pub fn exact(scenario: &Scenario, trim: &Trim) -> RunTruth {
+        let controls = crate::state::Control::ALL
+            .iter()
+            .map(|c| (c.name().to_string(), trim.controls[c.index()]))
+            .collect();
+        RunTruth {
+            kind: TruthKind::Exact,
+            scenario: scenario.name.clone(),
+            seed: scenario.seed,
+            aircraft: scenario.aircraft.name.clone(),
+            trim: TrimPoint {
+                airspeed: scenario.trim.airspeed,
+                altitude: scenario.trim.altitude,
+                flight_path_angle: scenario.trim.flight_path_angle,
+                heading: scenario.trim.heading,
+                alpha: trim.alpha,
+                beta: trim.beta,
+                pitch: trim.pitch,
+                controls,
+            },
+            parameters: scenario
+                .aircraft
+                .aero
+                .parameters
+                .iter()
+                .map(|(name, value)| (name.to_string(), value))
+                .collect(),
+        }
+    }
+
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let text = toml::to_string(self).map_err(|e| Error::Other(e.to_string()))?;
+        std::fs::write(path, text).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    pub fn read(path: &Path) -> Result<RunTruth> {
+        parse_toml(path, &read_text(path)?)
+    }
+}

@@ -1,0 +1,273 @@
+//! Output error (maximum likelihood) on simulated records where the answer
+//! is known.
+
+use aeroid::estimation::gauss_newton::Status;
+use aeroid::estimation::output_error::{OutputErrorOptions, output_error};
+use aeroid::estimation::structure::{ModelStructure, StructureFile};
+use aeroid::record::FlightRecord;
+use aeroid::recorder::Profile;
+use aeroid::scenario::Scenario;
+use aeroid::sim::Simulation;
+use aeroid::state::Control;
+
+const DEG: f64 = std::f64::consts::PI / 180.0;
+
+/// ATTAS from trim: elevator 3211 (unit 1.52 s, so every switch falls on the
+/// 25 Hz sample grid), then aileron and rudder doublets: all axes excited.
+fn attas_all_axes_record(profile: &str, seed: u64) -> (FlightRecord, Scenario) {
+    let mut scenario = Scenario::load("attas-trim").unwrap();
+    scenario.duration = 40.0;
+    scenario.seed = seed;
+    let mut simulation = Simulation::prepare(&scenario).unwrap();
+    simulation.exogenous.truncate(scenario.step_count() + 1);
+    simulation.winds.truncate(scenario.step_count() + 1);
+    for (k, exogenous) in simulation.exogenous.iter_mut().enumerate() {
+        let t = k as f64 * scenario.step;
+        let unit = 1.52;
+        let elevator = match ((t - 1.0) / unit).floor() as i64 {
+            0..=2 => 2.0,
+            3..=4 => -2.0,
+            5 => 2.0,
+            6 => -2.0,
+            _ => 0.0,
+        };
+        let doublet = |start: f64, width: f64| {
+            if (start..start + width).contains(&t) {
+                1.0
+            } else if (start + width..start + 2.0 * width).contains(&t) {
+                -1.0
+            } else {
+                0.0
+            }
+        };
+        exogenous[Control::Elevator.index()] += elevator * DEG;
+        exogenous[Control::Aileron.index()] += 4.0 * DEG * doublet(15.0, 2.0);
+        exogenous[Control::Rudder.index()] += 3.0 * DEG * doublet(24.0, 2.0);
+    }
+    let trace = simulation.run().unwrap();
+    let profile = Profile::load(profile, None).unwrap();
+    (
+        profile.record(&trace, &scenario.aircraft, seed).unwrap(),
+        scenario,
+    )
+}
+
+/// A structure with the ATTAS terms, start values scaled by `start_factor`.
+fn attas_structure(integrate: &[&str], outputs: &[&str], start_factor: f64) -> ModelStructure {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/aircraft/attas.toml"))
+        .unwrap();
+    let aircraft: toml::Table = toml::from_str(&text).unwrap();
+    let mut aero = aircraft["aero"].as_table().unwrap().clone();
+    for (_, value) in aero.iter_mut() {
+        if let Some(table) = value.as_table_mut() {
+            for (_, term) in table.iter_mut() {
+                *term = toml::Value::Float(term.as_float().unwrap() * start_factor);
+            }
+        }
+    }
+    let mut file = toml::Table::new();
+    file.insert("name".into(), "attas-test".into());
+    file.insert("aircraft".into(), "attas".into());
+    file.insert(
+        "integrate".into(),
+        integrate
+            .iter()
+            .map(|s| toml::Value::from(*s))
+            .collect::<Vec<_>>()
+            .into(),
+    );
+    file.insert(
+        "outputs".into(),
+        outputs
+            .iter()
+            .map(|s| toml::Value::from(*s))
+            .collect::<Vec<_>>()
+            .into(),
+    );
+    file.insert("aero".into(), aero.into());
+    let file: StructureFile = toml::from_str(&toml::to_string(&file).unwrap()).unwrap();
+    ModelStructure::from_file(
+        &file,
+        std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/models/attas-test.toml"
+        )),
+    )
+    .unwrap()
+}
+
+const ALL_STATES: [&str; 10] = [
+    "airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch", "yaw", "altitude",
+];
+const ALL_OUTPUTS: [&str; 11] = [
+    "airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch", "nx", "ny", "nz",
+];
+
+/// Ideal profile (no noise, 100 Hz = the simulator step), the postulated
+/// structure equal to the truth model, every state integrated with the same
+/// RK4 step and zero-order hold as the truth simulation: output error must
+/// recover every parameter within 1e-4 relative (the issue's gate) from start
+/// values 30 % off; the residual floor is rounding, so 1e-6 is expected.
+#[test]
+fn recovers_every_parameter_from_ideal_record() {
+    let (record, scenario) = attas_all_axes_record("ideal", 1);
+    let structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
+    let estimate = output_error(&[&record], &structure, &OutputErrorOptions::default()).unwrap();
+    assert_eq!(
+        estimate.status,
+        Status::Converged,
+        "{:?}",
+        estimate.cost_history
+    );
+    let truth = &scenario.aircraft.aero.parameters;
+    let mut worst = (0.0, String::new());
+    for (name, true_value) in truth.iter() {
+        let value = estimate.parameter(name).unwrap().value;
+        let relative = ((value - true_value) / true_value).abs();
+        if relative > worst.0 {
+            worst = (relative, name.to_string());
+        }
+    }
+    eprintln!(
+        "worst relative error {:.3e} ({}), {} iterations, {:.2} s",
+        worst.0, worst.1, estimate.iterations, estimate.wall_time
+    );
+    assert!(
+        worst.0 < 1e-4,
+        "{} off by {:.3e} relative",
+        worst.1,
+        worst.0
+    );
+}
+
+/// The flight-test profile with the noise lines removed from the channels `strip` selects.
+fn flight_test_variant(test: &str, strip: impl Fn(&str) -> bool) -> String {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/recorders/flight-test-25hz.toml"
+    ))
+    .unwrap();
+    let mut channel = String::new();
+    let mut out = String::new();
+    for line in text.lines() {
+        if let Some(name) = line.strip_prefix("name = \"") {
+            channel = name.trim_end_matches('"').to_string();
+        }
+        if !(line.starts_with("noise") && strip(&channel)) {
+            out += line;
+            out += "\n";
+        }
+    }
+    let path = std::env::temp_dir().join(format!("aeroid-{test}-{}.toml", std::process::id()));
+    std::fs::write(&path, out).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+fn is_control(channel: &str) -> bool {
+    Control::ALL.iter().any(|c| c.name() == channel)
+}
+
+/// Largest |estimate − truth| in units of the Cramér–Rao standard error, and a report.
+fn sigma_report(
+    estimate: &aeroid::estimation::estimate::Estimate,
+    scenario: &Scenario,
+) -> (f64, String) {
+    let mut report = String::new();
+    let mut worst: f64 = 0.0;
+    for (name, truth) in scenario.aircraft.aero.parameters.iter() {
+        let p = estimate.parameter(name).unwrap();
+        let sigmas = (p.value - truth) / p.standard_error;
+        worst = worst.max(sigmas.abs());
+        report += &format!(
+            "{name}: {:.5} ± {:.5} (truth {truth:.5}, {sigmas:+.2} σ)\n",
+            p.value, p.standard_error
+        );
+    }
+    (worst, report)
+}
+
+/// A 25 Hz record of steps that switch on its sample grid, no noise: the
+/// model integrated at 0.01 s with the inputs HELD between samples flies
+/// exactly the truth's inputs and recovers every parameter to 1e-6; the same
+/// record with the inputs interpolated LINEARLY between samples (ramps where
+/// the aircraft saw steps) biases the weak lift derivatives by more than 10 %.
+/// This pins the convention that input reconstruction follows the model's
+/// interpolation option (DESIGN.md: it changes results by several σ).
+#[test]
+fn input_reconstruction_follows_the_interpolation_option() {
+    let profile = flight_test_variant("noise-free", |_| true);
+    let (record, scenario) = attas_all_axes_record(&profile, 3);
+    let mut structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
+    structure.step = Some(0.01);
+    let worst_relative = |structure: &ModelStructure| {
+        let estimate = output_error(&[&record], structure, &OutputErrorOptions::default()).unwrap();
+        scenario
+            .aircraft
+            .aero
+            .parameters
+            .iter()
+            .map(|(name, truth)| ((estimate.parameter(name).unwrap().value - truth) / truth).abs())
+            .fold(0.0, f64::max)
+    };
+    let held = worst_relative(&structure);
+    assert!(held < 1e-6, "held inputs: worst relative error {held:.3e}");
+    structure.interpolation = aeroid::integrator::Interpolation::Linear;
+    let ramps = worst_relative(&structure);
+    assert!(
+        ramps > 0.1,
+        "linear reconstruction of steps: worst relative error {ramps:.3e}"
+    );
+}
+
+/// Flight-test profile (25 Hz, DATA.md white noise on the sensors), exact
+/// control-surface channels (output error treats inputs as known), full 6-DOF
+/// structure, initial states estimated. With one seed every parameter lies
+/// within 4 Cramér–Rao standard errors: for 28 Gaussian estimates the chance
+/// that any exceeds 4σ is 28·6.3e-5 ≈ 0.2 %, so a failure means bias or bounds
+/// that are too optimistic. The bounds must also be informative: Cm_q, Cl_p
+/// and Cn_r to better than 5 % (1σ).
+#[test]
+fn noisy_flight_test_record_within_cramer_rao_bounds() {
+    let profile = flight_test_variant("sensor-noise", is_control);
+    let (record, scenario) = attas_all_axes_record(&profile, 7);
+    let mut structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
+    structure.estimate_initial_state = true;
+    let estimate = output_error(&[&record], &structure, &OutputErrorOptions::default()).unwrap();
+    assert_eq!(
+        estimate.status,
+        Status::Converged,
+        "{:?}",
+        estimate.cost_history
+    );
+    let (worst, report) = sigma_report(&estimate, &scenario);
+    assert!(
+        worst < 4.0,
+        "an estimate is {worst:.2} σ from truth:\n{report}"
+    );
+    for name in ["Cm_q", "Cl_p", "Cn_r"] {
+        let p = estimate.parameter(name).unwrap();
+        assert!(
+            (p.standard_error / p.value).abs() < 0.05,
+            "{name}: {report}"
+        );
+    }
+}
+
+/// Noise on the control-surface channels (the bundled flight-test profile's
+/// 0.1°) is noise in the model's inputs, which output error assumes exact:
+/// errors in variables. The same manoeuvre and seed as the sensor-noise-only
+/// run above (all within 4σ) then has estimates more than 8σ from the truth
+/// (Cl_r ≈ 15σ, the control derivatives attenuated towards zero, when this
+/// test was written). A known limitation, measured and shown rather than hidden.
+#[test]
+fn control_channel_noise_biases_output_error() {
+    let (record, scenario) = attas_all_axes_record("flight-test-25hz", 7);
+    let mut structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
+    structure.estimate_initial_state = true;
+    let estimate = output_error(&[&record], &structure, &OutputErrorOptions::default()).unwrap();
+    let (worst, report) = sigma_report(&estimate, &scenario);
+    assert!(
+        worst > 8.0,
+        "largest deviation only {worst:.2} σ:\n{report}"
+    );
+}
