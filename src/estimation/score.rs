@@ -57,10 +57,23 @@ fn optional(value: Option<f64>) -> String {
 
 /// Writes the scored table as CSV (a spreadsheet opens it directly).
 pub fn write_csv(scores: &[ParameterScore], path: &Path) -> Result<()> {
-    let io_error = |e: csv::Error| Error::Io { path: path.to_path_buf(), source: e.into() };
+    let io_error = |e: csv::Error| Error::Io {
+        path: path.to_path_buf(),
+        source: e.into(),
+    };
     let mut writer = csv::Writer::from_path(path).map_err(io_error)?;
     writer
-        .write_record(["parameter", "estimate", "standard_error", "truth", "truth_kind", "error", "relative_error", "error_sigma", "inside_95"])
+        .write_record([
+            "parameter",
+            "estimate",
+            "standard_error",
+            "truth",
+            "truth_kind",
+            "error",
+            "relative_error",
+            "error_sigma",
+            "inside_95",
+        ])
         .map_err(io_error)?;
     for s in scores {
         writer
@@ -77,18 +90,27 @@ pub fn write_csv(scores: &[ParameterScore], path: &Path) -> Result<()> {
             ])
             .map_err(io_error)?;
     }
-    writer.flush().map_err(|source| Error::Io { path: path.to_path_buf(), source })
+    writer.flush().map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// A fixed-width table for the terminal.
 pub fn table(scores: &[ParameterScore]) -> String {
-    let mut text = format!("{:<18} {:>13} {:>11} {:>13} {:>11} {:>8} {:>4}\n", "parameter", "estimate", "σ (CRB)", "truth", "error", "err/σ", "95%");
+    let mut text = format!(
+        "{:<18} {:>13} {:>11} {:>13} {:>11} {:>8} {:>4}\n",
+        "parameter", "estimate", "σ (CRB)", "truth", "error", "err/σ", "95%"
+    );
     for s in scores {
         let truth = s.truth.map_or("-".into(), |t| format!("{t:.6}"));
         let error = s.error.map_or("-".into(), |e| format!("{e:.3e}"));
         let sigma = s.error_sigma.map_or("-".into(), |e| format!("{e:+.2}"));
         let inside = s.inside_95.map_or("-", |b| if b { "yes" } else { "NO" });
-        text += &format!("{:<18} {:>13.6} {:>11.3e} {:>13} {:>11} {:>8} {:>4}\n", s.name, s.estimate, s.standard_error, truth, error, sigma, inside);
+        text += &format!(
+            "{:<18} {:>13.6} {:>11.3e} {:>13} {:>11} {:>8} {:>4}\n",
+            s.name, s.estimate, s.standard_error, truth, error, sigma, inside
+        );
     }
     text
 }
@@ -107,9 +129,24 @@ mod tests {
             record: "r".into(),
             status: Status::Converged,
             parameters: vec![
-                ParameterEstimate { name: "Cm_q".into(), value: -12.0, standard_error: 0.1, start: -10.0 },
-                ParameterEstimate { name: "Cm_alpha".into(), value: -0.5, standard_error: 0.01, start: -0.4 },
-                ParameterEstimate { name: "bias.nz".into(), value: 0.01, standard_error: 0.001, start: 0.0 },
+                ParameterEstimate {
+                    name: "Cm_q".into(),
+                    value: -12.0,
+                    standard_error: 0.1,
+                    start: -10.0,
+                },
+                ParameterEstimate {
+                    name: "Cm_alpha".into(),
+                    value: -0.5,
+                    standard_error: 0.01,
+                    start: -0.4,
+                },
+                ParameterEstimate {
+                    name: "bias.nz".into(),
+                    value: 0.01,
+                    standard_error: 0.001,
+                    start: 0.0,
+                },
             ],
             covariance: vec![],
             fits: vec![],
@@ -133,11 +170,21 @@ mod tests {
                 pitch: 0.05,
                 controls: Default::default(),
             },
-            parameters: [("Cm_q".to_string(), -12.15), ("Cm_alpha".to_string(), -0.52)].into(),
+            parameters: [
+                ("Cm_q".to_string(), -12.15),
+                ("Cm_alpha".to_string(), -0.52),
+            ]
+            .into(),
         };
         let scores = score(&estimate, Some(&truth));
-        assert!((scores[0].error_sigma.unwrap() - 1.5).abs() < 1e-12 && scores[0].inside_95 == Some(true));
-        assert!((scores[1].error_sigma.unwrap() - 2.0).abs() < 1e-12 && scores[1].inside_95 == Some(false));
+        assert!(
+            (scores[0].error_sigma.unwrap() - 1.5).abs() < 1e-12
+                && scores[0].inside_95 == Some(true)
+        );
+        assert!(
+            (scores[1].error_sigma.unwrap() - 2.0).abs() < 1e-12
+                && scores[1].inside_95 == Some(false)
+        );
         assert!((scores[1].relative_error.unwrap() - 0.02 / 0.52).abs() < 1e-12);
         assert_eq!(scores[2].truth, None);
         assert!(table(&scores).contains("NO"));
