@@ -14,6 +14,8 @@ pub mod estimation;
 pub mod import;
 pub mod inputs;
 pub mod integrator;
+pub mod linearize;
+pub mod modal_fit;
 pub mod params;
 pub mod random;
 pub mod record;
