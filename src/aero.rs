@@ -553,17 +553,17 @@ impl AeroModel {
     /// The value of every regressor (indexed by `Regressor as usize`) at a
     /// flight condition; `CL2` is left 0 (it needs the lift coefficient).
     pub fn regressors(&self, input: &AeroInput, chi: f64) -> [f64; REGRESSOR_COUNT] {
-        let divisor = self.rate_divisor(input.airspeed);
+        let per_speed = 1.0 / self.rate_divisor(input.airspeed);
         let (b, c) = (self.geometry.span, self.geometry.chord);
         let u = &input.controls;
         [
             1.0,
             input.alpha,
             input.beta,
-            input.rates.x * b / divisor,
-            input.rates.y * c / divisor,
-            input.rates.z * b / divisor,
-            input.alpha_dot * c / divisor,
+            input.rates.x * b * per_speed,
+            input.rates.y * c * per_speed,
+            input.rates.z * b * per_speed,
+            input.alpha_dot * c * per_speed,
             u[Control::Elevator.index()],
             u[Control::Aileron.index()],
             u[Control::Rudder.index()],

@@ -36,35 +36,42 @@ impl Atmosphere {
 
     /// Standard temperature and pressure at `altitude` (m).
     pub fn standard(altitude: f64) -> (f64, f64) {
-        let (temperature, log_pressure_ratio) = Self::standard_log(altitude);
+        let (temperature, _, log_pressure_ratio) = Self::standard_log(altitude);
         (temperature, SEA_LEVEL_PRESSURE * log_pressure_ratio.exp())
     }
 
-    /// Standard temperature and ln(p/p0) at `altitude`: one logarithm, no `powf`.
-    fn standard_log(altitude: f64) -> (f64, f64) {
+    /// Standard temperature, ln(T/T0) and ln(p/p0) at `altitude`: one logarithm, no `powf`.
+    fn standard_log(altitude: f64) -> (f64, f64, f64) {
         let exponent = GRAVITY / (GAS_CONSTANT * LAPSE_RATE);
         let tropopause_temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * TROPOPAUSE;
         if altitude <= TROPOPAUSE {
             let temperature = SEA_LEVEL_TEMPERATURE - LAPSE_RATE * altitude;
+            let log_temperature_ratio = (temperature / SEA_LEVEL_TEMPERATURE).ln();
             (
                 temperature,
-                exponent * (temperature / SEA_LEVEL_TEMPERATURE).ln(),
+                log_temperature_ratio,
+                exponent * log_temperature_ratio,
             )
         } else {
-            let tropopause = exponent * (tropopause_temperature / SEA_LEVEL_TEMPERATURE).ln();
+            let log_temperature_ratio = (tropopause_temperature / SEA_LEVEL_TEMPERATURE).ln();
             let above =
                 -GRAVITY * (altitude - TROPOPAUSE) / (GAS_CONSTANT * tropopause_temperature);
-            (tropopause_temperature, tropopause + above)
+            (
+                tropopause_temperature,
+                log_temperature_ratio,
+                exponent * log_temperature_ratio + above,
+            )
         }
     }
 
     pub fn at(&self, altitude: f64) -> Air {
-        let (standard_temperature, log_pressure_ratio) = Self::standard_log(altitude);
+        let (standard_temperature, log_temperature_ratio, log_pressure_ratio) =
+            Self::standard_log(altitude);
         let temperature = standard_temperature + self.temperature_offset;
         let pressure = SEA_LEVEL_PRESSURE * log_pressure_ratio.exp();
         // ρ/ρ0 = (p/p0)·(T0/T); the logarithm serves power laws such as thrust lapse.
         let log_density_ratio = if self.temperature_offset == 0.0 {
-            log_pressure_ratio - (standard_temperature / SEA_LEVEL_TEMPERATURE).ln()
+            log_pressure_ratio - log_temperature_ratio
         } else {
             log_pressure_ratio - (temperature / SEA_LEVEL_TEMPERATURE).ln()
         };

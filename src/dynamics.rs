@@ -168,12 +168,13 @@ impl FlightModel {
     }
 
     /// ẋ = f(x, u). Allocation-free.
+    #[inline]
     pub fn derivative(&self, x: &StateVector, exogenous: &Exogenous) -> StateVector {
         self.evaluate(x, exogenous).derivative
     }
 
     /// The state derivative and all intermediate quantities at one state.
-    #[inline]
+    #[inline(always)]
     pub fn evaluate(&self, x: &StateVector, exogenous: &Exogenous) -> Evaluation {
         let aircraft = &self.aircraft;
         let mut controls = exogenous.controls;
@@ -252,6 +253,7 @@ impl FlightModel {
 
     /// Translational acceleration for a guess of α̇ (used by the aero model),
     /// returning the α̇ that acceleration implies.
+    #[inline(always)]
     fn translational(&self, context: &TranslationalContext, alpha_dot_guess: f64) -> Translational {
         let aircraft = &self.aircraft;
         let air_data = context.air_data;
