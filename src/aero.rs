@@ -630,6 +630,83 @@ impl AeroModel {
         }
     }
 
+    /// The six coefficients in this model's naming order (CL/CZ, CY, CD/CX, Cl, Cm, Cn).
+    pub fn coefficient_values(&self, c: &AeroCoefficients) -> [f64; 6] {
+        let (lift, drag) = match self.force_axes {
+            ForceAxes::Wind => (c.lift, c.drag),
+            ForceAxes::Body => (c.force.z, c.force.x),
+        };
+        [lift, c.force.y, drag, c.moment.x, c.moment.y, c.moment.z]
+    }
+
+    /// Local linear derivatives of this model at a flight condition, named
+    /// as a linear model's parameters (`CL_alpha`, `Cm_q`, `CL_0`, …): the
+    /// truth that a linear postulate is scored against when this (truth)
+    /// model is not linear (DESIGN.md, "Truth when the structures differ").
+    /// Central differences with steps of 1e-5 in each regressor; χ takes its
+    /// quasi-steady value χ∞(α) (α̇ = 0); the constant term is
+    /// C(at) − Σ ∂C/∂x·x(at) so that the linear model passes through C(at).
+    pub fn local_derivatives(&self, at: &AeroInput) -> Vec<(String, f64)> {
+        const STEP: f64 = 1e-5;
+        let divisor = self.rate_divisor(at.airspeed);
+        let (b, c) = (self.geometry.span, self.geometry.chord);
+        let evaluate = |input: &AeroInput| {
+            let mut input = *input;
+            input.chi = self.separation_target(input.alpha, input.alpha_dot);
+            self.coefficient_values(&self.coefficients(&input))
+        };
+        let perturbations: [(Regressor, f64, fn(&mut AeroInput, f64)); 9] = [
+            (Regressor::Alpha, STEP, |i, h| i.alpha += h),
+            (Regressor::Beta, STEP, |i, h| i.beta += h),
+            (Regressor::RollRate, STEP * divisor / b, |i, h| {
+                i.rates.x += h
+            }),
+            (Regressor::PitchRate, STEP * divisor / c, |i, h| {
+                i.rates.y += h
+            }),
+            (Regressor::YawRate, STEP * divisor / b, |i, h| {
+                i.rates.z += h
+            }),
+            (Regressor::Elevator, STEP, |i, h| {
+                i.controls[Control::Elevator.index()] += h
+            }),
+            (Regressor::Aileron, STEP, |i, h| {
+                i.controls[Control::Aileron.index()] += h
+            }),
+            (Regressor::Rudder, STEP, |i, h| {
+                i.controls[Control::Rudder.index()] += h
+            }),
+            (Regressor::Flap, STEP, |i, h| {
+                i.controls[Control::Flap.index()] += h
+            }),
+        ];
+        let regressors = self.regressors(at, 1.0);
+        let base = evaluate(at);
+        let mut constants = base;
+        let mut derivatives = Vec::new();
+        for (regressor, h, perturb) in perturbations {
+            let (mut plus, mut minus) = (*at, *at);
+            perturb(&mut plus, h);
+            perturb(&mut minus, -h);
+            let (up, down) = (evaluate(&plus), evaluate(&minus));
+            for (k, coefficient) in Coefficient::ALL.iter().enumerate() {
+                let slope = (up[k] - down[k]) / (2.0 * STEP);
+                constants[k] -= slope * regressors[regressor as usize];
+                derivatives.push((
+                    format!("{}_{}", coefficient.name(self.force_axes), regressor.key()),
+                    slope,
+                ));
+            }
+        }
+        for (k, coefficient) in Coefficient::ALL.iter().enumerate() {
+            derivatives.push((
+                format!("{}_0", coefficient.name(self.force_axes)),
+                constants[k],
+            ));
+        }
+        derivatives
+    }
+
     /// The terms of one coefficient as (regressor, parameter index), in file order.
     pub fn terms(&self, coefficient: Coefficient) -> impl Iterator<Item = (Regressor, usize)> + '_ {
         self.terms[coefficient as usize]

@@ -234,7 +234,7 @@ fn estimate(
         .is_file()
         .then(|| aeroid::truth::RunTruth::read(&truth_path))
         .transpose()?;
-    let scores = score::score(&estimate, truth.as_ref());
+    let scores = score::score(&estimate, truth.as_ref(), structure.aircraft.aero.kind);
     println!(
         "{} on {} with model {}: {:?} after {} iterations, {:.3} s",
         estimate.method,

@@ -51,8 +51,16 @@ pub struct RunTruth {
     pub seed: u64,
     pub aircraft: String,
     pub trim: TrimPoint,
+    /// The truth model's kind; a postulate of the same kind is scored
+    /// against `parameters` (exact), any other against `local_derivatives`.
+    #[serde(default)]
+    pub model: crate::aero::ModelKind,
     /// True aerodynamic parameters by name (`CL_alpha`, `Cm_q`, …).
     pub parameters: BTreeMap<String, f64>,
+    /// Local linear derivatives of the truth model at the trim point
+    /// (`AeroModel::local_derivatives`), for postulates of another structure.
+    #[serde(default)]
+    pub local_derivatives: BTreeMap<String, f64>,
 }
 
 impl RunTruth {
@@ -77,6 +85,7 @@ impl RunTruth {
                 pitch: trim.pitch,
                 controls,
             },
+            model: scenario.aircraft.aero.kind,
             parameters: scenario
                 .aircraft
                 .aero
@@ -84,7 +93,20 @@ impl RunTruth {
                 .iter()
                 .map(|(name, value)| (name.to_string(), value))
                 .collect(),
+            local_derivatives: trim_derivatives(scenario, trim),
         }
+    }
+
+    /// The truth value of a parameter of a postulated model of `kind`, and what kind of truth it is.
+    pub fn value_for(&self, name: &str, kind: crate::aero::ModelKind) -> Option<(f64, TruthKind)> {
+        let exact = (kind == self.model)
+            .then(|| self.parameters.get(name))
+            .flatten();
+        exact.map(|&v| (v, self.kind)).or_else(|| {
+            self.local_derivatives
+                .get(name)
+                .map(|&v| (v, TruthKind::LocalDerivative))
+        })
     }
 
     pub fn write(&self, path: &Path) -> Result<()> {
@@ -98,4 +120,20 @@ impl RunTruth {
     pub fn read(path: &Path) -> Result<RunTruth> {
         parse_toml(path, &read_text(path)?)
     }
+}
+
+/// Local derivatives of the scenario aircraft's aerodynamic model at the trim point.
+fn trim_derivatives(scenario: &Scenario, trim: &Trim) -> BTreeMap<String, f64> {
+    let aero = &scenario.aircraft.aero;
+    let air = scenario.environment.atmosphere.at(scenario.trim.altitude);
+    let at = crate::aero::AeroInput {
+        alpha: trim.alpha,
+        beta: trim.beta,
+        airspeed: scenario.trim.airspeed,
+        mach: scenario.trim.airspeed / air.speed_of_sound,
+        controls: trim.controls,
+        chi: aero.separation_target(trim.alpha, 0.0),
+        ..Default::default()
+    };
+    aero.local_derivatives(&at).into_iter().collect()
 }

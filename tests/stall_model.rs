@@ -184,3 +184,69 @@ fn simulator_solves_alpha_dot_loop_from_state_derivative() {
         "the ramp reached the stall: α {peak_alpha}, χ {lowest_chi}"
     );
 }
+
+/// Truth for a linear postulate of a stall-model flight is the local
+/// derivative at trim (DESIGN.md). For the linear ATTAS the local derivatives
+/// equal the file's parameters (to 1e-8: central differences of a linear
+/// function are exact up to rounding); for the stall model the local lift
+/// slope equals the analytic derivative of Eq. 4 with Eq. 3,
+/// CLα·[K + α·dK/dχ·dχ/dα], K = ((1+√χ)/2)², to 1e-6 (difference step 1e-5).
+#[test]
+fn local_derivatives_at_trim() {
+    let linear = Aircraft::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/aircraft/attas.toml"
+    )))
+    .unwrap()
+    .aero;
+    let at = AeroInput {
+        alpha: 0.15,
+        beta: 0.01,
+        airspeed: 100.0,
+        mach: 0.3,
+        ..Default::default()
+    };
+    let local: std::collections::HashMap<String, f64> =
+        linear.local_derivatives(&at).into_iter().collect();
+    for name in [
+        "CL_alpha", "CL_q", "CL_de", "Cm_alpha", "Cm_q", "Cl_p", "Cn_r", "CY_beta", "Cn_dr",
+        "CL_0", "Cm_0",
+    ] {
+        let exact = linear.parameters.get(name).unwrap();
+        assert!(
+            (local[name] - exact).abs() < 1e-8,
+            "{name}: {} vs {exact}",
+            local[name]
+        );
+    }
+    assert!(
+        local["Cm_beta"].abs() < 1e-12,
+        "absent terms have zero local derivative"
+    );
+
+    let stall = stall_aircraft(0.0, 0.9).aero;
+    let alpha = 0.28;
+    let local: std::collections::HashMap<String, f64> = stall
+        .local_derivatives(&AeroInput {
+            alpha,
+            airspeed: 85.0,
+            mach: 0.26,
+            ..Default::default()
+        })
+        .into_iter()
+        .collect();
+    let chi = closed_form_chi(alpha);
+    let k = (0.5 * (1.0 + chi.sqrt())).powi(2);
+    let dk_dchi = (1.0 + chi.sqrt()) / (4.0 * chi.sqrt());
+    let dchi_dalpha = -0.5 * A1 / (A1 * (alpha - ALPHA_STAR)).cosh().powi(2);
+    let expected = CL_ALPHA * (k + alpha * dk_dchi * dchi_dalpha);
+    assert!(
+        (local["CL_alpha"] - expected).abs() < 1e-6,
+        "{} vs {expected}",
+        local["CL_alpha"]
+    );
+    assert!(
+        local["CL_alpha"] < 0.6 * CL_ALPHA,
+        "near stall the local slope is far below CLα"
+    );
+}

@@ -4,6 +4,7 @@
 //! the truth model's local derivative at the trim point) is carried into
 //! every row so that a report says what it was scored against.
 
+use crate::aero::ModelKind;
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Estimate;
 use crate::truth::{RunTruth, TruthKind};
@@ -28,20 +29,27 @@ pub struct ParameterScore {
     pub inside_95: Option<bool>,
 }
 
-/// Scores every parameter of `estimate`; `truth` is None for real flight data.
-pub fn score(estimate: &Estimate, truth: Option<&RunTruth>) -> Vec<ParameterScore> {
+/// Scores every parameter of `estimate`, a fit of a postulated model of
+/// `kind`; `truth` is None for real flight data. Exact truth when the
+/// postulate's kind equals the truth model's, else the local derivative.
+pub fn score(
+    estimate: &Estimate,
+    truth: Option<&RunTruth>,
+    kind: ModelKind,
+) -> Vec<ParameterScore> {
     estimate
         .parameters
         .iter()
         .map(|p| {
-            let truth_value = truth.and_then(|t| t.parameters.get(&p.name).copied());
+            let found = truth.and_then(|t| t.value_for(&p.name, kind));
+            let truth_value = found.map(|(v, _)| v);
             let error = truth_value.map(|t| p.value - t);
             ParameterScore {
                 name: p.name.clone(),
                 estimate: p.value,
                 standard_error: p.standard_error,
                 truth: truth_value,
-                truth_kind: truth_value.and(truth.map(|t| t.kind)),
+                truth_kind: found.map(|(_, k)| k),
                 error,
                 relative_error: error.zip(truth_value).map(|(e, t)| e / t.abs()),
                 error_sigma: error.map(|e| e / p.standard_error),
