@@ -272,14 +272,13 @@ pub fn full_state(e: &DVector<f64>, reference: &StateVector) -> StateVector {
 /// ẋ_e from the simulator's ẋ at x: Euler-angle rates from the body rates, ḣ = −ḋown.
 fn euler_derivative(x: &StateVector, derivative: &StateVector, with_chi: bool) -> DVector<f64> {
     let euler = state::euler(x);
-    let (sin_phi, cos_phi) = euler.roll.sin_cos();
-    let (p, q, r) = (x[state::P], x[state::Q], x[state::R]);
-    let turn = q * sin_phi + r * cos_phi;
     let mut e = DVector::zeros(if with_chi { 11 } else { 10 });
     e.rows_mut(0, 6).copy_from(&derivative.fixed_rows::<6>(0));
-    e[PHI] = p + euler.pitch.tan() * turn;
-    e[THETA] = q * cos_phi - r * sin_phi;
-    e[PSI] = turn / euler.pitch.cos();
+    e.rows_mut(PHI, 3).copy_from(&state::euler_rates(
+        euler.roll,
+        euler.pitch,
+        &state::rates(x),
+    ));
     e[H] = -derivative[DOWN];
     if with_chi {
         e[CHI_E] = derivative[CHI];

@@ -157,6 +157,19 @@ pub fn rates(x: &StateVector) -> Vector3<f64> {
     Vector3::new(x[P], x[Q], x[R])
 }
 
+/// Euler-angle rates (φ̇, θ̇, ψ̇) from body rates (p, q, r) at roll φ and pitch θ:
+/// φ̇ = p + tan θ·(q sin φ + r cos φ), θ̇ = q cos φ − r sin φ,
+/// ψ̇ = (q sin φ + r cos φ)/cos θ.
+pub fn euler_rates(roll: f64, pitch: f64, rates: &Vector3<f64>) -> Vector3<f64> {
+    let (sin_roll, cos_roll) = roll.sin_cos();
+    let turn = rates.y * sin_roll + rates.z * cos_roll;
+    Vector3::new(
+        rates.x + pitch.tan() * turn,
+        rates.y * cos_roll - rates.z * sin_roll,
+        turn / pitch.cos(),
+    )
+}
+
 /// Altitude above the flat earth's reference (m), positive up.
 pub fn altitude(x: &StateVector) -> f64 {
     -x[DOWN]

@@ -69,9 +69,6 @@ pub fn derivative(
     let evaluation = model.evaluate(&to_state(x), &exogenous);
     let d = &evaluation.derivative;
     let velocity = evaluation.air_data.velocity;
-    let (sin_roll, cos_roll) = x[ROLL].sin_cos();
-    let (p, q, r) = (x[P], x[P + 1], x[P + 2]);
-    let turn = q * sin_roll + r * cos_roll;
     let mut rates = FlightPathState::zeros();
     rates[AIRSPEED] = velocity.dot(&d.fixed_rows::<3>(state::U)) / evaluation.air_data.airspeed;
     rates[ALPHA] = evaluation.alpha_dot;
@@ -79,9 +76,13 @@ pub fn derivative(
     rates
         .fixed_rows_mut::<3>(P)
         .copy_from(&evaluation.angular_acceleration);
-    rates[ROLL] = p + x[PITCH].tan() * turn;
-    rates[PITCH] = q * cos_roll - r * sin_roll;
-    rates[YAW] = turn / x[PITCH].cos();
+    rates
+        .fixed_rows_mut::<3>(ROLL)
+        .copy_from(&state::euler_rates(
+            x[ROLL],
+            x[PITCH],
+            &x.fixed_rows::<3>(P).into(),
+        ));
     rates[ALTITUDE] = -d[state::DOWN];
     rates[CHI] = d[state::CHI];
     (rates, evaluation)

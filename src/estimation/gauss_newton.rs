@@ -123,6 +123,19 @@ pub struct Solution {
 }
 
 impl Solution {
+    /// A run whose model could not be evaluated: the last good θ and the reason.
+    fn diverged(theta: DVector<f64>, history: Vec<Iteration>, reason: String) -> Solution {
+        Solution {
+            information: DMatrix::zeros(theta.len(), theta.len()),
+            residuals: DVector::zeros(0),
+            jacobian: DMatrix::zeros(0, theta.len()),
+            theta,
+            cost: f64::NAN,
+            status: Status::Diverged(reason),
+            history,
+        }
+    }
+
     /// Cramér–Rao covariance (JᵀJ)⁻¹ by SVD pseudo-inverse; unidentifiable
     /// directions get infinite variance rather than a meaningless number.
     pub fn covariance(&self) -> DMatrix<f64> {
@@ -198,15 +211,6 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
     let mut theta = start.clone();
     options.project(&mut theta);
     let mut history = Vec::new();
-    let failed = |theta: DVector<f64>, history, reason: String| Solution {
-        information: DMatrix::zeros(theta.len(), theta.len()),
-        residuals: DVector::zeros(0),
-        jacobian: DMatrix::zeros(0, theta.len()),
-        theta,
-        cost: f64::NAN,
-        status: Status::Diverged(reason),
-        history,
-    };
     let mut quiet_iterations = 0;
     for _ in 0..options.max_iterations {
         let evaluated = problem
@@ -216,7 +220,7 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             .and_then(|(r, cost)| problem.jacobian(&theta, options).map(|j| (r, cost, j)));
         let (residuals, cost, jacobian) = match evaluated {
             Ok(evaluated) => evaluated,
-            Err(reason) => return failed(theta, history, reason),
+            Err(reason) => return Solution::diverged(theta, history, reason),
         };
         let step = match improving_step(problem, &theta, &residuals, &jacobian, cost, options) {
             Some(step) => step,
@@ -344,15 +348,7 @@ fn finish<P: LeastSquaresProblem + ?Sized>(
             status,
             history,
         },
-        Err(reason) => Solution {
-            information: DMatrix::zeros(theta.len(), theta.len()),
-            residuals: DVector::zeros(0),
-            jacobian: DMatrix::zeros(0, theta.len()),
-            theta,
-            cost: f64::NAN,
-            status: Status::Diverged(reason),
-            history,
-        },
+        Err(reason) => Solution::diverged(theta, history, reason),
     }
 }
 

@@ -178,13 +178,21 @@ mod tests {
                 pitch: 0.05,
                 controls: Default::default(),
             },
+            model: ModelKind::Linear,
             parameters: [
                 ("Cm_q".to_string(), -12.15),
                 ("Cm_alpha".to_string(), -0.52),
             ]
             .into(),
+            local_derivatives: [("Cm_q".to_string(), -99.0)].into(),
         };
-        let scores = score(&estimate, Some(&truth));
+        let scores = score(&estimate, Some(&truth), ModelKind::Linear);
+        let stall_postulate = score(&estimate, Some(&truth), ModelKind::Stall);
+        assert_eq!(stall_postulate[0].truth, Some(-99.0));
+        assert_eq!(
+            stall_postulate[0].truth_kind,
+            Some(TruthKind::LocalDerivative)
+        );
         assert!(
             (scores[0].error_sigma.unwrap() - 1.5).abs() < 1e-12
                 && scores[0].inside_95 == Some(true)
