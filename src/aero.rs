@@ -37,6 +37,9 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// Moves one flight variable of an input by a step (for local derivatives).
+type Perturbation = fn(&mut AeroInput, f64);
+
 /// A regressor: the variable a derivative multiplies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Regressor {
@@ -655,7 +658,7 @@ impl AeroModel {
             input.chi = self.separation_target(input.alpha, input.alpha_dot);
             self.coefficient_values(&self.coefficients(&input))
         };
-        let perturbations: [(Regressor, f64, fn(&mut AeroInput, f64)); 9] = [
+        let perturbations: [(Regressor, f64, Perturbation); 9] = [
             (Regressor::Alpha, STEP, |i, h| i.alpha += h),
             (Regressor::Beta, STEP, |i, h| i.beta += h),
             (Regressor::RollRate, STEP * divisor / b, |i, h| {
