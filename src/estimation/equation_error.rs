@@ -31,11 +31,20 @@
 //! Diverged with the reason when a regressor matrix is rank-deficient or
 //! there are too few samples. A missing channel is an error naming it.
 //!
-//! Limitation (seed 004's finding): least squares assumes noise-free
-//! regressors. Measured α, β, rates and controls carry noise, so the
-//! estimates are biased towards zero (errors in variables); see
-//! `tests/equation_error.rs` for the size of that bias on the 25 Hz
-//! flight-test profile.
+//! Limitations, measured in `tests/equation_error.rs` (ATTAS multisine):
+//! - seed 004's finding: least squares assumes noise-free regressors;
+//!   measured α, β, rates and controls carry noise, so the estimates are
+//!   attenuated towards zero (errors in variables). On the 25 Hz
+//!   flight-test profile: CLα −5.6 %, Cmq −12.6 %, Clp −1.5 %, each as the
+//!   errors-in-variables limit (M_xx + M_nn)⁻¹·M_xx·θ predicts, and several
+//!   times larger than the reported standard errors;
+//! - the moments need differentiated rates: on noise-free 100 Hz data the
+//!   moment derivatives are within 3.3e-4 relative, the forces exact; but a
+//!   simulated step input (no actuator dynamics) makes the angular
+//!   acceleration jump, which any centred differentiator smears (1–4 %
+//!   errors), and zero-order-hold simulator inputs put the recorded control
+//!   half a step ahead of the mean control the differentiated rate reflects
+//!   (1–5 %).
 
 use crate::aero::{Coefficient, ForceAxes, ModelKind, Regressor};
 use crate::error::{Error, Result};
