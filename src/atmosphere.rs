@@ -5,7 +5,8 @@
 
 pub const SEA_LEVEL_TEMPERATURE: f64 = 288.15;
 pub const SEA_LEVEL_PRESSURE: f64 = 101_325.0;
-pub const SEA_LEVEL_DENSITY: f64 = 1.225;
+/// p0/(R·T0) = 1.224 999 kg/m³ (ICAO rounds it to 1.2250).
+pub const SEA_LEVEL_DENSITY: f64 = SEA_LEVEL_PRESSURE / (GAS_CONSTANT * SEA_LEVEL_TEMPERATURE);
 pub const GAS_CONSTANT: f64 = 287.052_87;
 pub const HEAT_CAPACITY_RATIO: f64 = 1.4;
 const LAPSE_RATE: f64 = 0.0065;

@@ -88,6 +88,12 @@ enum Command {
 /// Estimators the CLI can run.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 enum Method {
+    /// Equation error: least squares on coefficients reconstructed from
+    /// accelerations and angular accelerations, coloured-residual bounds.
+    Ee,
+    /// Stepwise regression (F-to-enter/F-to-remove, PRESS) on every
+    /// coefficient the model has, printing which terms it selects.
+    Swr,
     /// Output error, maximum likelihood (Gauss–Newton on det R).
     Oem,
 }
@@ -227,6 +233,12 @@ fn estimate(
     let record = aeroid::record::FlightRecord::read(record_folder)?;
     let structure = ModelStructure::load(model)?;
     let estimate = match method {
+        Method::Ee => aeroid::estimation::equation_error::equation_error(
+            &record,
+            &structure,
+            &Default::default(),
+        )?,
+        Method::Swr => stepwise_all(&record, &structure)?,
         Method::Oem => output_error::output_error(&[&record], &structure, &Default::default())?,
     };
     let truth_path = record_folder.join(aeroid::truth::TRUTH_FILE);
@@ -265,4 +277,51 @@ fn estimate(
         );
     }
     Ok(())
+}
+
+/// Stepwise regression on each coefficient the model structure has terms in;
+/// prints each report and returns the combined estimate.
+fn stepwise_all(
+    record: &aeroid::record::FlightRecord,
+    structure: &aeroid::estimation::structure::ModelStructure,
+) -> Result<aeroid::estimation::estimate::Estimate> {
+    use aeroid::aero::Coefficient;
+    use aeroid::estimation::stepwise;
+    let mut combined: Option<aeroid::estimation::estimate::Estimate> = None;
+    for coefficient in Coefficient::ALL {
+        if structure.aircraft.aero.terms(coefficient).next().is_none() {
+            continue;
+        }
+        let report = stepwise::stepwise(record, structure, coefficient, &Default::default())?;
+        println!("{report}");
+        let estimate = report.estimate();
+        combined = Some(match combined {
+            None => estimate,
+            Some(mut all) => {
+                all.covariance = block_diagonal(&all.covariance, &estimate.covariance);
+                all.parameters.extend(estimate.parameters);
+                all.fits.extend(estimate.fits);
+                all.notes.extend(estimate.notes);
+                all
+            }
+        });
+    }
+    combined
+        .ok_or_else(|| anyhow::anyhow!("the model '{}' has no coefficient terms", structure.name))
+}
+
+/// The block-diagonal matrix of two square matrices (independent fits).
+fn block_diagonal(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let n = a.len() + b.len();
+    (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| match (i < a.len(), j < a.len()) {
+                    (true, true) => a[i][j],
+                    (false, false) => b[i - a.len()][j - a.len()],
+                    _ => 0.0,
+                })
+                .collect()
+        })
+        .collect()
 }
