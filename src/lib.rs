@@ -17,6 +17,7 @@ pub mod integrator;
 pub mod linearize;
 pub mod modal_fit;
 pub mod params;
+pub mod pipeline;
 pub mod random;
 pub mod record;
 pub mod recorder;

@@ -66,6 +66,23 @@ enum Command {
         /// The record folder.
         record: PathBuf,
     },
+    /// The whole harness on one scenario: simulate, record (the scenario's
+    /// recorder profile unless --profile), run every classical estimator (ee,
+    /// swr, oem) on every model structure the scenario names, and score each
+    /// against the truth. With --out, writes the record, truth and estimates.
+    Run {
+        /// A bundled scenario name or a path to a scenario file.
+        scenario: String,
+        /// A recorder profile (recorders/) or a path.
+        #[arg(long)]
+        profile: Option<String>,
+        /// Print every parameter's score, not just the summary per estimator.
+        #[arg(long)]
+        verbose: bool,
+        /// A folder for the record, truth.toml and one estimate per model and method.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Estimate a postulated model's parameters from a record; print the
     /// estimates with Cramér–Rao standard errors, scored against the truth
     /// when the record came from a scenario (its truth.toml); write
@@ -131,6 +148,12 @@ fn run(cli: Cli) -> Result<()> {
             out,
         } => record(&scenario, profile.as_deref(), &out),
         Command::Import { data, map, out } => import(&data, &map, &out),
+        Command::Run {
+            scenario,
+            profile,
+            verbose,
+            out,
+        } => run_all(&scenario, profile.as_deref(), verbose, out.as_deref()),
         Command::Estimate {
             record,
             model,
@@ -238,7 +261,12 @@ fn estimate(
             &structure,
             &Default::default(),
         )?,
-        Method::Swr => stepwise_all(&record, &structure)?,
+        Method::Swr => {
+            let (reports, estimate) =
+                aeroid::estimation::stepwise::stepwise_all(&record, &structure)?;
+            reports.iter().for_each(|report| println!("{report}"));
+            estimate
+        }
         Method::Oem => output_error::output_error(&[&record], &structure, &Default::default())?,
     };
     let truth_path = record_folder.join(aeroid::truth::TRUTH_FILE);
@@ -279,49 +307,65 @@ fn estimate(
     Ok(())
 }
 
-/// Stepwise regression on each coefficient the model structure has terms in;
-/// prints each report and returns the combined estimate.
-fn stepwise_all(
-    record: &aeroid::record::FlightRecord,
-    structure: &aeroid::estimation::structure::ModelStructure,
-) -> Result<aeroid::estimation::estimate::Estimate> {
-    use aeroid::aero::Coefficient;
-    use aeroid::estimation::stepwise;
-    let mut combined: Option<aeroid::estimation::estimate::Estimate> = None;
-    for coefficient in Coefficient::ALL {
-        if structure.aircraft.aero.terms(coefficient).next().is_none() {
-            continue;
-        }
-        let report = stepwise::stepwise(record, structure, coefficient, &Default::default())?;
-        println!("{report}");
-        let estimate = report.estimate();
-        combined = Some(match combined {
-            None => estimate,
-            Some(mut all) => {
-                all.covariance = block_diagonal(&all.covariance, &estimate.covariance);
-                all.parameters.extend(estimate.parameters);
-                all.fits.extend(estimate.fits);
-                all.notes.extend(estimate.notes);
-                all
-            }
-        });
+fn run_all(
+    reference: &str,
+    profile: Option<&str>,
+    verbose: bool,
+    out: Option<&std::path::Path>,
+) -> Result<()> {
+    let scenario = Scenario::load(reference)?;
+    let profile = aeroid::recorder::profile_for(&scenario, profile)?;
+    let report = aeroid::pipeline::run(&scenario, &profile)?;
+    println!(
+        "{}: recorded with {} ({} channels); truth: {:?} model",
+        report.scenario,
+        report.profile,
+        report.record.channels.len(),
+        report.truth.model
+    );
+    if scenario.models.is_empty() {
+        println!("the scenario names no model structures (`models = [...]`): nothing to estimate");
     }
-    combined
-        .ok_or_else(|| anyhow::anyhow!("the model '{}' has no coefficient terms", structure.name))
-}
-
-/// The block-diagonal matrix of two square matrices (independent fits).
-fn block_diagonal(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let n = a.len() + b.len();
-    (0..n)
-        .map(|i| {
-            (0..n)
-                .map(|j| match (i < a.len(), j < a.len()) {
-                    (true, true) => a[i][j],
-                    (false, false) => b[i - a.len()][j - a.len()],
-                    _ => 0.0,
-                })
-                .collect()
-        })
-        .collect()
+    println!(
+        "{:<22} {:<5} {:<16} {:>6} {:>9} {:>13} {:>10}",
+        "model", "method", "status", "iter", "time [s]", "inside 95 %", "max|e/σ|"
+    );
+    for run in &report.runs {
+        match &run.outcome {
+            Ok((estimate, scores)) => {
+                let (inside, scored, worst) = run.coverage().unwrap_or((0, 0, f64::NAN));
+                let status = format!("{:?}", estimate.status)
+                    .chars()
+                    .take(16)
+                    .collect::<String>();
+                println!(
+                    "{:<22} {:<5} {:<16} {:>6} {:>9.3} {:>13} {:>10.2}",
+                    run.model,
+                    run.method,
+                    status,
+                    estimate.iterations,
+                    estimate.wall_time,
+                    format!("{inside}/{scored}"),
+                    worst
+                );
+                if verbose {
+                    print!("{}", aeroid::estimation::score::table(scores));
+                }
+            }
+            Err(reason) => println!("{:<22} {:<5} not run: {reason}", run.model, run.method),
+        }
+    }
+    if let Some(out) = out {
+        report.record.write(out)?;
+        report.truth.write(&out.join(aeroid::truth::TRUTH_FILE))?;
+        for run in &report.runs {
+            if let Ok((estimate, scores)) = &run.outcome {
+                let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
+                estimate.write_json(&out.join(format!("{stem}.json")))?;
+                aeroid::estimation::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
+            }
+        }
+        println!("record, truth and estimates written to {}", out.display());
+    }
+    Ok(())
 }

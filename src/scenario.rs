@@ -43,6 +43,9 @@ pub struct ScenarioFile {
     /// (a bundled name in `recorders/` or a path relative to this file).
     #[serde(default)]
     pub recorder: Option<String>,
+    /// Model structures (`models/` names or paths) that `aeroid run` fits to this scenario's record.
+    #[serde(default)]
+    pub models: Vec<String>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -113,6 +116,7 @@ pub struct Scenario {
     pub departure: DepartureLimits,
     /// The default recorder profile reference, if the file names one.
     pub recorder: Option<String>,
+    pub models: Vec<String>,
 }
 
 impl Scenario {
@@ -196,6 +200,7 @@ impl Scenario {
             wind: file.wind.clone(),
             departure,
             recorder: file.recorder.clone(),
+            models: file.models.clone(),
         };
         problems.finish(path, scenario)
     }

@@ -56,11 +56,25 @@ pub fn to_state(x: &FlightPathState) -> StateVector {
     full
 }
 
-/// Flight-path rates and the simulator's evaluation at x.
+/// Measured rates of the pseudo-controls that enter the integrated states'
+/// equations: the airspeed's (in β̇) and the sideslip's (in V̇).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PseudoRates {
+    pub airspeed: Option<f64>,
+    pub beta: Option<f64>,
+}
+
+/// Flight-path rates and the simulator's evaluation at x. A decoupled model
+/// takes the other axis's motion from measurement (seed 004 Eqs. 5–8), and
+/// that model has no forces on that axis, so where a measured state's rate
+/// enters an integrated state's equation the measured rate is used: with the
+/// airspeed measured, β̇ = (v̇ − V̇_m·sin β)/(V·cos β); with the sideslip
+/// measured, V̇ = [(u·u̇ + w·ẇ)/V + V·sin β·cos β·β̇_m]/cos²β.
 pub fn derivative(
     model: &FlightModel,
     x: &FlightPathState,
     controls: &Controls,
+    pseudo: PseudoRates,
 ) -> (FlightPathState, Evaluation) {
     let exogenous = Exogenous {
         controls: *controls,
@@ -70,9 +84,19 @@ pub fn derivative(
     let d = &evaluation.derivative;
     let velocity = evaluation.air_data.velocity;
     let mut rates = FlightPathState::zeros();
-    rates[AIRSPEED] = velocity.dot(&d.fixed_rows::<3>(state::U)) / evaluation.air_data.airspeed;
+    let (sin_beta, cos_beta) = x[BETA].sin_cos();
+    rates[AIRSPEED] = match pseudo.beta {
+        Some(beta_rate) => {
+            let longitudinal = (velocity.x * d[state::U] + velocity.z * d[state::W]) / x[AIRSPEED];
+            (longitudinal + x[AIRSPEED] * sin_beta * cos_beta * beta_rate) / (cos_beta * cos_beta)
+        }
+        None => velocity.dot(&d.fixed_rows::<3>(state::U)) / evaluation.air_data.airspeed,
+    };
     rates[ALPHA] = evaluation.alpha_dot;
-    rates[BETA] = evaluation.beta_dot;
+    rates[BETA] = match pseudo.airspeed {
+        Some(speed_rate) => (d[state::V] - speed_rate * sin_beta) / (x[AIRSPEED] * cos_beta),
+        None => evaluation.beta_dot,
+    };
     rates
         .fixed_rows_mut::<3>(P)
         .copy_from(&evaluation.angular_acceleration);
@@ -218,6 +242,21 @@ impl DrivenSimulation {
         self.start + k as f64 * self.step
     }
 
+    /// Rates over step k (slopes of the linear interpolation) of the measured
+    /// airspeed and sideslip, where they are not integrated.
+    fn pseudo_rates(&self, k: usize) -> PseudoRates {
+        let next = (k + 1).min(self.len() - 1);
+        let previous = next.saturating_sub(1);
+        let rate = |i: usize| {
+            (!self.integrate[i])
+                .then(|| (self.measured[next][i] - self.measured[previous][i]) / self.step)
+        };
+        PseudoRates {
+            airspeed: rate(AIRSPEED),
+            beta: rate(BETA),
+        }
+    }
+
     /// The state at grid point k: integrated entries from `x`, the rest measured.
     fn merge(&self, x: &FlightPathState, measured: &FlightPathState) -> FlightPathState {
         FlightPathState::from_fn(|i, _| if self.integrate[i] { x[i] } else { measured[i] })
@@ -244,7 +283,8 @@ impl DrivenSimulation {
             }
         });
         for k in 0..self.len() {
-            let (_, evaluation) = derivative(model, &x, &self.controls[k]);
+            let pseudo = self.pseudo_rates(k);
+            let (_, evaluation) = derivative(model, &x, &self.controls[k], pseudo);
             check_departure(&x, self.time(k))?;
             sink(k, &x, &evaluation);
             if k + 1 == self.len() {
@@ -262,7 +302,9 @@ impl DrivenSimulation {
                     FlightPathState::from_fn(
                         |i, _| if mask[i] == 1.0 { x[i] } else { measured[i] },
                     );
-                derivative(model, &merged, &controls).0.component_mul(&mask)
+                derivative(model, &merged, &controls, pseudo)
+                    .0
+                    .component_mul(&mask)
             });
             x = FlightPathState::from_fn(|i, _| {
                 if mask[i] == 1.0 {

@@ -203,6 +203,59 @@ pub struct StepwiseReport {
     pub notes: Vec<String>,
 }
 
+/// Stepwise regression on every coefficient the structure has terms in: the
+/// reports, and one estimate of all selected terms (covariance block-diagonal:
+/// the coefficients are fitted independently).
+pub fn stepwise_all(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+) -> Result<(Vec<StepwiseReport>, Estimate)> {
+    let mut reports = Vec::new();
+    let mut combined: Option<Estimate> = None;
+    for coefficient in Coefficient::ALL {
+        if structure.aircraft.aero.terms(coefficient).next().is_none() {
+            continue;
+        }
+        let report = stepwise(record, structure, coefficient, &StepwiseOptions::default())?;
+        let estimate = report.estimate();
+        reports.push(report);
+        combined = Some(match combined {
+            None => estimate,
+            Some(mut all) => {
+                all.covariance = block_diagonal(&all.covariance, &estimate.covariance);
+                all.parameters.extend(estimate.parameters);
+                all.fits.extend(estimate.fits);
+                all.notes.extend(estimate.notes);
+                all.wall_time += estimate.wall_time;
+                all
+            }
+        });
+    }
+    let estimate = combined.ok_or_else(|| {
+        crate::Error::Other(format!(
+            "the model '{}' has no coefficient terms",
+            structure.name
+        ))
+    })?;
+    Ok((reports, estimate))
+}
+
+/// The block-diagonal matrix of two square matrices.
+fn block_diagonal(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let n = a.len() + b.len();
+    (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| match (i < a.len(), j < a.len()) {
+                    (true, true) => a[i][j],
+                    (false, false) => b[i - a.len()][j - a.len()],
+                    _ => 0.0,
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// Determines the terms of `coefficient` from `record` by stepwise regression.
 pub fn stepwise(
     record: &FlightRecord,

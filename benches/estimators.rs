@@ -1,0 +1,32 @@
+//! One output-error fit and one equation-error fit of the ATTAS
+//! lateral-directional case (scenario attas-lateral-multistep: 60 s of
+//! aileron and rudder multisteps, recorded at 25 Hz by the flight-test
+//! profile; model attas-lateral, 18 parameters). Run:
+//! `cargo bench --bench estimators`.
+
+use aeroid::estimation::equation_error::equation_error;
+use aeroid::estimation::output_error::output_error;
+use aeroid::estimation::structure::ModelStructure;
+use aeroid::recorder::{Profile, record_scenario};
+use aeroid::scenario::Scenario;
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+
+fn bench_fits(c: &mut Criterion) {
+    let scenario = Scenario::load("attas-lateral-multistep").expect("bundled scenario");
+    let profile = Profile::load("flight-test-25hz", None).expect("bundled profile");
+    let (record, _) = record_scenario(&scenario, &profile).expect("record");
+    let structure = ModelStructure::load("attas-lateral").expect("bundled model");
+    let mut group = c.benchmark_group("attas_lateral_fit");
+    group.sample_size(10);
+    group.bench_function("output_error", |b| {
+        b.iter(|| output_error(&[black_box(&record)], &structure, &Default::default()).unwrap())
+    });
+    group.bench_function("equation_error", |b| {
+        b.iter(|| equation_error(black_box(&record), &structure, &Default::default()).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_fits);
+criterion_main!(benches);
