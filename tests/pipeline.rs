@@ -64,8 +64,7 @@ fn qar_record_is_reported_not_crashed() {
         let reason = run
             .outcome
             .as_ref()
-            .err()
-            .expect("QAR lacks the channels these models need");
+            .expect_err("QAR lacks the channels these models need");
         assert!(
             reason.contains("channel"),
             "{}/{}: {reason}",
