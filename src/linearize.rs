@@ -71,13 +71,8 @@ use crate::trim::Trim;
 use crate::wind::WindSample;
 use nalgebra::{Complex, DMatrix, DVector};
 
-/// Index of u in the Euler-angle state.
-pub const U: usize = 0;
-pub const V: usize = 1;
-pub const W: usize = 2;
-pub const P: usize = 3;
-pub const Q: usize = 4;
-pub const R: usize = 5;
+/// u, v, w, p, q, r: the first six entries of the Euler-angle state are those of the simulator state.
+pub use crate::state::{P, Q, R, U, V, W};
 pub const PHI: usize = 6;
 pub const THETA: usize = 7;
 pub const PSI: usize = 8;
