@@ -99,6 +99,10 @@ enum Command {
         /// The folder to write estimate.json and estimate.csv into (created).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Proof of match: simulate the estimated model on this other record
+        /// (a different manoeuvre) and report how well it reproduces each output.
+        #[arg(long)]
+        check_on: Option<PathBuf>,
     },
 }
 
@@ -159,7 +163,8 @@ fn run(cli: Cli) -> Result<()> {
             model,
             method,
             out,
-        } => estimate(&record, &model, method, out.as_deref()),
+            check_on,
+        } => estimate(&record, &model, method, out.as_deref(), check_on.as_deref()),
         Command::Inspect { record } => {
             print!(
                 "{}",
@@ -251,6 +256,7 @@ fn estimate(
     model: &str,
     method: Method,
     out: Option<&std::path::Path>,
+    check_on: Option<&std::path::Path>,
 ) -> Result<()> {
     use aeroid::estimation::{output_error, score, structure::ModelStructure};
     let record = aeroid::record::FlightRecord::read(record_folder)?;
@@ -293,6 +299,16 @@ fn estimate(
     }
     for note in &estimate.notes {
         println!("  note: {note}");
+    }
+    if let Some(other) = check_on {
+        let other = aeroid::record::FlightRecord::read(other)?;
+        println!("proof of match on {} (nothing adjusted):", other.scenario);
+        for fit in output_error::proof_of_match(&estimate, &structure, &other)? {
+            println!(
+                "  {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}",
+                fit.channel, fit.rms, fit.r_squared, fit.theil
+            );
+        }
     }
     if let Some(out) = out {
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;

@@ -120,6 +120,34 @@ pub fn output_error(
     ))
 }
 
+/// Proof of match (seeds 002, 004): the structure with an estimate's
+/// aerodynamic values, simulated on another manoeuvre with nothing adjusted
+/// (initial state from that record's first samples), and how well it
+/// reproduces each output there.
+pub fn proof_of_match(
+    estimate: &Estimate,
+    structure: &ModelStructure,
+    record: &FlightRecord,
+) -> Result<Vec<OutputFit>> {
+    let mut aircraft = structure.aircraft.clone();
+    for p in &estimate.parameters {
+        if aircraft.aero.parameters.index(&p.name).is_some() {
+            aircraft.aero.parameters.set(&p.name, p.value)?;
+        }
+    }
+    let segment = segment(record, structure, &OutputErrorOptions::default())?;
+    let mut problem = Problem {
+        model: FlightModel::new(aircraft, Default::default()),
+        unknowns: Vec::new(),
+        segments: vec![segment],
+        outputs: structure.outputs.clone(),
+        weights: vec![1.0; structure.outputs.len()],
+    };
+    problem.try_fits(&DVector::zeros(0)).map_err(|reason| {
+        Error::Other(format!("proof of match on '{}': {reason}", record.scenario))
+    })
+}
+
 /// The fitting window of a record: where every output channel has samples.
 fn window(
     record: &FlightRecord,
@@ -369,11 +397,14 @@ impl Problem {
         }
     }
 
+    /// Fit metrics per output at θ; empty when the model cannot be simulated there.
     fn fits(&mut self, theta: &DVector<f64>) -> Vec<OutputFit> {
-        let Ok(predictions) = self.predictions(theta) else {
-            return Vec::new();
-        };
-        (0..self.outputs.len())
+        self.try_fits(theta).unwrap_or_default()
+    }
+
+    fn try_fits(&mut self, theta: &DVector<f64>) -> std::result::Result<Vec<OutputFit>, String> {
+        let predictions = self.predictions(theta)?;
+        Ok((0..self.outputs.len())
             .map(|o| {
                 let measured: Vec<f64> = self
                     .segments
@@ -383,7 +414,7 @@ impl Problem {
                 let predicted: Vec<f64> = predictions.iter().flat_map(|p| p[o].clone()).collect();
                 OutputFit::new(&self.outputs[o], &measured, &predicted)
             })
-            .collect()
+            .collect())
     }
 }
 
