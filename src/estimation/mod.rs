@@ -5,6 +5,7 @@
 //! coefficient reconstruction (`reconstruction`, with `differentiation`) and
 //! the least-squares solution with its error bounds (`regression`).
 
+pub mod compatibility;
 pub mod differentiation;
 pub mod driven;
 pub mod equation_error;

@@ -418,6 +418,22 @@ impl Problem {
     }
 }
 
+/// Weights 1/σ per output of a diagonal R re-estimated from the residuals,
+/// R_ii = mean square residual (seed 001 Eq. 8), with a floor of 10⁻¹² of the
+/// output's RMS so that a noise-free fit stays finite.
+pub(crate) fn diagonal_weights(errors: &[Vec<f64>], measured: &[Vec<f64>]) -> Vec<f64> {
+    errors
+        .iter()
+        .zip(measured)
+        .map(|(error, values)| {
+            let count = error.len().max(1) as f64;
+            let variance = error.iter().map(|e| e * e).sum::<f64>() / count;
+            let scale = values.iter().map(|z| z * z).sum::<f64>() / count;
+            1.0 / variance.max(1e-24 * scale.max(1e-300)).sqrt()
+        })
+        .collect()
+}
+
 /// Linear interpolation of a grid series at time t.
 fn interpolate(grid: &[f64], simulation: &DrivenSimulation, t: f64) -> f64 {
     let position = ((t - simulation.start) / simulation.step).max(0.0);
@@ -446,19 +462,15 @@ impl LeastSquaresProblem for Problem {
     /// floor of 10⁻¹² of the output's RMS so that a noise-free fit stays finite.
     fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
         let errors = self.errors(theta)?;
-        for (o, error) in errors.iter().enumerate() {
-            let count = error.len().max(1) as f64;
-            let variance = error.iter().map(|e| e * e).sum::<f64>() / count;
-            let scale = self
-                .segments
-                .iter()
-                .flat_map(|s| s.outputs[o].values.iter())
-                .map(|z| z * z)
-                .sum::<f64>()
-                / count;
-            let floor = 1e-24 * scale.max(1e-300);
-            self.weights[o] = 1.0 / variance.max(floor).sqrt();
-        }
+        let measured: Vec<Vec<f64>> = (0..self.outputs.len())
+            .map(|o| {
+                self.segments
+                    .iter()
+                    .flat_map(|s| s.outputs[o].values.iter().copied())
+                    .collect()
+            })
+            .collect();
+        self.weights = diagonal_weights(&errors, &measured);
         Ok(true)
     }
 }
