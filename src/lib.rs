@@ -11,6 +11,7 @@ pub mod dynamics;
 pub mod engine;
 pub mod error;
 pub mod estimation;
+pub mod gate;
 pub mod import;
 pub mod inputs;
 pub mod integrator;

@@ -93,6 +93,14 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Run the accuracy gates (golden/gates.toml): fly, record and estimate
+    /// every case, check each parameter against the truth within its
+    /// tolerance, print what failed, and exit non-zero on any failure.
+    Gate {
+        /// The gate file.
+        #[arg(long, default_value = aeroid::gate::GATE_FILE)]
+        file: PathBuf,
+    },
     /// Estimate a postulated model's parameters from a record; print the
     /// estimates with Cramér–Rao standard errors, scored against the truth
     /// when the record came from a scenario (its truth.toml); write
@@ -168,6 +176,7 @@ fn run(cli: Cli) -> Result<()> {
             verbose,
             out,
         } => run_all(&scenario, profile.as_deref(), verbose, out.as_deref()),
+        Command::Gate { file } => gate(&file),
         Command::Reconstruct { record, out } => reconstruct(&record, out.as_deref()),
         Command::Estimate {
             record,
@@ -422,4 +431,45 @@ fn reconstruct(record_folder: &std::path::Path, out: Option<&std::path::Path>) -
         println!("corrected record written to {}", out.display());
     }
     Ok(())
+}
+
+fn gate(file: &std::path::Path) -> Result<()> {
+    let gates = aeroid::gate::load(file)?;
+    let mut failed = Vec::new();
+    for case in &gates.cases {
+        match aeroid::gate::run_case(case) {
+            Ok(result) if result.passed() => {
+                let worst = result
+                    .rows
+                    .iter()
+                    .map(|r| r.error.abs() / r.allowed)
+                    .fold(0.0, f64::max);
+                println!(
+                    "pass  {:<28} {} parameters, worst at {:.0} % of its tolerance",
+                    case.name,
+                    result.rows.len(),
+                    100.0 * worst
+                );
+            }
+            Ok(result) => {
+                println!("FAIL  {}\n{}", case.name, result.failures());
+                failed.push(case.name.clone());
+            }
+            Err(error) => {
+                println!("FAIL  {}: {error}", case.name);
+                failed.push(case.name.clone());
+            }
+        }
+    }
+    if failed.is_empty() {
+        println!("all {} gates pass", gates.cases.len());
+        Ok(())
+    } else {
+        anyhow::bail!(
+            "{} of {} gates failed: {}",
+            failed.len(),
+            gates.cases.len(),
+            failed.join(", ")
+        )
+    }
 }

@@ -1,0 +1,46 @@
+//! The accuracy gates of golden/gates.toml as tests: every case passes its
+//! tolerances, and its estimates (4 significant digits) match the committed
+//! insta snapshot in golden/snapshots, so any change in what an estimator
+//! returns is seen in review even while it stays inside its gate.
+
+use aeroid::gate;
+
+#[test]
+fn every_gate_passes_and_matches_its_snapshot() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(gate::GATE_FILE);
+    let gates = gate::load(&path).unwrap();
+    assert!(!gates.cases.is_empty());
+    let mut failures = String::new();
+    for case in &gates.cases {
+        let result = gate::run_case(case).unwrap_or_else(|e| panic!("{}: {e}", case.name));
+        if !result.passed() {
+            failures += &format!("{}\n{}", case.name, result.failures());
+        }
+        insta::with_settings!({ snapshot_path => "../golden/snapshots", prepend_module_to_snapshot => false }, {
+            insta::assert_snapshot!(case.name.clone(), result.snapshot());
+        });
+    }
+    assert!(failures.is_empty(), "gates failed:\n{failures}");
+}
+
+/// A gate must be able to fail: the same case with a tolerance far below the
+/// estimator's accuracy fails, and its failure table names the parameters.
+#[test]
+fn a_tight_gate_fails_with_a_readable_table() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(gate::GATE_FILE);
+    let mut case = gate::load(&path)
+        .unwrap()
+        .cases
+        .into_iter()
+        .find(|c| c.method == "ee")
+        .unwrap();
+    case.relative_tolerance = 1e-9;
+    case.tolerance.clear();
+    let result = gate::run_case(&case).unwrap();
+    assert!(!result.passed());
+    let table = result.failures();
+    assert!(
+        table.contains("allowed") && table.lines().count() > 2,
+        "{table}"
+    );
+}
