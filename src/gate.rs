@@ -99,18 +99,10 @@ impl GateResult {
             self.estimate.status
         );
         for p in &self.estimate.parameters {
-            text += &format!("{} = {}\n", p.name, significant(p.value, 4));
+            text += &format!("{} = {}\n", p.name, crate::record::rounded(p.value));
         }
         text
     }
-}
-
-/// `value` rounded to `digits` significant digits, in a stable text form.
-pub fn significant(value: f64, digits: usize) -> String {
-    if value == 0.0 || !value.is_finite() {
-        return format!("{value}");
-    }
-    format!("{:.*e}", digits - 1, value)
 }
 
 /// Loads and validates a gate file.

@@ -22,7 +22,7 @@
 use crate::error::{Error, Result};
 use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimation::gauss_newton::{self, LeastSquaresProblem, Options};
-use crate::estimation::output_error::diagonal_weights;
+use crate::estimation::output_error::{diagonal_weights, interpolate};
 use crate::integrator::rk4_step;
 use crate::record::{Channel, FlightRecord};
 use crate::state;
@@ -269,17 +269,10 @@ impl Problem {
                 times
                     .iter()
                     .zip(values)
-                    .map(|(&t, &z)| residual(o, z, self.interpolate(grid, t)))
+                    .map(|(&t, &z)| residual(o, z, interpolate(grid, self.start, self.step, t)))
                     .collect()
             })
             .collect())
-    }
-
-    fn interpolate(&self, grid: &[f64], t: f64) -> f64 {
-        let position = ((t - self.start) / self.step).max(0.0);
-        let k = (position.floor() as usize).min(grid.len().saturating_sub(2));
-        let fraction = (position - k as f64).clamp(0.0, 1.0);
-        grid[k] + fraction * (grid[(k + 1).min(grid.len() - 1)] - grid[k])
     }
 
     fn fits(&self, theta: &DVector<f64>) -> Vec<OutputFit> {

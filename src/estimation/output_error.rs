@@ -323,7 +323,9 @@ impl Problem {
                         measured
                             .times
                             .iter()
-                            .map(|&t| interpolate(grid, simulation, t) + bias)
+                            .map(|&t| {
+                                interpolate(grid, simulation.start, simulation.step, t) + bias
+                            })
                             .collect()
                     })
                     .collect(),
@@ -435,8 +437,9 @@ pub(crate) fn diagonal_weights(errors: &[Vec<f64>], measured: &[Vec<f64>]) -> Ve
 }
 
 /// Linear interpolation of a grid series at time t.
-fn interpolate(grid: &[f64], simulation: &DrivenSimulation, t: f64) -> f64 {
-    let position = ((t - simulation.start) / simulation.step).max(0.0);
+/// `grid[k]` is the value at `start + k·step`; held beyond the ends.
+pub(crate) fn interpolate(grid: &[f64], start: f64, step: f64, t: f64) -> f64 {
+    let position = ((t - start) / step).max(0.0);
     let k = (position.floor() as usize).min(grid.len().saturating_sub(2));
     let fraction = (position - k as f64).clamp(0.0, 1.0);
     if grid.len() < 2 {
