@@ -20,7 +20,7 @@
 //! the estimated errors removed.
 
 use crate::error::{Error, Result};
-use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
+use crate::estimation::estimate::{Estimate, OutputFit};
 use crate::estimation::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::estimation::output_error::{diagonal_weights, interpolate};
 use crate::integrator::rk4_step;
@@ -78,32 +78,17 @@ pub fn flight_path_reconstruction(
     let mut options = Options::new(start.len());
     options.max_iterations = max_iterations;
     let solution = gauss_newton::solve(&mut problem, &start, &options);
-    let covariance = solution.covariance();
-    let names = problem.names();
-    let parameters: Vec<ParameterEstimate> = (0..names.len())
-        .map(|j| ParameterEstimate {
-            name: names[j].clone(),
-            value: solution.theta[j],
-            standard_error: covariance[(j, j)].sqrt(),
-            start: start[j],
-        })
-        .collect();
     let errors = problem.full_errors(&solution.theta);
-    let fits = problem.fits(&solution.theta);
+    let label = (
+        "fpr",
+        "kinematic compatibility".to_string(),
+        record.scenario.clone(),
+    );
     let estimate = Estimate {
-        method: "fpr".into(),
-        model: "kinematic compatibility".into(),
-        record: record.scenario.clone(),
-        status: solution.status.clone(),
-        parameters,
-        covariance: (0..covariance.nrows())
-            .map(|i| covariance.row(i).iter().copied().collect())
-            .collect(),
-        fits,
-        iterations: solution.history.len(),
-        cost_history: solution.history.iter().map(|i| i.cost).collect(),
+        fits: problem.fits(&solution.theta),
         wall_time: started.elapsed().as_secs_f64(),
         notes: vec!["still air, accelerometer at the centre of gravity, R diagonal".into()],
+        ..Estimate::from_solution(label, &problem.names(), &start, &solution)
     };
     Ok(Compatibility {
         corrected: corrected_record(record, &errors),

@@ -5,7 +5,8 @@
 //! diverged — never a panic). Serialises to JSON and CSV.
 
 use crate::error::{Error, Result};
-use crate::estimation::gauss_newton::Status;
+use crate::estimation::gauss_newton::{Solution, Status};
+use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -77,6 +78,40 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// The estimate of a Gauss–Newton solution: values with Cramér–Rao
+    /// standard errors (√ of the covariance diagonal), the covariance, the
+    /// iterations and cost history. Fits, wall time and notes are the caller's.
+    pub fn from_solution(
+        (method, model, record): (&str, String, String),
+        names: &[String],
+        start: &DVector<f64>,
+        solution: &Solution,
+    ) -> Estimate {
+        let covariance = solution.covariance();
+        Estimate {
+            method: method.to_string(),
+            model,
+            record,
+            status: solution.status.clone(),
+            parameters: (0..names.len())
+                .map(|j| ParameterEstimate {
+                    name: names[j].clone(),
+                    value: solution.theta[j],
+                    standard_error: covariance[(j, j)].sqrt(),
+                    start: start[j],
+                })
+                .collect(),
+            covariance: (0..covariance.nrows())
+                .map(|i| covariance.row(i).iter().copied().collect())
+                .collect(),
+            fits: Vec::new(),
+            iterations: solution.history.len(),
+            cost_history: solution.history.iter().map(|i| i.cost).collect(),
+            wall_time: 0.0,
+            notes: Vec::new(),
+        }
+    }
+
     pub fn parameter(&self, name: &str) -> Option<&ParameterEstimate> {
         self.parameters.iter().find(|p| p.name == name)
     }

@@ -21,7 +21,7 @@
 use crate::dynamics::FlightModel;
 use crate::error::{Error, Result};
 use crate::estimation::driven::{self, DrivenSimulation, FlightPathState};
-use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
+use crate::estimation::estimate::{Estimate, OutputFit};
 use crate::estimation::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
 use crate::record::FlightRecord;
@@ -354,18 +354,6 @@ impl Problem {
         solution: &gauss_newton::Solution,
         wall_time: f64,
     ) -> Estimate {
-        let covariance = solution.covariance();
-        let parameters = self
-            .unknowns
-            .iter()
-            .enumerate()
-            .map(|(j, &unknown)| ParameterEstimate {
-                name: self.name(unknown),
-                value: solution.theta[j],
-                standard_error: covariance[(j, j)].sqrt(),
-                start: start[j],
-            })
-            .collect();
         let mut notes: Vec<String> = self
             .segments
             .iter()
@@ -373,29 +361,30 @@ impl Problem {
             .collect();
         notes.sort();
         notes.dedup();
-        let fits = self.fits(&solution.theta);
         let determinant: f64 = self.weights.iter().map(|w| w.powi(-2)).product();
         notes.push(format!(
             "R is diagonal; det(R) = {determinant:.4e} at the solution"
         ));
+        let record = records
+            .iter()
+            .map(|r| r.scenario.clone())
+            .collect::<Vec<_>>()
+            .join(", ");
+        let names: Vec<String> = self
+            .unknowns
+            .iter()
+            .map(|&unknown| self.name(unknown))
+            .collect();
         Estimate {
-            method: "oem".into(),
-            model: structure.name.clone(),
-            record: records
-                .iter()
-                .map(|r| r.scenario.clone())
-                .collect::<Vec<_>>()
-                .join(", "),
-            status: solution.status.clone(),
-            parameters,
-            covariance: (0..covariance.nrows())
-                .map(|i| covariance.row(i).iter().copied().collect())
-                .collect(),
-            fits,
-            iterations: solution.history.len(),
-            cost_history: solution.history.iter().map(|i| i.cost).collect(),
+            fits: self.fits(&solution.theta),
             wall_time,
             notes,
+            ..Estimate::from_solution(
+                ("oem", structure.name.clone(), record),
+                &names,
+                start,
+                solution,
+            )
         }
     }
 
