@@ -1,8 +1,9 @@
-//! `aeroid check`: validates an aircraft, scenario or recorder-profile file,
+//! `aeroid check`: validates an aircraft, model-structure, scenario or recorder-profile file,
 //! reporting every problem at once; a valid scenario is also trimmed, so that
 //! a flight condition with no trim is found before a long run.
 
 use crate::aircraft::Aircraft;
+use crate::estimation::structure::ModelStructure;
 use crate::error::{Error, Result, parse_toml, read_text};
 use crate::recorder::{Profile, ProfileFile};
 use crate::scenario::{Scenario, ScenarioFile};
@@ -24,6 +25,22 @@ pub fn check_file(path: &Path) -> Result<CheckReport> {
     if table.contains_key("trim") {
         let file: ScenarioFile = parse_toml(path, &text)?;
         check_scenario(&Scenario::from_file(&file, path)?)
+    } else if table.contains_key("aero") && table.contains_key("aircraft") {
+        let structure = ModelStructure::load(&path.to_string_lossy())?;
+        Ok(CheckReport {
+            kind: "model structure",
+            lines: vec![
+                format!(
+                    "{}: fits aircraft {} ({:?} model), {} of {} parameters free",
+                    structure.name,
+                    structure.aircraft.name,
+                    structure.aircraft.aero.kind,
+                    structure.free.iter().filter(|f| **f).count(),
+                    structure.free.len()
+                ),
+                format!("free: {}", structure.free_names().join(", ")),
+            ],
+        })
     } else if table.contains_key("aero") {
         Ok(describe_aircraft(&Aircraft::load(path)?))
     } else if table.get("channels").is_some_and(|c| c.is_array()) && !table.contains_key("time") {

@@ -100,6 +100,12 @@ enum Command {
         /// The gate file.
         #[arg(long, default_value = aeroid::gate::GATE_FILE)]
         file: PathBuf,
+        /// Print every parameter's row (estimate, σ, truth, error, allowed), not only failures.
+        #[arg(long)]
+        verbose: bool,
+        /// Run only the cases whose name contains this text.
+        #[arg(long)]
+        only: Option<String>,
     },
     /// Estimate a postulated model's parameters from a record; print the
     /// estimates with Cramér–Rao standard errors, scored against the truth
@@ -176,7 +182,11 @@ fn run(cli: Cli) -> Result<()> {
             verbose,
             out,
         } => run_all(&scenario, profile.as_deref(), verbose, out.as_deref()),
-        Command::Gate { file } => gate(&file),
+        Command::Gate {
+            file,
+            verbose,
+            only,
+        } => gate(&file, verbose, only.as_deref()),
         Command::Reconstruct { record, out } => reconstruct(&record, out.as_deref()),
         Command::Estimate {
             record,
@@ -433,26 +443,30 @@ fn reconstruct(record_folder: &std::path::Path, out: Option<&std::path::Path>) -
     Ok(())
 }
 
-fn gate(file: &std::path::Path) -> Result<()> {
-    let gates = aeroid::gate::load(file)?;
+fn gate(file: &std::path::Path, verbose: bool, only: Option<&str>) -> Result<()> {
+    let mut gates = aeroid::gate::load(file)?;
+    gates
+        .cases
+        .retain(|case| only.is_none_or(|text| case.name.contains(text)));
     let mut failed = Vec::new();
     for case in &gates.cases {
         match aeroid::gate::run_case(case) {
             Ok(result) if result.passed() => {
-                let worst = result
-                    .rows
-                    .iter()
-                    .map(|r| r.error.abs() / r.allowed)
-                    .fold(0.0, f64::max);
-                println!(
-                    "pass  {:<28} {} parameters, worst at {:.0} % of its tolerance",
-                    case.name,
-                    result.rows.len(),
-                    100.0 * worst
-                );
+                match &result.refusal {
+                    Some(refusal) => println!("pass  {:<34} refused as expected: {refusal}", case.name),
+                    None => println!(
+                        "pass  {:<34} {} parameters, worst at {:.0} % of its tolerance",
+                        case.name,
+                        result.rows.len(),
+                        100.0 * result.worst()
+                    ),
+                }
+                if verbose && result.refusal.is_none() {
+                    println!("{}", result.table(false));
+                }
             }
             Ok(result) => {
-                println!("FAIL  {}\n{}", case.name, result.failures());
+                println!("FAIL  {}\n{}", case.name, result.table(!verbose));
                 failed.push(case.name.clone());
             }
             Err(error) => {

@@ -461,17 +461,24 @@ fn rate_label(rate: f64) -> String {
 
 /// Four significant digits, plain notation within 1e-3..1e6, else scientific.
 pub fn rounded(value: f64) -> String {
+    significant(value, 4)
+}
+
+/// `digits` significant digits (at least 1), plain notation within
+/// 1e-3..1e6, else scientific; never "-0".
+pub fn significant(value: f64, digits: usize) -> String {
     if value == 0.0 {
         return "0".to_string();
     }
     if !value.is_finite() {
         return format!("{value}");
     }
+    let digits = digits.max(1) as i32;
     let magnitude = value.abs().log10().floor() as i32;
     let text = if (-3..6).contains(&magnitude) {
-        format!("{:.*}", (3 - magnitude).max(0) as usize, value)
+        format!("{:.*}", (digits - 1 - magnitude).max(0) as usize, value)
     } else {
-        format!("{value:.3e}")
+        format!("{value:.*e}", (digits - 1) as usize)
     };
     if text.starts_with("-") && text.trim_start_matches(['-', '0', '.']).is_empty() {
         text[1..].to_string()

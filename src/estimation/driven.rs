@@ -291,8 +291,11 @@ impl DrivenSimulation {
                 break;
             }
             let stage = |theta: f64| {
+                // Measured pseudo-controls are continuous states: always
+                // linear inside the step (consistent with their rates in
+                // `pseudo_rates`); controls follow the model's option.
+                let measured = self.measured[k] + (self.measured[k + 1] - self.measured[k]) * theta;
                 let w = self.interpolation.weight(theta);
-                let measured = self.measured[k] + (self.measured[k + 1] - self.measured[k]) * w;
                 let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
                 (measured, controls)
             };
