@@ -3,8 +3,8 @@
 //! a flight condition with no trim is found before a long run.
 
 use crate::aircraft::Aircraft;
-use crate::estimation::structure::ModelStructure;
 use crate::error::{Error, Result, parse_toml, read_text};
+use crate::estimation::structure::ModelStructure;
 use crate::recorder::{Profile, ProfileFile};
 use crate::scenario::{Scenario, ScenarioFile};
 use crate::sim::Simulation;

@@ -58,6 +58,12 @@ pub struct GateCase {
     /// at or above it are reported as not identifiable and not gated.
     #[serde(default)]
     pub identifiable_below: Option<f64>,
+    /// For terms the estimator adds that the truth model lacks (|truth| < 1e-12, as
+    /// stepwise regression may select): |estimate| ≤ k·σ, i.e. the spurious
+    /// term must stay statistically indistinguishable from zero. Without it
+    /// such terms fall under the absolute floor.
+    #[serde(default)]
+    pub spurious_sigma: Option<f64>,
     /// The estimator must refuse this record with an error containing this text.
     #[serde(default)]
     pub expect_error: Option<String>,
@@ -139,7 +145,9 @@ impl GateResult {
     pub fn table(&self, only_failures: bool) -> String {
         if let Some(refusal) = &self.refusal {
             return match &self.case.expect_error {
-                Some(expected) => format!("refused: {refusal}\n(expected an error containing '{expected}')\n"),
+                Some(expected) => {
+                    format!("refused: {refusal}\n(expected an error containing '{expected}')\n")
+                }
                 None => format!("refused: {refusal}\n"),
             };
         }
@@ -149,7 +157,15 @@ impl GateResult {
         }
         text += &format!(
             "{:<14} {:>13} {:>10} {:>13} {:>11} {:>9} {:>8} {:>10}  {}\n",
-            "parameter", "estimate", "σ", "truth", "error", "error/|t|", "error/σ", "allowed", "check"
+            "parameter",
+            "estimate",
+            "σ",
+            "truth",
+            "error",
+            "error/|t|",
+            "error/σ",
+            "allowed",
+            "check"
         );
         for row in self.rows.iter().filter(|r| !only_failures || !r.passed()) {
             let check = match (row.identifiable, row.passed()) {
@@ -202,7 +218,11 @@ impl GateResult {
                 p.name,
                 crate::record::rounded(p.value),
                 crate::record::significant(p.standard_error, 2),
-                if identifiable { "" } else { "  (not identifiable)" }
+                if identifiable {
+                    ""
+                } else {
+                    "  (not identifiable)"
+                }
             );
         }
         text
@@ -238,6 +258,7 @@ pub fn load(path: &Path) -> Result<GateFile> {
             .flatten()
             .chain(case.tolerance.values())
             .chain(case.identifiable_below.iter())
+            .chain(case.spurious_sigma.iter())
             .any(|t| t.is_nan() || *t <= 0.0)
         {
             problems.push(field, "tolerances and thresholds must be positive");
@@ -271,7 +292,10 @@ pub fn run_case(case: &GateCase) -> Result<GateResult> {
         .filter_map(|p| {
             let (truth, _) = truth.value_for(&p.name, structure.aircraft.aero.kind)?;
             let tolerance = case.tolerance_for(&p.name);
-            let allowed = if case.sigma_tolerance.is_some() {
+            let spurious = truth.abs() < 1e-12;
+            let allowed = if let (true, Some(k)) = (spurious, case.spurious_sigma) {
+                k * p.standard_error
+            } else if case.sigma_tolerance.is_some() {
                 tolerance * p.standard_error
             } else {
                 (tolerance * truth.abs()).max(case.absolute_floor)

@@ -12,6 +12,7 @@ pub mod engine;
 pub mod error;
 pub mod estimation;
 pub mod gate;
+pub mod identifiability;
 pub mod import;
 pub mod inputs;
 pub mod integrator;

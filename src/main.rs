@@ -93,6 +93,31 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// A-priori identifiability: the Cramér–Rao bound of every aerodynamic
+    /// parameter of the scenario's aircraft that the profile's channels allow
+    /// (sensitivities by central differences through the simulator and the
+    /// recorder, measurement error from the profile's noise and resolution),
+    /// and whether its relative bound is below the threshold.
+    Identifiability {
+        /// A bundled scenario name or a path.
+        scenario: String,
+        /// The recorder profile (default: the scenario's).
+        #[arg(long)]
+        profile: Option<String>,
+        /// Identifiable when σ/|truth| is below this.
+        #[arg(long, default_value_t = 0.1)]
+        threshold: f64,
+        /// Only these parameters (comma-separated).
+        #[arg(long, value_delimiter = ',')]
+        parameters: Option<Vec<String>>,
+        /// Only these channels (comma-separated).
+        #[arg(long, value_delimiter = ',')]
+        channels: Option<Vec<String>>,
+        /// Split the flight into segments of this length (e.g. "20 s"), each
+        /// with its own unknown initial state.
+        #[arg(long)]
+        segment: Option<String>,
+    },
     /// Run the accuracy gates (golden/gates.toml): fly, record and estimate
     /// every case, check each parameter against the truth within its
     /// tolerance, print what failed, and exit non-zero on any failure.
@@ -188,6 +213,37 @@ fn run(cli: Cli) -> Result<()> {
             only,
         } => gate(&file, verbose, only.as_deref()),
         Command::Reconstruct { record, out } => reconstruct(&record, out.as_deref()),
+        Command::Identifiability {
+            scenario,
+            profile,
+            threshold,
+            parameters,
+            channels,
+            segment,
+        } => {
+            let segment = segment
+                .map(|text| {
+                    aeroid::units::Quantity::Text(text)
+                        .si(aeroid::units::Dimension::Time)
+                        .map_err(|e| anyhow::anyhow!("--segment: {e}"))
+                })
+                .transpose()?;
+            let scenario = aeroid::scenario::Scenario::load(&scenario)?;
+            let profile = aeroid::recorder::profile_for(&scenario, profile.as_deref())?;
+            if !(threshold > 0.0) {
+                anyhow::bail!("--threshold must be positive, is {threshold}");
+            }
+            let options = aeroid::identifiability::IdentifiabilityOptions {
+                threshold,
+                parameters,
+                channels,
+                segment,
+                ..Default::default()
+            };
+            let result = aeroid::identifiability::analyse(&scenario, &profile, &options)?;
+            print!("{}", result.table());
+            Ok(())
+        }
         Command::Estimate {
             record,
             model,
@@ -453,7 +509,9 @@ fn gate(file: &std::path::Path, verbose: bool, only: Option<&str>) -> Result<()>
         match aeroid::gate::run_case(case) {
             Ok(result) if result.passed() => {
                 match &result.refusal {
-                    Some(refusal) => println!("pass  {:<34} refused as expected: {refusal}", case.name),
+                    Some(refusal) => {
+                        println!("pass  {:<34} refused as expected: {refusal}", case.name)
+                    }
                     None => println!(
                         "pass  {:<34} {} parameters, worst at {:.0} % of its tolerance",
                         case.name,

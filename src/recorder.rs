@@ -233,6 +233,21 @@ impl Profile {
         problems.finish(path, profile)
     }
 
+    /// The same profile without its random and discontinuous errors (noise,
+    /// quantization, dropouts, faults): what it records is a smooth function
+    /// of the flight, for sensitivities. Rates, skew, delay, lag, filters,
+    /// bias, scale factor and saturation stay.
+    pub fn without_random_errors(&self) -> Profile {
+        let mut clean = self.clone();
+        for channel in &mut clean.channels {
+            channel.noise = 0.0;
+            channel.resolution = None;
+            channel.dropout = 0.0;
+            channel.fault = None;
+        }
+        clean
+    }
+
     /// Records a truth trace of `aircraft` with this profile; random draws come from `seed`.
     pub fn record(
         &self,

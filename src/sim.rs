@@ -73,6 +73,17 @@ impl Simulation {
 
     /// Integrates from trim over all steps.
     pub fn run(&self) -> Result<TruthTrace> {
+        self.run_with_restarts(|_| None)
+    }
+
+    /// Simulates from the trim state, but at every step k where `restart(k)`
+    /// gives a state, continues from that state instead (multiple shooting:
+    /// an analysis of short segments of a long flight restarts each segment
+    /// from a known state).
+    pub fn run_with_restarts(
+        &self,
+        restart: impl Fn(usize) -> Option<StateVector>,
+    ) -> Result<TruthTrace> {
         let steps = self.exogenous.len() - 1;
         let mut trace = TruthTrace {
             scenario: self.name.clone(),
@@ -81,6 +92,9 @@ impl Simulation {
         };
         let mut x = self.trim.state;
         for k in 0..=steps {
+            if let Some(state) = restart(k) {
+                x = state;
+            }
             let time = k as f64 * self.step;
             let exogenous = self.exogenous_at(k, 0.0);
             let evaluation = self.model.evaluate(&x, &exogenous);

@@ -23,24 +23,34 @@ fn every_gate_passes_and_matches_its_snapshot() {
     assert!(failures.is_empty(), "gates failed:\n{failures}");
 }
 
-/// A gate must be able to fail: the same case with a tolerance far below the
-/// estimator's accuracy fails, and its failure table names the parameters.
+/// A gate must be able to fail: a case with a tolerance far below the
+/// estimator's accuracy fails, and its failure table names the parameters;
+/// likewise a σ gate, and a case that expects a refusal from an estimator
+/// that does run.
 #[test]
 fn a_tight_gate_fails_with_a_readable_table() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(gate::GATE_FILE);
-    let mut case = gate::load(&path)
-        .unwrap()
-        .cases
-        .into_iter()
-        .find(|c| c.method == "ee")
-        .unwrap();
-    case.relative_tolerance = 1e-9;
-    case.tolerance.clear();
-    let result = gate::run_case(&case).unwrap();
+    let cases = gate::load(&path).unwrap().cases;
+    let find = |name: &str| cases.iter().find(|c| c.name == name).unwrap().clone();
+
+    let mut relative = find("attas-lateral-ft-ee");
+    relative.relative_tolerance = Some(1e-9);
+    relative.tolerance.clear();
+    relative.absolute_floor = 0.0;
+    let result = gate::run_case(&relative).unwrap();
     assert!(!result.passed());
     let table = result.failures();
     assert!(
-        table.contains("allowed") && table.lines().count() > 2,
+        table.contains("allowed") && table.contains("FAIL") && table.lines().count() > 3,
         "{table}"
     );
+
+    let mut sigma = find("attas-lateral-ideal-oem");
+    sigma.relative_tolerance = None;
+    sigma.sigma_tolerance = Some(1e-3);
+    assert!(!gate::run_case(&sigma).unwrap().passed());
+
+    let mut refusal = find("attas-lateral-ideal-oem");
+    refusal.expect_error = Some("needs channels".into());
+    assert!(!gate::run_case(&refusal).unwrap().passed());
 }

@@ -242,14 +242,25 @@ impl DrivenSimulation {
         self.start + k as f64 * self.step
     }
 
-    /// Rates over step k (slopes of the linear interpolation) of the measured
-    /// airspeed and sideslip, where they are not integrated.
+    /// Rates over step k of the measured airspeed and sideslip, where they
+    /// are not integrated: the centred difference (x[k+2] − x[k−1])/(3·Δt),
+    /// which leaves out the two samples the step interpolates between. A
+    /// rate from those same samples would share their noise, and the product
+    /// of a noisy measured β with its own noisy rate in V̇ (Eq. in
+    /// [`derivative`]) has a non-zero mean, −σ²/Δt: an errors-in-variables
+    /// bias on drag. Near the ends the window shrinks to what exists.
     fn pseudo_rates(&self, k: usize) -> PseudoRates {
-        let next = (k + 1).min(self.len() - 1);
-        let previous = next.saturating_sub(1);
+        let last = self.len() - 1;
+        let (previous, next) = (k.saturating_sub(1), (k + 2).min(last));
+        let (previous, next) = if next > previous {
+            (previous, next)
+        } else {
+            (last.saturating_sub(1), last)
+        };
+        let span = (next - previous) as f64 * self.step;
         let rate = |i: usize| {
             (!self.integrate[i])
-                .then(|| (self.measured[next][i] - self.measured[previous][i]) / self.step)
+                .then(|| (self.measured[next][i] - self.measured[previous][i]) / span)
         };
         PseudoRates {
             airspeed: rate(AIRSPEED),

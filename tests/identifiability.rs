@@ -1,0 +1,126 @@
+//! A-priori identifiability (src/identifiability.rs): the QAR table of
+//! issue 4, and the properties that make the bounds trustworthy.
+
+use aeroid::identifiability::{IdentifiabilityOptions, analyse};
+use aeroid::recorder::Profile;
+use aeroid::scenario::Scenario;
+
+const LATERAL: [&str; 6] = ["Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr"];
+
+/// The QAR of seed 000 on the transport approach, in 20 s segments (each
+/// with its own unknown initial state, as an output-error analyst fits a
+/// long record; one 320 s shot of this spirally unstable aircraft would
+/// make the sensitivities grow as e^(0.038·t)). Which parameters remain
+/// identifiable at the 10 % relative-σ threshold (justified in the module
+/// documentation) is snapshotted. Independent of the snapshot, the physics
+/// must show: the rudder never moves in this flight, so every rudder
+/// derivative, and each constant term it is collinear with, is not
+/// identifiable; the elevator and aileron primary derivatives and the
+/// static stability derivatives are.
+#[test]
+fn qar_identifiability_table() {
+    let scenario = Scenario::load("transport-approach").unwrap();
+    let profile = Profile::load("qar-seed000", None).unwrap();
+    let options = IdentifiabilityOptions {
+        segment: Some(20.0),
+        ..Default::default()
+    };
+    let result = analyse(&scenario, &profile, &options).unwrap();
+    let verdict = |name: &str| {
+        result
+            .rows
+            .iter()
+            .find(|r| r.parameter == name)
+            .unwrap_or_else(|| panic!("{name} missing"))
+            .identifiable
+    };
+    for name in ["CY_dr", "Cl_dr", "Cn_dr", "Cn_0"] {
+        assert!(
+            !verdict(name),
+            "{name} should not be identifiable\n{}",
+            result.table()
+        );
+    }
+    for name in ["Cm_alpha", "Cm_de", "Cl_da", "Cl_p", "Cn_beta", "CL_alpha"] {
+        assert!(
+            verdict(name),
+            "{name} should be identifiable\n{}",
+            result.table()
+        );
+    }
+    assert!(result.excluded.iter().any(|(name, _)| name == "alpha"));
+    insta::assert_snapshot!("qar_identifiability", result.snapshot());
+}
+
+/// The bound scales with the measurement error: every channel's noise
+/// doubled (the flight-test profile has no quantization) doubles every σ,
+/// to rounding.
+#[test]
+fn bounds_scale_with_the_noise() {
+    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let options = IdentifiabilityOptions {
+        parameters: Some(LATERAL.map(String::from).to_vec()),
+        channels: Some(["beta", "p", "r", "roll", "ny"].map(String::from).to_vec()),
+        ..Default::default()
+    };
+    let base = analyse(&scenario, &profile, &options).unwrap();
+    let mut noisier = profile.clone();
+    noisier.channels.iter_mut().for_each(|c| c.noise *= 2.0);
+    let doubled = analyse(&scenario, &noisier, &options).unwrap();
+    for (a, b) in base.rows.iter().zip(&doubled.rows) {
+        assert!(a.sigma.is_finite() && a.sigma > 0.0, "{a:?}");
+        let ratio = b.sigma / a.sigma;
+        assert!((ratio - 2.0).abs() < 1e-6, "{}: ratio {ratio}", a.parameter);
+    }
+}
+
+/// A manoeuvre that never moves a control cannot identify its derivatives:
+/// the elevator 3211 leaves aileron and rudder at their trim positions, so
+/// Cl_da·δa and Cl_0 (likewise Cn_dr·δr and Cn_0) act as one constant and
+/// come out not identifiable, while the pitch derivatives the 3211 excites
+/// are identifiable.
+#[test]
+fn an_unexcited_control_is_not_identifiable() {
+    let scenario = Scenario::load("attas-elevator-3211").unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let names = [
+        "Cl_0", "Cl_da", "Cn_0", "Cn_dr", "Cm_alpha", "Cm_q", "Cm_de",
+    ];
+    let options = IdentifiabilityOptions {
+        parameters: Some(names.map(String::from).to_vec()),
+        ..Default::default()
+    };
+    let result = analyse(&scenario, &profile, &options).unwrap();
+    let table = result.table();
+    for row in &result.rows {
+        let expected = row.parameter.starts_with("Cm");
+        assert_eq!(row.identifiable, expected, "{table}");
+    }
+}
+
+/// Unknown names are errors that list what is known.
+#[test]
+fn unknown_parameter_or_channel_is_an_error() {
+    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let bad_parameter = IdentifiabilityOptions {
+        parameters: Some(vec!["Cl_nope".into()]),
+        ..Default::default()
+    };
+    let error = analyse(&scenario, &profile, &bad_parameter)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("Cl_nope") && error.contains("Cl_p"),
+        "{error}"
+    );
+    let bad_channel = IdentifiabilityOptions {
+        channels: Some(vec!["gyro".into()]),
+        ..Default::default()
+    };
+    let error = analyse(&scenario, &profile, &bad_channel)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("gyro") && error.contains("roll"), "{error}");
+}
