@@ -223,6 +223,9 @@ impl Signal {
     }
 }
 
+/// Tolerance (s) of a step input's switch times against rounding.
+const SWITCH_TOLERANCE: f64 = 1e-9;
+
 /// Piecewise constant: 0 before `times[0]`, `levels[i]` on
 /// [`times[i]`, `times[i+1]`), `after` from the last time on.
 #[derive(Debug, Clone)]
@@ -247,7 +250,11 @@ impl Steps {
         }
     }
 
+    /// A switch within [`SWITCH_TOLERANCE`] after `time` counts as reached:
+    /// switch times are sums such as 3 + 3·1.6 = 7.800000000000001, and a
+    /// switch meant to fall on a sample instant must not slip a whole step.
     fn value(&self, time: f64) -> f64 {
+        let time = time + SWITCH_TOLERANCE;
         if time.is_nan() || time < self.times[0] {
             return 0.0;
         }
