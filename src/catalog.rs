@@ -10,6 +10,8 @@ pub const AIRCRAFT_FOLDER: &str = "aircraft";
 pub const SCENARIO_FOLDER: &str = "scenarios";
 /// Recorder (sensor) profiles, `recorders/*.toml`.
 pub const RECORDER_FOLDER: &str = "recorders";
+/// Monte Carlo study files, `studies/*.toml`.
+pub const STUDY_FOLDER: &str = "studies";
 
 /// The data folder holding `aircraft/` and `scenarios/`.
 pub fn data_folder() -> PathBuf {
@@ -59,6 +61,8 @@ pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<Pat
             kind: match folder {
                 AIRCRAFT_FOLDER => "aircraft",
                 RECORDER_FOLDER => "recorder profile",
+                STUDY_FOLDER => "study",
+                crate::estimation::structure::MODEL_FOLDER => "model structure",
                 _ => "scenario",
             },
             name: reference.to_string(),

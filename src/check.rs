@@ -1,4 +1,4 @@
-//! `aeroid check`: validates an aircraft, model-structure, scenario or recorder-profile file,
+//! `aeroid check`: validates an aircraft, model-structure, scenario, recorder-profile or study file,
 //! reporting every problem at once; a valid scenario is also trimmed, so that
 //! a flight condition with no trim is found before a long run.
 
@@ -8,6 +8,7 @@ use crate::estimation::structure::ModelStructure;
 use crate::recorder::{Profile, ProfileFile};
 use crate::scenario::{Scenario, ScenarioFile};
 use crate::sim::Simulation;
+use crate::study::{Study, StudyFile};
 use std::path::Path;
 
 /// What a valid file holds, in a few lines for the user.
@@ -17,14 +18,18 @@ pub struct CheckReport {
     pub lines: Vec<String>,
 }
 
-/// Validates the file at `path`, telling an aircraft, a scenario and a
-/// recorder profile apart by their tables (`[aero]`, `[trim]`, `[[channels]]`).
+/// Validates the file at `path`, telling an aircraft, a scenario, a
+/// recorder profile and a study apart by their tables (`[aero]`, `[trim]`,
+/// `[[channels]]`, `runs` with `methods`).
 pub fn check_file(path: &Path) -> Result<CheckReport> {
     let text = read_text(path)?;
     let table: toml::Table = parse_toml(path, &text)?;
     if table.contains_key("trim") {
         let file: ScenarioFile = parse_toml(path, &text)?;
         check_scenario(&Scenario::from_file(&file, path)?)
+    } else if table.contains_key("runs") && table.contains_key("methods") {
+        let file: StudyFile = parse_toml(path, &text)?;
+        Ok(describe_study(&Study::from_file(&file, path)?))
     } else if table.contains_key("aero") && table.contains_key("aircraft") {
         let structure = ModelStructure::load(&path.to_string_lossy())?;
         Ok(CheckReport {
@@ -51,8 +56,8 @@ pub fn check_file(path: &Path) -> Result<CheckReport> {
             path: path.to_path_buf(),
             problems: vec![crate::error::Problem {
                 field: "(file)".into(),
-                message: "neither a scenario (no [trim] table), an aircraft (no [aero] table) \
-                          nor a recorder profile (no [[channels]])"
+                message: "neither a scenario (no [trim] table), an aircraft or model structure (no [aero] table), \
+                          a recorder profile (no [[channels]]) nor a study (no runs and methods)"
                     .into(),
             }],
         })
@@ -78,6 +83,23 @@ fn describe_aircraft(aircraft: &Aircraft) -> CheckReport {
                 aircraft.aero.parameters.len()
             ),
         ],
+    }
+}
+
+fn describe_study(study: &Study) -> CheckReport {
+    let mut lines = vec![format!(
+        "{}: {} sweep point(s) × {} runs = {} cases, seed {}; methods {}",
+        study.name,
+        study.points.len(),
+        study.runs,
+        study.cases().len(),
+        study.seed,
+        study.methods.join(", ")
+    )];
+    lines.extend((0..study.points.len()).map(|i| format!("point {i}: {}", study.point_label(i))));
+    CheckReport {
+        kind: "study",
+        lines,
     }
 }
 

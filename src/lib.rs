@@ -26,6 +26,7 @@ pub mod recorder;
 pub mod scenario;
 pub mod sim;
 pub mod state;
+pub mod study;
 pub mod trace;
 pub mod trim;
 pub mod truth;

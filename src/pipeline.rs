@@ -59,13 +59,9 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
         let structure = ModelStructure::load(reference);
         for method in METHODS {
             let outcome = match &structure {
-                Ok(structure) => estimate(method, &record, structure)
-                    .map(|estimate| {
-                        let scores =
-                            score::score(&estimate, Some(&truth), structure.aircraft.aero.kind);
-                        (estimate, scores)
-                    })
-                    .map_err(|error| error.to_string()),
+                Ok(structure) => {
+                    estimate_scored(method, &record, &truth, structure).map_err(|e| e.to_string())
+                }
                 Err(error) => Err(error.to_string()),
             };
             runs.push(MethodRun {
@@ -82,6 +78,18 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
         truth,
         runs,
     })
+}
+
+/// Runs one named estimator and scores its estimate against the run's truth.
+pub fn estimate_scored(
+    method: &str,
+    record: &FlightRecord,
+    truth: &RunTruth,
+    structure: &ModelStructure,
+) -> Result<(Estimate, Vec<ParameterScore>)> {
+    let estimate = estimate(method, record, structure)?;
+    let scores = score::score(&estimate, Some(truth), structure.aircraft.aero.kind);
+    Ok((estimate, scores))
 }
 
 /// Runs one named estimator with its default options.

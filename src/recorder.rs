@@ -282,6 +282,32 @@ impl Profile {
     }
 }
 
+impl Profile {
+    /// The same profile with every channel's white-noise standard deviation
+    /// multiplied by `factor` (bias, quantization, faults unchanged), named
+    /// `NAME×noiseFACTOR`. Monte Carlo studies sweep noise with it.
+    pub fn with_noise_scaled(&self, factor: f64) -> Profile {
+        let mut profile = self.clone();
+        profile.name = format!("{}×noise{factor}", self.name);
+        for channel in &mut profile.channels {
+            channel.noise *= factor;
+        }
+        profile
+    }
+
+    /// The same profile with every channel sampled at `rate` (Hz), each
+    /// keeping its place in the frame, named `NAME@RATEHz`. Monte Carlo
+    /// studies sweep sample rate with it.
+    pub fn with_rate(&self, rate: f64) -> Profile {
+        let mut profile = self.clone();
+        profile.name = format!("{}@{rate}Hz", self.name);
+        for channel in &mut profile.channels {
+            channel.rate = rate;
+        }
+        profile
+    }
+}
+
 /// Frame length and words per frame, for placing channels in the frame.
 struct FrameLayout {
     frame: f64,
@@ -755,10 +781,22 @@ pub fn profile_for(scenario: &Scenario, reference: Option<&str>) -> Result<Profi
     }
 }
 
-/// Simulates a scenario and records it: the flight record and the truth of the run.
+/// Simulates a scenario and records it: the flight record and the truth of the
+/// run. The scenario's seed drives both the turbulence and the recorder.
 pub fn record_scenario(scenario: &Scenario, profile: &Profile) -> Result<(FlightRecord, RunTruth)> {
+    record_scenario_seeded(scenario, profile, scenario.seed)
+}
+
+/// [`record_scenario`] with the recorder's random draws from `recorder_seed`
+/// (the turbulence still from `scenario.seed`), so that a Monte Carlo case
+/// can draw the two independently.
+pub fn record_scenario_seeded(
+    scenario: &Scenario,
+    profile: &Profile,
+    recorder_seed: u64,
+) -> Result<(FlightRecord, RunTruth)> {
     let simulation = Simulation::prepare(scenario)?;
     let trace = simulation.run()?;
-    let record = profile.record(&trace, &scenario.aircraft, scenario.seed)?;
+    let record = profile.record(&trace, &scenario.aircraft, recorder_seed)?;
     Ok((record, RunTruth::exact(scenario, &simulation.trim)))
 }

@@ -437,6 +437,58 @@ fn records_are_bit_identical_for_a_seed() {
     assert_ne!(bits(42), bits(43));
 }
 
+/// The Monte Carlo sweep modifiers. Scaling the noise scales every sample's
+/// noise exactly (same seed, same draws; the flight-test profile has no
+/// quantization): noise(2) − noise(0) = 2·(noise(1) − noise(0)) to rounding
+/// (headings modulo 2π),
+/// and scale 0 is the noise-free record. Overriding the rate samples every
+/// channel at it: 5 s at 10 Hz is 51 samples, 0.1 s apart.
+#[test]
+fn noise_scale_and_rate_override_modify_the_profile() {
+    let mut scenario = Scenario::load("attas-trim").unwrap();
+    scenario.duration = 5.0;
+    let trace = aeroid::sim::simulate(&scenario).unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let values = |profile: &Profile| -> Vec<Vec<f64>> {
+        let record = profile.record(&trace, &scenario.aircraft, 7).unwrap();
+        record.channels.iter().map(|c| c.values.clone()).collect()
+    };
+    let (clean, once, twice) = (
+        values(&profile.with_noise_scaled(0.0)),
+        values(&profile),
+        values(&profile.with_noise_scaled(2.0)),
+    );
+    let mut largest_noise = 0.0_f64;
+    for (k, model) in profile.channels.iter().enumerate() {
+        // Differences of headings, which wrap at 2π, are taken within ±π.
+        let minus = |a: f64, b: f64| match model.measurand.wraps {
+            true => (a - b + PI).rem_euclid(TAU) - PI,
+            false => a - b,
+        };
+        for ((&c, &o), &t) in clean[k].iter().zip(&once[k]).zip(&twice[k]) {
+            let noise = minus(o, c);
+            largest_noise = largest_noise.max(noise.abs());
+            assert!(
+                (minus(t, c) - 2.0 * noise).abs() <= 1e-9 * (1.0 + c.abs()),
+                "{c} {o} {t}"
+            );
+        }
+    }
+    assert!(largest_noise > 0.0, "the profile has noise to scale");
+    let slow = profile.with_rate(10.0);
+    assert!(slow.name.contains("@10Hz"));
+    let record = slow.record(&trace, &scenario.aircraft, 7).unwrap();
+    for channel in &record.channels {
+        assert_eq!(
+            (channel.rate, channel.times.len()),
+            (10.0, 51),
+            "{}",
+            channel.name
+        );
+        assert!((channel.times[1] - channel.times[0] - 0.1).abs() < 1e-12);
+    }
+}
+
 /// The QAR profile records exactly seed 000 Table 1: 35 channels with its rates.
 #[test]
 fn qar_profile_has_table_1_channels_and_rates() {
