@@ -171,7 +171,7 @@ const KNOWN_OEM_MISSES: [(&str, &str); 2] = [("Cl_p", "coverage"), ("Cl_r", "std
 
 /// Issue 4 acceptance: ATTAS lateral multistep on `flight-test-25hz` (noise
 /// on every channel, inputs and pseudo-controls included), 100 seeded runs,
-/// model `attas-lateral-x0` (initial state estimated: see the model file).
+/// model `attas-lateral` (initial state estimated: see the model file).
 ///
 /// Output error, per parameter (18), against the issue's bands:
 /// - |bias| < 0.5 σ_MC. With 100 runs the standard error of the mean is
