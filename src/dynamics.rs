@@ -115,6 +115,8 @@ pub struct Evaluation {
     /// χ the forces used (state, algebraic value, or 1).
     pub chi: f64,
     pub coefficients: AeroCoefficients,
+    /// The flight variables the aerodynamic model was evaluated at.
+    pub aero_input: AeroInput,
     /// Controls after saturation.
     pub controls: Controls,
     pub thrust: f64,
@@ -133,6 +135,7 @@ pub struct FlightModel {
 /// Forces of one α̇ guess.
 struct Translational {
     coefficients: AeroCoefficients,
+    input: AeroInput,
     chi: f64,
     velocity_rate: Vector3<f64>,
     specific_force: Vector3<f64>,
@@ -244,6 +247,7 @@ impl FlightModel {
             beta_dot: translational.beta_dot,
             chi: translational.chi,
             coefficients: translational.coefficients,
+            aero_input: translational.input,
             controls,
             thrust,
             specific_force: translational.specific_force,
@@ -284,6 +288,7 @@ impl FlightModel {
             / (air_data.airspeed * (u * u + w * w).sqrt());
         Translational {
             coefficients,
+            input,
             chi: aircraft.aero.effective_chi(&input),
             velocity_rate,
             specific_force,

@@ -20,12 +20,12 @@
 
 use crate::dynamics::FlightModel;
 use crate::error::{Error, Result};
-use crate::estimation::driven::{self, DrivenSimulation, FlightPathState};
+use crate::estimation::driven::{Column, DrivenSimulation, FlightPathState, Observable};
 use crate::estimation::estimate::{Estimate, OutputFit};
 use crate::estimation::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
 use crate::record::FlightRecord;
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 
 /// Settings of an output-error run.
 #[derive(Debug, Clone, PartialEq)]
@@ -72,8 +72,23 @@ struct Problem {
     segments: Vec<Segment>,
     unknowns: Vec<Unknown>,
     outputs: Vec<String>,
+    observables: Vec<Observable>,
     /// 1/σ per output (R = diag(σ²)).
     weights: Vec<f64>,
+    /// The last θ simulated and its predictions: the solver asks for the
+    /// residuals at an accepted step's θ again (re-weighting, Jacobian).
+    simulated: Option<(DVector<f64>, Predictions)>,
+}
+
+/// Model outputs at every recorded sample: [segment][output][sample].
+type Predictions = Vec<Vec<Vec<f64>>>;
+
+/// A segment's outputs and their sensitivities on the integration grid.
+struct Grid {
+    /// [output][grid point].
+    values: Vec<Vec<f64>>,
+    /// Per output, grid points × unknowns.
+    sensitivities: Vec<DMatrix<f64>>,
 }
 
 /// Fits `structure` to one or more records by output error.
@@ -83,14 +98,7 @@ pub fn output_error(
     options: &OutputErrorOptions,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
-    for name in &structure.outputs {
-        if !driven::is_observable(name) {
-            return Err(Error::Other(format!(
-                "model '{}': output '{name}' is not a model output",
-                structure.name
-            )));
-        }
-    }
+    let observables = observables(structure)?;
     let segments = records
         .iter()
         .map(|record| segment(record, structure, options))
@@ -100,7 +108,9 @@ pub fn output_error(
         unknowns: unknowns(structure, &segments),
         segments,
         outputs: structure.outputs.clone(),
+        observables,
         weights: vec![1.0; structure.outputs.len()],
+        simulated: None,
     };
     let start = problem.current();
     let mut solver_options = Options::new(start.len());
@@ -141,11 +151,29 @@ pub fn proof_of_match(
         unknowns: Vec::new(),
         segments: vec![segment],
         outputs: structure.outputs.clone(),
+        observables: observables(structure)?,
         weights: vec![1.0; structure.outputs.len()],
+        simulated: None,
     };
     problem.try_fits(&DVector::zeros(0)).map_err(|reason| {
         Error::Other(format!("proof of match on '{}': {reason}", record.scenario))
     })
+}
+
+/// The structure's outputs as model outputs; an error names one the model does not have.
+fn observables(structure: &ModelStructure) -> Result<Vec<Observable>> {
+    structure
+        .outputs
+        .iter()
+        .map(|name| {
+            Observable::parse(name).ok_or_else(|| {
+                Error::Other(format!(
+                    "model '{}': output '{name}' is not a model output",
+                    structure.name
+                ))
+            })
+        })
+        .collect()
 }
 
 /// The fitting window of a record: where every output channel has samples.
@@ -296,42 +324,92 @@ impl Problem {
         biases
     }
 
-    /// Model outputs at every recorded sample: [segment][output][sample].
-    fn predictions(
+    /// How each unknown enters segment `index`'s simulation.
+    fn columns(&self, index: usize) -> Vec<Column> {
+        let aero = &self.model.aircraft.aero;
+        self.unknowns
+            .iter()
+            .map(|unknown| match *unknown {
+                Unknown::Aero(i) if aero.term_of(i).is_some() => Column::Term(i),
+                Unknown::Aero(i) => Column::Nonlinear(i),
+                Unknown::Initial { segment, state } if segment == index => Column::Initial(state),
+                Unknown::Initial { .. } | Unknown::Bias { .. } => Column::Unused,
+            })
+            .collect()
+    }
+
+    /// Simulates segment `index` at the applied θ: outputs on the grid, with
+    /// their sensitivities to every unknown when `sensitivities`.
+    fn grid(&self, index: usize, sensitivities: bool) -> std::result::Result<Grid, String> {
+        let segment = &self.segments[index];
+        let columns = if sensitivities {
+            self.columns(index)
+        } else {
+            Vec::new()
+        };
+        let points = segment.simulation.len();
+        let mut grid = Grid {
+            values: vec![Vec::with_capacity(points); self.outputs.len()],
+            sensitivities: vec![DMatrix::zeros(points, columns.len()); self.outputs.len()],
+        };
+        segment.simulation.simulate(
+            &self.model,
+            &segment.initial,
+            &self.observables,
+            &columns,
+            |k, y, dy| {
+                for (o, values) in grid.values.iter_mut().enumerate() {
+                    values.push(y[o]);
+                    grid.sensitivities[o].row_mut(k).copy_from(&dy.row(o));
+                }
+            },
+        )?;
+        Ok(grid)
+    }
+
+    /// Model outputs at every recorded sample at θ, and the grids they came from.
+    fn simulate(
         &mut self,
         theta: &DVector<f64>,
-    ) -> std::result::Result<Vec<Vec<Vec<f64>>>, String> {
+        sensitivities: bool,
+    ) -> std::result::Result<(Predictions, Vec<Grid>), String> {
         let biases = self.apply(theta);
-        let mut all = Vec::with_capacity(self.segments.len());
-        for segment in &self.segments {
-            let mut grid = vec![Vec::with_capacity(segment.simulation.len()); self.outputs.len()];
-            segment
-                .simulation
-                .simulate(&self.model, &segment.initial, |_, x, evaluation| {
-                    for (values, name) in grid.iter_mut().zip(&self.outputs) {
-                        values.push(driven::observe(name, x, evaluation).unwrap_or(f64::NAN));
-                    }
-                })?;
-            let simulation = &segment.simulation;
-            all.push(
+        let grids = (0..self.segments.len())
+            .map(|index| self.grid(index, sensitivities))
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        let predictions = self
+            .segments
+            .iter()
+            .zip(&grids)
+            .map(|(segment, grid)| {
+                let simulation = &segment.simulation;
                 segment
                     .outputs
                     .iter()
-                    .zip(&grid)
+                    .zip(&grid.values)
                     .zip(&biases)
-                    .map(|((measured, grid), bias)| {
+                    .map(|((measured, values), bias)| {
                         measured
                             .times
                             .iter()
                             .map(|&t| {
-                                interpolate(grid, simulation.start, simulation.step, t) + bias
+                                interpolate(values, simulation.start, simulation.step, t) + bias
                             })
                             .collect()
                     })
-                    .collect(),
-            );
+                    .collect()
+            })
+            .collect();
+        self.simulated = Some((theta.clone(), predictions));
+        Ok((self.simulated.as_ref().unwrap().1.clone(), grids))
+    }
+
+    /// Model outputs at every recorded sample at θ (simulated once per θ).
+    fn predictions(&mut self, theta: &DVector<f64>) -> std::result::Result<Predictions, String> {
+        match &self.simulated {
+            Some((simulated, predictions)) if simulated == theta => Ok(predictions.clone()),
+            _ => Ok(self.simulate(theta, false)?.0),
         }
-        Ok(all)
     }
 
     /// Unweighted residuals z − y per output, all segments concatenated.
@@ -428,13 +506,18 @@ pub(crate) fn diagonal_weights(errors: &[Vec<f64>], measured: &[Vec<f64>]) -> Ve
 /// Linear interpolation of a grid series at time t.
 /// `grid[k]` is the value at `start + k·step`; held beyond the ends.
 pub(crate) fn interpolate(grid: &[f64], start: f64, step: f64, t: f64) -> f64 {
-    let position = ((t - start) / step).max(0.0);
-    let k = (position.floor() as usize).min(grid.len().saturating_sub(2));
-    let fraction = (position - k as f64).clamp(0.0, 1.0);
     if grid.len() < 2 {
         return grid.first().copied().unwrap_or(f64::NAN);
     }
+    let (k, fraction) = bracket(grid.len(), start, step, t);
     grid[k] + fraction * (grid[k + 1] - grid[k])
+}
+
+/// The grid interval [k, k + 1] (of `len` ≥ 2 points) holding t and t's fraction of it.
+fn bracket(len: usize, start: f64, step: f64, t: f64) -> (usize, f64) {
+    let position = ((t - start) / step).max(0.0);
+    let k = (position.floor() as usize).min(len.saturating_sub(2));
+    (k, (position - k as f64).clamp(0.0, 1.0))
 }
 
 impl LeastSquaresProblem for Problem {
@@ -464,5 +547,51 @@ impl LeastSquaresProblem for Problem {
             .collect();
         self.weights = diagonal_weights(&errors, &measured);
         Ok(true)
+    }
+
+    /// ∂r/∂θ = −R^{-1/2}·∂y/∂θ from the sensitivity equations (one simulation
+    /// with sensitivities per segment; see [`DrivenSimulation::simulate`]),
+    /// interpolated to the samples as y is; ∂y/∂bias = 1.
+    fn jacobian(
+        &mut self,
+        theta: &DVector<f64>,
+        _options: &Options,
+    ) -> std::result::Result<DMatrix<f64>, String> {
+        let (_, grids) = self.simulate(theta, true)?;
+        let rows = self
+            .segments
+            .iter()
+            .flat_map(|s| s.outputs.iter().map(|o| o.times.len()))
+            .sum();
+        let mut jacobian = DMatrix::zeros(rows, self.unknowns.len());
+        let mut row = 0;
+        for (o, weight) in self.weights.iter().enumerate() {
+            let bias = self
+                .unknowns
+                .iter()
+                .position(|u| *u == Unknown::Bias { output: o });
+            for (segment, grid) in self.segments.iter().zip(&grids) {
+                let simulation = &segment.simulation;
+                let sensitivities = &grid.sensitivities[o];
+                for &t in &segment.outputs[o].times {
+                    if sensitivities.nrows() < 2 {
+                        jacobian.row_mut(row).copy_from(&sensitivities.row(0));
+                    } else {
+                        let (k, fraction) =
+                            bracket(sensitivities.nrows(), simulation.start, simulation.step, t);
+                        for j in 0..self.unknowns.len() {
+                            let (low, high) = (sensitivities[(k, j)], sensitivities[(k + 1, j)]);
+                            jacobian[(row, j)] = low + fraction * (high - low);
+                        }
+                    }
+                    if let Some(j) = bias {
+                        jacobian[(row, j)] = 1.0;
+                    }
+                    jacobian.row_mut(row).scale_mut(-weight);
+                    row += 1;
+                }
+            }
+        }
+        Ok(jacobian)
     }
 }
