@@ -303,7 +303,7 @@ pub struct AeroModel {
 
 /// The regressor values each coefficient's terms multiply at one flight
 /// condition, such that a coefficient is Σ C_term·regressor (plus its offset).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct TermRegressors {
     /// The lift-type coefficient's: `alpha` carries the Kirchhoff factor.
     pub lift: [f64; REGRESSOR_COUNT],

@@ -5,8 +5,9 @@
 //! decoupled longitudinal and lateral-directional models of seed 004
 //! (Eqs. 1–8) are the subsets {V, α, q, θ} and {β, p, r, φ}; the full
 //! 6-DOF integrates them all. The equations are the simulator's own
-//! ([`FlightModel::evaluate`], no wind: estimation models the air-relative
-//! motion), converted to flight-path rates:
+//! ([`FlightModel::evaluate_kinematics`], no wind: estimation models the
+//! air-relative motion, so air data are V, α, β themselves and the attitude
+//! is the Euler angles' rotation), converted to flight-path rates:
 //! `V̇ = V·V̇_b/V`, α̇ and β̇ from the state derivative,
 //! `φ̇ = p + tan θ·(q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`,
 //! `ψ̇ = (q sin φ + r cos φ)/cos θ`, `ḣ = −ḋ`.
@@ -14,15 +15,16 @@
 //! taken inside a step with the model's [`Interpolation`] option, through
 //! the one RK4 integrator.
 
-use crate::aero::Coefficient;
-use crate::dynamics::{Evaluation, Exogenous, FlightModel};
+use crate::aero::{Coefficient, TermRegressors};
+use crate::atmosphere::Air;
+use crate::dynamics::{AirData, Evaluation, FlightModel, Kinematics};
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
 use crate::integrator::{Interpolation, rk4_step_with_sensitivity};
 use crate::record::FlightRecord;
-use crate::state::{self, CONTROL_COUNT, Control, Controls, EulerAngles, StateVector};
+use crate::state::{self, CONTROL_COUNT, Control, Controls, SinCos};
 use crate::units::STANDARD_GRAVITY;
-use nalgebra::{DMatrix, SVector};
+use nalgebra::{DMatrix, SVector, Vector3};
 
 pub const FLIGHT_PATH_SIZE: usize = 11;
 pub type FlightPathState = SVector<f64, FLIGHT_PATH_SIZE>;
@@ -37,24 +39,56 @@ const YAW: usize = 8;
 const ALTITUDE: usize = 9;
 const CHI: usize = 10;
 
-/// The simulator state of a flight-path state with no wind.
-pub fn to_state(x: &FlightPathState) -> StateVector {
-    let (alpha, beta) = (x[ALPHA], x[BETA]);
-    let mut full = StateVector::zeros();
-    full[state::U] = x[AIRSPEED] * alpha.cos() * beta.cos();
-    full[state::V] = x[AIRSPEED] * beta.sin();
-    full[state::W] = x[AIRSPEED] * alpha.sin() * beta.cos();
-    full.fixed_rows_mut::<3>(state::P)
-        .copy_from(&x.fixed_rows::<3>(P));
-    let attitude = state::quaternion_from_euler(EulerAngles {
-        roll: x[ROLL],
-        pitch: x[PITCH],
-        yaw: x[YAW],
-    });
-    state::set_attitude(&mut full, &attitude);
-    full[state::DOWN] = -x[ALTITUDE];
-    full[state::CHI] = x[CHI];
-    full
+/// Sines and cosines of a flight-path state's angles α, β, φ, θ, ψ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Angles {
+    alpha: SinCos,
+    beta: SinCos,
+    roll: SinCos,
+    pitch: SinCos,
+    yaw: SinCos,
+}
+
+impl Angles {
+    fn of(x: &FlightPathState) -> Angles {
+        Angles {
+            alpha: x[ALPHA].sin_cos(),
+            beta: x[BETA].sin_cos(),
+            roll: x[ROLL].sin_cos(),
+            pitch: x[PITCH].sin_cos(),
+            yaw: x[YAW].sin_cos(),
+        }
+    }
+
+    /// The angles after state `i` moved to `value` (only that one recomputed).
+    fn moved(mut self, i: usize, value: f64) -> Angles {
+        match i {
+            ALPHA => self.alpha = value.sin_cos(),
+            BETA => self.beta = value.sin_cos(),
+            ROLL => self.roll = value.sin_cos(),
+            PITCH => self.pitch = value.sin_cos(),
+            YAW => self.yaw = value.sin_cos(),
+            _ => {}
+        }
+        self
+    }
+}
+
+/// The kinematics of a flight-path state with no wind: body velocity
+/// V·(cos α cos β, sin β, sin α cos β), the Euler angles' rotation, air data
+/// straight from V, α, β.
+fn kinematics(x: &FlightPathState, angles: &Angles, air: &Air) -> Kinematics {
+    let ((sin_alpha, cos_alpha), (sin_beta, cos_beta)) = (angles.alpha, angles.beta);
+    let velocity = Vector3::new(cos_alpha * cos_beta, sin_beta, sin_alpha * cos_beta) * x[AIRSPEED];
+    Kinematics {
+        velocity,
+        omega: x.fixed_rows::<3>(P).into(),
+        ned_to_body: state::ned_to_body(angles.roll, angles.pitch, angles.yaw),
+        air: *air,
+        air_data: AirData::new(velocity, x[ALPHA], x[BETA], air),
+        chi: x[CHI],
+        wind_rate_body: Vector3::zeros(),
+    }
 }
 
 /// Measured rates of the pseudo-controls that enter the integrated states'
@@ -71,21 +105,20 @@ pub struct PseudoRates {
 /// enters an integrated state's equation the measured rate is used: with the
 /// airspeed measured, β̇ = (v̇ − V̇_m·sin β)/(V·cos β); with the sideslip
 /// measured, V̇ = [(u·u̇ + w·ẇ)/V + V·sin β·cos β·β̇_m]/cos²β.
-pub fn derivative(
+/// `angles` and `air` are x's (computed once per stage, see [`Linearization::at`]).
+fn derivative(
     model: &FlightModel,
     x: &FlightPathState,
+    angles: &Angles,
+    air: &Air,
     controls: &Controls,
     pseudo: PseudoRates,
 ) -> (FlightPathState, Evaluation) {
-    let exogenous = Exogenous {
-        controls: *controls,
-        ..Default::default()
-    };
-    let evaluation = model.evaluate(&to_state(x), &exogenous);
+    let evaluation = model.evaluate_kinematics(&kinematics(x, angles, air), controls);
     let d = &evaluation.derivative;
     let velocity = evaluation.air_data.velocity;
     let mut rates = FlightPathState::zeros();
-    let (sin_beta, cos_beta) = x[BETA].sin_cos();
+    let (sin_beta, cos_beta) = angles.beta;
     rates[AIRSPEED] = match pseudo.beta {
         Some(beta_rate) => {
             let longitudinal = (velocity.x * d[state::U] + velocity.z * d[state::W]) / x[AIRSPEED];
@@ -103,9 +136,9 @@ pub fn derivative(
         .copy_from(&evaluation.angular_acceleration);
     rates
         .fixed_rows_mut::<3>(ROLL)
-        .copy_from(&state::euler_rates(
-            x[ROLL],
-            x[PITCH],
+        .copy_from(&state::euler_rates_of(
+            angles.roll,
+            angles.pitch,
             &x.fixed_rows::<3>(P).into(),
         ));
     rates[ALTITUDE] = -d[state::DOWN];
@@ -226,7 +259,10 @@ enum Source {
 struct Directions {
     states: Vec<usize>,
     models: Vec<(FlightModel, f64)>,
+    /// Per unknown; a `Direction` or `Term` names a model.
     sources: Vec<Source>,
+    /// Whether any source is a term (the regressors are then needed).
+    has_terms: bool,
 }
 
 impl Directions {
@@ -239,6 +275,7 @@ impl Directions {
             },
             models: Vec::new(),
             sources: Vec::with_capacity(columns.len()),
+            has_terms: false,
         };
         let mut offsets: [Option<usize>; 6] = [None; 6];
         let aero = &model.aircraft.aero;
@@ -252,6 +289,7 @@ impl Directions {
                             perturbed.aircraft.aero.offsets[c] += OFFSET_STEP;
                             directions.push_model(perturbed, OFFSET_STEP)
                         });
+                        directions.has_terms = true;
                         Source::Term {
                             direction,
                             lift: coefficient == Coefficient::Lift,
@@ -270,7 +308,7 @@ impl Directions {
 
     fn push_model(&mut self, model: FlightModel, step: f64) -> usize {
         self.models.push((model, step));
-        self.states.len() + self.models.len() - 1
+        self.models.len() - 1
     }
 
     fn nonlinear(&mut self, model: &FlightModel, parameter: usize) -> Source {
@@ -280,36 +318,47 @@ impl Directions {
         *value += step;
         Source::Direction(self.push_model(perturbed, step))
     }
-
-    fn count(&self) -> usize {
-        self.states.len() + self.models.len()
-    }
 }
 
-/// A model linearised at one stage: ẋ, the evaluation, and the difference
-/// quotients of ẋ (and, at grid points, of the outputs) along every direction.
+/// A model linearised at one stage: ẋ, the evaluation, and difference
+/// quotients over the active states: ∂f/∂x, ∂f/∂θ, and at grid points the
+/// outputs' ∂g/∂x and ∂g/∂θ.
 struct Linearization {
     rates: FlightPathState,
     evaluation: Evaluation,
-    /// ∂ẋ per direction (states first, then models).
-    columns: Vec<FlightPathState>,
+    /// ∂f/∂x (active × active).
+    a: DMatrix<f64>,
+    /// ∂f/∂θ (active × unknowns).
+    b: DMatrix<f64>,
     outputs: Vec<f64>,
-    /// ∂y per direction, direction-major.
-    output_columns: Vec<f64>,
+    /// ∂g/∂x (outputs × active).
+    gx: DMatrix<f64>,
+    /// ∂g/∂θ (outputs × unknowns).
+    gtheta: DMatrix<f64>,
+    /// Scratch: ∂ẋ and ∂y per perturbed model.
+    model_rates: Vec<FlightPathState>,
+    model_outputs: DMatrix<f64>,
 }
 
 impl Linearization {
-    fn new(directions: usize, outputs: usize) -> Linearization {
+    fn new(directions: &Directions, outputs: usize) -> Linearization {
+        let (n, m) = (directions.states.len(), directions.sources.len());
         Linearization {
             rates: FlightPathState::zeros(),
             evaluation: Evaluation::default(),
-            columns: vec![FlightPathState::zeros(); directions],
+            a: DMatrix::zeros(n, n),
+            b: DMatrix::zeros(n, m),
             outputs: vec![0.0; outputs],
-            output_columns: vec![0.0; directions * outputs],
+            gx: DMatrix::zeros(outputs, n),
+            gtheta: DMatrix::zeros(outputs, m),
+            model_rates: vec![FlightPathState::zeros(); directions.models.len()],
+            model_outputs: DMatrix::zeros(outputs, directions.models.len()),
         }
     }
 
-    /// Linearises `model` at x along `directions`; the outputs too when `outputs` is not empty.
+    /// Linearises `model` at x along `directions`, and the `outputs` too.
+    /// The angles' sines and cosines and the air are computed once, and for a
+    /// moved state only what it changes.
     fn at(
         &mut self,
         model: &FlightModel,
@@ -319,51 +368,60 @@ impl Linearization {
         pseudo: PseudoRates,
         outputs: &[Observable],
     ) {
-        (self.rates, self.evaluation) = derivative(model, x, controls, pseudo);
+        let angles = Angles::of(x);
+        let atmosphere = &model.environment.atmosphere;
+        let air = atmosphere.at(x[ALTITUDE]);
+        (self.rates, self.evaluation) = derivative(model, x, &angles, &air, controls, pseudo);
         for (o, output) in outputs.iter().enumerate() {
             self.outputs[o] = output.value(x, &self.evaluation);
         }
-        let perturbed = directions
-            .states
-            .iter()
-            .map(|&i| {
-                let step = state_step(x[i]);
-                let mut moved = *x;
-                moved[i] += step;
-                (model, moved, step)
-            })
-            .chain(
-                directions
-                    .models
-                    .iter()
-                    .map(|(perturbed, step)| (perturbed, *x, *step)),
-            );
-        for (d, (model, moved, step)) in perturbed.enumerate() {
-            let (rates, evaluation) = derivative(model, &moved, controls, pseudo);
-            self.columns[d] = (rates - self.rates) / step;
+        if directions.sources.is_empty() {
+            return;
+        }
+        let states = &directions.states;
+        for (b, &i) in states.iter().enumerate() {
+            let step = state_step(x[i]);
+            let mut moved = *x;
+            moved[i] += step;
+            let moved_air = if i == ALTITUDE {
+                atmosphere.at(moved[i])
+            } else {
+                air
+            };
+            let moved_angles = angles.moved(i, moved[i]);
+            let (rates, evaluation) =
+                derivative(model, &moved, &moved_angles, &moved_air, controls, pseudo);
+            for (a, &r) in states.iter().enumerate() {
+                self.a[(a, b)] = (rates[r] - self.rates[r]) / step;
+            }
             for (o, output) in outputs.iter().enumerate() {
-                self.output_columns[d * outputs.len() + o] =
-                    (output.value(&moved, &evaluation) - self.outputs[o]) / step;
+                self.gx[(o, b)] = (output.value(&moved, &evaluation) - self.outputs[o]) / step;
             }
         }
-    }
-
-    /// ∂ẋ/∂θ·(stage sensitivity) + ∂f/∂θ over the active rows: the stage rate of S.
-    fn sensitivity_rate(
-        &self,
-        model: &FlightModel,
-        directions: &Directions,
-        stage: &DMatrix<f64>,
-        rate: &mut DMatrix<f64>,
-    ) {
-        let regressors = model
-            .aircraft
-            .aero
-            .term_regressors(&self.evaluation.aero_input);
+        for (d, (perturbed, step)) in directions.models.iter().enumerate() {
+            let (rates, evaluation) = derivative(perturbed, x, &angles, &air, controls, pseudo);
+            self.model_rates[d] = (rates - self.rates) / *step;
+            for (o, output) in outputs.iter().enumerate() {
+                self.model_outputs[(o, d)] =
+                    (output.value(x, &evaluation) - self.outputs[o]) / step;
+            }
+        }
+        let regressors = if directions.has_terms {
+            model
+                .aircraft
+                .aero
+                .term_regressors(&self.evaluation.aero_input)
+        } else {
+            TermRegressors::default()
+        };
         for (j, source) in directions.sources.iter().enumerate() {
-            let mut column = match *source {
-                Source::None => FlightPathState::zeros(),
-                Source::Direction(d) => self.columns[d],
+            let (d, factor) = match *source {
+                Source::None => {
+                    self.b.column_mut(j).fill(0.0);
+                    self.gtheta.column_mut(j).fill(0.0);
+                    continue;
+                }
+                Source::Direction(d) => (d, 1.0),
                 Source::Term {
                     direction,
                     lift,
@@ -374,53 +432,14 @@ impl Linearization {
                     } else {
                         &regressors.other
                     };
-                    self.columns[direction] * values[regressor]
+                    (direction, values[regressor])
                 }
             };
-            for (d, &i) in directions.states.iter().enumerate() {
-                column += self.columns[d] * stage[(i, j)];
+            for (a, &r) in states.iter().enumerate() {
+                self.b[(a, j)] = self.model_rates[d][r] * factor;
             }
-            for &i in &directions.states {
-                rate[(i, j)] = column[i];
-            }
-        }
-    }
-
-    /// The outputs' sensitivities ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ at a grid point.
-    fn output_sensitivity(
-        &self,
-        model: &FlightModel,
-        directions: &Directions,
-        sensitivity: &DMatrix<f64>,
-        into: &mut DMatrix<f64>,
-    ) {
-        let outputs = self.outputs.len();
-        let regressors = model
-            .aircraft
-            .aero
-            .term_regressors(&self.evaluation.aero_input);
-        let column = |d: usize| &self.output_columns[d * outputs..(d + 1) * outputs];
-        for (j, source) in directions.sources.iter().enumerate() {
-            for o in 0..outputs {
-                into[(o, j)] = match *source {
-                    Source::None => 0.0,
-                    Source::Direction(d) => column(d)[o],
-                    Source::Term {
-                        direction,
-                        lift,
-                        regressor,
-                    } => {
-                        let values = if lift {
-                            &regressors.lift
-                        } else {
-                            &regressors.other
-                        };
-                        column(direction)[o] * values[regressor]
-                    }
-                };
-                for (d, &i) in directions.states.iter().enumerate() {
-                    into[(o, j)] += column(d)[o] * sensitivity[(i, j)];
-                }
+            for o in 0..outputs.len() {
+                self.gtheta[(o, j)] = self.model_outputs[(o, d)] * factor;
             }
         }
     }
@@ -578,39 +597,48 @@ impl DrivenSimulation {
         });
         let active: Vec<usize> = (0..FLIGHT_PATH_SIZE).filter(|&i| mask[i] == 1.0).collect();
         let directions = Directions::new(model, columns, &active);
-        let mut sensitivity = DMatrix::zeros(FLIGHT_PATH_SIZE, columns.len());
+        let states = &directions.states;
+        let row = |state: usize| states.iter().position(|&i| i == state);
+        // S over the active states: the others are measured, independent of θ.
+        let mut sensitivity = DMatrix::zeros(states.len(), columns.len());
         for (j, column) in columns.iter().enumerate() {
             if let Column::Initial(i) = *column {
-                sensitivity[(i, j)] = 1.0;
+                sensitivity[(row(i).expect("an integrated state"), j)] = 1.0;
             }
-            if chi_from_alpha {
+            if let (true, Some(chi)) = (chi_from_alpha, row(CHI)) {
                 // χ(0) = χ∞(α(0)) moves with α(0) and the stall parameters.
                 let target = |model: &FlightModel, alpha: f64| {
                     model.aircraft.aero.separation_target(alpha, 0.0)
                 };
-                sensitivity[(CHI, j)] = match (*column, directions.sources[j]) {
+                sensitivity[(chi, j)] = match (*column, directions.sources[j]) {
                     (Column::Initial(ALPHA), _) => {
                         let step = state_step(x[ALPHA]);
                         (target(model, x[ALPHA] + step) - x[CHI]) / step
                     }
                     (_, Source::Direction(d)) => {
-                        let (perturbed, step) = &directions.models[d - directions.states.len()];
+                        let (perturbed, step) = &directions.models[d];
                         (target(perturbed, x[ALPHA]) - x[CHI]) / step
                     }
                     _ => 0.0,
                 };
             }
         }
-        let mut work = [(); 3].map(|_| DMatrix::zeros(FLIGHT_PATH_SIZE, columns.len()));
+        let mut work = [(); 3].map(|_| DMatrix::zeros(states.len(), columns.len()));
         let mut output_sensitivity = DMatrix::zeros(outputs.len(), columns.len());
-        let mut point = Linearization::new(directions.count(), outputs.len());
-        let mut stage = Linearization::new(directions.count(), 0);
+        let mut point = Linearization::new(&directions, outputs.len());
+        let mut stage = Linearization::new(&directions, 0);
         for k in 0..self.len() {
             let pseudo = self.pseudo_rates(k);
             point.at(model, &directions, &x, &self.controls[k], pseudo, outputs);
             check_departure(&x, self.time(k))?;
             if !columns.is_empty() {
-                point.output_sensitivity(model, &directions, &sensitivity, &mut output_sensitivity);
+                // ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ
+                affine(
+                    &point.gx,
+                    &sensitivity,
+                    &point.gtheta,
+                    &mut output_sensitivity,
+                );
             }
             sink(k, &point.outputs, &output_sensitivity);
             if k + 1 == self.len() {
@@ -637,7 +665,7 @@ impl DrivenSimulation {
                         stage.at(model, &directions, &merged, &controls, pseudo, &[]);
                         &stage
                     };
-                    linearization.sensitivity_rate(model, &directions, stage_sensitivity, rate);
+                    affine(&linearization.a, stage_sensitivity, &linearization.b, rate);
                     linearization.rates.component_mul(&mask)
                 },
             );
@@ -650,6 +678,25 @@ impl DrivenSimulation {
             });
         }
         Ok(())
+    }
+}
+
+/// into = a·s + b, for the small matrices of the sensitivity equations.
+fn affine(a: &DMatrix<f64>, s: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+    let rows = a.nrows();
+    let (a, s_rows) = (a.as_slice(), s.nrows());
+    for ((into, b), s) in into
+        .as_mut_slice()
+        .chunks_exact_mut(rows.max(1))
+        .zip(b.as_slice().chunks_exact(rows.max(1)))
+        .zip(s.as_slice().chunks_exact(s_rows.max(1)))
+    {
+        into.copy_from_slice(b);
+        for (a, &s) in a.chunks_exact(rows.max(1)).zip(s) {
+            for (into, a) in into.iter_mut().zip(a) {
+                *into += a * s;
+            }
+        }
     }
 }
 
