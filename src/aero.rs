@@ -295,6 +295,22 @@ pub struct AeroModel {
     stall: Option<StallIndices>,
     /// Whether any coefficient has an α̇ term (fixed by the structure, not the values).
     has_alpha_dot_terms: bool,
+    /// Added to each coefficient (in [`Coefficient`] order; the lift-type one
+    /// before it enters CL² drag). Zero in flight: output error moves one by
+    /// a small step to get ∂f/∂C for its sensitivity equations.
+    pub offsets: [f64; 6],
+}
+
+/// The regressor values each coefficient's terms multiply at one flight
+/// condition, such that a coefficient is Σ C_term·regressor (plus its offset).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TermRegressors {
+    /// The lift-type coefficient's: `alpha` carries the Kirchhoff factor.
+    pub lift: [f64; REGRESSOR_COUNT],
+    /// Every other coefficient's: `CL2` is the lift-type coefficient squared.
+    pub other: [f64; REGRESSOR_COUNT],
+    /// The lift-type coefficient.
+    pub lift_type: f64,
 }
 
 impl AeroModel {
@@ -318,6 +334,7 @@ impl AeroModel {
             oswald: None,
             stall: None,
             has_alpha_dot_terms: false,
+            offsets: [0.0; 6],
         };
         model.read_coefficients(spec, prefix, problems);
         model.read_extras(spec, prefix, problems);
@@ -583,13 +600,15 @@ impl AeroModel {
         self.terms[coefficient as usize]
             .iter()
             .map(|t| values[t.parameter] * regressors[t.regressor as usize])
-            .sum()
+            .sum::<f64>()
+            + self.offsets[coefficient as usize]
     }
 
-    /// Evaluates all six coefficients. Allocation-free.
-    pub fn coefficients(&self, input: &AeroInput) -> AeroCoefficients {
+    /// The regressors every term multiplies at a flight condition (the
+    /// Kirchhoff factor on the lift-type `alpha` term, `CL2` = CL²).
+    pub fn term_regressors(&self, input: &AeroInput) -> TermRegressors {
         let chi = self.effective_chi(input);
-        let mut regressors = self.regressors(input, chi);
+        let mut other = self.regressors(input, chi);
         let kirchhoff = match self.kind {
             ModelKind::Stall => {
                 let root = 0.5 * (1.0 + chi.max(0.0).sqrt());
@@ -597,10 +616,35 @@ impl AeroModel {
             }
             ModelKind::Linear => 1.0,
         };
-        let mut lift_regressors = regressors;
-        lift_regressors[Regressor::Alpha as usize] *= kirchhoff;
-        let lift_type = self.sum(Coefficient::Lift, &lift_regressors);
-        regressors[Regressor::LiftSquared as usize] = lift_type * lift_type;
+        let mut lift = other;
+        lift[Regressor::Alpha as usize] *= kirchhoff;
+        let lift_type = self.sum(Coefficient::Lift, &lift);
+        other[Regressor::LiftSquared as usize] = lift_type * lift_type;
+        TermRegressors {
+            lift,
+            other,
+            lift_type,
+        }
+    }
+
+    /// The coefficient and term of a parameter that enters linearly (`{coefficient}_{term}`);
+    /// None for `e` and the stall parameters.
+    pub fn term_of(&self, parameter: usize) -> Option<(Coefficient, Regressor)> {
+        Coefficient::ALL.into_iter().find_map(|coefficient| {
+            self.terms[coefficient as usize]
+                .iter()
+                .find(|t| t.parameter == parameter)
+                .map(|t| (coefficient, t.regressor))
+        })
+    }
+
+    /// Evaluates all six coefficients. Allocation-free.
+    pub fn coefficients(&self, input: &AeroInput) -> AeroCoefficients {
+        let TermRegressors {
+            other: regressors,
+            lift_type,
+            ..
+        } = self.term_regressors(input);
         let mut drag_type = self.sum(Coefficient::Drag, &regressors);
         if let Some(e) = self.oswald {
             drag_type += lift_type * lift_type

@@ -103,6 +103,21 @@ pub struct AirData {
     pub velocity: Vector3<f64>,
 }
 
+impl AirData {
+    /// Air data of an air-relative velocity (body axes) whose α and β are known.
+    pub fn new(velocity: Vector3<f64>, alpha: f64, beta: f64, air: &Air) -> AirData {
+        let airspeed = velocity.norm();
+        AirData {
+            airspeed,
+            alpha,
+            beta,
+            mach: airspeed / air.speed_of_sound,
+            dynamic_pressure: 0.5 * air.density * airspeed * airspeed,
+            velocity,
+        }
+    }
+}
+
 /// The state derivative together with every intermediate quantity a truth
 /// trace or a recorder needs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -115,12 +130,31 @@ pub struct Evaluation {
     /// χ the forces used (state, algebraic value, or 1).
     pub chi: f64,
     pub coefficients: AeroCoefficients,
+    /// The flight variables the aerodynamic model was evaluated at.
+    pub aero_input: AeroInput,
     /// Controls after saturation.
     pub controls: Controls,
     pub thrust: f64,
     /// Specific force (what an accelerometer at the CG reads), body axes, m/s².
     pub specific_force: Vector3<f64>,
     pub angular_acceleration: Vector3<f64>,
+}
+
+/// What the equations of motion need of the state and the wind at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Kinematics {
+    /// Inertial velocity, body axes.
+    pub velocity: Vector3<f64>,
+    /// Body rates p, q, r.
+    pub omega: Vector3<f64>,
+    /// NED→body rotation.
+    pub ned_to_body: Matrix3<f64>,
+    pub air: Air,
+    pub air_data: AirData,
+    /// The separation point state χ.
+    pub chi: f64,
+    /// Rate of the wind, body axes, as seen from the rotating body.
+    pub wind_rate_body: Vector3<f64>,
 }
 
 /// An aircraft in an environment: the right-hand side of the equations of motion.
@@ -133,6 +167,7 @@ pub struct FlightModel {
 /// Forces of one α̇ guess.
 struct Translational {
     coefficients: AeroCoefficients,
+    input: AeroInput,
     chi: f64,
     velocity_rate: Vector3<f64>,
     specific_force: Vector3<f64>,
@@ -157,14 +192,12 @@ impl FlightModel {
     ) -> AirData {
         let velocity = state::velocity(x) - ned_to_body * wind.ned - wind.body;
         let airspeed = velocity.norm();
-        AirData {
-            airspeed,
-            alpha: velocity.z.atan2(velocity.x),
-            beta: (velocity.y / airspeed).clamp(-1.0, 1.0).asin(),
-            mach: airspeed / air.speed_of_sound,
-            dynamic_pressure: 0.5 * air.density * airspeed * airspeed,
+        AirData::new(
             velocity,
-        }
+            velocity.z.atan2(velocity.x),
+            (velocity.y / airspeed).clamp(-1.0, 1.0).asin(),
+            air,
+        )
     }
 
     /// ẋ = f(x, u). Allocation-free.
@@ -176,29 +209,57 @@ impl FlightModel {
     /// The state derivative and all intermediate quantities at one state.
     #[inline(always)]
     pub fn evaluate(&self, x: &StateVector, exogenous: &Exogenous) -> Evaluation {
-        let aircraft = &self.aircraft;
-        let mut controls = exogenous.controls;
-        aircraft.saturate(&mut controls);
         let air = self.environment.atmosphere.at(state::altitude(x));
-        let body_to_ned = state::body_to_ned(x);
-        let ned_to_body = body_to_ned.transpose();
+        let ned_to_body = state::body_to_ned(x).transpose();
         let air_data = Self::air_data(x, &ned_to_body, &exogenous.wind, &air);
         let omega = state::rates(x);
+        let wind_rate_body = ned_to_body * exogenous.wind_rate.ned
+            - omega.cross(&(ned_to_body * exogenous.wind.ned))
+            + exogenous.wind_rate.body;
+        let mut evaluation = self.evaluate_kinematics(
+            &Kinematics {
+                velocity: state::velocity(x),
+                omega,
+                ned_to_body,
+                air,
+                air_data,
+                chi: x[CHI],
+                wind_rate_body,
+            },
+            &exogenous.controls,
+        );
+        evaluation
+            .derivative
+            .fixed_rows_mut::<4>(Q0)
+            .copy_from(&quaternion_rate(x, &omega));
+        evaluation
+    }
+
+    /// The equations of motion from the kinematic quantities they need (the
+    /// attitude enters only through `ned_to_body`). The quaternion rate is
+    /// left 0: it is the caller's, who knows the attitude's parametrisation.
+    #[inline(always)]
+    pub fn evaluate_kinematics(&self, kinematics: &Kinematics, controls: &Controls) -> Evaluation {
+        let aircraft = &self.aircraft;
+        let mut controls = *controls;
+        aircraft.saturate(&mut controls);
+        let Kinematics {
+            velocity,
+            omega,
+            ned_to_body,
+            air,
+            air_data,
+            ..
+        } = kinematics;
         let thrust = aircraft
             .propulsion
             .thrust(controls[Control::Throttle.index()], air.log_density_ratio);
         let thrust_force = aircraft.propulsion.direction * thrust;
-        let wind_rate_body = ned_to_body * exogenous.wind_rate.ned
-            - omega.cross(&(ned_to_body * exogenous.wind.ned))
-            + exogenous.wind_rate.body;
         let context = TranslationalContext {
-            x,
-            air_data: &air_data,
+            kinematics,
             controls: &controls,
-            omega: &omega,
             gravity_body: ned_to_body.column(2) * self.environment.gravity,
             thrust_force: &thrust_force,
-            wind_rate_body: &wind_rate_body,
         };
         let translational = if aircraft.aero.forces_depend_on_alpha_dot() {
             self.solve_alpha_dot(&context)
@@ -226,24 +287,22 @@ impl FlightModel {
             .fixed_rows_mut::<3>(P)
             .copy_from(&angular_acceleration);
         derivative
-            .fixed_rows_mut::<4>(Q0)
-            .copy_from(&quaternion_rate(x, &omega));
-        derivative
             .fixed_rows_mut::<3>(NORTH)
-            .copy_from(&(body_to_ned * state::velocity(x)));
+            .copy_from(&ned_to_body.tr_mul(velocity));
         derivative[CHI] =
             aircraft
                 .aero
-                .separation_rate(air_data.alpha, translational.alpha_dot, x[CHI]);
+                .separation_rate(air_data.alpha, translational.alpha_dot, kinematics.chi);
         debug_assert_eq!(DOWN, NORTH + 2);
         Evaluation {
             derivative,
-            air,
-            air_data,
+            air: *air,
+            air_data: *air_data,
             alpha_dot: translational.alpha_dot,
             beta_dot: translational.beta_dot,
             chi: translational.chi,
             coefficients: translational.coefficients,
+            aero_input: translational.input,
             controls,
             thrust,
             specific_force: translational.specific_force,
@@ -256,23 +315,24 @@ impl FlightModel {
     #[inline(always)]
     fn translational(&self, context: &TranslationalContext, alpha_dot_guess: f64) -> Translational {
         let aircraft = &self.aircraft;
-        let air_data = context.air_data;
+        let air_data = &context.kinematics.air_data;
         let input = AeroInput {
             alpha: air_data.alpha,
             beta: air_data.beta,
             airspeed: air_data.airspeed,
             mach: air_data.mach,
-            rates: *context.omega,
+            rates: context.kinematics.omega,
             alpha_dot: alpha_dot_guess,
             controls: *context.controls,
-            chi: context.x[CHI],
+            chi: context.kinematics.chi,
         };
         let coefficients = aircraft.aero.coefficients(&input);
         let aero_force = coefficients.force * (air_data.dynamic_pressure * aircraft.wing_area);
         let specific_force = (aero_force + context.thrust_force) / aircraft.mass.mass;
-        let velocity = state::velocity(context.x);
-        let velocity_rate = specific_force + context.gravity_body - context.omega.cross(&velocity);
-        let air_rate = velocity_rate - context.wind_rate_body;
+        let kinematics = context.kinematics;
+        let velocity_rate =
+            specific_force + context.gravity_body - kinematics.omega.cross(&kinematics.velocity);
+        let air_rate = velocity_rate - kinematics.wind_rate_body;
         let (u, v, w) = (
             air_data.velocity.x,
             air_data.velocity.y,
@@ -284,6 +344,7 @@ impl FlightModel {
             / (air_data.airspeed * (u * u + w * w).sqrt());
         Translational {
             coefficients,
+            input,
             chi: aircraft.aero.effective_chi(&input),
             velocity_rate,
             specific_force,
@@ -318,13 +379,10 @@ impl FlightModel {
 }
 
 struct TranslationalContext<'a> {
-    x: &'a StateVector,
-    air_data: &'a AirData,
+    kinematics: &'a Kinematics,
     controls: &'a Controls,
-    omega: &'a Vector3<f64>,
     gravity_body: Vector3<f64>,
     thrust_force: &'a Vector3<f64>,
-    wind_rate_body: &'a Vector3<f64>,
 }
 
 /// q̇ = ½·q ⊗ (0, ω), scalar-first quaternion.

@@ -8,7 +8,7 @@
 //! piecewise-constant inputs that switch on the step grid, the default);
 //! linear uses u(t_k) + θ·(u(t_{k+1}) − u(t_k)) at the stage time t_k + θ·h.
 
-use nalgebra::SVector;
+use nalgebra::{DMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -70,6 +70,55 @@ pub fn rk4_step<const N: usize>(
     x + (k1 + (k2 + k3) * 2.0 + k4) * (step / 6.0)
 }
 
+/// One RK4 step of x and of its sensitivity matrix S = ∂x/∂θ (N × m), the
+/// step itself differentiated: with stage states xᵢ = x + cᵢ·h·kᵢ₋₁
+/// (c = 0, ½, ½, 1) and stage sensitivities Sᵢ = S + cᵢ·h·Kᵢ₋₁,
+/// `Kᵢ = ∂f/∂x(xᵢ)·Sᵢ + ∂f/∂θ(xᵢ)` and `S⁺ = S + h/6·(K₁ + 2K₂ + 2K₃ + K₄)`.
+/// S⁺ is then the exact derivative of the discrete step [`rk4_step`] (whose
+/// x⁺ this returns bit for bit), not a separately discretised sensitivity
+/// equation. `derivative(xᵢ, θ, Sᵢ, Kᵢ)` returns ẋ at the stage and writes Kᵢ.
+/// `work` holds three N × m scratch matrices.
+pub fn rk4_step_with_sensitivity<const N: usize>(
+    x: &SVector<f64, N>,
+    sensitivity: &mut DMatrix<f64>,
+    step: f64,
+    work: &mut [DMatrix<f64>; 3],
+    mut derivative: impl FnMut(
+        &SVector<f64, N>,
+        f64,
+        &DMatrix<f64>,
+        &mut DMatrix<f64>,
+    ) -> SVector<f64, N>,
+) -> SVector<f64, N> {
+    let [stage, rate, sum] = work;
+    stage.copy_from(sensitivity);
+    let k1 = derivative(x, 0.0, stage, rate);
+    sum.copy_from(rate);
+    stage.copy_from(sensitivity);
+    add_scaled(stage, 0.5 * step, rate);
+    let k2 = derivative(&(x + k1 * (0.5 * step)), 0.5, stage, rate);
+    add_scaled(sum, 2.0, rate);
+    stage.copy_from(sensitivity);
+    add_scaled(stage, 0.5 * step, rate);
+    let k3 = derivative(&(x + k2 * (0.5 * step)), 0.5, stage, rate);
+    add_scaled(sum, 2.0, rate);
+    stage.copy_from(sensitivity);
+    add_scaled(stage, step, rate);
+    let k4 = derivative(&(x + k3 * step), 1.0, stage, rate);
+    add_scaled(sum, 1.0, rate);
+    add_scaled(sensitivity, step / 6.0, sum);
+    x + (k1 + (k2 + k3) * 2.0 + k4) * (step / 6.0)
+}
+
+/// target += factor·source, element-wise.
+fn add_scaled(target: &mut DMatrix<f64>, factor: f64, source: &DMatrix<f64>) {
+    target
+        .as_mut_slice()
+        .iter_mut()
+        .zip(source.as_slice())
+        .for_each(|(t, s)| *t += factor * s);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,6 +138,55 @@ mod tests {
         };
         let ratio = error(0.02) / error(0.01);
         assert!((ratio - 16.0).abs() < 1.0, "ratio {ratio}");
+    }
+
+    /// ẋ = −a·x² + b·sin x with θ = (a, b): the sensitivity of one step
+    /// agrees with central differences of the step to 1e-9 relative, and x⁺
+    /// is rk4_step's bit for bit.
+    #[test]
+    fn sensitivity_step_is_the_derivative_of_the_step() {
+        let f = |x: f64, a: f64, b: f64| -a * x * x + b * x.sin();
+        let step_of = |x0: f64, a: f64, b: f64| {
+            rk4_step(&nalgebra::Vector1::new(x0), 0.3, |x, _| {
+                nalgebra::Vector1::new(f(x[0], a, b))
+            })[0]
+        };
+        let (x0, a, b) = (0.8, 1.3, 0.7);
+        let mut s = DMatrix::from_row_slice(1, 3, &[0.0, 0.0, 1.0]);
+        let mut work = [
+            DMatrix::zeros(1, 3),
+            DMatrix::zeros(1, 3),
+            DMatrix::zeros(1, 3),
+        ];
+        let next = rk4_step_with_sensitivity(
+            &nalgebra::Vector1::new(x0),
+            &mut s,
+            0.3,
+            &mut work,
+            |x, _, stage, rate| {
+                let jacobian = -2.0 * a * x[0] + b * x[0].cos();
+                for j in 0..3 {
+                    rate[(0, j)] = jacobian * stage[(0, j)];
+                }
+                rate[(0, 0)] += -x[0] * x[0];
+                rate[(0, 1)] += x[0].sin();
+                nalgebra::Vector1::new(f(x[0], a, b))
+            },
+        );
+        assert_eq!(next[0], step_of(x0, a, b));
+        let h = 1e-6;
+        let expected = [
+            (step_of(x0, a + h, b) - step_of(x0, a - h, b)) / (2.0 * h),
+            (step_of(x0, a, b + h) - step_of(x0, a, b - h)) / (2.0 * h),
+            (step_of(x0 + h, a, b) - step_of(x0 - h, a, b)) / (2.0 * h),
+        ];
+        for (j, expected) in expected.iter().enumerate() {
+            assert!(
+                (s[(0, j)] - expected).abs() < 1e-9 * expected.abs().max(1.0),
+                "column {j}: {} vs {expected}",
+                s[(0, j)]
+            );
+        }
     }
 
     /// ẋ = u(t) with u sampled at the step ends: the hold integrates the start

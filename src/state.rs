@@ -157,16 +157,45 @@ pub fn rates(x: &StateVector) -> Vector3<f64> {
     Vector3::new(x[P], x[Q], x[R])
 }
 
+/// The sine and cosine of an angle.
+pub type SinCos = (f64, f64);
+
+/// NED→body rotation of Euler angles (3-2-1) given by their sines and cosines:
+/// rows are the body axes in NED, e.g. the third column is (−sin θ,
+/// sin φ·cos θ, cos φ·cos θ), the down axis in body axes.
+pub fn ned_to_body(roll: SinCos, pitch: SinCos, yaw: SinCos) -> Matrix3<f64> {
+    let ((sin_roll, cos_roll), (sin_pitch, cos_pitch), (sin_yaw, cos_yaw)) = (roll, pitch, yaw);
+    Matrix3::new(
+        cos_pitch * cos_yaw,
+        cos_pitch * sin_yaw,
+        -sin_pitch,
+        sin_roll * sin_pitch * cos_yaw - cos_roll * sin_yaw,
+        sin_roll * sin_pitch * sin_yaw + cos_roll * cos_yaw,
+        sin_roll * cos_pitch,
+        cos_roll * sin_pitch * cos_yaw + sin_roll * sin_yaw,
+        cos_roll * sin_pitch * sin_yaw - sin_roll * cos_yaw,
+        cos_roll * cos_pitch,
+    )
+}
+
 /// Euler-angle rates (φ̇, θ̇, ψ̇) from body rates (p, q, r) at roll φ and pitch θ:
 /// φ̇ = p + tan θ·(q sin φ + r cos φ), θ̇ = q cos φ − r sin φ,
 /// ψ̇ = (q sin φ + r cos φ)/cos θ.
 pub fn euler_rates(roll: f64, pitch: f64, rates: &Vector3<f64>) -> Vector3<f64> {
-    let (sin_roll, cos_roll) = roll.sin_cos();
+    euler_rates_of(roll.sin_cos(), pitch.sin_cos(), rates)
+}
+
+/// [`euler_rates`] from the sines and cosines of φ and θ.
+pub fn euler_rates_of(
+    (sin_roll, cos_roll): SinCos,
+    (sin_pitch, cos_pitch): SinCos,
+    rates: &Vector3<f64>,
+) -> Vector3<f64> {
     let turn = rates.y * sin_roll + rates.z * cos_roll;
     Vector3::new(
-        rates.x + pitch.tan() * turn,
+        rates.x + sin_pitch / cos_pitch * turn,
         rates.y * cos_roll - rates.z * sin_roll,
-        turn / pitch.cos(),
+        turn / cos_pitch,
     )
 }
 
@@ -191,6 +220,8 @@ mod tests {
         set_attitude(&mut x, &q);
         let difference = body_to_ned(&x) - q.to_rotation_matrix().into_inner();
         assert!(difference.norm() < 1e-14);
+        let direct = ned_to_body(e.roll.sin_cos(), e.pitch.sin_cos(), e.yaw.sin_cos());
+        assert!((direct - body_to_ned(&x).transpose()).norm() < 1e-14);
         let back = euler(&x);
         assert!((back.roll - e.roll).abs() < 1e-14);
         assert!((back.pitch - e.pitch).abs() < 1e-14);

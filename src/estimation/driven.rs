@@ -5,8 +5,9 @@
 //! decoupled longitudinal and lateral-directional models of seed 004
 //! (Eqs. 1–8) are the subsets {V, α, q, θ} and {β, p, r, φ}; the full
 //! 6-DOF integrates them all. The equations are the simulator's own
-//! ([`FlightModel::evaluate`], no wind: estimation models the air-relative
-//! motion), converted to flight-path rates:
+//! ([`FlightModel::evaluate_kinematics`], no wind: estimation models the
+//! air-relative motion, so air data are V, α, β themselves and the attitude
+//! is the Euler angles' rotation), converted to flight-path rates:
 //! `V̇ = V·V̇_b/V`, α̇ and β̇ from the state derivative,
 //! `φ̇ = p + tan θ·(q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`,
 //! `ψ̇ = (q sin φ + r cos φ)/cos θ`, `ḣ = −ḋ`.
@@ -14,14 +15,16 @@
 //! taken inside a step with the model's [`Interpolation`] option, through
 //! the one RK4 integrator.
 
-use crate::dynamics::{Evaluation, Exogenous, FlightModel};
+use crate::aero::{Coefficient, TermRegressors};
+use crate::atmosphere::Air;
+use crate::dynamics::{AirData, Evaluation, FlightModel, Kinematics};
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
-use crate::integrator::{Interpolation, rk4_step};
+use crate::integrator::{Interpolation, rk4_step_with_sensitivity};
 use crate::record::FlightRecord;
-use crate::state::{self, CONTROL_COUNT, Control, Controls, EulerAngles, StateVector};
+use crate::state::{self, CONTROL_COUNT, Control, Controls, SinCos};
 use crate::units::STANDARD_GRAVITY;
-use nalgebra::SVector;
+use nalgebra::{DMatrix, SVector, Vector3};
 
 pub const FLIGHT_PATH_SIZE: usize = 11;
 pub type FlightPathState = SVector<f64, FLIGHT_PATH_SIZE>;
@@ -36,24 +39,56 @@ const YAW: usize = 8;
 const ALTITUDE: usize = 9;
 const CHI: usize = 10;
 
-/// The simulator state of a flight-path state with no wind.
-pub fn to_state(x: &FlightPathState) -> StateVector {
-    let (alpha, beta) = (x[ALPHA], x[BETA]);
-    let mut full = StateVector::zeros();
-    full[state::U] = x[AIRSPEED] * alpha.cos() * beta.cos();
-    full[state::V] = x[AIRSPEED] * beta.sin();
-    full[state::W] = x[AIRSPEED] * alpha.sin() * beta.cos();
-    full.fixed_rows_mut::<3>(state::P)
-        .copy_from(&x.fixed_rows::<3>(P));
-    let attitude = state::quaternion_from_euler(EulerAngles {
-        roll: x[ROLL],
-        pitch: x[PITCH],
-        yaw: x[YAW],
-    });
-    state::set_attitude(&mut full, &attitude);
-    full[state::DOWN] = -x[ALTITUDE];
-    full[state::CHI] = x[CHI];
-    full
+/// Sines and cosines of a flight-path state's angles α, β, φ, θ, ψ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Angles {
+    alpha: SinCos,
+    beta: SinCos,
+    roll: SinCos,
+    pitch: SinCos,
+    yaw: SinCos,
+}
+
+impl Angles {
+    fn of(x: &FlightPathState) -> Angles {
+        Angles {
+            alpha: x[ALPHA].sin_cos(),
+            beta: x[BETA].sin_cos(),
+            roll: x[ROLL].sin_cos(),
+            pitch: x[PITCH].sin_cos(),
+            yaw: x[YAW].sin_cos(),
+        }
+    }
+
+    /// The angles after state `i` moved to `value` (only that one recomputed).
+    fn moved(mut self, i: usize, value: f64) -> Angles {
+        match i {
+            ALPHA => self.alpha = value.sin_cos(),
+            BETA => self.beta = value.sin_cos(),
+            ROLL => self.roll = value.sin_cos(),
+            PITCH => self.pitch = value.sin_cos(),
+            YAW => self.yaw = value.sin_cos(),
+            _ => {}
+        }
+        self
+    }
+}
+
+/// The kinematics of a flight-path state with no wind: body velocity
+/// V·(cos α cos β, sin β, sin α cos β), the Euler angles' rotation, air data
+/// straight from V, α, β.
+fn kinematics(x: &FlightPathState, angles: &Angles, air: &Air) -> Kinematics {
+    let ((sin_alpha, cos_alpha), (sin_beta, cos_beta)) = (angles.alpha, angles.beta);
+    let velocity = Vector3::new(cos_alpha * cos_beta, sin_beta, sin_alpha * cos_beta) * x[AIRSPEED];
+    Kinematics {
+        velocity,
+        omega: x.fixed_rows::<3>(P).into(),
+        ned_to_body: state::ned_to_body(angles.roll, angles.pitch, angles.yaw),
+        air: *air,
+        air_data: AirData::new(velocity, x[ALPHA], x[BETA], air),
+        chi: x[CHI],
+        wind_rate_body: Vector3::zeros(),
+    }
 }
 
 /// Measured rates of the pseudo-controls that enter the integrated states'
@@ -70,21 +105,20 @@ pub struct PseudoRates {
 /// enters an integrated state's equation the measured rate is used: with the
 /// airspeed measured, β̇ = (v̇ − V̇_m·sin β)/(V·cos β); with the sideslip
 /// measured, V̇ = [(u·u̇ + w·ẇ)/V + V·sin β·cos β·β̇_m]/cos²β.
-pub fn derivative(
+/// `angles` and `air` are x's (computed once per stage, see [`Linearization::at`]).
+fn derivative(
     model: &FlightModel,
     x: &FlightPathState,
+    angles: &Angles,
+    air: &Air,
     controls: &Controls,
     pseudo: PseudoRates,
 ) -> (FlightPathState, Evaluation) {
-    let exogenous = Exogenous {
-        controls: *controls,
-        ..Default::default()
-    };
-    let evaluation = model.evaluate(&to_state(x), &exogenous);
+    let evaluation = model.evaluate_kinematics(&kinematics(x, angles, air), controls);
     let d = &evaluation.derivative;
     let velocity = evaluation.air_data.velocity;
     let mut rates = FlightPathState::zeros();
-    let (sin_beta, cos_beta) = x[BETA].sin_cos();
+    let (sin_beta, cos_beta) = angles.beta;
     rates[AIRSPEED] = match pseudo.beta {
         Some(beta_rate) => {
             let longitudinal = (velocity.x * d[state::U] + velocity.z * d[state::W]) / x[AIRSPEED];
@@ -102,9 +136,9 @@ pub fn derivative(
         .copy_from(&evaluation.angular_acceleration);
     rates
         .fixed_rows_mut::<3>(ROLL)
-        .copy_from(&state::euler_rates(
-            x[ROLL],
-            x[PITCH],
+        .copy_from(&state::euler_rates_of(
+            angles.roll,
+            angles.pitch,
             &x.fixed_rows::<3>(P).into(),
         ));
     rates[ALTITUDE] = -d[state::DOWN];
@@ -112,37 +146,303 @@ pub fn derivative(
     (rates, evaluation)
 }
 
-/// A model output by record channel name, from the state and its evaluation.
-pub fn observe(name: &str, x: &FlightPathState, evaluation: &Evaluation) -> Option<f64> {
-    if let Some(i) = FLIGHT_PATH_STATES.iter().position(|s| *s == name) {
-        return Some(x[i]);
-    }
-    let f = &evaluation.specific_force;
-    let c = &evaluation.coefficients;
-    Some(match name {
-        "nx" => f.x / STANDARD_GRAVITY,
-        "ny" => f.y / STANDARD_GRAVITY,
-        "nz" => -f.z / STANDARD_GRAVITY,
-        "p_dot" => evaluation.angular_acceleration.x,
-        "q_dot" => evaluation.angular_acceleration.y,
-        "r_dot" => evaluation.angular_acceleration.z,
-        "mach" => evaluation.air_data.mach,
-        "dynamic_pressure" => evaluation.air_data.dynamic_pressure,
-        "CX" => c.force.x,
-        "CY" => c.force.y,
-        "CZ" => c.force.z,
-        "CL" => c.lift,
-        "CD" => c.drag,
-        "Cl" => c.moment.x,
-        "Cm" => c.moment.y,
-        "Cn" => c.moment.z,
-        _ => return None,
-    })
+/// A model output, resolved once from its record channel name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Observable {
+    /// A flight-path state (index into x).
+    State(usize),
+    /// Load factors nx, ny, nz (specific force / g; nz positive up).
+    LoadFactor(usize),
+    /// ṗ, q̇, ṙ.
+    AngularAcceleration(usize),
+    Mach,
+    DynamicPressure,
+    /// CX, CY, CZ.
+    Force(usize),
+    Lift,
+    Drag,
+    /// Cl, Cm, Cn.
+    Moment(usize),
 }
 
-/// True when `observe` knows the name.
-pub fn is_observable(name: &str) -> bool {
-    observe(name, &FlightPathState::zeros(), &Evaluation::default()).is_some()
+impl Observable {
+    /// The output a record channel name stands for; None when the model has no such output.
+    pub fn parse(name: &str) -> Option<Observable> {
+        if let Some(i) = FLIGHT_PATH_STATES.iter().position(|s| *s == name) {
+            return Some(Observable::State(i));
+        }
+        Some(match name {
+            "nx" => Observable::LoadFactor(0),
+            "ny" => Observable::LoadFactor(1),
+            "nz" => Observable::LoadFactor(2),
+            "p_dot" => Observable::AngularAcceleration(0),
+            "q_dot" => Observable::AngularAcceleration(1),
+            "r_dot" => Observable::AngularAcceleration(2),
+            "mach" => Observable::Mach,
+            "dynamic_pressure" => Observable::DynamicPressure,
+            "CX" => Observable::Force(0),
+            "CY" => Observable::Force(1),
+            "CZ" => Observable::Force(2),
+            "CL" => Observable::Lift,
+            "CD" => Observable::Drag,
+            "Cl" => Observable::Moment(0),
+            "Cm" => Observable::Moment(1),
+            "Cn" => Observable::Moment(2),
+            _ => return None,
+        })
+    }
+
+    /// The output's value at a state and its evaluation.
+    pub fn value(self, x: &FlightPathState, evaluation: &Evaluation) -> f64 {
+        let c = &evaluation.coefficients;
+        match self {
+            Observable::State(i) => x[i],
+            Observable::LoadFactor(2) => -evaluation.specific_force.z / STANDARD_GRAVITY,
+            Observable::LoadFactor(i) => evaluation.specific_force[i] / STANDARD_GRAVITY,
+            Observable::AngularAcceleration(i) => evaluation.angular_acceleration[i],
+            Observable::Mach => evaluation.air_data.mach,
+            Observable::DynamicPressure => evaluation.air_data.dynamic_pressure,
+            Observable::Force(i) => c.force[i],
+            Observable::Lift => c.lift,
+            Observable::Drag => c.drag,
+            Observable::Moment(i) => c.moment[i],
+        }
+    }
+}
+
+/// How one unknown θ_j of a simulation with sensitivities enters the model
+/// (the columns of S = ∂x/∂θ and of ∂y/∂θ).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Column {
+    /// A parameter `{coefficient}_{term}` (index into the aerodynamic
+    /// parameters), linear in the coefficient: ∂f/∂θ = ∂f/∂C·regressor.
+    Term(usize),
+    /// A parameter entering nonlinearly (`e`, the stall parameters).
+    Nonlinear(usize),
+    /// The initial value of an integrated state (index into x): S(0) = unit column.
+    Initial(usize),
+    /// Enters no equation (an output bias).
+    Unused,
+}
+
+/// Forward-difference step of a state: 10⁻⁷·max(|x|, 1) (truncation and
+/// rounding errors then both ~10⁻⁸ relative).
+fn state_step(value: f64) -> f64 {
+    1e-7 * value.abs().max(1.0)
+}
+
+/// Step of a coefficient offset (f is affine in it unless the forces depend on α̇).
+const OFFSET_STEP: f64 = 1e-6;
+
+/// Forward-difference step of a nonlinear parameter: 10⁻⁷·max(|θ|, 10⁻²).
+fn parameter_step(value: f64) -> f64 {
+    1e-7 * value.abs().max(1e-2)
+}
+
+/// Where the ∂f/∂θ of one column comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Source {
+    None,
+    /// The difference quotient of a perturbed model.
+    Direction(usize),
+    /// A coefficient offset's difference quotient times the term's regressor.
+    Term {
+        direction: usize,
+        lift: bool,
+        regressor: usize,
+    },
+}
+
+/// What a stage linearisation differentiates along: the active states
+/// (perturbed in x) and perturbed models (a coefficient offset or a
+/// nonlinear parameter moved by a step), with the step of each model.
+struct Directions {
+    states: Vec<usize>,
+    models: Vec<(FlightModel, f64)>,
+    /// Per unknown; a `Direction` or `Term` names a model.
+    sources: Vec<Source>,
+    /// Whether any source is a term (the regressors are then needed).
+    has_terms: bool,
+}
+
+impl Directions {
+    fn new(model: &FlightModel, columns: &[Column], active: &[usize]) -> Directions {
+        let mut directions = Directions {
+            states: if columns.is_empty() {
+                Vec::new()
+            } else {
+                active.to_vec()
+            },
+            models: Vec::new(),
+            sources: Vec::with_capacity(columns.len()),
+            has_terms: false,
+        };
+        let mut offsets: [Option<usize>; 6] = [None; 6];
+        let aero = &model.aircraft.aero;
+        for column in columns {
+            let source = match *column {
+                Column::Term(j) => match aero.term_of(j) {
+                    Some((coefficient, regressor)) => {
+                        let c = coefficient as usize;
+                        let direction = *offsets[c].get_or_insert_with(|| {
+                            let mut perturbed = model.clone();
+                            perturbed.aircraft.aero.offsets[c] += OFFSET_STEP;
+                            directions.push_model(perturbed, OFFSET_STEP)
+                        });
+                        directions.has_terms = true;
+                        Source::Term {
+                            direction,
+                            lift: coefficient == Coefficient::Lift,
+                            regressor: regressor as usize,
+                        }
+                    }
+                    None => directions.nonlinear(model, j),
+                },
+                Column::Nonlinear(j) => directions.nonlinear(model, j),
+                Column::Initial(_) | Column::Unused => Source::None,
+            };
+            directions.sources.push(source);
+        }
+        directions
+    }
+
+    fn push_model(&mut self, model: FlightModel, step: f64) -> usize {
+        self.models.push((model, step));
+        self.models.len() - 1
+    }
+
+    fn nonlinear(&mut self, model: &FlightModel, parameter: usize) -> Source {
+        let mut perturbed = model.clone();
+        let value = &mut perturbed.aircraft.aero.parameters.values_mut()[parameter];
+        let step = parameter_step(*value);
+        *value += step;
+        Source::Direction(self.push_model(perturbed, step))
+    }
+}
+
+/// A model linearised at one stage: ẋ, the evaluation, and difference
+/// quotients over the active states: ∂f/∂x, ∂f/∂θ, and at grid points the
+/// outputs' ∂g/∂x and ∂g/∂θ.
+struct Linearization {
+    rates: FlightPathState,
+    evaluation: Evaluation,
+    /// ∂f/∂x (active × active).
+    a: DMatrix<f64>,
+    /// ∂f/∂θ (active × unknowns).
+    b: DMatrix<f64>,
+    outputs: Vec<f64>,
+    /// ∂g/∂x (outputs × active).
+    gx: DMatrix<f64>,
+    /// ∂g/∂θ (outputs × unknowns).
+    gtheta: DMatrix<f64>,
+    /// Scratch: ∂ẋ and ∂y per perturbed model.
+    model_rates: Vec<FlightPathState>,
+    model_outputs: DMatrix<f64>,
+}
+
+impl Linearization {
+    fn new(directions: &Directions, outputs: usize) -> Linearization {
+        let (n, m) = (directions.states.len(), directions.sources.len());
+        Linearization {
+            rates: FlightPathState::zeros(),
+            evaluation: Evaluation::default(),
+            a: DMatrix::zeros(n, n),
+            b: DMatrix::zeros(n, m),
+            outputs: vec![0.0; outputs],
+            gx: DMatrix::zeros(outputs, n),
+            gtheta: DMatrix::zeros(outputs, m),
+            model_rates: vec![FlightPathState::zeros(); directions.models.len()],
+            model_outputs: DMatrix::zeros(outputs, directions.models.len()),
+        }
+    }
+
+    /// Linearises `model` at x along `directions`, and the `outputs` too.
+    /// The angles' sines and cosines and the air are computed once, and for a
+    /// moved state only what it changes.
+    fn at(
+        &mut self,
+        model: &FlightModel,
+        directions: &Directions,
+        x: &FlightPathState,
+        controls: &Controls,
+        pseudo: PseudoRates,
+        outputs: &[Observable],
+    ) {
+        let angles = Angles::of(x);
+        let atmosphere = &model.environment.atmosphere;
+        let air = atmosphere.at(x[ALTITUDE]);
+        (self.rates, self.evaluation) = derivative(model, x, &angles, &air, controls, pseudo);
+        for (o, output) in outputs.iter().enumerate() {
+            self.outputs[o] = output.value(x, &self.evaluation);
+        }
+        if directions.sources.is_empty() {
+            return;
+        }
+        let states = &directions.states;
+        for (b, &i) in states.iter().enumerate() {
+            let step = state_step(x[i]);
+            let mut moved = *x;
+            moved[i] += step;
+            let moved_air = if i == ALTITUDE {
+                atmosphere.at(moved[i])
+            } else {
+                air
+            };
+            let moved_angles = angles.moved(i, moved[i]);
+            let (rates, evaluation) =
+                derivative(model, &moved, &moved_angles, &moved_air, controls, pseudo);
+            for (a, &r) in states.iter().enumerate() {
+                self.a[(a, b)] = (rates[r] - self.rates[r]) / step;
+            }
+            for (o, output) in outputs.iter().enumerate() {
+                self.gx[(o, b)] = (output.value(&moved, &evaluation) - self.outputs[o]) / step;
+            }
+        }
+        for (d, (perturbed, step)) in directions.models.iter().enumerate() {
+            let (rates, evaluation) = derivative(perturbed, x, &angles, &air, controls, pseudo);
+            self.model_rates[d] = (rates - self.rates) / *step;
+            for (o, output) in outputs.iter().enumerate() {
+                self.model_outputs[(o, d)] =
+                    (output.value(x, &evaluation) - self.outputs[o]) / step;
+            }
+        }
+        let regressors = if directions.has_terms {
+            model
+                .aircraft
+                .aero
+                .term_regressors(&self.evaluation.aero_input)
+        } else {
+            TermRegressors::default()
+        };
+        for (j, source) in directions.sources.iter().enumerate() {
+            let (d, factor) = match *source {
+                Source::None => {
+                    self.b.column_mut(j).fill(0.0);
+                    self.gtheta.column_mut(j).fill(0.0);
+                    continue;
+                }
+                Source::Direction(d) => (d, 1.0),
+                Source::Term {
+                    direction,
+                    lift,
+                    regressor,
+                } => {
+                    let values = if lift {
+                        &regressors.lift
+                    } else {
+                        &regressors.other
+                    };
+                    (direction, values[regressor])
+                }
+            };
+            for (a, &r) in states.iter().enumerate() {
+                self.b[(a, j)] = self.model_rates[d][r] * factor;
+            }
+            for o in 0..outputs.len() {
+                self.gtheta[(o, j)] = self.model_outputs[(o, d)] * factor;
+            }
+        }
+    }
 }
 
 /// A postulated model's inputs and pseudo-controls on an integration grid.
@@ -273,53 +573,117 @@ impl DrivenSimulation {
         FlightPathState::from_fn(|i, _| if self.integrate[i] { x[i] } else { measured[i] })
     }
 
-    /// Simulates from `initial`, calling `sink(k, x, evaluation)` at every grid
-    /// point. Err with the time when the model departs (non-finite, |α| or |β|
+    /// Simulates from `initial`, calling `sink(k, y, ∂y/∂θ)` at every grid
+    /// point with the `outputs` and their sensitivities to the unknowns
+    /// described by `columns` (none: a plain simulation). The sensitivities
+    /// S = ∂x/∂θ of the integrated states are propagated through each RK4
+    /// stage with the stage's ∂f/∂x and ∂f/∂θ ([`rk4_step_with_sensitivity`]),
+    /// so that they are the derivatives of the discrete simulation itself;
+    /// ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ. ∂f/∂x and ∂g/∂x are forward differences in
+    /// each integrated state; for a term C_term of coefficient C, f is linear
+    /// in C, and ∂f/∂θ = (∂f/∂C)·regressor with ∂f/∂C the difference quotient
+    /// of an offset on C; a nonlinear parameter's is a forward difference.
+    /// Err with the time when the model departs (non-finite, |α| or |β|
     /// beyond 90°, airspeed not positive).
     pub fn simulate(
         &self,
         model: &FlightModel,
         initial: &FlightPathState,
-        mut sink: impl FnMut(usize, &FlightPathState, &Evaluation),
+        outputs: &[Observable],
+        columns: &[Column],
+        mut sink: impl FnMut(usize, &[f64], &DMatrix<f64>),
     ) -> std::result::Result<(), String> {
+        let aero = &model.aircraft.aero;
         let mut x = self.merge(initial, &self.measured[0]);
-        if model.aircraft.aero.chi_is_state() && !self.integrate[CHI] {
-            x[CHI] = model.aircraft.aero.separation_target(x[ALPHA], 0.0);
+        let chi_from_alpha = aero.chi_is_state() && !self.integrate[CHI];
+        if chi_from_alpha {
+            x[CHI] = aero.separation_target(x[ALPHA], 0.0);
         }
         let mask = FlightPathState::from_fn(|i, _| {
-            if self.integrate[i] || (i == CHI && model.aircraft.aero.chi_is_state()) {
+            if self.integrate[i] || (i == CHI && aero.chi_is_state()) {
                 1.0
             } else {
                 0.0
             }
         });
+        let active: Vec<usize> = (0..FLIGHT_PATH_SIZE).filter(|&i| mask[i] == 1.0).collect();
+        let directions = Directions::new(model, columns, &active);
+        let states = &directions.states;
+        let row = |state: usize| states.iter().position(|&i| i == state);
+        // S over the active states: the others are measured, independent of θ.
+        let mut sensitivity = DMatrix::zeros(states.len(), columns.len());
+        for (j, column) in columns.iter().enumerate() {
+            if let Column::Initial(i) = *column {
+                sensitivity[(row(i).expect("an integrated state"), j)] = 1.0;
+            }
+            if let (true, Some(chi)) = (chi_from_alpha, row(CHI)) {
+                // χ(0) = χ∞(α(0)) moves with α(0) and the stall parameters.
+                let target = |model: &FlightModel, alpha: f64| {
+                    model.aircraft.aero.separation_target(alpha, 0.0)
+                };
+                sensitivity[(chi, j)] = match (*column, directions.sources[j]) {
+                    (Column::Initial(ALPHA), _) => {
+                        let step = state_step(x[ALPHA]);
+                        (target(model, x[ALPHA] + step) - x[CHI]) / step
+                    }
+                    (_, Source::Direction(d)) => {
+                        let (perturbed, step) = &directions.models[d];
+                        (target(perturbed, x[ALPHA]) - x[CHI]) / step
+                    }
+                    _ => 0.0,
+                };
+            }
+        }
+        let mut work = [(); 3].map(|_| DMatrix::zeros(states.len(), columns.len()));
+        let mut output_sensitivity = DMatrix::zeros(outputs.len(), columns.len());
+        let mut point = Linearization::new(&directions, outputs.len());
+        let mut stage = Linearization::new(&directions, 0);
         for k in 0..self.len() {
             let pseudo = self.pseudo_rates(k);
-            let (_, evaluation) = derivative(model, &x, &self.controls[k], pseudo);
+            point.at(model, &directions, &x, &self.controls[k], pseudo, outputs);
             check_departure(&x, self.time(k))?;
-            sink(k, &x, &evaluation);
+            if !columns.is_empty() {
+                // ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ
+                affine(
+                    &point.gx,
+                    &sensitivity,
+                    &point.gtheta,
+                    &mut output_sensitivity,
+                );
+            }
+            sink(k, &point.outputs, &output_sensitivity);
             if k + 1 == self.len() {
                 break;
             }
-            let stage = |theta: f64| {
-                // Measured pseudo-controls are continuous states: always
-                // linear inside the step (consistent with their rates in
-                // `pseudo_rates`); controls follow the model's option.
-                let measured = self.measured[k] + (self.measured[k + 1] - self.measured[k]) * theta;
-                let w = self.interpolation.weight(theta);
-                let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
-                (measured, controls)
-            };
-            let next = rk4_step(&x, self.step, |x, theta| {
-                let (measured, controls) = stage(theta);
-                let merged =
-                    FlightPathState::from_fn(
-                        |i, _| if mask[i] == 1.0 { x[i] } else { measured[i] },
-                    );
-                derivative(model, &merged, &controls, pseudo)
-                    .0
-                    .component_mul(&mask)
-            });
+            let next = rk4_step_with_sensitivity(
+                &x,
+                &mut sensitivity,
+                self.step,
+                &mut work,
+                |x, theta, stage_sensitivity, rate| {
+                    // The first stage is the grid point, linearised above.
+                    let linearization = if theta == 0.0 {
+                        &point
+                    } else {
+                        // Measured pseudo-controls are continuous states:
+                        // always linear inside the step (consistent with
+                        // their rates in `pseudo_rates`); controls follow
+                        // the model's option.
+                        let measured =
+                            self.measured[k] + (self.measured[k + 1] - self.measured[k]) * theta;
+                        let w = self.interpolation.weight(theta);
+                        let controls =
+                            self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
+                        let merged = FlightPathState::from_fn(|i, _| {
+                            if mask[i] == 1.0 { x[i] } else { measured[i] }
+                        });
+                        stage.at(model, &directions, &merged, &controls, pseudo, &[]);
+                        &stage
+                    };
+                    affine(&linearization.a, stage_sensitivity, &linearization.b, rate);
+                    linearization.rates.component_mul(&mask)
+                },
+            );
             x = FlightPathState::from_fn(|i, _| {
                 if mask[i] == 1.0 {
                     next[i]
@@ -329,6 +693,25 @@ impl DrivenSimulation {
             });
         }
         Ok(())
+    }
+}
+
+/// into = a·s + b, for the small matrices of the sensitivity equations.
+fn affine(a: &DMatrix<f64>, s: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+    let rows = a.nrows();
+    let (a, s_rows) = (a.as_slice(), s.nrows());
+    for ((into, b), s) in into
+        .as_mut_slice()
+        .chunks_exact_mut(rows.max(1))
+        .zip(b.as_slice().chunks_exact(rows.max(1)))
+        .zip(s.as_slice().chunks_exact(s_rows.max(1)))
+    {
+        into.copy_from_slice(b);
+        for (a, &s) in a.chunks_exact(rows.max(1)).zip(s) {
+            for (into, a) in into.iter_mut().zip(a) {
+                *into += a * s;
+            }
+        }
     }
 }
 
