@@ -224,7 +224,7 @@ impl Signal {
 }
 
 /// Tolerance (s) of a step input's switch times against rounding.
-const SWITCH_TOLERANCE: f64 = 1e-9;
+const SWITCH_TOLERANCE: f64 = 1e-10;
 
 /// Piecewise constant: 0 before `times[0]`, `levels[i]` on
 /// [`times[i]`, `times[i+1]`), `after` from the last time on.
@@ -250,7 +250,7 @@ impl Steps {
         }
     }
 
-    /// A switch within [`SWITCH_TOLERANCE`] after `time` counts as reached:
+    /// A switch within [`SWITCH_TOLERANCE`] (0.1 ns) after `time` counts as reached:
     /// switch times are sums such as 3 + 3·1.6 = 7.800000000000001, and a
     /// switch meant to fall on a sample instant must not slip a whole step.
     fn value(&self, time: f64) -> f64 {
@@ -1058,6 +1058,20 @@ mod tests {
         assert!((throttle(0.5 + TINY) - 0.1).abs() < 1e-15);
         assert!((throttle(1e4) - 0.1).abs() < 1e-15);
         assert_eq!(s.deviation(1.0)[Control::Elevator.index()], 0.0);
+    }
+
+    /// Switch times are sums that round: 3 + 3·1.6 = 7.800000000000001. A
+    /// switch meant for the sample instant 7.8 s must happen there, not one
+    /// simulator step (or recorder sample) later.
+    #[test]
+    fn a_rounded_switch_time_lands_on_its_instant() {
+        let s = schedule(
+            "[[inputs]]\nkind = \"3211\"\ncontrol = \"elevator\"\nstart = 3\nunit_time = 1.6\namplitude = 0.03",
+        );
+        assert!(3.0 + 3.0 * 1.6 > 7.8);
+        assert_eq!(elevator(&s, 7.8), -0.03);
+        assert_eq!(elevator(&s, 780.0 * 0.01), -0.03);
+        assert_eq!(elevator(&s, 195.0 * 0.04), -0.03);
     }
 
     #[test]
