@@ -256,7 +256,7 @@ fn run(cli: Cli) -> Result<()> {
                 .transpose()?;
             let scenario = aeroid::scenario::Scenario::load(&scenario)?;
             let profile = aeroid::recorder::profile_for(&scenario, profile.as_deref())?;
-            if !(threshold > 0.0) {
+            if threshold.is_nan() || threshold <= 0.0 {
                 anyhow::bail!("--threshold must be positive, is {threshold}");
             }
             let options = aeroid::identifiability::IdentifiabilityOptions {
