@@ -42,13 +42,13 @@
 //! recorder's wind estimate are left out, each with its reason.
 
 use crate::error::{Error, Result};
-use crate::estimation::gauss_newton::pseudo_inverse_or_infinite;
+use crate::estimation::gauss_newton::{pseudo_inverse_or_infinite, unit_diagonal_scale};
 use crate::record::FlightRecord;
 use crate::recorder::Profile;
 use crate::scenario::Scenario;
 use crate::sim::Simulation;
 use crate::state::{self, StateVector};
-use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, UnitQuaternion, Vector3};
 
 /// Settings of an identifiability analysis.
 #[derive(Debug, Clone, PartialEq)]
@@ -377,11 +377,10 @@ fn marginal_information(information: &DMatrix<f64>, count: usize) -> DMatrix<f64
     if total == count {
         return information.clone();
     }
-    let nuisance = information.view((count, count), (total - count, total - count));
-    let scale = DVector::from_fn(total - count, |i, _| {
-        let d = nuisance[(i, i)];
-        if d > 0.0 { 1.0 / d.sqrt() } else { 0.0 }
-    });
+    let nuisance = information
+        .view((count, count), (total - count, total - count))
+        .into_owned();
+    let scale = unit_diagonal_scale(&nuisance);
     let scaled = DMatrix::from_fn(total - count, total - count, |i, j| {
         nuisance[(i, j)] * scale[i] * scale[j]
     });

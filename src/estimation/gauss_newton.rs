@@ -174,7 +174,7 @@ pub fn pseudo_inverse_or_infinite(matrix: &DMatrix<f64>) -> DMatrix<f64> {
 }
 
 /// 1/√A_ii (1 where the diagonal is zero: a parameter with no effect).
-fn unit_diagonal_scale(matrix: &DMatrix<f64>) -> DVector<f64> {
+pub(crate) fn unit_diagonal_scale(matrix: &DMatrix<f64>) -> DVector<f64> {
     matrix
         .diagonal()
         .map(|d| if d > 0.0 { 1.0 / d.sqrt() } else { 1.0 })
