@@ -19,6 +19,7 @@
 //! - an `FGFDMExec` is not thread-safe: [`Exec`] is neither `Send` nor `Sync`,
 //!   so each thread builds its own.
 
+pub mod crosscheck;
 pub mod export;
 
 use crate::error::{Error, Result};
