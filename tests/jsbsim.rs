@@ -302,55 +302,30 @@ fn export_carries_mass_inertia_and_geometry() {
     exec.run_ic().unwrap();
     let slug_ft2 = aeroid::jsbsim::SLUG * FT * FT;
     let inertia = aircraft.mass.inertia;
-    let close = |jsbsim: f64, aeroid: f64, what: &str| {
-        assert!(
-            (jsbsim - aeroid).abs() <= 1e-6 * aeroid.abs(),
-            "{what}: JSBSim {jsbsim} vs aeroid {aeroid}"
-        );
-    };
-    close(
-        exec.get("inertia/mass-slugs").unwrap() * aeroid::jsbsim::SLUG,
-        aircraft.mass.mass,
-        "mass",
-    );
-    close(
-        exec.get("inertia/ixx-slugs_ft2").unwrap() * slug_ft2,
-        inertia[(0, 0)],
-        "Ixx",
-    );
-    close(
-        exec.get("inertia/iyy-slugs_ft2").unwrap() * slug_ft2,
-        inertia[(1, 1)],
-        "Iyy",
-    );
-    close(
-        exec.get("inertia/izz-slugs_ft2").unwrap() * slug_ft2,
-        inertia[(2, 2)],
-        "Izz",
-    );
     // JSBSim's inertia/ixz-slugs_ft2 is the tensor element J13 = −∫xz dm
     // (−1.1442e4 kg·m² here), unlike inertia/iyz-slugs_ft2, which is −J23.
     // The sign inside the dynamics is checked by the lateral cross-checks.
-    close(
-        exec.get("inertia/ixz-slugs_ft2").unwrap() * slug_ft2,
-        inertia[(0, 2)],
-        "J13",
-    );
-    close(
-        exec.get("metrics/Sw-sqft").unwrap() * FT * FT,
-        aircraft.wing_area,
-        "wing area",
-    );
-    close(
-        exec.get("metrics/bw-ft").unwrap() * FT,
-        aircraft.geometry.span,
-        "span",
-    );
-    close(
-        exec.get("metrics/cbarw-ft").unwrap() * FT,
-        aircraft.geometry.chord,
-        "chord",
-    );
+    let expected = [
+        (
+            "inertia/mass-slugs",
+            aeroid::jsbsim::SLUG,
+            aircraft.mass.mass,
+        ),
+        ("inertia/ixx-slugs_ft2", slug_ft2, inertia[(0, 0)]),
+        ("inertia/iyy-slugs_ft2", slug_ft2, inertia[(1, 1)]),
+        ("inertia/izz-slugs_ft2", slug_ft2, inertia[(2, 2)]),
+        ("inertia/ixz-slugs_ft2", slug_ft2, inertia[(0, 2)]),
+        ("metrics/Sw-sqft", FT * FT, aircraft.wing_area),
+        ("metrics/bw-ft", FT, aircraft.geometry.span),
+        ("metrics/cbarw-ft", FT, aircraft.geometry.chord),
+    ];
+    for (property, to_si, aeroid) in expected {
+        let jsbsim = exec.get(property).unwrap() * to_si;
+        assert!(
+            (jsbsim - aeroid).abs() <= 1e-6 * aeroid.abs(),
+            "{property}: JSBSim {jsbsim} vs aeroid {aeroid}"
+        );
+    }
 }
 
 #[test]

@@ -256,6 +256,141 @@ const INTEGRATORS: [&str; 4] = [
 ];
 const ADAMS_BASHFORTH_3: f64 = 4.0;
 
+/// The exported aircraft of a prepared [`Simulation`] flying in JSBSim from
+/// the same trim with the same controls: the JSBSim half of a cross-check,
+/// and what `benches/jsbsim.rs` times.
+pub struct JsbsimFlight<'a> {
+    simulation: &'a Simulation,
+    exec: Exec,
+    controls: Vec<Property>,
+    readings: Vec<Property>,
+    substeps: usize,
+}
+
+impl<'a> JsbsimFlight<'a> {
+    /// Exports and loads the aircraft, sets the integrators, the time step
+    /// (the simulation's over `substeps`), the trim state and the controls
+    /// of step 0, and runs the initial conditions.
+    pub fn start(
+        simulation: &'a Simulation,
+        jsbsim_atmosphere: bool,
+        substeps: usize,
+    ) -> Result<Self> {
+        let environment = &simulation.model.environment;
+        let export_options = ExportOptions {
+            gravity: environment.gravity,
+            aeroid_atmosphere: !jsbsim_atmosphere,
+            temperature_offset: environment.atmosphere.temperature_offset,
+        };
+        let mut exec = load_exported(simulation, &export_options)?;
+        let trim_state = &simulation.trim.state;
+        if jsbsim_atmosphere {
+            // aeroid's offset changes temperature at constant pressure, JSBSim's
+            // delta-T changes both; only the standard day compares exactly.
+            exec.set(
+                "atmosphere/delta-T",
+                environment.atmosphere.temperature_offset * 1.8,
+            )?;
+        } else {
+            // The override functions run in a system, after JSBSim's atmosphere
+            // model, so RunIC's first frame would see an empty override (zero
+            // density, no lift) and JSBSim would seed its integrator history
+            // with that frame: a 1 g jump in the first step. Seed the override
+            // with aeroid's air at the initial altitude.
+            let air = environment.atmosphere.at(state::altitude(trim_state));
+            exec.set("atmosphere/override/temperature", air.temperature * 1.8)?;
+            exec.set(
+                "atmosphere/override/pressure",
+                air.pressure * FT * FT / super::LBF,
+            )?;
+            exec.set(
+                "atmosphere/override/density",
+                air.density * FT.powi(3) / super::SLUG,
+            )?;
+        }
+        for integrator in INTEGRATORS {
+            exec.set(integrator, ADAMS_BASHFORTH_3)?;
+        }
+        let substeps = substeps.max(1);
+        exec.set_dt(simulation.step / substeps as f64)?;
+        let euler = state::euler(trim_state);
+        exec.set_initial_conditions(&InitialConditions {
+            latitude: 0.0,
+            longitude: 0.0,
+            altitude: state::altitude(trim_state),
+            attitude: [euler.roll, euler.pitch, euler.yaw],
+            speed: InitialSpeed::Body([
+                trim_state[state::U],
+                trim_state[state::V],
+                trim_state[state::W],
+            ]),
+            rates: [
+                trim_state[state::P],
+                trim_state[state::Q],
+                trim_state[state::R],
+            ],
+        })?;
+        let controls = CONTROL_PROPERTIES
+            .iter()
+            .map(|name| exec.property(name))
+            .collect::<Result<_>>()?;
+        let readings = COMPARED
+            .iter()
+            .map(|c| exec.property(c.property))
+            .collect::<Result<_>>()?;
+        let mut flight = JsbsimFlight {
+            simulation,
+            exec,
+            controls,
+            readings,
+            substeps,
+        };
+        flight.set_controls(0)?;
+        flight.exec.run_ic()?;
+        Ok(flight)
+    }
+
+    /// Writes the (saturated) controls of step k.
+    fn set_controls(&mut self, k: usize) -> Result<()> {
+        let mut deflections: crate::state::Controls = self.simulation.exogenous[k]
+            .fixed_rows::<{ crate::state::CONTROL_COUNT }>(0)
+            .into_owned();
+        self.simulation.model.aircraft.saturate(&mut deflections);
+        for (control, property) in Control::ALL.iter().zip(&self.controls) {
+            self.exec
+                .set_cached(*property, deflections[control.index()])?;
+        }
+        Ok(())
+    }
+
+    /// Flies from step k to step k + 1. JSBSim's `Run` first advances the
+    /// state with the derivatives of the previous frame, then evaluates the
+    /// forces at the new state: the controls of step k+1 enter with the last
+    /// substep, which reproduces aeroid's zero-order hold.
+    pub fn advance(&mut self, k: usize) -> Result<()> {
+        for _ in 1..self.substeps {
+            self.exec.step()?;
+        }
+        self.set_controls(k + 1)?;
+        self.exec.step().map_err(|e| match e {
+            Error::Jsbsim { context, message } => Error::Jsbsim {
+                context: format!("t = {:.3} s: {context}", k as f64 * self.simulation.step),
+                message,
+            },
+            other => other,
+        })
+    }
+
+    /// The compared states now, in SI units.
+    fn states(&self) -> Result<[f64; 13]> {
+        let mut values = [0.0; 13];
+        for ((value, property), compared) in values.iter_mut().zip(&self.readings).zip(&COMPARED) {
+            *value = self.exec.get_cached(*property)? * compared.to_si;
+        }
+        Ok(values)
+    }
+}
+
 /// Flies `scenario` in both simulators and compares every state.
 pub fn crosscheck(scenario: &Scenario, options: &CrossCheckOptions) -> Result<CrossCheck> {
     let mut scenario = scenario.clone();
@@ -269,114 +404,17 @@ pub fn crosscheck(scenario: &Scenario, options: &CrossCheckOptions) -> Result<Cr
     let aeroid_seconds = started.elapsed().as_secs_f64();
     let steps = trace.samples.len() - 1;
 
-    let export_options = ExportOptions {
-        gravity: scenario.environment.gravity,
-        aeroid_atmosphere: !options.jsbsim_atmosphere,
-        temperature_offset: scenario.environment.atmosphere.temperature_offset,
-    };
-    let mut exec = load_exported(&simulation, &export_options)?;
-    let model = model_name(&simulation.model.aircraft);
-    if options.jsbsim_atmosphere {
-        // aeroid's offset changes temperature at constant pressure, JSBSim's
-        // delta-T changes both; only the standard day compares exactly.
-        exec.set(
-            "atmosphere/delta-T",
-            scenario.environment.atmosphere.temperature_offset * 1.8,
-        )?;
-    }
-    for integrator in INTEGRATORS {
-        exec.set(integrator, ADAMS_BASHFORTH_3)?;
-    }
-    let substeps = options.substeps.max(1);
-    exec.set_dt(simulation.step / substeps as f64)?;
-    let trim_state = &simulation.trim.state;
-    let euler = state::euler(trim_state);
-    exec.set_initial_conditions(&InitialConditions {
-        latitude: 0.0,
-        longitude: 0.0,
-        altitude: state::altitude(trim_state),
-        attitude: [euler.roll, euler.pitch, euler.yaw],
-        speed: InitialSpeed::Body([
-            trim_state[state::U],
-            trim_state[state::V],
-            trim_state[state::W],
-        ]),
-        rates: [
-            trim_state[state::P],
-            trim_state[state::Q],
-            trim_state[state::R],
-        ],
-    })?;
-    let controls: Vec<Property> = CONTROL_PROPERTIES
-        .iter()
-        .map(|name| exec.property(name))
-        .collect::<Result<_>>()?;
-    let readings: Vec<Property> = COMPARED
-        .iter()
-        .map(|c| exec.property(c.property))
-        .collect::<Result<_>>()?;
-    let set_controls = |exec: &mut Exec, k: usize| -> Result<()> {
-        let mut deflections: crate::state::Controls = simulation.exogenous[k]
-            .fixed_rows::<{ crate::state::CONTROL_COUNT }>(0)
-            .into_owned();
-        simulation.model.aircraft.saturate(&mut deflections);
-        for (control, property) in Control::ALL.iter().zip(&controls) {
-            exec.set_cached(*property, deflections[control.index()])?;
-        }
-        Ok(())
-    };
-    set_controls(&mut exec, 0)?;
-    if !options.jsbsim_atmosphere {
-        // The override functions run in a system, after JSBSim's atmosphere
-        // model, so RunIC's first frame would see an empty override (zero
-        // density, no lift) and JSBSim would seed its integrator history
-        // with that frame: a 1 g jump in the first step. Seed the override
-        // with aeroid's air at the initial altitude.
-        let air = simulation
-            .model
-            .environment
-            .atmosphere
-            .at(state::altitude(trim_state));
-        exec.set("atmosphere/override/temperature", air.temperature * 1.8)?;
-        exec.set(
-            "atmosphere/override/pressure",
-            air.pressure * FT * FT / super::LBF,
-        )?;
-        exec.set(
-            "atmosphere/override/density",
-            air.density * FT.powi(3) / super::SLUG,
-        )?;
-    }
-    exec.run_ic()?;
-
+    let mut flight = JsbsimFlight::start(&simulation, options.jsbsim_atmosphere, options.substeps)?;
     let mut jsbsim = Vec::with_capacity(steps + 1);
     let started = Instant::now();
     for k in 0..=steps {
-        let mut values = [0.0; 13];
-        for ((value, property), compared) in values.iter_mut().zip(&readings).zip(&COMPARED) {
-            *value = exec.get_cached(*property)? * compared.to_si;
-        }
-        jsbsim.push(values);
+        jsbsim.push(flight.states()?);
         if k < steps {
-            // The controls of step k+1 enter with the last substep, whose
-            // Run ends by evaluating the forces at state k+1.
-            for _ in 1..substeps {
-                exec.step()?;
-            }
-            set_controls(&mut exec, k + 1)?;
-            exec.step().map_err(|e| match e {
-                Error::Jsbsim { context, message } => Error::Jsbsim {
-                    context: format!(
-                        "{model} at t = {:.3} s: {context}",
-                        k as f64 * simulation.step
-                    ),
-                    message,
-                },
-                other => other,
-            })?;
+            flight.advance(k)?;
         }
     }
     let jsbsim_seconds = started.elapsed().as_secs_f64();
+    let substeps = flight.substeps;
 
     let differences = COMPARED
         .iter()
