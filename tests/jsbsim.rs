@@ -9,7 +9,7 @@ mod common;
 use aeroid::Error;
 use aeroid::aircraft::Aircraft;
 use aeroid::jsbsim::export::{ExportOptions, aircraft_xml, export, model_name};
-use aeroid::jsbsim::{Exec, FT, InitialConditions, InitialSpeed, TrimMode, default_root};
+use aeroid::jsbsim::{Exec, FT, InitialConditions, InitialSpeed, TrimMode};
 use std::path::{Path, PathBuf};
 
 fn attas() -> Aircraft {
@@ -35,15 +35,8 @@ fn exported_attas(test: &str, extra: &str) -> (PathBuf, String) {
 }
 
 fn load(folder: &Path, model: &str, allow_io: bool) -> aeroid::Result<Exec> {
-    let root = default_root();
     let mut exec = Exec::new()?;
-    exec.load_model_from(
-        folder,
-        &root.join("engine"),
-        &root.join("systems"),
-        model,
-        allow_io,
-    )?;
+    exec.load_model_in(folder, model, allow_io)?;
     Ok(exec)
 }
 
@@ -446,4 +439,21 @@ fn jsbsim_atmosphere_is_a_measurable_convention_difference() {
         speed(&theirs)
     );
     assert!(speed(&theirs) > 3.0 * speed(&ours));
+}
+
+/// `load_model` looks in the executive's own root, not the default one.
+#[test]
+fn load_model_uses_the_executives_root() {
+    let root = common::temp_folder("jsbsim-root");
+    export(&attas(), &ExportOptions::default(), &root.join("aircraft")).unwrap();
+    for folder in ["engine", "systems"] {
+        std::fs::create_dir_all(root.join(folder)).unwrap();
+    }
+    let mut exec = Exec::with_root(&root).unwrap();
+    assert_eq!(exec.root(), root.as_path());
+    exec.load_model("attas").unwrap();
+    assert!(
+        Exec::new().unwrap().load_model("attas").is_err(),
+        "the default root has no attas"
+    );
 }

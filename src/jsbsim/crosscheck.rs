@@ -470,15 +470,8 @@ fn load_exported(simulation: &Simulation, options: &ExportOptions) -> Result<Exe
     ));
     let result = (|| {
         export(&simulation.model.aircraft, options, &dir)?;
-        let root = super::default_root();
-        let mut exec = Exec::with_root(&root)?;
-        exec.load_model_from(
-            &dir,
-            &root.join("engine"),
-            &root.join("systems"),
-            &model_name(&simulation.model.aircraft),
-            false,
-        )?;
+        let mut exec = Exec::new()?;
+        exec.load_model_in(&dir, &model_name(&simulation.model.aircraft), false)?;
         Ok(exec)
     })();
     // The file is read completely while loading; a folder left behind is harmless.

@@ -136,6 +136,7 @@ pub struct Property {
 pub struct Exec {
     raw: NonNull<sys::AeroidJsb>,
     id: u64,
+    root: PathBuf,
     model: Option<String>,
     // A raw pointer already makes the type !Send and !Sync; this states it.
     _one_per_thread: PhantomData<*mut ()>,
@@ -176,6 +177,7 @@ impl Exec {
         Ok(Exec {
             raw,
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+            root: root.to_path_buf(),
             model: None,
             _one_per_thread: PhantomData,
         })
@@ -188,17 +190,28 @@ impl Exec {
         }
     }
 
+    /// The root directory (with `aircraft/`, `engine/`, `systems/`).
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
     /// Loads `model` from the root's `aircraft/MODEL/MODEL.xml`, with input
     /// and output disabled.
     pub fn load_model(&mut self, model: &str) -> Result<()> {
-        let root = default_root();
-        self.load_model_from(
-            &root.join("aircraft"),
-            &root.join("engine"),
-            &root.join("systems"),
-            model,
-            false,
-        )
+        let aircraft = self.root.join("aircraft");
+        self.load_model_in(&aircraft, model, false)
+    }
+
+    /// Loads `aircraft_dir/MODEL/MODEL.xml` with the root's engine and
+    /// systems folders (see [`Exec::load_model_from`] for `allow_io`).
+    pub fn load_model_in(
+        &mut self,
+        aircraft_dir: &Path,
+        model: &str,
+        allow_io: bool,
+    ) -> Result<()> {
+        let (engine, systems) = (self.root.join("engine"), self.root.join("systems"));
+        self.load_model_from(aircraft_dir, &engine, &systems, model, allow_io)
     }
 
     /// Loads `aircraft_dir/MODEL/MODEL.xml` with the given engine and systems
