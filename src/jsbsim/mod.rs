@@ -20,6 +20,7 @@
 //!   so each thread builds its own.
 
 pub mod crosscheck;
+pub mod derivatives;
 pub mod export;
 
 use crate::error::{Error, Result};
