@@ -529,3 +529,42 @@ fn central_differences_through_jsbsim_recover_the_exported_derivatives() {
         );
     }
 }
+
+/// The 737 trims with JSBSim's own trim (engines running, gear up, 10 000 ft,
+/// 280 kt), and central differences through JSBSim at that trim give the
+/// file's roll damping Clp = −0.4 (a constant in 737.xml, with no side force
+/// from p to move it). Not yet usable as truth (README, "Still to do"): its
+/// flight-control system rewrites the surface positions in every RunIC, so
+/// surface derivatives must go through the commands, and its yaw damper and
+/// the α̇ term fold into Cn_r and Cm_q.
+#[test]
+fn the_737_trims_and_its_roll_damping_is_recovered() {
+    use aeroid::jsbsim::derivatives::{ControlSurfaces, local_derivatives};
+    let mut exec = Exec::new().unwrap();
+    exec.load_model("737").unwrap();
+    let mut at = b737_cruise();
+    at.altitude = 10_000.0 * FT;
+    exec.set_initial_conditions(&at).unwrap();
+    exec.set("propulsion/set-running", -1.0).unwrap();
+    exec.set("gear/gear-cmd-norm", 0.0).unwrap();
+    exec.run_ic().unwrap();
+    exec.trim(TrimMode::Full).unwrap();
+    let alpha = exec.get("aero/alpha-rad").unwrap();
+    assert!((0.0..0.2).contains(&alpha), "trim α {alpha} rad");
+    at.attitude[1] = exec.get("attitude/theta-rad").unwrap();
+    at.speed = InitialSpeed::TrueAirspeed {
+        speed: exec.get("velocities/vt-fps").unwrap() * FT,
+        alpha,
+        beta: exec.get("aero/beta-rad").unwrap(),
+    };
+    let surface = |exec: &Exec, name: &'static str| (name, exec.get(name).unwrap());
+    let controls = ControlSurfaces {
+        elevator: surface(&exec, "fcs/elevator-pos-rad"),
+        aileron: surface(&exec, "fcs/left-aileron-pos-rad"),
+        rudder: surface(&exec, "fcs/rudder-pos-rad"),
+    };
+    let derivatives = local_derivatives(&mut exec, &at, &controls).unwrap();
+    let value = |name: &str| derivatives.iter().find(|(n, _)| n == name).unwrap().1;
+    assert!((value("Cl_p") + 0.4).abs() < 1e-9, "Cl_p {}", value("Cl_p"));
+    assert!(value("CL_alpha") > 3.0 && value("Cm_alpha") < 0.0);
+}
