@@ -98,6 +98,12 @@ pub enum Error {
         partial: Box<crate::trace::TruthTrace>,
     },
 
+    /// A JSBSim call failed (a C++ exception or a failure status, turned into
+    /// an error at the FFI boundary). `context` names the aircraft, property
+    /// or operation.
+    #[error("JSBSim: {context}: {message}")]
+    Jsbsim { context: String, message: String },
+
     #[error("{0}")]
     Other(String),
 }

@@ -16,6 +16,8 @@ pub mod identifiability;
 pub mod import;
 pub mod inputs;
 pub mod integrator;
+#[cfg(feature = "jsbsim")]
+pub mod jsbsim;
 pub mod linearize;
 pub mod modal_fit;
 pub mod params;

@@ -172,6 +172,40 @@ enum Command {
         #[arg(long)]
         check_on: Option<PathBuf>,
     },
+    /// Write an aircraft as a JSBSim aircraft (DIR/NAME/NAME.xml): the same
+    /// mass, inertia, geometry, thrust and linear aerodynamics, the
+    /// aerodynamics as JSBSim functions (needs the `jsbsim` feature).
+    #[cfg(feature = "jsbsim")]
+    ExportJsbsim {
+        /// A bundled aircraft name (see `aeroid list`) or a path to an aircraft file.
+        aircraft: String,
+        /// The folder to write the JSBSim aircraft folder into.
+        #[arg(long)]
+        out: PathBuf,
+        /// Keep JSBSim's standard atmosphere (geopotential altitude) instead of
+        /// overriding it with aeroid's ISA.
+        #[arg(long)]
+        jsbsim_atmosphere: bool,
+    },
+    /// Fly a scenario in aeroid's simulator and in JSBSim (the exported
+    /// aircraft, same trim, same inputs, no wind) and print the largest
+    /// difference per state and both simulators' steps per second (needs the
+    /// `jsbsim` feature).
+    #[cfg(feature = "jsbsim")]
+    Crosscheck {
+        /// A bundled scenario name or a path to a scenario file.
+        scenario: String,
+        /// Flight time, e.g. "60 s"; default: the scenario's duration.
+        #[arg(long)]
+        duration: Option<String>,
+        /// Keep JSBSim's standard atmosphere instead of aeroid's ISA.
+        #[arg(long)]
+        jsbsim_atmosphere: bool,
+        /// JSBSim steps per aeroid step: its Adams-Bashforth integrators
+        /// smear each input step over the derivative history.
+        #[arg(long, default_value_t = aeroid::jsbsim::crosscheck::DEFAULT_SUBSTEPS)]
+        substeps: usize,
+    },
 }
 
 /// Estimators the CLI can run.
@@ -238,6 +272,19 @@ fn run(cli: Cli) -> Result<()> {
             threads,
             out,
         } => run_study(&study, runs, threads, out.as_deref()),
+        #[cfg(feature = "jsbsim")]
+        Command::ExportJsbsim {
+            aircraft,
+            out,
+            jsbsim_atmosphere,
+        } => export_jsbsim(&aircraft, &out, jsbsim_atmosphere),
+        #[cfg(feature = "jsbsim")]
+        Command::Crosscheck {
+            scenario,
+            duration,
+            jsbsim_atmosphere,
+            substeps,
+        } => crosscheck(&scenario, duration.as_deref(), jsbsim_atmosphere, substeps),
         Command::Reconstruct { record, out } => reconstruct(&record, out.as_deref()),
         Command::Identifiability {
             scenario,
@@ -637,5 +684,79 @@ fn run_study(
             out.display()
         );
     }
+    Ok(())
+}
+
+#[cfg(feature = "jsbsim")]
+fn export_jsbsim(reference: &str, out: &std::path::Path, jsbsim_atmosphere: bool) -> Result<()> {
+    use aeroid::jsbsim::export::{ExportOptions, export};
+    let path = catalog::resolve(reference, catalog::AIRCRAFT_FOLDER, None)?;
+    let aircraft = aeroid::aircraft::Aircraft::load(&path)?;
+    let options = ExportOptions {
+        aeroid_atmosphere: !jsbsim_atmosphere,
+        ..ExportOptions::default()
+    };
+    let file = export(&aircraft, &options, out)?;
+    println!(
+        "{}: JSBSim aircraft written to {} (load it with aircraft path {})",
+        aircraft.name,
+        file.display(),
+        out.display()
+    );
+    Ok(())
+}
+
+#[cfg(feature = "jsbsim")]
+fn crosscheck(
+    reference: &str,
+    duration: Option<&str>,
+    jsbsim_atmosphere: bool,
+    substeps: usize,
+) -> Result<()> {
+    use aeroid::jsbsim::crosscheck::{CrossCheckOptions, crosscheck};
+    let scenario = Scenario::load(reference)?;
+    let duration = duration
+        .map(|text| {
+            aeroid::units::Quantity::Text(text.to_string())
+                .si(aeroid::units::Dimension::Time)
+                .map_err(|message| anyhow::anyhow!("--duration '{text}': {message}"))
+        })
+        .transpose()?;
+    let options = CrossCheckOptions {
+        duration,
+        jsbsim_atmosphere,
+        substeps,
+    };
+    let check = crosscheck(&scenario, &options)?;
+    println!(
+        "{}: {} s, {} steps of {} s, aeroid (RK4) vs JSBSim {} (Adams-Bashforth 3, {} substeps), no wind",
+        check.scenario,
+        check.duration,
+        check.steps,
+        check.step,
+        aeroid::jsbsim::VERSION,
+        check.substeps
+    );
+    println!(
+        "{:<9} {:>14} {:>10} {:>14} {:>10}",
+        "state", "max |diff|", "at t (s)", "excursion", "diff/exc"
+    );
+    for d in &check.differences {
+        let relative = d
+            .relative
+            .map_or_else(|| "-".to_string(), |r| format!("{:.3} %", 100.0 * r));
+        println!(
+            "{:<9} {:>14} {:>10.2} {:>14} {:>10}",
+            d.name,
+            format!("{:.3e} {}", d.max_difference, d.unit),
+            d.time_of_max,
+            format!("{:.3e} {}", d.excursion, d.unit),
+            relative
+        );
+    }
+    println!(
+        "steps per second: aeroid {:.0}, JSBSim {:.0}",
+        check.aeroid_steps_per_second, check.jsbsim_steps_per_second
+    );
     Ok(())
 }
