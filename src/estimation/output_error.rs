@@ -39,7 +39,7 @@ use crate::dynamics::FlightModel;
 use crate::error::{Error, Result};
 use crate::estimation::driven::{Column, DrivenSimulation, FlightPathState, Observable};
 use crate::estimation::estimate::{Estimate, OutputFit};
-use crate::estimation::gauss_newton::{self, LeastSquaresProblem, Options};
+use crate::estimation::gauss_newton::{self, LeastSquaresProblem, Options, Status};
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
 use crate::record::FlightRecord;
 use nalgebra::{DMatrix, DVector};
@@ -116,22 +116,63 @@ pub fn output_error(
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
     let mut problem = Problem::new(records, structure, options)?;
-    let start = problem.current();
-    let mut solver_options = Options::new(start.len());
-    solver_options.max_iterations = options.max_iterations;
-    for (j, unknown) in problem.unknowns.iter().enumerate() {
-        if let Unknown::Aero(i) = unknown {
-            solver_options.bounds[j] = structure.bounds[*i];
+    let original_start = problem.current();
+    let solver_options = |unknowns: &[Unknown]| {
+        let mut solver_options = Options::new(unknowns.len());
+        solver_options.max_iterations = options.max_iterations;
+        for (j, unknown) in unknowns.iter().enumerate() {
+            if let Unknown::Aero(i) = unknown {
+                solver_options.bounds[j] = structure.bounds[*i];
+            }
+        }
+        solver_options
+    };
+    // With the initial state among the unknowns, a first fit holds it at
+    // the first samples: from a-priori start values the full problem can
+    // fall into a wrong minimum (the stall model did: τ2 0.35 for 0.9),
+    // while the aerodynamic fit alone is robust and leaves the initial
+    // state a small correction.
+    let all = problem.unknowns.clone();
+    let mut staged = None;
+    if all.iter().any(|u| matches!(u, Unknown::Initial { .. })) {
+        problem.unknowns = all
+            .iter()
+            .copied()
+            .filter(|u| !matches!(u, Unknown::Initial { .. }))
+            .collect();
+        problem.simulated = None;
+        let first_start = problem.current();
+        let first_options = solver_options(&problem.unknowns);
+        let first = gauss_newton::solve(&mut problem, &first_start, &first_options);
+        if !matches!(first.status, Status::Diverged(_)) {
+            staged = Some((problem.unknowns.clone(), first.theta, first.history.len()));
+        }
+        problem.unknowns = all;
+        problem.simulated = None;
+    }
+    let mut start = problem.current();
+    if let Some((unknowns, theta, _)) = &staged {
+        for (j, unknown) in problem.unknowns.iter().enumerate() {
+            if let Some(k) = unknowns.iter().position(|u| u == unknown) {
+                start[j] = theta[k];
+            }
         }
     }
-    let solution = gauss_newton::solve(&mut problem, &start, &solver_options);
-    Ok(problem.estimate(
+    let final_options = solver_options(&problem.unknowns);
+    let solution = gauss_newton::solve(&mut problem, &start, &final_options);
+    let mut estimate = problem.estimate(
         structure,
         records,
-        &start,
+        &original_start,
         &solution,
         started.elapsed().as_secs_f64(),
-    ))
+    );
+    if let Some((_, _, iterations)) = staged {
+        estimate.notes.push(format!(
+            "initial state released after a first fit with it held at the first samples ({iterations} iterations)"
+        ));
+    }
+    Ok(estimate)
 }
 
 /// Proof of match (seeds 002, 004): the structure with an estimate's
