@@ -34,6 +34,10 @@
 //! bounds are the square roots of the diagonal of M⁻¹, M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ).
 //! Options: initial states and output biases as unknowns; several manoeuvres
 //! at once (shared aerodynamic parameters, initial states per manoeuvre).
+//! With initial states among the unknowns the fit runs in two stages: first
+//! with them held at the first recorded samples, then released, from the
+//! first stage's solution (freed at once from a-priori start values, the
+//! stall model's fit fell into a wrong minimum).
 
 use crate::dynamics::FlightModel;
 use crate::error::{Error, Result};
