@@ -277,7 +277,8 @@ pub fn analyse(
             })?;
         clean.record(&trace, &scenario.aircraft, scenario.seed)
     };
-    let nominal = fly(None, None)?;
+    // The nominal record: the flight already flown (a restart at its own state changes nothing).
+    let nominal = clean.record(&nominal_trace, &scenario.aircraft, scenario.seed)?;
     let wraps = |name: &str| {
         profile
             .channels
