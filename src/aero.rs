@@ -134,6 +134,14 @@ pub enum Coefficient {
 }
 
 impl Coefficient {
+    /// CL, CY or CD (not a moment).
+    pub fn is_force(self) -> bool {
+        matches!(
+            self,
+            Coefficient::Lift | Coefficient::Side | Coefficient::Drag
+        )
+    }
+
     pub const ALL: [Coefficient; 6] = [
         Coefficient::Lift,
         Coefficient::Side,

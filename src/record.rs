@@ -132,6 +132,30 @@ impl Channel {
             .ok_or_else(|| Error::Other(format!("channel '{}' has no valid sample", self.name)))
     }
 
+    /// Values at many instants by linear interpolation between the two
+    /// samples around each instant, without bridging: NaN where either of
+    /// them (the one at the instant, when there is one) is a dropout; held
+    /// outside the record. For derived channels whose dropouts mark where no
+    /// valid value exists (a derivative next to a control step).
+    pub fn values_at_unbridged(&self, times: &[f64]) -> Vec<f64> {
+        let last = self.times.len().saturating_sub(1);
+        times
+            .iter()
+            .map(|&t| {
+                let after = self.times.partition_point(|&time| time < t);
+                if after > last {
+                    return self.values.last().copied().unwrap_or(f64::NAN);
+                }
+                if after == 0 || self.times[after] == t {
+                    return self.values[after];
+                }
+                let (i, j) = (after - 1, after);
+                let weight = (t - self.times[i]) / (self.times[j] - self.times[i]);
+                self.values[i] + weight * (self.values[j] - self.values[i])
+            })
+            .collect()
+    }
+
     /// Smallest and largest value present, if any.
     pub fn range(&self) -> Option<(f64, f64)> {
         self.values

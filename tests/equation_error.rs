@@ -7,15 +7,15 @@
 //! multisine on elevator (1.5°), aileron (3°) and rudder (2°) from 1 s,
 //! harmonics of 0.05 Hz between 0.1 and 0.8 Hz interleaved over the three
 //! controls, two 20 s periods; 60 s at a 0.01 s step with LINEAR input
-//! interpolation. Why not a 3211 and doublets, and why linear: the simulator
-//! has no actuator dynamics, so a step input makes the angular acceleration
-//! jump, and any centred differentiator smears the jump over its window —
-//! measured on this aircraft with an elevator 3211 and aileron/rudder
-//! doublets: 1–4 % errors in the moment derivatives, whatever the
-//! differentiator's order. With zero-order-hold inputs the recorded control
-//! at t_k is the value held over [t_k, t_k+1), half a step ahead of the mean
-//! control the differentiated rate reflects: 1–5 % errors even for the
-//! multisine. Both are properties of the simulated data, not of the method.
+//! interpolation. Why linear: with zero-order-hold inputs the recorded
+//! control at t_k is the value held over [t_k, t_k+1), half a step ahead of
+//! the mean control the differentiated rate reflects: 1–5 % errors even for
+//! the multisine, a property of the simulated data, not of the method. Step
+//! inputs (a 3211, doublets) are covered by the golden gates: the simulator
+//! has no actuator dynamics, so the angular accelerations jump at a step,
+//! and the differentiator leaves out the samples whose window would cross
+//! one (src/estimation/differentiation.rs); without that the jumps were
+//! smeared into 1–7 % errors.
 
 use aeroid::aero::{Coefficient, Regressor};
 use aeroid::aircraft::Aircraft;

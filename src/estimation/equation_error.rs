@@ -38,20 +38,21 @@
 //!   flight-test profile: CLα −5.6 %, Cmq −12.6 %, Clp −1.5 %, each as the
 //!   errors-in-variables limit (M_xx + M_nn)⁻¹·M_xx·θ predicts, and several
 //!   times larger than the reported standard errors;
-//! - the moments need differentiated rates: on noise-free 100 Hz data the
-//!   moment derivatives are within 3.3e-4 relative, the forces exact; but a
-//!   simulated step input (no actuator dynamics) makes the angular
-//!   acceleration jump, which any centred differentiator smears (1–4 %
-//!   errors), and zero-order-hold simulator inputs put the recorded control
-//!   half a step ahead of the mean control the differentiated rate reflects
-//!   (1–5 %).
+//! - the moments need differentiated rates. A simulated step input makes
+//!   the angular accelerations jump; the differentiator leaves out the
+//!   samples whose window would cross a step found in a control channel
+//!   ([`crate::estimation::differentiation`]), so on noise-free data the
+//!   moment derivatives are within 1e-3 on step inputs too, and within the
+//!   differentiator's gain error (1.2e-3 on a 1.5 Hz multisine) otherwise.
+//!   Forces and moments are reconstructed separately, so the force
+//!   regressions keep the samples next to the steps.
 
 use crate::aero::{Coefficient, ForceAxes, ModelKind, Regressor};
 use crate::error::{Error, Result};
 use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimation::gauss_newton::Status;
 use crate::estimation::reconstruction::{
-    Reconstruction, ReconstructionOptions, Request, reconstruct,
+    Reconstruction, ReconstructionOptions, Request, check_channels, reconstruct,
 };
 use crate::estimation::regression::{LagWindow, LeastSquares};
 use crate::estimation::structure::ModelStructure;
@@ -132,21 +133,47 @@ pub fn equation_error(
     options: &EquationErrorOptions,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
+    // Forces and moments are reconstructed separately: only the moments
+    // need differentiated rates, whose windows leave out the samples next
+    // to a control step, and the force regressions keep those samples.
     let plans = plans(structure)?;
-    let reconstruction = reconstruct(
+    check_channels(
         record,
         &structure.aircraft,
         &request(&plans),
-        &options.reconstruction,
         "equation error",
     )?;
-    let lag = (options.correlation_lag * reconstruction.rate).round() as usize;
-    let results: Vec<CoefficientResult> = plans
-        .iter()
-        .map(|plan| fit_coefficient(plan, structure, &reconstruction, lag))
-        .collect();
+    let (forces, moments): (Vec<Plan>, Vec<Plan>) = plans
+        .into_iter()
+        .partition(|plan| plan.coefficient.is_force());
+    let reconstruction_options = options.reconstruction.for_structure(structure);
+    let mut results: Vec<CoefficientResult> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
+    let mut lag = 0;
+    for group in [forces, moments].iter().filter(|group| !group.is_empty()) {
+        let reconstruction = reconstruct(
+            record,
+            &structure.aircraft,
+            &request(group),
+            &reconstruction_options,
+            "equation error",
+        )?;
+        lag = (options.correlation_lag * reconstruction.rate).round() as usize;
+        results.extend(
+            group
+                .iter()
+                .map(|plan| fit_coefficient(plan, structure, &reconstruction, lag)),
+        );
+        notes.extend(
+            reconstruction
+                .notes
+                .into_iter()
+                .filter(|note| !notes.contains(note))
+                .collect::<Vec<_>>(),
+        );
+    }
     let mut estimate = assemble(record, structure, &results);
-    estimate.notes.extend(reconstruction.notes);
+    estimate.notes.extend(notes);
     estimate.notes.push(format!(
         "standard errors: Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein 1997), residual autocorrelation summed to lag {lag} samples ({} s)",
         options.correlation_lag

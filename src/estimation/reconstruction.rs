@@ -31,7 +31,8 @@
 //! q̄ is the `dynamic_pressure` channel when the record has it, else
 //! ½·ρ(h)·V² from the altitude and airspeed channels. ṗ, q̇, ṙ (and α̇ for
 //! `alpha_dot` terms) come from [`Differentiator`] applied to each channel on
-//! its own time base. Every channel is then read at the sample instants of
+//! its own time base, with no window across a step in any control channel
+//! ([`control_steps`]: the accelerations jump there). Every channel is then read at the sample instants of
 //! one reference channel with [`Channel::values_at`] (linear interpolation;
 //! dropouts bridged), inside the span where every channel and derivative
 //! exists. Samples where anything needed is not finite, or q̄ ≤ 0, are left out.
@@ -40,7 +41,7 @@ use crate::aero::{AeroInput, Coefficient, ForceAxes, REGRESSOR_COUNT, RateSpeed,
 use crate::aircraft::Aircraft;
 use crate::atmosphere::Atmosphere;
 use crate::error::{Error, Result};
-use crate::estimation::differentiation::Differentiator;
+use crate::estimation::differentiation::{Differentiator, step_times};
 use crate::record::{Channel, FlightRecord};
 use crate::state::Control;
 use crate::units::STANDARD_GRAVITY;
@@ -50,12 +51,29 @@ use std::collections::BTreeMap;
 /// How the record is brought to one time base.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ReconstructionOptions {
-    pub differentiator: Differentiator,
+    /// The differentiator; None: the default one (equation error and
+    /// stepwise regression put the model structure's here).
+    pub differentiator: Option<Differentiator>,
     /// The channel whose sample instants are the common time base; default:
     /// the fastest of the accelerometer and rate-gyro channels used.
     pub reference_channel: Option<String>,
     /// Only samples within [start, end] (s) are used.
     pub time_range: Option<(f64, f64)>,
+    /// Let the differentiator's windows cross control steps (default false:
+    /// the windows stop at every step found in a control channel, see
+    /// [`crate::estimation::differentiation::step_times`]).
+    pub across_steps: bool,
+}
+
+impl ReconstructionOptions {
+    /// These options with the model structure's differentiator where none is set.
+    pub fn for_structure(&self, structure: &crate::estimation::structure::ModelStructure) -> Self {
+        let mut options = self.clone();
+        options
+            .differentiator
+            .get_or_insert(structure.differentiator);
+        options
+    }
 }
 
 /// What to reconstruct: which coefficients (as measured values) and which regressors.
@@ -201,6 +219,19 @@ fn regressor_needs(aircraft: &Aircraft, regressor: Regressor, needs: &mut Needs)
     }
 }
 
+/// Where any control channel of the record steps (sorted, each instant
+/// once): the instants where angular accelerations and α̇ may jump.
+pub fn control_steps(record: &FlightRecord) -> Vec<f64> {
+    let mut steps: Vec<f64> = Control::ALL
+        .iter()
+        .filter_map(|control| record.channel(control.name()).ok())
+        .flat_map(step_times)
+        .collect();
+    steps.sort_by(f64::total_cmp);
+    steps.dedup();
+    steps
+}
+
 /// The channels that are differentiated: the rates for moments, α for α̇ terms.
 fn differentiated_channels(request: &Request) -> Vec<&'static str> {
     let moments = request
@@ -227,6 +258,17 @@ pub fn missing_channels(
         .into_keys()
         .filter(|name| record.channel(name).is_err())
         .collect()
+}
+
+/// Checks that the record has every channel `request` needs; the error
+/// names all missing ones and what each is for.
+pub fn check_channels(
+    record: &FlightRecord,
+    aircraft: &Aircraft,
+    request: &Request,
+    method: &str,
+) -> Result<()> {
+    check_present(record, &needed_channels(record, aircraft, request), method)
 }
 
 /// Checks that every needed channel is present, naming all missing ones.
@@ -259,11 +301,20 @@ pub fn reconstruct(
 ) -> Result<Reconstruction> {
     let needs = needed_channels(record, aircraft, request);
     check_present(record, &needs, method)?;
+    let breaks = if options.across_steps {
+        Vec::new()
+    } else {
+        control_steps(record)
+    };
     let derivatives: BTreeMap<&str, Channel> = differentiated_channels(request)
         .into_iter()
         .map(|name| {
             let channel = record.channel(name)?;
-            Ok((name, options.differentiator.differentiate(channel)))
+            let derivative = options
+                .differentiator
+                .unwrap_or_default()
+                .differentiate_with_breaks(channel, &breaks);
+            Ok((name, derivative))
         })
         .collect::<Result<_>>()?;
     let reference = reference_channel(record, &needs, options)?;
@@ -274,7 +325,8 @@ pub fn reconstruct(
     }
     let mut rates: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
     for (name, derivative) in &derivatives {
-        rates.insert(name, derivative.values_at(&times)?);
+        // Not bridged: a derivative's dropouts are where it does not exist.
+        rates.insert(name, derivative.values_at_unbridged(&times));
     }
     let signals = Signals {
         sampled: &sampled,
@@ -307,9 +359,12 @@ pub fn reconstruct(
         }
     }
     if !derivatives.is_empty() {
-        reconstruction
-            .notes
-            .push(options.differentiator.describe(reference.rate));
+        reconstruction.notes.push(
+            options
+                .differentiator
+                .unwrap_or_default()
+                .describe(reference.rate),
+        );
     }
     reconstruction.notes.push(format!(
         "common time base: the {} instants of channel '{}' ({} Hz) from {:.3} s to {:.3} s{}",

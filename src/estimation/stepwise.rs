@@ -278,7 +278,7 @@ pub fn stepwise(
         record,
         aircraft,
         &request,
-        &options.reconstruction,
+        &options.reconstruction.for_structure(structure),
         "stepwise regression",
     )?;
     if data.times.len() < 3 {

@@ -31,6 +31,7 @@ use crate::aero::{AeroModel, AeroSpec};
 use crate::aircraft::Aircraft;
 use crate::catalog;
 use crate::error::{Problems, Result, parse_toml, read_text};
+use crate::estimation::differentiation::Differentiator;
 use crate::integrator::Interpolation;
 use crate::units::{Dimension, Quantity};
 use serde::{Deserialize, Serialize};
@@ -67,6 +68,20 @@ pub struct StructureFile {
     pub aero: AeroSpec,
     #[serde(default)]
     pub parameters: BTreeMap<String, ParameterSpec>,
+    /// Equation error and stepwise regression: the differentiator of the
+    /// angular rates (default half-width 0.1 s, degree 4).
+    #[serde(default)]
+    pub differentiator: Option<DifferentiatorSpec>,
+}
+
+/// `[differentiator]`: the local polynomial differentiator's window and
+/// degree (see [`crate::estimation::differentiation`]); a fast aircraft
+/// needs a narrower window than the default's ±0.1 s.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DifferentiatorSpec {
+    pub half_width: Quantity,
+    pub degree: usize,
 }
 
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -93,6 +108,8 @@ pub struct ModelStructure {
     pub step: Option<f64>,
     pub estimate_initial_state: bool,
     pub output_biases: Vec<String>,
+    /// Equation error's and stepwise regression's differentiator.
+    pub differentiator: Differentiator,
     /// Per aero parameter (same order as `aircraft.aero.parameters`): free?
     pub free: Vec<bool>,
     pub bounds: Vec<(f64, f64)>,
@@ -137,6 +154,18 @@ impl ModelStructure {
                 }
             });
         let (free, bounds) = parameter_settings(&aircraft.aero, &file.parameters, &mut problems);
+        let mut differentiator = Differentiator::default();
+        if let Some(spec) = &file.differentiator {
+            match spec.half_width.si(Dimension::Time) {
+                Ok(width) if width > 0.0 => differentiator.half_width = width,
+                Ok(_) => problems.push("differentiator.half_width", "must be positive"),
+                Err(message) => problems.push("differentiator.half_width", message),
+            }
+            if spec.degree == 0 {
+                problems.push("differentiator.degree", "must be at least 1");
+            }
+            differentiator.degree = spec.degree.max(1);
+        }
         let structure = ModelStructure {
             name: file.name.clone(),
             path: path.to_path_buf(),
@@ -149,6 +178,7 @@ impl ModelStructure {
             output_biases: file.output_biases.clone(),
             free,
             bounds,
+            differentiator,
         };
         problems.finish(path, structure)
     }
