@@ -130,6 +130,9 @@ fn describe_profile(profile: &Profile) -> CheckReport {
 }
 
 fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
+    if let Some(jsbsim) = &scenario.jsbsim {
+        return check_jsbsim_scenario(scenario, jsbsim);
+    }
     let simulation = Simulation::prepare(scenario)?;
     let trim = &simulation.trim;
     let c = &trim.controls;
@@ -157,5 +160,40 @@ fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
                 trim.iterations
             ),
         ],
+    })
+}
+
+/// A scenario of one of JSBSim's own aircraft: trimmed by JSBSim, and its
+/// rigid-body file checked against JSBSim's mass, inertia and geometry.
+fn check_jsbsim_scenario(
+    scenario: &Scenario,
+    jsbsim: &crate::scenario::JsbsimAircraft,
+) -> Result<CheckReport> {
+    let mut lines = vec![format!(
+        "{}: JSBSim aircraft {} (rigid body {}), {} s at {} s steps, seed {}",
+        scenario.name,
+        jsbsim.model,
+        scenario.aircraft_path.display(),
+        scenario.duration,
+        scenario.step,
+        scenario.seed
+    )];
+    #[cfg(feature = "jsbsim")]
+    {
+        let trimmed = crate::jsbsim::own::trim(scenario)?;
+        crate::jsbsim::own::check_rigid_body(scenario, &trimmed.exec)?;
+        lines.push(format!(
+            "JSBSim trim: α {:.3}°, θ {:.3}°, commands elevator {:.4}, aileron {:.4}, rudder {:.4}, throttle {:.4}; rigid body matches JSBSim",
+            trimmed.alpha.to_degrees(),
+            trimmed.at.attitude[1].to_degrees(),
+            trimmed.surface_commands[0],
+            trimmed.surface_commands[1],
+            trimmed.surface_commands[2],
+            trimmed.throttle_command
+        ));
+    }
+    Ok(CheckReport {
+        kind: "scenario",
+        lines,
     })
 }
