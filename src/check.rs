@@ -178,22 +178,33 @@ fn check_jsbsim_scenario(
         scenario.step,
         scenario.seed
     )];
-    #[cfg(feature = "jsbsim")]
-    {
-        let trimmed = crate::jsbsim::own::trim(scenario)?;
-        crate::jsbsim::own::check_rigid_body(scenario, &trimmed.exec)?;
-        lines.push(format!(
-            "JSBSim trim: α {:.3}°, θ {:.3}°, commands elevator {:.4}, aileron {:.4}, rudder {:.4}, throttle {:.4}; rigid body matches JSBSim",
-            trimmed.alpha.to_degrees(),
-            trimmed.at.attitude[1].to_degrees(),
-            trimmed.surface_commands[0],
-            trimmed.surface_commands[1],
-            trimmed.surface_commands[2],
-            trimmed.throttle_command
-        ));
-    }
+    lines.extend(jsbsim_trim_line(scenario)?);
     Ok(CheckReport {
         kind: "scenario",
         lines,
     })
+}
+
+/// JSBSim's trim of the scenario and the rigid-body check, as a report line.
+#[cfg(feature = "jsbsim")]
+fn jsbsim_trim_line(scenario: &Scenario) -> Result<Option<String>> {
+    let trimmed = crate::jsbsim::own::trim(scenario)?;
+    crate::jsbsim::own::check_rigid_body(scenario, &trimmed.exec)?;
+    let [elevator, aileron, rudder] = trimmed.deflections()?;
+    Ok(Some(format!(
+        "JSBSim trim: α {:.3}°, θ {:.3}°, elevator {:.3}°, aileron {:.3}°, rudder {:.3}°, throttle command {:.4}, thrust {:.1} kN; rigid body matches JSBSim",
+        trimmed.alpha.to_degrees(),
+        trimmed.at.attitude[1].to_degrees(),
+        elevator.to_degrees(),
+        aileron.to_degrees(),
+        rudder.to_degrees(),
+        trimmed.throttle_command,
+        trimmed.thrust()? / 1000.0
+    )))
+}
+
+/// Without JSBSim a JSBSim scenario does not load, so there is no trim to report.
+#[cfg(not(feature = "jsbsim"))]
+fn jsbsim_trim_line(_scenario: &Scenario) -> Result<Option<String>> {
+    Ok(None)
 }

@@ -256,8 +256,17 @@ impl Trimmed {
         local_derivatives(&mut self.exec, &self.at, &surfaces)
     }
 
+    /// The surface deflections now (rad, aeroid's sign): elevator, aileron, rudder.
+    pub fn deflections(&self) -> Result<[f64; 3]> {
+        let mut deflections = [0.0; 3];
+        for (deflection, (_, position, sign)) in deflections.iter_mut().zip(SURFACES) {
+            *deflection = sign * self.exec.get(position)?;
+        }
+        Ok(deflections)
+    }
+
     /// The total propulsion force now (N).
-    fn thrust(&self) -> Result<f64> {
+    pub fn thrust(&self) -> Result<f64> {
         let force = [
             "forces/fbx-prop-lbs",
             "forces/fby-prop-lbs",
@@ -270,24 +279,23 @@ impl Trimmed {
     }
 }
 
-/// JSBSim's mass, inertia, geometry and thrust line now, in aeroid's axes and
-/// units, as (name, value, unit) rows: what the rigid-body file must hold.
+/// JSBSim's mass, inertia, geometry and (with engines) thrust line now, in
+/// aeroid's axes and units, as (name, value, unit) rows: what the
+/// rigid-body file must hold.
 pub fn rigid_body(exec: &Exec) -> Result<Vec<(&'static str, f64, &'static str)>> {
     let inertia = SLUG * FT * FT;
-    let engines = (0..)
-        .take_while(|i| {
-            exec.has_property(&format!("propulsion/engine[{i}]/x-position"))
-                .unwrap_or(false)
-        })
-        .count();
-    // Mean thrust point of the engines, structural frame (in), relative to
-    // the CG, then in body axes (x forward, z down): (−x, y, −z).
-    let mut arm = [0.0; 3];
-    for i in 0..engines {
+    // The thrusters' points, structural frame (in).
+    let mut thrusters = Vec::new();
+    while exec.has_property(&format!(
+        "propulsion/engine[{}]/x-position",
+        thrusters.len()
+    ))? {
+        let i = thrusters.len();
+        let mut point = [0.0; 3];
         for (k, axis) in ["x", "y", "z"].iter().enumerate() {
-            arm[k] += exec.get(&format!("propulsion/engine[{i}]/{axis}-position"))?
-                / engines.max(1) as f64;
+            point[k] = exec.get(&format!("propulsion/engine[{i}]/{axis}-position"))?;
         }
+        thrusters.push(point);
     }
     let cg = [
         exec.get("inertia/cg-x-in")?,
@@ -295,7 +303,7 @@ pub fn rigid_body(exec: &Exec) -> Result<Vec<(&'static str, f64, &'static str)>>
         exec.get("inertia/cg-z-in")?,
     ];
     let inch = FT / 12.0;
-    Ok(vec![
+    let mut rows = vec![
         ("mass", exec.get("inertia/mass-slugs")? * SLUG, "kg"),
         ("ixx", exec.get("inertia/ixx-slugs_ft2")? * inertia, "kg*m2"),
         ("iyy", exec.get("inertia/iyy-slugs_ft2")? * inertia, "kg*m2"),
@@ -309,10 +317,15 @@ pub fn rigid_body(exec: &Exec) -> Result<Vec<(&'static str, f64, &'static str)>>
         ("wing_area", exec.get("metrics/Sw-sqft")? * FT * FT, "m2"),
         ("span", exec.get("metrics/bw-ft")? * FT, "m"),
         ("chord", exec.get("metrics/cbarw-ft")? * FT, "m"),
-        ("thrust_x", -(arm[0] - cg[0]) * inch, "m"),
-        ("thrust_y", (arm[1] - cg[1]) * inch, "m"),
-        ("thrust_z", -(arm[2] - cg[2]) * inch, "m"),
-    ])
+    ];
+    if !thrusters.is_empty() {
+        // Their mean relative to the CG, in body axes (x forward, z down).
+        let mean = |k: usize| thrusters.iter().map(|p| p[k]).sum::<f64>() / thrusters.len() as f64;
+        rows.push(("thrust_x", -(mean(0) - cg[0]) * inch, "m"));
+        rows.push(("thrust_y", (mean(1) - cg[1]) * inch, "m"));
+        rows.push(("thrust_z", -(mean(2) - cg[2]) * inch, "m"));
+    }
+    Ok(rows)
 }
 
 /// Checks the rigid-body file against JSBSim's values (see [`rigid_body`]):
@@ -338,7 +351,11 @@ pub fn check_rigid_body(scenario: &Scenario, exec: &Exec) -> Result<()> {
         p.position.z,
     ];
     let mut problems = Vec::new();
-    for ((name, theirs, unit), ours) in rigid_body(exec)?.into_iter().zip(ours) {
+    let jsbsim = rigid_body(exec)?;
+    let engines = jsbsim
+        .iter()
+        .any(|(name, _, _)| name.starts_with("thrust_"));
+    for ((name, theirs, unit), ours) in jsbsim.into_iter().zip(ours) {
         let close = if name.starts_with("thrust_") {
             (ours - theirs).abs() <= 0.01
         } else {
@@ -350,7 +367,7 @@ pub fn check_rigid_body(scenario: &Scenario, exec: &Exec) -> Result<()> {
             ));
         }
     }
-    if p.max_thrust <= 0.0 {
+    if engines && p.max_thrust <= 0.0 {
         problems.push(
             "propulsion.max_thrust must be positive (the recorded throttle is the thrust over it)"
                 .into(),
@@ -385,7 +402,11 @@ pub fn fly(scenario: &Scenario) -> Result<(TruthTrace, RunTruth)> {
     check_rigid_body(scenario, &trimmed.exec)?;
     let derivatives = trimmed.derivatives()?;
     let max_thrust = scenario.aircraft.propulsion.max_thrust;
-    let throttle = trimmed.thrust()? / max_thrust;
+    let throttle = if trimmed.throttle_properties.is_empty() {
+        0.0
+    } else {
+        trimmed.thrust()? / max_thrust
+    };
     let mut trim_controls = Controls::zeros();
     trim_controls
         .fixed_rows_mut::<3>(0)
@@ -462,6 +483,9 @@ fn start(
         };
     }
     let throttle = Control::Throttle.index();
+    if trimmed.throttle_properties.is_empty() {
+        return JsbsimFlight::start(exec, commands, readings, scenario.step, SUBSTEPS, first);
+    }
     commands[throttle] = Some(ControlCommand {
         commands: trimmed
             .throttle_properties
