@@ -547,8 +547,7 @@ const B737_LATERAL: &str = "b737-lateral-multistep";
 /// trim, and the trim point itself; the derivatives are 737.xml's constants
 /// where the file makes them so. Cn_r = −0.35 and Cl_r = 0.09 only because
 /// the yaw damper's share (r into the rudder) is taken out by the chain rule
-/// (through the yaw damper Cn_r would read about −0.35 − 0.2·0.35·b/(2V)·2V/b
-/// per r̂, far from it); Cm_q = −43 is Cmq −27 plus Cmα̇ −16 (∂α̇/∂q = 1, the
+/// (through the yaw damper Cn_r reads −0.35 − 0.2·0.35·2V/b ≈ −1.05); Cm_q = −43 is Cmq −27 plus Cmα̇ −16 (∂α̇/∂q = 1, the
 /// 737 has no lift from q); Cl_da = −(0.1 − 0.0335·M) in aeroid's sign.
 #[test]
 fn the_737_truth_file_holds_jsbsims_local_derivatives_at_trim() {
