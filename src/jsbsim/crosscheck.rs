@@ -296,8 +296,7 @@ pub fn start_exported(
         exec,
         commands,
         readings,
-        simulation.step,
-        substeps,
+        (simulation.step, substeps, simulation.interpolation),
         &saturated_controls(simulation, 0),
     )
 }

@@ -8,9 +8,11 @@
 //! advances the state, then evaluates the forces at the new state with the
 //! controls set at that moment. So the controls of step k+1 are written
 //! before the last `Run` that produces state k+1, which reproduces aeroid's
-//! zero-order hold (DESIGN.md, "input interpolation"). The flight uses
-//! third-order Adams–Bashforth for all four integrations, with `substeps`
-//! JSBSim steps per aeroid step.
+//! zero-order hold; with linear interpolation the controls are interpolated
+//! between steps k and k+1 at the end of every substep (DESIGN.md,
+//! "Conventions": input interpolation is an explicit scenario option). The
+//! flight uses third-order Adams–Bashforth for all four integrations, with
+//! `substeps` JSBSim steps per aeroid step.
 //!
 //! A [`TruthSample`] read from JSBSim (DESIGN.md conventions: SI, radians,
 //! body axes x forward, z down):
@@ -38,6 +40,7 @@ use crate::aero::{AeroCoefficients, AeroInput};
 use crate::atmosphere::{Air, SEA_LEVEL_DENSITY};
 use crate::dynamics::{AirData, Evaluation};
 use crate::error::{Error, Result};
+use crate::integrator::Interpolation;
 use crate::state::{self, CONTROL_COUNT, Controls, EulerAngles, StateVector};
 use crate::trace::TruthSample;
 use crate::wind::WindSample;
@@ -165,6 +168,9 @@ pub struct JsbsimFlight {
     geometry: [f64; 3],
     step: f64,
     substeps: usize,
+    interpolation: Interpolation,
+    /// The controls of the current step.
+    current: Controls,
 }
 
 impl JsbsimFlight {
@@ -175,10 +181,10 @@ impl JsbsimFlight {
         mut exec: Exec,
         commands: Vec<Option<ControlCommand>>,
         readings: [ControlReading; CONTROL_COUNT],
-        step: f64,
-        substeps: usize,
+        timing: (f64, usize, Interpolation),
         controls: &Controls,
     ) -> Result<Self> {
+        let (step, substeps, interpolation) = timing;
         for integrator in INTEGRATORS {
             exec.set(integrator, ADAMS_BASHFORTH_3)?;
         }
@@ -211,6 +217,8 @@ impl JsbsimFlight {
             geometry,
             step,
             substeps,
+            interpolation,
+            current: *controls,
         };
         flight.set_controls(controls)?;
         flight.exec.run_ic()?;
@@ -239,21 +247,29 @@ impl JsbsimFlight {
     }
 
     /// Flies from step k to step k + 1 with `next` the controls of step k + 1:
-    /// they enter with the last substep, which reproduces aeroid's
-    /// zero-order hold.
+    /// they enter with the last substep (zero-order hold), or the controls
+    /// are interpolated at the end of every substep (linear).
     pub fn advance(&mut self, k: usize, next: &Controls) -> Result<()> {
-        for _ in 1..self.substeps {
-            self.exec.step()?;
-        }
-        self.set_controls(next)?;
         let step = self.step;
-        self.exec.step().map_err(|e| match e {
+        let at_time = |e: Error| match e {
             Error::Jsbsim { context, message } => Error::Jsbsim {
                 context: format!("t = {:.3} s: {context}", k as f64 * step),
                 message,
             },
             other => other,
-        })
+        };
+        for j in 1..=self.substeps {
+            if j == self.substeps {
+                self.set_controls(next)?;
+            } else if self.interpolation == Interpolation::Linear {
+                let fraction = j as f64 / self.substeps as f64;
+                let between = self.current + (next - self.current) * fraction;
+                self.set_controls(&between)?;
+            }
+            self.exec.step().map_err(at_time)?;
+        }
+        self.current = *next;
+        Ok(())
     }
 
     fn read(&self, index: usize) -> Result<f64> {

@@ -139,7 +139,13 @@ pub fn trim(scenario: &Scenario) -> Result<Trimmed> {
         exec.set("gear/gear-cmd-norm", 0.0)?;
     }
     for (property, value) in &jsbsim.properties {
-        exec.set(property, *value)?;
+        exec.set(property, *value).map_err(|error| {
+            invalid(
+                scenario,
+                &format!("jsbsim.properties.\"{property}\""),
+                error.to_string(),
+            )
+        })?;
     }
     exec.set(
         "atmosphere/delta-T",
@@ -468,6 +474,7 @@ fn start(
     first: &Controls,
 ) -> Result<JsbsimFlight> {
     let exec = trimmed.exec;
+    let timing = (scenario.step, SUBSTEPS, scenario.interpolation);
     let mut commands: Vec<Option<ControlCommand>> = vec![None; CONTROL_COUNT];
     let mut readings = [ControlReading::Constant(0.0); CONTROL_COUNT];
     for (k, (command, position, sign)) in SURFACES.iter().enumerate() {
@@ -484,7 +491,7 @@ fn start(
     }
     let throttle = Control::Throttle.index();
     if trimmed.throttle_properties.is_empty() {
-        return JsbsimFlight::start(exec, commands, readings, scenario.step, SUBSTEPS, first);
+        return JsbsimFlight::start(exec, commands, readings, timing, first);
     }
     commands[throttle] = Some(ControlCommand {
         commands: trimmed
@@ -499,7 +506,7 @@ fn start(
     readings[throttle] = ControlReading::ThrustFraction {
         max_thrust: scenario.aircraft.propulsion.max_thrust,
     };
-    JsbsimFlight::start(exec, commands, readings, scenario.step, SUBSTEPS, first)
+    JsbsimFlight::start(exec, commands, readings, timing, first)
 }
 
 /// The truth file of a JSBSim flight: JSBSim's local derivatives at the trim
