@@ -6,7 +6,7 @@
 //! The aircraft is an aeroid aircraft file, or one of JSBSim's own aircraft
 //! named `"jsbsim:NAME"` (`aircraft/NAME/NAME.xml` under JSBSim's root), which
 //! `aeroid record` and `aeroid run` fly in JSBSim (feature `jsbsim`,
-//! [`crate::jsbsim::own`]). Such a scenario also has a `[jsbsim]` table:
+//! `crate::jsbsim::own`). Such a scenario also has a `[jsbsim]` table:
 //!
 //! ```toml
 //! aircraft = "jsbsim:737"
