@@ -5,7 +5,7 @@
 //! Adams–Bashforth) plus the five control writes, through the FFI.
 //! Run: `cargo bench --features jsbsim --bench jsbsim`.
 
-use aeroid::jsbsim::crosscheck::JsbsimFlight;
+use aeroid::jsbsim::crosscheck::{saturated_controls, start_exported};
 use aeroid::scenario::Scenario;
 use aeroid::sim::Simulation;
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
@@ -27,12 +27,15 @@ fn bench_steps(c: &mut Criterion) {
             x
         })
     });
+    let controls: Vec<_> = (0..=STEPS)
+        .map(|k| saturated_controls(&simulation, k))
+        .collect();
     group.bench_function("jsbsim_ab3", |b| {
         b.iter_batched(
-            || JsbsimFlight::start(&simulation, false, 1).expect("JSBSim loads the exported ATTAS"),
+            || start_exported(&simulation, false, 1).expect("JSBSim loads the exported ATTAS"),
             |mut flight| {
                 for k in 0..STEPS {
-                    flight.advance(k).expect("JSBSim steps");
+                    flight.advance(k, &controls[k + 1]).expect("JSBSim steps");
                 }
                 flight
             },

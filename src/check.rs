@@ -130,6 +130,9 @@ fn describe_profile(profile: &Profile) -> CheckReport {
 }
 
 fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
+    if let Some(jsbsim) = &scenario.jsbsim {
+        return check_jsbsim_scenario(scenario, jsbsim);
+    }
     let simulation = Simulation::prepare(scenario)?;
     let trim = &simulation.trim;
     let c = &trim.controls;
@@ -158,4 +161,50 @@ fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
             ),
         ],
     })
+}
+
+/// A scenario of one of JSBSim's own aircraft: trimmed by JSBSim, and its
+/// rigid-body file checked against JSBSim's mass, inertia and geometry.
+fn check_jsbsim_scenario(
+    scenario: &Scenario,
+    jsbsim: &crate::scenario::JsbsimAircraft,
+) -> Result<CheckReport> {
+    let mut lines = vec![format!(
+        "{}: JSBSim aircraft {} (rigid body {}), {} s at {} s steps, seed {}",
+        scenario.name,
+        jsbsim.model,
+        scenario.aircraft_path.display(),
+        scenario.duration,
+        scenario.step,
+        scenario.seed
+    )];
+    lines.extend(jsbsim_trim_line(scenario)?);
+    Ok(CheckReport {
+        kind: "scenario",
+        lines,
+    })
+}
+
+/// JSBSim's trim of the scenario and the rigid-body check, as a report line.
+#[cfg(feature = "jsbsim")]
+fn jsbsim_trim_line(scenario: &Scenario) -> Result<Option<String>> {
+    let trimmed = crate::jsbsim::own::trim(scenario)?;
+    crate::jsbsim::own::check_rigid_body(scenario, &trimmed.exec)?;
+    let [elevator, aileron, rudder] = trimmed.deflections()?;
+    Ok(Some(format!(
+        "JSBSim trim: α {:.3}°, θ {:.3}°, elevator {:.3}°, aileron {:.3}°, rudder {:.3}°, throttle command {:.4}, thrust {:.1} kN; rigid body matches JSBSim",
+        trimmed.alpha.to_degrees(),
+        trimmed.at.attitude[1].to_degrees(),
+        elevator.to_degrees(),
+        aileron.to_degrees(),
+        rudder.to_degrees(),
+        trimmed.throttle_command,
+        trimmed.thrust()? / 1000.0
+    )))
+}
+
+/// Without JSBSim a JSBSim scenario does not load, so there is no trim to report.
+#[cfg(not(feature = "jsbsim"))]
+fn jsbsim_trim_line(_scenario: &Scenario) -> Result<Option<String>> {
+    Ok(None)
 }

@@ -491,12 +491,17 @@ fn run_all(
     let scenario = Scenario::load(reference)?;
     let profile = aeroid::recorder::profile_for(&scenario, profile)?;
     let report = aeroid::pipeline::run(&scenario, &profile)?;
+    let truth = match report.truth.kind {
+        aeroid::truth::TruthKind::Exact => format!("{:?} model", report.truth.model),
+        aeroid::truth::TruthKind::LocalDerivative => {
+            format!("local derivatives of {} at trim", report.truth.aircraft)
+        }
+    };
     println!(
-        "{}: recorded with {} ({} channels); truth: {:?} model",
+        "{}: recorded with {} ({} channels); truth: {truth}",
         report.scenario,
         report.profile,
         report.record.channels.len(),
-        report.truth.model
     );
     if scenario.models.is_empty() {
         println!("the scenario names no model structures (`models = [...]`): nothing to estimate");

@@ -50,7 +50,6 @@ use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use crate::random::{self, streams};
 use crate::record::{Channel, FlightRecord};
 use crate::scenario::Scenario;
-use crate::sim::Simulation;
 use crate::trace::TruthTrace;
 use crate::truth::RunTruth;
 use crate::units::{Dimension, Quantity, unit_factor};
@@ -795,8 +794,7 @@ pub fn record_scenario_seeded(
     profile: &Profile,
     recorder_seed: u64,
 ) -> Result<(FlightRecord, RunTruth)> {
-    let simulation = Simulation::prepare(scenario)?;
-    let trace = simulation.run()?;
+    let (trace, truth) = crate::sim::fly(scenario)?;
     let record = profile.record(&trace, &scenario.aircraft, recorder_seed)?;
-    Ok((record, RunTruth::exact(scenario, &simulation.trim)))
+    Ok((record, truth))
 }

@@ -2,6 +2,21 @@
 //! inputs superposed on trim, the wind, the environment, the duration,
 //! integration step and input interpolation, the seed, and the limits beyond
 //! which a simulation is declared to have departed.
+//!
+//! The aircraft is an aeroid aircraft file, or one of JSBSim's own aircraft
+//! named `"jsbsim:NAME"` (`aircraft/NAME/NAME.xml` under JSBSim's root), which
+//! `aeroid record` and `aeroid run` fly in JSBSim (feature `jsbsim`,
+//! `crate::jsbsim::own`). Such a scenario also has a `[jsbsim]` table:
+//!
+//! ```toml
+//! aircraft = "jsbsim:737"
+//! [jsbsim]
+//! rigid_body = "b737-jsbsim"   # aeroid aircraft file: JSBSim's mass, inertia, geometry, thrust line
+//! properties = { "fcs/flap-cmd-norm" = 0.0 }   # optional: JSBSim properties set before the trim
+//! ```
+//!
+//! Everything else (inputs, duration, step, seed, recorder, models) means
+//! what it means for an aeroid aircraft; wind and flap inputs are refused.
 
 use crate::aircraft::Aircraft;
 use crate::catalog;
@@ -13,7 +28,11 @@ use crate::trim::TrimCondition;
 use crate::units::{DEG, Dimension, Quantity};
 use crate::wind::WindSpec;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// How a scenario names one of JSBSim's own aircraft: `"jsbsim:737"`.
+pub const JSBSIM_PREFIX: &str = "jsbsim:";
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -21,7 +40,8 @@ pub struct ScenarioFile {
     pub name: String,
     #[serde(default)]
     pub description: String,
-    /// A bundled aircraft name or a path relative to this file.
+    /// A bundled aircraft name or a path relative to this file, or
+    /// `"jsbsim:NAME"` for one of JSBSim's own aircraft.
     pub aircraft: String,
     pub duration: Quantity,
     /// Integration step; the truth trace is written at this step.
@@ -46,6 +66,32 @@ pub struct ScenarioFile {
     /// Model structures (`models/` names or paths) that `aeroid run` fits to this scenario's record.
     #[serde(default)]
     pub models: Vec<String>,
+    /// For a JSBSim aircraft: its rigid body and the properties set before trim.
+    #[serde(default)]
+    pub jsbsim: Option<JsbsimSpec>,
+}
+
+/// The `[jsbsim]` table of a scenario whose aircraft is `"jsbsim:NAME"`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JsbsimSpec {
+    /// An aeroid aircraft file (bundled name or path) holding the JSBSim
+    /// aircraft's mass, inertia, geometry and thrust line: the rigid body of
+    /// the estimators' model structures, and what the recorder reads the mass
+    /// and thrust from. Checked against JSBSim at the trim point when flown.
+    pub rigid_body: String,
+    /// JSBSim properties set before trimming (flaps, fuel, switches).
+    #[serde(default)]
+    pub properties: BTreeMap<String, f64>,
+}
+
+/// One of JSBSim's own aircraft, flown instead of an aeroid one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JsbsimAircraft {
+    /// JSBSim's model name (`737` for `aircraft/737/737.xml`).
+    pub model: String,
+    /// Properties set before trimming.
+    pub properties: BTreeMap<String, f64>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -117,6 +163,10 @@ pub struct Scenario {
     /// The default recorder profile reference, if the file names one.
     pub recorder: Option<String>,
     pub models: Vec<String>,
+    /// Set when the scenario flies one of JSBSim's own aircraft; `aircraft` is
+    /// then its rigid body (`[jsbsim] rigid_body`), whose aerodynamic model is
+    /// not the truth.
+    pub jsbsim: Option<JsbsimAircraft>,
 }
 
 impl Scenario {
@@ -132,7 +182,13 @@ impl Scenario {
     /// (the aircraft file reports its own).
     pub fn from_file(file: &ScenarioFile, path: &Path) -> Result<Scenario> {
         let base = path.parent().unwrap_or(Path::new("."));
-        let aircraft_path = catalog::resolve(&file.aircraft, catalog::AIRCRAFT_FOLDER, Some(base))?;
+        let jsbsim = jsbsim_aircraft(file, path)?;
+        let aircraft_reference = match (&jsbsim, &file.jsbsim) {
+            (Some(_), Some(spec)) => &spec.rigid_body,
+            _ => &file.aircraft,
+        };
+        let aircraft_path =
+            catalog::resolve(aircraft_reference, catalog::AIRCRAFT_FOLDER, Some(base))?;
         let aircraft = Aircraft::load(&aircraft_path)?;
         let mut problems = Problems::default();
         let mut read = |field: &str, q: &Quantity, dimension: Dimension| {
@@ -201,6 +257,7 @@ impl Scenario {
             departure,
             recorder: file.recorder.clone(),
             models: file.models.clone(),
+            jsbsim,
         };
         problems.finish(path, scenario)
     }
@@ -209,6 +266,62 @@ impl Scenario {
     pub fn step_count(&self) -> usize {
         (self.duration / self.step).round() as usize
     }
+}
+
+/// The JSBSim aircraft a scenario names, checked: the `[jsbsim]` table is
+/// there exactly when the aircraft is `"jsbsim:NAME"`, the build has the
+/// `jsbsim` feature, JSBSim has the aircraft, and the flight is in still air.
+fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAircraft>> {
+    let invalid = |field: &str, message: String| Error::Invalid {
+        path: path.to_path_buf(),
+        problems: vec![crate::error::Problem {
+            field: field.into(),
+            message,
+        }],
+    };
+    let Some(model) = file.aircraft.strip_prefix(JSBSIM_PREFIX) else {
+        return match file.jsbsim {
+            Some(_) => Err(invalid(
+                "jsbsim",
+                format!(
+                    "only a scenario whose aircraft is \"{JSBSIM_PREFIX}NAME\" has a [jsbsim] table"
+                ),
+            )),
+            None => Ok(None),
+        };
+    };
+    if !cfg!(feature = "jsbsim") {
+        return Err(invalid(
+            "aircraft",
+            format!(
+                "'{}' is one of JSBSim's own aircraft; this aeroid was built without JSBSim: build it with `--features jsbsim` (cargo run --release --features jsbsim -- ...)",
+                file.aircraft
+            ),
+        ));
+    }
+    let Some(spec) = &file.jsbsim else {
+        return Err(invalid(
+            "jsbsim",
+            format!(
+                "a JSBSim aircraft needs a [jsbsim] table with `rigid_body`, the aeroid aircraft file of {model}'s mass, inertia, geometry and thrust line (e.g. aircraft/b737-jsbsim.toml)"
+            ),
+        ));
+    };
+    #[cfg(feature = "jsbsim")]
+    crate::jsbsim::own::check_model(model).map_err(|message| invalid("aircraft", message))?;
+    let calm = file.wind.gusts.is_empty()
+        && file.wind.turbulence.is_none()
+        && file.wind.speed.si(Dimension::Speed) == Ok(0.0);
+    if !calm {
+        return Err(invalid(
+            "wind",
+            "a JSBSim aircraft flies in still air here: aeroid does not feed wind, gusts or turbulence to JSBSim".into(),
+        ));
+    }
+    Ok(Some(JsbsimAircraft {
+        model: model.to_owned(),
+        properties: spec.properties.clone(),
+    }))
 }
 
 fn read_departure(

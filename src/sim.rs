@@ -10,6 +10,7 @@ use crate::scenario::{DepartureLimits, Scenario};
 use crate::state::{self, Controls, Q0, StateVector};
 use crate::trace::{TruthSample, TruthTrace};
 use crate::trim::{Trim, trim};
+use crate::truth::RunTruth;
 use crate::wind::{FlightConditions, WindSample};
 
 /// A scenario made ready to fly: trimmed, with its signals sampled at every step.
@@ -29,6 +30,15 @@ pub struct Simulation {
 impl Simulation {
     /// Trims the aircraft and samples inputs and wind for the whole run.
     pub fn prepare(scenario: &Scenario) -> Result<Simulation> {
+        if scenario.jsbsim.is_some() {
+            return Err(Error::Invalid {
+                path: scenario.path.clone(),
+                problems: vec![crate::error::Problem {
+                    field: "aircraft".into(),
+                    message: "is one of JSBSim's own aircraft: aeroid's simulator does not fly it; `aeroid simulate`, `record` and `run` fly it in JSBSim".into(),
+                }],
+            });
+        }
         let model = FlightModel::new(scenario.aircraft.clone(), scenario.environment);
         let steps = scenario.step_count();
         let conditions = FlightConditions {
@@ -98,7 +108,7 @@ impl Simulation {
             let time = k as f64 * self.step;
             let exogenous = self.exogenous_at(k, 0.0);
             let evaluation = self.model.evaluate(&x, &exogenous);
-            if let Some(reason) = self.departure_reason(&x, &evaluation) {
+            if let Some(reason) = departure_reason(&self.departure, &x, &evaluation) {
                 return Err(Error::Departed {
                     time,
                     reason,
@@ -135,48 +145,63 @@ impl Simulation {
             self.step,
         )
     }
-
-    fn departure_reason(
-        &self,
-        x: &StateVector,
-        evaluation: &crate::dynamics::Evaluation,
-    ) -> Option<String> {
-        let limits = &self.departure;
-        let air = &evaluation.air_data;
-        if !x.iter().all(|v| v.is_finite()) {
-            return Some("the state is no longer finite".into());
-        }
-        if air.alpha.abs() > limits.max_alpha {
-            return Some(format!(
-                "|α| = {:.1}° exceeds {:.1}°",
-                air.alpha.to_degrees(),
-                limits.max_alpha.to_degrees()
-            ));
-        }
-        if air.beta.abs() > limits.max_beta {
-            return Some(format!(
-                "|β| = {:.1}° exceeds {:.1}°",
-                air.beta.to_degrees(),
-                limits.max_beta.to_degrees()
-            ));
-        }
-        if !(limits.min_airspeed..=limits.max_airspeed).contains(&air.airspeed) {
-            return Some(format!(
-                "airspeed {:.1} m/s left [{:.1}, {:.1}] m/s",
-                air.airspeed, limits.min_airspeed, limits.max_airspeed
-            ));
-        }
-        let altitude = state::altitude(x);
-        (altitude < limits.min_altitude).then(|| {
-            format!(
-                "altitude {altitude:.1} m is below {:.1} m",
-                limits.min_altitude
-            )
-        })
-    }
 }
 
-/// Trims, then simulates a scenario.
+/// Why a flight has departed at state `x`, if it has: the state is no longer
+/// finite, or α, β, airspeed or altitude left the scenario's limits.
+pub fn departure_reason(
+    limits: &DepartureLimits,
+    x: &StateVector,
+    evaluation: &crate::dynamics::Evaluation,
+) -> Option<String> {
+    let air = &evaluation.air_data;
+    if !x.iter().all(|v| v.is_finite()) {
+        return Some("the state is no longer finite".into());
+    }
+    if air.alpha.abs() > limits.max_alpha {
+        return Some(format!(
+            "|α| = {:.1}° exceeds {:.1}°",
+            air.alpha.to_degrees(),
+            limits.max_alpha.to_degrees()
+        ));
+    }
+    if air.beta.abs() > limits.max_beta {
+        return Some(format!(
+            "|β| = {:.1}° exceeds {:.1}°",
+            air.beta.to_degrees(),
+            limits.max_beta.to_degrees()
+        ));
+    }
+    if !(limits.min_airspeed..=limits.max_airspeed).contains(&air.airspeed) {
+        return Some(format!(
+            "airspeed {:.1} m/s left [{:.1}, {:.1}] m/s",
+            air.airspeed, limits.min_airspeed, limits.max_airspeed
+        ));
+    }
+    let altitude = state::altitude(x);
+    (altitude < limits.min_altitude).then(|| {
+        format!(
+            "altitude {altitude:.1} m is below {:.1} m",
+            limits.min_altitude
+        )
+    })
+}
+
+/// Flies a scenario and simulates its truth trace (see [`fly`]).
 pub fn simulate(scenario: &Scenario) -> Result<TruthTrace> {
-    Simulation::prepare(scenario)?.run()
+    fly(scenario).map(|(trace, _)| trace)
+}
+
+/// Flies a scenario with the simulator of its aircraft, and gives the truth
+/// trace and the run's truth: aeroid's (trim, RK4) for an aeroid aircraft,
+/// with the exact truth; JSBSim for one of JSBSim's own aircraft (feature
+/// `jsbsim`, `crate::jsbsim::own::fly`), with JSBSim's local derivatives.
+pub fn fly(scenario: &Scenario) -> Result<(TruthTrace, RunTruth)> {
+    #[cfg(feature = "jsbsim")]
+    if scenario.jsbsim.is_some() {
+        return crate::jsbsim::own::fly(scenario);
+    }
+    let simulation = Simulation::prepare(scenario)?;
+    let trace = simulation.run()?;
+    Ok((trace, RunTruth::exact(scenario, &simulation.trim)))
 }

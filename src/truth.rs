@@ -3,9 +3,12 @@
 //! trim point, the scenario and its seed. Estimator scoring reads it back; a
 //! record imported from real flight data has none.
 //!
-//! Kind `exact`: the parameters are the ones the simulator used. Kind
-//! `local_derivative` (for truth models whose structure differs from the
-//! estimator's, see DESIGN.md) will be written by the scoring side.
+//! Kind `exact`: the parameters are the ones the simulator used, and
+//! `local_derivatives` holds the truth model's local derivatives at trim for
+//! postulates of another structure (DESIGN.md, "Truth when the structures
+//! differ"). Kind `local_derivative`: a flight of one of JSBSim's own aircraft
+//! (`crate::jsbsim::own`), whose truth is only JSBSim's local derivatives at
+//! the trim point; `parameters` is then empty.
 
 use crate::error::{Error, Result, parse_toml, read_text};
 use crate::scenario::Scenario;

@@ -60,6 +60,24 @@ fn unknown_aircraft_lists_the_known_ones() {
     );
 }
 
+/// Without the `jsbsim` feature, a scenario that names one of JSBSim's own
+/// aircraft says so, naming the file and how to build (the default build has
+/// no C++ JSBSim); the bundled 737 scenario is one.
+#[cfg(not(feature = "jsbsim"))]
+#[test]
+fn a_jsbsim_aircraft_without_the_feature_says_how_to_build() {
+    let error = Scenario::load("b737-elevator-3211").unwrap_err();
+    let message = error.to_string();
+    assert_eq!(problem_fields(&error), ["aircraft"]);
+    for expected in [
+        "scenarios/b737-elevator-3211.toml",
+        "'jsbsim:737' is one of JSBSim's own aircraft",
+        "--features jsbsim",
+    ] {
+        assert!(message.contains(expected), "{expected}: {message}");
+    }
+}
+
 #[test]
 fn negative_mass_nan_and_bad_unit_are_all_reported_at_once() {
     let text = common::attas_with(|t| {

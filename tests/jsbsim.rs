@@ -383,6 +383,21 @@ fn cross_check_attas_elevator_3211() {
     );
 }
 
+/// The multisine is flown with linear interpolation of the inputs inside a
+/// step (the scenario's `interpolation = "linear"`); JSBSim interpolates
+/// them at every substep too. Measured: within 0.08 % (altitude), every
+/// other state within 0.05 %; held over the step instead, p differed by
+/// 0.71 %, v and β by 0.52 %, so the 0.5 % bound tells the two apart.
+#[test]
+fn cross_check_attas_multisine_with_linear_inputs() {
+    cross_check_agrees(
+        "attas-multisine",
+        &[
+            "u", "v", "w", "p", "q", "r", "phi", "theta", "alpha", "beta",
+        ],
+    );
+}
+
 #[test]
 fn cross_check_attas_lateral_multistep() {
     cross_check_agrees(
@@ -461,11 +476,11 @@ fn load_model_uses_the_executives_root() {
 /// Central differences through JSBSim (perturb α, β, p̂, q̂, r̂, δe, δa, δr
 /// one at a time, RunIC, read the coefficients back from JSBSim's forces and
 /// moments) recover, on the exported ATTAS at its trim, aeroid's own local
-/// derivatives of the same model: all 48 within 1e-6 + 1e-5 relative. The
-/// machinery that will give a JSBSim aircraft's truth (issue 5, use 2).
+/// derivatives of the same model, constant terms included: all 54 within
+/// 1e-6 + 1e-5 relative. The machinery that gives a JSBSim aircraft's truth.
 #[test]
 fn central_differences_through_jsbsim_recover_the_exported_derivatives() {
-    use aeroid::jsbsim::derivatives::{ControlSurfaces, local_derivatives};
+    use aeroid::jsbsim::derivatives::{SurfaceBinding, local_derivatives};
     use aeroid::jsbsim::export::{CONTROL_PROPERTIES, THROTTLE_PROPERTY};
     use aeroid::state::Control;
     let scenario = aeroid::scenario::Scenario::load("attas-elevator-3211").unwrap();
@@ -491,26 +506,28 @@ fn central_differences_through_jsbsim_recover_the_exported_derivatives() {
         rates: [0.0; 3],
     };
     let surface = |control: Control| {
-        (
+        SurfaceBinding::direct(
             CONTROL_PROPERTIES[control.index()],
             trim.controls[control.index()],
         )
     };
-    let controls = ControlSurfaces {
-        elevator: surface(Control::Elevator),
-        aileron: surface(Control::Aileron),
-        rudder: surface(Control::Rudder),
-    };
+    let controls = [
+        surface(Control::Elevator),
+        surface(Control::Aileron),
+        surface(Control::Rudder),
+    ];
     let derivatives = local_derivatives(&mut exec, &at, &controls).unwrap();
-    assert_eq!(derivatives.len(), 48);
-    for (name, jsbsim) in &derivatives {
+    assert_eq!(derivatives.values.len(), 54);
+    for gain in derivatives.deflection_per_command {
+        assert!((gain - 1.0).abs() < 1e-12, "{gain}");
+    }
+    for (name, jsbsim) in &derivatives.values {
         let expected = truth.local_derivatives[name];
         assert!(
             (jsbsim - expected).abs() <= 1e-6 + 1e-5 * expected.abs(),
             "{name}: JSBSim {jsbsim} vs aeroid {expected}"
         );
     }
-    let value = |name: &str| derivatives.iter().find(|(n, _)| n == name).unwrap().1;
     // The eight the issue scores, against the file's values.
     for (name, file) in [
         ("CL_alpha", 3.30),
@@ -522,49 +539,441 @@ fn central_differences_through_jsbsim_recover_the_exported_derivatives() {
         ("Cn_beta", 0.1304),
         ("Cn_r", -0.0746),
     ] {
+        let value = derivatives.get(name).unwrap();
         assert!(
-            (value(name) - file).abs() <= 1e-5 * file.abs(),
-            "{name}: {} vs {file}",
-            value(name)
+            (value - file).abs() <= 1e-5 * file.abs(),
+            "{name}: {value} vs {file}"
         );
     }
 }
 
-/// The 737 trims with JSBSim's own trim (engines running, gear up, 10 000 ft,
-/// 280 kt), and central differences through JSBSim at that trim give the
-/// file's roll damping Clp = −0.4 (a constant in 737.xml, with no side force
-/// from p to move it). Not yet usable as truth (README, "Still to do"): its
-/// flight-control system rewrites the surface positions in every RunIC, so
-/// surface derivatives must go through the commands, and its yaw damper and
-/// the α̇ term fold into Cn_r and Cm_q.
+// ---------------------------------------------------------------------------
+// JSBSim's own 737 as truth (issue 5, use 2)
+// ---------------------------------------------------------------------------
+
+use aeroid::jsbsim::own;
+use aeroid::scenario::Scenario;
+
+const B737_3211: &str = "b737-elevator-3211";
+const B737_LATERAL: &str = "b737-lateral-multistep";
+
+/// The truth file of a recorded 737 flight holds JSBSim's local derivatives
+/// at the trim point, exactly what `local_derivatives` gives at JSBSim's
+/// trim, and the trim point itself; the derivatives are 737.xml's constants
+/// where the file makes them so. Cn_r = −0.35 and Cl_r = 0.09 only because
+/// the yaw damper's share (r into the rudder) is taken out by the chain rule
+/// (through the yaw damper Cn_r reads −0.35 − 0.2·0.35·2V/b ≈ −1.05); Cm_q = −43 is Cmq −27 plus Cmα̇ −16 (∂α̇/∂q = 1, the
+/// 737 has no lift from q); Cl_da = −(0.1 − 0.0335·M) in aeroid's sign.
 #[test]
-fn the_737_trims_and_its_roll_damping_is_recovered() {
-    use aeroid::jsbsim::derivatives::{ControlSurfaces, local_derivatives};
-    let mut exec = Exec::new().unwrap();
-    exec.load_model("737").unwrap();
-    let mut at = b737_cruise();
-    at.altitude = 10_000.0 * FT;
-    exec.set_initial_conditions(&at).unwrap();
-    exec.set("propulsion/set-running", -1.0).unwrap();
-    exec.set("gear/gear-cmd-norm", 0.0).unwrap();
+fn the_737_truth_file_holds_jsbsims_local_derivatives_at_trim() {
+    let scenario = Scenario::load(B737_3211).unwrap();
+    let profile = aeroid::recorder::profile_for(&scenario, None).unwrap();
+    let (record, truth) = aeroid::recorder::record_scenario(&scenario, &profile).unwrap();
+    let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
+    // Flown from JSBSim's trim, the 737 holds it until the 3211 starts at 2 s.
+    for sample in trace.samples.iter().take_while(|s| s.time < 2.0) {
+        let air = &sample.evaluation.air_data;
+        assert!(
+            (air.alpha - truth.trim.alpha).abs() < 1e-5
+                && (air.airspeed - truth.trim.airspeed).abs() < 1e-3
+                && sample.state[aeroid::state::Q].abs() < 1e-5,
+            "t = {}: α {}, V {}, q {}",
+            sample.time,
+            air.alpha,
+            air.airspeed,
+            sample.state[aeroid::state::Q]
+        );
+    }
+    assert_eq!(truth.kind, aeroid::truth::TruthKind::LocalDerivative);
+    assert_eq!(truth.aircraft, "jsbsim:737");
+    assert!(truth.parameters.is_empty());
+    assert!(record.channels.len() >= 18);
+    // The same trim and central differences, independently.
+    let mut trimmed = own::trim(&scenario).unwrap();
+    let derivatives = trimmed.derivatives().unwrap();
+    assert_eq!(truth.local_derivatives.len(), derivatives.values.len());
+    for (name, value) in &derivatives.values {
+        assert_eq!(truth.local_derivatives[name], *value, "{name}");
+    }
+    assert!((truth.trim.airspeed - 144.0).abs() < 1e-6);
+    assert!((truth.trim.altitude - 3048.0).abs() < 0.01);
+    assert!((truth.trim.alpha - trimmed.alpha).abs() < 1e-12);
+    assert!(
+        (0.03..0.1).contains(&truth.trim.alpha),
+        "trim α {}",
+        truth.trim.alpha
+    );
+    assert!((truth.trim.controls["elevator"] - derivatives.deflections[0]).abs() < 1e-12);
+    // Recorded thrust over max_thrust: ≈ 41 kN of 178 kN at trim.
+    assert!((0.15..0.35).contains(&truth.trim.controls["throttle"]));
+    // Round trip through truth.toml.
+    let folder = common::temp_folder("b737-truth");
+    let path = folder.join(aeroid::truth::TRUTH_FILE);
+    truth.write(&path).unwrap();
+    assert_eq!(aeroid::truth::RunTruth::read(&path).unwrap(), truth);
+
+    let mach = trimmed.exec.get("velocities/mach").unwrap();
+    let value = |name: &str| truth.local_derivatives[name];
+    for (name, expected) in [
+        ("Cl_p", -0.4),
+        ("Cl_r", 0.09),
+        ("Cl_dr", 0.01),
+        ("Cn_r", -0.35),
+        ("Cn_dr", -0.2),
+        ("CL_alpha", 1.0 / 0.23),
+        ("CL_de", 0.2),
+        ("CL_q", 0.0),
+        ("Cm_q", -43.0),
+        ("Cl_da", -(0.1 - 0.067 / 2.0 * mach)),
+    ] {
+        assert!(
+            (value(name) - expected).abs() < 1e-8,
+            "{name}: {} vs {expected}",
+            value(name)
+        );
+    }
+    // The gear is up and the flight is over aeroid's flat earth: g0 less
+    // the 2h/R of a planet of radius 1e9 m (6e-6 at 3 km).
+    assert_eq!(trimmed.exec.get("gear/gear-pos-norm").unwrap(), 0.0);
+    let gravity = trimmed.exec.get("accelerations/gravity-ft_sec2").unwrap() * FT;
+    assert!((gravity / 9.80665 - 1.0).abs() < 1e-5, "g = {gravity}");
+}
+
+/// The 737's flight-control system rewrites the surface positions in every
+/// RunIC (the trap): a surface position written directly does not survive,
+/// and central differences through the positions are refused with an error
+/// naming the properties. Through the commands each surface moves by its
+/// gain (0.3 rad per unit elevator command, 0.35 aileron and rudder) and its
+/// coefficient moves with the sign of aeroid's conventions (Cmδe < 0,
+/// Clδa < 0 with aileron = −left aileron, Cnδr < 0).
+#[test]
+fn the_737_fcs_moves_every_surface_only_through_its_command() {
+    use aeroid::jsbsim::derivatives::{SurfaceBinding, coefficients, local_derivatives};
+    let scenario = Scenario::load(B737_3211).unwrap();
+    let mut trimmed = own::trim(&scenario).unwrap();
+    let surfaces = trimmed.surfaces();
+    let at = trimmed.at;
+    let exec = &mut trimmed.exec;
+    let evaluate = |exec: &mut Exec, commands: [f64; 3]| {
+        for (surface, command) in surfaces.iter().zip(commands) {
+            exec.set(&surface.command, command).unwrap();
+        }
+        exec.set_initial_conditions(&at).unwrap();
+        exec.run_ic().unwrap();
+        let positions: Vec<f64> = surfaces
+            .iter()
+            .map(|s| s.sign * exec.get(&s.position).unwrap())
+            .collect();
+        (coefficients(exec).unwrap(), positions)
+    };
+    let trim_commands = surfaces.each_ref().map(|s| s.command_value);
+    let (base, base_positions) = evaluate(exec, trim_commands);
+    // Coefficient index (CL, CY, CD, Cl, Cm, Cn) each surface moves, the
+    // gain of deflection (aeroid's sign) per unit command, the sign of ∂C/∂δ.
+    for (k, (coefficient, gain, sign)) in [(4, 0.3, -1.0), (3, -0.35, -1.0), (5, 0.35, -1.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let mut commands = trim_commands;
+        commands[k] += 0.05;
+        let (moved, positions) = evaluate(exec, commands);
+        let deflection = positions[k] - base_positions[k];
+        assert!(
+            (deflection - 0.05 * gain).abs() < 1e-12,
+            "{}: deflection {deflection}",
+            surfaces[k].command
+        );
+        let change = moved[coefficient] - base[coefficient];
+        assert!(
+            change * sign / deflection > 0.0 && change.abs() > 1e-3,
+            "{}: coefficient change {change} for {deflection} rad",
+            surfaces[k].command
+        );
+    }
+    // Written directly, a position is overwritten by the FCS in RunIC.
+    evaluate(exec, trim_commands);
+    exec.set("fcs/elevator-pos-rad", 0.1).unwrap();
     exec.run_ic().unwrap();
-    exec.trim(TrimMode::Full).unwrap();
-    let alpha = exec.get("aero/alpha-rad").unwrap();
-    assert!((0.0..0.2).contains(&alpha), "trim α {alpha} rad");
-    at.attitude[1] = exec.get("attitude/theta-rad").unwrap();
-    at.speed = InitialSpeed::TrueAirspeed {
-        speed: exec.get("velocities/vt-fps").unwrap() * FT,
-        alpha,
-        beta: exec.get("aero/beta-rad").unwrap(),
+    let elevator = exec.get("fcs/elevator-pos-rad").unwrap();
+    assert!(
+        (elevator - base_positions[0]).abs() < 1e-12,
+        "the FCS keeps {elevator}"
+    );
+    let direct = surfaces
+        .each_ref()
+        .map(|s| SurfaceBinding::direct(&s.position, 0.0));
+    let error = local_derivatives(exec, &at, &direct).unwrap_err();
+    let text = message(&error);
+    assert!(
+        text.contains("does not move") && text.contains("fcs/elevator-pos-rad"),
+        "{text}"
+    );
+}
+
+/// Bad input: a JSBSim aircraft JSBSim does not have, a JSBSim scenario
+/// without its `[jsbsim]` table, a `[jsbsim]` table on an aeroid aircraft,
+/// wind (not fed to JSBSim) and a rigid body that is not JSBSim's: each a
+/// clear error naming the file and the field.
+#[test]
+fn bad_jsbsim_scenarios_are_clear_errors() {
+    let folder = common::temp_folder("b737-bad-input");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/b737-elevator-3211.toml"
+    ))
+    .unwrap();
+    let load = |name: &str, edited: String| {
+        let path = common::write(&folder, name, &edited);
+        (
+            path.clone(),
+            message(&Scenario::load(path.to_str().unwrap()).unwrap_err()),
+        )
     };
-    let surface = |exec: &Exec, name: &'static str| (name, exec.get(name).unwrap());
-    let controls = ControlSurfaces {
-        elevator: surface(&exec, "fcs/elevator-pos-rad"),
-        aileron: surface(&exec, "fcs/left-aileron-pos-rad"),
-        rudder: surface(&exec, "fcs/rudder-pos-rad"),
-    };
-    let derivatives = local_derivatives(&mut exec, &at, &controls).unwrap();
-    let value = |name: &str| derivatives.iter().find(|(n, _)| n == name).unwrap().1;
-    assert!((value("Cl_p") + 0.4).abs() < 1e-9, "Cl_p {}", value("Cl_p"));
-    assert!(value("CL_alpha") > 3.0 && value("Cm_alpha") < 0.0);
+    let (path, text_unknown) = load(
+        "unknown.toml",
+        text.replace("jsbsim:737", "jsbsim:747-400x"),
+    );
+    for expected in [
+        path.to_str().unwrap(),
+        "aircraft",
+        "JSBSim has no aircraft '747-400x'",
+        "737, 787-8",
+        "c172p",
+    ] {
+        assert!(
+            text_unknown.contains(expected),
+            "{expected}: {text_unknown}"
+        );
+    }
+    let without_table = text
+        .replace("[jsbsim]", "[other]")
+        .replace("rigid_body = \"b737-jsbsim\"", "");
+    let (_, missing) = load("missing.toml", without_table.replace("[other]\n", ""));
+    assert!(
+        missing.contains("jsbsim") && missing.contains("rigid_body"),
+        "{missing}"
+    );
+    let (_, stray) = load("stray.toml", text.replace("\"jsbsim:737\"", "\"attas\""));
+    assert!(
+        stray.contains("only a scenario whose aircraft is"),
+        "{stray}"
+    );
+    let (_, windy) = load("windy.toml", format!("{text}\n[wind]\nspeed = \"10 kt\"\n"));
+    assert!(
+        windy.contains("wind") && windy.contains("still air"),
+        "{windy}"
+    );
+    // A rigid body that is not the 737's is refused when flown, listing JSBSim's values.
+    let mut scenario = Scenario::load(B737_3211).unwrap();
+    scenario.aircraft = attas();
+    let refused = message(&own::fly(&scenario).unwrap_err());
+    assert!(
+        refused.contains("mass is 1.763100e4, JSBSim has 4.853"),
+        "{refused}"
+    );
+}
+
+/// The eight derivatives the issue scores, with the scenario that excites
+/// each, and the tolerances (relative to JSBSim's local derivative):
+/// - output error on the flight recorded WITHOUT noise (same profile, noise
+///   lines removed): about 1.5 times the error measured (floor 0.1 %). This
+///   error is deterministic: model structure, which
+///   [`the_linear_postulate_fits_jsbsims_own_coefficients`] measures (up to
+///   1 %, Cm_q), and, for Cn_beta and Cn_r (1.3–1.5 %), the yaw damper's
+///   share of the rudder, continuous between the 25 Hz samples that the
+///   estimator holds (0.3 % at 100 Hz). A regression of the truth, the
+///   flight or the estimator moves it.
+/// - output error on the flight-test record: the no-noise error measured
+///   plus 3 Cramér–Rao σ (measured σ of these fits), rounded up: the noise
+///   may add what the bound allows, no more.
+/// - equation error on the flight-test record: about twice the error
+///   measured, and towards zero. On noisy data it is biased towards zero by
+///   7–18 % (errors in variables, seed 004, as on the ATTAS).
+const SCORED: [(&str, &str, f64, f64, f64); 8] = [
+    ("CL_alpha", B737_3211, 0.001, 0.020, 0.25),
+    ("Cm_alpha", B737_3211, 0.005, 0.010, 0.34),
+    ("Cm_q", B737_3211, 0.025, 0.040, 0.37),
+    ("Cm_de", B737_3211, 0.012, 0.030, 0.24),
+    ("Cl_beta", B737_LATERAL, 0.003, 0.011, 0.15),
+    ("Cl_p", B737_LATERAL, 0.001, 0.007, 0.20),
+    ("Cn_beta", B737_LATERAL, 0.022, 0.018, 0.14),
+    ("Cn_r", B737_LATERAL, 0.020, 0.028, 0.20),
+];
+
+/// Flies a 737 scenario in JSBSim and records it with its (flight-test)
+/// profile and with the same profile without noise; gives both records and
+/// the truth.
+fn fly_737(
+    name: &str,
+) -> (
+    aeroid::record::FlightRecord,
+    aeroid::record::FlightRecord,
+    aeroid::truth::RunTruth,
+) {
+    let scenario = Scenario::load(name).unwrap();
+    let profile = aeroid::recorder::profile_for(&scenario, None).unwrap();
+    assert_eq!(profile.name, "flight-test-25hz");
+    let (trace, truth) = aeroid::sim::fly(&scenario).unwrap();
+    let noisy = profile
+        .record(&trace, &scenario.aircraft, scenario.seed)
+        .unwrap();
+    let clean = profile
+        .without_random_errors()
+        .record(&trace, &scenario.aircraft, scenario.seed)
+        .unwrap();
+    (noisy, clean, truth)
+}
+
+/// Equation error and output error on the JSBSim 737's elevator 3211 and
+/// aileron/rudder multistep, recorded by the 25 Hz flight-test profile, on
+/// the decoupled models `b737-longitudinal` and `b737-lateral`: each of
+/// CL_alpha, Cm_alpha, Cm_q, Cm_de, Cl_beta, Cl_p, Cn_beta, Cn_r scored
+/// against JSBSim's local derivatives at trim within the tolerances of
+/// [`SCORED`]. Prints the table the README quotes (`-- --nocapture`).
+#[test]
+fn estimators_recover_the_737_derivatives_from_flight_test_data() {
+    use aeroid::estimation::structure::ModelStructure;
+    println!(
+        "{:<9} {:<12} {:>10} {:>10} {:>9} {:>9} {:>7}",
+        "parameter", "method", "estimate", "JSBSim", "rel.err", "σ", "err/σ"
+    );
+    let mut failures = Vec::new();
+    for (scenario_name, model) in [
+        (B737_3211, "b737-longitudinal"),
+        (B737_LATERAL, "b737-lateral"),
+    ] {
+        let (noisy, clean, truth) = fly_737(scenario_name);
+        let structure = ModelStructure::load(model).unwrap();
+        for (method, record, label) in [
+            ("oem", &clean, "oem no noise"),
+            ("oem", &noisy, "oem"),
+            ("ee", &noisy, "ee"),
+        ] {
+            let (estimate, scores) =
+                aeroid::pipeline::estimate_scored(method, record, &truth, &structure).unwrap();
+            assert!(
+                matches!(
+                    estimate.status,
+                    aeroid::estimation::gauss_newton::Status::Converged
+                ),
+                "{label} on {scenario_name}: {:?}",
+                estimate.status
+            );
+            for (name, _, clean_tolerance, oem_tolerance, ee_tolerance) in
+                SCORED.iter().filter(|row| row.1 == scenario_name)
+            {
+                let score = scores.iter().find(|s| s.name == *name).unwrap();
+                let (jsbsim, kind) = truth.value_for(name, structure.aircraft.aero.kind).unwrap();
+                assert_eq!(kind, aeroid::truth::TruthKind::LocalDerivative);
+                let relative = (score.estimate - jsbsim) / jsbsim;
+                println!(
+                    "{:<9} {:<12} {:>10.5} {:>10.5} {:>+8.2}% {:>9.2e} {:>+7.2}",
+                    name,
+                    label,
+                    score.estimate,
+                    jsbsim,
+                    100.0 * relative,
+                    score.standard_error,
+                    (score.estimate - jsbsim) / score.standard_error
+                );
+                let tolerance = match label {
+                    "oem no noise" => *clean_tolerance,
+                    "oem" => *oem_tolerance,
+                    _ => *ee_tolerance,
+                };
+                let towards_zero = method == "oem" || score.estimate.abs() < jsbsim.abs();
+                if relative.abs() > tolerance || !towards_zero {
+                    failures.push(format!(
+                        "{label} {name}: {:.5} vs JSBSim {jsbsim:.5} ({:+.2} %, allowed {:.1} %{})",
+                        score.estimate,
+                        100.0 * relative,
+                        100.0 * tolerance,
+                        if towards_zero {
+                            ""
+                        } else {
+                            ", not towards zero"
+                        }
+                    ));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The model-structure error, measured without any estimator: JSBSim's own
+/// coefficients along each noise-free flight (every 10 ms sample of the
+/// trace), fitted by least squares with the postulated terms (CL, Cm on 1, α,
+/// q̂, δe; Cl, Cn on 1, β, p̂, r̂, δa, δr), against the local derivatives at
+/// trim. The differences are what linearising a table-driven model with an
+/// α̇ term at one point costs: Cm_q 1.0 % (the α̇ term's share depends on V
+/// and θ too), Cm_de and Cm_alpha 0.3 %, Cl_beta 0.3 %, the rest < 0.1 %.
+/// Required: within 1.5 %. Output error cannot be asked to beat this.
+#[test]
+fn the_linear_postulate_fits_jsbsims_own_coefficients() {
+    use nalgebra::{DMatrix, DVector};
+    for (scenario_name, coefficient, terms) in [
+        (B737_3211, "Cm", &["alpha", "q", "de"][..]),
+        (B737_3211, "CL", &["alpha", "de"][..]),
+        (B737_LATERAL, "Cl", &["beta", "p", "r", "da", "dr"][..]),
+        (B737_LATERAL, "Cn", &["beta", "p", "r", "da", "dr"][..]),
+    ] {
+        let scenario = Scenario::load(scenario_name).unwrap();
+        let (trace, truth) = aeroid::sim::fly(&scenario).unwrap();
+        let (span, chord) = (
+            scenario.aircraft.geometry.span,
+            scenario.aircraft.geometry.chord,
+        );
+        let regressor = |s: &aeroid::trace::TruthSample, term: &str| {
+            let air = &s.evaluation.air_data;
+            let rates = aeroid::state::rates(&s.state);
+            let u = &s.evaluation.controls;
+            match term {
+                "alpha" => air.alpha,
+                "beta" => air.beta,
+                "p" => rates.x * span / (2.0 * air.airspeed),
+                "q" => rates.y * chord / (2.0 * air.airspeed),
+                "r" => rates.z * span / (2.0 * air.airspeed),
+                "de" => u[0],
+                "da" => u[1],
+                "dr" => u[2],
+                _ => 1.0,
+            }
+        };
+        let value = |s: &aeroid::trace::TruthSample| {
+            let c = &s.evaluation.coefficients;
+            match coefficient {
+                "Cm" => c.moment.y,
+                "CL" => c.lift,
+                "Cl" => c.moment.x,
+                _ => c.moment.z,
+            }
+        };
+        let samples = &trace.samples;
+        let a = DMatrix::from_fn(samples.len(), terms.len() + 1, |i, j| {
+            if j == 0 {
+                1.0
+            } else {
+                regressor(&samples[i], terms[j - 1])
+            }
+        });
+        let y = DVector::from_fn(samples.len(), |i, _| value(&samples[i]));
+        let fit = a.svd(true, true).solve(&y, 1e-14).unwrap();
+        for (j, term) in terms.iter().enumerate() {
+            let name = format!("{coefficient}_{term}");
+            let local = truth.local_derivatives[&name];
+            let along = fit[j + 1];
+            let scored = SCORED.iter().any(|row| row.0 == name);
+            println!(
+                "{name:<9} local {local:>10.5}  along the flight {along:>10.5}  (difference {:+.2e})",
+                along - local
+            );
+            if scored {
+                assert!(
+                    (along - local).abs() <= 0.015 * local.abs(),
+                    "{name}: {along} along the flight vs {local} at trim"
+                );
+            }
+        }
+    }
 }

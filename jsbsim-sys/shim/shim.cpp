@@ -191,6 +191,18 @@ int aeroid_jsb_load_model(aeroid_jsb* h, const char* aircraft_dir, const char* e
   });
 }
 
+// Replaces the planet of a loaded model with the <planet> document in
+// `planet_file` (FGFDMExec::LoadPlanet: the inertial model's radius, rotation
+// and gravity; the models are re-initialised). Call it before setting the
+// initial conditions.
+int aeroid_jsb_load_planet(aeroid_jsb* h, const char* planet_file) {
+  return guarded("load planet", [&] {
+    if (!h->exec->LoadPlanet(SGPath::fromLocal8Bit(planet_file), false))
+      return fail(std::string("JSBSim could not load the planet file ") + planet_file);
+    return 0;
+  });
+}
+
 int aeroid_jsb_has_property(aeroid_jsb* h, const char* name, int* out) {
   *out = 0;
   return guarded("look up property", [&] {

@@ -34,6 +34,8 @@ unsafe extern "C" {
         model: *const c_char,
         allow_io: c_int,
     ) -> c_int;
+    /// Replaces the loaded model's planet with a `<planet>` file.
+    pub fn aeroid_jsb_load_planet(handle: *mut AeroidJsb, planet_file: *const c_char) -> c_int;
     pub fn aeroid_jsb_has_property(
         handle: *mut AeroidJsb,
         name: *const c_char,

@@ -537,9 +537,14 @@ fn thrust_force(aircraft: &Aircraft, signals: &Signals, k: usize) -> Vector3<f64
     if propulsion.max_thrust == 0.0 || !signals.sampled.contains_key("throttle") {
         return Vector3::zeros();
     }
-    let log_density_ratio = Atmosphere::default()
-        .at(signals.value("altitude", k))
-        .log_density_ratio;
+    // Without a thrust lapse the altitude channel is not needed (nor read).
+    let log_density_ratio = if propulsion.density_exponent == 0.0 {
+        0.0
+    } else {
+        Atmosphere::default()
+            .at(signals.value("altitude", k))
+            .log_density_ratio
+    };
     propulsion.direction * propulsion.thrust(signals.value("throttle", k), log_density_ratio)
 }
 

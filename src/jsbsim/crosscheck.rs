@@ -3,33 +3,27 @@
 //! state with the same control inputs and no wind, and reports the largest
 //! difference of every state.
 //!
-//! JSBSim integrates explicitly with derivatives from the previous frame: one
-//! `Run` first advances the state, then evaluates the forces at the new state
-//! with the controls set at that moment. So the controls of step k+1 are set
-//! before the `Run` that produces state k+1, which reproduces aeroid's
-//! zero-order hold. JSBSim's default integrators (rectangular Euler for the
-//! rotational rates and the attitude) are replaced by third-order
-//! Adams–Bashforth for all four integrations, run with
-//! [`CrossCheckOptions::substeps`] steps per aeroid step; aeroid uses RK4.
+//! The JSBSim half is the one flight loop of [`super::flight`] (zero-order
+//! hold of the controls, third-order Adams–Bashforth with
+//! [`CrossCheckOptions::substeps`] steps per aeroid step; aeroid uses RK4),
+//! and both halves are compared through the same truth samples.
 
 use super::export::{CONTROL_PROPERTIES, ExportOptions, export, model_name};
-use super::{Exec, FT, InitialConditions, InitialSpeed, Property};
-use crate::error::{Error, Result};
+use super::flight::{ControlCommand, ControlReading, JsbsimFlight};
+use super::{Exec, FT, InitialConditions, InitialSpeed};
+use crate::error::Result;
 use crate::scenario::Scenario;
 use crate::sim::Simulation;
-use crate::state::{self, Control};
+use crate::state::{self, Controls};
 use crate::wind::WindSpec;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// One compared state: its name, how aeroid's trace gives it, JSBSim's
-/// property and the factor from JSBSim's unit to SI, and the smallest
-/// excursion worth a relative figure.
+/// One compared state ([`compared_values`] gives it from a sample): its name
+/// and unit, and the smallest excursion worth a relative figure.
 struct Compared {
     name: &'static str,
     unit: &'static str,
-    property: &'static str,
-    to_si: f64,
     floor: f64,
     angle: bool,
 }
@@ -40,111 +34,85 @@ const COMPARED: [Compared; 13] = [
     Compared {
         name: "u",
         unit: "m/s",
-        property: "velocities/u-aero-fps",
-        to_si: FT,
         floor: 0.05,
         angle: false,
     },
     Compared {
         name: "v",
         unit: "m/s",
-        property: "velocities/v-aero-fps",
-        to_si: FT,
         floor: 0.05,
         angle: false,
     },
     Compared {
         name: "w",
         unit: "m/s",
-        property: "velocities/w-aero-fps",
-        to_si: FT,
         floor: 0.05,
         angle: false,
     },
     Compared {
         name: "p",
         unit: "rad/s",
-        property: "velocities/p-rad_sec",
-        to_si: 1.0,
         floor: 0.05 * DEG,
         angle: false,
     },
     Compared {
         name: "q",
         unit: "rad/s",
-        property: "velocities/q-rad_sec",
-        to_si: 1.0,
         floor: 0.05 * DEG,
         angle: false,
     },
     Compared {
         name: "r",
         unit: "rad/s",
-        property: "velocities/r-rad_sec",
-        to_si: 1.0,
         floor: 0.05 * DEG,
         angle: false,
     },
     Compared {
         name: "phi",
         unit: "rad",
-        property: "attitude/phi-rad",
-        to_si: 1.0,
         floor: 0.05 * DEG,
         angle: true,
     },
     Compared {
         name: "theta",
         unit: "rad",
-        property: "attitude/theta-rad",
-        to_si: 1.0,
         floor: 0.05 * DEG,
         angle: true,
     },
     Compared {
         name: "psi",
         unit: "rad",
-        property: "attitude/psi-rad",
-        to_si: 1.0,
         floor: 0.05 * DEG,
         angle: true,
     },
     Compared {
         name: "airspeed",
         unit: "m/s",
-        property: "velocities/vt-fps",
-        to_si: FT,
         floor: 0.05,
         angle: false,
     },
     Compared {
         name: "alpha",
         unit: "rad",
-        property: "aero/alpha-rad",
-        to_si: 1.0,
         floor: 0.05 * DEG,
         angle: true,
     },
     Compared {
         name: "beta",
         unit: "rad",
-        property: "aero/beta-rad",
-        to_si: 1.0,
         floor: 0.05 * DEG,
         angle: true,
     },
     Compared {
         name: "altitude",
         unit: "m",
-        property: "position/h-sl-ft",
-        to_si: FT,
         floor: 0.5,
         angle: false,
     },
 ];
 
-/// aeroid's value of the compared states at one trace sample.
-fn aeroid_values(sample: &crate::trace::TruthSample) -> [f64; 13] {
+/// The compared states of one truth sample (either simulator's).
+fn compared_values(sample: &crate::trace::TruthSample) -> [f64; 13] {
     let x = &sample.state;
     let air = &sample.evaluation.air_data;
     [
@@ -247,148 +215,99 @@ impl Default for CrossCheckOptions {
     }
 }
 
-/// JSBSim's integrators for the cross-check: third-order Adams–Bashforth.
-const INTEGRATORS: [&str; 4] = [
-    "simulation/integrator/rate/rotational",
-    "simulation/integrator/rate/translational",
-    "simulation/integrator/position/rotational",
-    "simulation/integrator/position/translational",
-];
-const ADAMS_BASHFORTH_3: f64 = 4.0;
-
-/// The exported aircraft of a prepared [`Simulation`] flying in JSBSim from
+/// Starts the exported aircraft of a prepared [`Simulation`] in JSBSim from
 /// the same trim with the same controls: the JSBSim half of a cross-check,
-/// and what `benches/jsbsim.rs` times.
-pub struct JsbsimFlight<'a> {
-    simulation: &'a Simulation,
-    exec: Exec,
-    controls: Vec<Property>,
-    readings: Vec<Property>,
+/// and what `benches/jsbsim.rs` times. The controls are written straight into
+/// the surface properties the export reads (it has no flight-control system).
+pub fn start_exported(
+    simulation: &Simulation,
+    jsbsim_atmosphere: bool,
     substeps: usize,
+) -> Result<JsbsimFlight> {
+    let environment = &simulation.model.environment;
+    let export_options = ExportOptions {
+        gravity: environment.gravity,
+        aeroid_atmosphere: !jsbsim_atmosphere,
+        temperature_offset: environment.atmosphere.temperature_offset,
+    };
+    let mut exec = load_exported(simulation, &export_options)?;
+    let trim_state = &simulation.trim.state;
+    if jsbsim_atmosphere {
+        // aeroid's offset changes temperature at constant pressure, JSBSim's
+        // delta-T changes both; only the standard day compares exactly.
+        exec.set(
+            "atmosphere/delta-T",
+            environment.atmosphere.temperature_offset * 1.8,
+        )?;
+    } else {
+        // The override functions run in a system, after JSBSim's atmosphere
+        // model, so RunIC's first frame would see an empty override (zero
+        // density, no lift) and JSBSim would seed its integrator history
+        // with that frame: a 1 g jump in the first step. Seed the override
+        // with aeroid's air at the initial altitude.
+        let air = environment.atmosphere.at(state::altitude(trim_state));
+        exec.set("atmosphere/override/temperature", air.temperature * 1.8)?;
+        exec.set(
+            "atmosphere/override/pressure",
+            air.pressure * FT * FT / super::LBF,
+        )?;
+        exec.set(
+            "atmosphere/override/density",
+            air.density * FT.powi(3) / super::SLUG,
+        )?;
+    }
+    let euler = state::euler(trim_state);
+    exec.set_initial_conditions(&InitialConditions {
+        latitude: 0.0,
+        longitude: 0.0,
+        altitude: state::altitude(trim_state),
+        attitude: [euler.roll, euler.pitch, euler.yaw],
+        speed: InitialSpeed::Body([
+            trim_state[state::U],
+            trim_state[state::V],
+            trim_state[state::W],
+        ]),
+        rates: [
+            trim_state[state::P],
+            trim_state[state::Q],
+            trim_state[state::R],
+        ],
+    })?;
+    let properties = CONTROL_PROPERTIES
+        .iter()
+        .map(|name| exec.property(name))
+        .collect::<Result<Vec<_>>>()?;
+    let commands = properties
+        .iter()
+        .map(|property| {
+            Some(ControlCommand {
+                commands: vec![*property],
+                base_command: 0.0,
+                base_value: 0.0,
+                per_unit: 1.0,
+            })
+        })
+        .collect();
+    let readings = std::array::from_fn(|i| ControlReading::Property {
+        property: properties[i],
+        scale: 1.0,
+    });
+    JsbsimFlight::start(
+        exec,
+        commands,
+        readings,
+        (simulation.step, substeps, simulation.interpolation),
+        &saturated_controls(simulation, 0),
+    )
 }
 
-impl<'a> JsbsimFlight<'a> {
-    /// Exports and loads the aircraft, sets the integrators, the time step
-    /// (the simulation's over `substeps`), the trim state and the controls
-    /// of step 0, and runs the initial conditions.
-    pub fn start(
-        simulation: &'a Simulation,
-        jsbsim_atmosphere: bool,
-        substeps: usize,
-    ) -> Result<Self> {
-        let environment = &simulation.model.environment;
-        let export_options = ExportOptions {
-            gravity: environment.gravity,
-            aeroid_atmosphere: !jsbsim_atmosphere,
-            temperature_offset: environment.atmosphere.temperature_offset,
-        };
-        let mut exec = load_exported(simulation, &export_options)?;
-        let trim_state = &simulation.trim.state;
-        if jsbsim_atmosphere {
-            // aeroid's offset changes temperature at constant pressure, JSBSim's
-            // delta-T changes both; only the standard day compares exactly.
-            exec.set(
-                "atmosphere/delta-T",
-                environment.atmosphere.temperature_offset * 1.8,
-            )?;
-        } else {
-            // The override functions run in a system, after JSBSim's atmosphere
-            // model, so RunIC's first frame would see an empty override (zero
-            // density, no lift) and JSBSim would seed its integrator history
-            // with that frame: a 1 g jump in the first step. Seed the override
-            // with aeroid's air at the initial altitude.
-            let air = environment.atmosphere.at(state::altitude(trim_state));
-            exec.set("atmosphere/override/temperature", air.temperature * 1.8)?;
-            exec.set(
-                "atmosphere/override/pressure",
-                air.pressure * FT * FT / super::LBF,
-            )?;
-            exec.set(
-                "atmosphere/override/density",
-                air.density * FT.powi(3) / super::SLUG,
-            )?;
-        }
-        for integrator in INTEGRATORS {
-            exec.set(integrator, ADAMS_BASHFORTH_3)?;
-        }
-        let substeps = substeps.max(1);
-        exec.set_dt(simulation.step / substeps as f64)?;
-        let euler = state::euler(trim_state);
-        exec.set_initial_conditions(&InitialConditions {
-            latitude: 0.0,
-            longitude: 0.0,
-            altitude: state::altitude(trim_state),
-            attitude: [euler.roll, euler.pitch, euler.yaw],
-            speed: InitialSpeed::Body([
-                trim_state[state::U],
-                trim_state[state::V],
-                trim_state[state::W],
-            ]),
-            rates: [
-                trim_state[state::P],
-                trim_state[state::Q],
-                trim_state[state::R],
-            ],
-        })?;
-        let controls = CONTROL_PROPERTIES
-            .iter()
-            .map(|name| exec.property(name))
-            .collect::<Result<_>>()?;
-        let readings = COMPARED
-            .iter()
-            .map(|c| exec.property(c.property))
-            .collect::<Result<_>>()?;
-        let mut flight = JsbsimFlight {
-            simulation,
-            exec,
-            controls,
-            readings,
-            substeps,
-        };
-        flight.set_controls(0)?;
-        flight.exec.run_ic()?;
-        Ok(flight)
-    }
-
-    /// Writes the (saturated) controls of step k.
-    fn set_controls(&mut self, k: usize) -> Result<()> {
-        let mut deflections: crate::state::Controls = self.simulation.exogenous[k]
-            .fixed_rows::<{ crate::state::CONTROL_COUNT }>(0)
-            .into_owned();
-        self.simulation.model.aircraft.saturate(&mut deflections);
-        for (control, property) in Control::ALL.iter().zip(&self.controls) {
-            self.exec
-                .set_cached(*property, deflections[control.index()])?;
-        }
-        Ok(())
-    }
-
-    /// Flies from step k to step k + 1. JSBSim's `Run` first advances the
-    /// state with the derivatives of the previous frame, then evaluates the
-    /// forces at the new state: the controls of step k+1 enter with the last
-    /// substep, which reproduces aeroid's zero-order hold.
-    pub fn advance(&mut self, k: usize) -> Result<()> {
-        for _ in 1..self.substeps {
-            self.exec.step()?;
-        }
-        self.set_controls(k + 1)?;
-        self.exec.step().map_err(|e| match e {
-            Error::Jsbsim { context, message } => Error::Jsbsim {
-                context: format!("t = {:.3} s: {context}", k as f64 * self.simulation.step),
-                message,
-            },
-            other => other,
-        })
-    }
-
-    /// The compared states now, in SI units.
-    fn states(&self) -> Result<[f64; 13]> {
-        let mut values = [0.0; 13];
-        for ((value, property), compared) in values.iter_mut().zip(&self.readings).zip(&COMPARED) {
-            *value = self.exec.get_cached(*property)? * compared.to_si;
-        }
-        Ok(values)
-    }
+/// The controls of step k as aeroid's simulator applies them (saturated).
+pub fn saturated_controls(simulation: &Simulation, k: usize) -> Controls {
+    let mut controls: Controls = simulation.exogenous[k]
+        .fixed_rows::<{ crate::state::CONTROL_COUNT }>(0)
+        .into_owned();
+    simulation.model.aircraft.saturate(&mut controls);
+    controls
 }
 
 /// Flies `scenario` in both simulators and compares every state.
@@ -404,17 +323,17 @@ pub fn crosscheck(scenario: &Scenario, options: &CrossCheckOptions) -> Result<Cr
     let aeroid_seconds = started.elapsed().as_secs_f64();
     let steps = trace.samples.len() - 1;
 
-    let mut flight = JsbsimFlight::start(&simulation, options.jsbsim_atmosphere, options.substeps)?;
+    let mut flight = start_exported(&simulation, options.jsbsim_atmosphere, options.substeps)?;
     let mut jsbsim = Vec::with_capacity(steps + 1);
     let started = Instant::now();
-    for k in 0..=steps {
-        jsbsim.push(flight.states()?);
+    for (k, sample) in trace.samples.iter().enumerate() {
+        jsbsim.push(compared_values(&flight.sample(sample.time)?));
         if k < steps {
-            flight.advance(k)?;
+            flight.advance(k, &saturated_controls(&simulation, k + 1))?;
         }
     }
     let jsbsim_seconds = started.elapsed().as_secs_f64();
-    let substeps = flight.substeps;
+    let substeps = flight.substeps();
 
     let differences = COMPARED
         .iter()
@@ -423,7 +342,7 @@ pub fn crosscheck(scenario: &Scenario, options: &CrossCheckOptions) -> Result<Cr
             let mut largest = (0.0_f64, 0.0);
             let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
             for (sample, theirs) in trace.samples.iter().zip(&jsbsim) {
-                let ours = aeroid_values(sample)[i];
+                let ours = compared_values(sample)[i];
                 low = low.min(ours);
                 high = high.max(ours);
                 let mut difference = ours - theirs[i];

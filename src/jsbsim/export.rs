@@ -225,7 +225,7 @@ pub fn aircraft_xml(aircraft: &Aircraft, options: &ExportOptions) -> Result<Stri
     let _ = writeln!(w, "  </mass_balance>");
     // JSBSim requires the element; aeroid's aircraft never touch the ground.
     let _ = writeln!(w, "  <ground_reactions/>");
-    planet(w, options.gravity);
+    write_planet(w, options.gravity);
     let _ = writeln!(w, "  <external_reactions>");
     let _ = writeln!(
         w,
@@ -272,7 +272,9 @@ fn escape(text: &str) -> String {
         .replace('"', "&quot;")
 }
 
-fn planet(w: &mut String, gravity: f64) {
+/// Writes aeroid's flat earth as a JSBSim `<planet>` element (see the module
+/// documentation): also loaded on its own for JSBSim's own aircraft.
+pub fn write_planet(w: &mut String, gravity: f64) {
     let radius_ft = FLAT_EARTH_RADIUS / FT;
     let _ = writeln!(w, "  <planet name=\"aeroid flat earth\">");
     let _ = writeln!(

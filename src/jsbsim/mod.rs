@@ -9,8 +9,9 @@
 //!   default input and output are disabled before loading and the output
 //!   instances are detached, so loading is side-effect free;
 //! - the initial-condition order matters (JSBSim keeps the speed type that was
-//!   set last and re-derives it when the altitude changes):
-//!   [`Exec::set_initial_conditions`] sets position, then attitude, then speed;
+//!   set last and re-derives it when the altitude changes; α set after the
+//!   attitude turns the attitude): [`Exec::set_initial_conditions`] sets
+//!   position, then speed, then attitude;
 //! - an unknown property reads 0.0 in JSBSim; here reading, writing or caching
 //!   an unknown property is an error naming it;
 //! - JSBSim's static unit table is filled by the first XML element ever built,
@@ -22,6 +23,8 @@
 pub mod crosscheck;
 pub mod derivatives;
 pub mod export;
+pub mod flight;
+pub mod own;
 
 use crate::error::{Error, Result};
 use jsbsim_sys as sys;
@@ -253,6 +256,19 @@ impl Exec {
         Ok(())
     }
 
+    /// Replaces the loaded model's planet (radius, rotation, gravity) with the
+    /// `<planet>` document in `file` (`FGFDMExec::LoadPlanet`, which
+    /// re-initialises the models): call it after loading, before the initial
+    /// conditions.
+    pub fn load_planet(&mut self, file: &Path) -> Result<()> {
+        let file_c = c_path(file, "planet file")?;
+        // SAFETY: valid handle and C string.
+        let status = unsafe { sys::aeroid_jsb_load_planet(self.raw.as_ptr(), file_c.as_ptr()) };
+        check(status, || {
+            self.context(format_args!("loading the planet {}", file.display()))
+        })
+    }
+
     /// Whether a property of this name exists.
     pub fn has_property(&self, name: &str) -> Result<bool> {
         let name_c = c_string(name, "property")?;
@@ -336,16 +352,17 @@ impl Exec {
     }
 
     /// Sets the initial conditions in the order JSBSim needs: position
-    /// (latitude, longitude, altitude), then attitude, then speed, then rates.
+    /// (latitude, longitude, altitude), then speed, then attitude, then rates.
     /// Setting the speed before the altitude would have JSBSim re-derive it
-    /// at the new altitude from the speed type set last.
+    /// at the new altitude from the speed type set last. Setting α or β keeps
+    /// the flight-path direction JSBSim holds (from whatever was set before)
+    /// and turns the attitude, while setting an Euler angle keeps the
+    /// body-axis velocity: so the attitude comes after the speed, and the
+    /// state set is the one asked for whatever the previous one was.
     pub fn set_initial_conditions(&mut self, ic: &InitialConditions) -> Result<()> {
         self.set("ic/lat-geod-rad", ic.latitude)?;
         self.set("ic/long-gc-rad", ic.longitude)?;
         self.set("ic/h-sl-ft", ic.altitude / FT)?;
-        self.set("ic/phi-rad", ic.attitude[0])?;
-        self.set("ic/theta-rad", ic.attitude[1])?;
-        self.set("ic/psi-true-rad", ic.attitude[2])?;
         match ic.speed {
             InitialSpeed::Body([u, v, w]) => {
                 self.set("ic/u-fps", u / FT)?;
@@ -363,6 +380,9 @@ impl Exec {
                 self.set("ic/vc-kts", speed / (1852.0 / 3600.0))?;
             }
         }
+        self.set("ic/phi-rad", ic.attitude[0])?;
+        self.set("ic/theta-rad", ic.attitude[1])?;
+        self.set("ic/psi-true-rad", ic.attitude[2])?;
         self.set("ic/p-rad_sec", ic.rates[0])?;
         self.set("ic/q-rad_sec", ic.rates[1])?;
         self.set("ic/r-rad_sec", ic.rates[2])
