@@ -200,6 +200,29 @@ mod tests {
         assert!((ratio - 16.0).abs() < 1.0, "ratio {ratio}");
     }
 
+    /// S (1 × 3, columns θ₁, θ₂, x₀) against central differences of
+    /// `step_of(x₀, θ₁, θ₂)` at `[x₀, θ₁, θ₂]`, to 1e-9 relative.
+    fn assert_is_derivative(
+        s: &DMatrix<f64>,
+        step_of: impl Fn(f64, f64, f64) -> f64,
+        at: [f64; 3],
+    ) {
+        let [x0, t1, t2] = at;
+        let d = 1e-6;
+        let expected = [
+            (step_of(x0, t1 + d, t2) - step_of(x0, t1 - d, t2)) / (2.0 * d),
+            (step_of(x0, t1, t2 + d) - step_of(x0, t1, t2 - d)) / (2.0 * d),
+            (step_of(x0 + d, t1, t2) - step_of(x0 - d, t1, t2)) / (2.0 * d),
+        ];
+        for (j, expected) in expected.iter().enumerate() {
+            assert!(
+                (s[(0, j)] - expected).abs() < 1e-9 * expected.abs().max(1.0),
+                "column {j}: {} vs {expected}",
+                s[(0, j)]
+            );
+        }
+    }
+
     /// ẋ = −a·x² + b·sin x with θ = (a, b, x₀): with the linearisations
     /// at the stage states the sensitivity step is the derivative of the
     /// discrete step, so it agrees with central differences of [`rk4_step`]
@@ -226,19 +249,7 @@ mod tests {
         let mut s = DMatrix::from_row_slice(1, 3, &[0.0, 0.0, 1.0]);
         let mut work = [(); 3].map(|_| DMatrix::zeros(1, 3));
         rk4_linear_step(&mut s, h, stages, &mut work);
-        let d = 1e-6;
-        let expected = [
-            (step_of(x0, a + d, b) - step_of(x0, a - d, b)) / (2.0 * d),
-            (step_of(x0, a, b + d) - step_of(x0, a, b - d)) / (2.0 * d),
-            (step_of(x0 + d, a, b) - step_of(x0 - d, a, b)) / (2.0 * d),
-        ];
-        for (j, expected) in expected.iter().enumerate() {
-            assert!(
-                (s[(0, j)] - expected).abs() < 1e-9 * expected.abs().max(1.0),
-                "column {j}: {} vs {expected}",
-                s[(0, j)]
-            );
-        }
+        assert_is_derivative(&s, step_of, [x0, a, b]);
     }
 
     /// ẋ = a(t)·x + b(t)·θ₁ + θ₂ with a, b linear in t inside the step and
@@ -271,19 +282,7 @@ mod tests {
             (&end.0, &end.1),
         ];
         rk4_linear_step(&mut s, h, stages, &mut work);
-        let d = 1e-6;
-        let expected = [
-            (step_of(x0, t1 + d, t2) - step_of(x0, t1 - d, t2)) / (2.0 * d),
-            (step_of(x0, t1, t2 + d) - step_of(x0, t1, t2 - d)) / (2.0 * d),
-            (step_of(x0 + d, t1, t2) - step_of(x0 - d, t1, t2)) / (2.0 * d),
-        ];
-        for (j, expected) in expected.iter().enumerate() {
-            assert!(
-                (s[(0, j)] - expected).abs() < 1e-9 * expected.abs().max(1.0),
-                "column {j}: {} vs {expected}",
-                s[(0, j)]
-            );
-        }
+        assert_is_derivative(&s, step_of, [x0, t1, t2]);
     }
 
     /// ẋ = u(t) with u sampled at the step ends: the hold integrates the start
