@@ -264,7 +264,7 @@ enum Source {
     },
 }
 
-/// What a grid-point linearisation differentiates along: the active states
+/// What a linearisation differentiates along: the active states
 /// (perturbed in x) and perturbed models (a coefficient offset or a
 /// nonlinear parameter moved by a step), with the step of each model.
 struct Directions {
@@ -331,7 +331,8 @@ impl Directions {
     }
 }
 
-/// A model linearised at one grid point: ẋ, the evaluation, and difference
+/// A model linearised at one point (a grid point, or an RK4 stage state
+/// with [`Linearise::Stages`]): ẋ, the evaluation, and difference
 /// quotients over the active states: ∂f/∂x, ∂f/∂θ, and at grid points the
 /// outputs' ∂g/∂x and ∂g/∂θ.
 struct Linearization {
