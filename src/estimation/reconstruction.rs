@@ -59,10 +59,6 @@ pub struct ReconstructionOptions {
     pub reference_channel: Option<String>,
     /// Only samples within [start, end] (s) are used.
     pub time_range: Option<(f64, f64)>,
-    /// Let the differentiator's windows cross control steps (default false:
-    /// the windows stop at every step found in a control channel, see
-    /// [`crate::estimation::differentiation::step_times`]).
-    pub across_steps: bool,
 }
 
 impl ReconstructionOptions {
@@ -234,10 +230,7 @@ pub fn control_steps(record: &FlightRecord) -> Vec<f64> {
 
 /// The channels that are differentiated: the rates for moments, α for α̇ terms.
 fn differentiated_channels(request: &Request) -> Vec<&'static str> {
-    let moments = request
-        .coefficients
-        .iter()
-        .any(|c| matches!(c, Coefficient::Roll | Coefficient::Pitch | Coefficient::Yaw));
+    let moments = request.coefficients.iter().any(|c| !c.is_force());
     let mut names = Vec::new();
     if moments {
         names.extend(["p", "q", "r"]);
@@ -301,12 +294,15 @@ pub fn reconstruct(
 ) -> Result<Reconstruction> {
     let needs = needed_channels(record, aircraft, request);
     check_present(record, &needs, method)?;
-    let breaks = if options.across_steps {
+    let differentiated = differentiated_channels(request);
+    // The differentiator's windows stop at the control steps: only looked
+    // for when something is differentiated.
+    let breaks = if differentiated.is_empty() {
         Vec::new()
     } else {
         control_steps(record)
     };
-    let derivatives: BTreeMap<&str, Channel> = differentiated_channels(request)
+    let derivatives: BTreeMap<&str, Channel> = differentiated
         .into_iter()
         .map(|name| {
             let channel = record.channel(name)?;
