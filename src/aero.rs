@@ -305,7 +305,9 @@ pub struct AeroModel {
     has_alpha_dot_terms: bool,
     /// Added to each coefficient (in [`Coefficient`] order; the lift-type one
     /// before it enters CL² drag). Zero in flight: output error moves one by
-    /// a small step to get ∂f/∂C for its sensitivity equations.
+    /// a small step to get ∂f/∂C for its sensitivity equations where the
+    /// forces depend on α̇ (elsewhere [`AeroModel::offset_response`] gives
+    /// it exactly).
     pub offsets: [f64; 6],
 }
 
@@ -557,6 +559,19 @@ impl AeroModel {
         }
     }
 
+    /// ∂(dχ/dt)/∂α̇ = ½·a1·τ2·(1 − tanh²(a1·(α − τ2·α̇ − α*)))/τ1 (from Eqs. 2–3);
+    /// 0 when χ is not a state.
+    pub fn separation_rate_slope(&self, alpha: f64, alpha_dot: f64) -> f64 {
+        match self.stall {
+            Some(s) if self.chi_is_state() => {
+                let v = self.parameters.values();
+                let t = (v[s.a1] * (alpha - v[s.tau2] * alpha_dot - v[s.alpha_star])).tanh();
+                0.5 * v[s.a1] * v[s.tau2] * (1.0 - t * t) / v[s.tau1]
+            }
+            _ => 0.0,
+        }
+    }
+
     /// The χ the forces use: the state when τ1 > 0, Eq. 3 when τ1 = 0, 1 without stall.
     pub fn effective_chi(&self, input: &AeroInput) -> f64 {
         if self.chi_is_state() {
@@ -664,7 +679,20 @@ impl AeroModel {
             self.sum(Coefficient::Pitch, &regressors),
             self.sum(Coefficient::Yaw, &regressors),
         );
-        let (sin_alpha, cos_alpha) = input.alpha.sin_cos();
+        self.assemble(lift_type, side, drag_type, moment, input.alpha)
+    }
+
+    /// The coefficients from the lift-type, side, drag-type and moment
+    /// coefficients at angle of attack α (linear in the four).
+    fn assemble(
+        &self,
+        lift_type: f64,
+        side: f64,
+        drag_type: f64,
+        moment: Vector3<f64>,
+        alpha: f64,
+    ) -> AeroCoefficients {
+        let (sin_alpha, cos_alpha) = alpha.sin_cos();
         match self.force_axes {
             ForceAxes::Wind => AeroCoefficients {
                 force: Vector3::new(
@@ -683,6 +711,36 @@ impl AeroModel {
                 drag: -drag_type * cos_alpha - lift_type * sin_alpha,
             },
         }
+    }
+
+    /// ∂[`AeroModel::coefficients`]/∂(offset of `coefficient`) at a flight
+    /// condition where the coefficients are `at` (α = `alpha`), exact:
+    /// the offset adds to its coefficient, and a lift-type offset also moves
+    /// the drag through CL² (its `CL2` terms and the Oswald term,
+    /// ∂CD/∂CL = 2·CL·(Σ CD_CL2 + 1/(e·π·Λ))).
+    pub fn offset_response(
+        &self,
+        coefficient: Coefficient,
+        at: &AeroCoefficients,
+        alpha: f64,
+    ) -> AeroCoefficients {
+        let mut unit = [0.0; 6];
+        unit[coefficient as usize] = 1.0;
+        if coefficient == Coefficient::Lift {
+            let values = self.parameters.values();
+            let mut slope: f64 = self.terms[Coefficient::Drag as usize]
+                .iter()
+                .filter(|t| t.regressor == Regressor::LiftSquared)
+                .map(|t| values[t.parameter])
+                .sum();
+            if let Some(e) = self.oswald {
+                slope += 1.0 / (values[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
+            }
+            let lift_type = self.coefficient_values(at)[0];
+            unit[Coefficient::Drag as usize] = 2.0 * lift_type * slope;
+        }
+        let [lift, side, drag, roll, pitch, yaw] = unit;
+        self.assemble(lift, side, drag, Vector3::new(roll, pitch, yaw), alpha)
     }
 
     /// The six coefficients in this model's naming order (CL/CZ, CY, CD/CX, Cl, Cm, Cn).

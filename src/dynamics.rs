@@ -169,10 +169,34 @@ struct Translational {
     coefficients: AeroCoefficients,
     input: AeroInput,
     chi: f64,
-    velocity_rate: Vector3<f64>,
-    specific_force: Vector3<f64>,
-    alpha_dot: f64,
-    beta_dot: f64,
+    accelerations: Accelerations,
+}
+
+/// What the aerodynamic coefficients give at one instant: affine in the
+/// coefficients (see [`FlightModel::acceleration_response`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Accelerations {
+    /// Specific force, body axes, m/s².
+    pub specific_force: Vector3<f64>,
+    /// u̇, v̇, ẇ.
+    pub velocity_rate: Vector3<f64>,
+    pub alpha_dot: f64,
+    pub beta_dot: f64,
+    /// ṗ, q̇, ṙ.
+    pub angular_acceleration: Vector3<f64>,
+}
+
+impl std::ops::Sub for Accelerations {
+    type Output = Accelerations;
+    fn sub(self, other: Accelerations) -> Accelerations {
+        Accelerations {
+            specific_force: self.specific_force - other.specific_force,
+            velocity_rate: self.velocity_rate - other.velocity_rate,
+            alpha_dot: self.alpha_dot - other.alpha_dot,
+            beta_dot: self.beta_dot - other.beta_dot,
+            angular_acceleration: self.angular_acceleration - other.angular_acceleration,
+        }
+    }
 }
 
 impl FlightModel {
@@ -245,7 +269,6 @@ impl FlightModel {
         aircraft.saturate(&mut controls);
         let Kinematics {
             velocity,
-            omega,
             ned_to_body,
             air,
             air_data,
@@ -266,48 +289,67 @@ impl FlightModel {
         } else {
             self.translational(&context, 0.0)
         };
-        let scale = air_data.dynamic_pressure * aircraft.wing_area;
-        let geometry = &aircraft.geometry;
-        let c = &translational.coefficients;
-        let aero_moment = Vector3::new(
-            c.moment.x * geometry.span,
-            c.moment.y * geometry.chord,
-            c.moment.z * geometry.span,
-        ) * scale;
-        let moment = aero_moment + aircraft.propulsion.position.cross(&thrust_force);
-        let inertia = &aircraft.mass.inertia;
-        let angular_acceleration =
-            aircraft.mass.inertia_inverse * (moment - omega.cross(&(inertia * omega)));
-
+        let Accelerations {
+            specific_force,
+            velocity_rate,
+            alpha_dot,
+            beta_dot,
+            angular_acceleration,
+        } = translational.accelerations;
         let mut derivative = StateVector::zeros();
-        derivative
-            .fixed_rows_mut::<3>(U)
-            .copy_from(&translational.velocity_rate);
+        derivative.fixed_rows_mut::<3>(U).copy_from(&velocity_rate);
         derivative
             .fixed_rows_mut::<3>(P)
             .copy_from(&angular_acceleration);
         derivative
             .fixed_rows_mut::<3>(NORTH)
             .copy_from(&ned_to_body.tr_mul(velocity));
-        derivative[CHI] =
-            aircraft
-                .aero
-                .separation_rate(air_data.alpha, translational.alpha_dot, kinematics.chi);
+        derivative[CHI] = aircraft
+            .aero
+            .separation_rate(air_data.alpha, alpha_dot, kinematics.chi);
         debug_assert_eq!(DOWN, NORTH + 2);
         Evaluation {
             derivative,
             air: *air,
             air_data: *air_data,
-            alpha_dot: translational.alpha_dot,
-            beta_dot: translational.beta_dot,
+            alpha_dot,
+            beta_dot,
             chi: translational.chi,
             coefficients: translational.coefficients,
             aero_input: translational.input,
             controls,
             thrust,
-            specific_force: translational.specific_force,
+            specific_force,
             angular_acceleration,
         }
+    }
+
+    /// How the accelerations of an evaluation at `kinematics` change when
+    /// its aerodynamic coefficients move by `direction` (other things equal):
+    /// exact, [`FlightModel::accelerations`] being affine in the
+    /// coefficients. Valid when the forces do not depend on α̇ (else the
+    /// coefficients move with α̇ too).
+    pub fn acceleration_response(
+        &self,
+        kinematics: &Kinematics,
+        evaluation: &Evaluation,
+        direction: &AeroCoefficients,
+    ) -> Accelerations {
+        let thrust_force = self.aircraft.propulsion.direction * evaluation.thrust;
+        let context = TranslationalContext {
+            kinematics,
+            controls: &evaluation.controls,
+            gravity_body: kinematics.ned_to_body.column(2) * self.environment.gravity,
+            thrust_force: &thrust_force,
+        };
+        let c = &evaluation.coefficients;
+        let moved = AeroCoefficients {
+            force: c.force + direction.force,
+            moment: c.moment + direction.moment,
+            lift: c.lift + direction.lift,
+            drag: c.drag + direction.drag,
+        };
+        self.accelerations(&context, &moved) - self.accelerations(&context, c)
     }
 
     /// Translational acceleration for a guess of α̇ (used by the aero model),
@@ -327,9 +369,29 @@ impl FlightModel {
             chi: context.kinematics.chi,
         };
         let coefficients = aircraft.aero.coefficients(&input);
-        let aero_force = coefficients.force * (air_data.dynamic_pressure * aircraft.wing_area);
-        let specific_force = (aero_force + context.thrust_force) / aircraft.mass.mass;
+        Translational {
+            accelerations: self.accelerations(context, &coefficients),
+            coefficients,
+            input,
+            chi: aircraft.aero.effective_chi(&input),
+        }
+    }
+
+    /// The accelerations aerodynamic coefficients give: the translational
+    /// equation (specific force, u̇ v̇ ẇ, and the α̇, β̇ of the air-relative
+    /// velocity) and the rotational one, ω̇ = I⁻¹·(M − ω × I·ω).
+    #[inline(always)]
+    fn accelerations(
+        &self,
+        context: &TranslationalContext,
+        coefficients: &AeroCoefficients,
+    ) -> Accelerations {
+        let aircraft = &self.aircraft;
         let kinematics = context.kinematics;
+        let air_data = &kinematics.air_data;
+        let scale = air_data.dynamic_pressure * aircraft.wing_area;
+        let aero_force = coefficients.force * scale;
+        let specific_force = (aero_force + context.thrust_force) / aircraft.mass.mass;
         let velocity_rate =
             specific_force + context.gravity_body - kinematics.omega.cross(&kinematics.velocity);
         let air_rate = velocity_rate - kinematics.wind_rate_body;
@@ -342,14 +404,23 @@ impl FlightModel {
         let speed_rate = air_data.velocity.dot(&air_rate) / air_data.airspeed;
         let beta_dot = (air_rate.y * air_data.airspeed - v * speed_rate)
             / (air_data.airspeed * (u * u + w * w).sqrt());
-        Translational {
-            coefficients,
-            input,
-            chi: aircraft.aero.effective_chi(&input),
-            velocity_rate,
+        let geometry = &aircraft.geometry;
+        let c = &coefficients.moment;
+        let aero_moment = Vector3::new(
+            c.x * geometry.span,
+            c.y * geometry.chord,
+            c.z * geometry.span,
+        ) * scale;
+        let moment = aero_moment + aircraft.propulsion.position.cross(context.thrust_force);
+        let omega = &kinematics.omega;
+        let inertia = &aircraft.mass.inertia;
+        Accelerations {
             specific_force,
+            velocity_rate,
             alpha_dot,
             beta_dot,
+            angular_acceleration: aircraft.mass.inertia_inverse
+                * (moment - omega.cross(&(inertia * omega))),
         }
     }
 
@@ -360,7 +431,7 @@ impl FlightModel {
         let mut result = self.translational(context, guess);
         let mut previous: Option<(f64, f64)> = None;
         for _ in 0..50 {
-            let residual = result.alpha_dot - guess;
+            let residual = result.accelerations.alpha_dot - guess;
             if residual.abs() <= TOLERANCE * (1.0 + guess.abs()) {
                 break;
             }
@@ -368,7 +439,7 @@ impl FlightModel {
                 Some((old_guess, old_residual)) if residual != old_residual => {
                     guess - residual * (guess - old_guess) / (residual - old_residual)
                 }
-                _ => result.alpha_dot,
+                _ => result.accelerations.alpha_dot,
             };
             previous = Some((guess, residual));
             guess = next;

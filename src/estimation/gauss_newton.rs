@@ -34,6 +34,18 @@ pub trait LeastSquaresProblem {
         Ok(false)
     }
 
+    /// For a problem whose Jacobian is an approximation it can make exact
+    /// (output error's grid-point linearisation): switch to the exact one
+    /// from now on, returning true if that changed anything. The solver
+    /// asks before a step whose predicted decrease is below
+    /// [`Options::refine_below`], and before it stops (it then carries on
+    /// with the refined Jacobian, except at the iteration limit, where the
+    /// final information matrix is the refined one), so that a converged
+    /// fit stops on the exact Jacobian.
+    fn refine(&mut self) -> bool {
+        false
+    }
+
     /// ∂r/∂θ. The default uses central differences with step
     /// h_j = relative_step·max(|θ_j|, typical_j) (see [`Options::relative_step`]).
     fn jacobian(
@@ -64,6 +76,9 @@ pub struct Options {
     /// iterations that only confirm convergence. None: not used (residuals
     /// whose scale means nothing).
     pub decrease_tolerance: Option<f64>,
+    /// Ask the problem to [`LeastSquaresProblem::refine`] its Jacobian
+    /// before a step whose predicted decrease is below this (None: never).
+    pub refine_below: Option<f64>,
     /// Relative finite-difference step (default 1e-6: central differences
     /// then have truncation error ~h² and rounding error ~ε/h, both ~1e-12
     /// relative).
@@ -81,6 +96,7 @@ impl Options {
             cost_tolerance: 1e-8,
             step_tolerance: 1e-9,
             decrease_tolerance: None,
+            refine_below: None,
             relative_step: 1e-6,
             typical: vec![1e-3; parameter_count],
             bounds: vec![(f64::NEG_INFINITY, f64::INFINITY); parameter_count],
@@ -233,8 +249,11 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             Err(reason) => return Solution::diverged(theta, history, reason),
         };
         let step = match improving_step(problem, &theta, &residuals, &jacobian, cost, options) {
-            Some(step) => step,
-            None => return finish(problem, theta, history, Status::Converged, options),
+            Outcome::Step(step) => step,
+            Outcome::Predicted | Outcome::NoDecrease if problem.refine() => continue,
+            Outcome::Predicted | Outcome::NoDecrease => {
+                return finish(problem, theta, history, Status::Converged, options);
+            }
         };
         history.push(Iteration {
             cost: step.cost,
@@ -251,9 +270,15 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             0
         };
         if quiet_iterations >= 2 || small_step {
+            if problem.refine() {
+                quiet_iterations = 0;
+                continue;
+            }
             return finish(problem, theta, history, Status::Converged, options);
         }
     }
+    // The information matrix at the limit is the refined one too.
+    problem.refine();
     finish(problem, theta, history, Status::IterationLimit, options)
 }
 
@@ -272,9 +297,16 @@ struct Step {
     halvings: i32,
 }
 
-/// A Gauss–Newton step with halving, then Levenberg–Marquardt; None when no
-/// step lowers the cost, or the step's predicted decrease is below
-/// [`Options::decrease_tolerance`] (converged).
+/// What [`improving_step`] found.
+enum Outcome {
+    Step(Step),
+    /// The step's predicted decrease is below [`Options::decrease_tolerance`].
+    Predicted,
+    /// No step lowers the cost.
+    NoDecrease,
+}
+
+/// A Gauss–Newton step with halving, then Levenberg–Marquardt.
 fn improving_step<P: LeastSquaresProblem + ?Sized>(
     problem: &mut P,
     theta: &DVector<f64>,
@@ -282,9 +314,17 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
     jacobian: &DMatrix<f64>,
     cost: f64,
     options: &Options,
-) -> Option<Step> {
+) -> Outcome {
     let information = jacobian.transpose() * jacobian;
     let gradient = jacobian.transpose() * residuals;
+    let gauss_newton = solve_symmetric(&information, &(-&gradient));
+    let predicted = -0.5 * gradient.dot(&gauss_newton);
+    if options.decrease_tolerance.is_some_and(|t| predicted <= t) {
+        return Outcome::Predicted;
+    }
+    if options.refine_below.is_some_and(|r| predicted <= r) {
+        problem.refine();
+    }
     let mut try_step = |delta: &DVector<f64>| {
         let mut candidate = theta + delta;
         options.project(&mut candidate);
@@ -295,16 +335,10 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
             .filter(|c| c.is_finite())?;
         (candidate_cost < cost).then_some((candidate, candidate_cost))
     };
-    let gauss_newton = solve_symmetric(&information, &(-&gradient));
-    if let Some(tolerance) = options.decrease_tolerance
-        && -0.5 * gradient.dot(&gauss_newton) <= tolerance
-    {
-        return None;
-    }
     let mut scale = 1.0;
     for halvings in 0..=10 {
         if let Some((theta, cost)) = try_step(&(&gauss_newton * scale)) {
-            return Some(Step {
+            return Outcome::Step(Step {
                 theta,
                 cost,
                 halvings,
@@ -318,7 +352,7 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
     for attempt in 1..=12 {
         let delta = solve_symmetric(&(&information + &diagonal * lambda), &(-&gradient));
         if let Some((theta, cost)) = try_step(&delta) {
-            return Some(Step {
+            return Outcome::Step(Step {
                 theta,
                 cost,
                 halvings: -attempt,
@@ -326,7 +360,7 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
         }
         lambda *= 10.0;
     }
-    None
+    Outcome::NoDecrease
 }
 
 /// Solves A·x = b for symmetric positive semi-definite A by SVD of the
@@ -535,5 +569,59 @@ mod tests {
         let covariance = solution.covariance();
         assert!(covariance[(0, 0)].is_infinite() && covariance[(1, 1)].is_infinite());
         assert!(covariance[(2, 2)].is_finite());
+    }
+
+    /// A problem whose Jacobian is 20 % off in one column until refined:
+    /// the solver refines it before a step predicted to decrease the cost by
+    /// less than `refine_below`, and before stopping on the predicted
+    /// decrease, so the fit ends on the exact Jacobian, at the truth.
+    #[test]
+    fn stops_only_on_the_refined_jacobian() {
+        struct Approximate {
+            fit: ExponentialFit,
+            exact: bool,
+            refinements: usize,
+        }
+        impl LeastSquaresProblem for Approximate {
+            fn residuals(&mut self, theta: &DVector<f64>) -> Result<DVector<f64>, String> {
+                self.fit.residuals(theta)
+            }
+            fn jacobian(
+                &mut self,
+                theta: &DVector<f64>,
+                options: &Options,
+            ) -> Result<DMatrix<f64>, String> {
+                let mut jacobian = finite_difference_jacobian(&mut self.fit, theta, options)?;
+                if !self.exact {
+                    jacobian.column_mut(1).scale_mut(1.2);
+                }
+                Ok(jacobian)
+            }
+            fn refine(&mut self) -> bool {
+                let refined = !self.exact;
+                self.exact = true;
+                self.refinements += usize::from(refined);
+                refined
+            }
+        }
+        let start = DVector::from_vec(vec![1.0, -0.2, 0.0]);
+        for refine_below in [Some(1e-2), None] {
+            let mut problem = Approximate {
+                fit: exponential(),
+                exact: false,
+                refinements: 0,
+            };
+            let mut options = Options::new(3);
+            options.decrease_tolerance = Some(1e-20);
+            options.refine_below = refine_below;
+            let solution = solve(&mut problem, &start, &options);
+            assert_eq!(solution.status, Status::Converged);
+            assert!(problem.exact && problem.refinements == 1);
+            let exact = finite_difference_jacobian(&mut problem.fit, &solution.theta, &options);
+            assert!((solution.jacobian - exact.unwrap()).amax() < 1e-12);
+            for (estimate, truth) in solution.theta.iter().zip([2.5, -0.7, 0.3]) {
+                assert!((estimate - truth).abs() < 1e-9, "{estimate} vs {truth}");
+            }
+        }
     }
 }
