@@ -684,6 +684,7 @@ impl AeroModel {
 
     /// The coefficients from the lift-type, side, drag-type and moment
     /// coefficients at angle of attack α (linear in the four).
+    #[inline(always)]
     fn assemble(
         &self,
         lift_type: f64,
