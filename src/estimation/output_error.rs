@@ -210,7 +210,7 @@ pub fn output_error(
         }
         problem.unknowns = all;
     }
-    let mut start = problem.current();
+    let mut start = original_start.clone();
     if let Some((unknowns, theta, _)) = &staged {
         for (j, unknown) in problem.unknowns.iter().enumerate() {
             if let Some(k) = unknowns.iter().position(|u| u == unknown) {
@@ -524,13 +524,6 @@ impl Problem {
         sensitivities: bool,
     ) -> std::result::Result<(), String> {
         self.simulated = None;
-        if std::env::var("AEROID_TRACE").is_ok() {
-            eprintln!(
-                "simulate sens={sensitivities} mode={:?} n={}",
-                self.linearise,
-                self.unknowns.len()
-            );
-        }
         let biases = self.apply(theta);
         let key = self.values(&self.all, &biases);
         let grids = (0..self.segments.len())
