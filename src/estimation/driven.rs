@@ -1007,13 +1007,7 @@ fn check_departure(x: &FlightPathState, time: f64) -> std::result::Result<(), St
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimation::structure::{ModelStructure, StructureFile};
-
-    fn structure(text: &str) -> ModelStructure {
-        let file: StructureFile = toml::from_str(text).unwrap();
-        let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/models/test.toml"));
-        ModelStructure::from_file(&file, path).unwrap()
-    }
+    use crate::estimation::structure::{ModelStructure, stall_test_structure};
 
     /// The exact coefficient responses ([`offset_evaluation`]) against
     /// central differences of models with the coefficient's offset moved by
@@ -1024,35 +1018,7 @@ mod tests {
     /// sideslip rates.
     #[test]
     fn coefficient_responses_match_perturbed_models() {
-        let stall = structure(
-            r#"
-name = "stall-responses"
-aircraft = "attas-stall"
-integrate = ["airspeed", "alpha", "q", "pitch"]
-outputs = ["alpha"]
-[aero]
-model = "stall"
-oswald_efficiency = 0.8
-[aero.stall]
-a1 = 20.0
-alpha_star = 0.25
-tau1 = 0.2
-tau2 = 0.5
-[aero.CD]
-0 = 0.04
-CL2 = 0.02
-chi = 0.07
-[aero.CL]
-0 = 0.15
-alpha = 3.0
-[aero.Cm]
-0 = 0.05
-alpha = -0.2
-q = -6.0
-de = -0.4
-chi = -0.1
-"#,
-        );
+        let stall = stall_test_structure(0.2);
         let cases = [
             (stall, PseudoRates::default()),
             (

@@ -818,7 +818,7 @@ impl LeastSquaresProblem for Problem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimation::structure::StructureFile;
+    use crate::estimation::structure::stall_test_structure;
     use crate::recorder::{Profile, record_scenario};
     use crate::scenario::Scenario;
 
@@ -826,8 +826,8 @@ mod tests {
     /// information matrix's) against central differences of
     /// whole simulations (the solver's default, relative step 1e-6), on 8 s
     /// of the ATTAS stall record through the stall: a postulated stall model
-    /// with linear terms, the nonlinear e, a1, α*, τ1, τ2, initial states and
-    /// an output bias. With τ1 > 0 χ is a state whose χ(0) = χ∞(α(0)) moves
+    /// with linear terms (a CL² drag term among them), the nonlinear e, a1,
+    /// α*, τ1, τ2, initial states and an output bias. With τ1 > 0 χ is a state whose χ(0) = χ∞(α(0)) moves
     /// with α(0) and the stall parameters; with τ1 = 0 (fixed) the forces
     /// depend on α̇, solved by secant. Every column agrees to 1e-5 of its
     /// largest entry, so Cramér–Rao bounds agree with the finite-difference
@@ -837,48 +837,8 @@ mod tests {
         let scenario = Scenario::load("attas-stall").unwrap();
         let profile = Profile::load("ideal", None).unwrap();
         let (record, _) = record_scenario(&scenario, &profile).unwrap();
-        for tau1 in ["0.2", "0.0"] {
-            let text = format!(
-                r#"
-name = "stall-jacobian"
-aircraft = "attas-stall"
-integrate = ["airspeed", "alpha", "q", "pitch"]
-outputs = ["airspeed", "alpha", "q", "nz", "nx"]
-step = "0.04 s"
-estimate_initial_state = true
-output_biases = ["nz"]
-[aero]
-model = "stall"
-rate_normalization = "V"
-oswald_efficiency = 0.8
-[aero.stall]
-a1 = 20.0
-alpha_star = 0.3
-tau1 = {tau1}
-tau2 = 0.5
-[aero.CD]
-0 = 0.04
-chi = 0.07
-[aero.CL]
-0 = 0.15
-alpha = 3.0
-[aero.Cm]
-0 = 0.05
-alpha = -0.2
-q = -6.0
-de = -0.4
-chi = -0.1
-[parameters.tau1]
-fixed = {fixed}
-"#,
-                fixed = tau1 == "0.0"
-            );
-            let file: StructureFile = toml::from_str(&text).unwrap();
-            let path = std::path::Path::new(concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/models/stall-jacobian.toml"
-            ));
-            let structure = ModelStructure::from_file(&file, path).unwrap();
+        for tau1 in [0.2, 0.0] {
+            let structure = stall_test_structure(tau1);
             let options = OutputErrorOptions {
                 window: Some((20.0, 28.0)),
                 ..Default::default()

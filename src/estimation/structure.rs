@@ -250,3 +250,54 @@ fn parameter_settings(
     }
     (free, bounds)
 }
+
+/// A postulated stall model of the `attas-stall` aircraft for unit tests
+/// (longitudinal, 0.04 s step, initial states and an nz bias estimated):
+/// linear terms, the Oswald e, a CD_CL2 term, and the stall parameters with
+/// τ1 as given (fixed when 0, which makes χ algebraic and the forces
+/// depend on α̇).
+#[cfg(test)]
+pub(crate) fn stall_test_structure(tau1: f64) -> ModelStructure {
+    let text = format!(
+        r#"
+name = "stall-test"
+aircraft = "attas-stall"
+integrate = ["airspeed", "alpha", "q", "pitch"]
+outputs = ["airspeed", "alpha", "q", "nz", "nx"]
+step = "0.04 s"
+estimate_initial_state = true
+output_biases = ["nz"]
+[aero]
+model = "stall"
+rate_normalization = "V"
+oswald_efficiency = 0.8
+[aero.stall]
+a1 = 20.0
+alpha_star = 0.3
+tau1 = {tau1:?}
+tau2 = 0.5
+[aero.CD]
+0 = 0.04
+CL2 = 0.02
+chi = 0.07
+[aero.CL]
+0 = 0.15
+alpha = 3.0
+[aero.Cm]
+0 = 0.05
+alpha = -0.2
+q = -6.0
+de = -0.4
+chi = -0.1
+[parameters.tau1]
+fixed = {fixed}
+"#,
+        fixed = tau1 == 0.0
+    );
+    let file: StructureFile = toml::from_str(&text).unwrap();
+    let path = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/models/stall-test.toml"
+    ));
+    ModelStructure::from_file(&file, path).unwrap()
+}
