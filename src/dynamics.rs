@@ -326,7 +326,7 @@ impl FlightModel {
 
     /// How the accelerations of an evaluation at `kinematics` change when
     /// its aerodynamic coefficients move by `direction` (other things equal):
-    /// exact, [`FlightModel::accelerations`] being affine in the
+    /// exact, `FlightModel::accelerations` being affine in the
     /// coefficients. Valid when the forces do not depend on α̇ (else the
     /// coefficients move with α̇ too).
     pub fn acceleration_response(

@@ -361,7 +361,7 @@ enum Response {
     /// The difference quotient of a perturbed model (index into `models`).
     Model(usize),
     /// A coefficient's, exact from the evaluation (f is affine in C when the
-    /// forces do not depend on α̇): [`AeroModel::offset_response`] through
+    /// forces do not depend on α̇): [`crate::aero::AeroModel::offset_response`] through
     /// [`FlightModel::acceleration_response`], χ̇ moving with α̇.
     Offset(Coefficient),
 }
@@ -789,7 +789,7 @@ impl DrivenSimulation {
     /// test against central differences); ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ. ∂f/∂x and ∂g/∂x are forward differences in
     /// each integrated state; for a term C_term of coefficient C, f is linear
     /// in C, and ∂f/∂θ = (∂f/∂C)·regressor with ∂f/∂C exact from the
-    /// evaluation ([`Response::Offset`]), or the difference quotient of an
+    /// evaluation (`Response::Offset`), or the difference quotient of an
     /// offset on C where the forces depend on α̇; a nonlinear parameter's is
     /// a forward difference.
     /// Err with the time when the model departs (non-finite, |α| or |β|
