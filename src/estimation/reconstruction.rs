@@ -324,10 +324,7 @@ pub fn reconstruct(
         // Not bridged: a derivative's dropouts are where it does not exist.
         rates.insert(name, derivative.values_at_unbridged(&times));
     }
-    let signals = Signals {
-        sampled: &sampled,
-        derivatives: &rates,
-    };
+    let signals = Signals::new(&sampled, &rates);
     let mut reconstruction = Reconstruction {
         times: Vec::with_capacity(times.len()),
         coefficients: Default::default(),
@@ -453,24 +450,62 @@ fn valid_span(channel: &Channel) -> Option<(f64, f64)> {
     Some((channel.times[first], channel.times[last]))
 }
 
-/// Channels sampled on the common time base, and derivatives of differentiated ones.
+/// The channels [`sample`] reads, sampled on the common time base (looked
+/// up by name once, not at every instant), and the derivatives of the
+/// differentiated ones; None when not needed.
 struct Signals<'a> {
-    sampled: &'a BTreeMap<&'a str, Vec<f64>>,
-    derivatives: &'a BTreeMap<&'a str, Vec<f64>>,
+    airspeed: Option<&'a [f64]>,
+    alpha: Option<&'a [f64]>,
+    altitude: Option<&'a [f64]>,
+    beta: Option<&'a [f64]>,
+    dynamic_pressure: Option<&'a [f64]>,
+    mach: Option<&'a [f64]>,
+    throttle: Option<&'a [f64]>,
+    /// nx, ny, nz.
+    load_factors: [Option<&'a [f64]>; 3],
+    /// p, q, r.
+    rates: [Option<&'a [f64]>; 3],
+    /// ṗ, q̇, ṙ.
+    rate_derivatives: [Option<&'a [f64]>; 3],
+    alpha_dot: Option<&'a [f64]>,
+    /// By [`Control::index`].
+    controls: [Option<&'a [f64]>; crate::state::CONTROL_COUNT],
 }
 
-impl Signals<'_> {
-    /// The value of a channel at instant k; NaN when it was not needed.
-    fn value(&self, name: &str, k: usize) -> f64 {
-        self.sampled.get(name).map_or(f64::NAN, |v| v[k])
-    }
+/// A series' value at instant k; NaN when there is no series.
+fn at(series: Option<&[f64]>, k: usize) -> f64 {
+    series.map_or(f64::NAN, |v| v[k])
+}
 
-    fn derivative(&self, name: &str, k: usize) -> f64 {
-        self.derivatives.get(name).map_or(f64::NAN, |v| v[k])
+impl<'a> Signals<'a> {
+    fn new(
+        sampled: &'a BTreeMap<&str, Vec<f64>>,
+        derivatives: &'a BTreeMap<&str, Vec<f64>>,
+    ) -> Signals<'a> {
+        let get = |name: &str| sampled.get(name).map(Vec::as_slice);
+        let rate = |name: &str| derivatives.get(name).map(Vec::as_slice);
+        let mut controls = [None; crate::state::CONTROL_COUNT];
+        for control in Control::ALL {
+            controls[control.index()] = get(control.name());
+        }
+        Signals {
+            airspeed: get("airspeed"),
+            alpha: get("alpha"),
+            altitude: get("altitude"),
+            beta: get("beta"),
+            dynamic_pressure: get("dynamic_pressure"),
+            mach: get("mach"),
+            throttle: get("throttle"),
+            load_factors: ["nx", "ny", "nz"].map(get),
+            rates: ["p", "q", "r"].map(get),
+            rate_derivatives: ["p", "q", "r"].map(rate),
+            alpha_dot: rate("alpha"),
+            controls,
+        }
     }
 
     fn rates(&self, k: usize) -> Vector3<f64> {
-        Vector3::new(self.value("p", k), self.value("q", k), self.value("r", k))
+        Vector3::from_fn(|i, _| at(self.rates[i], k))
     }
 }
 
@@ -489,7 +524,7 @@ fn sample(
     let thrust = thrust_force(aircraft, signals, k);
     let force = force_coefficients(aircraft, signals, k, dynamic_pressure, &thrust);
     let moment = moment_coefficients(aircraft, signals, k, dynamic_pressure, &thrust);
-    let alpha = signals.value("alpha", k);
+    let alpha = at(signals.alpha, k);
     let (lift, drag) = match aircraft.aero.force_axes {
         ForceAxes::Wind => (
             force.x * alpha.sin() - force.z * alpha.cos(),
@@ -512,17 +547,14 @@ fn sample(
 }
 
 fn density(signals: &Signals, k: usize) -> f64 {
-    Atmosphere::default()
-        .at(signals.value("altitude", k))
-        .density
+    Atmosphere::default().at(at(signals.altitude, k)).density
 }
 
 fn dynamic_pressure(signals: &Signals, k: usize) -> f64 {
-    let measured = signals.value("dynamic_pressure", k);
-    if signals.sampled.contains_key("dynamic_pressure") {
-        measured
+    if let Some(measured) = signals.dynamic_pressure {
+        measured[k]
     } else {
-        let airspeed = signals.value("airspeed", k);
+        let airspeed = at(signals.airspeed, k);
         0.5 * density(signals, k) * airspeed * airspeed
     }
 }
@@ -530,18 +562,18 @@ fn dynamic_pressure(signals: &Signals, k: usize) -> f64 {
 /// Thrust force in body axes (N): zero without propulsion.
 fn thrust_force(aircraft: &Aircraft, signals: &Signals, k: usize) -> Vector3<f64> {
     let propulsion = &aircraft.propulsion;
-    if propulsion.max_thrust == 0.0 || !signals.sampled.contains_key("throttle") {
+    let Some(throttle) = signals.throttle.filter(|_| propulsion.max_thrust != 0.0) else {
         return Vector3::zeros();
-    }
+    };
     // Without a thrust lapse the altitude channel is not needed (nor read).
     let log_density_ratio = if propulsion.density_exponent == 0.0 {
         0.0
     } else {
         Atmosphere::default()
-            .at(signals.value("altitude", k))
+            .at(at(signals.altitude, k))
             .log_density_ratio
     };
-    propulsion.direction * propulsion.thrust(signals.value("throttle", k), log_density_ratio)
+    propulsion.direction * propulsion.thrust(throttle[k], log_density_ratio)
 }
 
 /// CX, CY, CZ (Eqs. 17, 22, 18); components whose channel was not needed are NaN.
@@ -553,11 +585,8 @@ fn force_coefficients(
     thrust: &Vector3<f64>,
 ) -> Vector3<f64> {
     let weight = aircraft.mass.mass * STANDARD_GRAVITY;
-    let aerodynamic = Vector3::new(
-        weight * signals.value("nx", k),
-        weight * signals.value("ny", k),
-        -weight * signals.value("nz", k),
-    ) - thrust;
+    let [nx, ny, nz] = signals.load_factors.map(|n| at(n, k));
+    let aerodynamic = Vector3::new(weight * nx, weight * ny, -weight * nz) - thrust;
     aerodynamic / (dynamic_pressure * aircraft.wing_area)
 }
 
@@ -570,11 +599,7 @@ fn moment_coefficients(
     thrust: &Vector3<f64>,
 ) -> Vector3<f64> {
     let omega = signals.rates(k);
-    let omega_dot = Vector3::new(
-        signals.derivative("p", k),
-        signals.derivative("q", k),
-        signals.derivative("r", k),
-    );
+    let omega_dot = Vector3::from_fn(|i, _| at(signals.rate_derivatives[i], k));
     let inertia = &aircraft.mass.inertia;
     let thrust_moment = aircraft.propulsion.position.cross(thrust);
     let aerodynamic = inertia * omega_dot + omega.cross(&(inertia * omega)) - thrust_moment;
@@ -590,17 +615,14 @@ fn moment_coefficients(
 /// Every regressor of the postulated model from the measured channels
 /// (NaN where a channel was not needed); `chi` is taken as 1 (not measured).
 fn regressors(aircraft: &Aircraft, signals: &Signals, k: usize) -> [f64; REGRESSOR_COUNT] {
-    let mut controls = crate::state::Controls::from_element(f64::NAN);
-    for control in Control::ALL {
-        controls[control.index()] = signals.value(control.name(), k);
-    }
+    let controls = crate::state::Controls::from_fn(|i, _| at(signals.controls[i], k));
     let input = AeroInput {
-        alpha: signals.value("alpha", k),
-        beta: signals.value("beta", k),
-        airspeed: signals.value("airspeed", k),
-        mach: signals.value("mach", k),
+        alpha: at(signals.alpha, k),
+        beta: at(signals.beta, k),
+        airspeed: at(signals.airspeed, k),
+        mach: at(signals.mach, k),
         rates: signals.rates(k),
-        alpha_dot: signals.derivative("alpha", k),
+        alpha_dot: at(signals.alpha_dot, k),
         controls,
         chi: 1.0,
     };
@@ -664,10 +686,7 @@ mod tests {
         ]
         .into_iter()
         .collect();
-        let signals = Signals {
-            sampled: &sampled,
-            derivatives: &derivatives,
-        };
+        let signals = Signals::new(&sampled, &derivatives);
         let request = Request {
             coefficients: Coefficient::ALL.to_vec(),
             regressors: vec![Regressor::Beta, Regressor::RollRate, Regressor::Aileron],
