@@ -186,6 +186,19 @@ pub struct Accelerations {
     pub angular_acceleration: Vector3<f64>,
 }
 
+impl Accelerations {
+    /// The accelerations an evaluation holds.
+    pub fn of(evaluation: &Evaluation) -> Accelerations {
+        Accelerations {
+            specific_force: evaluation.specific_force,
+            velocity_rate: evaluation.derivative.fixed_rows::<3>(U).into(),
+            alpha_dot: evaluation.alpha_dot,
+            beta_dot: evaluation.beta_dot,
+            angular_acceleration: evaluation.angular_acceleration,
+        }
+    }
+}
+
 impl std::ops::Sub for Accelerations {
     type Output = Accelerations;
     fn sub(self, other: Accelerations) -> Accelerations {
@@ -327,8 +340,9 @@ impl FlightModel {
     /// How the accelerations of an evaluation at `kinematics` change when
     /// its aerodynamic coefficients move by `direction` (other things equal):
     /// exact, `FlightModel::accelerations` being affine in the
-    /// coefficients. Valid when the forces do not depend on α̇ (else the
-    /// coefficients move with α̇ too).
+    /// coefficients (the evaluation's own accelerations are the base).
+    /// Valid when the forces do not depend on α̇ (else the coefficients move
+    /// with α̇ too).
     pub fn acceleration_response(
         &self,
         kinematics: &Kinematics,
@@ -349,7 +363,7 @@ impl FlightModel {
             lift: c.lift + direction.lift,
             drag: c.drag + direction.drag,
         };
-        self.accelerations(&context, &moved) - self.accelerations(&context, c)
+        self.accelerations(&context, &moved) - Accelerations::of(evaluation)
     }
 
     /// Translational acceleration for a guess of α̇ (used by the aero model),

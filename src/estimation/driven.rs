@@ -216,17 +216,16 @@ fn flight_path_rates(
 /// (χ̇ through α̇: exact to first order, ∂χ̇/∂α̇ times α̇'s change), and so
 /// are the flight-path rates and every output, so the difference from the
 /// evaluation at x is exactly ∂/∂C.
+/// `kinematics` are x's.
 fn offset_evaluation(
     model: &FlightModel,
-    x: &FlightPathState,
-    angles: &Angles,
-    air: &Air,
+    kinematics: &Kinematics,
     at: &Evaluation,
     coefficient: Coefficient,
 ) -> Evaluation {
     let aero = &model.aircraft.aero;
     let direction = aero.offset_response(coefficient, &at.coefficients, at.aero_input.alpha);
-    let response = model.acceleration_response(&kinematics(x, angles, air), at, &direction);
+    let response = model.acceleration_response(kinematics, at, &direction);
     let mut moved = *at;
     moved.coefficients.force += direction.force;
     moved.coefficients.moment += direction.moment;
@@ -352,6 +351,30 @@ enum Source {
         lift: bool,
         regressor: usize,
     },
+}
+
+impl Source {
+    /// The response a column is made of and the factor it is multiplied by
+    /// (a term's regressor in `regressors`, 1 for a direction); None for no
+    /// source.
+    fn scaled(self, regressors: &TermRegressors) -> Option<(usize, f64)> {
+        match self {
+            Source::None => None,
+            Source::Direction(d) => Some((d, 1.0)),
+            Source::Term {
+                direction,
+                lift,
+                regressor,
+            } => {
+                let values = if lift {
+                    &regressors.lift
+                } else {
+                    &regressors.other
+                };
+                Some((direction, values[regressor]))
+            }
+        }
+    }
 }
 
 /// A response of ẋ and y to a change of the model: ∂/∂C of a coefficient,
@@ -526,6 +549,7 @@ impl Linearization {
                 self.gx[(o, b)] = (output.value(&moved, &evaluation) - self.outputs[o]) / step;
             }
         }
+        let point_kinematics = kinematics(x, &angles, &air);
         for (d, response) in directions.responses.iter().enumerate() {
             let (rates, evaluation, step) = match *response {
                 Response::Model(m) => {
@@ -536,7 +560,7 @@ impl Linearization {
                 }
                 Response::Offset(coefficient) => {
                     let evaluation =
-                        offset_evaluation(model, x, &angles, &air, &self.evaluation, coefficient);
+                        offset_evaluation(model, &point_kinematics, &self.evaluation, coefficient);
                     let rates = flight_path_rates(x, &angles, &evaluation, pseudo);
                     (rates, evaluation, 1.0)
                 }
@@ -556,25 +580,10 @@ impl Linearization {
             TermRegressors::default()
         };
         for (j, source) in directions.sources.iter().enumerate() {
-            let (d, factor) = match *source {
-                Source::None => {
-                    self.b.column_mut(j).fill(0.0);
-                    self.gtheta.column_mut(j).fill(0.0);
-                    continue;
-                }
-                Source::Direction(d) => (d, 1.0),
-                Source::Term {
-                    direction,
-                    lift,
-                    regressor,
-                } => {
-                    let values = if lift {
-                        &regressors.lift
-                    } else {
-                        &regressors.other
-                    };
-                    (direction, values[regressor])
-                }
+            let Some((d, factor)) = source.scaled(&regressors) else {
+                self.b.column_mut(j).fill(0.0);
+                self.gtheta.column_mut(j).fill(0.0);
+                continue;
             };
             for (a, &r) in states.iter().enumerate() {
                 self.b[(a, j)] = self.model_rates[d][r] * factor;
@@ -605,19 +614,9 @@ impl Linearization {
         model.aircraft.saturate(&mut input.controls);
         let regressors = model.aircraft.aero.term_regressors(&input);
         for (j, source) in directions.sources.iter().enumerate() {
-            if let Source::Term {
-                direction,
-                lift,
-                regressor,
-            } = *source
-            {
-                let values = if lift {
-                    &regressors.lift
-                } else {
-                    &regressors.other
-                };
+            if let (Source::Term { .. }, Some((d, factor))) = (source, source.scaled(&regressors)) {
                 for (a, &r) in directions.states.iter().enumerate() {
-                    into[(a, j)] = self.model_rates[direction][r] * values[regressor];
+                    into[(a, j)] = self.model_rates[d][r] * factor;
                 }
             }
         }
@@ -1048,7 +1047,8 @@ mod tests {
             let (angles, air) = (Angles::of(&x), model.environment.atmosphere.at(x[ALTITUDE]));
             let (rates, at) = derivative(&model, &x, &angles, &air, &controls, pseudo);
             for coefficient in Coefficient::ALL {
-                let moved = offset_evaluation(&model, &x, &angles, &air, &at, coefficient);
+                let moved =
+                    offset_evaluation(&model, &kinematics(&x, &angles, &air), &at, coefficient);
                 let exact = flight_path_rates(&x, &angles, &moved, pseudo) - rates;
                 let step = 1e-5;
                 let shifted = |sign: f64| {

@@ -249,11 +249,9 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             Err(reason) => return Solution::diverged(theta, history, reason),
         };
         let step = match improving_step(problem, &theta, &residuals, &jacobian, cost, options) {
-            Outcome::Step(step) => step,
-            Outcome::Predicted | Outcome::NoDecrease if problem.refine() => continue,
-            Outcome::Predicted | Outcome::NoDecrease => {
-                return finish(problem, theta, history, Status::Converged, options);
-            }
+            Some(step) => step,
+            None if problem.refine() => continue,
+            None => return finish(problem, theta, history, Status::Converged, options),
         };
         history.push(Iteration {
             cost: step.cost,
@@ -297,16 +295,9 @@ struct Step {
     halvings: i32,
 }
 
-/// What [`improving_step`] found.
-enum Outcome {
-    Step(Step),
-    /// The step's predicted decrease is below [`Options::decrease_tolerance`].
-    Predicted,
-    /// No step lowers the cost.
-    NoDecrease,
-}
-
-/// A Gauss–Newton step with halving, then Levenberg–Marquardt.
+/// A Gauss–Newton step with halving, then Levenberg–Marquardt; None when
+/// the step's predicted decrease is below [`Options::decrease_tolerance`]
+/// or no step lowers the cost (converged, either way).
 fn improving_step<P: LeastSquaresProblem + ?Sized>(
     problem: &mut P,
     theta: &DVector<f64>,
@@ -314,13 +305,13 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
     jacobian: &DMatrix<f64>,
     cost: f64,
     options: &Options,
-) -> Outcome {
+) -> Option<Step> {
     let information = jacobian.transpose() * jacobian;
     let gradient = jacobian.transpose() * residuals;
     let gauss_newton = solve_symmetric(&information, &(-&gradient));
     let predicted = -0.5 * gradient.dot(&gauss_newton);
     if options.decrease_tolerance.is_some_and(|t| predicted <= t) {
-        return Outcome::Predicted;
+        return None;
     }
     if options.refine_below.is_some_and(|r| predicted <= r) {
         problem.refine();
@@ -338,7 +329,7 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
     let mut scale = 1.0;
     for halvings in 0..=10 {
         if let Some((theta, cost)) = try_step(&(&gauss_newton * scale)) {
-            return Outcome::Step(Step {
+            return Some(Step {
                 theta,
                 cost,
                 halvings,
@@ -352,7 +343,7 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
     for attempt in 1..=12 {
         let delta = solve_symmetric(&(&information + &diagonal * lambda), &(-&gradient));
         if let Some((theta, cost)) = try_step(&delta) {
-            return Outcome::Step(Step {
+            return Some(Step {
                 theta,
                 cost,
                 halvings: -attempt,
@@ -360,7 +351,7 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
         }
         lambda *= 10.0;
     }
-    Outcome::NoDecrease
+    None
 }
 
 /// Solves A·x = b for symmetric positive semi-definite A by SVD of the
