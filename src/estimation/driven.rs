@@ -579,17 +579,25 @@ impl Linearization {
         } else {
             TermRegressors::default()
         };
+        // Column j of ∂f/∂θ and ∂g/∂θ: its response times its factor.
+        let (n, outputs) = (states.len(), outputs.len());
+        let (b, g) = (self.b.as_mut_slice(), self.gtheta.as_mut_slice());
         for (j, source) in directions.sources.iter().enumerate() {
+            let (b, g) = (
+                &mut b[j * n..(j + 1) * n],
+                &mut g[j * outputs..(j + 1) * outputs],
+            );
             let Some((d, factor)) = source.scaled(&regressors) else {
-                self.b.column_mut(j).fill(0.0);
-                self.gtheta.column_mut(j).fill(0.0);
+                b.fill(0.0);
+                g.fill(0.0);
                 continue;
             };
-            for (a, &r) in states.iter().enumerate() {
-                self.b[(a, j)] = self.model_rates[d][r] * factor;
+            let rates = &self.model_rates[d];
+            for (b, &r) in b.iter_mut().zip(states) {
+                *b = rates[r] * factor;
             }
-            for o in 0..outputs.len() {
-                self.gtheta[(o, j)] = self.model_outputs[(o, d)] * factor;
+            for (g, response) in g.iter_mut().zip(self.model_outputs.column(d).iter()) {
+                *g = response * factor;
             }
         }
     }

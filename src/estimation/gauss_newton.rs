@@ -307,7 +307,7 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
     options: &Options,
 ) -> Option<Step> {
     let information = jacobian.transpose() * jacobian;
-    let gradient = jacobian.transpose() * residuals;
+    let gradient = jacobian.tr_mul(residuals);
     let gauss_newton = solve_symmetric(&information, &(-&gradient));
     let predicted = -0.5 * gradient.dot(&gauss_newton);
     if options.decrease_tolerance.is_some_and(|t| predicted <= t) {

@@ -161,7 +161,9 @@ type Predictions = Vec<Vec<Vec<f64>>>;
 struct Grid {
     /// [output][grid point].
     values: Vec<Vec<f64>>,
-    /// Per output, ∂y/∂θ at each grid point (row-major: point × all unknowns).
+    /// Per output, ∂y/∂θ over the grid, one unknown after another
+    /// (column-major: all unknowns × points, the series of unknown c at
+    /// `c·points..(c + 1)·points`), so that a Jacobian column is a copy.
     sensitivities: Vec<Vec<f64>>,
 }
 
@@ -496,7 +498,7 @@ impl Problem {
         let points = segment.simulation.len();
         let mut grid = Grid {
             values: vec![Vec::with_capacity(points); self.outputs.len()],
-            sensitivities: vec![Vec::with_capacity(points * columns.len()); self.outputs.len()],
+            sensitivities: vec![vec![0.0; points * columns.len()]; self.outputs.len()],
         };
         segment.simulation.simulate(
             &self.model,
@@ -506,9 +508,15 @@ impl Problem {
             self.linearise,
             |k, y, dy| {
                 debug_assert_eq!(grid.values[0].len(), k);
-                for (o, values) in grid.values.iter_mut().enumerate() {
-                    values.push(y[o]);
-                    grid.sensitivities[o].extend(dy.row(o).iter());
+                for (values, y) in grid.values.iter_mut().zip(y) {
+                    values.push(*y);
+                }
+                // dy is outputs × columns, column-major.
+                let outputs = y.len();
+                for (c, column) in dy.as_slice().chunks_exact(outputs).enumerate() {
+                    for (series, value) in grid.sensitivities.iter_mut().zip(column) {
+                        series[c * points + k] = *value;
+                    }
                 }
             },
         )?;
@@ -763,54 +771,59 @@ impl LeastSquaresProblem for Problem {
             .iter()
             .flat_map(|s| s.outputs.iter().map(|o| o.times.len()))
             .sum();
-        // The solver's unknowns among the simulated columns.
-        let columns: Vec<usize> = self
-            .unknowns
-            .iter()
-            .map(|u| {
-                self.all
+        let all = self.all.len();
+        // Where each sample lies on its grid, per output and segment.
+        let brackets: Vec<Vec<Vec<(usize, f64)>>> = (0..self.outputs.len())
+            .map(|o| {
+                self.segments
                     .iter()
-                    .position(|a| a == u)
-                    .expect("a simulated unknown")
+                    .map(|segment| {
+                        let simulation = &segment.simulation;
+                        let points = simulation.len();
+                        segment.outputs[o]
+                            .times
+                            .iter()
+                            .map(|&t| match points {
+                                0 | 1 => (0, 0.0),
+                                _ => bracket(points, simulation.start, simulation.step, t),
+                            })
+                            .collect()
+                    })
+                    .collect()
             })
             .collect();
-        let (m, all) = (self.unknowns.len(), self.all.len());
-        let mut jacobian = Vec::with_capacity(rows * m);
-        for (o, weight) in self.weights.iter().enumerate() {
-            let bias = self
-                .unknowns
+        // Filled column by column (DMatrix is column-major), each column
+        // output after output and segment after segment, as the residuals.
+        let mut jacobian = DMatrix::zeros(rows, self.unknowns.len());
+        for (unknown, mut column) in self.unknowns.iter().zip(jacobian.column_iter_mut()) {
+            let c = self
+                .all
                 .iter()
-                .position(|u| *u == Unknown::Bias { output: o });
-            for (segment, grid) in self.segments.iter().zip(grids) {
-                let simulation = &segment.simulation;
-                let sensitivities = &grid.sensitivities[o];
-                let points = sensitivities.len() / all.max(1);
-                for &t in &segment.outputs[o].times {
-                    let start = jacobian.len();
-                    let (k, fraction) = if points < 2 {
-                        (0, 0.0)
-                    } else {
-                        bracket(points, simulation.start, simulation.step, t)
-                    };
-                    let low = &sensitivities[k * all..(k + 1) * all];
-                    if fraction == 0.0 {
-                        jacobian.extend(columns.iter().map(|&j| low[j]));
-                    } else {
-                        let high = &sensitivities[(k + 1) * all..(k + 2) * all];
-                        jacobian.extend(
-                            columns
-                                .iter()
-                                .map(|&j| low[j] + fraction * (high[j] - low[j])),
-                        );
+                .position(|a| a == unknown)
+                .expect("a simulated unknown");
+            let mut row = 0;
+            for (o, weight) in self.weights.iter().enumerate() {
+                for (grid, brackets) in grids.iter().zip(&brackets[o]) {
+                    let into = &mut column.as_mut_slice()[row..row + brackets.len()];
+                    row += brackets.len();
+                    if *unknown == (Unknown::Bias { output: o }) {
+                        into.fill(-weight);
+                        continue;
                     }
-                    if let Some(j) = bias {
-                        jacobian[start + j] = 1.0;
+                    let sensitivities = &grid.sensitivities[o];
+                    let points = sensitivities.len() / all.max(1);
+                    let series = &sensitivities[c * points..(c + 1) * points];
+                    for (into, &(k, fraction)) in into.iter_mut().zip(brackets) {
+                        let value = if fraction == 0.0 {
+                            series[k]
+                        } else {
+                            series[k] + fraction * (series[k + 1] - series[k])
+                        };
+                        *into = -weight * value;
                     }
-                    jacobian[start..].iter_mut().for_each(|v| *v *= -weight);
                 }
             }
         }
-        let jacobian = DMatrix::from_row_slice(rows, m, &jacobian);
         Ok(jacobian)
     }
 }
