@@ -171,6 +171,10 @@ enum Command {
         /// (a different manoeuvre) and report how well it reproduces each output.
         #[arg(long)]
         check_on: Option<PathBuf>,
+        /// Output error's start values: equation error's estimates when they
+        /// fit better than the model file's (ee), or the model file's (model).
+        #[arg(long, value_enum, default_value_t = OemStart::Ee)]
+        start: OemStart,
     },
     /// Write an aircraft as a JSBSim aircraft (DIR/NAME/NAME.xml): the same
     /// mass, inertia, geometry, thrust and linear aerodynamics, the
@@ -209,6 +213,15 @@ enum Command {
 }
 
 /// Estimators the CLI can run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum OemStart {
+    /// Equation error's estimates, when the structure allows equation error
+    /// and they fit the record better than the model file's values.
+    Ee,
+    /// The model file's values (the initial state first held).
+    Model,
+}
+
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 enum Method {
     /// Equation error: least squares on coefficients reconstructed from
@@ -323,7 +336,15 @@ fn run(cli: Cli) -> Result<()> {
             method,
             out,
             check_on,
-        } => estimate(&record, &model, method, out.as_deref(), check_on.as_deref()),
+            start,
+        } => estimate(
+            &record,
+            &model,
+            method,
+            out.as_deref(),
+            check_on.as_deref(),
+            start,
+        ),
         Command::Inspect { record } => {
             print!(
                 "{}",
@@ -416,6 +437,7 @@ fn estimate(
     method: Method,
     out: Option<&std::path::Path>,
     check_on: Option<&std::path::Path>,
+    start: OemStart,
 ) -> Result<()> {
     use aeroid::estimation::{output_error, score, structure::ModelStructure};
     let record = aeroid::record::FlightRecord::read(record_folder)?;
@@ -432,7 +454,16 @@ fn estimate(
             reports.iter().for_each(|report| println!("{report}"));
             estimate
         }
-        Method::Oem => output_error::output_error(&[&record], &structure, &Default::default())?,
+        Method::Oem => {
+            let options = output_error::OutputErrorOptions {
+                start: match start {
+                    OemStart::Ee => output_error::Start::EquationError,
+                    OemStart::Model => output_error::Start::Model,
+                },
+                ..Default::default()
+            };
+            output_error::output_error(&[&record], &structure, &options)?
+        }
     };
     let truth_path = record_folder.join(aeroid::truth::TRUTH_FILE);
     let truth = truth_path
