@@ -32,7 +32,7 @@
 
 use crate::error::Problems;
 use crate::params::ParameterSet;
-use crate::state::{Control, Controls};
+use crate::state::{Control, Controls, SinCos};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -663,6 +663,11 @@ impl AeroModel {
 
     /// Evaluates all six coefficients. Allocation-free.
     pub fn coefficients(&self, input: &AeroInput) -> AeroCoefficients {
+        self.coefficients_at(input, input.alpha.sin_cos())
+    }
+
+    /// As [`AeroModel::coefficients`], with sin α and cos α of `input.alpha` given.
+    pub fn coefficients_at(&self, input: &AeroInput, alpha_sin_cos: SinCos) -> AeroCoefficients {
         let TermRegressors {
             other: regressors,
             lift_type,
@@ -679,11 +684,11 @@ impl AeroModel {
             self.sum(Coefficient::Pitch, &regressors),
             self.sum(Coefficient::Yaw, &regressors),
         );
-        self.assemble(lift_type, side, drag_type, moment, input.alpha)
+        self.assemble(lift_type, side, drag_type, moment, alpha_sin_cos)
     }
 
     /// The coefficients from the lift-type, side, drag-type and moment
-    /// coefficients at angle of attack α (linear in the four).
+    /// coefficients at angle of attack α (its sine and cosine; linear in the four).
     #[inline(always)]
     fn assemble(
         &self,
@@ -691,9 +696,8 @@ impl AeroModel {
         side: f64,
         drag_type: f64,
         moment: Vector3<f64>,
-        alpha: f64,
+        (sin_alpha, cos_alpha): SinCos,
     ) -> AeroCoefficients {
-        let (sin_alpha, cos_alpha) = alpha.sin_cos();
         match self.force_axes {
             ForceAxes::Wind => AeroCoefficients {
                 force: Vector3::new(
@@ -715,7 +719,7 @@ impl AeroModel {
     }
 
     /// ∂[`AeroModel::coefficients`]/∂(offset of `coefficient`) at a flight
-    /// condition where the coefficients are `at` (α = `alpha`), exact:
+    /// condition where the coefficients are `at` (sin α, cos α = `alpha_sin_cos`), exact:
     /// the offset adds to its coefficient, and a lift-type offset also moves
     /// the drag through CL² (its `CL2` terms and the Oswald term,
     /// ∂CD/∂CL = 2·CL·(Σ CD_CL2 + 1/(e·π·Λ))).
@@ -723,7 +727,7 @@ impl AeroModel {
         &self,
         coefficient: Coefficient,
         at: &AeroCoefficients,
-        alpha: f64,
+        alpha_sin_cos: SinCos,
     ) -> AeroCoefficients {
         let mut unit = [0.0; 6];
         unit[coefficient as usize] = 1.0;
@@ -741,7 +745,13 @@ impl AeroModel {
             unit[Coefficient::Drag as usize] = 2.0 * lift_type * slope;
         }
         let [lift, side, drag, roll, pitch, yaw] = unit;
-        self.assemble(lift, side, drag, Vector3::new(roll, pitch, yaw), alpha)
+        self.assemble(
+            lift,
+            side,
+            drag,
+            Vector3::new(roll, pitch, yaw),
+            alpha_sin_cos,
+        )
     }
 
     /// The six coefficients in this model's naming order (CL/CZ, CY, CD/CX, Cl, Cm, Cn).

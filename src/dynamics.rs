@@ -21,7 +21,7 @@ use crate::aircraft::Aircraft;
 use crate::atmosphere::{Air, Atmosphere};
 use crate::integrator::Interpolation;
 use crate::state::{
-    self, CHI, CONTROL_COUNT, Control, Controls, DOWN, NORTH, P, Q0, StateVector, U,
+    self, CHI, CONTROL_COUNT, Control, Controls, DOWN, NORTH, P, Q0, SinCos, StateVector, U,
 };
 use crate::wind::WindSample;
 use nalgebra::{Matrix3, SVector, Vector3};
@@ -96,6 +96,8 @@ fn unpack_wind(v: &ExogenousVector) -> WindSample {
 pub struct AirData {
     pub airspeed: f64,
     pub alpha: f64,
+    /// sin α, cos α (the wind-axis forces need them at every evaluation).
+    pub alpha_sin_cos: SinCos,
     pub beta: f64,
     pub mach: f64,
     pub dynamic_pressure: f64,
@@ -106,10 +108,22 @@ pub struct AirData {
 impl AirData {
     /// Air data of an air-relative velocity (body axes) whose α and β are known.
     pub fn new(velocity: Vector3<f64>, alpha: f64, beta: f64, air: &Air) -> AirData {
+        AirData::with_alpha_sin_cos(velocity, alpha, alpha.sin_cos(), beta, air)
+    }
+
+    /// As [`AirData::new`], with α's sine and cosine already computed.
+    pub fn with_alpha_sin_cos(
+        velocity: Vector3<f64>,
+        alpha: f64,
+        alpha_sin_cos: SinCos,
+        beta: f64,
+        air: &Air,
+    ) -> AirData {
         let airspeed = velocity.norm();
         AirData {
             airspeed,
             alpha,
+            alpha_sin_cos,
             beta,
             mach: airspeed / air.speed_of_sound,
             dynamic_pressure: 0.5 * air.density * airspeed * airspeed,
@@ -382,7 +396,9 @@ impl FlightModel {
             controls: *context.controls,
             chi: context.kinematics.chi,
         };
-        let coefficients = aircraft.aero.coefficients(&input);
+        let coefficients = aircraft
+            .aero
+            .coefficients_at(&input, air_data.alpha_sin_cos);
         Translational {
             accelerations: self.accelerations(context, &coefficients),
             coefficients,

@@ -124,7 +124,7 @@ fn kinematics(x: &FlightPathState, angles: &Angles, air: &Air) -> Kinematics {
         omega: x.fixed_rows::<3>(P).into(),
         ned_to_body: state::ned_to_body(angles.roll, angles.pitch, (0.0, 1.0)),
         air: *air,
-        air_data: AirData::new(velocity, x[ALPHA], x[BETA], air),
+        air_data: AirData::with_alpha_sin_cos(velocity, x[ALPHA], angles.alpha, x[BETA], air),
         chi: x[CHI],
         wind_rate_body: Vector3::zeros(),
     }
@@ -224,7 +224,7 @@ fn offset_evaluation(
     coefficient: Coefficient,
 ) -> Evaluation {
     let aero = &model.aircraft.aero;
-    let direction = aero.offset_response(coefficient, &at.coefficients, at.aero_input.alpha);
+    let direction = aero.offset_response(coefficient, &at.coefficients, at.air_data.alpha_sin_cos);
     let response = model.acceleration_response(kinematics, at, &direction);
     let mut moved = *at;
     moved.coefficients.force += direction.force;

@@ -310,9 +310,11 @@ impl JsbsimFlight {
             speed_of_sound: self.read(R_SOUND)? * FT,
             log_density_ratio: (density / SEA_LEVEL_DENSITY).ln(),
         };
+        let alpha = self.read(R_ALPHA)?;
         let air_data = AirData {
             airspeed: self.read(R_AIRSPEED)? * FT,
-            alpha: self.read(R_ALPHA)?,
+            alpha,
+            alpha_sin_cos: alpha.sin_cos(),
             beta: self.read(R_BETA)?,
             mach: self.read(R_MACH)?,
             dynamic_pressure: self.read(R_QBAR)? * PSF,
@@ -320,7 +322,7 @@ impl JsbsimFlight {
         };
         let [cl, cy, cd, roll, pitch, yaw] = coefficients(&self.exec)?;
         let qs = air_data.dynamic_pressure * self.geometry[0];
-        let (sin_alpha, cos_alpha) = air_data.alpha.sin_cos();
+        let (sin_alpha, cos_alpha) = air_data.alpha_sin_cos;
         let coefficients = AeroCoefficients {
             force: Vector3::new(
                 self.read(R_AERO_X)? * LBF / qs,
