@@ -189,14 +189,7 @@ impl Differentiator {
     /// The centred derivative's gain relative to the ideal derivative at
     /// `frequency` (Hz) on a uniform grid of `rate` (Hz).
     pub fn gain(&self, rate: f64, frequency: f64) -> f64 {
-        let m = self.half_window(rate);
-        let omega = std::f64::consts::TAU * frequency;
-        let times: Vec<f64> = (0..=2 * m).map(|j| j as f64 / rate).collect();
-        let values: Vec<f64> = times
-            .iter()
-            .map(|t| (omega * (t - times[m])).sin())
-            .collect();
-        self.slope_at(&times, &values, m, 0..=2 * m) / omega
+        UniformWindow::new(self, self.half_window(rate), rate).gain(frequency)
     }
 
     /// The accurate band and the cut-off at `rate` (Hz), by scanning the gain.
@@ -207,8 +200,9 @@ impl Differentiator {
         let mut accurate_to = nyquist;
         let mut half_gain = nyquist;
         let mut accurate_found = false;
+        let window = UniformWindow::new(self, self.half_window(rate), rate);
         for frequency in frequencies {
-            let gain = self.gain(rate, frequency);
+            let gain = window.gain(frequency);
             if !accurate_found && (gain - 1.0).abs() > 0.01 {
                 accurate_to = frequency - nyquist / steps as f64;
                 accurate_found = true;
@@ -309,6 +303,19 @@ impl UniformWindow {
             spacing,
             weights,
         }
+    }
+
+    /// The gain relative to the ideal derivative at `frequency` (Hz): the
+    /// weights applied to sin(ω·t) centred on the window, over ω.
+    fn gain(&self, frequency: f64) -> f64 {
+        let omega = std::f64::consts::TAU * frequency;
+        let slope: f64 = self
+            .weights
+            .iter()
+            .enumerate()
+            .map(|(j, w)| w * (omega * (j as f64 - self.half as f64) * self.spacing).sin())
+            .sum();
+        slope / omega
     }
 
     /// The slope at sample k, or None where the window is not uniform and

@@ -248,10 +248,30 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             Ok(evaluated) => evaluated,
             Err(reason) => return Solution::diverged(theta, history, reason),
         };
-        let step = match improving_step(problem, &theta, &residuals, &jacobian, cost, options) {
+        let information = jacobian.transpose() * &jacobian;
+        let step = match improving_step(
+            problem,
+            &theta,
+            &residuals,
+            &jacobian,
+            &information,
+            cost,
+            options,
+        ) {
             Some(step) => step,
             None if problem.refine() => continue,
-            None => return finish(problem, theta, history, Status::Converged, options),
+            // Converged at θ, whose residuals and Jacobian are at hand.
+            None => {
+                return Solution {
+                    theta,
+                    cost,
+                    status: Status::Converged,
+                    history,
+                    information,
+                    residuals,
+                    jacobian,
+                };
+            }
         };
         history.push(Iteration {
             cost: step.cost,
@@ -303,12 +323,12 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
     theta: &DVector<f64>,
     residuals: &DVector<f64>,
     jacobian: &DMatrix<f64>,
+    information: &DMatrix<f64>,
     cost: f64,
     options: &Options,
 ) -> Option<Step> {
-    let information = jacobian.transpose() * jacobian;
     let gradient = jacobian.tr_mul(residuals);
-    let gauss_newton = solve_symmetric(&information, &(-&gradient));
+    let gauss_newton = solve_symmetric(information, &(-&gradient));
     let predicted = -0.5 * gradient.dot(&gauss_newton);
     if options.decrease_tolerance.is_some_and(|t| predicted <= t) {
         return None;
@@ -341,7 +361,7 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
         DMatrix::from_diagonal(&information.diagonal().map(|d| d.max(f64::MIN_POSITIVE)));
     let mut lambda = 1e-3;
     for attempt in 1..=12 {
-        let delta = solve_symmetric(&(&information + &diagonal * lambda), &(-&gradient));
+        let delta = solve_symmetric(&(information + &diagonal * lambda), &(-&gradient));
         if let Some((theta, cost)) = try_step(&delta) {
             return Some(Step {
                 theta,
