@@ -1,11 +1,14 @@
 //! One output-error fit and one equation-error fit of the ATTAS
 //! lateral-directional case (scenario attas-lateral-multistep: 60 s of
 //! aileron and rudder multisteps, recorded at 25 Hz by the flight-test
-//! profile; model attas-lateral, 18 parameters). Run:
+//! profile; model attas-lateral, 18 parameters and 4 initial states). The
+//! output-error fit is the default one: it starts from equation error's
+//! estimates (their cost included); `output_error_from_model_file` starts
+//! from the model file's a-priori values instead. Run:
 //! `cargo bench --bench estimators`.
 
 use aeroid::estimation::equation_error::equation_error;
-use aeroid::estimation::output_error::output_error;
+use aeroid::estimation::output_error::{OutputErrorOptions, Start, output_error};
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::recorder::{Profile, record_scenario};
 use aeroid::scenario::Scenario;
@@ -21,6 +24,13 @@ fn bench_fits(c: &mut Criterion) {
     group.sample_size(10);
     group.bench_function("output_error", |b| {
         b.iter(|| output_error(&[black_box(&record)], &structure, &Default::default()).unwrap())
+    });
+    let from_file = OutputErrorOptions {
+        start: Start::Model,
+        ..Default::default()
+    };
+    group.bench_function("output_error_from_model_file", |b| {
+        b.iter(|| output_error(&[black_box(&record)], &structure, &from_file).unwrap())
     });
     group.bench_function("equation_error", |b| {
         b.iter(|| equation_error(black_box(&record), &structure, &Default::default()).unwrap())
