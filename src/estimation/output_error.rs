@@ -638,7 +638,7 @@ impl Problem {
                     values.push(*y);
                 }
                 // dy is outputs × columns, column-major.
-                let outputs = y.len();
+                let outputs = y.len().max(1);
                 for (c, column) in dy.as_slice().chunks_exact(outputs).enumerate() {
                     for (series, value) in grid.sensitivities.iter_mut().zip(column) {
                         series[c * points + k] = *value;
