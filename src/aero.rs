@@ -287,6 +287,18 @@ pub struct AeroCoefficients {
     pub drag: f64,
 }
 
+impl std::ops::Add for AeroCoefficients {
+    type Output = AeroCoefficients;
+    fn add(self, other: AeroCoefficients) -> AeroCoefficients {
+        AeroCoefficients {
+            force: self.force + other.force,
+            moment: self.moment + other.moment,
+            lift: self.lift + other.lift,
+            drag: self.drag + other.drag,
+        }
+    }
+}
+
 /// An aerodynamic model with named parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AeroModel {

@@ -304,13 +304,7 @@ impl FlightModel {
         let thrust = aircraft
             .propulsion
             .thrust(controls[Control::Throttle.index()], air.log_density_ratio);
-        let thrust_force = aircraft.propulsion.direction * thrust;
-        let context = TranslationalContext {
-            kinematics,
-            controls: &controls,
-            gravity_body: ned_to_body.column(2) * self.environment.gravity,
-            thrust_force: &thrust_force,
-        };
+        let context = self.context(kinematics, &controls, thrust);
         let translational = if aircraft.aero.forces_depend_on_alpha_dot() {
             self.solve_alpha_dot(&context)
         } else {
@@ -363,21 +357,26 @@ impl FlightModel {
         evaluation: &Evaluation,
         direction: &AeroCoefficients,
     ) -> Accelerations {
-        let thrust_force = self.aircraft.propulsion.direction * evaluation.thrust;
-        let context = TranslationalContext {
-            kinematics,
-            controls: &evaluation.controls,
-            gravity_body: kinematics.ned_to_body.column(2) * self.environment.gravity,
-            thrust_force: &thrust_force,
-        };
-        let c = &evaluation.coefficients;
-        let moved = AeroCoefficients {
-            force: c.force + direction.force,
-            moment: c.moment + direction.moment,
-            lift: c.lift + direction.lift,
-            drag: c.drag + direction.drag,
-        };
+        let context = self.context(kinematics, &evaluation.controls, evaluation.thrust);
+        let moved = evaluation.coefficients + *direction;
         self.accelerations(&context, &moved) - Accelerations::of(evaluation)
+    }
+
+    /// What the translational and rotational equations need besides the
+    /// coefficients: gravity in body axes and the thrust force.
+    #[inline(always)]
+    fn context<'a>(
+        &self,
+        kinematics: &'a Kinematics,
+        controls: &'a Controls,
+        thrust: f64,
+    ) -> TranslationalContext<'a> {
+        TranslationalContext {
+            kinematics,
+            controls,
+            gravity_body: kinematics.ned_to_body.column(2) * self.environment.gravity,
+            thrust_force: self.aircraft.propulsion.direction * thrust,
+        }
     }
 
     /// Translational acceleration for a guess of α̇ (used by the aero model),
@@ -441,7 +440,7 @@ impl FlightModel {
             c.y * geometry.chord,
             c.z * geometry.span,
         ) * scale;
-        let moment = aero_moment + aircraft.propulsion.position.cross(context.thrust_force);
+        let moment = aero_moment + aircraft.propulsion.position.cross(&context.thrust_force);
         let omega = &kinematics.omega;
         let inertia = &aircraft.mass.inertia;
         Accelerations {
@@ -483,7 +482,7 @@ struct TranslationalContext<'a> {
     kinematics: &'a Kinematics,
     controls: &'a Controls,
     gravity_body: Vector3<f64>,
-    thrust_force: &'a Vector3<f64>,
+    thrust_force: Vector3<f64>,
 }
 
 /// q̇ = ½·q ⊗ (0, ω), scalar-first quaternion.

@@ -173,8 +173,8 @@ enum Command {
         check_on: Option<PathBuf>,
         /// Output error's start values: equation error's estimates when they
         /// fit better than the model file's (ee), or the model file's (model).
-        #[arg(long, value_enum, default_value_t = OemStart::Ee)]
-        start: OemStart,
+        #[arg(long, value_enum, default_value_t = aeroid::estimation::output_error::Start::EquationError)]
+        start: aeroid::estimation::output_error::Start,
     },
     /// Write an aircraft as a JSBSim aircraft (DIR/NAME/NAME.xml): the same
     /// mass, inertia, geometry, thrust and linear aerodynamics, the
@@ -213,15 +213,6 @@ enum Command {
 }
 
 /// Estimators the CLI can run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum OemStart {
-    /// Equation error's estimates, when the structure allows equation error
-    /// and they fit the record better than the model file's values.
-    Ee,
-    /// The model file's values (the initial state first held).
-    Model,
-}
-
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 enum Method {
     /// Equation error: least squares on coefficients reconstructed from
@@ -437,7 +428,7 @@ fn estimate(
     method: Method,
     out: Option<&std::path::Path>,
     check_on: Option<&std::path::Path>,
-    start: OemStart,
+    start: aeroid::estimation::output_error::Start,
 ) -> Result<()> {
     use aeroid::estimation::{output_error, score, structure::ModelStructure};
     let record = aeroid::record::FlightRecord::read(record_folder)?;
@@ -456,10 +447,7 @@ fn estimate(
         }
         Method::Oem => {
             let options = output_error::OutputErrorOptions {
-                start: match start {
-                    OemStart::Ee => output_error::Start::EquationError,
-                    OemStart::Model => output_error::Start::Model,
-                },
+                start,
                 ..Default::default()
             };
             output_error::output_error(&[&record], &structure, &options)?

@@ -227,10 +227,7 @@ fn offset_evaluation(
     let direction = aero.offset_response(coefficient, &at.coefficients, at.air_data.alpha_sin_cos);
     let response = model.acceleration_response(kinematics, at, &direction);
     let mut moved = *at;
-    moved.coefficients.force += direction.force;
-    moved.coefficients.moment += direction.moment;
-    moved.coefficients.lift += direction.lift;
-    moved.coefficients.drag += direction.drag;
+    moved.coefficients = moved.coefficients + direction;
     moved.specific_force += response.specific_force;
     moved.angular_acceleration += response.angular_acceleration;
     moved.alpha_dot += response.alpha_dot;
@@ -549,7 +546,8 @@ impl Linearization {
                 self.gx[(o, b)] = (output.value(&moved, &evaluation) - self.outputs[o]) / step;
             }
         }
-        let point_kinematics = kinematics(x, &angles, &air);
+        // x's kinematics, built once if a coefficient response needs them.
+        let mut point_kinematics = None;
         for (d, response) in directions.responses.iter().enumerate() {
             let (rates, evaluation, step) = match *response {
                 Response::Model(m) => {
@@ -559,8 +557,9 @@ impl Linearization {
                     (rates, evaluation, *step)
                 }
                 Response::Offset(coefficient) => {
-                    let evaluation =
-                        offset_evaluation(model, &point_kinematics, &self.evaluation, coefficient);
+                    let point =
+                        point_kinematics.get_or_insert_with(|| kinematics(x, &angles, &air));
+                    let evaluation = offset_evaluation(model, point, &self.evaluation, coefficient);
                     let rates = flight_path_rates(x, &angles, &evaluation, pseudo);
                     (rates, evaluation, 1.0)
                 }
@@ -592,10 +591,7 @@ impl Linearization {
                 g.fill(0.0);
                 continue;
             };
-            let rates = &self.model_rates[d];
-            for (b, &r) in b.iter_mut().zip(states) {
-                *b = rates[r] * factor;
-            }
+            scaled_response(&self.model_rates[d], states, factor, b);
             for (g, response) in g.iter_mut().zip(self.model_outputs.column(d).iter()) {
                 *g = response * factor;
             }
@@ -621,13 +617,21 @@ impl Linearization {
         input.controls = *controls;
         model.aircraft.saturate(&mut input.controls);
         let regressors = model.aircraft.aero.term_regressors(&input);
-        for (j, source) in directions.sources.iter().enumerate() {
+        let states = &directions.states;
+        let columns = into.as_mut_slice().chunks_exact_mut(states.len().max(1));
+        for (source, column) in directions.sources.iter().zip(columns) {
             if let (Source::Term { .. }, Some((d, factor))) = (source, source.scaled(&regressors)) {
-                for (a, &r) in directions.states.iter().enumerate() {
-                    into[(a, j)] = self.model_rates[d][r] * factor;
-                }
+                scaled_response(&self.model_rates[d], states, factor, column);
             }
         }
+    }
+}
+
+/// A column of ∂f/∂θ: a response's rates of the active `states` times the
+/// column's factor.
+fn scaled_response(rates: &FlightPathState, states: &[usize], factor: f64, into: &mut [f64]) {
+    for (into, &r) in into.iter_mut().zip(states) {
+        *into = rates[r] * factor;
     }
 }
 

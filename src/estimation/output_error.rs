@@ -93,15 +93,17 @@ const STAGE_DECREASE: f64 = 10.0;
 /// exact simulation usually ends the fit).
 const REFINE_DECREASE: f64 = 1.0;
 
-/// Where the iterations start (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Where the iterations start (see the module documentation); also the
+/// CLI's `--start` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Start {
     /// The model file's values; initial states first held (two stages).
     Model,
     /// Equation error's estimates where the structure allows it and they
     /// fit the record better than the model file's values; otherwise as
-    /// [`Start::Model`].
+    /// the model file's.
     #[default]
+    #[value(name = "ee")]
     EquationError,
 }
 
@@ -137,6 +139,9 @@ enum Unknown {
 struct Measured {
     times: Vec<f64>,
     values: Vec<f64>,
+    /// Where each sample lies on the segment's integration grid
+    /// ([`grid_bracket`]): found once, used by every prediction and Jacobian.
+    brackets: Vec<(usize, f64)>,
 }
 
 /// One manoeuvre: its driven simulation, initial state and measured outputs.
@@ -393,14 +398,22 @@ fn segment(
         .iter()
         .map(|name| {
             let channel = record.channel(name)?;
-            let (times, values) = channel
+            let (times, values): (Vec<f64>, Vec<f64>) = channel
                 .times
                 .iter()
                 .zip(&channel.values)
                 .filter(|(t, v)| **t >= window.0 && **t <= end && v.is_finite())
                 .map(|(t, v)| (*t, *v))
                 .unzip();
-            Ok(Measured { times, values })
+            let brackets = times
+                .iter()
+                .map(|&t| grid_bracket(simulation.len(), simulation.start, simulation.step, t))
+                .collect();
+            Ok(Measured {
+                times,
+                values,
+                brackets,
+            })
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(Segment {
@@ -668,7 +681,6 @@ impl Problem {
             .iter()
             .zip(&grids)
             .map(|(segment, grid)| {
-                let simulation = &segment.simulation;
                 segment
                     .outputs
                     .iter()
@@ -676,11 +688,9 @@ impl Problem {
                     .zip(&biases)
                     .map(|((measured, values), bias)| {
                         measured
-                            .times
+                            .brackets
                             .iter()
-                            .map(|&t| {
-                                interpolate(values, simulation.start, simulation.step, t) + bias
-                            })
+                            .map(|&at| on_grid(values, at) + bias)
                             .collect()
                     })
                     .collect()
@@ -821,18 +831,30 @@ pub(crate) fn diagonal_weights(errors: &[Vec<f64>], measured: &[Vec<f64>]) -> Ve
 /// Linear interpolation of a grid series at time t.
 /// `grid[k]` is the value at `start + k·step`; held beyond the ends.
 pub(crate) fn interpolate(grid: &[f64], start: f64, step: f64, t: f64) -> f64 {
-    if grid.len() < 2 {
-        return grid.first().copied().unwrap_or(f64::NAN);
+    if grid.is_empty() {
+        return f64::NAN;
     }
-    let (k, fraction) = bracket(grid.len(), start, step, t);
-    grid[k] + fraction * (grid[k + 1] - grid[k])
+    on_grid(grid, grid_bracket(grid.len(), start, step, t))
 }
 
-/// The grid interval [k, k + 1] (of `len` ≥ 2 points) holding t and t's fraction of it.
-fn bracket(len: usize, start: f64, step: f64, t: f64) -> (usize, f64) {
+/// The grid interval [k, k + 1] of a grid of `len` points holding t, and
+/// t's fraction of it ((0, 0) for a grid of one point).
+fn grid_bracket(len: usize, start: f64, step: f64, t: f64) -> (usize, f64) {
+    if len < 2 {
+        return (0, 0.0);
+    }
     let position = ((t - start) / step).max(0.0);
-    let k = (position.floor() as usize).min(len.saturating_sub(2));
+    let k = (position.floor() as usize).min(len - 2);
     (k, (position - k as f64).clamp(0.0, 1.0))
+}
+
+/// A grid series' value at a [`grid_bracket`].
+fn on_grid(series: &[f64], (k, fraction): (usize, f64)) -> f64 {
+    if fraction == 0.0 {
+        series[k]
+    } else {
+        series[k] + fraction * (series[k + 1] - series[k])
+    }
 }
 
 impl LeastSquaresProblem for Problem {
@@ -898,26 +920,6 @@ impl LeastSquaresProblem for Problem {
             .flat_map(|s| s.outputs.iter().map(|o| o.times.len()))
             .sum();
         let all = self.all.len();
-        // Where each sample lies on its grid, per output and segment.
-        let brackets: Vec<Vec<Vec<(usize, f64)>>> = (0..self.outputs.len())
-            .map(|o| {
-                self.segments
-                    .iter()
-                    .map(|segment| {
-                        let simulation = &segment.simulation;
-                        let points = simulation.len();
-                        segment.outputs[o]
-                            .times
-                            .iter()
-                            .map(|&t| match points {
-                                0 | 1 => (0, 0.0),
-                                _ => bracket(points, simulation.start, simulation.step, t),
-                            })
-                            .collect()
-                    })
-                    .collect()
-            })
-            .collect();
         // Filled column by column (DMatrix is column-major), each column
         // output after output and segment after segment, as the residuals.
         let mut jacobian = DMatrix::zeros(rows, self.unknowns.len());
@@ -929,7 +931,8 @@ impl LeastSquaresProblem for Problem {
                 .expect("a simulated unknown");
             let mut row = 0;
             for (o, weight) in self.weights.iter().enumerate() {
-                for (grid, brackets) in grids.iter().zip(&brackets[o]) {
+                for (segment, grid) in self.segments.iter().zip(grids) {
+                    let brackets = &segment.outputs[o].brackets;
                     let into = &mut column.as_mut_slice()[row..row + brackets.len()];
                     row += brackets.len();
                     if *unknown == (Unknown::Bias { output: o }) {
@@ -939,13 +942,8 @@ impl LeastSquaresProblem for Problem {
                     let sensitivities = &grid.sensitivities[o];
                     let points = sensitivities.len() / all.max(1);
                     let series = &sensitivities[c * points..(c + 1) * points];
-                    for (into, &(k, fraction)) in into.iter_mut().zip(brackets) {
-                        let value = if fraction == 0.0 {
-                            series[k]
-                        } else {
-                            series[k] + fraction * (series[k + 1] - series[k])
-                        };
-                        *into = -weight * value;
+                    for (into, &at) in into.iter_mut().zip(brackets) {
+                        *into = -weight * on_grid(series, at);
                     }
                 }
             }
