@@ -20,8 +20,8 @@
 //! otherwise it is released and computed afresh (the chord method of
 //! nonlinear equation solving). Parameters are projected onto their
 //! bounds. A problem whose residuals cannot be evaluated (a simulation that
-//! departs, a NaN) is
-//! reported as diverged with the last good estimate, never a panic.
+//! departs, a NaN) is reported as diverged with the last good estimate,
+//! never a panic.
 //!
 //! The problem is separate from the solver: the problem computes residuals;
 //! this module owns iteration, termination and the convergence history.

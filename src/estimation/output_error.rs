@@ -46,9 +46,9 @@
 //! stall, ideal and flight-test), HANSA 3 and CDRW benchmarks against fits
 //! that compute the Jacobian afresh at every step and stop on an exact one
 //! at the estimate: Cramér–Rao bounds within 9e-4 of theirs, estimates
-//! within 0.007σ. On the lateral benchmark from equation error's start the fit is
-//! one grid-point simulation, two plain ones, one exact and a last plain
-//! one that confirms convergence.
+//! within 0.008σ. On the lateral benchmark from equation error's start the
+//! fit is one grid-point simulation, two plain ones, one exact and a last
+//! plain one that confirms convergence.
 //! A parameter `C_term` enters f only through its coefficient
 //! C, linearly: ∂f/∂θ = (∂f/∂C)·regressor, with ∂f/∂C exact from the
 //! evaluation (f is affine in C: [`crate::aero::AeroModel::offset_response`]
