@@ -310,47 +310,39 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
                 fresh_predicted = Some(predicted);
             }
         }
-        if converged {
-            if problem.refine() {
-                held = None;
-                continue;
+        let step = if converged {
+            None
+        } else {
+            // A refinement releases a held Jacobian: the next simulation
+            // brings the refined one.
+            let refined =
+                options.refine_below.is_some_and(|r| predicted <= r) && refine(problem, &mut held);
+            if !refined && (held.is_some() || (may_hold && problem.hold(predicted))) {
+                held = Some(predicted);
             }
-            // Converged at θ, whose residuals and Jacobian are at hand.
-            return Solution {
-                theta,
+            improving_step(
+                problem,
+                &theta,
+                &gauss_newton,
+                &information,
                 cost,
-                status: Status::Converged,
-                history,
-                information,
-                residuals,
-                jacobian,
-            };
-        }
-        if options.refine_below.is_some_and(|r| predicted <= r) && problem.refine() {
-            // The next simulation brings the refined Jacobian.
-            held = None;
-        } else if held.is_some() || (may_hold && problem.hold(predicted)) {
-            held = Some(predicted);
-        }
-        let Some(step) = improving_step(
-            problem,
-            &theta,
-            &gauss_newton,
-            &information,
-            cost,
-            held.is_some(),
-            options,
-        ) else {
-            if held.take().is_some() {
+                held.is_some(),
+                options,
+            )
+        };
+        let Some(step) = step else {
+            if !converged && held.is_some() {
                 // The held Jacobian's step does not lower the cost: a fresh one.
                 problem.release();
-                may_hold = false;
+                (held, may_hold) = (None, false);
                 continue;
             }
-            if problem.refine() {
+            if refine(problem, &mut held) {
                 continue;
             }
-            // No step lowers the cost: converged at θ.
+            // Converged at θ (the predicted decrease is below the tolerance,
+            // or no step lowers the cost), whose residuals and Jacobian are
+            // at hand.
             return Solution {
                 theta,
                 cost,
@@ -376,7 +368,7 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             0
         };
         if quiet_iterations >= 2 || small_step {
-            if problem.refine() {
+            if refine(problem, &mut held) {
                 quiet_iterations = 0;
                 continue;
             }
@@ -384,9 +376,19 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
         }
     }
     // The information matrix at the limit is the refined one at θ.
-    problem.refine();
+    refine(problem, &mut held);
     problem.release();
     finish(problem, theta, history, Status::IterationLimit, options)
+}
+
+/// Asks the problem to refine its Jacobian; a refinement releases a held
+/// one (`held`, the solver's record of it).
+fn refine<P: LeastSquaresProblem + ?Sized>(problem: &mut P, held: &mut Option<f64>) -> bool {
+    let refined = problem.refine();
+    if refined {
+        *held = None;
+    }
+    refined
 }
 
 fn finite_cost(residuals: &DVector<f64>) -> Result<f64, String> {

@@ -736,8 +736,9 @@ impl Problem {
     }
 
     /// Model outputs at every recorded sample at θ (simulated once per θ).
-    /// A new θ is simulated with sensitivities: the solver asks for the
-    /// Jacobian at every step it accepts, and most steps are accepted.
+    /// A new θ is simulated with sensitivities (the solver asks for the
+    /// Jacobian at every step it accepts, and most steps are accepted),
+    /// except while a Jacobian is held: then plainly.
     fn predict(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
         if !self.is_simulated(theta, None) {
             let sensitivities = !self.unknowns.is_empty() && self.held.is_none();
@@ -1058,6 +1059,15 @@ mod tests {
         }
     }
 
+    /// The benchmark case: the ATTAS lateral multistep recorded by the
+    /// flight-test profile, and the lateral model.
+    fn lateral_benchmark() -> (FlightRecord, ModelStructure) {
+        let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+        let profile = Profile::load("flight-test-25hz", None).unwrap();
+        let (record, _) = record_scenario(&scenario, &profile).unwrap();
+        (record, ModelStructure::load("attas-lateral").unwrap())
+    }
+
     /// A fit that stops on a held exact Jacobian (the lateral benchmark
     /// does: its last simulation is plain) reports the Cramér–Rao bounds of
     /// the iterate where the Jacobian was computed, within 1.4σ of the
@@ -1069,10 +1079,7 @@ mod tests {
     /// the held Jacobian stopped the fit where a fresh one would have.
     #[test]
     fn bounds_from_a_held_jacobian_match_a_fresh_one() {
-        let scenario = Scenario::load("attas-lateral-multistep").unwrap();
-        let profile = Profile::load("flight-test-25hz", None).unwrap();
-        let (record, _) = record_scenario(&scenario, &profile).unwrap();
-        let structure = ModelStructure::load("attas-lateral").unwrap();
+        let (record, structure) = lateral_benchmark();
         let estimate = output_error(&[&record], &structure, &Default::default()).unwrap();
         assert_eq!(estimate.status, Status::Converged);
         let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
@@ -1121,10 +1128,7 @@ mod tests {
     /// iteration and the bounds use the exact Jacobian.
     #[test]
     fn grid_point_jacobian_is_close_on_the_lateral_case() {
-        let scenario = Scenario::load("attas-lateral-multistep").unwrap();
-        let profile = Profile::load("flight-test-25hz", None).unwrap();
-        let (record, _) = record_scenario(&scenario, &profile).unwrap();
-        let structure = ModelStructure::load("attas-lateral").unwrap();
+        let (record, structure) = lateral_benchmark();
         let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
         let theta = problem.current();
         problem.reweight(&theta).unwrap();
