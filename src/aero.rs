@@ -639,22 +639,49 @@ impl AeroModel {
             + self.offsets[coefficient as usize]
     }
 
-    /// The regressors every term multiplies at a flight condition (the
-    /// Kirchhoff factor on the lift-type `alpha` term, `CL2` = CL²).
-    pub fn term_regressors(&self, input: &AeroInput) -> TermRegressors {
-        let chi = self.effective_chi(input);
-        let mut other = self.regressors(input, chi);
-        let kirchhoff = match self.kind {
+    /// The factor on the lift-type `alpha` term: the Kirchhoff
+    /// ((1 + √χ)/2)² of the stall model, 1 for a linear one.
+    fn kirchhoff(&self, chi: f64) -> f64 {
+        match self.kind {
             ModelKind::Stall => {
                 let root = 0.5 * (1.0 + chi.max(0.0).sqrt());
                 root * root
             }
             ModelKind::Linear => 1.0,
-        };
+        }
+    }
+
+    /// The regressors of every coefficient but the lift-type one
+    /// (`CL2` = CL² included) and the lift-type coefficient, at a flight
+    /// condition; the lift-type `alpha` regressor is the `alpha` one times
+    /// the Kirchhoff factor (also returned).
+    fn regressors_and_lift(&self, input: &AeroInput) -> ([f64; REGRESSOR_COUNT], f64, f64) {
+        let chi = self.effective_chi(input);
+        let mut other = self.regressors(input, chi);
+        let kirchhoff = self.kirchhoff(chi);
+        let values = self.parameters.values();
+        let lift_type = self.terms[Coefficient::Lift as usize]
+            .iter()
+            .map(|t| {
+                let regressor = match t.regressor {
+                    Regressor::Alpha => other[Regressor::Alpha as usize] * kirchhoff,
+                    r => other[r as usize],
+                };
+                values[t.parameter] * regressor
+            })
+            .sum::<f64>()
+            + self.offsets[Coefficient::Lift as usize];
+        other[Regressor::LiftSquared as usize] = lift_type * lift_type;
+        (other, lift_type, kirchhoff)
+    }
+
+    /// The regressors every term multiplies at a flight condition (the
+    /// Kirchhoff factor on the lift-type `alpha` term, `CL2` = CL²).
+    pub fn term_regressors(&self, input: &AeroInput) -> TermRegressors {
+        let (other, lift_type, kirchhoff) = self.regressors_and_lift(input);
         let mut lift = other;
         lift[Regressor::Alpha as usize] *= kirchhoff;
-        let lift_type = self.sum(Coefficient::Lift, &lift);
-        other[Regressor::LiftSquared as usize] = lift_type * lift_type;
+        lift[Regressor::LiftSquared as usize] = 0.0;
         TermRegressors {
             lift,
             other,
@@ -680,11 +707,7 @@ impl AeroModel {
 
     /// As [`AeroModel::coefficients`], with sin α and cos α of `input.alpha` given.
     pub fn coefficients_at(&self, input: &AeroInput, alpha_sin_cos: SinCos) -> AeroCoefficients {
-        let TermRegressors {
-            other: regressors,
-            lift_type,
-            ..
-        } = self.term_regressors(input);
+        let (regressors, lift_type, _) = self.regressors_and_lift(input);
         let mut drag_type = self.sum(Coefficient::Drag, &regressors);
         if let Some(e) = self.oswald {
             drag_type += lift_type * lift_type

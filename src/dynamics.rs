@@ -345,21 +345,42 @@ impl FlightModel {
         }
     }
 
-    /// How the accelerations of an evaluation at `kinematics` change when
-    /// its aerodynamic coefficients move by `direction` (other things equal):
-    /// exact, `FlightModel::accelerations` being affine in the
-    /// coefficients (the evaluation's own accelerations are the base).
-    /// Valid when the forces do not depend on α̇ (else the coefficients move
-    /// with α̇ too).
+    /// How the accelerations change when the aerodynamic coefficients move
+    /// by `direction` (other things equal), at air data `air_data`: exact,
+    /// [`FlightModel::accelerations`] being affine in the coefficients, and
+    /// computed as its linear part alone (the aerodynamic force and moment
+    /// of `direction`, with no gravity, thrust or gyroscopic terms). Valid
+    /// when the forces do not depend on α̇ (else the coefficients move with
+    /// α̇ too).
     pub fn acceleration_response(
         &self,
-        kinematics: &Kinematics,
-        evaluation: &Evaluation,
+        air_data: &AirData,
         direction: &AeroCoefficients,
     ) -> Accelerations {
-        let context = self.context(kinematics, &evaluation.controls, evaluation.thrust);
-        let moved = evaluation.coefficients + *direction;
-        self.accelerations(&context, &moved) - Accelerations::of(evaluation)
+        let aircraft = &self.aircraft;
+        let scale = air_data.dynamic_pressure * aircraft.wing_area;
+        let specific_force = direction.force * scale / aircraft.mass.mass;
+        let (alpha_dot, beta_dot) = flow_angle_rates(air_data, &specific_force);
+        Accelerations {
+            specific_force,
+            velocity_rate: specific_force,
+            alpha_dot,
+            beta_dot,
+            angular_acceleration: aircraft.mass.inertia_inverse
+                * self.aero_moment(&direction.moment, scale),
+        }
+    }
+
+    /// The aerodynamic moment of moment coefficients (Cl, Cm, Cn) at
+    /// q̄·S = `scale`: (Cl·b, Cm·c̄, Cn·b)·q̄S.
+    #[inline(always)]
+    fn aero_moment(&self, c: &Vector3<f64>, scale: f64) -> Vector3<f64> {
+        let geometry = &self.aircraft.geometry;
+        Vector3::new(
+            c.x * geometry.span,
+            c.y * geometry.chord,
+            c.z * geometry.span,
+        ) * scale
     }
 
     /// What the translational and rotational equations need besides the
@@ -424,23 +445,9 @@ impl FlightModel {
         let velocity_rate =
             specific_force + context.gravity_body - kinematics.omega.cross(&kinematics.velocity);
         let air_rate = velocity_rate - kinematics.wind_rate_body;
-        let (u, v, w) = (
-            air_data.velocity.x,
-            air_data.velocity.y,
-            air_data.velocity.z,
-        );
-        let alpha_dot = (u * air_rate.z - w * air_rate.x) / (u * u + w * w);
-        let speed_rate = air_data.velocity.dot(&air_rate) / air_data.airspeed;
-        let beta_dot = (air_rate.y * air_data.airspeed - v * speed_rate)
-            / (air_data.airspeed * (u * u + w * w).sqrt());
-        let geometry = &aircraft.geometry;
-        let c = &coefficients.moment;
-        let aero_moment = Vector3::new(
-            c.x * geometry.span,
-            c.y * geometry.chord,
-            c.z * geometry.span,
-        ) * scale;
-        let moment = aero_moment + aircraft.propulsion.position.cross(&context.thrust_force);
+        let (alpha_dot, beta_dot) = flow_angle_rates(air_data, &air_rate);
+        let moment = self.aero_moment(&coefficients.moment, scale)
+            + aircraft.propulsion.position.cross(&context.thrust_force);
         let omega = &kinematics.omega;
         let inertia = &aircraft.mass.inertia;
         Accelerations {
@@ -476,6 +483,23 @@ impl FlightModel {
         }
         result
     }
+}
+
+/// α̇ and β̇ of the air-relative velocity (body axes, `air_data`) changing
+/// at `air_rate`: α̇ = (u·ẇ − w·u̇)/(u² + w²),
+/// β̇ = (v̇·V − v·V̇)/(V·√(u² + w²)) with V̇ = V·V̇/V; linear in the rate.
+#[inline(always)]
+fn flow_angle_rates(air_data: &AirData, air_rate: &Vector3<f64>) -> (f64, f64) {
+    let (u, v, w) = (
+        air_data.velocity.x,
+        air_data.velocity.y,
+        air_data.velocity.z,
+    );
+    let alpha_dot = (u * air_rate.z - w * air_rate.x) / (u * u + w * w);
+    let speed_rate = air_data.velocity.dot(air_rate) / air_data.airspeed;
+    let beta_dot = (air_rate.y * air_data.airspeed - v * speed_rate)
+        / (air_data.airspeed * (u * u + w * w).sqrt());
+    (alpha_dot, beta_dot)
 }
 
 struct TranslationalContext<'a> {

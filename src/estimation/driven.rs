@@ -15,9 +15,9 @@
 //! taken inside a step with the model's [`Interpolation`] option, through
 //! the one RK4 integrator.
 
-use crate::aero::{Coefficient, TermRegressors};
+use crate::aero::{AeroCoefficients, Coefficient, TermRegressors};
 use crate::atmosphere::{Air, Atmosphere};
-use crate::dynamics::{AirData, Evaluation, FlightModel, Kinematics};
+use crate::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Kinematics};
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
 use crate::integrator::{Interpolation, affine, rk4_linear_step, rk4_step};
@@ -25,6 +25,7 @@ use crate::record::FlightRecord;
 use crate::state::{self, CONTROL_COUNT, Control, Controls, SinCos};
 use crate::units::STANDARD_GRAVITY;
 use nalgebra::{DMatrix, SVector, Vector3};
+use std::sync::OnceLock;
 
 pub const FLIGHT_PATH_SIZE: usize = 11;
 pub type FlightPathState = SVector<f64, FLIGHT_PATH_SIZE>;
@@ -59,6 +60,33 @@ impl Angles {
         }
     }
 
+    /// The angles after state `i` moved by a difference step `h` (|h| ≲
+    /// 10⁻⁶), by the addition theorems with cos h = 1 − h²/2 and sin h = h
+    /// (both exact to rounding at such steps): no sine or cosine evaluated.
+    fn nudged(mut self, i: usize, h: f64) -> Angles {
+        let (sin_h, cos_h) = (h, 1.0 - 0.5 * h * h);
+        let nudge = |(sin, cos): SinCos| (sin * cos_h + cos * sin_h, cos * cos_h - sin * sin_h);
+        match i {
+            ALPHA => self.alpha = nudge(self.alpha),
+            BETA => self.beta = nudge(self.beta),
+            ROLL => self.roll = nudge(self.roll),
+            PITCH => self.pitch = nudge(self.pitch),
+            _ => {}
+        }
+        self
+    }
+
+    /// Takes angle `i` (a state index) from `other`.
+    fn copy(&mut self, i: usize, other: &Angles) {
+        match i {
+            ALPHA => self.alpha = other.alpha,
+            BETA => self.beta = other.beta,
+            ROLL => self.roll = other.roll,
+            PITCH => self.pitch = other.pitch,
+            _ => {}
+        }
+    }
+
     /// The angles after state `i` moved to `value` (only that one recomputed).
     fn moved(mut self, i: usize, value: f64) -> Angles {
         match i {
@@ -72,41 +100,99 @@ impl Angles {
     }
 }
 
+/// The measured signals' angle sines and cosines and air at the points
+/// where RK4 evaluates them, the grid points (index 2k) and the steps'
+/// midpoints (2k + 1): the same in every simulation of a record, so
+/// computed once (the air for the first atmosphere asked for).
+#[derive(Debug, Clone, Default)]
+struct Frozen {
+    angles: Vec<Angles>,
+    air: OnceLock<(Atmosphere, Vec<Air>)>,
+}
+
+impl Frozen {
+    fn new(measured: &[FlightPathState]) -> Frozen {
+        Frozen {
+            angles: frozen_points(measured).map(|x| Angles::of(&x)).collect(),
+            air: OnceLock::new(),
+        }
+    }
+
+    /// The air at every point for `atmosphere`; None for another atmosphere
+    /// than the first.
+    fn air(&self, measured: &[FlightPathState], atmosphere: &Atmosphere) -> Option<&[Air]> {
+        let (first, air) = self.air.get_or_init(|| {
+            let air = frozen_points(measured)
+                .map(|x| atmosphere.at(x[ALTITUDE]))
+                .collect();
+            (*atmosphere, air)
+        });
+        (first == atmosphere).then_some(air.as_slice())
+    }
+}
+
+/// The measured states at the grid points and the steps' midpoints,
+/// interpolated as [`DrivenSimulation::simulate`] does.
+fn frozen_points(measured: &[FlightPathState]) -> impl Iterator<Item = FlightPathState> + '_ {
+    measured.iter().enumerate().flat_map(move |(k, &point)| {
+        let midpoint = measured.get(k + 1).map(|next| point + (next - point) * 0.5);
+        std::iter::once(point).chain(midpoint)
+    })
+}
+
 /// The angles' sines and cosines and the air of the last state seen,
 /// recomputed only for what moved: RK4's two middle stages share the
 /// measured pseudo-controls, and a step's last stage has the next grid
-/// point's, so most are reused.
-struct Memo {
+/// point's, so most are reused; measured ones come from [`Frozen`] at the
+/// point set by [`Memo::at_point`].
+struct Memo<'a> {
     x: Option<FlightPathState>,
     angles: Angles,
     air: Air,
+    /// Which states are measured, the frozen angles and air, and the point.
+    measured: [bool; FLIGHT_PATH_SIZE],
+    frozen: Option<(&'a [Angles], Option<&'a [Air]>)>,
+    point: usize,
 }
 
-impl Memo {
-    fn new() -> Memo {
+impl<'a> Memo<'a> {
+    fn new(
+        measured: [bool; FLIGHT_PATH_SIZE],
+        frozen: Option<(&'a [Angles], Option<&'a [Air]>)>,
+    ) -> Memo<'a> {
         Memo {
             x: None,
             angles: Angles::of(&FlightPathState::zeros()),
             air: Air::default(),
+            measured,
+            frozen,
+            point: 0,
         }
     }
 
+    /// The states that follow are at frozen point `index` (2k: grid point
+    /// k; 2k + 1: the midpoint of step k).
+    fn at_point(&mut self, index: usize) {
+        self.point = index;
+    }
+
     fn of(&mut self, x: &FlightPathState, atmosphere: &Atmosphere) -> (Angles, Air) {
-        match self.x {
-            Some(last) => {
-                for i in [ALPHA, BETA, ROLL, PITCH] {
-                    if x[i] != last[i] {
-                        self.angles = self.angles.moved(i, x[i]);
-                    }
-                }
-                if x[ALTITUDE] != last[ALTITUDE] {
-                    self.air = atmosphere.at(x[ALTITUDE]);
-                }
+        let (first, last) = (self.x.is_none(), self.x.unwrap_or(*x));
+        let frozen = self.frozen.map(|(angles, air)| {
+            let point = self.point;
+            (&angles[point], air.map(|air| &air[point]))
+        });
+        for i in [ALPHA, BETA, ROLL, PITCH] {
+            match frozen {
+                Some((angles, _)) if self.measured[i] => self.angles.copy(i, angles),
+                _ if first || x[i] != last[i] => self.angles = self.angles.moved(i, x[i]),
+                _ => {}
             }
-            None => {
-                self.angles = Angles::of(x);
-                self.air = atmosphere.at(x[ALTITUDE]);
-            }
+        }
+        match frozen {
+            Some((_, Some(air))) if self.measured[ALTITUDE] => self.air = *air,
+            _ if first || x[ALTITUDE] != last[ALTITUDE] => self.air = atmosphere.at(x[ALTITUDE]),
+            _ => {}
         }
         self.x = Some(*x);
         (self.angles, self.air)
@@ -166,38 +252,79 @@ fn derivative(
 ) -> (FlightPathState, Evaluation) {
     let evaluation = model.evaluate_kinematics(&kinematics(x, angles, air), controls);
     (
-        flight_path_rates(x, angles, &evaluation, pseudo),
+        flight_path_rates(x, angles, &Motion::of(&evaluation), pseudo),
         evaluation,
     )
 }
 
-/// The flight-path rates of an evaluation at x ([`derivative`]): affine in
-/// the evaluation's state derivative, α̇ and β̇.
+/// What the flight-path rates take of an evaluation besides x: the
+/// air-relative velocity, the accelerations, ḋ and χ̇.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Motion {
+    velocity: Vector3<f64>,
+    airspeed: f64,
+    /// u̇, v̇, ẇ.
+    velocity_rate: Vector3<f64>,
+    alpha_dot: f64,
+    beta_dot: f64,
+    angular_acceleration: Vector3<f64>,
+    down_rate: f64,
+    chi_rate: f64,
+}
+
+impl Motion {
+    fn of(evaluation: &Evaluation) -> Motion {
+        let d = &evaluation.derivative;
+        Motion {
+            velocity: evaluation.air_data.velocity,
+            airspeed: evaluation.air_data.airspeed,
+            velocity_rate: d.fixed_rows::<3>(state::U).into(),
+            alpha_dot: evaluation.alpha_dot,
+            beta_dot: evaluation.beta_dot,
+            angular_acceleration: evaluation.angular_acceleration,
+            down_rate: d[state::DOWN],
+            chi_rate: d[state::CHI],
+        }
+    }
+
+    /// The motion with the accelerations moved by a coefficient's
+    /// `response` and χ̇ by `chi_rate`.
+    fn moved(mut self, response: &Accelerations, chi_rate: f64) -> Motion {
+        self.velocity_rate += response.velocity_rate;
+        self.alpha_dot += response.alpha_dot;
+        self.beta_dot += response.beta_dot;
+        self.angular_acceleration += response.angular_acceleration;
+        self.chi_rate += chi_rate;
+        self
+    }
+}
+
+/// The flight-path rates of an evaluation's motion at x ([`derivative`]):
+/// affine in the accelerations.
 fn flight_path_rates(
     x: &FlightPathState,
     angles: &Angles,
-    evaluation: &Evaluation,
+    motion: &Motion,
     pseudo: PseudoRates,
 ) -> FlightPathState {
-    let d = &evaluation.derivative;
-    let velocity = evaluation.air_data.velocity;
+    let (velocity, d) = (motion.velocity, motion.velocity_rate);
     let mut rates = FlightPathState::zeros();
     let (sin_beta, cos_beta) = angles.beta;
     rates[AIRSPEED] = match pseudo.beta {
         Some(beta_rate) => {
-            let longitudinal = (velocity.x * d[state::U] + velocity.z * d[state::W]) / x[AIRSPEED];
+            let longitudinal = (velocity.x * d.x + velocity.z * d.z) / x[AIRSPEED];
             (longitudinal + x[AIRSPEED] * sin_beta * cos_beta * beta_rate) / (cos_beta * cos_beta)
         }
-        None => velocity.dot(&d.fixed_rows::<3>(state::U)) / evaluation.air_data.airspeed,
+        None => velocity.dot(&d) / motion.airspeed,
     };
-    rates[ALPHA] = evaluation.alpha_dot;
+    rates[ALPHA] = motion.alpha_dot;
     rates[BETA] = match pseudo.airspeed {
-        Some(speed_rate) => (d[state::V] - speed_rate * sin_beta) / (x[AIRSPEED] * cos_beta),
-        None => evaluation.beta_dot,
+        Some(speed_rate) => (d.y - speed_rate * sin_beta) / (x[AIRSPEED] * cos_beta),
+        None => motion.beta_dot,
     };
     rates
         .fixed_rows_mut::<3>(P)
-        .copy_from(&evaluation.angular_acceleration);
+        .copy_from(&motion.angular_acceleration);
     rates
         .fixed_rows_mut::<3>(ROLL)
         .copy_from(&state::euler_rates_of(
@@ -205,29 +332,38 @@ fn flight_path_rates(
             angles.pitch,
             &x.fixed_rows::<3>(P).into(),
         ));
-    rates[ALTITUDE] = -d[state::DOWN];
-    rates[CHI] = d[state::CHI];
+    rates[ALTITUDE] = -motion.down_rate;
+    rates[CHI] = motion.chi_rate;
     rates
 }
 
-/// The evaluation at x with coefficient C's offset moved by 1 (everything
-/// else equal), for a model whose forces do not depend on α̇: the
-/// coefficients, accelerations and state derivative are then affine in C
-/// (χ̇ through α̇: exact to first order, ∂χ̇/∂α̇ times α̇'s change), and so
-/// are the flight-path rates and every output, so the difference from the
-/// evaluation at x is exactly ∂/∂C.
-/// `kinematics` are x's.
-fn offset_evaluation(
+/// A coefficient's response at an evaluation `at` of a model whose forces
+/// do not depend on α̇: the direction its offset moves the coefficients in
+/// ([`crate::aero::AeroModel::offset_response`]), the accelerations'
+/// response ([`FlightModel::acceleration_response`]) and χ̇'s (through α̇:
+/// exact to first order, ∂χ̇/∂α̇ times α̇'s change). The coefficients,
+/// accelerations and state derivative are affine in C, and so are the
+/// flight-path rates and every output, so moving by the response gives
+/// ∂/∂C exactly.
+fn offset_response(
     model: &FlightModel,
-    kinematics: &Kinematics,
     at: &Evaluation,
     coefficient: Coefficient,
-) -> Evaluation {
+) -> (AeroCoefficients, Accelerations, f64) {
     let aero = &model.aircraft.aero;
     let direction = aero.offset_response(coefficient, &at.coefficients, at.air_data.alpha_sin_cos);
-    let response = model.acceleration_response(kinematics, at, &direction);
+    let response = model.acceleration_response(&at.air_data, &direction);
+    let chi_rate = aero.separation_rate_slope(at.air_data.alpha, at.alpha_dot) * response.alpha_dot;
+    (direction, response, chi_rate)
+}
+
+/// The evaluation `at` moved by a coefficient's response ([`offset_response`]).
+fn offset_evaluation(
+    at: &Evaluation,
+    (direction, response, chi_rate): &(AeroCoefficients, Accelerations, f64),
+) -> Evaluation {
     let mut moved = *at;
-    moved.coefficients = moved.coefficients + direction;
+    moved.coefficients = moved.coefficients + *direction;
     moved.specific_force += response.specific_force;
     moved.angular_acceleration += response.angular_acceleration;
     moved.alpha_dot += response.alpha_dot;
@@ -237,8 +373,7 @@ fn offset_evaluation(
     d.fixed_rows_mut::<3>(state::U).copy_from(&velocity_rate);
     let angular = d.fixed_rows::<3>(state::P) + response.angular_acceleration;
     d.fixed_rows_mut::<3>(state::P).copy_from(&angular);
-    d[state::CHI] +=
-        aero.separation_rate_slope(at.air_data.alpha, at.alpha_dot) * response.alpha_dot;
+    d[state::CHI] += chi_rate;
     moved
 }
 
@@ -536,7 +671,7 @@ impl Linearization {
             } else {
                 air
             };
-            let moved_angles = angles.moved(i, moved[i]);
+            let moved_angles = angles.nudged(i, moved[i] - x[i]);
             let (rates, evaluation) =
                 derivative(model, &moved, &moved_angles, &moved_air, controls, pseudo);
             for (a, &r) in states.iter().enumerate() {
@@ -546,28 +681,32 @@ impl Linearization {
                 self.gx[(o, b)] = (output.value(&moved, &evaluation) - self.outputs[o]) / step;
             }
         }
-        // x's kinematics, built once if a coefficient response needs them.
-        let mut point_kinematics = None;
+        let motion = Motion::of(&self.evaluation);
         for (d, response) in directions.responses.iter().enumerate() {
-            let (rates, evaluation, step) = match *response {
+            match *response {
                 Response::Model(m) => {
                     let (perturbed, step) = &directions.models[m];
                     let (rates, evaluation) =
                         derivative(perturbed, x, &angles, &air, controls, pseudo);
-                    (rates, evaluation, *step)
+                    self.model_rates[d] = (rates - self.rates) / *step;
+                    for (o, output) in outputs.iter().enumerate() {
+                        self.model_outputs[(o, d)] =
+                            (output.value(x, &evaluation) - self.outputs[o]) / step;
+                    }
                 }
                 Response::Offset(coefficient) => {
-                    let point =
-                        point_kinematics.get_or_insert_with(|| kinematics(x, &angles, &air));
-                    let evaluation = offset_evaluation(model, point, &self.evaluation, coefficient);
-                    let rates = flight_path_rates(x, &angles, &evaluation, pseudo);
-                    (rates, evaluation, 1.0)
+                    let offset = offset_response(model, &self.evaluation, coefficient);
+                    let moved = motion.moved(&offset.1, offset.2);
+                    self.model_rates[d] =
+                        flight_path_rates(x, &angles, &moved, pseudo) - self.rates;
+                    if !outputs.is_empty() {
+                        let evaluation = offset_evaluation(&self.evaluation, &offset);
+                        for (o, output) in outputs.iter().enumerate() {
+                            self.model_outputs[(o, d)] =
+                                output.value(x, &evaluation) - self.outputs[o];
+                        }
+                    }
                 }
-            };
-            self.model_rates[d] = (rates - self.rates) / step;
-            for (o, output) in outputs.iter().enumerate() {
-                self.model_outputs[(o, d)] =
-                    (output.value(x, &evaluation) - self.outputs[o]) / step;
             }
         }
         let regressors = if directions.has_terms {
@@ -666,7 +805,8 @@ pub struct DrivenSimulation {
     pub integrate: [bool; FLIGHT_PATH_SIZE],
     pub controls: Vec<Controls>,
     /// Measured flight-path states at the grid points (integrated entries unused).
-    pub measured: Vec<FlightPathState>,
+    measured: Vec<FlightPathState>,
+    frozen: Frozen,
     /// Notes for the user (a control held constant because its channel is absent).
     pub notes: Vec<String>,
 }
@@ -735,9 +875,15 @@ impl DrivenSimulation {
             interpolation,
             integrate: mask,
             controls,
+            frozen: Frozen::new(&measured),
             measured,
             notes,
         })
+    }
+
+    /// Measured flight-path states at the grid points (integrated entries unused).
+    pub fn measured(&self) -> &[FlightPathState] {
+        &self.measured
     }
 
     /// Number of grid points.
@@ -870,7 +1016,12 @@ impl DrivenSimulation {
             .map(|_| Linearization::new(&directions, 0))
             .collect();
         let atmosphere = &model.environment.atmosphere;
-        let mut memo = Memo::new();
+        let measured_states = std::array::from_fn(|i| mask[i] == 0.0);
+        let frozen = (
+            self.frozen.angles.as_slice(),
+            self.frozen.air(&self.measured, atmosphere),
+        );
+        let mut memo = Memo::new(measured_states, Some(frozen));
         point.at(
             model,
             &directions,
@@ -905,7 +1056,13 @@ impl DrivenSimulation {
                 // Measured pseudo-controls are continuous states: always
                 // linear inside the step (consistent with their rates in
                 // `pseudo_rates`); controls follow the model's option.
-                let measured = self.measured[k] + (self.measured[k + 1] - self.measured[k]) * theta;
+                // The step's end is the next grid point.
+                let measured = if theta == 1.0 {
+                    self.measured[k + 1]
+                } else {
+                    self.measured[k] + (self.measured[k + 1] - self.measured[k]) * theta
+                };
+                memo.at_point(2 * k + if theta == 1.0 { 2 } else { 1 });
                 let w = self.interpolation.weight(theta);
                 let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
                 let merged =
@@ -941,6 +1098,7 @@ impl DrivenSimulation {
                     self.measured[k + 1][i]
                 }
             });
+            memo.at_point(2 * (k + 1));
             next_point.at(
                 model,
                 &directions,
@@ -1059,9 +1217,16 @@ mod tests {
             let (angles, air) = (Angles::of(&x), model.environment.atmosphere.at(x[ALTITUDE]));
             let (rates, at) = derivative(&model, &x, &angles, &air, &controls, pseudo);
             for coefficient in Coefficient::ALL {
-                let moved =
-                    offset_evaluation(&model, &kinematics(&x, &angles, &air), &at, coefficient);
-                let exact = flight_path_rates(&x, &angles, &moved, pseudo) - rates;
+                let offset = offset_response(&model, &at, coefficient);
+                let moved = offset_evaluation(&at, &offset);
+                let exact = flight_path_rates(&x, &angles, &Motion::of(&moved), pseudo) - rates;
+                let direct = flight_path_rates(
+                    &x,
+                    &angles,
+                    &Motion::of(&at).moved(&offset.1, offset.2),
+                    pseudo,
+                ) - rates;
+                assert_eq!(exact, direct);
                 let step = 1e-5;
                 let shifted = |sign: f64| {
                     let mut perturbed = model.clone();

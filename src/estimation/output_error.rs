@@ -413,7 +413,7 @@ fn segment(
         window,
     )?;
     let end = simulation.time(simulation.len() - 1);
-    let mut initial = simulation.measured[0];
+    let mut initial = simulation.measured()[0];
     for &i in &structure.integrate {
         initial[i] = record
             .channel(FLIGHT_PATH_STATES[i])
