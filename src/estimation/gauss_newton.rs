@@ -79,6 +79,14 @@ pub trait LeastSquaresProblem {
     ) -> Result<DMatrix<f64>, String> {
         finite_difference_jacobian(self, theta, options)
     }
+
+    /// The information matrix JᵀJ of the Jacobian `jacobian` just returned
+    /// by [`LeastSquaresProblem::jacobian`]. A problem that knows a cheaper
+    /// way may override it (output error: a held Jacobian's JᵀJ is a
+    /// weighted sum of per-output Gram matrices computed once).
+    fn information(&mut self, jacobian: &DMatrix<f64>) -> DMatrix<f64> {
+        jacobian.transpose() * jacobian
+    }
 }
 
 /// Solver settings.
@@ -293,7 +301,7 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             Ok(evaluated) => evaluated,
             Err(reason) => return Solution::diverged(theta, history, reason),
         };
-        let information = jacobian.transpose() * &jacobian;
+        let information = problem.information(&jacobian);
         let gauss_newton = GaussNewton::of(&jacobian, &residuals, &information);
         let predicted = gauss_newton.predicted;
         let converged = options.decrease_tolerance.is_some_and(|t| predicted <= t);
@@ -513,7 +521,7 @@ fn finish<P: LeastSquaresProblem + ?Sized>(
         .and_then(|r| problem.jacobian(&theta, options).map(|j| (r, j)));
     match evaluated {
         Ok((residuals, jacobian)) => Solution {
-            information: jacobian.transpose() * &jacobian,
+            information: problem.information(&jacobian),
             cost: cost_of(&residuals),
             residuals,
             jacobian,

@@ -212,6 +212,20 @@ struct Simulated {
     key: DVector<f64>,
     predictions: Predictions,
     grids: Option<(Vec<Grid>, Linearise)>,
+    /// The grids' Jacobian, assembled when first asked for.
+    assembled: Option<Assembled>,
+}
+
+/// A simulation's Jacobian ∂y/∂θ at the samples (unweighted; the residuals'
+/// Jacobian is −R^{-1/2} times it, so a held one is re-weighted by scaling
+/// rows) for the solver's `unknowns`, and per output the Gram matrix of its
+/// rows (computed when first asked for), so that JᵀJ = Σ_o G_o/σ_o².
+struct Assembled {
+    unknowns: Vec<Unknown>,
+    sensitivities: DMatrix<f64>,
+    /// Each output's rows.
+    rows: Vec<std::ops::Range<usize>>,
+    grams: Option<Vec<DMatrix<f64>>>,
 }
 
 /// Model outputs at every recorded sample: [segment][output][sample].
@@ -731,6 +745,7 @@ impl Problem {
             key,
             predictions,
             grids: sensitivities.then_some((grids, self.linearise)),
+            assembled: None,
         });
         Ok(())
     }
@@ -956,7 +971,8 @@ impl LeastSquaresProblem for Problem {
 
     /// ∂r/∂θ = −R^{-1/2}·∂y/∂θ from the sensitivity equations (one simulation
     /// with sensitivities per segment; see [`DrivenSimulation::simulate`]),
-    /// interpolated to the samples as y is; ∂y/∂bias = 1.
+    /// interpolated to the samples as y is; ∂y/∂bias = 1. ∂y/∂θ is assembled
+    /// once per simulation ([`Assembled`]): a held Jacobian is re-weighted.
     fn jacobian(
         &mut self,
         theta: &DVector<f64>,
@@ -965,48 +981,122 @@ impl LeastSquaresProblem for Problem {
         if self.held.is_none() && !self.is_simulated(theta, Some(self.linearise)) {
             self.simulate(theta, true)?;
         }
-        let Some(Simulated {
-            grids: Some((grids, _)),
-            ..
-        }) = self.held.as_ref().or(self.simulated.as_ref())
-        else {
-            unreachable!("simulated with sensitivities above")
-        };
-        let rows = self
-            .segments
-            .iter()
-            .flat_map(|s| s.outputs.iter().map(|o| o.times.len()))
-            .sum();
-        let all = self.all.len();
-        // Filled column by column (DMatrix is column-major), each column
-        // output after output and segment after segment, as the residuals.
-        let mut jacobian = DMatrix::zeros(rows, self.unknowns.len());
-        for (unknown, mut column) in self.unknowns.iter().zip(jacobian.column_iter_mut()) {
-            let c = self
-                .all
+        let weights = self.weights.clone();
+        let assembled = self.assembled();
+        let mut jacobian = assembled.sensitivities.clone();
+        for (rows, weight) in assembled.rows.iter().zip(&weights) {
+            jacobian.rows_mut(rows.start, rows.len()).scale_mut(-weight);
+        }
+        Ok(jacobian)
+    }
+
+    /// JᵀJ = Σ_o G_o/σ_o² from the per-output Gram matrices of the
+    /// Jacobian's simulation, computed once (a held Jacobian's are reused).
+    fn information(&mut self, jacobian: &DMatrix<f64>) -> DMatrix<f64> {
+        let weights = self.weights.clone();
+        let assembled = self.assembled();
+        debug_assert_eq!(jacobian.shape(), assembled.sensitivities.shape());
+        let grams = assembled.grams.get_or_insert_with(|| {
+            assembled
+                .rows
                 .iter()
-                .position(|a| a == unknown)
-                .expect("a simulated unknown");
-            let mut row = 0;
-            for (o, weight) in self.weights.iter().enumerate() {
-                for (segment, grid) in self.segments.iter().zip(grids) {
-                    let brackets = &segment.outputs[o].brackets;
-                    let into = &mut column.as_mut_slice()[row..row + brackets.len()];
-                    row += brackets.len();
-                    if *unknown == (Unknown::Bias { output: o }) {
-                        into.fill(-weight);
-                        continue;
-                    }
-                    let sensitivities = &grid.sensitivities[o];
-                    let points = sensitivities.len() / all.max(1);
-                    let series = &sensitivities[c * points..(c + 1) * points];
-                    for (into, &at) in into.iter_mut().zip(brackets) {
-                        *into = -weight * on_grid(series, at);
-                    }
+                .map(|rows| {
+                    let block = assembled.sensitivities.rows(rows.start, rows.len());
+                    block.transpose() * block
+                })
+                .collect()
+        });
+        let columns = jacobian.ncols();
+        grams
+            .iter()
+            .zip(&weights)
+            .fold(DMatrix::zeros(columns, columns), |sum, (gram, weight)| {
+                sum + gram * (weight * weight)
+            })
+    }
+}
+
+impl Problem {
+    /// ∂y/∂θ at the samples of the simulation whose Jacobian is asked for
+    /// (the held one, else the last), assembled for the solver's unknowns if
+    /// not yet.
+    fn assembled(&mut self) -> &mut Assembled {
+        let simulated = match self.held.as_mut() {
+            Some(held) => held,
+            None => self.simulated.as_mut().expect("simulated with sensitivities"),
+        };
+        let Simulated {
+            grids: Some((grids, _)),
+            assembled,
+            ..
+        } = simulated
+        else {
+            unreachable!("a Jacobian is asked for after a simulation with sensitivities")
+        };
+        if assembled
+            .as_ref()
+            .is_none_or(|assembled| assembled.unknowns != self.unknowns)
+        {
+            *assembled = Some(assemble(
+                &self.segments,
+                grids,
+                &self.all,
+                &self.unknowns,
+                self.outputs.len(),
+            ));
+        }
+        assembled.as_mut().expect("assembled above")
+    }
+}
+
+/// ∂y/∂θ at the samples for `unknowns` from the grids' sensitivities to
+/// `all` ([`Assembled`]). Filled column by column (DMatrix is
+/// column-major), each column output after output and segment after
+/// segment, as the residuals.
+fn assemble(
+    segments: &[Segment],
+    grids: &[Grid],
+    all: &[Unknown],
+    unknowns: &[Unknown],
+    outputs: usize,
+) -> Assembled {
+    let mut rows = Vec::with_capacity(outputs);
+    let mut start = 0;
+    for o in 0..outputs {
+        let count: usize = segments.iter().map(|s| s.outputs[o].times.len()).sum();
+        rows.push(start..start + count);
+        start += count;
+    }
+    let mut sensitivities = DMatrix::zeros(start, unknowns.len());
+    for (unknown, mut column) in unknowns.iter().zip(sensitivities.column_iter_mut()) {
+        let c = all
+            .iter()
+            .position(|a| a == unknown)
+            .expect("a simulated unknown");
+        let mut row = 0;
+        for o in 0..outputs {
+            for (segment, grid) in segments.iter().zip(grids) {
+                let brackets = &segment.outputs[o].brackets;
+                let into = &mut column.as_mut_slice()[row..row + brackets.len()];
+                row += brackets.len();
+                if *unknown == (Unknown::Bias { output: o }) {
+                    into.fill(1.0);
+                    continue;
+                }
+                let sensitivities = &grid.sensitivities[o];
+                let points = sensitivities.len() / all.len().max(1);
+                let series = &sensitivities[c * points..(c + 1) * points];
+                for (into, &at) in into.iter_mut().zip(brackets) {
+                    *into = on_grid(series, at);
                 }
             }
         }
-        Ok(jacobian)
+    }
+    Assembled {
+        unknowns: unknowns.to_vec(),
+        sensitivities,
+        rows,
+        grams: None,
     }
 }
 
