@@ -242,6 +242,7 @@ impl PseudoRates {
 /// airspeed measured, β̇ = (v̇ − V̇_m·sin β)/(V·cos β); with the sideslip
 /// measured, V̇ = [(u·u̇ + w·ẇ)/V + V·sin β·cos β·β̇_m]/cos²β.
 /// `angles` and `air` are x's (computed once per evaluation; [`Linearization::at`] reuses them for every perturbed model).
+#[inline(always)]
 fn derivative(
     model: &FlightModel,
     x: &FlightPathState,

@@ -1023,7 +1023,10 @@ impl Problem {
     fn assembled(&mut self) -> &mut Assembled {
         let simulated = match self.held.as_mut() {
             Some(held) => held,
-            None => self.simulated.as_mut().expect("simulated with sensitivities"),
+            None => self
+                .simulated
+                .as_mut()
+                .expect("simulated with sensitivities"),
         };
         let Simulated {
             grids: Some((grids, _)),
