@@ -791,8 +791,8 @@ pub enum Linearise {
     /// stall model's τ1 through the break. Good enough to steer
     /// Gauss–Newton (an approximate Jacobian changes the path, not the
     /// optimum it stops at to within the noise; see `output_error`), at
-    /// half the cost (the lateral benchmark's simulation: 5.5 ms against
-    /// 11.7 ms).
+    /// about half the cost (the lateral benchmark's simulation: 4.4 ms against
+    /// 8.0 ms).
     GridPoints,
 }
 

@@ -61,6 +61,10 @@
 //! simulations to 10⁻⁵, another the grid-point one against it. Each θ is
 //! simulated once, with sensitivities: the solver's re-weighting, residuals
 //! and Jacobian at an accepted step reuse the step's simulation.
+//! A simulation's ∂y/∂θ at the samples is assembled once, with the Gram
+//! matrix of each output's rows: a held Jacobian is re-weighted by scaling
+//! rows, and its information matrix is Σ_o G_o/σ_o²
+//! ([`LeastSquaresProblem::information`]).
 //! Convergence: the Gauss–Newton step's predicted decrease of the whitened
 //! cost below 1e-4 (a step under 0.014σ). Cramér–Rao
 //! bounds are the square roots of the diagonal of M⁻¹, M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ).
