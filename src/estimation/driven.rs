@@ -76,6 +76,13 @@ impl Angles {
         self
     }
 
+    /// The angles with angle `i` (a state index) taken from `other`.
+    #[cfg(debug_assertions)]
+    fn with(mut self, i: usize, other: &Angles) -> Angles {
+        self.copy(i, other);
+        self
+    }
+
     /// Takes angle `i` (a state index) from `other`.
     fn copy(&mut self, i: usize, other: &Angles) {
         match i {
@@ -184,13 +191,20 @@ impl<'a> Memo<'a> {
         });
         for i in [ALPHA, BETA, ROLL, PITCH] {
             match frozen {
-                Some((angles, _)) if self.measured[i] => self.angles.copy(i, angles),
+                Some((angles, _)) if self.measured[i] => {
+                    self.angles.copy(i, angles);
+                    // The frozen point is x's (every test that simulates checks it).
+                    debug_assert_eq!(Angles::of(x), Angles::of(x).with(i, angles));
+                }
                 _ if first || x[i] != last[i] => self.angles = self.angles.moved(i, x[i]),
                 _ => {}
             }
         }
         match frozen {
-            Some((_, Some(air))) if self.measured[ALTITUDE] => self.air = *air,
+            Some((_, Some(air))) if self.measured[ALTITUDE] => {
+                debug_assert_eq!(*air, atmosphere.at(x[ALTITUDE]));
+                self.air = *air
+            }
             _ if first || x[ALTITUDE] != last[ALTITUDE] => self.air = atmosphere.at(x[ALTITUDE]),
             _ => {}
         }

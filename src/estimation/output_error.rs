@@ -1165,6 +1165,52 @@ mod tests {
         (record, ModelStructure::load("attas-lateral").unwrap())
     }
 
+    /// The information matrix from the per-output Gram matrices
+    /// ([`Assembled`]) is JᵀJ of the weighted Jacobian to rounding (1e-12
+    /// of √(M_ii·M_jj)), for a fresh simulation and for a held one after R
+    /// changed (each output's weight moved by a different factor), whose
+    /// Jacobian is its rows re-scaled.
+    #[test]
+    fn information_from_gram_matrices_is_jtj() {
+        let (record, structure) = lateral_benchmark();
+        let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
+        let theta = problem.current();
+        let options = Options::new(theta.len());
+        problem.reweight(&theta).unwrap();
+        let check = |problem: &mut Problem| {
+            let jacobian = problem.jacobian(&theta, &options).unwrap();
+            let expected = jacobian.transpose() * &jacobian;
+            let information = problem.information(&jacobian);
+            let n = expected.nrows();
+            for (i, j) in (0..n).flat_map(|i| (0..n).map(move |j| (i, j))) {
+                let scale = (expected[(i, i)] * expected[(j, j)]).sqrt();
+                assert!(
+                    (information[(i, j)] - expected[(i, j)]).abs() <= 1e-12 * scale,
+                    "M[{i},{j}] {} against {}",
+                    information[(i, j)],
+                    expected[(i, j)]
+                );
+            }
+            jacobian
+        };
+        let fresh = check(&mut problem);
+        assert!(problem.hold(0.0), "a grid-point Jacobian is held");
+        for (o, weight) in problem.weights.iter_mut().enumerate() {
+            *weight *= 1.5 + o as f64;
+        }
+        let held = check(&mut problem);
+        let rows = problem.assembled().rows.clone();
+        for (o, rows) in rows.iter().enumerate() {
+            let factor = 1.5 + o as f64;
+            let expected = fresh.rows(rows.start, rows.len()) * factor;
+            let difference = (held.rows(rows.start, rows.len()) - &expected).amax();
+            assert!(
+                difference <= 1e-12 * expected.amax(),
+                "output {o}: {difference:e}"
+            );
+        }
+    }
+
     /// A fit that stops on a held exact Jacobian (the lateral benchmark
     /// does: its last simulation is plain) reports the Cramér–Rao bounds of
     /// the iterate where the Jacobian was computed, within 1.4σ of the
