@@ -77,7 +77,6 @@ impl Angles {
     }
 
     /// The angles with angle `i` (a state index) taken from `other`.
-    #[cfg(debug_assertions)]
     fn with(mut self, i: usize, other: &Angles) -> Angles {
         self.copy(i, other);
         self
