@@ -631,10 +631,28 @@ impl AeroModel {
     }
 
     fn sum(&self, coefficient: Coefficient, regressors: &[f64; REGRESSOR_COUNT]) -> f64 {
+        self.sum_scaled(coefficient, regressors, 1.0)
+    }
+
+    /// Σ C_term·regressor + offset of `coefficient`, with the `alpha`
+    /// regressor times `alpha_factor` (the Kirchhoff factor on the
+    /// lift-type coefficient; 1, which changes nothing, elsewhere).
+    fn sum_scaled(
+        &self,
+        coefficient: Coefficient,
+        regressors: &[f64; REGRESSOR_COUNT],
+        alpha_factor: f64,
+    ) -> f64 {
         let values = self.parameters.values();
         self.terms[coefficient as usize]
             .iter()
-            .map(|t| values[t.parameter] * regressors[t.regressor as usize])
+            .map(|t| {
+                let regressor = match t.regressor {
+                    Regressor::Alpha => regressors[Regressor::Alpha as usize] * alpha_factor,
+                    r => regressors[r as usize],
+                };
+                values[t.parameter] * regressor
+            })
             .sum::<f64>()
             + self.offsets[coefficient as usize]
     }
@@ -659,18 +677,7 @@ impl AeroModel {
         let chi = self.effective_chi(input);
         let mut other = self.regressors(input, chi);
         let kirchhoff = self.kirchhoff(chi);
-        let values = self.parameters.values();
-        let lift_type = self.terms[Coefficient::Lift as usize]
-            .iter()
-            .map(|t| {
-                let regressor = match t.regressor {
-                    Regressor::Alpha => other[Regressor::Alpha as usize] * kirchhoff,
-                    r => other[r as usize],
-                };
-                values[t.parameter] * regressor
-            })
-            .sum::<f64>()
-            + self.offsets[Coefficient::Lift as usize];
+        let lift_type = self.sum_scaled(Coefficient::Lift, &other, kirchhoff);
         other[Regressor::LiftSquared as usize] = lift_type * lift_type;
         (other, lift_type, kirchhoff)
     }

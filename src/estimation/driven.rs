@@ -60,47 +60,37 @@ impl Angles {
         }
     }
 
+    /// The sine and cosine of state `i`, if it is one of the angles.
+    fn slot(&mut self, i: usize) -> Option<&mut SinCos> {
+        match i {
+            ALPHA => Some(&mut self.alpha),
+            BETA => Some(&mut self.beta),
+            ROLL => Some(&mut self.roll),
+            PITCH => Some(&mut self.pitch),
+            _ => None,
+        }
+    }
+
+    /// The sine and cosine of state `i`, if it is one of the angles.
+    fn get(mut self, i: usize) -> Option<SinCos> {
+        self.slot(i).copied()
+    }
+
     /// The angles after state `i` moved by a difference step `h` (|h| ≲
     /// 10⁻⁶), by the addition theorems with cos h = 1 − h²/2 and sin h = h
     /// (both exact to rounding at such steps): no sine or cosine evaluated.
     fn nudged(mut self, i: usize, h: f64) -> Angles {
         let (sin_h, cos_h) = (h, 1.0 - 0.5 * h * h);
-        let nudge = |(sin, cos): SinCos| (sin * cos_h + cos * sin_h, cos * cos_h - sin * sin_h);
-        match i {
-            ALPHA => self.alpha = nudge(self.alpha),
-            BETA => self.beta = nudge(self.beta),
-            ROLL => self.roll = nudge(self.roll),
-            PITCH => self.pitch = nudge(self.pitch),
-            _ => {}
+        if let Some((sin, cos)) = self.slot(i) {
+            (*sin, *cos) = (*sin * cos_h + *cos * sin_h, *cos * cos_h - *sin * sin_h);
         }
         self
-    }
-
-    /// The angles with angle `i` (a state index) taken from `other`.
-    fn with(mut self, i: usize, other: &Angles) -> Angles {
-        self.copy(i, other);
-        self
-    }
-
-    /// Takes angle `i` (a state index) from `other`.
-    fn copy(&mut self, i: usize, other: &Angles) {
-        match i {
-            ALPHA => self.alpha = other.alpha,
-            BETA => self.beta = other.beta,
-            ROLL => self.roll = other.roll,
-            PITCH => self.pitch = other.pitch,
-            _ => {}
-        }
     }
 
     /// The angles after state `i` moved to `value` (only that one recomputed).
     fn moved(mut self, i: usize, value: f64) -> Angles {
-        match i {
-            ALPHA => self.alpha = value.sin_cos(),
-            BETA => self.beta = value.sin_cos(),
-            ROLL => self.roll = value.sin_cos(),
-            PITCH => self.pitch = value.sin_cos(),
-            _ => {}
+        if let Some(slot) = self.slot(i) {
+            *slot = value.sin_cos();
         }
         self
     }
@@ -137,11 +127,17 @@ impl Frozen {
     }
 }
 
+/// The measured state a fraction θ into the step from `start` to `end`:
+/// linear (measured pseudo-controls are continuous signals).
+fn between(start: &FlightPathState, end: &FlightPathState, theta: f64) -> FlightPathState {
+    start + (end - start) * theta
+}
+
 /// The measured states at the grid points and the steps' midpoints,
 /// interpolated as [`DrivenSimulation::simulate`] does.
 fn frozen_points(measured: &[FlightPathState]) -> impl Iterator<Item = FlightPathState> + '_ {
     measured.iter().enumerate().flat_map(move |(k, &point)| {
-        let midpoint = measured.get(k + 1).map(|next| point + (next - point) * 0.5);
+        let midpoint = measured.get(k + 1).map(|next| between(&point, next, 0.5));
         std::iter::once(point).chain(midpoint)
     })
 }
@@ -157,14 +153,14 @@ struct Memo<'a> {
     air: Air,
     /// Which states are measured, the frozen angles and air, and the point.
     measured: [bool; FLIGHT_PATH_SIZE],
-    frozen: Option<(&'a [Angles], Option<&'a [Air]>)>,
+    frozen: (&'a [Angles], Option<&'a [Air]>),
     point: usize,
 }
 
 impl<'a> Memo<'a> {
     fn new(
         measured: [bool; FLIGHT_PATH_SIZE],
-        frozen: Option<(&'a [Angles], Option<&'a [Air]>)>,
+        frozen: (&'a [Angles], Option<&'a [Air]>),
     ) -> Memo<'a> {
         Memo {
             x: None,
@@ -184,25 +180,22 @@ impl<'a> Memo<'a> {
 
     fn of(&mut self, x: &FlightPathState, atmosphere: &Atmosphere) -> (Angles, Air) {
         let (first, last) = (self.x.is_none(), self.x.unwrap_or(*x));
-        let frozen = self.frozen.map(|(angles, air)| {
-            let point = self.point;
-            (&angles[point], air.map(|air| &air[point]))
-        });
+        let (angles, air) = self.frozen;
+        let (frozen_angles, frozen_air) = (angles[self.point], air.map(|air| air[self.point]));
         for i in [ALPHA, BETA, ROLL, PITCH] {
-            match frozen {
-                Some((angles, _)) if self.measured[i] => {
-                    self.angles.copy(i, angles);
-                    // The frozen point is x's (every test that simulates checks it).
-                    debug_assert_eq!(Angles::of(x), Angles::of(x).with(i, angles));
-                }
-                _ if first || x[i] != last[i] => self.angles = self.angles.moved(i, x[i]),
-                _ => {}
+            if self.measured[i] {
+                let frozen = frozen_angles.get(i);
+                // The frozen point is x's (every test that simulates checks it).
+                debug_assert_eq!(frozen, Some(x[i].sin_cos()));
+                *self.angles.slot(i).expect("an angle") = frozen.expect("an angle");
+            } else if first || x[i] != last[i] {
+                self.angles = self.angles.moved(i, x[i]);
             }
         }
-        match frozen {
-            Some((_, Some(air))) if self.measured[ALTITUDE] => {
-                debug_assert_eq!(*air, atmosphere.at(x[ALTITUDE]));
-                self.air = *air
+        match frozen_air {
+            Some(air) if self.measured[ALTITUDE] => {
+                debug_assert_eq!(air, atmosphere.at(x[ALTITUDE]));
+                self.air = air
             }
             _ if first || x[ALTITUDE] != last[ALTITUDE] => self.air = atmosphere.at(x[ALTITUDE]),
             _ => {}
@@ -1035,7 +1028,7 @@ impl DrivenSimulation {
             self.frozen.angles.as_slice(),
             self.frozen.air(&self.measured, atmosphere),
         );
-        let mut memo = Memo::new(measured_states, Some(frozen));
+        let mut memo = Memo::new(measured_states, frozen);
         point.at(
             model,
             &directions,
@@ -1070,13 +1063,15 @@ impl DrivenSimulation {
                 // Measured pseudo-controls are continuous states: always
                 // linear inside the step (consistent with their rates in
                 // `pseudo_rates`); controls follow the model's option.
-                // The step's end is the next grid point.
+                // The step's end is the next grid point; the middle
+                // stages are at the step's midpoint.
                 let measured = if theta == 1.0 {
+                    memo.at_point(2 * k + 2);
                     self.measured[k + 1]
                 } else {
-                    self.measured[k] + (self.measured[k + 1] - self.measured[k]) * theta
+                    memo.at_point(2 * k + 1);
+                    between(&self.measured[k], &self.measured[k + 1], theta)
                 };
-                memo.at_point(2 * k + if theta == 1.0 { 2 } else { 1 });
                 let w = self.interpolation.weight(theta);
                 let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
                 let merged =
