@@ -239,10 +239,11 @@ type Predictions = Vec<Vec<Vec<f64>>>;
 struct Grid {
     /// [output][grid point].
     values: Vec<Vec<f64>>,
-    /// Per output, ∂y/∂θ over the grid, one unknown after another
-    /// (column-major: all unknowns × points, the series of unknown c at
-    /// `c·points..(c + 1)·points`), so that a Jacobian column is a copy.
-    sensitivities: Vec<Vec<f64>>,
+    /// ∂y/∂θ over the grid, grid point after grid point, each point's
+    /// block as the simulation gives it (outputs × all unknowns,
+    /// column-major: output o's sensitivity to unknown c at
+    /// `k·block + c·outputs + o`), so that storing a point is one copy.
+    sensitivities: Vec<f64>,
 }
 
 /// Fits `structure` to one or more records by output error.
@@ -686,7 +687,7 @@ impl Problem {
         let points = segment.simulation.len();
         let mut grid = Grid {
             values: vec![Vec::with_capacity(points); self.outputs.len()],
-            sensitivities: vec![vec![0.0; points * columns.len()]; self.outputs.len()],
+            sensitivities: Vec::with_capacity(points * self.outputs.len() * columns.len()),
         };
         segment.simulation.simulate(
             &self.model,
@@ -699,13 +700,7 @@ impl Problem {
                 for (values, y) in grid.values.iter_mut().zip(y) {
                     values.push(*y);
                 }
-                // dy is outputs × columns, column-major.
-                let outputs = y.len().max(1);
-                for (c, column) in dy.as_slice().chunks_exact(outputs).enumerate() {
-                    for (series, value) in grid.sensitivities.iter_mut().zip(column) {
-                        series[c * points + k] = *value;
-                    }
-                }
+                grid.sensitivities.extend_from_slice(dy.as_slice());
             },
         )?;
         Ok(grid)
@@ -900,11 +895,18 @@ fn grid_bracket(len: usize, start: f64, step: f64, t: f64) -> (usize, f64) {
 }
 
 /// A grid series' value at a [`grid_bracket`].
-fn on_grid(series: &[f64], (k, fraction): (usize, f64)) -> f64 {
+fn on_grid(series: &[f64], at: (usize, f64)) -> f64 {
+    at_bracket(at, |k| series[k])
+}
+
+/// The value at a [`grid_bracket`] of a series given point by point.
+#[inline(always)]
+fn at_bracket((k, fraction): (usize, f64), series: impl Fn(usize) -> f64) -> f64 {
     if fraction == 0.0 {
-        series[k]
+        series(k)
     } else {
-        series[k] + fraction * (series[k + 1] - series[k])
+        let start = series(k);
+        start + fraction * (series(k + 1) - start)
     }
 }
 
@@ -1057,9 +1059,9 @@ impl Problem {
 }
 
 /// ∂y/∂θ at the samples for `unknowns` from the grids' sensitivities to
-/// `all` ([`Assembled`]). Filled column by column (DMatrix is
-/// column-major), each column output after output and segment after
-/// segment, as the residuals.
+/// `all` ([`Assembled`]), row after row (output after output and segment
+/// after segment, as the residuals): a row reads the blocks of the two
+/// grid points around its sample, which lie together in memory.
 fn assemble(
     segments: &[Segment],
     grids: &[Grid],
@@ -1075,27 +1077,33 @@ fn assemble(
         start += count;
     }
     let mut sensitivities = DMatrix::zeros(start, unknowns.len());
-    for (unknown, mut column) in unknowns.iter().zip(sensitivities.column_iter_mut()) {
-        let c = all
-            .iter()
-            .position(|a| a == unknown)
-            .expect("a simulated unknown");
-        let mut row = 0;
-        for o in 0..outputs {
-            for (segment, grid) in segments.iter().zip(grids) {
-                let brackets = &segment.outputs[o].brackets;
-                let into = &mut column.as_mut_slice()[row..row + brackets.len()];
-                row += brackets.len();
-                if *unknown == (Unknown::Bias { output: o }) {
-                    into.fill(1.0);
-                    continue;
+    // Per unknown: its place among all, or None for an output's bias.
+    let places: Vec<Option<usize>> = unknowns
+        .iter()
+        .map(|unknown| match unknown {
+            Unknown::Bias { .. } => None,
+            _ => Some(
+                all.iter()
+                    .position(|a| a == unknown)
+                    .expect("a simulated unknown"),
+            ),
+        })
+        .collect();
+    let block = outputs * all.len();
+    let mut row = 0;
+    for o in 0..outputs {
+        for (segment, grid) in segments.iter().zip(grids) {
+            for &at in &segment.outputs[o].brackets {
+                for (j, (unknown, place)) in unknowns.iter().zip(&places).enumerate() {
+                    sensitivities[(row, j)] = match place {
+                        Some(c) => {
+                            at_bracket(at, |k| grid.sensitivities[k * block + c * outputs + o])
+                        }
+                        None if *unknown == (Unknown::Bias { output: o }) => 1.0,
+                        None => 0.0,
+                    };
                 }
-                let sensitivities = &grid.sensitivities[o];
-                let points = sensitivities.len() / all.len().max(1);
-                let series = &sensitivities[c * points..(c + 1) * points];
-                for (into, &at) in into.iter_mut().zip(brackets) {
-                    *into = on_grid(series, at);
-                }
+                row += 1;
             }
         }
     }
