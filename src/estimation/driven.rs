@@ -1015,9 +1015,27 @@ impl DrivenSimulation {
         let mut work = [(); 3].map(|_| shape());
         let (mut middle_a, mut middle_b, mut end_b) =
             (DMatrix::zeros(states.len(), states.len()), shape(), shape());
+        // Outputs that are states are x's entries, their sensitivities S's
+        // rows (none for a measured state); the others are linearised.
+        let mut computed = Vec::new();
+        let sources: Vec<OutputSource> = outputs
+            .iter()
+            .map(|output| match *output {
+                Observable::State(index) => OutputSource::State {
+                    index,
+                    row: row(index),
+                },
+                other => {
+                    computed.push(other);
+                    OutputSource::Linearised(computed.len() - 1)
+                }
+            })
+            .collect();
+        let mut values = vec![0.0; outputs.len()];
         let mut output_sensitivity = DMatrix::zeros(outputs.len(), columns.len());
-        let mut point = Linearization::new(&directions, outputs.len());
-        let mut next_point = Linearization::new(&directions, outputs.len());
+        let mut computed_sensitivity = DMatrix::zeros(computed.len(), columns.len());
+        let mut point = Linearization::new(&directions, computed.len());
+        let mut next_point = Linearization::new(&directions, computed.len());
         let exact = linearise == Linearise::Stages && !columns.is_empty();
         let mut stages: Vec<Linearization> = (0..if exact { 3 } else { 0 })
             .map(|_| Linearization::new(&directions, 0))
@@ -1035,7 +1053,7 @@ impl DrivenSimulation {
             &x,
             &self.controls[0],
             self.pseudo_rates(0),
-            outputs,
+            &computed,
             &mut memo,
         );
         for k in 0..self.len() {
@@ -1046,10 +1064,29 @@ impl DrivenSimulation {
                     &point.gx,
                     &sensitivity,
                     &point.gtheta,
-                    &mut output_sensitivity,
+                    &mut computed_sensitivity,
                 );
             }
-            sink(k, &point.outputs, &output_sensitivity);
+            for (o, source) in sources.iter().enumerate() {
+                let sensitivities = !columns.is_empty();
+                let mut into = output_sensitivity.row_mut(o);
+                match *source {
+                    OutputSource::State { index, row } => {
+                        values[o] = x[index];
+                        match row {
+                            Some(r) if sensitivities => into.copy_from(&sensitivity.row(r)),
+                            _ => into.fill(0.0),
+                        }
+                    }
+                    OutputSource::Linearised(c) => {
+                        values[o] = point.outputs[c];
+                        if sensitivities {
+                            into.copy_from(&computed_sensitivity.row(c));
+                        }
+                    }
+                }
+            }
+            sink(k, &values, &output_sensitivity);
             if k + 1 == self.len() {
                 break;
             }
@@ -1114,7 +1151,7 @@ impl DrivenSimulation {
                 &x,
                 &self.controls[k + 1],
                 end_pseudo,
-                outputs,
+                &computed,
                 &mut memo,
             );
             if exact {
@@ -1154,6 +1191,16 @@ impl DrivenSimulation {
         }
         Ok(())
     }
+}
+
+/// Where a simulation's output comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum OutputSource {
+    /// A state (index into x): its value, and its sensitivities the row of
+    /// S (None: a measured state, independent of θ).
+    State { index: usize, row: Option<usize> },
+    /// A linearised output (index into the linearisation's outputs).
+    Linearised(usize),
 }
 
 /// into = (a + b)/2.

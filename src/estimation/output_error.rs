@@ -1077,31 +1077,37 @@ fn assemble(
         start += count;
     }
     let mut sensitivities = DMatrix::zeros(start, unknowns.len());
-    // Per unknown: its place among all, or None for an output's bias.
-    let places: Vec<Option<usize>> = unknowns
-        .iter()
-        .map(|unknown| match unknown {
-            Unknown::Bias { .. } => None,
-            _ => Some(
+    let data = sensitivities.as_mut_slice();
+    // ∂y/∂bias = 1 on its output's rows; the simulated unknowns' columns
+    // (where each starts in the matrix) and places among all.
+    let mut simulated = Vec::with_capacity(unknowns.len());
+    for (j, unknown) in unknowns.iter().enumerate() {
+        let column = j * start;
+        match *unknown {
+            Unknown::Bias { output } => {
+                let rows = &rows[output];
+                data[column + rows.start..column + rows.end].fill(1.0);
+            }
+            _ => simulated.push((
+                column,
                 all.iter()
                     .position(|a| a == unknown)
                     .expect("a simulated unknown"),
-            ),
-        })
-        .collect();
+            )),
+        }
+    }
     let block = outputs * all.len();
     let mut row = 0;
     for o in 0..outputs {
+        // Where each simulated unknown's column starts, and its offset in a block.
+        let places: Vec<(usize, usize)> = simulated
+            .iter()
+            .map(|&(column, c)| (column, c * outputs + o))
+            .collect();
         for (segment, grid) in segments.iter().zip(grids) {
             for &at in &segment.outputs[o].brackets {
-                for (j, (unknown, place)) in unknowns.iter().zip(&places).enumerate() {
-                    sensitivities[(row, j)] = match place {
-                        Some(c) => {
-                            at_bracket(at, |k| grid.sensitivities[k * block + c * outputs + o])
-                        }
-                        None if *unknown == (Unknown::Bias { output: o }) => 1.0,
-                        None => 0.0,
-                    };
+                for &(column, offset) in &places {
+                    data[column + row] = at_bracket(at, |k| grid.sensitivities[k * block + offset]);
                 }
                 row += 1;
             }
