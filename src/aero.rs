@@ -30,6 +30,7 @@
 //! "body" gives CX, CY, CZ directly. Moments are body-axis, about the centre
 //! of gravity.
 
+use crate::dual::Real;
 use crate::error::Problems;
 use crate::params::ParameterSet;
 use crate::state::{Control, Controls, SinCos};
@@ -262,34 +263,63 @@ struct StallIndices {
     tau2: usize,
 }
 
-/// The flight variables a model is evaluated at (SI, rad, rad/s).
+/// The flight variables a model is evaluated at (SI, rad, rad/s), over a
+/// [`Real`] scalar (f64, or a [`crate::dual::Dual`] carrying derivatives).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct AeroInput {
-    pub alpha: f64,
-    pub beta: f64,
-    pub airspeed: f64,
-    pub mach: f64,
-    pub rates: Vector3<f64>,
-    pub alpha_dot: f64,
+pub struct AeroInput<T: Real = f64> {
+    pub alpha: T,
+    pub beta: T,
+    pub airspeed: T,
+    pub mach: T,
+    pub rates: Vector3<T>,
+    pub alpha_dot: T,
     pub controls: Controls,
     /// Flow separation point χ (1 attached, 0 separated); ignored by linear models.
-    pub chi: f64,
+    pub chi: T,
 }
 
 /// Coefficients a model produced, in body axes and in wind axes.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct AeroCoefficients {
+pub struct AeroCoefficients<T: Real = f64> {
     /// CX, CY, CZ.
-    pub force: Vector3<f64>,
+    pub force: Vector3<T>,
     /// Cl, Cm, Cn.
-    pub moment: Vector3<f64>,
-    pub lift: f64,
-    pub drag: f64,
+    pub moment: Vector3<T>,
+    pub lift: T,
+    pub drag: T,
 }
 
-impl std::ops::Add for AeroCoefficients {
-    type Output = AeroCoefficients;
-    fn add(self, other: AeroCoefficients) -> AeroCoefficients {
+impl<T: Real> AeroInput<T> {
+    /// The values, without derivatives.
+    pub fn values(&self) -> AeroInput {
+        AeroInput {
+            alpha: self.alpha.value(),
+            beta: self.beta.value(),
+            airspeed: self.airspeed.value(),
+            mach: self.mach.value(),
+            rates: self.rates.map(T::value),
+            alpha_dot: self.alpha_dot.value(),
+            controls: self.controls,
+            chi: self.chi.value(),
+        }
+    }
+}
+
+impl<T: Real> AeroCoefficients<T> {
+    /// The values, without derivatives.
+    pub fn values(&self) -> AeroCoefficients {
+        AeroCoefficients {
+            force: self.force.map(T::value),
+            moment: self.moment.map(T::value),
+            lift: self.lift.value(),
+            drag: self.drag.value(),
+        }
+    }
+}
+
+impl<T: Real> std::ops::Add for AeroCoefficients<T> {
+    type Output = AeroCoefficients<T>;
+    fn add(self, other: AeroCoefficients<T>) -> AeroCoefficients<T> {
         AeroCoefficients {
             force: self.force + other.force,
             moment: self.moment + other.moment,
@@ -551,23 +581,25 @@ impl AeroModel {
     }
 
     /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (seed 001, Eq. 3); 1 without stall model.
-    pub fn separation_target(&self, alpha: f64, alpha_dot: f64) -> f64 {
+    pub fn separation_target<T: Real>(&self, alpha: T, alpha_dot: T) -> T {
         match self.stall {
             Some(s) => {
                 let v = self.parameters.values();
-                0.5 * (1.0 - (v[s.a1] * (alpha - v[s.tau2] * alpha_dot - v[s.alpha_star])).tanh())
+                (T::constant(1.0)
+                    - ((alpha - alpha_dot * v[s.tau2] - v[s.alpha_star]) * v[s.a1]).tanh())
+                    * 0.5
             }
-            None => 1.0,
+            None => T::constant(1.0),
         }
     }
 
     /// dχ/dt = (χ∞ − χ)/τ1 (seed 001, Eq. 2); 0 when χ is not a state.
-    pub fn separation_rate(&self, alpha: f64, alpha_dot: f64, chi: f64) -> f64 {
+    pub fn separation_rate<T: Real>(&self, alpha: T, alpha_dot: T, chi: T) -> T {
         match self.stall {
             Some(s) if self.chi_is_state() => {
                 (self.separation_target(alpha, alpha_dot) - chi) / self.parameters.values()[s.tau1]
             }
-            _ => 0.0,
+            _ => T::zero(),
         }
     }
 
@@ -585,7 +617,7 @@ impl AeroModel {
     }
 
     /// The χ the forces use: the state when τ1 > 0, Eq. 3 when τ1 = 0, 1 without stall.
-    pub fn effective_chi(&self, input: &AeroInput) -> f64 {
+    pub fn effective_chi<T: Real>(&self, input: &AeroInput<T>) -> T {
         if self.chi_is_state() {
             input.chi
         } else {
@@ -594,78 +626,79 @@ impl AeroModel {
     }
 
     /// Normalising speed for rates: the airspeed or V0, times 2 or 1.
-    fn rate_divisor(&self, airspeed: f64) -> f64 {
+    fn rate_divisor<T: Real>(&self, airspeed: T) -> T {
         let speed = match self.rate_speed {
             RateSpeed::Airspeed => airspeed,
-            RateSpeed::Reference => self.reference_airspeed,
+            RateSpeed::Reference => T::constant(self.reference_airspeed),
         };
         match self.rate_normalization {
-            RateNormalization::TwiceSpeed => 2.0 * speed,
+            RateNormalization::TwiceSpeed => speed * 2.0,
             RateNormalization::Speed => speed,
         }
     }
 
     /// The value of every regressor (indexed by `Regressor as usize`) at a
     /// flight condition; `CL2` is left 0 (it needs the lift coefficient).
-    pub fn regressors(&self, input: &AeroInput, chi: f64) -> [f64; REGRESSOR_COUNT] {
-        let per_speed = 1.0 / self.rate_divisor(input.airspeed);
+    pub fn regressors<T: Real>(&self, input: &AeroInput<T>, chi: T) -> [T; REGRESSOR_COUNT] {
+        let per_speed = T::constant(1.0) / self.rate_divisor(input.airspeed);
         let (b, c) = (self.geometry.span, self.geometry.chord);
         let u = &input.controls;
+        let control = |control: Control| T::constant(u[control.index()]);
         [
-            1.0,
+            T::constant(1.0),
             input.alpha,
             input.beta,
             input.rates.x * b * per_speed,
             input.rates.y * c * per_speed,
             input.rates.z * b * per_speed,
             input.alpha_dot * c * per_speed,
-            u[Control::Elevator.index()],
-            u[Control::Aileron.index()],
-            u[Control::Rudder.index()],
-            u[Control::Flap.index()],
+            control(Control::Elevator),
+            control(Control::Aileron),
+            control(Control::Rudder),
+            control(Control::Flap),
             input.airspeed / self.reference_airspeed - 1.0,
             input.mach - self.reference_mach,
-            1.0 - chi,
-            0.0,
+            T::constant(1.0) - chi,
+            T::zero(),
         ]
     }
 
-    fn sum(&self, coefficient: Coefficient, regressors: &[f64; REGRESSOR_COUNT]) -> f64 {
-        self.sum_scaled(coefficient, regressors, 1.0)
+    fn sum<T: Real>(&self, coefficient: Coefficient, regressors: &[T; REGRESSOR_COUNT]) -> T {
+        self.sum_scaled(coefficient, regressors, T::constant(1.0))
     }
 
     /// Σ C_term·regressor + offset of `coefficient`, with the `alpha`
     /// regressor times `alpha_factor` (the Kirchhoff factor on the
     /// lift-type coefficient; 1, which changes nothing, elsewhere).
-    fn sum_scaled(
+    #[inline(always)]
+    fn sum_scaled<T: Real>(
         &self,
         coefficient: Coefficient,
-        regressors: &[f64; REGRESSOR_COUNT],
-        alpha_factor: f64,
-    ) -> f64 {
+        regressors: &[T; REGRESSOR_COUNT],
+        alpha_factor: T,
+    ) -> T {
         let values = self.parameters.values();
         self.terms[coefficient as usize]
             .iter()
-            .map(|t| {
+            .fold(T::constant(-0.0), |sum, t| {
                 let regressor = match t.regressor {
                     Regressor::Alpha => regressors[Regressor::Alpha as usize] * alpha_factor,
                     r => regressors[r as usize],
                 };
-                values[t.parameter] * regressor
+                sum + regressor * values[t.parameter]
             })
-            .sum::<f64>()
             + self.offsets[coefficient as usize]
     }
 
     /// The factor on the lift-type `alpha` term: the Kirchhoff
     /// ((1 + √χ)/2)² of the stall model, 1 for a linear one.
-    fn kirchhoff(&self, chi: f64) -> f64 {
+    fn kirchhoff<T: Real>(&self, chi: T) -> T {
         match self.kind {
             ModelKind::Stall => {
-                let root = 0.5 * (1.0 + chi.max(0.0).sqrt());
+                let root = (chi.max_value(0.0).sqrt() + 1.0) * 0.5;
                 root * root
             }
-            ModelKind::Linear => 1.0,
+            ModelKind::Linear => T::constant(1.0),
         }
     }
 
@@ -673,7 +706,7 @@ impl AeroModel {
     /// (`CL2` = CL² included) and the lift-type coefficient, at a flight
     /// condition; the lift-type `alpha` regressor is the `alpha` one times
     /// the Kirchhoff factor (also returned).
-    fn regressors_and_lift(&self, input: &AeroInput) -> ([f64; REGRESSOR_COUNT], f64, f64) {
+    fn regressors_and_lift<T: Real>(&self, input: &AeroInput<T>) -> ([T; REGRESSOR_COUNT], T, T) {
         let chi = self.effective_chi(input);
         let mut other = self.regressors(input, chi);
         let kirchhoff = self.kirchhoff(chi);
@@ -713,7 +746,11 @@ impl AeroModel {
     }
 
     /// As [`AeroModel::coefficients`], with sin α and cos α of `input.alpha` given.
-    pub fn coefficients_at(&self, input: &AeroInput, alpha_sin_cos: SinCos) -> AeroCoefficients {
+    pub fn coefficients_at<T: Real>(
+        &self,
+        input: &AeroInput<T>,
+        alpha_sin_cos: (T, T),
+    ) -> AeroCoefficients<T> {
         let (regressors, lift_type, _) = self.regressors_and_lift(input);
         let mut drag_type = self.sum(Coefficient::Drag, &regressors);
         if let Some(e) = self.oswald {
@@ -732,14 +769,14 @@ impl AeroModel {
     /// The coefficients from the lift-type, side, drag-type and moment
     /// coefficients at angle of attack α (its sine and cosine; linear in the four).
     #[inline(always)]
-    fn assemble(
+    fn assemble<T: Real>(
         &self,
-        lift_type: f64,
-        side: f64,
-        drag_type: f64,
-        moment: Vector3<f64>,
-        (sin_alpha, cos_alpha): SinCos,
-    ) -> AeroCoefficients {
+        lift_type: T,
+        side: T,
+        drag_type: T,
+        moment: Vector3<T>,
+        (sin_alpha, cos_alpha): (T, T),
+    ) -> AeroCoefficients<T> {
         match self.force_axes {
             ForceAxes::Wind => AeroCoefficients {
                 force: Vector3::new(

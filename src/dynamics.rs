@@ -19,9 +19,10 @@
 use crate::aero::{AeroCoefficients, AeroInput};
 use crate::aircraft::Aircraft;
 use crate::atmosphere::{Air, Atmosphere};
+use crate::dual::Real;
 use crate::integrator::Interpolation;
 use crate::state::{
-    self, CHI, CONTROL_COUNT, Control, Controls, DOWN, NORTH, P, Q0, SinCos, StateVector, U,
+    self, CHI, CONTROL_COUNT, Control, Controls, DOWN, NORTH, P, Q0, STATE_SIZE, StateVector, U,
 };
 use crate::wind::WindSample;
 use nalgebra::{Matrix3, SVector, Vector3};
@@ -91,18 +92,19 @@ fn unpack_wind(v: &ExogenousVector) -> WindSample {
     }
 }
 
-/// Air data relative to the moving air mass.
+/// Air data relative to the moving air mass (over a [`Real`] scalar, like
+/// everything the equations of motion compute).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct AirData {
-    pub airspeed: f64,
-    pub alpha: f64,
+pub struct AirData<T: Real = f64> {
+    pub airspeed: T,
+    pub alpha: T,
     /// sin α, cos α (the wind-axis forces need them at every evaluation).
-    pub alpha_sin_cos: SinCos,
-    pub beta: f64,
-    pub mach: f64,
-    pub dynamic_pressure: f64,
+    pub alpha_sin_cos: (T, T),
+    pub beta: T,
+    pub mach: T,
+    pub dynamic_pressure: T,
     /// Air-relative velocity in body axes.
-    pub velocity: Vector3<f64>,
+    pub velocity: Vector3<T>,
 }
 
 impl AirData {
@@ -110,23 +112,40 @@ impl AirData {
     pub fn new(velocity: Vector3<f64>, alpha: f64, beta: f64, air: &Air) -> AirData {
         AirData::with_alpha_sin_cos(velocity, alpha, alpha.sin_cos(), beta, air)
     }
+}
+
+impl<T: Real> AirData<T> {
+    /// The values, without derivatives.
+    pub fn values(&self) -> AirData {
+        AirData {
+            airspeed: self.airspeed.value(),
+            alpha: self.alpha.value(),
+            alpha_sin_cos: (self.alpha_sin_cos.0.value(), self.alpha_sin_cos.1.value()),
+            beta: self.beta.value(),
+            mach: self.mach.value(),
+            dynamic_pressure: self.dynamic_pressure.value(),
+            velocity: self.velocity.map(T::value),
+        }
+    }
 
     /// As [`AirData::new`], with α's sine and cosine already computed.
+    #[inline(always)]
     pub fn with_alpha_sin_cos(
-        velocity: Vector3<f64>,
-        alpha: f64,
-        alpha_sin_cos: SinCos,
-        beta: f64,
+        velocity: Vector3<T>,
+        alpha: T,
+        alpha_sin_cos: (T, T),
+        beta: T,
         air: &Air,
-    ) -> AirData {
-        let airspeed = velocity.norm();
+    ) -> AirData<T> {
+        // |v| as nalgebra's norm computes it, √(v·v).
+        let airspeed = velocity.dot(&velocity).sqrt();
         AirData {
             airspeed,
             alpha,
             alpha_sin_cos,
             beta,
             mach: airspeed / air.speed_of_sound,
-            dynamic_pressure: 0.5 * air.density * airspeed * airspeed,
+            dynamic_pressure: airspeed * (0.5 * air.density) * airspeed,
             velocity,
         }
     }
@@ -135,40 +154,61 @@ impl AirData {
 /// The state derivative together with every intermediate quantity a truth
 /// trace or a recorder needs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Evaluation {
-    pub derivative: StateVector,
+pub struct Evaluation<T: Real = f64> {
+    pub derivative: SVector<T, STATE_SIZE>,
     pub air: Air,
-    pub air_data: AirData,
-    pub alpha_dot: f64,
-    pub beta_dot: f64,
+    pub air_data: AirData<T>,
+    pub alpha_dot: T,
+    pub beta_dot: T,
     /// χ the forces used (state, algebraic value, or 1).
-    pub chi: f64,
-    pub coefficients: AeroCoefficients,
+    pub chi: T,
+    pub coefficients: AeroCoefficients<T>,
     /// The flight variables the aerodynamic model was evaluated at.
-    pub aero_input: AeroInput,
+    pub aero_input: AeroInput<T>,
     /// Controls after saturation.
     pub controls: Controls,
     pub thrust: f64,
     /// Specific force (what an accelerometer at the CG reads), body axes, m/s².
-    pub specific_force: Vector3<f64>,
-    pub angular_acceleration: Vector3<f64>,
+    pub specific_force: Vector3<T>,
+    pub angular_acceleration: Vector3<T>,
+}
+
+impl<T: Real> Evaluation<T> {
+    /// The evaluation's values, without derivatives (over a
+    /// [`crate::dual::Dual`], the same numbers as the f64 evaluation).
+    pub fn values(&self) -> Evaluation {
+        Evaluation {
+            derivative: self.derivative.map(T::value),
+            air: self.air,
+            air_data: self.air_data.values(),
+            alpha_dot: self.alpha_dot.value(),
+            beta_dot: self.beta_dot.value(),
+            chi: self.chi.value(),
+            coefficients: self.coefficients.values(),
+            aero_input: self.aero_input.values(),
+            controls: self.controls,
+            thrust: self.thrust,
+            specific_force: self.specific_force.map(T::value),
+            angular_acceleration: self.angular_acceleration.map(T::value),
+        }
+    }
 }
 
 /// What the equations of motion need of the state and the wind at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Kinematics {
+pub struct Kinematics<T: Real = f64> {
     /// Inertial velocity, body axes.
-    pub velocity: Vector3<f64>,
+    pub velocity: Vector3<T>,
     /// Body rates p, q, r.
-    pub omega: Vector3<f64>,
+    pub omega: Vector3<T>,
     /// NED→body rotation.
-    pub ned_to_body: Matrix3<f64>,
+    pub ned_to_body: Matrix3<T>,
     pub air: Air,
-    pub air_data: AirData,
+    pub air_data: AirData<T>,
     /// The separation point state χ.
-    pub chi: f64,
+    pub chi: T,
     /// Rate of the wind, body axes, as seen from the rotating body.
-    pub wind_rate_body: Vector3<f64>,
+    pub wind_rate_body: Vector3<T>,
 }
 
 /// An aircraft in an environment: the right-hand side of the equations of motion.
@@ -179,30 +219,30 @@ pub struct FlightModel {
 }
 
 /// Forces of one α̇ guess.
-struct Translational {
-    coefficients: AeroCoefficients,
-    input: AeroInput,
-    chi: f64,
-    accelerations: Accelerations,
+struct Translational<T: Real> {
+    coefficients: AeroCoefficients<T>,
+    input: AeroInput<T>,
+    chi: T,
+    accelerations: Accelerations<T>,
 }
 
 /// What the aerodynamic coefficients give at one instant: affine in the
 /// coefficients (see [`FlightModel::acceleration_response`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Accelerations {
+pub struct Accelerations<T: Real = f64> {
     /// Specific force, body axes, m/s².
-    pub specific_force: Vector3<f64>,
+    pub specific_force: Vector3<T>,
     /// u̇, v̇, ẇ.
-    pub velocity_rate: Vector3<f64>,
-    pub alpha_dot: f64,
-    pub beta_dot: f64,
+    pub velocity_rate: Vector3<T>,
+    pub alpha_dot: T,
+    pub beta_dot: T,
     /// ṗ, q̇, ṙ.
-    pub angular_acceleration: Vector3<f64>,
+    pub angular_acceleration: Vector3<T>,
 }
 
-impl Accelerations {
+impl<T: Real> Accelerations<T> {
     /// The accelerations an evaluation holds.
-    pub fn of(evaluation: &Evaluation) -> Accelerations {
+    pub fn of(evaluation: &Evaluation<T>) -> Accelerations<T> {
         Accelerations {
             specific_force: evaluation.specific_force,
             velocity_rate: evaluation.derivative.fixed_rows::<3>(U).into(),
@@ -213,9 +253,9 @@ impl Accelerations {
     }
 }
 
-impl std::ops::Sub for Accelerations {
-    type Output = Accelerations;
-    fn sub(self, other: Accelerations) -> Accelerations {
+impl<T: Real> std::ops::Sub for Accelerations<T> {
+    type Output = Accelerations<T>;
+    fn sub(self, other: Accelerations<T>) -> Accelerations<T> {
         Accelerations {
             specific_force: self.specific_force - other.specific_force,
             velocity_rate: self.velocity_rate - other.velocity_rate,
@@ -290,7 +330,11 @@ impl FlightModel {
     /// attitude enters only through `ned_to_body`). The quaternion rate is
     /// left 0: it is the caller's, who knows the attitude's parametrisation.
     #[inline(always)]
-    pub fn evaluate_kinematics(&self, kinematics: &Kinematics, controls: &Controls) -> Evaluation {
+    pub fn evaluate_kinematics<T: Real>(
+        &self,
+        kinematics: &Kinematics<T>,
+        controls: &Controls,
+    ) -> Evaluation<T> {
         let aircraft = &self.aircraft;
         let mut controls = *controls;
         aircraft.saturate(&mut controls);
@@ -308,7 +352,7 @@ impl FlightModel {
         let translational = if aircraft.aero.forces_depend_on_alpha_dot() {
             self.solve_alpha_dot(&context)
         } else {
-            self.translational(&context, 0.0)
+            self.translational(&context, T::zero())
         };
         let Accelerations {
             specific_force,
@@ -317,7 +361,7 @@ impl FlightModel {
             beta_dot,
             angular_acceleration,
         } = translational.accelerations;
-        let mut derivative = StateVector::zeros();
+        let mut derivative = SVector::<T, STATE_SIZE>::zeros();
         derivative.fixed_rows_mut::<3>(U).copy_from(&velocity_rate);
         derivative
             .fixed_rows_mut::<3>(P)
@@ -374,7 +418,7 @@ impl FlightModel {
     /// The aerodynamic moment of moment coefficients (Cl, Cm, Cn) at
     /// q̄·S = `scale`: (Cl·b, Cm·c̄, Cn·b)·q̄S.
     #[inline(always)]
-    fn aero_moment(&self, c: &Vector3<f64>, scale: f64) -> Vector3<f64> {
+    fn aero_moment<T: Real>(&self, c: &Vector3<T>, scale: T) -> Vector3<T> {
         let geometry = &self.aircraft.geometry;
         Vector3::new(
             c.x * geometry.span,
@@ -386,16 +430,19 @@ impl FlightModel {
     /// What the translational and rotational equations need besides the
     /// coefficients: gravity in body axes and the thrust force.
     #[inline(always)]
-    fn context<'a>(
+    fn context<'a, T: Real>(
         &self,
-        kinematics: &'a Kinematics,
+        kinematics: &'a Kinematics<T>,
         controls: &'a Controls,
         thrust: f64,
-    ) -> TranslationalContext<'a> {
+    ) -> TranslationalContext<'a, T> {
         TranslationalContext {
             kinematics,
             controls,
-            gravity_body: kinematics.ned_to_body.column(2) * self.environment.gravity,
+            gravity_body: kinematics
+                .ned_to_body
+                .column(2)
+                .map(|e| e * self.environment.gravity),
             thrust_force: self.aircraft.propulsion.direction * thrust,
         }
     }
@@ -403,7 +450,11 @@ impl FlightModel {
     /// Translational acceleration for a guess of α̇ (used by the aero model),
     /// returning the α̇ that acceleration implies.
     #[inline(always)]
-    fn translational(&self, context: &TranslationalContext, alpha_dot_guess: f64) -> Translational {
+    fn translational<T: Real>(
+        &self,
+        context: &TranslationalContext<T>,
+        alpha_dot_guess: T,
+    ) -> Translational<T> {
         let aircraft = &self.aircraft;
         let air_data = &context.kinematics.air_data;
         let input = AeroInput {
@@ -431,23 +482,28 @@ impl FlightModel {
     /// equation (specific force, u̇ v̇ ẇ, and the α̇, β̇ of the air-relative
     /// velocity) and the rotational one, ω̇ = I⁻¹·(M − ω × I·ω).
     #[inline(always)]
-    fn accelerations(
+    fn accelerations<T: Real>(
         &self,
-        context: &TranslationalContext,
-        coefficients: &AeroCoefficients,
-    ) -> Accelerations {
+        context: &TranslationalContext<T>,
+        coefficients: &AeroCoefficients<T>,
+    ) -> Accelerations<T> {
         let aircraft = &self.aircraft;
         let kinematics = context.kinematics;
         let air_data = &kinematics.air_data;
         let scale = air_data.dynamic_pressure * aircraft.wing_area;
         let aero_force = coefficients.force * scale;
-        let specific_force = (aero_force + context.thrust_force) / aircraft.mass.mass;
+        let specific_force =
+            (aero_force + context.thrust_force.map(T::constant)).map(|e| e / aircraft.mass.mass);
         let velocity_rate =
             specific_force + context.gravity_body - kinematics.omega.cross(&kinematics.velocity);
         let air_rate = velocity_rate - kinematics.wind_rate_body;
         let (alpha_dot, beta_dot) = flow_angle_rates(air_data, &air_rate);
         let moment = self.aero_moment(&coefficients.moment, scale)
-            + aircraft.propulsion.position.cross(&context.thrust_force);
+            + aircraft
+                .propulsion
+                .position
+                .cross(&context.thrust_force)
+                .map(T::constant);
         let omega = &kinematics.omega;
         let inertia = &aircraft.mass.inertia;
         Accelerations {
@@ -455,24 +511,28 @@ impl FlightModel {
             velocity_rate,
             alpha_dot,
             beta_dot,
-            angular_acceleration: aircraft.mass.inertia_inverse
-                * (moment - omega.cross(&(inertia * omega))),
+            angular_acceleration: constant_times(
+                &aircraft.mass.inertia_inverse,
+                &(moment - omega.cross(&constant_times(inertia, omega))),
+            ),
         }
     }
 
     /// Solves α̇ = g(α̇) by the secant method: the forces depend on α̇ and α̇ on the forces.
-    fn solve_alpha_dot(&self, context: &TranslationalContext) -> Translational {
+    /// Over a [`crate::dual::Dual`] the iterates' derivatives are not the
+    /// implicit function's: differentiate such models by differences.
+    fn solve_alpha_dot<T: Real>(&self, context: &TranslationalContext<T>) -> Translational<T> {
         const TOLERANCE: f64 = 1e-13;
-        let mut guess = 0.0;
+        let mut guess = T::zero();
         let mut result = self.translational(context, guess);
-        let mut previous: Option<(f64, f64)> = None;
+        let mut previous: Option<(T, T)> = None;
         for _ in 0..50 {
             let residual = result.accelerations.alpha_dot - guess;
-            if residual.abs() <= TOLERANCE * (1.0 + guess.abs()) {
+            if residual.value().abs() <= TOLERANCE * (1.0 + guess.value().abs()) {
                 break;
             }
             let next = match previous {
-                Some((old_guess, old_residual)) if residual != old_residual => {
+                Some((old_guess, old_residual)) if residual.value() != old_residual.value() => {
                     guess - residual * (guess - old_guess) / (residual - old_residual)
                 }
                 _ => result.accelerations.alpha_dot,
@@ -489,7 +549,7 @@ impl FlightModel {
 /// at `air_rate`: α̇ = (u·ẇ − w·u̇)/(u² + w²),
 /// β̇ = (v̇·V − v·V̇)/(V·√(u² + w²)) with V̇ = V·V̇/V; linear in the rate.
 #[inline(always)]
-fn flow_angle_rates(air_data: &AirData, air_rate: &Vector3<f64>) -> (f64, f64) {
+fn flow_angle_rates<T: Real>(air_data: &AirData<T>, air_rate: &Vector3<T>) -> (T, T) {
     let (u, v, w) = (
         air_data.velocity.x,
         air_data.velocity.y,
@@ -502,10 +562,17 @@ fn flow_angle_rates(air_data: &AirData, air_rate: &Vector3<f64>) -> (f64, f64) {
     (alpha_dot, beta_dot)
 }
 
-struct TranslationalContext<'a> {
-    kinematics: &'a Kinematics,
+/// m·v for a constant matrix m, summed as nalgebra's product sums it
+/// (column after column), without lifting m to the scalar `T`.
+#[inline(always)]
+fn constant_times<T: Real>(m: &Matrix3<f64>, v: &Vector3<T>) -> Vector3<T> {
+    Vector3::from_fn(|i, _| v.x * m[(i, 0)] + v.y * m[(i, 1)] + v.z * m[(i, 2)])
+}
+
+struct TranslationalContext<'a, T: Real> {
+    kinematics: &'a Kinematics<T>,
     controls: &'a Controls,
-    gravity_body: Vector3<f64>,
+    gravity_body: Vector3<T>,
     thrust_force: Vector3<f64>,
 }
 

@@ -7,6 +7,7 @@ pub mod atmosphere;
 pub mod catalog;
 pub mod check;
 pub mod derived;
+pub mod dual;
 pub mod dynamics;
 pub mod engine;
 pub mod error;

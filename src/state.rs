@@ -6,6 +6,7 @@
 //! separation point χ of the stall model (held constant when unused or
 //! algebraic).
 
+use crate::dual::Real;
 use nalgebra::{Matrix3, SVector, UnitQuaternion, Vector3};
 
 pub const STATE_SIZE: usize = 14;
@@ -163,7 +164,8 @@ pub type SinCos = (f64, f64);
 /// NED→body rotation of Euler angles (3-2-1) given by their sines and cosines:
 /// rows are the body axes in NED, e.g. the third column is (−sin θ,
 /// sin φ·cos θ, cos φ·cos θ), the down axis in body axes.
-pub fn ned_to_body(roll: SinCos, pitch: SinCos, yaw: SinCos) -> Matrix3<f64> {
+#[inline(always)]
+pub fn ned_to_body<T: Real>(roll: (T, T), pitch: (T, T), yaw: (T, T)) -> Matrix3<T> {
     let ((sin_roll, cos_roll), (sin_pitch, cos_pitch), (sin_yaw, cos_yaw)) = (roll, pitch, yaw);
     Matrix3::new(
         cos_pitch * cos_yaw,
@@ -186,11 +188,12 @@ pub fn euler_rates(roll: f64, pitch: f64, rates: &Vector3<f64>) -> Vector3<f64> 
 }
 
 /// [`euler_rates`] from the sines and cosines of φ and θ.
-pub fn euler_rates_of(
-    (sin_roll, cos_roll): SinCos,
-    (sin_pitch, cos_pitch): SinCos,
-    rates: &Vector3<f64>,
-) -> Vector3<f64> {
+#[inline(always)]
+pub fn euler_rates_of<T: Real>(
+    (sin_roll, cos_roll): (T, T),
+    (sin_pitch, cos_pitch): (T, T),
+    rates: &Vector3<T>,
+) -> Vector3<T> {
     let turn = rates.y * sin_roll + rates.z * cos_roll;
     Vector3::new(
         rates.x + sin_pitch / cos_pitch * turn,

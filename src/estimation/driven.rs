@@ -17,6 +17,7 @@
 
 use crate::aero::{AeroCoefficients, Coefficient, TermRegressors};
 use crate::atmosphere::{Air, Atmosphere};
+use crate::dual::{Dual, LANES, Real};
 use crate::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Kinematics};
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
@@ -43,11 +44,24 @@ const CHI: usize = 10;
 /// heading ψ enters none of the flight-path rates (gravity in body axes and
 /// the climb rate do not depend on it), so it is not needed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Angles {
-    alpha: SinCos,
-    beta: SinCos,
-    roll: SinCos,
-    pitch: SinCos,
+struct Angles<T: Real = f64> {
+    alpha: (T, T),
+    beta: (T, T),
+    roll: (T, T),
+    pitch: (T, T),
+}
+
+impl<T: Real> Angles<T> {
+    /// The sine and cosine of state `i`, if it is one of the angles.
+    fn slot(&mut self, i: usize) -> Option<&mut (T, T)> {
+        match i {
+            ALPHA => Some(&mut self.alpha),
+            BETA => Some(&mut self.beta),
+            ROLL => Some(&mut self.roll),
+            PITCH => Some(&mut self.pitch),
+            _ => None,
+        }
+    }
 }
 
 impl Angles {
@@ -57,17 +71,6 @@ impl Angles {
             beta: x[BETA].sin_cos(),
             roll: x[ROLL].sin_cos(),
             pitch: x[PITCH].sin_cos(),
-        }
-    }
-
-    /// The sine and cosine of state `i`, if it is one of the angles.
-    fn slot(&mut self, i: usize) -> Option<&mut SinCos> {
-        match i {
-            ALPHA => Some(&mut self.alpha),
-            BETA => Some(&mut self.beta),
-            ROLL => Some(&mut self.roll),
-            PITCH => Some(&mut self.pitch),
-            _ => None,
         }
     }
 
@@ -93,6 +96,27 @@ impl Angles {
             *slot = value.sin_cos();
         }
         self
+    }
+
+    /// The angles as dual numbers differentiating along the states of
+    /// `lanes` (lane l: state lanes[l]): d sin = cos, d cos = −sin on an
+    /// angle's own lane.
+    fn seeded(self, lanes: impl Iterator<Item = usize>) -> Angles<Dual> {
+        let lift = |(sin, cos): SinCos| (Dual::constant(sin), Dual::constant(cos));
+        let mut angles = Angles {
+            alpha: lift(self.alpha),
+            beta: lift(self.beta),
+            roll: lift(self.roll),
+            pitch: lift(self.pitch),
+        };
+        for (lane, i) in lanes.enumerate() {
+            if let Some((sin, cos)) = angles.slot(i) {
+                let (value_sin, value_cos) = (sin.value, cos.value);
+                sin.tangent[lane] = value_cos;
+                cos.tangent[lane] = -value_sin;
+            }
+        }
+        angles
     }
 }
 
@@ -208,13 +232,17 @@ impl<'a> Memo<'a> {
 /// The kinematics of a flight-path state with no wind: body velocity
 /// V·(cos α cos β, sin β, sin α cos β), the Euler angles' rotation (ψ = 0:
 /// see [`Angles`]), air data straight from V, α, β.
-fn kinematics(x: &FlightPathState, angles: &Angles, air: &Air) -> Kinematics {
+fn kinematics<T: Real>(
+    x: &SVector<T, FLIGHT_PATH_SIZE>,
+    angles: &Angles<T>,
+    air: &Air,
+) -> Kinematics<T> {
     let ((sin_alpha, cos_alpha), (sin_beta, cos_beta)) = (angles.alpha, angles.beta);
     let velocity = Vector3::new(cos_alpha * cos_beta, sin_beta, sin_alpha * cos_beta) * x[AIRSPEED];
     Kinematics {
         velocity,
         omega: x.fixed_rows::<3>(P).into(),
-        ned_to_body: state::ned_to_body(angles.roll, angles.pitch, (0.0, 1.0)),
+        ned_to_body: state::ned_to_body(angles.roll, angles.pitch, (T::zero(), T::constant(1.0))),
         air: *air,
         air_data: AirData::with_alpha_sin_cos(velocity, x[ALPHA], angles.alpha, x[BETA], air),
         chi: x[CHI],
@@ -249,14 +277,14 @@ impl PseudoRates {
 /// measured, V̇ = [(u·u̇ + w·ẇ)/V + V·sin β·cos β·β̇_m]/cos²β.
 /// `angles` and `air` are x's (computed once per evaluation; [`Linearization::at`] reuses them for every perturbed model).
 #[inline(always)]
-fn derivative(
+fn derivative<T: Real>(
     model: &FlightModel,
-    x: &FlightPathState,
-    angles: &Angles,
+    x: &SVector<T, FLIGHT_PATH_SIZE>,
+    angles: &Angles<T>,
     air: &Air,
     controls: &Controls,
     pseudo: PseudoRates,
-) -> (FlightPathState, Evaluation) {
+) -> (SVector<T, FLIGHT_PATH_SIZE>, Evaluation<T>) {
     let evaluation = model.evaluate_kinematics(&kinematics(x, angles, air), controls);
     (
         flight_path_rates(x, angles, &Motion::of(&evaluation), pseudo),
@@ -267,20 +295,20 @@ fn derivative(
 /// What the flight-path rates take of an evaluation besides x: the
 /// air-relative velocity, the accelerations, ḋ and χ̇.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Motion {
-    velocity: Vector3<f64>,
-    airspeed: f64,
+struct Motion<T: Real = f64> {
+    velocity: Vector3<T>,
+    airspeed: T,
     /// u̇, v̇, ẇ.
-    velocity_rate: Vector3<f64>,
-    alpha_dot: f64,
-    beta_dot: f64,
-    angular_acceleration: Vector3<f64>,
-    down_rate: f64,
-    chi_rate: f64,
+    velocity_rate: Vector3<T>,
+    alpha_dot: T,
+    beta_dot: T,
+    angular_acceleration: Vector3<T>,
+    down_rate: T,
+    chi_rate: T,
 }
 
-impl Motion {
-    fn of(evaluation: &Evaluation) -> Motion {
+impl<T: Real> Motion<T> {
+    fn of(evaluation: &Evaluation<T>) -> Motion<T> {
         let d = &evaluation.derivative;
         Motion {
             velocity: evaluation.air_data.velocity,
@@ -293,7 +321,9 @@ impl Motion {
             chi_rate: d[state::CHI],
         }
     }
+}
 
+impl Motion {
     /// The motion with the accelerations moved by a coefficient's
     /// `response` and χ̇ by `chi_rate`.
     fn moved(mut self, response: &Accelerations, chi_rate: f64) -> Motion {
@@ -308,14 +338,14 @@ impl Motion {
 
 /// The flight-path rates of an evaluation's motion at x ([`derivative`]):
 /// affine in the accelerations.
-fn flight_path_rates(
-    x: &FlightPathState,
-    angles: &Angles,
-    motion: &Motion,
+fn flight_path_rates<T: Real>(
+    x: &SVector<T, FLIGHT_PATH_SIZE>,
+    angles: &Angles<T>,
+    motion: &Motion<T>,
     pseudo: PseudoRates,
-) -> FlightPathState {
+) -> SVector<T, FLIGHT_PATH_SIZE> {
     let (velocity, d) = (motion.velocity, motion.velocity_rate);
-    let mut rates = FlightPathState::zeros();
+    let mut rates = SVector::<T, FLIGHT_PATH_SIZE>::zeros();
     let (sin_beta, cos_beta) = angles.beta;
     rates[AIRSPEED] = match pseudo.beta {
         Some(beta_rate) => {
@@ -326,7 +356,7 @@ fn flight_path_rates(
     };
     rates[ALPHA] = motion.alpha_dot;
     rates[BETA] = match pseudo.airspeed {
-        Some(speed_rate) => (d.y - speed_rate * sin_beta) / (x[AIRSPEED] * cos_beta),
+        Some(speed_rate) => (d.y - sin_beta * speed_rate) / (x[AIRSPEED] * cos_beta),
         None => motion.beta_dot,
     };
     rates
@@ -431,7 +461,7 @@ impl Observable {
     }
 
     /// The output's value at a state and its evaluation.
-    pub fn value(self, x: &FlightPathState, evaluation: &Evaluation) -> f64 {
+    pub fn value<T: Real>(self, x: &SVector<T, FLIGHT_PATH_SIZE>, evaluation: &Evaluation<T>) -> T {
         let c = &evaluation.coefficients;
         match self {
             Observable::State(i) => x[i],
@@ -534,6 +564,13 @@ enum Response {
 /// step of each.
 struct Directions {
     states: Vec<usize>,
+    /// The states ∂f/∂x and ∂g/∂x are differentiated along by dual numbers
+    /// ([`crate::dual`]), [`LANES`] at a time, each with its column in
+    /// ∂f/∂x; the others (the altitude, whose air comes from the
+    /// atmosphere table, and every state of a model whose forces depend on
+    /// α̇, solved for by iteration) by forward differences.
+    dual_lanes: Vec<Vec<(usize, usize)>>,
+    differenced: Vec<(usize, usize)>,
     models: Vec<(FlightModel, f64)>,
     responses: Vec<Response>,
     /// Per unknown; a `Direction` or `Term` names a response.
@@ -544,12 +581,23 @@ struct Directions {
 
 impl Directions {
     fn new(model: &FlightModel, columns: &[Column], active: &[usize]) -> Directions {
+        let states = if columns.is_empty() {
+            Vec::new()
+        } else {
+            active.to_vec()
+        };
+        let dual = !model.aircraft.aero.forces_depend_on_alpha_dot();
+        // (column in ∂f/∂x, state)
+        type Lane = (usize, usize);
+        let (by_dual, differenced): (Vec<Lane>, Vec<Lane>) = states
+            .iter()
+            .copied()
+            .enumerate()
+            .partition(|&(_, i)| dual && i != ALTITUDE);
         let mut directions = Directions {
-            states: if columns.is_empty() {
-                Vec::new()
-            } else {
-                active.to_vec()
-            },
+            dual_lanes: by_dual.chunks(LANES).map(<[_]>::to_vec).collect(),
+            differenced,
+            states,
             models: Vec::new(),
             responses: Vec::new(),
             sources: Vec::with_capacity(columns.len()),
@@ -609,9 +657,9 @@ impl Directions {
 }
 
 /// A model linearised at one point (a grid point, or an RK4 stage state
-/// with [`Linearise::Stages`]): ẋ, the evaluation, and difference
-/// quotients over the active states: ∂f/∂x, ∂f/∂θ, and at grid points the
-/// outputs' ∂g/∂x and ∂g/∂θ.
+/// with [`Linearise::Stages`]): ẋ, the evaluation, and derivatives over the
+/// active states (dual numbers or difference quotients: [`Directions`]):
+/// ∂f/∂x, ∂f/∂θ, and at grid points the outputs' ∂g/∂x and ∂g/∂θ.
 struct Linearization {
     rates: FlightPathState,
     evaluation: Evaluation,
@@ -661,15 +709,46 @@ impl Linearization {
     ) {
         let atmosphere = &model.environment.atmosphere;
         let (angles, air) = memo.of(x, atmosphere);
-        (self.rates, self.evaluation) = derivative(model, x, &angles, &air, controls, pseudo);
-        for (o, output) in outputs.iter().enumerate() {
-            self.outputs[o] = output.value(x, &self.evaluation);
+        // With dual lanes the first one's values are the evaluation at x
+        // (the same numbers); without, it is evaluated plainly.
+        if directions.dual_lanes.is_empty() {
+            (self.rates, self.evaluation) = derivative(model, x, &angles, &air, controls, pseudo);
+            for (o, output) in outputs.iter().enumerate() {
+                self.outputs[o] = output.value(x, &self.evaluation);
+            }
+        }
+        let states = &directions.states;
+        for (chunk, lanes) in directions.dual_lanes.iter().enumerate() {
+            let mut dual_x = x.map(Dual::constant);
+            for (lane, &(_, i)) in lanes.iter().enumerate() {
+                dual_x[i].tangent[lane] = 1.0;
+            }
+            let dual_angles = angles.seeded(lanes.iter().map(|&(_, i)| i));
+            let (rates, evaluation) =
+                derivative(model, &dual_x, &dual_angles, &air, controls, pseudo);
+            if chunk == 0 {
+                self.rates = rates.map(Dual::value);
+                self.evaluation = evaluation.values();
+            }
+            for (lane, &(b, _)) in lanes.iter().enumerate() {
+                for (a, &r) in states.iter().enumerate() {
+                    self.a[(a, b)] = rates[r].tangent[lane];
+                }
+            }
+            for (o, output) in outputs.iter().enumerate() {
+                let value = output.value(&dual_x, &evaluation);
+                if chunk == 0 {
+                    self.outputs[o] = value.value;
+                }
+                for (lane, &(b, _)) in lanes.iter().enumerate() {
+                    self.gx[(o, b)] = value.tangent[lane];
+                }
+            }
         }
         if directions.sources.is_empty() {
             return;
         }
-        let states = &directions.states;
-        for (b, &i) in states.iter().enumerate() {
+        for &(b, i) in &directions.differenced {
             let step = state_step(x[i]);
             let mut moved = *x;
             moved[i] += step;
@@ -950,8 +1029,12 @@ impl DrivenSimulation {
     /// of the step's two ends ([`rk4_linear_step`]): one linearisation per
     /// step instead of one per stage, for a Jacobian within O(h²) of the
     /// derivative of the discrete simulation (measured in the output-error
-    /// test against central differences); ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ. ∂f/∂x and ∂g/∂x are forward differences in
-    /// each integrated state; for a term C_term of coefficient C, f is linear
+    /// test against central differences); ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ. ∂f/∂x
+    /// and ∂g/∂x are exact, by dual numbers along the integrated states
+    /// (forward-mode automatic differentiation, [`crate::dual`]; the first
+    /// pass's values are the evaluation at x), except along the altitude and
+    /// for models whose forces depend on α̇, where they are forward
+    /// differences; for a term C_term of coefficient C, f is linear
     /// in C, and ∂f/∂θ = (∂f/∂C)·regressor with ∂f/∂C exact from the
     /// evaluation (`Response::Offset`), or the difference quotient of an
     /// offset on C where the forces depend on α̇; a nonlinear parameter's is
@@ -1241,6 +1324,86 @@ mod tests {
     /// term, a CL² drag term and a stall model whose χ̇ moves with α̇ (τ2);
     /// body axes (CDRW); and the lateral model with measured airspeed and
     /// sideslip rates.
+    /// ∂f/∂x and ∂g/∂x by dual numbers, along all eleven flight-path
+    /// states (three passes of four lanes; altitude included: its air is
+    /// held, as the dual evaluation holds it), against central differences
+    /// of the f64 evaluation (step 1e-6·max(|x|, 1), error ~1e-9 relative),
+    /// on the wind-axis stall model with χ a state (Kirchhoff factor, χ̇),
+    /// the body-axis CDRW model and the lateral model with measured airspeed
+    /// and sideslip rates; the values are the f64 evaluation's, bit for bit.
+    #[test]
+    fn dual_derivatives_match_central_differences() {
+        let cases = [
+            (stall_test_structure(0.2), PseudoRates::default()),
+            (
+                ModelStructure::load("cdrw-longitudinal").unwrap(),
+                PseudoRates::default(),
+            ),
+            (
+                ModelStructure::load("attas-lateral").unwrap(),
+                PseudoRates {
+                    airspeed: Some(0.3),
+                    beta: Some(0.02),
+                },
+            ),
+        ];
+        let outputs = [
+            "nx", "ny", "nz", "p_dot", "q_dot", "r_dot", "mach", "CX", "CY", "CZ", "CL", "CD",
+            "Cl", "Cm", "Cn",
+        ]
+        .map(|name| Observable::parse(name).unwrap());
+        let x = FlightPathState::from_column_slice(&[
+            60.0, 0.21, 0.03, 0.05, -0.04, 0.02, 0.1, 0.15, 0.3, 1000.0, 0.6,
+        ]);
+        let controls = Controls::from_column_slice(&[-0.05, 0.02, -0.01, 0.0, 0.5]);
+        for (structure, pseudo) in cases {
+            let model = FlightModel::new(structure.aircraft.clone(), Default::default());
+            let air = model.environment.atmosphere.at(x[ALTITUDE]);
+            let evaluate = |x: &FlightPathState| {
+                derivative(&model, x, &Angles::of(x), &air, &controls, pseudo)
+            };
+            let (rates, at) = evaluate(&x);
+            for lanes in (0..FLIGHT_PATH_SIZE).collect::<Vec<_>>().chunks(LANES) {
+                let mut dual_x = x.map(Dual::constant);
+                for (lane, &i) in lanes.iter().enumerate() {
+                    dual_x[i].tangent[lane] = 1.0;
+                }
+                let angles = Angles::of(&x).seeded(lanes.iter().copied());
+                let (dual_rates, dual_at) =
+                    derivative(&model, &dual_x, &angles, &air, &controls, pseudo);
+                assert_eq!(dual_rates.map(Dual::value), rates);
+                assert_eq!(dual_at.values(), at);
+                for (lane, &i) in lanes.iter().enumerate() {
+                    let step = 1e-6 * x[i].abs().max(1.0);
+                    let moved = |sign: f64| {
+                        let mut moved = x;
+                        moved[i] += sign * step;
+                        evaluate(&moved)
+                    };
+                    let ((plus, plus_at), (minus, minus_at)) = (moved(1.0), moved(-1.0));
+                    let numeric = (plus - minus) / (2.0 * step);
+                    let dual = dual_rates.map(|r| r.tangent[lane]);
+                    let scale = numeric.amax().max(1.0);
+                    assert!(
+                        (dual - numeric).amax() <= 1e-7 * scale,
+                        "{}: ∂f/∂x{i}: {dual} vs {numeric}",
+                        structure.name
+                    );
+                    for output in outputs {
+                        let dual = output.value(&dual_x, &dual_at).tangent[lane];
+                        let numeric = (output.value(&x, &plus_at) - output.value(&x, &minus_at))
+                            / (2.0 * step);
+                        assert!(
+                            (dual - numeric).abs() <= 1e-7 * numeric.abs().max(1.0),
+                            "{}: ∂{output:?}/∂x{i}: {dual} vs {numeric}",
+                            structure.name
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn coefficient_responses_match_perturbed_models() {
         let stall = stall_test_structure(0.2);

@@ -54,9 +54,11 @@
 //! evaluation (f is affine in C: [`crate::aero::AeroModel::offset_response`]
 //! through [`crate::dynamics::FlightModel::acceleration_response`]), or,
 //! where the forces depend on α̇, the difference quotient of an offset on
-//! C; ∂f/∂x, ∂g/∂x and ∂f/∂θ of the nonlinear parameters (e, the stall
-//! parameters) are forward differences (step 10⁻⁷·max(|·|, scale))
-//! ([`driven`]).
+//! C; ∂f/∂x and ∂g/∂x are exact, by forward-mode automatic
+//! differentiation (dual numbers, [`crate::dual`]), except along the
+//! altitude and where the forces depend on α̇; those and ∂f/∂θ of the
+//! nonlinear parameters (e, the stall parameters) are forward differences
+//! (step 10⁻⁷·max(|·|, scale)) ([`driven`]).
 //! A test checks the exact Jacobian against central differences of whole
 //! simulations to 10⁻⁵, another the grid-point one against it. Each θ is
 //! simulated once, with sensitivities: the solver's re-weighting, residuals
