@@ -25,9 +25,13 @@
 //! step taking the mean of the two ends at the middle stages, within O(h²)
 //! of the exact derivative, 5e-4 on the ATTAS lateral benchmark, a few % at
 //! a held control's step or through the stall). Such a Jacobian steers
-//! well, but the point where its Gauss–Newton step vanishes is not the
-//! optimum: iterated to convergence on the lateral benchmark it stops
-//! 0.34σ away (the exact step's predicted decrease there is 0.057). So once
+//! well, but the point where its Gauss–Newton step vanishes is not always
+//! the optimum: iterated to convergence with a fresh Jacobian at every
+//! step it stops at the exact optimum on the ATTAS benchmarks, but 0.02σ
+//! away on HANSA 3 and 0.26σ on CDRW (at a held control's step the step's
+//! end is linearised with the new controls; relinearised with the held
+//! ones, CDRW is still 0.07σ away), and held stale from the start it stops
+//! 0.29σ away on the ATTAS lateral benchmark. So once
 //! a step is predicted to lower the cost by less than 1 (a step under √2σ),
 //! the iterations switch to the linearisation at every RK4 stage
 //! ([`crate::integrator::rk4_linear_step`] with the stage linearisations;
