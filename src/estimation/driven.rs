@@ -1324,16 +1324,12 @@ mod tests {
     /// term, a CL² drag term and a stall model whose χ̇ moves with α̇ (τ2);
     /// body axes (CDRW); and the lateral model with measured airspeed and
     /// sideslip rates.
-    /// ∂f/∂x and ∂g/∂x by dual numbers, along all eleven flight-path
-    /// states (three passes of four lanes; altitude included: its air is
-    /// held, as the dual evaluation holds it), against central differences
-    /// of the f64 evaluation (step 1e-6·max(|x|, 1), error ~1e-9 relative),
-    /// on the wind-axis stall model with χ a state (Kirchhoff factor, χ̇),
-    /// the body-axis CDRW model and the lateral model with measured airspeed
-    /// and sideslip rates; the values are the f64 evaluation's, bit for bit.
-    #[test]
-    fn dual_derivatives_match_central_differences() {
-        let cases = [
+    /// The derivative tests' models: a wind-axis stall model with χ a
+    /// state, τ2 = 0.2 (χ̇ moves with α̇), an Oswald and a CL² drag term; the
+    /// body-axis CDRW model; the lateral model with measured airspeed and
+    /// sideslip rates.
+    fn test_models() -> [(ModelStructure, PseudoRates); 3] {
+        [
             (stall_test_structure(0.2), PseudoRates::default()),
             (
                 ModelStructure::load("cdrw-longitudinal").unwrap(),
@@ -1346,16 +1342,35 @@ mod tests {
                     beta: Some(0.02),
                 },
             ),
-        ];
+        ]
+    }
+
+    /// A state and controls away from trim, every rate and angle non-zero.
+    fn test_point() -> (FlightPathState, Controls) {
+        (
+            FlightPathState::from_column_slice(&[
+                60.0, 0.21, 0.03, 0.05, -0.04, 0.02, 0.1, 0.15, 0.3, 1000.0, 0.6,
+            ]),
+            Controls::from_column_slice(&[-0.05, 0.02, -0.01, 0.0, 0.5]),
+        )
+    }
+
+    /// ∂f/∂x and ∂g/∂x by dual numbers, along all eleven flight-path
+    /// states (three passes of four lanes; altitude included: its air is
+    /// held, as the dual evaluation holds it), against central differences
+    /// of the f64 evaluation (step 1e-6·max(|x|, 1), error ~1e-9 relative),
+    /// on the wind-axis stall model with χ a state (Kirchhoff factor, χ̇),
+    /// the body-axis CDRW model and the lateral model with measured airspeed
+    /// and sideslip rates; the values are the f64 evaluation's, bit for bit.
+    #[test]
+    fn dual_derivatives_match_central_differences() {
+        let cases = test_models();
         let outputs = [
             "nx", "ny", "nz", "p_dot", "q_dot", "r_dot", "mach", "CX", "CY", "CZ", "CL", "CD",
             "Cl", "Cm", "Cn",
         ]
         .map(|name| Observable::parse(name).unwrap());
-        let x = FlightPathState::from_column_slice(&[
-            60.0, 0.21, 0.03, 0.05, -0.04, 0.02, 0.1, 0.15, 0.3, 1000.0, 0.6,
-        ]);
-        let controls = Controls::from_column_slice(&[-0.05, 0.02, -0.01, 0.0, 0.5]);
+        let (x, controls) = test_point();
         for (structure, pseudo) in cases {
             let model = FlightModel::new(structure.aircraft.clone(), Default::default());
             let air = model.environment.atmosphere.at(x[ALTITUDE]);
@@ -1406,21 +1421,7 @@ mod tests {
 
     #[test]
     fn coefficient_responses_match_perturbed_models() {
-        let stall = stall_test_structure(0.2);
-        let cases = [
-            (stall, PseudoRates::default()),
-            (
-                ModelStructure::load("cdrw-longitudinal").unwrap(),
-                PseudoRates::default(),
-            ),
-            (
-                ModelStructure::load("attas-lateral").unwrap(),
-                PseudoRates {
-                    airspeed: Some(0.3),
-                    beta: Some(0.02),
-                },
-            ),
-        ];
+        let cases = test_models();
         let outputs = [
             "airspeed", "alpha", "beta", "p", "q", "r", "chi", "nx", "ny", "nz", "p_dot", "q_dot",
             "r_dot", "CX", "CY", "CZ", "CL", "CD", "Cl", "Cm", "Cn",
@@ -1429,10 +1430,7 @@ mod tests {
         for (structure, pseudo) in cases {
             let model = FlightModel::new(structure.aircraft.clone(), Default::default());
             assert!(!model.aircraft.aero.forces_depend_on_alpha_dot());
-            let x = FlightPathState::from_column_slice(&[
-                60.0, 0.21, 0.03, 0.05, -0.04, 0.02, 0.1, 0.15, 0.3, 1000.0, 0.6,
-            ]);
-            let controls = Controls::from_column_slice(&[-0.05, 0.02, -0.01, 0.0, 0.5]);
+            let (x, controls) = test_point();
             let (angles, air) = (Angles::of(&x), model.environment.atmosphere.at(x[ALTITUDE]));
             let (rates, at) = derivative(&model, &x, &angles, &air, &controls, pseudo);
             for coefficient in Coefficient::ALL {
