@@ -292,6 +292,31 @@ fn derivative<T: Real>(
     )
 }
 
+/// [`derivative`] over dual numbers differentiating along the states
+/// `lanes` (lane l: state lanes[l]) from x and its angles' sines and
+/// cosines: the seeded state, its rates and evaluation.
+fn dual_derivative(
+    model: &FlightModel,
+    x: &FlightPathState,
+    angles: Angles,
+    lanes: impl Iterator<Item = usize> + Clone,
+    air: &Air,
+    controls: &Controls,
+    pseudo: PseudoRates,
+) -> (
+    SVector<Dual, FLIGHT_PATH_SIZE>,
+    SVector<Dual, FLIGHT_PATH_SIZE>,
+    Evaluation<Dual>,
+) {
+    let mut dual_x = x.map(Dual::constant);
+    for (lane, i) in lanes.clone().enumerate() {
+        dual_x[i].tangent[lane] = 1.0;
+    }
+    let (rates, evaluation) =
+        derivative(model, &dual_x, &angles.seeded(lanes), air, controls, pseudo);
+    (dual_x, rates, evaluation)
+}
+
 /// What the flight-path rates take of an evaluation besides x: the
 /// air-relative velocity, the accelerations, ḋ and χ̇.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -719,13 +744,15 @@ impl Linearization {
         }
         let states = &directions.states;
         for (chunk, lanes) in directions.dual_lanes.iter().enumerate() {
-            let mut dual_x = x.map(Dual::constant);
-            for (lane, &(_, i)) in lanes.iter().enumerate() {
-                dual_x[i].tangent[lane] = 1.0;
-            }
-            let dual_angles = angles.seeded(lanes.iter().map(|&(_, i)| i));
-            let (rates, evaluation) =
-                derivative(model, &dual_x, &dual_angles, &air, controls, pseudo);
+            let (dual_x, rates, evaluation) = dual_derivative(
+                model,
+                x,
+                angles,
+                lanes.iter().map(|&(_, i)| i),
+                &air,
+                controls,
+                pseudo,
+            );
             if chunk == 0 {
                 self.rates = rates.map(Dual::value);
                 self.evaluation = evaluation.values();
@@ -1150,8 +1177,8 @@ impl DrivenSimulation {
                     &mut computed_sensitivity,
                 );
             }
+            let sensitivities = !columns.is_empty();
             for (o, source) in sources.iter().enumerate() {
-                let sensitivities = !columns.is_empty();
                 let mut into = output_sensitivity.row_mut(o);
                 match *source {
                     OutputSource::State { index, row } => {
@@ -1317,13 +1344,6 @@ mod tests {
     use super::*;
     use crate::estimation::structure::{ModelStructure, stall_test_structure};
 
-    /// The exact coefficient responses ([`offset_evaluation`]) against
-    /// central differences of models with the coefficient's offset moved by
-    /// ±10⁻⁵ (exact for the quadratic CL² drag; rounding ~10⁻¹⁰), for every
-    /// coefficient, flight-path rate and output: wind axes with an Oswald
-    /// term, a CL² drag term and a stall model whose χ̇ moves with α̇ (τ2);
-    /// body axes (CDRW); and the lateral model with measured airspeed and
-    /// sideslip rates.
     /// The derivative tests' models: a wind-axis stall model with χ a
     /// state, τ2 = 0.2 (χ̇ moves with α̇), an Oswald and a CL² drag term; the
     /// body-axis CDRW model; the lateral model with measured airspeed and
@@ -1379,13 +1399,15 @@ mod tests {
             };
             let (rates, at) = evaluate(&x);
             for lanes in (0..FLIGHT_PATH_SIZE).collect::<Vec<_>>().chunks(LANES) {
-                let mut dual_x = x.map(Dual::constant);
-                for (lane, &i) in lanes.iter().enumerate() {
-                    dual_x[i].tangent[lane] = 1.0;
-                }
-                let angles = Angles::of(&x).seeded(lanes.iter().copied());
-                let (dual_rates, dual_at) =
-                    derivative(&model, &dual_x, &angles, &air, &controls, pseudo);
+                let (dual_x, dual_rates, dual_at) = dual_derivative(
+                    &model,
+                    &x,
+                    Angles::of(&x),
+                    lanes.iter().copied(),
+                    &air,
+                    &controls,
+                    pseudo,
+                );
                 assert_eq!(dual_rates.map(Dual::value), rates);
                 assert_eq!(dual_at.values(), at);
                 for (lane, &i) in lanes.iter().enumerate() {
@@ -1419,6 +1441,13 @@ mod tests {
         }
     }
 
+    /// The exact coefficient responses ([`offset_evaluation`]) against
+    /// central differences of models with the coefficient's offset moved by
+    /// ±10⁻⁵ (exact for the quadratic CL² drag; rounding ~10⁻¹⁰), for every
+    /// coefficient, flight-path rate and output: wind axes with an Oswald
+    /// term, a CL² drag term and a stall model whose χ̇ moves with α̇ (τ2);
+    /// body axes (CDRW); and the lateral model with measured airspeed and
+    /// sideslip rates.
     #[test]
     fn coefficient_responses_match_perturbed_models() {
         let cases = test_models();
