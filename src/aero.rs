@@ -354,15 +354,34 @@ pub struct AeroModel {
 }
 
 /// The regressor values each coefficient's terms multiply at one flight
-/// condition, such that a coefficient is Σ C_term·regressor (plus its offset).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// condition, such that a coefficient is Σ C_term·regressor (plus its
+/// offset), as one table ([`TermRegressors::slot`]): the lift-type
+/// coefficient's (`alpha` carrying the Kirchhoff factor), then every other
+/// coefficient's (`CL2` the lift-type coefficient squared), then 1 (at
+/// [`TermRegressors::ONE`], for what enters unscaled).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TermRegressors {
-    /// The lift-type coefficient's: `alpha` carries the Kirchhoff factor.
-    pub lift: [f64; REGRESSOR_COUNT],
-    /// Every other coefficient's: `CL2` is the lift-type coefficient squared.
-    pub other: [f64; REGRESSOR_COUNT],
-    /// The lift-type coefficient.
-    pub lift_type: f64,
+    pub values: [f64; 2 * REGRESSOR_COUNT + 1],
+}
+
+impl TermRegressors {
+    /// The slot of the constant 1.
+    pub const ONE: usize = 2 * REGRESSOR_COUNT;
+
+    /// The slot of a term's regressor: the lift-type coefficient's (`lift`)
+    /// or another coefficient's.
+    pub fn slot(lift: bool, regressor: Regressor) -> usize {
+        regressor as usize + if lift { 0 } else { REGRESSOR_COUNT }
+    }
+}
+
+impl Default for TermRegressors {
+    /// Every regressor 0 (and the constant 1).
+    fn default() -> Self {
+        let mut values = [0.0; 2 * REGRESSOR_COUNT + 1];
+        values[TermRegressors::ONE] = 1.0;
+        TermRegressors { values }
+    }
 }
 
 impl AeroModel {
@@ -718,15 +737,14 @@ impl AeroModel {
     /// The regressors every term multiplies at a flight condition (the
     /// Kirchhoff factor on the lift-type `alpha` term, `CL2` = CL²).
     pub fn term_regressors(&self, input: &AeroInput) -> TermRegressors {
-        let (other, lift_type, kirchhoff) = self.regressors_and_lift(input);
-        let mut lift = other;
+        let (other, _, kirchhoff) = self.regressors_and_lift(input);
+        let mut regressors = TermRegressors::default();
+        let (lift, rest) = regressors.values.split_at_mut(REGRESSOR_COUNT);
+        lift.copy_from_slice(&other);
         lift[Regressor::Alpha as usize] *= kirchhoff;
         lift[Regressor::LiftSquared as usize] = 0.0;
-        TermRegressors {
-            lift,
-            other,
-            lift_type,
-        }
+        rest[..REGRESSOR_COUNT].copy_from_slice(&other);
+        regressors
     }
 
     /// The coefficient and term of a parameter that enters linearly (`{coefficient}_{term}`);

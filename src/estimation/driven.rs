@@ -259,6 +259,15 @@ pub struct PseudoRates {
 }
 
 impl PseudoRates {
+    /// The same measured signals with rates 0: what the flight-path rates'
+    /// part linear in the accelerations sees ([`Motion::response`]).
+    fn linear(self) -> PseudoRates {
+        PseudoRates {
+            airspeed: self.airspeed.map(|_| 0.0),
+            beta: self.beta.map(|_| 0.0),
+        }
+    }
+
     /// The rates a fraction θ into a step from `self` to `end`.
     fn blend(self, end: PseudoRates, theta: f64) -> PseudoRates {
         let mix = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| a + (b - a) * theta);
@@ -349,21 +358,49 @@ impl<T: Real> Motion<T> {
 }
 
 impl Motion {
-    /// The motion with the accelerations moved by a coefficient's
-    /// `response` and χ̇ by `chi_rate`.
-    fn moved(mut self, response: &Accelerations, chi_rate: f64) -> Motion {
-        self.velocity_rate += response.velocity_rate;
-        self.alpha_dot += response.alpha_dot;
-        self.beta_dot += response.beta_dot;
-        self.angular_acceleration += response.angular_acceleration;
-        self.chi_rate += chi_rate;
-        self
+    /// The change of this motion by a coefficient's `response` (its
+    /// accelerations, and `chi_rate` for χ̇) at the same velocity, as a
+    /// motion: [`motion_rates`] of it, with the measured rates' terms
+    /// removed ([`PseudoRates::linear`]), is the flight-path rates'
+    /// response, their part linear in the accelerations.
+    fn response(self, response: &Accelerations, chi_rate: f64) -> Motion {
+        Motion {
+            velocity_rate: response.velocity_rate,
+            alpha_dot: response.alpha_dot,
+            beta_dot: response.beta_dot,
+            angular_acceleration: response.angular_acceleration,
+            down_rate: 0.0,
+            chi_rate,
+            ..self
+        }
     }
 }
 
 /// The flight-path rates of an evaluation's motion at x ([`derivative`]):
 /// affine in the accelerations.
+#[inline(always)]
 fn flight_path_rates<T: Real>(
+    x: &SVector<T, FLIGHT_PATH_SIZE>,
+    angles: &Angles<T>,
+    motion: &Motion<T>,
+    pseudo: PseudoRates,
+) -> SVector<T, FLIGHT_PATH_SIZE> {
+    let mut rates = motion_rates(x, angles, motion, pseudo);
+    rates
+        .fixed_rows_mut::<3>(ROLL)
+        .copy_from(&state::euler_rates_of(
+            angles.roll,
+            angles.pitch,
+            &x.fixed_rows::<3>(P).into(),
+        ));
+    rates
+}
+
+/// The flight-path rates that depend on the motion (all but the Euler
+/// angles', which are 0 here): airspeed, flow angles, angular rates,
+/// altitude and χ.
+#[inline(always)]
+fn motion_rates<T: Real>(
     x: &SVector<T, FLIGHT_PATH_SIZE>,
     angles: &Angles<T>,
     motion: &Motion<T>,
@@ -387,13 +424,6 @@ fn flight_path_rates<T: Real>(
     rates
         .fixed_rows_mut::<3>(P)
         .copy_from(&motion.angular_acceleration);
-    rates
-        .fixed_rows_mut::<3>(ROLL)
-        .copy_from(&state::euler_rates_of(
-            angles.roll,
-            angles.pitch,
-            &x.fixed_rows::<3>(P).into(),
-        ));
     rates[ALTITUDE] = -motion.down_rate;
     rates[CHI] = motion.chi_rate;
     rates
@@ -539,36 +569,22 @@ enum Source {
     None,
     /// A response (index into [`Directions::responses`]).
     Direction(usize),
-    /// A coefficient's response times the term's regressor.
+    /// A coefficient's response times the term's regressor (its slot in
+    /// [`TermRegressors`]).
     Term {
         direction: usize,
-        lift: bool,
         regressor: usize,
     },
 }
 
-impl Source {
-    /// The response a column is made of and the factor it is multiplied by
-    /// (a term's regressor in `regressors`, 1 for a direction); None for no
-    /// source.
-    fn scaled(self, regressors: &TermRegressors) -> Option<(usize, f64)> {
-        match self {
-            Source::None => None,
-            Source::Direction(d) => Some((d, 1.0)),
-            Source::Term {
-                direction,
-                lift,
-                regressor,
-            } => {
-                let values = if lift {
-                    &regressors.lift
-                } else {
-                    &regressors.other
-                };
-                Some((direction, values[regressor]))
-            }
-        }
-    }
+/// A column of ∂f/∂θ and ∂g/∂θ that is not 0: unknown `column` is
+/// response `response` times the regressor in slot `factor` of
+/// [`TermRegressors`] ([`TermRegressors::ONE`] for a direction).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Filled {
+    column: usize,
+    response: usize,
+    factor: usize,
 }
 
 /// A response of ẋ and y to a change of the model: ∂/∂C of a coefficient,
@@ -600,8 +616,9 @@ struct Directions {
     responses: Vec<Response>,
     /// Per unknown; a `Direction` or `Term` names a response.
     sources: Vec<Source>,
-    /// Whether any source is a term (the regressors are then needed).
-    has_terms: bool,
+    /// The columns with a source, terms first (`terms` of them).
+    filled: Vec<Filled>,
+    terms: usize,
 }
 
 impl Directions {
@@ -626,7 +643,8 @@ impl Directions {
             models: Vec::new(),
             responses: Vec::new(),
             sources: Vec::with_capacity(columns.len()),
-            has_terms: false,
+            filled: Vec::new(),
+            terms: 0,
         };
         let mut offsets: [Option<usize>; 6] = [None; 6];
         let aero = &model.aircraft.aero;
@@ -645,11 +663,12 @@ impl Directions {
                                 directions.push_model(perturbed, OFFSET_STEP)
                             }
                         });
-                        directions.has_terms = true;
                         Source::Term {
                             direction,
-                            lift: coefficient == Coefficient::Lift,
-                            regressor: regressor as usize,
+                            regressor: TermRegressors::slot(
+                                coefficient == Coefficient::Lift,
+                                regressor,
+                            ),
                         }
                     }
                     None => directions.nonlinear(model, j),
@@ -659,6 +678,32 @@ impl Directions {
             };
             directions.sources.push(source);
         }
+        let filled = |(column, source): (usize, &Source)| match *source {
+            Source::None => None,
+            Source::Direction(response) => Some(Filled {
+                column,
+                response,
+                factor: TermRegressors::ONE,
+            }),
+            Source::Term {
+                direction,
+                regressor,
+            } => Some(Filled {
+                column,
+                response: direction,
+                factor: regressor,
+            }),
+        };
+        let sources = directions.sources.iter().enumerate();
+        directions.filled = sources.clone().filter_map(filled).collect();
+        directions
+            .filled
+            .sort_by_key(|f| f.factor == TermRegressors::ONE);
+        directions.terms = directions
+            .filled
+            .iter()
+            .filter(|f| f.factor != TermRegressors::ONE)
+            .count();
         directions
     }
 
@@ -697,8 +742,8 @@ struct Linearization {
     gx: DMatrix<f64>,
     /// ∂g/∂θ (outputs × unknowns).
     gtheta: DMatrix<f64>,
-    /// Scratch: ∂ẋ and ∂y per response.
-    model_rates: Vec<FlightPathState>,
+    /// Scratch: ∂ẋ of the active states and ∂y, a column per response.
+    model_rates: DMatrix<f64>,
     model_outputs: DMatrix<f64>,
 }
 
@@ -713,7 +758,7 @@ impl Linearization {
             outputs: vec![0.0; outputs],
             gx: DMatrix::zeros(outputs, n),
             gtheta: DMatrix::zeros(outputs, m),
-            model_rates: vec![FlightPathState::zeros(); directions.responses.len()],
+            model_rates: DMatrix::zeros(n, directions.responses.len()),
             model_outputs: DMatrix::zeros(outputs, directions.responses.len()),
         }
     }
@@ -801,7 +846,9 @@ impl Linearization {
                     let (perturbed, step) = &directions.models[m];
                     let (rates, evaluation) =
                         derivative(perturbed, x, &angles, &air, controls, pseudo);
-                    self.model_rates[d] = (rates - self.rates) / *step;
+                    for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states) {
+                        *into = (rates[r] - self.rates[r]) / step;
+                    }
                     for (o, output) in outputs.iter().enumerate() {
                         self.model_outputs[(o, d)] =
                             (output.value(x, &evaluation) - self.outputs[o]) / step;
@@ -809,9 +856,11 @@ impl Linearization {
                 }
                 Response::Offset(coefficient) => {
                     let offset = offset_response(model, &self.evaluation, coefficient);
-                    let moved = motion.moved(&offset.1, offset.2);
-                    self.model_rates[d] =
-                        flight_path_rates(x, &angles, &moved, pseudo) - self.rates;
+                    let response = motion.response(&offset.1, offset.2);
+                    let rates = motion_rates(x, &angles, &response, pseudo.linear());
+                    for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states) {
+                        *into = rates[r];
+                    }
                     if !outputs.is_empty() {
                         let evaluation = offset_evaluation(&self.evaluation, &offset);
                         for (o, output) in outputs.iter().enumerate() {
@@ -822,7 +871,7 @@ impl Linearization {
                 }
             }
         }
-        let regressors = if directions.has_terms {
+        let regressors = if directions.terms > 0 {
             model
                 .aircraft
                 .aero
@@ -830,23 +879,23 @@ impl Linearization {
         } else {
             TermRegressors::default()
         };
-        // Column j of ∂f/∂θ and ∂g/∂θ: its response times its factor.
+        // Column j of ∂f/∂θ and ∂g/∂θ: its response times its factor (the
+        // columns of unknowns with no source stay 0 from `new`).
         let (n, outputs) = (states.len(), outputs.len());
         let (b, g) = (self.b.as_mut_slice(), self.gtheta.as_mut_slice());
-        for (j, source) in directions.sources.iter().enumerate() {
-            let (b, g) = (
-                &mut b[j * n..(j + 1) * n],
+        for filled in &directions.filled {
+            let (j, d, factor) = (
+                filled.column,
+                filled.response,
+                regressors.values[filled.factor],
+            );
+            scaled(&self.model_rates, d, factor, &mut b[j * n..(j + 1) * n]);
+            scaled(
+                &self.model_outputs,
+                d,
+                factor,
                 &mut g[j * outputs..(j + 1) * outputs],
             );
-            let Some((d, factor)) = source.scaled(&regressors) else {
-                b.fill(0.0);
-                g.fill(0.0);
-                continue;
-            };
-            scaled_response(&self.model_rates[d], states, factor, b);
-            for (g, response) in g.iter_mut().zip(self.model_outputs.column(d).iter()) {
-                *g = response * factor;
-            }
         }
     }
 
@@ -862,28 +911,34 @@ impl Linearization {
         into: &mut DMatrix<f64>,
     ) {
         into.copy_from(&self.b);
-        if !directions.has_terms {
+        if directions.terms == 0 {
             return;
         }
         let mut input = self.evaluation.aero_input;
         input.controls = *controls;
         model.aircraft.saturate(&mut input.controls);
         let regressors = model.aircraft.aero.term_regressors(&input);
-        let states = &directions.states;
-        let columns = into.as_mut_slice().chunks_exact_mut(states.len().max(1));
-        for (source, column) in directions.sources.iter().zip(columns) {
-            if let (Source::Term { .. }, Some((d, factor))) = (source, source.scaled(&regressors)) {
-                scaled_response(&self.model_rates[d], states, factor, column);
-            }
+        let (n, into) = (directions.states.len(), into.as_mut_slice());
+        for filled in &directions.filled[..directions.terms] {
+            let (j, factor) = (filled.column, regressors.values[filled.factor]);
+            scaled(
+                &self.model_rates,
+                filled.response,
+                factor,
+                &mut into[j * n..(j + 1) * n],
+            );
         }
     }
 }
 
-/// A column of ∂f/∂θ: a response's rates of the active `states` times the
+/// A column of ∂f/∂θ or ∂g/∂θ: column `d` of `responses` times the
 /// column's factor.
-fn scaled_response(rates: &FlightPathState, states: &[usize], factor: f64, into: &mut [f64]) {
-    for (into, &r) in into.iter_mut().zip(states) {
-        *into = rates[r] * factor;
+#[inline(always)]
+fn scaled(responses: &DMatrix<f64>, d: usize, factor: f64, into: &mut [f64]) {
+    let rows = responses.nrows();
+    let response = &responses.as_slice()[d * rows..(d + 1) * rows];
+    for (into, response) in into.iter_mut().zip(response) {
+        *into = response * factor;
     }
 }
 
@@ -1466,13 +1521,19 @@ mod tests {
                 let offset = offset_response(&model, &at, coefficient);
                 let moved = offset_evaluation(&at, &offset);
                 let exact = flight_path_rates(&x, &angles, &Motion::of(&moved), pseudo) - rates;
-                let direct = flight_path_rates(
+                // The rates' response as the linearisation takes it: the
+                // part of the rates linear in the accelerations.
+                let direct = motion_rates(
                     &x,
                     &angles,
-                    &Motion::of(&at).moved(&offset.1, offset.2),
-                    pseudo,
-                ) - rates;
-                assert_eq!(exact, direct);
+                    &Motion::of(&at).response(&offset.1, offset.2),
+                    pseudo.linear(),
+                );
+                assert!(
+                    (exact - direct).amax() <= 1e-12 * exact.amax().max(1.0),
+                    "{}: {coefficient:?}: rates {exact} vs {direct}",
+                    structure.name
+                );
                 let step = 1e-5;
                 let shifted = |sign: f64| {
                     let mut perturbed = model.clone();
