@@ -958,8 +958,8 @@ pub enum Linearise {
     /// stall model's τ1 through the break. Good enough to steer
     /// Gauss–Newton (an approximate Jacobian changes the path, not the
     /// optimum it stops at to within the noise; see `output_error`), at
-    /// about half the cost (the lateral benchmark's simulation: 4.4 ms against
-    /// 8.0 ms).
+    /// about half the cost (the lateral benchmark's simulation: 3.5 ms against
+    /// 6.5 ms).
     GridPoints,
 }
 

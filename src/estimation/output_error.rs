@@ -39,8 +39,8 @@
 //! simulation the residuals come from: the fit stops only where that exact
 //! Gauss–Newton step is below 0.014σ, and the information matrix is the
 //! exact one.
-//! A simulation with sensitivities costs about 3.5 plain ones (grid points)
-//! or 7 (stages), so a Jacobian is held while it steers (simplified
+//! A simulation with sensitivities costs about 3 plain ones (grid points)
+//! or 6 (stages), so a Jacobian is held while it steers (simplified
 //! Gauss–Newton, [`LeastSquaresProblem::hold`]): the steps after it are
 //! taken on it with plain simulations, as long as each predicted decrease
 //! is at most half the one before. The exact Jacobian is held only where
