@@ -361,6 +361,7 @@ pub struct AeroModel {
 /// [`TermRegressors::ONE`], for what enters unscaled).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TermRegressors {
+    /// By slot: lift-type regressors, other regressors, 1.
     pub values: [f64; 2 * REGRESSOR_COUNT + 1],
 }
 

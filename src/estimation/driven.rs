@@ -694,16 +694,13 @@ impl Directions {
                 factor: regressor,
             }),
         };
-        let sources = directions.sources.iter().enumerate();
-        directions.filled = sources.clone().filter_map(filled).collect();
-        directions
-            .filled
-            .sort_by_key(|f| f.factor == TermRegressors::ONE);
-        directions.terms = directions
-            .filled
-            .iter()
-            .filter(|f| f.factor != TermRegressors::ONE)
-            .count();
+        let (mut filled, directed): (Vec<Filled>, Vec<Filled>) =
+            (directions.sources.iter().enumerate())
+                .filter_map(filled)
+                .partition(|f| f.factor != TermRegressors::ONE);
+        directions.terms = filled.len();
+        filled.extend(directed);
+        directions.filled = filled;
         directions
     }
 
