@@ -240,32 +240,6 @@ pub struct Accelerations<T: Real = f64> {
     pub angular_acceleration: Vector3<T>,
 }
 
-impl<T: Real> Accelerations<T> {
-    /// The accelerations an evaluation holds.
-    pub fn of(evaluation: &Evaluation<T>) -> Accelerations<T> {
-        Accelerations {
-            specific_force: evaluation.specific_force,
-            velocity_rate: evaluation.derivative.fixed_rows::<3>(U).into(),
-            alpha_dot: evaluation.alpha_dot,
-            beta_dot: evaluation.beta_dot,
-            angular_acceleration: evaluation.angular_acceleration,
-        }
-    }
-}
-
-impl<T: Real> std::ops::Sub for Accelerations<T> {
-    type Output = Accelerations<T>;
-    fn sub(self, other: Accelerations<T>) -> Accelerations<T> {
-        Accelerations {
-            specific_force: self.specific_force - other.specific_force,
-            velocity_rate: self.velocity_rate - other.velocity_rate,
-            alpha_dot: self.alpha_dot - other.alpha_dot,
-            beta_dot: self.beta_dot - other.beta_dot,
-            angular_acceleration: self.angular_acceleration - other.angular_acceleration,
-        }
-    }
-}
-
 impl FlightModel {
     pub fn new(aircraft: Aircraft, environment: Environment) -> Self {
         FlightModel {
