@@ -87,13 +87,31 @@ pub fn rk4_linear_step(
     stages: [(&DMatrix<f64>, &DMatrix<f64>); 4],
     work: &mut [DMatrix<f64>; 3],
 ) {
+    crate::simd::wide!(
+        rk4_linear_step_any,
+        (
+            sensitivity: &mut DMatrix<f64>,
+            step: f64,
+            stages: [(&DMatrix<f64>, &DMatrix<f64>); 4],
+            work: &mut [DMatrix<f64>; 3],
+        )
+    )
+}
+
+#[inline(always)]
+fn rk4_linear_step_any(
+    sensitivity: &mut DMatrix<f64>,
+    step: f64,
+    stages: [(&DMatrix<f64>, &DMatrix<f64>); 4],
+    work: &mut [DMatrix<f64>; 3],
+) {
     let [stage, rate, sum] = work;
-    affine(stages[0].0, sensitivity, stages[0].1, rate);
+    affine_any(stages[0].0, sensitivity, stages[0].1, rate);
     sum.copy_from(rate);
     for ((a, b), (c, weight)) in stages[1..].iter().zip([(0.5, 2.0), (0.5, 2.0), (1.0, 1.0)]) {
         stage.copy_from(sensitivity);
         add_scaled(stage, c * step, rate);
-        affine(a, stage, b, rate);
+        affine_any(a, stage, b, rate);
         add_scaled(sum, weight, rate);
     }
     add_scaled(sensitivity, step / 6.0, sum);
@@ -109,6 +127,19 @@ pub(crate) fn affine(
     b: &DMatrix<f64>,
     into: &mut DMatrix<f64>,
 ) {
+    crate::simd::wide!(
+        affine_any,
+        (
+            a: &DMatrix<f64>,
+            s: &DMatrix<f64>,
+            b: &DMatrix<f64>,
+            into: &mut DMatrix<f64>,
+        )
+    )
+}
+
+#[inline(always)]
+fn affine_any(a: &DMatrix<f64>, s: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
     let (rows, inner) = (a.nrows(), s.nrows());
     let (a, s, b) = (a.as_slice(), s.as_slice(), b.as_slice());
     let into = into.as_mut_slice();
@@ -136,6 +167,7 @@ pub(crate) fn affine(
     }
 }
 
+#[inline(always)]
 fn affine_kernel<const R: usize>(inner: usize, a: &[f64], s: &[f64], b: &[f64], into: &mut [f64]) {
     let a: &[[f64; R]] = a.as_chunks::<R>().0;
     let columns = into
@@ -155,6 +187,7 @@ fn affine_kernel<const R: usize>(inner: usize, a: &[f64], s: &[f64], b: &[f64], 
     }
 }
 
+#[inline(always)]
 fn affine_columns(rows: usize, inner: usize, a: &[f64], s: &[f64], b: &[f64], into: &mut [f64]) {
     for ((into, b), s) in into
         .chunks_exact_mut(rows)
@@ -171,6 +204,7 @@ fn affine_columns(rows: usize, inner: usize, a: &[f64], s: &[f64], b: &[f64], in
 }
 
 /// target += factor·source, element-wise.
+#[inline(always)]
 fn add_scaled(target: &mut DMatrix<f64>, factor: f64, source: &DMatrix<f64>) {
     target
         .as_mut_slice()

@@ -28,6 +28,8 @@ pub mod record;
 pub mod recorder;
 pub mod scenario;
 pub mod sim;
+#[macro_use]
+mod simd;
 pub mod state;
 pub mod study;
 pub mod trace;

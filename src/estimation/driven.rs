@@ -232,6 +232,7 @@ impl<'a> Memo<'a> {
 /// The kinematics of a flight-path state with no wind: body velocity
 /// V·(cos α cos β, sin β, sin α cos β), the Euler angles' rotation (ψ = 0:
 /// see [`Angles`]), air data straight from V, α, β.
+#[inline(always)]
 fn kinematics<T: Real>(
     x: &SVector<T, FLIGHT_PATH_SIZE>,
     angles: &Angles<T>,
@@ -304,6 +305,7 @@ fn derivative<T: Real>(
 /// [`derivative`] over dual numbers differentiating along the states
 /// `lanes` (lane l: state lanes[l]) from x and its angles' sines and
 /// cosines: the seeded state, its rates and evaluation.
+#[inline(always)]
 fn dual_derivative(
     model: &FlightModel,
     x: &FlightPathState,
@@ -765,6 +767,34 @@ impl Linearization {
     /// moved state only what it changes.
     #[allow(clippy::too_many_arguments)]
     fn at(
+        &mut self,
+        model: &FlightModel,
+        directions: &Directions,
+        x: &FlightPathState,
+        controls: &Controls,
+        pseudo: PseudoRates,
+        outputs: &[Observable],
+        memo: &mut Memo,
+    ) {
+        let this = self;
+        crate::simd::wide!(
+            Linearization::at_any,
+            (
+                this: &mut Linearization,
+                model: &FlightModel,
+                directions: &Directions,
+                x: &FlightPathState,
+                controls: &Controls,
+                pseudo: PseudoRates,
+                outputs: &[Observable],
+                memo: &mut Memo,
+            )
+        )
+    }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn at_any(
         &mut self,
         model: &FlightModel,
         directions: &Directions,

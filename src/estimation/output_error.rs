@@ -68,9 +68,11 @@
 //! simulated once, with sensitivities: the solver's re-weighting, residuals
 //! and Jacobian at an accepted step reuse the step's simulation.
 //! A simulation's ∂y/∂θ at the samples is assembled once, with the Gram
-//! matrix of each output's rows: a held Jacobian is re-weighted by scaling
-//! rows, and its information matrix is Σ_o G_o/σ_o²
-//! ([`LeastSquaresProblem::information`]).
+//! matrix of each output's rows; the solver gets the normal equations
+//! from them with no weighted copy of the Jacobian
+//! ([`LeastSquaresProblem::normal_equations`]): the information matrix is
+//! Σ_o G_o/σ_o², the gradient −Σ_o ∂y_oᵀ·r_o/σ_o, so a held Jacobian is
+//! re-weighted for free.
 //! Convergence: the Gauss–Newton step's predicted decrease of the whitened
 //! cost below 1e-4 (a step under 0.014σ). Cramér–Rao
 //! bounds are the square roots of the diagonal of M⁻¹, M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ).
@@ -99,7 +101,9 @@ use crate::error::{Error, Result};
 use crate::estimation::driven::{Column, DrivenSimulation, FlightPathState, Linearise, Observable};
 use crate::estimation::equation_error::{EquationErrorOptions, equation_error};
 use crate::estimation::estimate::{Estimate, OutputFit};
-use crate::estimation::gauss_newton::{self, LeastSquaresProblem, Options, Status};
+use crate::estimation::gauss_newton::{
+    self, LeastSquaresProblem, NormalEquations, Options, Status,
+};
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
 use crate::record::FlightRecord;
 use nalgebra::{DMatrix, DVector};
@@ -1002,12 +1006,29 @@ impl LeastSquaresProblem for Problem {
         Ok(jacobian)
     }
 
-    /// JᵀJ = Σ_o G_o/σ_o² from the per-output Gram matrices of the
-    /// Jacobian's simulation, computed once (a held Jacobian's are reused).
-    fn information(&mut self, jacobian: &DMatrix<f64>) -> DMatrix<f64> {
+    /// With J = −diag(1/σ_o)·Y (Y = ∂y/∂θ at the samples, its rows
+    /// grouped by output o): JᵀJ = Σ_o G_o/σ_o² from the per-output Gram
+    /// matrices G_o = Y_oᵀY_o of the Jacobian's simulation, computed once (a
+    /// held Jacobian's are reused), and Jᵀr = −Σ_o Y_oᵀr_o/σ_o. No weighted
+    /// copy of Y is made.
+    fn normal_equations(
+        &mut self,
+        theta: &DVector<f64>,
+        residuals: &DVector<f64>,
+        _options: &Options,
+    ) -> std::result::Result<NormalEquations, String> {
+        if self.held.is_none() && !self.is_simulated(theta, Some(self.linearise)) {
+            self.simulate(theta, true)?;
+        }
         let weights = self.weights.clone();
         let assembled = self.assembled();
-        debug_assert_eq!(jacobian.shape(), assembled.sensitivities.shape());
+        debug_assert_eq!(residuals.len(), assembled.sensitivities.nrows());
+        let columns = assembled.sensitivities.ncols();
+        let mut gradient = DVector::zeros(columns);
+        for (rows, weight) in assembled.rows.iter().zip(&weights) {
+            let block = assembled.sensitivities.rows(rows.start, rows.len());
+            gradient -= block.tr_mul(&residuals.rows(rows.start, rows.len())) * *weight;
+        }
         let grams = assembled.grams.get_or_insert_with(|| {
             assembled
                 .rows
@@ -1018,13 +1039,16 @@ impl LeastSquaresProblem for Problem {
                 })
                 .collect()
         });
-        let columns = jacobian.ncols();
-        grams
+        let information = grams
             .iter()
             .zip(&weights)
             .fold(DMatrix::zeros(columns, columns), |sum, (gram, weight)| {
                 sum + gram * (weight * weight)
-            })
+            });
+        Ok(NormalEquations {
+            gradient,
+            information,
+        })
     }
 }
 
@@ -1185,13 +1209,44 @@ mod tests {
         (record, ModelStructure::load("attas-lateral").unwrap())
     }
 
-    /// The information matrix from the per-output Gram matrices
-    /// ([`Assembled`]) is JᵀJ of the weighted Jacobian to rounding (1e-12
-    /// of √(M_ii·M_jj)), for a fresh simulation and for a held one after R
-    /// changed (each output's weight moved by a different factor), whose
-    /// Jacobian is its rows re-scaled.
+    /// The kernels that [`crate::simd::wide!`] compiles for AVX2 (the
+    /// linearisation, the sensitivity step, ∂g/∂x·S) give the baseline
+    /// build's numbers bit for bit: simulations with sensitivities, grid
+    /// points and stages, of the lateral benchmark and of the stall model
+    /// (χ a state; differenced directions), both ways. On a CPU without
+    /// AVX2 both ways are the baseline.
     #[test]
-    fn information_from_gram_matrices_is_jtj() {
+    fn wide_kernels_match_the_baseline() {
+        let stall = {
+            let scenario = Scenario::load("attas-stall").unwrap();
+            let profile = Profile::load("flight-test-25hz", None).unwrap();
+            let (record, _) = record_scenario(&scenario, &profile).unwrap();
+            (record, stall_test_structure(0.2))
+        };
+        for (record, structure) in [lateral_benchmark(), stall] {
+            let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
+            for linearise in [Linearise::GridPoints, Linearise::Stages] {
+                problem.linearise = linearise;
+                let wide = problem.grid(0, true).unwrap();
+                let baseline = crate::simd::baseline(|| problem.grid(0, true).unwrap());
+                assert!(!wide.sensitivities.is_empty());
+                assert!(
+                    wide.values == baseline.values && wide.sensitivities == baseline.sensitivities,
+                    "{} {linearise:?}: the AVX2 kernels' numbers differ from the baseline's",
+                    structure.name
+                );
+            }
+        }
+    }
+
+    /// The normal equations from the per-output blocks ([`Assembled`]):
+    /// the information matrix is JᵀJ of the weighted Jacobian to rounding
+    /// (1e-12 of √(M_ii·M_jj)) and the gradient Jᵀr (1e-12 of its largest
+    /// entry), for a fresh simulation and for a held one after R changed
+    /// (each output's weight moved by a different factor), whose Jacobian
+    /// is its rows re-scaled.
+    #[test]
+    fn normal_equations_from_output_blocks_are_jtj_and_jtr() {
         let (record, structure) = lateral_benchmark();
         let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
         let theta = problem.current();
@@ -1199,16 +1254,27 @@ mod tests {
         problem.reweight(&theta).unwrap();
         let check = |problem: &mut Problem| {
             let jacobian = problem.jacobian(&theta, &options).unwrap();
+            let residuals = problem.residuals(&theta).unwrap();
             let expected = jacobian.transpose() * &jacobian;
-            let information = problem.information(&jacobian);
+            let normal = problem
+                .normal_equations(&theta, &residuals, &options)
+                .unwrap();
             let n = expected.nrows();
             for (i, j) in (0..n).flat_map(|i| (0..n).map(move |j| (i, j))) {
                 let scale = (expected[(i, i)] * expected[(j, j)]).sqrt();
                 assert!(
-                    (information[(i, j)] - expected[(i, j)]).abs() <= 1e-12 * scale,
+                    (normal.information[(i, j)] - expected[(i, j)]).abs() <= 1e-12 * scale,
                     "M[{i},{j}] {} against {}",
-                    information[(i, j)],
+                    normal.information[(i, j)],
                     expected[(i, j)]
+                );
+            }
+            let expected = jacobian.tr_mul(&residuals);
+            let scale = expected.amax();
+            for (j, (gradient, expected)) in normal.gradient.iter().zip(&expected).enumerate() {
+                assert!(
+                    (gradient - expected).abs() <= 1e-12 * scale,
+                    "(Jᵀr)[{j}] {gradient} against {expected}"
                 );
             }
             jacobian
