@@ -105,6 +105,17 @@ fn rk4_linear_step_any(
     stages: [(&DMatrix<f64>, &DMatrix<f64>); 4],
     work: &mut [DMatrix<f64>; 3],
 ) {
+    let rows = sensitivity.nrows();
+    if (1..=12).contains(&rows) && stages.iter().all(|(a, _)| a.shape() == (rows, rows)) {
+        let slices = stages.map(|(a, b)| (a.as_slice(), b.as_slice()));
+        crate::simd::fixed_rows!(
+            rows,
+            rk4_linear_fixed,
+            |_: &mut [f64], _, _| unreachable!("1 to 12 rows"),
+            (sensitivity.as_mut_slice(), step, slices)
+        );
+        return;
+    }
     let [stage, rate, sum] = work;
     affine_any(stages[0].0, sensitivity, stages[0].1, rate);
     sum.copy_from(rate);
@@ -115,6 +126,47 @@ fn rk4_linear_step_any(
         add_scaled(sum, weight, rate);
     }
     add_scaled(sensitivity, step / 6.0, sum);
+}
+
+/// [`rk4_linear_step`] with R states, one column of S at a time through
+/// all four stages (held in registers): the same operations in the same
+/// order as the general path, so the same numbers.
+#[inline(always)]
+fn rk4_linear_fixed<const R: usize>(
+    sensitivity: &mut [f64],
+    step: f64,
+    stages: [(&[f64], &[f64]); 4],
+) {
+    let a: [&[[f64; R]]; 4] = stages.map(|(a, _)| a.as_chunks::<R>().0);
+    let b: [&[[f64; R]]; 4] = stages.map(|(_, b)| b.as_chunks::<R>().0);
+    let affine = |a: &[[f64; R]], s: &[f64; R], b: &[f64; R]| {
+        let mut column = *b;
+        for (a, &s) in a.iter().zip(s) {
+            for (value, a) in column.iter_mut().zip(a) {
+                *value += a * s;
+            }
+        }
+        column
+    };
+    for (j, s) in sensitivity.as_chunks_mut::<R>().0.iter_mut().enumerate() {
+        let mut rate = affine(a[0], s, &b[0][j]);
+        let mut sum = rate;
+        for (i, (c, weight)) in [(1, (0.5, 2.0)), (2, (0.5, 2.0)), (3, (1.0, 1.0))] {
+            let factor = c * step;
+            let mut stage = *s;
+            for (stage, rate) in stage.iter_mut().zip(&rate) {
+                *stage += factor * rate;
+            }
+            rate = affine(a[i], &stage, &b[i][j]);
+            for (sum, rate) in sum.iter_mut().zip(&rate) {
+                *sum += weight * rate;
+            }
+        }
+        let factor = step / 6.0;
+        for (s, sum) in s.iter_mut().zip(&sum) {
+            *s += factor * sum;
+        }
+    }
 }
 
 /// into = a·s + b, for the small matrices of the sensitivity equations
@@ -150,21 +202,12 @@ fn affine_any(a: &DMatrix<f64>, s: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut D
         into.copy_from_slice(b);
         return;
     }
-    match rows {
-        1 => affine_kernel::<1>(inner, a, s, b, into),
-        2 => affine_kernel::<2>(inner, a, s, b, into),
-        3 => affine_kernel::<3>(inner, a, s, b, into),
-        4 => affine_kernel::<4>(inner, a, s, b, into),
-        5 => affine_kernel::<5>(inner, a, s, b, into),
-        6 => affine_kernel::<6>(inner, a, s, b, into),
-        7 => affine_kernel::<7>(inner, a, s, b, into),
-        8 => affine_kernel::<8>(inner, a, s, b, into),
-        9 => affine_kernel::<9>(inner, a, s, b, into),
-        10 => affine_kernel::<10>(inner, a, s, b, into),
-        11 => affine_kernel::<11>(inner, a, s, b, into),
-        12 => affine_kernel::<12>(inner, a, s, b, into),
-        _ => affine_columns(rows, inner, a, s, b, into),
-    }
+    crate::simd::fixed_rows!(
+        rows,
+        affine_kernel,
+        |inner, a, s, b, into| affine_columns(rows, inner, a, s, b, into),
+        (inner, a, s, b, into)
+    )
 }
 
 #[inline(always)]

@@ -59,3 +59,28 @@ macro_rules! wide {
     }};
 }
 pub(crate) use wide;
+
+/// `fixed_rows!(rows, kernel, fallback, (a, b))`: `kernel::<R>(a, b)` with
+/// R = `rows` known at compile time for 1 to 12 rows (the small matrices of
+/// the sensitivity equations: the compiler unrolls and vectorises loops
+/// over R), `fallback(a, b)` for other counts.
+macro_rules! fixed_rows {
+    ($rows:expr, $kernel:ident, $fallback:expr, ($($arg:expr),* $(,)?)) => {
+        match $rows {
+            1 => $kernel::<1>($($arg),*),
+            2 => $kernel::<2>($($arg),*),
+            3 => $kernel::<3>($($arg),*),
+            4 => $kernel::<4>($($arg),*),
+            5 => $kernel::<5>($($arg),*),
+            6 => $kernel::<6>($($arg),*),
+            7 => $kernel::<7>($($arg),*),
+            8 => $kernel::<8>($($arg),*),
+            9 => $kernel::<9>($($arg),*),
+            10 => $kernel::<10>($($arg),*),
+            11 => $kernel::<11>($($arg),*),
+            12 => $kernel::<12>($($arg),*),
+            _ => $fallback($($arg),*),
+        }
+    };
+}
+pub(crate) use fixed_rows;

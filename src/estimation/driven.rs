@@ -908,22 +908,18 @@ impl Linearization {
         };
         // Column j of ∂f/∂θ and ∂g/∂θ: its response times its factor (the
         // columns of unknowns with no source stay 0 from `new`).
-        let (n, outputs) = (states.len(), outputs.len());
-        let (b, g) = (self.b.as_mut_slice(), self.gtheta.as_mut_slice());
-        for filled in &directions.filled {
-            let (j, d, factor) = (
-                filled.column,
-                filled.response,
-                regressors.values[filled.factor],
-            );
-            scaled(&self.model_rates, d, factor, &mut b[j * n..(j + 1) * n]);
-            scaled(
-                &self.model_outputs,
-                d,
-                factor,
-                &mut g[j * outputs..(j + 1) * outputs],
-            );
-        }
+        fill(
+            &self.model_rates,
+            &directions.filled,
+            &regressors,
+            &mut self.b,
+        );
+        fill(
+            &self.model_outputs,
+            &directions.filled,
+            &regressors,
+            &mut self.gtheta,
+        );
     }
 
     /// ∂f/∂θ at this point with the controls replaced by `controls` (the
@@ -945,27 +941,59 @@ impl Linearization {
         input.controls = *controls;
         model.aircraft.saturate(&mut input.controls);
         let regressors = model.aircraft.aero.term_regressors(&input);
-        let (n, into) = (directions.states.len(), into.as_mut_slice());
-        for filled in &directions.filled[..directions.terms] {
-            let (j, factor) = (filled.column, regressors.values[filled.factor]);
-            scaled(
-                &self.model_rates,
-                filled.response,
-                factor,
-                &mut into[j * n..(j + 1) * n],
-            );
-        }
+        fill(
+            &self.model_rates,
+            &directions.filled[..directions.terms],
+            &regressors,
+            into,
+        );
     }
 }
 
-/// A column of ∂f/∂θ or ∂g/∂θ: column `d` of `responses` times the
-/// column's factor.
+/// The `filled` columns of ∂f/∂θ or ∂g/∂θ (`into`): each its response's
+/// column of `responses` times its factor from `regressors`.
 #[inline(always)]
-fn scaled(responses: &DMatrix<f64>, d: usize, factor: f64, into: &mut [f64]) {
+fn fill(
+    responses: &DMatrix<f64>,
+    filled: &[Filled],
+    regressors: &TermRegressors,
+    into: &mut DMatrix<f64>,
+) {
     let rows = responses.nrows();
-    let response = &responses.as_slice()[d * rows..(d + 1) * rows];
-    for (into, response) in into.iter_mut().zip(response) {
-        *into = response * factor;
+    debug_assert_eq!(rows, into.nrows());
+    crate::simd::fixed_rows!(
+        rows,
+        fill_fixed,
+        |responses: &[f64], filled: &[Filled], factors: &[f64], into: &mut [f64]| {
+            for f in filled.iter().filter(|_| rows > 0) {
+                let response = &responses[f.response * rows..(f.response + 1) * rows];
+                let into = &mut into[f.column * rows..(f.column + 1) * rows];
+                for (into, response) in into.iter_mut().zip(response) {
+                    *into = response * factors[f.factor];
+                }
+            }
+        },
+        (
+            responses.as_slice(),
+            filled,
+            &regressors.values,
+            into.as_mut_slice()
+        )
+    )
+}
+
+/// [`fill`] with R rows.
+#[inline(always)]
+fn fill_fixed<const R: usize>(
+    responses: &[f64],
+    filled: &[Filled],
+    factors: &[f64],
+    into: &mut [f64],
+) {
+    let (responses, into) = (responses.as_chunks::<R>().0, into.as_chunks_mut::<R>().0);
+    for f in filled {
+        let factor = factors[f.factor];
+        into[f.column] = responses[f.response].map(|response| response * factor);
     }
 }
 

@@ -107,7 +107,7 @@ use crate::estimation::gauss_newton::{
 };
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
 use crate::record::FlightRecord;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector};
 
 /// Convergence: the Gauss–Newton step's predicted decrease of the
 /// whitened cost, ½·ΔθᵀMΔθ ≤ 1e-4, a step under 0.014σ
@@ -238,14 +238,22 @@ struct Simulated {
 
 /// A simulation's Jacobian ∂y/∂θ at the samples (unweighted; the residuals'
 /// Jacobian is −R^{-1/2} times it, so a held one is re-weighted by scaling
-/// rows) for the solver's `unknowns`, and per output the Gram matrix of its
-/// rows (computed when first asked for), so that JᵀJ = Σ_o G_o/σ_o².
+/// rows) for the solver's `unknowns`, row after row, and per output the
+/// Gram matrix of its rows, so that JᵀJ = Σ_o G_o/σ_o².
 struct Assembled {
     unknowns: Vec<Unknown>,
-    sensitivities: DMatrix<f64>,
+    /// Row-major: row i is `sensitivities[i·m..(i + 1)·m]`, m unknowns.
+    sensitivities: Vec<f64>,
     /// Each output's rows.
     rows: Vec<std::ops::Range<usize>>,
-    grams: Option<Vec<DMatrix<f64>>>,
+    grams: Vec<DMatrix<f64>>,
+}
+
+impl Assembled {
+    fn row(&self, i: usize) -> &[f64] {
+        let m = self.unknowns.len();
+        &self.sensitivities[i * m..(i + 1) * m]
+    }
 }
 
 /// Model outputs at every recorded sample: [segment][output][sample].
@@ -1005,18 +1013,25 @@ impl LeastSquaresProblem for Problem {
         }
         let weights = self.weights.clone();
         let assembled = self.assembled();
-        let mut jacobian = assembled.sensitivities.clone();
+        let mut jacobian = DMatrix::zeros(
+            assembled.rows.last().map_or(0, |rows| rows.end),
+            assembled.unknowns.len(),
+        );
         for (rows, weight) in assembled.rows.iter().zip(&weights) {
-            jacobian.rows_mut(rows.start, rows.len()).scale_mut(-weight);
+            for i in rows.clone() {
+                for (j, value) in assembled.row(i).iter().enumerate() {
+                    jacobian[(i, j)] = -weight * value;
+                }
+            }
         }
         Ok(jacobian)
     }
 
     /// With J = −diag(1/σ_o)·Y (Y = ∂y/∂θ at the samples, its rows
     /// grouped by output o): JᵀJ = Σ_o G_o/σ_o² from the per-output Gram
-    /// matrices G_o = Y_oᵀY_o of the Jacobian's simulation, computed once (a
-    /// held Jacobian's are reused), and Jᵀr = −Σ_o Y_oᵀr_o/σ_o. No weighted
-    /// copy of Y is made.
+    /// matrices G_o = Y_oᵀY_o of the Jacobian's simulation, computed once
+    /// (a held Jacobian's are reused), and Jᵀr = −Σ_o Y_oᵀr_o/σ_o. No
+    /// weighted copy of Y is made.
     fn normal_equations(
         &mut self,
         theta: &DVector<f64>,
@@ -1028,29 +1043,23 @@ impl LeastSquaresProblem for Problem {
         }
         let weights = self.weights.clone();
         let assembled = self.assembled();
-        debug_assert_eq!(residuals.len(), assembled.sensitivities.nrows());
-        let columns = assembled.sensitivities.ncols();
+        let columns = assembled.unknowns.len();
         let mut gradient = DVector::zeros(columns);
-        for (rows, weight) in assembled.rows.iter().zip(&weights) {
-            let block = assembled.sensitivities.rows(rows.start, rows.len());
-            gradient -= block.tr_mul(&residuals.rows(rows.start, rows.len())) * *weight;
+        let mut information = DMatrix::zeros(columns, columns);
+        for ((rows, weight), gram) in assembled.rows.iter().zip(&weights).zip(&assembled.grams) {
+            debug_assert!(rows.end <= residuals.len());
+            let mut product = vec![0.0; columns];
+            for i in rows.clone() {
+                let r = residuals[i];
+                for (sum, value) in product.iter_mut().zip(assembled.row(i)) {
+                    *sum += value * r;
+                }
+            }
+            for (gradient, product) in gradient.iter_mut().zip(&product) {
+                *gradient -= weight * product;
+            }
+            information += gram * (weight * weight);
         }
-        let grams = assembled.grams.get_or_insert_with(|| {
-            assembled
-                .rows
-                .iter()
-                .map(|rows| {
-                    let block = assembled.sensitivities.rows(rows.start, rows.len());
-                    block.transpose() * block
-                })
-                .collect()
-        });
-        let information = grams
-            .iter()
-            .zip(&weights)
-            .fold(DMatrix::zeros(columns, columns), |sum, (gram, weight)| {
-                sum + gram * (weight * weight)
-            });
         Ok(NormalEquations {
             gradient,
             information,
@@ -1097,7 +1106,8 @@ impl Problem {
 /// ∂y/∂θ at the samples for `unknowns` from the grids' sensitivities to
 /// `all` ([`Assembled`]), row after row (output after output and segment
 /// after segment, as the residuals): a row reads the blocks of the two
-/// grid points around its sample, which lie together in memory.
+/// grid points around its sample, which lie together in memory; then each
+/// output's Gram matrix.
 fn assemble(
     segments: &[Segment],
     grids: &[Grid],
@@ -1105,6 +1115,7 @@ fn assemble(
     unknowns: &[Unknown],
     outputs: usize,
 ) -> Assembled {
+    let m = unknowns.len();
     let mut rows = Vec::with_capacity(outputs);
     let mut start = 0;
     for o in 0..outputs {
@@ -1112,20 +1123,19 @@ fn assemble(
         rows.push(start..start + count);
         start += count;
     }
-    let mut sensitivities = DMatrix::zeros(start, unknowns.len());
-    let data = sensitivities.as_mut_slice();
-    // ∂y/∂bias = 1 on its output's rows; the simulated unknowns' columns
-    // (where each starts in the matrix) and places among all.
-    let mut simulated = Vec::with_capacity(unknowns.len());
+    let mut sensitivities = vec![0.0; start * m];
+    // ∂y/∂bias = 1 on its output's rows; the simulated unknowns' places
+    // among the solver's and among all.
+    let mut simulated = Vec::with_capacity(m);
     for (j, unknown) in unknowns.iter().enumerate() {
-        let column = j * start;
         match *unknown {
             Unknown::Bias { output } => {
-                let rows = &rows[output];
-                data[column + rows.start..column + rows.end].fill(1.0);
+                for i in rows[output].clone() {
+                    sensitivities[i * m + j] = 1.0;
+                }
             }
             _ => simulated.push((
-                column,
+                j,
                 all.iter()
                     .position(|a| a == unknown)
                     .expect("a simulated unknown"),
@@ -1133,27 +1143,34 @@ fn assemble(
         }
     }
     let block = outputs * all.len();
-    let mut row = 0;
+    let mut grams = Vec::with_capacity(outputs);
+    let mut data = sensitivities.chunks_exact_mut(m.max(1));
     for o in 0..outputs {
-        // Where each simulated unknown's column starts, and its offset in a block.
+        // Where each simulated unknown goes in a row, and its offset in a block.
         let places: Vec<(usize, usize)> = simulated
             .iter()
-            .map(|&(column, c)| (column, c * outputs + o))
+            .map(|&(j, c)| (j, c * outputs + o))
             .collect();
         for (segment, grid) in segments.iter().zip(grids) {
             for &at in &segment.outputs[o].brackets {
-                for &(column, offset) in &places {
-                    data[column + row] = at_bracket(at, |k| grid.sensitivities[k * block + offset]);
+                let row = data.next().expect("a row per sample");
+                for &(j, offset) in &places {
+                    row[j] = at_bracket(at, |k| grid.sensitivities[k * block + offset]);
                 }
-                row += 1;
             }
         }
+    }
+    for rows in &rows {
+        // The output's rows, row-major, are Y_oᵀ column-major.
+        let transposed =
+            DMatrixView::from_slice(&sensitivities[rows.start * m..rows.end * m], m, rows.len());
+        grams.push(transposed * transposed.transpose());
     }
     Assembled {
         unknowns: unknowns.to_vec(),
         sensitivities,
         rows,
-        grams: None,
+        grams,
     }
 }
 
