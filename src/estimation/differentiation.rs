@@ -255,9 +255,10 @@ pub fn step_times(channel: &Channel) -> Vec<f64> {
         return Vec::new();
     }
     let changes: Vec<f64> = finite.windows(2).map(|w| (w[1].1 - w[0].1).abs()).collect();
-    let mut sorted = changes.clone();
-    sorted.sort_by(f64::total_cmp);
-    let noise = 1.4826 * sorted[sorted.len() / 2];
+    let mut ranked = changes.clone();
+    let middle = ranked.len() / 2;
+    let (_, median, _) = ranked.select_nth_unstable_by(middle, f64::total_cmp);
+    let noise = 1.4826 * *median;
     let (low, high) = finite
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, v)| {

@@ -1157,9 +1157,10 @@ impl DrivenSimulation {
         FlightPathState::from_fn(|i, _| if self.integrate[i] { x[i] } else { measured[i] })
     }
 
-    /// Simulates from `initial`, calling `sink(k, y, ∂y/∂θ)` at every grid
-    /// point with the `outputs` and their sensitivities to the unknowns
-    /// described by `columns` (none: a plain simulation). The state takes
+    /// Simulates from `initial`, calling `sink(k, y, (∂y/∂θ)ᵀ)` at every
+    /// grid point with the `outputs` and their sensitivities to the unknowns
+    /// described by `columns` (none: a plain simulation), an output's
+    /// sensitivities a column of the transposed matrix. The state takes
     /// plain RK4 steps; the model is linearised at the grid points only, and
     /// the sensitivities S = ∂x/∂θ of the integrated states take the
     /// matching RK4 step of Ṡ = (∂f/∂x)·S + ∂f/∂θ with the linearisations
@@ -1252,7 +1253,8 @@ impl DrivenSimulation {
             })
             .collect();
         let mut values = vec![0.0; outputs.len()];
-        let mut output_sensitivity = DMatrix::zeros(outputs.len(), columns.len());
+        // (∂y/∂θ)ᵀ: each output's sensitivities contiguous.
+        let mut output_sensitivity = DMatrix::zeros(columns.len(), outputs.len());
         let mut computed_sensitivity = DMatrix::zeros(computed.len(), columns.len());
         let mut point = Linearization::new(&directions, computed.len());
         let mut next_point = Linearization::new(&directions, computed.len());
@@ -1289,19 +1291,19 @@ impl DrivenSimulation {
             }
             let sensitivities = !columns.is_empty();
             for (o, source) in sources.iter().enumerate() {
-                let mut into = output_sensitivity.row_mut(o);
+                let mut into = output_sensitivity.column_mut(o);
                 match *source {
                     OutputSource::State { index, row } => {
                         values[o] = x[index];
                         match row {
-                            Some(r) if sensitivities => into.copy_from(&sensitivity.row(r)),
+                            Some(r) if sensitivities => into.tr_copy_from(&sensitivity.row(r)),
                             _ => into.fill(0.0),
                         }
                     }
                     OutputSource::Linearised(c) => {
                         values[o] = point.outputs[c];
                         if sensitivities {
-                            into.copy_from(&computed_sensitivity.row(c));
+                            into.tr_copy_from(&computed_sensitivity.row(c));
                         }
                     }
                 }

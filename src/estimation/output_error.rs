@@ -264,9 +264,10 @@ struct Grid {
     /// [output][grid point].
     values: Vec<Vec<f64>>,
     /// ∂y/∂θ over the grid, grid point after grid point, each point's
-    /// block as the simulation gives it (outputs × all unknowns,
+    /// block as the simulation gives it ((∂y/∂θ)ᵀ, all unknowns × outputs,
     /// column-major: output o's sensitivity to unknown c at
-    /// `k·block + c·outputs + o`), so that storing a point is one copy.
+    /// `k·block + o·all + c`), so that storing a point is one copy and an
+    /// output's sensitivities lie together.
     sensitivities: Vec<f64>,
 }
 
@@ -1143,19 +1144,35 @@ fn assemble(
         }
     }
     let block = outputs * all.len();
+    // The simulated unknowns in the order of all, from the first: a row
+    // is then a slice of the grid's blocks (the usual case; otherwise one
+    // value at a time).
+    let in_order = simulated
+        .iter()
+        .enumerate()
+        .all(|(i, &(j, c))| i == j && i == c);
+    let count = simulated.len();
     let mut grams = Vec::with_capacity(outputs);
     let mut data = sensitivities.chunks_exact_mut(m.max(1));
     for o in 0..outputs {
-        // Where each simulated unknown goes in a row, and its offset in a block.
-        let places: Vec<(usize, usize)> = simulated
-            .iter()
-            .map(|&(j, c)| (j, c * outputs + o))
-            .collect();
         for (segment, grid) in segments.iter().zip(grids) {
-            for &at in &segment.outputs[o].brackets {
+            let at = |k: usize| &grid.sensitivities[k * block + o * all.len()..][..all.len()];
+            for &(k, fraction) in &segment.outputs[o].brackets {
                 let row = data.next().expect("a row per sample");
-                for &(j, offset) in &places {
-                    row[j] = at_bracket(at, |k| grid.sensitivities[k * block + offset]);
+                if in_order {
+                    let start = &at(k)[..count];
+                    if fraction == 0.0 {
+                        row[..count].copy_from_slice(start);
+                    } else {
+                        let end = &at(k + 1)[..count];
+                        for ((value, start), end) in row.iter_mut().zip(start).zip(end) {
+                            *value = start + fraction * (end - start);
+                        }
+                    }
+                } else {
+                    for &(j, c) in &simulated {
+                        row[j] = at_bracket((k, fraction), |k| at(k)[c]);
+                    }
                 }
             }
         }
