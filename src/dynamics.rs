@@ -378,7 +378,12 @@ impl FlightModel {
         let aircraft = &self.aircraft;
         let scale = air_data.dynamic_pressure * aircraft.wing_area;
         let specific_force = direction.force * scale / aircraft.mass.mass;
-        let (alpha_dot, beta_dot) = flow_angle_rates(air_data, &specific_force);
+        // A moment coefficient moves no force, and so neither flow angle.
+        let (alpha_dot, beta_dot) = if direction.force == Vector3::zeros() {
+            (0.0, 0.0)
+        } else {
+            flow_angle_rates(air_data, &specific_force)
+        };
         Accelerations {
             specific_force,
             velocity_rate: specific_force,
