@@ -7,8 +7,10 @@
 //! Eqs. 14–22; Jategaonkar, "Flight Vehicle System Identification", §4.5).
 //!
 //! Each iteration: the problem may re-weight (output error re-estimates R),
-//! the Jacobian is computed (analytically if the problem gives it, else by
-//! finite differences with a documented relative step), and the Gauss–Newton
+//! the normal equations Jᵀr and JᵀJ are formed (from the Jacobian,
+//! analytic if the problem gives it, else by finite differences with a
+//! documented relative step; or directly by a problem that knows a cheaper
+//! way, [`LeastSquaresProblem::normal_equations`]), and the Gauss–Newton
 //! step `Δθ = −(JᵀJ)⁻¹·Jᵀr` is solved by SVD (near-singular directions are
 //! dropped, so unidentifiable combinations do not blow up). If the cost does
 //! not fall, the step is halved (up to 10 times); if that fails, a
