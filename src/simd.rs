@@ -40,9 +40,10 @@ pub(crate) fn avx2() -> bool {
 }
 
 /// `wide!(f, (a: A, b: B) -> R)`, as a function's body: calls `f(a, b)`
-/// compiled for AVX2 when this CPU has it ([`avx2`]), else as built. `f` must be `#[inline(always)]`, and
-/// so must whatever it calls that should be compiled the same way: a
-/// function that is not inlined keeps the build's instruction set.
+/// compiled for AVX2 when this CPU has it ([`avx2`]), else as built. `f`
+/// must be `#[inline(always)]`, and so must whatever it calls that should
+/// be compiled the same way: a function that is not inlined keeps the
+/// build's instruction set.
 macro_rules! wide {
     ($f:path, ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?) => {{
         #[cfg(target_arch = "x86_64")]

@@ -33,7 +33,8 @@
 //! ones, CDRW is still 0.07σ away), and held stale from the start it stops
 //! 0.29σ away on the ATTAS lateral benchmark. So once
 //! a step is predicted to lower the cost by less than 20 (a step under
-//! 6.3σ, after which the fit is within about 1σ), the iterations switch to the linearisation at every RK4 stage
+//! 6.3σ, after which the fit is within about 1σ), the iterations switch
+//! to the linearisation at every RK4 stage
 //! ([`crate::integrator::rk4_linear_step`] with the stage linearisations;
 //! [`LeastSquaresProblem::refine`]), the exact derivative of the discrete
 //! simulation the residuals come from: the fit stops only where that exact
