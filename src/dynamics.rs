@@ -365,7 +365,7 @@ impl FlightModel {
 
     /// How the accelerations change when the aerodynamic coefficients move
     /// by `direction` (other things equal), at air data `air_data`: exact,
-    /// [`FlightModel::accelerations`] being affine in the coefficients, and
+    /// `FlightModel::accelerations` being affine in the coefficients, and
     /// computed as its linear part alone (the aerodynamic force and moment
     /// of `direction`, with no gravity, thrust or gyroscopic terms). Valid
     /// when the forces do not depend on α̇ (else the coefficients move with

@@ -87,45 +87,34 @@ pub fn rk4_linear_step(
     stages: [(&DMatrix<f64>, &DMatrix<f64>); 4],
     work: &mut [DMatrix<f64>; 3],
 ) {
-    crate::simd::wide!(
-        rk4_linear_step_any,
-        (
-            sensitivity: &mut DMatrix<f64>,
-            step: f64,
-            stages: [(&DMatrix<f64>, &DMatrix<f64>); 4],
-            work: &mut [DMatrix<f64>; 3],
-        )
+    crate::simd::wide(
+        #[inline(always)]
+        || {
+            let rows = sensitivity.nrows();
+            if (1..=12).contains(&rows) && stages.iter().all(|(a, _)| a.shape() == (rows, rows)) {
+                let slices = stages.map(|(a, b)| (a.as_slice(), b.as_slice()));
+                crate::simd::fixed_rows!(
+                    rows,
+                    rk4_linear_fixed,
+                    |_: &mut [f64], _, _| unreachable!("1 to 12 rows"),
+                    (sensitivity.as_mut_slice(), step, slices)
+                );
+                return;
+            }
+            let [stage, rate, sum] = work;
+            affine(stages[0].0, sensitivity, stages[0].1, rate);
+            sum.copy_from(rate);
+            for ((a, b), (c, weight)) in
+                stages[1..].iter().zip([(0.5, 2.0), (0.5, 2.0), (1.0, 1.0)])
+            {
+                stage.copy_from(sensitivity);
+                add_scaled(stage, c * step, rate);
+                affine(a, stage, b, rate);
+                add_scaled(sum, weight, rate);
+            }
+            add_scaled(sensitivity, step / 6.0, sum);
+        },
     )
-}
-
-#[inline(always)]
-fn rk4_linear_step_any(
-    sensitivity: &mut DMatrix<f64>,
-    step: f64,
-    stages: [(&DMatrix<f64>, &DMatrix<f64>); 4],
-    work: &mut [DMatrix<f64>; 3],
-) {
-    let rows = sensitivity.nrows();
-    if (1..=12).contains(&rows) && stages.iter().all(|(a, _)| a.shape() == (rows, rows)) {
-        let slices = stages.map(|(a, b)| (a.as_slice(), b.as_slice()));
-        crate::simd::fixed_rows!(
-            rows,
-            rk4_linear_fixed,
-            |_: &mut [f64], _, _| unreachable!("1 to 12 rows"),
-            (sensitivity.as_mut_slice(), step, slices)
-        );
-        return;
-    }
-    let [stage, rate, sum] = work;
-    affine_any(stages[0].0, sensitivity, stages[0].1, rate);
-    sum.copy_from(rate);
-    for ((a, b), (c, weight)) in stages[1..].iter().zip([(0.5, 2.0), (0.5, 2.0), (1.0, 1.0)]) {
-        stage.copy_from(sensitivity);
-        add_scaled(stage, c * step, rate);
-        affine_any(a, stage, b, rate);
-        add_scaled(sum, weight, rate);
-    }
-    add_scaled(sensitivity, step / 6.0, sum);
 }
 
 /// [`rk4_linear_step`] with R states, one column of S at a time through
@@ -179,34 +168,26 @@ pub(crate) fn affine(
     b: &DMatrix<f64>,
     into: &mut DMatrix<f64>,
 ) {
-    crate::simd::wide!(
-        affine_any,
-        (
-            a: &DMatrix<f64>,
-            s: &DMatrix<f64>,
-            b: &DMatrix<f64>,
-            into: &mut DMatrix<f64>,
-        )
-    )
-}
-
-#[inline(always)]
-fn affine_any(a: &DMatrix<f64>, s: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
-    let (rows, inner) = (a.nrows(), s.nrows());
-    let (a, s, b) = (a.as_slice(), s.as_slice(), b.as_slice());
-    let into = into.as_mut_slice();
-    if rows == 0 {
-        return;
-    }
-    if inner == 0 {
-        into.copy_from_slice(b);
-        return;
-    }
-    crate::simd::fixed_rows!(
-        rows,
-        affine_kernel,
-        |inner, a, s, b, into| affine_columns(rows, inner, a, s, b, into),
-        (inner, a, s, b, into)
+    crate::simd::wide(
+        #[inline(always)]
+        || {
+            let (rows, inner) = (a.nrows(), s.nrows());
+            let (a, s, b) = (a.as_slice(), s.as_slice(), b.as_slice());
+            let into = into.as_mut_slice();
+            if rows == 0 {
+                return;
+            }
+            if inner == 0 {
+                into.copy_from_slice(b);
+                return;
+            }
+            crate::simd::fixed_rows!(
+                rows,
+                affine_kernel,
+                |inner, a, s, b, into| affine_columns(rows, inner, a, s, b, into),
+                (inner, a, s, b, into)
+            )
+        },
     )
 }
 

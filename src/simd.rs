@@ -4,7 +4,7 @@
 //! The default build targets generic x86-64 (SSE2), so that one binary
 //! runs anywhere and the simulator keeps its tuning: built for this host's
 //! CPU (`target-cpu=native`) the output-error fit was 1.13× faster but the
-//! 6-DOF simulator 0.91× as fast. [`wide!`] runs a function compiled with
+//! 6-DOF simulator 0.91× as fast. [`wide`] runs a closure compiled with
 //! AVX2 enabled where the CPU has it: the dual-number evaluation's four
 //! tangent lanes and the sensitivity products then take one 256-bit
 //! instruction instead of two. Rust does not contract `a*b + c` into fused
@@ -17,7 +17,7 @@ thread_local! {
     static BASELINE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
-/// Runs `f` with every [`wide!`] function on this thread taking the
+/// Runs `f` with every [`wide`] closure on this thread taking the
 /// build's own instruction set, for tests that compare both.
 #[cfg(test)]
 pub(crate) fn baseline<R>(f: impl FnOnce() -> R) -> R {
@@ -27,7 +27,7 @@ pub(crate) fn baseline<R>(f: impl FnOnce() -> R) -> R {
     result
 }
 
-/// Whether [`wide!`] takes its AVX2 version: the CPU has AVX2 (the
+/// Whether [`wide`] takes its AVX2 version: the CPU has AVX2 (the
 /// standard library checks once and caches the answer).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
@@ -39,27 +39,25 @@ pub(crate) fn avx2() -> bool {
     std::arch::is_x86_feature_detected!("avx2")
 }
 
-/// `wide!(f, (a: A, b: B) -> R)`, as a function's body: calls `f(a, b)`
-/// compiled for AVX2 when this CPU has it ([`avx2`]), else as built. `f`
-/// must be `#[inline(always)]`, and so must whatever it calls that should
-/// be compiled the same way: a function that is not inlined keeps the
-/// build's instruction set.
-macro_rules! wide {
-    ($f:path, ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?) => {{
-        #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2")]
-        fn avx2($($arg: $ty),*) $(-> $ret)? {
-            $f($($arg),*)
-        }
-        #[cfg(target_arch = "x86_64")]
-        if $crate::simd::avx2() {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { avx2($($arg),*) };
-        }
-        $f($($arg),*)
-    }};
+/// Runs `f` compiled for AVX2 when this CPU has it ([`avx2`]), else as
+/// built. `f` must be an `#[inline(always)]` closure, and whatever it calls
+/// that should be compiled the same way `#[inline(always)]` too: code that
+/// is not inlined into the AVX2 copy keeps the build's instruction set.
+#[inline(always)]
+pub(crate) fn wide<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if avx2() {
+        // SAFETY: the CPU has AVX2, checked just above.
+        return unsafe { with_avx2(f) };
+    }
+    f()
 }
-pub(crate) use wide;
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
 
 /// `fixed_rows!(rows, kernel, fallback, (a, b))`: `kernel::<R>(a, b)` with
 /// R = `rows` known at compile time for 1 to 12 rows (the small matrices of

@@ -826,150 +826,133 @@ impl Linearization {
         outputs: &[Observable],
         memo: &mut Memo,
     ) {
-        let this = self;
-        crate::simd::wide!(
-            Linearization::at_any,
-            (
-                this: &mut Linearization,
-                model: &FlightModel,
-                directions: &Directions,
-                x: &FlightPathState,
-                controls: &Controls,
-                pseudo: PseudoRates,
-                outputs: &[Observable],
-                memo: &mut Memo,
-            )
-        )
-    }
-
-    #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn at_any(
-        &mut self,
-        model: &FlightModel,
-        directions: &Directions,
-        x: &FlightPathState,
-        controls: &Controls,
-        pseudo: PseudoRates,
-        outputs: &[Observable],
-        memo: &mut Memo,
-    ) {
-        let atmosphere = &model.environment.atmosphere;
-        let (angles, air) = memo.of(x, atmosphere);
-        // With dual lanes the first one's values are the evaluation at x
-        // (the same numbers); without, it is evaluated plainly.
-        if directions.dual_lanes.is_empty() {
-            (self.rates, self.evaluation) = derivative(model, x, &angles, &air, controls, pseudo);
-            for (o, output) in outputs.iter().enumerate() {
-                self.outputs[o] = output.value(x, &self.evaluation);
-            }
-        }
-        let states = &directions.states;
-        for (chunk, lanes) in directions.dual_lanes.iter().enumerate() {
-            let (dual_x, rates, evaluation) = dual_derivative(
-                model,
-                x,
-                angles,
-                lanes.iter().map(|&(_, i)| i),
-                &air,
-                controls,
-                pseudo,
-            );
-            if chunk == 0 {
-                self.rates = rates.map(Dual::value);
-                self.evaluation = evaluation.values();
-            }
-            for (lane, &(b, _)) in lanes.iter().enumerate() {
-                for (a, &r) in states.iter().enumerate() {
-                    self.a[(a, b)] = rates[r].tangent[lane];
+        // The whole linearisation, the dual-number pass included, compiled
+        // for AVX2 too.
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                let atmosphere = &model.environment.atmosphere;
+                let (angles, air) = memo.of(x, atmosphere);
+                // With dual lanes the first one's values are the evaluation at x
+                // (the same numbers); without, it is evaluated plainly.
+                if directions.dual_lanes.is_empty() {
+                    (self.rates, self.evaluation) =
+                        derivative(model, x, &angles, &air, controls, pseudo);
+                    for (o, output) in outputs.iter().enumerate() {
+                        self.outputs[o] = output.value(x, &self.evaluation);
+                    }
                 }
-            }
-            for (o, output) in outputs.iter().enumerate() {
-                let value = output.value(&dual_x, &evaluation);
-                if chunk == 0 {
-                    self.outputs[o] = value.value;
-                }
-                for (lane, &(b, _)) in lanes.iter().enumerate() {
-                    self.gx[(o, b)] = value.tangent[lane];
-                }
-            }
-        }
-        if directions.sources.is_empty() {
-            return;
-        }
-        for &(b, i) in &directions.differenced {
-            let step = state_step(x[i]);
-            let mut moved = *x;
-            moved[i] += step;
-            let moved_air = if i == ALTITUDE {
-                atmosphere.at(moved[i])
-            } else {
-                air
-            };
-            let moved_angles = angles.nudged(i, moved[i] - x[i]);
-            let (rates, evaluation) =
-                derivative(model, &moved, &moved_angles, &moved_air, controls, pseudo);
-            for (a, &r) in states.iter().enumerate() {
-                self.a[(a, b)] = (rates[r] - self.rates[r]) / step;
-            }
-            for (o, output) in outputs.iter().enumerate() {
-                self.gx[(o, b)] = (output.value(&moved, &evaluation) - self.outputs[o]) / step;
-            }
-        }
-        let motion = Motion::of(&self.evaluation);
-        for (d, response) in directions.responses.iter().enumerate() {
-            match *response {
-                Response::Model(m) => {
-                    let (perturbed, step) = &directions.models[m];
-                    let (rates, evaluation) =
-                        derivative(perturbed, x, &angles, &air, controls, pseudo);
-                    for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states) {
-                        *into = (rates[r] - self.rates[r]) / step;
+                let states = &directions.states;
+                for (chunk, lanes) in directions.dual_lanes.iter().enumerate() {
+                    let (dual_x, rates, evaluation) = dual_derivative(
+                        model,
+                        x,
+                        angles,
+                        lanes.iter().map(|&(_, i)| i),
+                        &air,
+                        controls,
+                        pseudo,
+                    );
+                    if chunk == 0 {
+                        self.rates = rates.map(Dual::value);
+                        self.evaluation = evaluation.values();
+                    }
+                    for (lane, &(b, _)) in lanes.iter().enumerate() {
+                        for (a, &r) in states.iter().enumerate() {
+                            self.a[(a, b)] = rates[r].tangent[lane];
+                        }
                     }
                     for (o, output) in outputs.iter().enumerate() {
-                        self.model_outputs[(o, d)] =
-                            (output.value(x, &evaluation) - self.outputs[o]) / step;
-                    }
-                }
-                Response::Offset(coefficient) => {
-                    let offset = offset_response(model, &self.evaluation, coefficient);
-                    let response = motion.response(&offset.1, offset.2);
-                    let rates = motion_rates(x, &angles, &response, pseudo.linear());
-                    for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states) {
-                        *into = rates[r];
-                    }
-                    if !outputs.is_empty() {
-                        let evaluation = offset_evaluation(&self.evaluation, &offset);
-                        for (o, output) in outputs.iter().enumerate() {
-                            self.model_outputs[(o, d)] =
-                                output.value(x, &evaluation) - self.outputs[o];
+                        let value = output.value(&dual_x, &evaluation);
+                        if chunk == 0 {
+                            self.outputs[o] = value.value;
+                        }
+                        for (lane, &(b, _)) in lanes.iter().enumerate() {
+                            self.gx[(o, b)] = value.tangent[lane];
                         }
                     }
                 }
-            }
-        }
-        let regressors = if directions.terms > 0 {
-            model
-                .aircraft
-                .aero
-                .term_regressors(&self.evaluation.aero_input)
-        } else {
-            TermRegressors::default()
-        };
-        // Column j of ∂f/∂θ and ∂g/∂θ: its response times its factor (the
-        // columns of unknowns with no source stay 0 from `new`).
-        fill(
-            &self.model_rates,
-            &directions.filled,
-            &regressors,
-            &mut self.b,
-        );
-        fill(
-            &self.model_outputs,
-            &directions.filled,
-            &regressors,
-            &mut self.gtheta,
-        );
+                if directions.sources.is_empty() {
+                    return;
+                }
+                for &(b, i) in &directions.differenced {
+                    let step = state_step(x[i]);
+                    let mut moved = *x;
+                    moved[i] += step;
+                    let moved_air = if i == ALTITUDE {
+                        atmosphere.at(moved[i])
+                    } else {
+                        air
+                    };
+                    let moved_angles = angles.nudged(i, moved[i] - x[i]);
+                    let (rates, evaluation) =
+                        derivative(model, &moved, &moved_angles, &moved_air, controls, pseudo);
+                    for (a, &r) in states.iter().enumerate() {
+                        self.a[(a, b)] = (rates[r] - self.rates[r]) / step;
+                    }
+                    for (o, output) in outputs.iter().enumerate() {
+                        self.gx[(o, b)] =
+                            (output.value(&moved, &evaluation) - self.outputs[o]) / step;
+                    }
+                }
+                let motion = Motion::of(&self.evaluation);
+                for (d, response) in directions.responses.iter().enumerate() {
+                    match *response {
+                        Response::Model(m) => {
+                            let (perturbed, step) = &directions.models[m];
+                            let (rates, evaluation) =
+                                derivative(perturbed, x, &angles, &air, controls, pseudo);
+                            for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states)
+                            {
+                                *into = (rates[r] - self.rates[r]) / step;
+                            }
+                            for (o, output) in outputs.iter().enumerate() {
+                                self.model_outputs[(o, d)] =
+                                    (output.value(x, &evaluation) - self.outputs[o]) / step;
+                            }
+                        }
+                        Response::Offset(coefficient) => {
+                            let offset = offset_response(model, &self.evaluation, coefficient);
+                            let response = motion.response(&offset.1, offset.2);
+                            let rates = motion_rates(x, &angles, &response, pseudo.linear());
+                            for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states)
+                            {
+                                *into = rates[r];
+                            }
+                            if !outputs.is_empty() {
+                                let evaluation = offset_evaluation(&self.evaluation, &offset);
+                                for (o, output) in outputs.iter().enumerate() {
+                                    self.model_outputs[(o, d)] =
+                                        output.value(x, &evaluation) - self.outputs[o];
+                                }
+                            }
+                        }
+                    }
+                }
+                let regressors = if directions.terms > 0 {
+                    model
+                        .aircraft
+                        .aero
+                        .term_regressors(&self.evaluation.aero_input)
+                } else {
+                    TermRegressors::default()
+                };
+                // Column j of ∂f/∂θ and ∂g/∂θ: its response times its factor (the
+                // columns of unknowns with no source stay 0 from `new`).
+                fill(
+                    &self.model_rates,
+                    &directions.filled,
+                    &regressors,
+                    &mut self.b,
+                );
+                fill(
+                    &self.model_outputs,
+                    &directions.filled,
+                    &regressors,
+                    &mut self.gtheta,
+                );
+            },
+        )
     }
 
     /// ∂f/∂θ at this point with the controls replaced by `controls` (the

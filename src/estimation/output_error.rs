@@ -2,17 +2,18 @@
 //! Iliff; Jategaonkar, "Flight Vehicle System Identification", ch. 4).
 //!
 //! The postulated model is simulated with the recorded inputs (and, for
-//! decoupled models, the recorded pseudo-controls; see [`driven`]); its
-//! outputs y(θ) are compared with the recorded outputs z at each channel's
-//! own sample instants, the prediction on the integration grid being
-//! interpolated linearly to them. The negative log-likelihood with unknown
-//! residual covariance R reduces to the cost det(R) (seed 001 Eq. 7), which is
-//! minimised by relaxation: at every iteration R is re-estimated from the
-//! residuals at the current θ, R = (1/N)·Σ e·eᵀ (Eq. 8), and a Gauss–Newton
-//! step is taken on ½·Σ eᵀR⁻¹e with R fixed (Eqs. 9–10), by the shared core
-//! [`gauss_newton`]. R is diagonal: channels may have different time bases,
-//! so cross-covariances are undefined, and with independent sensor noise the
-//! diagonal R is the maximum-likelihood one.
+//! decoupled models, the recorded pseudo-controls; see
+//! [`crate::estimation::driven`]); its outputs y(θ) are compared with the
+//! recorded outputs z at each channel's own sample instants, the prediction
+//! on the integration grid being interpolated linearly to them. The negative
+//! log-likelihood with unknown residual covariance R reduces to the cost
+//! det(R) (seed 001 Eq. 7), which is minimised by relaxation: at every
+//! iteration R is re-estimated from the residuals at the current θ, R =
+//! (1/N)·Σ e·eᵀ (Eq. 8), and a Gauss–Newton step is taken on ½·Σ eᵀR⁻¹e with
+//! R fixed (Eqs. 9–10), by the shared core [`gauss_newton`]. R is diagonal:
+//! channels may have different time bases, so cross-covariances are
+//! undefined, and with independent sensor noise the diagonal R is the
+//! maximum-likelihood one.
 //!
 //! Sensitivities ∂y/∂θ come from the sensitivity equations (Jategaonkar
 //! §4.6; Maine & Iliff): with ẋ = f(x, u, θ) and y = g(x, u, θ), the state
@@ -64,7 +65,7 @@
 //! differentiation (dual numbers, [`crate::dual`]), except along the
 //! altitude and where the forces depend on α̇; those and ∂f/∂θ of the
 //! nonlinear parameters (e, the stall parameters) are forward differences
-//! (step 10⁻⁷·max(|·|, scale)) ([`driven`]).
+//! (step 10⁻⁷·max(|·|, scale)) ([`crate::estimation::driven`]).
 //! A test checks the exact Jacobian against central differences of whole
 //! simulations to 10⁻⁵, another the grid-point one against it. Each θ is
 //! simulated once, with sensitivities: the solver's re-weighting, residuals
@@ -1010,11 +1011,7 @@ impl LeastSquaresProblem for Problem {
         theta: &DVector<f64>,
         _options: &Options,
     ) -> std::result::Result<DMatrix<f64>, String> {
-        if self.held.is_none() && !self.is_simulated(theta, Some(self.linearise)) {
-            self.simulate(theta, true)?;
-        }
-        let weights = self.weights.clone();
-        let assembled = self.assembled();
+        let (weights, assembled) = self.sensitivities_at(theta)?;
         let mut jacobian = DMatrix::zeros(
             assembled.rows.last().map_or(0, |rows| rows.end),
             assembled.unknowns.len(),
@@ -1040,11 +1037,7 @@ impl LeastSquaresProblem for Problem {
         residuals: &DVector<f64>,
         _options: &Options,
     ) -> std::result::Result<NormalEquations, String> {
-        if self.held.is_none() && !self.is_simulated(theta, Some(self.linearise)) {
-            self.simulate(theta, true)?;
-        }
-        let weights = self.weights.clone();
-        let assembled = self.assembled();
+        let (weights, assembled) = self.sensitivities_at(theta)?;
         let columns = assembled.unknowns.len();
         let mut gradient = DVector::zeros(columns);
         let mut information = DMatrix::zeros(columns, columns);
@@ -1070,6 +1063,20 @@ impl LeastSquaresProblem for Problem {
 }
 
 impl Problem {
+    /// The weights 1/σ and ∂y/∂θ at the samples ([`Problem::assembled`])
+    /// for the Jacobian at θ: the held simulation's, else θ's (simulated
+    /// with sensitivities if it was not).
+    fn sensitivities_at(
+        &mut self,
+        theta: &DVector<f64>,
+    ) -> std::result::Result<(Vec<f64>, &Assembled), String> {
+        if self.held.is_none() && !self.is_simulated(theta, Some(self.linearise)) {
+            self.simulate(theta, true)?;
+        }
+        let weights = self.weights.clone();
+        Ok((weights, self.assembled()))
+    }
+
     /// ∂y/∂θ at the samples of the simulation whose Jacobian is asked for
     /// (the held one, else the last), assembled for the solver's unknowns if
     /// not yet.
@@ -1250,7 +1257,7 @@ mod tests {
         (record, ModelStructure::load("attas-lateral").unwrap())
     }
 
-    /// The kernels that [`crate::simd::wide!`] compiles for AVX2 (the
+    /// The kernels that [`crate::simd::wide`] compiles for AVX2 (the
     /// linearisation, the sensitivity step, ∂g/∂x·S) give the baseline
     /// build's numbers bit for bit: simulations with sensitivities, grid
     /// points and stages, of the lateral benchmark and of the stall model
