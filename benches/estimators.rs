@@ -7,11 +7,11 @@
 //! from the model file's a-priori values instead. Run:
 //! `cargo bench --bench estimators`.
 
-use aeroid::estimation::equation_error::equation_error;
-use aeroid::estimation::output_error::{OutputErrorOptions, Start, output_error};
+use aeroid::estimation::methods::equation_error::equation_error;
+use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
 use aeroid::estimation::structure::ModelStructure;
-use aeroid::recorder::{Profile, record_scenario};
-use aeroid::scenario::Scenario;
+use aeroid::record::recorder::{Profile, record_scenario};
+use aeroid::sim::scenario::Scenario;
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 

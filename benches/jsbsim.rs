@@ -6,8 +6,8 @@
 //! Run: `cargo bench --features jsbsim --bench jsbsim`.
 
 use aeroid::jsbsim::crosscheck::{saturated_controls, start_exported};
-use aeroid::scenario::Scenario;
 use aeroid::sim::Simulation;
+use aeroid::sim::scenario::Scenario;
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 

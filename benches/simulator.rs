@@ -2,8 +2,8 @@
 //! equations of motion), single core, with the linear and the stall model.
 //! Run: `cargo bench --bench simulator`.
 
-use aeroid::scenario::Scenario;
 use aeroid::sim::Simulation;
+use aeroid::sim::scenario::Scenario;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 

@@ -2,13 +2,13 @@
 //! reporting every problem at once; a valid scenario is also trimmed, so that
 //! a flight condition with no trim is found before a long run.
 
-use crate::aircraft::Aircraft;
 use crate::error::{Error, Result, parse_toml, read_text};
 use crate::estimation::structure::ModelStructure;
-use crate::recorder::{Profile, ProfileFile};
-use crate::scenario::{Scenario, ScenarioFile};
+use crate::eval::study::{Study, StudyFile};
+use crate::record::recorder::{Profile, ProfileFile};
 use crate::sim::Simulation;
-use crate::study::{Study, StudyFile};
+use crate::sim::aircraft::Aircraft;
+use crate::sim::scenario::{Scenario, ScenarioFile};
 use std::path::Path;
 
 /// What a valid file holds, in a few lines for the user.
@@ -167,7 +167,7 @@ fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
 /// rigid-body file checked against JSBSim's mass, inertia and geometry.
 fn check_jsbsim_scenario(
     scenario: &Scenario,
-    jsbsim: &crate::scenario::JsbsimAircraft,
+    jsbsim: &crate::sim::scenario::JsbsimAircraft,
 ) -> Result<CheckReport> {
     let mut lines = vec![format!(
         "{}: JSBSim aircraft {} (rigid body {}), {} s at {} s steps, seed {}",

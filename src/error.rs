@@ -95,7 +95,7 @@ pub enum Error {
         time: f64,
         reason: String,
         /// The trace up to the last step before departure, so that nothing computed is lost.
-        partial: Box<crate::trace::TruthTrace>,
+        partial: Box<crate::sim::trace::TruthTrace>,
     },
 
     /// A JSBSim call failed (a C++ exception or a failure status, turned into

@@ -1,41 +1,28 @@
 //! aeroid: a simulation-based validation harness for aircraft aerodynamic
-//! parameter estimators. See README.md for the data flow.
+//! parameter estimators.
+//!
+//! The folders follow the data flow: `sim` flies a scenario and gives its
+//! truth, `record` turns the truth into what a recorder stores (or imports
+//! real data), `prep` differentiates and reconstructs recorded channels,
+//! `estimation` fits postulated models to a record, `eval` scores estimates
+//! against the truth (runs, gates, studies), `analysis` linearises and
+//! finds what is identifiable. `catalog` owns the data folders.
 
-pub mod aero;
-pub mod aircraft;
-pub mod atmosphere;
+pub mod analysis;
 pub mod catalog;
 pub mod check;
-pub mod derived;
 pub mod dual;
-pub mod dynamics;
-pub mod engine;
 pub mod error;
 pub mod estimation;
-pub mod gate;
-pub mod identifiability;
-pub mod import;
-pub mod inputs;
-pub mod integrator;
+pub mod eval;
 #[cfg(feature = "jsbsim")]
 pub mod jsbsim;
-pub mod linearize;
-pub mod modal_fit;
-pub mod params;
-pub mod pipeline;
+pub mod prep;
 pub mod random;
 pub mod record;
-pub mod recorder;
-pub mod scenario;
 pub mod sim;
 #[macro_use]
 mod simd;
-pub mod state;
-pub mod study;
-pub mod trace;
-pub mod trim;
-pub mod truth;
 pub mod units;
-pub mod wind;
 
 pub use error::{Error, Result};

@@ -1,7 +1,7 @@
 //! The `aeroid` command line. Only this file prints and exits.
 
 use aeroid::catalog;
-use aeroid::scenario::Scenario;
+use aeroid::sim::scenario::Scenario;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -123,7 +123,7 @@ enum Command {
     /// tolerance, print what failed, and exit non-zero on any failure.
     Gate {
         /// The gate file.
-        #[arg(long, default_value = aeroid::gate::GATE_FILE)]
+        #[arg(long, default_value = aeroid::eval::gate::GATE_FILE)]
         file: PathBuf,
         /// Print every parameter's row (estimate, σ, truth, error, allowed), not only failures.
         #[arg(long)]
@@ -173,8 +173,8 @@ enum Command {
         check_on: Option<PathBuf>,
         /// Output error's start values: equation error's estimates when they
         /// fit better than the model file's (ee), or the model file's (model).
-        #[arg(long, value_enum, default_value_t = aeroid::estimation::output_error::Start::EquationError)]
-        start: aeroid::estimation::output_error::Start,
+        #[arg(long, value_enum, default_value_t = aeroid::estimation::methods::output_error::Start::EquationError)]
+        start: aeroid::estimation::methods::output_error::Start,
     },
     /// Write an aircraft as a JSBSim aircraft (DIR/NAME/NAME.xml): the same
     /// mass, inertia, geometry, thrust and linear aerodynamics, the
@@ -305,19 +305,19 @@ fn run(cli: Cli) -> Result<()> {
                         .map_err(|e| anyhow::anyhow!("--segment: {e}"))
                 })
                 .transpose()?;
-            let scenario = aeroid::scenario::Scenario::load(&scenario)?;
-            let profile = aeroid::recorder::profile_for(&scenario, profile.as_deref())?;
+            let scenario = aeroid::sim::scenario::Scenario::load(&scenario)?;
+            let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
             if threshold.is_nan() || threshold <= 0.0 {
                 anyhow::bail!("--threshold must be positive, is {threshold}");
             }
-            let options = aeroid::identifiability::IdentifiabilityOptions {
+            let options = aeroid::analysis::identifiability::IdentifiabilityOptions {
                 threshold,
                 parameters,
                 channels,
                 segment,
                 ..Default::default()
             };
-            let result = aeroid::identifiability::analyse(&scenario, &profile, &options)?;
+            let result = aeroid::analysis::identifiability::analyse(&scenario, &profile, &options)?;
             print!("{}", result.table());
             Ok(())
         }
@@ -390,10 +390,10 @@ fn simulate(reference: &str, out: &std::path::Path) -> Result<()> {
 
 fn record(reference: &str, profile: Option<&str>, out: &std::path::Path) -> Result<()> {
     let scenario = Scenario::load(reference)?;
-    let profile = aeroid::recorder::profile_for(&scenario, profile)?;
-    let (record, truth) = aeroid::recorder::record_scenario(&scenario, &profile)?;
+    let profile = aeroid::record::recorder::profile_for(&scenario, profile)?;
+    let (record, truth) = aeroid::record::recorder::record_scenario(&scenario, &profile)?;
     record.write(out)?;
-    truth.write(&out.join(aeroid::truth::TRUTH_FILE))?;
+    truth.write(&out.join(aeroid::sim::truth::TRUTH_FILE))?;
     println!(
         "{}: recorded with profile {} ({} channels); record and truth written to {}",
         scenario.name,
@@ -405,7 +405,7 @@ fn record(reference: &str, profile: Option<&str>, out: &std::path::Path) -> Resu
 }
 
 fn import(data: &std::path::Path, map: &std::path::Path, out: &std::path::Path) -> Result<()> {
-    let outcome = aeroid::import::import(data, map)?;
+    let outcome = aeroid::record::import::import(data, map)?;
     outcome.record.write(out)?;
     println!(
         "{}: {} channels imported into {}",
@@ -428,20 +428,21 @@ fn estimate(
     method: Method,
     out: Option<&std::path::Path>,
     check_on: Option<&std::path::Path>,
-    start: aeroid::estimation::output_error::Start,
+    start: aeroid::estimation::methods::output_error::Start,
 ) -> Result<()> {
-    use aeroid::estimation::{output_error, score, structure::ModelStructure};
+    use aeroid::estimation::{methods::output_error, structure::ModelStructure};
+    use aeroid::eval::score;
     let record = aeroid::record::FlightRecord::read(record_folder)?;
     let structure = ModelStructure::load(model)?;
     let estimate = match method {
-        Method::Ee => aeroid::estimation::equation_error::equation_error(
+        Method::Ee => aeroid::estimation::methods::equation_error::equation_error(
             &record,
             &structure,
             &Default::default(),
         )?,
         Method::Swr => {
             let (reports, estimate) =
-                aeroid::estimation::stepwise::stepwise_all(&record, &structure)?;
+                aeroid::estimation::methods::stepwise::stepwise_all(&record, &structure)?;
             reports.iter().for_each(|report| println!("{report}"));
             estimate
         }
@@ -453,10 +454,10 @@ fn estimate(
             output_error::output_error(&[&record], &structure, &options)?
         }
     };
-    let truth_path = record_folder.join(aeroid::truth::TRUTH_FILE);
+    let truth_path = record_folder.join(aeroid::sim::truth::TRUTH_FILE);
     let truth = truth_path
         .is_file()
-        .then(|| aeroid::truth::RunTruth::read(&truth_path))
+        .then(|| aeroid::sim::truth::RunTruth::read(&truth_path))
         .transpose()?;
     let scores = score::score(&estimate, truth.as_ref(), structure.aircraft.aero.kind);
     println!(
@@ -508,11 +509,11 @@ fn run_all(
     out: Option<&std::path::Path>,
 ) -> Result<()> {
     let scenario = Scenario::load(reference)?;
-    let profile = aeroid::recorder::profile_for(&scenario, profile)?;
-    let report = aeroid::pipeline::run(&scenario, &profile)?;
+    let profile = aeroid::record::recorder::profile_for(&scenario, profile)?;
+    let report = aeroid::eval::run::run(&scenario, &profile)?;
     let truth = match report.truth.kind {
-        aeroid::truth::TruthKind::Exact => format!("{:?} model", report.truth.model),
-        aeroid::truth::TruthKind::LocalDerivative => {
+        aeroid::sim::truth::TruthKind::Exact => format!("{:?} model", report.truth.model),
+        aeroid::sim::truth::TruthKind::LocalDerivative => {
             format!("local derivatives of {} at trim", report.truth.aircraft)
         }
     };
@@ -548,7 +549,7 @@ fn run_all(
                     worst
                 );
                 if verbose {
-                    print!("{}", aeroid::estimation::score::table(scores));
+                    print!("{}", aeroid::eval::score::table(scores));
                 }
             }
             Err(reason) => println!("{:<22} {:<5} not run: {reason}", run.model, run.method),
@@ -556,12 +557,14 @@ fn run_all(
     }
     if let Some(out) = out {
         report.record.write(out)?;
-        report.truth.write(&out.join(aeroid::truth::TRUTH_FILE))?;
+        report
+            .truth
+            .write(&out.join(aeroid::sim::truth::TRUTH_FILE))?;
         for run in &report.runs {
             if let Ok((estimate, scores)) = &run.outcome {
                 let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
                 estimate.write_json(&out.join(format!("{stem}.json")))?;
-                aeroid::estimation::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
+                aeroid::eval::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
             }
         }
         println!("record, truth and estimates written to {}", out.display());
@@ -571,7 +574,7 @@ fn run_all(
 
 fn reconstruct(record_folder: &std::path::Path, out: Option<&std::path::Path>) -> Result<()> {
     let record = aeroid::record::FlightRecord::read(record_folder)?;
-    let result = aeroid::estimation::compatibility::flight_path_reconstruction(&record, 30)?;
+    let result = aeroid::prep::compatibility::flight_path_reconstruction(&record, 30)?;
     let estimate = &result.estimate;
     println!(
         "flight path reconstruction of {}: {:?} after {} iterations, {:.3} s",
@@ -597,13 +600,13 @@ fn reconstruct(record_folder: &std::path::Path, out: Option<&std::path::Path>) -
 }
 
 fn gate(file: &std::path::Path, verbose: bool, only: Option<&str>) -> Result<()> {
-    let mut gates = aeroid::gate::load(file)?;
+    let mut gates = aeroid::eval::gate::load(file)?;
     gates
         .cases
         .retain(|case| only.is_none_or(|text| case.name.contains(text)));
     let mut failed = Vec::new();
     for case in &gates.cases {
-        match aeroid::gate::run_case(case) {
+        match aeroid::eval::gate::run_case(case) {
             Ok(result) if result.passed() => {
                 match &result.refusal {
                     Some(refusal) => {
@@ -649,7 +652,7 @@ fn run_study(
     threads: usize,
     out: Option<&std::path::Path>,
 ) -> Result<()> {
-    let mut study = aeroid::study::Study::load(reference)?;
+    let mut study = aeroid::eval::study::Study::load(reference)?;
     if let Some(runs) = runs {
         anyhow::ensure!(runs >= 1, "--runs must be at least 1");
         study.runs = runs;
@@ -685,10 +688,10 @@ fn run_study(
         started.elapsed().as_secs_f64()
     );
     print!("{}", result.table());
-    let failures: Vec<&aeroid::study::Row> = result
+    let failures: Vec<&aeroid::eval::study::Row> = result
         .rows
         .iter()
-        .filter(|r| r.status == aeroid::study::FAILED)
+        .filter(|r| r.status == aeroid::eval::study::FAILED)
         .collect();
     if let Some(first) = failures.first() {
         println!(
@@ -715,7 +718,7 @@ fn run_study(
 fn export_jsbsim(reference: &str, out: &std::path::Path, jsbsim_atmosphere: bool) -> Result<()> {
     use aeroid::jsbsim::export::{ExportOptions, export};
     let path = catalog::resolve(reference, catalog::AIRCRAFT_FOLDER, None)?;
-    let aircraft = aeroid::aircraft::Aircraft::load(&path)?;
+    let aircraft = aeroid::sim::aircraft::Aircraft::load(&path)?;
     let options = ExportOptions {
         aeroid_atmosphere: !jsbsim_atmosphere,
         ..ExportOptions::default()

@@ -4,8 +4,8 @@
 mod common;
 
 use aeroid::Error;
-use aeroid::aircraft::Aircraft;
-use aeroid::scenario::Scenario;
+use aeroid::sim::aircraft::Aircraft;
+use aeroid::sim::scenario::Scenario;
 use std::path::Path;
 
 fn load_aircraft_text(test: &str, text: &str) -> (std::path::PathBuf, Error) {

@@ -2,10 +2,10 @@
 //! 31–32): sensor biases and scale factors planted by the recorder are found
 //! again, and the corrected record is consistent.
 
-use aeroid::estimation::compatibility::flight_path_reconstruction;
-use aeroid::estimation::gauss_newton::Status;
-use aeroid::recorder::{Profile, record_scenario};
-use aeroid::scenario::Scenario;
+use aeroid::estimation::solver::gauss_newton::Status;
+use aeroid::prep::compatibility::flight_path_reconstruction;
+use aeroid::record::recorder::{Profile, record_scenario};
+use aeroid::sim::scenario::Scenario;
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 const G: f64 = 9.80665;

@@ -17,18 +17,18 @@
 //! one (src/estimation/differentiation.rs); without that the jumps were
 //! smeared into 1–7 % errors.
 
-use aeroid::aero::{Coefficient, Regressor};
-use aeroid::aircraft::Aircraft;
-use aeroid::estimation::equation_error::{EquationErrorOptions, equation_error};
 use aeroid::estimation::estimate::Estimate;
-use aeroid::estimation::gauss_newton::Status;
+use aeroid::estimation::methods::equation_error::{EquationErrorOptions, equation_error};
+use aeroid::estimation::methods::stepwise::{Action, StepwiseOptions, stepwise};
 use aeroid::estimation::reconstruction::{ReconstructionOptions, Request, reconstruct};
-use aeroid::estimation::stepwise::{Action, StepwiseOptions, stepwise};
+use aeroid::estimation::solver::gauss_newton::Status;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::FlightRecord;
-use aeroid::recorder::{Profile, record_scenario};
-use aeroid::scenario::{Scenario, ScenarioFile};
+use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::Simulation;
+use aeroid::sim::aero::{Coefficient, Regressor};
+use aeroid::sim::aircraft::Aircraft;
+use aeroid::sim::scenario::{Scenario, ScenarioFile};
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 

@@ -3,7 +3,7 @@
 //! insta snapshot in golden/snapshots, so any change in what an estimator
 //! returns is seen in review even while it stays inside its gate.
 
-use aeroid::gate;
+use aeroid::eval::gate;
 
 #[test]
 fn every_gate_passes_and_matches_its_snapshot() {

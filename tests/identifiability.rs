@@ -1,9 +1,9 @@
 //! A-priori identifiability (src/identifiability.rs): the QAR table of
 //! issue 4, and the properties that make the bounds trustworthy.
 
-use aeroid::identifiability::{IdentifiabilityOptions, analyse};
-use aeroid::recorder::Profile;
-use aeroid::scenario::Scenario;
+use aeroid::analysis::identifiability::{IdentifiabilityOptions, analyse};
+use aeroid::record::recorder::Profile;
+use aeroid::sim::scenario::Scenario;
 
 const LATERAL: [&str; 6] = ["Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr"];
 

@@ -7,9 +7,9 @@
 mod common;
 
 use aeroid::Error;
-use aeroid::aircraft::Aircraft;
 use aeroid::jsbsim::export::{ExportOptions, aircraft_xml, export, model_name};
 use aeroid::jsbsim::{Exec, FT, InitialConditions, InitialSpeed, TrimMode};
+use aeroid::sim::aircraft::Aircraft;
 use std::path::{Path, PathBuf};
 
 fn attas() -> Aircraft {
@@ -337,7 +337,7 @@ fn export_refuses_the_stall_model() {
 /// 0.5 % of it, and that the states the manoeuvre excites are among them.
 fn cross_check_agrees(scenario: &str, excited: &[&str]) {
     use aeroid::jsbsim::crosscheck::{CrossCheckOptions, crosscheck};
-    let scenario = aeroid::scenario::Scenario::load(scenario).unwrap();
+    let scenario = aeroid::sim::scenario::Scenario::load(scenario).unwrap();
     let options = CrossCheckOptions {
         duration: Some(60.0),
         ..CrossCheckOptions::default()
@@ -428,7 +428,7 @@ fn cross_check_cdrw_lateral() {
 #[test]
 fn jsbsim_atmosphere_is_a_measurable_convention_difference() {
     use aeroid::jsbsim::crosscheck::{CrossCheckOptions, crosscheck};
-    let scenario = aeroid::scenario::Scenario::load("attas-elevator-3211").unwrap();
+    let scenario = aeroid::sim::scenario::Scenario::load("attas-elevator-3211").unwrap();
     let ours = crosscheck(
         &scenario,
         &CrossCheckOptions {
@@ -482,21 +482,21 @@ fn load_model_uses_the_executives_root() {
 fn central_differences_through_jsbsim_recover_the_exported_derivatives() {
     use aeroid::jsbsim::derivatives::{SurfaceBinding, local_derivatives};
     use aeroid::jsbsim::export::{CONTROL_PROPERTIES, THROTTLE_PROPERTY};
-    use aeroid::state::Control;
-    let scenario = aeroid::scenario::Scenario::load("attas-elevator-3211").unwrap();
+    use aeroid::sim::state::Control;
+    let scenario = aeroid::sim::scenario::Scenario::load("attas-elevator-3211").unwrap();
     let simulation = aeroid::sim::Simulation::prepare(&scenario).unwrap();
     let trim = &simulation.trim;
-    let truth = aeroid::truth::RunTruth::exact(&scenario, trim);
+    let truth = aeroid::sim::truth::RunTruth::exact(&scenario, trim);
     let folder = common::temp_folder("jsbsim-derivatives");
     export(&scenario.aircraft, &ExportOptions::default(), &folder).unwrap();
     let mut exec = load(&folder, &model_name(&scenario.aircraft), false).unwrap();
     exec.set(THROTTLE_PROPERTY, trim.controls[Control::Throttle.index()])
         .unwrap();
-    let euler = aeroid::state::euler(&trim.state);
+    let euler = aeroid::sim::state::euler(&trim.state);
     let at = InitialConditions {
         latitude: 0.0,
         longitude: 0.0,
-        altitude: aeroid::state::altitude(&trim.state),
+        altitude: aeroid::sim::state::altitude(&trim.state),
         attitude: [euler.roll, euler.pitch, euler.yaw],
         speed: InitialSpeed::TrueAirspeed {
             speed: scenario.trim.airspeed,
@@ -552,7 +552,7 @@ fn central_differences_through_jsbsim_recover_the_exported_derivatives() {
 // ---------------------------------------------------------------------------
 
 use aeroid::jsbsim::own;
-use aeroid::scenario::Scenario;
+use aeroid::sim::scenario::Scenario;
 
 const B737_3211: &str = "b737-elevator-3211";
 const B737_LATERAL: &str = "b737-lateral-multistep";
@@ -567,8 +567,8 @@ const B737_LATERAL: &str = "b737-lateral-multistep";
 #[test]
 fn the_737_truth_file_holds_jsbsims_local_derivatives_at_trim() {
     let scenario = Scenario::load(B737_3211).unwrap();
-    let profile = aeroid::recorder::profile_for(&scenario, None).unwrap();
-    let (record, truth) = aeroid::recorder::record_scenario(&scenario, &profile).unwrap();
+    let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
+    let (record, truth) = aeroid::record::recorder::record_scenario(&scenario, &profile).unwrap();
     let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
     // Flown from JSBSim's trim, the 737 holds it until the 3211 starts at 2 s.
     for sample in trace.samples.iter().take_while(|s| s.time < 2.0) {
@@ -576,15 +576,15 @@ fn the_737_truth_file_holds_jsbsims_local_derivatives_at_trim() {
         assert!(
             (air.alpha - truth.trim.alpha).abs() < 1e-5
                 && (air.airspeed - truth.trim.airspeed).abs() < 1e-3
-                && sample.state[aeroid::state::Q].abs() < 1e-5,
+                && sample.state[aeroid::sim::state::Q].abs() < 1e-5,
             "t = {}: α {}, V {}, q {}",
             sample.time,
             air.alpha,
             air.airspeed,
-            sample.state[aeroid::state::Q]
+            sample.state[aeroid::sim::state::Q]
         );
     }
-    assert_eq!(truth.kind, aeroid::truth::TruthKind::LocalDerivative);
+    assert_eq!(truth.kind, aeroid::sim::truth::TruthKind::LocalDerivative);
     assert_eq!(truth.aircraft, "jsbsim:737");
     assert!(truth.parameters.is_empty());
     assert!(record.channels.len() >= 18);
@@ -608,9 +608,9 @@ fn the_737_truth_file_holds_jsbsims_local_derivatives_at_trim() {
     assert!((0.15..0.35).contains(&truth.trim.controls["throttle"]));
     // Round trip through truth.toml.
     let folder = common::temp_folder("b737-truth");
-    let path = folder.join(aeroid::truth::TRUTH_FILE);
+    let path = folder.join(aeroid::sim::truth::TRUTH_FILE);
     truth.write(&path).unwrap();
-    assert_eq!(aeroid::truth::RunTruth::read(&path).unwrap(), truth);
+    assert_eq!(aeroid::sim::truth::RunTruth::read(&path).unwrap(), truth);
 
     let mach = trimmed.exec.get("velocities/mach").unwrap();
     let value = |name: &str| truth.local_derivatives[name];
@@ -809,10 +809,10 @@ fn fly_737(
 ) -> (
     aeroid::record::FlightRecord,
     aeroid::record::FlightRecord,
-    aeroid::truth::RunTruth,
+    aeroid::sim::truth::RunTruth,
 ) {
     let scenario = Scenario::load(name).unwrap();
-    let profile = aeroid::recorder::profile_for(&scenario, None).unwrap();
+    let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
     assert_eq!(profile.name, "flight-test-25hz");
     let (trace, truth) = aeroid::sim::fly(&scenario).unwrap();
     let noisy = profile
@@ -851,11 +851,11 @@ fn estimators_recover_the_737_derivatives_from_flight_test_data() {
             ("ee", &noisy, "ee"),
         ] {
             let (estimate, scores) =
-                aeroid::pipeline::estimate_scored(method, record, &truth, &structure).unwrap();
+                aeroid::eval::run::estimate_scored(method, record, &truth, &structure).unwrap();
             assert!(
                 matches!(
                     estimate.status,
-                    aeroid::estimation::gauss_newton::Status::Converged
+                    aeroid::estimation::solver::gauss_newton::Status::Converged
                 ),
                 "{label} on {scenario_name}: {:?}",
                 estimate.status
@@ -865,7 +865,7 @@ fn estimators_recover_the_737_derivatives_from_flight_test_data() {
             {
                 let score = scores.iter().find(|s| s.name == *name).unwrap();
                 let (jsbsim, kind) = truth.value_for(name, structure.aircraft.aero.kind).unwrap();
-                assert_eq!(kind, aeroid::truth::TruthKind::LocalDerivative);
+                assert_eq!(kind, aeroid::sim::truth::TruthKind::LocalDerivative);
                 let relative = (score.estimate - jsbsim) / jsbsim;
                 println!(
                     "{:<9} {:<12} {:>10.5} {:>10.5} {:>+8.2}% {:>9.2e} {:>+7.2}",
@@ -925,9 +925,9 @@ fn the_linear_postulate_fits_jsbsims_own_coefficients() {
             scenario.aircraft.geometry.span,
             scenario.aircraft.geometry.chord,
         );
-        let regressor = |s: &aeroid::trace::TruthSample, term: &str| {
+        let regressor = |s: &aeroid::sim::trace::TruthSample, term: &str| {
             let air = &s.evaluation.air_data;
-            let rates = aeroid::state::rates(&s.state);
+            let rates = aeroid::sim::state::rates(&s.state);
             let u = &s.evaluation.controls;
             match term {
                 "alpha" => air.alpha,
@@ -941,7 +941,7 @@ fn the_linear_postulate_fits_jsbsims_own_coefficients() {
                 _ => 1.0,
             }
         };
-        let value = |s: &aeroid::trace::TruthSample| {
+        let value = |s: &aeroid::sim::trace::TruthSample| {
             let c = &s.evaluation.coefficients;
             match coefficient {
                 "Cm" => c.moment.y,

@@ -1,8 +1,8 @@
 //! Acceptance test: linearise the simulator numerically at trim; the short
 //! period, phugoid, Dutch roll, roll and spiral eigenvalues of that
-//! linearisation ([`aeroid::linearize`]) agree within 1 % with the frequency
+//! linearisation ([`aeroid::analysis::linearize`]) agree within 1 % with the frequency
 //! and damping fitted by the Eigensystem Realization Algorithm
-//! ([`aeroid::modal_fit`]) to the simulated small-amplitude free response
+//! ([`aeroid::analysis::modal_fit`]) to the simulated small-amplitude free response
 //! after an elevator doublet or an aileron pulse, for ATTAS and the CDRW UAV.
 //!
 //! The two computations share only the right-hand side of the equations of
@@ -43,14 +43,14 @@
 //! So a true disagreement of a few per cent cannot hide, while the fit's
 //! known error stays about ten times below the limit.
 
-use aeroid::aircraft::Aircraft;
+use aeroid::analysis::linearize::{self, Linearization, Mode, ModeKind};
+use aeroid::analysis::modal_fit::{Era, EraFit, FittedMode};
 use aeroid::catalog;
-use aeroid::dynamics::Exogenous;
-use aeroid::linearize::{self, Linearization, Mode, ModeKind};
-use aeroid::modal_fit::{Era, EraFit, FittedMode};
-use aeroid::scenario::Scenario;
 use aeroid::sim::Simulation;
-use aeroid::state::{self, Control, StateVector};
+use aeroid::sim::aircraft::Aircraft;
+use aeroid::sim::dynamics::Exogenous;
+use aeroid::sim::scenario::Scenario;
+use aeroid::sim::state::{self, Control, StateVector};
 use nalgebra::{Complex, DMatrix};
 
 /// Relative tolerance on ωn, ζ and real eigenvalues.

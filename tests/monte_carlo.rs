@@ -4,7 +4,7 @@
 mod common;
 
 use aeroid::Error;
-use aeroid::study::{Row, Study, StudyResult};
+use aeroid::eval::study::{Row, Study, StudyResult};
 use std::path::PathBuf;
 
 /// A cheap study (equation error only: ~10 ms a fit) with two sweep points.
@@ -222,7 +222,7 @@ fn acceptance_attas_lateral_100_runs() {
     let mut study = Study::load("attas-lateral-acceptance").unwrap();
     assert_eq!(study.runs, 100, "issue 4 asks for at least 100 runs");
     let result = run(&study, 0);
-    let summary = |method: &str| -> Vec<&aeroid::study::SummaryRow> {
+    let summary = |method: &str| -> Vec<&aeroid::eval::study::SummaryRow> {
         result
             .summary
             .iter()

@@ -1,8 +1,8 @@
 //! The RK4 step of the 6-DOF allocates nothing on the heap: fixed-size
 //! nalgebra types throughout. A counting global allocator proves it.
 
-use aeroid::scenario::Scenario;
 use aeroid::sim::Simulation;
+use aeroid::sim::scenario::Scenario;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 

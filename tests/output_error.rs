@@ -1,14 +1,14 @@
 //! Output error (maximum likelihood) on simulated records where the answer
 //! is known.
 
-use aeroid::estimation::gauss_newton::Status;
-use aeroid::estimation::output_error::{OutputErrorOptions, Start, output_error};
+use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
+use aeroid::estimation::solver::gauss_newton::Status;
 use aeroid::estimation::structure::{ModelStructure, StructureFile};
 use aeroid::record::FlightRecord;
-use aeroid::recorder::Profile;
-use aeroid::scenario::Scenario;
+use aeroid::record::recorder::Profile;
 use aeroid::sim::Simulation;
-use aeroid::state::Control;
+use aeroid::sim::scenario::Scenario;
+use aeroid::sim::state::Control;
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
@@ -217,7 +217,7 @@ fn input_reconstruction_follows_the_interpolation_option() {
     };
     let held = worst_relative(&structure);
     assert!(held < 1e-6, "held inputs: worst relative error {held:.3e}");
-    structure.interpolation = aeroid::integrator::Interpolation::Linear;
+    structure.interpolation = aeroid::sim::integrator::Interpolation::Linear;
     let ramps = worst_relative(&structure);
     assert!(
         ramps > 0.1,
@@ -295,7 +295,7 @@ fn control_channel_noise_biases_output_error() {
 fn decoupled_lateral_model_on_ideal_record() {
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
     let profile = Profile::load("ideal", None).unwrap();
-    let (record, _) = aeroid::recorder::record_scenario(&scenario, &profile).unwrap();
+    let (record, _) = aeroid::record::recorder::record_scenario(&scenario, &profile).unwrap();
     let structure = ModelStructure::load("attas-lateral").unwrap();
     let estimate = output_error(&[&record], &structure, &OutputErrorOptions::default()).unwrap();
     assert_eq!(estimate.status, Status::Converged);
@@ -320,15 +320,19 @@ fn decoupled_lateral_model_on_ideal_record() {
 fn estimated_model_matches_another_manoeuvre() {
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let record = |name: &str| {
-        aeroid::recorder::record_scenario(&Scenario::load(name).unwrap(), &profile)
+        aeroid::record::recorder::record_scenario(&Scenario::load(name).unwrap(), &profile)
             .unwrap()
             .0
     };
     let (fitted_on, checked_on) = (record("attas-lateral-multistep"), record("attas-multisine"));
     let structure = ModelStructure::load("attas-lateral").unwrap();
     let estimate = output_error(&[&fitted_on], &structure, &OutputErrorOptions::default()).unwrap();
-    let fits = aeroid::estimation::output_error::proof_of_match(&estimate, &structure, &checked_on)
-        .unwrap();
+    let fits = aeroid::estimation::methods::output_error::proof_of_match(
+        &estimate,
+        &structure,
+        &checked_on,
+    )
+    .unwrap();
     for fit in &fits {
         assert!(fit.theil < 0.1, "{fit:?}");
     }
@@ -341,7 +345,8 @@ fn estimated_model_matches_another_manoeuvre() {
         }
     }
     let start_fits =
-        aeroid::estimation::output_error::proof_of_match(&start, &structure, &checked_on).unwrap();
+        aeroid::estimation::methods::output_error::proof_of_match(&start, &structure, &checked_on)
+            .unwrap();
     assert!(start_fits.iter().all(|f| f.theil > 0.3), "{start_fits:?}");
 }
 
@@ -355,7 +360,7 @@ fn estimated_model_matches_another_manoeuvre() {
 fn both_starts_reach_the_same_optimum() {
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
-    let (record, _) = aeroid::recorder::record_scenario(&scenario, &profile).unwrap();
+    let (record, _) = aeroid::record::recorder::record_scenario(&scenario, &profile).unwrap();
     let structure = ModelStructure::load("attas-lateral").unwrap();
     let fit = |start| {
         let options = OutputErrorOptions {

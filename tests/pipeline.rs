@@ -1,9 +1,9 @@
 //! `aeroid run`: simulate → record → every classical estimator → score, as
 //! a user runs it.
 
-use aeroid::pipeline;
-use aeroid::recorder::Profile;
-use aeroid::scenario::Scenario;
+use aeroid::eval::run;
+use aeroid::record::recorder::Profile;
+use aeroid::sim::scenario::Scenario;
 
 /// The bundled lateral scenario: all three estimators run on the model it
 /// names and converge; every estimated term that the truth model has is
@@ -12,10 +12,10 @@ use aeroid::scenario::Scenario;
 #[test]
 fn run_scores_every_method_on_the_lateral_scenario() {
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
-    let profile = aeroid::recorder::profile_for(&scenario, None).unwrap();
-    let report = pipeline::run(&scenario, &profile).unwrap();
+    let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
+    let report = run::run(&scenario, &profile).unwrap();
     let methods: Vec<&str> = report.runs.iter().map(|r| r.method).collect();
-    assert_eq!(methods, pipeline::METHODS);
+    assert_eq!(methods, run::METHODS);
     for run in &report.runs {
         let (estimate, scores) = run
             .outcome
@@ -24,7 +24,7 @@ fn run_scores_every_method_on_the_lateral_scenario() {
         assert!(
             matches!(
                 estimate.status,
-                aeroid::estimation::gauss_newton::Status::Converged
+                aeroid::estimation::solver::gauss_newton::Status::Converged
             ),
             "{}",
             run.method
@@ -35,7 +35,7 @@ fn run_scores_every_method_on_the_lateral_scenario() {
         {
             assert_eq!(
                 score.truth_kind,
-                Some(aeroid::truth::TruthKind::Exact),
+                Some(aeroid::sim::truth::TruthKind::Exact),
                 "{} {}",
                 run.method,
                 score.name
@@ -58,8 +58,8 @@ fn qar_record_is_reported_not_crashed() {
     let mut scenario = Scenario::load("transport-approach").unwrap();
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
-    let report = pipeline::run(&scenario, &profile).unwrap();
-    assert_eq!(report.runs.len(), 2 * pipeline::METHODS.len());
+    let report = run::run(&scenario, &profile).unwrap();
+    assert_eq!(report.runs.len(), 2 * run::METHODS.len());
     for run in &report.runs {
         let reason = run
             .outcome

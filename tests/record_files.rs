@@ -6,10 +6,10 @@
 mod common;
 
 use aeroid::Error;
+use aeroid::record::recorder::{Profile, profile_for};
 use aeroid::record::{Channel, FlightRecord};
-use aeroid::recorder::{Profile, profile_for};
-use aeroid::scenario::Scenario;
-use aeroid::truth::{RunTruth, TruthKind};
+use aeroid::sim::scenario::Scenario;
+use aeroid::sim::truth::{RunTruth, TruthKind};
 use aeroid::units::{DEG, FOOT, KNOT};
 use std::path::Path;
 use std::process::Command;
@@ -125,7 +125,7 @@ fn recorded_flight_round_trips() {
     let mut scenario = Scenario::load("attas-trim").unwrap();
     scenario.duration = 70.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
-    let (record, _) = aeroid::recorder::record_scenario(&scenario, &profile).unwrap();
+    let (record, _) = aeroid::record::recorder::record_scenario(&scenario, &profile).unwrap();
     record.write(&folder).unwrap();
     assert_same(&record, &FlightRecord::read(&folder).unwrap());
 }
@@ -168,11 +168,15 @@ unit = "deg"
 empty = "skip"
 "#;
 
-fn import_case(name: &str, csv: &str, map: &str) -> aeroid::Result<aeroid::import::ImportOutcome> {
+fn import_case(
+    name: &str,
+    csv: &str,
+    map: &str,
+) -> aeroid::Result<aeroid::record::import::ImportOutcome> {
     let folder = common::temp_folder(name);
     let data = common::write(&folder, "flight.csv", csv);
     let map = common::write(&folder, "map.toml", map);
-    aeroid::import::import(&data, &map)
+    aeroid::record::import::import(&data, &map)
 }
 
 /// Degrees, knots and feet (with an offset) and °C become rad, m/s, m and K;
@@ -204,7 +208,9 @@ fn import_converts_units_to_si() {
     assert!((heading.values[0] - 359.0 * DEG).abs() < 1e-12);
 }
 
-fn csv_error(result: aeroid::Result<aeroid::import::ImportOutcome>) -> (u64, String, String) {
+fn csv_error(
+    result: aeroid::Result<aeroid::record::import::ImportOutcome>,
+) -> (u64, String, String) {
     match result {
         Err(Error::Csv {
             line,

@@ -2,13 +2,13 @@
 //! anti-alias filter, lever-arm load factors, faults, dropouts, heading
 //! wrap, determinism, and the bundled profiles.
 
-use aeroid::aircraft::Aircraft;
-use aeroid::dynamics::Exogenous;
-use aeroid::recorder::{Profile, ProfileFile};
-use aeroid::scenario::Scenario;
+use aeroid::record::recorder::{Profile, ProfileFile};
 use aeroid::sim::Simulation;
-use aeroid::state::{self, DOWN, EulerAngles, StateVector};
-use aeroid::trace::{TruthSample, TruthTrace};
+use aeroid::sim::aircraft::Aircraft;
+use aeroid::sim::dynamics::Exogenous;
+use aeroid::sim::scenario::Scenario;
+use aeroid::sim::state::{self, DOWN, EulerAngles, StateVector};
+use aeroid::sim::trace::{TruthSample, TruthTrace};
 use aeroid::units::{DEG, FOOT, STANDARD_GRAVITY};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::f64::consts::{PI, TAU};
@@ -549,7 +549,10 @@ fn qar_profile_has_table_1_channels_and_rates() {
 fn ideal_profile_records_every_measurand_without_error() {
     let profile = Profile::load("ideal", None).unwrap();
     let names: Vec<&str> = profile.channels.iter().map(|c| c.measurand.name).collect();
-    let all: Vec<&str> = aeroid::derived::MEASURANDS.iter().map(|m| m.name).collect();
+    let all: Vec<&str> = aeroid::record::derived::MEASURANDS
+        .iter()
+        .map(|m| m.name)
+        .collect();
     assert_eq!(names, all);
     for c in &profile.channels {
         assert!(c.noise == 0.0 && c.bias == 0.0 && c.scale_factor == 1.0 && c.delay == 0.0);

@@ -4,9 +4,9 @@
 
 mod common;
 
-use aeroid::aero::{AeroInput, AeroModel};
-use aeroid::aircraft::Aircraft;
-use aeroid::integrator::rk4_step;
+use aeroid::sim::aero::{AeroInput, AeroModel};
+use aeroid::sim::aircraft::Aircraft;
+use aeroid::sim::integrator::rk4_step;
 use nalgebra::Vector1;
 
 const A1: f64 = 23.7;
@@ -144,7 +144,7 @@ fn slow_sweep_shows_tau2_hysteresis() {
 /// Eq. 3 evaluated at the trace's α and α̇ to 1e-12 (the loop is converged).
 #[test]
 fn simulator_solves_alpha_dot_loop_from_state_derivative() {
-    let mut scenario = aeroid::scenario::Scenario::load("attas-trim").unwrap();
+    let mut scenario = aeroid::sim::scenario::Scenario::load("attas-trim").unwrap();
     scenario.aircraft = stall_aircraft(0.0, 0.9);
     scenario.duration = 20.0;
     scenario.trim.airspeed = 95.0;

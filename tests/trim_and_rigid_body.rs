@@ -3,14 +3,14 @@
 
 mod common;
 
-use aeroid::aircraft::Aircraft;
-use aeroid::dynamics::{Environment, Exogenous, FlightModel};
-use aeroid::integrator::Interpolation;
-use aeroid::scenario::{DepartureLimits, Scenario};
 use aeroid::sim::Simulation;
-use aeroid::state::{self, StateVector};
-use aeroid::trim::Trim;
-use aeroid::wind::WindSample;
+use aeroid::sim::aircraft::Aircraft;
+use aeroid::sim::dynamics::{Environment, Exogenous, FlightModel};
+use aeroid::sim::integrator::Interpolation;
+use aeroid::sim::scenario::{DepartureLimits, Scenario};
+use aeroid::sim::state::{self, StateVector};
+use aeroid::sim::trim::Trim;
+use aeroid::sim::wind::WindSample;
 use nalgebra::Vector3;
 
 /// From a trimmed state with no input and no wind, 60 s of flight stays
@@ -140,7 +140,7 @@ fn torque_free_body_conserves_momentum_and_energy() {
     };
     let mut worst_norm = 0.0f64;
     for k in 0..steps {
-        let raw = aeroid::integrator::rk4_step(&x, simulation.step, |x, _| {
+        let raw = aeroid::sim::integrator::rk4_step(&x, simulation.step, |x, _| {
             simulation.model.derivative(x, &Exogenous::default())
         });
         worst_norm = worst_norm.max((raw.fixed_rows::<4>(state::Q0).norm() - 1.0).abs());

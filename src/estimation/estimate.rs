@@ -5,7 +5,7 @@
 //! diverged — never a panic). Serialises to JSON and CSV.
 
 use crate::error::{Error, Result};
-use crate::estimation::gauss_newton::{Solution, Status};
+use crate::estimation::solver::gauss_newton::{Solution, Status};
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 use std::path::Path;

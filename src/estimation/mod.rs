@@ -1,19 +1,14 @@
-//! Parameter estimation: the shared Gauss–Newton / Levenberg–Marquardt core,
-//! the postulated model structure, the estimators and what they return.
+//! Parameter estimation: the postulated model structure, the estimation
+//! problem, the state-space view of the model, the shared solvers, the
+//! estimators (one file each under `methods/`) and what they return.
 //!
 //! The regression estimators (equation error, stepwise regression) share the
-//! coefficient reconstruction (`reconstruction`, with `differentiation`) and
-//! the least-squares solution with its error bounds (`regression`).
+//! coefficient reconstruction (`reconstruction`) and the least-squares
+//! solution with its error bounds (`solver::regression`).
 
-pub mod compatibility;
-pub mod differentiation;
-pub mod driven;
-pub mod equation_error;
 pub mod estimate;
-pub mod gauss_newton;
-pub mod output_error;
+pub mod methods;
+pub mod model;
 pub mod reconstruction;
-pub mod regression;
-pub mod score;
-pub mod stepwise;
+pub mod solver;
 pub mod structure;

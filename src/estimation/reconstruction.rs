@@ -37,13 +37,13 @@
 //! dropouts bridged), inside the span where every channel and derivative
 //! exists. Samples where anything needed is not finite, or q̄ ≤ 0, are left out.
 
-use crate::aero::{AeroInput, Coefficient, ForceAxes, REGRESSOR_COUNT, RateSpeed, Regressor};
-use crate::aircraft::Aircraft;
-use crate::atmosphere::Atmosphere;
 use crate::error::{Error, Result};
-use crate::estimation::differentiation::{Differentiator, step_times};
+use crate::prep::differentiation::{Differentiator, step_times};
 use crate::record::{Channel, FlightRecord};
-use crate::state::Control;
+use crate::sim::aero::{AeroInput, Coefficient, ForceAxes, REGRESSOR_COUNT, RateSpeed, Regressor};
+use crate::sim::aircraft::Aircraft;
+use crate::sim::atmosphere::Atmosphere;
+use crate::sim::state::Control;
 use crate::units::STANDARD_GRAVITY;
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -469,7 +469,7 @@ struct Signals<'a> {
     rate_derivatives: [Option<&'a [f64]>; 3],
     alpha_dot: Option<&'a [f64]>,
     /// By [`Control::index`].
-    controls: [Option<&'a [f64]>; crate::state::CONTROL_COUNT],
+    controls: [Option<&'a [f64]>; crate::sim::state::CONTROL_COUNT],
 }
 
 /// A series' value at instant k; NaN when there is no series.
@@ -484,7 +484,7 @@ impl<'a> Signals<'a> {
     ) -> Signals<'a> {
         let get = |name: &str| sampled.get(name).map(Vec::as_slice);
         let rate = |name: &str| derivatives.get(name).map(Vec::as_slice);
-        let mut controls = [None; crate::state::CONTROL_COUNT];
+        let mut controls = [None; crate::sim::state::CONTROL_COUNT];
         for control in Control::ALL {
             controls[control.index()] = get(control.name());
         }
@@ -615,7 +615,7 @@ fn moment_coefficients(
 /// Every regressor of the postulated model from the measured channels
 /// (NaN where a channel was not needed); `chi` is taken as 1 (not measured).
 fn regressors(aircraft: &Aircraft, signals: &Signals, k: usize) -> [f64; REGRESSOR_COUNT] {
-    let controls = crate::state::Controls::from_fn(|i, _| at(signals.controls[i], k));
+    let controls = crate::sim::state::Controls::from_fn(|i, _| at(signals.controls[i], k));
     let input = AeroInput {
         alpha: at(signals.alpha, k),
         beta: at(signals.beta, k),
@@ -632,8 +632,8 @@ fn regressors(aircraft: &Aircraft, signals: &Signals, k: usize) -> [f64; REGRESS
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::Exogenous;
-    use crate::state::{P, Q, R};
+    use crate::sim::dynamics::Exogenous;
+    use crate::sim::state::{P, Q, R};
 
     /// The reconstruction inverts the simulator exactly: at a trimmed ATTAS
     /// state given rates p, q, r and deflected controls, the load factors,
@@ -643,7 +643,7 @@ mod tests {
     /// the engine 1.5 m above the centre of gravity, nz positive up).
     #[test]
     fn reconstruction_inverts_the_equations_of_motion() {
-        let scenario = crate::scenario::Scenario::load("attas-trim").unwrap();
+        let scenario = crate::sim::scenario::Scenario::load("attas-trim").unwrap();
         let simulation = crate::sim::Simulation::prepare(&scenario).unwrap();
         let aircraft = &scenario.aircraft;
         let mut x = simulation.trim.state;
@@ -670,7 +670,7 @@ mod tests {
             ("q", x[Q]),
             ("r", x[R]),
             ("throttle", controls[Control::Throttle.index()]),
-            ("altitude", crate::state::altitude(&x)),
+            ("altitude", crate::sim::state::altitude(&x)),
             ("dynamic_pressure", air.dynamic_pressure),
             ("elevator", controls[Control::Elevator.index()]),
             ("aileron", controls[Control::Aileron.index()]),

@@ -27,12 +27,12 @@
 //! upper = 1.0
 //! ```
 
-use crate::aero::{AeroModel, AeroSpec};
-use crate::aircraft::Aircraft;
 use crate::catalog;
 use crate::error::{Problems, Result, parse_toml, read_text};
-use crate::estimation::differentiation::Differentiator;
-use crate::integrator::Interpolation;
+use crate::prep::differentiation::Differentiator;
+use crate::sim::aero::{AeroModel, AeroSpec};
+use crate::sim::aircraft::Aircraft;
+use crate::sim::integrator::Interpolation;
 use crate::units::{Dimension, Quantity};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -75,7 +75,7 @@ pub struct StructureFile {
 }
 
 /// `[differentiator]`: the local polynomial differentiator's window and
-/// degree (see [`crate::estimation::differentiation`]); a fast aircraft
+/// degree (see [`crate::prep::differentiation`]); a fast aircraft
 /// needs a narrower window than the default's ±0.1 s.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -12,10 +12,10 @@ use super::export::{CONTROL_PROPERTIES, ExportOptions, export, model_name};
 use super::flight::{ControlCommand, ControlReading, JsbsimFlight};
 use super::{Exec, FT, InitialConditions, InitialSpeed};
 use crate::error::Result;
-use crate::scenario::Scenario;
 use crate::sim::Simulation;
-use crate::state::{self, Controls};
-use crate::wind::WindSpec;
+use crate::sim::scenario::Scenario;
+use crate::sim::state::{self, Controls};
+use crate::sim::wind::WindSpec;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -112,7 +112,7 @@ const COMPARED: [Compared; 13] = [
 ];
 
 /// The compared states of one truth sample (either simulator's).
-fn compared_values(sample: &crate::trace::TruthSample) -> [f64; 13] {
+fn compared_values(sample: &crate::sim::trace::TruthSample) -> [f64; 13] {
     let x = &sample.state;
     let air = &sample.evaluation.air_data;
     [
@@ -304,7 +304,7 @@ pub fn start_exported(
 /// The controls of step k as aeroid's simulator applies them (saturated).
 pub fn saturated_controls(simulation: &Simulation, k: usize) -> Controls {
     let mut controls: Controls = simulation.exogenous[k]
-        .fixed_rows::<{ crate::state::CONTROL_COUNT }>(0)
+        .fixed_rows::<{ crate::sim::state::CONTROL_COUNT }>(0)
         .into_owned();
     simulation.model.aircraft.saturate(&mut controls);
     controls

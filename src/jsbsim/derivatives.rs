@@ -29,7 +29,7 @@
 //!   can identify.
 //! - The constant terms make the linear model pass through the coefficients
 //!   at the condition, `C_0 = C(at) − Σ ∂C/∂x·x(at)`, as
-//!   [`crate::aero::AeroModel::local_derivatives`] does.
+//!   [`crate::sim::aero::AeroModel::local_derivatives`] does.
 
 use super::{Exec, InitialConditions, InitialSpeed};
 use crate::error::{Error, Result};

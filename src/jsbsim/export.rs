@@ -40,12 +40,12 @@ use super::{FT, LBF, SLUG};
 
 /// The avoirdupois pound (kg): JSBSim's weight unit, exact in its unit table.
 const POUND: f64 = 0.453_592_37;
-use crate::aero::{ForceAxes, ModelKind, RateNormalization, RateSpeed};
-use crate::aircraft::Aircraft;
-use crate::atmosphere::{
+use crate::error::{Error, Result};
+use crate::sim::aero::{ForceAxes, ModelKind, RateNormalization, RateSpeed};
+use crate::sim::aircraft::Aircraft;
+use crate::sim::atmosphere::{
     GAS_CONSTANT, SEA_LEVEL_DENSITY, SEA_LEVEL_PRESSURE, SEA_LEVEL_TEMPERATURE,
 };
-use crate::error::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -56,8 +56,8 @@ pub const FLAT_EARTH_RADIUS: f64 = 1.0e9;
 pub const THROTTLE_PROPERTY: &str = "aeroid/throttle";
 
 /// The JSBSim properties that carry aeroid's controls in an exported aircraft,
-/// in the order of [`crate::state::Control::ALL`].
-pub const CONTROL_PROPERTIES: [&str; crate::state::CONTROL_COUNT] = [
+/// in the order of [`crate::sim::state::Control::ALL`].
+pub const CONTROL_PROPERTIES: [&str; crate::sim::state::CONTROL_COUNT] = [
     "fcs/elevator-pos-rad",
     "fcs/left-aileron-pos-rad",
     "fcs/rudder-pos-rad",
@@ -394,7 +394,7 @@ fn aerodynamics(w: &mut String, aircraft: &Aircraft) -> Result<()> {
     let aero = &aircraft.aero;
     let axes = aero.force_axes;
     // Lift-type first, so that drag can use CL².
-    let names: [&str; 6] = crate::aero::Coefficient::ALL.map(|c| c.name(axes));
+    let names: [&str; 6] = crate::sim::aero::Coefficient::ALL.map(|c| c.name(axes));
     let mut sums: Vec<Vec<String>> = vec![Vec::new(); 6];
     for (parameter, value) in aero.parameters.iter() {
         if parameter == "e" {

@@ -36,14 +36,14 @@
 
 use super::derivatives::coefficients;
 use super::{Exec, FT, LBF, Property, SLUG};
-use crate::aero::{AeroCoefficients, AeroInput};
-use crate::atmosphere::{Air, SEA_LEVEL_DENSITY};
-use crate::dynamics::{AirData, Evaluation};
 use crate::error::{Error, Result};
-use crate::integrator::Interpolation;
-use crate::state::{self, CONTROL_COUNT, Controls, EulerAngles, StateVector};
-use crate::trace::TruthSample;
-use crate::wind::WindSample;
+use crate::sim::aero::{AeroCoefficients, AeroInput};
+use crate::sim::atmosphere::{Air, SEA_LEVEL_DENSITY};
+use crate::sim::dynamics::{AirData, Evaluation};
+use crate::sim::integrator::Interpolation;
+use crate::sim::state::{self, CONTROL_COUNT, Controls, EulerAngles, StateVector};
+use crate::sim::trace::TruthSample;
+use crate::sim::wind::WindSample;
 use nalgebra::Vector3;
 
 /// JSBSim's integrators for aeroid's flights: third-order Adams–Bashforth.
@@ -159,7 +159,7 @@ pub enum ControlReading {
 /// An aircraft loaded in JSBSim, flying on aeroid's step.
 pub struct JsbsimFlight {
     exec: Exec,
-    /// Per aeroid control ([`crate::state::Control::ALL`] order), if it is written.
+    /// Per aeroid control ([`crate::sim::state::Control::ALL`] order), if it is written.
     commands: Vec<Option<ControlCommand>>,
     readings: [ControlReading; CONTROL_COUNT],
     properties: Vec<Property>,

@@ -40,12 +40,12 @@ use super::derivatives::{LocalDerivatives, SurfaceBinding, local_derivatives};
 use super::export::write_planet;
 use super::flight::{ControlCommand, ControlReading, JsbsimFlight};
 use super::{Exec, FT, InitialConditions, InitialSpeed, LBF, SLUG, TrimMode};
-use crate::aircraft::Aircraft;
 use crate::error::{Error, Problem, Result};
-use crate::scenario::Scenario;
-use crate::state::{CONTROL_COUNT, Control, Controls};
-use crate::trace::TruthTrace;
-use crate::truth::{RunTruth, TrimPoint, TruthKind};
+use crate::sim::aircraft::Aircraft;
+use crate::sim::scenario::Scenario;
+use crate::sim::state::{CONTROL_COUNT, Control, Controls};
+use crate::sim::trace::TruthTrace;
+use crate::sim::truth::{RunTruth, TrimPoint, TruthKind};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -523,7 +523,7 @@ fn run_truth(
         kind: TruthKind::LocalDerivative,
         scenario: scenario.name.clone(),
         seed: scenario.seed,
-        aircraft: format!("{}{jsbsim}", crate::scenario::JSBSIM_PREFIX),
+        aircraft: format!("{}{jsbsim}", crate::sim::scenario::JSBSIM_PREFIX),
         trim: TrimPoint {
             airspeed: trimmed.airspeed,
             altitude: trimmed.at.altitude,

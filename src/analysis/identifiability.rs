@@ -1,0 +1,483 @@
+//! A-priori identifiability of an aircraft's aerodynamic parameters from a
+//! recorder: the Cramér–Rao bounds that the recorded channels allow, before
+//! any estimator runs (`aeroid identifiability`).
+//!
+//! For a scenario and a recorder profile, the output sensitivities
+//! S_c(t_i) = ∂y_c(t_i)/∂θ_j of every recorded channel c at its own sample
+//! instants t_i are computed by central differences: the scenario is flown
+//! again with θ_j ± h_j (h_j = 10⁻⁴·max(|θ_j|, 10⁻²)), from the same trim
+//! state with the same control positions and the same wind (the inputs of
+//! the experiment are fixed; only the aircraft changes), and recorded by the
+//! profile with its deterministic parts (rates, word-slot skew, delay, lag,
+//! anti-alias filter, bias, scale factor, saturation) but without noise,
+//! quantization, dropouts or faults, which would make the differences
+//! meaningless. The measurement-error variance of a channel is
+//! R_c = σ_noise² + LSB²/12 (white noise plus uniform quantization error).
+//! The flight may be split into segments (multiple shooting), each flown
+//! from the nominal state at its start; every segment's initial state (u, v,
+//! w, p, q, r, attitude, altitude) is then a nuisance unknown, as it is for
+//! an output-error analyst who fits a long record in pieces. Its
+//! sensitivities enter the same matrix and are marginalised by the
+//! inversion. The information matrix is M = Σ_c Σ_i S_c(t_i)ᵀ S_c(t_i) / R_c and the
+//! bounds are σ_j = √(M⁻¹)_jj (seed 001 Eq. 10, seed 004 Eq. 15: the same
+//! information matrix output error uses, evaluated at the truth with the
+//! true R). Parameters in the null space of M get σ = ∞.
+//!
+//! A parameter is *identifiable* when σ_j/|θ_j| is below a threshold,
+//! 10 % by default: its 95 % interval (±2σ) is then within ±20 % of the
+//! value, the accuracy of the wind-tunnel and handbook values an analyst
+//! already has before flight (DATCOM-type estimates of damping and control
+//! derivatives are commonly quoted at ±20–30 %); an estimate less certain
+//! than that adds nothing to the a-priori value.
+//!
+//! These are lower bounds for estimators that know the wind: with
+//! turbulence in the flight, an output-error fit that ignores it does worse,
+//! so "not identifiable" here is definitive, while "identifiable" is
+//! necessary, not sufficient. Faulty channels (a `fault` in the profile) are
+//! left out, as are channels with neither noise nor quantization (their
+//! information would be infinite). Unless channels are named, only the
+//! responses an aerodynamic model predicts are used (air data, angles,
+//! rates, load factors, altitude): inputs, engine and weight channels,
+//! inertial navigation (which integrates the unknown wind) and the
+//! recorder's wind estimate are left out, each with its reason.
+
+use crate::error::{Error, Result};
+use crate::estimation::solver::gauss_newton::{pseudo_inverse_or_infinite, unit_diagonal_scale};
+use crate::record::FlightRecord;
+use crate::record::recorder::Profile;
+use crate::sim::Simulation;
+use crate::sim::scenario::Scenario;
+use crate::sim::state::{self, StateVector};
+use nalgebra::{DMatrix, UnitQuaternion, Vector3};
+
+/// Settings of an identifiability analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentifiabilityOptions {
+    /// Relative-σ threshold below which a parameter counts as identifiable.
+    pub threshold: f64,
+    /// Parameters to analyse; default every aerodynamic parameter of the aircraft.
+    pub parameters: Option<Vec<String>>,
+    /// Channels to use; default every usable channel of the profile.
+    pub channels: Option<Vec<String>>,
+    /// Relative central-difference step.
+    pub relative_step: f64,
+    /// Split the flight into segments of this length (s), each restarted
+    /// from its own unknown initial state (multiple shooting); default one
+    /// segment, the whole flight.
+    pub segment: Option<f64>,
+}
+
+impl Default for IdentifiabilityOptions {
+    fn default() -> Self {
+        IdentifiabilityOptions {
+            threshold: 0.1,
+            parameters: None,
+            channels: None,
+            relative_step: 1e-4,
+            segment: None,
+        }
+    }
+}
+
+/// A channel that contributed information.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelUse {
+    pub name: String,
+    /// √R_c: noise and quantization error together.
+    pub sigma: f64,
+    pub samples: usize,
+}
+
+/// One parameter's bound.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentifiabilityRow {
+    pub parameter: String,
+    pub truth: f64,
+    pub sigma: f64,
+    pub identifiable: bool,
+}
+
+impl IdentifiabilityRow {
+    /// σ/|truth| (∞ for a zero truth with a non-zero bound).
+    pub fn relative_sigma(&self) -> f64 {
+        self.sigma / self.truth.abs()
+    }
+}
+
+/// The result of an analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Identifiability {
+    pub scenario: String,
+    pub profile: String,
+    pub threshold: f64,
+    /// Segment length (s): each segment's initial state is an unknown.
+    pub segment: f64,
+    pub channels: Vec<ChannelUse>,
+    /// Channels left out, with the reason.
+    pub excluded: Vec<(String, String)>,
+    pub rows: Vec<IdentifiabilityRow>,
+}
+
+impl Identifiability {
+    /// The table: parameter, truth, σ, σ/|truth|, verdict; then the channels.
+    pub fn table(&self) -> String {
+        let mut text = format!(
+            "{} recorded by {}: Cramér–Rao bounds at the truth, {} s segments with unknown initial states; identifiable when σ/|truth| < {}\n",
+            self.scenario, self.profile, self.segment, self.threshold
+        );
+        text += &format!(
+            "{:<14} {:>12} {:>11} {:>10}  {}\n",
+            "parameter", "truth", "σ", "σ/|truth|", "verdict"
+        );
+        for row in &self.rows {
+            text += &format!(
+                "{:<14} {:>12.6} {:>11.3e} {:>10.3e}  {}\n",
+                row.parameter,
+                row.truth,
+                row.sigma,
+                row.relative_sigma(),
+                verdict(row.identifiable)
+            );
+        }
+        let count = self.rows.iter().filter(|r| r.identifiable).count();
+        text += &format!("{count} of {} identifiable\n", self.rows.len());
+        text += &format!(
+            "channels used: {}\n",
+            self.channels
+                .iter()
+                .map(|c| format!("{} (σ {:.3e}, {} samples)", c.name, c.sigma, c.samples))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        for (name, reason) in &self.excluded {
+            text += &format!("left out: {name}: {reason}\n");
+        }
+        text
+    }
+
+    /// Rounded relative bounds and verdicts, one per line, for snapshots.
+    pub fn snapshot(&self) -> String {
+        let mut text = format!(
+            "{} / {}: {} s segments, threshold {}\n",
+            self.scenario, self.profile, self.segment, self.threshold
+        );
+        for row in &self.rows {
+            text += &format!(
+                "{} σ/|truth| = {}  {}\n",
+                row.parameter,
+                crate::record::significant(row.relative_sigma(), 2),
+                verdict(row.identifiable)
+            );
+        }
+        text += &format!(
+            "channels: {}\n",
+            self.channels
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        text
+    }
+}
+
+fn verdict(identifiable: bool) -> &'static str {
+    if identifiable {
+        "identifiable"
+    } else {
+        "NOT identifiable"
+    }
+}
+
+/// Unknown initial-state components of a segment: u, v, w, p, q, r, three
+/// small body-axis rotations of the attitude, and the altitude.
+const NUISANCE: usize = 10;
+
+/// The state `x` with nuisance component `component` moved by `delta`.
+fn perturbed_state(x: &StateVector, component: usize, delta: f64) -> StateVector {
+    let mut x = *x;
+    match component {
+        0..=5 => x[state::U + component] += delta,
+        6..=8 => {
+            let mut axis = Vector3::zeros();
+            axis[component - 6] = delta;
+            let attitude = state::attitude(&x) * UnitQuaternion::from_scaled_axis(axis);
+            state::set_attitude(&mut x, &attitude);
+        }
+        _ => x[state::DOWN] -= delta,
+    }
+    x
+}
+
+/// Central-difference step of nuisance component `component` (m/s, rad/s, rad, m).
+fn nuisance_step(component: usize) -> f64 {
+    match component {
+        0..=2 => 1e-2,
+        3..=5 => 1e-4,
+        6..=8 => 1e-4,
+        _ => 0.1,
+    }
+}
+
+/// Analyses which of the scenario aircraft's parameters the profile's
+/// channels can identify (see the module documentation).
+pub fn analyse(
+    scenario: &Scenario,
+    profile: &Profile,
+    options: &IdentifiabilityOptions,
+) -> Result<Identifiability> {
+    let simulation = Simulation::prepare(scenario)?;
+    let aero = &scenario.aircraft.aero;
+    let names: Vec<String> = match &options.parameters {
+        Some(names) => names.clone(),
+        None => aero.parameters.names().to_vec(),
+    };
+    let mut truths = Vec::with_capacity(names.len());
+    for name in &names {
+        let index = aero.parameters.index(name).ok_or_else(|| Error::Unknown {
+            kind: "parameter",
+            name: name.clone(),
+            known: aero.parameters.names().to_vec(),
+        })?;
+        truths.push(aero.parameters.values()[index]);
+    }
+    let (channels, excluded) = usable_channels(profile, options.channels.as_deref())?;
+    let clean = profile.without_random_errors();
+    let nominal_trace = simulation.run()?;
+    let nominal_states: Vec<StateVector> = nominal_trace.samples.iter().map(|s| s.state).collect();
+    let duration = nominal_trace.samples.last().map_or(0.0, |s| s.time);
+    let segment = options
+        .segment
+        .filter(|t| *t > 0.0 && *t < duration)
+        .unwrap_or(duration.max(simulation.step));
+    let segment_steps = ((segment / simulation.step).round() as usize).max(1);
+    let segments = nominal_states.len().div_ceil(segment_steps);
+    // Flies the scenario with one parameter changed or one initial-state
+    // component moved in every segment, restarting every segment from the
+    // nominal flight's state there.
+    let fly = |parameter: Option<(&str, f64)>, nuisance: Option<(usize, f64)>| {
+        let mut simulation = simulation.clone();
+        if let Some((name, value)) = parameter {
+            simulation.model.aircraft.aero.parameters.set(name, value)?;
+        }
+        let trace = simulation
+            .run_with_restarts(|k| {
+                (k % segment_steps == 0).then(|| match nuisance {
+                    Some((component, delta)) => {
+                        perturbed_state(&nominal_states[k], component, delta)
+                    }
+                    None => nominal_states[k],
+                })
+            })
+            .map_err(|error| {
+                Error::Other(format!(
+                    "identifiability of '{}': a perturbed flight failed: {error}",
+                    scenario.name
+                ))
+            })?;
+        clean.record(&trace, &scenario.aircraft, scenario.seed)
+    };
+    // The nominal record: the flight already flown (a restart at its own state changes nothing).
+    let nominal = clean.record(&nominal_trace, &scenario.aircraft, scenario.seed)?;
+    let wraps = |name: &str| {
+        profile
+            .channels
+            .iter()
+            .any(|c| c.measurand.name == name && c.measurand.wraps)
+    };
+    let mut uses = Vec::new();
+    let mut segment_of_row = Vec::new();
+    for (name, sigma) in &channels {
+        let channel = nominal.channel(name)?;
+        segment_of_row.extend(
+            channel
+                .times
+                .iter()
+                .map(|t| ((t / segment).floor().max(0.0) as usize).min(segments - 1)),
+        );
+        uses.push(ChannelUse {
+            name: name.clone(),
+            sigma: *sigma,
+            samples: channel.values.len(),
+        });
+    }
+    let rows_total = segment_of_row.len();
+    let columns = names.len() + NUISANCE * segments;
+    let mut sensitivities = DMatrix::zeros(rows_total, columns);
+    // Weighted central difference of the recorded channels, row by row.
+    let difference = |plus: &FlightRecord, minus: &FlightRecord, h: f64| -> Result<Vec<f64>> {
+        let mut column = Vec::with_capacity(rows_total);
+        for channel in &uses {
+            let (up, down) = (plus.channel(&channel.name)?, minus.channel(&channel.name)?);
+            let angle = wraps(&channel.name);
+            for (a, b) in up.values.iter().zip(&down.values) {
+                let mut d = a - b;
+                if angle {
+                    // Heading-like channels wrap at 2π; a tiny perturbation never moves π.
+                    d -= std::f64::consts::TAU * (d / std::f64::consts::TAU).round();
+                }
+                column.push(d / (2.0 * h) / channel.sigma);
+            }
+        }
+        Ok(column)
+    };
+    for (j, (name, truth)) in names.iter().zip(&truths).enumerate() {
+        let h = options.relative_step * truth.abs().max(1e-2);
+        let plus = fly(Some((name, truth + h)), None)?;
+        let minus = fly(Some((name, truth - h)), None)?;
+        for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
+            sensitivities[(row, j)] = value;
+        }
+    }
+    // An initial-state component moved in every segment at once: segments
+    // are independent, so each row's difference belongs to its own segment's
+    // unknown.
+    for component in 0..NUISANCE {
+        let h = nuisance_step(component);
+        let plus = fly(None, Some((component, h)))?;
+        let minus = fly(None, Some((component, -h)))?;
+        for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
+            let column = names.len() + NUISANCE * segment_of_row[row] + component;
+            sensitivities[(row, column)] = value;
+        }
+    }
+    let information = sensitivities.transpose() * &sensitivities;
+    let covariance = pseudo_inverse_or_infinite(&marginal_information(&information, names.len()));
+    let rows = names
+        .iter()
+        .zip(&truths)
+        .enumerate()
+        .map(|(j, (name, &truth))| {
+            let sigma = covariance[(j, j)].max(0.0).sqrt();
+            IdentifiabilityRow {
+                parameter: name.clone(),
+                truth,
+                sigma,
+                identifiable: sigma < options.threshold * truth.abs(),
+            }
+        })
+        .collect();
+    Ok(Identifiability {
+        scenario: scenario.name.clone(),
+        profile: profile.name.clone(),
+        threshold: options.threshold,
+        segment,
+        channels: uses,
+        excluded,
+        rows,
+    })
+}
+
+/// The information about the first `count` unknowns with the others
+/// (nuisance initial states) marginalised: the Schur complement
+/// M_θθ − M_θn·M_nn⁺·M_nθ. Nuisance directions that the data cannot
+/// separate (two initial-state components with the same effect) drop out of
+/// the pseudo-inverse instead of making parameters look unidentifiable.
+fn marginal_information(information: &DMatrix<f64>, count: usize) -> DMatrix<f64> {
+    let total = information.nrows();
+    if total == count {
+        return information.clone();
+    }
+    let nuisance = information
+        .view((count, count), (total - count, total - count))
+        .into_owned();
+    let scale = unit_diagonal_scale(&nuisance);
+    let scaled = DMatrix::from_fn(total - count, total - count, |i, j| {
+        nuisance[(i, j)] * scale[i] * scale[j]
+    });
+    let svd = scaled.svd(true, true);
+    let tolerance = 1e-12 * svd.singular_values.max();
+    let inverse = svd
+        .pseudo_inverse(tolerance)
+        .unwrap_or_else(|_| DMatrix::zeros(total - count, total - count));
+    let inverse = DMatrix::from_fn(total - count, total - count, |i, j| {
+        inverse[(i, j)] * scale[i] * scale[j]
+    });
+    let cross = information.view((0, count), (count, total - count));
+    information.view((0, 0), (count, count)) - cross * inverse * cross.transpose()
+}
+
+/// The profile's channels that carry information, with √R_c, and those left out with why.
+type ChannelSelection = (Vec<(String, f64)>, Vec<(String, String)>);
+
+fn usable_channels(profile: &Profile, wanted: Option<&[String]>) -> Result<ChannelSelection> {
+    if let Some(wanted) = wanted {
+        for name in wanted {
+            if !profile
+                .channels
+                .iter()
+                .any(|c| c.measurand.name == name.as_str())
+            {
+                return Err(Error::Unknown {
+                    kind: "channel",
+                    name: name.clone(),
+                    known: profile
+                        .channels
+                        .iter()
+                        .map(|c| c.measurand.name.to_string())
+                        .collect(),
+                });
+            }
+        }
+    }
+    let mut used = Vec::new();
+    let mut excluded = Vec::new();
+    for channel in &profile.channels {
+        let name = channel.measurand.name.to_string();
+        if wanted.is_some_and(|w| !w.contains(&name)) {
+            continue;
+        }
+        if wanted.is_none()
+            && let Some(reason) = not_aerodynamic(&name)
+        {
+            excluded.push((name, reason.into()));
+            continue;
+        }
+        let quantization = channel.resolution.map_or(0.0, |lsb| lsb * lsb / 12.0);
+        let variance = channel.noise * channel.noise + quantization;
+        if channel.fault.is_some() {
+            excluded.push((name, "faulty in this profile".into()));
+        } else if variance <= 0.0 {
+            excluded.push((
+                name,
+                "no noise or quantization in this profile (its information would be infinite)"
+                    .into(),
+            ));
+        } else {
+            used.push((name, variance.sqrt()));
+        }
+    }
+    if used.is_empty() {
+        return Err(Error::Other(format!(
+            "profile '{}': no channel with a finite error model to analyse",
+            profile.name
+        )));
+    }
+    Ok((used, excluded))
+}
+
+/// Why a channel is not, by default, a response an aerodynamic model predicts.
+fn not_aerodynamic(name: &str) -> Option<&'static str> {
+    let starts = |prefixes: &[&str]| prefixes.iter().any(|p| name.starts_with(p));
+    if starts(&["elevator", "aileron", "rudder", "flap", "throttle"]) {
+        Some("an input of the experiment, not a response")
+    } else if starts(&["gross_weight", "n1_", "n2_", "fuel_flow", "exhaust_gas"]) {
+        Some("engine or weight: not a response of the aerodynamics")
+    } else if starts(&[
+        "north",
+        "east",
+        "latitude",
+        "longitude",
+        "ground_speed",
+        "track",
+        "flight_path_angle",
+    ]) {
+        Some(
+            "inertial navigation: it integrates the wind, which an aerodynamic model does not know",
+        )
+    } else if starts(&["wind_"]) {
+        Some("the recorder's wind estimate, not a response")
+    } else {
+        None
+    }
+}

@@ -1,0 +1,7 @@
+//! Analyses of an aircraft before any estimator runs: numerical
+//! linearisation and dynamic modes, the eigensystem realisation fit of a
+//! response, and a-priori identifiability.
+
+pub mod identifiability;
+pub mod linearize;
+pub mod modal_fit;

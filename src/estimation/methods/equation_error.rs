@@ -1,0 +1,470 @@
+//! Equation error (least squares) estimation of aerodynamic derivatives —
+//! the comparison method of seeds 002 and 004 (seed 004 §3.1, Eqs. 25–27;
+//! Klein & Morelli, "Aircraft System Identification", AIAA 2006, ch. 5).
+//!
+//! Inputs: a flight record with load factors, angular rates, air data,
+//! controls and (when the aircraft has thrust) throttle and altitude; a
+//! postulated model structure (its aircraft's mass, inertia, geometry and
+//! propulsion; its terms; which parameters are free).
+//!
+//! 1. The coefficients are reconstructed from the measured accelerations and
+//!    angular accelerations (seed 004, Eqs. 17–24; see
+//!    [`crate::estimation::reconstruction`] for the equations, the thrust,
+//!    q̄, the differentiator and the common time base).
+//! 2. For each coefficient with a free parameter, one ordinary least-squares
+//!    problem `z = X·θ + ε` (Eq. 25): z is the measured coefficient minus the
+//!    terms whose parameters are fixed, X holds the regressors of the free
+//!    terms from the measured channels ([`crate::sim::aero::AeroModel::regressors`]:
+//!    α, β, normalised rates, controls, …). Drag in wind axes with an Oswald
+//!    factor e: the induced drag `CL²/(e·π·Λ)` uses the measured CL; with e
+//!    free the regressor `CL²/(π·Λ)` is fitted with parameter 1/e and e is
+//!    reported with the delta-method variance `σ_e = σ_{1/e}·e²`.
+//! 3. The cost `½·εᵀε` (Eq. 26) is minimised by `θ̂ = (XᵀX)⁻¹·Xᵀz` (Eq. 27),
+//!    computed by SVD ([`crate::estimation::solver::regression`]), with the
+//!    Cramér–Rao bound `s²·(XᵀX)⁻¹` and the bound corrected for coloured
+//!    residuals (Morelli & Klein 1997). The CORRECTED bound is reported as
+//!    each parameter's standard error; both appear in the notes.
+//!
+//! Outputs: an [`Estimate`] with method "ee", one fit per coefficient
+//! (measured against modelled coefficient), a block-diagonal covariance
+//! (the coefficients are fitted separately), and status Converged, or
+//! Diverged with the reason when a regressor matrix is rank-deficient or
+//! there are too few samples. A missing channel is an error naming it.
+//!
+//! Limitations, measured in `tests/equation_error.rs` (ATTAS multisine):
+//! - seed 004's finding: least squares assumes noise-free regressors;
+//!   measured α, β, rates and controls carry noise, so the estimates are
+//!   attenuated towards zero (errors in variables). On the 25 Hz
+//!   flight-test profile: CLα −5.6 %, Cmq −12.6 %, Clp −1.5 %, each as the
+//!   errors-in-variables limit (M_xx + M_nn)⁻¹·M_xx·θ predicts, and several
+//!   times larger than the reported standard errors;
+//! - the moments need differentiated rates. A simulated step input makes
+//!   the angular accelerations jump; the differentiator leaves out the
+//!   samples whose window would cross a step found in a control channel
+//!   ([`crate::prep::differentiation`]), so on noise-free data the
+//!   moment derivatives are within 1e-3 on step inputs too, and within the
+//!   differentiator's gain error (1.2e-3 on a 1.5 Hz multisine) otherwise.
+//!   Forces and moments are reconstructed separately, so the force
+//!   regressions keep the samples next to the steps.
+
+use crate::error::{Error, Result};
+use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
+use crate::estimation::reconstruction::{
+    Reconstruction, ReconstructionOptions, Request, check_channels, reconstruct,
+};
+use crate::estimation::solver::gauss_newton::Status;
+use crate::estimation::solver::regression::{LagWindow, LeastSquares};
+use crate::estimation::structure::ModelStructure;
+use crate::record::FlightRecord;
+use crate::sim::aero::{Coefficient, ForceAxes, ModelKind, Regressor};
+use nalgebra::{DMatrix, DVector};
+use std::f64::consts::PI;
+
+/// Method name in estimates.
+pub const METHOD: &str = "ee";
+
+/// Settings of the equation-error estimator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EquationErrorOptions {
+    pub reconstruction: ReconstructionOptions,
+    /// The residual autocorrelation in the coloured-residual bound is summed
+    /// to this lag (s). Default 2 s: longer than the correlation the
+    /// differentiator puts into the residuals (±0.1 s) and than a
+    /// short-period or Dutch-roll half-period of a transport aircraft.
+    pub correlation_lag: f64,
+}
+
+impl Default for EquationErrorOptions {
+    fn default() -> Self {
+        EquationErrorOptions {
+            reconstruction: ReconstructionOptions::default(),
+            correlation_lag: 2.0,
+        }
+    }
+}
+
+/// What one coefficient's regression holds: its free terms and, for drag,
+/// the Oswald factor.
+#[derive(Debug, Clone)]
+struct Plan {
+    coefficient: Coefficient,
+    /// (regressor, parameter index) of every term.
+    terms: Vec<(Regressor, usize)>,
+    /// Index of the Oswald factor e when this is wind-axis drag with one.
+    oswald: Option<usize>,
+}
+
+impl Plan {
+    fn free_terms<'a>(
+        &'a self,
+        structure: &'a ModelStructure,
+    ) -> impl Iterator<Item = (Regressor, usize)> + 'a {
+        self.terms
+            .iter()
+            .copied()
+            .filter(|(_, i)| structure.free[*i])
+    }
+
+    /// Parameter indices in column order (the free terms, then e when free).
+    fn columns(&self, structure: &ModelStructure) -> Vec<usize> {
+        let mut columns: Vec<usize> = self.free_terms(structure).map(|(_, i)| i).collect();
+        columns.extend(self.oswald.filter(|&e| structure.free[e]));
+        columns
+    }
+}
+
+/// The regression result of one coefficient.
+struct CoefficientResult {
+    /// Parameter indices (structure order) with value, corrected and white standard error.
+    parameters: Vec<(usize, f64, f64, f64)>,
+    covariance: DMatrix<f64>,
+    fit: OutputFit,
+    problem: Option<String>,
+    /// Set when the Bartlett lag window replaced the plain truncated sum.
+    window_note: Option<String>,
+}
+
+/// Estimates the free parameters of `structure` from `record` by equation
+/// error. Errors: a channel the structure needs is missing, the structure is
+/// not linear in its parameters, or it has no free parameter.
+pub fn equation_error(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &EquationErrorOptions,
+) -> Result<Estimate> {
+    let started = std::time::Instant::now();
+    // Forces and moments are reconstructed separately: only the moments
+    // need differentiated rates, whose windows leave out the samples next
+    // to a control step, and the force regressions keep those samples.
+    let plans = plans(structure)?;
+    check_channels(
+        record,
+        &structure.aircraft,
+        &request(&plans),
+        "equation error",
+    )?;
+    let (forces, moments): (Vec<Plan>, Vec<Plan>) = plans
+        .into_iter()
+        .partition(|plan| plan.coefficient.is_force());
+    let reconstruction_options = options.reconstruction.for_structure(structure);
+    let mut results: Vec<CoefficientResult> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
+    let mut lag = 0;
+    for group in [forces, moments].iter().filter(|group| !group.is_empty()) {
+        let reconstruction = reconstruct(
+            record,
+            &structure.aircraft,
+            &request(group),
+            &reconstruction_options,
+            "equation error",
+        )?;
+        lag = (options.correlation_lag * reconstruction.rate).round() as usize;
+        results.extend(
+            group
+                .iter()
+                .map(|plan| fit_coefficient(plan, structure, &reconstruction, lag)),
+        );
+        notes.extend(
+            reconstruction
+                .notes
+                .into_iter()
+                .filter(|note| !notes.contains(note))
+                .collect::<Vec<_>>(),
+        );
+    }
+    let mut estimate = assemble(record, structure, &results);
+    estimate.notes.extend(notes);
+    estimate.notes.push(format!(
+        "standard errors: Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein 1997), residual autocorrelation summed to lag {lag} samples ({} s)",
+        options.correlation_lag
+    ));
+    estimate
+        .notes
+        .extend(results.iter().filter_map(|r| r.window_note.clone()));
+    estimate
+        .notes
+        .extend(white_bound_notes(structure, &results));
+    estimate
+        .notes
+        .extend(outside_bounds_notes(structure, &results));
+    estimate.wall_time = started.elapsed().as_secs_f64();
+    Ok(estimate)
+}
+
+/// One plan per coefficient that has a free parameter.
+fn plans(structure: &ModelStructure) -> Result<Vec<Plan>> {
+    let aero = &structure.aircraft.aero;
+    if aero.kind != ModelKind::Linear {
+        return Err(Error::Other(format!(
+            "equation error fits models that are linear in their parameters; {} is a {:?} model (χ is not measured): use output error",
+            structure.name, aero.kind
+        )));
+    }
+    let oswald = aero.parameters.index("e");
+    let plans: Vec<Plan> = Coefficient::ALL
+        .into_iter()
+        .map(|coefficient| Plan {
+            coefficient,
+            terms: aero.terms(coefficient).collect(),
+            oswald: oswald
+                .filter(|_| coefficient == Coefficient::Drag && aero.force_axes == ForceAxes::Wind),
+        })
+        .filter(|plan| !plan.columns(structure).is_empty())
+        .collect();
+    if plans.is_empty() {
+        return Err(Error::Other(format!(
+            "{}: no free parameter to estimate",
+            structure.name
+        )));
+    }
+    Ok(plans)
+}
+
+/// The coefficients and regressors to reconstruct: the measured lift too when
+/// drag needs CL² (an Oswald factor or a CL2 term).
+fn request(plans: &[Plan]) -> Request {
+    let mut request = Request::default();
+    for plan in plans {
+        request.coefficients.push(plan.coefficient);
+        request
+            .regressors
+            .extend(plan.terms.iter().map(|(regressor, _)| *regressor));
+        let uses_lift =
+            plan.oswald.is_some() || plan.terms.iter().any(|(r, _)| *r == Regressor::LiftSquared);
+        if uses_lift && !request.coefficients.contains(&Coefficient::Lift) {
+            request.coefficients.push(Coefficient::Lift);
+        }
+    }
+    request
+}
+
+/// Induced-drag regressor CL²/(π·Λ), whose parameter is 1/e.
+fn induced_drag_regressor(structure: &ModelStructure, lift: f64) -> f64 {
+    lift * lift / (PI * structure.aircraft.geometry.aspect_ratio)
+}
+
+/// The regression of one coefficient.
+fn fit_coefficient(
+    plan: &Plan,
+    structure: &ModelStructure,
+    data: &Reconstruction,
+    lag: usize,
+) -> CoefficientResult {
+    let name = plan.coefficient.name(structure.aircraft.aero.force_axes);
+    let columns = plan.columns(structure);
+    let measured = data.coefficient(plan.coefficient);
+    if measured.len() <= columns.len() {
+        let reason = format!(
+            "{name}: {} samples for {} parameters",
+            measured.len(),
+            columns.len()
+        );
+        return failed_coefficient(name, &columns, reason);
+    }
+    let (x, z) = regression_problem(plan, structure, data, &columns);
+    let fit = LeastSquares::fit(&x, &z);
+    let (mut covariance, window) = fit.corrected_covariance(&x, lag);
+    let window_note = (window == LagWindow::Bartlett).then(|| {
+        format!(
+            "{name}: the truncated residual autocorrelation sum was not positive definite; its standard errors use Bartlett (triangular) lag weights"
+        )
+    });
+    let mut white = fit.white_covariance();
+    let mut theta = fit.theta.clone();
+    if plan.oswald.is_some_and(|e| structure.free[e]) {
+        to_oswald_factor(&mut theta, &mut covariance, &mut white);
+    }
+    let predicted: Vec<f64> = (0..measured.len())
+        .map(|k| measured[k] - fit.residuals[k])
+        .collect();
+    let names = structure.aircraft.aero.parameters.names();
+    let problem = (!fit.unidentifiable.is_empty()).then(|| {
+        let unidentifiable: Vec<&str> = fit
+            .unidentifiable
+            .iter()
+            .map(|&j| names[columns[j]].as_str())
+            .collect();
+        format!(
+            "{name}: the regressors of {} are not independent in this record (not excited, or excited together); fix some of them or fly a richer manoeuvre",
+            unidentifiable.join(", ")
+        )
+    });
+    CoefficientResult {
+        parameters: columns
+            .iter()
+            .enumerate()
+            .map(|(j, &i)| (i, theta[j], covariance[(j, j)].sqrt(), white[(j, j)].sqrt()))
+            .collect(),
+        covariance,
+        fit: OutputFit::new(name, measured, &predicted),
+        problem,
+        window_note,
+    }
+}
+
+/// X (regressors of the free terms, then CL²/(π·Λ) for a free e) and z (the
+/// measured coefficient minus the fixed terms) of one coefficient.
+fn regression_problem(
+    plan: &Plan,
+    structure: &ModelStructure,
+    data: &Reconstruction,
+    columns: &[usize],
+) -> (DMatrix<f64>, DVector<f64>) {
+    let values = structure.aircraft.aero.parameters.values();
+    let measured = data.coefficient(plan.coefficient);
+    let lift = data.coefficient(Coefficient::Lift);
+    let count = measured.len();
+    let x = DMatrix::from_fn(count, columns.len(), |k, j| {
+        match plan.terms.iter().find(|(_, i)| *i == columns[j]) {
+            Some((regressor, _)) => data.regressors[k][*regressor as usize],
+            None => induced_drag_regressor(structure, lift[k]),
+        }
+    });
+    let fixed_part = |k: usize| -> f64 {
+        let terms: f64 = plan
+            .terms
+            .iter()
+            .filter(|(_, i)| !structure.free[*i])
+            .map(|(regressor, i)| values[*i] * data.regressors[k][*regressor as usize])
+            .sum();
+        let induced = match plan.oswald {
+            Some(e) if !structure.free[e] => induced_drag_regressor(structure, lift[k]) / values[e],
+            _ => 0.0,
+        };
+        terms + induced
+    };
+    let z = DVector::from_fn(count, |k, _| measured[k] - fixed_part(k));
+    (x, z)
+}
+
+/// Replaces the last parameter k = 1/e by e = 1/k, with the delta-method
+/// covariance (∂e/∂k = −1/k²).
+fn to_oswald_factor(
+    theta: &mut DVector<f64>,
+    covariance: &mut DMatrix<f64>,
+    white: &mut DMatrix<f64>,
+) {
+    let last = theta.len() - 1;
+    let inverse = theta[last];
+    theta[last] = 1.0 / inverse;
+    let mut jacobian = DMatrix::identity(theta.len(), theta.len());
+    jacobian[(last, last)] = -1.0 / (inverse * inverse);
+    *covariance = &jacobian * &*covariance * &jacobian;
+    *white = &jacobian * &*white * &jacobian;
+}
+
+/// A coefficient that could not be fitted: start values, infinite variance.
+fn failed_coefficient(name: &str, columns: &[usize], reason: String) -> CoefficientResult {
+    let n = columns.len();
+    CoefficientResult {
+        parameters: columns
+            .iter()
+            .map(|&i| (i, f64::NAN, f64::INFINITY, f64::INFINITY))
+            .collect(),
+        covariance: DMatrix::from_element(n, n, f64::INFINITY),
+        fit: OutputFit::new(name, &[], &[]),
+        problem: Some(reason),
+        window_note: None,
+    }
+}
+
+/// The estimate from the per-coefficient results, parameters in structure order.
+fn assemble(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    results: &[CoefficientResult],
+) -> Estimate {
+    let aero = &structure.aircraft.aero;
+    let (names, starts) = (aero.parameters.names(), aero.parameters.values());
+    let mut entries: Vec<(usize, f64, f64)> = results
+        .iter()
+        .flat_map(|r| r.parameters.iter().map(|&(i, v, se, _)| (i, v, se)))
+        .collect();
+    entries.sort_by_key(|e| e.0);
+    let position = |index: usize| entries.iter().position(|e| e.0 == index).unwrap_or(0);
+    let mut covariance = vec![vec![0.0; entries.len()]; entries.len()];
+    for result in results {
+        for (a, &(i, ..)) in result.parameters.iter().enumerate() {
+            for (b, &(j, ..)) in result.parameters.iter().enumerate() {
+                covariance[position(i)][position(j)] = result.covariance[(a, b)];
+            }
+        }
+    }
+    let problems: Vec<String> = results.iter().filter_map(|r| r.problem.clone()).collect();
+    Estimate {
+        method: METHOD.to_string(),
+        model: structure.name.clone(),
+        record: record_name(record),
+        status: if problems.is_empty() {
+            Status::Converged
+        } else {
+            Status::Diverged(problems.join("; "))
+        },
+        parameters: entries
+            .iter()
+            .map(|&(i, value, standard_error)| ParameterEstimate {
+                name: names[i].clone(),
+                value: if value.is_nan() { starts[i] } else { value },
+                standard_error,
+                start: starts[i],
+            })
+            .collect(),
+        covariance,
+        fits: results.iter().map(|r| r.fit.clone()).collect(),
+        iterations: 1,
+        cost_history: Vec::new(),
+        wall_time: 0.0,
+        notes: Vec::new(),
+    }
+}
+
+/// A record's name for estimates: its scenario, else its profile.
+pub(crate) fn record_name(record: &FlightRecord) -> String {
+    if record.scenario.is_empty() {
+        record.profile.clone()
+    } else {
+        record.scenario.clone()
+    }
+}
+
+/// A note for each estimate outside its bounds in the structure file (least
+/// squares has no bounds; output error would stop at them).
+fn outside_bounds_notes(structure: &ModelStructure, results: &[CoefficientResult]) -> Vec<String> {
+    let names = structure.aircraft.aero.parameters.names();
+    results
+        .iter()
+        .flat_map(|r| r.parameters.iter())
+        .filter(|&&(i, value, ..)| {
+            let (low, high) = structure.bounds[i];
+            value < low || value > high
+        })
+        .map(|&(i, value, ..)| {
+            let (low, high) = structure.bounds[i];
+            format!(
+                "{} = {value:.6e} lies outside its bounds [{low}, {high}] (equation error does not apply bounds)",
+                names[i]
+            )
+        })
+        .collect()
+}
+
+/// One note with every parameter's white-residual bound and the correction ratio.
+fn white_bound_notes(structure: &ModelStructure, results: &[CoefficientResult]) -> Vec<String> {
+    let names = structure.aircraft.aero.parameters.names();
+    let items: Vec<String> = results
+        .iter()
+        .flat_map(|r| r.parameters.iter())
+        .map(|&(i, _, corrected, white)| {
+            format!(
+                "{} {:.3e} (corrected/white {:.2})",
+                names[i],
+                white,
+                corrected / white
+            )
+        })
+        .collect();
+    vec![format!(
+        "white-residual Cramér–Rao bounds s²(XᵀX)⁻¹: {}",
+        items.join(", ")
+    )]
+}

@@ -1,0 +1,5 @@
+//! The estimators, one file each.
+
+pub mod equation_error;
+pub mod output_error;
+pub mod stepwise;

@@ -1,0 +1,329 @@
+//! Accuracy gates (`golden/gates.toml`, `aeroid gate`): each case flies a
+//! scenario, records it with a profile, runs one estimator on one model and
+//! checks every estimated parameter against the truth. Noise-free cases gate
+//! the relative error (|estimate − truth| ≤ tol·|truth|, or an absolute
+//! floor for near-zero truths); noisy cases of estimators with valid
+//! Cramér–Rao bounds gate the error in σ units (|estimate − truth| ≤ k·σ).
+//! A case may set an identifiability threshold on σ/|truth| (the QAR case):
+//! parameters above it are listed as not identifiable instead of gated. A
+//! case may also require the estimator to refuse the record with a given
+//! error (an estimator that cannot run on a record must say so, not crash).
+//! A regression of any estimator's accuracy fails the gate with a table of
+//! what moved. Tolerances are set from the accuracy measured when a case was
+//! added, with the reason in the file.
+
+use crate::error::{Error, Problems, Result, parse_toml, read_text};
+use crate::estimation::estimate::Estimate;
+use crate::estimation::solver::gauss_newton::Status;
+use crate::estimation::structure::ModelStructure;
+use crate::eval::run;
+use crate::record::recorder::{Profile, record_scenario};
+use crate::sim::scenario::Scenario;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The gate file bundled with aeroid.
+pub const GATE_FILE: &str = "golden/gates.toml";
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GateFile {
+    #[serde(rename = "case")]
+    pub cases: Vec<GateCase>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GateCase {
+    pub name: String,
+    pub scenario: String,
+    pub profile: String,
+    pub model: String,
+    pub method: String,
+    /// Relative gate: |estimate − truth| ≤ tolerance·|truth| (noise-free data).
+    #[serde(default)]
+    pub relative_tolerance: Option<f64>,
+    /// σ gate: |estimate − truth| ≤ k·σ, σ the estimate's Cramér–Rao bound
+    /// (noisy data, for estimators whose bounds are valid).
+    #[serde(default)]
+    pub sigma_tolerance: Option<f64>,
+    /// Absolute tolerance used instead when the relative one is smaller (near-zero truths).
+    #[serde(default)]
+    pub absolute_floor: f64,
+    /// Per-parameter tolerances overriding the default, in its unit (relative or σ).
+    #[serde(default)]
+    pub tolerance: BTreeMap<String, f64>,
+    /// Identifiability threshold on the relative bound σ/|truth|: parameters
+    /// at or above it are reported as not identifiable and not gated.
+    #[serde(default)]
+    pub identifiable_below: Option<f64>,
+    /// For terms the estimator adds that the truth model lacks (|truth| < 1e-12, as
+    /// stepwise regression may select): |estimate| ≤ k·σ, i.e. the spurious
+    /// term must stay statistically indistinguishable from zero. Without it
+    /// such terms fall under the absolute floor.
+    #[serde(default)]
+    pub spurious_sigma: Option<f64>,
+    /// The estimator must refuse this record with an error containing this text.
+    #[serde(default)]
+    pub expect_error: Option<String>,
+}
+
+impl GateCase {
+    fn tolerance_for(&self, parameter: &str) -> f64 {
+        let default = self.sigma_tolerance.or(self.relative_tolerance);
+        self.tolerance
+            .get(parameter)
+            .copied()
+            .or(default)
+            .unwrap_or(f64::NAN)
+    }
+}
+
+/// One parameter's check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GateRow {
+    pub parameter: String,
+    pub estimate: f64,
+    /// Cramér–Rao standard error of the estimate.
+    pub sigma: f64,
+    pub truth: f64,
+    pub error: f64,
+    pub allowed: f64,
+    /// Relative bound below the case's identifiability threshold (always true without one).
+    pub identifiable: bool,
+}
+
+impl GateRow {
+    /// A parameter that is not identifiable is reported, not gated; an
+    /// identifiable one passes when its error is within a finite allowance.
+    pub fn passed(&self) -> bool {
+        !self.identifiable || (self.allowed.is_finite() && self.error.abs() <= self.allowed)
+    }
+
+    /// σ/|truth|.
+    pub fn relative_sigma(&self) -> f64 {
+        self.sigma / self.truth.abs()
+    }
+}
+
+/// The outcome of one case.
+#[derive(Debug, Clone)]
+pub struct GateResult {
+    pub case: GateCase,
+    /// The estimator's refusal, when it returned an error.
+    pub refusal: Option<String>,
+    pub estimate: Option<Estimate>,
+    pub rows: Vec<GateRow>,
+}
+
+impl GateResult {
+    pub fn passed(&self) -> bool {
+        match (&self.case.expect_error, &self.refusal) {
+            (Some(expected), Some(refusal)) => refusal.contains(expected.as_str()),
+            (Some(_), None) | (None, Some(_)) => false,
+            (None, None) => {
+                let diverged = self
+                    .estimate
+                    .as_ref()
+                    .is_none_or(|e| matches!(e.status, Status::Diverged(_)));
+                !diverged && !self.rows.is_empty() && self.rows.iter().all(GateRow::passed)
+            }
+        }
+    }
+
+    /// The largest |error|/allowed over the gated rows.
+    pub fn worst(&self) -> f64 {
+        self.rows
+            .iter()
+            .filter(|r| r.identifiable)
+            .map(|r| r.error.abs() / r.allowed)
+            .fold(0.0, f64::max)
+    }
+
+    /// Every row (or only the failed ones) as a readable table.
+    pub fn table(&self, only_failures: bool) -> String {
+        if let Some(refusal) = &self.refusal {
+            return match &self.case.expect_error {
+                Some(expected) => {
+                    format!("refused: {refusal}\n(expected an error containing '{expected}')\n")
+                }
+                None => format!("refused: {refusal}\n"),
+            };
+        }
+        let mut text = String::new();
+        if let Some(estimate) = &self.estimate {
+            text += &format!("status: {:?}\n", estimate.status);
+        }
+        text += &format!(
+            "{:<14} {:>13} {:>10} {:>13} {:>11} {:>9} {:>8} {:>10}  {}\n",
+            "parameter",
+            "estimate",
+            "σ",
+            "truth",
+            "error",
+            "error/|t|",
+            "error/σ",
+            "allowed",
+            "check"
+        );
+        for row in self.rows.iter().filter(|r| !only_failures || !r.passed()) {
+            let check = match (row.identifiable, row.passed()) {
+                (false, _) => "not identifiable",
+                (true, true) => "ok",
+                (true, false) => "FAIL",
+            };
+            text += &format!(
+                "{:<14} {:>13.6} {:>10.3e} {:>13.6} {:>11.3e} {:>9.2e} {:>8.2} {:>10.3e}  {check}\n",
+                row.parameter,
+                row.estimate,
+                row.sigma,
+                row.truth,
+                row.error,
+                row.error.abs() / row.truth.abs(),
+                row.error / row.sigma,
+                row.allowed,
+            );
+        }
+        text
+    }
+
+    /// The failed rows as a table.
+    pub fn failures(&self) -> String {
+        self.table(true)
+    }
+
+    /// The estimates rounded to 4 significant digits with their bounds to 2,
+    /// one per line, for snapshots; a refusal as its message.
+    pub fn snapshot(&self) -> String {
+        let mut text = format!(
+            "{} / {} / {} / {}",
+            self.case.scenario, self.case.profile, self.case.model, self.case.method,
+        );
+        if let Some(refusal) = &self.refusal {
+            return text + &format!(": refused: {refusal}\n");
+        }
+        let Some(estimate) = &self.estimate else {
+            return text;
+        };
+        text += &format!(": {:?}\n", estimate.status);
+        for p in &estimate.parameters {
+            let identifiable = self
+                .rows
+                .iter()
+                .find(|r| r.parameter == p.name)
+                .is_none_or(|r| r.identifiable);
+            text += &format!(
+                "{} = {} ± {}{}\n",
+                p.name,
+                crate::record::rounded(p.value),
+                crate::record::significant(p.standard_error, 2),
+                if identifiable {
+                    ""
+                } else {
+                    "  (not identifiable)"
+                }
+            );
+        }
+        text
+    }
+}
+
+/// Loads and validates a gate file.
+pub fn load(path: &Path) -> Result<GateFile> {
+    let file: GateFile = parse_toml(path, &read_text(path)?)?;
+    let mut problems = Problems::default();
+    for (i, case) in file.cases.iter().enumerate() {
+        let field = format!("case[{i}] ({})", case.name);
+        if !run::METHODS.contains(&case.method.as_str()) {
+            problems.push(
+                format!("{field}.method"),
+                format!(
+                    "unknown method '{}'; known: {}",
+                    case.method,
+                    run::METHODS.join(", ")
+                ),
+            );
+        }
+        let defaults = [case.relative_tolerance, case.sigma_tolerance];
+        match (defaults.iter().flatten().count(), &case.expect_error) {
+            (1, None) | (0, Some(_)) => {}
+            _ => problems.push(
+                field.clone(),
+                "give exactly one of relative_tolerance and sigma_tolerance, or expect_error alone",
+            ),
+        }
+        if defaults
+            .iter()
+            .flatten()
+            .chain(case.tolerance.values())
+            .chain(case.identifiable_below.iter())
+            .chain(case.spurious_sigma.iter())
+            .any(|t| t.is_nan() || *t <= 0.0)
+        {
+            problems.push(field, "tolerances and thresholds must be positive");
+        }
+    }
+    problems.finish(path, file)
+}
+
+/// Runs one case. Errors are for a case that cannot be set up (unknown
+/// scenario, profile or model, a departing simulation); the estimator's own
+/// error is the case's `refusal`.
+pub fn run_case(case: &GateCase) -> Result<GateResult> {
+    let scenario = Scenario::load(&case.scenario)?;
+    let profile = Profile::load(&case.profile, None)?;
+    let structure = ModelStructure::load(&case.model)?;
+    let (record, truth) = record_scenario(&scenario, &profile)?;
+    let estimate = match run::estimate(&case.method, &record, &structure) {
+        Ok(estimate) => estimate,
+        Err(error) => {
+            return Ok(GateResult {
+                case: case.clone(),
+                refusal: Some(error.to_string()),
+                estimate: None,
+                rows: Vec::new(),
+            });
+        }
+    };
+    let rows = estimate
+        .parameters
+        .iter()
+        .filter_map(|p| {
+            let (truth, _) = truth.value_for(&p.name, structure.aircraft.aero.kind)?;
+            let tolerance = case.tolerance_for(&p.name);
+            let spurious = truth.abs() < 1e-12;
+            let allowed = if let (true, Some(k)) = (spurious, case.spurious_sigma) {
+                k * p.standard_error
+            } else if case.sigma_tolerance.is_some() {
+                tolerance * p.standard_error
+            } else {
+                (tolerance * truth.abs()).max(case.absolute_floor)
+            };
+            let identifiable = case
+                .identifiable_below
+                .is_none_or(|limit| p.standard_error < limit * truth.abs());
+            Some(GateRow {
+                parameter: p.name.clone(),
+                estimate: p.value,
+                sigma: p.standard_error,
+                truth,
+                error: p.value - truth,
+                allowed,
+                identifiable,
+            })
+        })
+        .collect::<Vec<_>>();
+    if rows.is_empty() {
+        return Err(Error::Other(format!(
+            "gate '{}': no estimated parameter has a truth",
+            case.name
+        )));
+    }
+    Ok(GateResult {
+        case: case.clone(),
+        refusal: None,
+        estimate: Some(estimate),
+        rows,
+    })
+}

@@ -1,0 +1,8 @@
+//! Evaluating estimators: scoring an estimate against the truth, the whole
+//! harness on one scenario (`run`), the accuracy gates and Monte Carlo
+//! studies.
+
+pub mod gate;
+pub mod run;
+pub mod score;
+pub mod study;

@@ -1,0 +1,6 @@
+//! Preparing a record for estimation: smoothing numerical differentiation
+//! of recorded channels, and flight-path reconstruction (the data
+//! compatibility check that estimates sensor biases and scale factors).
+
+pub mod compatibility;
+pub mod differentiation;

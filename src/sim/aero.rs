@@ -1,0 +1,1002 @@
+//! Aerodynamic models: linear stability and control derivatives, and the
+//! quasi-steady stall model with Kirchhoff flow separation.
+//!
+//! One [`AeroModel`] evaluates both the truth model of an aircraft file and
+//! any postulated model of an estimator. Each coefficient is a sum of named
+//! terms `C_term · regressor`; parameters are named `{coefficient}_{term}`
+//! (`CL_alpha`, `Cm_q`, `CD_0`), plus `e` (Oswald factor) and the stall
+//! parameters `a1`, `alpha_star`, `tau1`, `tau2`.
+//!
+//! Regressors (the keys of a coefficient table):
+//! `0` (constant), `alpha`, `beta` (rad), `p`, `q`, `r` (normalised rates
+//! p·b/(kV), q·c̄/(kV), r·b/(kV) with k = 2 or 1 and V the airspeed or the
+//! reference airspeed V0, as the file says), `alpha_dot` (α̇·c̄/(kV)), `de`, `da`,
+//! `dr`, `df` (rad), `dV` = V/V0 − 1, `dMach` = M − M0, `chi` = 1 − χ
+//! (stall model), and `CL2` = CL² (drag only, wind axes).
+//!
+//! Quasi-steady stall (seed 001, Verma & Peyada 2020, Eqs. 2–4, after
+//! Fischenberg):
+//! `τ1·dχ/dt + χ = ½·(1 − tanh(a1·(α − τ2·α̇ − α*)))`            (Eq. 2; Eq. 3 when τ1 = 0)
+//! `CL = CL0 + CLα·((1 + √χ)/2)²·α`,
+//! `CD = CD0 + CL²/(e·π·Λ) + CDχ·(1 − χ)`,
+//! `Cm = Cm0 + Cmα·α + Cmq·q̂ + Cmδe·δe + Cmχ·(1 − χ)`            (Eq. 4).
+//! Here the Kirchhoff factor multiplies the `alpha` term of CL; any other
+//! term may be added to any coefficient. χ is a simulator state when τ1 > 0
+//! and algebraic (Eq. 3) when τ1 = 0.
+//!
+//! Force axes: "wind" gives CL and CD in stability axes (rotated by α only)
+//! and CY along the body y axis, the usual flight-test convention:
+//! `CX = −CD·cos α + CL·sin α`, `CZ = −CD·sin α − CL·cos α`.
+//! "body" gives CX, CY, CZ directly. Moments are body-axis, about the centre
+//! of gravity.
+
+use crate::dual::Real;
+use crate::error::Problems;
+use crate::sim::params::ParameterSet;
+use crate::sim::state::{Control, Controls, SinCos};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Moves one flight variable of an input by a step (for local derivatives).
+type Perturbation = fn(&mut AeroInput, f64);
+
+/// A regressor: the variable a derivative multiplies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Regressor {
+    Constant,
+    Alpha,
+    Beta,
+    RollRate,
+    PitchRate,
+    YawRate,
+    AlphaDot,
+    Elevator,
+    Aileron,
+    Rudder,
+    Flap,
+    SpeedRatio,
+    Mach,
+    Separation,
+    LiftSquared,
+}
+
+pub const REGRESSOR_COUNT: usize = 15;
+
+impl Regressor {
+    pub const ALL: [Regressor; REGRESSOR_COUNT] = [
+        Regressor::Constant,
+        Regressor::Alpha,
+        Regressor::Beta,
+        Regressor::RollRate,
+        Regressor::PitchRate,
+        Regressor::YawRate,
+        Regressor::AlphaDot,
+        Regressor::Elevator,
+        Regressor::Aileron,
+        Regressor::Rudder,
+        Regressor::Flap,
+        Regressor::SpeedRatio,
+        Regressor::Mach,
+        Regressor::Separation,
+        Regressor::LiftSquared,
+    ];
+
+    /// The key used in files and in parameter names.
+    pub fn key(self) -> &'static str {
+        match self {
+            Regressor::Constant => "0",
+            Regressor::Alpha => "alpha",
+            Regressor::Beta => "beta",
+            Regressor::RollRate => "p",
+            Regressor::PitchRate => "q",
+            Regressor::YawRate => "r",
+            Regressor::AlphaDot => "alpha_dot",
+            Regressor::Elevator => "de",
+            Regressor::Aileron => "da",
+            Regressor::Rudder => "dr",
+            Regressor::Flap => "df",
+            Regressor::SpeedRatio => "dV",
+            Regressor::Mach => "dMach",
+            Regressor::Separation => "chi",
+            Regressor::LiftSquared => "CL2",
+        }
+    }
+
+    pub fn from_key(key: &str) -> Option<Regressor> {
+        Regressor::ALL.into_iter().find(|r| r.key() == key)
+    }
+
+    fn keys() -> String {
+        Regressor::ALL.map(Regressor::key).join(", ")
+    }
+}
+
+/// Which axes the force coefficients are written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ForceAxes {
+    /// CD, CY, CL (stability axes for CD and CL, body y for CY).
+    #[default]
+    Wind,
+    /// CX, CY, CZ.
+    Body,
+}
+
+/// The six coefficients in evaluation order: lift-type first so that drag can use CL².
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coefficient {
+    Lift,
+    Side,
+    Drag,
+    Roll,
+    Pitch,
+    Yaw,
+}
+
+impl Coefficient {
+    /// CL, CY or CD (not a moment).
+    pub fn is_force(self) -> bool {
+        matches!(
+            self,
+            Coefficient::Lift | Coefficient::Side | Coefficient::Drag
+        )
+    }
+
+    pub const ALL: [Coefficient; 6] = [
+        Coefficient::Lift,
+        Coefficient::Side,
+        Coefficient::Drag,
+        Coefficient::Roll,
+        Coefficient::Pitch,
+        Coefficient::Yaw,
+    ];
+
+    /// Name in files: CL/CD in wind axes, CZ/CX in body axes.
+    pub fn name(self, axes: ForceAxes) -> &'static str {
+        match (self, axes) {
+            (Coefficient::Lift, ForceAxes::Wind) => "CL",
+            (Coefficient::Lift, ForceAxes::Body) => "CZ",
+            (Coefficient::Drag, ForceAxes::Wind) => "CD",
+            (Coefficient::Drag, ForceAxes::Body) => "CX",
+            (Coefficient::Side, _) => "CY",
+            (Coefficient::Roll, _) => "Cl",
+            (Coefficient::Pitch, _) => "Cm",
+            (Coefficient::Yaw, _) => "Cn",
+        }
+    }
+}
+
+/// How body rates are made non-dimensional.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum RateNormalization {
+    /// p·b/(2V), q·c̄/(2V), r·b/(2V).
+    #[default]
+    #[serde(rename = "2V")]
+    TwiceSpeed,
+    /// p·b/V, q·c̄/V, r·b/V.
+    #[serde(rename = "V")]
+    Speed,
+}
+
+/// Which speed the rate normalisation divides by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RateSpeed {
+    /// The instantaneous true airspeed V.
+    #[default]
+    Airspeed,
+    /// The constant reference airspeed V0 of the model.
+    Reference,
+}
+
+/// Kind of model written in a file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelKind {
+    #[default]
+    Linear,
+    Stall,
+}
+
+/// Stall parameters of the Kirchhoff flow-separation model.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StallSpec {
+    /// Static stall sharpness a1 (1/rad).
+    pub a1: f64,
+    /// Break-point angle of attack α* (rad).
+    pub alpha_star: f64,
+    /// Transient time constant τ1 (s); 0 makes χ algebraic.
+    pub tau1: f64,
+    /// Quasi-steady hysteresis time constant τ2 (s).
+    pub tau2: f64,
+}
+
+/// The `[aero]` table of an aircraft or model-structure file. Unknown keys
+/// are taken as coefficient tables and reported as unknown coefficients.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct AeroSpec {
+    #[serde(default)]
+    pub model: ModelKind,
+    #[serde(default)]
+    pub force_axes: ForceAxes,
+    #[serde(default)]
+    pub rate_normalization: RateNormalization,
+    #[serde(default)]
+    pub rate_speed: RateSpeed,
+    /// V0 (m/s): needed by `dV` terms and by `rate_speed = "reference"`.
+    #[serde(default)]
+    pub reference_airspeed: Option<f64>,
+    /// M0: needed by `dMach` terms.
+    #[serde(default)]
+    pub reference_mach: Option<f64>,
+    /// Oswald factor e: adds CL²/(e·π·Λ) to CD (wind axes).
+    #[serde(default)]
+    pub oswald_efficiency: Option<f64>,
+    #[serde(default)]
+    pub stall: Option<StallSpec>,
+    /// Coefficient tables, keyed by coefficient name then regressor key.
+    #[serde(flatten)]
+    pub coefficients: BTreeMap<String, BTreeMap<String, f64>>,
+}
+
+/// Reference geometry the model normalises with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferenceGeometry {
+    pub span: f64,
+    pub chord: f64,
+    pub aspect_ratio: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Term {
+    regressor: Regressor,
+    parameter: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StallIndices {
+    a1: usize,
+    alpha_star: usize,
+    tau1: usize,
+    tau2: usize,
+}
+
+/// The flight variables a model is evaluated at (SI, rad, rad/s), over a
+/// [`Real`] scalar (f64, or a [`crate::dual::Dual`] carrying derivatives).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AeroInput<T: Real = f64> {
+    pub alpha: T,
+    pub beta: T,
+    pub airspeed: T,
+    pub mach: T,
+    pub rates: Vector3<T>,
+    pub alpha_dot: T,
+    pub controls: Controls,
+    /// Flow separation point χ (1 attached, 0 separated); ignored by linear models.
+    pub chi: T,
+}
+
+/// Coefficients a model produced, in body axes and in wind axes.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AeroCoefficients<T: Real = f64> {
+    /// CX, CY, CZ.
+    pub force: Vector3<T>,
+    /// Cl, Cm, Cn.
+    pub moment: Vector3<T>,
+    pub lift: T,
+    pub drag: T,
+}
+
+impl<T: Real> AeroInput<T> {
+    /// The values, without derivatives.
+    pub fn values(&self) -> AeroInput {
+        AeroInput {
+            alpha: self.alpha.value(),
+            beta: self.beta.value(),
+            airspeed: self.airspeed.value(),
+            mach: self.mach.value(),
+            rates: self.rates.map(T::value),
+            alpha_dot: self.alpha_dot.value(),
+            controls: self.controls,
+            chi: self.chi.value(),
+        }
+    }
+}
+
+impl<T: Real> AeroCoefficients<T> {
+    /// The values, without derivatives.
+    pub fn values(&self) -> AeroCoefficients {
+        AeroCoefficients {
+            force: self.force.map(T::value),
+            moment: self.moment.map(T::value),
+            lift: self.lift.value(),
+            drag: self.drag.value(),
+        }
+    }
+}
+
+impl<T: Real> std::ops::Add for AeroCoefficients<T> {
+    type Output = AeroCoefficients<T>;
+    fn add(self, other: AeroCoefficients<T>) -> AeroCoefficients<T> {
+        AeroCoefficients {
+            force: self.force + other.force,
+            moment: self.moment + other.moment,
+            lift: self.lift + other.lift,
+            drag: self.drag + other.drag,
+        }
+    }
+}
+
+/// An aerodynamic model with named parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AeroModel {
+    pub kind: ModelKind,
+    pub force_axes: ForceAxes,
+    pub rate_normalization: RateNormalization,
+    pub rate_speed: RateSpeed,
+    pub reference_airspeed: f64,
+    pub reference_mach: f64,
+    pub geometry: ReferenceGeometry,
+    pub parameters: ParameterSet,
+    terms: [Vec<Term>; 6],
+    oswald: Option<usize>,
+    stall: Option<StallIndices>,
+    /// Whether any coefficient has an α̇ term (fixed by the structure, not the values).
+    has_alpha_dot_terms: bool,
+    /// Added to each coefficient (in [`Coefficient`] order; the lift-type one
+    /// before it enters CL² drag). Zero in flight: output error moves one by
+    /// a small step to get ∂f/∂C for its sensitivity equations where the
+    /// forces depend on α̇ (elsewhere [`AeroModel::offset_response`] gives
+    /// it exactly).
+    pub offsets: [f64; 6],
+}
+
+/// The regressor values each coefficient's terms multiply at one flight
+/// condition, such that a coefficient is Σ C_term·regressor (plus its
+/// offset), as one table ([`TermRegressors::slot`]): the lift-type
+/// coefficient's (`alpha` carrying the Kirchhoff factor), then every other
+/// coefficient's (`CL2` the lift-type coefficient squared), then 1 (at
+/// [`TermRegressors::ONE`], for what enters unscaled).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TermRegressors {
+    /// By slot: lift-type regressors, other regressors, 1.
+    pub values: [f64; 2 * REGRESSOR_COUNT + 1],
+}
+
+impl TermRegressors {
+    /// The slot of the constant 1.
+    pub const ONE: usize = 2 * REGRESSOR_COUNT;
+
+    /// The slot of a term's regressor: the lift-type coefficient's (`lift`)
+    /// or another coefficient's.
+    pub fn slot(lift: bool, regressor: Regressor) -> usize {
+        regressor as usize + if lift { 0 } else { REGRESSOR_COUNT }
+    }
+}
+
+impl Default for TermRegressors {
+    /// Every regressor 0 (and the constant 1).
+    fn default() -> Self {
+        let mut values = [0.0; 2 * REGRESSOR_COUNT + 1];
+        values[TermRegressors::ONE] = 1.0;
+        TermRegressors { values }
+    }
+}
+
+impl AeroModel {
+    /// Builds a model from its file table, collecting every problem under `prefix` (e.g. "aero").
+    pub fn from_spec(
+        spec: &AeroSpec,
+        geometry: ReferenceGeometry,
+        prefix: &str,
+        problems: &mut Problems,
+    ) -> AeroModel {
+        let mut model = AeroModel {
+            kind: spec.model,
+            force_axes: spec.force_axes,
+            rate_normalization: spec.rate_normalization,
+            rate_speed: spec.rate_speed,
+            reference_airspeed: spec.reference_airspeed.unwrap_or(f64::NAN),
+            reference_mach: spec.reference_mach.unwrap_or(f64::NAN),
+            geometry,
+            parameters: ParameterSet::default(),
+            terms: Default::default(),
+            oswald: None,
+            stall: None,
+            has_alpha_dot_terms: false,
+            offsets: [0.0; 6],
+        };
+        model.read_coefficients(spec, prefix, problems);
+        model.read_extras(spec, prefix, problems);
+        model.has_alpha_dot_terms = model
+            .terms
+            .iter()
+            .flatten()
+            .any(|t| t.regressor == Regressor::AlphaDot);
+        model
+    }
+
+    fn read_coefficients(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+        let known: Vec<&str> = Coefficient::ALL
+            .iter()
+            .map(|c| c.name(self.force_axes))
+            .collect();
+        for (name, table) in &spec.coefficients {
+            let Some(position) = known.iter().position(|k| k == name) else {
+                problems.push(
+                    format!("{prefix}.{name}"),
+                    format!(
+                        "unknown coefficient for {:?} force axes; known: {}",
+                        self.force_axes,
+                        known.join(", ")
+                    ),
+                );
+                continue;
+            };
+            for (key, &value) in table {
+                let field = format!("{prefix}.{name}.{key}");
+                match self.check_term(Coefficient::ALL[position], key, value) {
+                    Ok(regressor) => {
+                        let parameter =
+                            self.add_parameter(&format!("{name}_{key}"), value, &field, problems);
+                        self.terms[position].push(Term {
+                            regressor,
+                            parameter,
+                        });
+                    }
+                    Err(message) => problems.push(field, message),
+                }
+            }
+        }
+    }
+
+    fn check_term(
+        &self,
+        coefficient: Coefficient,
+        key: &str,
+        value: f64,
+    ) -> Result<Regressor, String> {
+        let regressor = Regressor::from_key(key)
+            .ok_or_else(|| format!("unknown term '{key}'; known: {}", Regressor::keys()))?;
+        if !value.is_finite() {
+            return Err(format!("{value} is not a finite number"));
+        }
+        match regressor {
+            Regressor::LiftSquared
+                if coefficient != Coefficient::Drag || self.force_axes != ForceAxes::Wind =>
+            {
+                Err("CL2 is a drag term of a wind-axis model".into())
+            }
+            Regressor::Separation if self.kind != ModelKind::Stall => {
+                Err("chi terms need model = \"stall\"".into())
+            }
+            _ => Ok(regressor),
+        }
+    }
+
+    fn add_parameter(
+        &mut self,
+        name: &str,
+        value: f64,
+        field: &str,
+        problems: &mut Problems,
+    ) -> usize {
+        self.parameters.add(name, value).unwrap_or_else(|message| {
+            problems.push(field, message);
+            self.parameters.index(name).unwrap_or(0)
+        })
+    }
+
+    fn read_extras(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+        if let Some(e) = spec.oswald_efficiency {
+            if !(e.is_finite() && e > 0.0) || self.force_axes != ForceAxes::Wind {
+                problems.push(
+                    format!("{prefix}.oswald_efficiency"),
+                    "must be a positive number, in a wind-axis model",
+                );
+            }
+            self.oswald = Some(self.add_parameter("e", e, prefix, problems));
+        }
+        self.read_stall(spec, prefix, problems);
+        self.check_references(spec, prefix, problems);
+    }
+
+    fn read_stall(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+        match (self.kind, &spec.stall) {
+            (ModelKind::Stall, Some(stall)) => {
+                if self.force_axes != ForceAxes::Wind {
+                    problems.push(
+                        format!("{prefix}.force_axes"),
+                        "the stall model is written in wind axes",
+                    );
+                }
+                let field = format!("{prefix}.stall");
+                for (name, value) in [
+                    ("a1", stall.a1),
+                    ("alpha_star", stall.alpha_star),
+                    ("tau1", stall.tau1),
+                    ("tau2", stall.tau2),
+                ] {
+                    if !value.is_finite() {
+                        problems.push(
+                            format!("{field}.{name}"),
+                            format!("{value} is not a finite number"),
+                        );
+                    }
+                }
+                if stall.tau1 < 0.0 {
+                    problems.push(format!("{field}.tau1"), "must be ≥ 0 (0 makes χ algebraic)");
+                }
+                self.stall = Some(StallIndices {
+                    a1: self.add_parameter("a1", stall.a1, &field, problems),
+                    alpha_star: self.add_parameter(
+                        "alpha_star",
+                        stall.alpha_star,
+                        &field,
+                        problems,
+                    ),
+                    tau1: self.add_parameter("tau1", stall.tau1, &field, problems),
+                    tau2: self.add_parameter("tau2", stall.tau2, &field, problems),
+                });
+            }
+            (ModelKind::Stall, None) => problems.push(
+                format!("{prefix}.stall"),
+                "model = \"stall\" needs a [stall] table",
+            ),
+            (ModelKind::Linear, Some(_)) => problems.push(
+                format!("{prefix}.stall"),
+                "a [stall] table needs model = \"stall\"",
+            ),
+            (ModelKind::Linear, None) => {}
+        }
+    }
+
+    fn check_references(&self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+        let uses = |regressor: Regressor| {
+            self.terms
+                .iter()
+                .flatten()
+                .any(|t| t.regressor == regressor)
+        };
+        let needs_speed = uses(Regressor::SpeedRatio) || self.rate_speed == RateSpeed::Reference;
+        match spec.reference_airspeed {
+            Some(v) if !(v.is_finite() && v > 0.0) => problems.push(
+                format!("{prefix}.reference_airspeed"),
+                "must be a positive speed (m/s)",
+            ),
+            None if needs_speed => problems.push(
+                format!("{prefix}.reference_airspeed"),
+                "needed by dV terms and rate_speed = \"reference\"",
+            ),
+            _ => {}
+        }
+        match spec.reference_mach {
+            Some(m) if !(m.is_finite() && m > 0.0) => problems.push(
+                format!("{prefix}.reference_mach"),
+                "must be a positive Mach number",
+            ),
+            None if uses(Regressor::Mach) => {
+                problems.push(format!("{prefix}.reference_mach"), "needed by dMach terms")
+            }
+            _ => {}
+        }
+    }
+
+    /// True when χ is integrated as a state (stall model with τ1 > 0).
+    pub fn chi_is_state(&self) -> bool {
+        self.stall
+            .is_some_and(|s| self.parameters.values()[s.tau1] > 0.0)
+    }
+
+    /// True when the forces depend on α̇ algebraically (α̇ terms, or algebraic χ with τ2 ≠ 0),
+    /// so the equations of motion must be solved for α̇.
+    pub fn forces_depend_on_alpha_dot(&self) -> bool {
+        let values = self.parameters.values();
+        let stall = self
+            .stall
+            .is_some_and(|s| values[s.tau1] == 0.0 && values[s.tau2] != 0.0);
+        stall || self.has_alpha_dot_terms
+    }
+
+    /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (seed 001, Eq. 3); 1 without stall model.
+    pub fn separation_target<T: Real>(&self, alpha: T, alpha_dot: T) -> T {
+        match self.stall {
+            Some(s) => {
+                let v = self.parameters.values();
+                (T::constant(1.0)
+                    - ((alpha - alpha_dot * v[s.tau2] - v[s.alpha_star]) * v[s.a1]).tanh())
+                    * 0.5
+            }
+            None => T::constant(1.0),
+        }
+    }
+
+    /// dχ/dt = (χ∞ − χ)/τ1 (seed 001, Eq. 2); 0 when χ is not a state.
+    pub fn separation_rate<T: Real>(&self, alpha: T, alpha_dot: T, chi: T) -> T {
+        match self.stall {
+            Some(s) if self.chi_is_state() => {
+                (self.separation_target(alpha, alpha_dot) - chi) / self.parameters.values()[s.tau1]
+            }
+            _ => T::zero(),
+        }
+    }
+
+    /// ∂(dχ/dt)/∂α̇ = ½·a1·τ2·(1 − tanh²(a1·(α − τ2·α̇ − α*)))/τ1 (from Eqs. 2–3);
+    /// 0 when χ is not a state.
+    pub fn separation_rate_slope(&self, alpha: f64, alpha_dot: f64) -> f64 {
+        match self.stall {
+            Some(s) if self.chi_is_state() => {
+                let v = self.parameters.values();
+                let t = (v[s.a1] * (alpha - v[s.tau2] * alpha_dot - v[s.alpha_star])).tanh();
+                0.5 * v[s.a1] * v[s.tau2] * (1.0 - t * t) / v[s.tau1]
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The χ the forces use: the state when τ1 > 0, Eq. 3 when τ1 = 0, 1 without stall.
+    pub fn effective_chi<T: Real>(&self, input: &AeroInput<T>) -> T {
+        if self.chi_is_state() {
+            input.chi
+        } else {
+            self.separation_target(input.alpha, input.alpha_dot)
+        }
+    }
+
+    /// Normalising speed for rates: the airspeed or V0, times 2 or 1.
+    fn rate_divisor<T: Real>(&self, airspeed: T) -> T {
+        let speed = match self.rate_speed {
+            RateSpeed::Airspeed => airspeed,
+            RateSpeed::Reference => T::constant(self.reference_airspeed),
+        };
+        match self.rate_normalization {
+            RateNormalization::TwiceSpeed => speed * 2.0,
+            RateNormalization::Speed => speed,
+        }
+    }
+
+    /// The value of every regressor (indexed by `Regressor as usize`) at a
+    /// flight condition; `CL2` is left 0 (it needs the lift coefficient).
+    pub fn regressors<T: Real>(&self, input: &AeroInput<T>, chi: T) -> [T; REGRESSOR_COUNT] {
+        let per_speed = T::constant(1.0) / self.rate_divisor(input.airspeed);
+        let (b, c) = (self.geometry.span, self.geometry.chord);
+        let u = &input.controls;
+        let control = |control: Control| T::constant(u[control.index()]);
+        [
+            T::constant(1.0),
+            input.alpha,
+            input.beta,
+            input.rates.x * b * per_speed,
+            input.rates.y * c * per_speed,
+            input.rates.z * b * per_speed,
+            input.alpha_dot * c * per_speed,
+            control(Control::Elevator),
+            control(Control::Aileron),
+            control(Control::Rudder),
+            control(Control::Flap),
+            input.airspeed / self.reference_airspeed - 1.0,
+            input.mach - self.reference_mach,
+            T::constant(1.0) - chi,
+            T::zero(),
+        ]
+    }
+
+    fn sum<T: Real>(&self, coefficient: Coefficient, regressors: &[T; REGRESSOR_COUNT]) -> T {
+        self.sum_scaled(coefficient, regressors, T::constant(1.0))
+    }
+
+    /// Σ C_term·regressor + offset of `coefficient`, with the `alpha`
+    /// regressor times `alpha_factor` (the Kirchhoff factor on the
+    /// lift-type coefficient; 1, which changes nothing, elsewhere).
+    #[inline(always)]
+    fn sum_scaled<T: Real>(
+        &self,
+        coefficient: Coefficient,
+        regressors: &[T; REGRESSOR_COUNT],
+        alpha_factor: T,
+    ) -> T {
+        let values = self.parameters.values();
+        self.terms[coefficient as usize]
+            .iter()
+            .fold(T::constant(-0.0), |sum, t| {
+                let regressor = match t.regressor {
+                    Regressor::Alpha => regressors[Regressor::Alpha as usize] * alpha_factor,
+                    r => regressors[r as usize],
+                };
+                sum + regressor * values[t.parameter]
+            })
+            + self.offsets[coefficient as usize]
+    }
+
+    /// The factor on the lift-type `alpha` term: the Kirchhoff
+    /// ((1 + √χ)/2)² of the stall model, 1 for a linear one.
+    fn kirchhoff<T: Real>(&self, chi: T) -> T {
+        match self.kind {
+            ModelKind::Stall => {
+                let root = (chi.max_value(0.0).sqrt() + 1.0) * 0.5;
+                root * root
+            }
+            ModelKind::Linear => T::constant(1.0),
+        }
+    }
+
+    /// The regressors of every coefficient but the lift-type one
+    /// (`CL2` = CL² included) and the lift-type coefficient, at a flight
+    /// condition; the lift-type `alpha` regressor is the `alpha` one times
+    /// the Kirchhoff factor (also returned).
+    fn regressors_and_lift<T: Real>(&self, input: &AeroInput<T>) -> ([T; REGRESSOR_COUNT], T, T) {
+        let chi = self.effective_chi(input);
+        let mut other = self.regressors(input, chi);
+        let kirchhoff = self.kirchhoff(chi);
+        let lift_type = self.sum_scaled(Coefficient::Lift, &other, kirchhoff);
+        other[Regressor::LiftSquared as usize] = lift_type * lift_type;
+        (other, lift_type, kirchhoff)
+    }
+
+    /// The regressors every term multiplies at a flight condition (the
+    /// Kirchhoff factor on the lift-type `alpha` term, `CL2` = CL²).
+    pub fn term_regressors(&self, input: &AeroInput) -> TermRegressors {
+        let (other, _, kirchhoff) = self.regressors_and_lift(input);
+        let mut regressors = TermRegressors::default();
+        let (lift, rest) = regressors.values.split_at_mut(REGRESSOR_COUNT);
+        lift.copy_from_slice(&other);
+        lift[Regressor::Alpha as usize] *= kirchhoff;
+        lift[Regressor::LiftSquared as usize] = 0.0;
+        rest[..REGRESSOR_COUNT].copy_from_slice(&other);
+        regressors
+    }
+
+    /// The coefficient and term of a parameter that enters linearly (`{coefficient}_{term}`);
+    /// None for `e` and the stall parameters.
+    pub fn term_of(&self, parameter: usize) -> Option<(Coefficient, Regressor)> {
+        Coefficient::ALL.into_iter().find_map(|coefficient| {
+            self.terms[coefficient as usize]
+                .iter()
+                .find(|t| t.parameter == parameter)
+                .map(|t| (coefficient, t.regressor))
+        })
+    }
+
+    /// Evaluates all six coefficients. Allocation-free.
+    pub fn coefficients(&self, input: &AeroInput) -> AeroCoefficients {
+        self.coefficients_at(input, input.alpha.sin_cos())
+    }
+
+    /// As [`AeroModel::coefficients`], with sin α and cos α of `input.alpha` given.
+    pub fn coefficients_at<T: Real>(
+        &self,
+        input: &AeroInput<T>,
+        alpha_sin_cos: (T, T),
+    ) -> AeroCoefficients<T> {
+        let (regressors, lift_type, _) = self.regressors_and_lift(input);
+        let mut drag_type = self.sum(Coefficient::Drag, &regressors);
+        if let Some(e) = self.oswald {
+            drag_type += lift_type * lift_type
+                / (self.parameters.values()[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
+        }
+        let side = self.sum(Coefficient::Side, &regressors);
+        let moment = Vector3::new(
+            self.sum(Coefficient::Roll, &regressors),
+            self.sum(Coefficient::Pitch, &regressors),
+            self.sum(Coefficient::Yaw, &regressors),
+        );
+        self.assemble(lift_type, side, drag_type, moment, alpha_sin_cos)
+    }
+
+    /// The coefficients from the lift-type, side, drag-type and moment
+    /// coefficients at angle of attack α (its sine and cosine; linear in the four).
+    #[inline(always)]
+    fn assemble<T: Real>(
+        &self,
+        lift_type: T,
+        side: T,
+        drag_type: T,
+        moment: Vector3<T>,
+        (sin_alpha, cos_alpha): (T, T),
+    ) -> AeroCoefficients<T> {
+        match self.force_axes {
+            ForceAxes::Wind => AeroCoefficients {
+                force: Vector3::new(
+                    -drag_type * cos_alpha + lift_type * sin_alpha,
+                    side,
+                    -drag_type * sin_alpha - lift_type * cos_alpha,
+                ),
+                moment,
+                lift: lift_type,
+                drag: drag_type,
+            },
+            ForceAxes::Body => AeroCoefficients {
+                force: Vector3::new(drag_type, side, lift_type),
+                moment,
+                lift: -lift_type * cos_alpha + drag_type * sin_alpha,
+                drag: -drag_type * cos_alpha - lift_type * sin_alpha,
+            },
+        }
+    }
+
+    /// ∂[`AeroModel::coefficients`]/∂(offset of `coefficient`) at a flight
+    /// condition where the coefficients are `at` (sin α, cos α = `alpha_sin_cos`), exact:
+    /// the offset adds to its coefficient, and a lift-type offset also moves
+    /// the drag through CL² (its `CL2` terms and the Oswald term,
+    /// ∂CD/∂CL = 2·CL·(Σ CD_CL2 + 1/(e·π·Λ))).
+    pub fn offset_response(
+        &self,
+        coefficient: Coefficient,
+        at: &AeroCoefficients,
+        alpha_sin_cos: SinCos,
+    ) -> AeroCoefficients {
+        let mut unit = [0.0; 6];
+        unit[coefficient as usize] = 1.0;
+        if coefficient == Coefficient::Lift {
+            let values = self.parameters.values();
+            let mut slope: f64 = self.terms[Coefficient::Drag as usize]
+                .iter()
+                .filter(|t| t.regressor == Regressor::LiftSquared)
+                .map(|t| values[t.parameter])
+                .sum();
+            if let Some(e) = self.oswald {
+                slope += 1.0 / (values[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
+            }
+            let lift_type = self.coefficient_values(at)[0];
+            unit[Coefficient::Drag as usize] = 2.0 * lift_type * slope;
+        }
+        let [lift, side, drag, roll, pitch, yaw] = unit;
+        self.assemble(
+            lift,
+            side,
+            drag,
+            Vector3::new(roll, pitch, yaw),
+            alpha_sin_cos,
+        )
+    }
+
+    /// The six coefficients in this model's naming order (CL/CZ, CY, CD/CX, Cl, Cm, Cn).
+    pub fn coefficient_values(&self, c: &AeroCoefficients) -> [f64; 6] {
+        let (lift, drag) = match self.force_axes {
+            ForceAxes::Wind => (c.lift, c.drag),
+            ForceAxes::Body => (c.force.z, c.force.x),
+        };
+        [lift, c.force.y, drag, c.moment.x, c.moment.y, c.moment.z]
+    }
+
+    /// Local linear derivatives of this model at a flight condition, named
+    /// as a linear model's parameters (`CL_alpha`, `Cm_q`, `CL_0`, …): the
+    /// truth that a linear postulate is scored against when this (truth)
+    /// model is not linear (DESIGN.md, "Truth when the structures differ").
+    /// Central differences with steps of 1e-5 in each regressor; χ takes its
+    /// quasi-steady value χ∞(α) (α̇ = 0); the constant term is
+    /// C(at) − Σ ∂C/∂x·x(at) so that the linear model passes through C(at).
+    pub fn local_derivatives(&self, at: &AeroInput) -> Vec<(String, f64)> {
+        const STEP: f64 = 1e-5;
+        let divisor = self.rate_divisor(at.airspeed);
+        let (b, c) = (self.geometry.span, self.geometry.chord);
+        let evaluate = |input: &AeroInput| {
+            let mut input = *input;
+            input.chi = self.separation_target(input.alpha, input.alpha_dot);
+            self.coefficient_values(&self.coefficients(&input))
+        };
+        let perturbations: [(Regressor, f64, Perturbation); 9] = [
+            (Regressor::Alpha, STEP, |i, h| i.alpha += h),
+            (Regressor::Beta, STEP, |i, h| i.beta += h),
+            (Regressor::RollRate, STEP * divisor / b, |i, h| {
+                i.rates.x += h
+            }),
+            (Regressor::PitchRate, STEP * divisor / c, |i, h| {
+                i.rates.y += h
+            }),
+            (Regressor::YawRate, STEP * divisor / b, |i, h| {
+                i.rates.z += h
+            }),
+            (Regressor::Elevator, STEP, |i, h| {
+                i.controls[Control::Elevator.index()] += h
+            }),
+            (Regressor::Aileron, STEP, |i, h| {
+                i.controls[Control::Aileron.index()] += h
+            }),
+            (Regressor::Rudder, STEP, |i, h| {
+                i.controls[Control::Rudder.index()] += h
+            }),
+            (Regressor::Flap, STEP, |i, h| {
+                i.controls[Control::Flap.index()] += h
+            }),
+        ];
+        let regressors = self.regressors(at, 1.0);
+        let base = evaluate(at);
+        let mut constants = base;
+        let mut derivatives = Vec::new();
+        for (regressor, h, perturb) in perturbations {
+            let (mut plus, mut minus) = (*at, *at);
+            perturb(&mut plus, h);
+            perturb(&mut minus, -h);
+            let (up, down) = (evaluate(&plus), evaluate(&minus));
+            for (k, coefficient) in Coefficient::ALL.iter().enumerate() {
+                let slope = (up[k] - down[k]) / (2.0 * STEP);
+                constants[k] -= slope * regressors[regressor as usize];
+                derivatives.push((
+                    format!("{}_{}", coefficient.name(self.force_axes), regressor.key()),
+                    slope,
+                ));
+            }
+        }
+        for (k, coefficient) in Coefficient::ALL.iter().enumerate() {
+            derivatives.push((
+                format!("{}_0", coefficient.name(self.force_axes)),
+                constants[k],
+            ));
+        }
+        derivatives
+    }
+
+    /// The terms of one coefficient as (regressor, parameter index), in file order.
+    pub fn terms(&self, coefficient: Coefficient) -> impl Iterator<Item = (Regressor, usize)> + '_ {
+        self.terms[coefficient as usize]
+            .iter()
+            .map(|t| (t.regressor, t.parameter))
+    }
+
+    /// Names of the terms of one coefficient, in file order (for reports and model-structure code).
+    pub fn term_names(&self, coefficient: Coefficient) -> Vec<String> {
+        self.terms[coefficient as usize]
+            .iter()
+            .map(|t| self.parameters.names()[t.parameter].clone())
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn geometry() -> ReferenceGeometry {
+        ReferenceGeometry {
+            span: 21.5,
+            chord: 3.159,
+            aspect_ratio: 21.5 * 21.5 / 64.0,
+        }
+    }
+
+    fn parse(text: &str) -> (AeroModel, Problems) {
+        let spec: AeroSpec = toml::from_str(text).unwrap();
+        let mut problems = Problems::default();
+        let model = AeroModel::from_spec(&spec, geometry(), "aero", &mut problems);
+        (model, problems)
+    }
+
+    #[test]
+    fn linear_terms_are_named_and_summed() {
+        let (model, problems) = parse(
+            "[CL]\n0 = 0.2\nalpha = 5.0\nq = 10.0\n[Cm]\nde = -1.0\n[CD]\n0 = 0.03\nCL2 = 0.05\n",
+        );
+        assert!(problems.is_empty(), "{problems:?}");
+        assert_eq!(model.parameters.get("CL_alpha"), Some(5.0));
+        let mut input = AeroInput {
+            alpha: 0.1,
+            airspeed: 100.0,
+            ..Default::default()
+        };
+        input.rates.y = 0.2;
+        input.controls[Control::Elevator.index()] = 0.05;
+        let c = model.coefficients(&input);
+        let q_hat = 0.2 * 3.159 / 200.0;
+        let lift = 0.2 + 0.5 + 10.0 * q_hat;
+        assert!((c.lift - lift).abs() < 1e-15);
+        assert!((c.drag - (0.03 + 0.05 * lift * lift)).abs() < 1e-15);
+        assert!((c.moment.y + 0.05).abs() < 1e-15);
+        let cz = -c.drag * 0.1f64.sin() - lift * 0.1f64.cos();
+        assert!((c.force.z - cz).abs() < 1e-15);
+    }
+
+    #[test]
+    fn every_problem_is_reported() {
+        let (_, problems) =
+            parse("[CL]\nalpha = nan\nbogus = 1.0\n[CQ]\n0 = 1.0\n[Cm]\nchi = 0.1\n");
+        let fields: Vec<&str> = problems.0.iter().map(|p| p.field.as_str()).collect();
+        assert_eq!(
+            fields,
+            ["aero.CL.alpha", "aero.CL.bogus", "aero.CQ", "aero.Cm.chi"],
+            "{problems:?}"
+        );
+    }
+}

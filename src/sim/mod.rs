@@ -1,0 +1,222 @@
+//! The simulation executive: trim, build the exogenous signals (trim controls
+//! plus inputs, wind) at every step instant, integrate with RK4, record the
+//! truth trace at every step, and stop with [`Error::Departed`] (carrying the
+//! trace so far) when the flight leaves its limits.
+
+pub mod aero;
+pub mod aircraft;
+pub mod atmosphere;
+pub mod dynamics;
+pub mod engine;
+pub mod inputs;
+pub mod integrator;
+pub mod params;
+pub mod scenario;
+pub mod state;
+pub mod trace;
+pub mod trim;
+pub mod truth;
+pub mod wind;
+
+use crate::error::{Error, Result};
+use crate::sim::dynamics::{Exogenous, ExogenousVector, FlightModel};
+use crate::sim::integrator::{Interpolation, rk4_step};
+use crate::sim::scenario::{DepartureLimits, Scenario};
+use crate::sim::state::{Controls, Q0, StateVector};
+use crate::sim::trace::{TruthSample, TruthTrace};
+use crate::sim::trim::{Trim, trim};
+use crate::sim::truth::RunTruth;
+use crate::sim::wind::{FlightConditions, WindSample};
+
+/// A scenario made ready to fly: trimmed, with its signals sampled at every step.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    pub name: String,
+    pub model: FlightModel,
+    pub trim: Trim,
+    pub step: f64,
+    pub interpolation: Interpolation,
+    pub departure: DepartureLimits,
+    /// Controls and wind at t_k = k·step, k = 0..=steps.
+    pub exogenous: Vec<ExogenousVector>,
+    pub winds: Vec<WindSample>,
+}
+
+impl Simulation {
+    /// Trims the aircraft and samples inputs and wind for the whole run.
+    pub fn prepare(scenario: &Scenario) -> Result<Simulation> {
+        if scenario.jsbsim.is_some() {
+            return Err(Error::Invalid {
+                path: scenario.path.clone(),
+                problems: vec![crate::error::Problem {
+                    field: "aircraft".into(),
+                    message: "is one of JSBSim's own aircraft: aeroid's simulator does not fly it; `aeroid simulate`, `record` and `run` fly it in JSBSim".into(),
+                }],
+            });
+        }
+        let model = FlightModel::new(scenario.aircraft.clone(), scenario.environment);
+        let steps = scenario.step_count();
+        let conditions = FlightConditions {
+            airspeed: scenario.trim.airspeed,
+            altitude: scenario.trim.altitude,
+        };
+        let winds = scenario
+            .wind
+            .generate(&conditions, scenario.step, steps + 1, scenario.seed)
+            .map_err(|message| Error::Invalid {
+                path: scenario.path.clone(),
+                problems: vec![crate::error::Problem {
+                    field: "wind".into(),
+                    message,
+                }],
+            })?;
+        let steady = WindSample {
+            ned: winds.first().map_or_else(Default::default, |w| w.ned),
+            body: Default::default(),
+        };
+        let trim = trim(&model, &scenario.trim, &steady)?;
+        let exogenous = winds
+            .iter()
+            .enumerate()
+            .map(|(k, wind)| {
+                let controls: Controls =
+                    trim.controls + scenario.inputs.deviation(k as f64 * scenario.step);
+                Exogenous::pack(&controls, wind)
+            })
+            .collect();
+        Ok(Simulation {
+            name: scenario.name.clone(),
+            model,
+            trim,
+            step: scenario.step,
+            interpolation: scenario.interpolation,
+            departure: scenario.departure,
+            exogenous,
+            winds,
+        })
+    }
+
+    /// Integrates from trim over all steps.
+    pub fn run(&self) -> Result<TruthTrace> {
+        self.run_with_restarts(|_| None)
+    }
+
+    /// Simulates from the trim state, but at every step k where `restart(k)`
+    /// gives a state, continues from that state instead (multiple shooting:
+    /// an analysis of short segments of a long flight restarts each segment
+    /// from a known state).
+    pub fn run_with_restarts(
+        &self,
+        restart: impl Fn(usize) -> Option<StateVector>,
+    ) -> Result<TruthTrace> {
+        let steps = self.exogenous.len() - 1;
+        let mut trace = TruthTrace {
+            scenario: self.name.clone(),
+            step: self.step,
+            samples: Vec::with_capacity(steps + 1),
+        };
+        let mut x = self.trim.state;
+        for k in 0..=steps {
+            if let Some(state) = restart(k) {
+                x = state;
+            }
+            let time = k as f64 * self.step;
+            let exogenous = self.exogenous_at(k, 0.0);
+            let evaluation = self.model.evaluate(&x, &exogenous);
+            if let Some(reason) = departure_reason(&self.departure, &x, &evaluation) {
+                return Err(Error::Departed {
+                    time,
+                    reason,
+                    partial: Box::new(trace),
+                });
+            }
+            trace
+                .samples
+                .push(TruthSample::new(time, x, evaluation, self.winds[k]));
+            if k < steps {
+                x = self.advance(&x, k);
+            }
+        }
+        Ok(trace)
+    }
+
+    /// One RK4 step from t_k, with the quaternion renormalised afterwards.
+    pub fn advance(&self, x: &StateVector, k: usize) -> StateVector {
+        let mut next = rk4_step(x, self.step, |x, theta| {
+            self.model.derivative(x, &self.exogenous_at(k, theta))
+        });
+        let norm = next.fixed_rows::<4>(Q0).norm();
+        next.fixed_rows_mut::<4>(Q0).unscale_mut(norm);
+        next
+    }
+
+    fn exogenous_at(&self, k: usize, theta: f64) -> Exogenous {
+        let end = self.exogenous.get(k + 1).unwrap_or(&self.exogenous[k]);
+        Exogenous::at_stage(
+            &self.exogenous[k],
+            end,
+            theta,
+            self.interpolation,
+            self.step,
+        )
+    }
+}
+
+/// Why a flight has departed at state `x`, if it has: the state is no longer
+/// finite, or α, β, airspeed or altitude left the scenario's limits.
+pub fn departure_reason(
+    limits: &DepartureLimits,
+    x: &StateVector,
+    evaluation: &crate::sim::dynamics::Evaluation,
+) -> Option<String> {
+    let air = &evaluation.air_data;
+    if !x.iter().all(|v| v.is_finite()) {
+        return Some("the state is no longer finite".into());
+    }
+    if air.alpha.abs() > limits.max_alpha {
+        return Some(format!(
+            "|α| = {:.1}° exceeds {:.1}°",
+            air.alpha.to_degrees(),
+            limits.max_alpha.to_degrees()
+        ));
+    }
+    if air.beta.abs() > limits.max_beta {
+        return Some(format!(
+            "|β| = {:.1}° exceeds {:.1}°",
+            air.beta.to_degrees(),
+            limits.max_beta.to_degrees()
+        ));
+    }
+    if !(limits.min_airspeed..=limits.max_airspeed).contains(&air.airspeed) {
+        return Some(format!(
+            "airspeed {:.1} m/s left [{:.1}, {:.1}] m/s",
+            air.airspeed, limits.min_airspeed, limits.max_airspeed
+        ));
+    }
+    let altitude = state::altitude(x);
+    (altitude < limits.min_altitude).then(|| {
+        format!(
+            "altitude {altitude:.1} m is below {:.1} m",
+            limits.min_altitude
+        )
+    })
+}
+
+/// Flies a scenario and simulates its truth trace (see [`fly`]).
+pub fn simulate(scenario: &Scenario) -> Result<TruthTrace> {
+    fly(scenario).map(|(trace, _)| trace)
+}
+
+/// Flies a scenario with the simulator of its aircraft, and gives the truth
+/// trace and the run's truth: aeroid's (trim, RK4) for an aeroid aircraft,
+/// with the exact truth; JSBSim for one of JSBSim's own aircraft (feature
+/// `jsbsim`, `crate::jsbsim::own::fly`), with JSBSim's local derivatives.
+pub fn fly(scenario: &Scenario) -> Result<(TruthTrace, RunTruth)> {
+    #[cfg(feature = "jsbsim")]
+    if scenario.jsbsim.is_some() {
+        return crate::jsbsim::own::fly(scenario);
+    }
+    let simulation = Simulation::prepare(scenario)?;
+    let trace = simulation.run()?;
+    Ok((trace, RunTruth::exact(scenario, &simulation.trim)))
+}

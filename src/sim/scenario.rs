@@ -1,0 +1,396 @@
+//! Scenario files (`scenarios/*.toml`): the aircraft, the trim point, the
+//! inputs superposed on trim, the wind, the environment, the duration,
+//! integration step and input interpolation, the seed, and the limits beyond
+//! which a simulation is declared to have departed.
+//!
+//! The aircraft is an aeroid aircraft file, or one of JSBSim's own aircraft
+//! named `"jsbsim:NAME"` (`aircraft/NAME/NAME.xml` under JSBSim's root), which
+//! `aeroid record` and `aeroid run` fly in JSBSim (feature `jsbsim`,
+//! `crate::jsbsim::own`). Such a scenario also has a `[jsbsim]` table:
+//!
+//! ```toml
+//! aircraft = "jsbsim:737"
+//! [jsbsim]
+//! rigid_body = "b737-jsbsim"   # aeroid aircraft file: JSBSim's mass, inertia, geometry, thrust line
+//! properties = { "fcs/flap-cmd-norm" = 0.0 }   # optional: JSBSim properties set before the trim
+//! ```
+//!
+//! Everything else (inputs, duration, step, seed, recorder, models) means
+//! what it means for an aeroid aircraft; wind and flap inputs are refused.
+
+use crate::catalog;
+use crate::error::{Error, Problems, Result, parse_toml, read_text};
+use crate::sim::aircraft::Aircraft;
+use crate::sim::dynamics::Environment;
+use crate::sim::inputs::{InputSchedule, InputSpec};
+use crate::sim::integrator::Interpolation;
+use crate::sim::trim::TrimCondition;
+use crate::sim::wind::WindSpec;
+use crate::units::{DEG, Dimension, Quantity};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// How a scenario names one of JSBSim's own aircraft: `"jsbsim:737"`.
+pub const JSBSIM_PREFIX: &str = "jsbsim:";
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioFile {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// A bundled aircraft name or a path relative to this file, or
+    /// `"jsbsim:NAME"` for one of JSBSim's own aircraft.
+    pub aircraft: String,
+    pub duration: Quantity,
+    /// Integration step; the truth trace is written at this step.
+    pub step: Quantity,
+    #[serde(default)]
+    pub seed: u64,
+    #[serde(default)]
+    pub interpolation: Interpolation,
+    pub trim: TrimSpec,
+    #[serde(default)]
+    pub environment: EnvironmentSpec,
+    #[serde(default)]
+    pub inputs: Vec<InputSpec>,
+    #[serde(default)]
+    pub wind: WindSpec,
+    #[serde(default)]
+    pub departure: DepartureSpec,
+    /// The recorder profile `aeroid record` uses when no `--profile` is given
+    /// (a bundled name in `recorders/` or a path relative to this file).
+    #[serde(default)]
+    pub recorder: Option<String>,
+    /// Model structures (`models/` names or paths) that `aeroid run` fits to this scenario's record.
+    #[serde(default)]
+    pub models: Vec<String>,
+    /// For a JSBSim aircraft: its rigid body and the properties set before trim.
+    #[serde(default)]
+    pub jsbsim: Option<JsbsimSpec>,
+}
+
+/// The `[jsbsim]` table of a scenario whose aircraft is `"jsbsim:NAME"`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JsbsimSpec {
+    /// An aeroid aircraft file (bundled name or path) holding the JSBSim
+    /// aircraft's mass, inertia, geometry and thrust line: the rigid body of
+    /// the estimators' model structures, and what the recorder reads the mass
+    /// and thrust from. Checked against JSBSim at the trim point when flown.
+    pub rigid_body: String,
+    /// JSBSim properties set before trimming (flaps, fuel, switches).
+    #[serde(default)]
+    pub properties: BTreeMap<String, f64>,
+}
+
+/// One of JSBSim's own aircraft, flown instead of an aeroid one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JsbsimAircraft {
+    /// JSBSim's model name (`737` for `aircraft/737/737.xml`).
+    pub model: String,
+    /// Properties set before trimming.
+    pub properties: BTreeMap<String, f64>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrimSpec {
+    pub airspeed: Quantity,
+    pub altitude: Quantity,
+    #[serde(default)]
+    pub flight_path_angle: Quantity,
+    #[serde(default)]
+    pub heading: Quantity,
+    #[serde(default)]
+    pub flap: Quantity,
+}
+
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentSpec {
+    #[serde(default)]
+    pub temperature_offset: Quantity,
+    /// Default: standard gravity; 0 switches gravity off.
+    #[serde(default)]
+    pub gravity: Option<Quantity>,
+}
+
+/// Limits beyond which the simulation has departed (all optional).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DepartureSpec {
+    /// Default 60°.
+    pub max_alpha: Option<Quantity>,
+    /// Default 45°.
+    pub max_beta: Option<Quantity>,
+    /// Default 0.3 × trim airspeed.
+    pub min_airspeed: Option<Quantity>,
+    /// Default 3 × trim airspeed.
+    pub max_airspeed: Option<Quantity>,
+    /// Default 0 m (the ground of the flat earth).
+    pub min_altitude: Option<Quantity>,
+}
+
+/// Departure limits in SI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DepartureLimits {
+    pub max_alpha: f64,
+    pub max_beta: f64,
+    pub min_airspeed: f64,
+    pub max_airspeed: f64,
+    pub min_altitude: f64,
+}
+
+/// A validated scenario, ready to simulate.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    pub name: String,
+    pub description: String,
+    pub path: PathBuf,
+    pub aircraft_path: PathBuf,
+    pub aircraft: Aircraft,
+    pub trim: TrimCondition,
+    pub environment: Environment,
+    pub duration: f64,
+    pub step: f64,
+    pub seed: u64,
+    pub interpolation: Interpolation,
+    pub inputs: InputSchedule,
+    pub wind: WindSpec,
+    pub departure: DepartureLimits,
+    /// The default recorder profile reference, if the file names one.
+    pub recorder: Option<String>,
+    pub models: Vec<String>,
+    /// Set when the scenario flies one of JSBSim's own aircraft; `aircraft` is
+    /// then its rigid body (`[jsbsim] rigid_body`), whose aerodynamic model is
+    /// not the truth.
+    pub jsbsim: Option<JsbsimAircraft>,
+}
+
+impl Scenario {
+    /// Loads a scenario by bundled name or path, with its aircraft.
+    pub fn load(reference: &str) -> Result<Scenario> {
+        let path = catalog::resolve(reference, catalog::SCENARIO_FOLDER, None)?;
+        let text = read_text(&path)?;
+        let file: ScenarioFile = parse_toml(&path, &text)?;
+        Scenario::from_file(&file, &path)
+    }
+
+    /// Validates a parsed file, reporting every problem of the scenario at once
+    /// (the aircraft file reports its own).
+    pub fn from_file(file: &ScenarioFile, path: &Path) -> Result<Scenario> {
+        let base = path.parent().unwrap_or(Path::new("."));
+        let jsbsim = jsbsim_aircraft(file, path)?;
+        let aircraft_reference = match (&jsbsim, &file.jsbsim) {
+            (Some(_), Some(spec)) => &spec.rigid_body,
+            _ => &file.aircraft,
+        };
+        let aircraft_path =
+            catalog::resolve(aircraft_reference, catalog::AIRCRAFT_FOLDER, Some(base))?;
+        let aircraft = Aircraft::load(&aircraft_path)?;
+        let mut problems = Problems::default();
+        let mut read = |field: &str, q: &Quantity, dimension: Dimension| {
+            q.si(dimension).unwrap_or_else(|message| {
+                problems.push(field, message);
+                f64::NAN
+            })
+        };
+        let trim = TrimCondition {
+            airspeed: read("trim.airspeed", &file.trim.airspeed, Dimension::Speed),
+            altitude: read("trim.altitude", &file.trim.altitude, Dimension::Length),
+            flight_path_angle: read(
+                "trim.flight_path_angle",
+                &file.trim.flight_path_angle,
+                Dimension::Angle,
+            ),
+            heading: read("trim.heading", &file.trim.heading, Dimension::Angle),
+            flap: read("trim.flap", &file.trim.flap, Dimension::Angle),
+        };
+        let duration = read("duration", &file.duration, Dimension::Time);
+        let step = read("step", &file.step, Dimension::Time);
+        let environment = Environment {
+            atmosphere: crate::sim::atmosphere::Atmosphere::new(read(
+                "environment.temperature_offset",
+                &file.environment.temperature_offset,
+                Dimension::TemperatureDifference,
+            )),
+            gravity: file
+                .environment
+                .gravity
+                .as_ref()
+                .map_or(crate::units::STANDARD_GRAVITY, |g| {
+                    read("environment.gravity", g, Dimension::Acceleration)
+                }),
+        };
+        let departure = read_departure(&file.departure, trim.airspeed, &mut read);
+        check_ranges(&trim, duration, step, &mut problems);
+        file.wind.validate(&mut problems);
+        let inputs = InputSchedule::build(&file.inputs, base, path);
+        let inputs = match (problems.is_empty(), inputs) {
+            (_, Ok(inputs)) => inputs,
+            (true, Err(error)) => return Err(error),
+            (false, Err(Error::Invalid { problems: more, .. })) => {
+                problems.0.extend(more);
+                InputSchedule::default()
+            }
+            (false, Err(other)) => {
+                problems.push("inputs", other.to_string());
+                InputSchedule::default()
+            }
+        };
+        let scenario = Scenario {
+            name: file.name.clone(),
+            description: file.description.clone(),
+            path: path.to_path_buf(),
+            aircraft_path,
+            aircraft,
+            trim,
+            environment,
+            duration,
+            step,
+            seed: file.seed,
+            interpolation: file.interpolation,
+            inputs,
+            wind: file.wind.clone(),
+            departure,
+            recorder: file.recorder.clone(),
+            models: file.models.clone(),
+            jsbsim,
+        };
+        problems.finish(path, scenario)
+    }
+
+    /// Number of integration steps.
+    pub fn step_count(&self) -> usize {
+        (self.duration / self.step).round() as usize
+    }
+}
+
+/// The JSBSim aircraft a scenario names, checked: the `[jsbsim]` table is
+/// there exactly when the aircraft is `"jsbsim:NAME"`, the build has the
+/// `jsbsim` feature, JSBSim has the aircraft, and the flight is in still air.
+fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAircraft>> {
+    let invalid = |field: &str, message: String| Error::Invalid {
+        path: path.to_path_buf(),
+        problems: vec![crate::error::Problem {
+            field: field.into(),
+            message,
+        }],
+    };
+    let Some(model) = file.aircraft.strip_prefix(JSBSIM_PREFIX) else {
+        return match file.jsbsim {
+            Some(_) => Err(invalid(
+                "jsbsim",
+                format!(
+                    "only a scenario whose aircraft is \"{JSBSIM_PREFIX}NAME\" has a [jsbsim] table"
+                ),
+            )),
+            None => Ok(None),
+        };
+    };
+    if !cfg!(feature = "jsbsim") {
+        return Err(invalid(
+            "aircraft",
+            format!(
+                "'{}' is one of JSBSim's own aircraft; this aeroid was built without JSBSim: build it with `--features jsbsim` (cargo run --release --features jsbsim -- ...)",
+                file.aircraft
+            ),
+        ));
+    }
+    let Some(spec) = &file.jsbsim else {
+        return Err(invalid(
+            "jsbsim",
+            format!(
+                "a JSBSim aircraft needs a [jsbsim] table with `rigid_body`, the aeroid aircraft file of {model}'s mass, inertia, geometry and thrust line (e.g. aircraft/b737-jsbsim.toml)"
+            ),
+        ));
+    };
+    #[cfg(feature = "jsbsim")]
+    crate::jsbsim::own::check_model(model).map_err(|message| invalid("aircraft", message))?;
+    let calm = file.wind.gusts.is_empty()
+        && file.wind.turbulence.is_none()
+        && file.wind.speed.si(Dimension::Speed) == Ok(0.0);
+    if !calm {
+        return Err(invalid(
+            "wind",
+            "a JSBSim aircraft flies in still air here: aeroid does not feed wind, gusts or turbulence to JSBSim".into(),
+        ));
+    }
+    Ok(Some(JsbsimAircraft {
+        model: model.to_owned(),
+        properties: spec.properties.clone(),
+    }))
+}
+
+fn read_departure(
+    spec: &DepartureSpec,
+    trim_airspeed: f64,
+    read: &mut impl FnMut(&str, &Quantity, Dimension) -> f64,
+) -> DepartureLimits {
+    let mut optional = |field: &str, q: &Option<Quantity>, dimension: Dimension, default: f64| {
+        q.as_ref().map_or(default, |q| read(field, q, dimension))
+    };
+    DepartureLimits {
+        max_alpha: optional(
+            "departure.max_alpha",
+            &spec.max_alpha,
+            Dimension::Angle,
+            60.0 * DEG,
+        ),
+        max_beta: optional(
+            "departure.max_beta",
+            &spec.max_beta,
+            Dimension::Angle,
+            45.0 * DEG,
+        ),
+        min_airspeed: optional(
+            "departure.min_airspeed",
+            &spec.min_airspeed,
+            Dimension::Speed,
+            0.3 * trim_airspeed,
+        ),
+        max_airspeed: optional(
+            "departure.max_airspeed",
+            &spec.max_airspeed,
+            Dimension::Speed,
+            3.0 * trim_airspeed,
+        ),
+        min_altitude: optional(
+            "departure.min_altitude",
+            &spec.min_altitude,
+            Dimension::Length,
+            0.0,
+        ),
+    }
+}
+
+fn check_ranges(trim: &TrimCondition, duration: f64, step: f64, problems: &mut Problems) {
+    if trim.airspeed <= 0.0 {
+        problems.push("trim.airspeed", "must be positive");
+    }
+    if !(0.0..=20_000.0).contains(&trim.altitude) {
+        problems.push(
+            "trim.altitude",
+            "must be within the modelled atmosphere, 0–20 000 m",
+        );
+    }
+    if trim.flight_path_angle.abs() >= 90.0 * DEG {
+        problems.push("trim.flight_path_angle", "must be within ±90°");
+    }
+    if duration <= 0.0 {
+        problems.push("duration", "must be positive");
+    }
+    if step <= 0.0 || step > 0.1 {
+        problems.push(
+            "step",
+            "must be positive and at most 0.1 s (RK4 accuracy for aircraft modes)",
+        );
+    } else if duration > 0.0 && (duration / step - (duration / step).round()).abs() > 1e-6 {
+        problems.push(
+            "step",
+            "must divide the duration into a whole number of steps",
+        );
+    }
+}

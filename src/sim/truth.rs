@@ -1,0 +1,146 @@
+//! The truth of a run, `truth.toml` beside a simulated record: the
+//! aircraft's true aerodynamic parameters by name, the kind of truth, the
+//! trim point, the scenario and its seed. Estimator scoring reads it back; a
+//! record imported from real flight data has none.
+//!
+//! Kind `exact`: the parameters are the ones the simulator used, and
+//! `local_derivatives` holds the truth model's local derivatives at trim for
+//! postulates of another structure (DESIGN.md, "Truth when the structures
+//! differ"). Kind `local_derivative`: a flight of one of JSBSim's own aircraft
+//! (`crate::jsbsim::own`), whose truth is only JSBSim's local derivatives at
+//! the trim point; `parameters` is then empty.
+
+use crate::error::{Error, Result, parse_toml, read_text};
+use crate::sim::scenario::Scenario;
+use crate::sim::trim::Trim;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The truth file's name inside a record folder.
+pub const TRUTH_FILE: &str = "truth.toml";
+
+/// What kind of truth the parameter values are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TruthKind {
+    /// The values the simulator itself used.
+    Exact,
+    /// Local derivatives of the truth model at the trim point.
+    LocalDerivative,
+}
+
+/// The trim point the run started from, SI and radians.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrimPoint {
+    pub airspeed: f64,
+    pub altitude: f64,
+    pub flight_path_angle: f64,
+    pub heading: f64,
+    pub alpha: f64,
+    pub beta: f64,
+    pub pitch: f64,
+    /// Trim controls by name (`elevator`, …, `throttle`).
+    pub controls: BTreeMap<String, f64>,
+}
+
+/// The truth of one simulated run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunTruth {
+    pub kind: TruthKind,
+    pub scenario: String,
+    pub seed: u64,
+    pub aircraft: String,
+    pub trim: TrimPoint,
+    /// The truth model's kind; a postulate of the same kind is scored
+    /// against `parameters` (exact), any other against `local_derivatives`.
+    #[serde(default)]
+    pub model: crate::sim::aero::ModelKind,
+    /// True aerodynamic parameters by name (`CL_alpha`, `Cm_q`, …).
+    pub parameters: BTreeMap<String, f64>,
+    /// Local linear derivatives of the truth model at the trim point
+    /// (`AeroModel::local_derivatives`), for postulates of another structure.
+    #[serde(default)]
+    pub local_derivatives: BTreeMap<String, f64>,
+}
+
+impl RunTruth {
+    /// The exact truth of a scenario flown from `trim`.
+    pub fn exact(scenario: &Scenario, trim: &Trim) -> RunTruth {
+        let controls = crate::sim::state::Control::ALL
+            .iter()
+            .map(|c| (c.name().to_string(), trim.controls[c.index()]))
+            .collect();
+        RunTruth {
+            kind: TruthKind::Exact,
+            scenario: scenario.name.clone(),
+            seed: scenario.seed,
+            aircraft: scenario.aircraft.name.clone(),
+            trim: TrimPoint {
+                airspeed: scenario.trim.airspeed,
+                altitude: scenario.trim.altitude,
+                flight_path_angle: scenario.trim.flight_path_angle,
+                heading: scenario.trim.heading,
+                alpha: trim.alpha,
+                beta: trim.beta,
+                pitch: trim.pitch,
+                controls,
+            },
+            model: scenario.aircraft.aero.kind,
+            parameters: scenario
+                .aircraft
+                .aero
+                .parameters
+                .iter()
+                .map(|(name, value)| (name.to_string(), value))
+                .collect(),
+            local_derivatives: trim_derivatives(scenario, trim),
+        }
+    }
+
+    /// The truth value of a parameter of a postulated model of `kind`, and what kind of truth it is.
+    pub fn value_for(
+        &self,
+        name: &str,
+        kind: crate::sim::aero::ModelKind,
+    ) -> Option<(f64, TruthKind)> {
+        let exact = (kind == self.model)
+            .then(|| self.parameters.get(name))
+            .flatten();
+        exact.map(|&v| (v, self.kind)).or_else(|| {
+            self.local_derivatives
+                .get(name)
+                .map(|&v| (v, TruthKind::LocalDerivative))
+        })
+    }
+
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let text = toml::to_string(self).map_err(|e| Error::Other(e.to_string()))?;
+        std::fs::write(path, text).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    pub fn read(path: &Path) -> Result<RunTruth> {
+        parse_toml(path, &read_text(path)?)
+    }
+}
+
+/// Local derivatives of the scenario aircraft's aerodynamic model at the trim point.
+fn trim_derivatives(scenario: &Scenario, trim: &Trim) -> BTreeMap<String, f64> {
+    let aero = &scenario.aircraft.aero;
+    let air = scenario.environment.atmosphere.at(scenario.trim.altitude);
+    let at = crate::sim::aero::AeroInput {
+        alpha: trim.alpha,
+        beta: trim.beta,
+        airspeed: scenario.trim.airspeed,
+        mach: scenario.trim.airspeed / air.speed_of_sound,
+        controls: trim.controls,
+        chi: aero.separation_target(trim.alpha, 0.0),
+        ..Default::default()
+    };
+    aero.local_derivatives(&at).into_iter().collect()
+}
