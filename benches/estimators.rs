@@ -20,14 +20,15 @@ fn bench_fits(c: &mut Criterion) {
     let profile = Profile::load("flight-test-25hz", None).expect("bundled profile");
     let (record, _) = record_scenario(&scenario, &profile).expect("record");
     let structure = ModelStructure::load("attas-lateral").expect("bundled model");
+    let from_model = OutputErrorOptions::for_structure(&structure).expect("model settings");
     let mut group = c.benchmark_group("attas_lateral_fit");
     group.sample_size(10);
     group.bench_function("output_error", |b| {
-        b.iter(|| output_error(&[black_box(&record)], &structure, &Default::default()).unwrap())
+        b.iter(|| output_error(&[black_box(&record)], &structure, &from_model).unwrap())
     });
     let from_file = OutputErrorOptions {
         start: Start::Model,
-        ..Default::default()
+        ..from_model.clone()
     };
     group.bench_function("output_error_from_model_file", |b| {
         b.iter(|| output_error(&[black_box(&record)], &structure, &from_file).unwrap())

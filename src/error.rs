@@ -104,6 +104,11 @@ pub enum Error {
     #[error("JSBSim: {context}: {message}")]
     Jsbsim { context: String, message: String },
 
+    /// An estimator cannot run on this record or model; the refusal says
+    /// what is missing, as data.
+    #[error("{0}")]
+    Refused(crate::estimation::estimator::Refusal),
+
     #[error("{0}")]
     Other(String),
 }

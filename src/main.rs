@@ -31,6 +31,12 @@ enum Command {
     },
     /// List the bundled aircraft, scenarios, recorder profiles and studies.
     List,
+    /// List every estimator with its paper, equations, needs and settings;
+    /// with a name, show that one.
+    Methods {
+        /// One method's name.
+        name: Option<String>,
+    },
     /// Validate an aircraft, scenario, recorder-profile or study file and explain
     /// every problem; a scenario is also trimmed.
     Check {
@@ -161,9 +167,9 @@ enum Command {
         /// The model structure: a bundled name (models/) or a path.
         #[arg(long)]
         model: String,
-        /// The estimator.
-        #[arg(long, value_enum)]
-        method: Method,
+        /// The estimator (see `aeroid methods`).
+        #[arg(long)]
+        method: String,
         /// The folder to write estimate.json and estimate.csv into (created).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -171,10 +177,11 @@ enum Command {
         /// (a different manoeuvre) and report how well it reproduces each output.
         #[arg(long)]
         check_on: Option<PathBuf>,
-        /// Output error's start values: equation error's estimates when they
-        /// fit better than the model file's (ee), or the model file's (model).
-        #[arg(long, value_enum, default_value_t = aeroid::estimation::methods::output_error::Start::EquationError)]
-        start: aeroid::estimation::methods::output_error::Start,
+        /// A setting of the method, KEY=VALUE with a TOML value, overriding
+        /// the model's `[methods.NAME]` table (e.g. `--set start=\"model\"`,
+        /// `--set step=\"0.02 s\"`); repeatable.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        settings: Vec<String>,
     },
     /// Write an aircraft as a JSBSim aircraft (DIR/NAME/NAME.xml): the same
     /// mass, inertia, geometry, thrust and linear aerodynamics, the
@@ -212,19 +219,6 @@ enum Command {
     },
 }
 
-/// Estimators the CLI can run.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-enum Method {
-    /// Equation error: least squares on coefficients reconstructed from
-    /// accelerations and angular accelerations, coloured-residual bounds.
-    Ee,
-    /// Stepwise regression (F-to-enter/F-to-remove, PRESS) on every
-    /// coefficient the model has, printing which terms it selects.
-    Swr,
-    /// Output error, maximum likelihood (Gauss–Newton on det R).
-    Oem,
-}
-
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
@@ -253,6 +247,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Methods { name } => methods(name.as_deref()),
         Command::Record {
             scenario,
             profile,
@@ -327,14 +322,14 @@ fn run(cli: Cli) -> Result<()> {
             method,
             out,
             check_on,
-            start,
+            settings,
         } => estimate(
             &record,
             &model,
-            method,
+            &method,
             out.as_deref(),
             check_on.as_deref(),
-            start,
+            &settings,
         ),
         Command::Inspect { record } => {
             print!(
@@ -422,38 +417,72 @@ fn import(data: &std::path::Path, map: &std::path::Path, out: &std::path::Path) 
     Ok(())
 }
 
+fn methods(name: Option<&str>) -> Result<()> {
+    let estimators = match name {
+        Some(name) => vec![aeroid::estimation::methods::find(name)?],
+        None => aeroid::estimation::methods::all(),
+    };
+    for estimator in estimators {
+        let info = estimator.info();
+        println!("{}: {}", info.name, info.title);
+        println!("  paper:     {}", info.paper);
+        println!("  equations: {}", info.equations);
+        println!("  needs:     {}", info.needs);
+        if let Some(from) = estimator.starts_from() {
+            println!("  starts from {from}'s estimate where it has one");
+        }
+        println!("  settings ([methods.{}]):", info.name);
+        for setting in &info.settings {
+            println!(
+                "    {} = {}   # {}",
+                setting.name, setting.default, setting.meaning
+            );
+        }
+        println!();
+    }
+    Ok(())
+}
+
+/// `--set KEY=VALUE` arguments as a `[methods.NAME]` table.
+fn settings_table(
+    method: &str,
+    settings: &[String],
+) -> Result<aeroid::estimation::estimator::MethodTables> {
+    let mut table = toml::Table::new();
+    for setting in settings {
+        let (key, value) = setting
+            .split_once('=')
+            .with_context(|| format!("--set {setting}: write KEY=VALUE"))?;
+        let parsed: toml::Table =
+            toml::from_str(&format!("value = {value}")).with_context(|| {
+                format!(
+                    "--set {setting}: the value is not TOML (a string needs quotes: {key}='\"…\"')"
+                )
+            })?;
+        table.insert(key.trim().to_string(), parsed["value"].clone());
+    }
+    Ok([(method.to_string(), table)].into())
+}
+
 fn estimate(
     record_folder: &std::path::Path,
     model: &str,
-    method: Method,
+    method: &str,
     out: Option<&std::path::Path>,
     check_on: Option<&std::path::Path>,
-    start: aeroid::estimation::methods::output_error::Start,
+    settings: &[String],
 ) -> Result<()> {
-    use aeroid::estimation::{methods::output_error, structure::ModelStructure};
+    use aeroid::estimation::{
+        methods::output_error, problem::EstimationProblem, structure::ModelStructure,
+    };
     use aeroid::eval::score;
     let record = aeroid::record::FlightRecord::read(record_folder)?;
     let structure = ModelStructure::load(model)?;
-    let estimate = match method {
-        Method::Ee => aeroid::estimation::methods::equation_error::equation_error(
-            &record,
-            &structure,
-            &Default::default(),
-        )?,
-        Method::Swr => {
-            let (reports, estimate) =
-                aeroid::estimation::methods::stepwise::stepwise_all(&record, &structure)?;
-            reports.iter().for_each(|report| println!("{report}"));
-            estimate
-        }
-        Method::Oem => {
-            let options = output_error::OutputErrorOptions {
-                start,
-                ..Default::default()
-            };
-            output_error::output_error(&[&record], &structure, &options)?
-        }
-    };
+    let overrides = settings_table(method, settings)?;
+    let problem = EstimationProblem::new(method, vec![record], structure, &[&overrides])?;
+    let estimate = aeroid::estimation::methods::estimate(&problem, None)?;
+    let structure = &problem.structure;
+    print!("{}", estimate.details);
     let truth_path = record_folder.join(aeroid::sim::truth::TRUTH_FILE);
     let truth = truth_path
         .is_file()
@@ -461,7 +490,7 @@ fn estimate(
         .transpose()?;
     let scores = score::score(&estimate, truth.as_ref(), structure.aircraft.aero.kind);
     println!(
-        "{} on {} with model {}: {:?} after {} iterations, {:.3} s",
+        "{} on {} with model {}: {} after {} iterations, {:.3} s",
         estimate.method,
         estimate.record,
         estimate.model,
@@ -482,7 +511,7 @@ fn estimate(
     if let Some(other) = check_on {
         let other = aeroid::record::FlightRecord::read(other)?;
         println!("proof of match on {} (nothing adjusted):", other.scenario);
-        for fit in output_error::proof_of_match(&estimate, &structure, &other)? {
+        for fit in output_error::proof_of_match(&estimate, structure, &other)? {
             println!(
                 "  {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}",
                 fit.channel, fit.rms, fit.r_squared, fit.theil
@@ -501,6 +530,8 @@ fn estimate(
     }
     Ok(())
 }
+
+use aeroid::eval::run::Outcome;
 
 fn run_all(
     reference: &str,
@@ -532,9 +563,11 @@ fn run_all(
     );
     for run in &report.runs {
         match &run.outcome {
-            Ok((estimate, scores)) => {
+            Outcome::Estimated { estimate, scores } => {
                 let (inside, scored, worst) = run.coverage().unwrap_or((0, 0, f64::NAN));
-                let status = format!("{:?}", estimate.status)
+                let status = estimate
+                    .status
+                    .to_string()
                     .chars()
                     .take(16)
                     .collect::<String>();
@@ -552,7 +585,15 @@ fn run_all(
                     print!("{}", aeroid::eval::score::table(scores));
                 }
             }
-            Err(reason) => println!("{:<22} {:<5} not run: {reason}", run.model, run.method),
+            Outcome::Refused(refusal) => println!(
+                "{:<22} {:<5} refused ({}): {refusal}",
+                run.model,
+                run.method,
+                refusal.kind()
+            ),
+            Outcome::Failed(reason) => {
+                println!("{:<22} {:<5} failed: {reason}", run.model, run.method)
+            }
         }
     }
     if let Some(out) = out {
@@ -561,7 +602,7 @@ fn run_all(
             .truth
             .write(&out.join(aeroid::sim::truth::TRUTH_FILE))?;
         for run in &report.runs {
-            if let Ok((estimate, scores)) = &run.outcome {
+            if let Outcome::Estimated { estimate, scores } = &run.outcome {
                 let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
                 estimate.write_json(&out.join(format!("{stem}.json")))?;
                 aeroid::eval::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;

@@ -222,6 +222,22 @@ fn is_exponent(text: &str, i: usize) -> bool {
         .is_some_and(|c| c.is_ascii_digit() || c == '-' || c == '+')
 }
 
+/// Serde: a time written as a quantity (`"0.1 s"` or `0.1`), read as seconds.
+pub fn seconds<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
+    Quantity::deserialize(deserializer)?
+        .si(Dimension::Time)
+        .map_err(serde::de::Error::custom)
+}
+
+/// Serde: an optional time written as a quantity, read as seconds.
+pub fn optional_seconds<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<Option<f64>, D::Error> {
+    Option::<Quantity>::deserialize(deserializer)?
+        .map(|q| q.si(Dimension::Time).map_err(serde::de::Error::custom))
+        .transpose()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -18,10 +18,10 @@
 //! smeared into 1–7 % errors.
 
 use aeroid::estimation::estimate::Estimate;
+use aeroid::estimation::estimate::Status;
 use aeroid::estimation::methods::equation_error::{EquationErrorOptions, equation_error};
 use aeroid::estimation::methods::stepwise::{Action, StepwiseOptions, stepwise};
 use aeroid::estimation::reconstruction::{ReconstructionOptions, Request, reconstruct};
-use aeroid::estimation::solver::gauss_newton::Status;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};

@@ -51,6 +51,6 @@ fn a_tight_gate_fails_with_a_readable_table() {
     assert!(!gate::run_case(&sigma).unwrap().passed());
 
     let mut refusal = find("attas-lateral-ideal-oem");
-    refusal.expect_error = Some("needs channels".into());
+    refusal.expect_refusal = Some(aeroid::estimation::estimator::RefusalKind::MissingChannels);
     assert!(!gate::run_case(&refusal).unwrap().passed());
 }

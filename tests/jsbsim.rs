@@ -855,7 +855,7 @@ fn estimators_recover_the_737_derivatives_from_flight_test_data() {
             assert!(
                 matches!(
                     estimate.status,
-                    aeroid::estimation::solver::gauss_newton::Status::Converged
+                    aeroid::estimation::estimate::Status::Converged
                 ),
                 "{label} on {scenario_name}: {:?}",
                 estimate.status

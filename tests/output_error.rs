@@ -1,8 +1,8 @@
 //! Output error (maximum likelihood) on simulated records where the answer
 //! is known.
 
+use aeroid::estimation::estimate::Status;
 use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
-use aeroid::estimation::solver::gauss_newton::Status;
 use aeroid::estimation::structure::{ModelStructure, StructureFile};
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::Profile;
@@ -112,7 +112,12 @@ const ALL_OUTPUTS: [&str; 11] = [
 fn recovers_every_parameter_from_ideal_record() {
     let (record, scenario) = attas_all_axes_record("ideal", 1);
     let structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
-    let estimate = output_error(&[&record], &structure, &OutputErrorOptions::default()).unwrap();
+    let estimate = output_error(
+        &[&record],
+        &structure,
+        &OutputErrorOptions::for_structure(&structure).unwrap(),
+    )
+    .unwrap();
     assert_eq!(
         estimate.status,
         Status::Converged,
@@ -203,10 +208,13 @@ fn sigma_report(
 fn input_reconstruction_follows_the_interpolation_option() {
     let profile = flight_test_variant("noise-free", |_| Some(""));
     let (record, scenario) = attas_all_axes_record(&profile, 3);
-    let mut structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
-    structure.step = Some(0.01);
-    let worst_relative = |structure: &ModelStructure| {
-        let estimate = output_error(&[&record], structure, &OutputErrorOptions::default()).unwrap();
+    let structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
+    let mut options = OutputErrorOptions {
+        step: Some(0.01),
+        ..Default::default()
+    };
+    let worst_relative = |options: &OutputErrorOptions| {
+        let estimate = output_error(&[&record], &structure, options).unwrap();
         scenario
             .aircraft
             .aero
@@ -215,10 +223,10 @@ fn input_reconstruction_follows_the_interpolation_option() {
             .map(|(name, truth)| ((estimate.parameter(name).unwrap().value - truth) / truth).abs())
             .fold(0.0, f64::max)
     };
-    let held = worst_relative(&structure);
+    let held = worst_relative(&options);
     assert!(held < 1e-6, "held inputs: worst relative error {held:.3e}");
-    structure.interpolation = aeroid::sim::integrator::Interpolation::Linear;
-    let ramps = worst_relative(&structure);
+    options.interpolation = aeroid::sim::integrator::Interpolation::Linear;
+    let ramps = worst_relative(&options);
     assert!(
         ramps > 0.1,
         "linear reconstruction of steps: worst relative error {ramps:.3e}"
@@ -236,9 +244,12 @@ fn input_reconstruction_follows_the_interpolation_option() {
 fn noisy_flight_test_record_within_cramer_rao_bounds() {
     let profile = flight_test_variant("sensor-noise", |c| is_control(c).then_some(""));
     let (record, scenario) = attas_all_axes_record(&profile, 7);
-    let mut structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
-    structure.estimate_initial_state = true;
-    let estimate = output_error(&[&record], &structure, &OutputErrorOptions::default()).unwrap();
+    let structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
+    let options = OutputErrorOptions {
+        estimate_initial_state: true,
+        ..Default::default()
+    };
+    let estimate = output_error(&[&record], &structure, &options).unwrap();
     assert_eq!(
         estimate.status,
         Status::Converged,
@@ -273,9 +284,12 @@ fn control_channel_noise_biases_output_error() {
         (is_control(c) && c != "throttle").then_some("0.1 deg")
     });
     let (record, scenario) = attas_all_axes_record(&profile, 7);
-    let mut structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
-    structure.estimate_initial_state = true;
-    let estimate = output_error(&[&record], &structure, &OutputErrorOptions::default()).unwrap();
+    let structure = attas_structure(&ALL_STATES, &ALL_OUTPUTS, 0.7);
+    let options = OutputErrorOptions {
+        estimate_initial_state: true,
+        ..Default::default()
+    };
+    let estimate = output_error(&[&record], &structure, &options).unwrap();
     let (worst, report) = sigma_report(&estimate, &scenario);
     assert!(
         worst > 8.0,
@@ -297,7 +311,12 @@ fn decoupled_lateral_model_on_ideal_record() {
     let profile = Profile::load("ideal", None).unwrap();
     let (record, _) = aeroid::record::recorder::record_scenario(&scenario, &profile).unwrap();
     let structure = ModelStructure::load("attas-lateral").unwrap();
-    let estimate = output_error(&[&record], &structure, &OutputErrorOptions::default()).unwrap();
+    let estimate = output_error(
+        &[&record],
+        &structure,
+        &OutputErrorOptions::for_structure(&structure).unwrap(),
+    )
+    .unwrap();
     assert_eq!(estimate.status, Status::Converged);
     for name in structure.free_names() {
         let truth = scenario.aircraft.aero.parameters.get(&name).unwrap();
@@ -326,7 +345,12 @@ fn estimated_model_matches_another_manoeuvre() {
     };
     let (fitted_on, checked_on) = (record("attas-lateral-multistep"), record("attas-multisine"));
     let structure = ModelStructure::load("attas-lateral").unwrap();
-    let estimate = output_error(&[&fitted_on], &structure, &OutputErrorOptions::default()).unwrap();
+    let estimate = output_error(
+        &[&fitted_on],
+        &structure,
+        &OutputErrorOptions::for_structure(&structure).unwrap(),
+    )
+    .unwrap();
     let fits = aeroid::estimation::methods::output_error::proof_of_match(
         &estimate,
         &structure,
@@ -365,7 +389,7 @@ fn both_starts_reach_the_same_optimum() {
     let fit = |start| {
         let options = OutputErrorOptions {
             start,
-            ..Default::default()
+            ..OutputErrorOptions::for_structure(&structure).unwrap()
         };
         output_error(&[&record], &structure, &options).unwrap()
     };

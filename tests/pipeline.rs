@@ -1,7 +1,8 @@
 //! `aeroid run`: simulate → record → every classical estimator → score, as
 //! a user runs it.
 
-use aeroid::eval::run;
+use aeroid::estimation::estimator::RefusalKind;
+use aeroid::eval::run::{self, Outcome};
 use aeroid::record::recorder::Profile;
 use aeroid::sim::scenario::Scenario;
 
@@ -14,17 +15,16 @@ fn run_scores_every_method_on_the_lateral_scenario() {
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
     let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
     let report = run::run(&scenario, &profile).unwrap();
-    let methods: Vec<&str> = report.runs.iter().map(|r| r.method).collect();
-    assert_eq!(methods, run::METHODS);
+    let methods: Vec<String> = report.runs.iter().map(|r| r.method.clone()).collect();
+    assert_eq!(methods, aeroid::estimation::methods::names());
     for run in &report.runs {
-        let (estimate, scores) = run
-            .outcome
-            .as_ref()
-            .unwrap_or_else(|e| panic!("{} failed: {e}", run.method));
+        let Outcome::Estimated { estimate, scores } = &run.outcome else {
+            panic!("{} did not run: {:?}", run.method, run.outcome.reason());
+        };
         assert!(
             matches!(
                 estimate.status,
-                aeroid::estimation::solver::gauss_newton::Status::Converged
+                aeroid::estimation::estimate::Status::Converged
             ),
             "{}",
             run.method
@@ -51,25 +51,41 @@ fn run_scores_every_method_on_the_lateral_scenario() {
     }
 }
 
-/// The QAR of seed 000 records no angular rates, no airspeed, no throttle:
-/// no estimator crashes on it; each reports what it lacks.
+/// The QAR of Wang et al. 2012 records no angular rates, no airspeed, no
+/// throttle: no estimator crashes on it; each refuses with a typed refusal
+/// naming what it lacks. Per method, what it must name: every method the
+/// airspeed (dynamic pressure; output error's pseudo-control or output);
+/// equation error the roll and yaw rates (the moment equations);
+/// output error the roll and yaw rates (a lateral output or pseudo-control).
 #[test]
-fn qar_record_is_reported_not_crashed() {
+fn qar_record_is_refused_with_what_each_method_lacks() {
     let mut scenario = Scenario::load("transport-approach").unwrap();
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
     let report = run::run(&scenario, &profile).unwrap();
-    assert_eq!(report.runs.len(), 2 * run::METHODS.len());
+    let expected: [(&str, &[&str]); 3] = [
+        ("ee", &["airspeed", "p", "r"]),
+        ("swr", &["airspeed"]),
+        ("oem", &["airspeed", "p", "r"]),
+    ];
+    assert_eq!(report.runs.len(), 2 * expected.len());
     for run in &report.runs {
-        let reason = run
-            .outcome
-            .as_ref()
-            .expect_err("QAR lacks the channels these models need");
-        assert!(
-            reason.contains("channel"),
-            "{}/{}: {reason}",
-            run.model,
-            run.method
-        );
+        let Outcome::Refused(refusal) = &run.outcome else {
+            panic!("{}/{}: {:?}", run.model, run.method, run.outcome.reason());
+        };
+        assert_eq!(refusal.kind(), RefusalKind::MissingChannels, "{refusal}");
+        let (_, channels) = expected
+            .iter()
+            .find(|(method, _)| *method == run.method)
+            .unwrap();
+        let named = refusal.missing_channels();
+        for channel in *channels {
+            assert!(
+                named.contains(channel),
+                "{}/{}: {refusal}",
+                run.model,
+                run.method
+            );
+        }
     }
 }

@@ -1,14 +1,64 @@
 //! What an estimator returns: values with Cramér–Rao standard errors, the
 //! covariance and correlation matrices, fit metrics per output (residual RMS,
 //! R², Theil's inequality coefficient, seed 001 Eq. 27), the iteration and
-//! cost history, wall time and a status (converged, iteration limit,
-//! diverged — never a panic). Serialises to JSON and CSV.
+//! cost history, wall time and a status. Serialises to JSON and CSV.
+//!
+//! The status is honest ([`Estimate::assess`]): an estimate is
+//! "converged" only when its method stopped at an optimum, every estimated
+//! parameter has a finite standard error (a singular information matrix
+//! leaves the parameters of its null space with infinite ones), the
+//! covariance is finite and every output is reproduced better than by its
+//! mean (R² ≥ 0). Otherwise it says what it is: unidentified parameters by
+//! name, a degenerate covariance, no progress from the start, a poor fit.
 
 use crate::error::{Error, Result};
-use crate::estimation::solver::gauss_newton::{Solution, Status};
+use crate::estimation::solver::gauss_newton::Solution;
+use crate::estimation::structure::ModelStructure;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+
+/// How an estimation ended.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "status", content = "reason")]
+pub enum Status {
+    /// Stopped at an optimum, every parameter determined.
+    Converged,
+    /// The iteration limit came first.
+    IterationLimit,
+    /// The model could not be evaluated (a departing simulation, a NaN).
+    Diverged(String),
+    /// No step lowered the cost from the start.
+    NoProgress,
+    /// These parameters have a non-finite standard error: the data do not
+    /// determine them.
+    Unidentified(Vec<String>),
+    /// The covariance is missing or not finite though every standard error is.
+    Degenerate(String),
+    /// These outputs are reproduced worse than by their mean (R² < 0) or not at all.
+    PoorFit(Vec<String>),
+}
+
+impl Status {
+    /// Only a converged estimate counts as a success in scores, gates and studies.
+    pub fn is_success(&self) -> bool {
+        matches!(self, Status::Converged)
+    }
+}
+
+impl std::fmt::Display for Status {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Status::Converged => f.write_str("converged"),
+            Status::IterationLimit => f.write_str("iteration limit"),
+            Status::Diverged(reason) => write!(f, "diverged: {reason}"),
+            Status::NoProgress => f.write_str("no progress from the start"),
+            Status::Unidentified(names) => write!(f, "unidentified: {}", names.join(", ")),
+            Status::Degenerate(reason) => write!(f, "degenerate: {reason}"),
+            Status::PoorFit(outputs) => write!(f, "poor fit (R² < 0): {}", outputs.join(", ")),
+        }
+    }
+}
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ParameterEstimate {
@@ -75,6 +125,10 @@ pub struct Estimate {
     pub wall_time: f64,
     /// Anything the user should know (a channel held constant, an unidentifiable parameter).
     pub notes: Vec<String>,
+    /// The method's own report, as text (stepwise regression: each
+    /// coefficient's search); empty when the method has none.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub details: String,
 }
 
 impl Estimate {
@@ -109,7 +163,69 @@ impl Estimate {
             cost_history: solution.history.iter().map(|i| i.cost).collect(),
             wall_time: 0.0,
             notes: Vec::new(),
+            details: String::new(),
         }
+    }
+
+    /// The estimate with its status judged honestly (module
+    /// documentation); a status other than converged is kept as it is.
+    pub fn assess(mut self, structure: &ModelStructure) -> Estimate {
+        if self.status != Status::Converged {
+            return self;
+        }
+        let unidentified: Vec<String> = self
+            .parameters
+            .iter()
+            .filter(|p| !p.standard_error.is_finite())
+            .map(|p| p.name.clone())
+            .collect();
+        let poor: Vec<String> = self
+            .fits
+            .iter()
+            .filter(|fit| fit.r_squared.is_nan() || fit.r_squared < 0.0 || !fit.rms.is_finite())
+            .map(|fit| fit.channel.clone())
+            .collect();
+        self.status = if !unidentified.is_empty() {
+            Status::Unidentified(unidentified)
+        } else if let Some(reason) = self.degenerate() {
+            Status::Degenerate(reason)
+        } else if !poor.is_empty() {
+            Status::PoorFit(poor)
+        } else {
+            Status::Converged
+        };
+        if self.status != Status::Converged {
+            self.notes.push(format!(
+                "not converged: {} (model '{}')",
+                self.status, structure.name
+            ));
+        }
+        self
+    }
+
+    /// Why the covariance cannot be used, if it cannot: missing, or
+    /// holding non-finite entries although every standard error is finite.
+    /// (A singular information matrix shows as infinite standard errors of
+    /// the parameters in its null space: unidentified, above. A covariance
+    /// corrected for coloured residuals need not be positive definite where
+    /// the residuals are rounding noise, as on noise-free data, so
+    /// definiteness is not asked of it.)
+    fn degenerate(&self) -> Option<String> {
+        if self.covariance.is_empty() {
+            return (!self.parameters.is_empty()).then(|| "no covariance was computed".to_string());
+        }
+        let square = self
+            .covariance
+            .iter()
+            .all(|row| row.len() == self.covariance.len());
+        if !square || self.covariance.len() != self.parameters.len() {
+            return Some("the covariance does not match the parameters".into());
+        }
+        self.covariance
+            .iter()
+            .flatten()
+            .any(|v| !v.is_finite())
+            .then(|| "the covariance holds non-finite entries".to_string())
     }
 
     pub fn parameter(&self, name: &str) -> Option<&ParameterEstimate> {
@@ -140,5 +256,83 @@ impl Estimate {
     pub fn read_json(path: &Path) -> Result<Estimate> {
         let text = crate::error::read_text(path)?;
         serde_json::from_str(&text).map_err(|e| Error::Other(format!("{}: {e}", path.display())))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A converged two-parameter estimate with the given covariance and
+    /// one output fit of R² `r_squared`.
+    fn estimate(covariance: [[f64; 2]; 2], r_squared: f64) -> Estimate {
+        Estimate {
+            method: "test".into(),
+            model: "m".into(),
+            record: "r".into(),
+            status: Status::Converged,
+            parameters: ["a", "b"]
+                .iter()
+                .enumerate()
+                .map(|(i, name)| ParameterEstimate {
+                    name: name.to_string(),
+                    value: 1.0,
+                    standard_error: covariance[i][i].sqrt(),
+                    start: 0.0,
+                })
+                .collect(),
+            covariance: covariance.iter().map(|row| row.to_vec()).collect(),
+            fits: vec![OutputFit {
+                channel: "nz".into(),
+                samples: 100,
+                rms: 0.1,
+                r_squared,
+                theil: 0.1,
+            }],
+            iterations: 3,
+            cost_history: vec![3.0, 2.0, 1.0],
+            wall_time: 0.0,
+            notes: Vec::new(),
+            details: String::new(),
+        }
+    }
+
+    fn structure() -> ModelStructure {
+        ModelStructure::load("attas-lateral").unwrap()
+    }
+
+    /// Each way an estimate is not converged, built on purpose: an infinite
+    /// σ names the parameter; finite σ with a NaN covariance entry is
+    /// degenerate; R² < 0 and a NaN R² are poor fits. A sound estimate
+    /// stays converged, and a status that is already not converged is
+    /// kept.
+    #[test]
+    fn assessment_says_what_an_estimate_is() {
+        let sound = estimate([[1.0, 0.5], [0.5, 1.0]], 0.9);
+        assert_eq!(sound.assess(&structure()).status, Status::Converged);
+
+        let infinite = estimate([[1.0, 0.0], [0.0, f64::INFINITY]], 0.9);
+        let assessed = infinite.assess(&structure());
+        assert_eq!(assessed.status, Status::Unidentified(vec!["b".into()]));
+        assert!(assessed.notes.iter().any(|n| n.contains("unidentified: b")));
+
+        let degenerate = estimate([[1.0, f64::NAN], [f64::NAN, 1.0]], 0.9);
+        assert!(matches!(
+            degenerate.assess(&structure()).status,
+            Status::Degenerate(_)
+        ));
+
+        for r_squared in [-0.3, f64::NAN] {
+            let poor = estimate([[1.0, 0.0], [0.0, 1.0]], r_squared);
+            assert_eq!(
+                poor.assess(&structure()).status,
+                Status::PoorFit(vec!["nz".into()])
+            );
+        }
+
+        let mut limited = estimate([[1.0, 0.0], [0.0, f64::INFINITY]], 0.9);
+        limited.status = Status::IterationLimit;
+        assert_eq!(limited.assess(&structure()).status, Status::IterationLimit);
+        assert!(!Status::IterationLimit.is_success());
     }
 }

@@ -7,8 +7,10 @@
 //! solution with its error bounds (`solver::regression`).
 
 pub mod estimate;
+pub mod estimator;
 pub mod methods;
 pub mod model;
+pub mod problem;
 pub mod reconstruction;
 pub mod solver;
 pub mod structure;

@@ -38,6 +38,7 @@
 //! exists. Samples where anything needed is not finite, or q̄ ≤ 0, are left out.
 
 use crate::error::{Error, Result};
+use crate::estimation::estimator::{MissingChannel, Refusal};
 use crate::prep::differentiation::{Differentiator, step_times};
 use crate::record::{Channel, FlightRecord};
 use crate::sim::aero::{AeroInput, Coefficient, ForceAxes, REGRESSOR_COUNT, RateSpeed, Regressor};
@@ -52,24 +53,13 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ReconstructionOptions {
     /// The differentiator; None: the default one (equation error and
-    /// stepwise regression put the model structure's here).
+    /// stepwise regression put the one of their settings here).
     pub differentiator: Option<Differentiator>,
     /// The channel whose sample instants are the common time base; default:
     /// the fastest of the accelerometer and rate-gyro channels used.
     pub reference_channel: Option<String>,
     /// Only samples within [start, end] (s) are used.
     pub time_range: Option<(f64, f64)>,
-}
-
-impl ReconstructionOptions {
-    /// These options with the model structure's differentiator where none is set.
-    pub fn for_structure(&self, structure: &crate::estimation::structure::ModelStructure) -> Self {
-        let mut options = self.clone();
-        options
-            .differentiator
-            .get_or_insert(structure.differentiator);
-        options
-    }
 }
 
 /// What to reconstruct: which coefficients (as measured values) and which regressors.
@@ -264,23 +254,22 @@ pub fn check_channels(
     check_present(record, &needed_channels(record, aircraft, request), method)
 }
 
-/// Checks that every needed channel is present, naming all missing ones.
+/// Checks that every needed channel is present: a refusal naming all
+/// missing ones and what each is for.
 fn check_present(record: &FlightRecord, needs: &Needs, method: &str) -> Result<()> {
-    let missing: Vec<String> = needs
+    let missing: Vec<MissingChannel> = needs
         .iter()
         .filter(|(name, _)| record.channel(name).is_err())
-        .map(|(name, why)| format!("'{name}' (for {why})"))
+        .map(|(name, why)| MissingChannel {
+            name: name.to_string(),
+            purpose: why.to_string(),
+        })
         .collect();
-    if missing.is_empty() {
-        return Ok(());
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    match Refusal::missing(method, missing, present) {
+        Some(refusal) => Err(Error::Refused(refusal)),
+        None => Ok(()),
     }
-    let present: Vec<&str> = record.channels.iter().map(|c| c.name.as_str()).collect();
-    Err(Error::Other(format!(
-        "{method} needs channel{} {} that the record does not have; channels present: {}",
-        if missing.len() > 1 { "s" } else { "" },
-        missing.join(", "),
-        present.join(", ")
-    )))
 }
 
 /// Reconstructs the requested coefficients and regressors from a record;

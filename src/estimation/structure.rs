@@ -3,18 +3,17 @@
 //! file, its values being start values), which parameters are fixed, their
 //! bounds, and for simulating estimators which flight-path states are
 //! integrated and which measured signals are fed in as pseudo-controls
-//! (decoupled longitudinal or lateral models, seed 004 Eqs. 1–8), and which
-//! recorded channels are compared.
+//! (decoupled longitudinal or lateral models: Dhayalan, Saderla & Ghosh,
+//! reflex-wing UAV paper, Eqs. 1–8), and which recorded channels are
+//! compared. How a method fits it (integration step, differentiator, start
+//! values, initial states and biases as unknowns) is the method's setting,
+//! in a `[methods.NAME]` table (see `aeroid methods`).
 //!
 //! ```toml
 //! name = "attas-lateral"
 //! aircraft = "attas"              # mass, inertia, geometry, propulsion of the fitted model
 //! integrate = ["beta", "p", "r", "roll"]   # the rest comes from measured channels
 //! outputs = ["beta", "p", "r", "roll", "ny"]
-//! interpolation = "linear"        # inputs inside an integration step
-//! step = "0.04 s"                 # optional; default: the fastest compared channel's period
-//! estimate_initial_state = true
-//! output_biases = ["ny"]
 //! [aero]
 //! rate_normalization = "2V"
 //! [aero.Cl]
@@ -25,15 +24,16 @@
 //! [parameters.Cn_beta]
 //! lower = 0.0
 //! upper = 1.0
+//! [methods.oem]
+//! estimate_initial_state = true
+//! output_biases = ["ny"]
 //! ```
 
 use crate::catalog;
 use crate::error::{Problems, Result, parse_toml, read_text};
-use crate::prep::differentiation::Differentiator;
+use crate::estimation::estimator::{MethodTables, check_method_tables};
 use crate::sim::aero::{AeroModel, AeroSpec};
-use crate::sim::aircraft::Aircraft;
-use crate::sim::integrator::Interpolation;
-use crate::units::{Dimension, Quantity};
+use crate::sim::aircraft::{Aircraft, AircraftFile};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -46,7 +46,7 @@ pub const FLIGHT_PATH_STATES: [&str; 11] = [
     "airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch", "yaw", "altitude", "chi",
 ];
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StructureFile {
     pub name: String,
@@ -57,34 +57,15 @@ pub struct StructureFile {
     pub integrate: Vec<String>,
     #[serde(default)]
     pub outputs: Vec<String>,
-    #[serde(default)]
-    pub interpolation: Interpolation,
-    #[serde(default)]
-    pub step: Option<Quantity>,
-    #[serde(default)]
-    pub estimate_initial_state: bool,
-    #[serde(default)]
-    pub output_biases: Vec<String>,
     pub aero: AeroSpec,
     #[serde(default)]
     pub parameters: BTreeMap<String, ParameterSpec>,
-    /// Equation error and stepwise regression: the differentiator of the
-    /// angular rates (default half-width 0.1 s, degree 4).
+    /// Settings per method (`[methods.oem]`, `[methods.ee]`, …).
     #[serde(default)]
-    pub differentiator: Option<DifferentiatorSpec>,
+    pub methods: MethodTables,
 }
 
-/// `[differentiator]`: the local polynomial differentiator's window and
-/// degree (see [`crate::prep::differentiation`]); a fast aircraft
-/// needs a narrower window than the default's ±0.1 s.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DifferentiatorSpec {
-    pub half_width: Quantity,
-    pub degree: usize,
-}
-
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ParameterSpec {
     #[serde(default)]
@@ -94,25 +75,26 @@ pub struct ParameterSpec {
 }
 
 /// A validated model structure.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct ModelStructure {
     pub name: String,
     pub path: PathBuf,
+    /// The file it was read from, and its aircraft's file: what an
+    /// [`crate::estimation::problem::EstimationProblem`] carries to be
+    /// rebuilt elsewhere.
+    pub file: StructureFile,
+    pub aircraft_file: AircraftFile,
     /// The aircraft whose mass, inertia, geometry and propulsion the model uses,
     /// with its aerodynamic model replaced by the postulated one.
     pub aircraft: Aircraft,
     /// Indices (into [`FLIGHT_PATH_STATES`]) of the integrated states.
     pub integrate: Vec<usize>,
     pub outputs: Vec<String>,
-    pub interpolation: Interpolation,
-    pub step: Option<f64>,
-    pub estimate_initial_state: bool,
-    pub output_biases: Vec<String>,
-    /// Equation error's and stepwise regression's differentiator.
-    pub differentiator: Differentiator,
     /// Per aero parameter (same order as `aircraft.aero.parameters`): free?
     pub free: Vec<bool>,
     pub bounds: Vec<(f64, f64)>,
+    /// The file's settings per method.
+    pub methods: MethodTables,
 }
 
 impl ModelStructure {
@@ -124,61 +106,39 @@ impl ModelStructure {
         ModelStructure::from_file(&file, &path)
     }
 
+    /// Validates a parsed file, loading its aircraft relative to `path`.
     pub fn from_file(file: &StructureFile, path: &Path) -> Result<ModelStructure> {
         let base = path.parent().unwrap_or(Path::new("."));
         let aircraft_path = catalog::resolve(&file.aircraft, catalog::AIRCRAFT_FOLDER, Some(base))?;
-        let mut aircraft = Aircraft::load(&aircraft_path)?;
+        let aircraft_text = read_text(&aircraft_path)?;
+        let aircraft_file: AircraftFile = parse_toml(&aircraft_path, &aircraft_text)?;
+        ModelStructure::from_parts(file, &aircraft_file, path)
+    }
+
+    /// Validates a structure file with its aircraft file given (as an
+    /// estimation problem carries them); `path` is named in errors.
+    pub fn from_parts(
+        file: &StructureFile,
+        aircraft_file: &AircraftFile,
+        path: &Path,
+    ) -> Result<ModelStructure> {
+        let mut aircraft = Aircraft::from_file(aircraft_file, path)?;
         let mut problems = Problems::default();
         aircraft.aero = AeroModel::from_spec(&file.aero, aircraft.geometry, "aero", &mut problems);
         let integrate = state_indices(&file.integrate, "integrate", &mut problems);
-        for (i, name) in file.output_biases.iter().enumerate() {
-            if !file.outputs.contains(name) {
-                problems.push(
-                    format!("output_biases[{i}]"),
-                    format!("'{name}' is not among the outputs"),
-                );
-            }
-        }
-        let step = file
-            .step
-            .as_ref()
-            .and_then(|q| match q.si(Dimension::Time) {
-                Ok(step) if step > 0.0 => Some(step),
-                Ok(_) => {
-                    problems.push("step", "must be positive");
-                    None
-                }
-                Err(message) => {
-                    problems.push("step", message);
-                    None
-                }
-            });
         let (free, bounds) = parameter_settings(&aircraft.aero, &file.parameters, &mut problems);
-        let mut differentiator = Differentiator::default();
-        if let Some(spec) = &file.differentiator {
-            match spec.half_width.si(Dimension::Time) {
-                Ok(width) if width > 0.0 => differentiator.half_width = width,
-                Ok(_) => problems.push("differentiator.half_width", "must be positive"),
-                Err(message) => problems.push("differentiator.half_width", message),
-            }
-            if spec.degree == 0 {
-                problems.push("differentiator.degree", "must be at least 1");
-            }
-            differentiator.degree = spec.degree.max(1);
-        }
+        check_method_tables(&file.methods, &mut problems);
         let structure = ModelStructure {
             name: file.name.clone(),
             path: path.to_path_buf(),
+            file: file.clone(),
+            aircraft_file: aircraft_file.clone(),
             aircraft,
             integrate,
             outputs: file.outputs.clone(),
-            interpolation: file.interpolation,
-            step,
-            estimate_initial_state: file.estimate_initial_state,
-            output_biases: file.output_biases.clone(),
             free,
             bounds,
-            differentiator,
+            methods: file.methods.clone(),
         };
         problems.finish(path, structure)
     }
@@ -189,6 +149,15 @@ impl ModelStructure {
         (0..names.len())
             .filter(|&i| self.free[i])
             .map(|i| names[i].clone())
+            .collect()
+    }
+
+    /// Names of the flight-path states that are not integrated: measured
+    /// channels fed in as pseudo-controls by a simulating estimator.
+    pub fn pseudo_controls(&self) -> Vec<&'static str> {
+        (0..FLIGHT_PATH_STATES.len())
+            .filter(|i| !self.integrate.contains(i))
+            .map(|i| FLIGHT_PATH_STATES[i])
             .collect()
     }
 }
@@ -264,9 +233,6 @@ name = "stall-test"
 aircraft = "attas-stall"
 integrate = ["airspeed", "alpha", "q", "pitch"]
 outputs = ["airspeed", "alpha", "q", "nz", "nx"]
-step = "0.04 s"
-estimate_initial_state = true
-output_biases = ["nz"]
 [aero]
 model = "stall"
 rate_normalization = "V"
@@ -291,6 +257,10 @@ de = -0.4
 chi = -0.1
 [parameters.tau1]
 fixed = {fixed}
+[methods.oem]
+step = "0.04 s"
+estimate_initial_state = true
+output_biases = ["nz"]
 "#,
         fixed = tau1 == 0.0
     );

@@ -14,9 +14,10 @@
 
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use crate::estimation::estimate::Estimate;
-use crate::estimation::solver::gauss_newton::Status;
+use crate::estimation::estimator::{MethodTables, Refusal, RefusalKind, check_method_tables};
+use crate::estimation::methods;
 use crate::estimation::structure::ModelStructure;
-use crate::eval::run;
+use crate::eval::run::{self, Outcome};
 use crate::record::recorder::{Profile, record_scenario};
 use crate::sim::scenario::Scenario;
 use serde::{Deserialize, Serialize};
@@ -64,9 +65,16 @@ pub struct GateCase {
     /// such terms fall under the absolute floor.
     #[serde(default)]
     pub spurious_sigma: Option<f64>,
-    /// The estimator must refuse this record with an error containing this text.
+    /// The estimator must refuse this record with a refusal of this kind
+    /// (`missing-channels`, `not-linear-in-parameters`, `nothing-to-estimate`).
     #[serde(default)]
-    pub expect_error: Option<String>,
+    pub expect_refusal: Option<RefusalKind>,
+    /// With `expect_refusal = "missing-channels"`: channels the refusal must name.
+    #[serde(default)]
+    pub expect_missing: Vec<String>,
+    /// Settings per method for this case, overriding the model's and the scenario's.
+    #[serde(default)]
+    pub methods: MethodTables,
 }
 
 impl GateCase {
@@ -111,23 +119,31 @@ impl GateRow {
 #[derive(Debug, Clone)]
 pub struct GateResult {
     pub case: GateCase,
-    /// The estimator's refusal, when it returned an error.
-    pub refusal: Option<String>,
+    /// The estimator's refusal, when it refused.
+    pub refusal: Option<Refusal>,
     pub estimate: Option<Estimate>,
     pub rows: Vec<GateRow>,
 }
 
 impl GateResult {
     pub fn passed(&self) -> bool {
-        match (&self.case.expect_error, &self.refusal) {
-            (Some(expected), Some(refusal)) => refusal.contains(expected.as_str()),
+        match (self.case.expect_refusal, &self.refusal) {
+            (Some(expected), Some(refusal)) => {
+                let named = refusal.missing_channels();
+                refusal.kind() == expected
+                    && self
+                        .case
+                        .expect_missing
+                        .iter()
+                        .all(|channel| named.contains(&channel.as_str()))
+            }
             (Some(_), None) | (None, Some(_)) => false,
             (None, None) => {
-                let diverged = self
+                let converged = self
                     .estimate
                     .as_ref()
-                    .is_none_or(|e| matches!(e.status, Status::Diverged(_)));
-                !diverged && !self.rows.is_empty() && self.rows.iter().all(GateRow::passed)
+                    .is_some_and(|e| e.status.is_success());
+                converged && !self.rows.is_empty() && self.rows.iter().all(GateRow::passed)
             }
         }
     }
@@ -144,16 +160,22 @@ impl GateResult {
     /// Every row (or only the failed ones) as a readable table.
     pub fn table(&self, only_failures: bool) -> String {
         if let Some(refusal) = &self.refusal {
-            return match &self.case.expect_error {
-                Some(expected) => {
-                    format!("refused: {refusal}\n(expected an error containing '{expected}')\n")
-                }
+            return match &self.case.expect_refusal {
+                Some(expected) => format!(
+                    "refused ({}): {refusal}\n(expected a refusal '{expected}'{})\n",
+                    refusal.kind(),
+                    if self.case.expect_missing.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" naming {}", self.case.expect_missing.join(", "))
+                    }
+                ),
                 None => format!("refused: {refusal}\n"),
             };
         }
         let mut text = String::new();
         if let Some(estimate) = &self.estimate {
-            text += &format!("status: {:?}\n", estimate.status);
+            text += &format!("status: {}\n", estimate.status);
         }
         text += &format!(
             "{:<14} {:>13} {:>10} {:>13} {:>11} {:>9} {:>8} {:>10}  {}\n",
@@ -201,7 +223,7 @@ impl GateResult {
             self.case.scenario, self.case.profile, self.case.model, self.case.method,
         );
         if let Some(refusal) = &self.refusal {
-            return text + &format!(": refused: {refusal}\n");
+            return text + &format!(": refused ({}): {refusal}\n", refusal.kind());
         }
         let Some(estimate) = &self.estimate else {
             return text;
@@ -235,23 +257,29 @@ pub fn load(path: &Path) -> Result<GateFile> {
     let mut problems = Problems::default();
     for (i, case) in file.cases.iter().enumerate() {
         let field = format!("case[{i}] ({})", case.name);
-        if !run::METHODS.contains(&case.method.as_str()) {
-            problems.push(
-                format!("{field}.method"),
-                format!(
-                    "unknown method '{}'; known: {}",
-                    case.method,
-                    run::METHODS.join(", ")
-                ),
-            );
+        if let Err(error) = methods::find(&case.method) {
+            problems.push(format!("{field}.method"), error.to_string());
+        }
+        let mut tables = Problems::default();
+        check_method_tables(&case.methods, &mut tables);
+        for problem in tables.0 {
+            problems.push(format!("{field}.{}", problem.field), problem.message);
         }
         let defaults = [case.relative_tolerance, case.sigma_tolerance];
-        match (defaults.iter().flatten().count(), &case.expect_error) {
+        match (defaults.iter().flatten().count(), &case.expect_refusal) {
             (1, None) | (0, Some(_)) => {}
             _ => problems.push(
                 field.clone(),
-                "give exactly one of relative_tolerance and sigma_tolerance, or expect_error alone",
+                "give exactly one of relative_tolerance and sigma_tolerance, or expect_refusal alone",
             ),
+        }
+        if !case.expect_missing.is_empty()
+            && case.expect_refusal != Some(RefusalKind::MissingChannels)
+        {
+            problems.push(
+                format!("{field}.expect_missing"),
+                "goes with expect_refusal = \"missing-channels\"",
+            );
         }
         if defaults
             .iter()
@@ -268,22 +296,32 @@ pub fn load(path: &Path) -> Result<GateFile> {
 }
 
 /// Runs one case. Errors are for a case that cannot be set up (unknown
-/// scenario, profile or model, a departing simulation); the estimator's own
-/// error is the case's `refusal`.
+/// scenario, profile or model, a departing simulation) or an estimator
+/// that failed; an estimator's refusal is the case's `refusal`.
 pub fn run_case(case: &GateCase) -> Result<GateResult> {
     let scenario = Scenario::load(&case.scenario)?;
     let profile = Profile::load(&case.profile, None)?;
     let structure = ModelStructure::load(&case.model)?;
     let (record, truth) = record_scenario(&scenario, &profile)?;
-    let estimate = match run::estimate(&case.method, &record, &structure) {
-        Ok(estimate) => estimate,
-        Err(error) => {
+    let (estimate, _) = match run::estimate_scored(
+        &case.method,
+        &record,
+        &truth,
+        &structure,
+        &[&scenario.methods, &case.methods],
+        None,
+    ) {
+        Outcome::Estimated { estimate, scores } => (*estimate, scores),
+        Outcome::Refused(refusal) => {
             return Ok(GateResult {
                 case: case.clone(),
-                refusal: Some(error.to_string()),
+                refusal: Some(refusal),
                 estimate: None,
                 rows: Vec::new(),
             });
+        }
+        Outcome::Failed(message) => {
+            return Err(Error::Other(format!("{}: {message}", case.method)));
         }
     };
     let rows = estimate

@@ -1,13 +1,17 @@
 //! `aeroid run`: the whole harness on one scenario. It simulates, records
-//! with the scenario's (or a given) recorder profile, runs every classical
-//! estimator (equation error, stepwise regression, output error) on every
-//! model structure the scenario names, and scores each estimate against the
-//! run's truth. One estimator failing (a missing channel on a QAR record, a
-//! diverged fit) is reported in its row and the others carry on.
+//! with the scenario's (or a given) recorder profile, runs every registered
+//! estimator on every model structure the scenario names, and scores each
+//! estimate against the run's truth. An estimator that cannot run on the
+//! record refuses with a typed [`Refusal`]; one that fails (a diverged fit)
+//! is reported in its row; the others carry on. A method that starts from
+//! another's estimate (output error from equation error's) gets it when
+//! that method ran on the same model before it.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::estimation::estimate::Estimate;
-use crate::estimation::methods::{equation_error, output_error, stepwise};
+use crate::estimation::estimator::{MethodTables, Refusal};
+use crate::estimation::methods;
+use crate::estimation::problem::EstimationProblem;
 use crate::estimation::structure::ModelStructure;
 use crate::eval::score::{self, ParameterScore};
 use crate::record::FlightRecord;
@@ -15,21 +19,65 @@ use crate::record::recorder::{Profile, record_scenario};
 use crate::sim::scenario::Scenario;
 use crate::sim::truth::RunTruth;
 
-/// The classical estimators, in the order `aeroid run` runs them.
-pub const METHODS: [&str; 3] = ["ee", "swr", "oem"];
+/// How one estimator fared on one model.
+#[derive(Debug, Clone)]
+pub enum Outcome {
+    /// An estimate (whatever its status) and its scores against the truth.
+    Estimated {
+        estimate: Box<Estimate>,
+        scores: Vec<ParameterScore>,
+    },
+    /// The estimator cannot run on this record or model, and says why.
+    Refused(Refusal),
+    /// Anything else that stopped it (a model file that does not load, a
+    /// simulation that cannot start), as a message.
+    Failed(String),
+}
+
+impl Outcome {
+    fn of(result: Result<(Estimate, Vec<ParameterScore>)>) -> Outcome {
+        match result {
+            Ok((estimate, scores)) => Outcome::Estimated {
+                estimate: Box::new(estimate),
+                scores,
+            },
+            Err(Error::Refused(refusal)) => Outcome::Refused(refusal),
+            Err(error) => Outcome::Failed(error.to_string()),
+        }
+    }
+
+    /// The estimate, when there is one.
+    pub fn estimate(&self) -> Option<&Estimate> {
+        match self {
+            Outcome::Estimated { estimate, .. } => Some(estimate),
+            _ => None,
+        }
+    }
+
+    /// Why there is no estimate, when there is none.
+    pub fn reason(&self) -> Option<String> {
+        match self {
+            Outcome::Estimated { .. } => None,
+            Outcome::Refused(refusal) => Some(format!("refused: {refusal}")),
+            Outcome::Failed(message) => Some(message.clone()),
+        }
+    }
+}
 
 /// One estimator on one model: its estimate and scores, or why it could not run.
 #[derive(Debug, Clone)]
 pub struct MethodRun {
     pub model: String,
-    pub method: &'static str,
-    pub outcome: std::result::Result<(Estimate, Vec<ParameterScore>), String>,
+    pub method: String,
+    pub outcome: Outcome,
 }
 
 impl MethodRun {
     /// Share of scored parameters whose truth lies inside the 95 % interval, and the largest |error/σ|.
     pub fn coverage(&self) -> Option<(usize, usize, f64)> {
-        let (_, scores) = self.outcome.as_ref().ok()?;
+        let Outcome::Estimated { scores, .. } = &self.outcome else {
+            return None;
+        };
         let scored: Vec<&ParameterScore> = scores.iter().filter(|s| s.truth.is_some()).collect();
         let inside = scored.iter().filter(|s| s.inside_95 == Some(true)).count();
         let worst = scored
@@ -54,15 +102,31 @@ pub struct RunReport {
 /// Simulates, records and estimates; fails only when the flight itself cannot be made.
 pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
     let (record, truth) = record_scenario(scenario, profile)?;
+    let estimators = methods::all();
     let mut runs = Vec::new();
     for reference in &scenario.models {
         let structure = ModelStructure::load(reference);
-        for method in METHODS {
+        let first = runs.len();
+        for estimator in &estimators {
+            let method = estimator.info().name.to_string();
             let outcome = match &structure {
                 Ok(structure) => {
-                    estimate_scored(method, &record, &truth, structure).map_err(|e| e.to_string())
+                    let start = estimator.starts_from().and_then(|from| {
+                        runs[first..]
+                            .iter()
+                            .find(|run: &&MethodRun| run.method == from)
+                            .and_then(|run| run.outcome.estimate())
+                    });
+                    estimate_scored(
+                        &method,
+                        &record,
+                        &truth,
+                        structure,
+                        &[&scenario.methods],
+                        start,
+                    )
                 }
-                Err(error) => Err(error.to_string()),
+                Err(error) => Outcome::Failed(error.to_string()),
             };
             runs.push(MethodRun {
                 model: reference.clone(),
@@ -80,32 +144,23 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
     })
 }
 
-/// Runs one named estimator and scores its estimate against the run's truth.
+/// Runs one registered method on a record and scores its estimate against
+/// the run's truth; its settings are the model's `[methods.NAME]` table
+/// overridden by `layers` (scenario, study or gate case).
 pub fn estimate_scored(
     method: &str,
     record: &FlightRecord,
     truth: &RunTruth,
     structure: &ModelStructure,
-) -> Result<(Estimate, Vec<ParameterScore>)> {
-    let estimate = estimate(method, record, structure)?;
-    let scores = score::score(&estimate, Some(truth), structure.aircraft.aero.kind);
-    Ok((estimate, scores))
-}
-
-/// Runs one named estimator with its default options.
-pub fn estimate(
-    method: &str,
-    record: &FlightRecord,
-    structure: &ModelStructure,
-) -> Result<Estimate> {
-    match method {
-        "ee" => equation_error::equation_error(record, structure, &Default::default()),
-        "swr" => stepwise::stepwise_all(record, structure).map(|(_, estimate)| estimate),
-        "oem" => output_error::output_error(&[record], structure, &Default::default()),
-        other => Err(crate::Error::Unknown {
-            kind: "method",
-            name: other.to_string(),
-            known: METHODS.map(String::from).to_vec(),
-        }),
-    }
+    layers: &[&MethodTables],
+    start: Option<&Estimate>,
+) -> Outcome {
+    Outcome::of(
+        EstimationProblem::new(method, vec![record.clone()], structure.clone(), layers)
+            .and_then(|problem| methods::estimate(&problem, start))
+            .map(|estimate| {
+                let scores = score::score(&estimate, Some(truth), structure.aircraft.aero.kind);
+                (estimate, scores)
+            }),
+    )
 }

@@ -53,7 +53,9 @@ pub fn score(
                 error,
                 relative_error: error.zip(truth_value).map(|(e, t)| e / t.abs()),
                 error_sigma: error.map(|e| e / p.standard_error),
-                inside_95: error.map(|e| e.abs() <= Z_95 * p.standard_error),
+                // An infinite or non-finite σ says nothing: never inside.
+                inside_95: error
+                    .map(|e| p.standard_error.is_finite() && e.abs() <= Z_95 * p.standard_error),
             }
         })
         .collect()
@@ -127,7 +129,7 @@ pub fn table(scores: &[ParameterScore]) -> String {
 mod tests {
     use super::*;
     use crate::estimation::estimate::ParameterEstimate;
-    use crate::estimation::solver::gauss_newton::Status;
+    use crate::estimation::estimate::Status;
 
     #[test]
     fn errors_in_sigma_units_and_interval_coverage() {
@@ -158,6 +160,7 @@ mod tests {
             ],
             covariance: vec![],
             fits: vec![],
+            details: String::new(),
             iterations: 3,
             cost_history: vec![],
             wall_time: 0.0,

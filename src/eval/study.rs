@@ -37,9 +37,11 @@
 
 use crate::catalog;
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
-use crate::estimation::solver::gauss_newton::Status;
+use crate::estimation::estimate::Status;
+use crate::estimation::estimator::{MethodTables, check_method_tables};
+use crate::estimation::methods;
 use crate::estimation::structure::{MODEL_FOLDER, ModelStructure};
-use crate::eval::run;
+use crate::eval::run::{self, Outcome};
 use crate::eval::score::ParameterScore;
 use crate::random;
 use crate::record::recorder::{Profile, parse_rate, record_scenario_seeded};
@@ -55,6 +57,8 @@ use std::path::{Path, PathBuf};
 pub const CONVERGED: &str = "converged";
 /// Status of a row whose recording or estimate could not be made at all.
 pub const FAILED: &str = "failed";
+/// Status of a row whose estimator refused the record (a missing channel, …).
+pub const REFUSED: &str = "refused";
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -65,11 +69,47 @@ pub struct StudyFile {
     pub scenarios: Vec<String>,
     pub profile: String,
     pub models: Vec<String>,
-    pub methods: Vec<String>,
+    pub methods: StudyMethods,
     pub runs: usize,
     pub seed: u64,
     #[serde(default)]
     pub sweep: SweepSpec,
+}
+
+/// A study's methods: a list of names (`methods = ["ee", "oem"]`), or one
+/// settings table per method (`[methods.oem]`), run in registry order.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum StudyMethods {
+    Names(Vec<String>),
+    Tables(MethodTables),
+}
+
+impl StudyMethods {
+    /// The method names, in the order they run.
+    pub fn names(&self) -> Vec<String> {
+        match self {
+            StudyMethods::Names(names) => names.clone(),
+            StudyMethods::Tables(tables) => methods::names()
+                .into_iter()
+                .filter(|name| tables.contains_key(name))
+                .chain(
+                    tables
+                        .keys()
+                        .filter(|name| methods::find(name).is_err())
+                        .cloned(),
+                )
+                .collect(),
+        }
+    }
+
+    /// The settings tables (none for a list).
+    pub fn tables(&self) -> MethodTables {
+        match self {
+            StudyMethods::Names(_) => MethodTables::new(),
+            StudyMethods::Tables(tables) => tables.clone(),
+        }
+    }
 }
 
 /// The sweep axes; an empty axis leaves the profile as it is.
@@ -103,6 +143,8 @@ pub struct Study {
     pub profile: Profile,
     pub models: Vec<ModelStructure>,
     pub methods: Vec<String>,
+    /// The study's settings per method, overriding the models' and the scenarios'.
+    pub settings: MethodTables,
     /// Runs per sweep point.
     pub runs: usize,
     pub seed: u64,
@@ -230,6 +272,7 @@ impl Study {
             .map_err(|error| problems.push("profile", error.to_string()))
             .ok();
         check_methods(&file.methods, &mut problems);
+        check_method_tables(&file.methods.tables(), &mut problems);
         if file.runs == 0 || file.runs > u32::MAX as usize {
             problems.push("runs", format!("must be within 1..=2³², is {}", file.runs));
         }
@@ -266,7 +309,8 @@ impl Study {
             scenarios,
             profile,
             models,
-            methods: file.methods.clone(),
+            methods: file.methods.names(),
+            settings: file.methods.tables(),
             runs: file.runs,
             seed: file.seed,
             points,
@@ -321,22 +365,33 @@ impl Study {
         };
         let mut rows = Vec::new();
         for model in &self.models {
+            let mut outcomes: Vec<(&str, Outcome)> = Vec::new();
             for method in &self.methods {
                 let fit = Row {
                     model: model.name.clone(),
                     method: method.clone(),
                     ..template.clone()
                 };
-                let outcome =
-                    recorded
-                        .as_ref()
-                        .map_err(Error::to_string)
-                        .and_then(|(record, truth)| {
-                            run::estimate_scored(method, record, truth, model)
-                                .map_err(|e| e.to_string())
-                        });
-                match outcome {
-                    Ok((estimate, scores)) => {
+                let outcome = match &recorded {
+                    Ok((record, truth)) => {
+                        let start = methods::find(method)
+                            .ok()
+                            .and_then(|estimator| estimator.starts_from())
+                            .and_then(|from| outcomes.iter().find(|(name, _)| *name == from))
+                            .and_then(|(_, outcome)| outcome.estimate());
+                        run::estimate_scored(
+                            method,
+                            record,
+                            truth,
+                            model,
+                            &[&scenario.methods, &self.settings],
+                            start,
+                        )
+                    }
+                    Err(error) => Outcome::Failed(error.to_string()),
+                };
+                match &outcome {
+                    Outcome::Estimated { estimate, scores } => {
                         let (status, reason) = status_text(&estimate.status);
                         rows.extend(
                             scores
@@ -344,8 +399,17 @@ impl Study {
                                 .map(|s| parameter_row(&fit, status, &reason, s)),
                         );
                     }
-                    Err(reason) => rows.push(Row { reason, ..fit }),
+                    Outcome::Refused(refusal) => rows.push(Row {
+                        status: REFUSED.into(),
+                        reason: refusal.to_string(),
+                        ..fit
+                    }),
+                    Outcome::Failed(reason) => rows.push(Row {
+                        reason: reason.clone(),
+                        ..fit
+                    }),
                 }
+                outcomes.push((method, outcome));
             }
         }
         rows
@@ -406,19 +470,16 @@ fn load_each<T>(
         .collect()
 }
 
-fn check_methods(methods: &[String], problems: &mut Problems) {
-    if methods.is_empty() {
+fn check_methods(methods: &StudyMethods, problems: &mut Problems) {
+    let names = methods.names();
+    if names.is_empty() {
         problems.push("methods", "must name at least one");
     }
-    for (i, method) in methods.iter().enumerate() {
-        if !run::METHODS.contains(&method.as_str()) {
-            problems.push(
-                format!("methods[{i}]"),
-                format!(
-                    "unknown method '{method}'; known: {}",
-                    run::METHODS.join(", ")
-                ),
-            );
+    if let StudyMethods::Names(names) = methods {
+        for (i, method) in names.iter().enumerate() {
+            if let Err(error) = methods::find(method) {
+                problems.push(format!("methods[{i}]"), error.to_string());
+            }
         }
     }
 }
@@ -468,6 +529,10 @@ fn status_text(status: &Status) -> (&'static str, String) {
         Status::Converged => (CONVERGED, String::new()),
         Status::IterationLimit => ("iteration_limit", String::new()),
         Status::Diverged(reason) => ("diverged", reason.clone()),
+        Status::NoProgress => ("no_progress", String::new()),
+        Status::Unidentified(names) => ("unidentified", names.join(" ")),
+        Status::Degenerate(reason) => ("degenerate", reason.clone()),
+        Status::PoorFit(outputs) => ("poor_fit", outputs.join(" ")),
     }
 }
 

@@ -55,13 +55,32 @@
 
 use crate::record::Channel;
 
-/// Settings of the local polynomial differentiator.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Settings of the local polynomial differentiator (a settings table
+/// writes them as `differentiator = { half_width = "0.1 s", degree = 4 }`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct Differentiator {
     /// Half-width of the window (s); rounded to whole samples at the channel's rate.
+    #[serde(deserialize_with = "crate::units::seconds")]
     pub half_width: f64,
     /// Degree of the local polynomial (≥ 1).
     pub degree: usize,
+}
+
+impl Differentiator {
+    /// Problems with a differentiator read from a settings table.
+    pub fn problems(&self) -> Option<String> {
+        if !(self.half_width > 0.0 && self.half_width.is_finite()) {
+            Some(format!(
+                "differentiator.half_width must be positive, is {} s",
+                self.half_width
+            ))
+        } else if self.degree == 0 {
+            Some("differentiator.degree must be at least 1".to_string())
+        } else {
+            None
+        }
+    }
 }
 
 impl Default for Differentiator {

@@ -36,8 +36,9 @@ pub const FORMAT: &str = "aeroid-record-1";
 /// The header of the time column of every record CSV.
 pub const TIME_HEADER: &str = "time [s]";
 
-/// One recorded channel.
-#[derive(Debug, Clone, PartialEq)]
+/// One recorded channel. In JSON (an estimation problem) a dropout is `null`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Channel {
     pub name: String,
     /// SI unit (`rad`, `m/s`, `-`, …).
@@ -51,7 +52,22 @@ pub struct Channel {
     /// Sample instants (s), strictly increasing.
     pub times: Vec<f64>,
     /// Sample values; NaN marks a dropout.
+    #[serde(with = "nan_as_null")]
     pub values: Vec<f64>,
+}
+
+/// Serde for sample values: NaN (a dropout) as `null`, which JSON can hold.
+mod nan_as_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(values: &[f64], serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq(values.iter().map(|v| (!v.is_nan()).then_some(*v)))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<f64>, D::Error> {
+        let values = Vec::<Option<f64>>::deserialize(deserializer)?;
+        Ok(values.into_iter().map(|v| v.unwrap_or(f64::NAN)).collect())
+    }
 }
 
 impl Channel {
@@ -191,7 +207,8 @@ impl Channel {
 }
 
 /// A flight record: named channels with their own time bases.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FlightRecord {
     /// Scenario name (or the imported file's name).
     pub scenario: String,

@@ -66,6 +66,10 @@ pub struct ScenarioFile {
     /// Model structures (`models/` names or paths) that `aeroid run` fits to this scenario's record.
     #[serde(default)]
     pub models: Vec<String>,
+    /// Settings per estimation method (`[methods.oem]`, …), overriding the
+    /// model files' tables; checked against the methods by `aeroid check`.
+    #[serde(default)]
+    pub methods: std::collections::BTreeMap<String, toml::Table>,
     /// For a JSBSim aircraft: its rigid body and the properties set before trim.
     #[serde(default)]
     pub jsbsim: Option<JsbsimSpec>,
@@ -163,6 +167,8 @@ pub struct Scenario {
     /// The default recorder profile reference, if the file names one.
     pub recorder: Option<String>,
     pub models: Vec<String>,
+    /// The file's `[methods.NAME]` settings tables.
+    pub methods: std::collections::BTreeMap<String, toml::Table>,
     /// Set when the scenario flies one of JSBSim's own aircraft; `aircraft` is
     /// then its rigid body (`[jsbsim] rigid_body`), whose aerodynamic model is
     /// not the truth.
@@ -257,6 +263,7 @@ impl Scenario {
             departure,
             recorder: file.recorder.clone(),
             models: file.models.clone(),
+            methods: file.methods.clone(),
             jsbsim,
         };
         problems.finish(path, scenario)

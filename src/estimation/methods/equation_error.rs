@@ -1,6 +1,8 @@
 //! Equation error (least squares) estimation of aerodynamic derivatives —
 //! the comparison method of seeds 002 and 004 (seed 004 §3.1, Eqs. 25–27;
 //! Klein & Morelli, "Aircraft System Identification", AIAA 2006, ch. 5).
+//! Method `ee`; settings `[methods.ee]`: the differentiator of the angular
+//! rates and the lag of the coloured-residual bound ([`EquationErrorSettings`]).
 //!
 //! Inputs: a flight record with load factors, angular rates, air data,
 //! controls and (when the aircraft has thrust) throttle and altitude; a
@@ -48,13 +50,18 @@
 //!   regressions keep the samples next to the steps.
 
 use crate::error::{Error, Result};
+use crate::estimation::estimate::Status;
 use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
+use crate::estimation::estimator::{
+    Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
+};
+use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
     Reconstruction, ReconstructionOptions, Request, check_channels, reconstruct,
 };
-use crate::estimation::solver::gauss_newton::Status;
 use crate::estimation::solver::regression::{LagWindow, LeastSquares};
 use crate::estimation::structure::ModelStructure;
+use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
 use crate::sim::aero::{Coefficient, ForceAxes, ModelKind, Regressor};
 use nalgebra::{DMatrix, DVector};
@@ -72,6 +79,101 @@ pub struct EquationErrorOptions {
     /// differentiator puts into the residuals (±0.1 s) and than a
     /// short-period or Dutch-roll half-period of a transport aircraft.
     pub correlation_lag: f64,
+}
+
+/// The `[methods.ee]` table.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EquationErrorSettings {
+    /// The local polynomial differentiator of the angular rates.
+    pub differentiator: Differentiator,
+    /// Lag (s) to which the residual autocorrelation is summed in the
+    /// coloured-residual bound.
+    #[serde(deserialize_with = "crate::units::seconds")]
+    pub correlation_lag: f64,
+}
+
+impl Default for EquationErrorSettings {
+    fn default() -> Self {
+        let options = EquationErrorOptions::default();
+        EquationErrorSettings {
+            differentiator: Differentiator::default(),
+            correlation_lag: options.correlation_lag,
+        }
+    }
+}
+
+/// The meaning of each key of [`EquationErrorSettings`], for `aeroid methods`.
+pub(crate) const DIFFERENTIATOR_SETTING: (&str, &str) = (
+    "differentiator",
+    "local polynomial differentiator of the angular rates: { half_width = \"0.1 s\", degree = 4 }; a fast aircraft needs a narrower window",
+);
+const CORRELATION_LAG_SETTING: (&str, &str) = (
+    "correlation_lag",
+    "lag (s) to which residual autocorrelation is summed in the coloured-residual Cramér–Rao bound",
+);
+
+impl EquationErrorSettings {
+    /// Reads and checks a `[methods.ee]` table.
+    pub fn read(settings: &Settings) -> Result<EquationErrorSettings> {
+        let parsed: EquationErrorSettings = parse_settings(METHOD, settings)?;
+        check_settings(METHOD, &parsed.differentiator, parsed.correlation_lag)?;
+        Ok(parsed)
+    }
+
+    pub fn options(&self) -> EquationErrorOptions {
+        EquationErrorOptions {
+            reconstruction: ReconstructionOptions {
+                differentiator: Some(self.differentiator),
+                ..Default::default()
+            },
+            correlation_lag: self.correlation_lag,
+        }
+    }
+}
+
+/// Checks the settings equation error and stepwise regression share.
+pub(crate) fn check_settings(
+    method: &str,
+    differentiator: &Differentiator,
+    correlation_lag: f64,
+) -> Result<()> {
+    let problem = differentiator.problems().or_else(|| {
+        (!(correlation_lag >= 0.0 && correlation_lag.is_finite()))
+            .then(|| format!("correlation_lag must be at least 0 s, is {correlation_lag} s"))
+    });
+    match problem {
+        Some(message) => Err(Error::Other(format!("[methods.{method}]: {message}"))),
+        None => Ok(()),
+    }
+}
+
+/// Equation error as a registered method.
+pub struct EquationError;
+
+impl Estimator for EquationError {
+    fn info(&self) -> MethodInfo {
+        MethodInfo {
+            name: METHOD,
+            title: "equation error: least squares on coefficients reconstructed from accelerations and angular accelerations",
+            paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), ch. 5; Dhayalan, Saderla & Ghosh, reflex-wing UAV paper (ML, LS and neural Gauss–Newton)",
+            equations: "coefficients from accelerations (reflex-wing UAV paper, Eqs. 17–24); z = Xθ + ε, θ = (XᵀX)⁻¹Xᵀz (Eqs. 25–27); coloured-residual bounds (Morelli & Klein 1997)",
+            needs: "load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude, throttle when the aircraft has thrust; a model linear in its parameters",
+            settings: setting_infos(
+                &EquationErrorSettings::default(),
+                &[DIFFERENTIATOR_SETTING, CORRELATION_LAG_SETTING],
+            ),
+        }
+    }
+
+    fn check_settings(&self, settings: &Settings) -> Result<()> {
+        EquationErrorSettings::read(settings).map(|_| ())
+    }
+
+    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
+        let options = EquationErrorSettings::read(&problem.settings)?.options();
+        equation_error(problem.record(), &problem.structure, &options)
+    }
 }
 
 impl Default for EquationErrorOptions {
@@ -137,16 +239,11 @@ pub fn equation_error(
     // need differentiated rates, whose windows leave out the samples next
     // to a control step, and the force regressions keep those samples.
     let plans = plans(structure)?;
-    check_channels(
-        record,
-        &structure.aircraft,
-        &request(&plans),
-        "equation error",
-    )?;
+    check_channels(record, &structure.aircraft, &request(&plans), METHOD)?;
     let (forces, moments): (Vec<Plan>, Vec<Plan>) = plans
         .into_iter()
         .partition(|plan| plan.coefficient.is_force());
-    let reconstruction_options = options.reconstruction.for_structure(structure);
+    let reconstruction_options = &options.reconstruction;
     let mut results: Vec<CoefficientResult> = Vec::new();
     let mut notes: Vec<String> = Vec::new();
     let mut lag = 0;
@@ -155,8 +252,8 @@ pub fn equation_error(
             record,
             &structure.aircraft,
             &request(group),
-            &reconstruction_options,
-            "equation error",
+            reconstruction_options,
+            METHOD,
         )?;
         lag = (options.correlation_lag * reconstruction.rate).round() as usize;
         results.extend(
@@ -195,10 +292,11 @@ pub fn equation_error(
 fn plans(structure: &ModelStructure) -> Result<Vec<Plan>> {
     let aero = &structure.aircraft.aero;
     if aero.kind != ModelKind::Linear {
-        return Err(Error::Other(format!(
-            "equation error fits models that are linear in their parameters; {} is a {:?} model (χ is not measured): use output error",
-            structure.name, aero.kind
-        )));
+        return Err(Error::Refused(Refusal::NotLinearInParameters {
+            method: METHOD.to_string(),
+            model: structure.name.clone(),
+            model_kind: format!("{:?}", aero.kind).to_lowercase(),
+        }));
     }
     let oswald = aero.parameters.index("e");
     let plans: Vec<Plan> = Coefficient::ALL
@@ -212,10 +310,10 @@ fn plans(structure: &ModelStructure) -> Result<Vec<Plan>> {
         .filter(|plan| !plan.columns(structure).is_empty())
         .collect();
     if plans.is_empty() {
-        return Err(Error::Other(format!(
-            "{}: no free parameter to estimate",
-            structure.name
-        )));
+        return Err(Error::Refused(Refusal::NothingToEstimate {
+            method: METHOD.to_string(),
+            model: structure.name.clone(),
+        }));
     }
     Ok(plans)
 }
@@ -415,6 +513,7 @@ fn assemble(
         cost_history: Vec::new(),
         wall_time: 0.0,
         notes: Vec::new(),
+        details: String::new(),
     }
 }
 

@@ -100,18 +100,28 @@
 //! simulation.
 
 use crate::error::{Error, Result};
+use crate::estimation::estimate::Status;
 use crate::estimation::estimate::{Estimate, OutputFit};
-use crate::estimation::methods::equation_error::{EquationErrorOptions, equation_error};
+use crate::estimation::estimator::{
+    Estimator, MethodInfo, MissingChannel, Refusal, Settings, merge_settings, parse_settings,
+    setting_infos,
+};
+use crate::estimation::methods::equation_error::{
+    self, EquationErrorOptions, EquationErrorSettings, equation_error,
+};
 use crate::estimation::model::driven::{
     Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
+use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{
-    self, LeastSquaresProblem, NormalEquations, Options, Status,
+    self, LeastSquaresProblem, NormalEquations, Options,
 };
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
 use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
+use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DMatrixView, DVector};
+use serde::{Deserialize, Serialize};
 
 /// Convergence: the Gauss–Newton step's predicted decrease of the
 /// whitened cost, ½·ΔθᵀMΔθ ≤ 1e-4, a step under 0.014σ
@@ -142,37 +152,170 @@ const REFINE_DECREASE: f64 = 20.0;
 /// 1.3e-3 of the bounds at the estimate (module documentation).
 const HOLD_DECREASE: f64 = 1.0;
 
-/// Where the iterations start (see the module documentation); also the
-/// CLI's `--start` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+/// Where the iterations start (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Start {
     /// The model file's values; initial states first held (two stages).
+    #[serde(rename = "model")]
     Model,
     /// Equation error's estimates where the structure allows it and they
     /// fit the record better than the model file's values; otherwise as
     /// the model file's.
     #[default]
-    #[value(name = "ee")]
+    #[serde(rename = "ee")]
     EquationError,
 }
 
-/// Settings of an output-error run.
-#[derive(Debug, Clone, PartialEq)]
+/// Settings of an output-error run: the `[methods.oem]` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct OutputErrorOptions {
-    pub max_iterations: usize,
-    /// Fit only this time window (s) of every record; default the whole record.
-    pub window: Option<(f64, f64)>,
     pub start: Start,
+    pub max_iterations: usize,
+    /// Integration step (s); None: the fastest compared channel's period.
+    #[serde(
+        deserialize_with = "crate::units::optional_seconds",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub step: Option<f64>,
+    /// How the inputs are interpolated inside an integration step.
+    pub interpolation: Interpolation,
+    /// Initial values of the integrated states as unknowns (per manoeuvre).
+    pub estimate_initial_state: bool,
+    /// Outputs with a constant bias as an unknown.
+    pub output_biases: Vec<String>,
+    /// Fit only this time window (s) of every record; default the whole record.
+    #[serde(skip)]
+    pub window: Option<(f64, f64)>,
 }
 
 impl Default for OutputErrorOptions {
     fn default() -> Self {
         OutputErrorOptions {
-            max_iterations: 30,
-            window: None,
             start: Start::default(),
+            max_iterations: 30,
+            step: None,
+            interpolation: Interpolation::default(),
+            estimate_initial_state: false,
+            output_biases: Vec::new(),
+            window: None,
         }
     }
+}
+
+impl OutputErrorOptions {
+    /// The options a model file's `[methods.oem]` table sets.
+    pub fn for_structure(structure: &ModelStructure) -> Result<OutputErrorOptions> {
+        OutputErrorOptions::read(&merge_settings(METHOD, &[&structure.methods]))
+    }
+
+    /// Reads and checks a `[methods.oem]` table.
+    pub fn read(settings: &Settings) -> Result<OutputErrorOptions> {
+        let options: OutputErrorOptions = parse_settings(METHOD, settings)?;
+        if options
+            .step
+            .is_some_and(|step| !(step > 0.0 && step.is_finite()))
+        {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: step must be positive"
+            )));
+        }
+        if options.max_iterations == 0 {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: max_iterations must be at least 1"
+            )));
+        }
+        Ok(options)
+    }
+}
+
+/// Output error as a registered method.
+pub struct OutputError;
+
+impl Estimator for OutputError {
+    fn info(&self) -> MethodInfo {
+        MethodInfo {
+            name: METHOD,
+            title: "output error: maximum likelihood, Gauss–Newton on det(R) with the sensitivity equations",
+            paper: "Maine & Iliff, \"Application of parameter estimation to aircraft stability and control: the output-error approach\" (NASA RP-1168); Jategaonkar, \"Flight Vehicle System Identification\", ch. 4; Verma & Peyada 2020",
+            equations: "cost det(R), R = (1/N)·Σ e·eᵀ, Gauss–Newton steps (Verma & Peyada 2020, Eqs. 5–10); sensitivity equations Ṡ = (∂f/∂x)S + ∂f/∂θ (Jategaonkar §4.6); Cramér–Rao bounds from M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ)",
+            needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
+            settings: setting_infos(
+                &OutputErrorOptions::default(),
+                &[
+                    (
+                        "start",
+                        "\"ee\": equation error's estimates where they fit better than the model file's values; \"model\": the model file's values, initial states first held",
+                    ),
+                    ("max_iterations", "Gauss–Newton iterations at most"),
+                    (
+                        "step",
+                        "integration step, e.g. \"0.04 s\"; none: the fastest compared channel's period",
+                    ),
+                    (
+                        "interpolation",
+                        "inputs inside an integration step: \"zoh\" (hold) or \"linear\"",
+                    ),
+                    (
+                        "estimate_initial_state",
+                        "initial values of the integrated states as unknowns, per manoeuvre",
+                    ),
+                    (
+                        "output_biases",
+                        "outputs with a constant bias as an unknown",
+                    ),
+                ],
+            ),
+        }
+    }
+
+    fn check_settings(&self, settings: &Settings) -> Result<()> {
+        OutputErrorOptions::read(settings).map(|_| ())
+    }
+
+    fn starts_from(&self) -> Option<&'static str> {
+        Some(equation_error::METHOD)
+    }
+
+    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
+        let options = OutputErrorOptions::read(&problem.settings)?;
+        let records: Vec<&FlightRecord> = problem.records.iter().collect();
+        output_error_from(&records, &problem.structure, &options, start)
+    }
+}
+
+/// Method name in estimates.
+pub const METHOD: &str = "oem";
+
+/// The channels a record lacks that output error needs for `structure`:
+/// the compared outputs, and the flight-path states it does not integrate
+/// (the driven simulation's pseudo-controls; yaw and χ are not needed,
+/// the altitude may be a pressure altitude).
+fn missing_channels(record: &FlightRecord, structure: &ModelStructure) -> Vec<MissingChannel> {
+    let has = |name: &str| record.channel(name).is_ok();
+    let mut missing: Vec<MissingChannel> = structure
+        .outputs
+        .iter()
+        .filter(|name| !has(name))
+        .map(|name| MissingChannel {
+            name: name.clone(),
+            purpose: "a compared output".into(),
+        })
+        .collect();
+    for name in structure.pseudo_controls() {
+        let absent = match name {
+            "yaw" | "chi" => false,
+            "altitude" => !has(name) && !has("pressure_altitude"),
+            _ => !has(name),
+        };
+        if absent && !missing.iter().any(|m| m.name == name) {
+            missing.push(MissingChannel {
+                name: name.to_string(),
+                purpose: "a pseudo-control (a state the model does not integrate)".into(),
+            });
+        }
+    }
+    missing
 }
 
 /// An unknown of the fit.
@@ -281,11 +424,41 @@ pub fn output_error(
     structure: &ModelStructure,
     options: &OutputErrorOptions,
 ) -> Result<Estimate> {
+    output_error_from(records, structure, options, None)
+}
+
+/// Output error with equation error's estimate on the first record given
+/// (else computed when the start asks for it).
+pub fn output_error_from(
+    records: &[&FlightRecord],
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+    regression: Option<&Estimate>,
+) -> Result<Estimate> {
     let started = std::time::Instant::now();
+    for record in records {
+        let present = record.channels.iter().map(|c| c.name.clone()).collect();
+        if let Some(refusal) =
+            Refusal::missing(METHOD, missing_channels(record, structure), present)
+        {
+            return Err(Error::Refused(refusal));
+        }
+    }
+    if let Some(name) = options
+        .output_biases
+        .iter()
+        .find(|name| !structure.outputs.contains(name))
+    {
+        return Err(Error::Other(format!(
+            "[methods.{METHOD}] output_biases: '{name}' is not among the outputs of model '{}' ({})",
+            structure.name,
+            structure.outputs.join(", ")
+        )));
+    }
     let mut problem = Problem::new(records, structure, options)?;
     let mut notes = Vec::new();
     let from_equation_error = options.start == Start::EquationError
-        && problem.start_from_equation_error(records[0], structure, &mut notes);
+        && problem.start_from_equation_error(records[0], structure, regression, &mut notes);
     let original_start = problem.current();
     let solver_options = |unknowns: &[Unknown], decrease: f64| {
         let mut solver_options = Options::new(unknowns.len());
@@ -372,7 +545,11 @@ pub fn proof_of_match(
             aircraft.aero.parameters.set(&p.name, p.value)?;
         }
     }
-    let segment = segment(record, structure, &OutputErrorOptions::default())?;
+    let segment = segment(
+        record,
+        structure,
+        &OutputErrorOptions::for_structure(structure)?,
+    )?;
     let mut problem = Problem {
         model: FlightModel::new(aircraft, Default::default()),
         all: Vec::new(),
@@ -435,8 +612,12 @@ fn window(
 }
 
 /// The integration step: the structure's, else the fastest output channel's period.
-fn step(record: &FlightRecord, structure: &ModelStructure) -> Result<f64> {
-    if let Some(step) = structure.step {
+fn step(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+) -> Result<f64> {
+    if let Some(step) = options.step {
         return Ok(step);
     }
     let mut fastest: f64 = 0.0;
@@ -452,11 +633,11 @@ fn segment(
     options: &OutputErrorOptions,
 ) -> Result<Segment> {
     let window = window(record, structure, options)?;
-    let step = step(record, structure)?;
+    let step = step(record, structure, options)?;
     let simulation = DrivenSimulation::from_record(
         record,
         &structure.integrate,
-        structure.interpolation,
+        options.interpolation,
         step,
         window,
     )?;
@@ -501,12 +682,16 @@ fn segment(
     })
 }
 
-fn unknowns(structure: &ModelStructure, segments: &[Segment]) -> Vec<Unknown> {
+fn unknowns(
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+    segments: &[Segment],
+) -> Vec<Unknown> {
     let mut unknowns: Vec<Unknown> = (0..structure.free.len())
         .filter(|&i| structure.free[i])
         .map(Unknown::Aero)
         .collect();
-    if structure.estimate_initial_state {
+    if options.estimate_initial_state {
         for segment in 0..segments.len() {
             unknowns.extend(
                 structure
@@ -517,7 +702,7 @@ fn unknowns(structure: &ModelStructure, segments: &[Segment]) -> Vec<Unknown> {
             );
         }
     }
-    for name in &structure.output_biases {
+    for name in &options.output_biases {
         if let Some(output) = structure.outputs.iter().position(|o| o == name) {
             unknowns.push(Unknown::Bias { output });
         }
@@ -536,7 +721,7 @@ impl Problem {
             .iter()
             .map(|record| segment(record, structure, options))
             .collect::<Result<Vec<_>>>()?;
-        let all = unknowns(structure, &segments);
+        let all = unknowns(structure, options, &segments);
         Ok(Problem {
             model: FlightModel::new(structure.aircraft.clone(), Default::default()),
             unknowns: all.clone(),
@@ -565,13 +750,27 @@ impl Problem {
         &mut self,
         record: &FlightRecord,
         structure: &ModelStructure,
+        given: Option<&Estimate>,
         notes: &mut Vec<String>,
     ) -> bool {
+        // Equation error as the model's `[methods.ee]` table sets it; its
+        // bounds are not needed.
+        let ee_settings = merge_settings(equation_error::METHOD, &[&structure.methods]);
         let options = EquationErrorOptions {
             correlation_lag: 0.0,
-            ..Default::default()
+            ..EquationErrorSettings::read(&ee_settings)
+                .map(|settings| settings.options())
+                .unwrap_or_default()
         };
-        let estimate = match equation_error(record, structure, &options) {
+        let computed;
+        let estimate = match given {
+            Some(estimate) => Ok(estimate),
+            None => {
+                computed = equation_error(record, structure, &options);
+                computed.as_ref().map_err(|e| e.to_string())
+            }
+        };
+        let estimate = match estimate {
             Ok(estimate) if estimate.status == Status::Converged => estimate,
             Ok(estimate) => {
                 notes.push(format!(
@@ -1204,6 +1403,11 @@ fn assemble(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The model file's `[methods.oem]` options.
+    fn model_options(structure: &ModelStructure) -> OutputErrorOptions {
+        OutputErrorOptions::for_structure(structure).unwrap()
+    }
     use crate::estimation::structure::stall_test_structure;
     use crate::record::recorder::{Profile, record_scenario};
     use crate::sim::scenario::Scenario;
@@ -1227,7 +1431,7 @@ mod tests {
             let structure = stall_test_structure(tau1);
             let options = OutputErrorOptions {
                 window: Some((20.0, 28.0)),
-                ..Default::default()
+                ..model_options(&structure)
             };
             let mut problem = Problem::new(&[&record], &structure, &options).unwrap();
             problem.linearise = Linearise::Stages;
@@ -1274,7 +1478,8 @@ mod tests {
             (record, stall_test_structure(0.2))
         };
         for (record, structure) in [lateral_benchmark(), stall] {
-            let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
+            let mut problem =
+                Problem::new(&[&record], &structure, &model_options(&structure)).unwrap();
             for linearise in [Linearise::GridPoints, Linearise::Stages] {
                 problem.linearise = linearise;
                 let wide = problem.grid(0, true).unwrap();
@@ -1298,7 +1503,7 @@ mod tests {
     #[test]
     fn normal_equations_from_output_blocks_are_jtj_and_jtr() {
         let (record, structure) = lateral_benchmark();
-        let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
+        let mut problem = Problem::new(&[&record], &structure, &model_options(&structure)).unwrap();
         let theta = problem.current();
         let options = Options::new(theta.len());
         problem.reweight(&theta).unwrap();
@@ -1359,9 +1564,9 @@ mod tests {
     #[test]
     fn bounds_from_a_held_jacobian_match_a_fresh_one() {
         let (record, structure) = lateral_benchmark();
-        let estimate = output_error(&[&record], &structure, &Default::default()).unwrap();
+        let estimate = output_error(&[&record], &structure, &model_options(&structure)).unwrap();
         assert_eq!(estimate.status, Status::Converged);
-        let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
+        let mut problem = Problem::new(&[&record], &structure, &model_options(&structure)).unwrap();
         let value = |name: &str| {
             let p = estimate.parameters.iter().find(|p| p.name == name);
             p.expect("an estimated unknown").value
@@ -1408,7 +1613,7 @@ mod tests {
     #[test]
     fn grid_point_jacobian_is_close_on_the_lateral_case() {
         let (record, structure) = lateral_benchmark();
-        let mut problem = Problem::new(&[&record], &structure, &Default::default()).unwrap();
+        let mut problem = Problem::new(&[&record], &structure, &model_options(&structure)).unwrap();
         let theta = problem.current();
         problem.reweight(&theta).unwrap();
         let solver = Options::new(theta.len());

@@ -44,14 +44,21 @@
 //! `min_r_squared_gain` there.
 
 use crate::error::{Error, Result};
+use crate::estimation::estimate::Status;
 use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
-use crate::estimation::methods::equation_error::record_name;
+use crate::estimation::estimator::{
+    Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
+};
+use crate::estimation::methods::equation_error::{
+    DIFFERENTIATOR_SETTING, check_settings, record_name,
+};
+use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
     Reconstruction, ReconstructionOptions, Request, missing_channels, reconstruct,
 };
-use crate::estimation::solver::gauss_newton::Status;
 use crate::estimation::solver::regression::LeastSquares;
 use crate::estimation::structure::ModelStructure;
+use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
 use crate::sim::aero::{Coefficient, ForceAxes, Regressor};
 use nalgebra::{DMatrix, DVector};
@@ -78,6 +85,125 @@ pub struct StepwiseOptions {
     pub reconstruction: ReconstructionOptions,
     /// Lag (s) of the coloured-residual bound of the final estimates (see equation error).
     pub correlation_lag: f64,
+}
+
+/// The `[methods.swr]` table.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StepwiseSettings {
+    pub differentiator: Differentiator,
+    #[serde(deserialize_with = "crate::units::seconds")]
+    pub correlation_lag: f64,
+    pub f_to_enter: f64,
+    pub f_to_remove: f64,
+    pub min_r_squared_gain: f64,
+    pub candidates: Option<Vec<String>>,
+    pub max_steps: usize,
+}
+
+impl Default for StepwiseSettings {
+    fn default() -> Self {
+        let options = StepwiseOptions::default();
+        StepwiseSettings {
+            differentiator: Differentiator::default(),
+            correlation_lag: options.correlation_lag,
+            f_to_enter: options.f_to_enter,
+            f_to_remove: options.f_to_remove,
+            min_r_squared_gain: options.min_r_squared_gain,
+            candidates: options.candidates,
+            max_steps: options.max_steps,
+        }
+    }
+}
+
+impl StepwiseSettings {
+    /// Reads and checks a `[methods.swr]` table.
+    pub fn read(settings: &Settings) -> Result<StepwiseSettings> {
+        let parsed: StepwiseSettings = parse_settings(METHOD, settings)?;
+        check_settings(METHOD, &parsed.differentiator, parsed.correlation_lag)?;
+        let invalid = |message: String| Err(Error::Other(format!("[methods.{METHOD}]: {message}")));
+        if !(parsed.f_to_enter > 0.0 && parsed.f_to_remove > 0.0)
+            || parsed.f_to_remove > parsed.f_to_enter
+        {
+            return invalid(format!(
+                "f_to_enter ({}) and f_to_remove ({}) must be positive, f_to_remove at most f_to_enter",
+                parsed.f_to_enter, parsed.f_to_remove
+            ));
+        }
+        if parsed.min_r_squared_gain.is_nan() || parsed.min_r_squared_gain < 0.0 {
+            return invalid("min_r_squared_gain must be at least 0".into());
+        }
+        for candidate in parsed.candidates.iter().flatten() {
+            Candidate::parse(candidate)?;
+        }
+        Ok(parsed)
+    }
+
+    pub fn options(&self) -> StepwiseOptions {
+        StepwiseOptions {
+            f_to_enter: self.f_to_enter,
+            f_to_remove: self.f_to_remove,
+            min_r_squared_gain: self.min_r_squared_gain,
+            candidates: self.candidates.clone(),
+            max_steps: self.max_steps,
+            reconstruction: ReconstructionOptions {
+                differentiator: Some(self.differentiator),
+                ..Default::default()
+            },
+            correlation_lag: self.correlation_lag,
+        }
+    }
+}
+
+/// Stepwise regression as a registered method: every coefficient the
+/// model has terms in, the selected terms estimated together.
+pub struct StepwiseRegression;
+
+impl Estimator for StepwiseRegression {
+    fn info(&self) -> MethodInfo {
+        MethodInfo {
+            name: METHOD,
+            title: "stepwise regression: model-structure determination by F-to-enter/F-to-remove on reconstructed coefficients",
+            paper: "Efroymson (1960), in Ralston & Wilf, \"Mathematical Methods for Digital Computers\"; Draper & Smith, \"Applied Regression Analysis\"; Klein & Morelli, \"Aircraft System Identification\", §5.4",
+            equations: "partial F statistics to enter and remove terms, PRESS (Klein & Morelli Eqs. 5.83–5.92); coefficients from accelerations as equation error",
+            needs: "as equation error: load factors, angular rates, air data, controls",
+            settings: setting_infos(
+                &StepwiseSettings::default(),
+                &[
+                    DIFFERENTIATOR_SETTING,
+                    (
+                        "correlation_lag",
+                        "lag (s) of the coloured-residual bound of the final estimates",
+                    ),
+                    ("f_to_enter", "partial F a term needs to enter"),
+                    (
+                        "f_to_remove",
+                        "partial F below which a term leaves (at most f_to_enter)",
+                    ),
+                    (
+                        "min_r_squared_gain",
+                        "a term enters only if it raises R² by at least this fraction",
+                    ),
+                    (
+                        "candidates",
+                        "candidate terms (regressor keys, products a*b, squares a^2); none: every regressor the record supplies and the default products",
+                    ),
+                    ("max_steps", "most entries and removals per coefficient"),
+                ],
+            ),
+        }
+    }
+
+    fn check_settings(&self, settings: &Settings) -> Result<()> {
+        StepwiseSettings::read(settings).map(|_| ())
+    }
+
+    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
+        let options = StepwiseSettings::read(&problem.settings)?.options();
+        let (reports, mut estimate) = stepwise_all(problem.record(), &problem.structure, &options)?;
+        estimate.details = reports.iter().map(|r| format!("{r}\n")).collect();
+        Ok(estimate)
+    }
 }
 
 impl Default for StepwiseOptions {
@@ -209,6 +335,7 @@ pub struct StepwiseReport {
 pub fn stepwise_all(
     record: &FlightRecord,
     structure: &ModelStructure,
+    options: &StepwiseOptions,
 ) -> Result<(Vec<StepwiseReport>, Estimate)> {
     let mut reports = Vec::new();
     let mut combined: Option<Estimate> = None;
@@ -216,7 +343,7 @@ pub fn stepwise_all(
         if structure.aircraft.aero.terms(coefficient).next().is_none() {
             continue;
         }
-        let report = stepwise(record, structure, coefficient, &StepwiseOptions::default())?;
+        let report = stepwise(record, structure, coefficient, options)?;
         let estimate = report.estimate();
         reports.push(report);
         combined = Some(match combined {
@@ -232,10 +359,10 @@ pub fn stepwise_all(
         });
     }
     let estimate = combined.ok_or_else(|| {
-        crate::Error::Other(format!(
-            "the model '{}' has no coefficient terms",
-            structure.name
-        ))
+        Error::Refused(Refusal::NothingToEstimate {
+            method: METHOD.to_string(),
+            model: structure.name.clone(),
+        })
     })?;
     Ok((reports, estimate))
 }
@@ -274,13 +401,7 @@ pub fn stepwise(
     if request.regressors.contains(&Regressor::LiftSquared) && coefficient != Coefficient::Lift {
         request.coefficients.push(Coefficient::Lift);
     }
-    let data = reconstruct(
-        record,
-        aircraft,
-        &request,
-        &options.reconstruction.for_structure(structure),
-        "stepwise regression",
-    )?;
+    let data = reconstruct(record, aircraft, &request, &options.reconstruction, METHOD)?;
     if data.times.len() < 3 {
         return Err(Error::Other(format!(
             "stepwise regression of {name}: {} usable samples",
@@ -656,6 +777,7 @@ impl StepwiseReport {
                     "standard errors: Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein 1997)".to_string(),
                 ])
                 .collect(),
+            details: String::new(),
         }
     }
 }

@@ -28,6 +28,7 @@
 //! The problem is separate from the solver: the problem computes residuals;
 //! this module owns iteration, termination and the convergence history.
 
+use crate::estimation::estimate::Status;
 use nalgebra::{DMatrix, DVector};
 
 /// A nonlinear least-squares problem in weighted residual form.
@@ -169,15 +170,6 @@ impl Options {
             .abs()
             .max(self.typical.get(j).copied().unwrap_or(1e-3))
     }
-}
-
-/// How a run ended.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case", tag = "status", content = "reason")]
-pub enum Status {
-    Converged,
-    IterationLimit,
-    Diverged(String),
 }
 
 /// One iteration's record.
@@ -379,11 +371,18 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             }
             // Converged at θ (the predicted decrease is below the tolerance,
             // or no step lowers the cost), whose residuals and Jacobian are
-            // at hand.
+            // at hand; but where no step ever lowered the cost from the
+            // start while the Gauss–Newton step predicts a decrease beyond
+            // rounding, the iterations made no progress.
+            let at_optimum = converged || predicted <= options.cost_tolerance * cost;
             return Solution {
                 theta,
                 cost,
-                status: Status::Converged,
+                status: if history.is_empty() && !at_optimum {
+                    Status::NoProgress
+                } else {
+                    Status::Converged
+                },
                 history,
                 information,
                 residuals,
@@ -683,6 +682,31 @@ mod tests {
         );
         assert_eq!(solution.status, Status::Converged);
         assert!((solution.theta[0] - 1.0).abs() < 1e-12);
+    }
+
+    /// A problem whose Jacobian points the wrong way: every Gauss–Newton
+    /// step, halved or damped, raises the cost, so no step is ever taken.
+    /// That is no progress from the start, not convergence; with the right
+    /// Jacobian the same problem converges at once.
+    #[test]
+    fn no_step_from_the_start_is_no_progress() {
+        struct Misleading(f64);
+        impl LeastSquaresProblem for Misleading {
+            fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, String> {
+                Ok(DVector::from_element(1, t[0] - 1.0))
+            }
+            fn jacobian(&mut self, _: &DVector<f64>, _: &Options) -> Result<DMatrix<f64>, String> {
+                Ok(DMatrix::from_element(1, 1, self.0))
+            }
+        }
+        let start = DVector::from_element(1, 3.0);
+        let stuck = solve(&mut Misleading(-1.0), &start, &Options::new(1));
+        assert_eq!(stuck.status, Status::NoProgress);
+        assert!(stuck.history.is_empty());
+        assert_eq!(stuck.theta[0], 3.0);
+        let solved = solve(&mut Misleading(1.0), &start, &Options::new(1));
+        assert_eq!(solved.status, Status::Converged);
+        assert!((solved.theta[0] - 1.0).abs() < 1e-12);
     }
 
     /// Linear model y = a + b·t with white noise of σ: the Cramér–Rao variance

@@ -1,0 +1,261 @@
+//! The estimator interface. Every method is one type implementing
+//! [`Estimator`] in its own file under `methods/`, registered by one line
+//! in [`crate::estimation::methods`]; the command line, `run`, `gate`,
+//! `study` and the reports find methods only through that registry.
+//!
+//! A method reads one [`EstimationProblem`] (the record or records, the
+//! model structure with its free parameters, start values and bounds, and
+//! its own settings, the resolved `[methods.NAME]` table) and returns an
+//! [`Estimate`], or refuses with a [`Refusal`] that says, as data, what the
+//! record or the model lacks. Settings are plain tables: a method declares
+//! each key with its default and meaning ([`MethodInfo::settings`]) and
+//! parses the table into its own settings type ([`parse_settings`]).
+
+use crate::error::{Error, Problems, Result};
+use crate::estimation::estimate::Estimate;
+use crate::estimation::problem::EstimationProblem;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// A method's settings: the merged `[methods.NAME]` table, as JSON values.
+pub type Settings = serde_json::Map<String, serde_json::Value>;
+
+/// `[methods.NAME]` tables as a file carries them, keyed by method name.
+pub type MethodTables = BTreeMap<String, toml::Table>;
+
+/// What `aeroid methods` shows of an estimator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodInfo {
+    /// The name used on the command line and in files (`ee`, `oem`, …).
+    pub name: &'static str,
+    /// What the method is, in a few words.
+    pub title: &'static str,
+    /// The papers and books it follows (author, title).
+    pub paper: &'static str,
+    /// The equations it implements, with their numbers in the papers.
+    pub equations: &'static str,
+    /// The channels and model structures it needs.
+    pub needs: &'static str,
+    /// Every setting of its `[methods.NAME]` table.
+    pub settings: Vec<SettingInfo>,
+}
+
+/// One key of a method's settings table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SettingInfo {
+    pub name: &'static str,
+    /// The default, as it would be written in a TOML file.
+    pub default: String,
+    pub meaning: &'static str,
+}
+
+/// An estimation method.
+pub trait Estimator: Send + Sync {
+    /// Name, paper, equations, needs and settings.
+    fn info(&self) -> MethodInfo;
+
+    /// Checks a settings table: every key known, every value well formed.
+    fn check_settings(&self, settings: &Settings) -> Result<()>;
+
+    /// The method whose estimate this one can take as its start (output
+    /// error: equation error's). A caller that has that estimate for the
+    /// same problem passes it to [`Estimator::estimate`].
+    fn starts_from(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// Estimates the problem's parameters, or refuses it
+    /// ([`Error::Refused`]) when the record or the model cannot serve.
+    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate>;
+}
+
+/// Parses a settings table into a method's settings type, naming the
+/// method and the offending key in the error.
+pub fn parse_settings<T: DeserializeOwned>(method: &str, settings: &Settings) -> Result<T> {
+    serde_json::from_value(serde_json::Value::Object(settings.clone()))
+        .map_err(|error| Error::Other(format!("[methods.{method}]: {error}")))
+}
+
+/// The settings list of [`MethodInfo`]: each key of `defaults` (a method's
+/// default settings, serialised) with its meaning from `meanings`. A key
+/// without a meaning, or a meaning without a key, is a programming error
+/// caught by the methods' tests.
+pub fn setting_infos<T: Serialize>(
+    defaults: &T,
+    meanings: &[(&'static str, &'static str)],
+) -> Vec<SettingInfo> {
+    let values = serde_json::to_value(defaults).unwrap_or_default();
+    meanings
+        .iter()
+        .map(|&(name, meaning)| SettingInfo {
+            name,
+            default: values
+                .get(name)
+                .map_or_else(|| "(none)".to_string(), toml_text),
+            meaning,
+        })
+        .collect()
+}
+
+/// A JSON value written the way a TOML file would write it.
+fn toml_text(value: &serde_json::Value) -> String {
+    match value {
+        serde_json::Value::Null => "(none)".to_string(),
+        other => other.to_string(),
+    }
+}
+
+/// Merges `[methods.NAME]` tables key by key: later layers override
+/// earlier ones (model file, then scenario, then study or gate case).
+pub fn merge_settings(method: &str, layers: &[&MethodTables]) -> Settings {
+    let mut merged = Settings::new();
+    for layer in layers {
+        if let Some(table) = layer.get(method) {
+            for (key, value) in table {
+                let value = serde_json::to_value(value).unwrap_or(serde_json::Value::Null);
+                merged.insert(key.clone(), value);
+            }
+        }
+    }
+    merged
+}
+
+/// Checks a file's `[methods.NAME]` tables: each names a registered method
+/// and holds settings that method accepts. Problems are named
+/// `methods.NAME`.
+pub fn check_method_tables(tables: &MethodTables, problems: &mut Problems) {
+    for (name, table) in tables {
+        let field = format!("methods.{name}");
+        match crate::estimation::methods::find(name) {
+            Ok(estimator) => {
+                if let Err(error) = estimator.check_settings(&merge_settings(
+                    name,
+                    &[&MethodTables::from([(name.clone(), table.clone())])],
+                )) {
+                    problems.push(field, error.to_string());
+                }
+            }
+            Err(error) => problems.push(field, error.to_string()),
+        }
+    }
+}
+
+/// Why an estimator cannot run on a problem, as data a program can read.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Refusal {
+    /// The record lacks channels the method needs.
+    MissingChannels {
+        method: String,
+        channels: Vec<MissingChannel>,
+        /// The channels the record has.
+        present: Vec<String>,
+    },
+    /// The method fits only models linear in their parameters.
+    NotLinearInParameters {
+        method: String,
+        model: String,
+        /// The model's kind (`stall`, …).
+        model_kind: String,
+    },
+    /// The model leaves the method nothing to estimate.
+    NothingToEstimate { method: String, model: String },
+}
+
+/// A needed channel and what it is needed for.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MissingChannel {
+    pub name: String,
+    pub purpose: String,
+}
+
+/// The kind of a [`Refusal`], as gate files and tests name it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RefusalKind {
+    MissingChannels,
+    NotLinearInParameters,
+    NothingToEstimate,
+}
+
+impl Refusal {
+    pub fn kind(&self) -> RefusalKind {
+        match self {
+            Refusal::MissingChannels { .. } => RefusalKind::MissingChannels,
+            Refusal::NotLinearInParameters { .. } => RefusalKind::NotLinearInParameters,
+            Refusal::NothingToEstimate { .. } => RefusalKind::NothingToEstimate,
+        }
+    }
+
+    /// The names of the missing channels (empty for other kinds).
+    pub fn missing_channels(&self) -> Vec<&str> {
+        match self {
+            Refusal::MissingChannels { channels, .. } => {
+                channels.iter().map(|c| c.name.as_str()).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    /// A refusal for missing channels, or None when nothing is missing.
+    pub fn missing(
+        method: &str,
+        missing: Vec<MissingChannel>,
+        present: Vec<String>,
+    ) -> Option<Self> {
+        (!missing.is_empty()).then(|| Refusal::MissingChannels {
+            method: method.to_string(),
+            channels: missing,
+            present,
+        })
+    }
+}
+
+impl fmt::Display for RefusalKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let text = serde_json::to_value(self)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
+        f.write_str(&text)
+    }
+}
+
+impl fmt::Display for Refusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Refusal::MissingChannels {
+                method,
+                channels,
+                present,
+            } => write!(
+                f,
+                "{method} needs channel{} {} that the record does not have; channels present: {}",
+                if channels.len() > 1 { "s" } else { "" },
+                channels
+                    .iter()
+                    .map(|c| format!("'{}' (for {})", c.name, c.purpose))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                present.join(", ")
+            ),
+            Refusal::NotLinearInParameters {
+                method,
+                model,
+                model_kind,
+            } => write!(
+                f,
+                "{method} fits models that are linear in their parameters; {model} is a {model_kind} model (χ is not measured): use output error"
+            ),
+            Refusal::NothingToEstimate { method, model } => {
+                write!(
+                    f,
+                    "{method}: the model '{model}' has no free parameter to estimate"
+                )
+            }
+        }
+    }
+}

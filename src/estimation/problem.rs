@@ -1,0 +1,226 @@
+//! The estimation problem: everything an estimator reads, resolved — the
+//! record or records (every channel in SI at its own sample instants, NaN a
+//! dropout), the model structure (its file and its aircraft's file, its
+//! free and fixed parameters with start values and bounds, the integrated
+//! states, the pseudo-controls and the compared outputs) and the method's
+//! settings (its `[methods.NAME]` tables merged: model file, then scenario,
+//! then study or gate case).
+//!
+//! It serialises to JSON and reads back identically: the contract for
+//! estimators written in other languages. The JSON holds the source files
+//! of the model (so aeroid rebuilds the same structure from it) beside the
+//! resolved view a foreign program reads directly (`parameters`,
+//! `integrate`, `pseudo_controls`, `outputs`). A dropout is `null`, an
+//! unbounded side of a parameter's range is `null`.
+//!
+//! ```json
+//! { "format": "aeroid-estimation-problem-1", "method": "oem",
+//!   "settings": { "estimate_initial_state": true },
+//!   "parameters": [ { "name": "Cl_beta", "start": -0.05, "free": true,
+//!                     "lower": null, "upper": null } ],
+//!   "integrate": ["beta", "p", "r", "roll"], "pseudo_controls": ["airspeed", …],
+//!   "outputs": ["beta", "p", "r", "roll", "ny"],
+//!   "model": { "structure": { … model file … }, "aircraft": { … aircraft file … } },
+//!   "records": [ { "scenario": "…", "channels": [ { "name": "p", "unit": "rad/s",
+//!                  "rate": 25.0, "times": [ … ], "values": [ … ] } ] } ] }
+//! ```
+
+use crate::error::{Error, Result};
+use crate::estimation::estimator::{MethodTables, Settings, merge_settings};
+use crate::estimation::methods;
+use crate::estimation::structure::{ModelStructure, StructureFile};
+use crate::record::FlightRecord;
+use crate::sim::aircraft::AircraftFile;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The format tag of a problem's JSON.
+pub const FORMAT: &str = "aeroid-estimation-problem-1";
+
+/// One estimator's problem.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EstimationProblem {
+    /// The registered method that solves it.
+    pub method: String,
+    /// One record, or several manoeuvres fitted together.
+    pub records: Vec<FlightRecord>,
+    pub structure: ModelStructure,
+    /// The method's settings: the merged `[methods.NAME]` tables.
+    pub settings: Settings,
+}
+
+impl EstimationProblem {
+    /// The problem of `method` on `records`, its settings the structure's
+    /// `[methods.NAME]` table overridden key by key by each of `layers`
+    /// (scenario, then study or gate case). Fails on an unknown method or
+    /// settings it does not accept.
+    pub fn new(
+        method: &str,
+        records: Vec<FlightRecord>,
+        structure: ModelStructure,
+        layers: &[&MethodTables],
+    ) -> Result<EstimationProblem> {
+        let estimator = methods::find(method)?;
+        let mut all = vec![&structure.methods];
+        all.extend_from_slice(layers);
+        let settings = merge_settings(method, &all);
+        estimator.check_settings(&settings)?;
+        if records.is_empty() {
+            return Err(Error::Other(format!(
+                "{method} on model '{}': no record given",
+                structure.name
+            )));
+        }
+        Ok(EstimationProblem {
+            method: method.to_string(),
+            records,
+            structure,
+            settings,
+        })
+    }
+
+    /// The first (or only) record.
+    pub fn record(&self) -> &FlightRecord {
+        &self.records[0]
+    }
+
+    /// The problem as JSON (see the module documentation).
+    pub fn to_json(&self) -> Result<String> {
+        let document = Document::of(self);
+        serde_json::to_string_pretty(&document)
+            .map_err(|e| Error::Other(format!("estimation problem as JSON: {e}")))
+    }
+
+    /// Reads a problem written by [`EstimationProblem::to_json`]; `origin`
+    /// names the file in errors. The structure is rebuilt from the files
+    /// the JSON carries and must agree with its resolved view.
+    pub fn from_json(text: &str, origin: &Path) -> Result<EstimationProblem> {
+        let document: Document = serde_json::from_str(text).map_err(|e| {
+            Error::Other(format!(
+                "{}: not an estimation problem: line {}, column {}: {e}",
+                origin.display(),
+                e.line(),
+                e.column()
+            ))
+        })?;
+        if document.format != FORMAT {
+            return Err(Error::Other(format!(
+                "{}: format '{}' is not '{FORMAT}'",
+                origin.display(),
+                document.format
+            )));
+        }
+        let path = PathBuf::from(&document.model.path);
+        let structure =
+            ModelStructure::from_parts(&document.model.structure, &document.model.aircraft, &path)?;
+        let resolved = Document::parameters(&structure);
+        if resolved != document.parameters {
+            return Err(Error::Other(format!(
+                "{}: the parameters do not agree with the model files they came with",
+                origin.display()
+            )));
+        }
+        methods::find(&document.method)?.check_settings(&document.settings)?;
+        if document.records.is_empty() {
+            return Err(Error::Other(format!("{}: no record", origin.display())));
+        }
+        Ok(EstimationProblem {
+            method: document.method,
+            records: document.records,
+            structure,
+            settings: document.settings,
+        })
+    }
+
+    pub fn write_json(&self, path: &Path) -> Result<()> {
+        std::fs::write(path, self.to_json()?).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    pub fn read_json(path: &Path) -> Result<EstimationProblem> {
+        EstimationProblem::from_json(&crate::error::read_text(path)?, path)
+    }
+}
+
+/// One parameter of the model as the problem states it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProblemParameter {
+    pub name: String,
+    pub start: f64,
+    pub free: bool,
+    /// None: unbounded below.
+    pub lower: Option<f64>,
+    /// None: unbounded above.
+    pub upper: Option<f64>,
+}
+
+/// The model's source files.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelDocument {
+    /// Where the model file was read from (named in errors).
+    path: String,
+    structure: StructureFile,
+    aircraft: AircraftFile,
+}
+
+/// The JSON form.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Document {
+    format: String,
+    method: String,
+    settings: Settings,
+    parameters: Vec<ProblemParameter>,
+    integrate: Vec<String>,
+    pseudo_controls: Vec<String>,
+    outputs: Vec<String>,
+    model: ModelDocument,
+    records: Vec<FlightRecord>,
+}
+
+impl Document {
+    fn of(problem: &EstimationProblem) -> Document {
+        let structure = &problem.structure;
+        Document {
+            format: FORMAT.to_string(),
+            method: problem.method.clone(),
+            settings: problem.settings.clone(),
+            parameters: Document::parameters(structure),
+            integrate: structure.file.integrate.clone(),
+            pseudo_controls: structure
+                .pseudo_controls()
+                .into_iter()
+                .map(String::from)
+                .collect(),
+            outputs: structure.outputs.clone(),
+            model: ModelDocument {
+                path: structure.path.display().to_string(),
+                structure: structure.file.clone(),
+                aircraft: structure.aircraft_file.clone(),
+            },
+            records: problem.records.clone(),
+        }
+    }
+
+    fn parameters(structure: &ModelStructure) -> Vec<ProblemParameter> {
+        let parameters = &structure.aircraft.aero.parameters;
+        let finite = |v: f64| v.is_finite().then_some(v);
+        parameters
+            .names()
+            .iter()
+            .zip(parameters.values())
+            .enumerate()
+            .map(|(i, (name, &start))| ProblemParameter {
+                name: name.clone(),
+                start,
+                free: structure.free[i],
+                lower: finite(structure.bounds[i].0),
+                upper: finite(structure.bounds[i].1),
+            })
+            .collect()
+    }
+}

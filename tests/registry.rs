@@ -1,0 +1,284 @@
+//! The estimator interface from a newcomer's side: a toy estimator added
+//! through the registry alone (this file's type and one `register` call)
+//! is found by `estimate` (the problem's method), `run`, `gate` and
+//! `study`, with its settings table read from a gate file, checked and
+//! refused when wrong; and the estimation problem's JSON reads back
+//! identically for every bundled model on every bundled scenario.
+
+use aeroid::error::Result;
+use aeroid::estimation::estimate::{Estimate, ParameterEstimate, Status};
+use aeroid::estimation::estimator::{
+    Estimator, MethodInfo, Settings, parse_settings, setting_infos,
+};
+use aeroid::estimation::methods;
+use aeroid::estimation::problem::EstimationProblem;
+use aeroid::estimation::structure::ModelStructure;
+use aeroid::eval::{gate, run, study};
+use aeroid::record::recorder::{Profile, record_scenario};
+use aeroid::sim::scenario::Scenario;
+use std::sync::Arc;
+
+/// The toy: every free parameter at the model file's start value times
+/// `scale`, with standard error `sigma`. Not an estimator anyone should
+/// use; it exercises the interface.
+struct StartValues;
+
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct StartSettings {
+    scale: f64,
+    sigma: f64,
+}
+
+impl Default for StartSettings {
+    fn default() -> Self {
+        StartSettings {
+            scale: 1.0,
+            sigma: 1.0,
+        }
+    }
+}
+
+impl Estimator for StartValues {
+    fn info(&self) -> MethodInfo {
+        MethodInfo {
+            name: "toy-start",
+            title: "the model file's start values",
+            paper: "none",
+            equations: "θ = scale·θ₀",
+            needs: "nothing",
+            settings: setting_infos(
+                &StartSettings::default(),
+                &[("scale", "factor on the start values"), ("sigma", "σ")],
+            ),
+        }
+    }
+
+    fn check_settings(&self, settings: &Settings) -> Result<()> {
+        parse_settings::<StartSettings>("toy-start", settings).map(|_| ())
+    }
+
+    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
+        let settings: StartSettings = parse_settings("toy-start", &problem.settings)?;
+        let structure = &problem.structure;
+        let parameters = &structure.aircraft.aero.parameters;
+        let free: Vec<ParameterEstimate> = parameters
+            .names()
+            .iter()
+            .zip(parameters.values())
+            .enumerate()
+            .filter(|(i, _)| structure.free[*i])
+            .map(|(_, (name, &start))| ParameterEstimate {
+                name: name.clone(),
+                value: settings.scale * start,
+                standard_error: settings.sigma,
+                start,
+            })
+            .collect();
+        let n = free.len();
+        Ok(Estimate {
+            method: "toy-start".into(),
+            model: structure.name.clone(),
+            record: problem.record().scenario.clone(),
+            status: Status::Converged,
+            covariance: (0..n)
+                .map(|i| {
+                    (0..n)
+                        .map(|j| if i == j { settings.sigma.powi(2) } else { 0.0 })
+                        .collect()
+                })
+                .collect(),
+            parameters: free,
+            fits: Vec::new(),
+            iterations: 0,
+            cost_history: Vec::new(),
+            wall_time: 0.0,
+            notes: Vec::new(),
+            details: String::new(),
+        })
+    }
+}
+
+fn register_toy() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| methods::register(Arc::new(StartValues)).unwrap());
+}
+
+#[test]
+fn a_registered_estimator_runs_everywhere() {
+    register_toy();
+    assert!(methods::names().contains(&"toy-start".to_string()));
+    assert!(
+        methods::register(Arc::new(StartValues)).is_err(),
+        "a name twice"
+    );
+
+    // estimate: the problem names the method; the model's table is merged
+    // with the caller's.
+    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
+    let (record, truth) = record_scenario(&scenario, &profile).unwrap();
+    let structure = ModelStructure::load("attas-lateral").unwrap();
+    let overrides: toml::Table = toml::from_str("[toy-start]\nscale = 2.0").unwrap();
+    let overrides = overrides
+        .into_iter()
+        .map(|(k, v)| (k, v.as_table().unwrap().clone()))
+        .collect();
+    let problem = EstimationProblem::new(
+        "toy-start",
+        vec![record.clone()],
+        structure.clone(),
+        &[&overrides],
+    )
+    .unwrap();
+    let estimate = methods::estimate(&problem, None).unwrap();
+    let first = &estimate.parameters[0];
+    assert_eq!(first.value, 2.0 * first.start);
+    assert_eq!(estimate.status, Status::Converged);
+
+    // A setting it does not know is refused before it runs.
+    let wrong: toml::Table = toml::from_str("[toy-start]\nscael = 2.0").unwrap();
+    let wrong = wrong
+        .into_iter()
+        .map(|(k, v)| (k, v.as_table().unwrap().clone()))
+        .collect();
+    let error = EstimationProblem::new(
+        "toy-start",
+        vec![record.clone()],
+        structure.clone(),
+        &[&wrong],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(error.contains("scael"), "{error}");
+
+    // run: every registered method, the toy among them, scored.
+    let report = run::run(&scenario, &profile).unwrap();
+    let toy = report
+        .runs
+        .iter()
+        .find(|r| r.method == "toy-start")
+        .expect("run lists the toy");
+    assert!(toy.coverage().is_some());
+    let _ = truth;
+
+    // gate: a gate file naming the toy, with its settings table.
+    let folder = std::env::temp_dir().join(format!("aeroid-registry-{}", std::process::id()));
+    std::fs::create_dir_all(&folder).unwrap();
+    let gate_file = folder.join("gates.toml");
+    std::fs::write(
+        &gate_file,
+        r#"[[case]]
+name = "toy"
+scenario = "attas-lateral-multistep"
+profile = "ideal"
+model = "attas-lateral"
+method = "toy-start"
+relative_tolerance = 10.0
+absolute_floor = 10.0
+[case.methods.toy-start]
+sigma = 0.5
+"#,
+    )
+    .unwrap();
+    let gates = gate::load(&gate_file).unwrap();
+    let result = gate::run_case(&gates.cases[0]).unwrap();
+    let estimate = result.estimate.as_ref().unwrap();
+    assert!(estimate.parameters.iter().all(|p| p.standard_error == 0.5));
+    assert!(result.passed(), "{}", result.failures());
+
+    // study: a study file with the toy as its method.
+    let study_file = folder.join("study.toml");
+    std::fs::write(
+        &study_file,
+        r#"name = "toy"
+scenarios = ["attas-lateral-multistep"]
+profile = "ideal"
+models = ["attas-lateral"]
+runs = 2
+seed = 1
+[methods.toy-start]
+scale = 1.0
+"#,
+    )
+    .unwrap();
+    let study = study::Study::load(study_file.to_str().unwrap()).unwrap();
+    assert_eq!(study.methods, ["toy-start"]);
+    let rows = study.run_case(study.cases()[0]);
+    assert!(rows.iter().all(|r| r.method == "toy-start"));
+    assert!(rows.iter().any(|r| r.status == study::CONVERGED));
+    std::fs::remove_dir_all(&folder).unwrap();
+}
+
+/// The problem's JSON reads back identically: for every bundled model on
+/// every bundled scenario (5 s of it), the problem read back equals the
+/// one written (records compared bit for bit through the JSON text, whose
+/// numbers are shortest round-trip decimals), for every method.
+#[test]
+fn estimation_problem_json_round_trip_is_exact() {
+    let models = aeroid::catalog::bundled(aeroid::estimation::structure::MODEL_FOLDER);
+    let mut flown = 0;
+    let mut problems = 0;
+    for name in aeroid::catalog::bundled(aeroid::catalog::SCENARIO_FOLDER) {
+        // JSBSim's own aircraft fly only in a build with the `jsbsim` feature.
+        let Ok(mut scenario) = Scenario::load(&name) else {
+            continue;
+        };
+        flown += 1;
+        scenario.duration = scenario.duration.min(5.0);
+        let profile = Profile::load("flight-test-25hz", None).unwrap();
+        let (record, _) = record_scenario(&scenario, &profile).unwrap();
+        for model in &models {
+            let structure = ModelStructure::load(model).unwrap();
+            for method in ["ee", "swr", "oem"] {
+                let problem = EstimationProblem::new(
+                    method,
+                    vec![record.clone()],
+                    structure.clone(),
+                    &[&scenario.methods],
+                )
+                .unwrap();
+                let text = problem.to_json().unwrap();
+                let back =
+                    EstimationProblem::from_json(&text, std::path::Path::new("problem.json"))
+                        .unwrap();
+                let again = back.to_json().unwrap();
+                let first_difference = again
+                    .lines()
+                    .zip(text.lines())
+                    .enumerate()
+                    .find(|(_, (a, b))| a != b);
+                assert_eq!(
+                    first_difference, None,
+                    "{name} {model} {method}: the JSON read back and written again differs"
+                );
+                assert_eq!(again.len(), text.len(), "{name} {model} {method}");
+                // Field by field, every float in its shortest round-trip
+                // form (NaN, an unset reference speed, is not == itself).
+                assert_eq!(
+                    format!("{:?}", back.structure),
+                    format!("{:?}", problem.structure),
+                    "{name} {model}"
+                );
+                assert_eq!(back.settings, problem.settings, "{name} {model}");
+                for (a, b) in back.records[0]
+                    .channels
+                    .iter()
+                    .zip(&problem.records[0].channels)
+                {
+                    assert!(
+                        a.values
+                            .iter()
+                            .zip(&b.values)
+                            .all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan())),
+                        "{name}: channel {}",
+                        a.name
+                    );
+                }
+                problems += 1;
+            }
+        }
+    }
+    assert!(flown >= 9, "{flown} scenarios flown");
+    assert_eq!(problems, flown * models.len() * 3);
+}
