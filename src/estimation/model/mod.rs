@@ -2,3 +2,4 @@
 //! inputs and pseudo-controls, with sensitivities to its parameters.
 
 pub mod driven;
+pub mod state_space;
