@@ -13,8 +13,12 @@
 //! `ψ̇ = (q sin φ + r cos φ)/cos θ`, `ḣ = −ḋ`.
 //! Controls and pseudo-controls are sampled on the integration grid and
 //! taken inside a step with the model's [`Interpolation`] option, through
-//! the one RK4 integrator.
+//! the one RK4 integrator. Each step is a function of its start state
+//! alone (`DrivenSimulation::step_from`, the caches restarted at every
+//! grid point), the step of the state-space view
+//! ([`super::state_space::DrivenStateSpace`]) that filters propagate with.
 
+use super::state_space::Jacobians;
 use crate::dual::{Dual, LANES, Real};
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
@@ -1096,20 +1100,6 @@ pub(super) fn evaluate(
     (rates, values)
 }
 
-/// The Jacobians of f and h at one point ([`linearise`]), over the
-/// states it was asked for and every aerodynamic parameter of the model.
-#[derive(Debug, Clone, PartialEq)]
-pub(super) struct PointJacobians {
-    /// ∂f/∂x (states × states).
-    pub rates_by_state: DMatrix<f64>,
-    /// ∂f/∂θ (states × parameters).
-    pub rates_by_parameter: DMatrix<f64>,
-    /// ∂h/∂x (outputs × states).
-    pub outputs_by_state: DMatrix<f64>,
-    /// ∂h/∂θ (outputs × parameters).
-    pub outputs_by_parameter: DMatrix<f64>,
-}
-
 /// The Jacobians of f (rows: `states`) and of the `outputs` at the full
 /// flight-path state x, along `states` and every aerodynamic parameter of
 /// `model`, by the machinery of [`DrivenSimulation::simulate`]'s
@@ -1127,7 +1117,7 @@ pub(super) fn linearise(
     pseudo: PseudoRates,
     states: &[usize],
     outputs: &[Observable],
-) -> PointJacobians {
+) -> Jacobians {
     let aero = &model.aircraft.aero;
     let columns: Vec<Column> = (0..aero.parameters.values().len())
         .map(|i| match aero.term_of(i) {
@@ -1139,7 +1129,7 @@ pub(super) fn linearise(
     let mut linearization = Linearization::new(&directions, outputs.len());
     let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], (&[], None));
     linearization.at(model, &directions, x, controls, pseudo, outputs, &mut memo);
-    PointJacobians {
+    Jacobians {
         rates_by_state: linearization.a,
         rates_by_parameter: linearization.b,
         outputs_by_state: linearization.gx,

@@ -275,20 +275,14 @@ impl StateSpaceModel for DrivenStateSpace {
     /// 10⁻⁵·max(|θ|, 10⁻²).
     fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
         let (full, model, controls, pseudo) = self.point(t, x, theta)?;
-        let jacobians = driven::linearise(
+        Ok(driven::linearise(
             &model,
             &full,
             &controls,
             pseudo,
             &self.states,
             &self.outputs,
-        );
-        Ok(Jacobians {
-            rates_by_state: jacobians.rates_by_state,
-            rates_by_parameter: jacobians.rates_by_parameter,
-            outputs_by_state: jacobians.outputs_by_state,
-            outputs_by_parameter: jacobians.outputs_by_parameter,
-        })
+        ))
     }
 
     /// One RK4 step (the project's integrator, [`crate::sim::integrator`])
