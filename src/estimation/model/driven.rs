@@ -1326,6 +1326,18 @@ impl DrivenSimulation {
         if fraction == 0.0 || k + 1 >= self.len() {
             return (self.measured[k], self.controls[k], self.pseudo_rates(k));
         }
+        let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
+        self.inputs_inside(k, fraction, ends)
+    }
+
+    /// [`DrivenSimulation::inputs_at`] a fraction in (0, 1] into step k,
+    /// given the pseudo-control rates at the step's two ends.
+    fn inputs_inside(
+        &self,
+        k: usize,
+        fraction: f64,
+        (start, end): (PseudoRates, PseudoRates),
+    ) -> (FlightPathState, Controls, PseudoRates) {
         let measured = if fraction == 1.0 {
             self.measured[k + 1]
         } else {
@@ -1333,10 +1345,7 @@ impl DrivenSimulation {
         };
         let w = self.interpolation.weight(fraction);
         let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
-        let pseudo = self
-            .pseudo_rates(k)
-            .blend(self.pseudo_rates(k + 1), fraction);
-        (measured, controls, pseudo)
+        (measured, controls, start.blend(end, fraction))
     }
 
     /// The flight-path state at grid point k (or a fraction into step k)
@@ -1367,6 +1376,7 @@ impl DrivenSimulation {
         memo: &mut Memo,
         mut rates: impl FnMut(&FlightPathState, &Controls, PseudoRates, &mut Memo) -> FlightPathState,
     ) -> FlightPathState {
+        let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
         let next = rk4_step(x, self.step, |x, fraction| {
             // The first stage is the grid point, evaluated by the caller.
             if fraction == 0.0 {
@@ -1379,7 +1389,7 @@ impl DrivenSimulation {
             } else {
                 2 * k + 1
             });
-            let (measured, controls, pseudo) = self.inputs_at(k, fraction);
+            let (measured, controls, pseudo) = self.inputs_inside(k, fraction, ends);
             let merged = Self::merged(x, &measured, mask);
             rates(&merged, &controls, pseudo, memo).component_mul(mask)
         });
