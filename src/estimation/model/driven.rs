@@ -13,8 +13,12 @@
 //! `ψ̇ = (q sin φ + r cos φ)/cos θ`, `ḣ = −ḋ`.
 //! Controls and pseudo-controls are sampled on the integration grid and
 //! taken inside a step with the model's [`Interpolation`] option, through
-//! the one RK4 integrator.
+//! the one RK4 integrator. Each step is a function of its start state
+//! alone (`DrivenSimulation::step_from`, the caches restarted at every
+//! grid point), the step of the state-space view
+//! ([`super::state_space::DrivenStateSpace`]) that filters propagate with.
 
+use super::state_space::Jacobians;
 use crate::dual::{Dual, LANES, Real};
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
@@ -242,13 +246,21 @@ impl<'a> Memo<'a> {
         self.point = index;
     }
 
+    /// Forgets the last state and the anchors: the next state's integrated
+    /// angles are the library's. Called at every grid point, so that an
+    /// integration step depends on its start state alone, not on the path
+    /// that led there (a filter steps from states no simulation visited).
+    fn restart(&mut self) {
+        self.x = None;
+    }
+
     fn of(&mut self, x: &FlightPathState, atmosphere: &Atmosphere) -> (Angles, Air) {
         let (first, last) = (self.x.is_none(), self.x.unwrap_or(*x));
         let (angles, air) = self.frozen;
-        let (frozen_angles, frozen_air) = (angles[self.point], air.map(|air| air[self.point]));
+        let frozen_air = air.map(|air| air[self.point]);
         for i in [ALPHA, BETA, ROLL, PITCH] {
             if self.measured[i] {
-                let frozen = frozen_angles.get(i);
+                let frozen = angles[self.point].get(i);
                 // The frozen point is x's (every test that simulates checks it).
                 debug_assert_eq!(frozen, Some(x[i].sin_cos()));
                 *self.angles.slot(i).expect("an angle") = frozen.expect("an angle");
@@ -615,6 +627,13 @@ fn parameter_step(value: f64) -> f64 {
     1e-7 * value.abs().max(1e-2)
 }
 
+/// Central-difference step of a nonlinear parameter: 10⁻⁵·max(|θ|, 10⁻²),
+/// about ε^⅓ relative (truncation error ~step²·f‴/6 and rounding error
+/// ~ε·|f|/step then both ~10⁻¹⁰ relative, 10⁻⁸ through a stall break).
+fn central_parameter_step(value: f64) -> f64 {
+    1e-5 * value.abs().max(1e-2)
+}
+
 /// Where the ∂f/∂θ of one column comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Source {
@@ -664,7 +683,11 @@ struct Directions {
     /// α̇, solved for by iteration) by forward differences.
     dual_lanes: Vec<Vec<(usize, usize)>>,
     differenced: Vec<(usize, usize)>,
-    models: Vec<(FlightModel, f64)>,
+    /// Each perturbed model: moved by +step, its step, and (central
+    /// differences) moved by −step.
+    models: Vec<(FlightModel, f64, Option<FlightModel>)>,
+    /// Whether the perturbed models' quotients are central differences.
+    central: bool,
     responses: Vec<Response>,
     /// Per unknown; a `Direction` or `Term` names a response.
     sources: Vec<Source>,
@@ -674,12 +697,11 @@ struct Directions {
 }
 
 impl Directions {
-    fn new(model: &FlightModel, columns: &[Column], active: &[usize]) -> Directions {
-        let states = if columns.is_empty() {
-            Vec::new()
-        } else {
-            active.to_vec()
-        };
+    /// Differentiates along `states` (none for a plain simulation) and
+    /// the unknowns `columns`; the perturbed models' difference quotients
+    /// forward, or `central`.
+    fn new(model: &FlightModel, columns: &[Column], states: &[usize], central: bool) -> Directions {
+        let states = states.to_vec();
         let dual = !model.aircraft.aero.forces_depend_on_alpha_dot();
         // (column in ∂f/∂x, state)
         type Lane = (usize, usize);
@@ -693,6 +715,7 @@ impl Directions {
             differenced,
             states,
             models: Vec::new(),
+            central,
             responses: Vec::new(),
             sources: Vec::with_capacity(columns.len()),
             filled: Vec::new(),
@@ -710,9 +733,9 @@ impl Directions {
                             if affine {
                                 directions.push_response(Response::Offset(coefficient))
                             } else {
-                                let mut perturbed = model.clone();
-                                perturbed.aircraft.aero.offsets[c] += OFFSET_STEP;
-                                directions.push_model(perturbed, OFFSET_STEP)
+                                directions.push_model(model, OFFSET_STEP, |model, step| {
+                                    model.aircraft.aero.offsets[c] += step
+                                })
                             }
                         });
                         Source::Term {
@@ -756,8 +779,21 @@ impl Directions {
         directions
     }
 
-    fn push_model(&mut self, model: FlightModel, step: f64) -> usize {
-        self.models.push((model, step));
+    /// A response by the difference quotient of `model` moved by
+    /// `step` (and by −step when central).
+    fn push_model(
+        &mut self,
+        model: &FlightModel,
+        step: f64,
+        moved: impl Fn(&mut FlightModel, f64),
+    ) -> usize {
+        let by = |step: f64| {
+            let mut perturbed = model.clone();
+            moved(&mut perturbed, step);
+            perturbed
+        };
+        let minus = self.central.then(|| by(-step));
+        self.models.push((by(step), step, minus));
         self.push_response(Response::Model(self.models.len() - 1))
     }
 
@@ -767,11 +803,15 @@ impl Directions {
     }
 
     fn nonlinear(&mut self, model: &FlightModel, parameter: usize) -> Source {
-        let mut perturbed = model.clone();
-        let value = &mut perturbed.aircraft.aero.parameters.values_mut()[parameter];
-        let step = parameter_step(*value);
-        *value += step;
-        Source::Direction(self.push_model(perturbed, step))
+        let value = model.aircraft.aero.parameters.values()[parameter];
+        let step = if self.central {
+            central_parameter_step(value)
+        } else {
+            parameter_step(value)
+        };
+        Source::Direction(self.push_model(model, step, |model, step| {
+            model.aircraft.aero.parameters.values_mut()[parameter] += step
+        }))
     }
 }
 
@@ -872,7 +912,7 @@ impl Linearization {
                         }
                     }
                 }
-                if directions.sources.is_empty() {
+                if directions.differenced.is_empty() && directions.responses.is_empty() {
                     return;
                 }
                 for &(b, i) in &directions.differenced {
@@ -899,16 +939,29 @@ impl Linearization {
                 for (d, response) in directions.responses.iter().enumerate() {
                     match *response {
                         Response::Model(m) => {
-                            let (perturbed, step) = &directions.models[m];
+                            let (perturbed, step, minus) = &directions.models[m];
                             let (rates, evaluation) =
                                 derivative(perturbed, x, &angles, &air, controls, pseudo);
+                            // The base of the quotient: this point (forward)
+                            // or the model moved by −step (central).
+                            let minus_outputs: Vec<f64>;
+                            let (base_rates, base_outputs, span) = match minus {
+                                None => (self.rates, self.outputs.as_slice(), *step),
+                                Some(minus) => {
+                                    let (rates, evaluation) =
+                                        derivative(minus, x, &angles, &air, controls, pseudo);
+                                    minus_outputs =
+                                        outputs.iter().map(|o| o.value(x, &evaluation)).collect();
+                                    (rates, minus_outputs.as_slice(), 2.0 * step)
+                                }
+                            };
                             for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states)
                             {
-                                *into = (rates[r] - self.rates[r]) / step;
+                                *into = (rates[r] - base_rates[r]) / span;
                             }
                             for (o, output) in outputs.iter().enumerate() {
                                 self.model_outputs[(o, d)] =
-                                    (output.value(x, &evaluation) - self.outputs[o]) / step;
+                                    (output.value(x, &evaluation) - base_outputs[o]) / span;
                             }
                         }
                         Response::Offset(coefficient) => {
@@ -1027,6 +1080,60 @@ fn fill_fixed<const R: usize>(
     for f in filled {
         let factor = factors[f.factor];
         into[f.column] = responses[f.response].map(|response| response * factor);
+    }
+}
+
+/// ẋ = f and the `outputs` y = h of `model` at the full flight-path state
+/// x with the given inputs: the simulator's equations ([`derivative`]),
+/// the angles' sines and cosines the library's and the air the
+/// atmosphere's at x's altitude.
+pub(super) fn evaluate(
+    model: &FlightModel,
+    x: &FlightPathState,
+    controls: &Controls,
+    pseudo: PseudoRates,
+    outputs: &[Observable],
+) -> (FlightPathState, Vec<f64>) {
+    let air = model.environment.atmosphere.at(x[ALTITUDE]);
+    let (rates, evaluation) = derivative(model, x, &Angles::of(x), &air, controls, pseudo);
+    let values = outputs.iter().map(|o| o.value(x, &evaluation)).collect();
+    (rates, values)
+}
+
+/// The Jacobians of f (rows: `states`) and of the `outputs` at the full
+/// flight-path state x, along `states` and every aerodynamic parameter of
+/// `model`, by the machinery of [`DrivenSimulation::simulate`]'s
+/// sensitivity equations ([`Linearization::at`]): dual numbers along the
+/// states (forward differences along the altitude, and wherever the
+/// forces depend on α̇), a term's ∂f/∂θ exact from the coefficient's
+/// response times its regressor, a nonlinear parameter's a central
+/// difference (the simulation's forward difference is within ~10⁻⁶ of it
+/// through a stall break; a filter linearises once per step, so the
+/// second evaluation is cheap there).
+pub(super) fn linearise(
+    model: &FlightModel,
+    x: &FlightPathState,
+    controls: &Controls,
+    pseudo: PseudoRates,
+    states: &[usize],
+    outputs: &[Observable],
+) -> Jacobians {
+    let aero = &model.aircraft.aero;
+    let columns: Vec<Column> = (0..aero.parameters.values().len())
+        .map(|i| match aero.term_of(i) {
+            Some(_) => Column::Term(i),
+            None => Column::Nonlinear(i),
+        })
+        .collect();
+    let directions = Directions::new(model, &columns, states, true);
+    let mut linearization = Linearization::new(&directions, outputs.len());
+    let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], (&[], None));
+    linearization.at(model, &directions, x, controls, pseudo, outputs, &mut memo);
+    Jacobians {
+        rates_by_state: linearization.a,
+        rates_by_parameter: linearization.b,
+        outputs_by_state: linearization.gx,
+        outputs_by_parameter: linearization.gtheta,
     }
 }
 
@@ -1190,6 +1297,145 @@ impl DrivenSimulation {
         FlightPathState::from_fn(|i, _| if self.integrate[i] { x[i] } else { measured[i] })
     }
 
+    /// Which flight-path states `model` integrates (1) and which are
+    /// measured (0): the structure's integrated states, and χ wherever the
+    /// model makes it a state (fed back from α when not integrated).
+    pub(super) fn mask(&self, model: &FlightModel) -> FlightPathState {
+        let chi_is_state = model.aircraft.aero.chi_is_state();
+        FlightPathState::from_fn(|i, _| {
+            if self.integrate[i] || (i == CHI && chi_is_state) {
+                1.0
+            } else {
+                0.0
+            }
+        })
+    }
+
+    /// The measured states, controls and pseudo-control rates a fraction
+    /// `fraction` ∈ [0, 1] into step k (k the last grid point: its own,
+    /// fraction 0): measured pseudo-controls are continuous states, always
+    /// linear inside the step (consistent with their rates in
+    /// [`DrivenSimulation::pseudo_rates`]); controls follow the model's
+    /// [`Interpolation`] (under a hold the step's end sees the start's
+    /// value). At fraction 0 the grid point's samples themselves.
+    pub(super) fn inputs_at(
+        &self,
+        k: usize,
+        fraction: f64,
+    ) -> (FlightPathState, Controls, PseudoRates) {
+        if fraction == 0.0 || k + 1 >= self.len() {
+            return (self.measured[k], self.controls[k], self.pseudo_rates(k));
+        }
+        let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
+        self.inputs_inside(k, fraction, ends)
+    }
+
+    /// [`DrivenSimulation::inputs_at`] a fraction in (0, 1] into step k,
+    /// given the pseudo-control rates at the step's two ends.
+    fn inputs_inside(
+        &self,
+        k: usize,
+        fraction: f64,
+        (start, end): (PseudoRates, PseudoRates),
+    ) -> (FlightPathState, Controls, PseudoRates) {
+        let measured = if fraction == 1.0 {
+            self.measured[k + 1]
+        } else {
+            between(&self.measured[k], &self.measured[k + 1], fraction)
+        };
+        let w = self.interpolation.weight(fraction);
+        let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
+        (measured, controls, start.blend(end, fraction))
+    }
+
+    /// The flight-path state at grid point k (or a fraction into step k)
+    /// with the `mask`ed states from `x` and the others from `measured`.
+    pub(super) fn merged(
+        x: &FlightPathState,
+        measured: &FlightPathState,
+        mask: &FlightPathState,
+    ) -> FlightPathState {
+        FlightPathState::from_fn(|i, _| if mask[i] == 1.0 { x[i] } else { measured[i] })
+    }
+
+    /// The one integration step of the postulated model: RK4
+    /// ([`rk4_step`]) from the state `x` at grid point k (`first` its
+    /// rates, evaluated by the caller) to grid point k + 1, the `mask`ed
+    /// states integrated and the others the next grid point's measured
+    /// values. `rates(state, controls, pseudo, memo)` evaluates ẋ at the
+    /// three later stages, given the stage's merged state and inputs
+    /// ([`DrivenSimulation::inputs_at`]) with `memo` at its frozen point.
+    /// Both [`DrivenSimulation::simulate`] and the state-space view's step
+    /// ([`super::state_space`]) take their steps here.
+    fn step_from(
+        &self,
+        k: usize,
+        x: &FlightPathState,
+        mask: &FlightPathState,
+        first: &FlightPathState,
+        memo: &mut Memo,
+        mut rates: impl FnMut(&FlightPathState, &Controls, PseudoRates, &mut Memo) -> FlightPathState,
+    ) -> FlightPathState {
+        let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
+        let next = rk4_step(x, self.step, |x, fraction| {
+            // The first stage is the grid point, evaluated by the caller.
+            if fraction == 0.0 {
+                return first.component_mul(mask);
+            }
+            // The step's end is the next grid point; the middle stages are
+            // at the step's midpoint.
+            memo.at_point(if fraction == 1.0 {
+                2 * k + 2
+            } else {
+                2 * k + 1
+            });
+            let (measured, controls, pseudo) = self.inputs_inside(k, fraction, ends);
+            let merged = Self::merged(x, &measured, mask);
+            rates(&merged, &controls, pseudo, memo).component_mul(mask)
+        });
+        Self::merged(&next, &self.measured[k + 1], mask)
+    }
+
+    /// One plain step of `model` from the full flight-path state `x` at
+    /// grid point k ([`DrivenSimulation::step_from`], a fresh memo): the
+    /// step [`DrivenSimulation::simulate`] takes from the same state.
+    pub(super) fn step_plain(
+        &self,
+        model: &FlightModel,
+        k: usize,
+        x: &FlightPathState,
+    ) -> FlightPathState {
+        let atmosphere = &model.environment.atmosphere;
+        let mask = self.mask(model);
+        let measured_states = std::array::from_fn(|i| mask[i] == 0.0);
+        let frozen = (
+            self.frozen.angles.as_slice(),
+            self.frozen.air(&self.measured, atmosphere),
+        );
+        let mut memo = Memo::new(measured_states, frozen);
+        memo.at_point(2 * k);
+        let (angles, air) = memo.of(x, atmosphere);
+        let (first, _) = derivative(
+            model,
+            x,
+            &angles,
+            &air,
+            &self.controls[k],
+            self.pseudo_rates(k),
+        );
+        self.step_from(
+            k,
+            x,
+            &mask,
+            &first,
+            &mut memo,
+            |x, controls, pseudo, memo| {
+                let (angles, air) = memo.of(x, atmosphere);
+                derivative(model, x, &angles, &air, controls, pseudo).0
+            },
+        )
+    }
+
     /// Simulates from `initial`, calling `sink(k, y, (∂y/∂θ)ᵀ)` at every
     /// grid point with the `outputs` and their sensitivities to the unknowns
     /// described by `columns` (none: a plain simulation), an output's
@@ -1227,15 +1473,10 @@ impl DrivenSimulation {
         if chi_from_alpha {
             x[CHI] = aero.separation_target(x[ALPHA], 0.0);
         }
-        let mask = FlightPathState::from_fn(|i, _| {
-            if self.integrate[i] || (i == CHI && aero.chi_is_state()) {
-                1.0
-            } else {
-                0.0
-            }
-        });
+        let mask = self.mask(model);
         let active: Vec<usize> = (0..FLIGHT_PATH_SIZE).filter(|&i| mask[i] == 1.0).collect();
-        let directions = Directions::new(model, columns, &active);
+        let linearised: &[usize] = if columns.is_empty() { &[] } else { &active };
+        let directions = Directions::new(model, columns, linearised, false);
         let states = &directions.states;
         let row = |state: usize| states.iter().position(|&i| i == state);
         // S over the active states: the others are measured, independent of θ.
@@ -1256,7 +1497,7 @@ impl DrivenSimulation {
                     }
                     (_, Source::Direction(d)) => match directions.responses[d] {
                         Response::Model(m) => {
-                            let (perturbed, step) = &directions.models[m];
+                            let (perturbed, step, _) = &directions.models[m];
                             (target(perturbed, x[ALPHA]) - x[CHI]) / step
                         }
                         Response::Offset(_) => 0.0,
@@ -1345,60 +1586,27 @@ impl DrivenSimulation {
             if k + 1 == self.len() {
                 break;
             }
-            let (pseudo, end_pseudo) = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
+            let end_pseudo = self.pseudo_rates(k + 1);
             let mut stage = 0;
-            let next = rk4_step(&x, self.step, |x, theta| {
-                // The first stage is the grid point, evaluated above.
-                if theta == 0.0 {
-                    return point.rates.component_mul(&mask);
-                }
-                // Measured pseudo-controls are continuous states: always
-                // linear inside the step (consistent with their rates in
-                // `pseudo_rates`); controls follow the model's option.
-                // The step's end is the next grid point; the middle
-                // stages are at the step's midpoint.
-                let measured = if theta == 1.0 {
-                    memo.at_point(2 * k + 2);
-                    self.measured[k + 1]
-                } else {
-                    memo.at_point(2 * k + 1);
-                    between(&self.measured[k], &self.measured[k + 1], theta)
-                };
-                let w = self.interpolation.weight(theta);
-                let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
-                let merged =
-                    FlightPathState::from_fn(
-                        |i, _| {
-                            if mask[i] == 1.0 { x[i] } else { measured[i] }
-                        },
-                    );
-                let pseudo = pseudo.blend(end_pseudo, theta);
-                let rates = if exact {
-                    let linearization = &mut stages[stage];
-                    stage += 1;
-                    linearization.at(
-                        model,
-                        &directions,
-                        &merged,
-                        &controls,
-                        pseudo,
-                        &[],
-                        &mut memo,
-                    );
-                    linearization.rates
-                } else {
-                    let (angles, air) = memo.of(&merged, atmosphere);
-                    derivative(model, &merged, &angles, &air, &controls, pseudo).0
-                };
-                rates.component_mul(&mask)
-            });
-            x = FlightPathState::from_fn(|i, _| {
-                if mask[i] == 1.0 {
-                    next[i]
-                } else {
-                    self.measured[k + 1][i]
-                }
-            });
+            x = self.step_from(
+                k,
+                &x,
+                &mask,
+                &point.rates,
+                &mut memo,
+                |merged, controls, pseudo, memo| {
+                    if exact {
+                        let linearization = &mut stages[stage];
+                        stage += 1;
+                        linearization.at(model, &directions, merged, controls, pseudo, &[], memo);
+                        linearization.rates
+                    } else {
+                        let (angles, air) = memo.of(merged, atmosphere);
+                        derivative(model, merged, &angles, &air, controls, pseudo).0
+                    }
+                },
+            );
+            memo.restart();
             memo.at_point(2 * (k + 1));
             next_point.at(
                 model,
@@ -1472,7 +1680,7 @@ fn missing(name: &str) -> Error {
     ))
 }
 
-fn check_departure(x: &FlightPathState, time: f64) -> std::result::Result<(), String> {
+pub(super) fn check_departure(x: &FlightPathState, time: f64) -> std::result::Result<(), String> {
     let limit = std::f64::consts::FRAC_PI_2;
     if !x.iter().all(|v| v.is_finite())
         || x[ALPHA].abs() > limit

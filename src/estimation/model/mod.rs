@@ -1,4 +1,9 @@
-//! The postulated model as estimators simulate it: driven by the record's
-//! inputs and pseudo-controls, with sensitivities to its parameters.
+//! The postulated model as estimators simulate and filter it: driven by
+//! the record's inputs and pseudo-controls ([`driven`]: the whole-trajectory
+//! simulation with sensitivities to its parameters), and as a state-space
+//! system ẋ = f(t, x, u, θ), y = h(t, x, u, θ) with its Jacobians and one
+//! integration step from any state ([`state_space`]), the view every method
+//! that simulates or filters shares.
 
 pub mod driven;
+pub mod state_space;

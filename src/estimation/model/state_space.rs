@@ -1,0 +1,600 @@
+//! The postulated model as a state-space system, the view that every
+//! method that simulates or filters shares (Jategaonkar, "Flight Vehicle
+//! System Identification", ch. 4: the system of the output-error method,
+//! and §4.6, the sensitivity equations built from its Jacobians):
+//!
+//!   ẋ(t) = f(t, x, u, θ),   y(t) = h(t, x, u, θ),
+//!
+//! x the integrated states, u the record's inputs at t (controls and
+//! measured pseudo-controls, read by the model itself), θ the parameters,
+//! passed to every call (no model for the caller to mutate). Besides f and
+//! h, the view gives the Jacobians ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ at any point
+//! (what an extended Kalman filter linearises, and what the sensitivity
+//! equations Ṡ = ∂f/∂x·S + ∂f/∂θ, ∂y/∂θ = ∂h/∂x·S + ∂h/∂θ integrate) and
+//! one integration step from any state, k → k + 1 on the model's
+//! integration grid (what a filter's time update propagates).
+//!
+//! [`DrivenStateSpace`] is the view of the nonlinear model driven by a
+//! flight record ([`super::driven`]): its step is the one the
+//! whole-trajectory simulation ([`DrivenSimulation::simulate`], output
+//! error's) takes, bit for bit; its Jacobians are that simulation's
+//! (dual numbers, exact coefficient responses, forward differences where
+//! it takes them). How those are made fast stays in [`super::driven`].
+
+use super::driven::{
+    self, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, Observable, PseudoRates,
+};
+use crate::error::{Error, Result};
+use crate::estimation::structure::FLIGHT_PATH_STATES;
+use crate::sim::dynamics::FlightModel;
+use crate::sim::state::Controls;
+use nalgebra::{DMatrix, DVector};
+
+/// The Jacobians of a state-space model at one point (t, x, θ).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Jacobians {
+    /// ∂f/∂x (states × states).
+    pub rates_by_state: DMatrix<f64>,
+    /// ∂f/∂θ (states × parameters).
+    pub rates_by_parameter: DMatrix<f64>,
+    /// ∂h/∂x (outputs × states).
+    pub outputs_by_state: DMatrix<f64>,
+    /// ∂h/∂θ (outputs × parameters).
+    pub outputs_by_parameter: DMatrix<f64>,
+}
+
+/// A postulated model as ẋ = f(t, x, u, θ), y = h(t, x, u, θ) on an
+/// integration grid t_k = start + k·step, k = 0 … len − 1, its inputs u
+/// its own (read from the record it is driven by). Every call takes θ.
+pub trait StateSpaceModel {
+    /// The number of states n (the length of x).
+    fn state_count(&self) -> usize;
+    /// The number of outputs (the length of y).
+    fn output_count(&self) -> usize;
+    /// The number of parameters (the length of θ).
+    fn parameter_count(&self) -> usize;
+    /// The number of grid points.
+    fn len(&self) -> usize;
+    /// Whether the grid has no points.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// The time of grid point k.
+    fn time(&self, k: usize) -> f64;
+    /// ẋ = f(t, x, u(t), θ).
+    fn rates(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>>;
+    /// y = h(t, x, u(t), θ).
+    fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>>;
+    /// ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ at (t, x, θ).
+    fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians>;
+    /// The state at grid point k + 1 after one integration step from x at
+    /// grid point k.
+    fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>>;
+}
+
+/// The state-space view of a nonlinear postulated model driven by a
+/// record ([`DrivenSimulation`]). x holds the integrated flight-path states
+/// in the order of [`FLIGHT_PATH_STATES`] (with χ wherever the aerodynamic
+/// model makes it a state); the others are the record's measured
+/// pseudo-controls. θ holds every aerodynamic parameter of the model, in
+/// the order of its parameter set. The inputs at t: controls with the
+/// model's interpolation (a hold takes the value of the step t starts,
+/// so at a grid time the new sample), measured pseudo-controls and their
+/// rates linear between grid points.
+#[derive(Debug, Clone)]
+pub struct DrivenStateSpace {
+    simulation: DrivenSimulation,
+    model: FlightModel,
+    outputs: Vec<Observable>,
+    /// The flight-path states in x.
+    states: Vec<usize>,
+    mask: FlightPathState,
+}
+
+/// Times within this fraction of a step of a grid point or of a step's
+/// midpoint are taken as that point (the RK4 stage times).
+const TIME_SNAP: f64 = 1e-9;
+
+impl DrivenStateSpace {
+    /// The view of `model` (its parameters' values are the default θ,
+    /// [`DrivenStateSpace::parameters`]) driven as `simulation` drives it,
+    /// with outputs `outputs`.
+    pub fn new(
+        simulation: DrivenSimulation,
+        model: FlightModel,
+        outputs: Vec<Observable>,
+    ) -> Result<DrivenStateSpace> {
+        if simulation.len() < 2 {
+            return Err(Error::Other(
+                "a state-space view needs at least two grid points".into(),
+            ));
+        }
+        let mask = simulation.mask(&model);
+        let states = (0..FLIGHT_PATH_SIZE).filter(|&i| mask[i] == 1.0).collect();
+        Ok(DrivenStateSpace {
+            simulation,
+            model,
+            outputs,
+            states,
+            mask,
+        })
+    }
+
+    /// The flight-path states in x (indices into [`FLIGHT_PATH_STATES`]).
+    pub fn states(&self) -> &[usize] {
+        &self.states
+    }
+
+    /// The names of the states in x.
+    pub fn state_names(&self) -> Vec<&'static str> {
+        self.states.iter().map(|&i| FLIGHT_PATH_STATES[i]).collect()
+    }
+
+    /// The model's own parameter values (θ as the model file gives it).
+    pub fn parameters(&self) -> DVector<f64> {
+        DVector::from_column_slice(self.model.aircraft.aero.parameters.values())
+    }
+
+    /// The driven simulation underneath.
+    pub fn simulation(&self) -> &DrivenSimulation {
+        &self.simulation
+    }
+
+    /// x of a full flight-path state.
+    pub fn state_of(&self, full: &FlightPathState) -> DVector<f64> {
+        DVector::from_iterator(self.states.len(), self.states.iter().map(|&i| full[i]))
+    }
+
+    /// The model with θ written in; an error for a θ of the wrong length,
+    /// or one that changes which states are integrated (the stall model's
+    /// χ is a state only while τ1 > 0).
+    fn model_at(&self, theta: &[f64]) -> Result<FlightModel> {
+        let count = self.parameter_count();
+        if theta.len() != count {
+            return Err(Error::Other(format!(
+                "θ has {} values; the model has {count} parameters",
+                theta.len()
+            )));
+        }
+        let mut model = self.model.clone();
+        model
+            .aircraft
+            .aero
+            .parameters
+            .values_mut()
+            .copy_from_slice(theta);
+        if self.simulation.mask(&model) != self.mask {
+            return Err(Error::Other(
+                "θ changes which states the model integrates (χ is a state only while τ1 > 0)"
+                    .into(),
+            ));
+        }
+        Ok(model)
+    }
+
+    /// The full flight-path state with x in its integrated entries and
+    /// `measured` in the others.
+    fn full(&self, x: &[f64], measured: &FlightPathState) -> Result<FlightPathState> {
+        if x.len() != self.states.len() {
+            return Err(Error::Other(format!(
+                "x has {} values; the model has {} states ({})",
+                x.len(),
+                self.states.len(),
+                self.state_names().join(", ")
+            )));
+        }
+        let mut full = *measured;
+        for (&i, &value) in self.states.iter().zip(x) {
+            full[i] = value;
+        }
+        Ok(full)
+    }
+
+    /// The grid step t falls in and the fraction into it (the last grid
+    /// point: its own, fraction 0); an error outside the grid.
+    fn locate(&self, t: f64) -> Result<(usize, f64)> {
+        let simulation = &self.simulation;
+        let last = simulation.len() - 1;
+        let position = (t - simulation.start) / simulation.step;
+        if !position.is_finite() || position < -TIME_SNAP || position > last as f64 + TIME_SNAP {
+            return Err(Error::Other(format!(
+                "t = {t} s is outside the record's integration grid ({} s to {} s)",
+                simulation.time(0),
+                simulation.time(last)
+            )));
+        }
+        let halves = (2.0 * position).round();
+        let position = if (position - 0.5 * halves).abs() <= TIME_SNAP {
+            0.5 * halves
+        } else {
+            position
+        };
+        let k = (position.floor().max(0.0) as usize).min(last);
+        Ok((k, if k == last { 0.0 } else { position - k as f64 }))
+    }
+
+    /// The full state, the model at θ and the inputs at t.
+    fn point(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+    ) -> Result<(FlightPathState, FlightModel, Controls, PseudoRates)> {
+        let (k, fraction) = self.locate(t)?;
+        let (measured, controls, pseudo) = self.simulation.inputs_at(k, fraction);
+        Ok((
+            self.full(x, &measured)?,
+            self.model_at(theta)?,
+            controls,
+            pseudo,
+        ))
+    }
+}
+
+impl StateSpaceModel for DrivenStateSpace {
+    fn state_count(&self) -> usize {
+        self.states.len()
+    }
+
+    fn output_count(&self) -> usize {
+        self.outputs.len()
+    }
+
+    fn parameter_count(&self) -> usize {
+        self.model.aircraft.aero.parameters.values().len()
+    }
+
+    fn len(&self) -> usize {
+        self.simulation.len()
+    }
+
+    fn time(&self, k: usize) -> f64 {
+        self.simulation.time(k)
+    }
+
+    /// The flight-path rates of the integrated states ([`super::driven`]'s
+    /// module header gives the equations).
+    fn rates(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        let (full, model, controls, pseudo) = self.point(t, x, theta)?;
+        let (rates, _) = driven::evaluate(&model, &full, &controls, pseudo, &[]);
+        Ok(self.state_of(&rates))
+    }
+
+    fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        let (full, model, controls, pseudo) = self.point(t, x, theta)?;
+        let (_, outputs) = driven::evaluate(&model, &full, &controls, pseudo, &self.outputs);
+        Ok(DVector::from_vec(outputs))
+    }
+
+    /// The Jacobians by the sensitivity equations' own linearisation
+    /// (Jategaonkar §4.6): ∂f/∂x and ∂h/∂x by dual numbers
+    /// (forward differences along the altitude and where the forces depend
+    /// on α̇), a term's ∂f/∂θ and ∂h/∂θ exact (f is affine in each
+    /// coefficient: its response times the term's regressor), a nonlinear
+    /// parameter's (e, the stall parameters) a central difference of step
+    /// 10⁻⁵·max(|θ|, 10⁻²).
+    fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
+        let (full, model, controls, pseudo) = self.point(t, x, theta)?;
+        Ok(driven::linearise(
+            &model,
+            &full,
+            &controls,
+            pseudo,
+            &self.states,
+            &self.outputs,
+        ))
+    }
+
+    /// One RK4 step (the project's integrator, [`crate::sim::integrator`])
+    /// of the integrated states, the inputs inside the step as the
+    /// whole-trajectory simulation takes them: the same routine as
+    /// [`DrivenSimulation::simulate`]'s, so the same state bit for bit.
+    /// An error when k is not a step of the grid, or when the model departs
+    /// (a non-finite state, |α| or |β| beyond 90°, airspeed not positive).
+    fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        let simulation = &self.simulation;
+        if k + 1 >= simulation.len() {
+            return Err(Error::Other(format!(
+                "no integration step from grid point {k}: the grid has {} points",
+                simulation.len()
+            )));
+        }
+        let model = self.model_at(theta)?;
+        let full = self.full(x, &simulation.measured()[k])?;
+        driven::check_departure(&full, simulation.time(k)).map_err(Error::Other)?;
+        let next = simulation.step_plain(&model, k, &full);
+        driven::check_departure(&next, simulation.time(k + 1)).map_err(Error::Other)?;
+        Ok(self.state_of(&next))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimation::model::driven::{Column, Linearise};
+    use crate::estimation::structure::{ModelStructure, stall_test_structure};
+    use crate::record::recorder::{Profile, record_scenario};
+    use crate::sim::integrator::Interpolation;
+    use crate::sim::scenario::Scenario;
+
+    /// A bundled scenario recorded by the 25 Hz flight-test profile (noisy
+    /// measured pseudo-controls, as output error sees them).
+    fn recorded(scenario: &str) -> crate::record::FlightRecord {
+        let scenario = Scenario::load(scenario).unwrap();
+        let profile = Profile::load("flight-test-25hz", None).unwrap();
+        record_scenario(&scenario, &profile).unwrap().0
+    }
+
+    /// The view of `structure` on `record` as output error builds its
+    /// simulation: the structure's step (else 25 Hz), the window where
+    /// every output has samples, the record's initial state (χ from α).
+    fn view(
+        record: &crate::record::FlightRecord,
+        structure: &ModelStructure,
+        interpolation: Interpolation,
+    ) -> (DrivenStateSpace, FlightPathState) {
+        let mut window = (f64::NEG_INFINITY, f64::INFINITY);
+        for name in &structure.outputs {
+            let times = &record.channel(name).unwrap().times;
+            window = (window.0.max(times[0]), window.1.min(*times.last().unwrap()));
+        }
+        let step = structure.step.unwrap_or(0.04);
+        let simulation = DrivenSimulation::from_record(
+            record,
+            &structure.integrate,
+            interpolation,
+            step,
+            window,
+        )
+        .unwrap();
+        let mut initial = simulation.measured()[0];
+        for &i in &structure.integrate {
+            initial[i] = record
+                .channel(FLIGHT_PATH_STATES[i])
+                .unwrap()
+                .value_at(window.0)
+                .unwrap();
+        }
+        initial[10] = structure.aircraft.aero.separation_target(initial[1], 0.0);
+        let model = FlightModel::new(structure.aircraft.clone(), Default::default());
+        let outputs = structure
+            .outputs
+            .iter()
+            .map(|name| Observable::parse(name).unwrap())
+            .collect();
+        (
+            DrivenStateSpace::new(simulation, model, outputs).unwrap(),
+            initial,
+        )
+    }
+
+    /// The ATTAS lateral model on its multistep, and the stall model (χ a
+    /// state, fed back from α; nonlinear parameters) on the stall manoeuvre.
+    fn cases() -> [(crate::record::FlightRecord, ModelStructure); 2] {
+        [
+            (
+                recorded("attas-lateral-multistep"),
+                ModelStructure::load("attas-lateral").unwrap(),
+            ),
+            (recorded("attas-stall"), stall_test_structure(0.2)),
+        ]
+    }
+
+    /// The states x_k of the whole-trajectory simulation at every grid
+    /// point, simulated plainly or with sensitivities to every parameter.
+    fn trajectory(
+        view: &DrivenStateSpace,
+        initial: &FlightPathState,
+        sensitivities: Option<Linearise>,
+    ) -> Vec<DVector<f64>> {
+        let aero = &view.model.aircraft.aero;
+        let columns: Vec<Column> = match sensitivities {
+            None => Vec::new(),
+            Some(_) => (0..view.parameter_count())
+                .map(|i| match aero.term_of(i) {
+                    Some(_) => Column::Term(i),
+                    None => Column::Nonlinear(i),
+                })
+                .collect(),
+        };
+        let outputs: Vec<Observable> = view.states.iter().map(|&i| Observable::State(i)).collect();
+        let mut states = Vec::new();
+        view.simulation
+            .simulate(
+                &view.model,
+                initial,
+                &outputs,
+                &columns,
+                sensitivities.unwrap_or(Linearise::GridPoints),
+                |_, y, _| states.push(DVector::from_column_slice(y)),
+            )
+            .unwrap();
+        states
+    }
+
+    /// One step of the view from the simulation's state x_k is the
+    /// simulation's x_{k+1}, bit for bit, at every grid point of the ATTAS
+    /// lateral multistep and the stall manoeuvre, for a plain simulation
+    /// and for simulations with sensitivities linearised at the grid points
+    /// and at every stage (their stage rates are the dual numbers' values).
+    #[test]
+    fn step_is_the_simulations_step_bit_for_bit() {
+        for (record, structure) in cases() {
+            let (view, initial) = view(&record, &structure, structure.interpolation);
+            let theta = view.parameters();
+            for sensitivities in [None, Some(Linearise::GridPoints), Some(Linearise::Stages)] {
+                let states = trajectory(&view, &initial, sensitivities);
+                assert_eq!(states.len(), view.len());
+                for k in 0..view.len() - 1 {
+                    let next = view
+                        .step(k, states[k].as_slice(), theta.as_slice())
+                        .unwrap();
+                    assert!(
+                        next.iter()
+                            .zip(states[k + 1].iter())
+                            .all(|(a, b)| a.to_bits() == b.to_bits()),
+                        "{} {sensitivities:?}: step {k}: {next} vs {}",
+                        structure.name,
+                        states[k + 1]
+                    );
+                }
+            }
+        }
+    }
+
+    /// A step from states the simulation never visited (every state moved
+    /// by 2 % of its value plus 0.01 in SI units, θ moved by 3 %) is RK4
+    /// assembled from the view's own f at the stage times, to 1e-12
+    /// relative (the step takes the angles' sines and cosines by the
+    /// addition theorems inside a step, within an ulp or two of f's); the
+    /// inputs are interpolated linearly, so that the last stage's inputs
+    /// are f's at t_{k+1}. Wrong lengths, a departed state and a step off
+    /// the grid are errors.
+    #[test]
+    fn step_from_an_unvisited_state_is_rk4_of_the_rates() {
+        for (record, structure) in cases() {
+            let (view, initial) = view(&record, &structure, Interpolation::Linear);
+            let theta = view.parameters() * 1.03;
+            let states = trajectory(&view, &initial, None);
+            let h = view.simulation.step;
+            for k in (0..view.len() - 1).step_by(37) {
+                let x = states[k].map(|v| v * 1.02 + 0.01);
+                let next = view.step(k, x.as_slice(), theta.as_slice()).unwrap();
+                let t = view.time(k);
+                let f = |t: f64, x: &DVector<f64>| {
+                    view.rates(t, x.as_slice(), theta.as_slice()).unwrap()
+                };
+                let k1 = f(t, &x);
+                let k2 = f(t + 0.5 * h, &(&x + &k1 * (0.5 * h)));
+                let k3 = f(t + 0.5 * h, &(&x + &k2 * (0.5 * h)));
+                let k4 = f(view.time(k + 1), &(&x + &k3 * h));
+                let expected = &x + (k1 + (k2 + k3) * 2.0 + k4) * (h / 6.0);
+                let scale = expected.amax().max(1.0);
+                assert!(
+                    (&next - &expected).amax() <= 1e-12 * scale,
+                    "{}: step {k}: {next} vs {expected}",
+                    structure.name
+                );
+                assert!(next != states[k + 1], "the perturbation moved nothing");
+            }
+            let x = states[0].clone();
+            let n = x.len();
+            assert!(
+                view.step(0, &x.as_slice()[..n - 1], theta.as_slice())
+                    .is_err()
+            );
+            assert!(view.step(0, x.as_slice(), &theta.as_slice()[1..]).is_err());
+            assert!(
+                view.step(view.len() - 1, x.as_slice(), theta.as_slice())
+                    .is_err()
+            );
+            let mut departed = x.clone();
+            departed[0] = f64::NAN;
+            assert!(view.step(0, departed.as_slice(), theta.as_slice()).is_err());
+            assert!(
+                view.rates(
+                    view.time(view.len() - 1) + 1.0,
+                    x.as_slice(),
+                    theta.as_slice()
+                )
+                .is_err()
+            );
+        }
+    }
+
+    /// Central-difference Jacobian of `g` at `point`: column j is
+    /// (g(point + δ_j e_j) − g(point − δ_j e_j))/(2δ_j), δ_j = `step(point_j)`.
+    fn central_differences(
+        point: &DVector<f64>,
+        step: impl Fn(f64) -> f64,
+        g: impl Fn(&DVector<f64>) -> DVector<f64>,
+    ) -> DMatrix<f64> {
+        let columns: Vec<DVector<f64>> = (0..point.len())
+            .map(|j| {
+                let delta = step(point[j]);
+                let moved = |sign: f64| {
+                    let mut moved = point.clone();
+                    moved[j] += sign * delta;
+                    g(&moved)
+                };
+                (moved(1.0) - moved(-1.0)) / (2.0 * delta)
+            })
+            .collect();
+        DMatrix::from_columns(&columns)
+    }
+
+    /// Every column of `exact` within 1e-6 of the largest entry of the
+    /// column (of either matrix) of `numeric`; a column 0 in both is 0.
+    fn assert_columns_agree(exact: &DMatrix<f64>, numeric: &DMatrix<f64>, what: &str) {
+        assert_eq!(exact.shape(), numeric.shape(), "{what}");
+        for j in 0..exact.ncols() {
+            let scale = exact.column(j).amax().max(numeric.column(j).amax());
+            let error = (exact.column(j) - numeric.column(j)).amax();
+            assert!(
+                error <= 1e-6 * scale,
+                "{what}: column {j}: error {error:.3e} of {scale:.3e}\n{}\nvs\n{}",
+                exact.column(j),
+                numeric.column(j)
+            );
+        }
+    }
+
+    /// ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ against central differences of the
+    /// view's f and h, to 1e-6 relative per column, at states and
+    /// parameters (θ moved by 3 %) away from the simulation's, at grid
+    /// points and at step midpoints (inputs interpolated), on the linear
+    /// ATTAS lateral model and on the stall model (nonlinear parameters by
+    /// the view's own central differences of step 10⁻⁵·max(|θ|, 10⁻²)).
+    /// The test's central-difference steps: 10⁻⁵·max(|x|, 1) for the
+    /// states, 4·10⁻⁶·max(|θ|, 10⁻²) for the parameters (not the view's,
+    /// so the comparison is not of one quotient with itself): truncation
+    /// error ~step²·f‴/6 ≲ 10⁻⁸ relative even through the stall break
+    /// (f‴ ~ a1³ there), rounding ~ε·|f|/step ≲ 10⁻⁷ relative.
+    #[test]
+    fn jacobians_match_central_differences() {
+        for (record, structure) in cases() {
+            let (view, initial) = view(&record, &structure, structure.interpolation);
+            let theta = view.parameters() * 1.03;
+            let states = trajectory(&view, &initial, None);
+            let state_step = |v: f64| 1e-5 * v.abs().max(1.0);
+            let parameter_step = |v: f64| 4e-6 * v.abs().max(1e-2);
+            for k in [view.len() / 5, view.len() / 2, 4 * view.len() / 5] {
+                let x = states[k].map(|v| v * 1.01);
+                for t in [view.time(k), view.time(k) + 0.5 * view.simulation.step] {
+                    let what = |name: &str| format!("{}: t = {t}: {name}", structure.name);
+                    let jacobians = view.jacobians(t, x.as_slice(), theta.as_slice()).unwrap();
+                    let rates_of_x =
+                        |x: &DVector<f64>| view.rates(t, x.as_slice(), theta.as_slice()).unwrap();
+                    let outputs_of_x =
+                        |x: &DVector<f64>| view.outputs(t, x.as_slice(), theta.as_slice()).unwrap();
+                    let rates_of_theta = |theta: &DVector<f64>| {
+                        view.rates(t, x.as_slice(), theta.as_slice()).unwrap()
+                    };
+                    let outputs_of_theta = |theta: &DVector<f64>| {
+                        view.outputs(t, x.as_slice(), theta.as_slice()).unwrap()
+                    };
+                    assert_columns_agree(
+                        &jacobians.rates_by_state,
+                        &central_differences(&x, state_step, rates_of_x),
+                        &what("∂f/∂x"),
+                    );
+                    assert_columns_agree(
+                        &jacobians.outputs_by_state,
+                        &central_differences(&x, state_step, outputs_of_x),
+                        &what("∂h/∂x"),
+                    );
+                    assert_columns_agree(
+                        &jacobians.rates_by_parameter,
+                        &central_differences(&theta, parameter_step, rates_of_theta),
+                        &what("∂f/∂θ"),
+                    );
+                    assert_columns_agree(
+                        &jacobians.outputs_by_parameter,
+                        &central_differences(&theta, parameter_step, outputs_of_theta),
+                        &what("∂h/∂θ"),
+                    );
+                }
+            }
+        }
+    }
+}
