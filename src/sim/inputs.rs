@@ -1328,6 +1328,17 @@ mod tests {
         assert!(message.contains("t, a"), "{message}");
     }
 
+    /// Replayed inputs are read by the same CSV reader as records and
+    /// imports, so a header that names a column twice is refused here too
+    /// (which of the two is meant is unknowable), at line 1 with the name.
+    #[test]
+    fn csv_replay_shares_the_record_reader() {
+        let file = TemporaryCsv::new("repeated", "t,a,a\n0,1,2\n1,2,3\n");
+        let (line, column, message) = csv_line_and_column(file.build("a"));
+        assert_eq!((line, column.as_str()), (1, "a"), "{message}");
+        assert!(message.contains("appears twice"), "{message}");
+    }
+
     #[test]
     fn schedule_without_inputs_is_empty_and_zero() {
         let s = InputSchedule::build(&[], Path::new("."), Path::new("test.toml"))

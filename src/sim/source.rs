@@ -101,3 +101,23 @@ impl FlightSource<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An aeroid aircraft is flown by aeroid's simulator: the flight through
+    /// the source is the simulation's own run, bit for bit, with the exact truth.
+    #[test]
+    fn an_aeroid_scenario_is_flown_by_the_aeroid_simulator() {
+        let mut scenario = Scenario::load("attas-trim").unwrap();
+        scenario.duration = 2.0;
+        let source = scenario.source();
+        assert!(matches!(source, FlightSource::Aeroid), "{source:?}");
+        let flight = source.fly(&scenario).unwrap();
+        assert!(flight.departure.is_none());
+        let direct = Simulation::prepare(&scenario).unwrap().run().unwrap();
+        assert_eq!(flight.trace, direct);
+        assert_eq!(flight.truth.kind, crate::sim::truth::TruthKind::Exact);
+    }
+}
