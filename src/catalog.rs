@@ -1,7 +1,7 @@
-//! Where bundled aircraft, scenario and recorder files are found, so that adding one
-//! never needs a recompile: the folder named by `AEROID_DATA`, else the
-//! current folder if it holds `aircraft/` or `scenarios/`, else the source
-//! tree aeroid was built from.
+//! Every data folder aeroid reads by name, and where they are found, so
+//! that adding a file never needs a recompile: the folder named by
+//! `AEROID_DATA`, else the current folder if it holds `aircraft/` or
+//! `scenarios/`, else the source tree aeroid was built from.
 
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -12,10 +12,27 @@ pub const SCENARIO_FOLDER: &str = "scenarios";
 pub const RECORDER_FOLDER: &str = "recorders";
 /// Monte Carlo study files, `studies/*.toml`.
 pub const STUDY_FOLDER: &str = "studies";
+/// Postulated model structures, `models/*.toml`.
+pub const MODEL_FOLDER: &str = "models";
+/// The accuracy gates and their snapshots.
+pub const GOLDEN_FOLDER: &str = "golden";
+/// The gate file, relative to the data folder.
+pub const GATE_FILE: &str = "golden/gates.toml";
+/// The folders of named files, in the order `aeroid list` shows them.
+pub const LISTED_FOLDERS: [&str; 5] = [
+    AIRCRAFT_FOLDER,
+    SCENARIO_FOLDER,
+    RECORDER_FOLDER,
+    MODEL_FOLDER,
+    STUDY_FOLDER,
+];
+
+/// The environment variable that names the data folder.
+pub const DATA_VARIABLE: &str = "AEROID_DATA";
 
 /// The data folder holding `aircraft/` and `scenarios/`.
 pub fn data_folder() -> PathBuf {
-    if let Some(folder) = std::env::var_os("AEROID_DATA") {
+    if let Some(folder) = std::env::var_os(DATA_VARIABLE) {
         return PathBuf::from(folder);
     }
     let current = PathBuf::from(".");
@@ -23,6 +40,11 @@ pub fn data_folder() -> PathBuf {
         return current;
     }
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The data folder's gate file (`golden/gates.toml`).
+pub fn gate_file() -> PathBuf {
+    data_folder().join(GATE_FILE)
 }
 
 /// Names (file stems) of the `.toml` files in a data sub-folder, sorted.
@@ -62,7 +84,7 @@ pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<Pat
                 AIRCRAFT_FOLDER => "aircraft",
                 RECORDER_FOLDER => "recorder profile",
                 STUDY_FOLDER => "study",
-                crate::estimation::structure::MODEL_FOLDER => "model structure",
+                MODEL_FOLDER => "model structure",
                 _ => "scenario",
             },
             name: reference.to_string(),

@@ -133,7 +133,7 @@ fn describe_profile(profile: &Profile) -> CheckReport {
 }
 
 fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
-    if let Some(jsbsim) = &scenario.jsbsim {
+    if let crate::sim::FlightSource::Jsbsim(jsbsim) = scenario.source() {
         return check_jsbsim_scenario(scenario, jsbsim);
     }
     let simulation = Simulation::prepare(scenario)?;

@@ -90,13 +90,10 @@ pub enum Error {
     #[error("no trim: {0}")]
     Trim(String),
 
+    /// The flight left its limits; whoever flew it keeps the trace up to
+    /// the departure (`crate::sim::Flight`).
     #[error("simulation departed at t = {time:.3} s: {reason}")]
-    Departed {
-        time: f64,
-        reason: String,
-        /// The trace up to the last step before departure, so that nothing computed is lost.
-        partial: Box<crate::sim::trace::TruthTrace>,
-    },
+    Departed { time: f64, reason: String },
 
     /// A JSBSim call failed (a C++ exception or a failure status, turned into
     /// an error at the FFI boundary). `context` names the aircraft, property

@@ -11,6 +11,7 @@
 pub mod analysis;
 pub mod catalog;
 pub mod check;
+pub(crate) mod csv_table;
 pub mod dual;
 pub mod error;
 pub mod estimation;

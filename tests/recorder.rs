@@ -423,7 +423,7 @@ fn heading_through_north_wraps_without_spikes() {
 fn records_are_bit_identical_for_a_seed() {
     let mut scenario = Scenario::load("attas-trim").unwrap();
     scenario.duration = 5.0;
-    let trace = aeroid::sim::simulate(&scenario).unwrap();
+    let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let bits = |seed: u64| -> Vec<u64> {
         let record = profile.record(&trace, &scenario.aircraft, seed).unwrap();
@@ -447,7 +447,7 @@ fn records_are_bit_identical_for_a_seed() {
 fn noise_scale_and_rate_override_modify_the_profile() {
     let mut scenario = Scenario::load("attas-trim").unwrap();
     scenario.duration = 5.0;
-    let trace = aeroid::sim::simulate(&scenario).unwrap();
+    let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let values = |profile: &Profile| -> Vec<Vec<f64>> {
         let record = profile.record(&trace, &scenario.aircraft, 7).unwrap();

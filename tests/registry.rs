@@ -216,7 +216,7 @@ scale = 1.0
 /// numbers are shortest round-trip decimals), for every method.
 #[test]
 fn estimation_problem_json_round_trip_is_exact() {
-    let models = aeroid::catalog::bundled(aeroid::estimation::structure::MODEL_FOLDER);
+    let models = aeroid::catalog::bundled(aeroid::catalog::MODEL_FOLDER);
     let mut flown = 0;
     let mut problems = 0;
     for name in aeroid::catalog::bundled(aeroid::catalog::SCENARIO_FOLDER) {

@@ -38,9 +38,6 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Folder of bundled model structures.
-pub const MODEL_FOLDER: &str = "models";
-
 /// Flight-path states a simulating estimator can integrate, named as record channels.
 pub const FLIGHT_PATH_STATES: [&str; 11] = [
     "airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch", "yaw", "altitude", "chi",
@@ -100,7 +97,7 @@ pub struct ModelStructure {
 impl ModelStructure {
     /// Loads a structure by bundled name (`models/NAME.toml`) or path.
     pub fn load(reference: &str) -> Result<ModelStructure> {
-        let path = catalog::resolve(reference, MODEL_FOLDER, None)?;
+        let path = catalog::resolve(reference, catalog::MODEL_FOLDER, None)?;
         let text = read_text(&path)?;
         let file: StructureFile = parse_toml(&path, &text)?;
         ModelStructure::from_file(&file, &path)

@@ -24,8 +24,8 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// The gate file bundled with aeroid.
-pub const GATE_FILE: &str = "golden/gates.toml";
+/// The gate file bundled with aeroid, relative to the data folder.
+pub use crate::catalog::GATE_FILE;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

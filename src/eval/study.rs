@@ -40,7 +40,7 @@ use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use crate::estimation::estimate::Status;
 use crate::estimation::estimator::{MethodTables, check_method_tables};
 use crate::estimation::methods;
-use crate::estimation::structure::{MODEL_FOLDER, ModelStructure};
+use crate::estimation::structure::ModelStructure;
 use crate::eval::run::{self, Outcome};
 use crate::eval::score::ParameterScore;
 use crate::random;
@@ -266,7 +266,7 @@ impl Study {
             Scenario::load(&resolved(r, catalog::SCENARIO_FOLDER)?)
         });
         let models = load_each("models", &file.models, &mut problems, |r| {
-            ModelStructure::load(&resolved(r, MODEL_FOLDER)?)
+            ModelStructure::load(&resolved(r, catalog::MODEL_FOLDER)?)
         });
         let profile = Profile::load(&file.profile, Some(base))
             .map_err(|error| problems.push("profile", error.to_string()))
@@ -666,8 +666,21 @@ impl StudyResult {
 
     /// The summary as a fixed-width table for the terminal.
     pub fn table(&self) -> String {
+        // The text columns are as wide as their longest entry, so that long
+        // model names keep the numbers in line.
+        let width = |header: &str, field: fn(&SummaryRow) -> &str| {
+            self.summary
+                .iter()
+                .map(|s| field(s).chars().count())
+                .chain([header.chars().count()])
+                .max()
+                .unwrap_or(0)
+        };
+        let model = width("model", |s| &s.model);
+        let method = width("meth", |s| &s.method);
+        let parameter = width("parameter", |s| &s.parameter);
         let mut text = format!(
-            "{:<14} {:<4} {:<12} {:>11} {:>11} {:>8} {:>7} {:>7} {:>7} {:>6} {:>9}\n",
+            "{:<model$} {:<method$} {:<parameter$} {:>11} {:>11} {:>8} {:>7} {:>7} {:>7} {:>6} {:>9}\n",
             "model",
             "meth",
             "parameter",
@@ -690,7 +703,7 @@ impl StudyResult {
                 );
             }
             text += &format!(
-                "{:<14} {:<4} {:<12} {:>11.5} {:>11.5} {:>8.2} {:>7.2} {:>7.2} {:>7.2} {:>5.0}% {:>9}\n",
+                "{:<model$} {:<method$} {:<parameter$} {:>11.5} {:>11.5} {:>8.2} {:>7.2} {:>7.2} {:>7.2} {:>5.0}% {:>9}\n",
                 s.model,
                 s.method,
                 s.parameter,
@@ -782,6 +795,31 @@ mod tests {
         assert!(close(s.bias_over_crb, 0.5) && close(s.relative_bias, 0.025));
         assert!(close(s.bias_standard_error, std / 3f64.sqrt()));
         assert!(close(s.coverage, 2.0 / 3.0));
+    }
+
+    /// A model name longer than the header (as a path to a model file is)
+    /// widens its column instead of pushing the numbers out of line: the
+    /// header and every row have the same width.
+    #[test]
+    fn table_columns_fit_long_model_names() {
+        let mut long = row(0, CONVERGED, -0.41, 0.01);
+        long.model = "models/attas-lateral-with-long-name.toml".into();
+        let rows = vec![long, row(0, CONVERGED, -0.40, 0.01)];
+        let result = StudyResult {
+            study: "s".into(),
+            seed: 0,
+            runs: 1,
+            summary: summarise(&rows),
+            rows,
+        };
+        let table = result.table();
+        let widths: Vec<usize> = table
+            .lines()
+            .filter(|line| !line.starts_with("point "))
+            .map(|line| line.chars().count())
+            .collect();
+        assert_eq!(widths.len(), 3, "{table}");
+        assert!(widths.iter().all(|w| *w == widths[0]), "{table}");
     }
 
     #[test]

@@ -46,6 +46,7 @@ use crate::sim::scenario::Scenario;
 use crate::sim::state::{CONTROL_COUNT, Control, Controls};
 use crate::sim::trace::TruthTrace;
 use crate::sim::truth::{RunTruth, TrimPoint, TruthKind};
+use crate::sim::{Departure, Flight};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -401,9 +402,9 @@ pub fn check_rigid_body(scenario: &Scenario, exec: &Exec) -> Result<()> {
 
 /// Flies a JSBSim scenario: trim, the rigid-body check, the local derivatives
 /// at the trim point, then the flight with the scenario's inputs. Returns the
-/// truth trace (departures stop it as aeroid's simulator does) and the run's
+/// truth trace (a departure stops it as in aeroid's simulator) and the run's
 /// truth (kind `local_derivative`).
-pub fn fly(scenario: &Scenario) -> Result<(TruthTrace, RunTruth)> {
+pub fn fly(scenario: &Scenario) -> Result<Flight> {
     let mut trimmed = trim(scenario)?;
     check_rigid_body(scenario, &trimmed.exec)?;
     let derivatives = trimmed.derivatives()?;
@@ -449,10 +450,10 @@ pub fn fly(scenario: &Scenario) -> Result<(TruthTrace, RunTruth)> {
         if let Some(reason) =
             crate::sim::departure_reason(&scenario.departure, &sample.state, &sample.evaluation)
         {
-            return Err(Error::Departed {
-                time,
-                reason,
-                partial: Box::new(trace),
+            return Ok(Flight {
+                trace,
+                truth,
+                departure: Some(Departure { time, reason }),
             });
         }
         trace.samples.push(sample);
@@ -460,7 +461,11 @@ pub fn fly(scenario: &Scenario) -> Result<(TruthTrace, RunTruth)> {
             flight.advance(k, &controls[k + 1])?;
         }
     }
-    Ok((trace, truth))
+    Ok(Flight {
+        trace,
+        truth,
+        departure: None,
+    })
 }
 
 /// The flight from the trim point: surface commands scaled by the measured

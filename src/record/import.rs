@@ -27,9 +27,10 @@
 //! cell becomes a dropout unless the map says `empty = "skip"` for that
 //! channel. Columns the map does not mention are listed in the outcome.
 
+use crate::csv_table::CsvTable;
 use crate::error::{Problems, Result, parse_toml, read_text};
 use crate::record::derived;
-use crate::record::{Channel, CsvTable, FlightRecord, check_name};
+use crate::record::{Channel, FlightRecord, check_name};
 use crate::units::{Dimension, Quantity, unit_factor};
 use serde::{Deserialize, Serialize};
 use std::path::Path;

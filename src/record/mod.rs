@@ -24,10 +24,12 @@ pub mod derived;
 pub mod import;
 pub mod recorder;
 
+use crate::csv_table::CsvTable;
+use crate::csv_table::first_disorder;
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The metadata file of a record folder.
 pub const RECORD_FILE: &str = "record.toml";
@@ -558,15 +560,6 @@ fn cell(value: f64) -> String {
     }
 }
 
-/// The index of the first time not after its predecessor (or not finite).
-pub(crate) fn first_disorder(times: &[f64]) -> Option<usize> {
-    times
-        .iter()
-        .enumerate()
-        .find(|&(k, t)| !t.is_finite() || (k > 0 && *t <= times[k - 1]))
-        .map(|(k, _)| k)
-}
-
 /// A channel name must be usable as a CSV header and file name.
 pub(crate) fn check_name(name: &str) -> Result<(), String> {
     let allowed = |c: char| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.');
@@ -576,116 +569,6 @@ pub(crate) fn check_name(name: &str) -> Result<(), String> {
         ))
     } else {
         Ok(())
-    }
-}
-
-/// A CSV file read whole, for naming the line and column of every bad cell.
-pub(crate) struct CsvTable {
-    pub path: PathBuf,
-    pub headers: Vec<String>,
-    /// Each data row with its line number in the file (the header is line 1).
-    rows: Vec<(u64, csv::StringRecord)>,
-}
-
-impl CsvTable {
-    /// Reads a CSV with a header row; a ragged row or a repeated header is an error.
-    pub fn read(path: &Path) -> Result<CsvTable> {
-        let mut reader = csv::Reader::from_path(path).map_err(|e| Error::Io {
-            path: path.to_path_buf(),
-            source: e.into(),
-        })?;
-        let csv_error = |e: csv::Error| Error::Csv {
-            path: path.to_path_buf(),
-            line: e.position().map_or(0, |p| p.line()),
-            column: String::new(),
-            message: e.to_string(),
-        };
-        let headers: Vec<String> = reader
-            .headers()
-            .map_err(csv_error)?
-            .iter()
-            .map(|h| h.trim().to_string())
-            .collect();
-        for (i, header) in headers.iter().enumerate() {
-            if headers[..i].contains(header) {
-                return Err(Error::Csv {
-                    path: path.to_path_buf(),
-                    line: 1,
-                    column: header.clone(),
-                    message: "the column name appears twice in the header".into(),
-                });
-            }
-        }
-        let mut rows = Vec::new();
-        for row in reader.records() {
-            let row = row.map_err(csv_error)?;
-            rows.push((row.position().map_or(0, |p| p.line()), row));
-        }
-        Ok(CsvTable {
-            path: path.to_path_buf(),
-            headers,
-            rows,
-        })
-    }
-
-    /// The index of a header, or an error naming the missing column.
-    pub fn column_index(&self, name: &str) -> Result<usize> {
-        self.headers
-            .iter()
-            .position(|h| h == name)
-            .ok_or_else(|| Error::Csv {
-                path: self.path.clone(),
-                line: 1,
-                column: name.to_string(),
-                message: format!(
-                    "no such column in the header; columns: {}",
-                    self.headers.join(", ")
-                ),
-            })
-    }
-
-    /// A column parsed as numbers; an empty cell is NaN when `allow_empty`,
-    /// anything else that is not a number is an error naming line and column.
-    pub fn numbers(&self, column: usize, allow_empty: bool) -> Result<Vec<f64>> {
-        self.rows
-            .iter()
-            .map(|(line, row)| {
-                let text = row.get(column).unwrap_or("").trim();
-                match text.parse::<f64>() {
-                    Ok(value) => Ok(value),
-                    Err(_) if text.is_empty() && allow_empty => Ok(f64::NAN),
-                    Err(_) => {
-                        Err(self.cell_error(*line, column, format!("'{text}' is not a number")))
-                    }
-                }
-            })
-            .collect()
-    }
-
-    /// A time column: numbers, finite, strictly increasing.
-    pub fn time_column(&self, column: usize) -> Result<Vec<f64>> {
-        let times = self.numbers(column, false)?;
-        match first_disorder(&times) {
-            None => Ok(times),
-            Some(k) => Err(self.cell_error(
-                self.rows[k].0,
-                column,
-                format!(
-                    "time {} is not after the previous time {} (the time column must increase strictly)",
-                    times[k],
-                    if k > 0 { times[k - 1] } else { f64::NAN }
-                ),
-            )),
-        }
-    }
-
-    fn cell_error(&self, line: u64, column: usize, message: String) -> Error {
-        Error::Csv {
-            path: self.path.clone(),
-            line,
-            column: self.headers.get(column).cloned().unwrap_or_default(),
-            message,
-        }
     }
 }
 

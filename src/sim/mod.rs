@@ -1,7 +1,8 @@
 //! The simulation executive: trim, build the exogenous signals (trim controls
 //! plus inputs, wind) at every step instant, integrate with RK4, record the
-//! truth trace at every step, and stop with [`Error::Departed`] (carrying the
-//! trace so far) when the flight leaves its limits.
+//! truth trace at every step, and stop with a [`Departure`] (beside the trace
+//! so far) when the flight leaves its limits. Which simulator flies a
+//! scenario is its [`FlightSource`].
 
 pub mod aero;
 pub mod aircraft;
@@ -12,6 +13,7 @@ pub mod inputs;
 pub mod integrator;
 pub mod params;
 pub mod scenario;
+pub mod source;
 pub mod state;
 pub mod trace;
 pub mod trim;
@@ -22,6 +24,7 @@ use crate::error::{Error, Result};
 use crate::sim::dynamics::{Exogenous, ExogenousVector, FlightModel};
 use crate::sim::integrator::{Interpolation, rk4_step};
 use crate::sim::scenario::{DepartureLimits, Scenario};
+pub use crate::sim::source::{Departure, Flight, FlightSource};
 use crate::sim::state::{Controls, Q0, StateVector};
 use crate::sim::trace::{TruthSample, TruthTrace};
 use crate::sim::trim::{Trim, trim};
@@ -45,7 +48,7 @@ pub struct Simulation {
 impl Simulation {
     /// Trims the aircraft and samples inputs and wind for the whole run.
     pub fn prepare(scenario: &Scenario) -> Result<Simulation> {
-        if scenario.jsbsim.is_some() {
+        if let FlightSource::Jsbsim(_) = scenario.source() {
             return Err(Error::Invalid {
                 path: scenario.path.clone(),
                 problems: vec![crate::error::Problem {
@@ -96,19 +99,36 @@ impl Simulation {
         })
     }
 
-    /// Integrates from trim over all steps.
+    /// Integrates from trim over all steps; a departure is an [`Error::Departed`].
     pub fn run(&self) -> Result<TruthTrace> {
         self.run_with_restarts(|_| None)
+    }
+
+    /// Integrates from trim over all steps or until the flight departs: the
+    /// trace (up to the last step before a departure) and the departure.
+    pub fn fly(&self) -> (TruthTrace, Option<Departure>) {
+        self.fly_with_restarts(|_| None)
     }
 
     /// Simulates from the trim state, but at every step k where `restart(k)`
     /// gives a state, continues from that state instead (multiple shooting:
     /// an analysis of short segments of a long flight restarts each segment
-    /// from a known state).
+    /// from a known state). A departure is an [`Error::Departed`].
     pub fn run_with_restarts(
         &self,
         restart: impl Fn(usize) -> Option<StateVector>,
     ) -> Result<TruthTrace> {
+        match self.fly_with_restarts(restart) {
+            (trace, None) => Ok(trace),
+            (_, Some(departure)) => Err(departure.into_error()),
+        }
+    }
+
+    /// [`Simulation::run_with_restarts`] that keeps the trace up to a departure.
+    pub fn fly_with_restarts(
+        &self,
+        restart: impl Fn(usize) -> Option<StateVector>,
+    ) -> (TruthTrace, Option<Departure>) {
         let steps = self.exogenous.len() - 1;
         let mut trace = TruthTrace {
             scenario: self.name.clone(),
@@ -124,11 +144,7 @@ impl Simulation {
             let exogenous = self.exogenous_at(k, 0.0);
             let evaluation = self.model.evaluate(&x, &exogenous);
             if let Some(reason) = departure_reason(&self.departure, &x, &evaluation) {
-                return Err(Error::Departed {
-                    time,
-                    reason,
-                    partial: Box::new(trace),
-                });
+                return (trace, Some(Departure { time, reason }));
             }
             trace
                 .samples
@@ -137,7 +153,7 @@ impl Simulation {
                 x = self.advance(&x, k);
             }
         }
-        Ok(trace)
+        (trace, None)
     }
 
     /// One RK4 step from t_k, with the quaternion renormalised afterwards.
@@ -202,21 +218,14 @@ pub fn departure_reason(
     })
 }
 
-/// Flies a scenario and simulates its truth trace (see [`fly`]).
-pub fn simulate(scenario: &Scenario) -> Result<TruthTrace> {
-    fly(scenario).map(|(trace, _)| trace)
+/// Flies a scenario with its [`FlightSource`] to its end or its departure.
+pub fn simulate(scenario: &Scenario) -> Result<Flight> {
+    scenario.source().fly(scenario)
 }
 
-/// Flies a scenario with the simulator of its aircraft, and gives the truth
-/// trace and the run's truth: aeroid's (trim, RK4) for an aeroid aircraft,
-/// with the exact truth; JSBSim for one of JSBSim's own aircraft (feature
-/// `jsbsim`, `crate::jsbsim::own::fly`), with JSBSim's local derivatives.
+/// Flies a scenario with its [`FlightSource`] and gives the truth trace and
+/// the run's truth: aeroid's simulator with the exact truth, or JSBSim with
+/// its local derivatives. A departure is an [`Error::Departed`].
 pub fn fly(scenario: &Scenario) -> Result<(TruthTrace, RunTruth)> {
-    #[cfg(feature = "jsbsim")]
-    if scenario.jsbsim.is_some() {
-        return crate::jsbsim::own::fly(scenario);
-    }
-    let simulation = Simulation::prepare(scenario)?;
-    let trace = simulation.run()?;
-    Ok((trace, RunTruth::exact(scenario, &simulation.trim)))
+    simulate(scenario)?.complete()
 }

@@ -325,9 +325,17 @@ mod tests {
         record_scenario(&scenario, &profile).unwrap().0
     }
 
+    /// The model file's `[methods.oem]` settings (step, interpolation).
+    fn model_options(
+        structure: &ModelStructure,
+    ) -> crate::estimation::methods::output_error::OutputErrorOptions {
+        crate::estimation::methods::output_error::OutputErrorOptions::for_structure(structure)
+            .unwrap()
+    }
+
     /// The view of `structure` on `record` as output error builds its
-    /// simulation: the structure's step (else 25 Hz), the window where
-    /// every output has samples, the record's initial state (χ from α).
+    /// simulation: the model's output-error step (else 25 Hz), the window
+    /// where every output has samples, the record's initial state (χ from α).
     fn view(
         record: &crate::record::FlightRecord,
         structure: &ModelStructure,
@@ -338,7 +346,7 @@ mod tests {
             let times = &record.channel(name).unwrap().times;
             window = (window.0.max(times[0]), window.1.min(*times.last().unwrap()));
         }
-        let step = structure.step.unwrap_or(0.04);
+        let step = model_options(structure).step.unwrap_or(0.04);
         let simulation = DrivenSimulation::from_record(
             record,
             &structure.integrate,
@@ -420,7 +428,8 @@ mod tests {
     #[test]
     fn step_is_the_simulations_step_bit_for_bit() {
         for (record, structure) in cases() {
-            let (view, initial) = view(&record, &structure, structure.interpolation);
+            let (view, initial) =
+                view(&record, &structure, model_options(&structure).interpolation);
             let theta = view.parameters();
             for sensitivities in [None, Some(Linearise::GridPoints), Some(Linearise::Stages)] {
                 let states = trajectory(&view, &initial, sensitivities);
@@ -553,7 +562,8 @@ mod tests {
     #[test]
     fn jacobians_match_central_differences() {
         for (record, structure) in cases() {
-            let (view, initial) = view(&record, &structure, structure.interpolation);
+            let (view, initial) =
+                view(&record, &structure, model_options(&structure).interpolation);
             let theta = view.parameters() * 1.03;
             let states = trajectory(&view, &initial, None);
             let state_step = |v: f64| 1e-5 * v.abs().max(1.0);

@@ -1,0 +1,21 @@
+//! `aeroid check`: validate one file and explain every problem.
+
+use anyhow::Result;
+use std::path::PathBuf;
+
+/// Validate an aircraft, scenario, recorder-profile, model-structure or study
+/// file and explain every problem; a scenario is also trimmed.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The file to check.
+    file: PathBuf,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let report = aeroid::check::check_file(&args.file)?;
+    outln!("{}: valid {}", args.file.display(), report.kind);
+    for line in report.lines {
+        outln!("  {line}");
+    }
+    Ok(())
+}

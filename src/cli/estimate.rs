@@ -1,0 +1,127 @@
+//! `aeroid estimate`: one estimator on one record and model structure.
+
+use aeroid::estimation::estimator::MethodTables;
+use anyhow::{Context, Result};
+use std::path::PathBuf;
+
+/// Estimate a postulated model's parameters from a record; print the
+/// estimates with Cramér–Rao standard errors, scored against the truth
+/// when the record came from a scenario (its truth.toml); write
+/// estimate.json and estimate.csv.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The record folder.
+    record: PathBuf,
+    /// The model structure: a bundled name (models/) or a path.
+    #[arg(long)]
+    model: String,
+    /// The estimator (see `aeroid methods`).
+    #[arg(long)]
+    method: String,
+    /// The folder to write estimate.json and estimate.csv into (created).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Proof of match: simulate the estimated model on this other record
+    /// (a different manoeuvre) and report how well it reproduces each output.
+    #[arg(long)]
+    check_on: Option<PathBuf>,
+    /// A setting of the method, KEY=VALUE with a TOML value, overriding
+    /// the model's `[methods.NAME]` table (e.g. `--set start='"model"'`,
+    /// `--set step='"0.02 s"'`); repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    settings: Vec<String>,
+}
+
+/// `--set KEY=VALUE` arguments as a `[methods.NAME]` table.
+fn settings_table(method: &str, settings: &[String]) -> Result<MethodTables> {
+    let mut table = toml::Table::new();
+    for setting in settings {
+        let (key, value) = setting
+            .split_once('=')
+            .with_context(|| format!("--set {setting}: write KEY=VALUE"))?;
+        let parsed: toml::Table =
+            toml::from_str(&format!("value = {value}")).with_context(|| {
+                format!(
+                    "--set {setting}: the value is not TOML (a string needs quotes: {key}='\"…\"')"
+                )
+            })?;
+        table.insert(key.trim().to_string(), parsed["value"].clone());
+    }
+    Ok([(method.to_string(), table)].into())
+}
+
+pub fn run(args: Args) -> Result<()> {
+    use aeroid::estimation::{
+        methods::{self, output_error},
+        problem::EstimationProblem,
+        structure::ModelStructure,
+    };
+    use aeroid::eval::score;
+    let Args {
+        record: record_folder,
+        model,
+        method,
+        out,
+        check_on,
+        settings,
+    } = args;
+    let record = aeroid::record::FlightRecord::read(&record_folder)?;
+    let structure = ModelStructure::load(&model)?;
+    let overrides = settings_table(&method, &settings)?;
+    let problem = EstimationProblem::new(&method, vec![record], structure, &[&overrides])?;
+    let estimate = methods::estimate(&problem, None)?;
+    let structure = &problem.structure;
+    out!("{}", estimate.details);
+    let truth_path = record_folder.join(aeroid::sim::truth::TRUTH_FILE);
+    let truth = truth_path
+        .is_file()
+        .then(|| aeroid::sim::truth::RunTruth::read(&truth_path))
+        .transpose()?;
+    let scores = score::score(&estimate, truth.as_ref(), structure.aircraft.aero.kind);
+    outln!(
+        "{} on {} with model {}: {} after {} iterations, {:.3} s",
+        estimate.method,
+        estimate.record,
+        estimate.model,
+        estimate.status,
+        estimate.iterations,
+        estimate.wall_time
+    );
+    out!("{}", score::table(&scores));
+    for fit in &estimate.fits {
+        outln!(
+            "  fit {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}",
+            fit.channel,
+            fit.rms,
+            fit.r_squared,
+            fit.theil
+        );
+    }
+    for note in &estimate.notes {
+        outln!("  note: {note}");
+    }
+    if let Some(other) = check_on {
+        let other = aeroid::record::FlightRecord::read(&other)?;
+        outln!("proof of match on {} (nothing adjusted):", other.scenario);
+        for fit in output_error::proof_of_match(&estimate, structure, &other)? {
+            outln!(
+                "  {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}",
+                fit.channel,
+                fit.rms,
+                fit.r_squared,
+                fit.theil
+            );
+        }
+    }
+    if let Some(out) = out {
+        std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+        estimate.write_json(&out.join("estimate.json"))?;
+        score::write_csv(&scores, &out.join("estimate.csv"))?;
+        outln!(
+            "written: {}/estimate.json, {}/estimate.csv",
+            out.display(),
+            out.display()
+        );
+    }
+    Ok(())
+}

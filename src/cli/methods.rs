@@ -1,0 +1,41 @@
+//! `aeroid methods`: the registered estimators.
+
+use aeroid::estimation::methods;
+use anyhow::Result;
+
+/// List every estimator with its paper, the equations it implements, what
+/// it needs and its settings (`[methods.NAME]` keys with their defaults);
+/// with a name, show that one.
+#[derive(clap::Args)]
+pub struct Args {
+    /// One method's name.
+    name: Option<String>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let estimators = match &args.name {
+        Some(name) => vec![methods::find(name)?],
+        None => methods::all(),
+    };
+    for estimator in estimators {
+        let info = estimator.info();
+        outln!("{}: {}", info.name, info.title);
+        outln!("  paper:     {}", info.paper);
+        outln!("  equations: {}", info.equations);
+        outln!("  needs:     {}", info.needs);
+        if let Some(from) = estimator.starts_from() {
+            outln!("  starts from {from}'s estimate where it has one");
+        }
+        outln!("  settings ([methods.{}]):", info.name);
+        for setting in &info.settings {
+            outln!(
+                "    {} = {}   # {}",
+                setting.name,
+                setting.default,
+                setting.meaning
+            );
+        }
+        outln!();
+    }
+    Ok(())
+}

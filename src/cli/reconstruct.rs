@@ -1,0 +1,51 @@
+//! `aeroid reconstruct`: flight path reconstruction of a record.
+
+use anyhow::Result;
+use std::path::PathBuf;
+
+/// Flight path reconstruction / data compatibility check: estimate
+/// accelerometer and gyro biases and the flow-vane scale factors and
+/// offsets from the kinematics; with --out, write the corrected record.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The record folder.
+    record: PathBuf,
+    /// A folder for the corrected record.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let record = aeroid::record::FlightRecord::read(&args.record)?;
+    let result = aeroid::prep::compatibility::flight_path_reconstruction(&record, 30)?;
+    let estimate = &result.estimate;
+    outln!(
+        "flight path reconstruction of {}: {:?} after {} iterations, {:.3} s",
+        estimate.record,
+        estimate.status,
+        estimate.iterations,
+        estimate.wall_time
+    );
+    for p in &estimate.parameters {
+        outln!(
+            "  {:<12} {:>14.6e} ± {:.3e}",
+            p.name,
+            p.value,
+            p.standard_error
+        );
+    }
+    for fit in &estimate.fits {
+        outln!(
+            "  fit {:<10} rms {:.4e}  R² {:.5}  TIC {:.4}",
+            fit.channel,
+            fit.rms,
+            fit.r_squared,
+            fit.theil
+        );
+    }
+    if let Some(out) = args.out {
+        result.corrected.write(&out)?;
+        outln!("corrected record written to {}", out.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,113 @@
+//! `aeroid run`: the whole harness on one scenario.
+
+use aeroid::eval::run::Outcome;
+use aeroid::sim::scenario::Scenario;
+use anyhow::Result;
+use std::path::PathBuf;
+
+/// The whole harness on one scenario: simulate, record (the scenario's
+/// recorder profile unless --profile), run every classical estimator (ee,
+/// swr, oem) on every model structure the scenario names, and score each
+/// against the truth. With --out, writes the record, truth and estimates.
+#[derive(clap::Args)]
+pub struct Args {
+    /// A bundled scenario name or a path to a scenario file.
+    scenario: String,
+    /// A recorder profile (recorders/) or a path.
+    #[arg(long)]
+    profile: Option<String>,
+    /// Print every parameter's score, not just the summary per estimator.
+    #[arg(long)]
+    verbose: bool,
+    /// A folder for the record, truth.toml and one estimate per model and method.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let Args {
+        scenario,
+        profile,
+        verbose,
+        out,
+    } = args;
+    let scenario = Scenario::load(&scenario)?;
+    let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
+    let report = aeroid::eval::run::run(&scenario, &profile)?;
+    let truth = match report.truth.kind {
+        aeroid::sim::truth::TruthKind::Exact => format!("{:?} model", report.truth.model),
+        aeroid::sim::truth::TruthKind::LocalDerivative => {
+            format!("local derivatives of {} at trim", report.truth.aircraft)
+        }
+    };
+    outln!(
+        "{}: recorded with {} ({} channels); truth: {truth}",
+        report.scenario,
+        report.profile,
+        report.record.channels.len(),
+    );
+    if scenario.models.is_empty() {
+        outln!("the scenario names no model structures (`models = [...]`): nothing to estimate");
+    } else {
+        outln!(
+            "{:<22} {:<5} {:<16} {:>6} {:>9} {:>13} {:>10}",
+            "model",
+            "method",
+            "status",
+            "iter",
+            "time [s]",
+            "inside 95 %",
+            "max|e/σ|"
+        );
+    }
+    for run in &report.runs {
+        match &run.outcome {
+            Outcome::Estimated { estimate, scores } => {
+                let (inside, scored, worst) = run.coverage().unwrap_or((0, 0, f64::NAN));
+                let status = estimate
+                    .status
+                    .to_string()
+                    .chars()
+                    .take(16)
+                    .collect::<String>();
+                outln!(
+                    "{:<22} {:<5} {:<16} {:>6} {:>9.3} {:>13} {:>10.2}",
+                    run.model,
+                    run.method,
+                    status,
+                    estimate.iterations,
+                    estimate.wall_time,
+                    format!("{inside}/{scored}"),
+                    worst
+                );
+                if verbose {
+                    out!("{}", aeroid::eval::score::table(scores));
+                }
+            }
+            Outcome::Refused(refusal) => outln!(
+                "{:<22} {:<5} refused ({}): {refusal}",
+                run.model,
+                run.method,
+                refusal.kind()
+            ),
+            Outcome::Failed(reason) => {
+                outln!("{:<22} {:<5} failed: {reason}", run.model, run.method)
+            }
+        }
+    }
+    if let Some(out) = out {
+        report.record.write(&out)?;
+        report
+            .truth
+            .write(&out.join(aeroid::sim::truth::TRUTH_FILE))?;
+        for run in &report.runs {
+            if let Outcome::Estimated { estimate, scores } = &run.outcome {
+                let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
+                estimate.write_json(&out.join(format!("{stem}.json")))?;
+                aeroid::eval::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
+            }
+        }
+        outln!("record, truth and estimates written to {}", out.display());
+    }
+    Ok(())
+}

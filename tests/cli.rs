@@ -1,0 +1,148 @@
+//! The command line as a user meets it: what it prints, where it finds its
+//! files and how it ends. Each test runs the built `aeroid` binary.
+
+mod common;
+
+use std::io::Read;
+use std::process::{Command, Stdio};
+
+fn aeroid() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_aeroid"))
+}
+
+/// The output of a command that must succeed.
+fn stdout_of(command: &mut Command) -> String {
+    let output = command.output().unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8(output.stdout).unwrap()
+}
+
+/// A reader that goes away (`aeroid list | head -1`) ends the program
+/// quietly: exit 0 and nothing on stderr, not a panic about a broken pipe
+/// (exit 101). The read end of the pipe is closed before aeroid writes.
+#[test]
+fn a_closed_pipe_ends_the_program_quietly() {
+    let mut child = aeroid()
+        .arg("list")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    let status = child.wait().unwrap();
+    assert!(stderr.is_empty(), "{stderr}");
+    assert_eq!(status.code(), Some(0), "{stderr}");
+}
+
+/// `estimate --model` takes a model structure by name, so `aeroid list`
+/// shows the bundled model structures beside the aircraft and scenarios.
+#[test]
+fn list_shows_the_model_structures() {
+    let text = stdout_of(aeroid().arg("list"));
+    for expected in [
+        "aircraft:",
+        "scenarios:",
+        "recorders:",
+        "models:\n",
+        "  attas-lateral\n",
+        "studies:",
+    ] {
+        assert!(text.contains(expected), "{expected}: {text}");
+    }
+}
+
+/// `check` validates model-structure files too, and its help says so; the
+/// top-level help names the data folder's environment variable.
+#[test]
+fn help_names_model_structures_and_the_data_folder_variable() {
+    let check = stdout_of(aeroid().args(["check", "--help"]));
+    assert!(check.contains("model-structure"), "{check}");
+    let top = stdout_of(aeroid().arg("--help"));
+    assert!(top.contains("AEROID_DATA"), "{top}");
+}
+
+/// The gate file is found through the data folder, like scenarios: from a
+/// folder that is not the repository (the data folder is then the source
+/// tree), and from the folder `AEROID_DATA` names.
+#[test]
+fn gate_finds_its_file_through_the_data_folder() {
+    let elsewhere = common::temp_folder("cli-gate-elsewhere");
+    let text = stdout_of(
+        aeroid()
+            .args(["gate", "--only", "no case has this name"])
+            .current_dir(&elsewhere)
+            .env_remove("AEROID_DATA"),
+    );
+    assert!(text.contains("all 0 gates pass"), "{text}");
+
+    let data = common::temp_folder("cli-gate-data");
+    std::fs::create_dir_all(data.join("golden")).unwrap();
+    common::write(&data.join("golden"), "gates.toml", "case = []\n");
+    let output = aeroid()
+        .arg("gate")
+        .current_dir(&elsewhere)
+        .env("AEROID_DATA", &data)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        output.status.success() && text.contains("all 0 gates pass"),
+        "{text}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+/// A scenario that names no model structures has nothing to estimate: `run`
+/// says so and prints no (empty) table header.
+#[test]
+fn run_without_models_prints_no_table_header() {
+    let text = stdout_of(aeroid().args(["run", "attas-trim"]));
+    assert!(text.contains("nothing to estimate"), "{text}");
+    assert!(!text.contains("inside 95 %"), "{text}");
+}
+
+/// A departing flight: `simulate` writes the trace up to the departure,
+/// says where it is and fails.
+#[test]
+fn simulate_writes_the_partial_trace_of_a_departing_flight() {
+    let folder = common::temp_folder("cli-departure");
+    let aircraft = common::attas_with(|t| {
+        t.replace("alpha = -0.176", "alpha = 0.05")
+            .replace("q = -12.3", "q = 0.0")
+    });
+    common::write(&folder, "unstable.toml", &aircraft);
+    let scenario = common::write(
+        &folder,
+        "departs.toml",
+        "name = \"departs\"\naircraft = \"unstable.toml\"\nduration = \"60 s\"\nstep = \"0.01 s\"\nseed = 1\n\n\
+         [trim]\nairspeed = \"103 m/s\"\naltitude = \"4877 m\"\n\n\
+         [[inputs]]\nkind = \"step\"\ncontrol = \"elevator\"\nstart = \"1 s\"\namplitude = \"-0.5 deg\"\n",
+    );
+    let out = folder.join("trace.csv");
+    let output = aeroid()
+        .arg("simulate")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("departed at t = ") && stderr.contains("samples before departure"),
+        "{stderr}"
+    );
+    let lines = std::fs::read_to_string(&out).unwrap().lines().count();
+    assert!(lines > 100, "the partial trace has {lines} lines");
+}
