@@ -83,7 +83,7 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// Flight path reconstruction / data compatibility check (seed 004): estimate
+    /// Flight path reconstruction / data compatibility check (reflex-wing UAV paper): estimate
     /// accelerometer and gyro biases and the flow-vane scale factors and
     /// offsets from the kinematics; with --out, write the corrected record.
     Reconstruct {

@@ -51,7 +51,7 @@ fn run_scores_every_method_on_the_lateral_scenario() {
     }
 }
 
-/// The QAR of seed 000 records no angular rates, no airspeed, no throttle:
+/// The QAR of Wang et al. 2012 records no angular rates, no airspeed, no throttle:
 /// no estimator crashes on it; each reports what it lacks.
 #[test]
 fn qar_record_is_reported_not_crashed() {

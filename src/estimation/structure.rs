@@ -3,7 +3,7 @@
 //! file, its values being start values), which parameters are fixed, their
 //! bounds, and for simulating estimators which flight-path states are
 //! integrated and which measured signals are fed in as pseudo-controls
-//! (decoupled longitudinal or lateral models, seed 004 Eqs. 1–8), and which
+//! (decoupled longitudinal or lateral models, reflex-wing UAV paper, Eqs. 1–8), and which
 //! recorded channels are compared.
 //!
 //! ```toml
