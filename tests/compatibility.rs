@@ -1,4 +1,4 @@
-//! Flight path reconstruction / data compatibility check (seed 004 Eqs.
+//! Flight path reconstruction / data compatibility check (reflex-wing UAV paper, Eqs.
 //! 31–32): sensor biases and scale factors planted by the recorder are found
 //! again, and the corrected record is consistent.
 

@@ -1,4 +1,4 @@
-//! Equation error (least squares, seeds 002 and 004) and stepwise regression
+//! Equation error (least squares, as in the ELM + Gauss–Newton and reflex-wing UAV papers) and stepwise regression
 //! on simulated ATTAS flights: exact recovery on ideal data, the
 //! errors-in-variables bias on the noisy 25 Hz flight-test profile, model
 //! structure determination, and named errors for bad input.
@@ -204,7 +204,7 @@ fn errors_in_variables_limit(
 /// 0.002 rad/s, accelerations 0.02 m/s²): 40 recordings of the same flight
 /// with different recorder seeds (the simulation is flown once), attas-full
 /// all free. Least squares assumes noise-free regressors; with noisy ones
-/// the estimates are attenuated towards zero (seed 004's finding: its LS
+/// the estimates are attenuated towards zero (the reflex-wing UAV paper's finding: its LS
 /// Clp, Clβ, Clδa were 25–35 % smaller than ML). Measured mean errors
 /// (Monte Carlo standard error in brackets, truth from aircraft/attas.toml):
 /// - CL_alpha 3.30: −0.183 [0.003], −5.6 %, z ≈ −57;

@@ -1,5 +1,5 @@
-//! A-priori identifiability (src/identifiability.rs): the QAR table of
-//! issue 4, and the properties that make the bounds trustworthy.
+//! A-priori identifiability (src/analysis/identifiability.rs): the QAR
+//! identifiability table, and the properties that make the bounds trustworthy.
 
 use aeroid::analysis::identifiability::{IdentifiabilityOptions, analyse};
 use aeroid::record::recorder::Profile;
@@ -7,7 +7,7 @@ use aeroid::sim::scenario::Scenario;
 
 const LATERAL: [&str; 6] = ["Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr"];
 
-/// The QAR of seed 000 on the transport approach, in 20 s segments (each
+/// The QAR of Wang et al. 2012 on the transport approach, in 20 s segments (each
 /// with its own unknown initial state, as an output-error analyst fits a
 /// long record; one 320 s shot of this spirally unstable aircraft would
 /// make the sensitivities grow as e^(0.038·t)). Which parameters remain

@@ -424,7 +424,7 @@ fn cross_check_cdrw_lateral() {
 /// With JSBSim's own atmosphere (geopotential altitude) the trims differ by
 /// the density at 3.7 m of altitude at 4877 m, and the ATTAS elevator 3211's
 /// speed then drifts by more than with aeroid's ISA in the exported file: the
-/// difference the README documents.
+/// difference docs/jsbsim.md documents.
 #[test]
 fn jsbsim_atmosphere_is_a_measurable_convention_difference() {
     use aeroid::jsbsim::crosscheck::{CrossCheckOptions, crosscheck};
@@ -548,7 +548,7 @@ fn central_differences_through_jsbsim_recover_the_exported_derivatives() {
 }
 
 // ---------------------------------------------------------------------------
-// JSBSim's own 737 as truth (issue 5, use 2)
+// JSBSim's own 737 as truth
 // ---------------------------------------------------------------------------
 
 use aeroid::jsbsim::own;
@@ -788,7 +788,7 @@ fn bad_jsbsim_scenarios_are_clear_errors() {
 ///   may add what the bound allows, no more.
 /// - equation error on the flight-test record: about twice the error
 ///   measured, and towards zero. On noisy data it is biased towards zero by
-///   3.5–15 % (errors in variables, seed 004; the moments were 7–18 % off
+///   3.5–15 % (errors in variables, the reflex-wing UAV paper; the moments were 7–18 % off
 ///   while the differentiator smeared the control steps).
 const SCORED: [(&str, &str, f64, f64, f64); 8] = [
     ("CL_alpha", B737_3211, 0.001, 0.020, 0.25),
@@ -830,7 +830,7 @@ fn fly_737(
 /// the decoupled models `b737-longitudinal` and `b737-lateral`: each of
 /// CL_alpha, Cm_alpha, Cm_q, Cm_de, Cl_beta, Cl_p, Cn_beta, Cn_r scored
 /// against JSBSim's local derivatives at trim within the tolerances of
-/// [`SCORED`]. Prints the table the README quotes (`-- --nocapture`).
+/// [`SCORED`]. Prints the table docs/jsbsim.md quotes (`-- --nocapture`).
 #[test]
 fn estimators_recover_the_737_derivatives_from_flight_test_data() {
     use aeroid::estimation::structure::ModelStructure;

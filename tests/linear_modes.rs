@@ -419,7 +419,7 @@ fn a_wrong_inertia_is_detected() {
 /// At a symmetric trim of a model without cross-coupling derivatives the
 /// linearisation decouples exactly: longitudinal–lateral cross terms are
 /// round-off (< 1e-9 of the blocks). ATTAS as bundled has small asymmetric
-/// constants (CY0, Cl0, Cn0 of seed 002), which trim with β ≈ −0.24° and
+/// constants (CY0, Cl0, Cn0 of the ELM + Gauss–Newton paper), which trim with β ≈ −0.24° and
 /// couple the blocks at the level of β: the largest cross term is then
 /// ∂ṗ/∂(u/V) = −β·∂ṗ/∂β ≈ 1e-2 of the largest block entries (2.3·|β|), and
 /// the test bounds it by 5·|β|. The velocity entries are scaled by the

@@ -1,5 +1,5 @@
 //! Monte Carlo studies (`aeroid study`): reproducibility whatever the thread
-//! count, bad study files, and the issue-4 acceptance over 100 seeded runs.
+//! count, bad study files, and the acceptance study over 100 seeded runs.
 
 mod common;
 
@@ -162,9 +162,9 @@ sample_rate = ["fast", "0 Hz"]
     );
 }
 
-/// Where the bundled acceptance study (seed 4) misses a band of issue 4, as
+/// Where the bundled acceptance study (seed 4) misses an acceptance band, as
 /// measured: (parameter, check). Pinned so that a new miss fails and a miss
-/// that goes away fails too (then remove it here and in README "Findings").
+/// that goes away fails too (then remove it here and in docs/findings.md).
 /// Both are marginal: Cl_r's σ_MC/CRB is 1.32 (band 0.7–1.3) and Cl_p's
 /// coverage 87 % (band 88–99 %, one run short).
 /// Of 36 band checks (18 parameters × spread and coverage), each at about
@@ -172,11 +172,11 @@ sample_rate = ["fast", "0 Hz"]
 /// chance and from the small errors-in-variables optimism (below).
 const MARGINAL_MISSES_ALLOWED: usize = 2;
 
-/// Issue 4 acceptance: ATTAS lateral multistep on `flight-test-25hz` (noise
+/// The acceptance study: ATTAS lateral multistep on `flight-test-25hz` (noise
 /// on every channel, inputs and pseudo-controls included), 100 seeded runs,
 /// model `attas-lateral` (initial state estimated: see the model file).
 ///
-/// Output error, per parameter (18), against the issue's bands:
+/// Output error, per parameter (18), against the acceptance bands:
 /// - |bias| < 0.5 σ_MC. With 100 runs the standard error of the mean is
 ///   σ_MC/10, so 0.5 σ_MC is 5 standard errors: an unbiased estimator
 ///   crosses it with probability ~6e-7 per parameter, a bias of 0.5 σ_MC
@@ -198,7 +198,7 @@ const MARGINAL_MISSES_ALLOWED: usize = 2;
 /// first noisy samples and σ_MC/CRB reached 6.3 (Cn_0; coverage 27 %):
 /// that start error is not in the bound.
 ///
-/// Equation error (seed 004's finding): its regressors (β, p, r, the
+/// Equation error (the reflex-wing UAV paper's finding): its regressors (β, p, r, the
 /// controls) are measured with noise, so the least-squares estimates are
 /// biased towards zero. Measured (mean of 100 runs): CY_beta −0.61 %
 /// (2.6 σ_MC), Cl_beta −1.1 % (1.9), Cl_p −0.90 % (1.5), CY_dr −1.7 %

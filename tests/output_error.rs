@@ -297,7 +297,7 @@ fn control_channel_noise_biases_output_error() {
     );
 }
 
-/// Decoupled lateral-directional model (seed 004 Eqs. 5–8: β, p, r, φ
+/// Decoupled lateral-directional model (reflex-wing UAV paper, Eqs. 5–8: β, p, r, φ
 /// integrated; V, α, θ, q, altitude fed in from the record), bundled model
 /// `attas-lateral`, on the bundled lateral multistep recorded by the ideal
 /// profile. The decoupled model is an approximation of the coupled truth

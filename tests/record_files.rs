@@ -303,7 +303,7 @@ fn aeroid(args: &[&str]) -> String {
 }
 
 /// `aeroid record` with the QAR profile, then `aeroid inspect`: exactly the
-/// channel set, rates and resolutions of seed 000 Table 1 (values rounded to
+/// channel set, rates and resolutions of Wang et al. 2012, Table 1 (values rounded to
 /// four significant digits), plus the run's truth.toml.
 #[test]
 fn qar_record_inspect_snapshot() {

@@ -489,7 +489,7 @@ fn noise_scale_and_rate_override_modify_the_profile() {
     }
 }
 
-/// The QAR profile records exactly seed 000 Table 1: 35 channels with its rates.
+/// The QAR profile records exactly Wang et al. 2012, Table 1: 35 channels with its rates.
 #[test]
 fn qar_profile_has_table_1_channels_and_rates() {
     let profile = Profile::load("qar-seed000", None).unwrap();

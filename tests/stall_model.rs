@@ -1,4 +1,4 @@
-//! The quasi-steady stall model with Kirchhoff flow separation (seed 001,
+//! The quasi-steady stall model with Kirchhoff flow separation (Verma & Peyada 2020,
 //! Eqs. 2–4): static lift curve, first-order χ dynamics, τ2 hysteresis, and
 //! α̇ taken from the state derivative in the full simulator.
 

@@ -19,7 +19,7 @@
 //! an output-error analyst who fits a long record in pieces. Its
 //! sensitivities enter the same matrix and are marginalised by the
 //! inversion. The information matrix is M = Σ_c Σ_i S_c(t_i)ᵀ S_c(t_i) / R_c and the
-//! bounds are σ_j = √(M⁻¹)_jj (seed 001 Eq. 10, seed 004 Eq. 15: the same
+//! bounds are σ_j = √(M⁻¹)_jj (Verma & Peyada 2020, Eq. 10; reflex-wing UAV paper, Eq. 15: the same
 //! information matrix output error uses, evaluated at the truth with the
 //! true R). Parameters in the null space of M get σ = ∞.
 //!

@@ -1,6 +1,6 @@
 //! What an estimator returns: values with Cramér–Rao standard errors, the
 //! covariance and correlation matrices, fit metrics per output (residual RMS,
-//! R², Theil's inequality coefficient, seed 001 Eq. 27), the iteration and
+//! R², Theil's inequality coefficient, Verma & Peyada 2020, Eq. 27), the iteration and
 //! cost history, wall time and a status. Serialises to JSON and CSV.
 //!
 //! The status is honest ([`Estimate::assess`]): an estimate is
@@ -76,7 +76,7 @@ pub struct OutputFit {
     pub samples: usize,
     pub rms: f64,
     pub r_squared: f64,
-    /// Theil's inequality coefficient (seed 001 Eq. 27): 0 perfect, 1 worst.
+    /// Theil's inequality coefficient (Verma & Peyada 2020, Eq. 27): 0 perfect, 1 worst.
     pub theil: f64,
 }
 

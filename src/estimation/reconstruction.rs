@@ -3,7 +3,7 @@
 //! common time base — the data of the regression estimators (equation error,
 //! stepwise regression).
 //!
-//! Forces (seed 004, Eqs. 17, 18 and 22, with the thrust vector of the
+//! Forces (reflex-wing UAV paper, Eqs. 17, 18 and 22, with the thrust vector of the
 //! aircraft's propulsion model; the load factors are specific force over g0
 //! with nz positive UP, so a_z = −g0·nz):
 //! - `CX = (m·g0·nx − T_x)/(q̄·S)`                                   (Eq. 17)
@@ -12,7 +12,7 @@
 //! - `CL = CX·sin α − CZ·cos α`, `CD = −CX·cos α − CZ·sin α`          (Eqs. 19, 20)
 //!
 //! with `T = δT·Tmax·(ρ/ρ0)^n` along the thrust line (throttle channel,
-//! ρ from the ISA at the altitude channel). The scan of seed 004 writes
+//! ρ from the ISA at the altitude channel). The scan of the reflex-wing UAV paper writes
 //! Eq. 18 without thrust; a thrust line inclined to the body x axis has a z
 //! component, so it is subtracted here as in Eq. 17.
 //!
@@ -23,7 +23,7 @@
 //! - `Cm = (Iy·q̇ + (Ix − Iz)·p·r + Ixz·(p² − r²) − M_T)/(q̄·S·c̄)`      (Eq. 21)
 //! - `Cn = (Iz·ṙ − Ixz·(ṗ − q·r) + (Iy − Ix)·p·q − N_T)/(q̄·S·b)`       (Eq. 24)
 //!
-//! The scanned Eqs. 21, 23 and 24 of seed 004 are damaged: they carry Iyz and
+//! The scanned Eqs. 21, 23 and 24 of the reflex-wing UAV paper are damaged: they carry Iyz and
 //! Ixy products (zero for a symmetric aircraft), drop the Ixz·ṙ and Ixz·ṗ
 //! couplings and flip the sign of the Ixz·(p² − r²) term (a sign convention
 //! for Ixz); the standard form above, consistent with the simulator, is used.

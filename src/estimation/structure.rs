@@ -3,8 +3,8 @@
 //! file, its values being start values), which parameters are fixed, their
 //! bounds, and for simulating estimators which flight-path states are
 //! integrated and which measured signals are fed in as pseudo-controls
-//! (decoupled longitudinal or lateral models: Dhayalan, Saderla & Ghosh,
-//! reflex-wing UAV paper, Eqs. 1–8), and which recorded channels are
+//! (decoupled longitudinal or lateral models: the reflex-wing UAV paper (ML, LS and neural
+//! Gauss–Newton), Eqs. 1–8), and which recorded channels are
 //! compared. How a method fits it (integration step, differentiator, start
 //! values, initial states and biases as unknowns) is the method's setting,
 //! in a `[methods.NAME]` table (see `aeroid methods`).

@@ -178,7 +178,8 @@ pub struct Row {
     pub recorder_seed: u64,
     pub model: String,
     pub method: String,
-    /// `converged`, `iteration_limit`, `diverged` or `failed`.
+    /// `converged`, `iteration_limit`, `diverged`, `no_progress`,
+    /// `unidentified`, `degenerate`, `poor_fit`, `refused` or `failed`.
     pub status: String,
     pub reason: String,
     /// Empty when the fit failed.
@@ -208,6 +209,11 @@ pub struct SummaryRow {
     pub converged: usize,
     pub iteration_limit: usize,
     pub diverged: usize,
+    /// Estimates that are not converged for another reason: no progress
+    /// from the start, unidentified parameters, a degenerate covariance or
+    /// a poor fit (the status column of `runs.csv` says which).
+    pub not_converged: usize,
+    pub refused: usize,
     pub failed: usize,
     pub truth: f64,
     pub mean: f64,
@@ -595,6 +601,11 @@ pub fn summarise(rows: &[Row]) -> Vec<SummaryRow> {
                     converged: count(CONVERGED),
                     iteration_limit: count("iteration_limit"),
                     diverged: count("diverged"),
+                    not_converged: ["no_progress", "unidentified", "degenerate", "poor_fit"]
+                        .iter()
+                        .map(|status| count(status))
+                        .sum(),
+                    refused: count(REFUSED),
                     failed: count(FAILED),
                     truth: group[0].truth.unwrap_or(f64::NAN),
                     mean: f64::NAN,

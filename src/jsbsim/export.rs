@@ -3,7 +3,7 @@
 //! linear aerodynamics, the aerodynamics as JSBSim `<function>`s.
 //!
 //! Conventions of the exported file (each one a difference between the two
-//! simulators that the export bridges; the README lists them):
+//! simulators that the export bridges; docs/jsbsim.md lists them):
 //! - Units: the file is in JSBSim's own units (ft, ft², lbs, slug·ft²),
 //!   converted with exact factors: JSBSim's unit table converts kg·m² to
 //!   slug·ft² with 1/1.35594 (exactly 1/1.3558179), 9e-5 off. Functions give

@@ -3,7 +3,7 @@
 //! the cross-check of an exported aircraft ([`super::crosscheck`]) and the
 //! flights of JSBSim's own aircraft ([`super::own`]).
 //!
-//! Timing (see also the README's cross-check conventions): JSBSim integrates
+//! Timing (see also docs/jsbsim.md, "Convention differences"): JSBSim integrates
 //! explicitly with the derivatives of the previous frame; one `Run` first
 //! advances the state, then evaluates the forces at the new state with the
 //! controls set at that moment. So the controls of step k+1 are written

@@ -1,10 +1,10 @@
-//! JSBSim's own aircraft as truth (issue 5, use 2): a scenario whose aircraft
+//! JSBSim's own aircraft as truth: a scenario whose aircraft
 //! is `"jsbsim:NAME"` is trimmed and flown by JSBSim, read back as aeroid's
 //! truth trace ([`super::flight`]) for the recorder, and its truth is the local
 //! derivative of JSBSim's aerodynamics at the trim point
 //! ([`super::derivatives`]; DESIGN.md, "Truth when the structures differ").
 //!
-//! Conventions and choices (each one a trap met on the 737; the README lists
+//! Conventions and choices (each one a trap met on the 737; docs/jsbsim.md lists
 //! them with the agreement found):
 //! - World: the aircraft flies over aeroid's flat, non-rotating earth with the
 //!   scenario's constant gravity (the planet of [`super::export`], loaded with
@@ -315,7 +315,7 @@ pub fn rigid_body(exec: &Exec) -> Result<Vec<(&'static str, f64, &'static str)>>
         ("ixx", exec.get("inertia/ixx-slugs_ft2")? * inertia, "kg*m2"),
         ("iyy", exec.get("inertia/iyy-slugs_ft2")? * inertia, "kg*m2"),
         ("izz", exec.get("inertia/izz-slugs_ft2")? * inertia, "kg*m2"),
-        // The property is the tensor element J13 = −Ixz (README, "Inertia").
+        // The property is the tensor element J13 = −Ixz (docs/jsbsim.md, "Inertia").
         (
             "ixz",
             -exec.get("inertia/ixz-slugs_ft2")? * inertia,

@@ -1,4 +1,4 @@
-//! Flight path reconstruction / data compatibility check (seed 004 §5,
+//! Flight path reconstruction / data compatibility check (reflex-wing UAV paper, §5,
 //! Eqs. 31–32; the kinematic model of Jategaonkar, "Flight Vehicle System
 //! Identification", ch. 10, and Mulder et al.): the measured accelerations
 //! and angular rates drive the rigid-body kinematics, and the systematic

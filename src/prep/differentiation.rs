@@ -39,7 +39,8 @@
 //! the jump smears it into the neighbouring samples: 1–7 % errors in the
 //! moment derivatives on noise-free step-input data, and on the 25 Hz
 //! flight-test profile a bias towards zero (Cl_p −9.5 %, 22 σ over 100
-//! runs) that had passed for seed 004's errors in variables. Given the
+//! runs) easily taken for the errors in variables the reflex-wing UAV paper
+//! reports. Given the
 //! instants where the derivative may jump
 //! ([`Differentiator::differentiate_with_breaks`]; [`step_times`] finds
 //! them in a control channel), a sample whose window would reach across one

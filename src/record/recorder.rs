@@ -2,7 +2,7 @@
 //! into a [`FlightRecord`]: what a real flight-test system or Quick Access
 //! Recorder would have stored, and nothing more.
 //!
-//! Profiles are TOML files in `recorders/` (bundled: `qar-seed000`, seed 000
+//! Profiles are TOML files in `recorders/` (bundled: `qar-seed000`, Wang et al. 2012
 //! Table 1 exactly; `flight-test-25hz`; `ideal`, every channel without error).
 //! Top level: `name`, `description`, `frame` (recorder frame length, default
 //! 1 s), `words_per_frame` (optional), `origin = { latitude, longitude }`
@@ -25,7 +25,7 @@
 //! | `lag` | time constant of a first-order sensor lag |
 //! | `anti_alias` | cut-off of a 2nd-order Butterworth filter applied before sampling |
 //! | `dropout` | probability that a sample is lost (recorded as NaN) |
-//! | `fault` | `{ kind = "stuck", from = "20 s", value = … }` (holds `value`, or the last good sample) or `{ kind = "levels", values = [...] }` (every sample reads one of the values at random, as seed 000's AoA) |
+//! | `fault` | `{ kind = "stuck", from = "20 s", value = … }` (holds `value`, or the last good sample) or `{ kind = "levels", values = [...] }` (every sample reads one of the values at random, as Wang et al. 2012's AoA) |
 //! | `position` | accelerometer position relative to the CG, body axes (load factors only) |
 //!
 //! Sample instants: `t_k = t_0 + phase + slot·frame + k/rate` for every
@@ -138,7 +138,7 @@ pub enum FaultSpec {
         #[serde(default)]
         value: Option<Quantity>,
     },
-    /// Every sample reads one of `values`, drawn at random (seed 000's AoA read 109.70 or 108.30).
+    /// Every sample reads one of `values`, drawn at random (Wang et al. 2012's AoA read 109.70 or 108.30).
     Levels { values: Vec<Quantity> },
 }
 

@@ -14,7 +14,7 @@
 //! `dr`, `df` (rad), `dV` = V/V0 − 1, `dMach` = M − M0, `chi` = 1 − χ
 //! (stall model), and `CL2` = CL² (drag only, wind axes).
 //!
-//! Quasi-steady stall (seed 001, Verma & Peyada 2020, Eqs. 2–4, after
+//! Quasi-steady stall (Verma & Peyada 2020, Eqs. 2–4, after
 //! Fischenberg):
 //! `τ1·dχ/dt + χ = ½·(1 − tanh(a1·(α − τ2·α̇ − α*)))`            (Eq. 2; Eq. 3 when τ1 = 0)
 //! `CL = CL0 + CLα·((1 + √χ)/2)²·α`,
@@ -600,7 +600,7 @@ impl AeroModel {
         stall || self.has_alpha_dot_terms
     }
 
-    /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (seed 001, Eq. 3); 1 without stall model.
+    /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (Verma & Peyada 2020, Eq. 3); 1 without stall model.
     pub fn separation_target<T: Real>(&self, alpha: T, alpha_dot: T) -> T {
         match self.stall {
             Some(s) => {
@@ -613,7 +613,7 @@ impl AeroModel {
         }
     }
 
-    /// dχ/dt = (χ∞ − χ)/τ1 (seed 001, Eq. 2); 0 when χ is not a state.
+    /// dχ/dt = (χ∞ − χ)/τ1 (Verma & Peyada 2020, Eq. 2); 0 when χ is not a state.
     pub fn separation_rate<T: Real>(&self, alpha: T, alpha_dot: T, chi: T) -> T {
         match self.stall {
             Some(s) if self.chi_is_state() => {

@@ -1,7 +1,7 @@
 //! Rigid-body six-degree-of-freedom equations of motion over a flat,
 //! non-rotating earth, in body axes with quaternion attitude (the standard
 //! form, e.g. Stevens, Lewis & Johnson, "Aircraft Control and Simulation",
-//! 3rd ed., §1.7, and seed 004 Eqs. 1–8 in their decoupled form):
+//! 3rd ed., §1.7, and the reflex-wing UAV paper, Eqs. 1–8, in their decoupled form):
 //!
 //! `m·(V̇ + ω × V) = F_aero + F_thrust + m·C_bn·g`,
 //! `I·ω̇ + ω × (I·ω) = M_aero + r_T × F_thrust`,

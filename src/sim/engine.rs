@@ -1,6 +1,6 @@
 //! ASSUMED engine map. The simulator models thrust only; a recorder also
-//! stores fan and core speed, fuel flow and exhaust-gas temperature (seed 000
-//! Table 1 records EGT, fuel flow and N2 of both engines). These are smooth,
+//! stores fan and core speed, fuel flow and exhaust-gas temperature (Wang et al. 2012,
+//! Table 1, records EGT, fuel flow and N2 of both engines). These are smooth,
 //! monotonic, made-up functions of the corrected thrust fraction of one
 //! engine, good enough to give engine channels realistic magnitudes and
 //! trends. They are NOT a model of any real engine and no estimator should
@@ -19,7 +19,7 @@
 use crate::sim::aircraft::Propulsion;
 use crate::sim::atmosphere::SEA_LEVEL_DENSITY;
 
-/// Number of engines the thrust is split over (ASSUMED: a twin, as seed 000's airplane and ATTAS).
+/// Number of engines the thrust is split over (ASSUMED: a twin, as Wang et al. 2012's airplane and ATTAS).
 pub const ENGINE_COUNT: f64 = 2.0;
 /// Thrust-specific fuel consumption, kg/(N·s) (ASSUMED).
 const SPECIFIC_FUEL_CONSUMPTION: f64 = 2.0e-5;

@@ -1,5 +1,5 @@
 //! Equation error (least squares) estimation of aerodynamic derivatives —
-//! the comparison method of seeds 002 and 004 (seed 004 §3.1, Eqs. 25–27;
+//! the comparison method of the ELM + Gauss–Newton and reflex-wing UAV papers (reflex-wing UAV paper, §3.1, Eqs. 25–27;
 //! Klein & Morelli, "Aircraft System Identification", AIAA 2006, ch. 5).
 //! Method `ee`; settings `[methods.ee]`: the differentiator of the angular
 //! rates and the lag of the coloured-residual bound ([`EquationErrorSettings`]).
@@ -10,7 +10,7 @@
 //! propulsion; its terms; which parameters are free).
 //!
 //! 1. The coefficients are reconstructed from the measured accelerations and
-//!    angular accelerations (seed 004, Eqs. 17–24; see
+//!    angular accelerations (reflex-wing UAV paper, Eqs. 17–24; see
 //!    [`crate::estimation::reconstruction`] for the equations, the thrust,
 //!    q̄, the differentiator and the common time base).
 //! 2. For each coefficient with a free parameter, one ordinary least-squares
@@ -34,7 +34,7 @@
 //! there are too few samples. A missing channel is an error naming it.
 //!
 //! Limitations, measured in `tests/equation_error.rs` (ATTAS multisine):
-//! - seed 004's finding: least squares assumes noise-free regressors;
+//! - the reflex-wing UAV paper's finding: least squares assumes noise-free regressors;
 //!   measured α, β, rates and controls carry noise, so the estimates are
 //!   attenuated towards zero (errors in variables). On the 25 Hz
 //!   flight-test profile: CLα −5.6 %, Cmq −12.6 %, Clp −1.5 %, each as the
@@ -156,7 +156,7 @@ impl Estimator for EquationError {
         MethodInfo {
             name: METHOD,
             title: "equation error: least squares on coefficients reconstructed from accelerations and angular accelerations",
-            paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), ch. 5; Dhayalan, Saderla & Ghosh, reflex-wing UAV paper (ML, LS and neural Gauss–Newton)",
+            paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), ch. 5; \"Longitudinal and lateral aerodynamic characterisation of reflex wing UAV from flight tests using ML, LS and neural Gauss Newton methods\"",
             equations: "coefficients from accelerations (reflex-wing UAV paper, Eqs. 17–24); z = Xθ + ε, θ = (XᵀX)⁻¹Xᵀz (Eqs. 25–27); coloured-residual bounds (Morelli & Klein 1997)",
             needs: "load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude, throttle when the aircraft has thrust; a model linear in its parameters",
             settings: setting_infos(

@@ -1,4 +1,4 @@
-//! Output error, maximum likelihood (seeds 001 Eqs. 5–10, 002, 004; Maine &
+//! Output error, maximum likelihood (Verma & Peyada 2020, Eqs. 5–10; the ELM + Gauss–Newton and reflex-wing UAV papers; Maine &
 //! Iliff; Jategaonkar, "Flight Vehicle System Identification", ch. 4).
 //!
 //! The postulated model is simulated with the recorded inputs (and, for
@@ -7,7 +7,7 @@
 //! recorded outputs z at each channel's own sample instants, the prediction
 //! on the integration grid being interpolated linearly to them. The negative
 //! log-likelihood with unknown residual covariance R reduces to the cost
-//! det(R) (seed 001 Eq. 7), which is minimised by relaxation: at every
+//! det(R) (Verma & Peyada 2020, Eq. 7), which is minimised by relaxation: at every
 //! iteration R is re-estimated from the residuals at the current θ, R =
 //! (1/N)·Σ e·eᵀ (Eq. 8), and a Gauss–Newton step is taken on ½·Σ eᵀR⁻¹e with
 //! R fixed (Eqs. 9–10), by the shared core [`gauss_newton`]. R is diagonal:
@@ -530,7 +530,7 @@ pub fn output_error_from(
     Ok(estimate)
 }
 
-/// Proof of match (seeds 002, 004): the structure with an estimate's
+/// Proof of match (ELM + Gauss–Newton and reflex-wing UAV papers): the structure with an estimate's
 /// aerodynamic values, simulated on another manoeuvre with nothing adjusted
 /// (initial state from that record's first samples), and how well it
 /// reproduces each output there.
@@ -1087,7 +1087,7 @@ impl Problem {
 }
 
 /// Weights 1/σ per output of a diagonal R re-estimated from the residuals,
-/// R_ii = mean square residual (seed 001 Eq. 8), with a floor of 10⁻¹² of the
+/// R_ii = mean square residual (Verma & Peyada 2020, Eq. 8), with a floor of 10⁻¹² of the
 /// output's RMS so that a noise-free fit stays finite.
 pub(crate) fn diagonal_weights(errors: &[Vec<f64>], measured: &[Vec<f64>]) -> Vec<f64> {
     errors
@@ -1187,7 +1187,7 @@ impl LeastSquaresProblem for Problem {
         ))
     }
 
-    /// R = diag(mean square residual per output) at θ (seed 001 Eq. 8), with a
+    /// R = diag(mean square residual per output) at θ (Verma & Peyada 2020, Eq. 8), with a
     /// floor of 10⁻¹² of the output's RMS so that a noise-free fit stays finite.
     fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
         let errors = self.errors(theta)?;

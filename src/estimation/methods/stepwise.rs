@@ -1,4 +1,4 @@
-//! Stepwise regression for model-structure determination (seed 003 cites it;
+//! Stepwise regression for model-structure determination (X-31/F-18 HARV EKF note cites it;
 //! Efroymson, "Multiple regression analysis", in Ralston & Wilf, Mathematical
 //! Methods for Digital Computers, 1960; Draper & Smith, "Applied Regression
 //! Analysis", 3rd ed. 1998, §15.2; Klein & Morelli, "Aircraft System
@@ -12,7 +12,7 @@
 //! `alpha^2` = (α − ᾱ)², so that around a trim point α² is not a near copy
 //! of α (α² = ᾱ² + 2ᾱ·(α − ᾱ) + (α − ᾱ)²); the means are given in the
 //! notes. The dependent variable is the coefficient reconstructed from
-//! the measured accelerations (seed 004 Eqs. 17–24, see
+//! the measured accelerations (reflex-wing UAV paper, Eqs. 17–24, see
 //! [`crate::estimation::reconstruction`]); the constant term is always in.
 //!
 //! Each step (K&M §5.4.2):

@@ -2,7 +2,7 @@
 //! flight-path coordinates x = [V, α, β, p, q, r, φ, θ, ψ, h, χ] (named as
 //! record channels). A chosen subset of x is integrated; the others are
 //! measured pseudo-controls read from the record at every stage — the
-//! decoupled longitudinal and lateral-directional models of seed 004
+//! decoupled longitudinal and lateral-directional models of the reflex-wing UAV paper
 //! (Eqs. 1–8) are the subsets {V, α, q, θ} and {β, p, r, φ}; the full
 //! 6-DOF integrates them all. The equations are the simulator's own
 //! ([`FlightModel::evaluate_kinematics`], no wind: estimation models the
@@ -342,7 +342,7 @@ impl PseudoRates {
 }
 
 /// Flight-path rates and the simulator's evaluation at x. A decoupled model
-/// takes the other axis's motion from measurement (seed 004 Eqs. 5–8), and
+/// takes the other axis's motion from measurement (reflex-wing UAV paper, Eqs. 5–8), and
 /// that model has no forces on that axis, so where a measured state's rate
 /// enters an integrated state's equation the measured rate is used: with the
 /// airspeed measured, β̇ = (v̇ − V̇_m·sin β)/(V·cos β); with the sideslip

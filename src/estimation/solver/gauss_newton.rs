@@ -3,7 +3,7 @@
 //! GN later). It minimises `J(θ) = ½·Σ r_i(θ)²` for a residual vector that the
 //! problem has already weighted (whitened), so that for maximum-likelihood
 //! output error with R the residual covariance, `r = R^{-1/2}·(z − y)` and
-//! the information matrix is `M = Σ Jᵀ·R⁻¹·J` (seed 001 Eqs. 5–10; seed 002
+//! the information matrix is `M = Σ Jᵀ·R⁻¹·J` (Verma & Peyada 2020, Eqs. 5–10; the ELM + Gauss–Newton paper
 //! Eqs. 14–22; Jategaonkar, "Flight Vehicle System Identification", §4.5).
 //!
 //! Each iteration: the problem may re-weight (output error re-estimates R),

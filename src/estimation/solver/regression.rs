@@ -2,7 +2,7 @@
 //! (equation error, stepwise regression), following Klein & Morelli,
 //! "Aircraft System Identification" (AIAA 2006), ch. 5:
 //!
-//! - solution `θ̂ = (XᵀX)⁻¹·Xᵀz` (seed 004, Eq. 27) computed by the SVD of X
+//! - solution `θ̂ = (XᵀX)⁻¹·Xᵀz` (reflex-wing UAV paper, Eq. 27) computed by the SVD of X
 //!   with its columns scaled to unit norm (never by forming the normal
 //!   equations), directions with singular values below the threshold of
 //!   [`pseudo_inverse_or_infinite`] left out and their parameters reported as
