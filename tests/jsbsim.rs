@@ -850,8 +850,11 @@ fn estimators_recover_the_737_derivatives_from_flight_test_data() {
             ("oem", &noisy, "oem"),
             ("ee", &noisy, "ee"),
         ] {
-            let (estimate, scores) =
-                aeroid::eval::run::estimate_scored(method, record, &truth, &structure).unwrap();
+            let aeroid::eval::run::Outcome::Estimated { estimate, scores } =
+                aeroid::eval::run::estimate_scored(method, record, &truth, &structure, &[], None)
+            else {
+                panic!("{label} on {scenario_name}: no estimate");
+            };
             assert!(
                 matches!(
                     estimate.status,

@@ -99,6 +99,15 @@ impl Estimator for StartValues {
     }
 }
 
+/// `[methods.NAME]` tables written as TOML (`[NAME]` tables).
+fn tables(text: &str) -> aeroid::estimation::estimator::MethodTables {
+    let parsed: toml::Table = toml::from_str(text).unwrap();
+    parsed
+        .into_iter()
+        .map(|(name, table)| (name, table.as_table().unwrap().clone()))
+        .collect()
+}
+
 fn register_toy() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| methods::register(Arc::new(StartValues)).unwrap());
@@ -119,11 +128,7 @@ fn a_registered_estimator_runs_everywhere() {
     let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
     let (record, truth) = record_scenario(&scenario, &profile).unwrap();
     let structure = ModelStructure::load("attas-lateral").unwrap();
-    let overrides: toml::Table = toml::from_str("[toy-start]\nscale = 2.0").unwrap();
-    let overrides = overrides
-        .into_iter()
-        .map(|(k, v)| (k, v.as_table().unwrap().clone()))
-        .collect();
+    let overrides = tables("[toy-start]\nscale = 2.0");
     let problem = EstimationProblem::new(
         "toy-start",
         vec![record.clone()],
@@ -137,11 +142,7 @@ fn a_registered_estimator_runs_everywhere() {
     assert_eq!(estimate.status, Status::Converged);
 
     // A setting it does not know is refused before it runs.
-    let wrong: toml::Table = toml::from_str("[toy-start]\nscael = 2.0").unwrap();
-    let wrong = wrong
-        .into_iter()
-        .map(|(k, v)| (k, v.as_table().unwrap().clone()))
-        .collect();
+    let wrong = tables("[toy-start]\nscael = 2.0");
     let error = EstimationProblem::new(
         "toy-start",
         vec![record.clone()],

@@ -25,6 +25,10 @@ pub struct Args {
     /// (a different manoeuvre) and report how well it reproduces each output.
     #[arg(long)]
     check_on: Option<PathBuf>,
+    /// Also write the estimation problem (record, model, settings) as JSON
+    /// to this file: what an estimator in another language reads.
+    #[arg(long, value_name = "FILE")]
+    write_problem: Option<PathBuf>,
     /// A setting of the method, KEY=VALUE with a TOML value, overriding
     /// the model's `[methods.NAME]` table (e.g. `--set start='"model"'`,
     /// `--set step='"0.02 s"'`); repeatable.
@@ -63,12 +67,17 @@ pub fn run(args: Args) -> Result<()> {
         method,
         out,
         check_on,
+        write_problem,
         settings,
     } = args;
     let record = aeroid::record::FlightRecord::read(&record_folder)?;
     let structure = ModelStructure::load(&model)?;
     let overrides = settings_table(&method, &settings)?;
     let problem = EstimationProblem::new(&method, vec![record], structure, &[&overrides])?;
+    if let Some(path) = &write_problem {
+        problem.write_json(path)?;
+        outln!("estimation problem written to {}", path.display());
+    }
     let estimate = methods::estimate(&problem, None)?;
     let structure = &problem.structure;
     out!("{}", estimate.details);

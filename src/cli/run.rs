@@ -6,9 +6,9 @@ use anyhow::Result;
 use std::path::PathBuf;
 
 /// The whole harness on one scenario: simulate, record (the scenario's
-/// recorder profile unless --profile), run every classical estimator (ee,
-/// swr, oem) on every model structure the scenario names, and score each
-/// against the truth. With --out, writes the record, truth and estimates.
+/// recorder profile unless --profile), run every registered estimator
+/// (`aeroid methods`) on every model structure the scenario names, and
+/// score each against the truth. With --out, writes the record, truth and estimates.
 #[derive(clap::Args)]
 pub struct Args {
     /// A bundled scenario name or a path to a scenario file.

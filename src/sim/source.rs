@@ -3,7 +3,7 @@
 //! `jsbsim`). [`Scenario::source`] is the one place that tells them apart;
 //! everything that flies a scenario goes through [`FlightSource::fly`].
 
-use crate::error::{Error, Problem, Result};
+use crate::error::{Error, Result};
 use crate::sim::Simulation;
 use crate::sim::scenario::{JsbsimAircraft, Scenario};
 use crate::sim::trace::TruthTrace;
@@ -93,7 +93,7 @@ impl FlightSource<'_> {
             #[cfg(not(feature = "jsbsim"))]
             FlightSource::Jsbsim(_) => Err(Error::Invalid {
                 path: scenario.path.clone(),
-                problems: vec![Problem {
+                problems: vec![crate::error::Problem {
                     field: "aircraft".into(),
                     message: "is one of JSBSim's own aircraft; this aeroid was built without JSBSim: build it with `--features jsbsim`".into(),
                 }],

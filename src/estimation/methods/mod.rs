@@ -80,3 +80,45 @@ pub fn estimate(problem: &EstimationProblem, start: Option<&Estimate>) -> Result
         .estimate(problem, start)
         .map(|estimate| estimate.assess(&problem.structure))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimation::estimator::Settings;
+
+    /// Every registered method is described (paper, equations, needs),
+    /// every setting it describes is accepted at its stated default, and a
+    /// key it does not have is refused with the key named.
+    #[test]
+    fn every_method_describes_its_settings_truthfully() {
+        let names = names();
+        for estimator in all() {
+            let info = estimator.info();
+            assert_eq!(names.iter().filter(|n| **n == info.name).count(), 1);
+            assert!(!info.paper.is_empty() && !info.equations.is_empty() && !info.needs.is_empty());
+            let mut defaults = Settings::new();
+            for setting in info.settings.iter().filter(|s| s.default != "(none)") {
+                let table: toml::Table = toml::from_str(&format!("value = {}", setting.default))
+                    .unwrap_or_else(|e| panic!("{} {}: {e}", info.name, setting.name));
+                defaults.insert(
+                    setting.name.to_string(),
+                    serde_json::to_value(&table["value"]).unwrap(),
+                );
+            }
+            estimator
+                .check_settings(&defaults)
+                .unwrap_or_else(|e| panic!("{}: {e}", info.name));
+            let mut unknown = Settings::new();
+            unknown.insert("no_such_setting".into(), serde_json::Value::from(1));
+            let error = estimator.check_settings(&unknown).unwrap_err().to_string();
+            assert!(error.contains("no_such_setting"), "{}: {error}", info.name);
+        }
+    }
+
+    /// The registry resolves names and refuses an unknown one with the list.
+    #[test]
+    fn unknown_method_names_the_known_ones() {
+        let error = find("no-such-method").err().unwrap().to_string();
+        assert!(error.contains("ee") && error.contains("oem"), "{error}");
+    }
+}
