@@ -161,6 +161,19 @@ pub enum Refusal {
     },
     /// The model leaves the method nothing to estimate.
     NothingToEstimate { method: String, model: String },
+    /// Fewer data than unknowns: no estimate can be determined.
+    TooFewData {
+        method: String,
+        data: usize,
+        unknowns: usize,
+    },
+    /// The model cannot be fitted by this method as it is stated (no
+    /// output to compare, an output that is fed in from the record).
+    UnsuitableModel {
+        method: String,
+        model: String,
+        reason: String,
+    },
 }
 
 /// A needed channel and what it is needed for.
@@ -178,6 +191,8 @@ pub enum RefusalKind {
     MissingChannels,
     NotLinearInParameters,
     NothingToEstimate,
+    TooFewData,
+    UnsuitableModel,
 }
 
 impl Refusal {
@@ -186,6 +201,8 @@ impl Refusal {
             Refusal::MissingChannels { .. } => RefusalKind::MissingChannels,
             Refusal::NotLinearInParameters { .. } => RefusalKind::NotLinearInParameters,
             Refusal::NothingToEstimate { .. } => RefusalKind::NothingToEstimate,
+            Refusal::TooFewData { .. } => RefusalKind::TooFewData,
+            Refusal::UnsuitableModel { .. } => RefusalKind::UnsuitableModel,
         }
     }
 
@@ -255,6 +272,19 @@ impl fmt::Display for Refusal {
                     "{method}: the model '{model}' has no free parameter to estimate"
                 )
             }
+            Refusal::TooFewData {
+                method,
+                data,
+                unknowns,
+            } => write!(
+                f,
+                "{method}: {data} data for {unknowns} unknowns; at least as many data as unknowns are needed"
+            ),
+            Refusal::UnsuitableModel {
+                method,
+                model,
+                reason,
+            } => write!(f, "{method} cannot fit the model '{model}': {reason}"),
         }
     }
 }

@@ -32,6 +32,7 @@
 use crate::catalog;
 use crate::error::{Problems, Result, parse_toml, read_text};
 use crate::estimation::estimator::{MethodTables, check_method_tables};
+use crate::estimation::model::driven::Observable;
 use crate::sim::aero::{AeroModel, AeroSpec};
 use crate::sim::aircraft::{Aircraft, AircraftFile};
 use serde::{Deserialize, Serialize};
@@ -123,6 +124,17 @@ impl ModelStructure {
         let mut problems = Problems::default();
         aircraft.aero = AeroModel::from_spec(&file.aero, aircraft.geometry, "aero", &mut problems);
         let integrate = state_indices(&file.integrate, "integrate", &mut problems);
+        for (i, name) in file.outputs.iter().enumerate() {
+            if Observable::parse(name).is_none() {
+                problems.push(
+                    format!("outputs[{i}]"),
+                    format!(
+                        "unknown output '{name}'; known: {}",
+                        Observable::names().collect::<Vec<_>>().join(", ")
+                    ),
+                );
+            }
+        }
         let (free, bounds) = parameter_settings(&aircraft.aero, &file.parameters, &mut problems);
         check_method_tables(&file.methods, &mut problems);
         let structure = ModelStructure {

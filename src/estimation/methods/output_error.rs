@@ -287,6 +287,34 @@ impl Estimator for OutputError {
 /// Method name in estimates.
 pub const METHOD: &str = "oem";
 
+/// Refuses a structure output error cannot fit as stated: no output to
+/// compare, or an output that is a flight-path state the model does not
+/// integrate (fed in from the record, it would be compared with itself).
+fn unsuitable(structure: &ModelStructure) -> Result<()> {
+    let refuse = |reason: String| {
+        Err(Error::Refused(Refusal::UnsuitableModel {
+            method: METHOD.to_string(),
+            model: structure.name.clone(),
+            reason,
+        }))
+    };
+    if structure.outputs.is_empty() {
+        return refuse("it names no outputs to compare (`outputs = [...]`)".into());
+    }
+    let fed_in: Vec<&str> = structure
+        .pseudo_controls()
+        .into_iter()
+        .filter(|state| structure.outputs.iter().any(|o| o == state))
+        .collect();
+    if !fed_in.is_empty() {
+        return refuse(format!(
+            "the outputs {} are not integrated (`integrate`): fed in from the record, each would be compared with itself",
+            fed_in.join(", ")
+        ));
+    }
+    Ok(())
+}
+
 /// The channels a record lacks that output error needs for `structure`:
 /// the compared outputs, and the flight-path states it does not integrate
 /// (the driven simulation's pseudo-controls; yaw and χ are not needed,
@@ -455,7 +483,21 @@ pub fn output_error_from(
             structure.outputs.join(", ")
         )));
     }
+    unsuitable(structure)?;
     let mut problem = Problem::new(records, structure, options)?;
+    let data: usize = problem
+        .segments
+        .iter()
+        .flat_map(|segment| &segment.outputs)
+        .map(|measured| measured.values.len())
+        .sum();
+    if data < problem.all.len() {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: METHOD.to_string(),
+            data,
+            unknowns: problem.all.len(),
+        }));
+    }
     let mut notes = Vec::new();
     let from_equation_error = options.start == Start::EquationError
         && problem.start_from_equation_error(records[0], structure, regression, &mut notes);

@@ -553,30 +553,43 @@ pub enum Observable {
 }
 
 impl Observable {
+    /// The outputs other than the flight-path states, by record channel name.
+    const NAMED: [(&'static str, Observable); 16] = [
+        ("nx", Observable::LoadFactor(0)),
+        ("ny", Observable::LoadFactor(1)),
+        ("nz", Observable::LoadFactor(2)),
+        ("p_dot", Observable::AngularAcceleration(0)),
+        ("q_dot", Observable::AngularAcceleration(1)),
+        ("r_dot", Observable::AngularAcceleration(2)),
+        ("mach", Observable::Mach),
+        ("dynamic_pressure", Observable::DynamicPressure),
+        ("CX", Observable::Force(0)),
+        ("CY", Observable::Force(1)),
+        ("CZ", Observable::Force(2)),
+        ("CL", Observable::Lift),
+        ("CD", Observable::Drag),
+        ("Cl", Observable::Moment(0)),
+        ("Cm", Observable::Moment(1)),
+        ("Cn", Observable::Moment(2)),
+    ];
+
     /// The output a record channel name stands for; None when the model has no such output.
     pub fn parse(name: &str) -> Option<Observable> {
         if let Some(i) = FLIGHT_PATH_STATES.iter().position(|s| *s == name) {
             return Some(Observable::State(i));
         }
-        Some(match name {
-            "nx" => Observable::LoadFactor(0),
-            "ny" => Observable::LoadFactor(1),
-            "nz" => Observable::LoadFactor(2),
-            "p_dot" => Observable::AngularAcceleration(0),
-            "q_dot" => Observable::AngularAcceleration(1),
-            "r_dot" => Observable::AngularAcceleration(2),
-            "mach" => Observable::Mach,
-            "dynamic_pressure" => Observable::DynamicPressure,
-            "CX" => Observable::Force(0),
-            "CY" => Observable::Force(1),
-            "CZ" => Observable::Force(2),
-            "CL" => Observable::Lift,
-            "CD" => Observable::Drag,
-            "Cl" => Observable::Moment(0),
-            "Cm" => Observable::Moment(1),
-            "Cn" => Observable::Moment(2),
-            _ => return None,
-        })
+        Observable::NAMED
+            .iter()
+            .find(|(named, _)| *named == name)
+            .map(|(_, observable)| *observable)
+    }
+
+    /// Every output name a model structure may compare.
+    pub fn names() -> impl Iterator<Item = &'static str> {
+        FLIGHT_PATH_STATES
+            .iter()
+            .copied()
+            .chain(Observable::NAMED.iter().map(|(name, _)| *name))
     }
 
     /// The output's value at a state and its evaluation.
