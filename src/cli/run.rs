@@ -31,6 +31,9 @@ pub fn run(args: Args) -> Result<()> {
         verbose,
         out,
     } = args;
+    if let Some(out) = &out {
+        aeroid::paths::check_output_folder(out)?;
+    }
     let scenario = Scenario::load(&scenario)?;
     let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
     let report = aeroid::eval::run::run(&scenario, &profile)?;
