@@ -125,6 +125,20 @@ pub enum Error {
     Other(String),
 }
 
+impl Error {
+    /// The error of a write: a failure of the file system reported as a
+    /// read ([`Error::Io`]) becomes a [`Error::Write`].
+    pub fn as_write(self) -> Error {
+        match self {
+            Error::Io { path, source } => Error::Write {
+                path,
+                reason: source.to_string(),
+            },
+            other => other,
+        }
+    }
+}
+
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// Reads a text file, naming it in the error.

@@ -382,3 +382,22 @@ fn scenario_and_study_references_stay_inside() {
         "{stderr}"
     );
 }
+
+/// A gate file's cases name bundled files; an absolute path or `..` is
+/// refused before any case runs.
+#[test]
+fn a_gate_case_naming_a_file_outside_is_refused() {
+    let folder = common::temp_folder("contracts-gate-escape");
+    let gates = common::write(
+        &folder,
+        "gates.toml",
+        "[[case]]\nname = \"escape\"\nscenario = \"../../etc/x.toml\"\nprofile = \"/etc/passwd\"\n\
+         model = \"attas-longitudinal\"\nmethod = \"ee\"\nrelative_tolerance = 0.1\n",
+    );
+    let stderr = refused_at_once(aeroid().arg("gate").arg("--file").arg(&gates));
+    assert!(
+        stderr.contains("case[0] (escape).scenario: '../../etc/x.toml' is an absolute path or leaves the folder with '..'")
+            && stderr.contains("case[0] (escape).profile: '/etc/passwd'"),
+        "{stderr}"
+    );
+}

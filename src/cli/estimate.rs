@@ -121,7 +121,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let Some(out) = out {
         std::fs::create_dir_all(&out).map_err(|e| aeroid::error::write_error(&out, e))?;
-        estimate.write_json(&out.join("estimate.json"))?;
+        estimate
+            .write_json(&out.join("estimate.json"))
+            .map_err(aeroid::Error::as_write)?;
         score::write_csv(&scores, &out.join("estimate.csv"))?;
         outln!(
             "written: {}/estimate.json, {}/estimate.csv",

@@ -106,7 +106,9 @@ pub fn run(args: Args) -> Result<()> {
         for run in &report.runs {
             if let Outcome::Estimated { estimate, scores } = &run.outcome {
                 let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
-                estimate.write_json(&out.join(format!("{stem}.json")))?;
+                estimate
+                    .write_json(&out.join(format!("{stem}.json")))
+                    .map_err(aeroid::Error::as_write)?;
                 aeroid::eval::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
             }
         }
