@@ -92,7 +92,9 @@ pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<Pat
 }
 
 /// [`resolve`] for the field `field` of the file `naming_file`, which the
-/// error of a reference that leaves its folder names.
+/// error of a reference that leaves its folder names; a file beside
+/// `naming_file` reached through a symbolic link that leads out of its
+/// folder is refused too.
 pub fn resolve_named(
     reference: &str,
     folder: &str,
@@ -111,6 +113,7 @@ pub fn resolve_named(
             ),
         });
     }
+    paths::inside(base, reference, naming_file, field)?;
     find(reference, folder, Some(base))
 }
 

@@ -401,3 +401,31 @@ fn a_gate_case_naming_a_file_outside_is_refused() {
         "{stderr}"
     );
 }
+
+/// A scenario's aircraft reached through a symbolic link that leads out of
+/// the scenario's folder is refused.
+#[cfg(unix)]
+#[test]
+fn a_scenario_aircraft_linked_from_outside_is_refused() {
+    let root = common::temp_folder("contracts-linked-aircraft");
+    let folder = root.join("inner");
+    std::fs::create_dir_all(&folder).unwrap();
+    let plane = common::write(&root, "plane.toml", &common::attas_with(|t| t));
+    std::os::unix::fs::symlink(&plane, folder.join("plane.toml")).unwrap();
+    let scenario = common::write(
+        &folder,
+        "s.toml",
+        "name = \"s\"\naircraft = \"plane.toml\"\nduration = \"3 s\"\nstep = \"0.01 s\"\nseed = 1\n\n\
+         [trim]\nairspeed = \"103 m/s\"\naltitude = \"4877 m\"\n",
+    );
+    let stderr = refused_at_once(aeroid().arg("check").arg(&scenario));
+    assert!(
+        stderr.contains(&format!(
+            "{}: aircraft: 'plane.toml' leads to {}, outside {}",
+            scenario.display(),
+            plane.canonicalize().unwrap().display(),
+            folder.display()
+        )),
+        "{stderr}"
+    );
+}
