@@ -4,6 +4,7 @@
 //! `scenarios/`, else the source tree aeroid was built from.
 
 use crate::error::{Error, Result};
+use crate::paths;
 use std::path::{Path, PathBuf};
 
 pub const AIRCRAFT_FOLDER: &str = "aircraft";
@@ -61,32 +62,89 @@ pub fn bundled(folder: &str) -> Vec<String> {
     names
 }
 
-/// Resolves a file reference: an existing path (relative to `base` when given,
-/// then to the current folder), or a bundled name in `folder`.
+/// What a file of `folder` is called in messages.
+fn kind(folder: &str) -> &'static str {
+    match folder {
+        AIRCRAFT_FOLDER => "aircraft",
+        RECORDER_FOLDER => "recorder profile",
+        STUDY_FOLDER => "study",
+        MODEL_FOLDER => "model structure",
+        _ => "scenario",
+    }
+}
+
+/// Resolves a file reference. Without `base` (a reference the user typed):
+/// an existing path, else a bundled name in `folder`. With `base` (the
+/// folder of the file that names it): a path inside `base`, a name in the
+/// `folder` beside `base`, a path inside the data folder or a bundled name;
+/// an absolute path or a `..` component is refused.
 pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<PathBuf> {
+    if let Some(base) = base
+        && let Some(reason) = paths::escape_reason(reference)
+    {
+        return Err(Error::Other(format!(
+            "{} '{reference}' {reason}; name a file inside {} by a relative path, or a bundled name",
+            kind(folder),
+            shown(base).display()
+        )));
+    }
+    find(reference, folder, base)
+}
+
+/// [`resolve`] for the field `field` of the file `naming_file`, which the
+/// error of a reference that leaves its folder names; a file beside
+/// `naming_file` reached through a symbolic link that leads out of its
+/// folder is refused too.
+pub fn resolve_named(
+    reference: &str,
+    folder: &str,
+    naming_file: &Path,
+    field: &str,
+) -> Result<PathBuf> {
+    let base = naming_file.parent().unwrap_or(Path::new(""));
+    if let Some(reason) = paths::escape_reason(reference) {
+        return Err(Error::Escape {
+            path: naming_file.to_path_buf(),
+            field: field.to_string(),
+            reference: reference.to_string(),
+            reason: format!(
+                "{reason}; name a file inside {} by a relative path, or a bundled name",
+                shown(base).display()
+            ),
+        });
+    }
+    paths::inside(base, reference, naming_file, field)?;
+    find(reference, folder, Some(base))
+}
+
+/// A folder as shown in messages: `.` for the current folder.
+fn shown(folder: &Path) -> &Path {
+    if folder.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        folder
+    }
+}
+
+fn find(reference: &str, folder: &str, base: Option<&Path>) -> Result<PathBuf> {
     let direct = PathBuf::from(reference);
-    let mut candidates = Vec::new();
-    if let Some(base) = base {
-        candidates.push(base.join(&direct));
-        candidates.push(
+    let bundled_file = data_folder().join(folder).join(format!("{reference}.toml"));
+    let candidates = match base {
+        Some(base) => vec![
+            base.join(&direct),
             base.join("..")
                 .join(folder)
                 .join(format!("{reference}.toml")),
-        );
-    }
-    candidates.push(direct);
-    candidates.push(data_folder().join(folder).join(format!("{reference}.toml")));
+            data_folder().join(&direct),
+            bundled_file,
+        ],
+        None => vec![direct, bundled_file],
+    };
     candidates
         .into_iter()
         .find(|c| c.is_file())
         .ok_or_else(|| Error::Unknown {
-            kind: match folder {
-                AIRCRAFT_FOLDER => "aircraft",
-                RECORDER_FOLDER => "recorder profile",
-                STUDY_FOLDER => "study",
-                MODEL_FOLDER => "model structure",
-                _ => "scenario",
-            },
+            kind: kind(folder),
             name: reference.to_string(),
             known: bundled(folder),
         })

@@ -42,9 +42,18 @@ impl CsvTable {
                 });
             }
         }
+        let hint = delimiter_hint(&headers);
         let mut rows = Vec::new();
         for row in reader.records() {
-            let row = row.map_err(csv_error)?;
+            let row = row.map_err(|e| match (&hint, e.kind()) {
+                (Some(hint), csv::ErrorKind::UnequalLengths { .. }) => Error::Csv {
+                    path: path.to_path_buf(),
+                    line: e.position().map_or(0, |p| p.line()),
+                    column: String::new(),
+                    message: format!("{e}; {hint}"),
+                },
+                _ => csv_error(e),
+            })?;
             rows.push((row.position().map_or(0, |p| p.line()), row));
         }
         Ok(CsvTable {
@@ -64,8 +73,10 @@ impl CsvTable {
                 line: 1,
                 column: name.to_string(),
                 message: format!(
-                    "no such column in the header; columns: {}",
-                    self.headers.join(", ")
+                    "no such column in the header; columns: {}{}",
+                    self.headers.join(", "),
+                    delimiter_hint(&self.headers)
+                        .map_or_else(String::new, |hint| format!("; {hint}"))
                 ),
             })
     }
@@ -128,6 +139,21 @@ impl CsvTable {
     }
 }
 
+/// A hint when a header of one column looks separated by another
+/// delimiter than the comma.
+fn delimiter_hint(headers: &[String]) -> Option<String> {
+    let [header] = headers else { return None };
+    [';', '\t', '|']
+        .into_iter()
+        .find(|&d| header.contains(d))
+        .map(|d| {
+            format!(
+                "the file seems to use '{}' as delimiter; aeroid reads comma-separated files",
+                d.escape_default()
+            )
+        })
+}
+
 /// The index of the first time not after its predecessor (or not finite).
 pub(crate) fn first_disorder(times: &[f64]) -> Option<usize> {
     times
@@ -135,4 +161,26 @@ pub(crate) fn first_disorder(times: &[f64]) -> Option<usize> {
         .enumerate()
         .find(|&(k, t)| !t.is_finite() || (k > 0 && *t <= times[k - 1]))
         .map(|(k, _)| k)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_semicolon_separated_file_gets_a_delimiter_hint() {
+        let path =
+            std::env::temp_dir().join(format!("aeroid-semicolon-{}.csv", std::process::id()));
+        std::fs::write(&path, "time;alpha\n0,0;1,5\n0,1;1,6\n").unwrap();
+        let error = CsvTable::read(&path).err().unwrap().to_string();
+        std::fs::write(&path, "time;alpha\n0;1\n1;2\n").unwrap();
+        let missing = CsvTable::read(&path)
+            .unwrap()
+            .column_index("time")
+            .unwrap_err();
+        std::fs::remove_file(&path).unwrap();
+        let hint = "the file seems to use ';' as delimiter; aeroid reads comma-separated files";
+        assert!(error.contains("line 2") && error.ends_with(hint), "{error}");
+        assert!(missing.to_string().ends_with(hint), "{missing}");
+    }
 }

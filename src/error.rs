@@ -63,6 +63,21 @@ pub enum Error {
         source: std::io::Error,
     },
 
+    /// A file or folder aeroid writes could not be written. The reason is
+    /// part of the message, not a separate cause, so that it is said once.
+    #[error("cannot write {path}: {reason}")]
+    Write { path: PathBuf, reason: String },
+
+    /// A file named inside another file (a record's `record.toml`, a
+    /// scenario, a study) that would leave the folder of the file naming it.
+    #[error("{path}: {field}: '{reference}' {reason}")]
+    Escape {
+        path: PathBuf,
+        field: String,
+        reference: String,
+        reason: String,
+    },
+
     #[error("{path}: malformed TOML: {message}")]
     Toml { path: PathBuf, message: String },
 
@@ -110,6 +125,20 @@ pub enum Error {
     Other(String),
 }
 
+impl Error {
+    /// The error of a write: a failure of the file system reported as a
+    /// read ([`Error::Io`]) becomes a [`Error::Write`].
+    pub fn as_write(self) -> Error {
+        match self {
+            Error::Io { path, source } => Error::Write {
+                path,
+                reason: source.to_string(),
+            },
+            other => other,
+        }
+    }
+}
+
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// Reads a text file, naming it in the error.
@@ -118,6 +147,19 @@ pub fn read_text(path: &std::path::Path) -> Result<String> {
         path: path.to_path_buf(),
         source,
     })
+}
+
+/// A write error naming the path, with the reason said once.
+pub fn write_error(path: &std::path::Path, error: impl fmt::Display) -> Error {
+    Error::Write {
+        path: path.to_path_buf(),
+        reason: error.to_string(),
+    }
+}
+
+/// Writes a text file, naming it in the error.
+pub fn write_text(path: &std::path::Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| write_error(path, e))
 }
 
 /// Parses TOML into `T`, reporting the file, line and column of a syntax or type error.

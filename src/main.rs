@@ -33,9 +33,7 @@ enum Command {
     Gate(cli::gate::Args),
     Study(cli::study::Args),
     Estimate(cli::estimate::Args),
-    #[cfg(feature = "jsbsim")]
     ExportJsbsim(cli::export_jsbsim::Args),
-    #[cfg(feature = "jsbsim")]
     Crosscheck(cli::crosscheck::Args),
 }
 
@@ -54,9 +52,7 @@ fn main() -> ExitCode {
         Command::Gate(args) => cli::gate::run(args),
         Command::Study(args) => cli::study::run(args),
         Command::Estimate(args) => cli::estimate::run(args),
-        #[cfg(feature = "jsbsim")]
         Command::ExportJsbsim(args) => cli::export_jsbsim::run(args),
-        #[cfg(feature = "jsbsim")]
         Command::Crosscheck(args) => cli::crosscheck::run(args),
     };
     match result {
@@ -64,7 +60,7 @@ fn main() -> ExitCode {
         // The reader of the output went away (`| head`): nothing left to say.
         Err(error) if cli::is_closed_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {error:#}");
+            eprintln!("error: {}", cli::message(&error));
             ExitCode::FAILURE
         }
     }

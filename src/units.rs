@@ -153,11 +153,42 @@ fn is_case_sensitive(name: &str) -> bool {
 }
 
 /// A quantity as written in a file: a plain number (SI) or `"value unit"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum Quantity {
     Number(f64),
     Text(String),
+}
+
+/// What a quantity field takes, in the words of an error about anything else.
+pub const QUANTITY_EXPECTED: &str = "a quantity (a number or a string such as \"5 deg\")";
+
+impl<'de> Deserialize<'de> for Quantity {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Quantity;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(QUANTITY_EXPECTED)
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Quantity, E> {
+                Ok(Quantity::Number(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Quantity, E> {
+                Ok(Quantity::Number(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Quantity, E> {
+                Ok(Quantity::Number(v as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Quantity, E> {
+                Ok(Quantity::Text(v.to_string()))
+            }
+            fn visit_string<E: serde::de::Error>(self, v: String) -> Result<Quantity, E> {
+                Ok(Quantity::Text(v))
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
 }
 
 impl Default for Quantity {
@@ -266,6 +297,26 @@ mod tests {
             .unwrap_err();
         assert!(err.contains("'kt'") && err.contains("deg"), "{err}");
         assert!(Quantity::Number(f64::NAN).si(Dimension::Length).is_err());
+    }
+
+    #[test]
+    fn a_boolean_is_not_a_quantity() {
+        #[derive(Debug, Deserialize)]
+        struct File {
+            #[allow(dead_code)]
+            duration: Quantity,
+        }
+        let error = toml::from_str::<File>("duration = true").unwrap_err();
+        assert!(
+            error
+                .message()
+                .contains("expected a quantity (a number or a string such as \"5 deg\")"),
+            "{error}"
+        );
+        let file: File = toml::from_str("duration = 5").unwrap();
+        assert_eq!(file.duration, Quantity::Number(5.0));
+        let file: File = toml::from_str("duration = \"5 s\"").unwrap();
+        assert_eq!(file.duration, Quantity::Text("5 s".into()));
         assert!(Quantity::Text("abc".into()).si(Dimension::Length).is_err());
     }
 }

@@ -70,7 +70,14 @@ pub fn run(args: Args) -> Result<()> {
         write_problem,
         settings,
     } = args;
+    if let Some(out) = &out {
+        aeroid::paths::check_output_folder(out)?;
+    }
     let record = aeroid::record::FlightRecord::read(&record_folder)?;
+    let other = check_on
+        .as_deref()
+        .map(aeroid::record::FlightRecord::read)
+        .transpose()?;
     let structure = ModelStructure::load(&model)?;
     let overrides = settings_table(&method, &settings)?;
     let problem = EstimationProblem::new(&method, vec![record], structure, &[&overrides])?;
@@ -109,8 +116,7 @@ pub fn run(args: Args) -> Result<()> {
     for note in &estimate.notes {
         outln!("  note: {note}");
     }
-    if let Some(other) = check_on {
-        let other = aeroid::record::FlightRecord::read(&other)?;
+    if let Some(other) = other {
         outln!("proof of match on {} (nothing adjusted):", other.scenario);
         for fit in output_error::proof_of_match(&estimate, structure, &other)? {
             outln!(
@@ -123,8 +129,10 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     if let Some(out) = out {
-        std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-        estimate.write_json(&out.join("estimate.json"))?;
+        std::fs::create_dir_all(&out).map_err(|e| aeroid::error::write_error(&out, e))?;
+        estimate
+            .write_json(&out.join("estimate.json"))
+            .map_err(aeroid::Error::as_write)?;
         score::write_csv(&scores, &out.join("estimate.csv"))?;
         outln!(
             "written: {}/estimate.json, {}/estimate.csv",

@@ -27,6 +27,7 @@ pub fn run(args: Args) -> Result<()> {
         out,
         jsbsim_atmosphere,
     } = args;
+    aeroid::paths::check_output_folder(&out)?;
     let path = catalog::resolve(&reference, catalog::AIRCRAFT_FOLDER, None)?;
     let aircraft = aeroid::sim::aircraft::Aircraft::load(&path)?;
     let options = ExportOptions {

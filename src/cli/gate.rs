@@ -27,9 +27,17 @@ pub fn run(args: Args) -> Result<()> {
     } = args;
     let file = file.unwrap_or_else(aeroid::catalog::gate_file);
     let mut gates = aeroid::eval::gate::load(&file)?;
-    gates
-        .cases
-        .retain(|case| only.as_deref().is_none_or(|text| case.name.contains(text)));
+    if let Some(text) = &only {
+        let names: Vec<String> = gates.cases.iter().map(|case| case.name.clone()).collect();
+        gates.cases.retain(|case| case.name.contains(text.as_str()));
+        if gates.cases.is_empty() {
+            anyhow::bail!(
+                "--only '{text}' matches no case of {}; cases: {}",
+                file.display(),
+                names.join(", ")
+            );
+        }
+    }
     let mut failed = Vec::new();
     for case in &gates.cases {
         match aeroid::eval::gate::run_case(case) {

@@ -25,6 +25,10 @@ pub mod crosscheck;
 pub mod estimate;
 #[cfg(feature = "jsbsim")]
 pub mod export_jsbsim;
+#[cfg(not(feature = "jsbsim"))]
+pub mod without_jsbsim;
+#[cfg(not(feature = "jsbsim"))]
+pub use without_jsbsim::{crosscheck, export_jsbsim};
 pub mod gate;
 pub mod identifiability;
 pub mod import;
@@ -36,6 +40,23 @@ pub mod record;
 pub mod run;
 pub mod simulate;
 pub mod study;
+
+/// The error and its causes, each said once: a cause whose text the
+/// message already holds is not repeated.
+pub fn message(error: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in error.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
+}
 
 /// Whether an error is a write to a closed pipe (the reader went away).
 pub fn is_closed_pipe(error: &anyhow::Error) -> bool {

@@ -16,6 +16,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(out) = &args.out {
+        aeroid::paths::check_output_folder(out)?;
+    }
     let record = aeroid::record::FlightRecord::read(&args.record)?;
     let result = aeroid::prep::compatibility::flight_path_reconstruction(&record, 30)?;
     let estimate = &result.estimate;

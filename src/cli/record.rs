@@ -25,6 +25,7 @@ pub fn run(args: Args) -> Result<()> {
         profile,
         out,
     } = args;
+    aeroid::paths::check_output_folder(&out)?;
     let scenario = Scenario::load(&scenario)?;
     let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
     let (record, truth) = aeroid::record::recorder::record_scenario(&scenario, &profile)?;

@@ -31,6 +31,9 @@ pub fn run(args: Args) -> Result<()> {
         verbose,
         out,
     } = args;
+    if let Some(out) = &out {
+        aeroid::paths::check_output_folder(out)?;
+    }
     let scenario = Scenario::load(&scenario)?;
     let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
     let report = aeroid::eval::run::run(&scenario, &profile)?;
@@ -103,7 +106,9 @@ pub fn run(args: Args) -> Result<()> {
         for run in &report.runs {
             if let Outcome::Estimated { estimate, scores } = &run.outcome {
                 let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
-                estimate.write_json(&out.join(format!("{stem}.json")))?;
+                estimate
+                    .write_json(&out.join(format!("{stem}.json")))
+                    .map_err(aeroid::Error::as_write)?;
                 aeroid::eval::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
             }
         }

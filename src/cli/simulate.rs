@@ -18,6 +18,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<()> {
     let Args { scenario, out } = args;
+    aeroid::paths::check_output_file(&out)?;
     let scenario = Scenario::load(&scenario)?;
     let started = std::time::Instant::now();
     let flight = aeroid::sim::simulate(&scenario)?;

@@ -31,6 +31,9 @@ pub fn run(args: Args) -> Result<()> {
         threads,
         out,
     } = args;
+    if let Some(out) = &out {
+        aeroid::paths::check_output_folder(out)?;
+    }
     let mut study = aeroid::eval::study::Study::load(&reference)?;
     if let Some(runs) = runs {
         anyhow::ensure!(runs >= 1, "--runs must be at least 1");

@@ -260,6 +260,18 @@ pub fn load(path: &Path) -> Result<GateFile> {
         if let Err(error) = methods::find(&case.method) {
             problems.push(format!("{field}.method"), error.to_string());
         }
+        for (key, reference) in [
+            ("scenario", &case.scenario),
+            ("profile", &case.profile),
+            ("model", &case.model),
+        ] {
+            if !crate::paths::stays_inside(reference) {
+                problems.push(
+                    format!("{field}.{key}"),
+                    format!("'{reference}' is an absolute path or leaves the folder with '..'; name a bundled file"),
+                );
+            }
+        }
         let mut tables = Problems::default();
         check_method_tables(&case.methods, &mut tables);
         for problem in tables.0 {

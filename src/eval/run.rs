@@ -104,8 +104,15 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
     let (record, truth) = record_scenario(scenario, profile)?;
     let estimators = methods::all();
     let mut runs = Vec::new();
-    for reference in &scenario.models {
-        let structure = ModelStructure::load(reference);
+    for (index, reference) in scenario.models.iter().enumerate() {
+        let field = format!("models[{index}]");
+        let structure = crate::catalog::resolve_named(
+            reference,
+            crate::catalog::MODEL_FOLDER,
+            &scenario.path,
+            &field,
+        )
+        .and_then(|path| ModelStructure::load(&path.to_string_lossy()));
         let first = runs.len();
         for estimator in &estimators {
             let method = estimator.info().name.to_string();

@@ -4,7 +4,7 @@
 //! the truth model's local derivative at the trim point) is carried into
 //! every row so that a report says what it was scored against.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::estimation::estimate::Estimate;
 use crate::sim::aero::ModelKind;
 use crate::sim::truth::{RunTruth, TruthKind};
@@ -67,10 +67,7 @@ fn optional(value: Option<f64>) -> String {
 
 /// Writes the scored table as CSV (a spreadsheet opens it directly).
 pub fn write_csv(scores: &[ParameterScore], path: &Path) -> Result<()> {
-    let io_error = |e: csv::Error| Error::Io {
-        path: path.to_path_buf(),
-        source: e.into(),
-    };
+    let io_error = |e: csv::Error| crate::error::write_error(path, e);
     let mut writer = csv::Writer::from_path(path).map_err(io_error)?;
     writer
         .write_record([
@@ -100,10 +97,9 @@ pub fn write_csv(scores: &[ParameterScore], path: &Path) -> Result<()> {
             ])
             .map_err(io_error)?;
     }
-    writer.flush().map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    writer
+        .flush()
+        .map_err(|e| crate::error::write_error(path, e))
 }
 
 /// A fixed-width table for the terminal.

@@ -662,10 +662,7 @@ impl StudyResult {
     /// Writes `runs.csv` (every row), `summary.csv` and `study.json` (the
     /// summary and rows; a NaN is null there) into `folder`, creating it.
     pub fn write(&self, folder: &Path) -> Result<()> {
-        let io = |path: &Path, source: std::io::Error| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        };
+        let io = |path: &Path, e: std::io::Error| crate::error::write_error(path, e);
         std::fs::create_dir_all(folder).map_err(|e| io(folder, e))?;
         write_csv(&folder.join("runs.csv"), &self.rows)?;
         write_csv(&folder.join("summary.csv"), &self.summary)?;
@@ -733,18 +730,14 @@ impl StudyResult {
 }
 
 fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
-    let io_error = |e: csv::Error| Error::Io {
-        path: path.to_path_buf(),
-        source: e.into(),
-    };
+    let io_error = |e: csv::Error| crate::error::write_error(path, e);
     let mut writer = csv::Writer::from_path(path).map_err(io_error)?;
     for row in rows {
         writer.serialize(row).map_err(io_error)?;
     }
-    writer.flush().map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    writer
+        .flush()
+        .map_err(|e| crate::error::write_error(path, e))
 }
 
 #[cfg(test)]

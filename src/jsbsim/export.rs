@@ -111,15 +111,9 @@ pub fn export(aircraft: &Aircraft, options: &ExportOptions, dir: &Path) -> Resul
     let xml = aircraft_xml(aircraft, options)?;
     let model = model_name(aircraft);
     let folder = dir.join(&model);
-    std::fs::create_dir_all(&folder).map_err(|source| Error::Io {
-        path: folder.clone(),
-        source,
-    })?;
+    std::fs::create_dir_all(&folder).map_err(|e| crate::error::write_error(&folder, e))?;
     let file = folder.join(format!("{model}.xml"));
-    std::fs::write(&file, xml).map_err(|source| Error::Io {
-        path: file.clone(),
-        source,
-    })?;
+    crate::error::write_text(&file, &xml)?;
     Ok(file)
 }
 

@@ -234,10 +234,7 @@ fn load_flat_earth(exec: &mut Exec, gravity: f64) -> Result<()> {
     ));
     let mut text = String::from("<?xml version=\"1.0\"?>\n");
     write_planet(&mut text, gravity);
-    std::fs::write(&file, text).map_err(|source| Error::Io {
-        path: file.clone(),
-        source,
-    })?;
+    crate::error::write_text(&file, &text)?;
     let result = exec.load_planet(&file);
     // The file is read completely while loading; a file left behind is harmless.
     let _ = std::fs::remove_file(&file);

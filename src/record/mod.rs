@@ -27,6 +27,7 @@ pub mod recorder;
 use crate::csv_table::CsvTable;
 use crate::csv_table::first_disorder;
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
+use crate::paths;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -307,10 +308,7 @@ impl FlightRecord {
     /// Writes the record into `folder` (created if needed): `record.toml` and one CSV per time base.
     pub fn write(&self, folder: &Path) -> Result<()> {
         self.validate(folder)?;
-        std::fs::create_dir_all(folder).map_err(|source| Error::Io {
-            path: folder.to_path_buf(),
-            source,
-        })?;
+        std::fs::create_dir_all(folder).map_err(|e| crate::error::write_error(folder, e))?;
         let bases = self.time_bases();
         let mut entries = Vec::with_capacity(self.channels.len());
         for base in &bases {
@@ -330,7 +328,7 @@ impl FlightRecord {
         };
         let path = folder.join(RECORD_FILE);
         let text = toml::to_string(&file).map_err(|e| Error::Other(e.to_string()))?;
-        std::fs::write(&path, text).map_err(|source| Error::Io { path, source })
+        crate::error::write_text(&path, &text)
     }
 
     /// Reads a record folder written by [`FlightRecord::write`] (or by hand in the same layout).
@@ -348,9 +346,10 @@ impl FlightRecord {
         }
         let mut tables: Vec<(String, CsvTable, Vec<f64>)> = Vec::new();
         let mut channels = Vec::with_capacity(file.channels.len());
-        for entry in file.channels {
+        for (index, entry) in file.channels.into_iter().enumerate() {
             if !tables.iter().any(|(name, _, _)| *name == entry.file) {
-                let table = CsvTable::read(&folder.join(&entry.file))?;
+                let field = format!("channels[{index}].file");
+                let table = CsvTable::read(&paths::inside(folder, &entry.file, &path, &field)?)?;
                 let times = table.time_column(0)?;
                 tables.push((entry.file.clone(), table, times));
             }
@@ -424,10 +423,7 @@ impl FlightRecord {
     }
 
     fn write_time_base(&self, path: &Path, members: &[usize]) -> Result<()> {
-        let io_error = |e: csv::Error| Error::Io {
-            path: path.to_path_buf(),
-            source: e.into(),
-        };
+        let io_error = |e: csv::Error| crate::error::write_error(path, e);
         let mut writer = csv::Writer::from_path(path).map_err(io_error)?;
         let header = std::iter::once(TIME_HEADER.to_string())
             .chain(members.iter().map(|&i| self.channels[i].header()));
@@ -438,10 +434,9 @@ impl FlightRecord {
                 .chain(members.iter().map(|&i| cell(self.channels[i].values[k])));
             writer.write_record(row).map_err(io_error)?;
         }
-        writer.flush().map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        writer
+            .flush()
+            .map_err(|e| crate::error::write_error(path, e))
     }
 
     /// The `aeroid inspect` table: every channel with its unit, rate,

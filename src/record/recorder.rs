@@ -775,7 +775,15 @@ fn butterworth(signal: &mut [f64], cutoff: f64, step: f64) -> Result<(), String>
 pub fn profile_for(scenario: &Scenario, reference: Option<&str>) -> Result<Profile> {
     match (reference, &scenario.recorder) {
         (Some(reference), _) => Profile::load(reference, None),
-        (None, Some(reference)) => Profile::load(reference, scenario.path.parent()),
+        (None, Some(reference)) => {
+            let path = catalog::resolve_named(
+                reference,
+                catalog::RECORDER_FOLDER,
+                &scenario.path,
+                "recorder",
+            )?;
+            Profile::load(&path.to_string_lossy(), None)
+        }
         (None, None) => Profile::load(DEFAULT_PROFILE, None),
     }
 }

@@ -183,7 +183,7 @@ impl InputSchedule {
         problems.finish(scenario_path, ())?;
         let signals = pending
             .into_iter()
-            .map(|item| item.load(base_dir))
+            .map(|item| item.load(base_dir, scenario_path))
             .collect::<crate::Result<Vec<Signal>>>()?;
         Ok(InputSchedule { signals })
     }
@@ -389,10 +389,10 @@ enum Pending {
 }
 
 impl Pending {
-    fn load(self, base_dir: &Path) -> crate::Result<Signal> {
+    fn load(self, base_dir: &Path, scenario_path: &Path) -> crate::Result<Signal> {
         match self {
             Pending::Ready(signal) => Ok(signal),
-            Pending::Csv(request) => request.load(base_dir),
+            Pending::Csv(request) => request.load(base_dir, scenario_path),
         }
     }
 }
@@ -878,6 +878,8 @@ fn peak_magnitude(harmonics: &[Harmonic], period: f64) -> f64 {
 struct CsvRequest {
     control: usize,
     file: PathBuf,
+    /// The spec's field naming the file (`inputs[2].file`), for errors.
+    field: String,
     time_column: String,
     column: String,
     /// Factor from the column's unit to SI.
@@ -893,9 +895,20 @@ impl CsvSpec {
         let factor = (self.unit.as_deref())
             .map_or(Ok(1.0), |unit| unit_factor(unit, self.control.dimension()));
         let factor = factor.map_err(|message| checker.push("unit", message)).ok();
+        let file = self.file.to_string_lossy();
+        if !crate::paths::stays_inside(&file) {
+            checker.push(
+                "file",
+                format!(
+                    "'{file}' leaves the scenario's folder; name a CSV file inside it by a relative path without '..'"
+                ),
+            );
+            return None;
+        }
         Some(CsvRequest {
             control: self.control.index(),
             file: self.file.clone(),
+            field: format!("{}.file", checker.prefix),
             time_column: self.time_column.clone(),
             column: self.column.clone(),
             factor: factor?,
@@ -905,8 +918,13 @@ impl CsvSpec {
 }
 
 impl CsvRequest {
-    fn load(self, base_dir: &Path) -> crate::Result<Signal> {
-        let path = base_dir.join(&self.file);
+    fn load(self, base_dir: &Path, scenario_path: &Path) -> crate::Result<Signal> {
+        let path = crate::paths::inside(
+            base_dir,
+            &self.file.to_string_lossy(),
+            scenario_path,
+            &self.field,
+        )?;
         let (times, values) = read_csv_columns(&path, &self.time_column, &self.column)?;
         Ok(Signal::Polyline(Polyline {
             control: self.control,

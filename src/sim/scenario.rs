@@ -189,12 +189,12 @@ impl Scenario {
     pub fn from_file(file: &ScenarioFile, path: &Path) -> Result<Scenario> {
         let base = path.parent().unwrap_or(Path::new("."));
         let jsbsim = jsbsim_aircraft(file, path)?;
-        let aircraft_reference = match (&jsbsim, &file.jsbsim) {
-            (Some(_), Some(spec)) => &spec.rigid_body,
-            _ => &file.aircraft,
+        let (aircraft_reference, field) = match (&jsbsim, &file.jsbsim) {
+            (Some(_), Some(spec)) => (&spec.rigid_body, "jsbsim.rigid_body"),
+            _ => (&file.aircraft, "aircraft"),
         };
         let aircraft_path =
-            catalog::resolve(aircraft_reference, catalog::AIRCRAFT_FOLDER, Some(base))?;
+            catalog::resolve_named(aircraft_reference, catalog::AIRCRAFT_FOLDER, path, field)?;
         let aircraft = Aircraft::load(&aircraft_path)?;
         let mut problems = Problems::default();
         let mut read = |field: &str, q: &Quantity, dimension: Dimension| {

@@ -157,10 +157,7 @@ impl TruthTrace {
 
     /// Writes the trace as CSV, header `name [unit]`, values in shortest round-trip form.
     pub fn write_csv(&self, path: &Path) -> Result<()> {
-        let io_error = |source: std::io::Error| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        };
+        let io_error = |source: std::io::Error| crate::error::write_error(path, source);
         let mut writer = csv::Writer::from_path(path).map_err(|e| io_error(e.into()))?;
         writer
             .write_record(COLUMNS.iter().map(|c| format!("{} [{}]", c.name, c.unit)))

@@ -118,10 +118,7 @@ impl RunTruth {
 
     pub fn write(&self, path: &Path) -> Result<()> {
         let text = toml::to_string(self).map_err(|e| Error::Other(e.to_string()))?;
-        std::fs::write(path, text).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        crate::error::write_text(path, &text)
     }
 
     pub fn read(path: &Path) -> Result<RunTruth> {
