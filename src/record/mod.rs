@@ -272,10 +272,17 @@ impl FlightRecord {
             })
     }
 
-    /// Checks what the file format relies on: unique, file-safe names,
-    /// matching lengths, finite strictly increasing times, positive rates.
+    /// Checks what the file format relies on: at least one channel, each
+    /// with samples, unique, file-safe names, matching lengths, finite
+    /// strictly increasing times, positive rates.
     pub fn validate(&self, path: &Path) -> Result<()> {
         let mut problems = Problems::default();
+        if self.channels.is_empty() {
+            problems.push(
+                "channels",
+                "the record has no channels; a record needs at least one",
+            );
+        }
         let mut seen = BTreeSet::new();
         for (i, channel) in self.channels.iter().enumerate() {
             let field = format!("channels[{i}] ({})", channel.name);
@@ -287,6 +294,8 @@ impl FlightRecord {
             }
             if channel.times.len() != channel.values.len() {
                 problems.push(&field, "times and values differ in length");
+            } else if channel.times.is_empty() {
+                problems.push(&field, "the channel has no samples");
             }
             if !(channel.rate.is_finite() && channel.rate > 0.0) {
                 problems.push(&field, "the nominal rate must be positive");
