@@ -145,6 +145,16 @@ pub fn parse_bytes(text: &str) -> Option<u64> {
     (bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64).then_some(bytes as u64)
 }
 
+/// A number for a message: plain for ordinary magnitudes, in scientific
+/// notation when tiny or huge (`1e-300`, not three hundred zeros).
+pub fn number(value: f64) -> String {
+    if value == 0.0 || !value.is_finite() || (1e-4..1e15).contains(&value.abs()) {
+        format!("{value}")
+    } else {
+        format!("{value:e}")
+    }
+}
+
 /// A count for a message: exact below 10¹², else in scientific notation.
 fn count_text(count: f64) -> String {
     if count < 1e12 && count.fract() == 0.0 {
@@ -202,6 +212,16 @@ mod tests {
         assert!(check_memory("a small record", 1000.0, 16).is_ok());
         assert!(check_memory("a count past usize", 1e30, 1).is_err());
         assert!(check_memory("a count past usize", f64::INFINITY, 1).is_err());
+    }
+
+    #[test]
+    fn numbers_in_messages_stay_short() {
+        assert_eq!(number(1e-300), "1e-300");
+        assert_eq!(number(5e-324), "5e-324");
+        assert_eq!(number(1e-6), "1e-6");
+        assert_eq!(number(0.01), "0.01");
+        assert_eq!(number(1e9), "1000000000");
+        assert_eq!(number(1e308), "1e308");
     }
 
     #[test]

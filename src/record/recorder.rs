@@ -522,8 +522,9 @@ impl FieldReader<'_> {
             self.push(
                 field,
                 format!(
-                    "{value} s is above the longest {} s (longer than the slowest aircraft mode's period: such a sensor records no motion)",
-                    limits::MAX_SENSOR_TIME
+                    "{} s is above the longest {} s (longer than the slowest aircraft mode's period: such a sensor records no motion)",
+                    limits::number(value),
+                    limits::number(limits::MAX_SENSOR_TIME)
                 ),
             );
             return f64::NAN;
@@ -611,8 +612,9 @@ impl FieldReader<'_> {
 /// Why a sample rate above [`limits::MAX_RATE`] is refused.
 pub fn rate_limit_message(rate: f64) -> String {
     format!(
-        "{rate} Hz is above the highest rate {} Hz (far above any flight-test system's sampling of aircraft motion)",
-        limits::MAX_RATE
+        "{} Hz is above the highest rate {} Hz (far above any flight-test system's sampling of aircraft motion)",
+        limits::number(rate),
+        limits::number(limits::MAX_RATE)
     )
 }
 

@@ -280,13 +280,14 @@ fn inertia_matrix(
         .as_ref()
         .is_some_and(|reason| !reason.trim().is_empty());
     if largest > 0.5 * total * (1.0 + 1e-9) && !accepted {
-        // Without a product of inertia the principal moments are the
-        // diagonal, and the largest one names the field.
-        let field = match ixz == 0.0 {
-            true if largest == izz => "mass.izz",
-            true if largest == iyy => "mass.iyy",
-            true => "mass.ixx",
-            false => "mass",
+        // The largest diagonal moment names the field (with a product of
+        // inertia, the principal moments are near the diagonal ones).
+        let field = if izz >= ixx && izz >= iyy {
+            "mass.izz"
+        } else if iyy >= ixx {
+            "mass.iyy"
+        } else {
+            "mass.ixx"
         };
         problems.push(
             field,

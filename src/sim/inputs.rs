@@ -379,7 +379,8 @@ impl Checker<'_> {
             self.push(
                 field,
                 format!(
-                    "{quantity} is beyond the {} input's largest magnitude {text}",
+                    "{} is beyond the {} input's largest magnitude {text}",
+                    quantity.to_string().trim_matches('"'),
                     control.name()
                 ),
             );
@@ -396,7 +397,8 @@ impl Checker<'_> {
             self.push(
                 field,
                 format!(
-                    "{quantity} is before the flight begins at 0 s; an input starts at 0 s or later"
+                    "{} is before the flight begins at 0 s; an input starts at 0 s or later",
+                    quantity.to_string().trim_matches('"')
                 ),
             );
             None

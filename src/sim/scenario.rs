@@ -404,8 +404,9 @@ fn check_ranges(trim: &TrimCondition, duration: f64, step: f64, problems: &mut P
         problems.push(
             "duration",
             format!(
-                "{duration} s is above the longest duration {} s (longer than any aircraft's endurance)",
-                limits::MAX_DURATION
+                "{} s is above the longest duration {} s (longer than any aircraft's endurance)",
+                limits::number(duration),
+                limits::number(limits::MAX_DURATION)
             ),
         );
     }
@@ -418,8 +419,9 @@ fn check_ranges(trim: &TrimCondition, duration: f64, step: f64, problems: &mut P
         problems.push(
             "step",
             format!(
-                "{step} s is below the smallest step {} s (RK4 is exact to round-off there; a smaller step only adds round-off and samples)",
-                limits::MIN_STEP
+                "{} s is below the smallest step {} s (RK4 is exact to round-off there; a smaller step only adds round-off and samples)",
+                limits::number(step),
+                limits::number(limits::MIN_STEP)
             ),
         );
     } else if duration > 0.0 && (duration / step - (duration / step).round()).abs() > 1e-6 {
