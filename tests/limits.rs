@@ -303,6 +303,35 @@ fn recorder_profiles_without_channels_or_with_nonsense_settings_are_refused() {
     );
 }
 
+/// `aeroid check` refuses the same profile: exit 1 naming the file and field.
+#[test]
+fn cli_check_refuses_a_fast_profile_and_a_huge_study() {
+    let (path, _) = profile_with("cli-fast-rate", |t| {
+        t.replacen("rate = \"100 Hz\"", "rate = \"1e9 Hz\"", 1)
+    });
+    let stderr = failure(aeroid(&["check", path.to_str().unwrap()], None));
+    assert!(
+        stderr.contains(&path.display().to_string())
+            && stderr.contains(
+                "channels.airspeed.rate: 1000000000 Hz is above the highest rate 10000 Hz"
+            ),
+        "{stderr}"
+    );
+    let folder = common::temp_folder("cli-study-runs");
+    let path = common::write(
+        &folder,
+        "study.toml",
+        &bundled("studies/attas-lateral-acceptance.toml")
+            .replace("runs = 100", "runs = 4000000000"),
+    );
+    let stderr = failure(aeroid(&["check", path.to_str().unwrap()], None));
+    assert!(
+        stderr.contains(&path.display().to_string())
+            && stderr.contains("runs: 4000000000 is above the most runs per sweep point, 1000000"),
+        "{stderr}"
+    );
+}
+
 // --- Studies -----------------------------------------------------------------
 
 /// `runs = 4000000000` passed validation and aborted allocating the cases.
@@ -586,8 +615,19 @@ fn an_empty_record_is_refused_where_it_is_read() {
         .map(|e| e.unwrap().path())
         .find(|p| p.extension().is_some_and(|e| e == "csv"))
         .unwrap();
-    let header_line = std::fs::read_to_string(&csv).unwrap();
-    let header_line = header_line.lines().next().unwrap().to_string();
+    let samples = std::fs::read_to_string(&csv).unwrap();
+    let header_line = samples.lines().next().unwrap().to_string();
+
+    // A record's cells are numbers or empty (a dropout), never infinities.
+    let second = samples.lines().nth(2).unwrap();
+    let mut cells: Vec<&str> = second.split(',').collect();
+    cells[1] = "1e400";
+    std::fs::write(&csv, samples.replace(second, &cells.join(","))).unwrap();
+    let message = FlightRecord::read(&folder).unwrap_err().to_string();
+    assert!(
+        message.contains(&format!("{}: line 3, column 'alpha [rad]': '1e400' reads as inf, not a finite number; a record stores a lost sample (dropout) as an empty cell", csv.display())),
+        "{message}"
+    );
     std::fs::write(&csv, header_line + "\n").unwrap();
     let error = FlightRecord::read(&folder).unwrap_err();
     assert_eq!(

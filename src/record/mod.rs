@@ -366,7 +366,15 @@ impl FlightRecord {
             let (_, table, times) = tables.iter().find(|(n, _, _)| *n == entry.file).unwrap();
             let column = table.column_index(&entry.column)?;
             channels.push(Channel {
-                values: table.numbers(column, true)?,
+                values: table
+                    .measurements(
+                        column,
+                        false,
+                        "a record stores a lost sample (dropout) as an empty cell",
+                    )?
+                    .into_iter()
+                    .map(|v| v.unwrap_or(f64::NAN))
+                    .collect(),
                 times: times.clone(),
                 name: entry.name,
                 unit: entry.unit,

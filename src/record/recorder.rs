@@ -14,15 +14,15 @@
 //! |---|---|
 //! | `name` | a quantity of [`crate::record::derived::MEASURANDS`] (`pitch`, `nz`, `calibrated_airspeed`, …) |
 //! | `label` | the recorder's own parameter title, kept as the channel's source |
-//! | `rate` | samples per second: `"25 Hz"`, `"1/64 Hz"`, `0.5` |
+//! | `rate` | samples per second: `"25 Hz"`, `"1/64 Hz"`, `0.5`; at most [`crate::limits::MAX_RATE`] |
 //! | `phase` | time of the first sample within the rate's period (default 0) |
 //! | `slot` / `word` | position within the frame: a fraction in [0, 1), or a word index of `words_per_frame` |
 //! | `resolution` | LSB; values are rounded to the nearest multiple |
 //! | `saturation` | `[min, max]` the value is clamped to |
 //! | `noise` | standard deviation of white Gaussian noise |
-//! | `bias`, `scale_factor` | `measured = scale_factor·x + bias` (default 0 and 1) |
-//! | `delay` | pure time delay |
-//! | `lag` | time constant of a first-order sensor lag |
+//! | `bias`, `scale_factor` | `measured = scale_factor·x + bias` (default 0 and 1; finite) |
+//! | `delay` | pure time delay, at most [`crate::limits::MAX_SENSOR_TIME`] |
+//! | `lag` | time constant of a first-order sensor lag, at most [`crate::limits::MAX_SENSOR_TIME`] |
 //! | `anti_alias` | cut-off of a 2nd-order Butterworth filter applied before sampling |
 //! | `dropout` | probability that a sample is lost (recorded as NaN) |
 //! | `fault` | `{ kind = "stuck", from = "20 s", value = … }` (holds `value`, or the last good sample) or `{ kind = "levels", values = [...] }` (every sample reads one of the values at random, as Wang et al. 2012's AoA) |
