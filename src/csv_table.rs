@@ -99,6 +99,51 @@ impl CsvTable {
             .collect()
     }
 
+    /// A column of measurements: `None` for an empty cell, else the number.
+    /// A cell that reads as NaN or an infinity (`inf`, `1e400`) is an error
+    /// naming line and column, or a NaN dropout when `non_finite_is_dropout`.
+    pub fn measurements(
+        &self,
+        column: usize,
+        non_finite_is_dropout: bool,
+        hint: &str,
+    ) -> Result<Vec<Option<f64>>> {
+        self.rows
+            .iter()
+            .map(|(line, row)| {
+                let text = row.get(column).unwrap_or("").trim();
+                if text.is_empty() {
+                    return Ok(None);
+                }
+                match text.parse::<f64>() {
+                    Ok(value) if value.is_finite() => Ok(Some(value)),
+                    Ok(_) if non_finite_is_dropout => Ok(Some(f64::NAN)),
+                    Ok(value) => Err(self.cell_error(
+                        *line,
+                        column,
+                        format!("'{text}' reads as {value}, not a finite number; {hint}"),
+                    )),
+                    Err(_) => {
+                        Err(self.cell_error(*line, column, format!("'{text}' is not a number")))
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// An error unless the file has at least one data row below its header.
+    pub fn require_rows(&self) -> Result<()> {
+        match self.rows.is_empty() {
+            false => Ok(()),
+            true => Err(Error::Csv {
+                path: self.path.clone(),
+                line: 1,
+                column: String::new(),
+                message: "the file has a header but no data rows; a record needs samples".into(),
+            }),
+        }
+    }
+
     /// A column of finite numbers; anything else is an error naming line and column.
     pub fn finite_numbers(&self, column: usize) -> Result<Vec<f64>> {
         let values = self.numbers(column, false)?;
@@ -117,6 +162,11 @@ impl CsvTable {
         let times = self.numbers(column, false)?;
         match first_disorder(&times) {
             None => Ok(times),
+            Some(k) if !times[k].is_finite() => Err(self.cell_error(
+                self.rows[k].0,
+                column,
+                format!("time {} is not a finite number", times[k]),
+            )),
             Some(k) => Err(self.cell_error(
                 self.rows[k].0,
                 column,

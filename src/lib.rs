@@ -18,6 +18,7 @@ pub mod estimation;
 pub mod eval;
 #[cfg(feature = "jsbsim")]
 pub mod jsbsim;
+pub mod limits;
 pub mod paths;
 pub mod prep;
 pub mod random;

@@ -226,6 +226,15 @@ pub fn analyse(
     profile: &Profile,
     options: &IdentifiabilityOptions,
 ) -> Result<Identifiability> {
+    if let Some(segment) = options.segment
+        && !(segment.is_finite() && segment >= scenario.step)
+    {
+        return Err(Error::Other(format!(
+            "segment length {segment} s: a segment must be at least one integration step ({} s of {}) long",
+            scenario.step,
+            scenario.path.display()
+        )));
+    }
     let simulation = Simulation::prepare(scenario)?;
     let aero = &scenario.aircraft.aero;
     let names: Vec<String> = match &options.parameters {
@@ -248,7 +257,7 @@ pub fn analyse(
     let duration = nominal_trace.samples.last().map_or(0.0, |s| s.time);
     let segment = options
         .segment
-        .filter(|t| *t > 0.0 && *t < duration)
+        .filter(|t| *t < duration)
         .unwrap_or(duration.max(simulation.step));
     let segment_steps = ((segment / simulation.step).round() as usize).max(1);
     let segments = nominal_states.len().div_ceil(segment_steps);

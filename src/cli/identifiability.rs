@@ -40,9 +40,14 @@ pub fn run(args: Args) -> Result<()> {
     } = args;
     let segment = segment
         .map(|text| {
-            aeroid::units::Quantity::Text(text)
+            let seconds = aeroid::units::Quantity::Text(text.clone())
                 .si(aeroid::units::Dimension::Time)
-                .map_err(|e| anyhow::anyhow!("--segment: {e}"))
+                .map_err(|e| anyhow::anyhow!("--segment: {e}"))?;
+            anyhow::ensure!(
+                seconds > 0.0,
+                "--segment: \"{text}\" must be a positive length of time (e.g. \"20 s\"); leave it out to analyse the whole flight as one segment"
+            );
+            Ok(seconds)
         })
         .transpose()?;
     let scenario = aeroid::sim::scenario::Scenario::load(&scenario)?;

@@ -36,8 +36,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut study = aeroid::eval::study::Study::load(&reference)?;
     if let Some(runs) = runs {
-        anyhow::ensure!(runs >= 1, "--runs must be at least 1");
-        study.runs = runs;
+        study.set_runs(runs, "--runs")?;
     }
     let cases = study.cases().len();
     outln!(

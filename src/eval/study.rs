@@ -43,6 +43,7 @@ use crate::estimation::methods;
 use crate::estimation::structure::ModelStructure;
 use crate::eval::run::{self, Outcome};
 use crate::eval::score::ParameterScore;
+use crate::limits;
 use crate::random;
 use crate::record::recorder::{Profile, parse_rate, record_scenario_seeded};
 use crate::sim::scenario::Scenario;
@@ -279,8 +280,8 @@ impl Study {
             .ok();
         check_methods(&file.methods, &mut problems);
         check_method_tables(&file.methods.tables(), &mut problems);
-        if file.runs == 0 || file.runs > u32::MAX as usize {
-            problems.push("runs", format!("must be within 1..=2³², is {}", file.runs));
+        if let Err(message) = check_runs(file.runs) {
+            problems.push("runs", message);
         }
         let rates = sample_rates(&file.sweep.sample_rate, &mut problems);
         let scales = noise_scales(&file.sweep.noise_scale, &mut problems);
@@ -308,7 +309,7 @@ impl Study {
                 }
             }
         }
-        Ok(Study {
+        let study = Study {
             name: file.name.clone(),
             description: file.description.clone(),
             path: path.to_path_buf(),
@@ -320,7 +321,49 @@ impl Study {
             runs: file.runs,
             seed: file.seed,
             points,
-        })
+        };
+        study.check_size("runs")?;
+        Ok(study)
+    }
+
+    /// Sets the runs per sweep point (`aeroid study --runs`), within
+    /// [`limits::MAX_RUNS`] and the memory budget; `field` names where the
+    /// number comes from in the refusal.
+    pub fn set_runs(&mut self, runs: usize, field: &str) -> Result<()> {
+        check_runs(runs).map_err(|message| self.invalid(field, message))?;
+        self.runs = runs;
+        self.check_size(field)
+    }
+
+    /// Checks that the cases and their rows fit the memory budget.
+    fn check_size(&self, field: &str) -> Result<()> {
+        let cases = self.points.len() as f64 * self.runs as f64;
+        let parameters: usize = self
+            .models
+            .iter()
+            .map(|m| m.free_names().len().max(1))
+            .sum();
+        let rows_per_case = (parameters.max(1) * self.methods.len().max(1)) as f64;
+        limits::check_memory(
+            &format!(
+                "the study ({} sweep point(s) × {} runs, {rows_per_case} rows per case)",
+                self.points.len(),
+                self.runs
+            ),
+            cases,
+            std::mem::size_of::<Case>() + rows_per_case as usize * std::mem::size_of::<Row>(),
+        )
+        .map_err(|message| self.invalid(field, message))
+    }
+
+    fn invalid(&self, field: &str, message: String) -> Error {
+        Error::Invalid {
+            path: self.path.clone(),
+            problems: vec![crate::error::Problem {
+                field: field.into(),
+                message,
+            }],
+        }
     }
 
     /// Every case, point by point, run by run.
@@ -490,6 +533,20 @@ fn check_methods(methods: &StudyMethods, problems: &mut Problems) {
     }
 }
 
+/// Runs per sweep point within 1..=[`limits::MAX_RUNS`].
+fn check_runs(runs: usize) -> Result<(), String> {
+    if runs == 0 {
+        Err("must be at least 1".into())
+    } else if runs > limits::MAX_RUNS {
+        Err(format!(
+            "{runs} is above the most runs per sweep point, {} (statistics of a thousand runs are within a few percent; a million runs of a one-second fit take eleven days of one core)",
+            limits::MAX_RUNS
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// The sample-rate axis in Hz; `[None]` (the profile's rates) when empty.
 fn sample_rates(spec: &[Quantity], problems: &mut Problems) -> Vec<Option<f64>> {
     if spec.is_empty() {
@@ -498,6 +555,13 @@ fn sample_rates(spec: &[Quantity], problems: &mut Problems) -> Vec<Option<f64>> 
     spec.iter()
         .enumerate()
         .map(|(i, q)| match parse_rate(q) {
+            Ok(rate) if rate > crate::limits::MAX_RATE => {
+                problems.push(
+                    format!("sweep.sample_rate[{i}]"),
+                    crate::record::recorder::rate_limit_message(rate),
+                );
+                None
+            }
             Ok(rate) if rate > 0.0 && rate.is_finite() => Some(rate),
             Ok(rate) => {
                 problems.push(

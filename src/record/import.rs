@@ -19,13 +19,15 @@
 //! rate = "8 Hz"                 # optional nominal rate; default from the median sample interval
 //! resolution = "0.25 kt"        # optional
 //! empty = "dropout"             # an empty cell: "dropout" (NaN sample, the default) or "skip" (no sample)
+//! non_finite = "error"          # a cell reading NaN or an infinity (`nan`, `inf`, `1e400`): "error" (the default) or "dropout"
 //! ```
 //!
 //! Nothing is silently dropped: a mapped column missing from the header, a
 //! cell that is not a number, a time column that does not increase strictly
 //! or a channel named twice is an error naming the row and column; an empty
 //! cell becomes a dropout unless the map says `empty = "skip"` for that
-//! channel. Columns the map does not mention are listed in the outcome.
+//! channel; a cell that reads as NaN or an infinity is an error unless the
+//! map says `non_finite = "dropout"`; a CSV without data rows is an error. Columns the map does not mention are listed in the outcome.
 
 use crate::csv_table::CsvTable;
 use crate::error::{Problems, Result, parse_toml, read_text};
@@ -76,6 +78,19 @@ pub struct ChannelColumnSpec {
     pub resolution: Option<Quantity>,
     #[serde(default)]
     pub empty: EmptyCell,
+    #[serde(default)]
+    pub non_finite: NonFiniteCell,
+}
+
+/// What a cell that reads as NaN or an infinity means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NonFiniteCell {
+    /// The import fails, naming the file, line and column.
+    #[default]
+    Error,
+    /// The sample was lost: kept as NaN.
+    Dropout,
 }
 
 /// What an empty cell of a channel column means.
@@ -114,6 +129,7 @@ struct MappedChannel {
     rate: Option<f64>,
     resolution: Option<f64>,
     empty: EmptyCell,
+    non_finite: NonFiniteCell,
 }
 
 /// The imported record and the CSV columns the map did not use.
@@ -128,6 +144,7 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
     let file: ColumnMapFile = parse_toml(map_path, &read_text(map_path)?)?;
     let (time, channels) = validate_map(&file, map_path)?;
     let table = CsvTable::read(data)?;
+    table.require_rows()?;
     let time_index = table.column_index(&file.time.column)?;
     let times: Vec<f64> = table
         .time_column(time_index)?
@@ -139,7 +156,15 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
     for mapped in &channels {
         let index = table.column_index(&mapped.column)?;
         used.push(mapped.column.clone());
-        let raw = table.numbers(index, true)?;
+        let raw = table.measurements(
+            index,
+            mapped.non_finite == NonFiniteCell::Dropout,
+            &format!(
+                "to record such cells as dropouts, set non_finite = \"dropout\" for channel '{}' in {}",
+                mapped.name,
+                map_path.display()
+            ),
+        )?;
         record_channels.push(build_channel(mapped, &times, &raw, data));
     }
     let unmapped = table
@@ -163,12 +188,18 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
     })
 }
 
-fn build_channel(mapped: &MappedChannel, times: &[f64], raw: &[f64], data: &Path) -> Channel {
+/// A channel from its column's cells (`None`: empty).
+fn build_channel(
+    mapped: &MappedChannel,
+    times: &[f64],
+    raw: &[Option<f64>],
+    data: &Path,
+) -> Channel {
     let (times, values): (Vec<f64>, Vec<f64>) = times
         .iter()
         .zip(raw)
-        .filter(|(_, v)| !(v.is_nan() && mapped.empty == EmptyCell::Skip))
-        .map(|(&t, &v)| (t, mapped.conversion.apply(v)))
+        .filter(|(_, v)| v.is_some() || mapped.empty == EmptyCell::Dropout)
+        .map(|(&t, &v)| (t, v.map_or(f64::NAN, |v| mapped.conversion.apply(v))))
         .unzip();
     Channel {
         name: mapped.name.clone(),
@@ -206,6 +237,12 @@ fn validate_map(file: &ColumnMapFile, path: &Path) -> Result<(Conversion, Vec<Ma
         problems.push(
             "time.scale",
             "must be positive so that time keeps increasing",
+        );
+    }
+    if file.channels.is_empty() {
+        problems.push(
+            "channels",
+            "must map at least one column to a channel ([[channels]] tables)",
         );
     }
     let mut channels: Vec<MappedChannel> = Vec::with_capacity(file.channels.len());
@@ -269,6 +306,7 @@ fn map_channel(spec: &ChannelColumnSpec, field: &str, problems: &mut Problems) -
         rate: positive("rate", &spec.rate, Dimension::Frequency),
         resolution: positive("resolution", &spec.resolution, dimension),
         empty: spec.empty,
+        non_finite: spec.non_finite,
     }
 }
 
@@ -299,6 +337,9 @@ fn conversion(
     let scale = scale.unwrap_or(1.0);
     if !scale.is_finite() || scale == 0.0 {
         problems.push(format!("{field}.scale"), "must be a non-zero number");
+    }
+    if offset.is_some_and(|offset| !offset.is_finite()) {
+        problems.push(format!("{field}.offset"), "must be a finite number");
     }
     let shift = match (dimension, unit) {
         (Dimension::TemperatureDifference, "degC") => CELSIUS_ZERO,

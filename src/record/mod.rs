@@ -273,10 +273,17 @@ impl FlightRecord {
             })
     }
 
-    /// Checks what the file format relies on: unique, file-safe names,
-    /// matching lengths, finite strictly increasing times, positive rates.
+    /// Checks what the file format relies on: at least one channel, each
+    /// with samples, unique, file-safe names, matching lengths, finite
+    /// strictly increasing times, positive rates.
     pub fn validate(&self, path: &Path) -> Result<()> {
         let mut problems = Problems::default();
+        if self.channels.is_empty() {
+            problems.push(
+                "channels",
+                "the record has no channels; a record needs at least one",
+            );
+        }
         let mut seen = BTreeSet::new();
         for (i, channel) in self.channels.iter().enumerate() {
             let field = format!("channels[{i}] ({})", channel.name);
@@ -288,6 +295,8 @@ impl FlightRecord {
             }
             if channel.times.len() != channel.values.len() {
                 problems.push(&field, "times and values differ in length");
+            } else if channel.times.is_empty() {
+                problems.push(&field, "the channel has no samples");
             }
             if !(channel.rate.is_finite() && channel.rate > 0.0) {
                 problems.push(&field, "the nominal rate must be positive");
@@ -356,7 +365,15 @@ impl FlightRecord {
             let (_, table, times) = tables.iter().find(|(n, _, _)| *n == entry.file).unwrap();
             let column = table.column_index(&entry.column)?;
             channels.push(Channel {
-                values: table.numbers(column, true)?,
+                values: table
+                    .measurements(
+                        column,
+                        false,
+                        "a record stores a lost sample (dropout) as an empty cell",
+                    )?
+                    .into_iter()
+                    .map(|v| v.unwrap_or(f64::NAN))
+                    .collect(),
                 times: times.clone(),
                 name: entry.name,
                 unit: entry.unit,

@@ -14,15 +14,15 @@
 //! |---|---|
 //! | `name` | a quantity of [`crate::record::derived::MEASURANDS`] (`pitch`, `nz`, `calibrated_airspeed`, …) |
 //! | `label` | the recorder's own parameter title, kept as the channel's source |
-//! | `rate` | samples per second: `"25 Hz"`, `"1/64 Hz"`, `0.5` |
+//! | `rate` | samples per second: `"25 Hz"`, `"1/64 Hz"`, `0.5`; at most [`crate::limits::MAX_RATE`] |
 //! | `phase` | time of the first sample within the rate's period (default 0) |
 //! | `slot` / `word` | position within the frame: a fraction in [0, 1), or a word index of `words_per_frame` |
 //! | `resolution` | LSB; values are rounded to the nearest multiple |
 //! | `saturation` | `[min, max]` the value is clamped to |
 //! | `noise` | standard deviation of white Gaussian noise |
-//! | `bias`, `scale_factor` | `measured = scale_factor·x + bias` (default 0 and 1) |
-//! | `delay` | pure time delay |
-//! | `lag` | time constant of a first-order sensor lag |
+//! | `bias`, `scale_factor` | `measured = scale_factor·x + bias` (default 0 and 1; finite) |
+//! | `delay` | pure time delay, at most [`crate::limits::MAX_SENSOR_TIME`] |
+//! | `lag` | time constant of a first-order sensor lag, at most [`crate::limits::MAX_SENSOR_TIME`] |
 //! | `anti_alias` | cut-off of a 2nd-order Butterworth filter applied before sampling |
 //! | `dropout` | probability that a sample is lost (recorded as NaN) |
 //! | `fault` | `{ kind = "stuck", from = "20 s", value = … }` (holds `value`, or the last good sample) or `{ kind = "levels", values = [...] }` (every sample reads one of the values at random, as Wang et al. 2012's AoA) |
@@ -45,6 +45,7 @@
 
 use crate::catalog;
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
+use crate::limits;
 use crate::random::{self, streams};
 use crate::record::derived::{self, Context, GeographicOrigin, Measurand};
 use crate::record::{Channel, FlightRecord};
@@ -220,6 +221,12 @@ impl Profile {
                 read_channel(spec, &layout, &mut problems)
             })
             .collect();
+        if file.channels.is_empty() {
+            problems.push(
+                "channels",
+                "must list at least one channel (a [[channels]] table): a recorder without channels records nothing",
+            );
+        }
         check_absent(&file.absent, &seen, &mut problems);
         let profile = Profile {
             name: file.name.clone(),
@@ -265,6 +272,28 @@ impl Profile {
             origin: self.origin,
             sensor_position: Vector3::zeros(),
         };
+        let start = trace.samples[0].time;
+        let span = trace.samples[trace.samples.len() - 1].time - start;
+        let samples: f64 = self
+            .channels
+            .iter()
+            .map(|c| (span * c.rate).max(0.0) + 1.0)
+            .sum();
+        limits::check_memory(
+            &format!(
+                "the record of profile {} (channel rate × duration samples)",
+                self.name
+            ),
+            samples,
+            2 * std::mem::size_of::<f64>(),
+        )
+        .map_err(|message| Error::Invalid {
+            path: self.path.clone(),
+            problems: vec![crate::error::Problem {
+                field: "channels.rate".into(),
+                message,
+            }],
+        })?;
         let mut rng = random::stream(seed, streams::RECORDER);
         let channels = self
             .channels
@@ -386,12 +415,7 @@ fn read_channel(
         prefix: &prefix,
         problems,
     };
-    let rate = reader.check(
-        "rate",
-        parse_rate(&spec.rate),
-        |v| v > 0.0 && v.is_finite(),
-        "must be positive",
-    );
+    let rate = reader.rate(&spec.rate);
     let phase = reader.non_negative("phase", &spec.phase, Dimension::Time);
     let slot = reader.slot(spec, layout);
     let model = ChannelModel {
@@ -413,9 +437,14 @@ fn read_channel(
             .map(|limits| reader.saturation(limits, dimension)),
         noise: reader.non_negative("noise", &spec.noise, dimension),
         bias: reader.value("bias", &spec.bias, dimension),
-        scale_factor: spec.scale_factor.unwrap_or(1.0),
-        delay: reader.non_negative("delay", &spec.delay, Dimension::Time),
-        lag: reader.non_negative("lag", &spec.lag, Dimension::Time),
+        scale_factor: reader.check(
+            "scale_factor",
+            Ok(spec.scale_factor.unwrap_or(1.0)),
+            f64::is_finite,
+            "must be a finite number",
+        ),
+        delay: reader.sensor_time("delay", &spec.delay),
+        lag: reader.sensor_time("lag", &spec.lag),
         anti_alias: spec.anti_alias.as_ref().map(|q| {
             reader.check(
                 "anti_alias",
@@ -474,6 +503,33 @@ impl FieldReader<'_> {
 
     fn non_negative(&mut self, field: &str, q: &Quantity, dimension: Dimension) -> f64 {
         self.check(field, q.si(dimension), |v| v >= 0.0, "must not be negative")
+    }
+
+    /// A sample rate within (0, [`limits::MAX_RATE`]].
+    fn rate(&mut self, q: &Quantity) -> f64 {
+        let rate = self.check("rate", parse_rate(q), |v| v > 0.0, "must be positive");
+        if rate > limits::MAX_RATE {
+            self.push("rate", rate_limit_message(rate));
+            return f64::NAN;
+        }
+        rate
+    }
+
+    /// A delay or lag time constant within [0, [`limits::MAX_SENSOR_TIME`]].
+    fn sensor_time(&mut self, field: &str, q: &Quantity) -> f64 {
+        let value = self.non_negative(field, q, Dimension::Time);
+        if value > limits::MAX_SENSOR_TIME {
+            self.push(
+                field,
+                format!(
+                    "{} s is above the longest {} s (longer than the slowest aircraft mode's period: such a sensor records no motion)",
+                    limits::number(value),
+                    limits::number(limits::MAX_SENSOR_TIME)
+                ),
+            );
+            return f64::NAN;
+        }
+        value
     }
 
     /// The channel's place in the frame as a fraction, from `slot` or `word`.
@@ -551,6 +607,15 @@ impl FieldReader<'_> {
         }
         Vector3::from_fn(|i, _| self.value("position", &position[i], Dimension::Length))
     }
+}
+
+/// Why a sample rate above [`limits::MAX_RATE`] is refused.
+pub fn rate_limit_message(rate: f64) -> String {
+    format!(
+        "{} Hz is above the highest rate {} Hz (far above any flight-test system's sampling of aircraft motion)",
+        limits::number(rate),
+        limits::number(limits::MAX_RATE)
+    )
 }
 
 /// A rate as written in a profile: a number (Hz), `"25 Hz"`, `"0.5"`, or a fraction `"1/64 Hz"`.

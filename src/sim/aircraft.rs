@@ -45,6 +45,11 @@ pub struct MassSpec {
     pub izz: Quantity,
     #[serde(default)]
     pub ixz: Quantity,
+    /// Why moments of inertia that no rigid body can have (the principal
+    /// moments violate the triangle inequality) are flown as they are, e.g.
+    /// a paper's published values; without it such moments are an error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub impossible_inertia: Option<String>,
 }
 
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -147,7 +152,7 @@ impl Aircraft {
                 problems.push(field, format!("must be positive, is {value}"));
             }
         }
-        let inertia = inertia_matrix(moments, &mut problems);
+        let inertia = inertia_matrix(moments, &file.mass.impossible_inertia, &mut problems);
         if propulsion.max_thrust < 0.0 {
             problems.push("propulsion.max_thrust", "must not be negative");
         }
@@ -242,16 +247,56 @@ fn read_limits(
 }
 
 /// The inertia tensor with the product of inertia Ixz (Ixy = Iyz = 0 for a
-/// symmetric aircraft), checked to be positive definite.
-fn inertia_matrix([ixx, iyy, izz, ixz]: [f64; 4], problems: &mut Problems) -> Matrix3<f64> {
+/// symmetric aircraft), checked to be one a rigid body can have: positive
+/// definite, and its principal moments satisfy the triangle inequality
+/// (each at most the sum of the other two, since I₁ + I₂ − I₃ = 2∫r₃² dm ≥ 0)
+/// unless the file gives `impossible_inertia`, a non-empty reason.
+fn inertia_matrix(
+    [ixx, iyy, izz, ixz]: [f64; 4],
+    accepted: &Option<String>,
+    problems: &mut Problems,
+) -> Matrix3<f64> {
     let inertia = Matrix3::new(ixx, 0.0, -ixz, 0.0, iyy, 0.0, -ixz, 0.0, izz);
+    if ![ixx, iyy, izz, ixz].iter().all(|v| v.is_finite()) {
+        return inertia;
+    }
     let positive_definite = ixx > 0.0 && iyy > 0.0 && izz > 0.0 && ixx * izz - ixz * ixz > 0.0;
-    if !positive_definite && [ixx, iyy, izz, ixz].iter().all(|v| v.is_finite()) {
+    if !positive_definite {
         problems.push(
             "mass",
             format!(
                 "the inertia tensor is not positive definite (needs Ixx, Iyy, Izz > 0 and Ixx·Izz > Ixz²; \
                  Ixx = {ixx}, Iyy = {iyy}, Izz = {izz}, Ixz = {ixz})"
+            ),
+        );
+        return inertia;
+    }
+    let mean = 0.5 * (ixx + izz);
+    let radius = (0.25 * (ixx - izz).powi(2) + ixz * ixz).sqrt();
+    let principal = [mean + radius, iyy, mean - radius];
+    let total: f64 = principal.iter().sum();
+    let largest = principal.iter().copied().fold(f64::MIN, f64::max);
+    let accepted = accepted
+        .as_ref()
+        .is_some_and(|reason| !reason.trim().is_empty());
+    if largest > 0.5 * total * (1.0 + 1e-9) && !accepted {
+        // The largest diagonal moment names the field (with a product of
+        // inertia, the principal moments are near the diagonal ones).
+        let field = if izz >= ixx && izz >= iyy {
+            "mass.izz"
+        } else if iyy >= ixx {
+            "mass.iyy"
+        } else {
+            "mass.ixx"
+        };
+        problems.push(
+            field,
+            format!(
+                "no rigid body has these moments of inertia: the principal moments {:.6e}, {:.6e}, {:.6e} kg·m² \
+                 violate the triangle inequality (each must be at most the sum of the other two; \
+                 Ixx = {ixx}, Iyy = {iyy}, Izz = {izz}, Ixz = {ixz}); \
+                 to fly published values as they are, give the reason in mass.impossible_inertia",
+                principal[0], principal[1], principal[2]
             ),
         );
     }

@@ -346,13 +346,63 @@ impl Checker<'_> {
             .ok()
     }
 
-    /// A value of the control's dimension (amplitude, level).
+    /// A value of the control's dimension (amplitude, level), within the
+    /// control's range ([`crate::limits::MAX_DEFLECTION`], [`crate::limits::MAX_THROTTLE`]).
     fn amplitude(&mut self, field: &str, quantity: &Quantity, control: Control) -> Option<f64> {
-        self.quantity(field, quantity, control.dimension())
+        let value = self.quantity(field, quantity, control.dimension())?;
+        self.within_range(field, quantity, value, control)
     }
 
+    fn within_range(
+        &mut self,
+        field: &str,
+        quantity: &Quantity,
+        value: f64,
+        control: Control,
+    ) -> Option<f64> {
+        let (limit, text) = match control {
+            Control::Throttle => (
+                crate::limits::MAX_THROTTLE,
+                format!("{}, the whole range of thrust", crate::limits::MAX_THROTTLE),
+            ),
+            _ => (
+                crate::limits::MAX_DEFLECTION,
+                format!(
+                    "{} deg (no control surface deflects further)",
+                    crate::limits::MAX_DEFLECTION.to_degrees()
+                ),
+            ),
+        };
+        if value.abs() <= limit {
+            Some(value)
+        } else {
+            self.push(
+                field,
+                format!(
+                    "{} is beyond the {} input's largest magnitude {text}",
+                    quantity.to_string().trim_matches('"'),
+                    control.name()
+                ),
+            );
+            None
+        }
+    }
+
+    /// An input's start: not before the flight begins at 0 s.
     fn time(&mut self, field: &str, quantity: &Quantity) -> Option<f64> {
-        self.quantity(field, quantity, Dimension::Time)
+        let value = self.quantity(field, quantity, Dimension::Time)?;
+        if value >= 0.0 {
+            Some(value)
+        } else {
+            self.push(
+                field,
+                format!(
+                    "{} is before the flight begins at 0 s; an input starts at 0 s or later",
+                    quantity.to_string().trim_matches('"')
+                ),
+            );
+            None
+        }
     }
 
     /// A strictly positive value (widths, periods, durations).
@@ -654,7 +704,9 @@ fn multisine_amplitudes(
         .zip(amplitudes)
         .enumerate()
         .map(|(i, (&control, amplitude))| {
-            checker.positive(&format!("amplitudes[{i}]"), amplitude, control.dimension())
+            let field = format!("amplitudes[{i}]");
+            let value = checker.positive(&field, amplitude, control.dimension())?;
+            checker.within_range(&field, amplitude, value, control)
         })
         .collect();
     values.into_iter().collect()
@@ -891,7 +943,9 @@ struct CsvRequest {
 impl CsvSpec {
     /// Checks the unit and shift; the file is read later by [`CsvRequest::load`].
     fn resolve(&self, checker: &mut Checker) -> Option<CsvRequest> {
-        let shift = checker.time("start", &self.start);
+        // A shift, not a start: a negative one moves a file whose clock
+        // starts late back to the flight's 0 s.
+        let shift = checker.quantity("start", &self.start, Dimension::Time);
         let factor = (self.unit.as_deref())
             .map_or(Ok(1.0), |unit| unit_factor(unit, self.control.dimension()));
         let factor = factor.map_err(|message| checker.push("unit", message)).ok();

@@ -57,6 +57,7 @@ impl Simulation {
                 }],
             });
         }
+        scenario.check_size()?;
         let model = FlightModel::new(scenario.aircraft.clone(), scenario.environment);
         let steps = scenario.step_count();
         let conditions = FlightConditions {

@@ -20,6 +20,7 @@
 
 use crate::catalog;
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
+use crate::limits;
 use crate::sim::aircraft::Aircraft;
 use crate::sim::dynamics::Environment;
 use crate::sim::inputs::{InputSchedule, InputSpec};
@@ -273,6 +274,17 @@ impl Scenario {
     pub fn step_count(&self) -> usize {
         (self.duration / self.step).round() as usize
     }
+
+    /// The bounds of duration and step and the memory budget, for a scenario
+    /// changed after loading: an [`Error::Invalid`] naming the field.
+    pub fn check_size(&self) -> Result<()> {
+        let mut problems = Problems::default();
+        check_ranges(&self.trim, self.duration, self.step, &mut problems);
+        problems
+            .0
+            .retain(|p| p.field == "duration" || p.field == "step");
+        problems.finish(&self.path, ())
+    }
 }
 
 /// The JSBSim aircraft a scenario names, checked: the `[jsbsim]` table is
@@ -388,16 +400,54 @@ fn check_ranges(trim: &TrimCondition, duration: f64, step: f64, problems: &mut P
     }
     if duration <= 0.0 {
         problems.push("duration", "must be positive");
+    } else if duration > limits::MAX_DURATION {
+        problems.push(
+            "duration",
+            format!(
+                "{} s is above the longest duration {} s (longer than any aircraft's endurance)",
+                limits::number(duration),
+                limits::number(limits::MAX_DURATION)
+            ),
+        );
     }
     if step <= 0.0 || step > 0.1 {
         problems.push(
             "step",
             "must be positive and at most 0.1 s (RK4 accuracy for aircraft modes)",
         );
+    } else if step < limits::MIN_STEP {
+        problems.push(
+            "step",
+            format!(
+                "{} s is below the smallest step {} s (RK4 is exact to round-off there; a smaller step only adds round-off and samples)",
+                limits::number(step),
+                limits::number(limits::MIN_STEP)
+            ),
+        );
     } else if duration > 0.0 && (duration / step - (duration / step).round()).abs() > 1e-6 {
         problems.push(
             "step",
             "must divide the duration into a whole number of steps",
         );
+    } else if duration > 0.0
+        && duration <= limits::MAX_DURATION
+        && let Err(message) = check_simulation_size(duration / step)
+    {
+        problems.push("duration", message);
     }
+}
+
+/// Memory one integration step of a simulation holds: the exogenous
+/// signals, the wind and the truth sample.
+pub const BYTES_PER_STEP: usize = std::mem::size_of::<crate::sim::dynamics::ExogenousVector>()
+    + std::mem::size_of::<crate::sim::wind::WindSample>()
+    + std::mem::size_of::<crate::sim::trace::TruthSample>();
+
+/// Checks that a simulation of `steps` steps fits the memory budget.
+pub fn check_simulation_size(steps: f64) -> Result<(), String> {
+    limits::check_memory(
+        "the simulation (duration / step + 1 samples)",
+        steps.round() + 1.0,
+        BYTES_PER_STEP,
+    )
 }

@@ -78,6 +78,7 @@ impl FlightSource<'_> {
 
     /// Trims and flies `scenario` (whose source this is) to its end or its departure.
     pub fn fly(&self, scenario: &Scenario) -> Result<Flight> {
+        scenario.check_size()?;
         match self {
             FlightSource::Aeroid => {
                 let simulation = Simulation::prepare(scenario)?;
