@@ -150,3 +150,26 @@ fn noisy_record_input_biases_and_flow_angle_calibration() {
         );
     }
 }
+
+/// One sample per channel is fewer data than the reconstruction's
+/// unknowns: refused with both numbers, never "converged" with every value
+/// ± inf.
+#[test]
+fn a_one_sample_record_is_refused() {
+    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    let (mut record, _) =
+        record_scenario(&scenario, &biased_profile("fpr-short", "25 Hz", true)).unwrap();
+    for channel in &mut record.channels {
+        channel.times.truncate(1);
+        channel.values.truncate(1);
+    }
+    match flight_path_reconstruction(&record, 30) {
+        Err(aeroid::Error::Refused(refusal)) => assert_eq!(
+            refusal.kind(),
+            aeroid::estimation::estimator::RefusalKind::TooFewData,
+            "{refusal}"
+        ),
+        Err(other) => panic!("an error, not a refusal: {other}"),
+        Ok(result) => panic!("reconstructed: {}", result.estimate.status),
+    }
+}

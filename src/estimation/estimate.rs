@@ -13,7 +13,6 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::solver::gauss_newton::Solution;
-use crate::estimation::structure::ModelStructure;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -169,7 +168,7 @@ impl Estimate {
 
     /// The estimate with its status judged honestly (module
     /// documentation); a status other than converged is kept as it is.
-    pub fn assess(mut self, structure: &ModelStructure) -> Estimate {
+    pub fn assess(mut self) -> Estimate {
         if self.status != Status::Converged {
             return self;
         }
@@ -197,7 +196,7 @@ impl Estimate {
         if self.status != Status::Converged {
             self.notes.push(format!(
                 "not converged: {} (model '{}')",
-                self.status, structure.name
+                self.status, self.model
             ));
         }
         self
@@ -297,10 +296,6 @@ mod tests {
         }
     }
 
-    fn structure() -> ModelStructure {
-        ModelStructure::load("attas-lateral").unwrap()
-    }
-
     /// Each way an estimate is not converged, built on purpose: an infinite
     /// σ names the parameter; finite σ with a NaN covariance entry is
     /// degenerate; R² < 0 and a NaN R² are poor fits. A sound estimate
@@ -309,30 +304,24 @@ mod tests {
     #[test]
     fn assessment_says_what_an_estimate_is() {
         let sound = estimate([[1.0, 0.5], [0.5, 1.0]], 0.9);
-        assert_eq!(sound.assess(&structure()).status, Status::Converged);
+        assert_eq!(sound.assess().status, Status::Converged);
 
         let infinite = estimate([[1.0, 0.0], [0.0, f64::INFINITY]], 0.9);
-        let assessed = infinite.assess(&structure());
+        let assessed = infinite.assess();
         assert_eq!(assessed.status, Status::Unidentified(vec!["b".into()]));
         assert!(assessed.notes.iter().any(|n| n.contains("unidentified: b")));
 
         let degenerate = estimate([[1.0, f64::NAN], [f64::NAN, 1.0]], 0.9);
-        assert!(matches!(
-            degenerate.assess(&structure()).status,
-            Status::Degenerate(_)
-        ));
+        assert!(matches!(degenerate.assess().status, Status::Degenerate(_)));
 
         for r_squared in [-0.3, f64::NAN] {
             let poor = estimate([[1.0, 0.0], [0.0, 1.0]], r_squared);
-            assert_eq!(
-                poor.assess(&structure()).status,
-                Status::PoorFit(vec!["nz".into()])
-            );
+            assert_eq!(poor.assess().status, Status::PoorFit(vec!["nz".into()]));
         }
 
         let mut limited = estimate([[1.0, 0.0], [0.0, f64::INFINITY]], 0.9);
         limited.status = Status::IterationLimit;
-        assert_eq!(limited.assess(&structure()).status, Status::IterationLimit);
+        assert_eq!(limited.assess().status, Status::IterationLimit);
         assert!(!Status::IterationLimit.is_success());
     }
 }

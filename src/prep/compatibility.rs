@@ -21,6 +21,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::{Estimate, OutputFit};
+use crate::estimation::estimator::Refusal;
 use crate::estimation::methods::output_error::{diagonal_weights, interpolate};
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::record::{Channel, FlightRecord};
@@ -75,6 +76,14 @@ pub fn flight_path_reconstruction(
     let started = std::time::Instant::now();
     let mut problem = Problem::new(record)?;
     let start = problem.start_values(record)?;
+    let data = problem.residuals(&start).map_or(0, |r| r.len());
+    if data < start.len() {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: "flight path reconstruction".into(),
+            data,
+            unknowns: start.len(),
+        }));
+    }
     let mut options = Options::new(start.len());
     options.max_iterations = max_iterations;
     let solution = gauss_newton::solve(&mut problem, &start, &options);
@@ -89,7 +98,8 @@ pub fn flight_path_reconstruction(
         wall_time: started.elapsed().as_secs_f64(),
         notes: vec!["still air, accelerometer at the centre of gravity, R diagonal".into()],
         ..Estimate::from_solution(label, &problem.names(), &start, &solution)
-    };
+    }
+    .assess();
     Ok(Compatibility {
         corrected: corrected_record(record, &errors),
         estimate,

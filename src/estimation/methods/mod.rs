@@ -76,9 +76,7 @@ pub fn register(estimator: Arc<dyn Estimator>) -> Result<()> {
 /// "converged", whichever method made it.
 pub fn estimate(problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
     let estimator = find(&problem.method)?;
-    estimator
-        .estimate(problem, start)
-        .map(|estimate| estimate.assess(&problem.structure))
+    estimator.estimate(problem, start).map(Estimate::assess)
 }
 
 #[cfg(test)]
