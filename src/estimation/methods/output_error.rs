@@ -339,7 +339,7 @@ fn missing_channels(record: &FlightRecord, structure: &ModelStructure) -> Vec<Mi
         if absent && !missing.iter().any(|m| m.name == name) {
             missing.push(MissingChannel {
                 name: name.to_string(),
-                purpose: "a pseudo-control (a state the model does not integrate)".into(),
+                purpose: "a pseudo-control, a state the model does not integrate".into(),
             });
         }
     }
