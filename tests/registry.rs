@@ -40,9 +40,12 @@ impl Default for StartSettings {
 }
 
 impl Estimator for StartValues {
+    fn name(&self) -> &'static str {
+        "toy-start"
+    }
+
     fn info(&self) -> MethodInfo {
         MethodInfo {
-            name: "toy-start",
             title: "the model file's start values",
             paper: "none",
             equations: "θ = scale·θ₀",

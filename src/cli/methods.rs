@@ -18,15 +18,15 @@ pub fn run(args: Args) -> Result<()> {
         None => methods::all(),
     };
     for estimator in estimators {
-        let info = estimator.info();
-        outln!("{}: {}", info.name, info.title);
+        let (name, info) = (estimator.name(), estimator.info());
+        outln!("{name}: {}", info.title);
         outln!("  paper:     {}", info.paper);
         outln!("  equations: {}", info.equations);
         outln!("  needs:     {}", info.needs);
         if let Some(from) = estimator.starts_from() {
             outln!("  starts from {from}'s estimate where it has one");
         }
-        outln!("  settings ([methods.{}]):", info.name);
+        outln!("  settings ([methods.{name}]):");
         for setting in &info.settings {
             outln!(
                 "    {} = {}   # {}",

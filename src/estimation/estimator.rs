@@ -28,8 +28,6 @@ pub type MethodTables = BTreeMap<String, toml::Table>;
 /// What `aeroid methods` shows of an estimator.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MethodInfo {
-    /// The name used on the command line and in files (`ee`, `oem`, …).
-    pub name: &'static str,
     /// What the method is, in a few words.
     pub title: &'static str,
     /// The papers and books it follows (author, title).
@@ -53,7 +51,10 @@ pub struct SettingInfo {
 
 /// An estimation method.
 pub trait Estimator: Send + Sync {
-    /// Name, paper, equations, needs and settings.
+    /// The name used on the command line and in files (`ee`, `oem`, …).
+    fn name(&self) -> &'static str;
+
+    /// Title, paper, equations, needs and settings.
     fn info(&self) -> MethodInfo;
 
     /// Checks a settings table: every key known, every value well formed.

@@ -115,7 +115,7 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
         .and_then(|path| ModelStructure::load(&path.to_string_lossy()));
         let first = runs.len();
         for estimator in &estimators {
-            let method = estimator.info().name.to_string();
+            let method = estimator.name().to_string();
             let outcome = match &structure {
                 Ok(structure) => {
                     let start = estimator.starts_from().and_then(|from| {

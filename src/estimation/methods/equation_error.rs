@@ -152,9 +152,12 @@ pub(crate) fn check_settings(
 pub struct EquationError;
 
 impl Estimator for EquationError {
+    fn name(&self) -> &'static str {
+        METHOD
+    }
+
     fn info(&self) -> MethodInfo {
         MethodInfo {
-            name: METHOD,
             title: "equation error: least squares on coefficients reconstructed from accelerations and angular accelerations",
             paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), ch. 5; \"Longitudinal and lateral aerodynamic characterisation of reflex wing UAV from flight tests using ML, LS and neural Gauss Newton methods\"",
             equations: "coefficients from accelerations (reflex-wing UAV paper, Eqs. 17–24); z = Xθ + ε, θ = (XᵀX)⁻¹Xᵀz (Eqs. 25–27); coloured-residual bounds (Morelli & Klein 1997)",

@@ -40,14 +40,14 @@ pub fn all() -> Vec<Arc<dyn Estimator>> {
 
 /// Every estimator's name, in registry order.
 pub fn names() -> Vec<String> {
-    all().iter().map(|e| e.info().name.to_string()).collect()
+    all().iter().map(|e| e.name().to_string()).collect()
 }
 
 /// The estimator named `name`.
 pub fn find(name: &str) -> Result<Arc<dyn Estimator>> {
     all()
         .into_iter()
-        .find(|e| e.info().name == name)
+        .find(|e| e.name() == name)
         .ok_or_else(|| Error::Unknown {
             kind: "method",
             name: name.to_string(),
@@ -57,11 +57,11 @@ pub fn find(name: &str) -> Result<Arc<dyn Estimator>> {
 
 /// Adds an estimator to the registry; its name must be new.
 pub fn register(estimator: Arc<dyn Estimator>) -> Result<()> {
-    let name = estimator.info().name;
+    let name = estimator.name();
     let mut registry = registry()
         .write()
         .unwrap_or_else(|poisoned| poisoned.into_inner());
-    if registry.iter().any(|e| e.info().name == name) {
+    if registry.iter().any(|e| e.name() == name) {
         return Err(Error::Other(format!(
             "an estimator named '{name}' is registered already"
         )));
@@ -91,13 +91,13 @@ mod tests {
     fn every_method_describes_its_settings_truthfully() {
         let names = names();
         for estimator in all() {
-            let info = estimator.info();
-            assert_eq!(names.iter().filter(|n| **n == info.name).count(), 1);
+            let (name, info) = (estimator.name(), estimator.info());
+            assert_eq!(names.iter().filter(|n| **n == name).count(), 1);
             assert!(!info.paper.is_empty() && !info.equations.is_empty() && !info.needs.is_empty());
             let mut defaults = Settings::new();
             for setting in info.settings.iter().filter(|s| s.default != "(none)") {
                 let table: toml::Table = toml::from_str(&format!("value = {}", setting.default))
-                    .unwrap_or_else(|e| panic!("{} {}: {e}", info.name, setting.name));
+                    .unwrap_or_else(|e| panic!("{name} {}: {e}", setting.name));
                 defaults.insert(
                     setting.name.to_string(),
                     serde_json::to_value(&table["value"]).unwrap(),
@@ -105,11 +105,11 @@ mod tests {
             }
             estimator
                 .check_settings(&defaults)
-                .unwrap_or_else(|e| panic!("{}: {e}", info.name));
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
             let mut unknown = Settings::new();
             unknown.insert("no_such_setting".into(), serde_json::Value::from(1));
             let error = estimator.check_settings(&unknown).unwrap_err().to_string();
-            assert!(error.contains("no_such_setting"), "{}: {error}", info.name);
+            assert!(error.contains("no_such_setting"), "{name}: {error}");
         }
     }
 

@@ -233,9 +233,12 @@ impl OutputErrorOptions {
 pub struct OutputError;
 
 impl Estimator for OutputError {
+    fn name(&self) -> &'static str {
+        METHOD
+    }
+
     fn info(&self) -> MethodInfo {
         MethodInfo {
-            name: METHOD,
             title: "output error: maximum likelihood, Gauss–Newton on det(R) with the sensitivity equations",
             paper: "Maine & Iliff, \"Application of parameter estimation to aircraft stability and control: the output-error approach\" (NASA RP-1168); Jategaonkar, \"Flight Vehicle System Identification\", ch. 4; Verma & Peyada 2020",
             equations: "cost det(R), R = (1/N)·Σ e·eᵀ, Gauss–Newton steps (Verma & Peyada 2020, Eqs. 5–10); sensitivity equations Ṡ = (∂f/∂x)S + ∂f/∂θ (Jategaonkar §4.6); Cramér–Rao bounds from M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ)",

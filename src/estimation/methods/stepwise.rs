@@ -160,9 +160,12 @@ impl StepwiseSettings {
 pub struct StepwiseRegression;
 
 impl Estimator for StepwiseRegression {
+    fn name(&self) -> &'static str {
+        METHOD
+    }
+
     fn info(&self) -> MethodInfo {
         MethodInfo {
-            name: METHOD,
             title: "stepwise regression: model-structure determination by F-to-enter/F-to-remove on reconstructed coefficients",
             paper: "Efroymson (1960), in Ralston & Wilf, \"Mathematical Methods for Digital Computers\"; Draper & Smith, \"Applied Regression Analysis\"; Klein & Morelli, \"Aircraft System Identification\", §5.4",
             equations: "partial F statistics to enter and remove terms, PRESS (Klein & Morelli Eqs. 5.83–5.92); coefficients from accelerations as equation error",
