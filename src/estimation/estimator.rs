@@ -134,7 +134,9 @@ pub fn check_method_tables(tables: &MethodTables, problems: &mut Problems) {
                 let mut settings = Settings::new();
                 overlay(&mut settings, table);
                 if let Err(error) = estimator.check_settings(&settings) {
-                    problems.push(field, error.to_string());
+                    let message = error.to_string();
+                    let prefix = format!("[{field}]: ");
+                    problems.push(field, message.trim_start_matches(&prefix).to_string());
                 }
             }
             Err(error) => problems.push(field, error.to_string()),

@@ -79,11 +79,44 @@ pub struct StudyFile {
 
 /// A study's methods: a list of names (`methods = ["ee", "oem"]`), or one
 /// settings table per method (`[methods.oem]`), run in registry order.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize)]
 #[serde(untagged)]
 pub enum StudyMethods {
     Names(Vec<String>),
     Tables(MethodTables),
+}
+
+impl<'de> Deserialize<'de> for StudyMethods {
+    fn deserialize<D: serde::Deserializer<'de>>(
+        deserializer: D,
+    ) -> std::result::Result<Self, D::Error> {
+        let expected = "a list of method names (methods = [\"ee\", \"oem\"]) or one [methods.NAME] settings table per method";
+        match toml::Value::deserialize(deserializer)? {
+            toml::Value::Array(names) => names
+                .into_iter()
+                .map(|name| match name {
+                    toml::Value::String(name) => Ok(name),
+                    other => Err(serde::de::Error::custom(format!(
+                        "{other} is not a method name; expected {expected}"
+                    ))),
+                })
+                .collect::<std::result::Result<_, _>>()
+                .map(StudyMethods::Names),
+            toml::Value::Table(tables) => tables
+                .into_iter()
+                .map(|(name, table)| match table {
+                    toml::Value::Table(table) => Ok((name, table)),
+                    other => Err(serde::de::Error::custom(format!(
+                        "methods.{name} = {other}: expected {expected}"
+                    ))),
+                })
+                .collect::<std::result::Result<_, _>>()
+                .map(StudyMethods::Tables),
+            other => Err(serde::de::Error::custom(format!(
+                "{other}: expected {expected}"
+            ))),
+        }
+    }
 }
 
 impl StudyMethods {
