@@ -150,3 +150,40 @@ fn simulate_writes_the_partial_trace_of_a_departing_flight() {
     let lines = std::fs::read_to_string(&out).unwrap().lines().count();
     assert!(lines > 100, "the partial trace has {lines} lines");
 }
+
+/// A `truth.toml` that aeroid did not write (another tool's, with fields
+/// aeroid does not know) does not stop `estimate`: the estimate is made and
+/// reported unscored, with a warning naming the file.
+#[test]
+fn a_foreign_truth_file_is_ignored_with_a_warning() {
+    let folder = common::temp_folder("foreign-truth");
+    let record = folder.join("rec");
+    stdout_of(
+        aeroid()
+            .args([
+                "record",
+                "attas-elevator-3211",
+                "--profile",
+                "flight-test-25hz",
+                "--out",
+            ])
+            .arg(&record),
+    );
+    std::fs::write(record.join("truth.toml"), "conventions = \"other\"\n").unwrap();
+    let output = aeroid()
+        .args(["estimate"])
+        .arg(&record)
+        .args(["--model", "attas-longitudinal", "--method", "ee"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning:")
+            && stderr.contains("truth.toml")
+            && stderr.contains("not scored"),
+        "{stderr}"
+    );
+    assert!(String::from_utf8_lossy(&output.stdout).contains("converged"));
+    std::fs::remove_dir_all(&folder).unwrap();
+}

@@ -88,11 +88,20 @@ pub fn run(args: Args) -> Result<()> {
     let estimate = methods::estimate(&problem, None)?;
     let structure = &problem.structure;
     out!("{}", estimate.details);
+    // A truth.toml that aeroid did not write (another tool's) is not this
+    // record's truth: the estimate is reported unscored, with a warning.
     let truth_path = record_folder.join(aeroid::sim::truth::TRUTH_FILE);
-    let truth = truth_path
+    let truth = match truth_path
         .is_file()
         .then(|| aeroid::sim::truth::RunTruth::read(&truth_path))
-        .transpose()?;
+    {
+        Some(Ok(truth)) => Some(truth),
+        Some(Err(error)) => {
+            eprintln!("warning: {error}; the estimate is not scored");
+            None
+        }
+        None => None,
+    };
     let scores = score::score(&estimate, truth.as_ref(), structure.aircraft.aero.kind);
     outln!(
         "{} on {} with model {}: {} after {} iterations, {:.3} s",
