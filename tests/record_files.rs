@@ -400,3 +400,44 @@ fn import_load_factor_in_g_or_acceleration() {
     let ny = &record.channel("ny").unwrap().values;
     assert!((ny[0] - 10.0 / aeroid::units::STANDARD_GRAVITY).abs() < 1e-15);
 }
+
+/// A non-finite offset in the map is a map problem naming the field, for
+/// the time column and for a channel.
+#[test]
+fn import_non_finite_offset_is_named() {
+    let map = FLIGHT_MAP.replace("column = \"Time\"", "column = \"Time\"\noffset = nan");
+    let error = import_case("nan-time-offset", FLIGHT_CSV, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("map.toml") && error.contains("time.offset: must be a finite number"),
+        "{error}"
+    );
+    let map = FLIGHT_MAP.replace("offset = -10000.0", "offset = inf");
+    let error = import_case("inf-channel-offset", FLIGHT_CSV, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("channels[2].offset: must be a finite number"),
+        "{error}"
+    );
+}
+
+/// A time scale so large that converted times overflow is refused, naming
+/// the time column, instead of importing a record with infinite times.
+#[test]
+fn import_time_overflowing_on_conversion_is_refused() {
+    let map = FLIGHT_MAP.replace(
+        "column = \"Time\"",
+        "column = \"Time\"\nscale = 1e308\nunit = \"h\"",
+    );
+    let error = import_case("time-overflow", FLIGHT_CSV, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("map.toml")
+            && error.contains("time: column 'Time' converted to seconds is inf")
+            && error.contains("keep times finite and increasing"),
+        "{error}"
+    );
+}

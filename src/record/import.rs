@@ -27,7 +27,7 @@
 //! cell becomes a dropout unless the map says `empty = "skip"` for that
 //! channel. Columns the map does not mention are listed in the outcome.
 
-use crate::csv_table::CsvTable;
+use crate::csv_table::{CsvTable, first_disorder};
 use crate::error::{Problems, Result, parse_toml, read_text};
 use crate::record::derived;
 use crate::record::{Channel, FlightRecord, check_name};
@@ -134,6 +134,7 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
         .into_iter()
         .map(|t| time.apply(t))
         .collect();
+    check_converted_times(&times, &file.time.column, map_path)?;
     let mut used = vec![file.time.column.clone()];
     let mut record_channels = Vec::with_capacity(channels.len());
     for mapped in &channels {
@@ -178,6 +179,31 @@ fn build_channel(mapped: &MappedChannel, times: &[f64], raw: &[f64], data: &Path
         source: format!("import: column '{}' of {}", mapped.column, data.display()),
         times,
         values,
+    }
+}
+
+/// The time column after its scale, offset and unit: still finite and
+/// strictly increasing (a huge scale or offset can make times overflow or
+/// collapse onto each other).
+fn check_converted_times(times: &[f64], column: &str, map_path: &Path) -> Result<()> {
+    match first_disorder(times) {
+        None => Ok(()),
+        Some(k) => Err(crate::error::Error::Invalid {
+            path: map_path.to_path_buf(),
+            problems: vec![crate::error::Problem {
+                field: "time".into(),
+                message: format!(
+                    "column '{column}' converted to seconds is {} at data row {}{}: \
+                     the time scale and offset must keep times finite and increasing",
+                    times[k],
+                    k + 1,
+                    match k {
+                        0 => String::new(),
+                        _ => format!(", not after {}", times[k - 1]),
+                    }
+                ),
+            }],
+        }),
     }
 }
 
@@ -299,6 +325,9 @@ fn conversion(
     let scale = scale.unwrap_or(1.0);
     if !scale.is_finite() || scale == 0.0 {
         problems.push(format!("{field}.scale"), "must be a non-zero number");
+    }
+    if !offset.unwrap_or(0.0).is_finite() {
+        problems.push(format!("{field}.offset"), "must be a finite number");
     }
     let shift = match (dimension, unit) {
         (Dimension::TemperatureDifference, "degC") => CELSIUS_ZERO,
