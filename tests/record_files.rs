@@ -441,3 +441,29 @@ fn import_time_overflowing_on_conversion_is_refused() {
         "{error}"
     );
 }
+
+/// A seed above i64::MAX cannot be stored in record.toml (TOML integers are
+/// signed 64-bit): writing refuses it, naming the field, rather than writing
+/// a record that does not read back.
+#[test]
+fn record_seed_beyond_toml_integers_is_refused() {
+    let folder = common::temp_folder("huge-seed");
+    let record = FlightRecord {
+        scenario: "huge seed".into(),
+        seed: Some(15_161_483_648_911_747_848),
+        profile: "test".into(),
+        absent: Vec::new(),
+        channels: vec![channel("q", "rad/s", 1.0, vec![0.0, 1.0], vec![0.1, 0.2])],
+    };
+    let error = record.write(&folder.join("rec")).unwrap_err().to_string();
+    assert!(
+        error.contains("seed: 15161483648911747848 is above 9223372036854775807"),
+        "{error}"
+    );
+    let fits = FlightRecord {
+        seed: Some(i64::MAX as u64),
+        ..record
+    };
+    fits.write(&folder.join("fits")).unwrap();
+    assert_same(&fits, &FlightRecord::read(&folder.join("fits")).unwrap());
+}

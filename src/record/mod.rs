@@ -273,9 +273,21 @@ impl FlightRecord {
     }
 
     /// Checks what the file format relies on: unique, file-safe names,
-    /// matching lengths, finite strictly increasing times, positive rates.
+    /// matching lengths, finite strictly increasing times, positive rates,
+    /// a seed that fits a TOML integer (signed 64-bit).
     pub fn validate(&self, path: &Path) -> Result<()> {
         let mut problems = Problems::default();
+        if let Some(seed) = self.seed
+            && i64::try_from(seed).is_err()
+        {
+            problems.push(
+                "seed",
+                format!(
+                    "{seed} is above {}, the largest integer record.toml can hold",
+                    i64::MAX
+                ),
+            );
+        }
         let mut seen = BTreeSet::new();
         for (i, channel) in self.channels.iter().enumerate() {
             let field = format!("channels[{i}] ({})", channel.name);
