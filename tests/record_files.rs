@@ -467,3 +467,39 @@ fn record_seed_beyond_toml_integers_is_refused() {
     fits.write(&folder.join("fits")).unwrap();
     assert_same(&fits, &FlightRecord::read(&folder.join("fits")).unwrap());
 }
+
+/// Extreme nominal rates name their shared CSV file in a few characters
+/// (a plain 1e300 would be a 300-digit file name the file system refuses).
+#[test]
+fn extreme_rates_give_short_file_names() {
+    let folder = common::temp_folder("extreme-rates");
+    let times = vec![0.0, 1.0];
+    let record = FlightRecord {
+        scenario: "extreme rates".into(),
+        seed: None,
+        profile: "test".into(),
+        absent: Vec::new(),
+        channels: vec![
+            channel("q", "rad/s", 1e300, times.clone(), vec![0.1, 0.2]),
+            channel("r", "rad/s", 1e300, times.clone(), vec![0.1, 0.2]),
+            channel("p", "rad/s", 1e-300, vec![0.5, 2.0], vec![0.1, 0.2]),
+            channel("nz", "-", 1e-300, vec![0.5, 2.0], vec![1.0, 1.0]),
+        ],
+    };
+    let data = folder.join("rec");
+    record.write(&data).unwrap();
+    let mut files: Vec<String> = std::fs::read_dir(&data)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(
+        files,
+        [
+            "rate_1p000e-300hz.csv",
+            "rate_1p000e300hz.csv",
+            "record.toml"
+        ]
+    );
+    assert_same(&record, &FlightRecord::read(&data).unwrap());
+}

@@ -514,22 +514,27 @@ fn describe_channel(channel: &Channel) -> String {
     )
 }
 
-/// A rate as a user reads it: `25`, `0.5`, or `1/64` for one sample every 64 s.
+/// Rates and periods from here on are written in scientific notation.
+const PLAIN_LIMIT: f64 = 1e6;
+
+/// A rate as a user reads it: `25`, `0.5`, or `1/64` for one sample every 64 s;
+/// `1.000e300` rather than 301 digits.
 pub fn rate_text(rate: f64) -> String {
     let period = 1.0 / rate;
-    if rate < 1.0 && (period - period.round()).abs() < 1e-9 {
+    if rate < 1.0 && period < PLAIN_LIMIT && (period - period.round()).abs() < 1e-9 {
         format!("1/{}", period.round())
-    } else if (rate - rate.round()).abs() < 1e-9 {
+    } else if (1.0..PLAIN_LIMIT).contains(&rate) && (rate - rate.round()).abs() < 1e-9 {
         format!("{}", rate.round())
     } else {
         rounded(rate)
     }
 }
 
-/// A rate for a file name: `25hz`, `12p5hz`, `64s` (one sample every 64 s).
+/// A rate for a file name: `25hz`, `12p5hz`, `64s` (one sample every 64 s);
+/// short for any rate (`1p000e-300hz`), as file names have a length limit.
 fn rate_label(rate: f64) -> String {
     let period = 1.0 / rate;
-    if rate < 1.0 && (period - period.round()).abs() < 1e-9 {
+    if rate < 1.0 && period < PLAIN_LIMIT && (period - period.round()).abs() < 1e-9 {
         format!("{}s", period.round())
     } else {
         format!("{}hz", rate_text(rate).replace('.', "p"))
