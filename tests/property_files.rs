@@ -1,6 +1,7 @@
 //! Property-based tests over every file kind aeroid reads: bundled files
 //! (aircraft, scenarios, model structures, recorder profiles, studies, the
-//! gate file), an import column map with its CSV, and record folders, each
+//! gate file), an import column map with its CSV, a scenario replaying an
+//! input CSV, and record folders, each
 //! mutated (a key or table deleted, an array element duplicated, a value's
 //! type swapped, extreme numbers, NaN and infinities as TOML floats and as
 //! quantities with units, empty values, a line duplicated or deleted, the
@@ -9,8 +10,9 @@
 //! The property: every loader returns either a valid result or a clean
 //! error, never a panic or a hang (each case runs on its own thread with a
 //! time limit), and `aeroid check` never accepts a file that its loader
-//! rejects. A record read or imported without error is valid and reads back
-//! identically after being written.
+//! rejects. What loads is used (a scenario flies briefly, a profile records,
+//! a record is described) without a panic. A record read or imported
+//! without error is valid and reads back identically after being written.
 //!
 //! Cases per file kind: `AEROID_FUZZ_CASES` (default 500); see docs/testing.md.
 
@@ -688,6 +690,7 @@ fn round_trip(record: &FlightRecord, folder: &Path) -> Result<Outcome, String> {
     record
         .validate(folder)
         .map_err(|e| format!("a record that loaded is not valid: {e}"))?;
+    let _ = record.describe();
     let copy = folder.join("copy");
     record
         .write(&copy)
@@ -820,52 +823,74 @@ fn apply_csv(bytes: &mut Vec<u8>, mutation: &CsvMutation) {
     }
 }
 
+/// Mutations of a TOML file and of a CSV file beside it: a third of the
+/// cases mutate only the TOML file, a third only the CSV file, a third both.
+fn toml_and_csv_mutations() -> impl Strategy<Value = (Mutations, Vec<CsvMutation>)> {
+    (
+        mutations(),
+        prop::collection::vec(csv_mutation(), 1..4),
+        0..3u8,
+    )
+        .prop_map(|(toml, csv, side)| match side {
+            0 => (toml, Vec::new()),
+            1 => (
+                Mutations {
+                    tree: Vec::new(),
+                    text: Vec::new(),
+                },
+                csv,
+            ),
+            _ => (toml, csv),
+        })
+}
+
 #[test]
 fn mutated_record_folders_read_or_fail_cleanly() {
-    let strategy = (
-        record(),
-        mutations(),
-        prop::collection::vec((any::<usize>(), csv_mutation()), 0..4),
+    let strategy = (record(), toml_and_csv_mutations(), any::<usize>());
+    check_property(
+        "record folder",
+        strategy,
+        |(record, (mutations, csv), file)| {
+            let csv: Vec<(usize, CsvMutation)> = csv.into_iter().map(|m| (file, m)).collect();
+            let input = format!("{record:?}\nrecord.toml: {mutations:?}\nCSV: {csv:?}");
+            guarded(&input, move || {
+                let folder = CaseFolder::new("record");
+                let data = folder.0.join("rec");
+                record
+                    .write(&data)
+                    .map_err(|e| format!("a valid record cannot be written: {e}"))?;
+                let toml_path = data.join("record.toml");
+                let text = std::fs::read_to_string(&toml_path).unwrap();
+                std::fs::write(&toml_path, mutate(&text, &mutations)).unwrap();
+                let mut csv_files: Vec<PathBuf> = std::fs::read_dir(&data)
+                    .unwrap()
+                    .map(|e| e.unwrap().path())
+                    .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+                    .collect();
+                csv_files.sort();
+                for (file, mutation) in &csv {
+                    let path = &csv_files[file % csv_files.len()];
+                    let mut bytes = std::fs::read(path).unwrap();
+                    apply_csv(&mut bytes, mutation);
+                    std::fs::write(path, bytes).unwrap();
+                }
+                let unchanged =
+                    mutations.tree.is_empty() && mutations.text.is_empty() && csv.is_empty();
+                let read = FlightRecord::read(&data);
+                match read {
+                    Ok(read) if unchanged && !same_record(&record, &read) => Err(format!(
+                        "an unchanged record reads back different:\n{read:?}"
+                    )),
+                    Ok(read) => round_trip(&read, &folder.0),
+                    Err(_) if unchanged => Err(format!(
+                        "a valid record does not read back: {}",
+                        read.unwrap_err()
+                    )),
+                    Err(_) => Ok(Outcome::Refused),
+                }
+            })
+        },
     );
-    check_property("record folder", strategy, |(record, mutations, csv)| {
-        let input = format!("{record:?}\nrecord.toml: {mutations:?}\nCSV: {csv:?}");
-        guarded(&input, move || {
-            let folder = CaseFolder::new("record");
-            let data = folder.0.join("rec");
-            record
-                .write(&data)
-                .map_err(|e| format!("a valid record cannot be written: {e}"))?;
-            let toml_path = data.join("record.toml");
-            let text = std::fs::read_to_string(&toml_path).unwrap();
-            std::fs::write(&toml_path, mutate(&text, &mutations)).unwrap();
-            let mut csv_files: Vec<PathBuf> = std::fs::read_dir(&data)
-                .unwrap()
-                .map(|e| e.unwrap().path())
-                .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-                .collect();
-            csv_files.sort();
-            for (file, mutation) in &csv {
-                let path = &csv_files[file % csv_files.len()];
-                let mut bytes = std::fs::read(path).unwrap();
-                apply_csv(&mut bytes, mutation);
-                std::fs::write(path, bytes).unwrap();
-            }
-            let unchanged =
-                mutations.tree.is_empty() && mutations.text.is_empty() && csv.is_empty();
-            let read = FlightRecord::read(&data);
-            match read {
-                Ok(read) if unchanged && !same_record(&record, &read) => Err(format!(
-                    "an unchanged record reads back different:\n{read:?}"
-                )),
-                Ok(read) => round_trip(&read, &folder.0),
-                Err(_) if unchanged => Err(format!(
-                    "a valid record does not read back: {}",
-                    read.unwrap_err()
-                )),
-                Err(_) => Ok(Outcome::Refused),
-            }
-        })
-    });
 }
 
 // ------------------------------------------------------------- CSV import
@@ -930,12 +955,8 @@ fn flight_csv() -> impl Strategy<Value = String> {
 
 #[test]
 fn mutated_imports_read_or_fail_cleanly() {
-    let strategy = (
-        mutations(),
-        flight_csv(),
-        prop::collection::vec(csv_mutation(), 0..4),
-    );
-    check_property("import", strategy, |(mutations, csv, csv_mutations)| {
+    let strategy = (toml_and_csv_mutations(), flight_csv());
+    check_property("import", strategy, |((mutations, csv_mutations), csv)| {
         let map = mutate(COLUMN_MAP, &mutations);
         let mut data = csv.into_bytes();
         for mutation in &csv_mutations {
@@ -961,4 +982,87 @@ fn mutated_imports_read_or_fail_cleanly() {
             }
         })
     });
+}
+
+// ------------------------------------------------- replayed input CSV
+
+/// A scenario whose elevator replays a CSV file beside it.
+const REPLAY_SCENARIO: &str = r#"
+name = "replay"
+aircraft = "attas"
+duration = "10 s"
+step = "0.01 s"
+seed = 1
+
+[trim]
+airspeed = "103 m/s"
+altitude = "4877 m"
+
+[[inputs]]
+kind = "csv"
+control = "elevator"
+file = "elevator.csv"
+time_column = "t"
+column = "de"
+unit = "deg"
+start = "1 s"
+"#;
+
+/// An elevator input: a strictly increasing time column, the deflection
+/// and a column the scenario does not use.
+fn input_csv() -> impl Strategy<Value = String> {
+    let row = (1e-3..2.0f64, -3.0..3.0f64, any::<i16>());
+    (-5.0..5.0f64, prop::collection::vec(row, 0..20)).prop_map(|(start, rows)| {
+        let mut text = String::from("t,de,extra\n");
+        let mut time = start;
+        for (dt, de, extra) in rows {
+            time += dt;
+            text.push_str(&format!("{time},{de},{extra}\n"));
+        }
+        text
+    })
+}
+
+#[test]
+fn mutated_replayed_inputs_load_or_fail_cleanly() {
+    let strategy = (toml_and_csv_mutations(), input_csv());
+    check_property(
+        "replayed input",
+        strategy,
+        |((mutations, csv_mutations), csv)| {
+            let scenario = mutate(REPLAY_SCENARIO, &mutations);
+            if known_size_class(Kind::Scenario, &scenario) {
+                return Ok(Outcome::Skipped);
+            }
+            let mut data = csv.into_bytes();
+            for mutation in &csv_mutations {
+                apply_csv(&mut data, mutation);
+            }
+            let input = format!(
+                "scenario with {mutations:?}:\n{}\n--- CSV ---\n{}",
+                String::from_utf8_lossy(&scenario),
+                String::from_utf8_lossy(&data)
+            );
+            guarded(&input, move || {
+                let folder = CaseFolder::new("replay");
+                let path = folder.0.join("replay.toml");
+                std::fs::write(&path, &scenario).unwrap();
+                std::fs::write(folder.0.join("elevator.csv"), &data).unwrap();
+                let loaded = Kind::Scenario.load(&path);
+                if let (Err(error), Ok(report)) = (&loaded, check_file(&path)) {
+                    return Err(format!(
+                        "check accepts ({}: {:?}) a scenario the loader rejects: {error}",
+                        report.kind, report.lines
+                    ));
+                }
+                match loaded {
+                    Ok(()) => {
+                        use_loaded(Kind::Scenario, &path)?;
+                        Ok(Outcome::Accepted)
+                    }
+                    Err(_) => Ok(Outcome::Refused),
+                }
+            })
+        },
+    );
 }
