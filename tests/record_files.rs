@@ -503,3 +503,19 @@ fn extreme_rates_give_short_file_names() {
     );
     assert_same(&record, &FlightRecord::read(&data).unwrap());
 }
+
+/// A time scale that makes sample intervals so short that the rate from
+/// the median interval overflows is refused, naming the channel's rate.
+#[test]
+fn import_rate_overflowing_from_the_time_scale_is_named() {
+    let map = FLIGHT_MAP.replace("column = \"Time\"", "column = \"Time\"\nscale = 5e-324");
+    let csv = "Time,AOA,IAS,ALT,TAT,Flag,HDG\n544,2.5,200,10000,-12.5,1,359\n545,2.6,201,10010,-12.25,0,1\n";
+    let error = import_case("rate-overflow", csv, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("map.toml")
+            && error.contains("channels[0].rate: channel 'alpha': its median sample interval gives a rate of inf Hz"),
+        "{error}"
+    );
+}

@@ -137,11 +137,13 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
     check_converted_times(&times, &file.time.column, map_path)?;
     let mut used = vec![file.time.column.clone()];
     let mut record_channels = Vec::with_capacity(channels.len());
-    for mapped in &channels {
+    for (i, mapped) in channels.iter().enumerate() {
         let index = table.column_index(&mapped.column)?;
         used.push(mapped.column.clone());
         let raw = table.numbers(index, true)?;
-        record_channels.push(build_channel(mapped, &times, &raw, data));
+        let channel = build_channel(mapped, &times, &raw, data);
+        check_rate(&channel, i, map_path)?;
+        record_channels.push(channel);
     }
     let unmapped = table
         .headers
@@ -205,6 +207,26 @@ fn check_converted_times(times: &[f64], column: &str, map_path: &Path) -> Result
             }],
         }),
     }
+}
+
+/// A channel's nominal rate, given or from the median sample interval, is
+/// finite and positive (a time scale can make intervals so short that the
+/// rate overflows).
+fn check_rate(channel: &Channel, index: usize, map_path: &Path) -> Result<()> {
+    if channel.rate.is_finite() && channel.rate > 0.0 {
+        return Ok(());
+    }
+    Err(crate::error::Error::Invalid {
+        path: map_path.to_path_buf(),
+        problems: vec![crate::error::Problem {
+            field: format!("channels[{index}].rate"),
+            message: format!(
+                "channel '{}': its median sample interval gives a rate of {} Hz; \
+                 check the time scale and unit, or give the rate",
+                channel.name, channel.rate
+            ),
+        }],
+    })
 }
 
 /// The rate implied by the median sample interval (1 Hz with fewer than two samples).
