@@ -225,3 +225,53 @@ fn cli_check_explains_problems_and_fails() {
         "{stderr}"
     );
 }
+
+/// A multisine period so long that its band's harmonic numbers do not fit
+/// is a problem naming the input's period, not an integer overflow.
+#[test]
+fn multisine_period_beyond_harmonic_numbers_is_named() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/attas-multisine.toml"
+    ))
+    .unwrap()
+    .replace(
+        "period = \"20 s\"",
+        "period = \"123456789012345678901234567890 s\"",
+    );
+    let folder = common::temp_folder("multisine-period");
+    let path = common::write(&folder, "s.toml", &text);
+    let error = Scenario::load(path.to_str().unwrap()).unwrap_err();
+    let fields = problem_fields(&error);
+    let message = error.to_string();
+    assert_eq!(fields, ["inputs[0].period"], "{message}");
+    assert!(
+        message.contains("puts the harmonic numbers beyond 4294967295"),
+        "{message}"
+    );
+}
+
+/// A gate whose tolerance is infinite would pass whatever the estimate: the
+/// gate file is refused, naming the case.
+#[test]
+fn an_infinite_gate_tolerance_is_refused() {
+    let folder = common::temp_folder("infinite-tolerance");
+    let path = common::write(
+        &folder,
+        "gates.toml",
+        r#"[[case]]
+name = "never-fails"
+scenario = "attas-lateral-multistep"
+profile = "ideal"
+model = "attas-lateral"
+method = "oem"
+sigma_tolerance = inf
+"#,
+    );
+    let error = aeroid::eval::gate::load(&path).unwrap_err().to_string();
+    assert!(
+        error.contains("never-fails") && error.contains("positive finite"),
+        "{error}"
+    );
+    std::fs::remove_dir_all(&folder).unwrap();
+}

@@ -679,3 +679,47 @@ fn a_zero_identifiability_segment_is_an_error() {
         );
     }
 }
+
+/// A finite cell times a finite but huge scale overflows to infinity: the
+/// import is refused naming the channel and the sample, not stored as an
+/// infinity (found by the property tests).
+#[test]
+fn import_refuses_values_that_overflow_in_conversion() {
+    let map = MAP.replace(
+        "name = \"airspeed\"\ncolumn = \"IAS\"\nunit = \"kt\"",
+        "name = \"airspeed\"\ncolumn = \"IAS\"\nunit = \"kt\"\nscale = 1e308",
+    );
+    assert_ne!(map, MAP);
+    let message = import_case("import-overflow", CSV, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("(airspeed)") && message.contains("is infinite"),
+        "{message}"
+    );
+}
+
+/// Recorder settings each within their bounds can overflow together (a
+/// huge scale factor on a large value): recording is refused naming the
+/// profile, the channel and the sample (found by the property tests).
+#[test]
+fn a_profile_whose_samples_overflow_is_refused() {
+    let (path, profile) = profile_with("overflow", |t| {
+        t.replacen(
+            "rate = \"100 Hz\"",
+            "rate = \"100 Hz\"\nscale_factor = 1e308",
+            1,
+        )
+    });
+    let profile = profile.unwrap();
+    let scenario = Scenario::load("attas-trim").unwrap();
+    let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
+    let error = profile.record(&trace, &scenario.aircraft, 1).unwrap_err();
+    let message = error.to_string();
+    assert!(
+        message.contains(&path.display().to_string())
+            && message.contains("(airspeed)")
+            && message.contains("is infinite"),
+        "{message}"
+    );
+}

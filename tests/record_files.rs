@@ -393,3 +393,151 @@ fn import_load_factor_in_g_or_acceleration() {
     let ny = &record.channel("ny").unwrap().values;
     assert!((ny[0] - 10.0 / aeroid::units::STANDARD_GRAVITY).abs() < 1e-15);
 }
+
+/// A non-finite offset in the map is a map problem naming the field, for
+/// the time column and for a channel.
+#[test]
+fn import_non_finite_offset_is_named() {
+    let map = FLIGHT_MAP.replace("column = \"Time\"", "column = \"Time\"\noffset = nan");
+    let error = import_case("nan-time-offset", FLIGHT_CSV, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("map.toml") && error.contains("time.offset: must be a finite number"),
+        "{error}"
+    );
+    let map = FLIGHT_MAP.replace("offset = -10000.0", "offset = inf");
+    let error = import_case("inf-channel-offset", FLIGHT_CSV, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("channels[2].offset: must be a finite number"),
+        "{error}"
+    );
+}
+
+/// A time scale so large that converted times overflow is refused, naming
+/// the time column, instead of importing a record with infinite times.
+#[test]
+fn import_time_overflowing_on_conversion_is_refused() {
+    let map = FLIGHT_MAP.replace(
+        "column = \"Time\"",
+        "column = \"Time\"\nscale = 1e308\nunit = \"h\"",
+    );
+    let error = import_case("time-overflow", FLIGHT_CSV, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("map.toml")
+            && error.contains("time: column 'Time' converted to seconds is inf")
+            && error.contains("keep times finite and increasing"),
+        "{error}"
+    );
+}
+
+/// A seed above i64::MAX cannot be stored in record.toml (TOML integers are
+/// signed 64-bit): writing refuses it, naming the field, rather than writing
+/// a record that does not read back.
+#[test]
+fn record_seed_beyond_toml_integers_is_refused() {
+    let folder = common::temp_folder("huge-seed");
+    let record = FlightRecord {
+        scenario: "huge seed".into(),
+        seed: Some(15_161_483_648_911_747_848),
+        profile: "test".into(),
+        absent: Vec::new(),
+        channels: vec![channel("q", "rad/s", 1.0, vec![0.0, 1.0], vec![0.1, 0.2])],
+    };
+    let error = record.write(&folder.join("rec")).unwrap_err().to_string();
+    assert!(
+        error.contains("seed: 15161483648911747848 is above 9223372036854775807"),
+        "{error}"
+    );
+    let fits = FlightRecord {
+        seed: Some(i64::MAX as u64),
+        ..record
+    };
+    fits.write(&folder.join("fits")).unwrap();
+    assert_same(&fits, &FlightRecord::read(&folder.join("fits")).unwrap());
+}
+
+/// Extreme nominal rates name their shared CSV file in a few characters
+/// (a plain 1e300 would be a 300-digit file name the file system refuses).
+#[test]
+fn extreme_rates_give_short_file_names() {
+    let folder = common::temp_folder("extreme-rates");
+    let times = vec![0.0, 1.0];
+    let record = FlightRecord {
+        scenario: "extreme rates".into(),
+        seed: None,
+        profile: "test".into(),
+        absent: Vec::new(),
+        channels: vec![
+            channel("q", "rad/s", 1e300, times.clone(), vec![0.1, 0.2]),
+            channel("r", "rad/s", 1e300, times.clone(), vec![0.1, 0.2]),
+            channel("p", "rad/s", 1e-300, vec![0.5, 2.0], vec![0.1, 0.2]),
+            channel("nz", "-", 1e-300, vec![0.5, 2.0], vec![1.0, 1.0]),
+        ],
+    };
+    let data = folder.join("rec");
+    record.write(&data).unwrap();
+    let mut files: Vec<String> = std::fs::read_dir(&data)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(
+        files,
+        [
+            "rate_1p000e-300hz.csv",
+            "rate_1p000e300hz.csv",
+            "record.toml"
+        ]
+    );
+    assert_same(&record, &FlightRecord::read(&data).unwrap());
+}
+
+/// A time scale that makes sample intervals so short that the rate from
+/// the median interval overflows is refused, naming the channel's rate.
+#[test]
+fn import_rate_overflowing_from_the_time_scale_is_named() {
+    let map = FLIGHT_MAP.replace("column = \"Time\"", "column = \"Time\"\nscale = 5e-324");
+    let csv = "Time,AOA,IAS,ALT,TAT,Flag,HDG\n544,2.5,200,10000,-12.5,1,359\n545,2.6,201,10010,-12.25,0,1\n";
+    let error = import_case("rate-overflow", csv, &map)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("map.toml")
+            && error.contains("channels[0].rate: channel 'alpha': its median sample interval gives a rate of inf Hz"),
+        "{error}"
+    );
+}
+
+/// A Monte Carlo case's recorder seed may be any u64 (the record is valid
+/// in memory, and studies use it so), but record.toml holds signed 64-bit
+/// integers: writing such a record is refused naming the seed, not written
+/// in a form that does not read back.
+#[test]
+fn a_seed_beyond_a_toml_integer_is_valid_but_not_written() {
+    let record = FlightRecord {
+        scenario: "seed".into(),
+        seed: Some(u64::MAX),
+        profile: "test".into(),
+        absent: Vec::new(),
+        channels: vec![channel(
+            "alpha",
+            "rad",
+            25.0,
+            vec![0.0, 0.04],
+            vec![0.1, 0.2],
+        )],
+    };
+    let folder = common::temp_folder("huge-seed");
+    record.validate(&folder).unwrap();
+    let message = record.write(&folder.join("rec")).unwrap_err().to_string();
+    assert!(
+        message.contains("seed") && message.contains("largest integer record.toml can hold"),
+        "{message}"
+    );
+    std::fs::remove_dir_all(&folder).unwrap();
+}

@@ -299,9 +299,12 @@ pub fn load(path: &Path) -> Result<GateFile> {
             .chain(case.tolerance.values())
             .chain(case.identifiable_below.iter())
             .chain(case.spurious_sigma.iter())
-            .any(|t| t.is_nan() || *t <= 0.0)
+            .any(|t| !(t.is_finite() && *t > 0.0))
         {
-            problems.push(field, "tolerances and thresholds must be positive");
+            problems.push(
+                field,
+                "tolerances and thresholds must be positive finite numbers",
+            );
         }
     }
     problems.finish(path, file)

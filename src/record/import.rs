@@ -29,7 +29,7 @@
 //! channel; a cell that reads as NaN or an infinity is an error unless the
 //! map says `non_finite = "dropout"`; a CSV without data rows is an error. Columns the map does not mention are listed in the outcome.
 
-use crate::csv_table::CsvTable;
+use crate::csv_table::{CsvTable, first_disorder};
 use crate::error::{Problems, Result, parse_toml, read_text};
 use crate::record::derived;
 use crate::record::{Channel, FlightRecord, check_name};
@@ -151,9 +151,10 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
         .into_iter()
         .map(|t| time.apply(t))
         .collect();
+    check_converted_times(&times, &file.time.column, map_path)?;
     let mut used = vec![file.time.column.clone()];
     let mut record_channels = Vec::with_capacity(channels.len());
-    for mapped in &channels {
+    for (i, mapped) in channels.iter().enumerate() {
         let index = table.column_index(&mapped.column)?;
         used.push(mapped.column.clone());
         let raw = table.measurements(
@@ -165,7 +166,9 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
                 map_path.display()
             ),
         )?;
-        record_channels.push(build_channel(mapped, &times, &raw, data));
+        let channel = build_channel(mapped, &times, &raw, data);
+        check_rate(&channel, i, map_path)?;
+        record_channels.push(channel);
     }
     let unmapped = table
         .headers
@@ -176,16 +179,17 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
     let stem = data
         .file_stem()
         .map_or(String::new(), |s| s.to_string_lossy().into_owned());
-    Ok(ImportOutcome {
-        record: FlightRecord {
-            scenario: file.name.clone().unwrap_or(stem),
-            seed: None,
-            profile: format!("import:{}", map_path.display()),
-            absent: Vec::new(),
-            channels: record_channels,
-        },
-        unmapped,
-    })
+    let record = FlightRecord {
+        scenario: file.name.clone().unwrap_or(stem),
+        seed: None,
+        profile: format!("import:{}", map_path.display()),
+        absent: Vec::new(),
+        channels: record_channels,
+    };
+    // What the record format relies on (a channel whose cells are all
+    // skipped has no samples), said of the data file before anything is written.
+    record.validate(data)?;
+    Ok(ImportOutcome { record, unmapped })
 }
 
 /// A channel from its column's cells (`None`: empty).
@@ -210,6 +214,51 @@ fn build_channel(
         times,
         values,
     }
+}
+
+/// The time column after its scale, offset and unit: still finite and
+/// strictly increasing (a huge scale or offset can make times overflow or
+/// collapse onto each other).
+fn check_converted_times(times: &[f64], column: &str, map_path: &Path) -> Result<()> {
+    match first_disorder(times) {
+        None => Ok(()),
+        Some(k) => Err(crate::error::Error::Invalid {
+            path: map_path.to_path_buf(),
+            problems: vec![crate::error::Problem {
+                field: "time".into(),
+                message: format!(
+                    "column '{column}' converted to seconds is {} at data row {}{}: \
+                     the time scale and offset must keep times finite and increasing",
+                    times[k],
+                    k + 1,
+                    match k {
+                        0 => String::new(),
+                        _ => format!(", not after {}", times[k - 1]),
+                    }
+                ),
+            }],
+        }),
+    }
+}
+
+/// A channel's nominal rate, given or from the median sample interval, is
+/// finite and positive (a time scale can make intervals so short that the
+/// rate overflows).
+fn check_rate(channel: &Channel, index: usize, map_path: &Path) -> Result<()> {
+    if channel.rate.is_finite() && channel.rate > 0.0 {
+        return Ok(());
+    }
+    Err(crate::error::Error::Invalid {
+        path: map_path.to_path_buf(),
+        problems: vec![crate::error::Problem {
+            field: format!("channels[{index}].rate"),
+            message: format!(
+                "channel '{}': its median sample interval gives a rate of {} Hz; \
+                 check the time scale and unit, or give the rate",
+                channel.name, channel.rate
+            ),
+        }],
+    })
 }
 
 /// The rate implied by the median sample interval (1 Hz with fewer than two samples).

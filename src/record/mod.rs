@@ -275,7 +275,8 @@ impl FlightRecord {
 
     /// Checks what the file format relies on: at least one channel, each
     /// with samples, unique, file-safe names, matching lengths, finite
-    /// strictly increasing times, positive rates.
+    /// strictly increasing times, positive rates, finite values (NaN is a
+    /// dropout).
     pub fn validate(&self, path: &Path) -> Result<()> {
         let mut problems = Problems::default();
         if self.channels.is_empty() {
@@ -310,6 +311,15 @@ impl FlightRecord {
                     ),
                 );
             }
+            if let Some(k) = channel.values.iter().position(|v| v.is_infinite()) {
+                problems.push(
+                    &field,
+                    format!(
+                        "the value at sample {k} (t = {} s) is infinite; a sample is a finite number or a dropout",
+                        channel.times[k]
+                    ),
+                );
+            }
         }
         problems.finish(path, ())
     }
@@ -317,6 +327,20 @@ impl FlightRecord {
     /// Writes the record into `folder` (created if needed): `record.toml` and one CSV per time base.
     pub fn write(&self, folder: &Path) -> Result<()> {
         self.validate(folder)?;
+        if let Some(seed) = self.seed
+            && i64::try_from(seed).is_err()
+        {
+            return Err(Error::Invalid {
+                path: folder.join(RECORD_FILE),
+                problems: vec![crate::error::Problem {
+                    field: "seed".into(),
+                    message: format!(
+                        "{seed} is above {}, the largest integer record.toml can hold",
+                        i64::MAX
+                    ),
+                }],
+            });
+        }
         std::fs::create_dir_all(folder).map_err(|e| crate::error::write_error(folder, e))?;
         let bases = self.time_bases();
         let mut entries = Vec::with_capacity(self.channels.len());
@@ -514,22 +538,27 @@ fn describe_channel(channel: &Channel) -> String {
     )
 }
 
-/// A rate as a user reads it: `25`, `0.5`, or `1/64` for one sample every 64 s.
+/// Rates and periods from here on are written in scientific notation.
+const PLAIN_LIMIT: f64 = 1e6;
+
+/// A rate as a user reads it: `25`, `0.5`, or `1/64` for one sample every 64 s;
+/// `1.000e300` rather than 301 digits.
 pub fn rate_text(rate: f64) -> String {
     let period = 1.0 / rate;
-    if rate < 1.0 && (period - period.round()).abs() < 1e-9 {
+    if rate < 1.0 && period < PLAIN_LIMIT && (period - period.round()).abs() < 1e-9 {
         format!("1/{}", period.round())
-    } else if (rate - rate.round()).abs() < 1e-9 {
+    } else if (1.0..PLAIN_LIMIT).contains(&rate) && (rate - rate.round()).abs() < 1e-9 {
         format!("{}", rate.round())
     } else {
         rounded(rate)
     }
 }
 
-/// A rate for a file name: `25hz`, `12p5hz`, `64s` (one sample every 64 s).
+/// A rate for a file name: `25hz`, `12p5hz`, `64s` (one sample every 64 s);
+/// short for any rate (`1p000e-300hz`), as file names have a length limit.
 fn rate_label(rate: f64) -> String {
     let period = 1.0 / rate;
-    if rate < 1.0 && (period - period.round()).abs() < 1e-9 {
+    if rate < 1.0 && period < PLAIN_LIMIT && (period - period.round()).abs() < 1e-9 {
         format!("{}s", period.round())
     } else {
         format!("{}hz", rate_text(rate).replace('.', "p"))

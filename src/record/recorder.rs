@@ -300,13 +300,18 @@ impl Profile {
             .iter()
             .map(|model| model.record(trace, &context, &self.name, &mut rng))
             .collect::<Result<_>>()?;
-        Ok(FlightRecord {
+        let record = FlightRecord {
             scenario: trace.scenario.clone(),
             seed: Some(seed),
             profile: self.name.clone(),
             absent: self.absent.clone(),
             channels,
-        })
+        };
+        // Settings within their bounds can still overflow together (a huge
+        // scale factor on a huge bias): the profile is named, with the
+        // channel and the sample.
+        record.validate(&self.path)?;
+        Ok(record)
     }
 }
 

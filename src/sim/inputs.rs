@@ -743,6 +743,16 @@ fn harmonic_numbers(
 ) -> Option<Vec<u32>> {
     let numbers = match (listed, band) {
         (Some(listed), _) => check_listed_harmonics(checker, listed, band, period)?,
+        (None, (Some(_), Some(high)))
+            if (high * period).is_nan() || high * period >= u32::MAX as f64 =>
+        {
+            let message = format!(
+                "{period} s at frequency_max {high} Hz puts the harmonic numbers beyond {}: check the band and period",
+                u32::MAX
+            );
+            checker.push("period", message);
+            return None;
+        }
         (None, (Some(low), Some(high))) => harmonics_in_band(low, high, period),
         (None, _) => {
             let message = "frequency_min and frequency_max are required unless harmonics is given";
