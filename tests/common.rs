@@ -24,3 +24,16 @@ pub fn attas_with(edit: impl Fn(String) -> String) -> String {
         .unwrap();
     edit(text)
 }
+
+/// Imports `csv` with the column map `map`, both written to a fresh folder
+/// named after `test` (as `flight.csv` and `map.toml`).
+pub fn import_case(
+    test: &str,
+    csv: &str,
+    map: &str,
+) -> aeroid::Result<aeroid::record::import::ImportOutcome> {
+    let folder = temp_folder(test);
+    let data = write(&folder, "flight.csv", csv);
+    let map = write(&folder, "map.toml", map);
+    aeroid::record::import::import(&data, &map)
+}

@@ -525,17 +525,6 @@ column = "IAS"
 unit = "kt"
 "#;
 
-fn import_case(
-    test: &str,
-    csv: &str,
-    map: &str,
-) -> aeroid::Result<aeroid::record::import::ImportOutcome> {
-    let folder = common::temp_folder(test);
-    let data = common::write(&folder, "flight.csv", csv);
-    let map = common::write(&folder, "map.toml", map);
-    aeroid::record::import::import(&data, &map)
-}
-
 /// `inf` and `1e400` cells were stored as infinities: each is an error
 /// naming the file, line and column, and how to map them to dropouts.
 #[test]
@@ -547,7 +536,7 @@ fn import_refuses_non_finite_cells_unless_mapped_to_dropouts() {
         ("NaN", "NaN"),
     ] {
         let csv = CSV.replace("2.6", cell);
-        let error = import_case("import-inf", &csv, MAP).unwrap_err();
+        let error = common::import_case("import-inf", &csv, MAP).unwrap_err();
         let message = error.to_string();
         assert!(
             message.ends_with(&format!(
@@ -561,7 +550,8 @@ fn import_refuses_non_finite_cells_unless_mapped_to_dropouts() {
         );
     }
     let map = MAP.replace("unit = \"deg\"", "unit = \"deg\"\nnon_finite = \"dropout\"");
-    let outcome = import_case("import-inf-dropout", &CSV.replace("2.6", "1e400"), &map).unwrap();
+    let outcome =
+        common::import_case("import-inf-dropout", &CSV.replace("2.6", "1e400"), &map).unwrap();
     let alpha = outcome.record.channel("alpha").unwrap();
     assert_eq!(alpha.times, [0.0, 0.5, 1.0]);
     assert!(alpha.values[1].is_nan() && alpha.dropouts() == 1);
@@ -571,7 +561,7 @@ fn import_refuses_non_finite_cells_unless_mapped_to_dropouts() {
 /// A header-only CSV was "3 channels imported"; a map without channels is refused.
 #[test]
 fn import_refuses_a_csv_without_data_rows_and_a_map_without_channels() {
-    let error = import_case("import-header-only", "Time,AOA,IAS\n", MAP).unwrap_err();
+    let error = common::import_case("import-header-only", "Time,AOA,IAS\n", MAP).unwrap_err();
     let message = error.to_string();
     assert!(
         message.ends_with(
@@ -580,13 +570,13 @@ fn import_refuses_a_csv_without_data_rows_and_a_map_without_channels() {
         "{message}"
     );
     let map = "channels = []\n".to_string() + MAP.split("[[channels]]").next().unwrap();
-    let error = import_case("import-no-channels", CSV, &map).unwrap_err();
+    let error = common::import_case("import-no-channels", CSV, &map).unwrap_err();
     assert_eq!(
         problems(&error),
         ["channels: must map at least one column to a channel ([[channels]] tables)"]
     );
     let map = MAP.replace("unit = \"kt\"", "unit = \"kt\"\noffset = inf");
-    let error = import_case("import-infinite-offset", CSV, &map).unwrap_err();
+    let error = common::import_case("import-infinite-offset", CSV, &map).unwrap_err();
     assert_eq!(
         problems(&error),
         ["channels[1].offset: must be a finite number"]
@@ -598,7 +588,9 @@ fn import_refuses_a_csv_without_data_rows_and_a_map_without_channels() {
 #[test]
 fn an_empty_record_is_refused_where_it_is_read() {
     let folder = common::temp_folder("empty-record");
-    let record = import_case("empty-record-source", CSV, MAP).unwrap().record;
+    let record = common::import_case("empty-record-source", CSV, MAP)
+        .unwrap()
+        .record;
     record.write(&folder).unwrap();
     let text = std::fs::read_to_string(folder.join("record.toml")).unwrap();
     let header = text.split("[[channels]]").next().unwrap().to_string();
@@ -690,7 +682,7 @@ fn import_refuses_values_that_overflow_in_conversion() {
         "name = \"airspeed\"\ncolumn = \"IAS\"\nunit = \"kt\"\nscale = 1e308",
     );
     assert_ne!(map, MAP);
-    let message = import_case("import-overflow", CSV, &map)
+    let message = common::import_case("import-overflow", CSV, &map)
         .unwrap_err()
         .to_string();
     assert!(

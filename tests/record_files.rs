@@ -168,23 +168,12 @@ unit = "deg"
 empty = "skip"
 "#;
 
-fn import_case(
-    name: &str,
-    csv: &str,
-    map: &str,
-) -> aeroid::Result<aeroid::record::import::ImportOutcome> {
-    let folder = common::temp_folder(name);
-    let data = common::write(&folder, "flight.csv", csv);
-    let map = common::write(&folder, "map.toml", map);
-    aeroid::record::import::import(&data, &map)
-}
-
 /// Degrees, knots and feet (with an offset) and °C become rad, m/s, m and K;
 /// an empty cell is a NaN dropout, or no sample where the map says `skip`;
 /// unmapped columns are reported; the rate comes from the median interval.
 #[test]
 fn import_converts_units_to_si() {
-    let outcome = import_case("import", FLIGHT_CSV, FLIGHT_MAP).unwrap();
+    let outcome = common::import_case("import", FLIGHT_CSV, FLIGHT_MAP).unwrap();
     let record = &outcome.record;
     assert_eq!(record.scenario, "test flight");
     assert_eq!(outcome.unmapped, ["Flag"]);
@@ -226,7 +215,7 @@ fn csv_error(
 #[test]
 fn import_missing_column_is_named() {
     let map = FLIGHT_MAP.replace("column = \"IAS\"", "column = \"KIAS\"");
-    let (line, column, message) = csv_error(import_case("missing", FLIGHT_CSV, &map));
+    let (line, column, message) = csv_error(common::import_case("missing", FLIGHT_CSV, &map));
     assert_eq!((line, column.as_str()), (1, "KIAS"));
     assert!(message.contains("no such column"), "{message}");
 }
@@ -235,7 +224,7 @@ fn import_missing_column_is_named() {
 #[test]
 fn import_non_numeric_cell_is_named() {
     let csv = FLIGHT_CSV.replace("10020", "1002O");
-    let (line, column, message) = csv_error(import_case("non-numeric", &csv, FLIGHT_MAP));
+    let (line, column, message) = csv_error(common::import_case("non-numeric", &csv, FLIGHT_MAP));
     assert_eq!((line, column.as_str()), (4, "ALT"));
     assert!(message.contains("'1002O' is not a number"), "{message}");
 }
@@ -244,7 +233,7 @@ fn import_non_numeric_cell_is_named() {
 #[test]
 fn import_non_monotonic_time_is_named() {
     let csv = FLIGHT_CSV.replace("1.5,2.8", "0.5,2.8");
-    let (line, column, message) = csv_error(import_case("non-monotonic", &csv, FLIGHT_MAP));
+    let (line, column, message) = csv_error(common::import_case("non-monotonic", &csv, FLIGHT_MAP));
     assert_eq!((line, column.as_str()), (5, "Time"));
     assert!(message.contains("not after the previous time"), "{message}");
 }
@@ -253,7 +242,7 @@ fn import_non_monotonic_time_is_named() {
 #[test]
 fn import_duplicate_channel_is_named() {
     let map = FLIGHT_MAP.replace("name = \"yaw\"", "name = \"alpha\"");
-    match import_case("duplicate", FLIGHT_CSV, &map) {
+    match common::import_case("duplicate", FLIGHT_CSV, &map) {
         Err(Error::Invalid { problems, .. }) => {
             assert_eq!(problems.len(), 1, "{problems:?}");
             assert_eq!(problems[0].field, "channels[4].name");
@@ -271,7 +260,7 @@ fn import_duplicate_channel_is_named() {
 #[test]
 fn import_duplicate_header_is_named() {
     let csv = FLIGHT_CSV.replace("Flag", "AOA");
-    let (line, column, _) = csv_error(import_case("duplicate-header", &csv, FLIGHT_MAP));
+    let (line, column, _) = csv_error(common::import_case("duplicate-header", &csv, FLIGHT_MAP));
     assert_eq!((line, column.as_str()), (1, "AOA"));
 }
 
@@ -279,7 +268,7 @@ fn import_duplicate_header_is_named() {
 #[test]
 fn import_wrong_unit_is_named() {
     let map = FLIGHT_MAP.replace("unit = \"kt\"", "unit = \"deg\"");
-    let error = import_case("wrong-unit", FLIGHT_CSV, &map)
+    let error = common::import_case("wrong-unit", FLIGHT_CSV, &map)
         .unwrap_err()
         .to_string();
     assert!(
@@ -388,7 +377,7 @@ fn import_load_factor_in_g_or_acceleration() {
         column = "AZ"
         unit = "m/s^2"
     "#;
-    let record = import_case("load-factor", csv, map).unwrap().record;
+    let record = common::import_case("load-factor", csv, map).unwrap().record;
     assert_eq!(record.channel("nz").unwrap().values, [1.02, 0.98]);
     let ny = &record.channel("ny").unwrap().values;
     assert!((ny[0] - 10.0 / aeroid::units::STANDARD_GRAVITY).abs() < 1e-15);
@@ -399,7 +388,7 @@ fn import_load_factor_in_g_or_acceleration() {
 #[test]
 fn import_non_finite_offset_is_named() {
     let map = FLIGHT_MAP.replace("column = \"Time\"", "column = \"Time\"\noffset = nan");
-    let error = import_case("nan-time-offset", FLIGHT_CSV, &map)
+    let error = common::import_case("nan-time-offset", FLIGHT_CSV, &map)
         .unwrap_err()
         .to_string();
     assert!(
@@ -407,7 +396,7 @@ fn import_non_finite_offset_is_named() {
         "{error}"
     );
     let map = FLIGHT_MAP.replace("offset = -10000.0", "offset = inf");
-    let error = import_case("inf-channel-offset", FLIGHT_CSV, &map)
+    let error = common::import_case("inf-channel-offset", FLIGHT_CSV, &map)
         .unwrap_err()
         .to_string();
     assert!(
@@ -424,7 +413,7 @@ fn import_time_overflowing_on_conversion_is_refused() {
         "column = \"Time\"",
         "column = \"Time\"\nscale = 1e308\nunit = \"h\"",
     );
-    let error = import_case("time-overflow", FLIGHT_CSV, &map)
+    let error = common::import_case("time-overflow", FLIGHT_CSV, &map)
         .unwrap_err()
         .to_string();
     assert!(
@@ -503,7 +492,7 @@ fn extreme_rates_give_short_file_names() {
 fn import_rate_overflowing_from_the_time_scale_is_named() {
     let map = FLIGHT_MAP.replace("column = \"Time\"", "column = \"Time\"\nscale = 5e-324");
     let csv = "Time,AOA,IAS,ALT,TAT,Flag,HDG\n544,2.5,200,10000,-12.5,1,359\n545,2.6,201,10010,-12.25,0,1\n";
-    let error = import_case("rate-overflow", csv, &map)
+    let error = common::import_case("rate-overflow", csv, &map)
         .unwrap_err()
         .to_string();
     assert!(
