@@ -26,9 +26,7 @@ pub fn check_file(path: &Path) -> Result<CheckReport> {
     let table: toml::Table = parse_toml(path, &text)?;
     if table.contains_key("trim") {
         let file: ScenarioFile = parse_toml(path, &text)?;
-        let mut problems = crate::error::Problems::default();
-        crate::estimation::estimator::check_method_tables(&file.methods, &mut problems);
-        problems.finish(path, ())?;
+        crate::estimation::estimator::validate_method_tables(&file.methods, path)?;
         check_scenario(&Scenario::from_file(&file, path)?)
     } else if table.contains_key("runs") && table.contains_key("methods") {
         let file: StudyFile = parse_toml(path, &text)?;

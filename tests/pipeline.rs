@@ -89,3 +89,39 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
         }
     }
 }
+
+/// A scenario's `[methods.NAME]` tables are checked before anything flies:
+/// an unknown method and a setting out of range are errors naming the
+/// scenario file and the table.
+#[test]
+fn a_scenario_with_wrong_method_settings_is_refused() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/attas-lateral-multistep.toml"
+    ))
+    .unwrap();
+    let folder =
+        std::env::temp_dir().join(format!("aeroid-scenario-methods-{}", std::process::id()));
+    std::fs::create_dir_all(&folder).unwrap();
+    for (table, expected) in [
+        (
+            "[methods.nosuch]\nx = 1\n",
+            "methods.nosuch: unknown method 'nosuch'",
+        ),
+        (
+            "[methods.oem]\nstep = \"-1 s\"\n",
+            "methods.oem: step must be positive",
+        ),
+    ] {
+        let path = folder.join("scenario.toml");
+        std::fs::write(&path, format!("{text}\n{table}")).unwrap();
+        let scenario = Scenario::load(path.to_str().unwrap()).unwrap();
+        let profile = Profile::load("ideal", None).unwrap();
+        let error = run::run(&scenario, &profile).unwrap_err().to_string();
+        assert!(
+            error.contains("scenario.toml") && error.contains(expected),
+            "{error}"
+        );
+    }
+    std::fs::remove_dir_all(&folder).unwrap();
+}

@@ -286,3 +286,31 @@ fn estimation_problem_json_round_trip_is_exact() {
     assert!(flown >= 9, "{flown} scenarios flown");
     assert_eq!(problems, flown * models.len() * 3);
 }
+
+/// A problem file that is not one, or whose record breaks the record
+/// format (times that do not increase), is refused naming the file.
+#[test]
+fn a_broken_problem_file_is_refused() {
+    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    let profile = Profile::load("ideal", None).unwrap();
+    let (record, _) = record_scenario(&scenario, &profile).unwrap();
+    let structure = ModelStructure::load("attas-lateral").unwrap();
+    let problem = EstimationProblem::new("oem", vec![record], structure, &[]).unwrap();
+    let origin = std::path::Path::new("broken.json");
+    let error = EstimationProblem::from_json("{\"format\": 1}", origin)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.starts_with("broken.json: not an estimation problem"),
+        "{error}"
+    );
+    let mut reversed = problem.clone();
+    reversed.records[0].channels[0].times.reverse();
+    let error = EstimationProblem::from_json(&reversed.to_json().unwrap(), origin)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("broken.json") && error.contains("not after"),
+        "{error}"
+    );
+}

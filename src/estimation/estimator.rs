@@ -144,6 +144,14 @@ pub fn check_method_tables(tables: &MethodTables, problems: &mut Problems) {
     }
 }
 
+/// [`check_method_tables`] for a file read elsewhere (a scenario): an
+/// error naming `path` and each table's problem.
+pub fn validate_method_tables(tables: &MethodTables, path: &std::path::Path) -> Result<()> {
+    let mut problems = Problems::default();
+    check_method_tables(tables, &mut problems);
+    problems.finish(path, ())
+}
+
 /// Why an estimator cannot run on a problem, as data a program can read.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]

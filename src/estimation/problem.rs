@@ -124,6 +124,9 @@ impl EstimationProblem {
         if document.records.is_empty() {
             return Err(Error::Other(format!("{}: no record", origin.display())));
         }
+        for record in &document.records {
+            record.validate(origin)?;
+        }
         Ok(EstimationProblem {
             method: document.method,
             records: document.records,

@@ -14,7 +14,9 @@
 
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use crate::estimation::estimate::Estimate;
-use crate::estimation::estimator::{MethodTables, Refusal, RefusalKind, check_method_tables};
+use crate::estimation::estimator::{
+    MethodTables, Refusal, RefusalKind, check_method_tables, validate_method_tables,
+};
 use crate::estimation::methods;
 use crate::estimation::structure::ModelStructure;
 use crate::eval::run::{self, Outcome};
@@ -315,6 +317,7 @@ pub fn load(path: &Path) -> Result<GateFile> {
 /// that failed; an estimator's refusal is the case's `refusal`.
 pub fn run_case(case: &GateCase) -> Result<GateResult> {
     let scenario = Scenario::load(&case.scenario)?;
+    validate_method_tables(&scenario.methods, &scenario.path)?;
     let profile = Profile::load(&case.profile, None)?;
     let structure = ModelStructure::load(&case.model)?;
     let (record, truth) = record_scenario(&scenario, &profile)?;

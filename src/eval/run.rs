@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Estimate;
-use crate::estimation::estimator::{MethodTables, Refusal};
+use crate::estimation::estimator::{MethodTables, Refusal, validate_method_tables};
 use crate::estimation::methods;
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::structure::ModelStructure;
@@ -101,6 +101,7 @@ pub struct RunReport {
 
 /// Simulates, records and estimates; fails only when the flight itself cannot be made.
 pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
+    validate_method_tables(&scenario.methods, &scenario.path)?;
     let (record, truth) = record_scenario(scenario, profile)?;
     let estimators = methods::all();
     let mut runs = Vec::new();

@@ -38,7 +38,7 @@
 use crate::catalog;
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use crate::estimation::estimate::Status;
-use crate::estimation::estimator::{MethodTables, check_method_tables};
+use crate::estimation::estimator::{MethodTables, check_method_tables, validate_method_tables};
 use crate::estimation::methods;
 use crate::estimation::structure::ModelStructure;
 use crate::eval::run::{self, Outcome};
@@ -303,7 +303,9 @@ impl Study {
                 .map(|path| path.to_string_lossy().into_owned())
         };
         let scenarios = load_each("scenarios", &file.scenarios, &mut problems, |r| {
-            Scenario::load(&resolved(r, catalog::SCENARIO_FOLDER)?)
+            let scenario = Scenario::load(&resolved(r, catalog::SCENARIO_FOLDER)?)?;
+            validate_method_tables(&scenario.methods, &scenario.path)?;
+            Ok(scenario)
         });
         let models = load_each("models", &file.models, &mut problems, |r| {
             ModelStructure::load(&resolved(r, catalog::MODEL_FOLDER)?)
