@@ -79,8 +79,10 @@
 //! Convergence: the Gauss–Newton step's predicted decrease of the whitened
 //! cost below 1e-4 (a step under 0.014σ). Cramér–Rao
 //! bounds are the square roots of the diagonal of M⁻¹, M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ).
-//! Options: initial states and output biases as unknowns; several manoeuvres
-//! at once (shared aerodynamic parameters, initial states per manoeuvre).
+//! Settings (`[methods.oem]`, [`OutputErrorOptions`]): integration step and
+//! input interpolation, start, iteration limit, initial states and output
+//! biases as unknowns. Several manoeuvres may be fitted at once (shared
+//! aerodynamic parameters, initial states per manoeuvre).
 //!
 //! Start values ([`Start`]): by default the iterations start from equation
 //! error's estimates on the first record (the usual practice: Jategaonkar
@@ -656,7 +658,7 @@ fn window(
     Ok(range)
 }
 
-/// The integration step: the structure's, else the fastest output channel's period.
+/// The integration step: the settings', else the fastest output channel's period.
 fn step(
     record: &FlightRecord,
     structure: &ModelStructure,
