@@ -69,15 +69,23 @@ pub fn run(args: Args) -> Result<()> {
         started.elapsed().as_secs_f64()
     );
     out!("{}", result.table());
-    let failures: Vec<&aeroid::eval::study::Row> = result
-        .rows
+    // Every fit that is not converged is counted by what it is, with the
+    // first one's reason.
+    let endings = result.endings();
+    outln!(
+        "fits: {}",
+        endings
+            .iter()
+            .map(|(status, count, _)| format!("{count} {status}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    for (status, count, first) in endings
         .iter()
-        .filter(|r| r.status == aeroid::eval::study::FAILED)
-        .collect();
-    if let Some(first) = failures.first() {
+        .filter(|(status, _, _)| status != aeroid::eval::study::CONVERGED)
+    {
         outln!(
-            "{} fit(s) failed; the first (point {}, run {}, {} {}): {}",
-            failures.len(),
+            "{count} {status}; the first (point {}, run {}, {} {}): {}",
             first.point,
             first.run,
             first.model,

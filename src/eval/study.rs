@@ -758,6 +758,27 @@ fn statistics(group: &[&Row], summary: SummaryRow) -> SummaryRow {
 }
 
 impl StudyResult {
+    /// How the fits ended: per status, the number of fits (one per case,
+    /// model and method) and the first such fit's row, in status order of
+    /// first appearance.
+    pub fn endings(&self) -> Vec<(String, usize, &Row)> {
+        let mut seen = std::collections::HashSet::new();
+        let mut endings: Vec<(String, usize, &Row)> = Vec::new();
+        for row in &self.rows {
+            if !seen.insert((row.point, row.run, &row.model, &row.method)) {
+                continue;
+            }
+            match endings
+                .iter_mut()
+                .find(|(status, _, _)| *status == row.status)
+            {
+                Some((_, count, _)) => *count += 1,
+                None => endings.push((row.status.clone(), 1, row)),
+            }
+        }
+        endings
+    }
+
     /// Writes `runs.csv` (every row), `summary.csv` and `study.json` (the
     /// summary and rows; a NaN is null there) into `folder`, creating it.
     pub fn write(&self, folder: &Path) -> Result<()> {
@@ -863,6 +884,50 @@ mod tests {
             error: Some(estimate + 0.4),
             inside_95: Some((estimate + 0.4).abs() <= 1.96 * standard_error),
         }
+    }
+
+    /// Fits are counted once each, whatever their parameter rows: two
+    /// converged fits of two parameters each, one unidentified fit and one
+    /// refused (a single row) give 2, 1 and 1, each with its first row.
+    #[test]
+    fn endings_count_fits_by_status() {
+        let mut rows = Vec::new();
+        for run in 0..2 {
+            rows.push(row(run, CONVERGED, -0.4, 0.01));
+            rows.push(Row {
+                parameter: "Cl_r".into(),
+                ..row(run, CONVERGED, 0.1, 0.01)
+            });
+        }
+        rows.push(Row {
+            reason: "Cl_r".into(),
+            ..row(2, "unidentified", -0.4, f64::INFINITY)
+        });
+        rows.push(Row {
+            reason: "oem needs channels 'p'".into(),
+            parameter: String::new(),
+            ..row(3, REFUSED, f64::NAN, f64::NAN)
+        });
+        let result = StudyResult {
+            study: "s".into(),
+            seed: 1,
+            runs: 4,
+            summary: summarise(&rows),
+            rows,
+        };
+        let endings: Vec<(String, usize, usize)> = result
+            .endings()
+            .into_iter()
+            .map(|(status, count, first)| (status, count, first.run))
+            .collect();
+        assert_eq!(
+            endings,
+            [
+                (CONVERGED.to_string(), 2, 0),
+                ("unidentified".to_string(), 1, 2),
+                (REFUSED.to_string(), 1, 3)
+            ]
+        );
     }
 
     /// Three converged estimates −0.41, −0.40, −0.36 (mean −0.39, bias
