@@ -107,8 +107,14 @@ pub fn check_memory(what: &str, count: f64, item_bytes: usize) -> Result<(), Str
     }
 }
 
-/// Total memory of the machine in bytes (`MemTotal` of `/proc/meminfo`).
+/// Total memory of the machine in bytes (`MemTotal` of `/proc/meminfo`),
+/// read once: every simulation and record of a study is checked against it.
 fn machine_memory() -> Option<u64> {
+    static MEMORY: std::sync::OnceLock<Option<u64>> = std::sync::OnceLock::new();
+    *MEMORY.get_or_init(read_machine_memory)
+}
+
+fn read_machine_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
     let mut words = line.split_whitespace().skip(1);
