@@ -85,7 +85,7 @@ pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<Pat
         return Err(Error::Other(format!(
             "{} '{reference}' {reason}; name a file inside {} by a relative path, or a bundled name",
             kind(folder),
-            shown(base).display()
+            paths::shown(base).display()
         )));
     }
     find(reference, folder, base)
@@ -109,7 +109,7 @@ pub fn resolve_named(
             reference: reference.to_string(),
             reason: format!(
                 "{reason}; name a file inside {} by a relative path, or a bundled name",
-                shown(base).display()
+                paths::shown(base).display()
             ),
         });
     }
@@ -117,14 +117,6 @@ pub fn resolve_named(
     find(reference, folder, Some(base))
 }
 
-/// A folder as shown in messages: `.` for the current folder.
-fn shown(folder: &Path) -> &Path {
-    if folder.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        folder
-    }
-}
 
 fn find(reference: &str, folder: &str, base: Option<&Path>) -> Result<PathBuf> {
     let direct = PathBuf::from(reference);

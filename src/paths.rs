@@ -40,11 +40,7 @@ pub fn inside(folder: &Path, reference: &str, naming_file: &Path, field: &str) -
         reference: reference.to_string(),
         reason,
     };
-    let shown = if folder.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        folder
-    };
+    let shown = shown(folder);
     if let Some(reason) = escape_reason(reference) {
         return Err(escape(format!(
             "{reason}; name a file inside {} by a relative path",
@@ -62,6 +58,15 @@ pub fn inside(folder: &Path, reference: &str, naming_file: &Path, field: &str) -
         )));
     }
     Ok(path)
+}
+
+/// A folder as shown in messages: `.` for the current folder.
+pub(crate) fn shown(folder: &Path) -> &Path {
+    if folder.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        folder
+    }
 }
 
 /// Checks before any work that `path` can be written as a file: not a
