@@ -117,7 +117,6 @@ pub fn resolve_named(
     find(reference, folder, Some(base))
 }
 
-
 fn find(reference: &str, folder: &str, base: Option<&Path>) -> Result<PathBuf> {
     let direct = PathBuf::from(reference);
     let bundled_file = data_folder().join(folder).join(format!("{reference}.toml"));

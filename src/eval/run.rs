@@ -103,7 +103,7 @@ pub struct RunReport {
 pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
     validate_method_tables(&scenario.methods, &scenario.path)?;
     let (record, truth) = record_scenario(scenario, profile)?;
-    let estimators = methods::all();
+    let names = methods::names();
     let mut runs = Vec::new();
     for (index, reference) in scenario.models.iter().enumerate() {
         let field = format!("models[{index}]");
@@ -114,34 +114,20 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
             &field,
         )
         .and_then(|path| ModelStructure::load(&path.to_string_lossy()));
-        let first = runs.len();
-        for estimator in &estimators {
-            let method = estimator.name().to_string();
-            let outcome = match &structure {
-                Ok(structure) => {
-                    let start = estimator.starts_from().and_then(|from| {
-                        runs[first..]
-                            .iter()
-                            .find(|run: &&MethodRun| run.method == from)
-                            .and_then(|run| run.outcome.estimate())
-                    });
-                    estimate_scored(
-                        &method,
-                        &record,
-                        &truth,
-                        structure,
-                        &[&scenario.methods],
-                        start,
-                    )
-                }
-                Err(error) => Outcome::Failed(error.to_string()),
-            };
-            runs.push(MethodRun {
-                model: reference.clone(),
-                method,
-                outcome,
-            });
-        }
+        let outcomes = match &structure {
+            Ok(structure) => {
+                estimate_each(&names, &record, &truth, structure, &[&scenario.methods])
+            }
+            Err(error) => names
+                .iter()
+                .map(|name| (name.clone(), Outcome::Failed(error.to_string())))
+                .collect(),
+        };
+        runs.extend(outcomes.into_iter().map(|(method, outcome)| MethodRun {
+            model: reference.clone(),
+            method,
+            outcome,
+        }));
     }
     Ok(RunReport {
         scenario: scenario.name.clone(),
@@ -150,6 +136,30 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
         truth,
         runs,
     })
+}
+
+/// Runs each of `methods` in turn on a record with one model and scores
+/// every estimate; a method that starts from another's estimate
+/// ([`crate::estimation::estimator::Estimator::starts_from`]) gets it when
+/// that method ran before it here.
+pub fn estimate_each(
+    methods: &[String],
+    record: &FlightRecord,
+    truth: &RunTruth,
+    structure: &ModelStructure,
+    layers: &[&MethodTables],
+) -> Vec<(String, Outcome)> {
+    let mut outcomes: Vec<(String, Outcome)> = Vec::with_capacity(methods.len());
+    for method in methods {
+        let start = methods::find(method)
+            .ok()
+            .and_then(|estimator| estimator.starts_from())
+            .and_then(|from| outcomes.iter().find(|(name, _)| name == from))
+            .and_then(|(_, outcome)| outcome.estimate());
+        let outcome = estimate_scored(method, record, truth, structure, layers, start);
+        outcomes.push((method.clone(), outcome));
+    }
+    outcomes
 }
 
 /// Runs one registered method on a record and scores its estimate against

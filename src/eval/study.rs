@@ -449,32 +449,27 @@ impl Study {
         };
         let mut rows = Vec::new();
         for model in &self.models {
-            let mut outcomes: Vec<(&str, Outcome)> = Vec::new();
-            for method in &self.methods {
+            let outcomes = match &recorded {
+                Ok((record, truth)) => run::estimate_each(
+                    &self.methods,
+                    record,
+                    truth,
+                    model,
+                    &[&scenario.methods, &self.settings],
+                ),
+                Err(error) => self
+                    .methods
+                    .iter()
+                    .map(|method| (method.clone(), Outcome::Failed(error.to_string())))
+                    .collect(),
+            };
+            for (method, outcome) in outcomes {
                 let fit = Row {
                     model: model.name.clone(),
-                    method: method.clone(),
+                    method,
                     ..template.clone()
                 };
-                let outcome = match &recorded {
-                    Ok((record, truth)) => {
-                        let start = methods::find(method)
-                            .ok()
-                            .and_then(|estimator| estimator.starts_from())
-                            .and_then(|from| outcomes.iter().find(|(name, _)| *name == from))
-                            .and_then(|(_, outcome)| outcome.estimate());
-                        run::estimate_scored(
-                            method,
-                            record,
-                            truth,
-                            model,
-                            &[&scenario.methods, &self.settings],
-                            start,
-                        )
-                    }
-                    Err(error) => Outcome::Failed(error.to_string()),
-                };
-                match &outcome {
+                match outcome {
                     Outcome::Estimated { estimate, scores } => {
                         let (status, reason) = status_text(&estimate.status);
                         rows.extend(
@@ -488,12 +483,8 @@ impl Study {
                         reason: refusal.to_string(),
                         ..fit
                     }),
-                    Outcome::Failed(reason) => rows.push(Row {
-                        reason: reason.clone(),
-                        ..fit
-                    }),
+                    Outcome::Failed(reason) => rows.push(Row { reason, ..fit }),
                 }
-                outcomes.push((method, outcome));
             }
         }
         rows

@@ -1,7 +1,7 @@
 //! The estimators, one file each, and the one registry that lists them.
 //! Adding a method is one file implementing
 //! [`crate::estimation::estimator::Estimator`] and one line in
-//! `built_in`; the command line, `run`, `gate`, `study` and the reports
+//! `built_in`; the command line, `run`, `gate` and `study`
 //! find methods only here. A program embedding aeroid (or a test) adds its
 //! own with [`register`].
 
