@@ -114,6 +114,9 @@ use crate::estimation::methods::equation_error::{
 use crate::estimation::model::driven::{
     Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
+use crate::estimation::model::state_space::{
+    fitting_window, integration_step, observables, recorded_initial_state,
+};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{
     self, LeastSquaresProblem, NormalEquations, Options,
@@ -616,71 +619,13 @@ pub fn proof_of_match(
 }
 
 /// The structure's outputs as model outputs; an error names one the model does not have.
-fn observables(structure: &ModelStructure) -> Result<Vec<Observable>> {
-    structure
-        .outputs
-        .iter()
-        .map(|name| {
-            Observable::parse(name).ok_or_else(|| {
-                Error::Other(format!(
-                    "model '{}': output '{name}' is not a model output",
-                    structure.name
-                ))
-            })
-        })
-        .collect()
-}
-
-/// The fitting window of a record: where every output channel has samples.
-fn window(
-    record: &FlightRecord,
-    structure: &ModelStructure,
-    options: &OutputErrorOptions,
-) -> Result<(f64, f64)> {
-    let mut range = options.window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-    for name in &structure.outputs {
-        let channel = record.channel(name)?;
-        let (first, last) = (
-            channel.times.first().copied(),
-            channel.times.last().copied(),
-        );
-        let (Some(first), Some(last)) = (first, last) else {
-            return Err(Error::Other(format!("channel '{name}' is empty")));
-        };
-        range = (range.0.max(first), range.1.min(last));
-    }
-    if range.1 <= range.0 {
-        return Err(Error::Other(format!(
-            "record '{}': the output channels share no time window",
-            record.scenario
-        )));
-    }
-    Ok(range)
-}
-
-/// The integration step: the settings', else the fastest output channel's period.
-fn step(
-    record: &FlightRecord,
-    structure: &ModelStructure,
-    options: &OutputErrorOptions,
-) -> Result<f64> {
-    if let Some(step) = options.step {
-        return Ok(step);
-    }
-    let mut fastest: f64 = 0.0;
-    for name in &structure.outputs {
-        fastest = fastest.max(record.channel(name)?.rate);
-    }
-    Ok(1.0 / fastest)
-}
-
 fn segment(
     record: &FlightRecord,
     structure: &ModelStructure,
     options: &OutputErrorOptions,
 ) -> Result<Segment> {
-    let window = window(record, structure, options)?;
-    let step = step(record, structure, options)?;
+    let window = fitting_window(record, &structure.outputs, options.window)?;
+    let step = integration_step(record, &structure.outputs, options.step)?;
     let simulation = DrivenSimulation::from_record(
         record,
         &structure.integrate,
@@ -689,16 +634,7 @@ fn segment(
         window,
     )?;
     let end = simulation.time(simulation.len() - 1);
-    let mut initial = simulation.measured()[0];
-    for &i in &structure.integrate {
-        initial[i] = record
-            .channel(FLIGHT_PATH_STATES[i])
-            .ok()
-            .and_then(|c| c.value_at(window.0))
-            .unwrap_or(0.0);
-    }
-    let aero = &structure.aircraft.aero;
-    initial[10] = aero.separation_target(initial[1], 0.0);
+    let initial = recorded_initial_state(record, structure, &simulation, window.0);
     let outputs = structure
         .outputs
         .iter()

@@ -5,5 +5,8 @@
 //! integration step from any state ([`state_space`]), the view every method
 //! that simulates or filters shares.
 
+pub mod augmented;
 pub mod driven;
+pub mod linear;
+pub mod observations;
 pub mod state_space;

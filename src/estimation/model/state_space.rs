@@ -26,7 +26,10 @@ use super::driven::{
 };
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
+use crate::estimation::structure::ModelStructure;
+use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
+use crate::sim::integrator::Interpolation;
 use crate::sim::state::Controls;
 use nalgebra::{DMatrix, DVector};
 
@@ -41,6 +44,89 @@ pub struct Jacobians {
     pub outputs_by_state: DMatrix<f64>,
     /// ∂h/∂θ (outputs × parameters).
     pub outputs_by_parameter: DMatrix<f64>,
+}
+
+/// The window of a record where every channel in `outputs` has samples,
+/// inside `limit` if given.
+pub fn fitting_window(
+    record: &FlightRecord,
+    outputs: &[String],
+    limit: Option<(f64, f64)>,
+) -> Result<(f64, f64)> {
+    let mut range = limit.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+    for name in outputs {
+        let channel = record.channel(name)?;
+        let (first, last) = (
+            channel.times.first().copied(),
+            channel.times.last().copied(),
+        );
+        let (Some(first), Some(last)) = (first, last) else {
+            return Err(Error::Other(format!("channel '{name}' is empty")));
+        };
+        range = (range.0.max(first), range.1.min(last));
+    }
+    if range.1 <= range.0 {
+        return Err(Error::Other(format!(
+            "record '{}': the output channels share no time window",
+            record.scenario
+        )));
+    }
+    Ok(range)
+}
+
+/// The model outputs a structure compares, parsed.
+pub fn observables(structure: &ModelStructure) -> Result<Vec<Observable>> {
+    structure
+        .outputs
+        .iter()
+        .map(|name| {
+            Observable::parse(name).ok_or_else(|| {
+                Error::Other(format!(
+                    "model '{}': output '{name}' is not a model output",
+                    structure.name
+                ))
+            })
+        })
+        .collect()
+}
+
+/// The integration step: `step` if given, else the period of the fastest
+/// channel in `outputs`.
+pub fn integration_step(
+    record: &FlightRecord,
+    outputs: &[String],
+    step: Option<f64>,
+) -> Result<f64> {
+    if let Some(step) = step {
+        return Ok(step);
+    }
+    let mut fastest: f64 = 0.0;
+    for name in outputs {
+        fastest = fastest.max(record.channel(name)?.rate);
+    }
+    Ok(1.0 / fastest)
+}
+
+/// The full flight-path state a simulation of `structure` starts from at
+/// `start`: the integrated states as recorded there (0 where a channel is
+/// absent), the others the simulation's measured values, χ at its
+/// steady value for the recorded α.
+pub fn recorded_initial_state(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    simulation: &DrivenSimulation,
+    start: f64,
+) -> FlightPathState {
+    let mut initial = simulation.measured()[0];
+    for &i in &structure.integrate {
+        initial[i] = record
+            .channel(FLIGHT_PATH_STATES[i])
+            .ok()
+            .and_then(|c| c.value_at(start))
+            .unwrap_or(0.0);
+    }
+    initial[10] = structure.aircraft.aero.separation_target(initial[1], 0.0);
+    initial
 }
 
 /// A postulated model as ẋ = f(t, x, u, θ), y = h(t, x, u, θ) on an
@@ -118,6 +204,35 @@ impl DrivenStateSpace {
             states,
             mask,
         })
+    }
+
+    /// The view of `structure` driven by `record` as output error drives
+    /// it: over the window where every output has samples (inside `limit`),
+    /// on a grid of `step` (else the fastest output's period), with the
+    /// state x₀ the record gives at the window's start
+    /// ([`recorded_initial_state`]). Returns the view and x₀.
+    pub fn for_record(
+        record: &FlightRecord,
+        structure: &ModelStructure,
+        interpolation: Interpolation,
+        step: Option<f64>,
+        limit: Option<(f64, f64)>,
+    ) -> Result<(DrivenStateSpace, DVector<f64>)> {
+        let window = fitting_window(record, &structure.outputs, limit)?;
+        let step = integration_step(record, &structure.outputs, step)?;
+        let simulation = DrivenSimulation::from_record(
+            record,
+            &structure.integrate,
+            interpolation,
+            step,
+            window,
+        )?;
+        let initial = recorded_initial_state(record, structure, &simulation, window.0);
+        let outputs = observables(structure)?;
+        let model = FlightModel::new(structure.aircraft.clone(), Default::default());
+        let view = DrivenStateSpace::new(simulation, model, outputs)?;
+        let x0 = view.state_of(&initial);
+        Ok((view, x0))
     }
 
     /// The flight-path states in x (indices into [`FLIGHT_PATH_STATES`]).

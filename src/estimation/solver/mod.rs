@@ -2,5 +2,7 @@
 //! Levenberg–Marquardt solver and ordinary least squares with its error
 //! bounds.
 
+pub mod extended_kalman;
 pub mod gauss_newton;
+pub mod kalman;
 pub mod regression;

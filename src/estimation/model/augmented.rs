@@ -1,0 +1,148 @@
+//! A model with some of its parameters made states (the augmented-state
+//! form of the EKF and UKF estimators: Jategaonkar, "Flight Vehicle System
+//! Identification", 2nd ed., §7.2, Eq. 7.8; the X-31/F-18 HARV note, seed
+//! 003): z = [x; θ_a], ż = [f(x, θ); 0], y = h(x, θ), the parameters θ_a
+//! read from z and the others held at their given values. A parameter
+//! state is constant over a step (a pseudonoise on it enters only through
+//! the filter's process noise).
+
+use super::state_space::{Jacobians, StateSpaceModel};
+use crate::error::{Error, Result};
+use nalgebra::{DMatrix, DVector};
+
+/// `base` with the parameters `augmented` (indices into its θ) as states
+/// after its own; the other parameters at `theta`. It has no parameters
+/// of its own.
+#[derive(Debug, Clone)]
+pub struct Augmented<'a, M: StateSpaceModel + ?Sized> {
+    base: &'a M,
+    theta: Vec<f64>,
+    augmented: Vec<usize>,
+}
+
+impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
+    /// An error for an index outside θ, a repeated one, or a θ of the
+    /// wrong length.
+    pub fn new(base: &'a M, theta: &[f64], augmented: Vec<usize>) -> Result<Augmented<'a, M>> {
+        if theta.len() != base.parameter_count() {
+            return Err(Error::Other(format!(
+                "θ has {} values; the model has {} parameters",
+                theta.len(),
+                base.parameter_count()
+            )));
+        }
+        for (i, &j) in augmented.iter().enumerate() {
+            if j >= theta.len() || augmented[..i].contains(&j) {
+                return Err(Error::Other(format!(
+                    "parameter index {j} is outside θ or repeated"
+                )));
+            }
+        }
+        Ok(Augmented {
+            base,
+            theta: theta.to_vec(),
+            augmented,
+        })
+    }
+
+    /// The augmented state [x; θ_a] of a base state and the held θ.
+    pub fn state(&self, x: &[f64]) -> DVector<f64> {
+        DVector::from_iterator(
+            x.len() + self.augmented.len(),
+            x.iter()
+                .copied()
+                .chain(self.augmented.iter().map(|&j| self.theta[j])),
+        )
+    }
+
+    /// Splits z into the base state and the full θ.
+    fn split<'z>(&self, z: &'z [f64]) -> Result<(&'z [f64], Vec<f64>)> {
+        let n = self.base.state_count();
+        if z.len() != n + self.augmented.len() {
+            return Err(Error::Other(format!(
+                "the augmented state has {} values; expected {}",
+                z.len(),
+                n + self.augmented.len()
+            )));
+        }
+        let mut theta = self.theta.clone();
+        for (i, &j) in self.augmented.iter().enumerate() {
+            theta[j] = z[n + i];
+        }
+        Ok((&z[..n], theta))
+    }
+
+    /// The columns of a base Jacobian for the augmented parameters.
+    fn augmented_columns(&self, by_parameter: &DMatrix<f64>) -> DMatrix<f64> {
+        by_parameter.select_columns(&self.augmented)
+    }
+}
+
+impl<M: StateSpaceModel + ?Sized> StateSpaceModel for Augmented<'_, M> {
+    fn state_count(&self) -> usize {
+        self.base.state_count() + self.augmented.len()
+    }
+
+    fn output_count(&self) -> usize {
+        self.base.output_count()
+    }
+
+    fn parameter_count(&self) -> usize {
+        0
+    }
+
+    fn len(&self) -> usize {
+        self.base.len()
+    }
+
+    fn time(&self, k: usize) -> f64 {
+        self.base.time(k)
+    }
+
+    fn rates(&self, t: f64, z: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
+        let (x, theta) = self.split(z)?;
+        let rates = self.base.rates(t, x, &theta)?;
+        Ok(rates.resize_vertically(z.len(), 0.0))
+    }
+
+    fn outputs(&self, t: f64, z: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
+        let (x, theta) = self.split(z)?;
+        self.base.outputs(t, x, &theta)
+    }
+
+    /// [[∂f/∂x, ∂f/∂θ_a], [0, 0]] and [∂h/∂x, ∂h/∂θ_a].
+    fn jacobians(&self, t: f64, z: &[f64], _theta: &[f64]) -> Result<Jacobians> {
+        let (x, theta) = self.split(z)?;
+        let base = self.base.jacobians(t, x, &theta)?;
+        let (n, size) = (x.len(), z.len());
+        let mut rates_by_state = DMatrix::zeros(size, size);
+        rates_by_state
+            .view_mut((0, 0), (n, n))
+            .copy_from(&base.rates_by_state);
+        rates_by_state
+            .view_mut((0, n), (n, size - n))
+            .copy_from(&self.augmented_columns(&base.rates_by_parameter));
+        let outputs = base.outputs_by_state.nrows();
+        let mut outputs_by_state = DMatrix::zeros(outputs, size);
+        outputs_by_state
+            .view_mut((0, 0), (outputs, n))
+            .copy_from(&base.outputs_by_state);
+        outputs_by_state
+            .view_mut((0, n), (outputs, size - n))
+            .copy_from(&self.augmented_columns(&base.outputs_by_parameter));
+        Ok(Jacobians {
+            rates_by_state,
+            rates_by_parameter: DMatrix::zeros(size, 0),
+            outputs_by_state,
+            outputs_by_parameter: DMatrix::zeros(outputs, 0),
+        })
+    }
+
+    fn step(&self, k: usize, z: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
+        let (x, theta) = self.split(z)?;
+        let next = self.base.step(k, x, &theta)?;
+        let mut result = DVector::from_column_slice(z);
+        result.rows_mut(0, x.len()).copy_from(&next);
+        Ok(result)
+    }
+}

@@ -1,0 +1,185 @@
+//! One pass of the continuous–discrete extended Kalman filter over any
+//! state-space model ([`StateSpaceModel`]) and a record's observations on
+//! its grid ([`Observations`]): the filter the EKF, the EKF + smoother and
+//! the filter error method run (Jategaonkar, "Flight Vehicle System
+//! Identification", 2nd ed., §7.2, Eqs. 7.11–7.19; Gelb, "Applied Optimal
+//! Estimation", Table 6.1-1, continuous-discrete form).
+//!
+//! Time update from grid point k − 1 to k: the state by the model's own
+//! integration step, x⁻_k = step(x⁺_{k−1}); the covariance by the
+//! transition of the model linearised at (t_{k−1}, x⁺_{k−1}),
+//! Φ = e^{A·h}, A = ∂f/∂x, P⁻_k = Φ·P⁺_{k−1}·Φᵀ + Q_d with Q_d the
+//! discretised continuous process noise (Van Loan; [`kalman::discretise`]).
+//! Measurement update at k with the outputs measured there: ŷ = h(t_k, x⁻_k),
+//! H = ∂h/∂x at (t_k, x⁻_k) (rows of the measured outputs), R their noise
+//! variances (diagonal), [`kalman::update`]. For a linear model whose step is
+//! exact ([`crate::estimation::model::linear`]) this is the linear Kalman
+//! filter.
+//!
+//! The pass keeps what smoothers and likelihoods need: predicted and
+//! filtered estimates, each update and each transition, the innovations
+//! per output with their variances, and the negative log-likelihood
+//! −ln L = ½·Σ_k (νᵀS⁻¹ν + ln det S) + const (Jategaonkar Eq. 5.16).
+
+use crate::error::{Error, Result};
+use crate::estimation::model::observations::Observations;
+use crate::estimation::model::state_space::StateSpaceModel;
+use crate::estimation::solver::kalman::{self, Gaussian, Measured};
+use nalgebra::{DMatrix, DVector};
+
+/// The filter's noise: continuous process-noise spectral density over the
+/// states (n × n; zero: none) and each output's measurement variance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Noise {
+    pub process: DMatrix<f64>,
+    pub measurement: DVector<f64>,
+}
+
+/// One innovation: grid point, ν and its predicted variance S_ii.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Innovation {
+    pub k: usize,
+    pub value: f64,
+    pub variance: f64,
+}
+
+/// What one filter pass produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pass {
+    /// (x, P)_{k|k−1}; at k = 0 the initial estimate.
+    pub predicted: Vec<Gaussian>,
+    /// (x, P)_{k|k}.
+    pub filtered: Vec<Gaussian>,
+    /// The update at each grid point with measurements.
+    pub measured: Vec<Option<Measured>>,
+    /// Φ from k to k + 1 (len − 1 of them).
+    pub transitions: Vec<DMatrix<f64>>,
+    /// Per output, its innovations.
+    pub innovations: Vec<Vec<Innovation>>,
+    /// ½·Σ (νᵀS⁻¹ν + ln det S).
+    pub negative_log_likelihood: f64,
+}
+
+/// Runs the filter from `initial` at grid point 0 with the parameters
+/// `theta` (a model's own; none for an augmented model). An error names
+/// the time where the model departs or a covariance breaks down.
+pub fn filter<M: StateSpaceModel + ?Sized>(
+    model: &M,
+    theta: &[f64],
+    initial: Gaussian,
+    noise: &Noise,
+    observations: &Observations,
+) -> Result<Pass> {
+    let n = model.state_count();
+    let len = model.len();
+    check_sizes(model, &initial, noise, observations)?;
+    let mut pass = Pass {
+        predicted: Vec::with_capacity(len),
+        filtered: Vec::with_capacity(len),
+        measured: Vec::with_capacity(len),
+        transitions: Vec::with_capacity(len.saturating_sub(1)),
+        innovations: vec![Vec::new(); model.output_count()],
+        negative_log_likelihood: 0.0,
+    };
+    let mut state = initial.mean;
+    let mut covariance = initial.covariance;
+    let no_input = DMatrix::zeros(n, 0);
+    for k in 0..len {
+        let t = model.time(k);
+        if k > 0 {
+            let previous = model.time(k - 1);
+            let a = model
+                .jacobians(previous, state.as_slice(), theta)?
+                .rates_by_state;
+            let discrete = kalman::discretise(&a, &no_input, Some(&noise.process), t - previous);
+            state = model
+                .step(k - 1, state.as_slice(), theta)
+                .map_err(|e| at_time(e, previous))?;
+            covariance = kalman::predict_covariance(
+                &covariance,
+                &discrete.transition,
+                &discrete.process_noise,
+            );
+            pass.transitions.push(discrete.transition);
+        }
+        pass.predicted.push(Gaussian {
+            mean: state.clone(),
+            covariance: covariance.clone(),
+        });
+        let present = &observations.at[k];
+        if present.is_empty() {
+            pass.measured.push(None);
+        } else {
+            let rows: Vec<usize> = present.iter().map(|&(o, _)| o).collect();
+            let predicted = model.outputs(t, state.as_slice(), theta)?;
+            let h = model
+                .jacobians(t, state.as_slice(), theta)?
+                .outputs_by_state
+                .select_rows(&rows);
+            let r = DMatrix::from_diagonal(&DVector::from_iterator(
+                rows.len(),
+                rows.iter().map(|&o| noise.measurement[o]),
+            ));
+            let innovation =
+                DVector::from_iterator(rows.len(), present.iter().map(|&(o, z)| z - predicted[o]));
+            let update = kalman::update(&mut state, &mut covariance, &h, &r, innovation)
+                .map_err(|e| at_time(e, t))?;
+            pass.negative_log_likelihood += 0.5 * update.log_likelihood_term();
+            for (i, &o) in rows.iter().enumerate() {
+                pass.innovations[o].push(Innovation {
+                    k,
+                    value: update.innovation[i],
+                    variance: update.innovation_covariance[(i, i)],
+                });
+            }
+            pass.measured.push(Some(Measured {
+                observation: h,
+                update,
+            }));
+        }
+        if !state.iter().all(|v| v.is_finite()) {
+            return Err(Error::Other(format!(
+                "the filter's state went non-finite at t = {t} s"
+            )));
+        }
+        pass.filtered.push(Gaussian {
+            mean: state.clone(),
+            covariance: covariance.clone(),
+        });
+    }
+    Ok(pass)
+}
+
+fn check_sizes<M: StateSpaceModel + ?Sized>(
+    model: &M,
+    initial: &Gaussian,
+    noise: &Noise,
+    observations: &Observations,
+) -> Result<()> {
+    let n = model.state_count();
+    let outputs = model.output_count();
+    let fits = initial.mean.len() == n
+        && initial.covariance.shape() == (n, n)
+        && noise.process.shape() == (n, n)
+        && noise.measurement.len() == outputs
+        && observations.at.len() == model.len()
+        && observations.names.len() == outputs;
+    if fits {
+        Ok(())
+    } else {
+        Err(Error::Other(format!(
+            "the filter's sizes do not agree: {n} states and {outputs} outputs on {} grid points; initial {} and {:?}, process noise {:?}, {} measurement variances, observations of {} outputs on {} points",
+            model.len(),
+            initial.mean.len(),
+            initial.covariance.shape(),
+            noise.process.shape(),
+            noise.measurement.len(),
+            observations.names.len(),
+            observations.at.len()
+        )))
+    }
+}
+
+fn at_time(error: Error, t: f64) -> Error {
+    Error::Other(format!("at t = {t} s: {error}"))
+}

@@ -1,0 +1,682 @@
+//! The Kalman-filtering core every filter method shares: discretisation,
+//! time and measurement updates, the steady-state gain, the
+//! Rauch–Tung–Striebel and modified Bryson–Frazier smoothers, and sigma
+//! points. Methods hold the model ([`crate::estimation::model`]); this
+//! module holds only the linear algebra.
+//!
+//! - Discretisation (Van Loan, "Computing integrals involving the matrix
+//!   exponential", IEEE TAC 23(3), 1978, §4): with ẋ = A·x + B·u + G·w,
+//!   E[w·wᵀ] = Q_c, the step h transition Φ = e^{A·h}, the input matrix
+//!   Γ = ∫₀ʰ e^{A·s} ds·B and the discrete process noise
+//!   Q_d = ∫₀ʰ e^{A·s}·G·Q_c·Gᵀ·e^{Aᵀ·s} ds come from the exponentials of
+//!   the block matrices [[A, B], [0, 0]]·h and [[−A, GQ_cGᵀ], [0, Aᵀ]]·h.
+//!   The exponential is by scaling and squaring with a Taylor series
+//!   (Moler & Van Loan, "Nineteen dubious ways…", SIAM Rev. 45, 2003,
+//!   method 3): the matrix scaled to norm ≤ ½, 18 terms (truncation below
+//!   10⁻¹⁸ relative).
+//! - Time update P⁻ = Φ·P⁺·Φᵀ + Q_d; measurement update with gain
+//!   K = P⁻·Hᵀ·S⁻¹, S = H·P⁻·Hᵀ + R, state x⁺ = x⁻ + K·ν and covariance in
+//!   Joseph's form P⁺ = (I − K·H)·P⁻·(I − K·H)ᵀ + K·R·Kᵀ (Jategaonkar,
+//!   "Flight Vehicle System Identification", 2nd ed., §5.2, Eqs. 5.8–5.14;
+//!   Gelb, "Applied Optimal Estimation", Table 4.2-1). S is factored by
+//!   Cholesky; one that is not positive definite is an error.
+//! - The steady-state gain of a time-invariant system (the filter error
+//!   method's, Jategaonkar §5.3, Eq. 5.23): the predicted covariance P
+//!   solving the discrete algebraic Riccati equation
+//!   P = Φ·(P − P·Hᵀ·(H·P·Hᵀ + R)⁻¹·H·P)·Φᵀ + Q_d, by the structured
+//!   doubling algorithm (Chu, Fan & Lin, "A structure-preserving doubling
+//!   algorithm for discrete-time algebraic Riccati equations", Linear
+//!   Algebra Appl. 396, 2005, Eq. 2.5), quadratically convergent.
+//! - Rauch–Tung–Striebel smoother (Rauch, Tung & Striebel, AIAA J. 3(8),
+//!   1965): x_{k|N} = x_{k|k} + C_k·(x_{k+1|N} − x_{k+1|k}),
+//!   C_k = P_{k|k}·Φ_kᵀ·P_{k+1|k}⁻¹.
+//! - Modified Bryson–Frazier smoother (Bierman, "Fixed interval smoothing
+//!   with discrete measurements", Int. J. Control 18(1), 1973; the form of
+//!   Wang et al. 2012, Eqs. 21–24): backwards from λ̂_N = 0, Λ̂_N = 0, at a
+//!   measurement λ̃_k = −Hᵀ·S⁻¹·ν + (I − K·H)ᵀ·λ̂_k,
+//!   Λ̃_k = Hᵀ·S⁻¹·H + (I − K·H)ᵀ·Λ̂_k·(I − K·H) (else λ̃ = λ̂, Λ̃ = Λ̂);
+//!   x_{k|N} = x_{k|k−1} − P_{k|k−1}·λ̃_k,
+//!   P_{k|N} = P_{k|k−1} − P_{k|k−1}·Λ̃_k·P_{k|k−1};
+//!   λ̂_{k−1} = Φᵀ·λ̃_k, Λ̂_{k−1} = Φᵀ·Λ̃_k·Φ (Φ from k − 1 to k). It needs
+//!   no inverse of a covariance, unlike RTS.
+//! - Sigma points of the scaled unscented transform (Wan & van der Merwe,
+//!   "The unscented Kalman filter for nonlinear estimation", IEEE AS-SPCC
+//!   2000, Eq. 15): χ₀ = x̄, χ_{±i} = x̄ ± (√((n + λ)·P))_i,
+//!   λ = α²·(n + κ) − n, weights W₀ᵐ = λ/(n + λ),
+//!   W₀ᶜ = W₀ᵐ + 1 − α² + β, Wᵢ = 1/(2(n + λ)).
+
+use crate::error::{Error, Result};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+
+/// Taylor terms of the scaled exponential.
+const TAYLOR_TERMS: usize = 18;
+
+/// e^M by scaling and squaring (see the module header).
+pub fn exponential(matrix: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = matrix.nrows();
+    let norm = matrix.iter().map(|v| v.abs()).fold(0.0, f64::max) * n as f64;
+    let squarings = if norm > 0.5 {
+        (norm / 0.5).log2().ceil() as i32
+    } else {
+        0
+    };
+    let scaled = matrix / 2f64.powi(squarings);
+    let mut result = DMatrix::identity(n, n);
+    let mut term = DMatrix::identity(n, n);
+    for k in 1..=TAYLOR_TERMS {
+        term = &term * &scaled / k as f64;
+        result += &term;
+    }
+    for _ in 0..squarings {
+        result = &result * &result;
+    }
+    result
+}
+
+/// A linear system over one step: x_{k+1} = Φ·x_k + Γ·u_k + w_k,
+/// E[w·wᵀ] = Q_d.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Discrete {
+    /// Φ = e^{A·h}.
+    pub transition: DMatrix<f64>,
+    /// Γ = ∫₀ʰ e^{A·s} ds·B (a held input).
+    pub input: DMatrix<f64>,
+    /// Q_d (zero without process noise).
+    pub process_noise: DMatrix<f64>,
+}
+
+/// Φ, Γ and Q_d of ẋ = A·x + B·u + G·w over a step h, with `noise` the
+/// continuous spectral density G·Q_c·Gᵀ (None: no process noise). Van
+/// Loan's method (module header).
+pub fn discretise(
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    noise: Option<&DMatrix<f64>>,
+    h: f64,
+) -> Discrete {
+    let n = a.nrows();
+    let m = b.ncols();
+    let mut block = DMatrix::zeros(n + m, n + m);
+    block.view_mut((0, 0), (n, n)).copy_from(&(a * h));
+    block.view_mut((0, n), (n, m)).copy_from(&(b * h));
+    let exp = exponential(&block);
+    let transition = exp.view((0, 0), (n, n)).into_owned();
+    let input = exp.view((0, n), (n, m)).into_owned();
+    let process_noise = match noise {
+        None => DMatrix::zeros(n, n),
+        Some(noise) => {
+            let mut block = DMatrix::zeros(2 * n, 2 * n);
+            block.view_mut((0, 0), (n, n)).copy_from(&(-a * h));
+            block.view_mut((0, n), (n, n)).copy_from(&(noise * h));
+            block
+                .view_mut((n, n), (n, n))
+                .copy_from(&(a.transpose() * h));
+            let exp = exponential(&block);
+            // Q_d = Φ·(upper-right block); symmetrised against rounding.
+            let q = &transition * exp.view((0, n), (n, n));
+            (&q + q.transpose()) * 0.5
+        }
+    };
+    Discrete {
+        transition,
+        input,
+        process_noise,
+    }
+}
+
+/// P⁻ = Φ·P·Φᵀ + Q_d.
+pub fn predict_covariance(
+    covariance: &DMatrix<f64>,
+    transition: &DMatrix<f64>,
+    process_noise: &DMatrix<f64>,
+) -> DMatrix<f64> {
+    transition * covariance * transition.transpose() + process_noise
+}
+
+/// What a measurement update used and produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Update {
+    /// ν = z − ŷ.
+    pub innovation: DVector<f64>,
+    /// S = H·P⁻·Hᵀ + R.
+    pub innovation_covariance: DMatrix<f64>,
+    /// S⁻¹.
+    pub innovation_inverse: DMatrix<f64>,
+    /// K = P⁻·Hᵀ·S⁻¹.
+    pub gain: DMatrix<f64>,
+}
+
+impl Update {
+    /// νᵀ·S⁻¹·ν + ln det S, the update's term of −2·ln L (without 2π).
+    pub fn log_likelihood_term(&self) -> f64 {
+        let weighted = &self.innovation_inverse * &self.innovation;
+        let quadratic = self.innovation.dot(&weighted);
+        let log_det = match Cholesky::new(self.innovation_covariance.clone()) {
+            Some(c) => 2.0 * c.l().diagonal().iter().map(|d| d.ln()).sum::<f64>(),
+            None => f64::INFINITY,
+        };
+        quadratic + log_det
+    }
+}
+
+/// The measurement update of (x, P) with the innovation ν, its
+/// sensitivity H and the noise covariance R, in place (Joseph's form).
+/// An error when S is not positive definite.
+pub fn update(
+    state: &mut DVector<f64>,
+    covariance: &mut DMatrix<f64>,
+    observation: &DMatrix<f64>,
+    noise: &DMatrix<f64>,
+    innovation: DVector<f64>,
+) -> Result<Update> {
+    let n = state.len();
+    let ph = &*covariance * observation.transpose();
+    let s = observation * &ph + noise;
+    let s = (&s + s.transpose()) * 0.5;
+    let cholesky = Cholesky::new(s.clone()).ok_or_else(|| {
+        Error::Other(
+            "the innovation covariance H·P·Hᵀ + R is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
+        )
+    })?;
+    let inverse = cholesky.inverse();
+    let gain = &ph * &inverse;
+    *state += &gain * &innovation;
+    let reduce = DMatrix::identity(n, n) - &gain * observation;
+    let joseph = &reduce * &*covariance * reduce.transpose() + &gain * noise * gain.transpose();
+    *covariance = (&joseph + joseph.transpose()) * 0.5;
+    Ok(Update {
+        innovation,
+        innovation_covariance: s,
+        innovation_inverse: inverse,
+        gain,
+    })
+}
+
+/// The steady state of a time-invariant filter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SteadyState {
+    /// The predicted covariance P solving the Riccati equation.
+    pub covariance: DMatrix<f64>,
+    /// K = P·Hᵀ·S⁻¹.
+    pub gain: DMatrix<f64>,
+    /// S = H·P·Hᵀ + R.
+    pub innovation_covariance: DMatrix<f64>,
+}
+
+/// Doubling iterations before the Riccati solution is declared not found.
+const DOUBLING_LIMIT: usize = 60;
+
+/// The steady-state predicted covariance and gain of
+/// x_{k+1} = Φ·x_k + w (Q_d), z = H·x + v (R), by the structured doubling
+/// algorithm (module header). An error when it does not converge (Φ not
+/// detectable through H, or a singular step).
+pub fn steady_state(
+    transition: &DMatrix<f64>,
+    observation: &DMatrix<f64>,
+    process_noise: &DMatrix<f64>,
+    noise: &DMatrix<f64>,
+) -> Result<SteadyState> {
+    let n = transition.nrows();
+    let noise_inverse = Cholesky::new(noise.clone())
+        .ok_or_else(|| {
+            Error::Other("the measurement noise covariance R is not positive definite".into())
+        })?
+        .inverse();
+    let identity = DMatrix::<f64>::identity(n, n);
+    // The DARE X = AᵀXA − AᵀXB(R + BᵀXB)⁻¹BᵀXA + Q with A = Φᵀ, B = Hᵀ.
+    let mut a = transition.transpose();
+    let mut g = observation.transpose() * &noise_inverse * observation;
+    let mut x = process_noise.clone();
+    for _ in 0..DOUBLING_LIMIT {
+        let w = &identity + &g * &x;
+        let lu = w.lu();
+        let solve = |m: &DMatrix<f64>| lu.solve(m);
+        let (Some(wa), Some(wg)) = (solve(&a), solve(&g)) else {
+            return Err(Error::Other(
+                "the Riccati equation's doubling met a singular matrix".into(),
+            ));
+        };
+        let next_x = &x + a.transpose() * &x * &wa;
+        let next_g = &g + &a * wg * a.transpose();
+        let next_a = &a * wa;
+        let change = (&next_x - &x).norm();
+        x = (&next_x + next_x.transpose()) * 0.5;
+        g = (&next_g + next_g.transpose()) * 0.5;
+        a = next_a;
+        if !x.iter().all(|v| v.is_finite()) {
+            break;
+        }
+        if change <= 1e-14 * x.norm().max(f64::MIN_POSITIVE) {
+            let s = observation * &x * observation.transpose() + noise;
+            let s_inverse = Cholesky::new(s.clone())
+                .ok_or_else(|| {
+                    Error::Other(
+                        "the steady-state innovation covariance is not positive definite".into(),
+                    )
+                })?
+                .inverse();
+            let gain = &x * observation.transpose() * s_inverse;
+            let closed_loop = transition * (&identity - &gain * observation);
+            if !is_stable(closed_loop) {
+                break;
+            }
+            return Ok(SteadyState {
+                covariance: x,
+                gain,
+                innovation_covariance: s,
+            });
+        }
+    }
+    Err(Error::Other(
+        "the steady-state Riccati equation has no solution: the system is not detectable through the outputs, or not stabilisable by the process noise".into(),
+    ))
+}
+
+/// Whether every eigenvalue of a transition matrix lies inside the unit
+/// circle: its 2³⁰th power (by squaring) vanishes.
+fn is_stable(mut matrix: DMatrix<f64>) -> bool {
+    for _ in 0..30 {
+        matrix = &matrix * &matrix;
+        let norm = matrix.norm();
+        if !norm.is_finite() || norm > 1e100 {
+            return false;
+        }
+    }
+    matrix.norm() < 1e-6
+}
+
+/// A Gaussian estimate: mean and covariance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Gaussian {
+    pub mean: DVector<f64>,
+    pub covariance: DMatrix<f64>,
+}
+
+/// The RTS smoother over a filter's pass: `filtered[k]` = (x, P)_{k|k},
+/// `predicted[k]` = (x, P)_{k|k−1} (predicted[0] unused),
+/// `transitions[k]` = Φ from k to k + 1. Returns (x, P)_{k|N}.
+pub fn rts_smooth(
+    filtered: &[Gaussian],
+    predicted: &[Gaussian],
+    transitions: &[DMatrix<f64>],
+) -> Result<Vec<Gaussian>> {
+    let n = filtered.len();
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let mut smoothed = filtered.to_vec();
+    for k in (0..n - 1).rev() {
+        let prior = &predicted[k + 1];
+        let inverse = Cholesky::new(prior.covariance.clone())
+            .ok_or_else(|| {
+                Error::Other(format!(
+                    "the RTS smoother: the predicted covariance at step {} is not positive definite",
+                    k + 1
+                ))
+            })?
+            .inverse();
+        let gain = &filtered[k].covariance * transitions[k].transpose() * inverse;
+        let mean = &filtered[k].mean + &gain * (&smoothed[k + 1].mean - &prior.mean);
+        let covariance = &filtered[k].covariance
+            + &gain * (&smoothed[k + 1].covariance - &prior.covariance) * gain.transpose();
+        smoothed[k] = Gaussian {
+            mean,
+            covariance: (&covariance + covariance.transpose()) * 0.5,
+        };
+    }
+    Ok(smoothed)
+}
+
+/// What the modified Bryson–Frazier smoother needs of a measurement
+/// update: H, S⁻¹, ν and K.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measured {
+    pub observation: DMatrix<f64>,
+    pub update: Update,
+}
+
+/// The modified Bryson–Frazier smoother (module header) over a filter's
+/// pass: `predicted[k]` = (x, P)_{k|k−1} (at k = 0 the initial estimate),
+/// `measured[k]` the update at k if there was one, `transitions[k]` = Φ
+/// from k to k + 1. Returns (x, P)_{k|N}.
+pub fn mbf_smooth(
+    predicted: &[Gaussian],
+    measured: &[Option<Measured>],
+    transitions: &[DMatrix<f64>],
+) -> Vec<Gaussian> {
+    let len = predicted.len();
+    let Some(first) = predicted.first() else {
+        return Vec::new();
+    };
+    let n = first.mean.len();
+    let mut adjoint = DVector::zeros(n);
+    let mut information = DMatrix::zeros(n, n);
+    let mut smoothed = predicted.to_vec();
+    for k in (0..len).rev() {
+        if let Some(Measured {
+            observation,
+            update,
+        }) = &measured[k]
+        {
+            let reduce = DMatrix::identity(n, n) - &update.gain * observation;
+            let weighted = observation.transpose() * &update.innovation_inverse;
+            adjoint = -&weighted * &update.innovation + reduce.transpose() * &adjoint;
+            information = &weighted * observation + reduce.transpose() * &information * &reduce;
+        }
+        let prior = &predicted[k];
+        let mean = &prior.mean - &prior.covariance * &adjoint;
+        let covariance = &prior.covariance - &prior.covariance * &information * &prior.covariance;
+        smoothed[k] = Gaussian {
+            mean,
+            covariance: (&covariance + covariance.transpose()) * 0.5,
+        };
+        if k > 0 {
+            let phi = &transitions[k - 1];
+            adjoint = phi.transpose() * &adjoint;
+            information = phi.transpose() * &information * phi;
+        }
+    }
+    smoothed
+}
+
+/// The scaled unscented transform's parameters (Wan & van der Merwe 2000).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unscented {
+    /// Spread of the points about the mean (10⁻³ … 1).
+    pub alpha: f64,
+    /// Prior knowledge of the distribution (2 for a Gaussian).
+    pub beta: f64,
+    /// Secondary scaling (0, or 3 − n).
+    pub kappa: f64,
+}
+
+impl Default for Unscented {
+    fn default() -> Self {
+        Unscented {
+            alpha: 1.0,
+            beta: 2.0,
+            kappa: 0.0,
+        }
+    }
+}
+
+/// 2n + 1 sigma points with their mean and covariance weights.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SigmaPoints {
+    pub points: Vec<DVector<f64>>,
+    pub mean_weights: Vec<f64>,
+    pub covariance_weights: Vec<f64>,
+}
+
+impl Unscented {
+    /// The sigma points of (x̄, P); an error when P is not positive definite.
+    pub fn points(&self, mean: &DVector<f64>, covariance: &DMatrix<f64>) -> Result<SigmaPoints> {
+        let n = mean.len();
+        let lambda = self.alpha * self.alpha * (n as f64 + self.kappa) - n as f64;
+        let scale = n as f64 + lambda;
+        let root = Cholesky::<f64, Dyn>::new(covariance * scale)
+            .ok_or_else(|| {
+                Error::Other("the UKF's state covariance is not positive definite".into())
+            })?
+            .unpack();
+        let mut points = Vec::with_capacity(2 * n + 1);
+        points.push(mean.clone());
+        for i in 0..n {
+            points.push(mean + root.column(i));
+        }
+        for i in 0..n {
+            points.push(mean - root.column(i));
+        }
+        let weight = 1.0 / (2.0 * scale);
+        let mut mean_weights = vec![weight; 2 * n + 1];
+        let mut covariance_weights = mean_weights.clone();
+        mean_weights[0] = lambda / scale;
+        covariance_weights[0] = lambda / scale + 1.0 - self.alpha * self.alpha + self.beta;
+        Ok(SigmaPoints {
+            points,
+            mean_weights,
+            covariance_weights,
+        })
+    }
+}
+
+impl SigmaPoints {
+    /// The weighted mean of transformed points.
+    pub fn mean_of(&self, transformed: &[DVector<f64>]) -> DVector<f64> {
+        let mut mean = DVector::zeros(transformed[0].len());
+        for (point, &w) in transformed.iter().zip(&self.mean_weights) {
+            mean.axpy(w, point, 1.0);
+        }
+        mean
+    }
+
+    /// The weighted cross-covariance Σ W_i·(a_i − ā)(b_i − b̄)ᵀ.
+    pub fn cross_covariance(
+        &self,
+        a: &[DVector<f64>],
+        a_mean: &DVector<f64>,
+        b: &[DVector<f64>],
+        b_mean: &DVector<f64>,
+    ) -> DMatrix<f64> {
+        let mut result = DMatrix::zeros(a_mean.len(), b_mean.len());
+        for ((a, b), &w) in a.iter().zip(b).zip(&self.covariance_weights) {
+            let da = a - a_mean;
+            let db = b - b_mean;
+            result.ger(w, &da, &db, 1.0);
+        }
+        result
+    }
+}
+
+/// The fraction of lags 1 … `lags` at which the normalised autocorrelation
+/// of `series` (mean removed) lies inside ±1.96/√N, the 95 % band of
+/// white noise (Box & Jenkins; Jategaonkar §6.5.1): a whiteness test of
+/// innovations. NaN for a constant or too short series.
+pub fn whiteness(series: &[f64], lags: usize) -> f64 {
+    let n = series.len();
+    if n < 2 || lags == 0 || lags >= n {
+        return f64::NAN;
+    }
+    let mean = series.iter().sum::<f64>() / n as f64;
+    let centred: Vec<f64> = series.iter().map(|v| v - mean).collect();
+    let zero: f64 = centred.iter().map(|v| v * v).sum();
+    if zero <= 0.0 {
+        return f64::NAN;
+    }
+    let band = 1.96 / (n as f64).sqrt();
+    let inside = (1..=lags)
+        .filter(|&lag| {
+            let r: f64 = (lag..n).map(|i| centred[i] * centred[i - lag]).sum::<f64>() / zero;
+            r.abs() <= band
+        })
+        .count();
+    inside as f64 / lags as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn assert_close(a: &DMatrix<f64>, b: &DMatrix<f64>, tolerance: f64, what: &str) {
+        let scale = b.norm().max(1e-300);
+        let error = (a - b).norm() / scale;
+        assert!(
+            error <= tolerance,
+            "{what}: relative error {error:e}\n{a}\n{b}"
+        );
+    }
+
+    /// A damped oscillator (short period like) and a slow real mode.
+    fn system() -> (DMatrix<f64>, DMatrix<f64>) {
+        let a = DMatrix::from_row_slice(3, 3, &[-1.2, 1.0, 0.0, -8.0, -2.1, 0.3, 0.0, 0.5, -0.05]);
+        let b = DMatrix::from_row_slice(3, 1, &[-0.1, -9.0, 0.0]);
+        (a, b)
+    }
+
+    #[test]
+    fn exponential_of_a_diagonalisable_matrix_matches_its_eigen_form() {
+        // A rotation generator: e^{[[0, w], [−w, 0]]·t} = [[cos, sin], [−sin, cos]].
+        let w: f64 = 7.3;
+        let m = DMatrix::from_row_slice(2, 2, &[0.0, w, -w, 0.0]);
+        let exact = DMatrix::from_row_slice(2, 2, &[w.cos(), w.sin(), -w.sin(), w.cos()]);
+        assert_close(&exponential(&m), &exact, 1e-13, "rotation");
+        // Diagonal: e^d elementwise, across scales.
+        let d = DMatrix::from_diagonal(&DVector::from_vec(vec![-30.0, 0.001, 4.0]));
+        let exact = DMatrix::from_diagonal(&DVector::from_vec(vec![
+            (-30.0f64).exp(),
+            0.001f64.exp(),
+            4.0f64.exp(),
+        ]));
+        assert_close(&exponential(&d), &exact, 1e-13, "diagonal");
+    }
+
+    #[test]
+    fn van_loan_matches_fine_quadrature() {
+        // Γ and Q_d against the integrals by the trapezoidal rule over 20 000
+        // sub-steps of e^{A·s} (error ~h²/12·max|f″| ≈ 1e-10 relative).
+        let (a, b) = system();
+        let noise = DMatrix::from_diagonal(&DVector::from_vec(vec![0.3, 2.0, 0.01]));
+        let h = 0.2;
+        let discrete = discretise(&a, &b, Some(&noise), h);
+        let steps = 20_000;
+        let ds = h / steps as f64;
+        let (mut gamma, mut q) = (DMatrix::zeros(3, 1), DMatrix::zeros(3, 3));
+        for i in 0..=steps {
+            let w = if i == 0 || i == steps { 0.5 } else { 1.0 };
+            let e = exponential(&(&a * (i as f64 * ds)));
+            gamma += &e * &b * (w * ds);
+            q += &e * &noise * e.transpose() * (w * ds);
+        }
+        assert_close(&discrete.transition, &exponential(&(&a * h)), 1e-14, "Φ");
+        assert_close(&discrete.input, &gamma, 1e-9, "Γ");
+        assert_close(&discrete.process_noise, &q, 1e-9, "Q_d");
+    }
+
+    #[test]
+    fn steady_state_solves_the_riccati_equation_and_is_the_filters_limit() {
+        let (a, b) = system();
+        let noise = DMatrix::from_diagonal(&DVector::from_vec(vec![0.3, 2.0, 0.01]));
+        let d = discretise(&a, &b, Some(&noise), 0.04);
+        let h = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+        let r = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-4, 4e-4]));
+        let s = steady_state(&d.transition, &h, &d.process_noise, &r).unwrap();
+        let p = &s.covariance;
+        let gain_term = p * h.transpose() * (&h * p * h.transpose() + &r).try_inverse().unwrap();
+        let residual = &d.transition * (p - &gain_term * &h * p) * d.transition.transpose()
+            + &d.process_noise
+            - p;
+        assert!(residual.norm() <= 1e-12 * p.norm(), "{residual}");
+        // The time-varying filter's covariance converges to it.
+        let mut state = DVector::zeros(3);
+        let mut covariance = DMatrix::identity(3, 3);
+        for _ in 0..3000 {
+            covariance = predict_covariance(&covariance, &d.transition, &d.process_noise);
+            let predicted = covariance.clone();
+            update(&mut state, &mut covariance, &h, &r, DVector::zeros(2)).unwrap();
+            if (&predicted - p).norm() < 1e-13 * p.norm() {
+                break;
+            }
+        }
+        let predicted = predict_covariance(&covariance, &d.transition, &d.process_noise);
+        assert_close(&predicted, p, 1e-10, "limit of the filter");
+    }
+
+    #[test]
+    fn steady_state_of_an_undetectable_system_is_refused() {
+        // A growing mode that no output sees.
+        let phi = DMatrix::from_row_slice(2, 2, &[1.1, 0.0, 0.0, 0.5]);
+        let h = DMatrix::from_row_slice(1, 2, &[0.0, 1.0]);
+        let q = DMatrix::identity(2, 2) * 0.1;
+        let r = DMatrix::identity(1, 1) * 0.01;
+        assert!(steady_state(&phi, &h, &q, &r).is_err());
+    }
+
+    #[test]
+    fn mbf_and_rts_smoothers_agree() {
+        let (a, b) = system();
+        let noise = DMatrix::from_diagonal(&DVector::from_vec(vec![0.3, 2.0, 0.01]));
+        let d = discretise(&a, &b, Some(&noise), 0.05);
+        let h = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 1.0, 1.0]);
+        let r = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-3, 4e-3]));
+        let mut x = DVector::from_vec(vec![0.1, -0.2, 0.05]);
+        let mut p = DMatrix::identity(3, 3) * 0.5;
+        let (mut filtered, mut predicted, mut measured, mut transitions) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for k in 0..80 {
+            if k > 0 {
+                x = &d.transition * &x;
+                p = predict_covariance(&p, &d.transition, &d.process_noise);
+                transitions.push(d.transition.clone());
+            }
+            predicted.push(Gaussian {
+                mean: x.clone(),
+                covariance: p.clone(),
+            });
+            // Every third step without a measurement.
+            if k % 3 == 2 {
+                measured.push(None);
+            } else {
+                let z = DVector::from_vec(vec![(k as f64 * 0.3).sin(), (k as f64 * 0.11).cos()]);
+                let nu = z - &h * &x;
+                let u = update(&mut x, &mut p, &h, &r, nu).unwrap();
+                measured.push(Some(Measured {
+                    observation: h.clone(),
+                    update: u,
+                }));
+            }
+            filtered.push(Gaussian {
+                mean: x.clone(),
+                covariance: p.clone(),
+            });
+        }
+        transitions.push(d.transition.clone());
+        let rts = rts_smooth(&filtered, &predicted, &transitions).unwrap();
+        let mbf = mbf_smooth(&predicted, &measured, &transitions);
+        for (k, (a, b)) in rts.iter().zip(&mbf).enumerate() {
+            let da = (&a.mean - &b.mean).norm() / a.mean.norm().max(1e-3);
+            assert!(da < 1e-9, "mean at {k}: {da:e}");
+            assert_close(&b.covariance, &a.covariance, 1e-9, "covariance");
+        }
+    }
+
+    #[test]
+    fn sigma_points_reproduce_mean_and_covariance() {
+        let mean = DVector::from_vec(vec![1.0, -2.0, 0.5]);
+        let covariance =
+            DMatrix::from_row_slice(3, 3, &[2.0, 0.3, 0.1, 0.3, 1.0, -0.2, 0.1, -0.2, 0.5]);
+        for unscented in [
+            Unscented::default(),
+            Unscented {
+                alpha: 1e-3,
+                beta: 2.0,
+                kappa: 0.0,
+            },
+        ] {
+            let sigma = unscented.points(&mean, &covariance).unwrap();
+            // W₀ᵐ = 1 − n/(α²·(n + κ)): −3·10⁶ at α = 10⁻³, so the mean
+            // keeps about 16 − 6.5 digits.
+            let m = sigma.mean_of(&sigma.points);
+            assert!((&m - &mean).norm() < 1e-8, "{m}");
+            let c = sigma.cross_covariance(&sigma.points, &m, &sigma.points, &m);
+            assert_close(&c, &covariance, 1e-9, "covariance");
+        }
+    }
+
+    #[test]
+    fn whiteness_separates_white_from_coloured_series() {
+        use rand::rngs::ChaCha8Rng;
+        use rand::{RngExt, SeedableRng};
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let white: Vec<f64> = (0..4000)
+            .map(|_| rng.sample::<f64, _>(rand_distr::StandardNormal))
+            .collect();
+        assert!(whiteness(&white, 50) >= 0.9);
+        let mut coloured = vec![0.0; white.len()];
+        for i in 1..white.len() {
+            coloured[i] = 0.9 * coloured[i - 1] + white[i];
+        }
+        // ρ(k) = 0.9ᵏ ≥ 0.35 to lag 10, far above the band 1.96/√4000 = 0.031
+        // (the estimate's own scatter there is ≈ 0.07).
+        assert!(whiteness(&coloured, 10) == 0.0);
+    }
+}
