@@ -25,7 +25,7 @@ fn study_file(test: &str, text: &str) -> PathBuf {
 }
 
 fn run(study: &Study, threads: usize) -> StudyResult {
-    study.run(threads, &|| {}).unwrap()
+    study.run(threads, &|_| {}).unwrap()
 }
 
 /// Rows as CSV text: f64 are written in their shortest round-trip form, so

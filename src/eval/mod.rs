@@ -3,6 +3,7 @@
 //! studies.
 
 pub mod gate;
+pub mod journal;
 pub mod run;
 pub mod score;
 pub mod study;

@@ -41,6 +41,7 @@ use crate::estimation::estimate::Status;
 use crate::estimation::estimator::{MethodTables, check_method_tables, validate_method_tables};
 use crate::estimation::methods;
 use crate::estimation::structure::ModelStructure;
+use crate::eval::journal::{self, Finished, Header, Journal, Shard, float_text};
 use crate::eval::run::{self, Outcome};
 use crate::eval::score::ParameterScore;
 use crate::limits;
@@ -218,11 +219,15 @@ pub struct Row {
     pub reason: String,
     /// Empty when the fit failed.
     pub parameter: String,
+    #[serde(with = "float_text")]
     pub estimate: f64,
     /// Cramér–Rao standard error of the estimate.
+    #[serde(with = "float_text")]
     pub standard_error: f64,
     /// None for unknowns without a truth (initial states, output biases).
+    #[serde(with = "float_text::option")]
     pub truth: Option<f64>,
+    #[serde(with = "float_text::option")]
     pub error: Option<f64>,
     pub inside_95: Option<bool>,
 }
@@ -490,33 +495,180 @@ impl Study {
         rows
     }
 
+    /// The index of a case in the study's case order (point by point,
+    /// run by run): what shards and journals key cases by.
+    pub fn case_index(&self, case: Case) -> usize {
+        case.point * self.runs + case.run
+    }
+
     /// Runs every case on `threads` threads (0: one per core), calling
-    /// `progress` after each case, and summarises. The rows are in case
-    /// order and bit-identical for any thread count.
-    pub fn run(&self, threads: usize, progress: &(dyn Fn() + Sync)) -> Result<StudyResult> {
+    /// `progress` with each case's rows as it finishes, and summarises.
+    /// The rows are in case order and bit-identical for any thread count.
+    pub fn run(&self, threads: usize, progress: &(dyn Fn(&[Row]) + Sync)) -> Result<StudyResult> {
+        let finished = std::sync::Mutex::new(Finished::new());
+        self.run_cases(&self.cases(), threads, &|index, rows| {
+            progress(&rows);
+            finished
+                .lock()
+                .map_err(|_| Error::Other("a study thread panicked".into()))?
+                .insert(index, rows);
+            Ok(())
+        })?;
+        let finished = finished
+            .into_inner()
+            .map_err(|_| Error::Other("a study thread panicked".into()))?;
+        Ok(self.result(finished))
+    }
+
+    /// Runs `cases` on `threads` threads (0: one per core), handing each
+    /// case's index and rows to `finish` as it finishes; the first error
+    /// `finish` returns stops the run (cases already running complete).
+    pub fn run_cases(
+        &self,
+        cases: &[Case],
+        threads: usize,
+        finish: &(dyn Fn(usize, Vec<Row>) -> Result<()> + Sync),
+    ) -> Result<()> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(|e| Error::Other(format!("cannot start {threads} threads: {e}")))?;
-        let cases = self.cases();
-        let rows: Vec<Row> = pool.install(|| {
+        pool.install(|| {
             cases
                 .par_iter()
-                .flat_map_iter(|&case| {
-                    let rows = self.run_case(case);
-                    progress();
-                    rows
-                })
-                .collect()
-        });
-        Ok(StudyResult {
+                .try_for_each(|&case| finish(self.case_index(case), self.run_case(case)))
+        })
+    }
+
+    /// The cases of `shard` not yet in `finished`.
+    pub fn remaining(&self, shard: Shard, finished: &Finished) -> Vec<Case> {
+        self.cases()
+            .into_iter()
+            .filter(|&case| {
+                let index = self.case_index(case);
+                shard.holds(index) && !finished.contains_key(&index)
+            })
+            .collect()
+    }
+
+    /// The journal header of this study's `shard`.
+    pub fn journal_header(&self, shard: Shard) -> Result<Header> {
+        Ok(Header {
+            format: journal::FORMAT.into(),
             study: self.name.clone(),
             seed: self.seed,
             runs: self.runs,
-            summary: summarise(&rows),
-            rows,
+            fingerprint: self.fingerprint()?,
+            cases: self.cases().len(),
+            shard,
         })
     }
+
+    /// A hash (FNV-1a, 64 bits) of everything that decides the study's
+    /// numbers: seed, runs, methods and settings, the sweep points' rates
+    /// and noise scales, and the text of every file the study reads (its
+    /// scenarios and their aircraft, the profile, the models and their
+    /// aircraft) — the same on every machine that has the same files,
+    /// wherever they are.
+    pub fn fingerprint(&self) -> Result<String> {
+        let mut identity = format!(
+            "{:?}|{}|{}|{:?}|{:?}",
+            self.name, self.seed, self.runs, self.methods, self.settings
+        );
+        for point in &self.points {
+            identity += &format!("|{:?}|{}", point.sample_rate, point.noise_scale);
+        }
+        for scenario in &self.scenarios {
+            identity += &read_text(&scenario.path)?;
+            identity += &read_text(&scenario.aircraft_path)?;
+        }
+        identity += &read_text(&self.profile.path)?;
+        for model in &self.models {
+            identity += &serde_json::to_string(&(&model.file, &model.aircraft_file))
+                .map_err(|e| Error::Other(format!("model '{}': {e}", model.name)))?;
+        }
+        let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+        for byte in identity.bytes() {
+            hash ^= u64::from(byte);
+            hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        Ok(format!("{hash:016x}"))
+    }
+
+    /// Runs the cases of `shard` still missing from the journal in
+    /// `folder` (started there, or continued when `resume`), appending
+    /// each as it finishes. Returns the journal's finished cases, all of
+    /// the shard's when it completes.
+    pub fn run_journaled(
+        &self,
+        folder: &Path,
+        shard: Shard,
+        resume: bool,
+        threads: usize,
+        progress: &(dyn Fn(&[Row]) + Sync),
+    ) -> Result<JournaledRun> {
+        let header = self.journal_header(shard)?;
+        let (journal, finished) = if resume {
+            Journal::resume(folder, &header)?
+        } else {
+            (Journal::create(folder, &header)?, Finished::new())
+        };
+        let remaining = self.remaining(shard, &finished);
+        let resumed = finished.len();
+        let finished = std::sync::Mutex::new(finished);
+        self.run_cases(&remaining, threads, &|index, rows| {
+            journal.append(index, &rows)?;
+            progress(&rows);
+            finished
+                .lock()
+                .map_err(|_| Error::Other("a study thread panicked".into()))?
+                .insert(index, rows);
+            Ok(())
+        })?;
+        let finished = finished
+            .into_inner()
+            .map_err(|_| Error::Other("a study thread panicked".into()))?;
+        Ok(JournaledRun {
+            resumed,
+            ran: remaining.len(),
+            finished,
+        })
+    }
+
+    /// The result of every case of the study, in case order.
+    pub fn result(&self, finished: Finished) -> StudyResult {
+        result_of(&self.name, self.seed, self.runs, finished)
+    }
+}
+
+/// What a journaled run did.
+#[derive(Debug)]
+pub struct JournaledRun {
+    /// Cases found in the journal when it resumed.
+    pub resumed: usize,
+    /// Cases run now.
+    pub ran: usize,
+    /// Every finished case of the shard.
+    pub finished: Finished,
+}
+
+/// The result of a study's finished cases, in case order: the same bytes
+/// whether they ran on one machine, in shards, or resumed.
+pub fn result_of(study: &str, seed: u64, runs: usize, finished: Finished) -> StudyResult {
+    let rows: Vec<Row> = finished.into_values().flatten().collect();
+    StudyResult {
+        study: study.to_string(),
+        seed,
+        runs,
+        summary: summarise(&rows),
+        rows,
+    }
+}
+
+/// Merges the shard journals in `folders` into the whole study's result.
+pub fn merge(folders: &[PathBuf]) -> Result<StudyResult> {
+    let (header, finished) = journal::merge(folders)?;
+    Ok(result_of(&header.study, header.seed, header.runs, finished))
 }
 
 fn label(scenario: &str, sample_rate: Option<f64>, noise_scale: f64) -> String {
