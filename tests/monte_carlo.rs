@@ -28,6 +28,21 @@ fn run(study: &Study, threads: usize) -> StudyResult {
     study.run(threads, &|_| {}).unwrap()
 }
 
+/// A journaled run on `threads` threads and its rows as `runs.csv` holds them.
+fn journaled(study: &Study, threads: usize, folder: &str) -> (StudyResult, Vec<Row>) {
+    let folder = common::temp_folder(folder);
+    study
+        .run_journaled(&folder, Default::default(), false, threads, &|_| {})
+        .unwrap();
+    let result = aeroid::eval::study::assemble(&[folder.clone()], &folder).unwrap();
+    let rows = csv::Reader::from_path(folder.join("runs.csv"))
+        .unwrap()
+        .deserialize()
+        .collect::<Result<Vec<Row>, _>>()
+        .unwrap();
+    (result, rows)
+}
+
 /// Rows as CSV text: f64 are written in their shortest round-trip form, so
 /// equal text is equal bits.
 fn csv_text(rows: &[Row]) -> String {
@@ -44,22 +59,31 @@ fn csv_text(rows: &[Row]) -> String {
 fn same_rows_whatever_the_thread_count_and_run_count() {
     let path = study_file("mc-threads", SMALL);
     let mut study = Study::load(path.to_str().unwrap()).unwrap();
-    let (one, two) = (run(&study, 1), run(&study, 2));
-    assert_eq!(one.rows.len(), 2 * 4 * 18);
-    assert_eq!(csv_text(&one.rows), csv_text(&two.rows));
+    let ((one, one_rows), (two, two_rows)) = (
+        journaled(&study, 1, "mc-threads-1"),
+        journaled(&study, 2, "mc-threads-2"),
+    );
+    assert_eq!(one_rows.len(), 2 * 4 * 18);
+    assert_eq!(one.rows, one_rows.len());
+    assert_eq!(csv_text(&one_rows), csv_text(&two_rows));
     assert_eq!(format!("{:?}", one.summary), format!("{:?}", two.summary));
-    let mut seeds: Vec<u64> = one.rows.iter().map(|r| r.recorder_seed).collect();
+    // The unjournaled run summarises the same rows the same way.
+    assert_eq!(
+        format!("{:?}", run(&study, 2).summary),
+        format!("{:?}", one.summary)
+    );
+    let mut seeds: Vec<u64> = one_rows.iter().map(|r| r.recorder_seed).collect();
     seeds.dedup();
     assert_eq!(seeds.len(), 8, "one recorder seed per case");
 
     study.runs = 2;
-    let fewer = run(&study, 2);
-    let first_two: Vec<Row> = one.rows.iter().filter(|r| r.run < 2).cloned().collect();
-    assert_eq!(csv_text(&fewer.rows), csv_text(&first_two));
+    let (_, fewer) = journaled(&study, 2, "mc-threads-fewer");
+    let first_two: Vec<Row> = one_rows.iter().filter(|r| r.run < 2).cloned().collect();
+    assert_eq!(csv_text(&fewer), csv_text(&first_two));
 
     study.seed += 1;
-    let other = run(&study, 2);
-    assert_ne!(other.rows[0].estimate, fewer.rows[0].estimate);
+    let (_, other) = journaled(&study, 2, "mc-threads-other");
+    assert_ne!(other[0].estimate, fewer[0].estimate);
 }
 
 /// The sweep grid is scenario × sample rate × noise scale, and each point's
@@ -220,8 +244,9 @@ const MARGINAL_MISSES_ALLOWED: usize = 2;
 #[test]
 fn acceptance_attas_lateral_100_runs() {
     let mut study = Study::load("attas-lateral-acceptance").unwrap();
+    let folder = "mc-acceptance";
     assert_eq!(study.runs, 100, "issue 4 asks for at least 100 runs");
-    let result = run(&study, 0);
+    let (result, rows) = journaled(&study, 0, folder);
     let summary = |method: &str| -> Vec<&aeroid::eval::study::SummaryRow> {
         result
             .summary
@@ -295,7 +320,7 @@ fn acceptance_attas_lateral_100_runs() {
     }
 
     study.runs = 2;
-    let again = run(&study, 1);
-    let first_two: Vec<Row> = result.rows.iter().filter(|r| r.run < 2).cloned().collect();
-    assert_eq!(csv_text(&again.rows), csv_text(&first_two));
+    let (_, again) = journaled(&study, 1, "mc-acceptance-again");
+    let first_two: Vec<Row> = rows.iter().filter(|r| r.run < 2).cloned().collect();
+    assert_eq!(csv_text(&again), csv_text(&first_two));
 }

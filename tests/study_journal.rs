@@ -27,9 +27,18 @@ fn written(folder: &Path) -> Vec<Vec<u8>> {
         .collect()
 }
 
+/// One thread, one journal: the reference bytes. The summary of the
+/// unjournaled run is the same.
 fn reference(study: &Study, folder: &Path) -> Vec<Vec<u8>> {
-    let result = study.run(1, &|_| {}).unwrap();
-    result.write(folder).unwrap();
+    study
+        .run_journaled(folder, Shard::default(), false, 1, &|_| {})
+        .unwrap();
+    let result = study::assemble(&[folder.to_path_buf()], folder).unwrap();
+    let unjournaled = study.run(2, &|_| {}).unwrap();
+    assert_eq!(
+        serde_json::to_string(&unjournaled).unwrap(),
+        serde_json::to_string(&result).unwrap()
+    );
     written(folder)
 }
 
@@ -40,10 +49,10 @@ fn shards_and_thread_counts_merge_to_the_one_machine_bytes() {
     let expected = reference(&study, &root.join("one"));
     // Two threads, one journaled shard.
     let whole = root.join("whole");
-    let run = study
+    study
         .run_journaled(&whole, Shard::default(), false, 2, &|_| {})
         .unwrap();
-    study.result(run.finished).write(&whole).unwrap();
+    study::assemble(&[whole.clone()], &whole).unwrap();
     assert_eq!(written(&whole), expected, "two threads, journaled");
     // Four shards of a study with 6 cases: 2, 2, 1, 1 cases.
     let folders: Vec<PathBuf> = (1..=4)
@@ -53,19 +62,20 @@ fn shards_and_thread_counts_merge_to_the_one_machine_bytes() {
             let run = study
                 .run_journaled(&folder, shard, false, 2, &|_| {})
                 .unwrap();
-            assert_eq!(run.finished.len(), if index <= 2 { 2 } else { 1 });
+            assert_eq!(run.ran, if index <= 2 { 2 } else { 1 });
             folder
         })
         .collect();
-    let merged = study::merge(&folders).unwrap();
     let out = root.join("merged");
-    merged.write(&out).unwrap();
+    study::assemble(&folders, &out).unwrap();
     assert_eq!(written(&out), expected, "four shards merged");
     // A missing shard or a shard given twice is refused.
-    let error = study::merge(&folders[..3]).unwrap_err().to_string();
+    let error = study::assemble(&folders[..3], &out)
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("missing"), "{error}");
     let twice = [folders[0].clone(), folders[0].clone()];
-    let error = study::merge(&twice).unwrap_err().to_string();
+    let error = study::assemble(&twice, &out).unwrap_err().to_string();
     assert!(error.contains("both in"), "{error}");
 }
 
@@ -101,7 +111,7 @@ fn an_interrupted_study_resumes_without_losing_or_repeating_a_case() {
         .run_journaled(&folder, Shard::default(), true, 2, &|_| {})
         .unwrap();
     assert_eq!((run.resumed, run.ran), (2, 4));
-    study.result(run.finished).write(&folder).unwrap();
+    study::assemble(&[folder.clone()], &folder).unwrap();
     assert_eq!(written(&folder), expected);
     // The journal now holds each case once.
     let (_, finished) = journal::read(&folder).unwrap();

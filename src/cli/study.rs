@@ -137,7 +137,8 @@ pub fn run(args: Args) -> Result<()> {
         );
         return Ok(());
     }
-    report(&study.result(journaled.finished), Some(&out))
+    let result = aeroid::eval::study::assemble(std::slice::from_ref(&out), &out)?;
+    report(&result, Some(&out))
 }
 
 /// `aeroid study merge --out DIR SHARD_DIR…`.
@@ -149,36 +150,41 @@ fn merge(args: Args) -> Result<()> {
         anyhow::bail!("aeroid study merge needs the shards' output folders");
     }
     aeroid::paths::check_output_folder(&out)?;
-    let result = aeroid::eval::study::merge(&args.shards)?;
+    let result = aeroid::eval::study::assemble(&args.shards, &out)?;
     outln!(
-        "study {}: {} shard folder(s) merged, {} rows",
+        "study {}: {} shard folder(s) merged, {} cases, {} rows",
         result.study,
         args.shards.len(),
-        result.rows.len()
+        result.cases,
+        result.rows
     );
     report(&result, Some(&out))
 }
 
-/// Prints the summary and the endings, and writes the result to `out`.
+/// Prints the summary and the endings, and where they were written.
 fn report(result: &aeroid::eval::study::StudyResult, out: Option<&PathBuf>) -> Result<()> {
     out!("{}", result.table());
     // Every fit that is not converged is counted by what it is, with the
     // first one's reason.
-    let endings = result.endings();
     outln!(
         "fits: {}",
-        endings
+        result
+            .endings
             .iter()
-            .map(|(status, count, _)| format!("{count} {status}"))
+            .map(|e| format!("{} {}", e.count, e.status))
             .collect::<Vec<_>>()
             .join(", ")
     );
-    for (status, count, first) in endings
+    for ending in result
+        .endings
         .iter()
-        .filter(|(status, _, _)| status != aeroid::eval::study::CONVERGED)
+        .filter(|e| e.status != aeroid::eval::study::CONVERGED)
     {
+        let first = &ending.first;
         outln!(
-            "{count} {status}; the first (point {}, run {}, {} {}): {}",
+            "{} {}; the first (point {}, run {}, {} {}): {}",
+            ending.count,
+            ending.status,
             first.point,
             first.run,
             first.model,
@@ -187,7 +193,6 @@ fn report(result: &aeroid::eval::study::StudyResult, out: Option<&PathBuf>) -> R
         );
     }
     if let Some(out) = out {
-        result.write(out)?;
         outln!(
             "written: {0}/runs.csv, {0}/summary.csv, {0}/study.json",
             out.display()

@@ -98,8 +98,8 @@ struct Entry {
     rows: Vec<Row>,
 }
 
-/// The finished cases of a journal, by case index.
-pub type Finished = BTreeMap<usize, Vec<Row>>;
+/// The cases a journal holds.
+pub type Finished = std::collections::BTreeSet<usize>;
 
 /// An open journal, appended to by the threads of a study.
 #[derive(Debug)]
@@ -140,8 +140,9 @@ impl Journal {
     /// line cut short, and returns the journal with the cases it holds.
     pub fn resume(folder: &Path, header: &Header) -> Result<(Journal, Finished)> {
         let path = folder.join(JOURNAL_FILE);
-        let (found, finished, complete_length) = read_journal(&path)?;
-        if found != *header {
+        let index = index_journal(&path)?;
+        let found = &index.header;
+        if *found != *header {
             return Err(Error::Other(format!(
                 "{}: the journal is of another study or shard (study '{}', shard {}, fingerprint {}; this run: study '{}', shard {}, fingerprint {}); a study resumes only with the files, seed, runs and shard it started with",
                 path.display(),
@@ -157,7 +158,7 @@ impl Journal {
             .write(true)
             .open(&path)
             .map_err(|e| write_error(&path, e))?;
-        file.set_len(complete_length)
+        file.set_len(index.complete_length)
             .map_err(|e| write_error(&path, e))?;
         let mut file = file;
         use std::io::Seek;
@@ -168,7 +169,7 @@ impl Journal {
                 path,
                 file: Mutex::new(file),
             },
-            finished,
+            index.entries.keys().copied().collect(),
         ))
     }
 
@@ -200,88 +201,149 @@ struct EntryRef<'a> {
 
 /// Reads the journal in `folder`: its header and finished cases.
 pub fn read(folder: &Path) -> Result<(Header, Finished)> {
-    let (header, finished, _) = read_journal(&folder.join(JOURNAL_FILE))?;
-    Ok((header, finished))
+    let index = index_journal(&folder.join(JOURNAL_FILE))?;
+    Ok((index.header, index.entries.keys().copied().collect()))
 }
 
-/// The header, the cases, and the length of the file up to its last
-/// complete line.
-fn read_journal(path: &Path) -> Result<(Header, Finished, u64)> {
+/// Where each case of a journal is: its header, the byte range of each
+/// case's line, and the length of the file up to its last complete line.
+#[derive(Debug)]
+struct Index {
+    header: Header,
+    entries: BTreeMap<usize, (u64, usize)>,
+    complete_length: u64,
+}
+
+/// Indexes a journal, checking every line (each is parsed, then only its
+/// place kept).
+fn index_journal(path: &Path) -> Result<Index> {
     let file = File::open(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    let mut reader = BufReader::new(file);
-    let mut lines = Vec::new();
-    let mut line = String::new();
-    loop {
-        line.clear();
-        let read = reader.read_line(&mut line).map_err(|source| Error::Io {
+    let size = file
+        .metadata()
+        .map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,
-        })?;
-        if read == 0 {
-            break;
-        }
-        lines.push((line.ends_with('\n'), line.clone()));
-    }
+        })?
+        .len();
+    let mut reader = BufReader::new(file);
     let malformed = |number: usize, reason: String| {
         Error::Other(format!("{}:{number}: {reason}", path.display()))
     };
-    let Some((_, first)) = lines.first() else {
-        return Err(malformed(1, "an empty journal (no header)".into()));
+    let mut line = String::new();
+    let mut read_line = |line: &mut String| {
+        line.clear();
+        reader.read_line(line).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
     };
+    if read_line(&mut line)? == 0 {
+        return Err(malformed(1, "an empty journal (no header)".into()));
+    }
     let header: Header =
-        serde_json::from_str(first.trim_end()).map_err(|e| malformed(1, format!("header: {e}")))?;
+        serde_json::from_str(line.trim_end()).map_err(|e| malformed(1, format!("header: {e}")))?;
     if header.format != FORMAT {
         return Err(malformed(
             1,
             format!("format '{}', expected '{FORMAT}'", header.format),
         ));
     }
-    let mut finished = Finished::new();
-    let mut length = first.len() as u64;
-    let last = lines.len() - 1;
-    for (number, (complete, text)) in lines.iter().enumerate().skip(1) {
-        let parsed = serde_json::from_str::<Entry>(text.trim_end());
-        match parsed {
-            Ok(entry) if *complete => {
+    let mut entries = BTreeMap::new();
+    let mut offset = line.len() as u64;
+    let mut number = 1;
+    loop {
+        let read = read_line(&mut line)?;
+        if read == 0 {
+            break;
+        }
+        number += 1;
+        let complete = line.ends_with('\n');
+        let last = offset + read as u64 == size;
+        match serde_json::from_str::<Entry>(line.trim_end()) {
+            Ok(entry) if complete => {
                 if entry.case >= header.cases || !header.shard.holds(entry.case) {
                     return Err(malformed(
-                        number + 1,
+                        number,
                         format!(
                             "case {} is not a case of shard {}",
                             entry.case, header.shard
                         ),
                     ));
                 }
-                if finished.insert(entry.case, entry.rows).is_some() {
+                if entries.insert(entry.case, (offset, read)).is_some() {
                     return Err(malformed(
-                        number + 1,
+                        number,
                         format!("case {} appears twice", entry.case),
                     ));
                 }
-                length += text.len() as u64;
             }
             // The last line, cut short by an interruption: dropped.
-            _ if number == last => {}
-            Ok(_) => unreachable!("only the last line can lack its newline"),
-            Err(e) => return Err(malformed(number + 1, e.to_string())),
+            _ if last && !complete => break,
+            Ok(_) => return Err(malformed(number, "a line without its end".into())),
+            Err(e) => return Err(malformed(number, e.to_string())),
         }
+        offset += read as u64;
     }
-    Ok((header, finished, length))
+    Ok(Index {
+        header,
+        entries,
+        complete_length: offset,
+    })
 }
 
-/// Reads and joins the journals of a study's shards: every shard of one
-/// study, each once, each complete. Returns the header of the whole study
-/// (shard 1/1) and every case.
-pub fn merge(folders: &[PathBuf]) -> Result<(Header, Finished)> {
+/// The journals of a study's shards (or of a whole study), read case by
+/// case in case order.
+#[derive(Debug)]
+pub struct Cases {
+    header: Header,
+    files: Vec<(PathBuf, File)>,
+    /// Case → (file, offset, length).
+    places: BTreeMap<usize, (usize, u64, usize)>,
+}
+
+impl Cases {
+    /// The header of the whole study (shard 1/1).
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// Calls `each` with every case's index and rows, in case order.
+    pub fn for_each(&mut self, mut each: impl FnMut(usize, Vec<Row>) -> Result<()>) -> Result<()> {
+        use std::io::{Read, Seek, SeekFrom};
+        let mut buffer = Vec::new();
+        for (&case, &(file, offset, length)) in &self.places {
+            let (path, handle) = &mut self.files[file];
+            buffer.resize(length, 0);
+            handle
+                .seek(SeekFrom::Start(offset))
+                .and_then(|_| handle.read_exact(&mut buffer))
+                .map_err(|source| Error::Io {
+                    path: path.clone(),
+                    source,
+                })?;
+            let entry: Entry = serde_json::from_slice(&buffer)
+                .map_err(|e| Error::Other(format!("{}: case {case}: {e}", path.display())))?;
+            each(case, entry.rows)?;
+        }
+        Ok(())
+    }
+}
+
+/// Opens the journals of a study's shards for reading in case order:
+/// every shard of one study, each once, each complete; or the one
+/// journal of a whole study, complete.
+pub fn open(folders: &[PathBuf]) -> Result<Cases> {
     let mut merged: Option<Header> = None;
     let mut seen: BTreeMap<usize, PathBuf> = BTreeMap::new();
-    let mut finished = Finished::new();
+    let mut files = Vec::new();
+    let mut places = BTreeMap::new();
     for folder in folders {
-        let (header, cases) = read(folder)?;
         let path = folder.join(JOURNAL_FILE);
+        let index = index_journal(&path)?;
+        let header = index.header;
         let whole = Header {
             shard: Shard::default(),
             ..header.clone()
@@ -309,31 +371,42 @@ pub fn merge(folders: &[PathBuf]) -> Result<(Header, Finished)> {
             )));
         }
         let expected = (0..header.cases).filter(|&c| header.shard.holds(c)).count();
-        if cases.len() != expected {
+        if index.entries.len() != expected {
             return Err(Error::Other(format!(
-                "{}: shard {} has {} of its {expected} cases: finish it with --resume before merging",
+                "{}: shard {} has {} of its {expected} cases: finish it with --resume first",
                 path.display(),
                 header.shard,
-                cases.len()
+                index.entries.len()
             )));
         }
-        finished.extend(cases);
+        let file = File::open(&path).map_err(|source| Error::Io {
+            path: path.clone(),
+            source,
+        })?;
+        for (case, (offset, length)) in index.entries {
+            places.insert(case, (files.len(), offset, length));
+        }
+        files.push((path, file));
     }
     let Some(header) = merged else {
         return Err(Error::Other("no shard folders given to merge".into()));
     };
-    let missing: Vec<usize> = (0..header.cases)
-        .filter(|c| !finished.contains_key(c))
-        .collect();
-    if !missing.is_empty() {
+    if places.len() != header.cases {
+        let missing: Vec<usize> = (0..header.cases)
+            .filter(|c| !places.contains_key(c))
+            .take(5)
+            .collect();
         return Err(Error::Other(format!(
-            "the shards hold {} of the study's {} cases; missing shards hold cases such as {:?}",
-            finished.len(),
-            header.cases,
-            &missing[..missing.len().min(5)]
+            "the shards hold {} of the study's {} cases; missing shards hold cases such as {missing:?}",
+            places.len(),
+            header.cases
         )));
     }
-    Ok((header, finished))
+    Ok(Cases {
+        header,
+        files,
+        places,
+    })
 }
 
 /// Serde for numbers that may be non-finite: finite ones as JSON numbers,

@@ -7,3 +7,4 @@ pub mod journal;
 pub mod run;
 pub mod score;
 pub mod study;
+pub mod summary;

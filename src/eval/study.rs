@@ -44,15 +44,15 @@ use crate::estimation::structure::ModelStructure;
 use crate::eval::journal::{self, Finished, Header, Journal, Shard, float_text};
 use crate::eval::run::{self, Outcome};
 use crate::eval::score::ParameterScore;
+pub use crate::eval::summary::{Ending, Summariser, SummaryRow, summarise};
 use crate::limits;
 use crate::random;
 use crate::record::recorder::{Profile, parse_rate, record_scenario_seeded};
 use crate::sim::scenario::Scenario;
 use crate::units::Quantity;
 use rand::RngExt;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Status of a row whose fit converged; only these enter the statistics.
@@ -232,59 +232,18 @@ pub struct Row {
     pub inside_95: Option<bool>,
 }
 
-/// Statistics of one parameter at one sweep point for one model and method,
-/// over the converged runs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SummaryRow {
-    pub point: usize,
-    pub scenario: String,
-    pub sample_rate: Option<f64>,
-    pub noise_scale: f64,
-    pub model: String,
-    pub method: String,
-    pub parameter: String,
-    /// Cases run at this point, and how each fit ended.
-    pub runs: usize,
-    pub converged: usize,
-    pub iteration_limit: usize,
-    pub diverged: usize,
-    /// Estimates that are not converged for another reason: no progress
-    /// from the start, unidentified parameters, a degenerate covariance or
-    /// a poor fit (the status column of `runs.csv` says which).
-    pub not_converged: usize,
-    pub refused: usize,
-    pub failed: usize,
-    pub truth: f64,
-    pub mean: f64,
-    /// mean − truth.
-    pub bias: f64,
-    /// bias / |truth|.
-    pub relative_bias: f64,
-    /// Sample standard deviation of the estimates (n − 1), σ_MC.
-    pub std: f64,
-    /// bias / σ_MC.
-    pub bias_over_std: f64,
-    /// Standard error of the mean, σ_MC/√n: the bias is significant when
-    /// many times larger.
-    pub bias_standard_error: f64,
-    /// Mean Cramér–Rao standard error of the runs.
-    pub mean_crb: f64,
-    /// bias / mean CRB.
-    pub bias_over_crb: f64,
-    /// σ_MC / mean CRB: 1 when the bounds are honest.
-    pub std_over_crb: f64,
-    /// Share of runs whose 95 % interval (±1.96 CRB) holds the truth.
-    pub coverage: f64,
-}
-
-/// What a study produced.
+/// What a study produced: its summary and how its fits ended.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct StudyResult {
     pub study: String,
     pub seed: u64,
     pub runs: usize,
+    /// Cases and rows (`runs.csv`'s) the summary is of.
+    pub cases: usize,
+    pub rows: usize,
     pub summary: Vec<SummaryRow>,
-    pub rows: Vec<Row>,
+    /// How the fits ended, each status with its count and first fit.
+    pub endings: Vec<Ending>,
 }
 
 impl Study {
@@ -502,26 +461,40 @@ impl Study {
     }
 
     /// Runs every case on `threads` threads (0: one per core), calling
-    /// `progress` with each case's rows as it finishes, and summarises.
-    /// The rows are in case order and bit-identical for any thread count.
+    /// `progress` with each case's rows as it finishes, and summarises
+    /// them in case order: the same numbers for any thread count. Nothing
+    /// is written; [`Study::run_journaled`] keeps every row.
     pub fn run(&self, threads: usize, progress: &(dyn Fn(&[Row]) + Sync)) -> Result<StudyResult> {
-        let finished = std::sync::Mutex::new(Finished::new());
-        self.run_cases(&self.cases(), threads, &|index, rows| {
+        let cases = self.cases();
+        let ordered = std::sync::Mutex::new((0usize, BTreeMap::new(), Summariser::default()));
+        self.run_cases(&cases, threads, &|position, rows| {
             progress(&rows);
-            finished
+            let mut guard = ordered
                 .lock()
-                .map_err(|_| Error::Other("a study thread panicked".into()))?
-                .insert(index, rows);
+                .map_err(|_| Error::Other("a study thread panicked".into()))?;
+            let (next, pending, summariser) = &mut *guard;
+            pending.insert(position, rows);
+            while let Some(rows) = pending.remove(next) {
+                summariser.add(&rows);
+                *next += 1;
+            }
             Ok(())
         })?;
-        let finished = finished
+        let (_, _, summariser) = ordered
             .into_inner()
             .map_err(|_| Error::Other("a study thread panicked".into()))?;
-        Ok(self.result(finished))
+        Ok(StudyResult::of(
+            &self.name,
+            self.seed,
+            self.runs,
+            cases.len(),
+            &summariser,
+        ))
     }
 
-    /// Runs `cases` on `threads` threads (0: one per core), handing each
-    /// case's index and rows to `finish` as it finishes; the first error
+    /// Runs `cases` on `threads` threads (0: one per core), each thread
+    /// taking the next case in order, and hands each case's position in
+    /// `cases` and its rows to `finish` as it finishes. The first error
     /// `finish` returns stops the run (cases already running complete).
     pub fn run_cases(
         &self,
@@ -529,15 +502,38 @@ impl Study {
         threads: usize,
         finish: &(dyn Fn(usize, Vec<Row>) -> Result<()> + Sync),
     ) -> Result<()> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| Error::Other(format!("cannot start {threads} threads: {e}")))?;
-        pool.install(|| {
-            cases
-                .par_iter()
-                .try_for_each(|&case| finish(self.case_index(case), self.run_case(case)))
-        })
+        use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+        let threads = match threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
+        }
+        .min(cases.len().max(1));
+        let next = AtomicUsize::new(0);
+        let stop = AtomicBool::new(false);
+        let failure = std::sync::Mutex::new(None);
+        std::thread::scope(|scope| {
+            for _ in 0..threads {
+                scope.spawn(|| {
+                    while !stop.load(Ordering::Relaxed) {
+                        let position = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(&case) = cases.get(position) else {
+                            break;
+                        };
+                        if let Err(error) = finish(position, self.run_case(case)) {
+                            stop.store(true, Ordering::Relaxed);
+                            if let Ok(mut first) = failure.lock() {
+                                first.get_or_insert(error);
+                            }
+                        }
+                    }
+                });
+            }
+        });
+        match failure.into_inner() {
+            Ok(None) => Ok(()),
+            Ok(Some(error)) => Err(error),
+            Err(_) => Err(Error::Other("a study thread panicked".into())),
+        }
     }
 
     /// The cases of `shard` not yet in `finished`.
@@ -546,7 +542,7 @@ impl Study {
             .into_iter()
             .filter(|&case| {
                 let index = self.case_index(case);
-                shard.holds(index) && !finished.contains_key(&index)
+                shard.holds(index) && !finished.contains(&index)
             })
             .collect()
     }
@@ -597,8 +593,7 @@ impl Study {
 
     /// Runs the cases of `shard` still missing from the journal in
     /// `folder` (started there, or continued when `resume`), appending
-    /// each as it finishes. Returns the journal's finished cases, all of
-    /// the shard's when it completes.
+    /// each to it as it finishes.
     pub fn run_journaled(
         &self,
         folder: &Path,
@@ -614,61 +609,59 @@ impl Study {
             (Journal::create(folder, &header)?, Finished::new())
         };
         let remaining = self.remaining(shard, &finished);
-        let resumed = finished.len();
-        let finished = std::sync::Mutex::new(finished);
-        self.run_cases(&remaining, threads, &|index, rows| {
-            journal.append(index, &rows)?;
+        self.run_cases(&remaining, threads, &|position, rows| {
+            journal.append(self.case_index(remaining[position]), &rows)?;
             progress(&rows);
-            finished
-                .lock()
-                .map_err(|_| Error::Other("a study thread panicked".into()))?
-                .insert(index, rows);
             Ok(())
         })?;
-        let finished = finished
-            .into_inner()
-            .map_err(|_| Error::Other("a study thread panicked".into()))?;
         Ok(JournaledRun {
-            resumed,
+            resumed: finished.len(),
             ran: remaining.len(),
-            finished,
         })
-    }
-
-    /// The result of every case of the study, in case order.
-    pub fn result(&self, finished: Finished) -> StudyResult {
-        result_of(&self.name, self.seed, self.runs, finished)
     }
 }
 
 /// What a journaled run did.
-#[derive(Debug)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct JournaledRun {
     /// Cases found in the journal when it resumed.
     pub resumed: usize,
     /// Cases run now.
     pub ran: usize,
-    /// Every finished case of the shard.
-    pub finished: Finished,
 }
 
-/// The result of a study's finished cases, in case order: the same bytes
-/// whether they ran on one machine, in shards, or resumed.
-pub fn result_of(study: &str, seed: u64, runs: usize, finished: Finished) -> StudyResult {
-    let rows: Vec<Row> = finished.into_values().flatten().collect();
-    StudyResult {
-        study: study.to_string(),
-        seed,
-        runs,
-        summary: summarise(&rows),
-        rows,
-    }
-}
-
-/// Merges the shard journals in `folders` into the whole study's result.
-pub fn merge(folders: &[PathBuf]) -> Result<StudyResult> {
-    let (header, finished) = journal::merge(folders)?;
-    Ok(result_of(&header.study, header.seed, header.runs, finished))
+/// The result of a study from the journals in `folders` (one whole
+/// study's, or every shard's): `runs.csv` written to `out` case by case in
+/// case order, then `summary.csv` and `study.json`. The same bytes
+/// whether the cases ran on one machine, in shards, resumed, or on any
+/// number of threads; memory independent of the number of cases.
+pub fn assemble(folders: &[PathBuf], out: &Path) -> Result<StudyResult> {
+    let mut cases = journal::open(folders)?;
+    let header = cases.header().clone();
+    std::fs::create_dir_all(out).map_err(|e| crate::error::write_error(out, e))?;
+    let path = out.join("runs.csv");
+    let io_error = |e: csv::Error| crate::error::write_error(&path, e);
+    let mut writer = csv::Writer::from_path(&path).map_err(io_error)?;
+    let mut summariser = Summariser::default();
+    cases.for_each(|_, rows| {
+        for row in &rows {
+            writer.serialize(row).map_err(io_error)?;
+        }
+        summariser.add(&rows);
+        Ok(())
+    })?;
+    writer
+        .flush()
+        .map_err(|e| crate::error::write_error(&path, e))?;
+    let result = StudyResult::of(
+        &header.study,
+        header.seed,
+        header.runs,
+        header.cases,
+        &summariser,
+    );
+    result.write(out)?;
+    Ok(result)
 }
 
 fn label(scenario: &str, sample_rate: Option<f64>, noise_scale: f64) -> String {
@@ -798,136 +791,31 @@ fn parameter_row(fit: &Row, status: &str, reason: &str, score: &ParameterScore) 
     }
 }
 
-/// Per sweep point, model, method and parameter with a truth: the
-/// statistics of the converged fits, in the order the rows first name them.
-/// Shards' rows concatenated summarise like one study's.
-pub fn summarise(rows: &[Row]) -> Vec<SummaryRow> {
-    // How each (point, model, method) fit ended, once per run.
-    let mut endings: HashMap<(usize, &str, &str), HashMap<usize, &str>> = HashMap::new();
-    let mut order: Vec<(usize, &str, &str, &str)> = Vec::new();
-    let mut groups: HashMap<(usize, &str, &str, &str), Vec<&Row>> = HashMap::new();
-    for row in rows {
-        endings
-            .entry((row.point, &row.model, &row.method))
-            .or_default()
-            .insert(row.run, &row.status);
-        if row.truth.is_none() {
-            continue;
-        }
-        let key = (row.point, &*row.model, &*row.method, &*row.parameter);
-        groups
-            .entry(key)
-            .or_insert_with(|| {
-                order.push(key);
-                Vec::new()
-            })
-            .push(row);
-    }
-    order
-        .iter()
-        .map(|key| {
-            let group = &groups[key];
-            let ending = &endings[&(key.0, key.1, key.2)];
-            let count = |status: &str| ending.values().filter(|&&s| s == status).count();
-            statistics(
-                group,
-                SummaryRow {
-                    point: key.0,
-                    scenario: group[0].scenario.clone(),
-                    sample_rate: group[0].sample_rate,
-                    noise_scale: group[0].noise_scale,
-                    model: key.1.to_string(),
-                    method: key.2.to_string(),
-                    parameter: key.3.to_string(),
-                    runs: ending.len(),
-                    converged: count(CONVERGED),
-                    iteration_limit: count("iteration_limit"),
-                    diverged: count("diverged"),
-                    not_converged: ["no_progress", "unidentified", "degenerate", "poor_fit"]
-                        .iter()
-                        .map(|status| count(status))
-                        .sum(),
-                    refused: count(REFUSED),
-                    failed: count(FAILED),
-                    truth: group[0].truth.unwrap_or(f64::NAN),
-                    mean: f64::NAN,
-                    bias: f64::NAN,
-                    relative_bias: f64::NAN,
-                    std: f64::NAN,
-                    bias_over_std: f64::NAN,
-                    bias_standard_error: f64::NAN,
-                    mean_crb: f64::NAN,
-                    bias_over_crb: f64::NAN,
-                    std_over_crb: f64::NAN,
-                    coverage: f64::NAN,
-                },
-            )
-        })
-        .collect()
-}
-
-/// Fills the statistics of `summary` from the converged rows of `group`.
-fn statistics(group: &[&Row], summary: SummaryRow) -> SummaryRow {
-    let used: Vec<&Row> = group
-        .iter()
-        .copied()
-        .filter(|r| r.status == CONVERGED)
-        .collect();
-    let n = used.len() as f64;
-    let mean_of = |f: &dyn Fn(&Row) -> f64| used.iter().map(|r| f(r)).sum::<f64>() / n;
-    let mean = mean_of(&|r| r.estimate);
-    let variance = used
-        .iter()
-        .map(|r| (r.estimate - mean).powi(2))
-        .sum::<f64>()
-        / (n - 1.0);
-    let std = variance.sqrt();
-    let mean_crb = mean_of(&|r| r.standard_error);
-    let truth = summary.truth;
-    let bias = mean - truth;
-    SummaryRow {
-        mean,
-        bias,
-        relative_bias: bias / truth.abs(),
-        std,
-        bias_over_std: bias / std,
-        bias_standard_error: std / n.sqrt(),
-        mean_crb,
-        bias_over_crb: bias / mean_crb,
-        std_over_crb: std / mean_crb,
-        coverage: mean_of(&|r| f64::from(u8::from(r.inside_95 == Some(true)))),
-        ..summary
-    }
-}
-
 impl StudyResult {
-    /// How the fits ended: per status, the number of fits (one per case,
-    /// model and method) and the first such fit's row, in status order of
-    /// first appearance.
-    pub fn endings(&self) -> Vec<(String, usize, &Row)> {
-        let mut seen = std::collections::HashSet::new();
-        let mut endings: Vec<(String, usize, &Row)> = Vec::new();
-        for row in &self.rows {
-            if !seen.insert((row.point, row.run, &row.model, &row.method)) {
-                continue;
-            }
-            match endings
-                .iter_mut()
-                .find(|(status, _, _)| *status == row.status)
-            {
-                Some((_, count, _)) => *count += 1,
-                None => endings.push((row.status.clone(), 1, row)),
-            }
+    /// The result of `cases` cases summarised by `summariser`.
+    pub fn of(
+        study: &str,
+        seed: u64,
+        runs: usize,
+        cases: usize,
+        summariser: &Summariser,
+    ) -> StudyResult {
+        StudyResult {
+            study: study.to_string(),
+            seed,
+            runs,
+            cases,
+            rows: summariser.rows(),
+            summary: summariser.summary(),
+            endings: summariser.endings().to_vec(),
         }
-        endings
     }
 
-    /// Writes `runs.csv` (every row), `summary.csv` and `study.json` (the
-    /// summary and rows; a NaN is null there) into `folder`, creating it.
+    /// Writes `summary.csv` and `study.json` (the result; a NaN is null
+    /// there) into `folder`, creating it.
     pub fn write(&self, folder: &Path) -> Result<()> {
         let io = |path: &Path, e: std::io::Error| crate::error::write_error(path, e);
         std::fs::create_dir_all(folder).map_err(|e| io(folder, e))?;
-        write_csv(&folder.join("runs.csv"), &self.rows)?;
         write_csv(&folder.join("summary.csv"), &self.summary)?;
         let path = folder.join("study.json");
         let text = serde_json::to_string_pretty(self)
@@ -1051,17 +939,14 @@ mod tests {
             parameter: String::new(),
             ..row(3, REFUSED, f64::NAN, f64::NAN)
         });
-        let result = StudyResult {
-            study: "s".into(),
-            seed: 1,
-            runs: 4,
-            summary: summarise(&rows),
-            rows,
-        };
+        let mut summariser = Summariser::default();
+        summariser.add(&rows);
+        let result = StudyResult::of("s", 1, 4, 4, &summariser);
+        assert_eq!(result.rows, rows.len());
         let endings: Vec<(String, usize, usize)> = result
-            .endings()
-            .into_iter()
-            .map(|(status, count, first)| (status, count, first.run))
+            .endings
+            .iter()
+            .map(|e| (e.status.clone(), e.count, e.first.run))
             .collect();
         assert_eq!(
             endings,
@@ -1116,13 +1001,9 @@ mod tests {
         let mut long = row(0, CONVERGED, -0.41, 0.01);
         long.model = "models/attas-lateral-with-long-name.toml".into();
         let rows = vec![long, row(0, CONVERGED, -0.40, 0.01)];
-        let result = StudyResult {
-            study: "s".into(),
-            seed: 0,
-            runs: 1,
-            summary: summarise(&rows),
-            rows,
-        };
+        let mut summariser = Summariser::default();
+        summariser.add(&rows);
+        let result = StudyResult::of("s", 0, 1, 1, &summariser);
         let table = result.table();
         let widths: Vec<usize> = table
             .lines()

@@ -1,0 +1,225 @@
+//! A study's statistics, accumulated row by row in case order
+//! ([`Summariser`]): memory grows with the number of sweep points, models,
+//! methods and parameters, never with the number of cases. Per point,
+//! model, method and parameter, over the converged fits: mean, bias,
+//! sample standard deviation σ_MC (Welford's update: Welford, "Note on a
+//! method for calculating corrected sums of squares and products",
+//! Technometrics 4(3), 1962), mean Cramér–Rao bound, coverage; and how
+//! every fit ended, each fit counted once whatever its number of
+//! parameter rows.
+
+use crate::eval::study::{CONVERGED, FAILED, REFUSED, Row};
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+
+/// Statistics of one parameter at one sweep point for one model and method,
+/// over the converged runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SummaryRow {
+    pub point: usize,
+    pub scenario: String,
+    pub sample_rate: Option<f64>,
+    pub noise_scale: f64,
+    pub model: String,
+    pub method: String,
+    pub parameter: String,
+    /// Cases run at this point, and how each fit ended.
+    pub runs: usize,
+    pub converged: usize,
+    pub iteration_limit: usize,
+    pub diverged: usize,
+    /// Estimates that are not converged for another reason: no progress
+    /// from the start, unidentified parameters, a degenerate covariance or
+    /// a poor fit (the status column of `runs.csv` says which).
+    pub not_converged: usize,
+    pub refused: usize,
+    pub failed: usize,
+    pub truth: f64,
+    pub mean: f64,
+    /// mean − truth.
+    pub bias: f64,
+    /// bias / |truth|.
+    pub relative_bias: f64,
+    /// Sample standard deviation of the estimates (n − 1), σ_MC.
+    pub std: f64,
+    /// bias / σ_MC.
+    pub bias_over_std: f64,
+    /// Standard error of the mean, σ_MC/√n: the bias is significant when
+    /// many times larger.
+    pub bias_standard_error: f64,
+    /// Mean Cramér–Rao standard error of the runs.
+    pub mean_crb: f64,
+    /// bias / mean CRB.
+    pub bias_over_crb: f64,
+    /// σ_MC / mean CRB: 1 when the bounds are honest.
+    pub std_over_crb: f64,
+    /// Share of runs whose 95 % interval (±1.96 CRB) holds the truth.
+    pub coverage: f64,
+}
+
+/// How many fits ended one way, with the first of them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Ending {
+    pub status: String,
+    pub count: usize,
+    /// The first row of the first such fit.
+    pub first: Row,
+}
+
+/// One (point, model, method, parameter) group.
+#[derive(Debug, Clone)]
+struct Group {
+    first: Row,
+    /// Converged estimates: count, sum, Welford's mean and M₂.
+    n: usize,
+    sum: f64,
+    running_mean: f64,
+    m2: f64,
+    crb_sum: f64,
+    inside: usize,
+}
+
+type FitKey = (usize, String, String);
+
+/// Rows in, statistics out (module header).
+#[derive(Debug, Clone, Default)]
+pub struct Summariser {
+    order: Vec<(usize, String, String, String)>,
+    groups: HashMap<(usize, String, String, String), Group>,
+    /// Per (point, model, method): fits by status.
+    fits: HashMap<FitKey, HashMap<String, usize>>,
+    endings: Vec<Ending>,
+    /// The fit the last row belonged to: (point, run, model, method).
+    last_fit: Option<(usize, usize, String, String)>,
+    rows: usize,
+}
+
+impl Summariser {
+    /// Adds the rows of one case (cases in case order).
+    pub fn add(&mut self, rows: &[Row]) {
+        for row in rows {
+            self.add_row(row);
+        }
+    }
+
+    fn add_row(&mut self, row: &Row) {
+        self.rows += 1;
+        let fit = (row.point, row.run, row.model.clone(), row.method.clone());
+        if self.last_fit.as_ref() != Some(&fit) {
+            *self
+                .fits
+                .entry((row.point, row.model.clone(), row.method.clone()))
+                .or_default()
+                .entry(row.status.clone())
+                .or_default() += 1;
+            match self.endings.iter_mut().find(|e| e.status == row.status) {
+                Some(ending) => ending.count += 1,
+                None => self.endings.push(Ending {
+                    status: row.status.clone(),
+                    count: 1,
+                    first: row.clone(),
+                }),
+            }
+            self.last_fit = Some(fit);
+        }
+        if row.truth.is_none() {
+            return;
+        }
+        let key = (
+            row.point,
+            row.model.clone(),
+            row.method.clone(),
+            row.parameter.clone(),
+        );
+        let group = self.groups.entry(key.clone()).or_insert_with(|| {
+            self.order.push(key);
+            Group {
+                first: row.clone(),
+                n: 0,
+                sum: 0.0,
+                running_mean: 0.0,
+                m2: 0.0,
+                crb_sum: 0.0,
+                inside: 0,
+            }
+        });
+        if row.status == CONVERGED {
+            group.n += 1;
+            group.sum += row.estimate;
+            let delta = row.estimate - group.running_mean;
+            group.running_mean += delta / group.n as f64;
+            group.m2 += delta * (row.estimate - group.running_mean);
+            group.crb_sum += row.standard_error;
+            group.inside += usize::from(row.inside_95 == Some(true));
+        }
+    }
+
+    /// The number of rows added.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// How the fits ended, in the order each status first appeared.
+    pub fn endings(&self) -> &[Ending] {
+        &self.endings
+    }
+
+    /// The summary rows, groups in the order they first appeared.
+    pub fn summary(&self) -> Vec<SummaryRow> {
+        self.order
+            .iter()
+            .map(|key| {
+                let group = &self.groups[key];
+                let empty = HashMap::new();
+                let fits = self
+                    .fits
+                    .get(&(key.0, key.1.clone(), key.2.clone()))
+                    .unwrap_or(&empty);
+                let count = |status: &str| fits.get(status).copied().unwrap_or(0);
+                let n = group.n as f64;
+                let mean = group.sum / n;
+                let std = (group.m2 / (n - 1.0)).sqrt();
+                let mean_crb = group.crb_sum / n;
+                let truth = group.first.truth.unwrap_or(f64::NAN);
+                let bias = mean - truth;
+                SummaryRow {
+                    point: key.0,
+                    scenario: group.first.scenario.clone(),
+                    sample_rate: group.first.sample_rate,
+                    noise_scale: group.first.noise_scale,
+                    model: key.1.clone(),
+                    method: key.2.clone(),
+                    parameter: key.3.clone(),
+                    runs: fits.values().sum(),
+                    converged: count(CONVERGED),
+                    iteration_limit: count("iteration_limit"),
+                    diverged: count("diverged"),
+                    not_converged: ["no_progress", "unidentified", "degenerate", "poor_fit"]
+                        .iter()
+                        .map(|status| count(status))
+                        .sum(),
+                    refused: count(REFUSED),
+                    failed: count(FAILED),
+                    truth,
+                    mean,
+                    bias,
+                    relative_bias: bias / truth.abs(),
+                    std,
+                    bias_over_std: bias / std,
+                    bias_standard_error: std / n.sqrt(),
+                    mean_crb,
+                    bias_over_crb: bias / mean_crb,
+                    std_over_crb: std / mean_crb,
+                    coverage: group.inside as f64 / n,
+                }
+            })
+            .collect()
+    }
+}
+
+/// The summary of `rows` (in case order).
+pub fn summarise(rows: &[Row]) -> Vec<SummaryRow> {
+    let mut summariser = Summariser::default();
+    summariser.add(rows);
+    summariser.summary()
+}
