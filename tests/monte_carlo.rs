@@ -34,7 +34,7 @@ fn journaled(study: &Study, threads: usize, folder: &str) -> (StudyResult, Vec<R
     study
         .run_journaled(&folder, Default::default(), false, threads, &|_| {})
         .unwrap();
-    let result = aeroid::eval::study::assemble(&[folder.clone()], &folder).unwrap();
+    let result = aeroid::eval::study::assemble(std::slice::from_ref(&folder), &folder).unwrap();
     let rows = csv::Reader::from_path(folder.join("runs.csv"))
         .unwrap()
         .deserialize()

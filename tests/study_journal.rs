@@ -52,7 +52,7 @@ fn shards_and_thread_counts_merge_to_the_one_machine_bytes() {
     study
         .run_journaled(&whole, Shard::default(), false, 2, &|_| {})
         .unwrap();
-    study::assemble(&[whole.clone()], &whole).unwrap();
+    study::assemble(std::slice::from_ref(&whole), &whole).unwrap();
     assert_eq!(written(&whole), expected, "two threads, journaled");
     // Four shards of a study with 6 cases: 2, 2, 1, 1 cases.
     let folders: Vec<PathBuf> = (1..=4)
@@ -111,7 +111,7 @@ fn an_interrupted_study_resumes_without_losing_or_repeating_a_case() {
         .run_journaled(&folder, Shard::default(), true, 2, &|_| {})
         .unwrap();
     assert_eq!((run.resumed, run.ran), (2, 4));
-    study::assemble(&[folder.clone()], &folder).unwrap();
+    study::assemble(std::slice::from_ref(&folder), &folder).unwrap();
     assert_eq!(written(&folder), expected);
     // The journal now holds each case once.
     let (_, finished) = journal::read(&folder).unwrap();
