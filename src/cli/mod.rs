@@ -37,6 +37,7 @@ pub mod list;
 pub mod methods;
 pub mod reconstruct;
 pub mod record;
+pub mod report;
 pub mod run;
 pub mod simulate;
 pub mod study;

@@ -130,6 +130,7 @@ pub fn run(args: Args) -> Result<()> {
             String::new()
         }
     );
+    keep_study_file(&study.path, &out)?;
     if shard.count > 1 {
         outln!(
             "shard {shard} journaled in {}; when every shard is done: aeroid study merge --out DIR SHARD_DIR…",
@@ -139,6 +140,17 @@ pub fn run(args: Args) -> Result<()> {
     }
     let result = aeroid::eval::study::assemble(std::slice::from_ref(&out), &out)?;
     report(&result, Some(&out))
+}
+
+/// Copies the study file into its output folder (`study.toml`, which the
+/// report shows).
+fn keep_study_file(study: &std::path::Path, out: &std::path::Path) -> Result<()> {
+    let copy = out.join(aeroid::eval::report::STUDY_COPY);
+    if std::fs::canonicalize(study).ok() != std::fs::canonicalize(&copy).ok() {
+        std::fs::copy(study, &copy)
+            .with_context(|| format!("copying {} to {}", study.display(), copy.display()))?;
+    }
+    Ok(())
 }
 
 /// `aeroid study merge --out DIR SHARD_DIR…`.
@@ -151,6 +163,10 @@ fn merge(args: Args) -> Result<()> {
     }
     aeroid::paths::check_output_folder(&out)?;
     let result = aeroid::eval::study::assemble(&args.shards, &out)?;
+    let first_copy = args.shards[0].join(aeroid::eval::report::STUDY_COPY);
+    if first_copy.exists() {
+        keep_study_file(&first_copy, &out)?;
+    }
     outln!(
         "study {}: {} shard folder(s) merged, {} cases, {} rows",
         result.study,

@@ -4,6 +4,7 @@
 
 pub mod gate;
 pub mod journal;
+pub mod report;
 pub mod run;
 pub mod score;
 pub mod study;
