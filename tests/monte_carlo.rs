@@ -324,3 +324,72 @@ fn acceptance_attas_lateral_100_runs() {
     let first_two: Vec<Row> = rows.iter().filter(|r| r.run < 2).cloned().collect();
     assert_eq!(csv_text(&again), csv_text(&first_two));
 }
+
+/// The other sweep axes: turbulence (the scenario's wind replaced),
+/// input amplitude and resolution, in the order scenario × turbulence ×
+/// input scale × rate × noise × resolution; each point's case flies what
+/// its axes say (turbulence moves the estimates, a halved input halves the
+/// excitation and so roughly doubles the equation-error bounds), and bad
+/// values are refused by name.
+#[test]
+fn turbulence_input_and_resolution_axes() {
+    let text = SMALL.replace(
+        "noise_scale = [0.5, 2.0]",
+        "turbulence = [\"none\", \"moderate\"]\ninput_scale = [1.0, 0.5]\nresolution_scale = [1.0, 4.0]",
+    );
+    let study = Study::load(study_file("mc-axes", &text).to_str().unwrap()).unwrap();
+    let grid: Vec<(Option<&str>, f64, f64)> = study
+        .points
+        .iter()
+        .map(|p| (p.turbulence.as_deref(), p.input_scale, p.resolution_scale))
+        .collect();
+    assert_eq!(grid.len(), 8);
+    assert_eq!(grid[0], (Some("none"), 1.0, 1.0));
+    assert_eq!(grid[1], (Some("none"), 1.0, 4.0));
+    assert_eq!(grid[2], (Some("none"), 0.5, 1.0));
+    assert_eq!(grid[4], (Some("moderate"), 1.0, 1.0));
+    // The flight-test profile is not quantized; the QAR profile is.
+    assert!(study.points[1].profile.name.ends_with("×lsb4"));
+    let qar = aeroid::record::recorder::Profile::load("qar-seed000", None).unwrap();
+    let coarse = qar.with_resolution_scaled(4.0);
+    let lsb = |p: &aeroid::record::recorder::Profile| {
+        p.channels.iter().find_map(|c| c.resolution).unwrap()
+    };
+    assert!((lsb(&coarse) / lsb(&qar) - 4.0).abs() < 1e-12);
+    let unquantized = qar.with_resolution_scaled(0.0);
+    assert!(unquantized.channels.iter().all(|c| c.resolution.is_none()));
+    let crb = |point: usize, parameter: &str| {
+        let rows = study.run_case(aeroid::eval::study::Case { point, run: 0 });
+        let row = rows
+            .iter()
+            .find(|r| r.parameter == parameter)
+            .unwrap()
+            .clone();
+        assert_eq!(row.status, "converged", "{row:?}");
+        (row.estimate, row.standard_error)
+    };
+    let (calm, calm_sigma) = crb(0, "Cl_da");
+    let (gusty, _) = crb(4, "Cl_da");
+    assert_ne!(calm, gusty, "turbulence changes the flight");
+    let (_, half_sigma) = crb(2, "Cl_da");
+    let ratio = half_sigma / calm_sigma;
+    assert!(
+        (1.6..2.4).contains(&ratio),
+        "halved inputs: σ ratio {ratio}"
+    );
+
+    let bad = SMALL.replace(
+        "noise_scale = [0.5, 2.0]",
+        "turbulence = [\"stormy\"]\ninput_scale = [0.0]\nresolution_scale = [-1.0]",
+    );
+    let message = Study::load(study_file("mc-axes-bad", &bad).to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    for field in [
+        "sweep.turbulence[0]",
+        "sweep.input_scale[0]",
+        "sweep.resolution_scale[0]",
+    ] {
+        assert!(message.contains(field), "{field}: {message}");
+    }
+}

@@ -13,13 +13,17 @@
 //! methods = ["oem", "ee"]                   # ee, swr, oem (as `aeroid run`)
 //! runs = 100                                # runs per sweep point
 //! seed = 4                                  # study seed
-//! [sweep]                                   # optional axes; each defaults to the profile as it is
+//! [sweep]                                   # optional axes; each defaults to the files as they are
+//! turbulence = ["none", "moderate"]         # Dryden turbulence replacing the scenarios'
+//! input_scale = [0.5, 1.0]                  # every input's deviation from trim times this
 //! sample_rate = ["10 Hz", "25 Hz"]          # every channel of the profile at this rate
 //! noise_scale = [0.5, 1.0, 2.0]             # every channel's noise σ times this
+//! resolution_scale = [1.0, 4.0]             # every quantized channel's LSB times this
 //! ```
 //!
-//! Sweep points are the product scenario × sample rate × noise scale, in
-//! that order (the last varies fastest). A case is one run at one point; it
+//! Sweep points are the product scenario × turbulence × input scale ×
+//! sample rate × noise scale × resolution scale, in that order (the last
+//! varies fastest). A case is one run at one point; it
 //! is keyed by the stream `point·2³² + run` of the study seed (one
 //! ChaCha8 generator per case, [`random::stream`]), from which it draws two
 //! seeds: the turbulence seed (replacing the scenario's `seed`) and the
@@ -49,6 +53,7 @@ use crate::limits;
 use crate::random;
 use crate::record::recorder::{Profile, parse_rate, record_scenario_seeded};
 use crate::sim::scenario::Scenario;
+use crate::sim::wind::TurbulenceSpec;
 use crate::units::Quantity;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
@@ -151,10 +156,19 @@ impl StudyMethods {
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepSpec {
+    /// Dryden turbulence: `none`, `light`, `moderate`, `severe`.
+    #[serde(default)]
+    pub turbulence: Vec<String>,
+    /// Every input's deviation from trim times this.
+    #[serde(default)]
+    pub input_scale: Vec<f64>,
     #[serde(default)]
     pub sample_rate: Vec<Quantity>,
     #[serde(default)]
     pub noise_scale: Vec<f64>,
+    /// Every quantized channel's resolution (LSB) times this.
+    #[serde(default)]
+    pub resolution_scale: Vec<f64>,
 }
 
 /// One point of the sweep grid: a scenario and the profile modified for it.
@@ -162,9 +176,13 @@ pub struct SweepSpec {
 pub struct SweepPoint {
     /// Index into [`Study::scenarios`].
     pub scenario: usize,
+    /// The turbulence intensity, or None for the scenario's own wind.
+    pub turbulence: Option<String>,
+    pub input_scale: f64,
     /// Every channel's rate (Hz), or None for the profile's own rates.
     pub sample_rate: Option<f64>,
     pub noise_scale: f64,
+    pub resolution_scale: f64,
     pub profile: Profile,
 }
 
@@ -205,9 +223,13 @@ impl Case {
 pub struct Row {
     pub point: usize,
     pub scenario: String,
+    /// The turbulence intensity; empty for the scenario's own wind.
+    pub turbulence: String,
+    pub input_scale: f64,
     /// Every channel's rate (Hz); empty for the profile's own.
     pub sample_rate: Option<f64>,
     pub noise_scale: f64,
+    pub resolution_scale: f64,
     pub run: usize,
     pub turbulence_seed: u64,
     pub recorder_seed: u64,
@@ -283,7 +305,16 @@ impl Study {
             problems.push("runs", message);
         }
         let rates = sample_rates(&file.sweep.sample_rate, &mut problems);
-        let scales = noise_scales(&file.sweep.noise_scale, &mut problems);
+        let sweep = &file.sweep;
+        let scales = scale_axis("noise_scale", &sweep.noise_scale, false, &mut problems);
+        let resolutions = scale_axis(
+            "resolution_scale",
+            &sweep.resolution_scale,
+            false,
+            &mut problems,
+        );
+        let input_scales = scale_axis("input_scale", &sweep.input_scale, true, &mut problems);
+        let turbulence = turbulence_axis(&sweep.turbulence, &mut problems);
         let (Some(profile), true) = (profile, problems.is_empty()) else {
             return Err(Error::Invalid {
                 path: path.to_path_buf(),
@@ -292,19 +323,34 @@ impl Study {
         };
         let mut points = Vec::new();
         for scenario in 0..scenarios.len() {
-            for &sample_rate in &rates {
-                let rated = sample_rate.map_or_else(|| profile.clone(), |r| profile.with_rate(r));
-                for &noise_scale in &scales {
-                    points.push(SweepPoint {
-                        scenario,
-                        sample_rate,
-                        noise_scale,
-                        profile: if noise_scale == 1.0 {
-                            rated.clone()
-                        } else {
-                            rated.with_noise_scaled(noise_scale)
-                        },
-                    });
+            for turbulence in &turbulence {
+                for &input_scale in &input_scales {
+                    for &sample_rate in &rates {
+                        let rated =
+                            sample_rate.map_or_else(|| profile.clone(), |r| profile.with_rate(r));
+                        for &noise_scale in &scales {
+                            let noisy = if noise_scale == 1.0 {
+                                rated.clone()
+                            } else {
+                                rated.with_noise_scaled(noise_scale)
+                            };
+                            for &resolution_scale in &resolutions {
+                                points.push(SweepPoint {
+                                    scenario,
+                                    turbulence: turbulence.clone(),
+                                    input_scale,
+                                    sample_rate,
+                                    noise_scale,
+                                    resolution_scale,
+                                    profile: if resolution_scale == 1.0 {
+                                        noisy.clone()
+                                    } else {
+                                        noisy.with_resolution_scaled(resolution_scale)
+                                    },
+                                });
+                            }
+                        }
+                    }
                 }
             }
         }
@@ -372,14 +418,19 @@ impl Study {
             .collect()
     }
 
-    /// A short label of a sweep point: scenario, rate and noise scale.
+    /// A short label of a sweep point: scenario, turbulence, input scale,
+    /// rate, noise scale and resolution scale (the axes not at their
+    /// defaults, and always the noise scale).
     pub fn point_label(&self, point: usize) -> String {
         let p = &self.points[point];
-        label(
-            &self.scenarios[p.scenario].name,
-            p.sample_rate,
-            p.noise_scale,
-        )
+        label(&Axes {
+            scenario: &self.scenarios[p.scenario].name,
+            turbulence: p.turbulence.as_deref().unwrap_or(""),
+            input_scale: p.input_scale,
+            sample_rate: p.sample_rate,
+            noise_scale: p.noise_scale,
+            resolution_scale: p.resolution_scale,
+        })
     }
 
     /// Runs one case: draws its seeds, flies and records the scenario, and
@@ -391,12 +442,28 @@ impl Study {
         let recorder_seed: u64 = rng.random();
         let mut scenario = self.scenarios[point.scenario].clone();
         scenario.seed = turbulence_seed;
+        match point.turbulence.as_deref() {
+            None => {}
+            Some("none") => scenario.wind.turbulence = None,
+            Some(intensity) => {
+                scenario.wind.turbulence = Some(TurbulenceSpec {
+                    intensity: Some(intensity.to_string()),
+                    ..TurbulenceSpec::default()
+                })
+            }
+        }
+        if point.input_scale != 1.0 {
+            scenario.inputs = scenario.inputs.scaled(point.input_scale);
+        }
         let recorded = record_scenario_seeded(&scenario, &point.profile, recorder_seed);
         let template = Row {
             point: case.point,
             scenario: scenario.name.clone(),
+            turbulence: point.turbulence.clone().unwrap_or_default(),
+            input_scale: point.input_scale,
             sample_rate: point.sample_rate,
             noise_scale: point.noise_scale,
+            resolution_scale: point.resolution_scale,
             run: case.run,
             turbulence_seed,
             recorder_seed,
@@ -664,9 +731,32 @@ pub fn assemble(folders: &[PathBuf], out: &Path) -> Result<StudyResult> {
     Ok(result)
 }
 
-fn label(scenario: &str, sample_rate: Option<f64>, noise_scale: f64) -> String {
-    let rate = sample_rate.map_or(String::new(), |r| format!(" @{r} Hz"));
-    format!("{scenario}{rate} noise×{noise_scale}")
+/// A sweep point's values.
+struct Axes<'a> {
+    scenario: &'a str,
+    turbulence: &'a str,
+    input_scale: f64,
+    sample_rate: Option<f64>,
+    noise_scale: f64,
+    resolution_scale: f64,
+}
+
+fn label(axes: &Axes) -> String {
+    let mut text = axes.scenario.to_string();
+    if !axes.turbulence.is_empty() {
+        text += &format!(" turbulence {}", axes.turbulence);
+    }
+    if axes.input_scale != 1.0 {
+        text += &format!(" inputs×{}", axes.input_scale);
+    }
+    if let Some(rate) = axes.sample_rate {
+        text += &format!(" @{rate} Hz");
+    }
+    text += &format!(" noise×{}", axes.noise_scale);
+    if axes.resolution_scale != 1.0 {
+        text += &format!(" lsb×{}", axes.resolution_scale);
+    }
+    text
 }
 
 /// Loads every reference of a list field, recording each failure under `field[i]`.
@@ -749,21 +839,48 @@ fn sample_rates(spec: &[Quantity], problems: &mut Problems) -> Vec<Option<f64>> 
         .collect()
 }
 
-/// The noise-scale axis; `[1]` when empty.
-fn noise_scales(spec: &[f64], problems: &mut Problems) -> Vec<f64> {
+/// A scale axis `sweep.NAME`; `[1]` when empty. Each value finite and
+/// ≥ 0 (> 0 when `positive`).
+fn scale_axis(name: &str, spec: &[f64], positive: bool, problems: &mut Problems) -> Vec<f64> {
     if spec.is_empty() {
         return vec![1.0];
     }
     for (i, &scale) in spec.iter().enumerate() {
-        if !(scale.is_finite() && scale >= 0.0) {
+        let valid = scale.is_finite() && if positive { scale > 0.0 } else { scale >= 0.0 };
+        if !valid {
             problems.push(
-                format!("sweep.noise_scale[{i}]"),
-                format!("must be a finite number ≥ 0, is {scale}"),
+                format!("sweep.{name}[{i}]"),
+                format!(
+                    "must be a finite number {} 0, is {scale}",
+                    if positive { ">" } else { "≥" }
+                ),
             );
         }
     }
     spec.to_vec()
 }
+
+/// The turbulence axis; `[None]` (the scenarios' own wind) when empty.
+fn turbulence_axis(spec: &[String], problems: &mut Problems) -> Vec<Option<String>> {
+    if spec.is_empty() {
+        return vec![None];
+    }
+    for (i, name) in spec.iter().enumerate() {
+        if !TURBULENCE.contains(&name.as_str()) {
+            problems.push(
+                format!("sweep.turbulence[{i}]"),
+                format!(
+                    "unknown intensity '{name}'; known: {}",
+                    TURBULENCE.join(", ")
+                ),
+            );
+        }
+    }
+    spec.iter().cloned().map(Some).collect()
+}
+
+/// The turbulence axis' values.
+const TURBULENCE: [&str; 4] = ["none", "light", "moderate", "severe"];
 
 fn status_text(status: &Status) -> (&'static str, String) {
     match status {
@@ -858,7 +975,14 @@ impl StudyResult {
                 point = s.point;
                 text += &format!(
                     "point {point}: {}\n",
-                    label(&s.scenario, s.sample_rate, s.noise_scale)
+                    label(&Axes {
+                        scenario: &s.scenario,
+                        turbulence: &s.turbulence,
+                        input_scale: s.input_scale,
+                        sample_rate: s.sample_rate,
+                        noise_scale: s.noise_scale,
+                        resolution_scale: s.resolution_scale,
+                    })
                 );
             }
             text += &format!(
@@ -899,8 +1023,11 @@ mod tests {
         Row {
             point: 0,
             scenario: "s".into(),
+            turbulence: String::new(),
+            input_scale: 1.0,
             sample_rate: None,
             noise_scale: 1.0,
+            resolution_scale: 1.0,
             run,
             turbulence_seed: 0,
             recorder_seed: 0,

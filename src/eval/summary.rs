@@ -18,8 +18,12 @@ use std::collections::HashMap;
 pub struct SummaryRow {
     pub point: usize,
     pub scenario: String,
+    /// The turbulence intensity; empty for the scenario's own wind.
+    pub turbulence: String,
+    pub input_scale: f64,
     pub sample_rate: Option<f64>,
     pub noise_scale: f64,
+    pub resolution_scale: f64,
     pub model: String,
     pub method: String,
     pub parameter: String,
@@ -185,8 +189,11 @@ impl Summariser {
                 SummaryRow {
                     point: key.0,
                     scenario: group.first.scenario.clone(),
+                    turbulence: group.first.turbulence.clone(),
+                    input_scale: group.first.input_scale,
                     sample_rate: group.first.sample_rate,
                     noise_scale: group.first.noise_scale,
+                    resolution_scale: group.first.resolution_scale,
                     model: key.1.clone(),
                     method: key.2.clone(),
                     parameter: key.3.clone(),

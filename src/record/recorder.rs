@@ -328,6 +328,18 @@ impl Profile {
         profile
     }
 
+    /// The same profile with every quantized channel's resolution (LSB)
+    /// times `factor` (0: unquantized), named `NAME×lsbFACTOR`. Monte Carlo
+    /// studies sweep resolution with it.
+    pub fn with_resolution_scaled(&self, factor: f64) -> Profile {
+        let mut profile = self.clone();
+        profile.name = format!("{}×lsb{factor}", self.name);
+        for channel in &mut profile.channels {
+            channel.resolution = channel.resolution.map(|r| r * factor).filter(|&r| r > 0.0);
+        }
+        profile
+    }
+
     /// The same profile with every channel sampled at `rate` (Hz), each
     /// keeping its place in the frame, named `NAME@RATEHz`. Monte Carlo
     /// studies sweep sample rate with it.

@@ -153,9 +153,21 @@ fn default_time_column() -> String {
 }
 
 /// Signals built from the specs, evaluated at any time.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct InputSchedule {
     signals: Vec<Signal>,
+    /// Every deviation times this (1 as the file gives it).
+    scale: f64,
+}
+
+impl Default for InputSchedule {
+    /// No inputs.
+    fn default() -> Self {
+        InputSchedule {
+            signals: Vec::new(),
+            scale: 1.0,
+        }
+    }
 }
 
 impl InputSchedule {
@@ -185,7 +197,10 @@ impl InputSchedule {
             .into_iter()
             .map(|item| item.load(base_dir, scenario_path))
             .collect::<crate::Result<Vec<Signal>>>()?;
-        Ok(InputSchedule { signals })
+        Ok(InputSchedule {
+            signals,
+            scale: 1.0,
+        })
     }
 
     /// Sum of all signals at time `time` (s): deviation from trim, SI/rad
@@ -195,12 +210,24 @@ impl InputSchedule {
         for signal in &self.signals {
             signal.add_to(time, &mut deviation);
         }
+        if self.scale != 1.0 {
+            deviation *= self.scale;
+        }
         deviation
     }
 
     /// True when the scenario has no input signals.
     pub fn is_empty(&self) -> bool {
         self.signals.is_empty()
+    }
+
+    /// The same inputs with every deviation from trim times `factor`
+    /// (a study's input-amplitude axis).
+    pub fn scaled(&self, factor: f64) -> InputSchedule {
+        InputSchedule {
+            signals: self.signals.clone(),
+            scale: self.scale * factor,
+        }
     }
 }
 
