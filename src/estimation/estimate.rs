@@ -243,6 +243,42 @@ impl Estimate {
             .collect()
     }
 
+    /// The parameter most correlated with parameter `index` and
+    /// |correlation|; None without a finite covariance.
+    pub fn strongest_correlation(&self, index: usize) -> Option<(&str, f64)> {
+        let correlation = self.correlation();
+        let row = correlation.get(index)?;
+        row.iter()
+            .enumerate()
+            .filter(|&(j, r)| j != index && r.is_finite())
+            .map(|(j, r)| {
+                (
+                    self.parameters.get(j).map_or("", |p| p.name.as_str()),
+                    r.abs(),
+                )
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// The condition number of the correlation matrix (the information
+    /// matrix with every parameter scaled to unit variance): how close the
+    /// parameters are to being inseparable, independent of their units.
+    /// None without a finite covariance.
+    pub fn correlation_condition(&self) -> Option<f64> {
+        let correlation = self.correlation();
+        let n = correlation.len();
+        if n == 0 || correlation.iter().flatten().any(|r| !r.is_finite()) {
+            return None;
+        }
+        let matrix = nalgebra::DMatrix::from_fn(n, n, |i, j| correlation[i][j]);
+        let eigenvalues = matrix.symmetric_eigenvalues();
+        let largest = eigenvalues.max();
+        let smallest = eigenvalues.min();
+        (smallest > 0.0)
+            .then(|| largest / smallest)
+            .or(Some(f64::INFINITY))
+    }
+
     pub fn write_json(&self, path: &Path) -> Result<()> {
         let text = serde_json::to_string_pretty(self)
             .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;

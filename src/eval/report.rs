@@ -405,7 +405,7 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
     for s in &result.summary {
         let _ = writeln!(
             page,
-            "<tr><td>{}</td><td class=\"text\">{}</td><td>{}</td><td>{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td>{:.5}</td><td>{:.5}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.0} %</td><td>{}/{}</td></tr>",
+            "<tr><td>{}</td><td class=\"text\">{}</td><td>{}</td><td>{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td>{:.5}</td><td>{:.5}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.0} %</td><td>{:.3e}</td><td>{}/{}</td><td>{:.0} %</td><td>{:.3}</td><td>{:.0} % {}</td><td class=\"text\">{}</td></tr>",
             s.point,
             escape(&s.scenario),
             s.sample_rate.map_or("profile".into(), |r| r.to_string()),
@@ -420,8 +420,14 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
             s.bias_over_crb,
             s.std_over_crb,
             100.0 * s.coverage,
+            s.rmse,
             s.converged,
-            s.runs
+            s.runs,
+            100.0 * s.refusal_rate,
+            s.relative_crb,
+            100.0 * s.correlated_share,
+            escape(&s.correlated_with),
+            escape(&s.identifiability)
         );
     }
     page += "</table>\n";

@@ -252,6 +252,14 @@ pub struct Row {
     #[serde(with = "float_text::option")]
     pub error: Option<f64>,
     pub inside_95: Option<bool>,
+    /// The estimated parameter most correlated with this one, and
+    /// |correlation|.
+    pub correlated_with: String,
+    #[serde(with = "float_text::option")]
+    pub max_correlation: Option<f64>,
+    /// The fit's correlation-matrix condition number.
+    #[serde(with = "float_text::option")]
+    pub condition_number: Option<f64>,
 }
 
 /// What a study produced: its summary and how its fits ended.
@@ -477,6 +485,9 @@ impl Study {
             truth: None,
             error: None,
             inside_95: None,
+            correlated_with: String::new(),
+            max_correlation: None,
+            condition_number: None,
         };
         let mut rows = Vec::new();
         for model in &self.models {
@@ -503,11 +514,20 @@ impl Study {
                 match outcome {
                     Outcome::Estimated { estimate, scores } => {
                         let (status, reason) = status_text(&estimate.status);
-                        rows.extend(
-                            scores
-                                .iter()
-                                .map(|s| parameter_row(&fit, status, &reason, s)),
-                        );
+                        let fit = Row {
+                            condition_number: estimate.correlation_condition(),
+                            ..fit
+                        };
+                        rows.extend(scores.iter().map(|s| {
+                            let index = estimate.parameters.iter().position(|p| p.name == s.name);
+                            let strongest = index.and_then(|i| estimate.strongest_correlation(i));
+                            Row {
+                                correlated_with: strongest
+                                    .map_or(String::new(), |(name, _)| name.to_string()),
+                                max_correlation: strongest.map(|(_, r)| r),
+                                ..parameter_row(&fit, status, &reason, s)
+                            }
+                        }));
                     }
                     Outcome::Refused(refusal) => rows.push(Row {
                         status: REFUSED.into(),
@@ -1041,6 +1061,9 @@ mod tests {
             truth: Some(-0.4),
             error: Some(estimate + 0.4),
             inside_95: Some((estimate + 0.4).abs() <= 1.96 * standard_error),
+            correlated_with: String::new(),
+            max_correlation: None,
+            condition_number: None,
         }
     }
 
@@ -1118,6 +1141,25 @@ mod tests {
         assert!(close(s.bias_over_crb, 0.5) && close(s.relative_bias, 0.025));
         assert!(close(s.bias_standard_error, std / 3f64.sqrt()));
         assert!(close(s.coverage, 2.0 / 3.0));
+        // Errors −0.01, 0, +0.04; two of five runs failed to converge.
+        assert!(close(s.rmse, (0.0017_f64 / 3.0).sqrt()), "{}", s.rmse);
+        assert!(close(s.failure_rate, 0.4) && close(s.refusal_rate, 0.0));
+        assert!(close(s.relative_crb, 0.05));
+        assert_eq!(s.identifiability, "identifiable");
+    }
+
+    /// The verdict: a CRB above the parameter's size, none converged, a
+    /// CRB over 20 % or mostly entangled with another parameter.
+    #[test]
+    fn identifiability_verdicts() {
+        use crate::eval::summary::verdict;
+        assert_eq!(verdict(10, 0.05, 0.0), "identifiable");
+        assert_eq!(verdict(10, 0.3, 0.0), "weak");
+        assert_eq!(verdict(10, 0.05, 0.8), "weak");
+        assert_eq!(verdict(10, 1.5, 0.0), "not identifiable");
+        assert_eq!(verdict(0, f64::NAN, f64::NAN), "not identifiable");
+        // Truth 0: the relative CRB is infinite; correlations decide.
+        assert_eq!(verdict(10, f64::INFINITY, 0.0), "identifiable");
     }
 
     /// A model name longer than the header (as a path to a model file is)

@@ -59,6 +59,42 @@ pub struct SummaryRow {
     pub std_over_crb: f64,
     /// Share of runs whose 95 % interval (±1.96 CRB) holds the truth.
     pub coverage: f64,
+    /// √(mean (estimate − truth)²).
+    pub rmse: f64,
+    /// Share of the runs whose fit did not converge (refusals aside).
+    pub failure_rate: f64,
+    /// Share of the runs whose estimator refused the record.
+    pub refusal_rate: f64,
+    /// Mean CRB / |truth|.
+    pub relative_crb: f64,
+    /// Share of converged fits in which this parameter's correlation with
+    /// another exceeds 0.9 in magnitude, and the other parameter (the
+    /// first such fit's).
+    pub correlated_share: f64,
+    pub correlated_with: String,
+    /// Mean log₁₀ of the fits' correlation-matrix condition number.
+    pub condition_log10: f64,
+    /// `identifiable`, `weak` or `not identifiable` ([`verdict`]).
+    pub identifiability: String,
+}
+
+/// |correlation| above which two parameters are reported as entangled.
+pub const CORRELATED: f64 = 0.9;
+
+/// The identifiability of a parameter from its summary: `not identifiable`
+/// when no fit converged or its Cramér–Rao bound exceeds its size
+/// (relative CRB > 1); `weak` when the bound is over 20 % of its size or it
+/// is correlated beyond 0.9 with another parameter in most fits; else
+/// `identifiable`. A parameter whose truth is 0 is judged by its
+/// correlations alone.
+pub fn verdict(converged: usize, relative_crb: f64, correlated_share: f64) -> &'static str {
+    if converged == 0 || relative_crb > 1.0 && relative_crb.is_finite() {
+        "not identifiable"
+    } else if relative_crb > 0.2 && relative_crb.is_finite() || correlated_share > 0.5 {
+        "weak"
+    } else {
+        "identifiable"
+    }
 }
 
 /// How many fits ended one way, with the first of them.
@@ -81,6 +117,11 @@ struct Group {
     m2: f64,
     crb_sum: f64,
     inside: usize,
+    squared_error: f64,
+    correlated: usize,
+    correlated_with: Option<String>,
+    condition_log_sum: f64,
+    conditions: usize,
 }
 
 type FitKey = (usize, String, String);
@@ -145,6 +186,11 @@ impl Summariser {
                 m2: 0.0,
                 crb_sum: 0.0,
                 inside: 0,
+                squared_error: 0.0,
+                correlated: 0,
+                correlated_with: None,
+                condition_log_sum: 0.0,
+                conditions: 0,
             }
         });
         if row.status == CONVERGED {
@@ -155,6 +201,19 @@ impl Summariser {
             group.m2 += delta * (row.estimate - group.running_mean);
             group.crb_sum += row.standard_error;
             group.inside += usize::from(row.inside_95 == Some(true));
+            if let Some(truth) = row.truth {
+                group.squared_error += (row.estimate - truth).powi(2);
+            }
+            if row.max_correlation.is_some_and(|r| r > CORRELATED) {
+                group.correlated += 1;
+                group
+                    .correlated_with
+                    .get_or_insert_with(|| row.correlated_with.clone());
+            }
+            if let Some(condition) = row.condition_number.filter(|c| c.is_finite()) {
+                group.condition_log_sum += condition.log10();
+                group.conditions += 1;
+            }
         }
     }
 
@@ -186,6 +245,9 @@ impl Summariser {
                 let mean_crb = group.crb_sum / n;
                 let truth = group.first.truth.unwrap_or(f64::NAN);
                 let bias = mean - truth;
+                let runs: usize = fits.values().sum();
+                let relative_crb = mean_crb / truth.abs();
+                let correlated_share = group.correlated as f64 / n;
                 SummaryRow {
                     point: key.0,
                     scenario: group.first.scenario.clone(),
@@ -197,7 +259,7 @@ impl Summariser {
                     model: key.1.clone(),
                     method: key.2.clone(),
                     parameter: key.3.clone(),
-                    runs: fits.values().sum(),
+                    runs,
                     converged: count(CONVERGED),
                     iteration_limit: count("iteration_limit"),
                     diverged: count("diverged"),
@@ -218,6 +280,14 @@ impl Summariser {
                     bias_over_crb: bias / mean_crb,
                     std_over_crb: std / mean_crb,
                     coverage: group.inside as f64 / n,
+                    rmse: (group.squared_error / n).sqrt(),
+                    failure_rate: (runs - count(CONVERGED) - count(REFUSED)) as f64 / runs as f64,
+                    refusal_rate: count(REFUSED) as f64 / runs as f64,
+                    relative_crb,
+                    correlated_share,
+                    correlated_with: group.correlated_with.clone().unwrap_or_default(),
+                    condition_log10: group.condition_log_sum / group.conditions as f64,
+                    identifiability: verdict(group.n, relative_crb, correlated_share).into(),
                 }
             })
             .collect()
