@@ -948,8 +948,9 @@ impl StudyResult {
         }
     }
 
-    /// Writes `summary.csv` and `study.json` (the result; a NaN is null
-    /// there) into `folder`, creating it.
+    /// Writes `summary.csv` and `study.json` (the result; a non-finite
+    /// number is the string "NaN", "inf" or "-inf" there) into `folder`,
+    /// creating it.
     pub fn write(&self, folder: &Path) -> Result<()> {
         let io = |path: &Path, e: std::io::Error| crate::error::write_error(path, e);
         std::fs::create_dir_all(folder).map_err(|e| io(folder, e))?;

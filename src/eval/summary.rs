@@ -8,6 +8,7 @@
 //! every fit ended, each fit counted once whatever its number of
 //! parameter rows.
 
+use crate::eval::journal::float_text;
 use crate::eval::study::{CONVERGED, FAILED, REFUSED, Row};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -38,41 +39,58 @@ pub struct SummaryRow {
     pub not_converged: usize,
     pub refused: usize,
     pub failed: usize,
+    #[serde(with = "float_text")]
     pub truth: f64,
+    #[serde(with = "float_text")]
     pub mean: f64,
     /// mean − truth.
+    #[serde(with = "float_text")]
     pub bias: f64,
     /// bias / |truth|.
+    #[serde(with = "float_text")]
     pub relative_bias: f64,
     /// Sample standard deviation of the estimates (n − 1), σ_MC.
+    #[serde(with = "float_text")]
     pub std: f64,
     /// bias / σ_MC.
+    #[serde(with = "float_text")]
     pub bias_over_std: f64,
     /// Standard error of the mean, σ_MC/√n: the bias is significant when
     /// many times larger.
+    #[serde(with = "float_text")]
     pub bias_standard_error: f64,
     /// Mean Cramér–Rao standard error of the runs.
+    #[serde(with = "float_text")]
     pub mean_crb: f64,
     /// bias / mean CRB.
+    #[serde(with = "float_text")]
     pub bias_over_crb: f64,
     /// σ_MC / mean CRB: 1 when the bounds are honest.
+    #[serde(with = "float_text")]
     pub std_over_crb: f64,
     /// Share of runs whose 95 % interval (±1.96 CRB) holds the truth.
+    #[serde(with = "float_text")]
     pub coverage: f64,
     /// √(mean (estimate − truth)²).
+    #[serde(with = "float_text")]
     pub rmse: f64,
     /// Share of the runs whose fit did not converge (refusals aside).
+    #[serde(with = "float_text")]
     pub failure_rate: f64,
     /// Share of the runs whose estimator refused the record.
+    #[serde(with = "float_text")]
     pub refusal_rate: f64,
     /// Mean CRB / |truth|.
+    #[serde(with = "float_text")]
     pub relative_crb: f64,
     /// Share of converged fits in which this parameter's correlation with
     /// another exceeds 0.9 in magnitude, and the other parameter (the
     /// first such fit's).
+    #[serde(with = "float_text")]
     pub correlated_share: f64,
     pub correlated_with: String,
     /// Mean log₁₀ of the fits' correlation-matrix condition number.
+    #[serde(with = "float_text")]
     pub condition_log10: f64,
     /// `identifiable`, `weak` or `not identifiable` ([`verdict`]).
     pub identifiability: String,
