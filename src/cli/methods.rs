@@ -13,6 +13,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    for problem in methods::plugin_problems() {
+        eprintln!("warning: {problem}");
+    }
     let estimators = match &args.name {
         Some(name) => vec![methods::find(name)?],
         None => methods::all(),

@@ -10,6 +10,7 @@ pub mod estimate;
 pub mod estimator;
 pub mod methods;
 pub mod model;
+pub mod plugin;
 pub mod problem;
 pub mod reconstruction;
 pub mod solver;

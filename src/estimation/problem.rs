@@ -114,9 +114,13 @@ impl EstimationProblem {
         let structure =
             ModelStructure::from_parts(&document.model.structure, &document.model.aircraft, &path)?;
         let resolved = Document::parameters(&structure);
-        if resolved != document.parameters {
+        let aircraft_agrees = document
+            .aircraft
+            .as_ref()
+            .is_none_or(|view| *view == AircraftView::of(&structure));
+        if resolved != document.parameters || !aircraft_agrees {
             return Err(Error::Other(format!(
-                "{}: the parameters do not agree with the model files they came with",
+                "{}: the parameters or the aircraft do not agree with the model files they came with",
                 origin.display()
             )));
         }
@@ -181,8 +185,62 @@ struct Document {
     integrate: Vec<String>,
     pseudo_controls: Vec<String>,
     outputs: Vec<String>,
+    /// The aircraft in SI, as the model uses it (read for programs; on
+    /// reading it must agree with the files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    aircraft: Option<AircraftView>,
     model: ModelDocument,
     records: Vec<FlightRecord>,
+}
+
+/// The aircraft and the model's conventions in SI, for programs that read
+/// the problem: mass (kg), wing area (m²), span and chord (m), the inertia
+/// tensor's Ixx, Iyy, Izz, Ixz (kg·m²), the rate normalisation (`2V`: p̂ =
+/// p·b/(2V)) and the speed it uses (`airspeed` or `reference`, then
+/// `reference_airspeed`, m/s).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AircraftView {
+    pub mass: f64,
+    pub wing_area: f64,
+    pub span: f64,
+    pub chord: f64,
+    pub ixx: f64,
+    pub iyy: f64,
+    pub izz: f64,
+    pub ixz: f64,
+    pub rate_normalization: String,
+    pub rate_speed: String,
+    pub reference_airspeed: f64,
+}
+
+impl AircraftView {
+    fn of(structure: &ModelStructure) -> AircraftView {
+        let aircraft = &structure.aircraft;
+        let inertia = &aircraft.mass.inertia;
+        let aero = &structure.file.aero;
+        AircraftView {
+            mass: aircraft.mass.mass,
+            wing_area: aircraft.wing_area,
+            span: aircraft.geometry.span,
+            chord: aircraft.geometry.chord,
+            ixx: inertia[(0, 0)],
+            iyy: inertia[(1, 1)],
+            izz: inertia[(2, 2)],
+            ixz: -inertia[(0, 2)],
+            rate_normalization: value_text(&aero.rate_normalization),
+            rate_speed: value_text(&aero.rate_speed),
+            reference_airspeed: aircraft.aero.reference_airspeed,
+        }
+    }
+}
+
+/// A setting's text as the files write it.
+fn value_text<T: Serialize>(value: &T) -> String {
+    serde_json::to_value(value)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default()
 }
 
 impl Document {
@@ -200,6 +258,7 @@ impl Document {
                 .map(String::from)
                 .collect(),
             outputs: structure.outputs.clone(),
+            aircraft: Some(AircraftView::of(structure)),
             model: ModelDocument {
                 path: structure.path.display().to_string(),
                 structure: structure.file.clone(),

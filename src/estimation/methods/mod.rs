@@ -24,10 +24,38 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
     ]
 }
 
-/// The registry: the built-in estimators, then those registered at run time.
+/// The registry: the built-in estimators, the plug-ins found in the
+/// plug-in folders ([`crate::estimation::plugin::discover`]; one named like
+/// an earlier method is left out, with a problem), then those registered
+/// at run time.
 fn registry() -> &'static RwLock<Vec<Arc<dyn Estimator>>> {
     static REGISTRY: OnceLock<RwLock<Vec<Arc<dyn Estimator>>>> = OnceLock::new();
-    REGISTRY.get_or_init(|| RwLock::new(built_in()))
+    REGISTRY.get_or_init(|| {
+        let mut estimators = built_in();
+        let (plugins, mut problems) = crate::estimation::plugin::discover();
+        for plugin in plugins {
+            if estimators.iter().any(|e| e.name() == plugin.name()) {
+                problems.push(Error::Other(format!(
+                    "{}: a method named '{}' exists already; the plug-in is left out",
+                    plugin.path().display(),
+                    plugin.name()
+                )));
+            } else {
+                estimators.push(Arc::new(plugin));
+            }
+        }
+        let _ = PLUGIN_PROBLEMS.set(problems.iter().map(ToString::to_string).collect());
+        RwLock::new(estimators)
+    })
+}
+
+/// Plug-in files that could not be loaded, each with its reason.
+static PLUGIN_PROBLEMS: OnceLock<Vec<String>> = OnceLock::new();
+
+/// The plug-in files left out of the registry, and why.
+pub fn plugin_problems() -> Vec<String> {
+    let _ = registry();
+    PLUGIN_PROBLEMS.get().cloned().unwrap_or_default()
 }
 
 /// Every estimator, in registry order.
