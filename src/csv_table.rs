@@ -166,7 +166,9 @@ impl CsvTable {
         }
         let headers = match layout.header {
             true => headers,
-            false => (1..=width.map_or(0, |(_, n)| n)).map(|n| n.to_string()).collect(),
+            false => (1..=width.map_or(0, |(_, n)| n))
+                .map(|n| n.to_string())
+                .collect(),
         };
         Self::check_headers(path, &headers)?;
         Ok(CsvTable {
@@ -274,7 +276,9 @@ impl CsvTable {
                 column: String::new(),
                 message: match self.headers.is_empty() {
                     true => "the file has no data rows; a record needs samples".into(),
-                    false => "the file has a header but no data rows; a record needs samples".into(),
+                    false => {
+                        "the file has a header but no data rows; a record needs samples".into()
+                    }
                 },
             }),
         }

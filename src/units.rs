@@ -115,8 +115,18 @@ impl Dimension {
             ],
             Time => &[("s", 1.0), ("ms", 1e-3), ("min", 60.0), ("h", 3600.0)],
             Frequency => &[("Hz", 1.0), ("1/s", 1.0)],
-            Mass => &[("kg", 1.0), ("t", 1000.0), ("lb", 0.453_592_37), ("slug", SLUG)],
-            Force => &[("N", 1.0), ("kN", 1000.0), ("daN", 10.0), ("lbf", POUND_FORCE)],
+            Mass => &[
+                ("kg", 1.0),
+                ("t", 1000.0),
+                ("lb", 0.453_592_37),
+                ("slug", SLUG),
+            ],
+            Force => &[
+                ("N", 1.0),
+                ("kN", 1000.0),
+                ("daN", 10.0),
+                ("lbf", POUND_FORCE),
+            ],
             Inertia => &[
                 ("kg*m2", 1.0),
                 ("kg m^2", 1.0),
@@ -517,6 +527,9 @@ mod tests {
         // FL100 is 3048 m; 1 psf is 47.88 Pa.
         assert!((29.92 * unit_factor("inHg", Pressure).unwrap() - 101_320.76).abs() < 0.01);
         let error = unit_factor("kg/m3", Dimensionless).unwrap_err();
-        assert!(error.starts_with("unit 'kg/m3' is not a unit of a dimensionless quantity"), "{error}");
+        assert!(
+            error.starts_with("unit 'kg/m3' is not a unit of a dimensionless quantity"),
+            "{error}"
+        );
     }
 }

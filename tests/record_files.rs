@@ -273,7 +273,8 @@ fn import_wrong_unit_is_named() {
         .to_string();
     assert!(
         error.contains("channels[1].unit")
-            && error.contains("channel 'airspeed', column 'IAS': unit 'deg' is not a unit of speed"),
+            && error
+                .contains("channel 'airspeed', column 'IAS': unit 'deg' is not a unit of speed"),
         "{error}"
     );
 }

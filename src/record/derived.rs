@@ -202,7 +202,10 @@ pub const MEASURANDS: &[Measurand] = &[
         |s, c| engine(s, c).exhaust_gas_temperature
     ),
     measurand!("thrust", "N", Force, |s, _c| s.evaluation.thrust),
-    measurand!("density", "kg/m3", Density, |s, _c| s.evaluation.air.density),
+    measurand!("density", "kg/m3", Density, |s, _c| s
+        .evaluation
+        .air
+        .density),
     measurand!("static_pressure", "Pa", Pressure, |s, _c| s
         .evaluation
         .air

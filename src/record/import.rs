@@ -454,7 +454,12 @@ fn validate_map(file: &ColumnMapFile, path: &Path) -> Result<(Conversion, Vec<Ma
         Some(Dimension::Time),
         &mut problems,
     );
-    check_column(&file.time.column, file.file.header, "time.column", &mut problems);
+    check_column(
+        &file.time.column,
+        file.file.header,
+        "time.column",
+        &mut problems,
+    );
     if time.scale <= 0.0 {
         problems.push(
             "time.scale",
