@@ -251,6 +251,15 @@ fn equation_error_gives_the_same_estimate_on_both_twins() {
     let a = equation_error(&headed, &structure, &options).unwrap();
     let b = equation_error(&headerless, &structure, &options).unwrap();
     assert!(!a.parameters.is_empty());
+    // The rate from the median sample interval is not exactly 100 Hz in
+    // binary; it prints as people write it.
+    let rate = headerless.channel("alpha").unwrap().rate;
+    assert!((rate - 100.0).abs() < 1e-6 && rate != 100.0, "{rate}");
+    let notes = b.notes.join("\n");
+    assert!(
+        notes.contains("at 100 Hz") && notes.contains("(100 Hz)") && !notes.contains("99.99"),
+        "{notes}"
+    );
     for (x, y) in a.parameters.iter().zip(&b.parameters) {
         assert_eq!(x.name, y.name);
         assert!(

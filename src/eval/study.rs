@@ -520,7 +520,9 @@ impl Study {
 }
 
 fn label(scenario: &str, sample_rate: Option<f64>, noise_scale: f64) -> String {
-    let rate = sample_rate.map_or(String::new(), |r| format!(" @{r} Hz"));
+    let rate = sample_rate.map_or(String::new(), |r| {
+        format!(" @{} Hz", crate::record::rate_text(r))
+    });
     format!("{scenario}{rate} noise×{noise_scale}")
 }
 

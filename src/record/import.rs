@@ -426,7 +426,8 @@ fn check_rate(channel: &Channel, index: usize, map_path: &Path) -> Result<()> {
             message: format!(
                 "channel '{}': its median sample interval gives a rate of {} Hz; \
                  check the time scale and unit, or give the rate",
-                channel.name, channel.rate
+                channel.name,
+                crate::record::rate_text(channel.rate)
             ),
         }],
     })
