@@ -1,9 +1,44 @@
 //! The one CSV reader of aeroid: flight records, imported flight data and
 //! replayed inputs are all read as a [`CsvTable`], so that every bad cell is
-//! reported the same way, by file, line and column.
+//! reported the same way, by file, line and column. Imported data may also
+//! be headerless ASCII, whitespace- or comma-separated, with comment lines
+//! ([`Layout`]).
 
 use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// What separates the cells of a line of an imported data file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Delimiter {
+    /// Commas in a file with a header; without a header, commas on a line
+    /// that has one, else runs of spaces and tabs.
+    #[default]
+    Auto,
+    Comma,
+    /// Runs of spaces and tabs (no empty cells).
+    Whitespace,
+    Semicolon,
+    Tab,
+}
+
+/// How an imported data file is laid out. Whatever the layout, a UTF-8
+/// byte-order mark is ignored, lines may end in CRLF, and blank lines and
+/// lines starting with `#` or `%` are comments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layout {
+    /// Whether the first line that is not a comment names the columns;
+    /// without one, columns are known by number (1 is the first).
+    pub header: bool,
+    pub delimiter: Delimiter,
+}
+
+/// Whether a line is a comment (or blank) in an imported data file.
+fn is_comment(line: &str) -> bool {
+    let line = line.trim();
+    line.is_empty() || line.starts_with('#') || line.starts_with('%')
+}
 
 /// A CSV file read whole, for naming the line and column of every bad cell.
 pub(crate) struct CsvTable {
@@ -16,10 +51,14 @@ pub(crate) struct CsvTable {
 impl CsvTable {
     /// Reads a CSV with a header row; a ragged row or a repeated header is an error.
     pub fn read(path: &Path) -> Result<CsvTable> {
-        let mut reader = csv::Reader::from_path(path).map_err(|e| Error::Io {
+        let reader = csv::Reader::from_path(path).map_err(|e| Error::Io {
             path: path.to_path_buf(),
             source: e.into(),
         })?;
+        Self::parse_csv(path, reader)
+    }
+
+    fn parse_csv<R: std::io::Read>(path: &Path, mut reader: csv::Reader<R>) -> Result<CsvTable> {
         let csv_error = |e: csv::Error| Error::Csv {
             path: path.to_path_buf(),
             line: e.position().map_or(0, |p| p.line()),
@@ -32,16 +71,7 @@ impl CsvTable {
             .iter()
             .map(|h| h.trim().to_string())
             .collect();
-        for (i, header) in headers.iter().enumerate() {
-            if headers[..i].contains(header) {
-                return Err(Error::Csv {
-                    path: path.to_path_buf(),
-                    line: 1,
-                    column: header.clone(),
-                    message: "the column name appears twice in the header".into(),
-                });
-            }
-        }
+        Self::check_headers(path, &headers)?;
         let hint = delimiter_hint(&headers);
         let mut rows = Vec::new();
         for row in reader.records() {
@@ -61,6 +91,111 @@ impl CsvTable {
             headers,
             rows,
         })
+    }
+
+    /// A header named twice is an error.
+    fn check_headers(path: &Path, headers: &[String]) -> Result<()> {
+        for (i, header) in headers.iter().enumerate() {
+            if headers[..i].contains(header) {
+                return Err(Error::Csv {
+                    path: path.to_path_buf(),
+                    line: 1,
+                    column: header.clone(),
+                    message: "the column name appears twice in the header".into(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads an imported data file laid out as `layout`.
+    pub fn read_layout(path: &Path, layout: Layout) -> Result<CsvTable> {
+        let text = crate::error::read_text(path)?;
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+        if layout.header && matches!(layout.delimiter, Delimiter::Auto | Delimiter::Comma) {
+            // Comment lines become blank lines, which the CSV reader skips,
+            // so that line numbers stay those of the file.
+            let blanked: String = text
+                .lines()
+                .map(|line| if is_comment(line) { "" } else { line })
+                .collect::<Vec<_>>()
+                .join("\n");
+            return Self::parse_csv(path, csv::Reader::from_reader(blanked.as_bytes()));
+        }
+        Self::parse_lines(path, text, layout)
+    }
+
+    /// A file split line by line on `layout`'s delimiter.
+    fn parse_lines(path: &Path, text: &str, layout: Layout) -> Result<CsvTable> {
+        let split = |line: &str| -> Vec<String> {
+            let cells: Vec<&str> = match layout.delimiter {
+                Delimiter::Comma => line.split(',').collect(),
+                Delimiter::Semicolon => line.split(';').collect(),
+                Delimiter::Tab => line.split('\t').collect(),
+                Delimiter::Whitespace => line.split_whitespace().collect(),
+                Delimiter::Auto if line.contains(',') => line.split(',').collect(),
+                Delimiter::Auto => line.split_whitespace().collect(),
+            };
+            cells.into_iter().map(|c| c.trim().to_string()).collect()
+        };
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, line)| !is_comment(line))
+            .map(|(k, line)| (k as u64 + 1, split(line)));
+        let headers: Vec<String> = match layout.header {
+            true => lines.next().map(|(_, cells)| cells).unwrap_or_default(),
+            false => Vec::new(),
+        };
+        let mut rows: Vec<(u64, csv::StringRecord)> = Vec::new();
+        let mut width = (!headers.is_empty()).then_some((1, headers.len()));
+        for (line, cells) in lines {
+            let (first, expected) = *width.get_or_insert((line, cells.len()));
+            if cells.len() != expected {
+                return Err(Error::Csv {
+                    path: path.to_path_buf(),
+                    line,
+                    column: String::new(),
+                    message: format!(
+                        "the line has {} cells, line {first} has {expected}; every line needs the same number of cells",
+                        cells.len()
+                    ),
+                });
+            }
+            rows.push((line, csv::StringRecord::from(cells)));
+        }
+        let headers = match layout.header {
+            true => headers,
+            false => (1..=width.map_or(0, |(_, n)| n))
+                .map(|n| n.to_string())
+                .collect(),
+        };
+        Self::check_headers(path, &headers)?;
+        Ok(CsvTable {
+            path: path.to_path_buf(),
+            headers,
+            rows,
+        })
+    }
+
+    /// The index of column `number` (1 is the first), or an error naming
+    /// the first data line when the rows are shorter.
+    pub fn column_by_number(&self, number: u64) -> Result<usize> {
+        let width = self.headers.len();
+        match usize::try_from(number) {
+            Ok(n) if (1..=width).contains(&n) => Ok(n - 1),
+            _ => Err(Error::Csv {
+                path: self.path.clone(),
+                line: self.rows.first().map_or(1, |(line, _)| *line),
+                column: number.to_string(),
+                message: match number {
+                    0 => "column numbers start at 1".to_string(),
+                    _ => format!(
+                        "column number {number} is beyond the row, which has {width} columns"
+                    ),
+                },
+            }),
+        }
     }
 
     /// The index of a header, or an error naming the missing column.
@@ -139,7 +274,12 @@ impl CsvTable {
                 path: self.path.clone(),
                 line: 1,
                 column: String::new(),
-                message: "the file has a header but no data rows; a record needs samples".into(),
+                message: match self.headers.is_empty() {
+                    true => "the file has no data rows; a record needs samples".into(),
+                    false => {
+                        "the file has a header but no data rows; a record needs samples".into()
+                    }
+                },
             }),
         }
     }

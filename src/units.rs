@@ -10,6 +10,12 @@ pub const DEG: f64 = std::f64::consts::PI / 180.0;
 pub const FOOT: f64 = 0.3048;
 pub const KNOT: f64 = 1852.0 / 3600.0;
 pub const STANDARD_GRAVITY: f64 = 9.80665;
+/// The international pound-force (N).
+pub const POUND_FORCE: f64 = 4.448_221_615_260_5;
+/// The slug (kg): one pound-force accelerates it by one foot per second squared.
+pub const SLUG: f64 = POUND_FORCE / FOOT;
+/// One inch of mercury at 0 °C (Pa).
+pub const INCH_OF_MERCURY: f64 = 3_386.389;
 
 /// The physical dimension a field expects.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -21,6 +27,7 @@ pub enum Dimension {
     Area,
     Speed,
     Acceleration,
+    AngularAcceleration,
     Time,
     Frequency,
     Mass,
@@ -29,13 +36,14 @@ pub enum Dimension {
     TemperatureDifference,
     MassFlow,
     Pressure,
+    Density,
     /// Load factor: specific force in units of standard gravity (dimensionless).
     LoadFactor,
 }
 
 impl Dimension {
     /// Every dimension, for finding the one a unit belongs to.
-    pub const ALL: [Dimension; 16] = [
+    pub const ALL: [Dimension; 18] = [
         Dimension::Dimensionless,
         Dimension::Angle,
         Dimension::AngularRate,
@@ -43,6 +51,7 @@ impl Dimension {
         Dimension::Area,
         Dimension::Speed,
         Dimension::Acceleration,
+        Dimension::AngularAcceleration,
         Dimension::Time,
         Dimension::Frequency,
         Dimension::Mass,
@@ -51,6 +60,7 @@ impl Dimension {
         Dimension::TemperatureDifference,
         Dimension::MassFlow,
         Dimension::Pressure,
+        Dimension::Density,
         Dimension::LoadFactor,
     ];
 
@@ -58,30 +68,65 @@ impl Dimension {
     fn units(self) -> &'static [(&'static str, f64)] {
         use Dimension::*;
         match self {
-            Dimensionless => &[("", 1.0), ("%", 0.01)],
+            Dimensionless => &[("", 1.0), ("-", 1.0), ("%", 0.01)],
             Angle => &[("rad", 1.0), ("deg", DEG), ("°", DEG)],
-            AngularRate => &[("rad/s", 1.0), ("deg/s", DEG)],
-            Length => &[("m", 1.0), ("km", 1000.0), ("ft", FOOT), ("nmi", 1852.0)],
+            AngularRate => &[("rad/s", 1.0), ("deg/s", DEG), ("°/s", DEG)],
+            AngularAcceleration => &[
+                ("rad/s2", 1.0),
+                ("rad/s^2", 1.0),
+                ("rad/s²", 1.0),
+                ("deg/s2", DEG),
+                ("deg/s^2", DEG),
+                ("deg/s²", DEG),
+                ("°/s²", DEG),
+            ],
+            Length => &[
+                ("m", 1.0),
+                ("km", 1000.0),
+                ("ft", FOOT),
+                ("nmi", 1852.0),
+                ("FL", 100.0 * FOOT),
+            ],
             Area => &[
                 ("m2", 1.0),
                 ("m^2", 1.0),
                 ("m²", 1.0),
                 ("ft2", FOOT * FOOT),
                 ("ft^2", FOOT * FOOT),
+                ("ft²", FOOT * FOOT),
             ],
             Speed => &[
                 ("m/s", 1.0),
                 ("kt", KNOT),
                 ("kts", KNOT),
+                ("kn", KNOT),
                 ("km/h", 1.0 / 3.6),
                 ("ft/s", FOOT),
                 ("ft/min", FOOT / 60.0),
             ],
-            Acceleration => &[("m/s2", 1.0), ("m/s^2", 1.0), ("g", STANDARD_GRAVITY)],
+            Acceleration => &[
+                ("m/s2", 1.0),
+                ("m/s^2", 1.0),
+                ("m/s²", 1.0),
+                ("g", STANDARD_GRAVITY),
+                ("ft/s2", FOOT),
+                ("ft/s^2", FOOT),
+                ("ft/s²", FOOT),
+            ],
             Time => &[("s", 1.0), ("ms", 1e-3), ("min", 60.0), ("h", 3600.0)],
             Frequency => &[("Hz", 1.0), ("1/s", 1.0)],
-            Mass => &[("kg", 1.0), ("t", 1000.0), ("lb", 0.453_592_37)],
-            Force => &[("N", 1.0), ("kN", 1000.0), ("lbf", 4.448_221_615_260_5)],
+            Mass => &[
+                ("kg", 1.0),
+                ("t", 1000.0),
+                ("lb", 0.453_592_37),
+                ("slug", SLUG),
+            ],
+            Force => &[
+                ("N", 1.0),
+                ("kN", 1000.0),
+                ("daN", 10.0),
+                ("lbf", POUND_FORCE),
+            ],
             Inertia => &[
                 ("kg*m2", 1.0),
                 ("kg m^2", 1.0),
@@ -89,7 +134,7 @@ impl Dimension {
                 ("kg m2", 1.0),
                 ("slug*ft2", 1.355_817_948_331_4),
             ],
-            TemperatureDifference => &[("K", 1.0), ("degC", 1.0)],
+            TemperatureDifference => &[("K", 1.0), ("degC", 1.0), ("°C", 1.0)],
             MassFlow => &[
                 ("kg/s", 1.0),
                 ("kg/h", 1.0 / 3600.0),
@@ -97,18 +142,61 @@ impl Dimension {
             ],
             Pressure => &[
                 ("Pa", 1.0),
+                ("N/m2", 1.0),
                 ("hPa", 100.0),
                 ("kPa", 1000.0),
                 ("mbar", 100.0),
-                ("psi", 6_894.757_293_168),
-                ("inHg", 3_386.389),
+                ("psi", POUND_FORCE / (FOOT * FOOT / 144.0)),
+                ("psf", POUND_FORCE / (FOOT * FOOT)),
+                ("lbf/ft2", POUND_FORCE / (FOOT * FOOT)),
+                ("lbf/ft^2", POUND_FORCE / (FOOT * FOOT)),
+                ("lbf/ft²", POUND_FORCE / (FOOT * FOOT)),
+                ("inHg", INCH_OF_MERCURY),
+            ],
+            Density => &[
+                ("kg/m3", 1.0),
+                ("kg/m^3", 1.0),
+                ("kg/m³", 1.0),
+                ("slug/ft3", SLUG / (FOOT * FOOT * FOOT)),
+                ("slug/ft^3", SLUG / (FOOT * FOOT * FOOT)),
+                ("slug/ft³", SLUG / (FOOT * FOOT * FOOT)),
             ],
             LoadFactor => &[
                 ("", 1.0),
+                ("-", 1.0),
                 ("g", 1.0),
                 ("m/s2", 1.0 / STANDARD_GRAVITY),
                 ("m/s^2", 1.0 / STANDARD_GRAVITY),
+                ("m/s²", 1.0 / STANDARD_GRAVITY),
+                ("ft/s2", FOOT / STANDARD_GRAVITY),
+                ("ft/s^2", FOOT / STANDARD_GRAVITY),
+                ("ft/s²", FOOT / STANDARD_GRAVITY),
             ],
+        }
+    }
+
+    /// The dimension in words, for messages.
+    pub fn label(self) -> &'static str {
+        use Dimension::*;
+        match self {
+            Dimensionless => "a dimensionless quantity",
+            Angle => "angle",
+            AngularRate => "angular rate",
+            AngularAcceleration => "angular acceleration",
+            Length => "length",
+            Area => "area",
+            Speed => "speed",
+            Acceleration => "acceleration",
+            Time => "time",
+            Frequency => "frequency",
+            Mass => "mass",
+            Force => "force",
+            Inertia => "moment of inertia",
+            TemperatureDifference => "temperature",
+            MassFlow => "mass flow",
+            Pressure => "pressure",
+            Density => "density",
+            LoadFactor => "load factor",
         }
     }
 
@@ -138,7 +226,8 @@ pub fn unit_factor(unit: &str, dimension: Dimension) -> Result<f64, String> {
         .map(|(_, factor)| *factor)
         .ok_or_else(|| {
             format!(
-                "unit '{unit}' is not a unit of {dimension:?}; accepted: {}",
+                "unit '{unit}' is not a unit of {}; accepted: {}",
+                dimension.label(),
                 dimension.accepted()
             )
         })
@@ -148,7 +237,7 @@ pub fn unit_factor(unit: &str, dimension: Dimension) -> Result<f64, String> {
 fn is_case_sensitive(name: &str) -> bool {
     matches!(
         name,
-        "t" | "g" | "kN" | "N" | "Hz" | "K" | "Pa" | "hPa" | "kPa"
+        "t" | "g" | "kN" | "N" | "daN" | "Hz" | "K" | "Pa" | "hPa" | "kPa"
     )
 }
 
@@ -318,5 +407,129 @@ mod tests {
         let file: File = toml::from_str("duration = \"5 s\"").unwrap();
         assert_eq!(file.duration, Quantity::Text("5 s".into()));
         assert!(Quantity::Text("abc".into()).si(Dimension::Length).is_err());
+    }
+
+    /// Every unit of every dimension against a value from its definition
+    /// (NIST SP 811 factors), and every listed unit is covered.
+    #[test]
+    fn every_unit_converts_to_its_known_si_value() {
+        use Dimension::*;
+        let cases: &[(Dimension, &str, f64)] = &[
+            (Dimensionless, "", 1.0),
+            (Dimensionless, "-", 1.0),
+            (Dimensionless, "%", 0.01),
+            (Angle, "rad", 1.0),
+            (Angle, "deg", 0.017_453_292_519_943_295),
+            (Angle, "°", 0.017_453_292_519_943_295),
+            (AngularRate, "rad/s", 1.0),
+            (AngularRate, "deg/s", 0.017_453_292_519_943_295),
+            (AngularRate, "°/s", 0.017_453_292_519_943_295),
+            (AngularAcceleration, "rad/s2", 1.0),
+            (AngularAcceleration, "rad/s^2", 1.0),
+            (AngularAcceleration, "rad/s²", 1.0),
+            (AngularAcceleration, "deg/s2", 0.017_453_292_519_943_295),
+            (AngularAcceleration, "deg/s^2", 0.017_453_292_519_943_295),
+            (AngularAcceleration, "deg/s²", 0.017_453_292_519_943_295),
+            (AngularAcceleration, "°/s²", 0.017_453_292_519_943_295),
+            (Length, "m", 1.0),
+            (Length, "km", 1000.0),
+            (Length, "ft", 0.3048),
+            (Length, "nmi", 1852.0),
+            (Length, "FL", 30.48),
+            (Area, "m2", 1.0),
+            (Area, "m^2", 1.0),
+            (Area, "m²", 1.0),
+            (Area, "ft2", 0.092_903_04),
+            (Area, "ft^2", 0.092_903_04),
+            (Area, "ft²", 0.092_903_04),
+            (Speed, "m/s", 1.0),
+            (Speed, "kt", 0.514_444_444_444_444_4),
+            (Speed, "kts", 0.514_444_444_444_444_4),
+            (Speed, "kn", 0.514_444_444_444_444_4),
+            (Speed, "km/h", 0.277_777_777_777_777_8),
+            (Speed, "ft/s", 0.3048),
+            (Speed, "ft/min", 0.00508),
+            (Acceleration, "m/s2", 1.0),
+            (Acceleration, "m/s^2", 1.0),
+            (Acceleration, "m/s²", 1.0),
+            (Acceleration, "g", 9.80665),
+            (Acceleration, "ft/s2", 0.3048),
+            (Acceleration, "ft/s^2", 0.3048),
+            (Acceleration, "ft/s²", 0.3048),
+            (Time, "s", 1.0),
+            (Time, "ms", 0.001),
+            (Time, "min", 60.0),
+            (Time, "h", 3600.0),
+            (Frequency, "Hz", 1.0),
+            (Frequency, "1/s", 1.0),
+            (Mass, "kg", 1.0),
+            (Mass, "t", 1000.0),
+            (Mass, "lb", 0.453_592_37),
+            (Mass, "slug", 14.593_902_937_206_364),
+            (Force, "N", 1.0),
+            (Force, "kN", 1000.0),
+            (Force, "daN", 10.0),
+            (Force, "lbf", 4.448_221_615_260_5),
+            (Inertia, "kg*m2", 1.0),
+            (Inertia, "kg m^2", 1.0),
+            (Inertia, "kg*m^2", 1.0),
+            (Inertia, "kg m2", 1.0),
+            (Inertia, "slug*ft2", 1.355_817_948_331_4),
+            (TemperatureDifference, "K", 1.0),
+            (TemperatureDifference, "degC", 1.0),
+            (TemperatureDifference, "°C", 1.0),
+            (MassFlow, "kg/s", 1.0),
+            (MassFlow, "kg/h", 1.0 / 3600.0),
+            (MassFlow, "lb/h", 0.453_592_37 / 3600.0),
+            (Pressure, "Pa", 1.0),
+            (Pressure, "N/m2", 1.0),
+            (Pressure, "hPa", 100.0),
+            (Pressure, "kPa", 1000.0),
+            (Pressure, "mbar", 100.0),
+            (Pressure, "psi", 6_894.757_293_168_361),
+            (Pressure, "psf", 47.880_258_980_335_84),
+            (Pressure, "lbf/ft2", 47.880_258_980_335_84),
+            (Pressure, "lbf/ft^2", 47.880_258_980_335_84),
+            (Pressure, "lbf/ft²", 47.880_258_980_335_84),
+            (Pressure, "inHg", 3_386.389),
+            (Density, "kg/m3", 1.0),
+            (Density, "kg/m^3", 1.0),
+            (Density, "kg/m³", 1.0),
+            (Density, "slug/ft3", 515.378_818_393_196),
+            (Density, "slug/ft^3", 515.378_818_393_196),
+            (Density, "slug/ft³", 515.378_818_393_196),
+            (LoadFactor, "", 1.0),
+            (LoadFactor, "-", 1.0),
+            (LoadFactor, "g", 1.0),
+            (LoadFactor, "m/s2", 1.0 / 9.80665),
+            (LoadFactor, "m/s^2", 1.0 / 9.80665),
+            (LoadFactor, "m/s²", 1.0 / 9.80665),
+            (LoadFactor, "ft/s2", 0.3048 / 9.80665),
+            (LoadFactor, "ft/s^2", 0.3048 / 9.80665),
+            (LoadFactor, "ft/s²", 0.3048 / 9.80665),
+        ];
+        for &(dimension, unit, expected) in cases {
+            let factor = unit_factor(unit, dimension).unwrap();
+            assert!(
+                (factor / expected - 1.0).abs() < 1e-14,
+                "{unit} as {dimension:?}: {factor}, expected {expected}"
+            );
+        }
+        for dimension in Dimension::ALL {
+            for (unit, _) in dimension.units() {
+                assert!(
+                    cases.iter().any(|&(d, u, _)| d == dimension && u == *unit),
+                    "{unit} of {dimension:?} has no test"
+                );
+            }
+        }
+        // Known values: 1 slug/ft³ is 515.379 kg/m³; 29.92 inHg is 1013.2 hPa;
+        // FL100 is 3048 m; 1 psf is 47.88 Pa.
+        assert!((29.92 * unit_factor("inHg", Pressure).unwrap() - 101_320.76).abs() < 0.01);
+        let error = unit_factor("kg/m3", Dimensionless).unwrap_err();
+        assert!(
+            error.starts_with("unit 'kg/m3' is not a unit of a dimensionless quantity"),
+            "{error}"
+        );
     }
 }

@@ -1,6 +1,7 @@
 //! Property-based tests over every file kind aeroid reads: bundled files
 //! (aircraft, scenarios, model structures, recorder profiles, studies, the
-//! gate file), an import column map with its CSV, a scenario replaying an
+//! gate file), an import column map with its CSV or its headerless ASCII file (comments,
+//! BOM, CRLF, numbered and combined columns), a scenario replaying an
 //! input CSV, and record folders, each
 //! mutated (a key or table deleted, an array element duplicated, a value's
 //! type swapped, extreme numbers, NaN and infinities as TOML floats and as
@@ -770,16 +771,21 @@ const CELLS: &[&str] = &[
 ];
 
 fn apply_csv(bytes: &mut Vec<u8>, mutation: &CsvMutation) {
+    apply_delimited(bytes, mutation, ",");
+}
+
+/// A mutation of a file whose cells are separated by `delimiter`.
+fn apply_delimited(bytes: &mut Vec<u8>, mutation: &CsvMutation, delimiter: &str) {
     match mutation {
         CsvMutation::Text(text) => apply_text(bytes, text),
         CsvMutation::Cell(row, column, value) => {
             let text = String::from_utf8_lossy(bytes).into_owned();
             let mut lines: Vec<String> = text.split('\n').map(str::to_string).collect();
             let line = *row as usize % lines.len();
-            let mut cells: Vec<String> = lines[line].split(',').map(str::to_string).collect();
+            let mut cells: Vec<String> = lines[line].split(delimiter).map(str::to_string).collect();
             let cell = *column as usize % cells.len();
             cells[cell] = pick(CELLS, *value).to_string();
-            lines[line] = cells.join(",");
+            lines[line] = cells.join(delimiter);
             *bytes = lines.join("\n").into_bytes();
         }
     }
@@ -941,6 +947,123 @@ fn mutated_imports_read_or_fail_cleanly() {
             }
         })
     });
+}
+
+// ------------------------------------------------- headerless ASCII import
+
+const ASCII_MAP: &str = r#"
+name = "fuzz ascii"
+
+[file]
+header = false
+delimiter = "auto"
+
+[time]
+column = 1
+unit = "s"
+
+[[channels]]
+name = "airspeed"
+column = 2
+unit = "kt"
+rate = "8 Hz"
+
+[[channels]]
+name = "altitude"
+column = 3
+unit = "ft"
+convention = "geometric"
+
+[[channels]]
+name = "thrust"
+columns = [4, 5]
+combine = "sum"
+unit = "lbf"
+
+[[channels]]
+name = "aileron"
+columns = [6, 7]
+combine = "half_difference"
+unit = "deg"
+
+[[channels]]
+name = "density"
+column = 8
+unit = "slug/ft3"
+non_finite = "dropout"
+
+[[channels]]
+name = "q_dot"
+column = 9
+unit = "deg/s2"
+"#;
+
+/// A headerless ASCII file: comment lines, optional BOM and CRLF, cells
+/// separated by runs of spaces, a strictly increasing first column.
+fn flight_ascii() -> impl Strategy<Value = String> {
+    let row = (
+        1e-3..1.0f64,
+        prop::collection::vec(-1e4..1e4f64, 8),
+        any::<bool>(),
+    );
+    (
+        -1e4..1e4f64,
+        prop::collection::vec(row, 0..30),
+        any::<bool>(),
+        any::<bool>(),
+    )
+        .prop_map(|(start, rows, bom, crlf)| {
+            let end = if crlf { "\r\n" } else { "\n" };
+            let mut text = String::new();
+            if bom {
+                text.push('\u{feff}');
+            }
+            text.push_str(&format!(
+                "% time tas alt thrust1 thrust2 ail_l ail_r rho qdot{end}"
+            ));
+            let mut time = start;
+            for (dt, cells, comment) in rows {
+                time += dt;
+                let cells: Vec<String> = cells.iter().map(f64::to_string).collect();
+                text.push_str(&format!("{time}  {}{end}", cells.join("  ")));
+                if comment {
+                    text.push_str(&format!("# a comment{end}"));
+                }
+            }
+            text
+        })
+}
+
+#[test]
+fn mutated_headerless_imports_read_or_fail_cleanly() {
+    let strategy = (toml_and_csv_mutations(), flight_ascii());
+    check_property(
+        "headerless import",
+        strategy,
+        |((mutations, cell_mutations), ascii)| {
+            let map = mutate(ASCII_MAP, &mutations);
+            let mut data = ascii.into_bytes();
+            for mutation in &cell_mutations {
+                apply_delimited(&mut data, mutation, "  ");
+            }
+            let input = format!(
+                "map with {mutations:?}:\n{}\n--- ASCII ---\n{}",
+                String::from_utf8_lossy(&map),
+                String::from_utf8_lossy(&data)
+            );
+            guarded(&input, move || {
+                let folder = CaseFolder::new("import-ascii");
+                let map_path = folder.0.join("map.toml");
+                let data_path = folder.0.join("flight.asc");
+                std::fs::write(&map_path, &map).unwrap();
+                std::fs::write(&data_path, &data).unwrap();
+                match import::import(&data_path, &map_path) {
+                    Ok(outcome) => round_trip(&outcome.record, &folder.0),
+                    Err(_) => Ok(Outcome::Refused),
+                }
+            })
+        },
+    );
 }
 
 // ------------------------------------------------- replayed input CSV

@@ -272,7 +272,9 @@ fn import_wrong_unit_is_named() {
         .unwrap_err()
         .to_string();
     assert!(
-        error.contains("channels[1].unit") && error.contains("Speed"),
+        error.contains("channels[1].unit")
+            && error
+                .contains("channel 'airspeed', column 'IAS': unit 'deg' is not a unit of speed"),
         "{error}"
     );
 }

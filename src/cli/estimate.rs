@@ -1,17 +1,22 @@
-//! `aeroid estimate`: one estimator on one record and model structure.
+//! `aeroid estimate`: one estimator on one record, or several manoeuvres
+//! fitted jointly, and a model structure.
 
 use aeroid::estimation::estimator::MethodTables;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
-/// Estimate a postulated model's parameters from a record; print the
-/// estimates with Cramér–Rao standard errors, scored against the truth
-/// when the record came from a scenario (its truth.toml); write
-/// estimate.json and estimate.csv.
+/// Estimate a postulated model's parameters from a record, or from several
+/// manoeuvres fitted jointly (output error: shared aerodynamic parameters,
+/// each manoeuvre its own initial state); print the estimates with
+/// Cramér–Rao standard errors, scored against the truth when the records
+/// came from a scenario (their truth.toml); write estimate.json and
+/// estimate.csv.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The record folder.
-    record: PathBuf,
+    /// The record folder, or several: REC1 REC2 … fitted jointly (methods
+    /// that fit one record at a time refuse several).
+    #[arg(required = true, num_args = 1..)]
+    records: Vec<PathBuf>,
     /// The model structure: a bundled name (models/) or a path.
     #[arg(long)]
     model: String,
@@ -62,7 +67,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     use aeroid::eval::score;
     let Args {
-        record: record_folder,
+        records: record_folders,
         model,
         method,
         out,
@@ -73,14 +78,17 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &out {
         aeroid::paths::check_output_folder(out)?;
     }
-    let record = aeroid::record::FlightRecord::read(&record_folder)?;
+    let records = record_folders
+        .iter()
+        .map(|folder| aeroid::record::FlightRecord::read(folder))
+        .collect::<aeroid::Result<Vec<_>>>()?;
     let other = check_on
         .as_deref()
         .map(aeroid::record::FlightRecord::read)
         .transpose()?;
     let structure = ModelStructure::load(&model)?;
     let overrides = settings_table(&method, &settings)?;
-    let problem = EstimationProblem::new(&method, vec![record], structure, &[&overrides])?;
+    let problem = EstimationProblem::new(&method, records, structure, &[&overrides])?;
     if let Some(path) = &write_problem {
         problem.write_json(path)?;
         outln!("estimation problem written to {}", path.display());
@@ -88,20 +96,7 @@ pub fn run(args: Args) -> Result<()> {
     let estimate = methods::estimate(&problem, None)?;
     let structure = &problem.structure;
     out!("{}", estimate.details);
-    // A truth.toml that aeroid did not write (another tool's) is not this
-    // record's truth: the estimate is reported unscored, with a warning.
-    let truth_path = record_folder.join(aeroid::sim::truth::TRUTH_FILE);
-    let truth = match truth_path
-        .is_file()
-        .then(|| aeroid::sim::truth::RunTruth::read(&truth_path))
-    {
-        Some(Ok(truth)) => Some(truth),
-        Some(Err(error)) => {
-            eprintln!("warning: {error}; the estimate is not scored");
-            None
-        }
-        None => None,
-    };
+    let truth = shared_truth(&record_folders);
     let scores = score::score(&estimate, truth.as_ref(), structure.aircraft.aero.kind);
     outln!(
         "{} on {} with model {}: {} after {} iterations, {:.3} s",
@@ -150,4 +145,43 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The truth the records came from: each record's `truth.toml`, when every
+/// record has one and they agree. A truth.toml that aeroid did not write
+/// (another tool's) is not a record's truth, and records from different
+/// truths have none in common: the estimate is reported unscored, with a
+/// warning.
+fn shared_truth(folders: &[PathBuf]) -> Option<aeroid::sim::truth::RunTruth> {
+    let mut shared: Option<aeroid::sim::truth::RunTruth> = None;
+    for folder in folders {
+        let path = folder.join(aeroid::sim::truth::TRUTH_FILE);
+        if !path.is_file() {
+            return None;
+        }
+        let truth = match aeroid::sim::truth::RunTruth::read(&path) {
+            Ok(truth) => truth,
+            Err(error) => {
+                eprintln!("warning: {error}; the estimate is not scored");
+                return None;
+            }
+        };
+        match &shared {
+            Some(first)
+                if first.kind != truth.kind
+                    || first.parameters != truth.parameters
+                    || first.local_derivatives != truth.local_derivatives =>
+            {
+                eprintln!(
+                    "warning: {} holds another truth than {}; the estimate is not scored",
+                    path.display(),
+                    folders[0].join(aeroid::sim::truth::TRUTH_FILE).display()
+                );
+                return None;
+            }
+            Some(_) => {}
+            None => shared = Some(truth),
+        }
+    }
+    shared
 }

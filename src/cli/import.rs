@@ -1,14 +1,23 @@
-//! `aeroid import`: a CSV of real flight data and a column map become a record.
+//! `aeroid import`: a data file of real flight data and a column map become a record.
 
 use anyhow::Result;
 use std::path::PathBuf;
 
-/// Bring real flight data in: a CSV and a column map (TOML) become a record folder.
+/// Bring real flight data in: a data file and a column map (TOML) become a record folder.
+///
+/// The data file is a CSV with a header row, or headerless ASCII
+/// (whitespace- or comma-separated) whose columns the map names by number;
+/// comment lines (`#`, `%`), CRLF line ends and a UTF-8 byte-order mark are
+/// accepted. The map names each channel's column (or columns, summed,
+/// averaged or half-differenced), unit, scale, offset and, for altitude, its
+/// convention. The map format, every channel name with its unit and
+/// meaning, and every accepted unit are in docs/import.md.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The CSV file with a time column.
+    /// The data file: headed CSV, or headerless ASCII (see docs/import.md).
     data: PathBuf,
-    /// The column map: time column, and per channel its column, unit, scale and offset.
+    /// The column map: time column, and per channel its column(s), unit,
+    /// scale and offset (format in docs/import.md).
     #[arg(long)]
     map: PathBuf,
     /// The record folder to write.
@@ -32,6 +41,9 @@ pub fn run(args: Args) -> Result<()> {
             "columns not in the map (not imported): {}",
             outcome.unmapped.join(", ")
         );
+    }
+    for warning in &outcome.warnings {
+        eprintln!("warning: {warning}");
     }
     Ok(())
 }

@@ -72,6 +72,18 @@ pub trait Estimator: Send + Sync {
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate>;
 }
 
+/// A refusal unless the problem has exactly one record, for methods
+/// that fit one record at a time.
+pub fn one_record(method: &str, problem: &EstimationProblem) -> Result<()> {
+    match problem.records.len() {
+        1 => Ok(()),
+        records => Err(Error::Refused(Refusal::OneRecordOnly {
+            method: method.to_string(),
+            records,
+        })),
+    }
+}
+
 /// Parses a settings table into a method's settings type, naming the
 /// method and the offending key in the error.
 pub fn parse_settings<T: DeserializeOwned>(method: &str, settings: &Settings) -> Result<T> {
@@ -185,6 +197,12 @@ pub enum Refusal {
         model: String,
         reason: String,
     },
+    /// The method fits one record at a time and was given several.
+    OneRecordOnly {
+        method: String,
+        /// How many records it was given.
+        records: usize,
+    },
 }
 
 /// A needed channel and what it is needed for.
@@ -204,6 +222,7 @@ pub enum RefusalKind {
     NothingToEstimate,
     TooFewData,
     UnsuitableModel,
+    OneRecordOnly,
 }
 
 impl Refusal {
@@ -214,6 +233,7 @@ impl Refusal {
             Refusal::NothingToEstimate { .. } => RefusalKind::NothingToEstimate,
             Refusal::TooFewData { .. } => RefusalKind::TooFewData,
             Refusal::UnsuitableModel { .. } => RefusalKind::UnsuitableModel,
+            Refusal::OneRecordOnly { .. } => RefusalKind::OneRecordOnly,
         }
     }
 
@@ -296,6 +316,11 @@ impl fmt::Display for Refusal {
                 model,
                 reason,
             } => write!(f, "{method} cannot fit the model '{model}': {reason}"),
+            Refusal::OneRecordOnly { method, records } => write!(
+                f,
+                "{method} fits one record at a time, and was given {records}: \
+                 run it on each record, or fit them jointly with output error (oem)"
+            ),
         }
     }
 }

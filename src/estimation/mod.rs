@@ -15,3 +15,32 @@ pub mod problem;
 pub mod reconstruction;
 pub mod solver;
 pub mod structure;
+
+/// Every channel some estimator or the flight-path reconstruction reads
+/// (see docs/import.md, "What each estimator reads"). An imported channel
+/// not in this list is kept in the record, and the import warns that no
+/// estimator uses it.
+pub const CHANNELS_READ: &[&str] = &[
+    "airspeed",
+    "alpha",
+    "beta",
+    "mach",
+    "dynamic_pressure",
+    "p",
+    "q",
+    "r",
+    "roll",
+    "pitch",
+    "yaw",
+    "nx",
+    "ny",
+    "nz",
+    "altitude",
+    "pressure_altitude",
+    "elevator",
+    "aileron",
+    "rudder",
+    "flap",
+    "throttle",
+    "chi",
+];

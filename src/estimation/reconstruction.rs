@@ -352,7 +352,7 @@ pub fn reconstruct(
         "common time base: the {} instants of channel '{}' ({} Hz) from {:.3} s to {:.3} s{}",
         reconstruction.times.len(),
         reference.name,
-        reference.rate,
+        crate::record::rate_text(reference.rate),
         times.first().copied().unwrap_or(f64::NAN),
         times.last().copied().unwrap_or(f64::NAN),
         if dropped > 0 {

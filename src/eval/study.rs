@@ -770,7 +770,7 @@ fn label(axes: &Axes) -> String {
         text += &format!(" inputs×{}", axes.input_scale);
     }
     if let Some(rate) = axes.sample_rate {
-        text += &format!(" @{rate} Hz");
+        text += &format!(" @{} Hz", crate::record::rate_text(rate));
     }
     text += &format!(" noise×{}", axes.noise_scale);
     if axes.resolution_scale != 1.0 {

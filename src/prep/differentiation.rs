@@ -246,7 +246,7 @@ impl Differentiator {
             "angular accelerations by local polynomial (Savitzky–Golay) differentiation: degree {}, ±{} samples at {} Hz (±{:.3} s), zero lag, gain within 1 % up to {:.2} Hz, one half at {:.2} Hz",
             self.degree,
             band.half_window,
-            rate,
+            crate::record::rate_text(rate),
             band.half_window as f64 / rate,
             band.accurate_to,
             band.half_gain

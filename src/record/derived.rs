@@ -3,7 +3,8 @@
 //! real recorder stores (load factors at the accelerometer, calibrated
 //! airspeed, ground speed, track, flight-path angle, pressure altitude, total
 //! air temperature, wind, left/right surface positions, engine readings,
-//! latitude and longitude). Names follow `trace::COLUMNS` where the quantity
+//! latitude and longitude, total thrust, air density, static pressure,
+//! body angular accelerations). Names follow `trace::COLUMNS` where the quantity
 //! is the same; every value is SI with angles in radians.
 //!
 //! Conventions (pinned here, tested in `tests/recorder.rs`):
@@ -200,6 +201,27 @@ pub const MEASURANDS: &[Measurand] = &[
         TemperatureDifference,
         |s, c| engine(s, c).exhaust_gas_temperature
     ),
+    measurand!("thrust", "N", Force, |s, _c| s.evaluation.thrust),
+    measurand!("density", "kg/m3", Density, |s, _c| s
+        .evaluation
+        .air
+        .density),
+    measurand!("static_pressure", "Pa", Pressure, |s, _c| s
+        .evaluation
+        .air
+        .pressure),
+    measurand!("p_dot", "rad/s2", AngularAcceleration, |s, _c| s
+        .evaluation
+        .angular_acceleration
+        .x),
+    measurand!("q_dot", "rad/s2", AngularAcceleration, |s, _c| s
+        .evaluation
+        .angular_acceleration
+        .y),
+    measurand!("r_dot", "rad/s2", AngularAcceleration, |s, _c| s
+        .evaluation
+        .angular_acceleration
+        .z),
 ];
 
 /// The measurand with this name, if any.

@@ -12,6 +12,8 @@ pub const HEAT_CAPACITY_RATIO: f64 = 1.4;
 const LAPSE_RATE: f64 = 0.0065;
 const TROPOPAUSE: f64 = 11_000.0;
 const GRAVITY: f64 = crate::units::STANDARD_GRAVITY;
+/// The earth radius of the ISA's geopotential altitude (m), ICAO Doc 7488.
+pub const GEOPOTENTIAL_EARTH_RADIUS: f64 = 6_356_766.0;
 
 /// Air properties at one altitude.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -85,6 +87,12 @@ impl Atmosphere {
         }
     }
 
+    /// The geopotential altitude H = r0·z/(r0 + z) of the geometric
+    /// altitude z (r0 = 6 356 766 m): the altitude the ISA is tabulated in.
+    pub fn geopotential_altitude(geometric: f64) -> f64 {
+        GEOPOTENTIAL_EARTH_RADIUS * geometric / (GEOPOTENTIAL_EARTH_RADIUS + geometric)
+    }
+
     /// Pressure altitude: the ISA altitude at which the standard pressure equals `pressure`.
     pub fn pressure_altitude(pressure: f64) -> f64 {
         let exponent = GAS_CONSTANT * LAPSE_RATE / GRAVITY;
@@ -131,6 +139,14 @@ mod tests {
             assert!((Atmosphere::pressure_altitude(air.pressure) - h).abs() < 1e-6);
             assert!((air.log_density_ratio.exp() - air.density / SEA_LEVEL_DENSITY).abs() < 1e-4);
         }
+    }
+
+    /// 10 000 m geometric is 9 984.3 m geopotential (ICAO Doc 7488 table).
+    #[test]
+    fn geopotential_altitude_matches_icao() {
+        let h = Atmosphere::geopotential_altitude(10_000.0);
+        assert!((h - 9_984.3).abs() < 0.05, "{h}");
+        assert_eq!(Atmosphere::geopotential_altitude(0.0), 0.0);
     }
 
     #[test]

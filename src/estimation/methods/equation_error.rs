@@ -174,6 +174,7 @@ impl Estimator for EquationError {
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
+        crate::estimation::estimator::one_record(METHOD, problem)?;
         let options = EquationErrorSettings::read(&problem.settings)?.options();
         equation_error(problem.record(), &problem.structure, &options)
     }

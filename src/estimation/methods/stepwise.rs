@@ -8,10 +8,14 @@
 //! inertia, geometry, propulsion and rate normalisation — its terms are not
 //! used), one coefficient, and a pool of candidate terms: regressor keys
 //! (`alpha`, `q`, `de`, …) and products of two (`alpha*beta`, squares as
-//! `alpha^2`). Products are formed from MEAN-REMOVED regressors,
+//! `alpha^2`). Products are searched as MEAN-REMOVED regressors,
 //! `alpha^2` = (α − ᾱ)², so that around a trim point α² is not a near copy
 //! of α (α² = ᾱ² + 2ᾱ·(α − ᾱ) + (α − ᾱ)²); the means are given in the
-//! notes. The dependent variable is the coefficient reconstructed from
+//! notes. The selected model is reported in the plain basis of the model's
+//! parameters: (a − ā)(b − b̄) = a·b − b̄·a − ā·b + ā·b̄, so the product's
+//! estimate is kept and b̄·θ_ab, ā·θ_ab and ā·b̄·θ_ab move to the linear
+//! terms of a and b (added when not selected) and to the constant; the
+//! covariance is transformed with the same matrix, C' = T·C·Tᵀ. The dependent variable is the coefficient reconstructed from
 //! the measured accelerations (reflex-wing UAV paper, Eqs. 17–24, see
 //! [`crate::estimation::reconstruction`]); the constant term is always in.
 //!
@@ -202,6 +206,7 @@ impl Estimator for StepwiseRegression {
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
+        crate::estimation::estimator::one_record(METHOD, problem)?;
         let options = StepwiseSettings::read(&problem.settings)?.options();
         let (reports, mut estimate) = stepwise_all(problem.record(), &problem.structure, &options)?;
         estimate.details = reports.iter().map(|r| format!("{r}\n")).collect();
@@ -513,7 +518,7 @@ fn product_means_note(data: &Reconstruction, candidates: &[Candidate]) -> Option
             .map(|r| format!("{} {:.6e}", r.key(), means[*r as usize]))
             .collect();
         format!(
-            "products and squares are of mean-removed regressors; means: {}",
+            "products and squares are searched as mean-removed regressors and reported in the plain basis (constant and linear terms transformed back); means: {}",
             items.join(", ")
         )
     })
@@ -523,6 +528,8 @@ fn product_means_note(data: &Reconstruction, candidates: &[Candidate]) -> Option
 struct Problem<'a> {
     z: DVector<f64>,
     columns: DMatrix<f64>,
+    /// The regressors' means removed from the factors of products.
+    means: Vec<f64>,
     candidates: &'a [Candidate],
     total_sum_of_squares: f64,
 }
@@ -554,6 +561,7 @@ impl<'a> Problem<'a> {
             total_sum_of_squares: z.iter().map(|v| (v - mean).powi(2)).sum(),
             z,
             columns,
+            means,
             candidates,
         }
     }
@@ -715,19 +723,29 @@ impl<'a> Problem<'a> {
             .collect()
     }
 
-    /// Fills in the selected terms' estimates, bounds and fit.
+    /// Fills in the selected terms' estimates, bounds and fit, in the
+    /// plain basis ([`Problem::plain_basis`]).
     fn finish(&self, mut report: StepwiseReport, model: &[usize], lag: usize) -> StepwiseReport {
         let x = self.matrix(model);
         let fit = LeastSquares::fit(&x, &self.z);
-        let white = fit.white_covariance();
+        let (terms, transform) = self.plain_basis(model);
+        let theta = &transform * &fit.theta;
+        let white = &transform * fit.white_covariance() * transform.transpose();
         let (corrected, _) = fit.corrected_covariance(&x, lag);
-        let term_names = std::iter::once("0".to_string())
-            .chain(model.iter().map(|&j| self.candidates[j].name.clone()));
-        report.selected = term_names
+        let corrected = &transform * corrected * transform.transpose();
+        let selected = model.len() + 1;
+        if terms.len() > selected {
+            report.notes.push(format!(
+                "terms {} carry the linear parts of the mean-removed products and squares (not selected themselves)",
+                terms[selected..].join(", ")
+            ));
+        }
+        report.selected = terms
+            .iter()
             .enumerate()
             .map(|(i, term)| SelectedTerm {
                 parameter: format!("{}_{term}", report.coefficient),
-                value: fit.theta[i],
+                value: theta[i],
                 standard_error: white[(i, i)].sqrt(),
                 corrected_standard_error: corrected[(i, i)].sqrt(),
             })
@@ -738,6 +756,41 @@ impl<'a> Problem<'a> {
         report.fit = OutputFit::new(&report.coefficient, self.z.as_slice(), &predicted);
         report.covariance = corrected;
         report
+    }
+
+    /// The plain-basis terms of a model (the constant `0`, the selected
+    /// terms, then linear terms a product needs but the search did not
+    /// select) and the matrix T from the searched (mean-removed) estimates
+    /// to theirs: (a − ā)(b − b̄) = a·b − b̄·a − ā·b + ā·b̄.
+    fn plain_basis(&self, model: &[usize]) -> (Vec<String>, DMatrix<f64>) {
+        let mut terms: Vec<String> = std::iter::once("0".to_string())
+            .chain(model.iter().map(|&j| self.candidates[j].name.clone()))
+            .collect();
+        let searched = terms.len();
+        let mut rows: Vec<Vec<f64>> = (0..searched)
+            .map(|i| (0..searched).map(|j| f64::from(u8::from(i == j))).collect())
+            .collect();
+        for (position, &j) in model.iter().enumerate() {
+            let column = position + 1;
+            let [a, b] = self.candidates[j].factors[..] else {
+                continue;
+            };
+            let (mean_a, mean_b) = (self.means[a as usize], self.means[b as usize]);
+            rows[0][column] += mean_a * mean_b;
+            for (factor, other_mean) in [(a, mean_b), (b, mean_a)] {
+                let row = match terms.iter().position(|t| t == factor.key()) {
+                    Some(row) => row,
+                    None => {
+                        terms.push(factor.key().to_string());
+                        rows.push(vec![0.0; searched]);
+                        rows.len() - 1
+                    }
+                };
+                rows[row][column] -= other_mean;
+            }
+        }
+        let transform = DMatrix::from_fn(rows.len(), searched, |i, j| rows[i][j]);
+        (terms, transform)
     }
 }
 
@@ -936,5 +989,104 @@ mod tests {
             "{}",
             search.stop_reason
         );
+    }
+
+    /// The reconstruction of z(α) on a slow sine of α around 0.1 rad.
+    fn quadratic_data(z: impl Fn(f64, usize) -> f64) -> Reconstruction {
+        let count = 400;
+        let mut regressors = Vec::with_capacity(count);
+        let mut values = Vec::with_capacity(count);
+        for k in 0..count {
+            let alpha = 0.1 + 0.05 * (k as f64 * 0.05).sin();
+            let mut row = [0.0; REGRESSOR_COUNT];
+            row[Regressor::Alpha as usize] = alpha;
+            regressors.push(row);
+            values.push(z(alpha, k));
+        }
+        let mut coefficients: [Option<Vec<f64>>; 6] = Default::default();
+        coefficients[Coefficient::Drag as usize] = Some(values);
+        Reconstruction {
+            times: (0..count).map(|k| k as f64).collect(),
+            coefficients,
+            regressors,
+            reference_channel: "test".into(),
+            rate: 1.0,
+            notes: Vec::new(),
+        }
+    }
+
+    /// The estimates of a model, in the plain basis, with the white covariance.
+    fn plain_estimates(
+        problem: &Problem,
+        model: &[usize],
+    ) -> (Vec<String>, DVector<f64>, DMatrix<f64>) {
+        let fit = LeastSquares::fit(&problem.matrix(model), &problem.z);
+        let (terms, transform) = problem.plain_basis(model);
+        let covariance = &transform * fit.white_covariance() * transform.transpose();
+        (terms, &transform * &fit.theta, covariance)
+    }
+
+    /// Ideal data CD = 0.02 + 0.1·α + 0.8·α², α² searched mean-removed: the
+    /// estimates come back in the model's basis, near-exact (1e-12).
+    #[test]
+    fn squares_are_reported_in_the_plain_basis() {
+        let data = quadratic_data(|alpha, _| 0.02 + 0.1 * alpha + 0.8 * alpha * alpha);
+        let candidates: Vec<Candidate> = ["alpha", "alpha^2"]
+            .iter()
+            .map(|n| Candidate::parse(n).unwrap())
+            .collect();
+        let problem = Problem::new(&data, Coefficient::Drag, &candidates);
+        let (terms, theta, _) = plain_estimates(&problem, &[0, 1]);
+        assert_eq!(terms, ["0", "alpha", "alpha^2"]);
+        for (value, truth) in theta.iter().zip([0.02, 0.1, 0.8]) {
+            assert!((value - truth).abs() < 1e-12, "{theta}");
+        }
+        // Only the square selected, CD = 0.02 + 0.8·(α − ᾱ)²: its linear
+        // part −2ᾱ·0.8·α is carried by an added alpha term.
+        let mean = problem.means[Regressor::Alpha as usize];
+        let data = quadratic_data(|alpha, _| 0.02 + 0.8 * (alpha - mean).powi(2));
+        let problem = Problem::new(&data, Coefficient::Drag, &candidates[1..]);
+        let (terms, theta, _) = plain_estimates(&problem, &[0]);
+        assert_eq!(terms, ["0", "alpha^2", "alpha"]);
+        let expected = [0.02 + 0.8 * mean * mean, 0.8, -1.6 * mean];
+        for (value, truth) in theta.iter().zip(expected) {
+            assert!((value - truth).abs() < 1e-12, "{theta}");
+        }
+    }
+
+    /// With noise, the transformed estimates and covariance equal those of
+    /// the regression on the plain regressors 1, α, α² (the same column
+    /// space): the covariance is transformed consistently.
+    #[test]
+    fn the_plain_basis_covariance_is_that_of_the_plain_regression() {
+        let mut rng = crate::random::stream(5, 0);
+        let noise: Vec<f64> = (0..400)
+            .map(|_| rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut rng))
+            .collect();
+        let data =
+            quadratic_data(|alpha, k| 0.02 + 0.1 * alpha + 0.8 * alpha * alpha + 1e-3 * noise[k]);
+        let candidates: Vec<Candidate> = ["alpha", "alpha^2"]
+            .iter()
+            .map(|n| Candidate::parse(n).unwrap())
+            .collect();
+        let problem = Problem::new(&data, Coefficient::Drag, &candidates);
+        let (_, theta, covariance) = plain_estimates(&problem, &[0, 1]);
+        let x = DMatrix::from_fn(data.times.len(), 3, |k, j| {
+            data.regressors[k][Regressor::Alpha as usize].powi(j as i32)
+        });
+        let plain = LeastSquares::fit(&x, &problem.z);
+        let plain_covariance = plain.white_covariance();
+        for i in 0..3 {
+            assert!((theta[i] - plain.theta[i]).abs() < 1e-9 * plain.theta[i].abs().max(1.0));
+            for j in 0..3 {
+                let scale = (plain_covariance[(i, i)] * plain_covariance[(j, j)]).sqrt();
+                assert!(
+                    (covariance[(i, j)] - plain_covariance[(i, j)]).abs() < 1e-8 * scale,
+                    "({i}, {j}): {} vs {}",
+                    covariance[(i, j)],
+                    plain_covariance[(i, j)]
+                );
+            }
+        }
     }
 }
