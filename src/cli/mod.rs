@@ -35,6 +35,7 @@ pub mod import;
 pub mod inspect;
 pub mod list;
 pub mod methods;
+pub mod plugin;
 pub mod reconstruct;
 pub mod record;
 pub mod report;

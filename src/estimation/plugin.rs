@@ -137,7 +137,10 @@ pub struct PluginFile {
     pub command: Vec<String>,
     #[serde(default)]
     pub working_directory: Option<PathBuf>,
-    #[serde(default = "default_time_limit", deserialize_with = "crate::units::seconds")]
+    #[serde(
+        default = "default_time_limit",
+        deserialize_with = "crate::units::seconds"
+    )]
     pub time_limit: f64,
     #[serde(default)]
     pub records: Records,
@@ -270,14 +273,16 @@ impl Plugin {
                 )));
             }
             Outcome::Exited(Some(0)) => {}
-            Outcome::Exited(Some(code)) => return Err(failure(format!("exited with status {code}"))),
+            Outcome::Exited(Some(code)) => {
+                return Err(failure(format!("exited with status {code}")));
+            }
             Outcome::Exited(None) => return Err(failure("killed by a signal".into())),
         }
         let refusal_path = work.path.join("refusal.json");
         if refusal_path.exists() {
             let text = read_text(&refusal_path)?;
-            let refusal: Refusal = serde_json::from_str(&text)
-                .map_err(|e| failure(format!("refusal.json: {e}")))?;
+            let refusal: Refusal =
+                serde_json::from_str(&text).map_err(|e| failure(format!("refusal.json: {e}")))?;
             return Err(Error::Refused(refusal));
         }
         let estimate_path = work.path.join("estimate.json");
@@ -287,8 +292,9 @@ impl Plugin {
             ));
         }
         let text = read_text(&estimate_path)?;
-        let mut estimate =
-            self.estimate_from(problem, &text).map_err(|reason| failure(format!("estimate.json: {reason}")))?;
+        let mut estimate = self
+            .estimate_from(problem, &text)
+            .map_err(|reason| failure(format!("estimate.json: {reason}")))?;
         if !stderr.is_empty() {
             estimate.notes.push(format!("plug-in stderr: {stderr}"));
         }
@@ -383,7 +389,10 @@ impl Plugin {
                 return Err(format!("parameters[{i}]: '{}' is given twice", p.name));
             }
             if !p.value.is_finite() {
-                return Err(format!("parameters[{i}] ('{}'): value is not a finite number", p.name));
+                return Err(format!(
+                    "parameters[{i}] ('{}'): value is not a finite number",
+                    p.name
+                ));
             }
             if p.standard_error.is_nan() || p.standard_error < 0.0 {
                 return Err(format!(
@@ -544,11 +553,7 @@ impl Drop for WorkFolder {
 fn tail(path: &Path) -> String {
     let text = std::fs::read_to_string(path).unwrap_or_default();
     let text = text.trim();
-    let start = text
-        .char_indices()
-        .rev()
-        .nth(499)
-        .map_or(0, |(i, _)| i);
+    let start = text.char_indices().rev().nth(499).map_or(0, |(i, _)| i);
     text[start..].replace('\n', " | ")
 }
 
