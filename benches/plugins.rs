@@ -33,13 +33,22 @@ fn round_trip(c: &mut Criterion) {
         "command = [\"sh\", \"noop.sh\"]\n",
     )
     .unwrap();
+    std::fs::write(
+        folder.join("noop-json.toml"),
+        "command = [\"sh\", \"noop.sh\"]\nrecord_folders = false\n",
+    )
+    .unwrap();
     let plugin = Plugin::load(&folder.join("noop.toml")).unwrap();
+    let json_only = Plugin::load(&folder.join("noop-json.toml")).unwrap();
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let (record, _) = record_scenario(&scenario, &profile).unwrap();
     let problem = EstimationProblem::new("ee", vec![record], structure, &[]).unwrap();
     c.bench_function("plugin round trip (no-op, ATTAS lateral record)", |b| {
         b.iter(|| plugin.estimate(&problem, None).unwrap())
+    });
+    c.bench_function("plugin round trip (no-op, problem.json only)", |b| {
+        b.iter(|| json_only.estimate(&problem, None).unwrap())
     });
     let _ = std::fs::remove_dir_all(&folder);
 }

@@ -9,6 +9,7 @@
 //! working_directory = "."                     # relative to this file (default: its folder)
 //! time_limit = "60 s"
 //! records = "one"                             # or "many": several manoeuvres at once
+//! record_folders = true                       # also write each record as a record folder
 //! settings = ["ridge"]                        # the [methods.NAME] keys it takes (default: any)
 //! [environment]
 //! OMP_NUM_THREADS = "1"
@@ -16,7 +17,8 @@
 //!
 //! For each estimate aeroid makes a fresh work folder holding
 //! `problem.json` (the [`EstimationProblem`], every record inside it) and
-//! `record-K/` (each record in the record-folder format, without its truth),
+//! `record-K/` (each record in the record-folder format, without its truth;
+//! unless `record_folders = false`),
 //! runs the command with the work folder as its last argument (its own
 //! process group; stdout and stderr to files in the work folder; `TMPDIR`
 //! the work folder), and reads back `estimate.json` or `refusal.json`
@@ -149,6 +151,14 @@ pub struct PluginFile {
     pub settings: Option<Vec<String>>,
     #[serde(default)]
     pub environment: BTreeMap<String, String>,
+    /// Whether the records are also written as record folders (a plug-in
+    /// that reads only problem.json saves the time).
+    #[serde(default = "yes")]
+    pub record_folders: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn default_time_limit() -> f64 {
@@ -168,6 +178,7 @@ pub struct Plugin {
     records: Records,
     settings: Option<Vec<String>>,
     environment: BTreeMap<String, String>,
+    record_folders: bool,
 }
 
 impl Plugin {
@@ -234,6 +245,7 @@ impl Plugin {
             records: file.records,
             settings: file.settings,
             environment: file.environment,
+            record_folders: file.record_folders,
         })
     }
 
@@ -249,8 +261,10 @@ impl Plugin {
         let json = problem.to_json()?;
         let problem_path = work.path.join("problem.json");
         std::fs::write(&problem_path, json).map_err(|e| write_error(&problem_path, e))?;
-        for (k, record) in problem.records.iter().enumerate() {
-            record.write(&work.path.join(format!("record-{k}")))?;
+        if self.record_folders {
+            for (k, record) in problem.records.iter().enumerate() {
+                record.write(&work.path.join(format!("record-{k}")))?;
+            }
         }
         let outcome = self.execute(&work.path)?;
         let stderr = tail(&work.path.join("stderr.txt"));
@@ -334,11 +348,17 @@ impl Plugin {
             match child.try_wait() {
                 Ok(Some(status)) => return Ok(Outcome::Exited(status.code())),
                 Ok(None) if Instant::now() >= deadline => {
-                    // The whole process group: a shell's children too.
-                    let _ = Command::new("kill")
-                        .args(["-KILL", &format!("-{}", child.id())])
-                        .stderr(Stdio::null())
-                        .status();
+                    // The whole process group (a shell's children too),
+                    // by the system call: the group is the child's own
+                    // (process_group(0) above), never aeroid's.
+                    if let Ok(group) = libc::pid_t::try_from(child.id())
+                        && group > 1
+                    {
+                        // SAFETY: killpg only sends a signal; it touches no memory.
+                        unsafe {
+                            libc::killpg(group, libc::SIGKILL);
+                        }
+                    }
                     let _ = child.kill();
                     let _ = child.wait();
                     return Ok(Outcome::TimedOut);
