@@ -234,7 +234,10 @@ fn estimate_writes_the_smoothed_histories_where_asked() {
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(!output.status.success() && stderr.contains("ebm"), "{stderr}");
+    assert!(
+        !output.status.success() && stderr.contains("ebm"),
+        "{stderr}"
+    );
     assert!(!other.exists());
     std::fs::remove_dir_all(&folder).unwrap();
 }

@@ -4,7 +4,7 @@
 
 use aeroid::estimation::estimate::{Estimate, Status};
 use aeroid::estimation::methods::smoothed_regression::{
-    SmoothedRegressionSettings, Smoothed, smooth_and_regress,
+    Smoothed, SmoothedRegressionSettings, smooth_and_regress,
 };
 use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::ModelStructure;
@@ -56,11 +56,7 @@ fn coefficient_errors(
 ) -> Vec<(&'static str, f64, f64)> {
     let steps = aeroid::estimation::reconstruction::control_steps(record);
     let kept: Vec<usize> = (0..smoothed.times.len())
-        .filter(|&k| {
-            steps
-                .iter()
-                .all(|s| (s - smoothed.times[k]).abs() > margin)
-        })
+        .filter(|&k| steps.iter().all(|s| (s - smoothed.times[k]).abs() > margin))
         .collect();
     ["CX", "CY", "CZ", "Cl", "Cm", "Cn"]
         .iter()
@@ -222,11 +218,17 @@ fn record_without_angular_rates_says_what_it_could_estimate() {
         .find(|l| l.starts_with("determined to 10 %"))
         .unwrap();
     for parameter in ["CL_alpha", "CD_0", "e"] {
-        assert!(determined.split(';').next().unwrap().contains(parameter), "{determined}");
+        assert!(
+            determined.split(';').next().unwrap().contains(parameter),
+            "{determined}"
+        );
     }
     let cm_q = estimate.parameter("Cm_q").unwrap();
     assert!(cm_q.standard_error > 0.1 * cm_q.value.abs(), "{text}");
-    assert!(determined.split(';').nth(1).unwrap().contains("Cm_q"), "{determined}");
+    assert!(
+        determined.split(';').nth(1).unwrap().contains("Cm_q"),
+        "{determined}"
+    );
     for (parameter, value, sigma, truth) in &rows {
         assert!(
             (value - truth).abs() < 3.0 * sigma,
@@ -276,9 +278,17 @@ fn smoothed_histories_are_written_as_csv() {
 fn bad_settings_are_refused_naming_the_key() {
     let method = aeroid::estimation::methods::find("ebm").unwrap();
     for (key, value, expected) in [
-        ("observations", serde_json::json!(["nx", "n_z"]), "observations"),
+        (
+            "observations",
+            serde_json::json!(["nx", "n_z"]),
+            "observations",
+        ),
         ("force_noise", serde_json::json!(-1.0), "force_noise"),
-        ("measurement_noise", serde_json::json!({"pitch": -0.1}), "measurement_noise"),
+        (
+            "measurement_noise",
+            serde_json::json!({"pitch": -0.1}),
+            "measurement_noise",
+        ),
         ("step_margin", serde_json::json!(-0.1), "step_margin"),
     ] {
         let mut settings = aeroid::estimation::estimator::Settings::new();

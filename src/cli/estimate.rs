@@ -105,7 +105,10 @@ pub fn run(args: Args) -> Result<()> {
         smooth(problem.record(), &problem.structure, &settings)?
             .write_csv(path)
             .map_err(aeroid::Error::as_write)?;
-        outln!("smoothed coefficient histories written to {}", path.display());
+        outln!(
+            "smoothed coefficient histories written to {}",
+            path.display()
+        );
     }
     let structure = &problem.structure;
     out!("{}", estimate.details);

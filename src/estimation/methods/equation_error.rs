@@ -247,7 +247,10 @@ pub fn equation_error(
         .into_iter()
         .partition(|plan| plan.coefficient.is_force());
     let mut groups: Vec<(Vec<Plan>, Reconstruction)> = Vec::new();
-    for group in [forces, moments].into_iter().filter(|group| !group.is_empty()) {
+    for group in [forces, moments]
+        .into_iter()
+        .filter(|group| !group.is_empty())
+    {
         let reconstruction = reconstruct(
             record,
             &structure.aircraft,

@@ -204,7 +204,9 @@ impl SmoothedRegressionSettings {
 
     fn check(&self) -> Result<()> {
         let refuse = |key: &str, message: String| {
-            Err(Error::Other(format!("[methods.{METHOD}]: {key}: {message}")))
+            Err(Error::Other(format!(
+                "[methods.{METHOD}]: {key}: {message}"
+            )))
         };
         for (key, names) in [
             ("observations", &self.observations),
@@ -240,7 +242,10 @@ impl SmoothedRegressionSettings {
             ("initial_moment_std", &self.initial_moment_std),
         ] {
             if values.iter().any(|v| !(*v > 0.0 && v.is_finite())) {
-                return refuse(key, format!("every value must be finite and > 0: {values:?}"));
+                return refuse(
+                    key,
+                    format!("every value must be finite and > 0: {values:?}"),
+                );
             }
         }
         for (name, value) in &self.measurement_noise {
@@ -298,7 +303,8 @@ impl Estimator for SmoothedRegression {
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         let settings = SmoothedRegressionSettings::read(&problem.settings)?;
         let started = std::time::Instant::now();
-        let (smoothed, mut estimate) = smooth_and_regress(problem.record(), &problem.structure, &settings)?;
+        let (smoothed, mut estimate) =
+            smooth_and_regress(problem.record(), &problem.structure, &settings)?;
         estimate.notes.extend(smoothed.notes.iter().cloned());
         estimate.notes.push(determined_note(&estimate));
         estimate.wall_time = started.elapsed().as_secs_f64();
@@ -361,7 +367,9 @@ const HISTORY_COLUMNS: &[Column] = &[
     ("CD", "-", |x| wind_axes(x).1),
     ("airspeed", "m/s", |x| speed(x)),
     ("alpha", "rad", |x| x[U + 2].atan2(x[U])),
-    ("beta", "rad", |x| (x[U + 1] / speed(x)).clamp(-1.0, 1.0).asin()),
+    ("beta", "rad", |x| {
+        (x[U + 1] / speed(x)).clamp(-1.0, 1.0).asin()
+    }),
     ("p", "rad/s", |x| x[P]),
     ("q", "rad/s", |x| x[P + 1]),
     ("r", "rad/s", |x| x[P + 2]),
@@ -402,7 +410,11 @@ impl Smoothed {
             .map_err(|e| io_error(e.into()))?;
         for ((t, x), sigma) in self.times.iter().zip(&self.states).zip(&self.deviations) {
             let mut row = vec![t.to_string()];
-            row.extend(HISTORY_COLUMNS.iter().map(|(_, _, f)| f(x.as_slice()).to_string()));
+            row.extend(
+                HISTORY_COLUMNS
+                    .iter()
+                    .map(|(_, _, f)| f(x.as_slice()).to_string()),
+            );
             row.extend((0..6).map(|i| sigma[coefficient_states::coefficient(i)].to_string()));
             writer.write_record(&row).map_err(|e| io_error(e.into()))?;
         }
@@ -581,8 +593,10 @@ fn initial_estimate(
     for _ in 0..3 {
         deviations.extend(settings.initial_moment_std);
     }
-    let covariance =
-        DMatrix::from_diagonal(&DVector::from_iterator(STATE_COUNT, deviations.iter().map(|s| s * s)));
+    let covariance = DMatrix::from_diagonal(&DVector::from_iterator(
+        STATE_COUNT,
+        deviations.iter().map(|s| s * s),
+    ));
     Gaussian {
         mean: x,
         covariance,
@@ -727,8 +741,12 @@ fn determination_note(smoothed: &[Gaussian], deviations: &[DVector<f64>]) -> Str
             let c = coefficient_states::coefficient(i);
             let n = smoothed.len() as f64;
             let mean = smoothed.iter().map(|g| g.mean[c]).sum::<f64>() / n;
-            let variation =
-                (smoothed.iter().map(|g| (g.mean[c] - mean).powi(2)).sum::<f64>() / n).sqrt();
+            let variation = (smoothed
+                .iter()
+                .map(|g| (g.mean[c] - mean).powi(2))
+                .sum::<f64>()
+                / n)
+                .sqrt();
             let sigma = (deviations.iter().map(|d| d[c] * d[c]).sum::<f64>() / n).sqrt();
             format!("{name} σ {sigma:.2e} (variation {variation:.2e})")
         })

@@ -278,19 +278,16 @@ impl CoefficientStates {
         let omega = Vector3::new(x[P], x[P + 1], x[P + 2]);
         let (sin_phi, cos_phi) = x[PHI].sin_cos();
         let (sin_theta, cos_theta) = x[THETA].sin_cos();
-        let gravity = Vector3::new(-sin_theta, sin_phi * cos_theta, cos_phi * cos_theta)
-            * STANDARD_GRAVITY;
+        let gravity =
+            Vector3::new(-sin_theta, sin_phi * cos_theta, cos_phi * cos_theta) * STANDARD_GRAVITY;
         let specific = (force * loads.scale + loads.thrust) / mass.mass;
         let velocity_rate = specific + gravity - omega.cross(&velocity);
         let aero_moment = moment.component_mul(&self.arms()) * loads.scale;
         let thrust_moment = self.aircraft.propulsion.position.cross(&loads.thrust);
-        let angular =
-            mass.inertia_inverse * (aero_moment + thrust_moment - omega.cross(&(mass.inertia * omega)));
-        let euler = crate::sim::state::euler_rates_of(
-            (sin_phi, cos_phi),
-            (sin_theta, cos_theta),
-            &omega,
-        );
+        let angular = mass.inertia_inverse
+            * (aero_moment + thrust_moment - omega.cross(&(mass.inertia * omega)));
+        let euler =
+            crate::sim::state::euler_rates_of((sin_phi, cos_phi), (sin_theta, cos_theta), &omega);
         let mut rates = State::zeros();
         rates.fixed_rows_mut::<3>(U).copy_from(&velocity_rate);
         rates.fixed_rows_mut::<3>(P).copy_from(&angular);
@@ -320,7 +317,8 @@ impl CoefficientStates {
     /// The load factors (nx, ny, nz) of a state.
     fn load_factors(&self, x: &[f64], loads: &Loads) -> Vector3<f64> {
         let (force, _) = Self::coefficients(x);
-        let specific = (force * loads.scale + loads.thrust) / (self.aircraft.mass.mass * STANDARD_GRAVITY);
+        let specific =
+            (force * loads.scale + loads.thrust) / (self.aircraft.mass.mass * STANDARD_GRAVITY);
         Vector3::new(specific.x, specific.y, -specific.z)
     }
 }
@@ -485,7 +483,10 @@ impl StateSpaceModel for CoefficientStates {
             let mut set = |column: usize, value: f64| outputs[(row, column)] = value;
             let load_factor = |i: usize, sign: f64, set: &mut dyn FnMut(usize, f64)| {
                 for j in 0..3 {
-                    set(U + j, sign * force[i] * density * area * velocity[j] / weight);
+                    set(
+                        U + j,
+                        sign * force[i] * density * area * velocity[j] / weight,
+                    );
                 }
                 set(
                     H,
@@ -573,9 +574,7 @@ mod tests {
     /// A state away from trim: every term of f and h non-zero.
     fn state() -> Vec<f64> {
         let mut x = vec![0.0; STATE_COUNT];
-        x[..10].copy_from_slice(&[
-            101.0, 3.0, 7.0, 0.1, -0.05, 0.08, 0.2, 0.07, 0.3, 4800.0,
-        ]);
+        x[..10].copy_from_slice(&[101.0, 3.0, 7.0, 0.1, -0.05, 0.08, 0.2, 0.07, 0.3, 4800.0]);
         let values = [-0.03, 0.02, -0.6, 0.004, -0.01, 0.003];
         for (i, value) in values.iter().enumerate() {
             x[coefficient(i)] = *value;
@@ -601,11 +600,9 @@ mod tests {
                 &jacobians.rates_by_state,
                 &(|x: &[f64]| model.rates(t, x, &[]).unwrap()) as &dyn Fn(&[f64]) -> DVector<f64>,
             ),
-            (
-                "∂h/∂x",
-                &jacobians.outputs_by_state,
-                &|x: &[f64]| model.outputs(t, x, &[]).unwrap(),
-            ),
+            ("∂h/∂x", &jacobians.outputs_by_state, &|x: &[f64]| {
+                model.outputs(t, x, &[]).unwrap()
+            }),
         ] {
             for j in 0..STATE_COUNT {
                 let h = 1e-6 * x[j].abs().max(1.0);
@@ -687,11 +684,8 @@ mod tests {
         .unwrap();
         let rates = model.rates(0.0, &x, &[]).unwrap();
         let d = &evaluation.derivative;
-        let euler_rates = sim_state::euler_rates(
-            euler.roll,
-            euler.pitch,
-            &Vector3::new(s[3], s[4], s[5]),
-        );
+        let euler_rates =
+            sim_state::euler_rates(euler.roll, euler.pitch, &Vector3::new(s[3], s[4], s[5]));
         let expected = [
             d[0],
             d[1],

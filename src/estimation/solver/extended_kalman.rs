@@ -291,6 +291,9 @@ mod tests {
         assert!((2.8..3.2).contains(&phi_order), "Φ order {phi_order}");
         assert!((1.8..2.2).contains(&q_order), "Q_d order {q_order}");
         // The truncation bound (‖A‖·h)³/6 with ‖A‖ ≈ 4, h = 0.02: 8.5e-5.
-        assert!(phi_coarse < 8.5e-5 && q_coarse < 1e-3, "{phi_coarse} {q_coarse}");
+        assert!(
+            phi_coarse < 8.5e-5 && q_coarse < 1e-3,
+            "{phi_coarse} {q_coarse}"
+        );
     }
 }
