@@ -887,3 +887,60 @@ pub fn smooth_and_regress(
     );
     Ok((smoothed, estimate))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::Channel;
+    use std::f64::consts::PI;
+
+    /// A heading through ±180° becomes continuous; dropouts stay dropouts
+    /// and do not break the unwrapping.
+    #[test]
+    fn yaw_is_unwrapped_across_the_branch_cut() {
+        let values = vec![3.0, 3.1, f64::NAN, -3.1, -3.0, 3.05];
+        let record = FlightRecord {
+            channels: vec![Channel {
+                name: "yaw".into(),
+                unit: "rad".into(),
+                rate: 1.0,
+                resolution: None,
+                source: "test".into(),
+                times: (0..values.len()).map(|k| k as f64).collect(),
+                values,
+            }],
+            ..FlightRecord::default()
+        };
+        let unwrapped = unwrapped_yaw(&record).channels[0].values.clone();
+        let expected = [3.0, 3.1, f64::NAN, 2.0 * PI - 3.1, 2.0 * PI - 3.0, 3.05];
+        for (u, e) in unwrapped.iter().zip(expected) {
+            assert!(
+                u.is_nan() && e.is_nan() || (u - e).abs() < 1e-12,
+                "{unwrapped:?}"
+            );
+        }
+    }
+
+    /// The process noise puts each setting on its states: the third
+    /// derivatives of the coefficients, the velocities and the rates, and
+    /// nothing on the kinematic angles, height or lower derivatives.
+    #[test]
+    fn process_noise_sits_on_the_third_derivatives_and_velocities() {
+        let settings = SmoothedRegressionSettings::default();
+        let q = process_noise(&settings);
+        for i in 0..3 {
+            let force = coefficient_states::coefficient(i);
+            let moment = coefficient_states::coefficient(3 + i);
+            assert_eq!(q[(force + 2, force + 2)], settings.force_noise);
+            assert_eq!(q[(moment + 2, moment + 2)], settings.moment_noise);
+            assert_eq!(q[(force, force)] + q[(force + 1, force + 1)], 0.0);
+            assert_eq!(q[(U + i, U + i)], settings.velocity_noise);
+            assert_eq!(q[(P + i, P + i)], settings.rate_noise);
+        }
+        for state in [PHI, THETA, PSI, H] {
+            assert_eq!(q[(state, state)], 0.0);
+        }
+        assert_eq!(q.nrows(), STATE_COUNT);
+        assert_eq!((&q - DMatrix::from_diagonal(&q.diagonal())).amax(), 0.0);
+    }
+}
