@@ -297,3 +297,33 @@ fn bad_settings_are_refused_naming_the_key() {
         assert!(error.contains(expected) && error.contains("ebm"), "{error}");
     }
 }
+
+/// A record without a needed observation (the load factors) or without a
+/// control of the model's terms is refused with every missing channel
+/// named and what it is for; a stall model (not linear in its parameters)
+/// is refused as equation error refuses it.
+#[test]
+fn missing_channels_and_nonlinear_models_are_refused() {
+    use aeroid::estimation::estimator::RefusalKind;
+    let (mut record, _, _) = fly("attas-elevator-3211", "flight-test-25hz", 1);
+    record
+        .channels
+        .retain(|c| !["nz", "elevator"].contains(&c.name.as_str()));
+    let structure = ModelStructure::load("attas-longitudinal").unwrap();
+    let problem = EstimationProblem::new("ebm", vec![record.clone()], structure, &[]).unwrap();
+    let Err(aeroid::Error::Refused(refusal)) = aeroid::estimation::methods::estimate(&problem, None)
+    else {
+        panic!("not refused");
+    };
+    assert_eq!(refusal.kind(), RefusalKind::MissingChannels, "{refusal}");
+    assert_eq!(refusal.missing_channels(), ["nz", "elevator"], "{refusal}");
+    let text = refusal.to_string();
+    assert!(text.contains("Eq. 8") && text.contains("regressor 'de'"), "{text}");
+    let stall = ModelStructure::load("attas-stall").unwrap();
+    let problem = EstimationProblem::new("ebm", vec![record], stall, &[]).unwrap();
+    let Err(aeroid::Error::Refused(refusal)) = aeroid::estimation::methods::estimate(&problem, None)
+    else {
+        panic!("not refused");
+    };
+    assert_eq!(refusal.kind(), RefusalKind::NotLinearInParameters, "{refusal}");
+}
