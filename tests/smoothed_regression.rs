@@ -311,19 +311,28 @@ fn missing_channels_and_nonlinear_models_are_refused() {
         .retain(|c| !["nz", "elevator"].contains(&c.name.as_str()));
     let structure = ModelStructure::load("attas-longitudinal").unwrap();
     let problem = EstimationProblem::new("ebm", vec![record.clone()], structure, &[]).unwrap();
-    let Err(aeroid::Error::Refused(refusal)) = aeroid::estimation::methods::estimate(&problem, None)
+    let Err(aeroid::Error::Refused(refusal)) =
+        aeroid::estimation::methods::estimate(&problem, None)
     else {
         panic!("not refused");
     };
     assert_eq!(refusal.kind(), RefusalKind::MissingChannels, "{refusal}");
     assert_eq!(refusal.missing_channels(), ["nz", "elevator"], "{refusal}");
     let text = refusal.to_string();
-    assert!(text.contains("Eq. 8") && text.contains("regressor 'de'"), "{text}");
+    assert!(
+        text.contains("Eq. 8") && text.contains("regressor 'de'"),
+        "{text}"
+    );
     let stall = ModelStructure::load("attas-stall").unwrap();
     let problem = EstimationProblem::new("ebm", vec![record], stall, &[]).unwrap();
-    let Err(aeroid::Error::Refused(refusal)) = aeroid::estimation::methods::estimate(&problem, None)
+    let Err(aeroid::Error::Refused(refusal)) =
+        aeroid::estimation::methods::estimate(&problem, None)
     else {
         panic!("not refused");
     };
-    assert_eq!(refusal.kind(), RefusalKind::NotLinearInParameters, "{refusal}");
+    assert_eq!(
+        refusal.kind(),
+        RefusalKind::NotLinearInParameters,
+        "{refusal}"
+    );
 }
