@@ -4,11 +4,17 @@
 //! profile; model attas-lateral, 18 parameters and 4 initial states). The
 //! output-error fit is the default one: it starts from equation error's
 //! estimates (their cost included); `output_error_from_model_file` starts
-//! from the model file's a-priori values instead. Run:
+//! from the model file's a-priori values instead. `ebm_smoother_pass` is
+//! one EKF + modified Bryson–Frazier pass of estimation before modelling
+//! over the same record (28 states, 1501 points), `ebm` that pass and the
+//! regression. Run:
 //! `cargo bench --bench estimators`.
 
 use aeroid::estimation::methods::equation_error::equation_error;
 use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
+use aeroid::estimation::methods::smoothed_regression::{
+    SmoothedRegressionSettings, smooth, smooth_and_regress,
+};
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
@@ -35,6 +41,13 @@ fn bench_fits(c: &mut Criterion) {
     });
     group.bench_function("equation_error", |b| {
         b.iter(|| equation_error(black_box(&record), &structure, &Default::default()).unwrap())
+    });
+    let settings = SmoothedRegressionSettings::default();
+    group.bench_function("ebm_smoother_pass", |b| {
+        b.iter(|| smooth(black_box(&record), &structure, &settings).unwrap())
+    });
+    group.bench_function("ebm", |b| {
+        b.iter(|| smooth_and_regress(black_box(&record), &structure, &settings).unwrap())
     });
     group.finish();
 }

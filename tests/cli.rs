@@ -187,3 +187,57 @@ fn a_foreign_truth_file_is_ignored_with_a_warning() {
     assert!(String::from_utf8_lossy(&output.stdout).contains("converged"));
     std::fs::remove_dir_all(&folder).unwrap();
 }
+
+/// `estimate --method ebm --write-smoothed FILE` writes the smoothed
+/// coefficient histories where the user named, with the truth trace's
+/// column names; with another method the option is refused, naming `ebm`,
+/// and nothing is written.
+#[test]
+fn estimate_writes_the_smoothed_histories_where_asked() {
+    let folder = common::temp_folder("write-smoothed");
+    let record = folder.join("rec");
+    stdout_of(
+        aeroid()
+            .args([
+                "record",
+                "attas-elevator-3211",
+                "--profile",
+                "flight-test-25hz",
+                "--out",
+            ])
+            .arg(&record),
+    );
+    let csv = folder.join("smoothed.csv");
+    let printed = stdout_of(
+        aeroid()
+            .arg("estimate")
+            .arg(&record)
+            .args(["--model", "attas-longitudinal", "--method", "ebm"])
+            .arg("--write-smoothed")
+            .arg(&csv),
+    );
+    assert!(printed.contains("Cm_q"), "{printed}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header = text.lines().next().unwrap();
+    assert!(
+        header.starts_with("time [s],CX [-],CY [-],CZ [-],Cl [-],Cm [-],Cn [-]"),
+        "{header}"
+    );
+    assert_eq!(text.lines().count(), 1 + 1501);
+    let other = folder.join("other.csv");
+    let output = aeroid()
+        .arg("estimate")
+        .arg(&record)
+        .args(["--model", "attas-longitudinal", "--method", "ee"])
+        .arg("--write-smoothed")
+        .arg(&other)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && stderr.contains("ebm"),
+        "{stderr}"
+    );
+    assert!(!other.exists());
+    std::fs::remove_dir_all(&folder).unwrap();
+}

@@ -39,6 +39,12 @@ pub struct Args {
     /// `--set step='"0.02 s"'`); repeatable.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     settings: Vec<String>,
+    /// With `--method ebm`: write the smoothed coefficient histories (CX …
+    /// Cn, CL, CD, air data, rates, attitude, altitude and each
+    /// coefficient's σ) as CSV to this file, to plot against the truth
+    /// trace's coefficients.
+    #[arg(long, value_name = "FILE")]
+    write_smoothed: Option<PathBuf>,
 }
 
 /// `--set KEY=VALUE` arguments as a `[methods.NAME]` table.
@@ -74,7 +80,14 @@ pub fn run(args: Args) -> Result<()> {
         check_on,
         write_problem,
         settings,
+        write_smoothed,
     } = args;
+    if write_smoothed.is_some() && method != methods::smoothed_regression::METHOD {
+        anyhow::bail!(
+            "--write-smoothed: only the method '{}' smooths coefficient histories, not '{method}'",
+            methods::smoothed_regression::METHOD
+        );
+    }
     if let Some(out) = &out {
         aeroid::paths::check_output_folder(out)?;
     }
@@ -94,6 +107,17 @@ pub fn run(args: Args) -> Result<()> {
         outln!("estimation problem written to {}", path.display());
     }
     let estimate = methods::estimate(&problem, None)?;
+    if let Some(path) = &write_smoothed {
+        use methods::smoothed_regression::{SmoothedRegressionSettings, smooth};
+        let settings = SmoothedRegressionSettings::read(&problem.settings)?;
+        smooth(problem.record(), &problem.structure, &settings)?
+            .write_csv(path)
+            .map_err(aeroid::Error::as_write)?;
+        outln!(
+            "smoothed coefficient histories written to {}",
+            path.display()
+        );
+    }
     let structure = &problem.structure;
     out!("{}", estimate.details);
     let truth = shared_truth(&record_folders);

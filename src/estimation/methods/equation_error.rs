@@ -192,10 +192,10 @@ impl Default for EquationErrorOptions {
 /// What one coefficient's regression holds: its free terms and, for drag,
 /// the Oswald factor.
 #[derive(Debug, Clone)]
-struct Plan {
-    coefficient: Coefficient,
+pub(crate) struct Plan {
+    pub(crate) coefficient: Coefficient,
     /// (regressor, parameter index) of every term.
-    terms: Vec<(Regressor, usize)>,
+    pub(crate) terms: Vec<(Regressor, usize)>,
     /// Index of the Oswald factor e when this is wind-axis drag with one.
     oswald: Option<usize>,
 }
@@ -242,42 +242,62 @@ pub fn equation_error(
     // Forces and moments are reconstructed separately: only the moments
     // need differentiated rates, whose windows leave out the samples next
     // to a control step, and the force regressions keep those samples.
-    let plans = plans(structure)?;
+    let plans = plans(structure, METHOD)?;
     check_channels(record, &structure.aircraft, &request(&plans), METHOD)?;
     let (forces, moments): (Vec<Plan>, Vec<Plan>) = plans
         .into_iter()
         .partition(|plan| plan.coefficient.is_force());
-    let reconstruction_options = &options.reconstruction;
-    let mut results: Vec<CoefficientResult> = Vec::new();
-    let mut notes: Vec<String> = Vec::new();
-    let mut lag = 0;
-    for group in [forces, moments].iter().filter(|group| !group.is_empty()) {
+    let mut groups: Vec<(Vec<Plan>, Reconstruction)> = Vec::new();
+    for group in [forces, moments]
+        .into_iter()
+        .filter(|group| !group.is_empty())
+    {
         let reconstruction = reconstruct(
             record,
             &structure.aircraft,
-            &request(group),
-            reconstruction_options,
+            &request(&group),
+            &options.reconstruction,
             METHOD,
         )?;
-        lag = (options.correlation_lag * reconstruction.rate).round() as usize;
+        groups.push((group, reconstruction));
+    }
+    let mut estimate = regress(record, structure, METHOD, &groups, options.correlation_lag);
+    estimate.wall_time = started.elapsed().as_secs_f64();
+    Ok(estimate)
+}
+
+/// The regression step of the regression estimators (equation error, and
+/// estimation before modelling on smoothed coefficients): for each group's
+/// data, one least-squares fit per plan (Eqs. 25–27) with the
+/// coloured-residual bound summed to `correlation_lag` seconds, assembled
+/// into one estimate of `method` with the data's notes.
+pub(crate) fn regress(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    method: &str,
+    groups: &[(Vec<Plan>, Reconstruction)],
+    correlation_lag: f64,
+) -> Estimate {
+    let mut results: Vec<CoefficientResult> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
+    let mut lag = 0;
+    for (group, reconstruction) in groups {
+        lag = (correlation_lag * reconstruction.rate).round() as usize;
         results.extend(
             group
                 .iter()
-                .map(|plan| fit_coefficient(plan, structure, &reconstruction, lag)),
+                .map(|plan| fit_coefficient(plan, structure, reconstruction, lag)),
         );
-        notes.extend(
-            reconstruction
-                .notes
-                .into_iter()
-                .filter(|note| !notes.contains(note))
-                .collect::<Vec<_>>(),
-        );
+        for note in &reconstruction.notes {
+            if !notes.contains(note) {
+                notes.push(note.clone());
+            }
+        }
     }
-    let mut estimate = assemble(record, structure, &results);
+    let mut estimate = assemble(record, structure, method, &results);
     estimate.notes.extend(notes);
     estimate.notes.push(format!(
-        "standard errors: Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein 1997), residual autocorrelation summed to lag {lag} samples ({} s)",
-        options.correlation_lag
+        "standard errors: Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein 1997), residual autocorrelation summed to lag {lag} samples ({correlation_lag} s)"
     ));
     estimate
         .notes
@@ -288,16 +308,17 @@ pub fn equation_error(
     estimate
         .notes
         .extend(outside_bounds_notes(structure, &results));
-    estimate.wall_time = started.elapsed().as_secs_f64();
-    Ok(estimate)
+    estimate
 }
 
-/// One plan per coefficient that has a free parameter.
-fn plans(structure: &ModelStructure) -> Result<Vec<Plan>> {
+/// One plan per coefficient that has a free parameter; `method` names the
+/// estimator in a refusal (a model not linear in its parameters, or nothing
+/// to estimate).
+pub(crate) fn plans(structure: &ModelStructure, method: &str) -> Result<Vec<Plan>> {
     let aero = &structure.aircraft.aero;
     if aero.kind != ModelKind::Linear {
         return Err(Error::Refused(Refusal::NotLinearInParameters {
-            method: METHOD.to_string(),
+            method: method.to_string(),
             model: structure.name.clone(),
             model_kind: format!("{:?}", aero.kind).to_lowercase(),
         }));
@@ -315,7 +336,7 @@ fn plans(structure: &ModelStructure) -> Result<Vec<Plan>> {
         .collect();
     if plans.is_empty() {
         return Err(Error::Refused(Refusal::NothingToEstimate {
-            method: METHOD.to_string(),
+            method: method.to_string(),
             model: structure.name.clone(),
         }));
     }
@@ -324,7 +345,7 @@ fn plans(structure: &ModelStructure) -> Result<Vec<Plan>> {
 
 /// The coefficients and regressors to reconstruct: the measured lift too when
 /// drag needs CL² (an Oswald factor or a CL2 term).
-fn request(plans: &[Plan]) -> Request {
+pub(crate) fn request(plans: &[Plan]) -> Request {
     let mut request = Request::default();
     for plan in plans {
         request.coefficients.push(plan.coefficient);
@@ -474,6 +495,7 @@ fn failed_coefficient(name: &str, columns: &[usize], reason: String) -> Coeffici
 fn assemble(
     record: &FlightRecord,
     structure: &ModelStructure,
+    method: &str,
     results: &[CoefficientResult],
 ) -> Estimate {
     let aero = &structure.aircraft.aero;
@@ -494,7 +516,7 @@ fn assemble(
     }
     let problems: Vec<String> = results.iter().filter_map(|r| r.problem.clone()).collect();
     Estimate {
-        method: METHOD.to_string(),
+        method: method.to_string(),
         model: structure.name.clone(),
         record: record_name(record),
         status: if problems.is_empty() {
@@ -544,7 +566,7 @@ fn outside_bounds_notes(structure: &ModelStructure, results: &[CoefficientResult
         .map(|&(i, value, ..)| {
             let (low, high) = structure.bounds[i];
             format!(
-                "{} = {value:.6e} lies outside its bounds [{low}, {high}] (equation error does not apply bounds)",
+                "{} = {value:.6e} lies outside its bounds [{low}, {high}] (least squares does not apply bounds)",
                 names[i]
             )
         })

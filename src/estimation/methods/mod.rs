@@ -7,6 +7,7 @@
 
 pub mod equation_error;
 pub mod output_error;
+pub mod smoothed_regression;
 pub mod stepwise;
 
 use crate::error::{Error, Result};
@@ -21,6 +22,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(equation_error::EquationError),
         Arc::new(stepwise::StepwiseRegression),
         Arc::new(output_error::OutputError),
+        Arc::new(smoothed_regression::SmoothedRegression),
     ]
 }
 

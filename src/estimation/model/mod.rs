@@ -6,6 +6,7 @@
 //! that simulates or filters shares.
 
 pub mod augmented;
+pub mod coefficient_states;
 pub mod driven;
 pub mod linear;
 pub mod observations;
