@@ -197,7 +197,7 @@ struct Document {
 /// the problem: mass (kg), wing area (m²), span and chord (m), the inertia
 /// tensor's Ixx, Iyy, Izz, Ixz (kg·m²), the rate normalisation (`2V`: p̂ =
 /// p·b/(2V)) and the speed it uses (`airspeed` or `reference`, then
-/// `reference_airspeed`, m/s).
+/// `reference_airspeed`, m/s, null when the model sets none).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AircraftView {
@@ -211,7 +211,8 @@ pub struct AircraftView {
     pub ixz: f64,
     pub rate_normalization: String,
     pub rate_speed: String,
-    pub reference_airspeed: f64,
+    /// None (null) when the model sets none.
+    pub reference_airspeed: Option<f64>,
 }
 
 impl AircraftView {
@@ -230,7 +231,7 @@ impl AircraftView {
             ixz: -inertia[(0, 2)],
             rate_normalization: value_text(&aero.rate_normalization),
             rate_speed: value_text(&aero.rate_speed),
-            reference_airspeed: aircraft.aero.reference_airspeed,
+            reference_airspeed: Some(aircraft.aero.reference_airspeed).filter(|v| v.is_finite()),
         }
     }
 }
