@@ -6,6 +6,7 @@
 //! own with [`register`].
 
 pub mod equation_error;
+pub mod filter_error;
 pub mod output_error;
 pub mod stepwise;
 
@@ -21,6 +22,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(equation_error::EquationError),
         Arc::new(stepwise::StepwiseRegression),
         Arc::new(output_error::OutputError),
+        Arc::new(filter_error::FilterError),
     ]
 }
 
