@@ -4,10 +4,13 @@
 //! profile; model attas-lateral, 18 parameters and 4 initial states). The
 //! output-error fit is the default one: it starts from equation error's
 //! estimates (their cost included); `output_error_from_model_file` starts
-//! from the model file's a-priori values instead. Run:
+//! from the model file's a-priori values instead. `filter_error` is the
+//! filter error method's default fit of the same record (from equation
+//! error's estimates, their cost included). Run:
 //! `cargo bench --bench estimators`.
 
 use aeroid::estimation::methods::equation_error::equation_error;
+use aeroid::estimation::methods::filter_error::{FilterErrorOptions, filter_error};
 use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::recorder::{Profile, record_scenario};
@@ -32,6 +35,10 @@ fn bench_fits(c: &mut Criterion) {
     };
     group.bench_function("output_error_from_model_file", |b| {
         b.iter(|| output_error(&[black_box(&record)], &structure, &from_file).unwrap())
+    });
+    let filter = FilterErrorOptions::for_structure(&structure).expect("model settings");
+    group.bench_function("filter_error", |b| {
+        b.iter(|| filter_error(black_box(&record), &structure, &filter).unwrap())
     });
     group.bench_function("equation_error", |b| {
         b.iter(|| equation_error(black_box(&record), &structure, &Default::default()).unwrap())

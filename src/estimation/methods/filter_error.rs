@@ -2,24 +2,25 @@
 //! (Maine & Iliff, "Identification of dynamic systems", NASA RP-1138,
 //! 1985, ch. 9; Jategaonkar, "Flight Vehicle System Identification",
 //! 2nd ed., ch. 5; the seed paper 002 uses it as its comparison method).
+//! The equation numbers are Jategaonkar's as his FVSysID programs
+//! (`gainmat`, `fcompn`) cite them; elsewhere the sections are named.
 //! Output error assumes that the only noise is on the measurements; with
 //! turbulence (process noise) its simulation drifts away from the flight
 //! and its estimates are biased. The filter error method predicts each
 //! sample from the filtered state of the one before, so the innovations
 //! stay white and the likelihood is the right one for both noises.
 //!
-//! System (Jategaonkar Eqs. 5.1–5.2): ẋ = f(x, u, θ) + F·w,
+//! System (Jategaonkar §5.1): ẋ = f(x, u, θ) + F·w,
 //! z_k = h(x_k, u_k, θ) + G·v_k, w and v white with unit intensity, F
 //! diagonal with one entry per state driven by noise (the
 //! `process_noise` states), estimated with the aerodynamic parameters.
 //!
-//! Filter (the steady-state extended filter, Jategaonkar §5.5, Eqs.
-//! 5.45–5.49):
+//! Filter (the steady-state extended filter, Jategaonkar §5.5):
 //! - prediction by the nonlinear model's own integration step
 //!   ([`StateSpaceModel::step`]): x̃_k = step(x̂_{k−1}), ỹ_k = h(x̃_k);
 //! - correction x̂_k = x̃_k + K·(z_k − ỹ_k) with a constant gain K;
 //! - K = P·Cᵀ·R⁻¹ (Eq. 5.48), R the covariance of the innovations
-//!   ν = z − ỹ (so the measurement noise is G·Gᵀ = R − C·P·Cᵀ, Eq. 5.13),
+//!   ν = z − ỹ (so the measurement noise is G·Gᵀ = R − C·P·Cᵀ, §5.3),
 //!   P the steady-state predicted covariance of the system linearised, as
 //!   FVSysID's `gainmat` does, at the first grid point (t₀, x₀, u(t₀)) of
 //!   the record (A = ∂f/∂x, C = ∂h/∂x there, Eqs. 5.50–5.51).
@@ -27,8 +28,8 @@
 //!   P = Φ·(P − P·Cᵀ·R⁻¹·C·P)·Φᵀ + Q_d, Φ = e^{A·Δt}, Q_d the process noise
 //!   F·Fᵀ discretised (Van Loan), solved exactly
 //!   ([`kalman::steady_state_for_innovation`]: Newton's method started
-//!   from [`kalman::steady_state`]). Jategaonkar's Eq. 5.14 (and
-//!   `gainmat`) solves the continuous equation
+//!   from [`kalman::steady_state`]). Jategaonkar (§5.3, and
+//!   `gainmat` by Potter's method, Eqs. 5.15–5.17) solves the continuous equation
 //!   A·P + P·Aᵀ − P·Cᵀ·R⁻¹·C·P/Δt + F·Fᵀ = 0 instead, its first-order
 //!   approximation in Δt; the exact discrete form makes the filter, on a
 //!   linear model, the linear Kalman filter of that system exactly, which
@@ -36,7 +37,7 @@
 //!   On a multi-rate record a grid point with only some outputs corrects
 //!   with those outputs' columns of K.
 //!
-//! Cost and relaxation (Jategaonkar §5.3, Eqs. 5.16–5.25): the negative
+//! Cost and relaxation (Jategaonkar §5.3): the negative
 //! log-likelihood of the innovations, ½·Σ_k (ν_kᵀR⁻¹ν_k + ln det R),
 //! minimised by relaxation: at every iteration R is re-estimated from the
 //! innovations at the current (θ, F), R = (1/N)·Σ ν·νᵀ (diagonal, as output
@@ -53,16 +54,21 @@
 //! K·C at or above 1), cannot be evaluated, and the solver cuts it
 //! (halvings, then Levenberg–Marquardt damping) until it is feasible;
 //! Jategaonkar instead solves the step as a constrained quadratic
-//! program. A compensated F that violates it is halved until it does not.
+//! program. A compensated F that violates it is halved until it does not;
+//! when no F gives a filter with the new R (an unstable mode needs more
+//! gain than R's measurement-noise share allows), the R update is undone
+//! for that iteration.
 //!
 //! Sensitivities: by forward differences of whole filter passes (each
 //! perturbed θ or F gets its own linearisation, Riccati solution and gain,
-//! as FVSysID perturbs the gain with the parameters), the shared core's
-//! finite-difference Jacobian ([`Options::central_differences`] false: one
-//! pass per unknown, half the cost of central differences, for a Jacobian
-//! within ~10⁻⁶ relative) with its relative step 10⁻⁶·max(|θ_j|,
+//! as FVSysID perturbs the gain with the parameters; one pass per unknown,
+//! half the cost of central differences, for a Jacobian within ~10⁻⁶
+//! relative), with the shared core's relative step 10⁻⁶·max(|θ_j|,
 //! typical_j) (typical 10⁻³ for an aerodynamic parameter, a tenth of the
-//! start value for an F entry). Cramér–Rao bounds are the square roots of
+//! start value for an F entry); where the forward pass is infeasible (an
+//! iterate on the constraint), the backward difference
+//! ([`LeastSquaresProblem::jacobian`]; the core's default is central
+//! differences). Cramér–Rao bounds are the square roots of
 //! the diagonal of M⁻¹, M = Σ (∂ν/∂θ)ᵀ R⁻¹ (∂ν/∂θ) at the optimum, the F
 //! entries among the unknowns; only the aerodynamic parameters (with the
 //! aerodynamic block of M⁻¹) are the estimate's parameters, scored against
@@ -71,9 +77,8 @@
 //! cost below 10⁻⁴ (a step under 0.014σ), as output error.
 //!
 //! Start: the aerodynamic parameters from equation error's estimate (as
-//! output error; the seed paper 002 and Jategaonkar §5.8 start the filter
-//! error method near a regression or output-error solution, since it is
-//! sensitive to its start), else the model file's values. The initial
+//! output error; the seed paper 002 starts its filter error method near
+//! the equation-error estimates, finding it sensitive to its start), else the model file's values. The initial
 //! state is the record's first sample (the filter corrects it, so it is not
 //! an unknown). R starts from the innovations with no process noise (the
 //! output-error residuals), F from a scale where the process noise over one
@@ -190,7 +195,7 @@ impl Estimator for FilterError {
         MethodInfo {
             title: "filter error: maximum likelihood with a steady-state extended Kalman filter in the loop, for flights with turbulence",
             paper: "Maine & Iliff, \"Identification of dynamic systems\" (NASA RP-1138, 1985); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 5",
-            equations: "innovations ν = z − ỹ of x̃_k = step(x̂_{k−1}), x̂ = x̃ + K·ν, K = P·Cᵀ·R⁻¹ (Jategaonkar Eqs. 5.45–5.49), P from the discrete Riccati equation of the model linearised at the first point; cost ½·Σ(νᵀR⁻¹ν + ln det R), R = (1/N)·Σ ν·νᵀ, Gauss–Newton on θ and F with R fixed, F compensated after each R update (Eq. 5.41), diag(K·C) ≤ 1 (§5.3); Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ)",
+            equations: "innovations ν = z − ỹ of x̃_k = step(x̂_{k−1}), x̂ = x̃ + K·ν, K = P·Cᵀ·R⁻¹ (Jategaonkar §5.5, Eq. 5.48), P from the discrete Riccati equation of the model linearised at the first point; cost ½·Σ(νᵀR⁻¹ν + ln det R), R = (1/N)·Σ ν·νᵀ, Gauss–Newton on θ and F with R fixed, F compensated after each R update (Eq. 5.41), diag(K·C) ≤ 1 (§5.3); Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ)",
             needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
             settings: setting_infos(
                 &FilterErrorOptions::default(),
@@ -612,7 +617,6 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             .skip(aero)
             .map(|f| f.abs() / start_factor)
             .collect();
-        options.central_differences = false;
         // F enters only through F·Fᵀ: its sign means nothing, so it is not
         // bounded (a bound at zero would project steps, which need not
         // then descend); its magnitude is reported.
@@ -649,6 +653,34 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         ))
     }
 
+    /// Forward differences of whole filter passes (module documentation);
+    /// where the forward pass is infeasible (an iterate on the constraint
+    /// diag(K·C) ≤ 1 or at the edge of the filters that exist with this
+    /// R), the backward difference.
+    fn jacobian(
+        &mut self,
+        unknowns: &DVector<f64>,
+        options: &Options,
+    ) -> std::result::Result<DMatrix<f64>, String> {
+        let here = self.residuals(unknowns)?;
+        let mut columns = Vec::with_capacity(unknowns.len());
+        for j in 0..unknowns.len() {
+            let typical = options.typical.get(j).copied().unwrap_or(1e-3);
+            let h = options.relative_step * unknowns[j].abs().max(typical);
+            let mut moved = unknowns.clone();
+            moved[j] += h;
+            let column = match self.residuals(&moved) {
+                Ok(forward) => (forward - &here) / h,
+                Err(_) => {
+                    moved[j] = unknowns[j] - h;
+                    (&here - self.residuals(&moved)?) / h
+                }
+            };
+            columns.push(column);
+        }
+        Ok(DMatrix::from_columns(&columns))
+    }
+
     /// R = (1/N)·Σ ν·νᵀ (diagonal) at the current (θ, F).
     fn reweight(&mut self, unknowns: &DVector<f64>) -> std::result::Result<bool, String> {
         let pass = self.pass(unknowns).map_err(|e| e.to_string())?;
@@ -661,6 +693,9 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
 
     /// F compensated for the R update (Jategaonkar Eq. 5.41, FVSysID's
     /// `fcompn`), then halved while the filter it gives is infeasible.
+    /// When no F gives a filter with the new R (an unstable mode needs a
+    /// gain that R's measurement-noise share cannot carry), the R update
+    /// is undone: the iteration goes on with the R before it.
     fn compensate(&mut self, unknowns: &DVector<f64>) -> Option<DVector<f64>> {
         let (old, c) = self.previous.take()?;
         if self.noisy.is_empty() {
@@ -686,6 +721,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
                 compensated[j] *= 0.5;
             }
         }
+        self.variances = old;
         None
     }
 }

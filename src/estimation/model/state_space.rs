@@ -32,7 +32,6 @@ use crate::sim::dynamics::FlightModel;
 use crate::sim::integrator::Interpolation;
 use crate::sim::state::Controls;
 use nalgebra::{DMatrix, DVector};
-use std::sync::{Arc, Mutex};
 
 /// The Jacobians of a state-space model at one point (t, x, θ).
 #[derive(Debug, Clone, PartialEq)]
@@ -176,26 +175,6 @@ pub struct DrivenStateSpace {
     /// The flight-path states in x.
     states: Vec<usize>,
     mask: FlightPathState,
-    /// The model at the last θ asked for.
-    at: ModelCache,
-}
-
-/// The model with the last θ written in, kept so that many calls at one θ
-/// (a filter pass's steps and outputs) write θ into a copy of the model
-/// once rather than at every call. A copy of the view starts empty.
-#[derive(Default)]
-struct ModelCache(Mutex<Option<(Vec<f64>, Arc<FlightModel>)>>);
-
-impl Clone for ModelCache {
-    fn clone(&self) -> Self {
-        ModelCache::default()
-    }
-}
-
-impl std::fmt::Debug for ModelCache {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("ModelCache")
-    }
 }
 
 /// Times within this fraction of a step of a grid point or of a step's
@@ -224,7 +203,6 @@ impl DrivenStateSpace {
             outputs,
             states,
             mask,
-            at: ModelCache::default(),
         })
     }
 
@@ -285,20 +263,7 @@ impl DrivenStateSpace {
     /// The model with θ written in; an error for a θ of the wrong length,
     /// or one that changes which states are integrated (the stall model's
     /// χ is a state only while τ1 > 0).
-    fn model_at(&self, theta: &[f64]) -> Result<Arc<FlightModel>> {
-        let mut cache = self.at.0.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some((values, model)) = cache.as_ref()
-            && values.as_slice() == theta
-        {
-            return Ok(model.clone());
-        }
-        let model = Arc::new(self.model_with(theta)?);
-        *cache = Some((theta.to_vec(), model.clone()));
-        Ok(model)
-    }
-
-    /// A copy of the model with θ written in (see [`Self::model_at`]).
-    fn model_with(&self, theta: &[f64]) -> Result<FlightModel> {
+    fn model_at(&self, theta: &[f64]) -> Result<FlightModel> {
         let count = self.parameter_count();
         if theta.len() != count {
             return Err(Error::Other(format!(
@@ -369,7 +334,7 @@ impl DrivenStateSpace {
         t: f64,
         x: &[f64],
         theta: &[f64],
-    ) -> Result<(FlightPathState, Arc<FlightModel>, Controls, PseudoRates)> {
+    ) -> Result<(FlightPathState, FlightModel, Controls, PseudoRates)> {
         let (k, fraction) = self.locate(t)?;
         let (measured, controls, pseudo) = self.simulation.inputs_at(k, fraction);
         Ok((

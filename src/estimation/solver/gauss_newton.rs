@@ -152,14 +152,6 @@ pub struct Options {
     /// then have truncation error ~h² and rounding error ~ε/h, both ~1e-12
     /// relative).
     pub relative_step: f64,
-    /// Central differences in the default Jacobian (true), or forward
-    /// differences, r(θ + h·e_j) − r(θ) over h, one evaluation per
-    /// parameter instead of two: for a problem whose residuals are
-    /// expensive and have no sensitivity equations (filter error: a whole
-    /// filter pass per evaluation). Truncation error ~h, about 1e-6
-    /// relative at the default step: a Cramér–Rao bound off by as much,
-    /// an optimum off by a fraction of that of a standard deviation.
-    pub central_differences: bool,
     /// Magnitude below which a parameter's step is not scaled by its value.
     pub typical: Vec<f64>,
     /// Lower and upper bound of each parameter.
@@ -175,7 +167,6 @@ impl Options {
             decrease_tolerance: None,
             refine_below: None,
             relative_step: 1e-6,
-            central_differences: true,
             typical: vec![1e-3; parameter_count],
             bounds: vec![(f64::NEG_INFINITY, f64::INFINITY); parameter_count],
         }
@@ -278,28 +269,20 @@ fn cost_of(residuals: &DVector<f64>) -> f64 {
     0.5 * residuals.norm_squared()
 }
 
-/// Finite-difference Jacobian of the problem's residuals: central, or
-/// forward where [`Options::central_differences`] is false.
+/// Central-difference Jacobian of the problem's residuals.
 pub fn finite_difference_jacobian<P: LeastSquaresProblem + ?Sized>(
     problem: &mut P,
     theta: &DVector<f64>,
     options: &Options,
 ) -> Result<DMatrix<f64>, String> {
     let mut columns = Vec::with_capacity(theta.len());
-    let here = if options.central_differences {
-        None
-    } else {
-        Some(problem.residuals(theta)?)
-    };
     for j in 0..theta.len() {
         let h = options.relative_step * options.scale(theta, j);
         let (mut plus, mut minus) = (theta.clone(), theta.clone());
         plus[j] += h;
         minus[j] -= h;
-        columns.push(match &here {
-            None => (problem.residuals(&plus)? - problem.residuals(&minus)?) / (2.0 * h),
-            Some(here) => (problem.residuals(&plus)? - here) / h,
-        });
+        let difference = problem.residuals(&plus)? - problem.residuals(&minus)?;
+        columns.push(difference / (2.0 * h));
     }
     Ok(DMatrix::from_columns(&columns))
 }
@@ -654,28 +637,6 @@ mod tests {
             solution.history.windows(2).all(|w| w[1].cost <= w[0].cost),
             "cost never rises"
         );
-    }
-
-    /// Forward differences reach the noise-free optimum as central ones
-    /// do (to the same 1e-10: a Jacobian off by ~1e-6 relative changes
-    /// the path, not the point where the gradient vanishes) with fewer
-    /// residual evaluations.
-    #[test]
-    fn forward_differences_reach_the_same_optimum_with_fewer_evaluations() {
-        let start = DVector::from_vec(vec![1.0, -0.2, 0.0]);
-        let mut evaluations = Vec::new();
-        for central in [true, false] {
-            let mut problem = exponential();
-            let mut options = Options::new(3);
-            options.central_differences = central;
-            let solution = solve(&mut problem, &start, &options);
-            assert_eq!(solution.status, Status::Converged);
-            for (estimate, truth) in solution.theta.iter().zip([2.5, -0.7, 0.3]) {
-                assert!((estimate - truth).abs() < 1e-10, "{estimate} vs {truth}");
-            }
-            evaluations.push(problem.evaluations);
-        }
-        assert!(evaluations[1] < evaluations[0], "{evaluations:?}");
     }
 
     /// Rosenbrock's valley as residuals (10(y − x²), 1 − x): plain Gauss–Newton
