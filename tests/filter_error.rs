@@ -446,9 +446,9 @@ fn filter_error_is_unbiased_with_process_noise_where_output_error_is_not() {
         oem.push(lateral_fit(&model, &observations, &initial, vec![]));
     }
     let mut report = String::new();
-    for j in 0..4 {
+    for (j, truth_j) in truth.iter().enumerate() {
         let statistics = |fits: &[(Vec<f64>, Vec<f64>, Status)]| {
-            let errors: Vec<f64> = fits.iter().map(|f| f.0[j] - truth[j]).collect();
+            let errors: Vec<f64> = fits.iter().map(|f| f.0[j] - truth_j).collect();
             let count = errors.len() as f64;
             let mean = errors.iter().sum::<f64>() / count;
             let spread =
@@ -460,8 +460,7 @@ fn filter_error_is_unbiased_with_process_noise_where_output_error_is_not() {
         let (mean, spread, rms, bound) = statistics(&fem);
         let (oem_mean, _, oem_rms, oem_bound) = statistics(&oem);
         report.push_str(&format!(
-            "θ{j} truth {:.4}: filter error mean error {mean:.2e}, σ_MC {spread:.2e}, CRB {bound:.2e} (σ_MC/CRB {:.2}); output error mean error {oem_mean:.2e}, RMS error {oem_rms:.2e} = {:.1} of its CRB {oem_bound:.2e}, {:.1}× filter error's\n",
-            truth[j],
+            "θ{j} truth {truth_j:.4}: filter error mean error {mean:.2e}, σ_MC {spread:.2e}, CRB {bound:.2e} (σ_MC/CRB {:.2}); output error mean error {oem_mean:.2e}, RMS error {oem_rms:.2e} = {:.1} of its CRB {oem_bound:.2e}, {:.1}× filter error's\n",
             spread / bound,
             oem_rms / oem_bound,
             oem_rms / rms
