@@ -81,7 +81,8 @@
 //! the equation-error estimates, finding it sensitive to its start), else the model file's values. The initial
 //! state is the record's first sample (the filter corrects it, so it is not
 //! an unknown). R starts from the innovations with no process noise (the
-//! output-error residuals), F from a scale where the process noise over one
+//! output-error residuals; where that simulation departs, an unstable
+//! mode, from the measurements' variances), F from a scale where the process noise over one
 //! step equals the output residual level seen through C,
 //! F_ref,i = (Σ_j C_ji²/R_jj)^{−½}/√Δt, times the factor among 1, 0.3,
 //! 0.1, 0.03, 0.01 with the lowest cost ½·Σ N_o·ln R_oo after two R
@@ -534,6 +535,27 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         )
     }
 
+    /// Each output's variance about its mean over its measurements (a
+    /// floor of 10⁻¹² of its mean square), the start of R when the model
+    /// cannot be simulated without the filter.
+    fn measured_variances(&self) -> DVector<f64> {
+        let count = self.model.output_count();
+        let mut sums = vec![(0.0, 0.0, 0usize); count];
+        for (&o, &z) in self.outputs.iter().zip(&self.measured) {
+            sums[o].0 += z;
+            sums[o].1 += z * z;
+            sums[o].2 += 1;
+        }
+        DVector::from_iterator(
+            count,
+            sums.iter().map(|&(sum, square, n)| {
+                let n = n.max(1) as f64;
+                let mean_square = square / n;
+                (mean_square - (sum / n).powi(2)).max(1e-12 * mean_square.max(1e-300))
+            }),
+        )
+    }
+
     /// ½·Σ_o N_o·ln R_oo: the likelihood with R estimated, up to a constant.
     fn determinant_cost(&self) -> f64 {
         let mut counts = vec![0usize; self.model.output_count()];
@@ -571,12 +593,23 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// and the factor chosen.
     fn start(&mut self, theta: &DVector<f64>) -> Result<(DVector<f64>, f64)> {
         let zero = DVector::zeros(self.model.state_count());
-        let simulation = self.pass(&self.join(theta, &zero))?;
-        self.variances = self.variances_of(&simulation);
+        match self.pass(&self.join(theta, &zero)) {
+            Ok(simulation) => self.variances = self.variances_of(&simulation),
+            // A simulation that departs (an unstable mode) is no reason to
+            // give up a filter that would hold it: R starts from the
+            // measurements' own variances.
+            Err(_) if !self.noisy.is_empty() => self.variances = self.measured_variances(),
+            Err(error) => return Err(error),
+        }
         if self.noisy.is_empty() {
             return Ok((self.join(theta, &zero), 0.0));
         }
-        let reference = self.reference_distribution(&simulation.output_matrix);
+        let start = self.model.time(0);
+        let c = self
+            .model
+            .jacobians(start, self.initial.as_slice(), theta.as_slice())?
+            .outputs_by_state;
+        let reference = self.reference_distribution(&c);
         let simulated = self.variances.clone();
         let mut best: Option<(f64, f64, DVector<f64>)> = None;
         let mut failure = None;
