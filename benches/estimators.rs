@@ -7,10 +7,13 @@
 //! from the model file's a-priori values instead. `ebm_smoother_pass` is
 //! one EKF + modified Bryson–Frazier pass of estimation before modelling
 //! over the same record (28 states, 1501 points), `ebm` that pass and the
-//! regression. Run:
+//! regression. `filter_error` is the filter error method's default fit of
+//! the same record (from equation error's estimates, their cost included).
+//! Run:
 //! `cargo bench --bench estimators`.
 
 use aeroid::estimation::methods::equation_error::equation_error;
+use aeroid::estimation::methods::filter_error::{FilterErrorOptions, filter_error};
 use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
 use aeroid::estimation::methods::smoothed_regression::{
     SmoothedRegressionSettings, smooth, smooth_and_regress,
@@ -38,6 +41,10 @@ fn bench_fits(c: &mut Criterion) {
     };
     group.bench_function("output_error_from_model_file", |b| {
         b.iter(|| output_error(&[black_box(&record)], &structure, &from_file).unwrap())
+    });
+    let filter = FilterErrorOptions::for_structure(&structure).expect("model settings");
+    group.bench_function("filter_error", |b| {
+        b.iter(|| filter_error(black_box(&record), &structure, &filter).unwrap())
     });
     group.bench_function("equation_error", |b| {
         b.iter(|| equation_error(black_box(&record), &structure, &Default::default()).unwrap())

@@ -6,6 +6,7 @@
 //! own with [`register`].
 
 pub mod equation_error;
+pub mod filter_error;
 pub mod output_error;
 pub mod smoothed_regression;
 pub mod stepwise;
@@ -23,6 +24,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(stepwise::StepwiseRegression),
         Arc::new(output_error::OutputError),
         Arc::new(smoothed_regression::SmoothedRegression),
+        Arc::new(filter_error::FilterError),
     ]
 }
 

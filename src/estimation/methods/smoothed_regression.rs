@@ -302,6 +302,7 @@ impl Estimator for SmoothedRegression {
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         let settings = SmoothedRegressionSettings::read(&problem.settings)?;
+        crate::estimation::estimator::one_record(METHOD, problem)?;
         let started = std::time::Instant::now();
         let (smoothed, mut estimate) =
             smooth_and_regress(problem.record(), &problem.structure, &settings)?;

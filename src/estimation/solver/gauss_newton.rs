@@ -6,7 +6,8 @@
 //! the information matrix is `M = Σ Jᵀ·R⁻¹·J` (Verma & Peyada 2020, Eqs. 5–10; the ELM + Gauss–Newton paper
 //! Eqs. 14–22; Jategaonkar, "Flight Vehicle System Identification", §4.5).
 //!
-//! Each iteration: the problem may re-weight (output error re-estimates R),
+//! Each iteration: the problem may re-weight (output error re-estimates R;
+//! filter error also compensates its process noise for the new R),
 //! the normal equations Jᵀr and JᵀJ are formed (from the Jacobian,
 //! analytic if the problem gives it, else by finite differences with a
 //! documented relative step; or directly by a problem that knows a cheaper
@@ -41,6 +42,18 @@ pub trait LeastSquaresProblem {
     /// R) does so here. Returns true when the weights changed.
     fn reweight(&mut self, _theta: &DVector<f64>) -> Result<bool, String> {
         Ok(false)
+    }
+
+    /// Called after a [`LeastSquaresProblem::reweight`] that changed the
+    /// weights, for a problem whose parameters are tied to them (filter
+    /// error: the process-noise matrix F is scaled with the change of the
+    /// innovation covariance R, Jategaonkar, "Flight Vehicle System
+    /// Identification", Eq. 5.41, so that the filter's gain, which depends
+    /// on both, stays near where it was): the parameters to continue from,
+    /// or None to keep θ. Also called after the last re-weighting at the
+    /// solution, so the solution's θ is consistent with its weights.
+    fn compensate(&mut self, _theta: &DVector<f64>) -> Option<DVector<f64>> {
+        None
     }
 
     /// For a problem whose Jacobian is an approximation it can make exact
@@ -306,6 +319,7 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
     for _ in 0..options.max_iterations {
         let evaluated = problem
             .reweight(&theta)
+            .map(|changed| compensate(problem, &mut theta, changed, options))
             .and_then(|_| problem.residuals(&theta))
             .and_then(|r| finite_cost(&r).map(|cost| (r, cost)))
             .and_then(|(r, cost)| {
@@ -414,6 +428,20 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
     refine(problem, &mut held);
     problem.release();
     finish(problem, theta, history, Status::IterationLimit, options)
+}
+
+/// After a re-weighting that `changed` the weights, moves θ where the
+/// problem's [`LeastSquaresProblem::compensate`] says (within the bounds).
+fn compensate<P: LeastSquaresProblem + ?Sized>(
+    problem: &mut P,
+    theta: &mut DVector<f64>,
+    changed: bool,
+    options: &Options,
+) {
+    if let Some(compensated) = changed.then(|| problem.compensate(theta)).flatten() {
+        *theta = compensated;
+        options.project(theta);
+    }
 }
 
 /// Asks the problem to refine its Jacobian; a refinement releases a held
@@ -532,13 +560,14 @@ fn solve_symmetric(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
 
 fn finish<P: LeastSquaresProblem + ?Sized>(
     problem: &mut P,
-    theta: DVector<f64>,
+    mut theta: DVector<f64>,
     history: Vec<Iteration>,
     status: Status,
     options: &Options,
 ) -> Solution {
     let evaluated = problem
         .reweight(&theta)
+        .map(|changed| compensate(problem, &mut theta, changed, options))
         .and_then(|_| problem.residuals(&theta))
         .and_then(|r| {
             let normal = problem.normal_equations(&theta, &r, options)?;

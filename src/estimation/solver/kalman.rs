@@ -272,6 +272,96 @@ pub fn steady_state(
     ))
 }
 
+/// Newton iterations of [`steady_state_for_innovation`] before it gives up.
+const NEWTON_LIMIT: usize = 50;
+
+/// The steady state of a time-invariant filter whose innovation
+/// covariance is given (the filter error method's R, Jategaonkar §5.3,
+/// where R is estimated from the innovations and the measurement noise is
+/// what is left of it, G·Gᵀ = R − H·P·Hᵀ, Eq. 5.13): the predicted
+/// covariance P solving P = Φ·(P − P·Hᵀ·S⁻¹·H·P)·Φᵀ + Q_d, the gain
+/// K = P·Hᵀ·S⁻¹, and the measurement noise V = S − H·P·Hᵀ it implies.
+/// This P is the steady state of the ordinary filter ([`steady_state`])
+/// with measurement noise V, whose innovation covariance is then S.
+///
+/// Solved by Newton's method on the matrix equation, from the steady state
+/// with measurement noise S (whose P bounds the solution from above): the
+/// derivative in the direction X is Φ·(L·X·Lᵀ − M·X·Mᵀ)·Φᵀ − X with
+/// M = K·H and L = I − M, solved as an n²-dimensional linear system
+/// (Kronecker form), until the equation's residual is below 10⁻¹³ of P.
+/// An error when no such steady state exists: the iteration does not
+/// converge, the filter is not stable, or V is not positive definite (an
+/// eigenvalue of K·H at or above 1: process noise too large for S).
+pub fn steady_state_for_innovation(
+    transition: &DMatrix<f64>,
+    observation: &DMatrix<f64>,
+    process_noise: &DMatrix<f64>,
+    innovation: &DMatrix<f64>,
+) -> Result<(SteadyState, DMatrix<f64>)> {
+    let n = transition.nrows();
+    let innovation_inverse = Cholesky::new(innovation.clone())
+        .ok_or_else(|| Error::Other("the innovation covariance R is not positive definite".into()))?
+        .inverse();
+    let weight = observation.transpose() * &innovation_inverse * observation;
+    let identity = DMatrix::<f64>::identity(n, n);
+    let residual_of = |p: &DMatrix<f64>| {
+        transition * (p - p * &weight * p) * transition.transpose() + process_noise - p
+    };
+    let mut p = steady_state(transition, observation, process_noise, innovation)?.covariance;
+    let mut residual = residual_of(&p);
+    let mut converged = false;
+    for _ in 0..NEWTON_LIMIT {
+        if residual.norm() <= 1e-13 * p.norm().max(f64::MIN_POSITIVE) {
+            converged = true;
+            break;
+        }
+        let m = &p * &weight;
+        let left = transition * (&identity - &m);
+        let right = transition * &m;
+        let jacobian = left.kronecker(&left)
+            - right.kronecker(&right)
+            - DMatrix::<f64>::identity(n * n, n * n);
+        let rhs = DVector::from_column_slice((-&residual).as_slice());
+        let Some(step) = jacobian.lu().solve(&rhs) else {
+            break;
+        };
+        let step = DMatrix::from_column_slice(n, n, step.as_slice());
+        let next = &p + (&step + step.transpose()) * 0.5;
+        if !next.iter().all(|v| v.is_finite()) {
+            break;
+        }
+        p = next;
+        residual = residual_of(&p);
+    }
+    let refuse = |why: &str| {
+        Err(Error::Other(format!(
+            "no steady-state filter has this innovation covariance: {why}"
+        )))
+    };
+    if !converged {
+        return refuse("the Riccati equation's Newton iteration did not converge");
+    }
+    let gain = &p * observation.transpose() * &innovation_inverse;
+    let noise = innovation - observation * &p * observation.transpose();
+    let noise = (&noise + noise.transpose()) * 0.5;
+    if Cholesky::new(noise.clone()).is_none() {
+        return refuse(
+            "the measurement noise R − H·P·Hᵀ is not positive definite (K·H has an eigenvalue at or above 1)",
+        );
+    }
+    if !is_stable(transition * (&identity - &gain * observation)) {
+        return refuse("the filter it defines is not stable");
+    }
+    Ok((
+        SteadyState {
+            covariance: p,
+            gain,
+            innovation_covariance: innovation.clone(),
+        },
+        noise,
+    ))
+}
+
 /// Whether every eigenvalue of a transition matrix lies inside the unit
 /// circle: its 2³⁰th power (by squaring) vanishes.
 fn is_stable(mut matrix: DMatrix<f64>) -> bool {
@@ -579,6 +669,33 @@ mod tests {
         }
         let predicted = predict_covariance(&covariance, &d.transition, &d.process_noise);
         assert_close(&predicted, p, 1e-10, "limit of the filter");
+    }
+
+    /// The steady state with a given innovation covariance S: P solves
+    /// its Riccati equation, and it is the ordinary steady state with the
+    /// measurement noise it implies, whose innovation covariance is S (to
+    /// 1e-10: the two solvers' tolerances, 1e-13 and 1e-14 of P, after
+    /// rounding). An S smaller than the process noise allows is refused.
+    #[test]
+    fn steady_state_for_an_innovation_covariance_is_the_ordinary_one_with_its_noise() {
+        let (a, b) = system();
+        let noise = DMatrix::from_diagonal(&DVector::from_vec(vec![0.3, 2.0, 0.01]));
+        let d = discretise(&a, &b, Some(&noise), 0.04);
+        let h = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+        let s = DMatrix::from_diagonal(&DVector::from_vec(vec![0.02, 4e-3]));
+        let (steady, v) =
+            steady_state_for_innovation(&d.transition, &h, &d.process_noise, &s).unwrap();
+        let p = &steady.covariance;
+        let weight = h.transpose() * s.clone().try_inverse().unwrap() * &h;
+        let residual =
+            &d.transition * (p - p * &weight * p) * d.transition.transpose() + &d.process_noise - p;
+        assert!(residual.norm() <= 1e-12 * p.norm(), "{residual}");
+        let ordinary = steady_state(&d.transition, &h, &d.process_noise, &v).unwrap();
+        assert_close(&ordinary.covariance, p, 1e-10, "P");
+        assert_close(&ordinary.innovation_covariance, &s, 1e-10, "S");
+        assert_close(&ordinary.gain, &steady.gain, 1e-10, "K");
+        let small = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-6, 1e-7]));
+        assert!(steady_state_for_innovation(&d.transition, &h, &d.process_noise, &small).is_err());
     }
 
     #[test]

@@ -1,0 +1,1029 @@
+//! Filter error, maximum likelihood with a Kalman filter in the loop
+//! (Maine & Iliff, "Identification of dynamic systems", NASA RP-1138,
+//! 1985, ch. 9; Jategaonkar, "Flight Vehicle System Identification",
+//! 2nd ed., ch. 5; the seed paper 002 uses it as its comparison method).
+//! The equation numbers are Jategaonkar's as his FVSysID programs
+//! (`gainmat`, `fcompn`) cite them; elsewhere the sections are named.
+//! Output error assumes that the only noise is on the measurements; with
+//! turbulence (process noise) its simulation drifts away from the flight
+//! and its estimates are biased. The filter error method predicts each
+//! sample from the filtered state of the one before, so the innovations
+//! stay white and the likelihood is the right one for both noises.
+//!
+//! System (Jategaonkar §5.1): ẋ = f(x, u, θ) + F·w,
+//! z_k = h(x_k, u_k, θ) + G·v_k, w and v white with unit intensity, F
+//! diagonal with one entry per state driven by noise (the
+//! `process_noise` states), estimated with the aerodynamic parameters.
+//!
+//! Filter (the steady-state extended filter, Jategaonkar §5.5):
+//! - prediction by the nonlinear model's own integration step
+//!   ([`StateSpaceModel::step`]): x̃_k = step(x̂_{k−1}), ỹ_k = h(x̃_k);
+//! - correction x̂_k = x̃_k + K·(z_k − ỹ_k) with a constant gain K;
+//! - K = P·Cᵀ·R⁻¹ (Eq. 5.48), R the covariance of the innovations
+//!   ν = z − ỹ (so the measurement noise is G·Gᵀ = R − C·P·Cᵀ, §5.3),
+//!   P the steady-state predicted covariance of the system linearised, as
+//!   FVSysID's `gainmat` does, at the first grid point (t₀, x₀, u(t₀)) of
+//!   the record (A = ∂f/∂x, C = ∂h/∂x there, Eqs. 5.50–5.51).
+//!   P solves the discrete Riccati equation
+//!   P = Φ·(P − P·Cᵀ·R⁻¹·C·P)·Φᵀ + Q_d, Φ = e^{A·Δt}, Q_d the process noise
+//!   F·Fᵀ discretised (Van Loan), solved exactly
+//!   ([`kalman::steady_state_for_innovation`]: Newton's method started
+//!   from [`kalman::steady_state`]). Jategaonkar (§5.3, and
+//!   `gainmat` by Potter's method, Eqs. 5.15–5.17) solves the continuous equation
+//!   A·P + P·Aᵀ − P·Cᵀ·R⁻¹·C·P/Δt + F·Fᵀ = 0 instead, its first-order
+//!   approximation in Δt; the exact discrete form makes the filter, on a
+//!   linear model, the linear Kalman filter of that system exactly, which
+//!   `tests/filter_error.rs` checks against an independent filter.
+//!   On a multi-rate record a grid point with only some outputs corrects
+//!   with those outputs' columns of K.
+//!
+//! Cost and relaxation (Jategaonkar §5.3): the negative
+//! log-likelihood of the innovations, ½·Σ_k (ν_kᵀR⁻¹ν_k + ln det R),
+//! minimised by relaxation: at every iteration R is re-estimated from the
+//! innovations at the current (θ, F), R = (1/N)·Σ ν·νᵀ (diagonal, as output
+//! error's: the channels may have different time bases), then one
+//! Gauss–Newton step on ½·Σ νᵀR⁻¹ν with R fixed is taken on θ and F
+//! together, by the shared core ([`gauss_newton`]). After each R update F
+//! is compensated by the heuristic of Jategaonkar Eq. 5.41 as FVSysID's
+//! `fcompn` codes it: F_ii ← F_ii·Σ_j C_ji²·R_jj,old⁻¹·√(R_jj,new/R_jj,old)
+//! / Σ_j C_ji²·R_jj,old⁻¹, so that the gain, which depends on both, does
+//! not jump with R ([`LeastSquaresProblem::compensate`]).
+//! Constraint (Jategaonkar §5.3): the diagonal of K·C must stay ≤ 1. A
+//! step that violates it, or for which no steady-state filter with the
+//! current R exists (R − C·P·Cᵀ not positive definite, an eigenvalue of
+//! K·C at or above 1), cannot be evaluated, and the solver cuts it
+//! (halvings, then Levenberg–Marquardt damping) until it is feasible;
+//! Jategaonkar instead solves the step as a constrained quadratic
+//! program. A compensated F that violates it is halved until it does not;
+//! when no F gives a filter with the new R (an unstable mode needs more
+//! gain than R's measurement-noise share allows), the R update is undone
+//! for that iteration.
+//!
+//! Sensitivities: by forward differences of whole filter passes (each
+//! perturbed θ or F gets its own linearisation, Riccati solution and gain,
+//! as FVSysID perturbs the gain with the parameters; one pass per unknown,
+//! half the cost of central differences, for a Jacobian within ~10⁻⁶
+//! relative), with the shared core's relative step 10⁻⁶·max(|θ_j|,
+//! typical_j) (typical 10⁻³ for an aerodynamic parameter, a tenth of the
+//! start value for an F entry); where the forward pass is infeasible (an
+//! iterate on the constraint), the backward difference
+//! ([`LeastSquaresProblem::jacobian`]; the core's default is central
+//! differences). Cramér–Rao bounds are the square roots of
+//! the diagonal of M⁻¹, M = Σ (∂ν/∂θ)ᵀ R⁻¹ (∂ν/∂θ) at the optimum, the F
+//! entries among the unknowns; only the aerodynamic parameters (with the
+//! aerodynamic block of M⁻¹) are the estimate's parameters, scored against
+//! the truth; F with its bounds is in the notes and details.
+//! Convergence: the Gauss–Newton step's predicted decrease of the whitened
+//! cost below 10⁻⁴ (a step under 0.014σ), as output error.
+//!
+//! Start: the aerodynamic parameters from equation error's estimate (as
+//! output error; the seed paper 002 starts its filter error method near
+//! the equation-error estimates, finding it sensitive to its start), else the model file's values. The initial
+//! state is the record's first sample (the filter corrects it, so it is not
+//! an unknown). R starts from the innovations with no process noise (the
+//! output-error residuals; where that simulation departs, an unstable
+//! mode, from the measurements' variances), F from a scale where the process noise over one
+//! step equals the output residual level seen through C,
+//! F_ref,i = (Σ_j C_ji²/R_jj)^{−½}/√Δt, times the factor among 1, 0.3,
+//! 0.1, 0.03, 0.01 with the lowest cost ½·Σ N_o·ln R_oo after two R
+//! updates.
+
+use crate::error::{Error, Result};
+use crate::estimation::estimate::{Estimate, OutputFit, Status};
+use crate::estimation::estimator::{
+    Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
+};
+use crate::estimation::methods::equation_error::{
+    self, EquationErrorOptions, EquationErrorSettings, equation_error,
+};
+use crate::estimation::methods::output_error::{self, Start};
+use crate::estimation::model::observations::Observations;
+use crate::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
+use crate::estimation::problem::EstimationProblem;
+use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options};
+use crate::estimation::solver::kalman::{self, SteadyState};
+use crate::estimation::structure::ModelStructure;
+use crate::record::FlightRecord;
+use crate::sim::integrator::Interpolation;
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// Method name in estimates.
+pub const METHOD: &str = "fem";
+
+/// Convergence: the Gauss–Newton step's predicted decrease of the whitened
+/// cost, ½·ΔθᵀMΔθ ≤ 1e-4, a step under 0.014σ (as output error).
+const CONVERGED_DECREASE: f64 = 1e-4;
+
+/// The factors of F_ref tried for the start of F (module documentation).
+const START_FACTORS: [f64; 5] = [1.0, 0.3, 0.1, 0.03, 0.01];
+
+/// States that are not driven by process noise by default: attitude,
+/// heading and altitude are kinematic integrals, χ is internal.
+const NOISELESS_STATES: [&str; 5] = ["roll", "pitch", "yaw", "altitude", "chi"];
+
+/// Settings of a filter-error run: the `[methods.fem]` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FilterErrorOptions {
+    pub start: Start,
+    pub max_iterations: usize,
+    /// Integration step (s); None: the fastest compared channel's period.
+    #[serde(
+        deserialize_with = "crate::units::optional_seconds",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub step: Option<f64>,
+    /// How the inputs are interpolated inside an integration step.
+    pub interpolation: Interpolation,
+    /// The integrated states driven by process noise (one F entry each);
+    /// None: every integrated state but roll, pitch, yaw, altitude and χ.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub process_noise: Option<Vec<String>>,
+    /// Fit only this time window (s) of the record; default the whole record.
+    #[serde(skip)]
+    pub window: Option<(f64, f64)>,
+}
+
+impl Default for FilterErrorOptions {
+    fn default() -> Self {
+        FilterErrorOptions {
+            start: Start::default(),
+            max_iterations: 30,
+            step: None,
+            interpolation: Interpolation::default(),
+            process_noise: None,
+            window: None,
+        }
+    }
+}
+
+impl FilterErrorOptions {
+    /// Reads and checks a `[methods.fem]` table.
+    pub fn read(settings: &Settings) -> Result<FilterErrorOptions> {
+        let options: FilterErrorOptions = parse_settings(METHOD, settings)?;
+        if options
+            .step
+            .is_some_and(|step| !(step > 0.0 && step.is_finite()))
+        {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: step must be positive"
+            )));
+        }
+        if options.max_iterations == 0 {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: max_iterations must be at least 1"
+            )));
+        }
+        Ok(options)
+    }
+
+    /// The options a model file's `[methods.fem]` table sets.
+    pub fn for_structure(structure: &ModelStructure) -> Result<FilterErrorOptions> {
+        FilterErrorOptions::read(&merge_settings(METHOD, &[&structure.methods]))
+    }
+}
+
+/// Filter error as a registered method.
+pub struct FilterError;
+
+impl Estimator for FilterError {
+    fn name(&self) -> &'static str {
+        METHOD
+    }
+
+    fn info(&self) -> MethodInfo {
+        MethodInfo {
+            title: "filter error: maximum likelihood with a steady-state extended Kalman filter in the loop, for flights with turbulence",
+            paper: "Maine & Iliff, \"Identification of dynamic systems\" (NASA RP-1138, 1985); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 5",
+            equations: "innovations ν = z − ỹ of x̃_k = step(x̂_{k−1}), x̂ = x̃ + K·ν, K = P·Cᵀ·R⁻¹ (Jategaonkar §5.5, Eq. 5.48), P from the discrete Riccati equation of the model linearised at the first point; cost ½·Σ(νᵀR⁻¹ν + ln det R), R = (1/N)·Σ ν·νᵀ, Gauss–Newton on θ and F with R fixed, F compensated after each R update (Eq. 5.41), diag(K·C) ≤ 1 (§5.3); Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ)",
+            needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
+            settings: setting_infos(
+                &FilterErrorOptions::default(),
+                &[
+                    (
+                        "start",
+                        "\"ee\": equation error's estimates where they converge; \"model\": the model file's values",
+                    ),
+                    ("max_iterations", "Gauss–Newton iterations at most"),
+                    (
+                        "step",
+                        "integration step, e.g. \"0.04 s\"; none: the fastest compared channel's period",
+                    ),
+                    (
+                        "interpolation",
+                        "inputs inside an integration step: \"zoh\" (hold) or \"linear\"",
+                    ),
+                    (
+                        "process_noise",
+                        "the integrated states driven by process noise, one F entry each; none: all but roll, pitch, yaw, altitude and chi",
+                    ),
+                ],
+            ),
+        }
+    }
+
+    fn check_settings(&self, settings: &Settings) -> Result<()> {
+        FilterErrorOptions::read(settings).map(|_| ())
+    }
+
+    fn starts_from(&self) -> Option<&'static str> {
+        Some(equation_error::METHOD)
+    }
+
+    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
+        let options = FilterErrorOptions::read(&problem.settings)?;
+        crate::estimation::estimator::one_record(METHOD, problem)?;
+        filter_error_from(problem.record(), &problem.structure, &options, start)
+    }
+}
+
+/// What one steady-state filter pass gives.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SteadyPass {
+    /// ν = z − ỹ at every measurement, in the observations' order (grid
+    /// point after grid point, each point's outputs as listed there).
+    pub innovations: Vec<f64>,
+    /// ỹ at every measurement, in the same order.
+    pub predicted: Vec<f64>,
+    /// ½·Σ_k (ν_kᵀR⁻¹ν_k + ln det R) over the measurements (without 2π).
+    pub negative_log_likelihood: f64,
+    /// P, K and R of the filter.
+    pub steady: SteadyState,
+    /// G·Gᵀ = R − C·P·Cᵀ.
+    pub measurement_noise: DMatrix<f64>,
+    /// C = ∂h/∂x at the first grid point, where the gain was computed.
+    pub output_matrix: DMatrix<f64>,
+}
+
+/// One pass of the steady-state filter (module documentation) over
+/// `observations` on the model's grid, from `initial` at grid point 0,
+/// with parameters `theta`, process-noise distribution F = diag(`distribution`)
+/// (one entry per state, zero for a state without noise) and innovation
+/// covariance R = diag(`variances`), one per output. With no process noise
+/// the gain is zero and the pass is the model's simulation. An error when
+/// the model cannot be evaluated, no steady-state filter has this R, or
+/// the constraint diag(K·C) ≤ 1 is violated.
+pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
+    model: &M,
+    theta: &[f64],
+    initial: &DVector<f64>,
+    distribution: &DVector<f64>,
+    variances: &DVector<f64>,
+    observations: &Observations,
+) -> Result<SteadyPass> {
+    let (n, outputs) = (model.state_count(), model.output_count());
+    if initial.len() != n
+        || distribution.len() != n
+        || variances.len() != outputs
+        || observations.at.len() != model.len()
+        || model.len() < 2
+    {
+        return Err(Error::Other(format!(
+            "the filter's sizes do not agree: {n} states, {outputs} outputs on {} grid points; initial state of {}, {} F entries, {} variances, observations on {} points",
+            model.len(),
+            initial.len(),
+            distribution.len(),
+            variances.len(),
+            observations.at.len()
+        )));
+    }
+    if !variances.iter().all(|v| *v > 0.0 && v.is_finite()) {
+        return Err(Error::Other(
+            "the innovation variances must be positive and finite".into(),
+        ));
+    }
+    let start = model.time(0);
+    let jacobians = model.jacobians(start, initial.as_slice(), theta)?;
+    let c = jacobians.outputs_by_state;
+    let r = DMatrix::from_diagonal(variances);
+    let (steady, measurement_noise) = if distribution.iter().all(|f| *f == 0.0) {
+        let steady = SteadyState {
+            covariance: DMatrix::zeros(n, n),
+            gain: DMatrix::zeros(n, outputs),
+            innovation_covariance: r.clone(),
+        };
+        (steady, r)
+    } else {
+        let spectral = DMatrix::from_diagonal(&distribution.map(|f| f * f));
+        let discrete = kalman::discretise(
+            &jacobians.rates_by_state,
+            &DMatrix::zeros(n, 0),
+            Some(&spectral),
+            model.time(1) - start,
+        );
+        kalman::steady_state_for_innovation(&discrete.transition, &c, &discrete.process_noise, &r)?
+    };
+    let kc = &steady.gain * &c;
+    if let Some(i) = (0..n).find(|&i| kc[(i, i)] > 1.0) {
+        return Err(Error::Other(format!(
+            "the gain violates diag(K·C) ≤ 1 (Jategaonkar §5.3): entry {i} is {:.4}",
+            kc[(i, i)]
+        )));
+    }
+    let log_variances = variances.map(f64::ln);
+    let count: usize = observations.at.iter().map(Vec::len).sum();
+    let mut pass = SteadyPass {
+        innovations: Vec::with_capacity(count),
+        predicted: Vec::with_capacity(count),
+        negative_log_likelihood: 0.0,
+        steady,
+        measurement_noise,
+        output_matrix: c,
+    };
+    let mut state = initial.clone();
+    for (k, present) in observations.at.iter().enumerate() {
+        if k > 0 {
+            state = model
+                .step(k - 1, state.as_slice(), theta)
+                .map_err(|e| at_time(e, model.time(k - 1)))?;
+        }
+        if present.is_empty() {
+            continue;
+        }
+        let t = model.time(k);
+        let predicted = model.outputs(t, state.as_slice(), theta)?;
+        for &(o, z) in present {
+            let innovation = z - predicted[o];
+            pass.innovations.push(innovation);
+            pass.predicted.push(predicted[o]);
+            pass.negative_log_likelihood +=
+                0.5 * (innovation * innovation / variances[o] + log_variances[o]);
+            state.axpy(innovation, &pass.steady.gain.column(o), 1.0);
+        }
+        if !state.iter().all(|v| v.is_finite()) {
+            return Err(Error::Other(format!(
+                "the filter's state went non-finite at t = {t} s"
+            )));
+        }
+    }
+    Ok(pass)
+}
+
+fn at_time(error: Error, t: f64) -> Error {
+    Error::Other(format!("at t = {t} s: {error}"))
+}
+
+/// A filter-error fit of any state-space model: its unknowns are the free
+/// entries of θ followed by the F entries of the noisy states.
+pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
+    model: &'a M,
+    observations: &'a Observations,
+    initial: DVector<f64>,
+    /// Every parameter of the model (the fixed ones at their values).
+    theta: DVector<f64>,
+    /// The indices of the estimated parameters in θ.
+    free: Vec<usize>,
+    /// The states driven by process noise (indices into x).
+    noisy: Vec<usize>,
+    /// The output of each measurement, in the observations' order.
+    outputs: Vec<usize>,
+    /// The measured values, in the same order.
+    measured: Vec<f64>,
+    /// R = diag(variances), the current innovation covariance.
+    variances: DVector<f64>,
+    /// R before the last update and the C of that update's pass, for the
+    /// compensation of F.
+    previous: Option<(DVector<f64>, DMatrix<f64>)>,
+    /// F_ref of each F entry at the start: an entry below [`COLLAPSED`] of
+    /// it is zero (see [`FilterErrorFit::split`]).
+    scale: Vec<f64>,
+}
+
+/// The fraction of F_ref (module documentation) below which an F entry is
+/// taken as zero. F enters only through F² (Q = F·Fᵀ), so F = 0 is where
+/// the likelihood's derivative in F vanishes, and where the data want no
+/// process noise on a state the Gauss–Newton step, linear in F, keeps
+/// predicting a decrease from F² below zero that it cannot realise: F only
+/// halves at each iteration. An entry at 10⁻³ of F_ref puts a process
+/// noise of 10⁻⁶ of the residual level into each step (a gain of order
+/// 10⁻³); set to zero, its column of the Jacobian is zero and the solver's
+/// SVD leaves it out, so it no longer holds up convergence (its bound is
+/// then infinite: no process noise found on that state).
+const COLLAPSED: f64 = 1e-3;
+
+/// What a filter-error fit returns.
+#[derive(Debug, Clone)]
+pub struct FitResult {
+    pub solution: gauss_newton::Solution,
+    /// The unknowns where the iterations started.
+    pub start: DVector<f64>,
+    /// R = diag(variances) at the solution.
+    pub variances: DVector<f64>,
+    /// The pass at the solution (None when it cannot be evaluated).
+    pub pass: Option<SteadyPass>,
+    /// The start factor of F_ref chosen (module documentation).
+    pub start_factor: f64,
+}
+
+impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
+    /// A fit of `model` to `observations` from `initial`, with `theta`
+    /// (every parameter; `free` says which are estimated) and F entries
+    /// for the states `noisy` (none: output error, the filter being the
+    /// simulation).
+    pub fn new(
+        model: &'a M,
+        observations: &'a Observations,
+        initial: DVector<f64>,
+        theta: DVector<f64>,
+        free: Vec<usize>,
+        noisy: Vec<usize>,
+    ) -> Result<Self> {
+        let (n, parameters) = (model.state_count(), model.parameter_count());
+        if theta.len() != parameters
+            || free.iter().any(|&i| i >= parameters)
+            || noisy.iter().any(|&i| i >= n)
+        {
+            return Err(Error::Other(
+                "a filter-error fit's parameters or noisy states do not match the model".into(),
+            ));
+        }
+        let (outputs, measured) = observations.at.iter().flatten().copied().unzip();
+        Ok(FilterErrorFit {
+            model,
+            observations,
+            initial,
+            theta,
+            free,
+            noisy,
+            outputs,
+            measured,
+            variances: DVector::from_element(model.output_count(), 1.0),
+            previous: None,
+            scale: Vec::new(),
+        })
+    }
+
+    /// The unknowns' count: free parameters and F entries.
+    fn unknown_count(&self) -> usize {
+        self.free.len() + self.noisy.len()
+    }
+
+    /// θ and the F diagonal of the unknowns u.
+    fn split(&self, unknowns: &DVector<f64>) -> (DVector<f64>, DVector<f64>) {
+        let mut theta = self.theta.clone();
+        for (j, &i) in self.free.iter().enumerate() {
+            theta[i] = unknowns[j];
+        }
+        let mut distribution = DVector::zeros(self.model.state_count());
+        for (j, &i) in self.noisy.iter().enumerate() {
+            let value = unknowns[self.free.len() + j];
+            let scale = self.scale.get(j).copied().unwrap_or(0.0);
+            distribution[i] = if value.abs() < COLLAPSED * scale {
+                0.0
+            } else {
+                value
+            };
+        }
+        (theta, distribution)
+    }
+
+    /// The unknowns of θ and F.
+    fn join(&self, theta: &DVector<f64>, distribution: &DVector<f64>) -> DVector<f64> {
+        DVector::from_iterator(
+            self.unknown_count(),
+            self.free
+                .iter()
+                .map(|&i| theta[i])
+                .chain(self.noisy.iter().map(|&i| distribution[i])),
+        )
+    }
+
+    /// The filter pass at the unknowns u with the current R.
+    pub fn pass(&self, unknowns: &DVector<f64>) -> Result<SteadyPass> {
+        let (theta, distribution) = self.split(unknowns);
+        steady_state_pass(
+            self.model,
+            theta.as_slice(),
+            &self.initial,
+            &distribution,
+            &self.variances,
+            self.observations,
+        )
+    }
+
+    /// The diagonal R of a pass's innovations: each output's mean square,
+    /// floored at 10⁻²⁴ of its measurements' mean square so that a
+    /// noise-free fit stays finite.
+    fn variances_of(&self, pass: &SteadyPass) -> DVector<f64> {
+        let count = self.model.output_count();
+        let mut sums = vec![(0.0, 0.0, 0usize); count];
+        for ((&o, &nu), &z) in self
+            .outputs
+            .iter()
+            .zip(&pass.innovations)
+            .zip(&self.measured)
+        {
+            sums[o].0 += nu * nu;
+            sums[o].1 += z * z;
+            sums[o].2 += 1;
+        }
+        DVector::from_iterator(
+            count,
+            sums.iter().map(|&(innovations, measured, n)| {
+                let n = n.max(1) as f64;
+                (innovations / n).max(1e-24 * (measured / n).max(1e-300))
+            }),
+        )
+    }
+
+    /// Each output's variance about its mean over its measurements (a
+    /// floor of 10⁻¹² of its mean square), the start of R when the model
+    /// cannot be simulated without the filter.
+    fn measured_variances(&self) -> DVector<f64> {
+        let count = self.model.output_count();
+        let mut sums = vec![(0.0, 0.0, 0usize); count];
+        for (&o, &z) in self.outputs.iter().zip(&self.measured) {
+            sums[o].0 += z;
+            sums[o].1 += z * z;
+            sums[o].2 += 1;
+        }
+        DVector::from_iterator(
+            count,
+            sums.iter().map(|&(sum, square, n)| {
+                let n = n.max(1) as f64;
+                let mean_square = square / n;
+                (mean_square - (sum / n).powi(2)).max(1e-12 * mean_square.max(1e-300))
+            }),
+        )
+    }
+
+    /// ½·Σ_o N_o·ln R_oo: the likelihood with R estimated, up to a constant.
+    fn determinant_cost(&self) -> f64 {
+        let mut counts = vec![0usize; self.model.output_count()];
+        for &o in &self.outputs {
+            counts[o] += 1;
+        }
+        counts
+            .iter()
+            .zip(self.variances.iter())
+            .map(|(&n, r)| 0.5 * n as f64 * r.ln())
+            .sum()
+    }
+
+    /// F_ref (module documentation): the process noise whose one-step
+    /// spread equals the residual level seen through C = ∂h/∂x at the
+    /// first point.
+    fn reference_distribution(&self, c: &DMatrix<f64>) -> DVector<f64> {
+        let step = self.model.time(1) - self.model.time(0);
+        let mut reference = DVector::zeros(self.model.state_count());
+        for &i in &self.noisy {
+            let information: f64 = (0..c.nrows())
+                .map(|j| c[(j, i)] * c[(j, i)] / self.variances[j])
+                .sum();
+            reference[i] = if information > 0.0 {
+                1.0 / (information * step).sqrt()
+            } else {
+                1e-3
+            };
+        }
+        reference
+    }
+
+    /// Sets R from the innovations with no process noise at θ and chooses
+    /// the start of F (module documentation); returns the start unknowns
+    /// and the factor chosen.
+    fn start(&mut self, theta: &DVector<f64>) -> Result<(DVector<f64>, f64)> {
+        let zero = DVector::zeros(self.model.state_count());
+        match self.pass(&self.join(theta, &zero)) {
+            Ok(simulation) => self.variances = self.variances_of(&simulation),
+            // A simulation that departs (an unstable mode) is no reason to
+            // give up a filter that would hold it: R starts from the
+            // measurements' own variances.
+            Err(_) if !self.noisy.is_empty() => self.variances = self.measured_variances(),
+            Err(error) => return Err(error),
+        }
+        if self.noisy.is_empty() {
+            return Ok((self.join(theta, &zero), 0.0));
+        }
+        let start = self.model.time(0);
+        let c = self
+            .model
+            .jacobians(start, self.initial.as_slice(), theta.as_slice())?
+            .outputs_by_state;
+        let reference = self.reference_distribution(&c);
+        let simulated = self.variances.clone();
+        let mut best: Option<(f64, f64, DVector<f64>)> = None;
+        let mut failure = None;
+        for factor in START_FACTORS {
+            self.variances = simulated.clone();
+            let unknowns = self.join(theta, &(&reference * factor));
+            let relaxed = (0..2).try_for_each(|_| {
+                let pass = self.pass(&unknowns)?;
+                self.variances = self.variances_of(&pass);
+                Ok::<(), Error>(())
+            });
+            match relaxed.and_then(|_| self.pass(&unknowns)) {
+                Ok(_) => {
+                    let cost = self.determinant_cost();
+                    if best.as_ref().is_none_or(|(c, _, _)| cost < *c) {
+                        best = Some((cost, factor, self.variances.clone()));
+                    }
+                }
+                Err(error) => failure = Some(error),
+            }
+        }
+        match best {
+            Some((_, factor, variances)) => {
+                self.variances = variances;
+                Ok((self.join(theta, &(&reference * factor)), factor))
+            }
+            None => Err(failure.unwrap_or_else(|| Error::Other("no start for F".into()))),
+        }
+    }
+
+    /// Fits from `theta` (every parameter) with the solver `options`
+    /// (bounds of the free parameters; those of F are set here).
+    pub fn fit(&mut self, theta: &DVector<f64>, mut options: Options) -> Result<FitResult> {
+        let (start, start_factor) = self.start(theta)?;
+        let aero = self.free.len();
+        self.scale = start
+            .iter()
+            .skip(aero)
+            .map(|f| f.abs() / start_factor)
+            .collect();
+        // F enters only through F·Fᵀ: its sign means nothing, so it is not
+        // bounded (a bound at zero would project steps, which need not
+        // then descend); its magnitude is reported.
+        options.typical.resize(self.unknown_count(), 1e-3);
+        options
+            .bounds
+            .resize(self.unknown_count(), (f64::NEG_INFINITY, f64::INFINITY));
+        for j in aero..self.unknown_count() {
+            options.typical[j] = (0.1 * start[j]).max(f64::MIN_POSITIVE);
+        }
+        let solution = gauss_newton::solve(self, &start, &options);
+        let pass = self.pass(&solution.theta).ok();
+        Ok(FitResult {
+            solution,
+            start,
+            variances: self.variances.clone(),
+            pass,
+            start_factor,
+        })
+    }
+}
+
+impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> {
+    /// ν/√R_oo at every measurement.
+    fn residuals(&mut self, unknowns: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
+        let pass = self.pass(unknowns).map_err(|e| e.to_string())?;
+        let weights = self.variances.map(|v| 1.0 / v.sqrt());
+        Ok(DVector::from_iterator(
+            pass.innovations.len(),
+            pass.innovations
+                .iter()
+                .zip(&self.outputs)
+                .map(|(nu, &o)| nu * weights[o]),
+        ))
+    }
+
+    /// Forward differences of whole filter passes (module documentation);
+    /// where the forward pass is infeasible (an iterate on the constraint
+    /// diag(K·C) ≤ 1 or at the edge of the filters that exist with this
+    /// R), the backward difference.
+    fn jacobian(
+        &mut self,
+        unknowns: &DVector<f64>,
+        options: &Options,
+    ) -> std::result::Result<DMatrix<f64>, String> {
+        let here = self.residuals(unknowns)?;
+        let mut columns = Vec::with_capacity(unknowns.len());
+        for j in 0..unknowns.len() {
+            let typical = options.typical.get(j).copied().unwrap_or(1e-3);
+            let h = options.relative_step * unknowns[j].abs().max(typical);
+            let mut moved = unknowns.clone();
+            moved[j] += h;
+            let column = match self.residuals(&moved) {
+                Ok(forward) => (forward - &here) / h,
+                Err(_) => {
+                    moved[j] = unknowns[j] - h;
+                    (&here - self.residuals(&moved)?) / h
+                }
+            };
+            columns.push(column);
+        }
+        Ok(DMatrix::from_columns(&columns))
+    }
+
+    /// R = (1/N)·Σ ν·νᵀ (diagonal) at the current (θ, F).
+    fn reweight(&mut self, unknowns: &DVector<f64>) -> std::result::Result<bool, String> {
+        let pass = self.pass(unknowns).map_err(|e| e.to_string())?;
+        let variances = self.variances_of(&pass);
+        let changed = variances != self.variances;
+        let previous = std::mem::replace(&mut self.variances, variances);
+        self.previous = Some((previous, pass.output_matrix));
+        Ok(changed)
+    }
+
+    /// F compensated for the R update (Jategaonkar Eq. 5.41, FVSysID's
+    /// `fcompn`), then halved while the filter it gives is infeasible.
+    /// When no F gives a filter with the new R (an unstable mode needs a
+    /// gain that R's measurement-noise share cannot carry), the R update
+    /// is undone: the iteration goes on with the R before it.
+    fn compensate(&mut self, unknowns: &DVector<f64>) -> Option<DVector<f64>> {
+        let (old, c) = self.previous.take()?;
+        if self.noisy.is_empty() {
+            return None;
+        }
+        let mut compensated = unknowns.clone();
+        for (j, &i) in self.noisy.iter().enumerate() {
+            let (mut weighted, mut plain) = (0.0, 0.0);
+            for o in 0..c.nrows() {
+                let w = c[(o, i)] * c[(o, i)] / old[o];
+                weighted += w * (self.variances[o] / old[o]).sqrt();
+                plain += w;
+            }
+            if plain > 0.0 {
+                compensated[self.free.len() + j] *= weighted / plain;
+            }
+        }
+        for _ in 0..40 {
+            if self.pass(&compensated).is_ok() {
+                return Some(compensated);
+            }
+            for j in self.free.len()..compensated.len() {
+                compensated[j] *= 0.5;
+            }
+        }
+        self.variances = old;
+        None
+    }
+}
+
+/// Fits `structure` to `record` by filter error.
+pub fn filter_error(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &FilterErrorOptions,
+) -> Result<Estimate> {
+    filter_error_from(record, structure, options, None)
+}
+
+/// The integrated states driven by process noise (indices into x).
+fn noisy_states(view: &DrivenStateSpace, options: &FilterErrorOptions) -> Result<Vec<usize>> {
+    let names = view.state_names();
+    match &options.process_noise {
+        None => Ok((0..names.len())
+            .filter(|&i| !NOISELESS_STATES.contains(&names[i]))
+            .collect()),
+        Some(chosen) => chosen
+            .iter()
+            .map(|name| {
+                names.iter().position(|n| n == name).ok_or_else(|| {
+                    Error::Other(format!(
+                        "[methods.{METHOD}] process_noise: '{name}' is not an integrated state of the model ({})",
+                        names.join(", ")
+                    ))
+                })
+            })
+            .collect(),
+    }
+}
+
+/// Filter error with equation error's estimate on the record given (else
+/// computed when the start asks for it).
+pub fn filter_error_from(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &FilterErrorOptions,
+    regression: Option<&Estimate>,
+) -> Result<Estimate> {
+    let started = std::time::Instant::now();
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    if let Some(refusal) = Refusal::missing(
+        METHOD,
+        output_error::missing_channels(record, structure),
+        present,
+    ) {
+        return Err(Error::Refused(refusal));
+    }
+    output_error::unsuitable(structure, METHOD)?;
+    let free: Vec<usize> = (0..structure.free.len())
+        .filter(|&i| structure.free[i])
+        .collect();
+    if free.is_empty() {
+        return Err(Error::Refused(Refusal::NothingToEstimate {
+            method: METHOD.to_string(),
+            model: structure.name.clone(),
+        }));
+    }
+    let (view, initial) = DrivenStateSpace::for_record(
+        record,
+        structure,
+        options.interpolation,
+        options.step,
+        options.window,
+    )?;
+    let noisy = noisy_states(&view, options)?;
+    let step = view.time(1) - view.time(0);
+    let observations =
+        Observations::from_record(record, &structure.outputs, view.time(0), step, view.len())?;
+    let data: usize = observations.counts().iter().sum();
+    let unknowns = free.len() + noisy.len();
+    if data < unknowns {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: METHOD.to_string(),
+            data,
+            unknowns,
+        }));
+    }
+    let mut notes: Vec<String> = observations.note(step).into_iter().collect();
+    let file = view.parameters();
+    let mut fit = FilterErrorFit::new(
+        &view,
+        &observations,
+        initial,
+        file.clone(),
+        free.clone(),
+        noisy.clone(),
+    )?;
+    let mut solver = Options::new(free.len());
+    solver.max_iterations = options.max_iterations;
+    solver.decrease_tolerance = Some(CONVERGED_DECREASE);
+    for (j, &i) in free.iter().enumerate() {
+        solver.bounds[j] = structure.bounds[i];
+    }
+    let regression = match options.start {
+        Start::EquationError => regression_start(record, structure, regression, &file, &mut notes),
+        Start::Model => None,
+    };
+    let result = match regression {
+        Some(theta) => match fit.fit(&theta, solver.clone()) {
+            Ok(result) => {
+                notes.push("started from equation error's estimates".into());
+                Ok(result)
+            }
+            Err(error) => {
+                notes.push(format!(
+                    "started from the model file's values: no filter from equation error's estimates ({error})"
+                ));
+                fit.fit(&file, solver)
+            }
+        },
+        None => fit.fit(&file, solver),
+    }?;
+    let state_names = view.state_names();
+    let parameter_names = structure.aircraft.aero.parameters.names();
+    Ok(assemble(
+        structure,
+        record,
+        &fit,
+        &result,
+        &Names {
+            parameters: free.iter().map(|&i| parameter_names[i].clone()).collect(),
+            noise: noisy
+                .iter()
+                .map(|&i| format!("F.{}", state_names[i]))
+                .collect(),
+        },
+        notes,
+        started.elapsed().as_secs_f64(),
+    ))
+}
+
+/// Equation error's estimates as a start (the free parameters, within
+/// their bounds), when it converged; None with a note otherwise.
+fn regression_start(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    given: Option<&Estimate>,
+    file: &DVector<f64>,
+    notes: &mut Vec<String>,
+) -> Option<DVector<f64>> {
+    let computed;
+    let estimate = match given {
+        Some(estimate) => Ok(estimate),
+        None => {
+            let settings = merge_settings(equation_error::METHOD, &[&structure.methods]);
+            let options = EquationErrorOptions {
+                correlation_lag: 0.0,
+                ..EquationErrorSettings::read(&settings)
+                    .map(|settings| settings.options())
+                    .unwrap_or_default()
+            };
+            computed = equation_error(record, structure, &options);
+            computed.as_ref().map_err(|e| e.to_string())
+        }
+    };
+    match estimate {
+        Ok(estimate) if estimate.status == Status::Converged => {
+            let names = structure.aircraft.aero.parameters.names();
+            let mut theta = file.clone();
+            for (i, name) in names.iter().enumerate() {
+                if let (true, Some(p)) = (structure.free[i], estimate.parameter(name)) {
+                    let (low, high) = structure.bounds[i];
+                    theta[i] = p.value.clamp(low, high);
+                }
+            }
+            Some(theta)
+        }
+        Ok(estimate) => {
+            notes.push(format!(
+                "started from the model file's values: equation error ended {}",
+                estimate.status
+            ));
+            None
+        }
+        Err(error) => {
+            notes.push(format!(
+                "started from the model file's values: no equation-error start ({error})"
+            ));
+            None
+        }
+    }
+}
+
+/// The names of a fit's unknowns: the free parameters, then F's entries.
+struct Names {
+    parameters: Vec<String>,
+    noise: Vec<String>,
+}
+
+/// The estimate of a fit: the aerodynamic parameters with the aerodynamic
+/// block of the Cramér–Rao covariance; F and R in the notes and details.
+fn assemble<M: StateSpaceModel + ?Sized>(
+    structure: &ModelStructure,
+    record: &FlightRecord,
+    fit: &FilterErrorFit<'_, M>,
+    result: &FitResult,
+    names: &Names,
+    mut notes: Vec<String>,
+    wall_time: f64,
+) -> Estimate {
+    let all: Vec<String> = names
+        .parameters
+        .iter()
+        .chain(&names.noise)
+        .cloned()
+        .collect();
+    let full = Estimate::from_solution(
+        (METHOD, structure.name.clone(), record.scenario.clone()),
+        &all,
+        &result.start,
+        &result.solution,
+    );
+    let aero = names.parameters.len();
+    let mut details = String::from("process-noise distribution F (diagonal), Cramér–Rao σ:\n");
+    for p in &full.parameters[aero..] {
+        details.push_str(&format!(
+            "  {} = {:.6e} ± {:.3e} (start {:.3e})\n",
+            p.name,
+            p.value.abs(),
+            p.standard_error,
+            p.start
+        ));
+    }
+    details.push_str("innovation covariance R (diagonal):\n");
+    for (name, r) in structure.outputs.iter().zip(result.variances.iter()) {
+        details.push_str(&format!("  {name}: {r:.6e}\n"));
+    }
+    notes.push(format!(
+        "process noise {}; F started at {} × F_ref",
+        full.parameters[aero..]
+            .iter()
+            .map(|p| format!(
+                "{} = {:.4e} ± {:.2e}",
+                p.name,
+                p.value.abs(),
+                p.standard_error
+            ))
+            .collect::<Vec<_>>()
+            .join(", "),
+        result.start_factor
+    ));
+    notes.push(format!(
+        "R (innovation covariance) is diagonal; det(R) = {:.4e} at the solution",
+        result.variances.iter().product::<f64>()
+    ));
+    let fits = result
+        .pass
+        .as_ref()
+        .map(|pass| {
+            (0..structure.outputs.len())
+                .map(|o| {
+                    let (measured, predicted): (Vec<f64>, Vec<f64>) = fit
+                        .outputs
+                        .iter()
+                        .zip(fit.measured.iter().zip(&pass.predicted))
+                        .filter(|(output, _)| **output == o)
+                        .map(|(_, (z, y))| (*z, *y))
+                        .unzip();
+                    OutputFit::new(&structure.outputs[o], &measured, &predicted)
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    Estimate {
+        parameters: full.parameters[..aero].to_vec(),
+        covariance: full.covariance[..aero]
+            .iter()
+            .map(|row| row[..aero].to_vec())
+            .collect(),
+        fits,
+        wall_time,
+        notes,
+        details,
+        ..full
+    }
+}
