@@ -5,6 +5,7 @@
 //! find methods only here. A program embedding aeroid (or a test) adds its
 //! own with [`register`].
 
+pub mod augmented_ekf;
 pub mod equation_error;
 pub mod output_error;
 pub mod stepwise;
@@ -21,6 +22,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(equation_error::EquationError),
         Arc::new(stepwise::StepwiseRegression),
         Arc::new(output_error::OutputError),
+        Arc::new(augmented_ekf::AugmentedEkf),
     ]
 }
 

@@ -295,13 +295,14 @@ impl Estimator for OutputError {
 /// Method name in estimates.
 pub const METHOD: &str = "oem";
 
-/// Refuses a structure output error cannot fit as stated: no output to
-/// compare, or an output that is a flight-path state the model does not
-/// integrate (fed in from the record, it would be compared with itself).
-fn unsuitable(structure: &ModelStructure) -> Result<()> {
+/// Refuses a structure output error (or another method that simulates or
+/// filters it, `method`) cannot fit as stated: no output to compare, or an
+/// output that is a flight-path state the model does not integrate (fed
+/// in from the record, it would be compared with itself).
+pub(crate) fn unsuitable(method: &str, structure: &ModelStructure) -> Result<()> {
     let refuse = |reason: String| {
         Err(Error::Refused(Refusal::UnsuitableModel {
-            method: METHOD.to_string(),
+            method: method.to_string(),
             model: structure.name.clone(),
             reason,
         }))
@@ -327,7 +328,10 @@ fn unsuitable(structure: &ModelStructure) -> Result<()> {
 /// the compared outputs, and the flight-path states it does not integrate
 /// (the driven simulation's pseudo-controls; yaw and χ are not needed,
 /// the altitude may be a pressure altitude).
-fn missing_channels(record: &FlightRecord, structure: &ModelStructure) -> Vec<MissingChannel> {
+pub(crate) fn missing_channels(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+) -> Vec<MissingChannel> {
     let has = |name: &str| record.channel(name).is_ok();
     let mut missing: Vec<MissingChannel> = structure
         .outputs
@@ -491,7 +495,7 @@ pub fn output_error_from(
             structure.outputs.join(", ")
         )));
     }
-    unsuitable(structure)?;
+    unsuitable(METHOD, structure)?;
     let mut problem = Problem::new(records, structure, options)?;
     let data: usize = problem
         .segments

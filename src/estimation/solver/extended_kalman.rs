@@ -84,6 +84,12 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
     let mut state = initial.mean;
     let mut covariance = initial.covariance;
     let no_input = DMatrix::zeros(n, 0);
+    // Without process noise Q_d = 0: Van Loan's second exponential is skipped.
+    let process = noise
+        .process
+        .iter()
+        .any(|&v| v != 0.0)
+        .then_some(&noise.process);
     for k in 0..len {
         let t = model.time(k);
         if k > 0 {
@@ -91,7 +97,7 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
             let a = model
                 .jacobians(previous, state.as_slice(), theta)?
                 .rates_by_state;
-            let discrete = kalman::discretise(&a, &no_input, Some(&noise.process), t - previous);
+            let discrete = kalman::discretise(&a, &no_input, process, t - previous);
             state = model
                 .step(k - 1, state.as_slice(), theta)
                 .map_err(|e| at_time(e, previous))?;
