@@ -9,6 +9,7 @@ pub mod augmented_ekf;
 pub mod equation_error;
 pub mod output_error;
 pub mod stepwise;
+pub mod unscented;
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Estimate;
@@ -23,6 +24,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(stepwise::StepwiseRegression),
         Arc::new(output_error::OutputError),
         Arc::new(augmented_ekf::AugmentedEkf),
+        Arc::new(unscented::UnscentedFilter),
     ]
 }
 
