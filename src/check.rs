@@ -137,30 +137,41 @@ fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
     let simulation = Simulation::prepare(scenario)?;
     let trim = &simulation.trim;
     let c = &trim.controls;
+    let mut lines = vec![
+        format!(
+            "{}: aircraft {} ({}), {} s at {} s steps, seed {}",
+            scenario.name,
+            scenario.aircraft.name,
+            scenario.aircraft_path.display(),
+            scenario.duration,
+            scenario.step,
+            scenario.seed
+        ),
+        format!(
+            "trim: α {:.3}°, θ {:.3}°, elevator {:.3}°, aileron {:.3}°, rudder {:.3}°, throttle {:.4}; residual {:.1e} after {} iterations",
+            trim.alpha.to_degrees(),
+            trim.pitch.to_degrees(),
+            c[0].to_degrees(),
+            c[1].to_degrees(),
+            c[2].to_degrees(),
+            c[4],
+            trim.residual,
+            trim.iterations
+        ),
+    ];
+    let parameters = &scenario.aircraft.aero.parameters;
+    lines.extend(scenario.parameter_changes.iter().map(|change| {
+        format!(
+            "parameter change at {} s: {} = {} (aircraft file: {})",
+            change.time,
+            change.parameter,
+            change.value,
+            parameters.get(&change.parameter).unwrap_or(f64::NAN)
+        )
+    }));
     Ok(CheckReport {
         kind: "scenario",
-        lines: vec![
-            format!(
-                "{}: aircraft {} ({}), {} s at {} s steps, seed {}",
-                scenario.name,
-                scenario.aircraft.name,
-                scenario.aircraft_path.display(),
-                scenario.duration,
-                scenario.step,
-                scenario.seed
-            ),
-            format!(
-                "trim: α {:.3}°, θ {:.3}°, elevator {:.3}°, aileron {:.3}°, rudder {:.3}°, throttle {:.4}; residual {:.1e} after {} iterations",
-                trim.alpha.to_degrees(),
-                trim.pitch.to_degrees(),
-                c[0].to_degrees(),
-                c[1].to_degrees(),
-                c[2].to_degrees(),
-                c[4],
-                trim.residual,
-                trim.iterations
-            ),
-        ],
+        lines,
     })
 }
 

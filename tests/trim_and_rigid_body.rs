@@ -117,6 +117,7 @@ fn torque_free_body_conserves_momentum_and_energy() {
     let simulation = Simulation {
         name: "torque-free".into(),
         model,
+        changed_models: Vec::new(),
         trim: Trim {
             state: x,
             controls: Default::default(),

@@ -235,6 +235,13 @@ pub fn analyse(
             scenario.path.display()
         )));
     }
+    if !scenario.parameter_changes.is_empty() {
+        return Err(Error::Other(format!(
+            "identifiability of '{}' ({}): its parameters change during the flight ([[parameter_changes]]); the analysis is of constant parameters",
+            scenario.name,
+            scenario.path.display()
+        )));
+    }
     let simulation = Simulation::prepare(scenario)?;
     let aero = &scenario.aircraft.aero;
     let names: Vec<String> = match &options.parameters {

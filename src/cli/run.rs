@@ -49,6 +49,19 @@ pub fn run(args: Args) -> Result<()> {
         report.profile,
         report.record.channels.len(),
     );
+    for change in &report.truth.parameter_changes {
+        outln!(
+            "{} changes to {} at {} s: scored against its value at the start, {}",
+            change.parameter,
+            change.value,
+            change.time,
+            report
+                .truth
+                .parameters
+                .get(&change.parameter)
+                .map_or(f64::NAN, |v| *v),
+        );
+    }
     if scenario.models.is_empty() {
         outln!("the scenario names no model structures (`models = [...]`): nothing to estimate");
     } else {

@@ -184,6 +184,7 @@ mod tests {
             ]
             .into(),
             local_derivatives: [("Cm_q".to_string(), -99.0)].into(),
+            parameter_changes: vec![],
         };
         let scores = score(&estimate, Some(&truth), ModelKind::Linear);
         let stall_postulate = score(&estimate, Some(&truth), ModelKind::Stall);

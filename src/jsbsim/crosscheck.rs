@@ -1,7 +1,8 @@
 //! `aeroid crosscheck SCENARIO`: flies a scenario in aeroid's simulator and in
 //! JSBSim (the aircraft exported by [`super::export`]), from the same trim
-//! state with the same control inputs and no wind, and reports the largest
-//! difference of every state.
+//! state with the same control inputs, no wind and no parameter changes
+//! (the aircraft of the scenario's start throughout), and reports the
+//! largest difference of every state.
 //!
 //! The JSBSim half is the one flight loop of [`super::flight`] (zero-order
 //! hold of the controls, third-order Adams–Bashforth with
@@ -314,6 +315,7 @@ pub fn saturated_controls(simulation: &Simulation, k: usize) -> Controls {
 pub fn crosscheck(scenario: &Scenario, options: &CrossCheckOptions) -> Result<CrossCheck> {
     let mut scenario = scenario.clone();
     scenario.wind = WindSpec::default();
+    scenario.parameter_changes.clear();
     if let Some(duration) = options.duration {
         scenario.duration = duration;
     }

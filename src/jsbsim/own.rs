@@ -542,5 +542,6 @@ fn run_truth(
         model: Default::default(),
         parameters: BTreeMap::new(),
         local_derivatives: derivatives.values.iter().cloned().collect(),
+        parameter_changes: Vec::new(),
     }
 }

@@ -584,6 +584,34 @@ impl AeroModel {
         }
     }
 
+    /// Whether `value` may replace parameter `name` in flight: a finite
+    /// number, a positive Oswald factor `e`, and a `tau1` that keeps χ what
+    /// it was at the start, a state (τ1 > 0) or algebraic (τ1 = 0), since
+    /// the state vector cannot gain or lose χ mid-flight.
+    pub fn check_replacement(&self, name: &str, value: f64) -> Result<(), String> {
+        if !value.is_finite() {
+            return Err(format!("{value} is not a finite number"));
+        }
+        let index = self.parameters.index(name);
+        if index.is_some() && index == self.oswald && value <= 0.0 {
+            return Err(format!("the Oswald factor e must be positive, got {value}"));
+        }
+        if let Some(s) = self.stall
+            && index == Some(s.tau1)
+            && (value > 0.0) != self.chi_is_state()
+        {
+            return Err(match self.chi_is_state() {
+                true => {
+                    format!("tau1 must stay positive (χ is a state of this aircraft), got {value}")
+                }
+                false => {
+                    format!("tau1 must stay 0 (χ is algebraic for this aircraft), got {value}")
+                }
+            });
+        }
+        Ok(())
+    }
+
     /// True when χ is integrated as a state (stall model with τ1 > 0).
     pub fn chi_is_state(&self) -> bool {
         self.stall

@@ -3,6 +3,12 @@
 //! truth trace at every step, and stop with a [`Departure`] (beside the trace
 //! so far) when the flight leaves its limits. Which simulator flies a
 //! scenario is its [`FlightSource`].
+//!
+//! A scheduled parameter change (scenario `[[parameter_changes]]`) at
+//! t = K·step takes effect at that step boundary: the samples before t_K and
+//! the state at t_K are those of the flight without the change; the
+//! coefficients of the sample at t_K and every step from t_K on use the new
+//! value.
 
 pub mod aero;
 pub mod aircraft;
@@ -35,7 +41,11 @@ use crate::sim::wind::{FlightConditions, WindSample};
 #[derive(Debug, Clone)]
 pub struct Simulation {
     pub name: String,
+    /// The flight model at the start (trimmed with), until the first change.
     pub model: FlightModel,
+    /// The flight model from each scheduled parameter change on: (the step
+    /// it first flies, model), in step order, one per step with changes.
+    pub changed_models: Vec<(usize, FlightModel)>,
     pub trim: Trim,
     pub step: f64,
     pub interpolation: Interpolation,
@@ -88,9 +98,11 @@ impl Simulation {
                 Exogenous::pack(&controls, wind)
             })
             .collect();
+        let changed_models = changed_models(scenario, &model)?;
         Ok(Simulation {
             name: scenario.name.clone(),
             model,
+            changed_models,
             trim,
             step: scenario.step,
             interpolation: scenario.interpolation,
@@ -143,7 +155,7 @@ impl Simulation {
             }
             let time = k as f64 * self.step;
             let exogenous = self.exogenous_at(k, 0.0);
-            let evaluation = self.model.evaluate(&x, &exogenous);
+            let evaluation = self.model_at(k).evaluate(&x, &exogenous);
             if let Some(reason) = departure_reason(&self.departure, &x, &evaluation) {
                 return (trace, Some(Departure { time, reason }));
             }
@@ -157,10 +169,21 @@ impl Simulation {
         (trace, None)
     }
 
+    /// The flight model in effect from t_k to t_k+1 (after the parameter
+    /// changes scheduled at or before t_k).
+    pub fn model_at(&self, k: usize) -> &FlightModel {
+        self.changed_models
+            .iter()
+            .rev()
+            .find(|(first, _)| *first <= k)
+            .map_or(&self.model, |(_, model)| model)
+    }
+
     /// One RK4 step from t_k, with the quaternion renormalised afterwards.
     pub fn advance(&self, x: &StateVector, k: usize) -> StateVector {
+        let model = self.model_at(k);
         let mut next = rk4_step(x, self.step, |x, theta| {
-            self.model.derivative(x, &self.exogenous_at(k, theta))
+            model.derivative(x, &self.exogenous_at(k, theta))
         });
         let norm = next.fixed_rows::<4>(Q0).norm();
         next.fixed_rows_mut::<4>(Q0).unscale_mut(norm);
@@ -177,6 +200,32 @@ impl Simulation {
             self.step,
         )
     }
+}
+
+/// The flight model after each step with scheduled parameter changes: the
+/// step is t/step rounded (the scenario puts every change on the grid), and
+/// each model carries every change up to its step.
+fn changed_models(scenario: &Scenario, start: &FlightModel) -> Result<Vec<(usize, FlightModel)>> {
+    let mut changes: Vec<_> = scenario
+        .parameter_changes
+        .iter()
+        .map(|change| ((change.time / scenario.step).round() as usize, change))
+        .collect();
+    changes.sort_by_key(|(step, _)| *step);
+    let mut models: Vec<(usize, FlightModel)> = Vec::new();
+    let mut current = start.clone();
+    for (step, change) in changes {
+        current
+            .aircraft
+            .aero
+            .parameters
+            .set(&change.parameter, change.value)?;
+        match models.last_mut() {
+            Some((last, model)) if *last == step => *model = current.clone(),
+            _ => models.push((step, current.clone())),
+        }
+    }
+    Ok(models)
 }
 
 /// Why a flight has departed at state `x`, if it has: the state is no longer

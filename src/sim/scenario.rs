@@ -16,7 +16,24 @@
 //! ```
 //!
 //! Everything else (inputs, duration, step, seed, recorder, models) means
-//! what it means for an aeroid aircraft; wind and flap inputs are refused.
+//! what it means for an aeroid aircraft; wind, flap inputs and parameter
+//! changes are refused.
+//!
+//! A scenario may change one of the aircraft's aerodynamic parameters during
+//! the flight (a failure, icing, a model that must be tracked):
+//!
+//! ```toml
+//! [[parameter_changes]]
+//! time = "30 s"           # on the step grid, inside the run: 0 < time < duration
+//! parameter = "Cm_alpha"  # a parameter of the aircraft's aero model, named as in model files
+//! scale = 0.8             # × the aircraft file's value; or `value = -0.14`, not both
+//! ```
+//!
+//! The new value holds from that instant on: the sample at `time` and every
+//! step after it are computed with it (see [`crate::sim::Simulation`]). A
+//! `time` off the integration step grid is refused rather than moved, so
+//! that the change happens exactly when the file says. The run's truth
+//! records the schedule ([`crate::sim::truth::RunTruth::parameter_changes`]).
 
 use crate::catalog;
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
@@ -74,6 +91,34 @@ pub struct ScenarioFile {
     /// For a JSBSim aircraft: its rigid body and the properties set before trim.
     #[serde(default)]
     pub jsbsim: Option<JsbsimSpec>,
+    /// Aerodynamic parameters changed during the flight.
+    #[serde(default)]
+    pub parameter_changes: Vec<ParameterChangeSpec>,
+}
+
+/// One `[[parameter_changes]]` table of a scenario file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParameterChangeSpec {
+    /// When the new value starts to hold: a multiple of the step, 0 < time < duration.
+    pub time: Quantity,
+    /// An aerodynamic parameter of the aircraft (`Cm_alpha`, `e`, `tau1`, …).
+    pub parameter: String,
+    /// The new value (the parameter's own units, as in the aircraft file).
+    #[serde(default)]
+    pub value: Option<f64>,
+    /// The new value as a multiple of the aircraft file's value.
+    #[serde(default)]
+    pub scale: Option<f64>,
+}
+
+/// A validated parameter change: from `time` (s) on, `parameter` is `value`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParameterChange {
+    pub time: f64,
+    pub parameter: String,
+    pub value: f64,
 }
 
 /// The `[jsbsim]` table of a scenario whose aircraft is `"jsbsim:NAME"`.
@@ -174,6 +219,9 @@ pub struct Scenario {
     /// then its rigid body (`[jsbsim] rigid_body`), whose aerodynamic model is
     /// not the truth.
     pub jsbsim: Option<JsbsimAircraft>,
+    /// Aerodynamic parameters changed during the flight, in time order
+    /// (changes at the same instant in file order).
+    pub parameter_changes: Vec<ParameterChange>,
 }
 
 impl Scenario {
@@ -233,6 +281,13 @@ impl Scenario {
         };
         let departure = read_departure(&file.departure, trim.airspeed, &mut read);
         check_ranges(&trim, duration, step, &mut problems);
+        let parameter_changes = read_parameter_changes(
+            &file.parameter_changes,
+            &aircraft,
+            duration,
+            step,
+            &mut problems,
+        );
         file.wind.validate(&mut problems);
         let inputs = InputSchedule::build(&file.inputs, base, path);
         let inputs = match (problems.is_empty(), inputs) {
@@ -266,6 +321,7 @@ impl Scenario {
             models: file.models.clone(),
             methods: file.methods.clone(),
             jsbsim,
+            parameter_changes,
         };
         problems.finish(path, scenario)
     }
@@ -289,7 +345,8 @@ impl Scenario {
 
 /// The JSBSim aircraft a scenario names, checked: the `[jsbsim]` table is
 /// there exactly when the aircraft is `"jsbsim:NAME"`, the build has the
-/// `jsbsim` feature, JSBSim has the aircraft, and the flight is in still air.
+/// `jsbsim` feature, JSBSim has the aircraft, and the flight is in still air
+/// with no parameter changes.
 fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAircraft>> {
     let invalid = |field: &str, message: String| Error::Invalid {
         path: path.to_path_buf(),
@@ -309,6 +366,12 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
             None => Ok(None),
         };
     };
+    if !file.parameter_changes.is_empty() {
+        return Err(invalid(
+            "parameter_changes",
+            "a JSBSim aircraft flies JSBSim's own aerodynamic tables: aeroid cannot change its parameters during the flight".into(),
+        ));
+    }
     if !cfg!(feature = "jsbsim") {
         return Err(invalid(
             "aircraft",
@@ -341,6 +404,117 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
         model: model.to_owned(),
         properties: spec.properties.clone(),
     }))
+}
+
+/// The `[[parameter_changes]]` tables, checked against the aircraft, the
+/// duration and the step (each problem under `parameter_changes[i].KEY`),
+/// sorted by time.
+fn read_parameter_changes(
+    specs: &[ParameterChangeSpec],
+    aircraft: &Aircraft,
+    duration: f64,
+    step: f64,
+    problems: &mut Problems,
+) -> Vec<ParameterChange> {
+    let mut changes: Vec<ParameterChange> = Vec::with_capacity(specs.len());
+    for (index, spec) in specs.iter().enumerate() {
+        let field = |key: &str| format!("parameter_changes[{index}].{key}");
+        let time = match spec.time.si(Dimension::Time) {
+            Ok(time) => check_change_time(time, duration, step)
+                .map_err(|message| problems.push(field("time"), message))
+                .ok(),
+            Err(message) => {
+                problems.push(field("time"), message);
+                None
+            }
+        };
+        let parameters = &aircraft.aero.parameters;
+        let Some(original) = parameters.get(&spec.parameter) else {
+            problems.push(
+                field("parameter"),
+                format!(
+                    "'{}' is not a parameter of aircraft {}; known: {}",
+                    spec.parameter,
+                    aircraft.name,
+                    parameters.names().join(", ")
+                ),
+            );
+            continue;
+        };
+        let value = match (spec.value, spec.scale) {
+            (Some(value), None) => Some(("value", value)),
+            (None, Some(scale)) => Some(("scale", scale * original)),
+            (Some(_), Some(_)) => {
+                problems.push(field("scale"), "give either `value` or `scale`, not both");
+                None
+            }
+            (None, None) => {
+                problems.push(
+                    field("value"),
+                    "missing: give the new `value` or a `scale` of the aircraft's value",
+                );
+                None
+            }
+        };
+        let value = value.and_then(|(key, value)| {
+            aircraft
+                .aero
+                .check_replacement(&spec.parameter, value)
+                .map(|()| value)
+                .map_err(|message| problems.push(field(key), message))
+                .ok()
+        });
+        let (Some(time), Some(value)) = (time, value) else {
+            continue;
+        };
+        if changes
+            .iter()
+            .any(|c| c.parameter == spec.parameter && same_step(c.time, time, step))
+        {
+            problems.push(
+                field("time"),
+                format!(
+                    "{} is changed twice at {} s",
+                    spec.parameter,
+                    limits::number(time)
+                ),
+            );
+            continue;
+        }
+        changes.push(ParameterChange {
+            time,
+            parameter: spec.parameter.clone(),
+            value,
+        });
+    }
+    changes.sort_by(|a, b| a.time.total_cmp(&b.time));
+    changes
+}
+
+/// Whether two change times fall on the same integration step.
+fn same_step(a: f64, b: f64, step: f64) -> bool {
+    (a / step).round() == (b / step).round()
+}
+
+/// A change time inside the run (0 < time < duration) on the step grid (a
+/// duration or step that is itself invalid is reported on its own).
+fn check_change_time(time: f64, duration: f64, step: f64) -> Result<f64, String> {
+    if !(time > 0.0 && time.is_finite()) || time >= duration {
+        return Err(format!(
+            "{} s is outside the run: a change happens after 0 s and before the duration, {} s",
+            limits::number(time),
+            limits::number(duration)
+        ));
+    }
+    let steps = time / step;
+    if step > 0.0 && step.is_finite() && (steps - steps.round()).abs() > 1e-6 {
+        return Err(format!(
+            "{} s is not a multiple of the step {} s: a change happens at an integration step",
+            limits::number(time),
+            limits::number(step)
+        ));
+    }
+    Ok(time)
 }
 
 fn read_departure(

@@ -9,9 +9,16 @@
 //! differ"). Kind `local_derivative`: a flight of one of JSBSim's own aircraft
 //! (`crate::jsbsim::own`), whose truth is only JSBSim's local derivatives at
 //! the trim point; `parameters` is then empty.
+//!
+//! A scenario that changes parameters during the flight
+//! (`[[parameter_changes]]`) leaves `parameters` and `local_derivatives` at
+//! their values at the start, so that a fit scored against them reads as
+//! for any other flight, and lists the schedule in `parameter_changes`:
+//! [`RunTruth::parameter_at`] gives a parameter's value at any time,
+//! [`RunTruth::final_parameters`] the values after every change.
 
 use crate::error::{Error, Result, parse_toml, read_text};
-use crate::sim::scenario::Scenario;
+use crate::sim::scenario::{ParameterChange, Scenario};
 use crate::sim::trim::Trim;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -64,6 +71,10 @@ pub struct RunTruth {
     /// (`AeroModel::local_derivatives`), for postulates of another structure.
     #[serde(default)]
     pub local_derivatives: BTreeMap<String, f64>,
+    /// Changes of `parameters` during the flight, in time order: from
+    /// `time` on, `parameter` is `value`. Absent (empty) when none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parameter_changes: Vec<ParameterChange>,
 }
 
 impl RunTruth {
@@ -97,7 +108,33 @@ impl RunTruth {
                 .map(|(name, value)| (name.to_string(), value))
                 .collect(),
             local_derivatives: trim_derivatives(scenario, trim),
+            parameter_changes: scenario.parameter_changes.clone(),
         }
+    }
+
+    /// The value of parameter `name` at time `t` (s): the last change at or
+    /// before `t`, else the value at the start; None for a name `parameters`
+    /// does not hold.
+    pub fn parameter_at(&self, name: &str, t: f64) -> Option<f64> {
+        let start = *self.parameters.get(name)?;
+        Some(
+            self.parameter_changes
+                .iter()
+                .rev()
+                .find(|c| c.parameter == name && c.time <= t)
+                .map_or(start, |c| c.value),
+        )
+    }
+
+    /// The parameters after every change: the values at the end of the flight.
+    pub fn final_parameters(&self) -> BTreeMap<String, f64> {
+        let mut parameters = self.parameters.clone();
+        for change in &self.parameter_changes {
+            if let Some(value) = parameters.get_mut(&change.parameter) {
+                *value = change.value;
+            }
+        }
+        parameters
     }
 
     /// The truth value of a parameter of a postulated model of `kind`, and what kind of truth it is.
