@@ -18,7 +18,7 @@
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Estimate;
 use crate::estimation::estimator::{
-    Estimator, MethodInfo, Settings, SettingInfo, parse_settings, setting_infos,
+    Estimator, MethodInfo, SettingInfo, Settings, parse_settings, setting_infos,
 };
 use crate::estimation::methods::augmented_ekf::{
     FILTER_SETTINGS, FilterSettings, augmented_estimate,
@@ -41,13 +41,16 @@ pub struct SigmaSettings {
     pub kappa: f64,
 }
 
+/// α = 0.5: the points at ±√(n/4)·σ instead of ±√n·σ (n = 17 to 22
+/// augmented states here, 4σ), where α = 1 took the stall model's
+/// break-point parameters so far from the mean that the sigma points'
+/// spread stopped describing the filter's error (docs/findings.md).
 impl Default for SigmaSettings {
     fn default() -> Self {
-        let u = Unscented::default();
         SigmaSettings {
-            alpha: u.alpha,
-            beta: u.beta,
-            kappa: u.kappa,
+            alpha: 0.5,
+            beta: 2.0,
+            kappa: 0.0,
         }
     }
 }
@@ -135,7 +138,7 @@ impl Estimator for UnscentedFilter {
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let (settings, unscented) = read(&problem.settings)?;
-        let (estimate, history) = augmented_estimate(
+        let run = augmented_estimate(
             METHOD,
             problem.record(),
             &problem.structure,
@@ -146,8 +149,8 @@ impl Estimator for UnscentedFilter {
             },
         )?;
         if let Some(path) = &settings.history {
-            history.write_csv(path)?;
+            run.history.write_csv(path)?;
         }
-        Ok(estimate)
+        Ok(run.estimate)
     }
 }
