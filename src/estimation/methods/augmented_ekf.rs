@@ -988,7 +988,8 @@ fn status_of(
     let unidentified: Vec<String> = (0..names.len())
         .filter(|&j| {
             let prior = prior[(n + j, n + j)].sqrt();
-            !(history.sigmas[last][j] < prior / std::f64::consts::SQRT_2)
+            history.sigmas[last][j].is_nan()
+                || history.sigmas[last][j] >= prior / std::f64::consts::SQRT_2
         })
         .map(|j| names[j].clone())
         .collect();
@@ -1000,7 +1001,7 @@ fn status_of(
             let moved = (from..=last)
                 .map(|k| (history.values[k][j] - history.values[last][j]).abs())
                 .fold(0.0, f64::max);
-            !(moved <= 2.0 * history.sigmas[from][j])
+            moved.is_nan() || moved > 2.0 * history.sigmas[from][j]
         })
         .map(|j| names[j].clone())
         .collect();
@@ -1014,7 +1015,7 @@ fn status_of(
     let inconsistent: Vec<String> = ratios
         .iter()
         .zip(outputs)
-        .filter(|(r, _)| !((*r - 1.0).abs() <= CONSISTENT))
+        .filter(|(r, _)| r.is_nan() || (*r - 1.0).abs() > CONSISTENT)
         .map(|(r, o)| format!("{o} (mean ν²/S {r:.2})"))
         .collect();
     if !inconsistent.is_empty() {

@@ -10,26 +10,30 @@
 //! Time update from grid point k − 1 to k: sigma points χ_i of
 //! (x⁺_{k−1}, P⁺_{k−1}) ([`Unscented::points`], Wan & van der Merwe
 //! Eq. 15), each propagated by the model's own integration step,
-//! χ'_i = step(χ_i); x⁻ = Σ Wᵐ_i·χ'_i, P⁻ = Σ Wᶜ_i·(χ'_i − x⁻)(χ'_i − x⁻)ᵀ
-//! + Q_d. The pass's transition is the statistical linearisation
-//! Φ = P_{x'x}·P⁺⁻¹, P_{x'x} = Σ Wᶜ_i·(χ'_i − x⁻)(χ_i − x⁺)ᵀ, with which
-//! the RTS smoother's gain is the unscented RTS smoother's
-//! (P_{xx'}·P⁻⁻¹); Q_d = ∫₀ʰ e^{A·s}·Q_c·e^{Aᵀ·s} ds by the trapezoidal
-//! rule with that Φ, (Q_c + Φ·Q_c·Φᵀ)·h/2 (no Jacobian: the UKF has none),
-//! within O(h³) of the extended filter's Van Loan Q_d.
+//! χ'_i = step(χ_i); x⁻ = Σ Wᵐ_i·χ'_i and
+//! P⁻ = Σ Wᶜ_i·(χ'_i − x⁻)(χ'_i − x⁻)ᵀ + Q_d. The pass's transition is the
+//! statistical linearisation Φ = P_{x'x}·P⁺⁻¹ with
+//! P_{x'x} = Σ Wᶜ_i·(χ'_i − x⁻)(χ_i − x⁺)ᵀ, with which the RTS smoother's
+//! gain is the unscented RTS smoother's (P_{xx'}·P⁻⁻¹). The process noise
+//! Q_d = ∫₀ʰ e^{A·s}·Q_c·e^{Aᵀ·s} ds is taken by the trapezoidal rule with
+//! that Φ, (Q_c + Φ·Q_c·Φᵀ)·h/2 (the UKF has no Jacobian), within O(h³)
+//! of the extended filter's Van Loan Q_d.
 //!
 //! Measurement update at k with the outputs measured there: sigma points
 //! of (x⁻, P⁻) (redrawn: the additive-noise form), Y_i = h(t_k, χ_i) (rows
-//! of the measured outputs), ŷ = Σ Wᵐ_i·Y_i, S = Σ Wᶜ_i·(Y_i − ŷ)(Y_i − ŷ)ᵀ
-//! + R, P_xy = Σ Wᶜ_i·(χ_i − x⁻)(Y_i − ŷ)ᵀ, K = P_xy·S⁻¹,
-//! x⁺ = x⁻ + K·(z − ŷ). The covariance: P⁺ = P⁻ − K·S·Kᵀ in Wan & van der
-//! Merwe, here in Joseph's form (I − K·H)·P⁻·(I − K·H)ᵀ + K·R·Kᵀ with the
-//! statistical H = P_xyᵀ·P⁻⁻¹ (the pass's observation matrix), which is
-//! positive semi-definite by construction. The two agree for a linear h
-//! and differ by K·(H·P⁻·Hᵀ + R − S)·Kᵀ otherwise, a term of the order of
-//! the unscented transform's correction to the linearised output
-//! covariance; the subtractive form lost definiteness to rounding on a
-//! noise-free record (R at 10⁻⁶ of the signal).
+//! of the measured outputs), ŷ = Σ Wᵐ_i·Y_i,
+//! S = Σ Wᶜ_i·(Y_i − ŷ)(Y_i − ŷ)ᵀ + R,
+//! P_xy = Σ Wᶜ_i·(χ_i − x⁻)(Y_i − ŷ)ᵀ, K = P_xy·S⁻¹ and
+//! x⁺ = x⁻ + K·(z − ŷ). Wan & van der Merwe take P⁺ = P⁻ − K·S·Kᵀ; here
+//! it is Joseph's form (I − K·H)·P⁻·(I − K·H)ᵀ + K·R·Kᵀ with the
+//! statistical H = P_xyᵀ·P⁻⁻¹ (the pass's observation matrix), positive
+//! semi-definite by construction. The two agree for a linear h and
+//! differ by K·(H·P⁻·Hᵀ + R − S)·Kᵀ otherwise, a term of the order of the
+//! unscented transform's correction to the linearised output covariance;
+//! the subtractive form lost definiteness to rounding on a noise-free
+//! record. A covariance that rounding has left short of positive definite
+//! is loaded on its diagonal by at most 10⁻⁸ of itself before it is
+//! factored ([`LOADS`]).
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
