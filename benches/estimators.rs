@@ -14,6 +14,7 @@
 use aeroid::estimation::estimator::Settings;
 use aeroid::estimation::methods::augmented_ekf::{FilterSettings, augmented_estimate};
 use aeroid::estimation::methods::equation_error::equation_error;
+use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
 use aeroid::estimation::methods::unscented;
 use aeroid::estimation::model::augmented::Augmented;
 use aeroid::estimation::model::observations::Observations;
@@ -21,12 +22,11 @@ use aeroid::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
 use aeroid::estimation::solver::extended_kalman::{self, Noise};
 use aeroid::estimation::solver::kalman::Gaussian;
 use aeroid::estimation::solver::unscented_kalman;
-use nalgebra::{DMatrix, DVector};
-use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
 use criterion::{Criterion, criterion_group, criterion_main};
+use nalgebra::{DMatrix, DVector};
 use std::hint::black_box;
 
 fn bench_fits(c: &mut Criterion) {
@@ -58,14 +58,9 @@ fn bench_filters(c: &mut Criterion) {
     let profile = Profile::load("flight-test-25hz", None).expect("bundled profile");
     let (record, _) = record_scenario(&scenario, &profile).expect("record");
     let structure = ModelStructure::load("attas-lateral").expect("bundled model");
-    let (view, x0) = DrivenStateSpace::for_record(
-        &record,
-        &structure,
-        Default::default(),
-        None,
-        None,
-    )
-    .expect("view");
+    let (view, x0) =
+        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None)
+            .expect("view");
     let theta = view.parameters();
     let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
     let model = Augmented::new(&view, theta.as_slice(), free.clone()).expect("augmented");
@@ -114,17 +109,27 @@ fn bench_filters(c: &mut Criterion) {
     let settings = FilterSettings::default();
     group.bench_function("ekf_method", |b| {
         b.iter(|| {
-            augmented_estimate("ekf", &record, &structure, &settings, None, &|m, i, q, o| {
-                extended_kalman::filter(m, &[], i, q, o)
-            })
+            augmented_estimate(
+                "ekf",
+                &record,
+                &structure,
+                &settings,
+                None,
+                &|m, i, q, o| extended_kalman::filter(m, &[], i, q, o),
+            )
             .unwrap()
         })
     });
     group.bench_function("ukf_method", |b| {
         b.iter(|| {
-            augmented_estimate("ukf", &record, &structure, &settings, None, &|m, i, q, o| {
-                unscented_kalman::filter(m, &[], i, q, o, &sigma)
-            })
+            augmented_estimate(
+                "ukf",
+                &record,
+                &structure,
+                &settings,
+                None,
+                &|m, i, q, o| unscented_kalman::filter(m, &[], i, q, o, &sigma),
+            )
             .unwrap()
         })
     });
