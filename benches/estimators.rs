@@ -9,19 +9,33 @@
 //! over the same record (28 states, 1501 points), `ebm` that pass and the
 //! regression. `filter_error` is the filter error method's default fit of
 //! the same record (from equation error's estimates, their cost included).
-//! Run:
+//! The `attas_lateral_filter`
+//! group times one pass of the extended and of the unscented Kalman filter
+//! over the same record with the 4 kinematic states and the 18 parameters
+//! as augmented states (no process noise, R at the profile's noise), and
+//! the whole `ekf` and `ukf` methods (start, Fourier R, passes). Run:
 //! `cargo bench --bench estimators`.
 
+use aeroid::estimation::estimator::Settings;
+use aeroid::estimation::methods::augmented_ekf::{FilterSettings, augmented_estimate};
 use aeroid::estimation::methods::equation_error::equation_error;
 use aeroid::estimation::methods::filter_error::{FilterErrorOptions, filter_error};
 use aeroid::estimation::methods::output_error::{OutputErrorOptions, Start, output_error};
 use aeroid::estimation::methods::smoothed_regression::{
     SmoothedRegressionSettings, smooth, smooth_and_regress,
 };
+use aeroid::estimation::methods::unscented;
+use aeroid::estimation::model::augmented::Augmented;
+use aeroid::estimation::model::observations::Observations;
+use aeroid::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
+use aeroid::estimation::solver::extended_kalman::{self, Noise};
+use aeroid::estimation::solver::kalman::Gaussian;
+use aeroid::estimation::solver::unscented_kalman;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
 use criterion::{Criterion, criterion_group, criterion_main};
+use nalgebra::{DMatrix, DVector};
 use std::hint::black_box;
 
 fn bench_fits(c: &mut Criterion) {
@@ -59,5 +73,88 @@ fn bench_fits(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_fits);
+fn bench_filters(c: &mut Criterion) {
+    let scenario = Scenario::load("attas-lateral-multistep").expect("bundled scenario");
+    let profile = Profile::load("flight-test-25hz", None).expect("bundled profile");
+    let (record, _) = record_scenario(&scenario, &profile).expect("record");
+    let structure = ModelStructure::load("attas-lateral").expect("bundled model");
+    let (view, x0) =
+        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None)
+            .expect("view");
+    let theta = view.parameters();
+    let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
+    let model = Augmented::new(&view, theta.as_slice(), free.clone()).expect("augmented");
+    let n = model.state_count();
+    let mut prior = DMatrix::from_diagonal_element(n, n, 1e-5);
+    for j in 0..free.len() {
+        let i = x0.len() + j;
+        prior[(i, i)] = (0.3 * theta[free[j]].abs().max(0.1)).powi(2);
+    }
+    let initial = Gaussian {
+        mean: model.state(x0.as_slice()),
+        covariance: prior,
+    };
+    let deg = std::f64::consts::PI / 180.0;
+    let noise = Noise {
+        process: DMatrix::zeros(n, n),
+        measurement: DVector::from_vec(
+            [0.1 * deg, 0.002, 0.002, 0.1 * deg, 0.02 / 9.80665]
+                .iter()
+                .map(|s| s * s)
+                .collect(),
+        ),
+    };
+    let observations = Observations::from_record(
+        &record,
+        &structure.outputs,
+        view.time(0),
+        view.time(1) - view.time(0),
+        view.len(),
+    )
+    .expect("observations");
+    let sigma = unscented::read(&Settings::new()).expect("defaults").1;
+    let mut group = c.benchmark_group("attas_lateral_filter");
+    group.sample_size(10);
+    group.bench_function("ekf_pass", |b| {
+        b.iter(|| {
+            extended_kalman::filter(&model, &[], initial.clone(), &noise, &observations).unwrap()
+        })
+    });
+    group.bench_function("ukf_pass", |b| {
+        b.iter(|| {
+            unscented_kalman::filter(&model, &[], initial.clone(), &noise, &observations, &sigma)
+                .unwrap()
+        })
+    });
+    let settings = FilterSettings::default();
+    group.bench_function("ekf_method", |b| {
+        b.iter(|| {
+            augmented_estimate(
+                "ekf",
+                &record,
+                &structure,
+                &settings,
+                None,
+                &|m, i, q, o| extended_kalman::filter(m, &[], i, q, o),
+            )
+            .unwrap()
+        })
+    });
+    group.bench_function("ukf_method", |b| {
+        b.iter(|| {
+            augmented_estimate(
+                "ukf",
+                &record,
+                &structure,
+                &settings,
+                None,
+                &|m, i, q, o| unscented_kalman::filter(m, &[], i, q, o, &sigma),
+            )
+            .unwrap()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_fits, bench_filters);
 criterion_main!(benches);

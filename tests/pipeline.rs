@@ -56,8 +56,9 @@ fn run_scores_every_method_on_the_lateral_scenario() {
 /// naming what it lacks. Per method, what it must name: every method the
 /// airspeed (dynamic pressure; output error's pseudo-control or output);
 /// equation error the roll and yaw rates (the moment equations);
-/// output error and filter error the roll and yaw rates (a lateral output
-/// or pseudo-control); estimation before modelling, which needs no rate,
+/// output error, filter error and the augmented-state filters (EKF, UKF)
+/// the roll and yaw rates (a lateral output or pseudo-control); estimation
+/// before modelling, which needs no rate,
 /// the airspeed and the altitude (observations of Eq. 8: the profile
 /// records calibrated airspeed and pressure altitude, not true airspeed and
 /// altitude).
@@ -67,12 +68,14 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
     let report = run::run(&scenario, &profile).unwrap();
-    let expected: [(&str, &[&str]); 5] = [
+    let expected: [(&str, &[&str]); 7] = [
         ("ee", &["airspeed", "p", "r"]),
         ("swr", &["airspeed"]),
         ("oem", &["airspeed", "p", "r"]),
         ("ebm", &["airspeed", "altitude"]),
         ("fem", &["airspeed", "p", "r"]),
+        ("ekf", &["airspeed", "p", "r"]),
+        ("ukf", &["airspeed", "p", "r"]),
     ];
     assert_eq!(report.runs.len(), 2 * expected.len());
     for run in &report.runs {

@@ -36,6 +36,10 @@ pub enum Status {
     Degenerate(String),
     /// These outputs are reproduced worse than by their mean (R² < 0) or not at all.
     PoorFit(Vec<String>),
+    /// A recursive estimator's parameter estimates had not settled by the
+    /// end of the record, or its innovations disagree with their predicted
+    /// covariance: the reason.
+    Unsettled(String),
 }
 
 impl Status {
@@ -55,6 +59,7 @@ impl std::fmt::Display for Status {
             Status::Unidentified(names) => write!(f, "unidentified: {}", names.join(", ")),
             Status::Degenerate(reason) => write!(f, "degenerate: {reason}"),
             Status::PoorFit(outputs) => write!(f, "poor fit (R² < 0): {}", outputs.join(", ")),
+            Status::Unsettled(reason) => write!(f, "not settled: {reason}"),
         }
     }
 }

@@ -911,6 +911,7 @@ fn status_text(status: &Status) -> (&'static str, String) {
         Status::Unidentified(names) => ("unidentified", names.join(" ")),
         Status::Degenerate(reason) => ("degenerate", reason.clone()),
         Status::PoorFit(outputs) => ("poor_fit", outputs.join(" ")),
+        Status::Unsettled(reason) => ("unsettled", reason.clone()),
     }
 }
 

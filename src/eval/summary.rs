@@ -34,8 +34,9 @@ pub struct SummaryRow {
     pub iteration_limit: usize,
     pub diverged: usize,
     /// Estimates that are not converged for another reason: no progress
-    /// from the start, unidentified parameters, a degenerate covariance or
-    /// a poor fit (the status column of `runs.csv` says which).
+    /// from the start, unidentified parameters, a degenerate covariance, a
+    /// poor fit or a filter's parameters still moving (the status column
+    /// of `runs.csv` says which).
     pub not_converged: usize,
     pub refused: usize,
     pub failed: usize,
@@ -281,7 +282,13 @@ impl Summariser {
                     converged: count(CONVERGED),
                     iteration_limit: count("iteration_limit"),
                     diverged: count("diverged"),
-                    not_converged: ["no_progress", "unidentified", "degenerate", "poor_fit"]
+                    not_converged: [
+                        "no_progress",
+                        "unidentified",
+                        "degenerate",
+                        "poor_fit",
+                        "unsettled",
+                    ]
                         .iter()
                         .map(|status| count(status))
                         .sum(),

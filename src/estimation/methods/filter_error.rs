@@ -798,7 +798,7 @@ pub fn filter_error_from(
     ) {
         return Err(Error::Refused(refusal));
     }
-    output_error::unsuitable(structure, METHOD)?;
+    output_error::unsuitable(METHOD, structure)?;
     let free: Vec<usize> = (0..structure.free.len())
         .filter(|&i| structure.free[i])
         .collect();

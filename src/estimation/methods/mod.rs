@@ -5,11 +5,13 @@
 //! find methods only here. A program embedding aeroid (or a test) adds its
 //! own with [`register`].
 
+pub mod augmented_ekf;
 pub mod equation_error;
 pub mod filter_error;
 pub mod output_error;
 pub mod smoothed_regression;
 pub mod stepwise;
+pub mod unscented;
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Estimate;
@@ -25,6 +27,8 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(output_error::OutputError),
         Arc::new(smoothed_regression::SmoothedRegression),
         Arc::new(filter_error::FilterError),
+        Arc::new(augmented_ekf::AugmentedEkf),
+        Arc::new(unscented::UnscentedFilter),
     ]
 }
 

@@ -295,10 +295,11 @@ impl Estimator for OutputError {
 /// Method name in estimates.
 pub const METHOD: &str = "oem";
 
-/// Refuses a structure output error cannot fit as stated: no output to
-/// compare, or an output that is a flight-path state the model does not
-/// integrate (fed in from the record, it would be compared with itself).
-pub(crate) fn unsuitable(structure: &ModelStructure, method: &str) -> Result<()> {
+/// Refuses a structure output error (or another method that simulates or
+/// filters it, `method`) cannot fit as stated: no output to compare, or an
+/// output that is a flight-path state the model does not integrate (fed
+/// in from the record, it would be compared with itself).
+pub(crate) fn unsuitable(method: &str, structure: &ModelStructure) -> Result<()> {
     let refuse = |reason: String| {
         Err(Error::Refused(Refusal::UnsuitableModel {
             method: method.to_string(),
@@ -494,7 +495,7 @@ pub fn output_error_from(
             structure.outputs.join(", ")
         )));
     }
-    unsuitable(structure, METHOD)?;
+    unsuitable(METHOD, structure)?;
     let mut problem = Problem::new(records, structure, options)?;
     let data: usize = problem
         .segments

@@ -67,7 +67,10 @@ impl Discretisation {
         match self {
             Discretisation::Exact => {
                 let n = a.nrows();
-                let discrete = kalman::discretise(a, &DMatrix::zeros(n, 0), Some(noise), h);
+                // Without process noise Q_d = 0: Van Loan's second
+                // exponential is skipped.
+                let process = noise.iter().any(|&v| v != 0.0).then_some(noise);
+                let discrete = kalman::discretise(a, &DMatrix::zeros(n, 0), process, h);
                 (discrete.transition, discrete.process_noise)
             }
             Discretisation::SecondOrder => {

@@ -13,7 +13,7 @@
 //!   The exponential is by scaling and squaring with a Taylor series
 //!   (Moler & Van Loan, "Nineteen dubious ways…", SIAM Rev. 45, 2003,
 //!   method 3): the matrix scaled to norm ≤ ½, 18 terms (truncation below
-//!   10⁻¹⁸ relative).
+//!   10⁻¹⁸ relative); on its blocks when its trailing rows are zero.
 //! - Time update P⁻ = Φ·P⁺·Φᵀ + Q_d; measurement update with gain
 //!   K = P⁻·Hᵀ·S⁻¹, S = H·P⁻·Hᵀ + R, state x⁺ = x⁻ + K·ν and covariance in
 //!   Joseph's form P⁺ = (I − K·H)·P⁻·(I − K·H)ᵀ + K·R·Kᵀ (Jategaonkar,
@@ -51,7 +51,11 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 /// Taylor terms of the scaled exponential.
 const TAYLOR_TERMS: usize = 18;
 
-/// e^M by scaling and squaring (see the module header).
+/// e^M by scaling and squaring (see the module header). When M's last r
+/// rows are zero, M = [[X, Y], [0, 0]] (a discretisation's input block, an
+/// augmented model's parameter rows), e^M = [[e^X, φ₁(X)·Y], [0, I]] is
+/// computed on the blocks: the same scaling, terms and squarings, each
+/// product O(k²·(k + r)) for the k leading rows instead of O((k + r)³).
 pub fn exponential(matrix: &DMatrix<f64>) -> DMatrix<f64> {
     let n = matrix.nrows();
     let norm = matrix.iter().map(|v| v.abs()).fold(0.0, f64::max) * n as f64;
@@ -60,16 +64,32 @@ pub fn exponential(matrix: &DMatrix<f64>) -> DMatrix<f64> {
     } else {
         0
     };
-    let scaled = matrix / 2f64.powi(squarings);
-    let mut result = DMatrix::identity(n, n);
-    let mut term = DMatrix::identity(n, n);
-    for k in 1..=TAYLOR_TERMS {
-        term = &term * &scaled / k as f64;
-        result += &term;
+    let zero_rows = (0..n)
+        .rev()
+        .take_while(|&i| matrix.row(i).iter().all(|&v| v == 0.0))
+        .count();
+    let k = n - zero_rows;
+    let scale = 2f64.powi(-squarings);
+    let x = matrix.view((0, 0), (k, k)) * scale;
+    let y = matrix.view((0, k), (k, n - k)) * scale;
+    // Taylor series of [[X, Y], [0, 0]]: the k-th term is
+    // [[X^k/k!, X^(k−1)·Y/k!], [0, 0]].
+    let mut top_left = DMatrix::identity(k, k);
+    let mut top_right = DMatrix::zeros(k, n - k);
+    let mut term = DMatrix::identity(k, k);
+    for j in 1..=TAYLOR_TERMS {
+        top_right += &term * &y / j as f64;
+        term = &term * &x / j as f64;
+        top_left += &term;
     }
+    // [[E, F], [0, I]]² = [[E², E·F + F], [0, I]].
     for _ in 0..squarings {
-        result = &result * &result;
+        top_right = &top_left * &top_right + &top_right;
+        top_left = &top_left * &top_left;
     }
+    let mut result = DMatrix::identity(n, n);
+    result.view_mut((0, 0), (k, k)).copy_from(&top_left);
+    result.view_mut((0, k), (k, n - k)).copy_from(&top_right);
     result
 }
 
@@ -618,6 +638,26 @@ mod tests {
             4.0f64.exp(),
         ]));
         assert_close(&exponential(&d), &exact, 1e-13, "diagonal");
+    }
+
+    /// A matrix with zero trailing rows (a system with its input block)
+    /// against the same exponential with those rows perturbed by 10⁻³⁰⁰
+    /// (the dense path, the same scaling): equal to rounding, with the
+    /// zero rows' block exactly [0, I].
+    #[test]
+    fn exponential_of_a_block_with_zero_rows_is_the_dense_one() {
+        let (a, b) = system();
+        let h = 0.3;
+        let mut block = DMatrix::zeros(4, 4);
+        block.view_mut((0, 0), (3, 3)).copy_from(&(&a * h));
+        block.view_mut((0, 3), (3, 1)).copy_from(&(&b * h));
+        let structured = exponential(&block);
+        let mut dense = block.clone();
+        dense[(3, 0)] = 1e-300;
+        let dense = exponential(&dense);
+        assert_close(&structured, &dense, 1e-14, "blocks");
+        assert_eq!(structured[(3, 3)], 1.0);
+        assert_eq!(structured[(3, 0)], 0.0);
     }
 
     #[test]

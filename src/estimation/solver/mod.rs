@@ -6,3 +6,4 @@ pub mod extended_kalman;
 pub mod gauss_newton;
 pub mod kalman;
 pub mod regression;
+pub mod unscented_kalman;
