@@ -37,7 +37,13 @@ fn filter_error_is_unbiased_in_turbulence_where_output_error_is_not() {
     let (fem, oem) = (of("fem"), of("oem"));
     assert_eq!(fem.len(), 18, "{table}");
     for s in &fem {
-        assert!(s.converged >= 95, "{}: {} of {} converged\n{table}", s.parameter, s.converged, s.runs);
+        assert!(
+            s.converged >= 95,
+            "{}: {} of {} converged\n{table}",
+            s.parameter,
+            s.converged,
+            s.runs
+        );
         assert!(
             s.bias_over_std.abs() < 0.5,
             "fem {}: bias {:.2} σ_MC\n{table}",

@@ -289,9 +289,9 @@ impl Summariser {
                         "poor_fit",
                         "unsettled",
                     ]
-                        .iter()
-                        .map(|status| count(status))
-                        .sum(),
+                    .iter()
+                    .map(|status| count(status))
+                    .sum(),
                     refused: count(REFUSED),
                     failed: count(FAILED),
                     truth,

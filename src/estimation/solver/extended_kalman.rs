@@ -148,7 +148,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     discretisation: Discretisation,
 ) -> Result<Pass> {
     let len = model.len();
-    check_sizes(model, &initial, noise, observations)?;
+    check_sizes("filter", model, &initial, noise, observations)?;
     let mut pass = Pass {
         predicted: Vec::with_capacity(len),
         filtered: Vec::with_capacity(len),
@@ -222,7 +222,10 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     Ok(pass)
 }
 
-fn check_sizes<M: StateSpaceModel + ?Sized>(
+/// Checks that a filter's model, initial estimate, noise and observations
+/// agree in size; `filter` names the filter in the error.
+pub(crate) fn check_sizes<M: StateSpaceModel + ?Sized>(
+    filter: &str,
     model: &M,
     initial: &Gaussian,
     noise: &Noise,
@@ -240,7 +243,7 @@ fn check_sizes<M: StateSpaceModel + ?Sized>(
         Ok(())
     } else {
         Err(Error::Other(format!(
-            "the filter's sizes do not agree: {n} states and {outputs} outputs on {} grid points; initial {} and {:?}, process noise {:?}, {} measurement variances, observations of {} outputs on {} points",
+            "the {filter}'s sizes do not agree: {n} states and {outputs} outputs on {} grid points; initial {} and {:?}, process noise {:?}, {} measurement variances, observations of {} outputs on {} points",
             model.len(),
             initial.mean.len(),
             initial.covariance.shape(),
@@ -252,7 +255,8 @@ fn check_sizes<M: StateSpaceModel + ?Sized>(
     }
 }
 
-fn at_time(error: Error, t: f64) -> Error {
+/// An error with the time it happened at.
+pub(crate) fn at_time(error: Error, t: f64) -> Error {
     Error::Other(format!("at t = {t} s: {error}"))
 }
 

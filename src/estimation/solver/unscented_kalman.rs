@@ -38,7 +38,7 @@
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::StateSpaceModel;
-use crate::estimation::solver::extended_kalman::{Innovation, Noise, Pass};
+use crate::estimation::solver::extended_kalman::{Innovation, Noise, Pass, at_time, check_sizes};
 use crate::estimation::solver::kalman::{Gaussian, Measured, SigmaPoints, Unscented, Update};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
@@ -56,7 +56,7 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
 ) -> Result<Pass> {
     let n = model.state_count();
     let len = model.len();
-    check_sizes(model, &initial, noise, observations)?;
+    check_sizes("unscented filter", model, &initial, noise, observations)?;
     let mut pass = Pass {
         predicted: Vec::with_capacity(len),
         filtered: Vec::with_capacity(len),
@@ -236,39 +236,6 @@ fn points(
 
 fn symmetric(m: DMatrix<f64>) -> DMatrix<f64> {
     (&m + m.transpose()) * 0.5
-}
-
-fn check_sizes<M: StateSpaceModel + ?Sized>(
-    model: &M,
-    initial: &Gaussian,
-    noise: &Noise,
-    observations: &Observations,
-) -> Result<()> {
-    let n = model.state_count();
-    let outputs = model.output_count();
-    let fits = initial.mean.len() == n
-        && initial.covariance.shape() == (n, n)
-        && noise.process.shape() == (n, n)
-        && noise.measurement.len() == outputs
-        && observations.at.len() == model.len()
-        && observations.names.len() == outputs;
-    if fits {
-        Ok(())
-    } else {
-        Err(Error::Other(format!(
-            "the unscented filter's sizes do not agree: {n} states and {outputs} outputs on {} grid points; initial {}, process noise {:?}, {} measurement variances, observations of {} outputs on {} points",
-            model.len(),
-            initial.mean.len(),
-            noise.process.shape(),
-            noise.measurement.len(),
-            observations.names.len(),
-            observations.at.len()
-        )))
-    }
-}
-
-fn at_time(error: Error, t: f64) -> Error {
-    Error::Other(format!("at t = {t} s: {error}"))
 }
 
 #[cfg(test)]
