@@ -23,6 +23,7 @@ use crate::error::{Error, Result, read_text, write_error};
 use crate::eval::journal::{self, JOURNAL_FILE};
 use crate::eval::study::{CONVERGED, Row, StudyResult};
 use crate::eval::summary::SummaryRow;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -134,27 +135,19 @@ pub fn error_plot(model: &str, parameter: &str, summary: &[&SummaryRow]) -> Resu
     let (x_min, x_max) = range(points.clone().map(|p| p.0));
     let (y_min, y_max) = range(points.flat_map(|p| [p.1, p.1.abs().max(p.2), -p.2]));
     let title = format!("{model}: {parameter}, error against the sweep");
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_error)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&title, ("sans-serif", 16))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x_min..x_max, y_min..y_max)
-            .map_err(plot_error)?;
-        chart
-            .configure_mesh()
-            .x_desc(if by_rate {
-                "sample rate (Hz)"
-            } else {
-                "sweep point"
-            })
-            .y_desc("mean − truth")
-            .draw()
-            .map_err(plot_error)?;
+    let x_label = if by_rate {
+        "sample rate (Hz)"
+    } else {
+        "sweep point"
+    };
+    let frame = Frame {
+        title: &title,
+        x: (x_min, x_max),
+        y: (y_min, y_max),
+        x_label,
+        y_label: "mean − truth",
+    };
+    let svg = frame.draw(|chart| {
         for (number, (key, mut values)) in series.into_iter().enumerate() {
             values.sort_by(|a, b| a.0.total_cmp(&b.0));
             let colour = PALETTE[number % PALETTE.len()];
@@ -184,14 +177,8 @@ pub fn error_plot(model: &str, parameter: &str, summary: &[&SummaryRow]) -> Resu
                     .map_err(plot_error)?;
             }
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(plot_error)?;
-        root.present().map_err(plot_error)?;
-    }
+        Ok(())
+    })?;
     Ok(Plot { title, svg })
 }
 
@@ -206,23 +193,14 @@ pub fn estimates_plot(model: &str, parameter: &str, rows: &[&Row], runs: usize) 
     let (x_min, x_max) = range(used.iter().map(|r| case(r)));
     let (y_min, y_max) = range(used.iter().map(|r| r.estimate).chain(truth));
     let title = format!("{model}: {parameter}, estimates");
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_error)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&title, ("sans-serif", 16))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x_min..x_max, y_min..y_max)
-            .map_err(plot_error)?;
-        chart
-            .configure_mesh()
-            .x_desc("case")
-            .y_desc(parameter)
-            .draw()
-            .map_err(plot_error)?;
+    let frame = Frame {
+        title: &title,
+        x: (x_min, x_max),
+        y: (y_min, y_max),
+        x_label: "case",
+        y_label: parameter,
+    };
+    let svg = frame.draw(|chart| {
         if let Some(truth) = truth {
             chart
                 .draw_series(LineSeries::new(
@@ -246,15 +224,55 @@ pub fn estimates_plot(model: &str, parameter: &str, rows: &[&Row], runs: usize) 
                 .label(method.to_string())
                 .legend(move |(x, y)| Circle::new((x + 9, y), 3, colour.filled()));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(plot_error)?;
-        root.present().map_err(plot_error)?;
-    }
+        Ok(())
+    })?;
     Ok(Plot { title, svg })
+}
+
+/// A plot's frame: title, axis ranges and labels.
+struct Frame<'a> {
+    title: &'a str,
+    x: (f64, f64),
+    y: (f64, f64),
+    x_label: &'a str,
+    y_label: &'a str,
+}
+
+/// The chart a plot's series are drawn on.
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+impl Frame<'_> {
+    /// The SVG of the frame (white ground, caption, mesh, axis labels)
+    /// with `series` drawn on it, and the legend.
+    fn draw(&self, series: impl FnOnce(&mut Chart) -> Result<()>) -> Result<String> {
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
+            root.fill(&WHITE).map_err(plot_error)?;
+            let mut chart = ChartBuilder::on(&root)
+                .caption(self.title, ("sans-serif", 16))
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(70)
+                .build_cartesian_2d(self.x.0..self.x.1, self.y.0..self.y.1)
+                .map_err(plot_error)?;
+            chart
+                .configure_mesh()
+                .x_desc(self.x_label)
+                .y_desc(self.y_label)
+                .draw()
+                .map_err(plot_error)?;
+            series(&mut chart)?;
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(plot_error)?;
+            root.present().map_err(plot_error)?;
+        }
+        Ok(svg)
+    }
 }
 
 /// Each method's colour, in order of first appearance.
