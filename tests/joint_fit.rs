@@ -76,11 +76,13 @@ fn two_repeats_fitted_jointly_halve_the_variance() {
     assert!(compared >= 5, "{compared} parameters compared");
 }
 
-/// Equation error and stepwise regression fit one record at a time: given
-/// two, they refuse with a typed refusal rather than use the first.
+/// Every method but output error fits one record at a time (equation
+/// error, stepwise regression, filter error, the EKF and UKF, estimation
+/// before modelling): given two, each refuses with a typed refusal rather
+/// than use the first.
 #[test]
 fn one_record_methods_refuse_several() {
-    for method in ["ee", "swr"] {
+    for method in ["ee", "swr", "fem", "ekf", "ukf", "ebm"] {
         let error = fit(method, repeats().to_vec()).unwrap_err();
         let aeroid::Error::Refused(refusal) = &error else {
             panic!("{method}: not a refusal: {error}");

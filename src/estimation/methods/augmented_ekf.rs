@@ -284,6 +284,7 @@ impl Estimator for AugmentedEkf {
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let settings = FilterSettings::read(METHOD, &problem.settings)?;
+        crate::estimation::estimator::one_record(METHOD, problem)?;
         let run = augmented_estimate(
             METHOD,
             problem.record(),

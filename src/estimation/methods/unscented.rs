@@ -138,6 +138,7 @@ impl Estimator for UnscentedFilter {
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let (settings, unscented) = read(&problem.settings)?;
+        crate::estimation::estimator::one_record(METHOD, problem)?;
         let run = augmented_estimate(
             METHOD,
             problem.record(),
