@@ -269,3 +269,55 @@ fn every_fault_is_an_error_with_its_reason_and_a_counted_failure() {
         result.endings
     );
 }
+
+/// A study with a plug-in among its methods is deterministic and resumable
+/// like any other: one thread, or two threads after an interruption that
+/// kept one case, write the same bytes.
+#[test]
+fn a_study_with_a_plugin_is_deterministic_and_resumable() {
+    use aeroid::eval::journal::{JOURNAL_FILE, Shard};
+    use aeroid::eval::study::{Study, assemble};
+    let name = registered(&examples().join("side-force.toml"));
+    let folder = common::temp_folder("plugin_study");
+    cy_beta_model(&folder);
+    let text = format!(
+        "name = \"with-plugin\"\nscenarios = [\"attas-lateral-multistep\"]\nprofile = \"flight-test-25hz\"\nmodels = [\"attas-cy-beta.toml\"]\nmethods = [\"ee\", \"{name}\"]\nruns = 3\nseed = 8\n"
+    );
+    let path = common::write(&folder, "with-plugin.toml", &text);
+    let study = Study::load(path.to_str().unwrap()).unwrap();
+    let written = |out: &Path| {
+        ["runs.csv", "summary.csv", "study.json"].map(|file| std::fs::read(out.join(file)).unwrap())
+    };
+    let one = folder.join("one");
+    study
+        .run_journaled(&one, Shard::default(), false, 1, &|_| {})
+        .unwrap();
+    let result = assemble(std::slice::from_ref(&one), &one).unwrap();
+    assert!(
+        result
+            .summary
+            .iter()
+            .any(|s| s.method == name && s.converged == 3),
+        "{}{:?}",
+        result.table(),
+        result.endings
+    );
+    let resumed = folder.join("resumed");
+    study
+        .run_journaled(&resumed, Shard::default(), false, 2, &|_| {})
+        .unwrap();
+    let journal = resumed.join(JOURNAL_FILE);
+    let kept: Vec<String> = std::fs::read_to_string(&journal)
+        .unwrap()
+        .lines()
+        .take(2)
+        .map(String::from)
+        .collect();
+    std::fs::write(&journal, kept.join("\n") + "\n").unwrap();
+    let run = study
+        .run_journaled(&resumed, Shard::default(), true, 2, &|_| {})
+        .unwrap();
+    assert_eq!((run.resumed, run.ran), (1, 2));
+    assemble(std::slice::from_ref(&resumed), &resumed).unwrap();
+    assert_eq!(written(&resumed), written(&one));
+}

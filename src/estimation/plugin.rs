@@ -263,7 +263,16 @@ impl Plugin {
         std::fs::write(&problem_path, json).map_err(|e| write_error(&problem_path, e))?;
         if self.record_folders {
             for (k, record) in problem.records.iter().enumerate() {
-                record.write(&work.path.join(format!("record-{k}")))?;
+                let folder = work.path.join(format!("record-{k}"));
+                if record.seed.is_some_and(|seed| i64::try_from(seed).is_err()) {
+                    // record.toml holds TOML integers; a study's recorder
+                    // seed may exceed them (problem.json keeps it).
+                    let mut copy = record.clone();
+                    copy.seed = None;
+                    copy.write(&folder)?;
+                } else {
+                    record.write(&folder)?;
+                }
             }
         }
         let outcome = self.execute(&work.path)?;
