@@ -149,14 +149,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
 ) -> Result<Pass> {
     let len = model.len();
     check_sizes("filter", model, &initial, noise, observations)?;
-    let mut pass = Pass {
-        predicted: Vec::with_capacity(len),
-        filtered: Vec::with_capacity(len),
-        measured: Vec::with_capacity(len),
-        transitions: Vec::with_capacity(len.saturating_sub(1)),
-        innovations: vec![Vec::new(); model.output_count()],
-        negative_log_likelihood: 0.0,
-    };
+    let mut pass = Pass::with_capacity(len, model.output_count());
     let mut state = initial.mean;
     let mut covariance = initial.covariance;
     for k in 0..len {
@@ -196,30 +189,68 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 DVector::from_iterator(rows.len(), present.iter().map(|&(o, z)| z - predicted[o]));
             let update = kalman::update(&mut state, &mut covariance, &h, &r, innovation)
                 .map_err(|e| at_time(e, t))?;
-            pass.negative_log_likelihood += 0.5 * update.log_likelihood_term();
-            for (i, &o) in rows.iter().enumerate() {
-                pass.innovations[o].push(Innovation {
-                    k,
-                    value: update.innovation[i],
-                    variance: update.innovation_covariance[(i, i)],
-                });
-            }
-            pass.measured.push(Some(Measured {
-                observation: h,
-                update,
-            }));
+            pass.measured_at(
+                k,
+                present,
+                Measured {
+                    observation: h,
+                    update,
+                },
+            );
         }
+        pass.filtered_at(t, &state, &covariance)?;
+    }
+    Ok(pass)
+}
+
+impl Pass {
+    /// An empty pass over `len` grid points and `outputs` outputs.
+    pub(crate) fn with_capacity(len: usize, outputs: usize) -> Pass {
+        Pass {
+            predicted: Vec::with_capacity(len),
+            filtered: Vec::with_capacity(len),
+            measured: Vec::with_capacity(len),
+            transitions: Vec::with_capacity(len.saturating_sub(1)),
+            innovations: vec![Vec::new(); outputs],
+            negative_log_likelihood: 0.0,
+        }
+    }
+
+    /// Keeps the measurement update at grid point k of the outputs
+    /// `present` (in its rows' order): its likelihood term, each output's
+    /// innovation and the update itself.
+    pub(crate) fn measured_at(&mut self, k: usize, present: &[(usize, f64)], measured: Measured) {
+        let update = &measured.update;
+        self.negative_log_likelihood += 0.5 * update.log_likelihood_term();
+        for (i, &(o, _)) in present.iter().enumerate() {
+            self.innovations[o].push(Innovation {
+                k,
+                value: update.innovation[i],
+                variance: update.innovation_covariance[(i, i)],
+            });
+        }
+        self.measured.push(Some(measured));
+    }
+
+    /// Keeps the filtered estimate at time t; an error when the state went
+    /// non-finite.
+    pub(crate) fn filtered_at(
+        &mut self,
+        t: f64,
+        state: &DVector<f64>,
+        covariance: &DMatrix<f64>,
+    ) -> Result<()> {
         if !state.iter().all(|v| v.is_finite()) {
             return Err(Error::Other(format!(
                 "the filter's state went non-finite at t = {t} s"
             )));
         }
-        pass.filtered.push(Gaussian {
+        self.filtered.push(Gaussian {
             mean: state.clone(),
             covariance: covariance.clone(),
         });
+        Ok(())
     }
-    Ok(pass)
 }
 
 /// Checks that a filter's model, initial estimate, noise and observations

@@ -38,7 +38,7 @@
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::StateSpaceModel;
-use crate::estimation::solver::extended_kalman::{Innovation, Noise, Pass, at_time, check_sizes};
+use crate::estimation::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
 use crate::estimation::solver::kalman::{Gaussian, Measured, SigmaPoints, Unscented, Update};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
@@ -57,14 +57,7 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
     let n = model.state_count();
     let len = model.len();
     check_sizes("unscented filter", model, &initial, noise, observations)?;
-    let mut pass = Pass {
-        predicted: Vec::with_capacity(len),
-        filtered: Vec::with_capacity(len),
-        measured: Vec::with_capacity(len),
-        transitions: Vec::with_capacity(len.saturating_sub(1)),
-        innovations: vec![Vec::new(); model.output_count()],
-        negative_log_likelihood: 0.0,
-    };
+    let mut pass = Pass::with_capacity(len, model.output_count());
     let mut state = initial.mean;
     let mut covariance = initial.covariance;
     for k in 0..len {
@@ -113,26 +106,9 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
                 &mut covariance,
             )
             .map_err(|e| at_time(e, t))?;
-            let update = &measured.update;
-            pass.negative_log_likelihood += 0.5 * update.log_likelihood_term();
-            for (i, &(o, _)) in present.iter().enumerate() {
-                pass.innovations[o].push(Innovation {
-                    k,
-                    value: update.innovation[i],
-                    variance: update.innovation_covariance[(i, i)],
-                });
-            }
-            pass.measured.push(Some(measured));
+            pass.measured_at(k, present, measured);
         }
-        if !state.iter().all(|v| v.is_finite()) {
-            return Err(Error::Other(format!(
-                "the filter's state went non-finite at t = {t} s"
-            )));
-        }
-        pass.filtered.push(Gaussian {
-            mean: state.clone(),
-            covariance: covariance.clone(),
-        });
+        pass.filtered_at(t, &state, &covariance)?;
     }
     Ok(pass)
 }
