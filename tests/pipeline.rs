@@ -57,7 +57,8 @@ fn run_scores_every_method_on_the_lateral_scenario() {
 /// airspeed (dynamic pressure; output error's pseudo-control or output);
 /// equation error the roll and yaw rates (the moment equations);
 /// output error, filter error and the augmented-state filters (EKF, UKF)
-/// the roll and yaw rates (a lateral output or pseudo-control); estimation
+/// the roll and yaw rates (a lateral output or pseudo-control), and so do
+/// the frequency-domain methods; estimation
 /// before modelling, which needs no rate,
 /// the airspeed and the altitude (observations of Eq. 8: the profile
 /// records calibrated airspeed and pressure altitude, not true airspeed and
@@ -68,8 +69,10 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
     let report = run::run(&scenario, &profile).unwrap();
-    let expected: [(&str, &[&str]); 7] = [
+    let expected: [(&str, &[&str]); 9] = [
         ("ee", &["airspeed", "p", "r"]),
+        ("fdee", &["airspeed", "p", "r"]),
+        ("fdoe", &["airspeed", "p", "r"]),
         ("swr", &["airspeed"]),
         ("oem", &["airspeed", "p", "r"]),
         ("ebm", &["airspeed", "altitude"]),

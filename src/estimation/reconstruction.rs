@@ -60,6 +60,9 @@ pub struct ReconstructionOptions {
     pub reference_channel: Option<String>,
     /// Only samples within [start, end] (s) are used.
     pub time_range: Option<(f64, f64)>,
+    /// The moments leave out I·ω̇ (no rate is differentiated): the
+    /// frequency-domain estimators add it from the rates' transforms.
+    pub omit_angular_accelerations: bool,
 }
 
 /// What to reconstruct: which coefficients (as measured values) and which regressors.
@@ -78,6 +81,9 @@ pub struct Reconstruction {
     /// Every regressor at each instant (`Regressor as usize`); unrequested ones may be NaN.
     pub regressors: Vec<[f64; REGRESSOR_COUNT]>,
     pub reference_channel: String,
+    /// q̄ (Pa) at each kept instant; empty when the data did not come from
+    /// a record's reconstruction.
+    pub dynamic_pressure: Vec<f64>,
     /// Rate (Hz) of the reference channel.
     pub rate: f64,
     pub notes: Vec<String>,
@@ -219,8 +225,12 @@ pub fn control_steps(record: &FlightRecord) -> Vec<f64> {
 }
 
 /// The channels that are differentiated: the rates for moments, α for α̇ terms.
-fn differentiated_channels(request: &Request) -> Vec<&'static str> {
-    let moments = request.coefficients.iter().any(|c| !c.is_force());
+fn differentiated_channels(
+    request: &Request,
+    options: &ReconstructionOptions,
+) -> Vec<&'static str> {
+    let moments =
+        !options.omit_angular_accelerations && request.coefficients.iter().any(|c| !c.is_force());
     let mut names = Vec::new();
     if moments {
         names.extend(["p", "q", "r"]);
@@ -283,7 +293,7 @@ pub fn reconstruct(
 ) -> Result<Reconstruction> {
     let needs = needed_channels(record, aircraft, request);
     check_present(record, &needs, method)?;
-    let differentiated = differentiated_channels(request);
+    let differentiated = differentiated_channels(request, options);
     // The differentiator's windows stop at the control steps: only looked
     // for when something is differentiated.
     let breaks = if differentiated.is_empty() {
@@ -319,6 +329,7 @@ pub fn reconstruct(
         coefficients: Default::default(),
         regressors: Vec::with_capacity(times.len()),
         reference_channel: reference.name.clone(),
+        dynamic_pressure: Vec::with_capacity(times.len()),
         rate: reference.rate,
         notes: Vec::new(),
     };
@@ -330,6 +341,9 @@ pub fn reconstruct(
         match sample(aircraft, request, &signals, k) {
             Some((coefficients, regressors)) => {
                 reconstruction.times.push(time);
+                reconstruction
+                    .dynamic_pressure
+                    .push(dynamic_pressure(&signals, k));
                 reconstruction.regressors.push(regressors);
                 for (series, value) in reconstruction.coefficients.iter_mut().zip(coefficients) {
                     if let Some(series) = series {
@@ -588,7 +602,8 @@ fn moment_coefficients(
     thrust: &Vector3<f64>,
 ) -> Vector3<f64> {
     let omega = signals.rates(k);
-    let omega_dot = Vector3::from_fn(|i, _| at(signals.rate_derivatives[i], k));
+    // Without derivatives (omit_angular_accelerations) I·ω̇ is left out.
+    let omega_dot = Vector3::from_fn(|i, _| signals.rate_derivatives[i].map_or(0.0, |v| v[k]));
     let inertia = &aircraft.mass.inertia;
     let thrust_moment = aircraft.propulsion.position.cross(thrust);
     let aerodynamic = inertia * omega_dot + omega.cross(&(inertia * omega)) - thrust_moment;

@@ -212,7 +212,7 @@ impl Plan {
     }
 
     /// Parameter indices in column order (the free terms, then e when free).
-    fn columns(&self, structure: &ModelStructure) -> Vec<usize> {
+    pub(crate) fn columns(&self, structure: &ModelStructure) -> Vec<usize> {
         let mut columns: Vec<usize> = self.free_terms(structure).map(|(_, i)| i).collect();
         columns.extend(self.oswald.filter(|&e| structure.free[e]));
         columns
@@ -220,7 +220,7 @@ impl Plan {
 }
 
 /// The regression result of one coefficient.
-struct CoefficientResult {
+pub(crate) struct CoefficientResult {
     /// Parameter indices (structure order) with value, corrected and white standard error.
     parameters: Vec<(usize, f64, f64, f64)>,
     covariance: DMatrix<f64>,
@@ -385,8 +385,46 @@ fn fit_coefficient(
         return failed_coefficient(name, &columns, reason);
     }
     let (x, z) = regression_problem(plan, structure, data, &columns);
-    let fit = LeastSquares::fit(&x, &z);
-    let (mut covariance, window) = fit.corrected_covariance(&x, lag);
+    fit_regression(
+        plan,
+        structure,
+        &columns,
+        (&x, &z),
+        measured,
+        Bound::Coloured(lag),
+    )
+}
+
+/// Which Cramér–Rao bound a regression reports.
+pub(crate) enum Bound<'a> {
+    /// Corrected for coloured residuals, autocorrelation summed to this lag (rows).
+    Coloured(usize),
+    /// For residuals whose variance differs from row to row: each row's
+    /// variance from the residuals ([`LeastSquares::weighted_covariance`]).
+    RowVariances(&'a dyn Fn(&DVector<f64>) -> Vec<f64>),
+}
+
+/// The least-squares fit of one coefficient's regression `z = X·θ` (the
+/// columns of X are `columns`, a free Oswald factor last as 1/e), with the
+/// reported bound (the white one s²·(XᵀX)⁻¹ in the notes) and the fit of
+/// `measured` (z plus the fixed terms, row for row).
+pub(crate) fn fit_regression(
+    plan: &Plan,
+    structure: &ModelStructure,
+    columns: &[usize],
+    (x, z): (&DMatrix<f64>, &DVector<f64>),
+    measured: &[f64],
+    bound: Bound,
+) -> CoefficientResult {
+    let name = plan.coefficient.name(structure.aircraft.aero.force_axes);
+    let fit = LeastSquares::fit(x, z);
+    let (mut covariance, window) = match bound {
+        Bound::Coloured(lag) => fit.corrected_covariance(x, lag),
+        Bound::RowVariances(variances) => (
+            fit.weighted_covariance(x, &variances(&fit.residuals)),
+            LagWindow::Rectangular,
+        ),
+    };
     let window_note = (window == LagWindow::Bartlett).then(|| {
         format!(
             "{name}: the truncated residual autocorrelation sum was not positive definite; its standard errors use Bartlett (triangular) lag weights"
@@ -427,7 +465,7 @@ fn fit_coefficient(
 
 /// X (regressors of the free terms, then CL²/(π·Λ) for a free e) and z (the
 /// measured coefficient minus the fixed terms) of one coefficient.
-fn regression_problem(
+pub(crate) fn regression_problem(
     plan: &Plan,
     structure: &ModelStructure,
     data: &Reconstruction,
@@ -477,7 +515,11 @@ fn to_oswald_factor(
 }
 
 /// A coefficient that could not be fitted: start values, infinite variance.
-fn failed_coefficient(name: &str, columns: &[usize], reason: String) -> CoefficientResult {
+pub(crate) fn failed_coefficient(
+    name: &str,
+    columns: &[usize],
+    reason: String,
+) -> CoefficientResult {
     let n = columns.len();
     CoefficientResult {
         parameters: columns
@@ -492,7 +534,7 @@ fn failed_coefficient(name: &str, columns: &[usize], reason: String) -> Coeffici
 }
 
 /// The estimate from the per-coefficient results, parameters in structure order.
-fn assemble(
+pub(crate) fn assemble(
     record: &FlightRecord,
     structure: &ModelStructure,
     method: &str,
@@ -554,7 +596,10 @@ pub(crate) fn record_name(record: &FlightRecord) -> String {
 
 /// A note for each estimate outside its bounds in the structure file (least
 /// squares has no bounds; output error would stop at them).
-fn outside_bounds_notes(structure: &ModelStructure, results: &[CoefficientResult]) -> Vec<String> {
+pub(crate) fn outside_bounds_notes(
+    structure: &ModelStructure,
+    results: &[CoefficientResult],
+) -> Vec<String> {
     let names = structure.aircraft.aero.parameters.names();
     results
         .iter()
@@ -574,7 +619,10 @@ fn outside_bounds_notes(structure: &ModelStructure, results: &[CoefficientResult
 }
 
 /// One note with every parameter's white-residual bound and the correction ratio.
-fn white_bound_notes(structure: &ModelStructure, results: &[CoefficientResult]) -> Vec<String> {
+pub(crate) fn white_bound_notes(
+    structure: &ModelStructure,
+    results: &[CoefficientResult],
+) -> Vec<String> {
     let names = structure.aircraft.aero.parameters.names();
     let items: Vec<String> = results
         .iter()

@@ -8,6 +8,8 @@
 pub mod augmented_ekf;
 pub mod equation_error;
 pub mod filter_error;
+pub mod frequency_output_error;
+pub mod frequency_regression;
 pub mod output_error;
 pub mod smoothed_regression;
 pub mod stepwise;
@@ -24,7 +26,9 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
     vec![
         Arc::new(equation_error::EquationError),
         Arc::new(stepwise::StepwiseRegression),
+        Arc::new(frequency_regression::FrequencyRegression),
         Arc::new(output_error::OutputError),
+        Arc::new(frequency_output_error::FrequencyOutputError),
         Arc::new(smoothed_regression::SmoothedRegression),
         Arc::new(filter_error::FilterError),
         Arc::new(augmented_ekf::AugmentedEkf),

@@ -794,6 +794,7 @@ fn regression_data(
         coefficients: Default::default(),
         regressors: Vec::new(),
         reference_channel: "ebm grid".into(),
+        dynamic_pressure: Vec::new(),
         rate: 1.0 / (smoothed.times[1] - smoothed.times[0]),
         notes: Vec::new(),
     };

@@ -964,6 +964,7 @@ mod tests {
             coefficients,
             regressors,
             reference_channel: "test".into(),
+            dynamic_pressure: Vec::new(),
             rate: 1.0,
             notes: Vec::new(),
         };
@@ -1010,6 +1011,7 @@ mod tests {
             coefficients,
             regressors,
             reference_channel: "test".into(),
+            dynamic_pressure: Vec::new(),
             rate: 1.0,
             notes: Vec::new(),
         }

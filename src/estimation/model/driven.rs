@@ -35,9 +35,9 @@ use std::sync::OnceLock;
 pub const FLIGHT_PATH_SIZE: usize = 11;
 pub type FlightPathState = SVector<f64, FLIGHT_PATH_SIZE>;
 
-const AIRSPEED: usize = 0;
+pub(super) const AIRSPEED: usize = 0;
 const ALPHA: usize = 1;
-const BETA: usize = 2;
+pub(super) const BETA: usize = 2;
 const P: usize = 3;
 const ROLL: usize = 6;
 const PITCH: usize = 7;

@@ -127,7 +127,7 @@ impl LinearStateSpace {
     }
 
     /// The matrices with θ written in.
-    fn at(&self, theta: &[f64]) -> Result<[DMatrix<f64>; 4]> {
+    pub(crate) fn at(&self, theta: &[f64]) -> Result<[DMatrix<f64>; 4]> {
         if theta.len() != self.parameters.len() {
             return Err(Error::Other(format!(
                 "θ has {} values; the linear model has {} parameters",

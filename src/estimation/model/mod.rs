@@ -11,3 +11,4 @@ pub mod driven;
 pub mod linear;
 pub mod observations;
 pub mod state_space;
+pub mod transfer;

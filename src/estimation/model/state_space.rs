@@ -255,6 +255,11 @@ impl DrivenStateSpace {
         &self.simulation
     }
 
+    /// The outputs, in the order of y.
+    pub fn observables(&self) -> &[Observable] {
+        &self.outputs
+    }
+
     /// x of a full flight-path state.
     pub fn state_of(&self, full: &FlightPathState) -> DVector<f64> {
         DVector::from_iterator(self.states.len(), self.states.iter().map(|&i| full[i]))
@@ -263,7 +268,7 @@ impl DrivenStateSpace {
     /// The model with θ written in; an error for a θ of the wrong length,
     /// or one that changes which states are integrated (the stall model's
     /// χ is a state only while τ1 > 0).
-    fn model_at(&self, theta: &[f64]) -> Result<FlightModel> {
+    pub(crate) fn model_at(&self, theta: &[f64]) -> Result<FlightModel> {
         let count = self.parameter_count();
         if theta.len() != count {
             return Err(Error::Other(format!(

@@ -3,6 +3,7 @@
 //! bounds.
 
 pub mod extended_kalman;
+pub mod fourier;
 pub mod gauss_newton;
 pub mod kalman;
 pub mod regression;

@@ -137,6 +137,22 @@ impl LeastSquares {
         &self.inverse_information * middle * &self.inverse_information
     }
 
+    /// The bound for independent residuals of unequal variance v_i (row i):
+    /// `(XᵀX)⁻¹·(Σᵢ v_i·xᵢxᵢᵀ)·(XᵀX)⁻¹` (the sandwich of White,
+    /// Econometrica 48, 1980, with the caller's variance model). Falls back
+    /// to the white bound when a parameter is unidentifiable.
+    pub fn weighted_covariance(&self, x: &DMatrix<f64>, variances: &[f64]) -> DMatrix<f64> {
+        if !self.unidentifiable.is_empty() || variances.len() != x.nrows() {
+            return self.white_covariance();
+        }
+        let mut middle = DMatrix::zeros(x.ncols(), x.ncols());
+        for (i, &v) in variances.iter().enumerate() {
+            let row = x.row(i);
+            middle += row.transpose() * row * v;
+        }
+        &self.inverse_information * middle * &self.inverse_information
+    }
+
     /// The Morelli–Klein bound with the plain truncated sum, or, when that is
     /// not positive for some parameter, the Bartlett-weighted one; with the
     /// window used.

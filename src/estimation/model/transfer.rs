@@ -1,0 +1,219 @@
+//! Linear time-invariant models as the frequency-domain estimators see
+//! them: matrices A(θ), B(θ), C(θ), D(θ) of
+//!
+//!   δẋ = A·δx + B·δu,   δy = C·δx + D·δu,
+//!
+//! in perturbations from a reference point, whose transfer function
+//! C·(jωI − A)⁻¹·B + D is fitted to measured Fourier transforms
+//! (Klein & Morelli, "Aircraft System Identification", AIAA 2006, §7.4).
+//!
+//! Two sources: a [`LinearStateSpace`] (dimensional derivatives as entries),
+//! and a nonlinear postulated model linearised about one grid point of its
+//! record-driven view ([`LinearisedFlight`]): the integrated flight-path
+//! states are δx; the controls and the measured pseudo-controls (the
+//! flight-path states the model does not integrate, e.g. V, α, q, θ under a
+//! lateral model) are δu; the Jacobians come from central differences of
+//! the same flight-path rates and outputs the time-domain methods integrate
+//! ([`super::driven`]), with the pseudo-controls' own rates at zero (a
+//! steady reference). With a linear aerodynamic model, A…D are affine in
+//! the coefficients; the bias terms (the constant regressor) only move the
+//! reference's rates, which a transform at the Fourier frequencies k/T does
+//! not see.
+
+use super::driven::{self, FlightPathState, PseudoRates};
+use super::linear::LinearStateSpace;
+use super::state_space::DrivenStateSpace;
+use crate::error::{Error, Result};
+use crate::estimation::structure::FLIGHT_PATH_STATES;
+use crate::sim::state::{Control, Controls};
+use nalgebra::DMatrix;
+
+/// A linear model with parameters θ.
+pub trait TransferModel {
+    fn parameter_count(&self) -> usize;
+    /// A, B, C, D at θ.
+    fn matrices(&self, theta: &[f64]) -> Result<[DMatrix<f64>; 4]>;
+}
+
+impl TransferModel for LinearStateSpace {
+    fn parameter_count(&self) -> usize {
+        self.parameters.len()
+    }
+
+    fn matrices(&self, theta: &[f64]) -> Result<[DMatrix<f64>; 4]> {
+        self.at(theta)
+    }
+}
+
+/// One input of a linearised flight.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Input {
+    Control(Control),
+    /// A measured flight-path state (index into [`FLIGHT_PATH_STATES`]).
+    Measured(usize),
+}
+
+impl Input {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Input::Control(control) => control.name(),
+            Input::Measured(i) => FLIGHT_PATH_STATES[*i],
+        }
+    }
+}
+
+/// A record-driven postulated model linearised about grid point `k`.
+#[derive(Debug, Clone)]
+pub struct LinearisedFlight<'a> {
+    view: &'a DrivenStateSpace,
+    reference: FlightPathState,
+    controls: Controls,
+    inputs: Vec<Input>,
+}
+
+impl<'a> LinearisedFlight<'a> {
+    /// The view linearised about its grid point `k` with the integrated
+    /// states at `x` (the others, and the controls, as measured there).
+    pub fn new(view: &'a DrivenStateSpace, k: usize, x: &[f64]) -> Result<LinearisedFlight<'a>> {
+        let simulation = view.simulation();
+        if k >= simulation.len() {
+            return Err(Error::Other(format!(
+                "no grid point {k} to linearise about: the grid has {}",
+                simulation.len()
+            )));
+        }
+        let mut reference = simulation.measured()[k];
+        if x.len() != view.states().len() {
+            return Err(Error::Other(format!(
+                "x has {} values; the model has {} states",
+                x.len(),
+                view.states().len()
+            )));
+        }
+        for (&i, &value) in view.states().iter().zip(x) {
+            reference[i] = value;
+        }
+        let mut inputs: Vec<Input> = Control::ALL.into_iter().map(Input::Control).collect();
+        inputs.extend(
+            (0..FLIGHT_PATH_STATES.len())
+                .filter(|i| !simulation.integrate[*i])
+                .map(Input::Measured),
+        );
+        Ok(LinearisedFlight {
+            view,
+            reference,
+            controls: simulation.controls[k],
+            inputs,
+        })
+    }
+
+    pub fn inputs(&self) -> &[Input] {
+        &self.inputs
+    }
+
+    /// δu at every grid point: controls and measured states minus the reference's.
+    pub fn input_perturbations(&self) -> DMatrix<f64> {
+        let simulation = self.view.simulation();
+        DMatrix::from_fn(simulation.len(), self.inputs.len(), |k, i| {
+            match self.inputs[i] {
+                Input::Control(c) => simulation.controls[k][c.index()] - self.controls[c.index()],
+                Input::Measured(j) => simulation.measured()[k][j] - self.reference[j],
+            }
+        })
+    }
+
+    /// The integrated states' reference values.
+    pub fn reference_state(&self) -> Vec<f64> {
+        self.view
+            .states()
+            .iter()
+            .map(|&i| self.reference[i])
+            .collect()
+    }
+
+    /// Rates of the integrated states and outputs at a perturbed point.
+    fn evaluate(
+        &self,
+        model: &crate::sim::dynamics::FlightModel,
+        state: &FlightPathState,
+        controls: &Controls,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let pseudo = PseudoRates {
+            airspeed: (!self.view.simulation().integrate[driven::AIRSPEED]).then_some(0.0),
+            beta: (!self.view.simulation().integrate[driven::BETA]).then_some(0.0),
+        };
+        let (rates, outputs) =
+            driven::evaluate(model, state, controls, pseudo, self.view.observables());
+        (
+            self.view.states().iter().map(|&i| rates[i]).collect(),
+            outputs,
+        )
+    }
+}
+
+/// Central-difference step along a flight-path state or control.
+fn nudge(value: f64) -> f64 {
+    1e-6 * value.abs().max(1.0)
+}
+
+impl TransferModel for LinearisedFlight<'_> {
+    fn parameter_count(&self) -> usize {
+        self.view.parameters().len()
+    }
+
+    fn matrices(&self, theta: &[f64]) -> Result<[DMatrix<f64>; 4]> {
+        let model = self.view.model_at(theta)?;
+        let states = self.view.states();
+        let (n, m, l) = (
+            states.len(),
+            self.inputs.len(),
+            self.view.observables().len(),
+        );
+        let mut matrices = [
+            DMatrix::zeros(n, n),
+            DMatrix::zeros(n, m),
+            DMatrix::zeros(l, n),
+            DMatrix::zeros(l, m),
+        ];
+        let columns = states
+            .iter()
+            .map(|&i| (Input::Measured(i), true))
+            .chain(self.inputs.iter().map(|&input| (input, false)));
+        for (column, (input, is_state)) in columns.enumerate() {
+            let mut sides = [(Vec::new(), Vec::new()), (Vec::new(), Vec::new())];
+            let mut step = 0.0;
+            for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
+                let (mut state, mut controls) = (self.reference, self.controls);
+                match input {
+                    Input::Control(c) => {
+                        step = nudge(controls[c.index()]);
+                        controls[c.index()] += sign * step;
+                    }
+                    Input::Measured(j) => {
+                        step = nudge(state[j]);
+                        state[j] += sign * step;
+                    }
+                }
+                *side = self.evaluate(&model, &state, &controls);
+            }
+            let [(rates_up, outputs_up), (rates_down, outputs_down)] = &sides;
+            let (f, h, j) = if is_state {
+                (0, 2, column)
+            } else {
+                (1, 3, column - n)
+            };
+            for r in 0..n {
+                matrices[f][(r, j)] = (rates_up[r] - rates_down[r]) / (2.0 * step);
+            }
+            for r in 0..l {
+                matrices[h][(r, j)] = (outputs_up[r] - outputs_down[r]) / (2.0 * step);
+            }
+        }
+        if matrices.iter().any(|m| m.iter().any(|v| !v.is_finite())) {
+            return Err(Error::Other(
+                "the linearised model is not finite at the reference point".into(),
+            ));
+        }
+        Ok(matrices)
+    }
+}
