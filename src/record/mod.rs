@@ -22,6 +22,7 @@
 
 pub mod derived;
 pub mod import;
+pub mod quality;
 pub mod recorder;
 
 use crate::csv_table::CsvTable;
