@@ -324,6 +324,73 @@ pub fn geometric_flow_angles(record: &FlightRecord, wind: Wind) -> Result<Geomet
     })
 }
 
+/// A record with the geometric angles in it, and what was done, per channel.
+#[derive(Debug, Clone)]
+pub struct Derivation {
+    pub record: FlightRecord,
+    pub angles: GeometricFlowAngles,
+    /// One line per angle: added, replaced (and why) or added beside the recorded one.
+    pub notes: Vec<String>,
+}
+
+/// The record with the geometric `alpha` and `beta` in it. Where the record
+/// has no such channel the geometric one is added; where its channel is
+/// unusable by the quality report ([`crate::record::quality`]: stuck or
+/// with implausible steps) it is replaced, and the note says what was
+/// wrong; a usable recorded channel is kept and the geometric one added as
+/// `alpha_geometric` (`beta_geometric`), unless `replace`. An added angle
+/// leaves the record's `absent` list.
+pub fn with_geometric_flow_angles(
+    record: &FlightRecord,
+    wind: Wind,
+    replace: bool,
+) -> Result<Derivation> {
+    let angles = geometric_flow_angles(record, wind)?;
+    let mut derived = record.clone();
+    let mut notes = Vec::new();
+    for channel in [&angles.alpha, &angles.beta] {
+        let name = channel.name.clone();
+        let recorded = record.channel(&name).ok();
+        let quality = recorded.map(crate::record::quality::assess_channel);
+        let (target, note) = match quality {
+            None => (name.clone(), format!("{name}: added (geometric)")),
+            Some(q) if q.is_unusable() => (
+                name.clone(),
+                format!(
+                    "{name}: the recorded channel is left out ({}); replaced by the geometric one",
+                    q.flags()
+                ),
+            ),
+            Some(_) if replace => (
+                name.clone(),
+                format!("{name}: the recorded channel is replaced by the geometric one"),
+            ),
+            Some(_) => {
+                let target = format!("{name}_geometric");
+                let note = format!(
+                    "{name}: the recorded channel is kept (no quality flag); the geometric one is added as {target}"
+                );
+                (target, note)
+            }
+        };
+        let channel = Channel {
+            name: target.clone(),
+            ..channel.clone()
+        };
+        match derived.channels.iter_mut().find(|c| c.name == target) {
+            Some(existing) => *existing = channel,
+            None => derived.channels.push(channel),
+        }
+        derived.absent.retain(|a| *a != target);
+        notes.push(note);
+    }
+    Ok(Derivation {
+        record: derived,
+        angles,
+        notes,
+    })
+}
+
 /// The needed channels of the record, or an error naming every one it lacks
 /// or holds in a unit other than the SI one.
 fn needed_channels<'a>(

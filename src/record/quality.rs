@@ -401,7 +401,13 @@ mod tests {
     #[test]
     fn two_random_levels_are_stuck_unless_one_resolution_apart() {
         let values: Vec<f64> = (0..40)
-            .map(|k| if (k * 7) % 3 == 0 { 109.7 * DEG } else { 108.3 * DEG })
+            .map(|k| {
+                if (k * 7) % 3 == 0 {
+                    109.7 * DEG
+                } else {
+                    108.3 * DEG
+                }
+            })
             .collect();
         let quality = assess_channel(&channel("alpha", 0.5, values.clone()));
         assert_eq!(
@@ -425,9 +431,7 @@ mod tests {
             .map(|k| 0.01 * (k as f64 * 1.7).sin() + 0.1 * (k as f64 * 0.05).sin())
             .collect();
         let mut frozen = noisy.clone();
-        for k in 60..100 {
-            frozen[k] = noisy[59];
-        }
+        frozen[60..].fill(noisy[59]);
         let quality = assess_channel(&channel("pitch", 25.0, frozen));
         assert_eq!(
             quality.stuck,
@@ -491,7 +495,11 @@ mod tests {
         assert_eq!(quality.steps.len(), 2, "{:?}", quality.steps);
         assert_eq!(quality.steps[0].time, 2.0);
         assert!((quality.steps[1].jump + 10.0 * DEG).abs() < 0.01);
-        assert!(assess_channel(&channel("pitch", 1.0, values)).steps.is_empty());
+        assert!(
+            assess_channel(&channel("pitch", 1.0, values))
+                .steps
+                .is_empty()
+        );
         let heading: Vec<f64> = (0..60)
             .map(|k| (350.0 + 0.4 * k as f64) * DEG % std::f64::consts::TAU)
             .collect();
