@@ -55,10 +55,18 @@
 //! σ_β ≈ √(0.087² + 0.289²) ≈ 0.30°: the 1° track resolution dominates β.
 //!
 //! # Measured on the transport approach (QAR, seed 5)
-//! With steady wind only (no gusts, no turbulence) the RMS errors against
-//! the simulator's α and β are those the formula predicts (checked in
-//! `tests/flow_angles.rs`). In the scenario's gusty wind the unknown
-//! vertical wind dominates α: see docs/cli.md (`derive`) for the numbers.
+//! Checked in `tests/flow_angles.rs`, tabled in docs/cli.md (`derive`).
+//! - Steady 20 kt wind only: RMS error 0.103° in α and 0.268° in β against
+//!   the formula's 0.105° and 0.282°; every sample within the first-order
+//!   worst case (at most 0.95 of it).
+//! - Without the wind correction β is off by 4.69° on average (the
+//!   crosswind over the airspeed), the wind's first-order effect.
+//! - Gusts and moderate turbulence: 1.16° RMS in α (4.05° largest), of
+//!   which the unknown vertical wind's first-order effect leaves 0.15° RMS
+//!   unexplained (0.10° with unquantized channels); 0.94° RMS in β, mostly
+//!   the horizontal turbulence the 1/4 Hz wind channels miss (0.52° with
+//!   the wind at 1 Hz). The wind channels' resolution (0.1 kt, 0.5°)
+//!   contributes 0.001° (α) and 0.007° (β) RMS, as the formula predicts.
 
 use crate::error::{Error, Result};
 use crate::record::{Channel, FlightRecord, derived};
