@@ -166,10 +166,11 @@ fn body_air_velocity(x: &Inputs, wind: Wind) -> Vector3<f64> {
 pub fn flow_angles(x: &Inputs, wind: Wind) -> (f64, f64) {
     let velocity = body_air_velocity(x, wind);
     let speed = velocity.norm();
-    let beta = if speed > 0.0 {
-        (velocity.y / speed).clamp(-1.0, 1.0).asin()
-    } else {
+    // A dropout in an input (NaN) stays a dropout; standing still relative to the air is β = 0.
+    let beta = if speed == 0.0 {
         0.0
+    } else {
+        (velocity.y / speed).clamp(-1.0, 1.0).asin()
     };
     (velocity.z.atan2(velocity.x), beta)
 }
@@ -523,6 +524,67 @@ mod tests {
         assert!(alpha.abs() < 1e-12);
         assert!((beta + (10.0f64 / 100.0).atan()).abs() < 1e-12, "{beta}");
         assert_eq!(flow_angles(&x, Wind::Uncorrected).1, 0.0);
+    }
+
+    fn channel(name: &str, unit: &str, rate: f64, offset: f64, values: Vec<f64>) -> Channel {
+        Channel {
+            name: name.into(),
+            unit: unit.into(),
+            rate,
+            resolution: None,
+            source: String::new(),
+            times: (0..values.len())
+                .map(|k| offset + k as f64 / rate)
+                .collect(),
+            values,
+        }
+    }
+
+    /// The time-base convention: 1 Hz attitude and flight path (pitch at
+    /// 0.1 s into each second, the others later; heading and track at the
+    /// same instants), wind at 1/4 Hz from 0 to
+    /// 16 s. The angles come at pitch's instants within 0.2…16 s (the span
+    /// all channels cover: the first track sample is at 0.2 s), a track
+    /// dropout at 5.2 s makes the two instants around it (5.1 s, 6.1 s)
+    /// dropouts, and a
+    /// heading through north (359.5° → 0.5°) is interpolated through 0°.
+    #[test]
+    fn angles_are_at_the_fastest_channel_within_the_common_span() {
+        let n = 20;
+        let heading = |k: usize| ((359.5 + 0.1 * k as f64) * DEG).rem_euclid(std::f64::consts::TAU);
+        let mut track: Vec<f64> = (0..n).map(heading).collect();
+        track[5] = f64::NAN;
+        let record = FlightRecord {
+            channels: vec![
+                channel("pitch", "rad", 1.0, 0.1, vec![0.05; n]),
+                channel("roll", "rad", 1.0, 0.1, vec![0.0; n]),
+                channel("yaw", "rad", 1.0, 0.2, (0..n).map(heading).collect()),
+                channel("flight_path_angle", "rad", 1.0, 0.15, vec![0.0; n]),
+                channel("track", "rad", 1.0, 0.2, track),
+                channel("ground_speed", "m/s", 1.0, 0.2, vec![100.0; n]),
+                channel("wind_speed", "m/s", 0.25, 0.0, vec![0.0; 5]),
+                channel("wind_direction", "rad", 0.25, 0.0, vec![0.0; 5]),
+            ],
+            ..FlightRecord::default()
+        };
+        let angles = geometric_flow_angles(&record, Wind::Corrected).unwrap();
+        assert_eq!(angles.time_base, "pitch");
+        let expected: Vec<f64> = (1..16).map(|k| 0.1 + k as f64).collect();
+        assert_eq!(angles.alpha.times, expected);
+        for (t, (alpha, beta)) in expected
+            .iter()
+            .zip(angles.alpha.values.iter().zip(&angles.beta.values))
+        {
+            if (5.0..7.0).contains(t) {
+                assert!(alpha.is_nan() && beta.is_nan(), "{t}");
+            } else {
+                // Heading and track move together, so the flow stays on the nose.
+                assert!(
+                    (alpha - 0.05).abs() < 1e-12 && beta.abs() < 1e-9,
+                    "{t}: {alpha} {beta}"
+                );
+            }
+        }
     }
 
     /// The central-difference partials match the closed forms of the module
