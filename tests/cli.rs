@@ -241,3 +241,93 @@ fn estimate_writes_the_smoothed_histories_where_asked() {
     assert!(!other.exists());
     std::fs::remove_dir_all(&folder).unwrap();
 }
+
+/// The QAR record of the transport approach: `inspect --quality` flags its
+/// angle of attack as stuck, and `derive` leaves that channel out for the
+/// geometric one and says so, adds the sideslip the QAR lacks (no longer
+/// absent), and the written channels say where they came from.
+#[test]
+fn derive_replaces_the_stuck_angle_of_attack_and_says_so() {
+    let folder = common::temp_folder("derive-qar");
+    let (recorded, derived) = (folder.join("qar"), folder.join("derived"));
+    stdout_of(
+        aeroid()
+            .args(["record", "transport-approach", "--out"])
+            .arg(&recorded),
+    );
+    let quality = stdout_of(aeroid().args(["inspect", "--quality"]).arg(&recorded));
+    assert!(
+        quality.contains("stuck: reads only 1.890, 1.915 rad"),
+        "{quality}"
+    );
+    assert!(quality.ends_with("flagged: alpha\n"), "{quality}");
+    let text = stdout_of(
+        aeroid()
+            .arg("derive")
+            .arg(&recorded)
+            .arg("--out")
+            .arg(&derived),
+    );
+    assert!(
+        text.contains("alpha: the recorded channel is left out (stuck: reads only 1.890, 1.915 rad); replaced by the geometric one"),
+        "{text}"
+    );
+    assert!(text.contains("beta: added (geometric)"), "{text}");
+    let record = aeroid::record::FlightRecord::read(&derived).unwrap();
+    for name in ["alpha", "beta"] {
+        let channel = record.channel(name).unwrap();
+        assert!(
+            channel
+                .source
+                .starts_with("geometric (Wang et al. 2012, Eqs. 1-6) from pitch, roll, yaw"),
+            "{}",
+            channel.source
+        );
+        assert_eq!(channel.rate, 1.0);
+    }
+    assert!(!record.absent.contains(&"beta".to_string()));
+}
+
+/// A record without the flight-path channels (the 25 Hz flight-test
+/// profile) is refused with the record and every missing channel named;
+/// without the wind correction the wind channels are not asked for.
+#[test]
+fn derive_names_the_missing_channels() {
+    let folder = common::temp_folder("derive-missing");
+    let recorded = folder.join("flight-test");
+    stdout_of(
+        aeroid()
+            .args([
+                "record",
+                "attas-lateral-multistep",
+                "--profile",
+                "flight-test-25hz",
+                "--out",
+            ])
+            .arg(&recorded),
+    );
+    for (flag, expected) in [
+        (
+            None,
+            "need the channel(s) flight_path_angle, track, ground_speed, wind_speed, wind_direction, which the record lacks",
+        ),
+        (
+            Some("--no-wind-correction"),
+            "need the channel(s) flight_path_angle, track, ground_speed, which the record lacks",
+        ),
+    ] {
+        let mut command = aeroid();
+        command
+            .arg("derive")
+            .arg(&recorded)
+            .arg("--out")
+            .arg(folder.join("out"));
+        command.args(flag);
+        let output = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains(&recorded.display().to_string()), "{stderr}");
+        assert!(stderr.contains(expected), "{stderr}");
+        assert!(!folder.join("out").exists());
+    }
+}

@@ -22,6 +22,7 @@ macro_rules! outln {
 pub mod check;
 #[cfg(feature = "jsbsim")]
 pub mod crosscheck;
+pub mod derive;
 pub mod estimate;
 #[cfg(feature = "jsbsim")]
 pub mod export_jsbsim;

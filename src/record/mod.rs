@@ -22,6 +22,7 @@
 
 pub mod derived;
 pub mod import;
+pub mod quality;
 pub mod recorder;
 
 use crate::csv_table::CsvTable;
@@ -590,6 +591,22 @@ pub fn significant(value: f64, digits: usize) -> String {
         text[1..].to_string()
     } else {
         text
+    }
+}
+
+/// Removes 2π jumps so that an angle varies continuously: each value is
+/// shifted by the whole turns that bring it within π of the valid value
+/// before it. Dropouts (NaN) are skipped.
+pub fn unwrap_angles(angles: &mut [f64]) {
+    let mut previous: Option<f64> = None;
+    let mut shift = 0.0;
+    for value in angles.iter_mut().filter(|v| !v.is_nan()) {
+        if let Some(last) = previous {
+            shift -=
+                std::f64::consts::TAU * ((*value + shift - last) / std::f64::consts::TAU).round();
+        }
+        *value += shift;
+        previous = Some(*value);
     }
 }
 

@@ -717,7 +717,7 @@ impl ChannelModel {
             .map(|s| (self.measurand.value)(s, context))
             .collect();
         if self.measurand.wraps {
-            unwrap_angle(&mut signal);
+            crate::record::unwrap_angles(&mut signal);
         }
         if self.lag > 0.0 {
             first_order_lag(grid, &mut signal, self.lag);
@@ -796,17 +796,6 @@ pub fn interpolate(grid: &[f64], values: &[f64], time: f64) -> f64 {
     let k = after - 1;
     let fraction = (time - grid[k]) / (grid[k + 1] - grid[k]);
     values[k] + (values[k + 1] - values[k]) * fraction
-}
-
-/// Removes 2π jumps so that an angle varies continuously.
-fn unwrap_angle(angles: &mut [f64]) {
-    let mut shift = 0.0;
-    for k in 1..angles.len() {
-        let raw = angles[k] + shift;
-        let jump = raw - angles[k - 1];
-        shift -= TAU * (jump / TAU).round();
-        angles[k] += shift;
-    }
 }
 
 /// First-order lag `τ·ẏ + y = u`, exact for an input linear between grid points,
