@@ -7,9 +7,9 @@
 //! sideslip β instead of the body velocities u, v, w, by the exact
 //! first-order change of variables z − z₀ = T·(x − x₀) at trim, T = ∂z/∂x
 //! (V = |(u, v, w)|, α = atan(w/u), β = asin(v/V)), so that A_z = T·A·T⁻¹
-//! and B_z = T·B. The altitude and heading are left out (over a flat earth
-//! with a constant density gradient they feed back only through the slow
-//! height mode). The file is written in absolute quantities: the state
+//! and B_z = T·B. The heading is left out (over a flat earth nothing
+//! depends on it); the altitude is a longitudinal state (the density
+//! gradient), left out of the short-period approximation. The file is written in absolute quantities: the state
 //! bias b = −A_z·z₀ − B_z·δ₀ puts the equilibrium at the trim state z₀
 //! with the trim controls δ₀, so that a record's channels are its states
 //! and inputs as they are. The outputs are the states (C = I).
@@ -17,7 +17,7 @@
 //! (`A_alpha_q` is ∂α̇/∂q, `B_p_aileron` is ∂ṗ/∂δa); the biases are fixed
 //! numbers. Assumes no steady wind (u, v, w are then the air-relative velocities).
 
-use super::linearize::{Linearization, P, PHI, Q, R, THETA, U, V, W};
+use super::linearize::{H, Linearization, P, PHI, Q, R, THETA, U, V, W};
 use crate::estimation::linear_structure::{Cell, KIND, LinearFile, LinearParameter};
 use crate::sim::integrator::Interpolation;
 use crate::sim::state::Control;
@@ -27,14 +27,14 @@ use std::collections::BTreeMap;
 /// Which states the file keeps.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Axes {
-    /// V, α, q, θ with the elevator and throttle.
+    /// V, α, q, θ, h with the elevator and throttle.
     Longitudinal,
     /// α, q with the elevator: the short-period approximation (the
     /// longitudinal model with V and θ held).
     ShortPeriod,
     /// β, p, r, φ with the aileron and rudder.
     Lateral,
-    /// All eight, with the elevator, aileron, rudder and throttle.
+    /// All nine, with the elevator, aileron, rudder and throttle.
     All,
 }
 
@@ -49,13 +49,13 @@ impl Axes {
         }
     }
 
-    /// The record names of the states, and the Euler-state entries they replace.
+    /// The record names of the states.
     fn states(self) -> &'static [&'static str] {
         match self {
-            Axes::Longitudinal => &["airspeed", "alpha", "q", "pitch"],
+            Axes::Longitudinal => &["airspeed", "alpha", "q", "pitch", "altitude"],
             Axes::ShortPeriod => &["alpha", "q"],
             Axes::Lateral => &["beta", "p", "r", "roll"],
-            Axes::All => &["airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch"],
+            Axes::All => &RECORD_STATES,
         }
     }
 
@@ -74,18 +74,20 @@ impl Axes {
     }
 }
 
-/// The eight record states in the order of [`Axes::All`].
-const RECORD_STATES: [&str; 8] = ["airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch"];
+/// The nine record states in the order of [`Axes::All`].
+const RECORD_STATES: [&str; 9] = [
+    "airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch", "altitude",
+];
 
-/// The linear model in the record states z = (V, α, β, p, q, r, φ, θ):
+/// The linear model in the record states z = (V, α, β, p, q, r, φ, θ, h):
 /// (A_z, B_z over all controls, z₀).
 fn in_record_states(linear: &Linearization) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
     let x = &linear.state;
-    let euler = [U, V, W, P, Q, R, PHI, THETA];
+    let euler = [U, V, W, P, Q, R, PHI, THETA, H];
     let (u, v, w) = (x[U], x[V], x[W]);
     let speed = (u * u + v * v + w * w).sqrt();
     let planar = u * u + w * w;
-    let mut t = DMatrix::zeros(8, 8);
+    let mut t = DMatrix::zeros(9, 9);
     for (j, value) in [u, v, w].iter().enumerate() {
         t[(0, j)] = value / speed;
     }
@@ -95,15 +97,15 @@ fn in_record_states(linear: &Linearization) -> (DMatrix<f64>, DMatrix<f64>, DVec
     t[(2, 0)] = -u * v / scale;
     t[(2, 1)] = planar / scale;
     t[(2, 2)] = -v * w / scale;
-    for i in 3..8 {
+    for i in 3..9 {
         t[(i, i)] = 1.0;
     }
-    let a = DMatrix::from_fn(8, 8, |i, j| linear.a[(euler[i], euler[j])]);
-    let b = DMatrix::from_fn(8, linear.b.ncols(), |i, j| linear.b[(euler[i], j)]);
+    let a = DMatrix::from_fn(9, 9, |i, j| linear.a[(euler[i], euler[j])]);
+    let b = DMatrix::from_fn(9, linear.b.ncols(), |i, j| linear.b[(euler[i], j)]);
     let inverse = t
         .clone()
         .try_inverse()
-        .unwrap_or_else(|| DMatrix::identity(8, 8));
+        .unwrap_or_else(|| DMatrix::identity(9, 9));
     let z0 = DVector::from_vec(vec![
         speed,
         w.atan2(u),
@@ -113,6 +115,7 @@ fn in_record_states(linear: &Linearization) -> (DMatrix<f64>, DMatrix<f64>, DVec
         x[R],
         x[PHI],
         x[THETA],
+        x[H],
     ]);
     (&t * a * inverse, t * b, z0)
 }
