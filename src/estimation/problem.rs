@@ -59,9 +59,10 @@ impl EstimationProblem {
     pub fn new(
         method: &str,
         records: Vec<FlightRecord>,
-        structure: Structure,
+        structure: impl Into<Structure>,
         layers: &[&MethodTables],
     ) -> Result<EstimationProblem> {
+        let structure = structure.into();
         let estimator = methods::find(method)?;
         let mut all = vec![structure.methods()];
         all.extend_from_slice(layers);
@@ -205,10 +206,11 @@ impl ModelDocument {
     fn structure(&self, path: &Path) -> Result<Structure> {
         match (&self.structure, &self.aircraft, &self.linear) {
             (Some(structure), Some(aircraft), None) => {
-                ModelStructure::from_parts(structure, aircraft, path).map(Structure::SixDof)
+                ModelStructure::from_parts(structure, aircraft, path)
+                    .map(|s| Structure::SixDof(Box::new(s)))
             }
             (None, None, Some(linear)) => {
-                LinearStructure::from_file(linear, path).map(Structure::Linear)
+                LinearStructure::from_file(linear, path).map(|s| Structure::Linear(Box::new(s)))
             }
             _ => Err(Error::Other(format!(
                 "{}: the model holds either `structure` and `aircraft` (6-DOF) or `linear`",

@@ -178,8 +178,20 @@ impl ModelStructure {
 /// [`LinearStructure`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Structure {
-    SixDof(ModelStructure),
-    Linear(LinearStructure),
+    SixDof(Box<ModelStructure>),
+    Linear(Box<LinearStructure>),
+}
+
+impl From<ModelStructure> for Structure {
+    fn from(structure: ModelStructure) -> Structure {
+        Structure::SixDof(Box::new(structure))
+    }
+}
+
+impl From<LinearStructure> for Structure {
+    fn from(structure: LinearStructure) -> Structure {
+        Structure::Linear(Box::new(structure))
+    }
 }
 
 impl Structure {
@@ -189,11 +201,11 @@ impl Structure {
         let text = read_text(&path)?;
         let table: toml::Table = parse_toml(&path, &text)?;
         match table.get("kind").map(|kind| kind.as_str()) {
-            None => {
-                ModelStructure::from_file(&parse_toml(&path, &text)?, &path).map(Structure::SixDof)
-            }
+            None => ModelStructure::from_file(&parse_toml(&path, &text)?, &path)
+                .map(|s| Structure::SixDof(Box::new(s))),
             Some(Some(linear_structure::KIND)) => {
-                LinearStructure::from_file(&parse_toml(&path, &text)?, &path).map(Structure::Linear)
+                LinearStructure::from_file(&parse_toml(&path, &text)?, &path)
+                    .map(|s| Structure::Linear(Box::new(s)))
             }
             Some(other) => Err(Error::Invalid {
                 path,
@@ -281,7 +293,7 @@ impl Structure {
     /// that kind.
     pub fn six_dof(&self, method: &str) -> Result<&ModelStructure> {
         match self {
-            Structure::SixDof(s) => Ok(s),
+            Structure::SixDof(s) => Ok(s.as_ref()),
             Structure::Linear(s) => Err(Error::Refused(Refusal::StructureKind {
                 method: method.to_string(),
                 model: s.name.clone(),

@@ -98,7 +98,7 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
     let n = structure.states.len();
     let mut states = vec![Vec::with_capacity(count); n];
     let mut outputs = vec![Vec::with_capacity(count); structure.outputs.len()];
-    for k in 0..count {
+    for (k, &t) in times.iter().enumerate() {
         if k > 0 {
             x = model.step(k - 1, x.as_slice(), theta.as_slice())?;
             if let Some(factor) = &noise {
@@ -107,12 +107,12 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
             }
             if !x.iter().all(|v| v.is_finite()) {
                 return Err(Error::Departed {
-                    time: times[k],
+                    time: t,
                     reason: format!("the linear model '{}' diverged", structure.name),
                 });
             }
         }
-        let y = model.outputs(times[k], x.as_slice(), theta.as_slice())?;
+        let y = model.outputs(t, x.as_slice(), theta.as_slice())?;
         for i in 0..n {
             states[i].push(x[i]);
         }
