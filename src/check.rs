@@ -31,6 +31,26 @@ pub fn check_file(path: &Path) -> Result<CheckReport> {
     } else if table.contains_key("runs") && table.contains_key("methods") {
         let file: StudyFile = parse_toml(path, &text)?;
         Ok(describe_study(&Study::from_file(&file, path)?))
+    } else if table.get("kind").and_then(|k| k.as_str())
+        == Some(crate::estimation::linear_structure::KIND)
+    {
+        let structure =
+            crate::estimation::linear_structure::LinearStructure::load(&path.to_string_lossy())?;
+        Ok(CheckReport {
+            kind: "model structure",
+            lines: vec![
+                format!(
+                    "{}: linear, states {}, inputs {}, outputs {}, {} of {} parameters free",
+                    structure.name,
+                    structure.states.join(", "),
+                    structure.inputs.join(", "),
+                    structure.outputs.join(", "),
+                    structure.free.iter().filter(|f| **f).count(),
+                    structure.free.len()
+                ),
+                format!("free: {}", structure.free_names().join(", ")),
+            ],
+        })
     } else if table.contains_key("aero") && table.contains_key("aircraft") {
         let structure = ModelStructure::load(&path.to_string_lossy())?;
         Ok(CheckReport {

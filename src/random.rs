@@ -12,6 +12,8 @@ pub mod streams {
     pub const TURBULENCE: u64 = 1;
     /// Sensor noise, dropouts and faults of the recorder.
     pub const RECORDER: u64 = 2;
+    /// Process noise of a linear model's flight.
+    pub const PROCESS_NOISE: u64 = 3;
 }
 
 /// The generator for `stream` of `seed`.

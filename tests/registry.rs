@@ -63,7 +63,7 @@ impl Estimator for StartValues {
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         let settings: StartSettings = parse_settings("toy-start", &problem.settings)?;
-        let structure = &problem.structure;
+        let structure = problem.structure.six_dof("toy-start")?;
         let parameters = &structure.aircraft.aero.parameters;
         let free: Vec<ParameterEstimate> = parameters
             .names()
@@ -233,7 +233,7 @@ fn estimation_problem_json_round_trip_is_exact() {
         let profile = Profile::load("flight-test-25hz", None).unwrap();
         let (record, _) = record_scenario(&scenario, &profile).unwrap();
         for model in &models {
-            let structure = ModelStructure::load(model).unwrap();
+            let structure = aeroid::estimation::structure::Structure::load(model).unwrap();
             for method in ["ee", "swr", "oem"] {
                 let problem = EstimationProblem::new(
                     method,

@@ -3,5 +3,6 @@
 //! response, and a-priori identifiability.
 
 pub mod identifiability;
+pub mod linear_model;
 pub mod linearize;
 pub mod modal_fit;

@@ -69,7 +69,7 @@ pub fn run(args: Args) -> Result<()> {
     use aeroid::estimation::{
         methods::{self, output_error},
         problem::EstimationProblem,
-        structure::ModelStructure,
+        structure::Structure,
     };
     use aeroid::eval::score;
     let Args {
@@ -99,7 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(aeroid::record::FlightRecord::read)
         .transpose()?;
-    let structure = ModelStructure::load(&model)?;
+    let structure = Structure::load(&model)?;
     let overrides = settings_table(&method, &settings)?;
     let problem = EstimationProblem::new(&method, records, structure, &[&overrides])?;
     if let Some(path) = &write_problem {
@@ -110,9 +110,15 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &write_smoothed {
         use methods::smoothed_regression::{SmoothedRegressionSettings, smooth};
         let settings = SmoothedRegressionSettings::read(&problem.settings)?;
-        smooth(problem.record(), &problem.structure, &settings)?
-            .write_csv(path)
-            .map_err(aeroid::Error::as_write)?;
+        smooth(
+            problem.record(),
+            problem
+                .structure
+                .six_dof(methods::smoothed_regression::METHOD)?,
+            &settings,
+        )?
+        .write_csv(path)
+        .map_err(aeroid::Error::as_write)?;
         outln!(
             "smoothed coefficient histories written to {}",
             path.display()
@@ -121,7 +127,7 @@ pub fn run(args: Args) -> Result<()> {
     let structure = &problem.structure;
     out!("{}", estimate.details);
     let truth = shared_truth(&record_folders);
-    let scores = score::score(&estimate, truth.as_ref(), structure.aircraft.aero.kind);
+    let scores = score::score(&estimate, truth.as_ref(), structure.score_kind());
     outln!(
         "{} on {} with model {}: {} after {} iterations, {:.3} s",
         estimate.method,
@@ -146,6 +152,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let Some(other) = other {
         outln!("proof of match on {} (nothing adjusted):", other.scenario);
+        let structure = structure.six_dof("proof of match (--check-on)")?;
         for fit in output_error::proof_of_match(&estimate, structure, &other)? {
             outln!(
                 "  {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}",

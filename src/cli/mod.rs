@@ -34,6 +34,7 @@ pub mod gate;
 pub mod identifiability;
 pub mod import;
 pub mod inspect;
+pub mod linearise;
 pub mod list;
 pub mod methods;
 pub mod plugin;

@@ -28,7 +28,8 @@ pub fn run(args: Args) -> Result<()> {
     aeroid::paths::check_output_folder(&out)?;
     let scenario = Scenario::load(&scenario)?;
     let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
-    let (record, truth) = aeroid::record::recorder::record_scenario(&scenario, &profile)?;
+    let (record, truth) =
+        aeroid::eval::linear_flight::record_flight(&scenario, &profile, scenario.seed)?;
     record.write(&out)?;
     truth.write(&out.join(aeroid::sim::truth::TRUTH_FILE))?;
     outln!(

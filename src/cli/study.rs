@@ -84,7 +84,7 @@ pub fn run(args: Args) -> Result<()> {
         study
             .models
             .iter()
-            .map(|m| m.name.as_str())
+            .map(|m| m.name())
             .collect::<Vec<_>>()
             .join(", "),
         study.methods.join(", "),

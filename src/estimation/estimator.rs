@@ -197,6 +197,16 @@ pub enum Refusal {
         model: String,
         reason: String,
     },
+    /// The method fits only another kind of model structure (the 6-DOF
+    /// equations), and was given one of kind `kind` (`linear`).
+    StructureKind {
+        method: String,
+        model: String,
+        /// The structure's kind (`linear`).
+        structure: String,
+        /// What the method fits.
+        needs: String,
+    },
     /// The method fits one record at a time and was given several.
     OneRecordOnly {
         method: String,
@@ -222,6 +232,7 @@ pub enum RefusalKind {
     NothingToEstimate,
     TooFewData,
     UnsuitableModel,
+    StructureKind,
     OneRecordOnly,
 }
 
@@ -233,6 +244,7 @@ impl Refusal {
             Refusal::NothingToEstimate { .. } => RefusalKind::NothingToEstimate,
             Refusal::TooFewData { .. } => RefusalKind::TooFewData,
             Refusal::UnsuitableModel { .. } => RefusalKind::UnsuitableModel,
+            Refusal::StructureKind { .. } => RefusalKind::StructureKind,
             Refusal::OneRecordOnly { .. } => RefusalKind::OneRecordOnly,
         }
     }
@@ -316,6 +328,15 @@ impl fmt::Display for Refusal {
                 model,
                 reason,
             } => write!(f, "{method} cannot fit the model '{model}': {reason}"),
+            Refusal::StructureKind {
+                method,
+                model,
+                structure,
+                needs,
+            } => write!(
+                f,
+                "{method} fits {needs}; '{model}' is a {structure} model structure: fit it with output error (oem) or filter error (fem)"
+            ),
             Refusal::OneRecordOnly { method, records } => write!(
                 f,
                 "{method} fits one record at a time, and was given {records}: \

@@ -8,6 +8,7 @@
 
 pub mod estimate;
 pub mod estimator;
+pub mod linear_structure;
 pub mod methods;
 pub mod model;
 pub mod plugin;

@@ -402,15 +402,14 @@ impl Plugin {
         let structure = &problem.structure;
         let free_names = structure.free_names();
         let free: Vec<&str> = free_names.iter().map(String::as_str).collect();
-        let names = structure.aircraft.aero.parameters.names();
-        let values = structure.aircraft.aero.parameters.values();
+        let (names, values) = structure.parameters();
         let mut parameters = Vec::with_capacity(free.len());
         for (i, p) in written.parameters.iter().enumerate() {
             if !free.contains(&p.name.as_str()) {
                 return Err(format!(
                     "parameters[{i}]: '{}' is not a free parameter of model '{}' (free: {})",
                     p.name,
-                    structure.name,
+                    structure.name(),
                     free.join(", ")
                 ));
             }
@@ -487,7 +486,7 @@ impl Plugin {
         };
         Ok(Estimate {
             method: self.name.to_string(),
-            model: structure.name.clone(),
+            model: structure.name().to_string(),
             record: problem
                 .records
                 .iter()

@@ -27,8 +27,9 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::estimator::{MethodTables, Settings, merge_settings};
+use crate::estimation::linear_structure::{LinearFile, LinearStructure};
 use crate::estimation::methods;
-use crate::estimation::structure::{ModelStructure, StructureFile};
+use crate::estimation::structure::{ModelStructure, Structure, StructureFile};
 use crate::record::FlightRecord;
 use crate::sim::aircraft::AircraftFile;
 use serde::{Deserialize, Serialize};
@@ -44,7 +45,8 @@ pub struct EstimationProblem {
     pub method: String,
     /// One record, or several manoeuvres fitted together.
     pub records: Vec<FlightRecord>,
-    pub structure: ModelStructure,
+    /// The model structure, of either kind.
+    pub structure: Structure,
     /// The method's settings: the merged `[methods.NAME]` tables.
     pub settings: Settings,
 }
@@ -57,18 +59,19 @@ impl EstimationProblem {
     pub fn new(
         method: &str,
         records: Vec<FlightRecord>,
-        structure: ModelStructure,
+        structure: impl Into<Structure>,
         layers: &[&MethodTables],
     ) -> Result<EstimationProblem> {
+        let structure = structure.into();
         let estimator = methods::find(method)?;
-        let mut all = vec![&structure.methods];
+        let mut all = vec![structure.methods()];
         all.extend_from_slice(layers);
         let settings = merge_settings(method, &all);
         estimator.check_settings(&settings)?;
         if records.is_empty() {
             return Err(Error::Other(format!(
                 "{method} on model '{}': no record given",
-                structure.name
+                structure.name()
             )));
         }
         Ok(EstimationProblem {
@@ -111,13 +114,15 @@ impl EstimationProblem {
             )));
         }
         let path = PathBuf::from(&document.model.path);
-        let structure =
-            ModelStructure::from_parts(&document.model.structure, &document.model.aircraft, &path)?;
+        let structure = document.model.structure(&path)?;
         let resolved = Document::parameters(&structure);
-        let aircraft_agrees = document
-            .aircraft
-            .as_ref()
-            .is_none_or(|view| *view == AircraftView::of(&structure));
+        let aircraft_agrees = match &structure {
+            Structure::SixDof(six_dof) => document
+                .aircraft
+                .as_ref()
+                .is_none_or(|view| *view == AircraftView::of(six_dof)),
+            Structure::Linear(_) => document.aircraft.is_none(),
+        };
         if resolved != document.parameters || !aircraft_agrees {
             return Err(Error::Other(format!(
                 "{}: the parameters or the aircraft do not agree with the model files they came with",
@@ -164,14 +169,55 @@ pub struct ProblemParameter {
     pub upper: Option<f64>,
 }
 
-/// The model's source files.
+/// The model's source files: a 6-DOF structure with its aircraft, or a
+/// linear model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ModelDocument {
     /// Where the model file was read from (named in errors).
     path: String,
-    structure: StructureFile,
-    aircraft: AircraftFile,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    structure: Option<StructureFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    aircraft: Option<AircraftFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    linear: Option<LinearFile>,
+}
+
+impl ModelDocument {
+    fn of(structure: &Structure) -> ModelDocument {
+        match structure {
+            Structure::SixDof(s) => ModelDocument {
+                path: s.path.display().to_string(),
+                structure: Some(s.file.clone()),
+                aircraft: Some(s.aircraft_file.clone()),
+                linear: None,
+            },
+            Structure::Linear(s) => ModelDocument {
+                path: s.path.display().to_string(),
+                structure: None,
+                aircraft: None,
+                linear: Some(s.file.clone()),
+            },
+        }
+    }
+
+    /// The structure rebuilt from the files.
+    fn structure(&self, path: &Path) -> Result<Structure> {
+        match (&self.structure, &self.aircraft, &self.linear) {
+            (Some(structure), Some(aircraft), None) => {
+                ModelStructure::from_parts(structure, aircraft, path)
+                    .map(|s| Structure::SixDof(Box::new(s)))
+            }
+            (None, None, Some(linear)) => {
+                LinearStructure::from_file(linear, path).map(|s| Structure::Linear(Box::new(s)))
+            }
+            _ => Err(Error::Other(format!(
+                "{}: the model holds either `structure` and `aircraft` (6-DOF) or `linear`",
+                path.display()
+            ))),
+        }
+    }
 }
 
 /// The JSON form.
@@ -247,42 +293,47 @@ fn value_text<T: Serialize>(value: &T) -> String {
 impl Document {
     fn of(problem: &EstimationProblem) -> Document {
         let structure = &problem.structure;
+        let (integrate, pseudo_controls, aircraft) = match structure {
+            Structure::SixDof(s) => (
+                s.file.integrate.clone(),
+                s.pseudo_controls().into_iter().map(String::from).collect(),
+                Some(AircraftView::of(s)),
+            ),
+            Structure::Linear(s) => (s.states.clone(), s.inputs.clone(), None),
+        };
         Document {
             format: FORMAT.to_string(),
             method: problem.method.clone(),
             settings: problem.settings.clone(),
             parameters: Document::parameters(structure),
-            integrate: structure.file.integrate.clone(),
-            pseudo_controls: structure
-                .pseudo_controls()
-                .into_iter()
-                .map(String::from)
-                .collect(),
-            outputs: structure.outputs.clone(),
-            aircraft: Some(AircraftView::of(structure)),
-            model: ModelDocument {
-                path: structure.path.display().to_string(),
-                structure: structure.file.clone(),
-                aircraft: structure.aircraft_file.clone(),
-            },
+            integrate,
+            pseudo_controls,
+            outputs: structure.outputs().to_vec(),
+            aircraft,
+            model: ModelDocument::of(structure),
             records: problem.records.clone(),
         }
     }
 
-    fn parameters(structure: &ModelStructure) -> Vec<ProblemParameter> {
-        let parameters = &structure.aircraft.aero.parameters;
+    fn parameters(structure: &Structure) -> Vec<ProblemParameter> {
+        let (names, starts, free, bounds) = match structure {
+            Structure::SixDof(s) => {
+                let parameters = &s.aircraft.aero.parameters;
+                (parameters.names(), parameters.values(), &s.free, &s.bounds)
+            }
+            Structure::Linear(s) => (&s.names[..], &s.starts[..], &s.free, &s.bounds),
+        };
         let finite = |v: f64| v.is_finite().then_some(v);
-        parameters
-            .names()
+        names
             .iter()
-            .zip(parameters.values())
+            .zip(starts)
             .enumerate()
             .map(|(i, (name, &start))| ProblemParameter {
                 name: name.clone(),
                 start,
-                free: structure.free[i],
-                lower: finite(structure.bounds[i].0),
-                upper: finite(structure.bounds[i].1),
+                free: free[i],
+                lower: finite(bounds[i].0),
+                upper: finite(bounds[i].1),
             })
             .collect()
     }

@@ -30,8 +30,9 @@
 //! ```
 
 use crate::catalog;
-use crate::error::{Problems, Result, parse_toml, read_text};
-use crate::estimation::estimator::{MethodTables, check_method_tables};
+use crate::error::{Error, Problems, Result, parse_toml, read_text};
+use crate::estimation::estimator::{MethodTables, Refusal, check_method_tables};
+use crate::estimation::linear_structure::{self, LinearStructure};
 use crate::estimation::model::driven::Observable;
 use crate::sim::aero::{AeroModel, AeroSpec};
 use crate::sim::aircraft::{Aircraft, AircraftFile};
@@ -168,6 +169,138 @@ impl ModelStructure {
             .filter(|i| !self.integrate.contains(i))
             .map(|i| FLIGHT_PATH_STATES[i])
             .collect()
+    }
+}
+
+/// A model structure of either kind a model file declares: the nonlinear
+/// 6-DOF equations with non-dimensional coefficients (no `kind` key), or a
+/// linear state-space model in dimensional derivatives (`kind = "linear"`,
+/// [`LinearStructure`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Structure {
+    SixDof(Box<ModelStructure>),
+    Linear(Box<LinearStructure>),
+}
+
+impl From<ModelStructure> for Structure {
+    fn from(structure: ModelStructure) -> Structure {
+        Structure::SixDof(Box::new(structure))
+    }
+}
+
+impl From<LinearStructure> for Structure {
+    fn from(structure: LinearStructure) -> Structure {
+        Structure::Linear(Box::new(structure))
+    }
+}
+
+impl Structure {
+    /// Loads a structure of either kind by bundled name or path.
+    pub fn load(reference: &str) -> Result<Structure> {
+        let path = catalog::resolve(reference, catalog::MODEL_FOLDER, None)?;
+        let text = read_text(&path)?;
+        let table: toml::Table = parse_toml(&path, &text)?;
+        match table.get("kind").map(|kind| kind.as_str()) {
+            None => ModelStructure::from_file(&parse_toml(&path, &text)?, &path)
+                .map(|s| Structure::SixDof(Box::new(s))),
+            Some(Some(linear_structure::KIND)) => {
+                LinearStructure::from_file(&parse_toml(&path, &text)?, &path)
+                    .map(|s| Structure::Linear(Box::new(s)))
+            }
+            Some(other) => Err(Error::Invalid {
+                path,
+                problems: vec![crate::error::Problem {
+                    field: "kind".into(),
+                    message: format!(
+                        "is {}; a model file is \"{}\" or has no kind (the 6-DOF equations)",
+                        other.map_or("not text".into(), |k| format!("'{k}'")),
+                        linear_structure::KIND
+                    ),
+                }],
+            }),
+        }
+    }
+
+    pub fn name(&self) -> &str {
+        match self {
+            Structure::SixDof(s) => &s.name,
+            Structure::Linear(s) => &s.name,
+        }
+    }
+
+    /// The file's `[methods.NAME]` tables.
+    pub fn methods(&self) -> &MethodTables {
+        match self {
+            Structure::SixDof(s) => &s.methods,
+            Structure::Linear(s) => &s.methods,
+        }
+    }
+
+    /// The compared outputs.
+    pub fn outputs(&self) -> &[String] {
+        match self {
+            Structure::SixDof(s) => &s.outputs,
+            Structure::Linear(s) => &s.outputs,
+        }
+    }
+
+    /// Every parameter's name and start value.
+    pub fn parameters(&self) -> (&[String], &[f64]) {
+        match self {
+            Structure::SixDof(s) => (
+                s.aircraft.aero.parameters.names(),
+                s.aircraft.aero.parameters.values(),
+            ),
+            Structure::Linear(s) => (&s.names, &s.starts),
+        }
+    }
+
+    /// The names of the free parameters.
+    pub fn free_names(&self) -> Vec<String> {
+        match self {
+            Structure::SixDof(s) => s.free_names(),
+            Structure::Linear(s) => s.free_names(),
+        }
+    }
+
+    /// The model's source files as JSON (what identifies it).
+    pub fn files_json(&self) -> std::result::Result<String, serde_json::Error> {
+        match self {
+            Structure::SixDof(s) => serde_json::to_string(&(&s.file, &s.aircraft_file)),
+            Structure::Linear(s) => serde_json::to_string(&s.file),
+        }
+    }
+
+    /// The kind's name in messages.
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Structure::SixDof(_) => "6-DOF",
+            Structure::Linear(_) => linear_structure::KIND,
+        }
+    }
+
+    /// The kind of truth model a fit of this structure is scored against
+    /// exactly: a linear flight's truth is kept as a linear aero model's,
+    /// under the parameters' own names.
+    pub fn score_kind(&self) -> crate::sim::aero::ModelKind {
+        match self {
+            Structure::SixDof(s) => s.aircraft.aero.kind,
+            Structure::Linear(_) => crate::sim::aero::ModelKind::Linear,
+        }
+    }
+
+    /// The 6-DOF structure, or the refusal of `method`, which fits only
+    /// that kind.
+    pub fn six_dof(&self, method: &str) -> Result<&ModelStructure> {
+        match self {
+            Structure::SixDof(s) => Ok(s.as_ref()),
+            Structure::Linear(s) => Err(Error::Refused(Refusal::StructureKind {
+                method: method.to_string(),
+                model: s.name.clone(),
+                structure: linear_structure::KIND.into(),
+                needs: "the 6-DOF equations with non-dimensional coefficients".into(),
+            })),
+        }
     }
 }
 

@@ -18,9 +18,9 @@ use crate::estimation::estimator::{
     MethodTables, Refusal, RefusalKind, check_method_tables, validate_method_tables,
 };
 use crate::estimation::methods;
-use crate::estimation::structure::ModelStructure;
+use crate::estimation::structure::Structure;
 use crate::eval::run::{self, Outcome};
-use crate::record::recorder::{Profile, record_scenario};
+use crate::record::recorder::Profile;
 use crate::sim::scenario::Scenario;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -319,8 +319,9 @@ pub fn run_case(case: &GateCase) -> Result<GateResult> {
     let scenario = Scenario::load(&case.scenario)?;
     validate_method_tables(&scenario.methods, &scenario.path)?;
     let profile = Profile::load(&case.profile, None)?;
-    let structure = ModelStructure::load(&case.model)?;
-    let (record, truth) = record_scenario(&scenario, &profile)?;
+    let structure = Structure::load(&case.model)?;
+    let (record, truth) =
+        crate::eval::linear_flight::record_flight(&scenario, &profile, scenario.seed)?;
     let (estimate, _) = match run::estimate_scored(
         &case.method,
         &record,
@@ -346,7 +347,7 @@ pub fn run_case(case: &GateCase) -> Result<GateResult> {
         .parameters
         .iter()
         .filter_map(|p| {
-            let (truth, _) = truth.value_for(&p.name, structure.aircraft.aero.kind)?;
+            let (truth, _) = truth.value_for(&p.name, structure.score_kind())?;
             let tolerance = case.tolerance_for(&p.name);
             let spurious = truth.abs() < 1e-12;
             let allowed = if let (true, Some(k)) = (spurious, case.spurious_sigma) {

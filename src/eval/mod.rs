@@ -4,6 +4,7 @@
 
 pub mod gate;
 pub mod journal;
+pub mod linear_flight;
 pub mod report;
 pub mod run;
 pub mod score;

@@ -12,10 +12,10 @@ use crate::estimation::estimate::Estimate;
 use crate::estimation::estimator::{MethodTables, Refusal, validate_method_tables};
 use crate::estimation::methods;
 use crate::estimation::problem::EstimationProblem;
-use crate::estimation::structure::ModelStructure;
+use crate::estimation::structure::Structure;
 use crate::eval::score::{self, ParameterScore};
 use crate::record::FlightRecord;
-use crate::record::recorder::{Profile, record_scenario};
+use crate::record::recorder::Profile;
 use crate::sim::scenario::Scenario;
 use crate::sim::truth::RunTruth;
 
@@ -102,7 +102,8 @@ pub struct RunReport {
 /// Simulates, records and estimates; fails only when the flight itself cannot be made.
 pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
     validate_method_tables(&scenario.methods, &scenario.path)?;
-    let (record, truth) = record_scenario(scenario, profile)?;
+    let (record, truth) =
+        crate::eval::linear_flight::record_flight(scenario, profile, scenario.seed)?;
     let names = methods::names();
     let mut runs = Vec::new();
     for (index, reference) in scenario.models.iter().enumerate() {
@@ -113,7 +114,7 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
             &scenario.path,
             &field,
         )
-        .and_then(|path| ModelStructure::load(&path.to_string_lossy()));
+        .and_then(|path| Structure::load(&path.to_string_lossy()));
         let outcomes = match &structure {
             Ok(structure) => {
                 estimate_each(&names, &record, &truth, structure, &[&scenario.methods])
@@ -146,7 +147,7 @@ pub fn estimate_each(
     methods: &[String],
     record: &FlightRecord,
     truth: &RunTruth,
-    structure: &ModelStructure,
+    structure: &Structure,
     layers: &[&MethodTables],
 ) -> Vec<(String, Outcome)> {
     let mut outcomes: Vec<(String, Outcome)> = Vec::with_capacity(methods.len());
@@ -169,7 +170,7 @@ pub fn estimate_scored(
     method: &str,
     record: &FlightRecord,
     truth: &RunTruth,
-    structure: &ModelStructure,
+    structure: &Structure,
     layers: &[&MethodTables],
     start: Option<&Estimate>,
 ) -> Outcome {
@@ -177,7 +178,7 @@ pub fn estimate_scored(
         EstimationProblem::new(method, vec![record.clone()], structure.clone(), layers)
             .and_then(|problem| methods::estimate(&problem, start))
             .map(|estimate| {
-                let scores = score::score(&estimate, Some(truth), structure.aircraft.aero.kind);
+                let scores = score::score(&estimate, Some(truth), structure.score_kind());
                 (estimate, scores)
             }),
     )

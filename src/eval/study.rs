@@ -44,14 +44,14 @@ use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use crate::estimation::estimate::Status;
 use crate::estimation::estimator::{MethodTables, check_method_tables, validate_method_tables};
 use crate::estimation::methods;
-use crate::estimation::structure::ModelStructure;
+use crate::estimation::structure::Structure;
 use crate::eval::journal::{self, Finished, Header, Journal, Shard, float_text};
 use crate::eval::run::{self, Outcome};
 use crate::eval::score::ParameterScore;
 pub use crate::eval::summary::{Ending, Summariser, SummaryRow, summarise};
 use crate::limits;
 use crate::random;
-use crate::record::recorder::{Profile, parse_rate, record_scenario_seeded};
+use crate::record::recorder::{Profile, parse_rate};
 use crate::sim::scenario::Scenario;
 use crate::sim::wind::TurbulenceSpec;
 use crate::units::Quantity;
@@ -194,7 +194,7 @@ pub struct Study {
     pub path: PathBuf,
     pub scenarios: Vec<Scenario>,
     pub profile: Profile,
-    pub models: Vec<ModelStructure>,
+    pub models: Vec<Structure>,
     pub methods: Vec<String>,
     /// The study's settings per method, overriding the models' and the scenarios'.
     pub settings: MethodTables,
@@ -302,7 +302,7 @@ impl Study {
             Ok(scenario)
         });
         let models = load_each("models", &file.models, &mut problems, |r| {
-            ModelStructure::load(&resolved(r, catalog::MODEL_FOLDER)?)
+            Structure::load(&resolved(r, catalog::MODEL_FOLDER)?)
         });
         let profile = Profile::load(&file.profile, Some(base))
             .map_err(|error| problems.push("profile", error.to_string()))
@@ -463,7 +463,8 @@ impl Study {
         if point.input_scale != 1.0 {
             scenario.inputs = scenario.inputs.scaled(point.input_scale);
         }
-        let recorded = record_scenario_seeded(&scenario, &point.profile, recorder_seed);
+        let recorded =
+            crate::eval::linear_flight::record_flight(&scenario, &point.profile, recorder_seed);
         let template = Row {
             point: case.point,
             scenario: scenario.name.clone(),
@@ -507,7 +508,7 @@ impl Study {
             };
             for (method, outcome) in outcomes {
                 let fit = Row {
-                    model: model.name.clone(),
+                    model: model.name().to_string(),
                     method,
                     ..template.clone()
                 };
@@ -664,11 +665,15 @@ impl Study {
         for scenario in &self.scenarios {
             identity += &read_text(&scenario.path)?;
             identity += &read_text(&scenario.aircraft_path)?;
+            if let Some(linear) = &scenario.linear {
+                identity += &read_text(&linear.model_path)?;
+            }
         }
         identity += &read_text(&self.profile.path)?;
         for model in &self.models {
-            identity += &serde_json::to_string(&(&model.file, &model.aircraft_file))
-                .map_err(|e| Error::Other(format!("model '{}': {e}", model.name)))?;
+            identity += &model
+                .files_json()
+                .map_err(|e| Error::Other(format!("model '{}': {e}", model.name())))?;
         }
         let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
         for byte in identity.bytes() {

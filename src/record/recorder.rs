@@ -316,6 +316,48 @@ impl Profile {
 }
 
 impl Profile {
+    /// Records named true signals on `grid` (a step of `step`), such as a
+    /// linear model's states, inputs and outputs: each channel of the
+    /// profile whose quantity is one of `signals` is recorded from it as
+    /// from a truth trace; the profile's other channels are left out.
+    /// Random draws come from `seed`, channel by channel in profile order.
+    pub fn record_signals(
+        &self,
+        scenario: &str,
+        grid: &[f64],
+        step: f64,
+        signals: &[(String, Vec<f64>)],
+        seed: u64,
+    ) -> Result<FlightRecord> {
+        if grid.len() < 2 || signals.iter().any(|(_, s)| s.len() != grid.len()) {
+            return Err(Error::Other(
+                "signals to record need at least two samples, one per grid point".into(),
+            ));
+        }
+        let mut rng = random::stream(seed, streams::RECORDER);
+        let mut channels = Vec::new();
+        for model in &self.channels {
+            if let Some((_, signal)) = signals.iter().find(|(n, _)| n == model.measurand.name) {
+                channels.push(model.record_signal(
+                    grid,
+                    signal.clone(),
+                    step,
+                    &self.name,
+                    &mut rng,
+                )?);
+            }
+        }
+        let record = FlightRecord {
+            scenario: scenario.to_string(),
+            seed: Some(seed),
+            profile: self.name.clone(),
+            absent: self.absent.clone(),
+            channels,
+        };
+        record.validate(&self.path)?;
+        Ok(record)
+    }
+
     /// The same profile with every channel's white-noise standard deviation
     /// multiplied by `factor` (bias, quantization, faults unchanged), named
     /// `NAME×noiseFACTOR`. Monte Carlo studies sweep noise with it.
@@ -677,12 +719,30 @@ impl ChannelModel {
             ..*context
         };
         let grid: Vec<f64> = trace.samples.iter().map(|s| s.time).collect();
-        let signal = self.sensed_signal(trace, &grid, &context)?;
+        let signal: Vec<f64> = trace
+            .samples
+            .iter()
+            .map(|s| (self.measurand.value)(s, &context))
+            .collect();
+        self.record_signal(&grid, signal, trace.step, profile, rng)
+    }
+
+    /// Records the true quantity `signal` given on `grid` (of step `step`):
+    /// the sensor's own dynamics, sampling and measurement errors.
+    fn record_signal(
+        &self,
+        grid: &[f64],
+        signal: Vec<f64>,
+        step: f64,
+        profile: &str,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Channel> {
+        let signal = self.sensed_signal(signal, grid, step)?;
         let times = self.sample_times(grid[0], grid[grid.len() - 1]);
         let mut values = Vec::with_capacity(times.len());
         let mut last_good = f64::NAN;
         for &time in &times {
-            let truth = interpolate(&grid, &signal, time - self.delay);
+            let truth = interpolate(grid, &signal, time - self.delay);
             let value = self.measure(truth, time, &mut last_good, rng);
             values.push(value);
         }
@@ -705,17 +765,7 @@ impl ChannelModel {
     }
 
     /// The true quantity on the simulator's grid after the sensor's own dynamics.
-    fn sensed_signal(
-        &self,
-        trace: &TruthTrace,
-        grid: &[f64],
-        context: &Context,
-    ) -> Result<Vec<f64>> {
-        let mut signal: Vec<f64> = trace
-            .samples
-            .iter()
-            .map(|s| (self.measurand.value)(s, context))
-            .collect();
+    fn sensed_signal(&self, mut signal: Vec<f64>, grid: &[f64], step: f64) -> Result<Vec<f64>> {
         if self.measurand.wraps {
             crate::record::unwrap_angles(&mut signal);
         }
@@ -723,7 +773,7 @@ impl ChannelModel {
             first_order_lag(grid, &mut signal, self.lag);
         }
         if let Some(cutoff) = self.anti_alias {
-            butterworth(&mut signal, cutoff, trace.step).map_err(|message| {
+            butterworth(&mut signal, cutoff, step).map_err(|message| {
                 Error::Other(format!("channel {}: {message}", self.measurand.name))
             })?;
         }

@@ -94,6 +94,32 @@ pub struct ScenarioFile {
     /// Aerodynamic parameters changed during the flight.
     #[serde(default)]
     pub parameter_changes: Vec<ParameterChangeSpec>,
+    /// Fly a linear model file instead of the aircraft's 6-DOF equations.
+    #[serde(default)]
+    pub linear: Option<LinearFlightSpec>,
+}
+
+/// The `[linear]` table of a scenario: the flight is that of a linear
+/// model (`kind = "linear"` model file), its inputs the scenario's
+/// `[[inputs]]` on the model inputs named like controls, its truth the
+/// model's parameter values. `aircraft` and `trim` then only name the
+/// condition the model stands for.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearFlightSpec {
+    /// A bundled model name or a path relative to this file.
+    pub model: String,
+    /// White process noise per state: the entry of the diagonal F of
+    /// ẋ = A·x + B·u + b + F·w, w of unit intensity (state units per √s).
+    #[serde(default)]
+    pub process_noise: BTreeMap<String, f64>,
+}
+
+/// A validated `[linear]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearFlight {
+    pub model_path: PathBuf,
+    pub process_noise: BTreeMap<String, f64>,
 }
 
 /// One `[[parameter_changes]]` table of a scenario file.
@@ -222,6 +248,8 @@ pub struct Scenario {
     /// Aerodynamic parameters changed during the flight, in time order
     /// (changes at the same instant in file order).
     pub parameter_changes: Vec<ParameterChange>,
+    /// Set when the flight is a linear model's (`[linear]`).
+    pub linear: Option<LinearFlight>,
 }
 
 impl Scenario {
@@ -289,6 +317,34 @@ impl Scenario {
             &mut problems,
         );
         file.wind.validate(&mut problems);
+        let linear = match &file.linear {
+            None => None,
+            Some(spec) => {
+                for (state, value) in &spec.process_noise {
+                    if !(value.is_finite() && *value >= 0.0) {
+                        problems.push(
+                            format!("linear.process_noise.{state}"),
+                            "must be finite and not negative",
+                        );
+                    }
+                }
+                match catalog::resolve_named(
+                    &spec.model,
+                    catalog::MODEL_FOLDER,
+                    path,
+                    "linear.model",
+                ) {
+                    Ok(model_path) => Some(LinearFlight {
+                        model_path,
+                        process_noise: spec.process_noise.clone(),
+                    }),
+                    Err(error) => {
+                        problems.push("linear.model", error.to_string());
+                        None
+                    }
+                }
+            }
+        };
         let inputs = InputSchedule::build(&file.inputs, base, path);
         let inputs = match (problems.is_empty(), inputs) {
             (_, Ok(inputs)) => inputs,
@@ -322,6 +378,7 @@ impl Scenario {
             methods: file.methods.clone(),
             jsbsim,
             parameter_changes,
+            linear,
         };
         problems.finish(path, scenario)
     }

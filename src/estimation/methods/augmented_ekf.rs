@@ -288,7 +288,7 @@ impl Estimator for AugmentedEkf {
         let run = augmented_estimate(
             METHOD,
             problem.record(),
-            &problem.structure,
+            problem.structure.six_dof(METHOD)?,
             &settings,
             start,
             &|model, initial, noise, observations| {

@@ -176,7 +176,11 @@ impl Estimator for EquationError {
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         crate::estimation::estimator::one_record(METHOD, problem)?;
         let options = EquationErrorSettings::read(&problem.settings)?.options();
-        equation_error(problem.record(), &problem.structure, &options)
+        equation_error(
+            problem.record(),
+            problem.structure.six_dof(METHOD)?,
+            &options,
+        )
     }
 }
 

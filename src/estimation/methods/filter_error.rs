@@ -93,6 +93,7 @@ use crate::estimation::estimate::{Estimate, OutputFit, Status};
 use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
 };
+use crate::estimation::linear_structure::LinearStructure;
 use crate::estimation::methods::equation_error::{
     self, EquationErrorOptions, EquationErrorSettings, equation_error,
 };
@@ -102,7 +103,7 @@ use crate::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::estimation::solver::kalman::{self, SteadyState};
-use crate::estimation::structure::ModelStructure;
+use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DVector};
@@ -234,7 +235,27 @@ impl Estimator for FilterError {
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let options = FilterErrorOptions::read(&problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;
-        filter_error_from(problem.record(), &problem.structure, &options, start)
+        match &problem.structure {
+            Structure::SixDof(structure) => {
+                filter_error_from(problem.record(), structure, &options, start)
+            }
+            Structure::Linear(structure) => linear_fit(
+                METHOD,
+                problem.record(),
+                structure,
+                &LinearFitOptions {
+                    max_iterations: options.max_iterations,
+                    step: options.step,
+                    window: options.window,
+                    process_noise: Some(
+                        options
+                            .process_noise
+                            .clone()
+                            .unwrap_or_else(|| structure.states.clone()),
+                    ),
+                },
+            ),
+        }
     }
 }
 
@@ -866,7 +887,7 @@ pub fn filter_error_from(
     let state_names = view.state_names();
     let parameter_names = structure.aircraft.aero.parameters.names();
     Ok(assemble(
-        structure,
+        (METHOD, &structure.name, &structure.outputs),
         record,
         &fit,
         &result,
@@ -875,6 +896,111 @@ pub fn filter_error_from(
             noise: noisy
                 .iter()
                 .map(|&i| format!("F.{}", state_names[i]))
+                .collect(),
+        },
+        notes,
+        started.elapsed().as_secs_f64(),
+    ))
+}
+
+/// How [`linear_fit`] fits a linear structure.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct LinearFitOptions {
+    pub max_iterations: usize,
+    /// The grid step; None: the fastest output's period.
+    pub step: Option<f64>,
+    pub window: Option<(f64, f64)>,
+    /// The states driven by process noise (filter error); None or empty:
+    /// none, and the fit is output error (the filter is the simulation).
+    pub process_noise: Option<Vec<String>>,
+}
+
+/// Output error (no process noise) or filter error on a linear structure:
+/// the [`FilterErrorFit`] of its exact discrete model driven by the
+/// record's input channels, from the file's parameter values, the initial
+/// state the record's value of each state named like a channel (else 0).
+/// `method` names the estimate.
+pub(crate) fn linear_fit(
+    method: &str,
+    record: &FlightRecord,
+    structure: &LinearStructure,
+    options: &LinearFitOptions,
+) -> Result<Estimate> {
+    let started = std::time::Instant::now();
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    if let Some(refusal) = Refusal::missing(method, structure.missing_channels(record), present) {
+        return Err(Error::Refused(refusal));
+    }
+    let free: Vec<usize> = (0..structure.free.len())
+        .filter(|&i| structure.free[i])
+        .collect();
+    if free.is_empty() {
+        return Err(Error::Refused(Refusal::NothingToEstimate {
+            method: method.to_string(),
+            model: structure.name.clone(),
+        }));
+    }
+    let noisy: Vec<usize> = options
+        .process_noise
+        .iter()
+        .flatten()
+        .map(|name| {
+            structure.states.iter().position(|s| s == name).ok_or_else(|| {
+                Error::Other(format!(
+                    "[methods.{method}] process_noise: '{name}' is not a state of the model ({})",
+                    structure.states.join(", ")
+                ))
+            })
+        })
+        .collect::<Result<_>>()?;
+    let (model, initial) = structure.for_record(record, options.step, options.window)?;
+    let step = model.time(1) - model.time(0);
+    let observations =
+        Observations::from_record(record, &structure.outputs, model.time(0), step, model.len())?;
+    let data: usize = observations.counts().iter().sum();
+    let unknowns = free.len() + noisy.len();
+    if data < unknowns {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: method.to_string(),
+            data,
+            unknowns,
+        }));
+    }
+    let mut notes: Vec<String> = observations.note(step).into_iter().collect();
+    notes.push(format!(
+        "linear model, inputs {} between grid points, started from the model file's values",
+        match structure.interpolation {
+            Interpolation::ZeroOrderHold => "held",
+            Interpolation::Linear => "linear",
+        }
+    ));
+    let theta = structure.parameter_values();
+    let mut fit = FilterErrorFit::new(
+        &model,
+        &observations,
+        initial,
+        theta.clone(),
+        free.clone(),
+        noisy.clone(),
+    )?;
+    let mut solver = Options::new(free.len());
+    solver.max_iterations = options.max_iterations;
+    solver.decrease_tolerance = Some(CONVERGED_DECREASE);
+    for (j, &i) in free.iter().enumerate() {
+        solver.bounds[j] = structure.bounds[i];
+        solver.typical[j] = 1e-3_f64.max(1e-2 * theta[i].abs());
+    }
+    let result = fit.fit(&theta, solver)?;
+    Ok(assemble(
+        (method, &structure.name, &structure.outputs),
+        record,
+        &fit,
+        &result,
+        &Names {
+            parameters: free.iter().map(|&i| structure.names[i].clone()).collect(),
+            noise: noisy
+                .iter()
+                .map(|&i| format!("F.{}", structure.states[i]))
                 .collect(),
         },
         notes,
@@ -940,10 +1066,11 @@ struct Names {
     noise: Vec<String>,
 }
 
-/// The estimate of a fit: the aerodynamic parameters with the aerodynamic
-/// block of the Cramér–Rao covariance; F and R in the notes and details.
+/// The estimate of a fit by `method` of model `name` with `outputs`: the
+/// model's parameters with their block of the Cramér–Rao covariance; F and
+/// R in the notes and details.
 fn assemble<M: StateSpaceModel + ?Sized>(
-    structure: &ModelStructure,
+    (method, name, outputs): (&str, &str, &[String]),
     record: &FlightRecord,
     fit: &FilterErrorFit<'_, M>,
     result: &FitResult,
@@ -958,13 +1085,16 @@ fn assemble<M: StateSpaceModel + ?Sized>(
         .cloned()
         .collect();
     let full = Estimate::from_solution(
-        (METHOD, structure.name.clone(), record.scenario.clone()),
+        (method, name.to_string(), record.scenario.clone()),
         &all,
         &result.start,
         &result.solution,
     );
     let aero = names.parameters.len();
-    let mut details = String::from("process-noise distribution F (diagonal), Cramér–Rao σ:\n");
+    let mut details = String::new();
+    if !names.noise.is_empty() {
+        details.push_str("process-noise distribution F (diagonal), Cramér–Rao σ:\n");
+    }
     for p in &full.parameters[aero..] {
         details.push_str(&format!(
             "  {} = {:.6e} ± {:.3e} (start {:.3e})\n",
@@ -975,23 +1105,25 @@ fn assemble<M: StateSpaceModel + ?Sized>(
         ));
     }
     details.push_str("innovation covariance R (diagonal):\n");
-    for (name, r) in structure.outputs.iter().zip(result.variances.iter()) {
+    for (name, r) in outputs.iter().zip(result.variances.iter()) {
         details.push_str(&format!("  {name}: {r:.6e}\n"));
     }
-    notes.push(format!(
-        "process noise {}; F started at {} × F_ref",
-        full.parameters[aero..]
-            .iter()
-            .map(|p| format!(
-                "{} = {:.4e} ± {:.2e}",
-                p.name,
-                p.value.abs(),
-                p.standard_error
-            ))
-            .collect::<Vec<_>>()
-            .join(", "),
-        result.start_factor
-    ));
+    if !names.noise.is_empty() {
+        notes.push(format!(
+            "process noise {}; F started at {} × F_ref",
+            full.parameters[aero..]
+                .iter()
+                .map(|p| format!(
+                    "{} = {:.4e} ± {:.2e}",
+                    p.name,
+                    p.value.abs(),
+                    p.standard_error
+                ))
+                .collect::<Vec<_>>()
+                .join(", "),
+            result.start_factor
+        ));
+    }
     notes.push(format!(
         "R (innovation covariance) is diagonal; det(R) = {:.4e} at the solution",
         result.variances.iter().product::<f64>()
@@ -1000,7 +1132,7 @@ fn assemble<M: StateSpaceModel + ?Sized>(
         .pass
         .as_ref()
         .map(|pass| {
-            (0..structure.outputs.len())
+            (0..outputs.len())
                 .map(|o| {
                     let (measured, predicted): (Vec<f64>, Vec<f64>) = fit
                         .outputs
@@ -1009,7 +1141,7 @@ fn assemble<M: StateSpaceModel + ?Sized>(
                         .filter(|(output, _)| **output == o)
                         .map(|(_, (z, y))| (*z, *y))
                         .unzip();
-                    OutputFit::new(&structure.outputs[o], &measured, &predicted)
+                    OutputFit::new(&outputs[o], &measured, &predicted)
                 })
                 .collect()
         })

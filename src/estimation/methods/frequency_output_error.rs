@@ -47,7 +47,9 @@ use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::control_steps;
 use crate::estimation::solver::fourier::{FourierTransform, breaks_at};
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options, Solution};
-use crate::estimation::structure::ModelStructure;
+use crate::estimation::linear_structure::LinearStructure;
+use crate::estimation::model::linear::Matrix;
+use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::aero::Regressor;
 use crate::sim::integrator::Interpolation;
@@ -162,7 +164,14 @@ impl Estimator for FrequencyOutputError {
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         crate::estimation::estimator::one_record(METHOD, problem)?;
         let options = FrequencyOutputErrorSettings::read(&problem.settings)?;
-        frequency_output_error(problem.record(), &problem.structure, &options)
+        match &problem.structure {
+            Structure::SixDof(structure) => {
+                frequency_output_error(problem.record(), structure, &options)
+            }
+            Structure::Linear(structure) => {
+                linear_frequency_output_error(problem.record(), structure, &options)
+            }
+        }
     }
 }
 
@@ -429,17 +438,7 @@ pub fn frequency_output_error(
     let breaks = breaks_at(start, step, count, &control_steps(record));
     let transform = FourierTransform::with_breaks(&omegas, start, step, count, &breaks)?;
     let times: Vec<f64> = (0..count).map(|k| simulation.time(k)).collect();
-    let mut measured = DMatrix::zeros(count, structure.outputs.len());
-    for (o, name) in structure.outputs.iter().enumerate() {
-        let values = record.channel(name)?.values_at(&times)?;
-        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-            return Err(Error::Other(format!(
-                "{METHOD}: channel '{name}' has no value at {:.3} s; the Fourier transform needs every sample",
-                times[k]
-            )));
-        }
-        measured.set_column(o, &DVector::from_vec(values));
-    }
+    let measured = measured_outputs(record, &structure.outputs, &times)?;
     let end_time = simulation.time(transform.samples - 1);
     let end_state = view.state_of(&recorded_initial_state(
         record, structure, simulation, end_time,
@@ -453,7 +452,7 @@ pub fn frequency_output_error(
     let first = vec![0.0; reference.len()];
     let data = FrequencyData::new(&transform, &inputs, &measured, (&first, &last))?;
     let aero = &structure.aircraft.aero;
-    let names = aero.parameters.names();
+    let names = aero.parameters.names().to_vec();
     let held: Vec<usize> = (0..names.len())
         .filter(|&i| {
             structure.free[i]
@@ -465,75 +464,218 @@ pub fn frequency_output_error(
     let free: Vec<usize> = (0..names.len())
         .filter(|&i| structure.free[i] && !held.contains(&i))
         .collect();
-    if free.is_empty() {
-        return Err(Error::Refused(Refusal::NothingToEstimate {
-            method: METHOD.into(),
-            model: structure.name.clone(),
-        }));
-    }
     let start_values = view.parameters();
-    let mut solver = Options::new(free.len());
-    solver.max_iterations = options.max_iterations;
-    solver.decrease_tolerance = Some(1e-4);
-    solver.bounds = free.iter().map(|&i| structure.bounds[i]).collect();
-    let fit = fit_transfer(&linearised, &data, &start_values, &free, &solver)?;
-    let free_names: Vec<String> = free.iter().map(|&i| names[i].clone()).collect();
-    let free_start = DVector::from_iterator(free.len(), free.iter().map(|&i| start_values[i]));
-    let mut estimate = Estimate::from_solution(
-        (METHOD, structure.name.clone(), record_name(record)),
-        &free_names,
-        &free_start,
-        &fit.solution,
-    );
-    estimate.fits = structure
-        .outputs
-        .iter()
-        .enumerate()
-        .filter(|_| !fit.predicted.is_empty())
-        .map(|(o, name)| {
-            OutputFit::new(
-                &format!("{name} (Fourier transforms)"),
-                &parts(&data.outputs[o]),
-                &parts(&fit.predicted[o]),
-            )
-        })
-        .collect();
+    let fitted = Fitted {
+        method_model_record: (METHOD, structure.name.clone(), record_name(record)),
+        names: &names,
+        start: &start_values,
+        free: &free,
+        held: &held,
+        bounds: &structure.bounds,
+        outputs: &structure.outputs,
+    };
     let inputs_used: Vec<&str> = linearised.inputs().iter().map(|i| i.name()).collect();
-    estimate.notes.push(format!(
-        "linearised about the record at {:.3} s: states {}; inputs {}",
-        start,
-        view.state_names().join(", "),
-        inputs_used.join(", ")
-    ));
-    estimate.notes.push(format!(
+    let notes = vec![
+        format!(
+            "linearised about the record at {:.3} s: states {}; inputs {}",
+            start,
+            view.state_names().join(", "),
+            inputs_used.join(", ")
+        ),
+        transform_note(&transform, &breaks, &band_note),
+    ];
+    let mut estimate = fitted.fit(&linearised, &data, options, notes)?;
+    estimate.wall_time = started.elapsed().as_secs_f64();
+    Ok(estimate)
+}
+
+/// The note on the transforms.
+fn transform_note(transform: &FourierTransform, breaks: &[usize], band_note: &str) -> String {
+    format!(
         "finite Fourier transforms by Filon–Simpson quadrature over {} samples at {} Hz{}: {band_note}",
         transform.samples,
-        crate::record::rate_text(1.0 / step),
+        crate::record::rate_text(1.0 / transform.step),
         match breaks.len() {
             0 => String::new(),
             n => format!(", integrated piecewise across {n} control steps"),
         }
-    ));
-    if !held.is_empty() {
-        let held_names: Vec<&str> = held.iter().map(|&i| names[i].as_str()).collect();
-        estimate.notes.push(format!(
-            "not estimated: {} (bias terms have no transform at the Fourier frequencies; held at their start values)",
-            held_names.join(", ")
-        ));
-    }
-    estimate.notes.push(format!(
-        "residual spectral density S (diagonal): {}",
-        structure
+    )
+}
+
+/// What the fit of either kind of structure needs besides the model and
+/// the transforms.
+struct Fitted<'a> {
+    method_model_record: (&'a str, String, String),
+    names: &'a [String],
+    start: &'a DVector<f64>,
+    free: &'a [usize],
+    /// Free parameters that are not estimated (bias terms).
+    held: &'a [usize],
+    bounds: &'a [(f64, f64)],
+    outputs: &'a [String],
+}
+
+impl Fitted<'_> {
+    /// Fits `model` to `data` and assembles the estimate with `notes`.
+    fn fit(
+        &self,
+        model: &dyn TransferModel,
+        data: &FrequencyData,
+        options: &FrequencyOutputErrorOptions,
+        mut notes: Vec<String>,
+    ) -> Result<Estimate> {
+        if self.free.is_empty() {
+            return Err(Error::Refused(Refusal::NothingToEstimate {
+                method: METHOD.into(),
+                model: self.method_model_record.1.clone(),
+            }));
+        }
+        let mut solver = Options::new(self.free.len());
+        solver.max_iterations = options.max_iterations;
+        solver.decrease_tolerance = Some(1e-4);
+        solver.bounds = self.free.iter().map(|&i| self.bounds[i]).collect();
+        let fit = fit_transfer(model, data, self.start, self.free, &solver)?;
+        let free_names: Vec<String> = self.free.iter().map(|&i| self.names[i].clone()).collect();
+        let free_start =
+            DVector::from_iterator(self.free.len(), self.free.iter().map(|&i| self.start[i]));
+        let (method, model_name, record) = self.method_model_record.clone();
+        let mut estimate = Estimate::from_solution(
+            (method, model_name, record),
+            &free_names,
+            &free_start,
+            &fit.solution,
+        );
+        estimate.fits = self
             .outputs
             .iter()
-            .zip(&fit.spectral_density)
-            .map(|(name, s)| format!("{name} {s:.3e}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    ));
-    let mut estimate = estimate.assess();
+            .enumerate()
+            .filter(|_| !fit.predicted.is_empty())
+            .map(|(o, name)| {
+                OutputFit::new(
+                    &format!("{name} (Fourier transforms)"),
+                    &parts(&data.outputs[o]),
+                    &parts(&fit.predicted[o]),
+                )
+            })
+            .collect();
+        if !self.held.is_empty() {
+            let held: Vec<&str> = self.held.iter().map(|&i| self.names[i].as_str()).collect();
+            notes.push(format!(
+                "not estimated: {} (bias terms have no transform at the Fourier frequencies; held at their start values)",
+                held.join(", ")
+            ));
+        }
+        notes.push(format!(
+            "residual spectral density S (diagonal): {}",
+            self.outputs
+                .iter()
+                .zip(&fit.spectral_density)
+                .map(|(name, s)| format!("{name} {s:.3e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        estimate.notes = notes;
+        Ok(estimate.assess())
+    }
+}
+
+/// Frequency-domain output error on a linear structure (`kind = "linear"`):
+/// its own matrices, the inputs and outputs as the record gives them; a
+/// state's end values from the record channel of its name (0 for a state
+/// no channel measures).
+pub fn linear_frequency_output_error(
+    record: &FlightRecord,
+    structure: &LinearStructure,
+    options: &FrequencyOutputErrorOptions,
+) -> Result<Estimate> {
+    let started = std::time::Instant::now();
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    if let Some(refusal) = Refusal::missing(METHOD, structure.missing_channels(record), present) {
+        return Err(Error::Refused(refusal));
+    }
+    let (model, _) = structure.for_record(record, None, None)?;
+    let (start, step, count) = (model.start, model.step, model.inputs.len());
+    let times: Vec<f64> = (0..count).map(|k| start + k as f64 * step).collect();
+    let inputs = DMatrix::from_fn(count, structure.inputs.len(), |k, i| model.inputs[k][i]);
+    let controls: Vec<(&str, Vec<f64>)> = structure
+        .inputs
+        .iter()
+        .enumerate()
+        .map(|(i, name)| (name.as_str(), inputs.column(i).iter().copied().collect()))
+        .collect();
+    let (omegas, band_note) = options
+        .band
+        .frequencies(METHOD, &controls, (start, step, count), false)?;
+    let breaks = breaks_at(start, step, count, &control_steps(record));
+    let transform = FourierTransform::with_breaks(&omegas, start, step, count, &breaks)?;
+    let measured = measured_outputs(record, &structure.outputs, &times)?;
+    let end = times[count - 1];
+    let mut unmeasured = Vec::new();
+    let mut state_at = |t: f64| -> Result<Vec<f64>> {
+        structure
+            .states
+            .iter()
+            .map(|name| match record.channel(name) {
+                Ok(channel) => Ok(channel.values_at(&[t])?[0]),
+                Err(_) => {
+                    if !unmeasured.contains(name) {
+                        unmeasured.push(name.clone());
+                    }
+                    Ok(0.0)
+                }
+            })
+            .collect()
+    };
+    let (first, last) = (state_at(start)?, state_at(end)?);
+    let data = FrequencyData::new(&transform, &inputs, &measured, (&first, &last))?;
+    let held: Vec<usize> = (0..structure.names.len())
+        .filter(|&i| {
+            structure.free[i]
+                && matches!(
+                    structure.entries[i].matrix,
+                    Matrix::StateBias | Matrix::OutputBias
+                )
+        })
+        .collect();
+    let free: Vec<usize> = (0..structure.names.len())
+        .filter(|&i| structure.free[i] && !held.contains(&i))
+        .collect();
+    let start_values = structure.parameter_values();
+    let fitted = Fitted {
+        method_model_record: (METHOD, structure.name.clone(), record_name(record)),
+        names: &structure.names,
+        start: &start_values,
+        free: &free,
+        held: &held,
+        bounds: &structure.bounds,
+        outputs: &structure.outputs,
+    };
+    let mut notes = vec![transform_note(&transform, &breaks, &band_note)];
+    if !unmeasured.is_empty() {
+        notes.push(format!(
+            "no channel measures the states {}: their values at the record's ends are taken as 0",
+            unmeasured.join(", ")
+        ));
+    }
+    let mut estimate = fitted.fit(&model, &data, options, notes)?;
     estimate.wall_time = started.elapsed().as_secs_f64();
     Ok(estimate)
+}
+
+/// The outputs' channels at `times`; an error naming a channel without a value.
+fn measured_outputs(record: &FlightRecord, outputs: &[String], times: &[f64]) -> Result<DMatrix<f64>> {
+    let mut measured = DMatrix::zeros(times.len(), outputs.len());
+    for (o, name) in outputs.iter().enumerate() {
+        let values = record.channel(name)?.values_at(times)?;
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Other(format!(
+                "{METHOD}: channel '{name}' has no value at {:.3} s; the Fourier transform needs every sample",
+                times[k]
+            )));
+        }
+        measured.set_column(o, &DVector::from_vec(values));
+    }
+    Ok(measured)
 }
 
 /// The control a control regressor reads.

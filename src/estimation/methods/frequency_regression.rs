@@ -375,7 +375,8 @@ impl Estimator for FrequencyRegression {
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         crate::estimation::estimator::one_record(METHOD, problem)?;
         let options = FrequencyRegressionSettings::read(&problem.settings)?;
-        frequency_regression(problem.record(), &problem.structure, &options)
+        let structure = problem.structure.six_dof(METHOD)?;
+        frequency_regression(problem.record(), structure, &options)
     }
 }
 

@@ -108,9 +108,11 @@ use crate::estimation::estimator::{
     Estimator, MethodInfo, MissingChannel, Refusal, Settings, merge_settings, parse_settings,
     setting_infos,
 };
+use crate::estimation::linear_structure::LinearStructure;
 use crate::estimation::methods::equation_error::{
     self, EquationErrorOptions, EquationErrorSettings, equation_error,
 };
+use crate::estimation::methods::filter_error;
 use crate::estimation::model::driven::{
     Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
@@ -121,7 +123,7 @@ use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{
     self, LeastSquaresProblem, NormalEquations, Options,
 };
-use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
+use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
 use crate::sim::integrator::Interpolation;
@@ -287,13 +289,48 @@ impl Estimator for OutputError {
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let options = OutputErrorOptions::read(&problem.settings)?;
+        let structure = match &problem.structure {
+            Structure::SixDof(structure) => structure,
+            Structure::Linear(linear) => return linear_output_error(problem, linear, &options),
+        };
         let records: Vec<&FlightRecord> = problem.records.iter().collect();
-        output_error_from(&records, &problem.structure, &options, start)
+        output_error_from(&records, structure, &options, start)
     }
 }
 
 /// Method name in estimates.
 pub const METHOD: &str = "oem";
+
+/// Output error on a linear structure: the filter-error fit with no
+/// process noise, whose filter is the model's exact simulation
+/// ([`filter_error::linear_fit`]). Initial states and output biases are
+/// the model file's business there (states start from the record, biases
+/// are `output_bias` parameters), so those settings are refused.
+fn linear_output_error(
+    problem: &EstimationProblem,
+    structure: &LinearStructure,
+    options: &OutputErrorOptions,
+) -> Result<Estimate> {
+    crate::estimation::estimator::one_record(METHOD, problem)?;
+    if options.estimate_initial_state || !options.output_biases.is_empty() {
+        return Err(Error::Other(format!(
+            "[methods.{METHOD}]: estimate_initial_state and output_biases are for 6-DOF structures; \
+             a linear model ('{}') states its biases as `state_bias` and `output_bias` parameters",
+            structure.name
+        )));
+    }
+    filter_error::linear_fit(
+        METHOD,
+        problem.record(),
+        structure,
+        &filter_error::LinearFitOptions {
+            max_iterations: options.max_iterations,
+            step: options.step,
+            window: options.window,
+            process_noise: None,
+        },
+    )
+}
 
 /// Refuses a structure output error (or another method that simulates or
 /// filters it, `method`) cannot fit as stated: no output to compare, or an

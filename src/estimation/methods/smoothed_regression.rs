@@ -304,8 +304,11 @@ impl Estimator for SmoothedRegression {
         let settings = SmoothedRegressionSettings::read(&problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;
         let started = std::time::Instant::now();
-        let (smoothed, mut estimate) =
-            smooth_and_regress(problem.record(), &problem.structure, &settings)?;
+        let (smoothed, mut estimate) = smooth_and_regress(
+            problem.record(),
+            problem.structure.six_dof(METHOD)?,
+            &settings,
+        )?;
         estimate.notes.extend(smoothed.notes.iter().cloned());
         estimate.notes.push(determined_note(&estimate));
         estimate.wall_time = started.elapsed().as_secs_f64();

@@ -208,7 +208,11 @@ impl Estimator for StepwiseRegression {
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         crate::estimation::estimator::one_record(METHOD, problem)?;
         let options = StepwiseSettings::read(&problem.settings)?.options();
-        let (reports, mut estimate) = stepwise_all(problem.record(), &problem.structure, &options)?;
+        let (reports, mut estimate) = stepwise_all(
+            problem.record(),
+            problem.structure.six_dof(METHOD)?,
+            &options,
+        )?;
         estimate.details = reports.iter().map(|r| format!("{r}\n")).collect();
         Ok(estimate)
     }

@@ -1,18 +1,26 @@
 //! A linear time-invariant model as a state-space model:
 //!
-//!   ẋ = A·x + B·u,   y = C·x + D·u,
+//!   ẋ = A·x + B·u + b,   y = [C·x + D·u + c; (ẋ)_R],
 //!
-//! u held constant over each step of the grid (zero-order hold), θ a list
-//! of entries of A, B, C and D (dimensional derivatives such as Z_w, M_q,
-//! M_δe). Its step is exact, x_{k+1} = Φ·x_k + Γ·u_k with Φ = e^{A·h} and
-//! Γ = ∫₀ʰ e^{A·s} ds·B (Van Loan, [`crate::estimation::solver::kalman`]),
+//! b a constant term per state, c one per output, and (ẋ)_R the rates of
+//! the states R that are outputs themselves (ṗ, ṙ as measured angular
+//! accelerations). θ is a list of entries of A, B, C, D, b and c
+//! (dimensional derivatives such as Z_w, M_q, M_δe, and biases). The
+//! inputs u are given at the grid points and held over each step
+//! (zero-order hold) or interpolated linearly between them (first-order
+//! hold). The step is exact under either: x_{k+1} = Φ·x_k + Γ₀·(u_k, 1)
+//! (+ Γ₁·(u_{k+1} − u_k) under the first-order hold), with Φ = e^{A·h} and
+//! Γ₀ = ∫₀ʰ e^{A·s} ds·[B b] (Van Loan, [`crate::estimation::solver::kalman`]),
 //! so a filter on it is a linear Kalman filter: the oracle the filters are
-//! checked against.
+//! checked against. The discrete matrices of the last θ are kept, so a
+//! pass over the grid computes them once.
 
 use super::state_space::{Jacobians, StateSpaceModel};
 use crate::error::{Error, Result};
-use crate::estimation::solver::kalman::discretise;
+use crate::estimation::solver::kalman::{discretise, discretise_first_order_hold};
+use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DVector};
+use std::sync::{Arc, Mutex};
 
 /// Which matrix a parameter is an entry of.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -21,6 +29,10 @@ pub enum Matrix {
     B,
     C,
     D,
+    /// b, the constant term of the state equations (column 0).
+    StateBias,
+    /// c, the constant term of the outputs C·x + D·u + c (column 0).
+    OutputBias,
 }
 
 /// A parameter: entry (row, column) of one of the matrices.
@@ -31,24 +43,89 @@ pub struct Entry {
     pub column: usize,
 }
 
-/// ẋ = A·x + B·u, y = C·x + D·u on the grid start + k·step, u_k given.
+/// A, B, C, D, b, c with θ written in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Matrices {
+    pub a: DMatrix<f64>,
+    pub b: DMatrix<f64>,
+    pub c: DMatrix<f64>,
+    pub d: DMatrix<f64>,
+    pub state_bias: DVector<f64>,
+    pub output_bias: DVector<f64>,
+}
+
+impl Matrices {
+    fn entry_mut(&mut self, entry: &Entry) -> &mut f64 {
+        match entry.matrix {
+            Matrix::A => &mut self.a[(entry.row, entry.column)],
+            Matrix::B => &mut self.b[(entry.row, entry.column)],
+            Matrix::C => &mut self.c[(entry.row, entry.column)],
+            Matrix::D => &mut self.d[(entry.row, entry.column)],
+            Matrix::StateBias => &mut self.state_bias[entry.row],
+            Matrix::OutputBias => &mut self.output_bias[entry.row],
+        }
+    }
+
+    /// ẋ = A·x + B·u + b.
+    pub fn rates(&self, x: &DVector<f64>, u: &DVector<f64>) -> DVector<f64> {
+        &self.a * x + &self.b * u + &self.state_bias
+    }
+}
+
+/// The discrete step of one θ: Φ, Γ₀ of [B b], and Γ₁ of B under the
+/// first-order hold.
+#[derive(Debug, Clone, PartialEq)]
+struct Discrete {
+    transition: DMatrix<f64>,
+    input: DMatrix<f64>,
+    ramp: Option<DMatrix<f64>>,
+}
+
+/// The discrete matrices of the last θ a step was taken with.
+#[derive(Debug, Default)]
+struct Cache(Mutex<Option<(Vec<f64>, Arc<Discrete>)>>);
+
+impl Clone for Cache {
+    fn clone(&self) -> Self {
+        Cache::default()
+    }
+}
+
+impl PartialEq for Cache {
+    /// A cache says nothing about the model.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+/// ẋ = A·x + B·u + b, y = [C·x + D·u + c; (ẋ)_R] on the grid start + k·step, u_k given.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinearStateSpace {
     pub a: DMatrix<f64>,
     pub b: DMatrix<f64>,
     pub c: DMatrix<f64>,
     pub d: DMatrix<f64>,
+    /// b (zero unless set by [`LinearStateSpace::with_biases`]).
+    pub state_bias: DVector<f64>,
+    /// c (zero unless set by [`LinearStateSpace::with_biases`]).
+    pub output_bias: DVector<f64>,
+    /// The states whose rates follow C·x + D·u + c among the outputs.
+    pub rate_outputs: Vec<usize>,
+    /// How u is taken inside a step.
+    pub hold: Interpolation,
     /// θ: the entries it sets (θ_j overrides entry j).
     pub parameters: Vec<Entry>,
     pub start: f64,
     pub step: f64,
-    /// u at each grid point, held over the step that follows.
+    /// u at each grid point.
     pub inputs: Vec<DVector<f64>>,
+    cache: Cache,
 }
 
 impl LinearStateSpace {
-    /// A model; an error when the shapes do not agree, an entry lies
-    /// outside its matrix, or the grid has fewer than two points.
+    /// A model with no biases, no rate outputs and held inputs; an error
+    /// when the shapes do not agree, an entry lies outside its matrix, or
+    /// the grid has fewer than two points.
     pub fn new(
         [a, b, c, d]: [DMatrix<f64>; 4],
         parameters: Vec<Entry>,
@@ -56,16 +133,63 @@ impl LinearStateSpace {
         step: f64,
         inputs: Vec<DVector<f64>>,
     ) -> Result<LinearStateSpace> {
+        let (n, l) = (a.nrows(), c.nrows());
+        LinearStateSpace {
+            a,
+            b,
+            c,
+            d,
+            state_bias: DVector::zeros(n),
+            output_bias: DVector::zeros(l),
+            rate_outputs: Vec::new(),
+            hold: Interpolation::ZeroOrderHold,
+            parameters,
+            start,
+            step,
+            inputs,
+            cache: Cache::default(),
+        }
+        .checked()
+    }
+
+    /// The model with constant terms b (per state) and c (per output of C).
+    pub fn with_biases(
+        mut self,
+        state_bias: DVector<f64>,
+        output_bias: DVector<f64>,
+    ) -> Result<LinearStateSpace> {
+        self.state_bias = state_bias;
+        self.output_bias = output_bias;
+        self.checked()
+    }
+
+    /// The model with the rates of `states` appended to its outputs.
+    pub fn with_rate_outputs(mut self, states: Vec<usize>) -> Result<LinearStateSpace> {
+        self.rate_outputs = states;
+        self.checked()
+    }
+
+    /// The model with its inputs taken inside a step by `hold`.
+    pub fn with_hold(mut self, hold: Interpolation) -> LinearStateSpace {
+        self.hold = hold;
+        self
+    }
+
+    fn checked(self) -> Result<LinearStateSpace> {
+        let (a, b, c, d) = (&self.a, &self.b, &self.c, &self.d);
         let (n, m, l) = (a.nrows(), b.ncols(), c.nrows());
         let shapes_agree = a.ncols() == n
             && b.nrows() == n
             && c.ncols() == n
             && d.nrows() == l
             && d.ncols() == m
-            && inputs.iter().all(|u| u.len() == m);
+            && self.state_bias.len() == n
+            && self.output_bias.len() == l
+            && self.rate_outputs.iter().all(|&i| i < n)
+            && self.inputs.iter().all(|u| u.len() == m);
         if !shapes_agree {
             return Err(Error::Other(format!(
-                "a linear model's matrices do not agree: A {}×{}, B {}×{}, C {}×{}, D {}×{}, inputs of {m}",
+                "a linear model's matrices do not agree: A {}×{}, B {}×{}, C {}×{}, D {}×{}, b of {}, c of {}, inputs of {m}",
                 a.nrows(),
                 a.ncols(),
                 b.nrows(),
@@ -73,46 +197,47 @@ impl LinearStateSpace {
                 c.nrows(),
                 c.ncols(),
                 d.nrows(),
-                d.ncols()
+                d.ncols(),
+                self.state_bias.len(),
+                self.output_bias.len(),
             )));
         }
-        if inputs.len() < 2 || !(step > 0.0 && step.is_finite()) {
+        if self.inputs.len() < 2 || !(self.step > 0.0 && self.step.is_finite()) {
             return Err(Error::Other(
                 "a linear model needs at least two grid points and a positive step".into(),
             ));
         }
-        let model = LinearStateSpace {
-            a,
-            b,
-            c,
-            d,
-            parameters,
-            start,
-            step,
-            inputs,
-        };
-        for entry in &model.parameters {
-            let matrix = model.matrix(entry.matrix);
-            if entry.row >= matrix.nrows() || entry.column >= matrix.ncols() {
+        for entry in &self.parameters {
+            let (rows, columns) = self.shape(entry.matrix);
+            if entry.row >= rows || entry.column >= columns {
                 return Err(Error::Other(format!(
-                    "parameter entry ({}, {}) lies outside {:?} ({}×{})",
-                    entry.row,
-                    entry.column,
-                    entry.matrix,
-                    matrix.nrows(),
-                    matrix.ncols()
+                    "parameter entry ({}, {}) lies outside {:?} ({rows}×{columns})",
+                    entry.row, entry.column, entry.matrix,
                 )));
             }
         }
-        Ok(model)
+        Ok(self)
     }
 
-    fn matrix(&self, which: Matrix) -> &DMatrix<f64> {
+    fn shape(&self, which: Matrix) -> (usize, usize) {
         match which {
-            Matrix::A => &self.a,
-            Matrix::B => &self.b,
-            Matrix::C => &self.c,
-            Matrix::D => &self.d,
+            Matrix::A => self.a.shape(),
+            Matrix::B => self.b.shape(),
+            Matrix::C => self.c.shape(),
+            Matrix::D => self.d.shape(),
+            Matrix::StateBias => (self.state_bias.len(), 1),
+            Matrix::OutputBias => (self.output_bias.len(), 1),
+        }
+    }
+
+    fn value(&self, entry: &Entry) -> f64 {
+        match entry.matrix {
+            Matrix::A => self.a[(entry.row, entry.column)],
+            Matrix::B => self.b[(entry.row, entry.column)],
+            Matrix::C => self.c[(entry.row, entry.column)],
+            Matrix::D => self.d[(entry.row, entry.column)],
+            Matrix::StateBias => self.state_bias[entry.row],
+            Matrix::OutputBias => self.output_bias[entry.row],
         }
     }
 
@@ -120,14 +245,12 @@ impl LinearStateSpace {
     pub fn parameter_values(&self) -> DVector<f64> {
         DVector::from_iterator(
             self.parameters.len(),
-            self.parameters
-                .iter()
-                .map(|e| self.matrix(e.matrix)[(e.row, e.column)]),
+            self.parameters.iter().map(|e| self.value(e)),
         )
     }
 
     /// The matrices with θ written in.
-    pub(crate) fn at(&self, theta: &[f64]) -> Result<[DMatrix<f64>; 4]> {
+    pub fn at(&self, theta: &[f64]) -> Result<Matrices> {
         if theta.len() != self.parameters.len() {
             return Err(Error::Other(format!(
                 "θ has {} values; the linear model has {} parameters",
@@ -135,21 +258,23 @@ impl LinearStateSpace {
                 self.parameters.len()
             )));
         }
-        let mut matrices = [
-            self.a.clone(),
-            self.b.clone(),
-            self.c.clone(),
-            self.d.clone(),
-        ];
+        let mut matrices = Matrices {
+            a: self.a.clone(),
+            b: self.b.clone(),
+            c: self.c.clone(),
+            d: self.d.clone(),
+            state_bias: self.state_bias.clone(),
+            output_bias: self.output_bias.clone(),
+        };
         for (entry, &value) in self.parameters.iter().zip(theta) {
-            let index = entry.matrix as usize;
-            matrices[index][(entry.row, entry.column)] = value;
+            *matrices.entry_mut(entry) = value;
         }
         Ok(matrices)
     }
 
-    /// The grid point whose step contains t (the last point: itself).
-    fn input_at(&self, t: f64) -> Result<&DVector<f64>> {
+    /// u at t: the held grid sample, or the linear interpolation between
+    /// the two grid points around t.
+    fn input_at(&self, t: f64) -> Result<DVector<f64>> {
         let position = (t - self.start) / self.step;
         let last = self.inputs.len() - 1;
         if !position.is_finite() || position < -1e-9 || position > last as f64 + 1e-9 {
@@ -158,7 +283,13 @@ impl LinearStateSpace {
             )));
         }
         let k = ((position + 1e-9).floor().max(0.0) as usize).min(last);
-        Ok(&self.inputs[k])
+        let fraction = (position - k as f64).clamp(0.0, 1.0);
+        Ok(match (self.hold, k < last) {
+            (Interpolation::Linear, true) if fraction > 1e-9 => {
+                &self.inputs[k] + (&self.inputs[k + 1] - &self.inputs[k]) * fraction
+            }
+            _ => self.inputs[k].clone(),
+        })
     }
 
     fn check_state(&self, x: &[f64]) -> Result<()> {
@@ -171,6 +302,35 @@ impl LinearStateSpace {
         }
         Ok(())
     }
+
+    /// The discrete step of θ, from the cache when θ is the last one's.
+    fn discrete(&self, theta: &[f64]) -> Result<Arc<Discrete>> {
+        let mut cache = self.cache.0.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some((last, discrete)) = cache.as_ref()
+            && last.as_slice() == theta
+        {
+            return Ok(discrete.clone());
+        }
+        let matrices = self.at(theta)?;
+        let (n, m) = matrices.b.shape();
+        let mut driven = DMatrix::zeros(n, m + 1);
+        driven.view_mut((0, 0), (n, m)).copy_from(&matrices.b);
+        driven.set_column(m, &matrices.state_bias);
+        let held = discretise(&matrices.a, &driven, None, self.step);
+        let ramp = match self.hold {
+            Interpolation::ZeroOrderHold => None,
+            Interpolation::Linear => {
+                Some(discretise_first_order_hold(&matrices.a, &matrices.b, self.step).2)
+            }
+        };
+        let discrete = Arc::new(Discrete {
+            transition: held.transition,
+            input: held.input,
+            ramp,
+        });
+        *cache = Some((theta.to_vec(), discrete.clone()));
+        Ok(discrete)
+    }
 }
 
 impl StateSpaceModel for LinearStateSpace {
@@ -179,7 +339,7 @@ impl StateSpaceModel for LinearStateSpace {
     }
 
     fn output_count(&self) -> usize {
-        self.c.nrows()
+        self.c.nrows() + self.rate_outputs.len()
     }
 
     fn parameter_count(&self) -> usize {
@@ -196,42 +356,72 @@ impl StateSpaceModel for LinearStateSpace {
 
     fn rates(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
         self.check_state(x)?;
-        let [a, b, _, _] = self.at(theta)?;
-        Ok(a * DVector::from_column_slice(x) + b * self.input_at(t)?)
+        let matrices = self.at(theta)?;
+        Ok(matrices.rates(&DVector::from_column_slice(x), &self.input_at(t)?))
     }
 
     fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
         self.check_state(x)?;
-        let [_, _, c, d] = self.at(theta)?;
-        Ok(c * DVector::from_column_slice(x) + d * self.input_at(t)?)
+        let matrices = self.at(theta)?;
+        let (x, u) = (DVector::from_column_slice(x), self.input_at(t)?);
+        let direct = &matrices.c * &x + &matrices.d * &u + &matrices.output_bias;
+        let rates = matrices.rates(&x, &u);
+        Ok(DVector::from_iterator(
+            self.output_count(),
+            direct
+                .iter()
+                .copied()
+                .chain(self.rate_outputs.iter().map(|&i| rates[i])),
+        ))
     }
 
     fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
         self.check_state(x)?;
-        let [a, _, c, _] = self.at(theta)?;
+        let matrices = self.at(theta)?;
         let u = self.input_at(t)?;
-        let (n, l, p) = (a.nrows(), c.nrows(), theta.len());
+        let (n, l, p) = (matrices.a.nrows(), self.output_count(), theta.len());
+        let direct = matrices.c.nrows();
         let mut rates_by_parameter = DMatrix::zeros(n, p);
         let mut outputs_by_parameter = DMatrix::zeros(l, p);
         for (j, entry) in self.parameters.iter().enumerate() {
             let factor = match entry.matrix {
                 Matrix::A | Matrix::C => x[entry.column],
                 Matrix::B | Matrix::D => u[entry.column],
+                Matrix::StateBias | Matrix::OutputBias => 1.0,
             };
             match entry.matrix {
-                Matrix::A | Matrix::B => rates_by_parameter[(entry.row, j)] += factor,
-                Matrix::C | Matrix::D => outputs_by_parameter[(entry.row, j)] += factor,
+                Matrix::A | Matrix::B | Matrix::StateBias => {
+                    rates_by_parameter[(entry.row, j)] += factor;
+                    for (o, &state) in self.rate_outputs.iter().enumerate() {
+                        if state == entry.row {
+                            outputs_by_parameter[(direct + o, j)] += factor;
+                        }
+                    }
+                }
+                Matrix::C | Matrix::D | Matrix::OutputBias => {
+                    outputs_by_parameter[(entry.row, j)] += factor
+                }
             }
         }
+        let mut outputs_by_state = DMatrix::zeros(l, n);
+        outputs_by_state
+            .view_mut((0, 0), (direct, n))
+            .copy_from(&matrices.c);
+        for (o, &state) in self.rate_outputs.iter().enumerate() {
+            outputs_by_state
+                .row_mut(direct + o)
+                .copy_from(&matrices.a.row(state));
+        }
         Ok(Jacobians {
-            rates_by_state: a,
+            rates_by_state: matrices.a,
             rates_by_parameter,
-            outputs_by_state: c,
+            outputs_by_state,
             outputs_by_parameter,
         })
     }
 
-    /// The exact step under a held input: x_{k+1} = Φ·x_k + Γ·u_k.
+    /// The exact step: x_{k+1} = Φ·x_k + Γ₀·(u_k, 1), plus Γ₁·(u_{k+1} − u_k)
+    /// under the first-order hold.
     fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
         self.check_state(x)?;
         if k + 1 >= self.inputs.len() {
@@ -240,9 +430,15 @@ impl StateSpaceModel for LinearStateSpace {
                 self.inputs.len()
             )));
         }
-        let [a, b, _, _] = self.at(theta)?;
-        let discrete = discretise(&a, &b, None, self.step);
-        Ok(discrete.transition * DVector::from_column_slice(x) + discrete.input * &self.inputs[k])
+        let discrete = self.discrete(theta)?;
+        let u = &self.inputs[k];
+        let driven = DVector::from_iterator(u.len() + 1, u.iter().copied().chain([1.0]));
+        let mut next =
+            &discrete.transition * DVector::from_column_slice(x) + &discrete.input * driven;
+        if let Some(ramp) = &discrete.ramp {
+            next += ramp * (&self.inputs[k + 1] - u);
+        }
+        Ok(next)
     }
 }
 

@@ -40,8 +40,20 @@ impl TransferModel for LinearStateSpace {
         self.parameters.len()
     }
 
+    /// The bias terms are constants: no transform at ω = 2πk/T. A rate
+    /// output (ẋ_i) is row i of [A B].
     fn matrices(&self, theta: &[f64]) -> Result<[DMatrix<f64>; 4]> {
-        self.at(theta)
+        let m = self.at(theta)?;
+        let rows = |direct: &DMatrix<f64>, rates: &DMatrix<f64>| {
+            let mut stacked = DMatrix::zeros(direct.nrows() + self.rate_outputs.len(), direct.ncols());
+            stacked.rows_mut(0, direct.nrows()).copy_from(direct);
+            for (k, &i) in self.rate_outputs.iter().enumerate() {
+                stacked.row_mut(direct.nrows() + k).copy_from(&rates.row(i));
+            }
+            stacked
+        };
+        let (c, d) = (rows(&m.c, &m.a), rows(&m.d, &m.b));
+        Ok([m.a, m.b, c, d])
     }
 }
 

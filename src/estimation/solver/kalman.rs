@@ -144,6 +144,33 @@ pub fn discretise(
     }
 }
 
+/// The input matrices of one step under a first-order hold, u linear from
+/// u_k to u_{k+1} over the step: x_{k+1} = Φ·x_k + Γ₀·u_k + Γ₁·(u_{k+1} − u_k)
+/// with Γ₀ = ∫₀ʰ e^{A·s} ds·B (the zero-order hold's Γ) and
+/// Γ₁ = ∫₀ʰ e^{A·(h−s)}·B·s/h ds, both from one exponential of the block
+/// matrix [[A·h, B·h, 0], [0, 0, I], [0, 0, 0]] (Van Loan; Franklin, Powell
+/// & Workman, "Digital Control of Dynamic Systems", §6.3.2). Returns
+/// (Φ, Γ₀, Γ₁).
+pub fn discretise_first_order_hold(
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    h: f64,
+) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    let (n, m) = (a.nrows(), b.ncols());
+    let mut block = DMatrix::zeros(n + 2 * m, n + 2 * m);
+    block.view_mut((0, 0), (n, n)).copy_from(&(a * h));
+    block.view_mut((0, n), (n, m)).copy_from(&(b * h));
+    block
+        .view_mut((n, n + m), (m, m))
+        .copy_from(&DMatrix::identity(m, m));
+    let exp = exponential(&block);
+    (
+        exp.view((0, 0), (n, n)).into_owned(),
+        exp.view((0, n), (n, m)).into_owned(),
+        exp.view((0, n + m), (n, m)).into_owned(),
+    )
+}
+
 /// P⁻ = Φ·P·Φᵀ + Q_d.
 pub fn predict_covariance(
     covariance: &DMatrix<f64>,

@@ -1,0 +1,219 @@
+//! Flights of a linear model (a scenario with a `[linear]` table): the
+//! model file's ẋ = A·x + B·u + b + F·w, y = [C·x + D·u + c; (ẋ)_R] flown
+//! on the scenario's step with the model's own exact discretisation
+//! ([`LinearStateSpace::step`]), its parameters at the file's values (the
+//! run's truth, exact), recorded by the recorder profile like any flight.
+//!
+//! - Inputs: a model input named like a control (`elevator`, `aileron`,
+//!   `rudder`, `flap`, `throttle`) is the scenario's `[[inputs]]` signal on
+//!   that control (the deviation from trim), any other input 0.
+//! - Initial state: the equilibrium of the inputs at t = 0,
+//!   A·x₀ = −(B·u₀ + b) (x₀ = 0 when A is singular).
+//! - Process noise: white, F = diag(`process_noise`) over the named
+//!   states; per step w_k ~ N(0, Q_d), Q_d = ∫₀ʰ e^{A·s}·F·Fᵀ·e^{Aᵀ·s} ds
+//!   (Van Loan, [`crate::estimation::solver::kalman::discretise`]), drawn
+//!   from [`random::streams::PROCESS_NOISE`] of the scenario's seed: the
+//!   discrete process of exactly the continuous model that the filter
+//!   error method postulates.
+//! - Record: the profile's channels whose quantity is a state, input or
+//!   output of the model, named as in the file ([`Profile::record_signals`]).
+
+use crate::error::{Error, Result};
+use crate::estimation::linear_structure::LinearStructure;
+use crate::estimation::model::linear::LinearStateSpace;
+use crate::estimation::model::state_space::StateSpaceModel;
+use crate::estimation::solver::kalman;
+use crate::random::{self, streams};
+use crate::record::FlightRecord;
+use crate::record::recorder::{Profile, record_scenario_seeded};
+use crate::sim::aero::ModelKind;
+use crate::sim::scenario::{LinearFlight, Scenario};
+use crate::sim::state::Control;
+use crate::sim::truth::{RunTruth, TrimPoint, TruthKind};
+use nalgebra::{DMatrix, DVector};
+use rand::RngExt;
+use rand_distr::StandardNormal;
+
+/// A linear model's flight: the grid, every signal by name, and its truth.
+#[derive(Debug, Clone)]
+pub struct LinearTrace {
+    pub times: Vec<f64>,
+    /// States, inputs and outputs, each on the grid.
+    pub signals: Vec<(String, Vec<f64>)>,
+    pub truth: RunTruth,
+}
+
+/// Records a scenario's flight: a linear model's when it has a `[linear]`
+/// table, else the simulator's ([`record_scenario_seeded`]).
+pub fn record_flight(
+    scenario: &Scenario,
+    profile: &Profile,
+    recorder_seed: u64,
+) -> Result<(FlightRecord, RunTruth)> {
+    let Some(linear) = &scenario.linear else {
+        return record_scenario_seeded(scenario, profile, recorder_seed);
+    };
+    let trace = fly(scenario, linear)?;
+    let step = scenario.step;
+    let record = profile.record_signals(
+        &scenario.name,
+        &trace.times,
+        step,
+        &trace.signals,
+        recorder_seed,
+    )?;
+    Ok((record, trace.truth))
+}
+
+/// Flies the linear model of a scenario's `[linear]` table.
+pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
+    let structure = LinearStructure::load(&linear.model_path.to_string_lossy())?;
+    let count = scenario.step_count() + 1;
+    let times: Vec<f64> = (0..count).map(|k| k as f64 * scenario.step).collect();
+    let controls: Vec<Option<usize>> = structure
+        .inputs
+        .iter()
+        .map(|name| Control::ALL.iter().position(|c| c.name() == name))
+        .collect();
+    let inputs: Vec<DVector<f64>> = times
+        .iter()
+        .map(|&t| {
+            let deviation = scenario.inputs.deviation(t);
+            DVector::from_iterator(
+                controls.len(),
+                controls.iter().map(|c| c.map_or(0.0, |i| deviation[i])),
+            )
+        })
+        .collect();
+    let model = structure.model(0.0, scenario.step, inputs.clone())?;
+    let theta = structure.parameter_values();
+    let distribution = process_noise(&structure, linear, scenario)?;
+    let noise = noise_factor(&model, &distribution)?;
+    let matrices = model.at(theta.as_slice())?;
+    let mut x = equilibrium(
+        &matrices.a,
+        &(&matrices.b * &inputs[0] + &matrices.state_bias),
+    );
+    let mut rng = random::stream(scenario.seed, streams::PROCESS_NOISE);
+    let n = structure.states.len();
+    let mut states = vec![Vec::with_capacity(count); n];
+    let mut outputs = vec![Vec::with_capacity(count); structure.outputs.len()];
+    for (k, &t) in times.iter().enumerate() {
+        if k > 0 {
+            x = model.step(k - 1, x.as_slice(), theta.as_slice())?;
+            if let Some(factor) = &noise {
+                let draws = DVector::from_fn(n, |_, _| rng.sample::<f64, _>(StandardNormal));
+                x += factor * draws;
+            }
+            if !x.iter().all(|v| v.is_finite()) {
+                return Err(Error::Departed {
+                    time: t,
+                    reason: format!("the linear model '{}' diverged", structure.name),
+                });
+            }
+        }
+        let y = model.outputs(t, x.as_slice(), theta.as_slice())?;
+        for i in 0..n {
+            states[i].push(x[i]);
+        }
+        for (o, column) in outputs.iter_mut().enumerate() {
+            column.push(y[o]);
+        }
+    }
+    let mut signals: Vec<(String, Vec<f64>)> =
+        structure.states.iter().cloned().zip(states).collect();
+    for (j, name) in structure.inputs.iter().enumerate() {
+        signals.push((name.clone(), inputs.iter().map(|u| u[j]).collect()));
+    }
+    signals.extend(structure.outputs.iter().cloned().zip(outputs));
+    Ok(LinearTrace {
+        times,
+        signals,
+        truth: truth(scenario, &structure),
+    })
+}
+
+/// F's diagonal from `[linear] process_noise`, named states checked.
+fn process_noise(
+    structure: &LinearStructure,
+    linear: &LinearFlight,
+    scenario: &Scenario,
+) -> Result<DVector<f64>> {
+    let mut distribution = DVector::zeros(structure.states.len());
+    for (state, &value) in &linear.process_noise {
+        let Some(i) = structure.states.iter().position(|s| s == state) else {
+            return Err(Error::Invalid {
+                path: scenario.path.clone(),
+                problems: vec![crate::error::Problem {
+                    field: format!("linear.process_noise.{state}"),
+                    message: format!(
+                        "not a state of '{}' ({})",
+                        structure.name,
+                        structure.states.join(", ")
+                    ),
+                }],
+            });
+        };
+        distribution[i] = value;
+    }
+    Ok(distribution)
+}
+
+/// A factor L with L·Lᵀ = Q_d of one step, or None without process noise.
+fn noise_factor(
+    model: &LinearStateSpace,
+    distribution: &DVector<f64>,
+) -> Result<Option<DMatrix<f64>>> {
+    if distribution.iter().all(|f| *f == 0.0) {
+        return Ok(None);
+    }
+    let theta = model.parameter_values();
+    let a = model.at(theta.as_slice())?.a;
+    let n = a.nrows();
+    let spectral = DMatrix::from_diagonal(&distribution.map(|f| f * f));
+    let q =
+        kalman::discretise(&a, &DMatrix::zeros(n, 0), Some(&spectral), model.step).process_noise;
+    // Q_d is only positive semi-definite when some states have no noise:
+    // its symmetric eigen-decomposition gives a factor either way.
+    let eigen = q.symmetric_eigen();
+    let roots = eigen.eigenvalues.map(|v| v.max(0.0).sqrt());
+    Ok(Some(&eigen.eigenvectors * DMatrix::from_diagonal(&roots)))
+}
+
+/// x with A·x = −rate, or 0 when A is singular.
+fn equilibrium(a: &DMatrix<f64>, rate: &DVector<f64>) -> DVector<f64> {
+    a.clone()
+        .lu()
+        .solve(&-rate)
+        .filter(|x| x.iter().all(|v| v.is_finite()))
+        .unwrap_or_else(|| DVector::zeros(a.nrows()))
+}
+
+/// The exact truth of a linear flight: the model's parameter values.
+fn truth(scenario: &Scenario, structure: &LinearStructure) -> RunTruth {
+    RunTruth {
+        kind: TruthKind::Exact,
+        scenario: scenario.name.clone(),
+        seed: scenario.seed,
+        aircraft: scenario.aircraft.name.clone(),
+        trim: TrimPoint {
+            airspeed: scenario.trim.airspeed,
+            altitude: scenario.trim.altitude,
+            flight_path_angle: scenario.trim.flight_path_angle,
+            heading: scenario.trim.heading,
+            alpha: 0.0,
+            beta: 0.0,
+            pitch: 0.0,
+            controls: Default::default(),
+        },
+        model: ModelKind::Linear,
+        parameters: structure
+            .names
+            .iter()
+            .cloned()
+            .zip(structure.starts.iter().copied())
+            .collect(),
+        local_derivatives: Default::default(),
+        parameter_changes: Vec::new(),
+    }
+}
