@@ -41,9 +41,17 @@ fn run_scores_every_method_on_the_lateral_scenario() {
                 score.name
             );
         }
-        if run.method != "swr" {
-            assert!(
-                scores.iter().filter(|s| s.truth.is_some()).count() == 18,
+        // Stepwise regression chooses its own terms; frequency-domain output
+        // error does not estimate the three bias terms.
+        let expected = match run.method.as_str() {
+            "swr" => None,
+            "fdoe" => Some(15),
+            _ => Some(18),
+        };
+        if let Some(expected) = expected {
+            assert_eq!(
+                scores.iter().filter(|s| s.truth.is_some()).count(),
+                expected,
                 "{}",
                 run.method
             );

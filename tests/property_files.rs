@@ -18,7 +18,7 @@
 //! Cases per file kind: `AEROID_FUZZ_CASES` (default 500); see docs/testing.md.
 
 use aeroid::check::check_file;
-use aeroid::estimation::structure::ModelStructure;
+use aeroid::estimation::structure::Structure;
 use aeroid::eval::gate;
 use aeroid::eval::study::Study;
 use aeroid::record::recorder::Profile;
@@ -486,7 +486,7 @@ impl Kind {
         let outcome = match self {
             Kind::Aircraft => Aircraft::load(path).map(drop),
             Kind::Scenario => Scenario::load(reference).map(drop),
-            Kind::Model => ModelStructure::load(reference).map(drop),
+            Kind::Model => Structure::load(reference).map(drop),
             Kind::Profile => Profile::load(reference, None).map(drop),
             Kind::Study => Study::load(reference).map(drop),
             Kind::Gates => gate::load(path).map(drop),

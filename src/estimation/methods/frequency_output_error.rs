@@ -38,17 +38,17 @@ use crate::estimation::estimate::{Estimate, OutputFit};
 use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
 };
+use crate::estimation::linear_structure::LinearStructure;
 use crate::estimation::methods::equation_error::record_name;
 use crate::estimation::methods::frequency_regression::{BandOptions, model_controls};
 use crate::estimation::methods::output_error;
+use crate::estimation::model::linear::Matrix;
 use crate::estimation::model::state_space::{DrivenStateSpace, recorded_initial_state};
 use crate::estimation::model::transfer::{LinearisedFlight, TransferModel};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::control_steps;
 use crate::estimation::solver::fourier::{FourierTransform, breaks_at};
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options, Solution};
-use crate::estimation::linear_structure::LinearStructure;
-use crate::estimation::model::linear::Matrix;
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::aero::Regressor;
@@ -603,9 +603,10 @@ pub fn linear_frequency_output_error(
         .enumerate()
         .map(|(i, name)| (name.as_str(), inputs.column(i).iter().copied().collect()))
         .collect();
-    let (omegas, band_note) = options
-        .band
-        .frequencies(METHOD, &controls, (start, step, count), false)?;
+    let (omegas, band_note) =
+        options
+            .band
+            .frequencies(METHOD, &controls, (start, step, count), false)?;
     let breaks = breaks_at(start, step, count, &control_steps(record));
     let transform = FourierTransform::with_breaks(&omegas, start, step, count, &breaks)?;
     let measured = measured_outputs(record, &structure.outputs, &times)?;
@@ -663,7 +664,11 @@ pub fn linear_frequency_output_error(
 }
 
 /// The outputs' channels at `times`; an error naming a channel without a value.
-fn measured_outputs(record: &FlightRecord, outputs: &[String], times: &[f64]) -> Result<DMatrix<f64>> {
+fn measured_outputs(
+    record: &FlightRecord,
+    outputs: &[String],
+    times: &[f64],
+) -> Result<DMatrix<f64>> {
     let mut measured = DMatrix::zeros(times.len(), outputs.len());
     for (o, name) in outputs.iter().enumerate() {
         let values = record.channel(name)?.values_at(times)?;

@@ -26,13 +26,13 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
     vec![
         Arc::new(equation_error::EquationError),
         Arc::new(stepwise::StepwiseRegression),
-        Arc::new(frequency_regression::FrequencyRegression),
         Arc::new(output_error::OutputError),
-        Arc::new(frequency_output_error::FrequencyOutputError),
         Arc::new(smoothed_regression::SmoothedRegression),
         Arc::new(filter_error::FilterError),
         Arc::new(augmented_ekf::AugmentedEkf),
         Arc::new(unscented::UnscentedFilter),
+        Arc::new(frequency_regression::FrequencyRegression),
+        Arc::new(frequency_output_error::FrequencyOutputError),
     ]
 }
 

@@ -45,7 +45,8 @@ impl TransferModel for LinearStateSpace {
     fn matrices(&self, theta: &[f64]) -> Result<[DMatrix<f64>; 4]> {
         let m = self.at(theta)?;
         let rows = |direct: &DMatrix<f64>, rates: &DMatrix<f64>| {
-            let mut stacked = DMatrix::zeros(direct.nrows() + self.rate_outputs.len(), direct.ncols());
+            let mut stacked =
+                DMatrix::zeros(direct.nrows() + self.rate_outputs.len(), direct.ncols());
             stacked.rows_mut(0, direct.nrows()).copy_from(direct);
             for (k, &i) in self.rate_outputs.iter().enumerate() {
                 stacked.row_mut(direct.nrows() + k).copy_from(&rates.row(i));
