@@ -388,12 +388,15 @@ impl Estimator for FrequencyRegression {
     }
 }
 
+/// One regression's transforms: z̃ and one X̃ column per regression column.
+type Regression = (Vec<Complex<f64>>, Vec<Vec<Complex<f64>>>);
+
 /// The transformed data: per plan the measured side and its regressors.
 struct Transformed {
     /// Angular frequencies (rad/s).
     frequencies: Vec<f64>,
     /// Per plan: z̃ and one X̃ column per regression column.
-    plans: Vec<(Vec<Complex<f64>>, Vec<Vec<Complex<f64>>>)>,
+    plans: Vec<Regression>,
     samples: usize,
 }
 
@@ -402,8 +405,10 @@ struct Transformed {
 struct Signals {
     /// N × S, column by column.
     matrix: DMatrix<f64>,
-    /// Per plan: first column and count of columns (z, then regressors).
-    layout: Vec<(usize, usize)>,
+    /// Per plan: the column of z, and per regression column the column of
+    /// its q̄S·x and the factor (the reference length l) it takes. A
+    /// regressor the plans share is transformed once.
+    layout: Vec<(usize, Vec<(usize, f64)>)>,
     /// Column of p (then q, r) when a moment is regressed.
     rates: Option<usize>,
     /// The plans' coefficients.
@@ -423,6 +428,8 @@ impl Signals {
         let count = data.times.len();
         let mut columns: Vec<Vec<f64>> = Vec::new();
         let mut layout = Vec::new();
+        // The columns that hold a regressor's q̄S·x.
+        let mut shared: Vec<usize> = Vec::new();
         for plan in plans {
             let length = match plan.coefficient {
                 Coefficient::Roll | Coefficient::Yaw => aircraft.geometry.span,
@@ -432,15 +439,26 @@ impl Signals {
             let scale: Vec<f64> = data
                 .dynamic_pressure
                 .iter()
-                .map(|q| q * aircraft.wing_area * length)
+                .map(|q| q * aircraft.wing_area)
                 .collect();
             let free = plan.columns(structure);
             let (x, z) = regression_problem(plan, structure, data, &free);
-            layout.push((columns.len(), 1 + free.len()));
-            columns.push((0..count).map(|k| z[k] * scale[k]).collect());
+            let z_column = columns.len();
+            columns.push((0..count).map(|k| z[k] * scale[k] * length).collect());
+            let mut regressors = Vec::with_capacity(free.len());
             for j in 0..free.len() {
-                columns.push((0..count).map(|k| x[(k, j)] * scale[k]).collect());
+                let series: Vec<f64> = (0..count).map(|k| x[(k, j)] * scale[k]).collect();
+                let column = match shared.iter().find(|&&c| columns[c] == series) {
+                    Some(&c) => c,
+                    None => {
+                        shared.push(columns.len());
+                        columns.push(series);
+                        columns.len() - 1
+                    }
+                };
+                regressors.push((column, length));
             }
+            layout.push((z_column, regressors));
         }
         let rates = if plans.iter().any(|p| !p.coefficient.is_force()) {
             let first = columns.len();
@@ -573,7 +591,7 @@ pub fn frequency_regression(
 
 /// Adds (I·ω̇)_row of each moment plan to its z̃ from the rates' transforms.
 fn add_angular_accelerations(
-    plans: &mut [(Vec<Complex<f64>>, Vec<Vec<Complex<f64>>>)],
+    plans: &mut [Regression],
     signals: &Signals,
     rate_derivatives: &[Vec<Complex<f64>>],
 ) {
@@ -597,17 +615,17 @@ fn add_angular_accelerations(
 }
 
 /// The plans' transformed data from all columns' transforms.
-fn split(
-    signals: &Signals,
-    columns: &[Vec<Complex<f64>>],
-) -> Vec<(Vec<Complex<f64>>, Vec<Vec<Complex<f64>>>)> {
+fn split(signals: &Signals, columns: &[Vec<Complex<f64>>]) -> Vec<Regression> {
     signals
         .layout
         .iter()
-        .map(|&(first, width)| {
+        .map(|(z, regressors)| {
             (
-                columns[first].clone(),
-                columns[first + 1..first + width].to_vec(),
+                columns[*z].clone(),
+                regressors
+                    .iter()
+                    .map(|&(c, factor)| columns[c].iter().map(|v| v * factor).collect())
+                    .collect(),
             )
         })
         .collect()
@@ -679,7 +697,7 @@ fn transform_recursively(signals: &Signals, omegas: &[f64], grid: &Grid) -> Resu
 fn fit_plan(
     plan: &Plan,
     structure: &ModelStructure,
-    (z, x): &(Vec<Complex<f64>>, Vec<Vec<Complex<f64>>>),
+    (z, x): &Regression,
     omegas: &[f64],
 ) -> CoefficientResult {
     let name = plan.coefficient.name(structure.aircraft.aero.force_axes);
@@ -874,10 +892,12 @@ pub fn linear_frequency_regression(
     let mut fits = Vec::new();
     let mut problems = Vec::new();
     for (state, row) in equations {
-        let of_equation = |matrix: Matrix| match (state, matrix) {
-            (true, Matrix::A | Matrix::B | Matrix::StateBias) => true,
-            (false, Matrix::C | Matrix::D | Matrix::OutputBias) => true,
-            _ => false,
+        let of_equation = |matrix: Matrix| {
+            matches!(
+                (state, matrix),
+                (true, Matrix::A | Matrix::B | Matrix::StateBias)
+                    | (false, Matrix::C | Matrix::D | Matrix::OutputBias)
+            )
         };
         let entries: Vec<usize> = (0..structure.names.len())
             .filter(|&i| {

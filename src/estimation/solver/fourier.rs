@@ -302,7 +302,7 @@ impl FourierTransform {
             let rotation = phasor(omega, step);
             let mut e = C64::new(1.0, 0.0);
             for k in 0..count {
-                if k % ANCHOR_INTERVAL == 0 {
+                if k.is_multiple_of(ANCHOR_INTERVAL) {
                     e = phasor(omega, start + k as f64 * step);
                 }
                 phasors.push(e);
@@ -469,7 +469,7 @@ impl RunningTransform {
         // The phasor of sample k.
         self.earlier = [self.earlier[1].clone(), self.phasors.clone()];
         for (j, e) in self.phasors.iter_mut().enumerate() {
-            *e = if k % ANCHOR_INTERVAL == 0 {
+            *e = if k.is_multiple_of(ANCHOR_INTERVAL) {
                 phasor(self.frequencies[j], self.start + k as f64 * self.step)
             } else {
                 *e * self.rotations[j]
