@@ -122,14 +122,29 @@ struct Weights {
     panel: [C64; 3],
     tail: [C64; 3],
     linear: [C64; 2],
+    /// A whole-panel piece's first and last samples, referred to their own
+    /// phasors: w₋·e^{−jωh} and w₊·e^{jωh}.
+    first: C64,
+    last: C64,
+    /// Its inner samples: a panel's join (first + last, real) and centre
+    /// (w₀, real).
+    even: f64,
+    odd: f64,
 }
 
 impl Weights {
     fn new(omega: f64, h: f64) -> Weights {
+        let panel = quadratic_weights(omega, h, (-h, h));
+        let rotation = phasor(omega, h);
+        let (first, last) = (panel[0] * rotation, panel[2] * rotation.conj());
         Weights {
-            panel: quadratic_weights(omega, h, (-h, h)),
+            panel,
             tail: quadratic_weights(omega, h, (0.0, h)),
             linear: linear_weights(omega, h),
+            first,
+            last,
+            even: (first + last).re,
+            odd: panel[1].re,
         }
     }
 }
@@ -152,50 +167,44 @@ fn left_limit(s: usize, b: usize) -> Point {
     })
 }
 
-/// One contribution of the rule: Σ weight·point, times the phasor at `at`.
-struct Contribution<'a> {
-    points: [&'a Point; 3],
-    weights: [C64; 3],
-    /// The sample whose instant the weights are referred to.
-    at: usize,
-}
-
-/// Calls `add` with every contribution of the rule over the piece
-/// `points` (consecutive samples; the last may be a left limit), given
-/// the weights at one frequency.
-fn piece_contributions(
-    points: &[Point],
+/// Calls `add(i, w)` with the weight w of point i of a piece of `length`
+/// consecutive points from sample `first` (the last may be a left limit),
+/// given the rule's weights at one frequency and the samples' phasors:
+/// whole panels (the inner points by parity), then the last interval alone
+/// when the count of intervals is odd, or one linear interval.
+fn piece_weights(
+    length: usize,
     first: usize,
     weights: &Weights,
-    mut add: impl FnMut(Contribution),
+    phasors: impl Fn(usize) -> C64,
+    mut add: impl FnMut(usize, C64),
 ) {
-    let n = points.len().saturating_sub(1);
+    let n = length.saturating_sub(1);
     if n == 0 {
         return;
     }
     if n == 1 {
-        add(Contribution {
-            points: [&points[0], &points[1], &points[1]],
-            weights: [weights.linear[0], weights.linear[1], C64::new(0.0, 0.0)],
-            at: first,
-        });
+        let e = phasors(first);
+        add(0, weights.linear[0] * e);
+        add(1, weights.linear[1] * e);
         return;
     }
-    let mut i = 0;
-    while i + 2 <= n {
-        add(Contribution {
-            points: [&points[i], &points[i + 1], &points[i + 2]],
-            weights: weights.panel,
-            at: first + i + 1,
-        });
-        i += 2;
+    let m = n - n % 2;
+    add(0, weights.first * phasors(first));
+    for i in 1..m {
+        let c = if i % 2 == 1 {
+            weights.odd
+        } else {
+            weights.even
+        };
+        add(i, phasors(first + i) * c);
     }
-    if i < n {
-        add(Contribution {
-            points: [&points[n - 2], &points[n - 1], &points[n]],
-            weights: weights.tail,
-            at: first + n - 1,
-        });
+    add(m, weights.last * phasors(first + m));
+    if m < n {
+        let e = phasors(first + n - 1);
+        add(n - 2, weights.tail[0] * e);
+        add(n - 1, weights.tail[1] * e);
+        add(n, weights.tail[2] * e);
     }
 }
 
@@ -295,39 +304,48 @@ impl FourierTransform {
         let mut real = DMatrix::zeros(count, m);
         let mut imaginary = DMatrix::zeros(count, m);
         let pieces = pieces(count, breaks);
-        let mut phasors = Vec::with_capacity(count);
-        for (j, &omega) in frequencies.iter().enumerate() {
-            let weights = Weights::new(omega, step);
-            phasors.clear();
-            let rotation = phasor(omega, step);
-            let mut e = C64::new(1.0, 0.0);
-            for k in 0..count {
-                if k.is_multiple_of(ANCHOR_INTERVAL) {
-                    e = phasor(omega, start + k as f64 * step);
+        // The phasors of LANES frequencies at a time: independent rotation
+        // chains, which the processor overlaps.
+        const LANES: usize = 4;
+        let mut phasors = vec![[C64::new(0.0, 0.0); LANES]; count];
+        for group in (0..m).step_by(LANES) {
+            let lanes = LANES.min(m - group);
+            let omegas = &frequencies[group..group + lanes];
+            let rotations: Vec<C64> = omegas.iter().map(|&w| phasor(w, step)).collect();
+            let mut e = [C64::new(0.0, 0.0); LANES];
+            for (k, slot) in phasors.iter_mut().enumerate() {
+                for lane in 0..lanes {
+                    if k % ANCHOR_INTERVAL == 0 {
+                        e[lane] = phasor(omegas[lane], start + k as f64 * step);
+                    }
+                    slot[lane] = e[lane];
+                    e[lane] *= rotations[lane];
                 }
-                phasors.push(e);
-                e *= rotation;
             }
-            let (mut re, mut im) = (real.column_mut(j), imaginary.column_mut(j));
-            let mut add = |k: usize, value: C64| {
-                re[k] += value.re;
-                im[k] += value.im;
-            };
-            for (first, points) in &pieces {
-                piece_contributions(points, *first, &weights, |c| {
-                    let e = phasors[c.at];
-                    for (point, w) in c.points.iter().zip(c.weights) {
-                        let value = w * e;
-                        match point {
-                            Point::Sample(k) => add(*k, value),
+            for (lane, &omega) in omegas.iter().enumerate() {
+                let weights = Weights::new(omega, step);
+                let j = group + lane;
+                let (mut re, mut im) = (real.column_mut(j), imaginary.column_mut(j));
+                for (first, points) in &pieces {
+                    piece_weights(
+                        points.len(),
+                        *first,
+                        &weights,
+                        |k| phasors[k][lane],
+                        |i, w| match &points[i] {
+                            Point::Sample(k) => {
+                                re[*k] += w.re;
+                                im[*k] += w.im;
+                            }
                             Point::Limit(terms) => {
                                 for &(k, coefficient) in terms {
-                                    add(k, value * coefficient);
+                                    re[k] += w.re * coefficient;
+                                    im[k] += w.im * coefficient;
                                 }
                             }
-                        }
-                    }
-                });
+                        },
+                    );
+                }
             }
         }
         Ok(FourierTransform {
