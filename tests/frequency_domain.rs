@@ -302,3 +302,40 @@ fn both_methods_recover_a_linear_structure() {
         );
     }
 }
+
+/// Settings out of range are errors naming the method's table and the key.
+#[test]
+fn bad_settings_are_refused_with_the_key() {
+    use aeroid::estimation::methods::frequency_output_error::FrequencyOutputErrorSettings;
+    use aeroid::estimation::methods::frequency_regression::FrequencyRegressionSettings;
+    let settings = |text: &str| -> aeroid::estimation::estimator::Settings {
+        let table: toml::Table = toml::from_str(text).unwrap();
+        serde_json::to_value(table)
+            .unwrap()
+            .as_object()
+            .unwrap()
+            .clone()
+    };
+    for (text, key) in [
+        (r#"band = ["2 Hz", "1 Hz"]"#, "band"),
+        (r#"band = ["0.1 Hz", "1 m"]"#, "band"),
+        (r#"resolution = "-0.1 Hz""#, "resolution"),
+        ("input_threshold = 1.5", "input_threshold"),
+        ("bandwidth = 3", "bandwidth"),
+    ] {
+        let message = FrequencyRegressionSettings::read(&settings(text))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("[methods.fdee]") && message.contains(key),
+            "{text}: {message}"
+        );
+    }
+    let message = FrequencyOutputErrorSettings::read(&settings("max_iterations = 0"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("[methods.fdoe]") && message.contains("max_iterations"),
+        "{message}"
+    );
+}

@@ -40,7 +40,9 @@ use crate::estimation::estimator::{
 };
 use crate::estimation::linear_structure::LinearStructure;
 use crate::estimation::methods::equation_error::record_name;
-use crate::estimation::methods::frequency_regression::{BandOptions, model_controls};
+use crate::estimation::methods::frequency_regression::{
+    BAND_SETTINGS, BandOptions, model_controls,
+};
 use crate::estimation::methods::output_error;
 use crate::estimation::model::linear::Matrix;
 use crate::estimation::model::state_space::{DrivenStateSpace, recorded_initial_state};
@@ -139,18 +141,9 @@ impl Estimator for FrequencyOutputError {
             settings: setting_infos(
                 &FrequencyOutputErrorSettings::default(),
                 &[
-                    (
-                        "band",
-                        "[low, high], e.g. [\"0.1 Hz\", \"1.5 Hz\"]; none: from the inputs' spectra",
-                    ),
-                    (
-                        "resolution",
-                        "frequency spacing; none: 1/T (then trim values and biases drop out exactly)",
-                    ),
-                    (
-                        "input_threshold",
-                        "the automatic band ends where every control's amplitude spectrum is below this fraction of its peak",
-                    ),
+                    BAND_SETTINGS[0],
+                    BAND_SETTINGS[1],
+                    BAND_SETTINGS[2],
                     ("max_iterations", "Gauss–Newton iterations at most"),
                 ],
             ),

@@ -129,6 +129,22 @@ pub struct FrequencyRegressionOptions {
     pub recursive: bool,
 }
 
+/// The meanings of the band settings both frequency-domain methods take.
+pub(crate) const BAND_SETTINGS: [(&str, &str); 3] = [
+    (
+        "band",
+        "[low, high], e.g. [\"0.1 Hz\", \"1.5 Hz\"]; none: from the inputs' spectra",
+    ),
+    (
+        "resolution",
+        "frequency spacing, e.g. \"0.04 Hz\"; none: 1/T, the record's Fourier resolution (then trim values and constant biases have no transform)",
+    ),
+    (
+        "input_threshold",
+        "the automatic band ends where every control's amplitude spectrum is below this fraction of its peak",
+    ),
+];
+
 /// Where the frequency-domain methods look: the band and the spacing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BandOptions {
@@ -340,23 +356,14 @@ impl Estimator for FrequencyRegression {
         MethodInfo {
             title: "Fourier-transform regression: equation error on the finite Fourier transforms of the force and moment equations over the excited band",
             paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), §7.2–7.3; Morelli, \"Real-time parameter estimation in the frequency domain\", J. Guidance 23(5), 2000",
-            equations: "x̃(ω) = ∫x·e^{−jωt}dt by Filon–Simpson quadrature; (ω̇)~ = jω·ω̃ + end terms; θ = [Re(X̃*X̃)]⁻¹Re(X̃*z̃), Cov = s²[Re(X̃*X̃)]⁻¹",
-            needs: "as equation error (load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude), uniformly sampled; a model linear in its parameters",
+            equations: "x̃(ω) = ∫x·e^{−jωt}dt by Filon–Simpson quadrature; (ω̇)~ = jω·ω̃ + end terms; θ = [Re(X̃*X̃)]⁻¹Re(X̃*z̃), Cov = [Re(X̃*X̃)]⁻¹Re(X̃*VX̃)[Re(X̃*X̃)]⁻¹ with V the local residual power",
+            needs: "as equation error (load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude), uniformly sampled; a model linear in its parameters; a linear structure: every state measured",
             settings: setting_infos(
                 &FrequencyRegressionSettings::default(),
                 &[
-                    (
-                        "band",
-                        "[low, high], e.g. [\"0.1 Hz\", \"1.5 Hz\"]; none: from the inputs' spectra",
-                    ),
-                    (
-                        "resolution",
-                        "frequency spacing, e.g. \"0.04 Hz\"; none: 1/T, the record's Fourier resolution",
-                    ),
-                    (
-                        "input_threshold",
-                        "the automatic band ends where every control's amplitude spectrum is below this fraction of its peak",
-                    ),
+                    BAND_SETTINGS[0],
+                    BAND_SETTINGS[1],
+                    BAND_SETTINGS[2],
                     (
                         "zero_frequency",
                         "include ω = 0 (the means; estimates bias terms); none: when a free term has the constant regressor",
