@@ -244,15 +244,15 @@ impl BandOptions {
                     .collect();
                 let omegas: Vec<f64> = candidates.iter().map(|f| 2.0 * PI * f).collect();
                 let transform = FourierTransform::new(&omegas, start, step, samples)?;
+                let means: Vec<f64> = controls
+                    .iter()
+                    .map(|(_, v)| v.iter().sum::<f64>() / v.len() as f64)
+                    .collect();
+                let centred =
+                    DMatrix::from_fn(samples, controls.len(), |k, i| controls[i].1[k] - means[i]);
                 let mut high: f64 = 0.0;
-                for (_, values) in controls {
-                    let mean = values.iter().sum::<f64>() / values.len() as f64;
-                    let centred: Vec<f64> = values.iter().map(|v| v - mean).collect();
-                    let amplitude: Vec<f64> = transform
-                        .transform(&centred)?
-                        .iter()
-                        .map(|c| c.norm())
-                        .collect();
+                for spectrum in transform.transform_columns(&centred)? {
+                    let amplitude: Vec<f64> = spectrum.iter().map(|c| c.norm()).collect();
                     let peak = amplitude.iter().copied().fold(0.0, f64::max);
                     if let Some(last) = amplitude
                         .iter()

@@ -72,13 +72,18 @@ fn moments(omega: f64, a: f64, b: f64) -> [C64; 3] {
         // Σ_m (−jω)^m/m!·(b^{n+m+1} − a^{n+m+1})/(n+m+1).
         let mut sums = [C64::new(0.0, 0.0); 3];
         for (n, sum) in sums.iter_mut().enumerate() {
+            // term = (−jω)^m/m!; b^{n+m+1} and a^{n+m+1} carried along.
             let mut term = C64::new(1.0, 0.0);
+            let (mut pa, mut pb) = (a.powi(n as i32 + 1), b.powi(n as i32 + 1));
+            let scale = reach.powi(n as i32 + 1);
             for m in 0..60 {
-                let power = (n + m + 1) as i32;
-                let span = (b.powi(power) - a.powi(power)) / power as f64;
-                *sum += term * span;
+                let power = (n + m + 1) as f64;
+                *sum += term * ((pb - pa) / power);
                 term *= C64::new(0.0, -omega) / (m + 1) as f64;
-                if term.norm() * reach.powi(power + 1) < 1e-18 * reach.powi(n as i32 + 1) {
+                pa *= a;
+                pb *= b;
+                // Later terms are below (ω·reach)^m/m! of the first.
+                if (term.re.abs() + term.im.abs()) * pb.abs().max(pa.abs()) < 1e-18 * scale {
                     break;
                 }
             }
@@ -170,14 +175,18 @@ fn left_limit(s: usize, b: usize) -> Point {
 /// Calls `add(i, w)` with the weight w of point i of a piece of `length`
 /// consecutive points from sample `first` (the last may be a left limit),
 /// given the rule's weights at one frequency and the samples' phasors:
-/// whole panels (the inner points by parity), then the last interval alone
-/// when the count of intervals is odd, or one linear interval.
+/// whole panels, then the last interval alone when the count of intervals
+/// is odd, or one linear interval. The whole panels' inner points, samples
+/// all, are left to `inner(samples)`: their weights are the phasor times
+/// `weights.odd` at an odd offset from `first` and `weights.even` at an
+/// even one.
 fn piece_weights(
     length: usize,
     first: usize,
     weights: &Weights,
     phasors: impl Fn(usize) -> C64,
     mut add: impl FnMut(usize, C64),
+    mut inner: impl FnMut(std::ops::Range<usize>),
 ) {
     let n = length.saturating_sub(1);
     if n == 0 {
@@ -191,14 +200,7 @@ fn piece_weights(
     }
     let m = n - n % 2;
     add(0, weights.first * phasors(first));
-    for i in 1..m {
-        let c = if i % 2 == 1 {
-            weights.odd
-        } else {
-            weights.even
-        };
-        add(i, phasors(first + i) * c);
-    }
+    inner(first + 1..first + m);
     add(m, weights.last * phasors(first + m));
     if m < n {
         let e = phasors(first + n - 1);
@@ -327,12 +329,33 @@ impl FourierTransform {
                 let j = group + lane;
                 let (mut re, mut im) = (real.column_mut(j), imaginary.column_mut(j));
                 for (first, points) in &pieces {
+                    // At most five: the ends and a last interval's three.
+                    let mut boundary = [(0, C64::new(0.0, 0.0)); 5];
+                    let mut count = 0;
                     piece_weights(
                         points.len(),
                         *first,
                         &weights,
                         |k| phasors[k][lane],
-                        |i, w| match &points[i] {
+                        |i, w| {
+                            boundary[count] = (i, w);
+                            count += 1;
+                        },
+                        |samples| {
+                            for k in samples {
+                                let c = if (k - first) % 2 == 1 {
+                                    weights.odd
+                                } else {
+                                    weights.even
+                                };
+                                let e = phasors[k][lane];
+                                re[k] += e.re * c;
+                                im[k] += e.im * c;
+                            }
+                        },
+                    );
+                    for &(i, w) in &boundary[..count] {
+                        match &points[i] {
                             Point::Sample(k) => {
                                 re[*k] += w.re;
                                 im[*k] += w.im;
@@ -343,8 +366,8 @@ impl FourierTransform {
                                     im[k] += w.im * coefficient;
                                 }
                             }
-                        },
-                    );
+                        }
+                    }
                 }
             }
         }
@@ -368,8 +391,17 @@ impl FourierTransform {
                 signals.nrows()
             )));
         }
-        let real = signals.tr_mul(&self.weights[0]);
-        let imaginary = signals.tr_mul(&self.weights[1]);
+        // Many signals: the general matrix product on a transposed copy
+        // (blocked and vectorised); a few: one dot product per entry.
+        let (real, imaginary) = if signals.ncols() >= 4 {
+            let rows = signals.transpose();
+            (&rows * &self.weights[0], &rows * &self.weights[1])
+        } else {
+            (
+                signals.tr_mul(&self.weights[0]),
+                signals.tr_mul(&self.weights[1]),
+            )
+        };
         Ok((0..signals.ncols())
             .map(|i| {
                 (0..self.frequencies.len())
