@@ -212,6 +212,18 @@ impl Differentiator {
         UniformWindow::new(self, self.half_window(rate), rate).gain(frequency)
     }
 
+    /// The standard deviation of the centred derivative per unit standard
+    /// deviation of white errors in the samples, on a uniform grid of
+    /// `rate` (Hz): the norm √Σ w_j² of the filter's weights (1/s).
+    pub fn noise_gain(&self, rate: f64) -> f64 {
+        UniformWindow::new(self, self.half_window(rate), rate)
+            .weights
+            .iter()
+            .map(|w| w * w)
+            .sum::<f64>()
+            .sqrt()
+    }
+
     /// The accurate band and the cut-off at `rate` (Hz), by scanning the gain.
     pub fn bandwidth(&self, rate: f64) -> Bandwidth {
         let nyquist = rate / 2.0;
