@@ -149,22 +149,6 @@ fn with_rates_reconstructed(record: &FlightRecord) -> FlightRecord {
     derive(&stripped, &options).unwrap().record
 }
 
-/// Largest |relative error| and |error/σ| over the scored parameters.
-fn worst(outcome: &Outcome) -> (f64, f64) {
-    let Outcome::Estimated { scores, .. } = outcome else {
-        panic!("{:?}", outcome.reason());
-    };
-    scores
-        .iter()
-        .filter(|s| s.truth.is_some())
-        .fold((0.0, 0.0), |(r, e), s| {
-            (
-                f64::max(r, s.relative_error.unwrap_or(0.0).abs()),
-                f64::max(e, s.error_sigma.unwrap_or(0.0).abs()),
-            )
-        })
-}
-
 /// Largest |error/σ| over the scored parameters, and the parameter.
 fn largest_error_sigma(outcome: &Outcome) -> (String, f64) {
     let Outcome::Estimated { scores, .. } = outcome else {

@@ -47,8 +47,8 @@ use crate::record::{Channel, FlightRecord};
 /// The differentiator the derive step applies to the attitude unless told
 /// otherwise: a quartic over ±0.5 s. On 25 Hz attitude with 0.1° noise its
 /// ±13 samples give 0.16°/s of rate noise (the default differentiator's
-/// ±0.12 s gives 1.3°/s); its gain is within 1 % up to ≈ 0.46 Hz, above
-/// the rigid-body modes of a transport aircraft. At 1 Hz it takes the
+/// ±0.12 s gives 1.3°/s); its gain is within 1 % up to more than 0.4 Hz,
+/// above the rigid-body modes of a transport aircraft. At 1 Hz it takes the
 /// least a quartic fit needs, ±3 samples.
 pub const DEFAULT_DIFFERENTIATOR: Differentiator = Differentiator {
     half_width: 0.5,
