@@ -407,6 +407,17 @@ mod tests {
         }
     }
 
+    /// The noise gain of the 7-point quartic (cubic) derivative is the
+    /// norm of the Savitzky–Golay weights (22, −67, −58, 0, 58, 67,
+    /// −22)/(252·Δt): √16674/252/Δt = 0.5124/Δt (to 1e-9 relative).
+    #[test]
+    fn noise_gain_is_the_norm_of_the_weights() {
+        let d = Differentiator::default();
+        let expected = 16674f64.sqrt() / 252.0 * 25.0;
+        assert_eq!(d.half_window(25.0), 3);
+        assert!((d.noise_gain(25.0) / expected - 1.0).abs() < 1e-9);
+    }
+
     /// On evenly spaced samples the fixed weights give the local fit's
     /// slope to rounding (1e-12 relative on a noisy sine), and a window with
     /// a dropout or an uneven instant falls back to the fit itself.
