@@ -320,16 +320,18 @@ mod tests {
     }
 
     /// A steady coordinated turn through north (heading recorded in
-    /// [0, 2π)) at a constant bank and pitch: ψ̇ is constant after
-    /// unwrapping and the rates are the closed forms (to 1e-9: the
-    /// differentiator is exact on a line).
+    /// [0, 2π)) at a constant bank and pitch, with a heading dropout: ψ̇
+    /// is constant after unwrapping, the windows around the dropout fit
+    /// the samples they have, and the rates are the closed forms (to 1e-9:
+    /// the differentiator is exact on a line).
     #[test]
     fn a_steady_turn_through_north() {
         let (bank, pitch, turn) = (0.4_f64, 0.05_f64, 0.03_f64);
         let n = 200;
-        let heading: Vec<f64> = (0..n)
+        let mut heading: Vec<f64> = (0..n)
             .map(|k| (6.0 + turn * k as f64 / 10.0).rem_euclid(std::f64::consts::TAU))
             .collect();
+        heading[50] = f64::NAN;
         let record = FlightRecord {
             channels: vec![
                 channel("pitch", 10.0, vec![pitch; n]),
@@ -349,9 +351,24 @@ mod tests {
         }
     }
 
-    /// A record without a heading is refused, naming it.
+    /// A record without a heading is refused, naming it; so is an
+    /// attitude channel in degrees.
     #[test]
     fn a_missing_attitude_channel_is_named() {
+        let mut degrees = channel("yaw", 10.0, vec![0.0; 20]);
+        degrees.unit = "deg".into();
+        let record = FlightRecord {
+            channels: vec![
+                channel("pitch", 10.0, vec![0.0; 20]),
+                channel("roll", 10.0, vec![0.0; 20]),
+                degrees,
+            ],
+            ..FlightRecord::default()
+        };
+        let error = kinematic_rates(&record, &Differentiator::default())
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("'yaw' is in 'deg'"), "{error}");
         let record = FlightRecord {
             channels: vec![
                 channel("pitch", 10.0, vec![0.0; 20]),
