@@ -286,6 +286,25 @@ fn derive_replaces_the_stuck_angle_of_attack_and_says_so() {
         assert_eq!(channel.rate, 1.0);
     }
     assert!(!record.absent.contains(&"beta".to_string()));
+    // The QAR has no rate gyros and split surfaces: derive adds p, q, r from
+    // the attitude kinematics and the combined surfaces, with provenance.
+    for (name, source) in [
+        ("p", "kinematic (p = roll_dot - yaw_dot sin(pitch)"),
+        ("q", "kinematic ("),
+        ("r", "kinematic ("),
+        ("aileron", "combined: (aileron_left - aileron_right)/2"),
+        ("elevator", "combined: (elevator_left + elevator_right)/2"),
+        ("flap", "combined: (flap_left + flap_right)/2"),
+    ] {
+        assert!(
+            text.contains(&format!("{name}: added")),
+            "{name} not added: {text}"
+        );
+        let channel = record.channel(name).unwrap();
+        assert!(channel.source.starts_with(source), "{}", channel.source);
+        assert!(!record.absent.contains(&name.to_string()));
+    }
+    assert!(text.contains("airspeed: added (geometric"), "{text}");
 }
 
 /// A record without the flight-path channels (the 25 Hz flight-test

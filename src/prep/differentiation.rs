@@ -212,6 +212,18 @@ impl Differentiator {
         UniformWindow::new(self, self.half_window(rate), rate).gain(frequency)
     }
 
+    /// The standard deviation of the centred derivative per unit standard
+    /// deviation of white errors in the samples, on a uniform grid of
+    /// `rate` (Hz): the norm √Σ w_j² of the filter's weights (1/s).
+    pub fn noise_gain(&self, rate: f64) -> f64 {
+        UniformWindow::new(self, self.half_window(rate), rate)
+            .weights
+            .iter()
+            .map(|w| w * w)
+            .sum::<f64>()
+            .sqrt()
+    }
+
     /// The accurate band and the cut-off at `rate` (Hz), by scanning the gain.
     pub fn bandwidth(&self, rate: f64) -> Bandwidth {
         let nyquist = rate / 2.0;
@@ -393,6 +405,17 @@ mod tests {
         for (t, d) in derivative.times.iter().zip(&derivative.values) {
             assert!((d - df(*t)).abs() < 1e-10, "t = {t}: {d} vs {}", df(*t));
         }
+    }
+
+    /// The noise gain of the 7-point quartic (cubic) derivative is the
+    /// norm of the Savitzky–Golay weights (22, −67, −58, 0, 58, 67,
+    /// −22)/(252·Δt): √16674/252/Δt = 0.5124/Δt (to 1e-9 relative).
+    #[test]
+    fn noise_gain_is_the_norm_of_the_weights() {
+        let d = Differentiator::default();
+        let expected = 16674f64.sqrt() / 252.0 * 25.0;
+        assert_eq!(d.half_window(25.0), 3);
+        assert!((d.noise_gain(25.0) / expected - 1.0).abs() < 1e-9);
     }
 
     /// On evenly spaced samples the fixed weights give the local fit's

@@ -162,6 +162,12 @@ fn body_air_velocity(x: &Inputs, wind: Wind) -> Vector3<f64> {
     ned_to_body(x.roll.sin_cos(), x.pitch.sin_cos(), x.yaw.sin_cos()) * (ground - air_mass)
 }
 
+/// The true airspeed at one instant: the norm of the air-relative velocity
+/// of Eq. 3 (the vertical wind taken as 0).
+pub fn airspeed(x: &Inputs, wind: Wind) -> f64 {
+    body_air_velocity(x, wind).norm()
+}
+
 /// Angle of attack and sideslip (rad) at one instant (Eqs. 1–6).
 pub fn flow_angles(x: &Inputs, wind: Wind) -> (f64, f64) {
     let velocity = body_air_velocity(x, wind);
@@ -226,6 +232,9 @@ pub struct GeometricFlowAngles {
     pub alpha: Channel,
     /// Channel `beta` (rad) on the same time base.
     pub beta: Channel,
+    /// Channel `airspeed` (m/s, true airspeed: the norm of Eq. 3) on the
+    /// same time base.
+    pub airspeed: Channel,
     /// The channel whose instants the angles are computed at.
     pub time_base: String,
     /// The inputs at each instant of the time base (NaN in a dropout).
@@ -313,9 +322,10 @@ pub fn geometric_flow_angles(record: &FlightRecord, wind: Wind) -> Result<Geomet
         },
         channels[reference].name
     );
+    let speeds: Vec<f64> = inputs.iter().map(|x| airspeed(x, wind)).collect();
     let channel = |name: &str, values: Vec<f64>| Channel {
         name: name.to_string(),
-        unit: "rad".to_string(),
+        unit: if name == "airspeed" { "m/s" } else { "rad" }.to_string(),
         rate: channels[reference].rate,
         resolution: None,
         source: source.clone(),
@@ -325,6 +335,7 @@ pub fn geometric_flow_angles(record: &FlightRecord, wind: Wind) -> Result<Geomet
     Ok(GeometricFlowAngles {
         alpha: channel("alpha", alpha),
         beta: channel("beta", beta),
+        airspeed: channel("airspeed", speeds),
         time_base: channels[reference].name.clone(),
         inputs,
         resolutions,
@@ -342,7 +353,8 @@ pub struct Derivation {
     pub notes: Vec<String>,
 }
 
-/// The record with the geometric `alpha` and `beta` in it. Where the record
+/// The record with the geometric `alpha` and `beta` in it, and the
+/// geometric true `airspeed` where the record has none. Where the record
 /// has no such channel the geometric one is added; where its channel is
 /// unusable by the quality report ([`crate::record::quality`]: stuck or
 /// with implausible steps) it is replaced, and the note says what was
@@ -382,16 +394,19 @@ pub fn with_geometric_flow_angles(
                 (target, note)
             }
         };
-        let channel = Channel {
-            name: target.clone(),
-            ..channel.clone()
-        };
-        match derived.channels.iter_mut().find(|c| c.name == target) {
-            Some(existing) => *existing = channel,
-            None => derived.channels.push(channel),
-        }
-        derived.absent.retain(|a| *a != target);
+        crate::record::put_channel(
+            &mut derived,
+            Channel {
+                name: target,
+                ..channel.clone()
+            },
+        );
         notes.push(note);
+    }
+    if record.channel("airspeed").is_err() {
+        crate::record::put_channel(&mut derived, angles.airspeed.clone());
+        notes
+            .push("airspeed: added (geometric, the norm of the air-relative velocity)".to_string());
     }
     Ok(Derivation {
         record: derived,

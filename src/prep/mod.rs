@@ -1,8 +1,12 @@
 //! Preparing a record for estimation: smoothing numerical differentiation
 //! of recorded channels, and flight-path reconstruction (the data
 //! compatibility check that estimates sensor biases and scale factors),
-//! geometric angle of attack and sideslip.
+//! geometric angle of attack and sideslip, angular rates from the attitude
+//! kinematics, and combined control surfaces from split ones.
 
+pub mod angular_rates;
 pub mod compatibility;
+pub mod derive;
 pub mod differentiation;
 pub mod flow_angles;
+pub mod surfaces;

@@ -594,6 +594,16 @@ pub fn significant(value: f64, digits: usize) -> String {
     }
 }
 
+/// Puts a derived channel into a record: it replaces the record's channel of
+/// the same name, or is added, and its name leaves the `absent` list.
+pub fn put_channel(record: &mut FlightRecord, channel: Channel) {
+    record.absent.retain(|a| *a != channel.name);
+    match record.channels.iter_mut().find(|c| c.name == channel.name) {
+        Some(existing) => *existing = channel,
+        None => record.channels.push(channel),
+    }
+}
+
 /// Removes 2π jumps so that an angle varies continuously: each value is
 /// shifted by the whole turns that bring it within π of the valid value
 /// before it. Dropouts (NaN) are skipped.

@@ -1,0 +1,87 @@
+//! The derive step (`aeroid derive`): the channels a recorder lacks,
+//! computed from those it has. In order: combined control surfaces from
+//! split ones ([`crate::prep::surfaces`]), the geometric angle of attack
+//! and sideslip ([`crate::prep::flow_angles`]) and the body rates from the
+//! attitude kinematics ([`crate::prep::angular_rates`]). Each derived
+//! channel names its method and inputs in its `source`.
+
+use crate::error::Result;
+use crate::prep::angular_rates::{KinematicRates, with_kinematic_rates};
+use crate::prep::differentiation::Differentiator;
+use crate::prep::flow_angles::{GeometricFlowAngles, Wind, with_geometric_flow_angles};
+use crate::prep::surfaces::with_combined_surfaces;
+use crate::record::FlightRecord;
+
+/// When the body rates are derived.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RatesChoice {
+    /// When the record lacks any of p, q, r.
+    WhenAbsent,
+    /// Always (beside recorded rates as `p_kinematic`…, unless replacing).
+    Always,
+    Never,
+}
+
+/// What the derive step does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// The geometric flow angles with or without wind correction, or none.
+    pub flow_angles: Option<Wind>,
+    pub rates: RatesChoice,
+    /// The differentiator of the attitude angles.
+    pub differentiator: Differentiator,
+    /// Replace usable recorded channels too (flow angles, rates).
+    pub replace: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            flow_angles: Some(Wind::Corrected),
+            rates: RatesChoice::WhenAbsent,
+            differentiator: crate::prep::angular_rates::DEFAULT_DIFFERENTIATOR,
+            replace: false,
+        }
+    }
+}
+
+/// A derived record and what was done.
+#[derive(Debug, Clone)]
+pub struct Derived {
+    pub record: FlightRecord,
+    pub angles: Option<GeometricFlowAngles>,
+    pub rates: Option<KinematicRates>,
+    /// One line per derived channel.
+    pub notes: Vec<String>,
+}
+
+/// Runs the derive step on a record (see the module documentation).
+pub fn derive(record: &FlightRecord, options: &Options) -> Result<Derived> {
+    let (mut derived, mut notes) = with_combined_surfaces(record)?;
+    let mut angles = None;
+    if let Some(wind) = options.flow_angles {
+        let derivation = with_geometric_flow_angles(&derived, wind, options.replace)?;
+        derived = derivation.record;
+        notes.extend(derivation.notes);
+        angles = Some(derivation.angles);
+    }
+    let lacks_rates = ["p", "q", "r"]
+        .iter()
+        .any(|name| record.channel(name).is_err());
+    let mut rates = None;
+    if options.rates == RatesChoice::Always
+        || (options.rates == RatesChoice::WhenAbsent && lacks_rates)
+    {
+        let (with_rates, kinematic, rate_notes) =
+            with_kinematic_rates(&derived, &options.differentiator, options.replace)?;
+        derived = with_rates;
+        notes.extend(rate_notes);
+        rates = Some(kinematic);
+    }
+    Ok(Derived {
+        record: derived,
+        angles,
+        rates,
+        notes,
+    })
+}
