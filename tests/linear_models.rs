@@ -70,7 +70,7 @@ fn six_dof_methods_refuse_a_linear_structure() {
     let scenario = Scenario::load("linear-short-period-attas").unwrap();
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let (record, _) = record_flight(&scenario, &profile, 1).unwrap();
-    for method in ["ee", "swr", "ebm", "ekf", "ukf"] {
+    for method in ["swr", "ebm"] {
         match estimate(method, &record, "linear-short-period-attas") {
             Err(aeroid::Error::Refused(refusal)) => {
                 assert_eq!(
@@ -273,4 +273,200 @@ fn filter_error_is_within_its_bounds_where_output_error_is_biased() {
         oem_worst > 3.0,
         "output error is not shown biased: worst mean {oem_worst:.2}σ"
     );
+}
+
+/// A linear structure with every parameter's start value scaled by
+/// `factor` (a linear model's start values are its flight's truth).
+fn started_off(name: &str, factor: f64) -> LinearStructure {
+    let structure = LinearStructure::load(name).unwrap();
+    let mut file = structure.file.clone();
+    for parameter in file.parameters.values_mut() {
+        parameter.start *= factor;
+    }
+    LinearStructure::from_file(&file, &structure.path).unwrap()
+}
+
+/// The augmented-state EKF and UKF on the linear lateral model (16 free
+/// derivatives as augmented states, the model's exact discretisation as
+/// the state's step), the model file's values 20 % off every truth.
+///
+/// Noise-free (ideal recorder, 100 Hz, the flight's own grid), started
+/// from those values (`start = "model"`: equation error is within 1e-4
+/// of the truth here, so starting there would test little): the filter's
+/// model is the truth's exactly, so the estimates reach the truth to
+/// 1e-6 of max(|truth|, 1). The status is honestly not converged: the
+/// innovations are rounding, far below the floor R is held at
+/// (10⁻⁴ of each channel's spread), not white noise of variance R
+/// (measured: 3.5e-14). The UKF does not get there: as on the 6-DOF
+/// lateral record (tests/augmented_filters.rs), its covariance loses
+/// definiteness in the quiet part between the two multisteps (29 s), and
+/// it says so: diverged, naming the covariance.
+///
+/// Noisy (flight-test-25hz: 0.1° on β and φ, 0.002 rad/s on the rates,
+/// 0.01° on the surfaces), equation error's start: converged (settled,
+/// identified, innovations consistent) and every estimate within 4σ of
+/// the truth (16 parameters at 4σ: a chance of 1e-3 that an honest
+/// filter fails here).
+#[test]
+fn augmented_filters_serve_a_linear_structure() {
+    let name = "linear-lateral-attas";
+    let scenario = Scenario::load(name).unwrap();
+    let structure = started_off(name, 1.2);
+    let from_model: aeroid::estimation::estimator::MethodTables =
+        toml::from_str("[ekf]\nstart = \"model\"\n[ukf]\nstart = \"model\"\n").unwrap();
+    for (profile, noisy) in [("ideal", false), ("flight-test-25hz", true)] {
+        let profile = Profile::load(profile, None).unwrap();
+        let (record, truth) = record_flight(&scenario, &profile, scenario.seed).unwrap();
+        for method in ["ekf", "ukf"] {
+            let layers: Vec<&aeroid::estimation::estimator::MethodTables> =
+                if noisy { vec![] } else { vec![&from_model] };
+            let problem =
+                EstimationProblem::new(method, vec![record.clone()], structure.clone(), &layers)
+                    .unwrap();
+            let estimate = methods::estimate(&problem, None).unwrap();
+            assert_eq!(estimate.parameters.len(), 16);
+            let (mut worst_error, mut worst_sigma) = (0.0_f64, 0.0_f64);
+            for p in &estimate.parameters {
+                let true_value = truth.parameters[&p.name];
+                let error = (p.value - true_value).abs();
+                worst_error = worst_error.max(error / true_value.abs().max(1.0));
+                worst_sigma = worst_sigma.max(error / p.standard_error);
+            }
+            println!(
+                "{method} on {}: {}; worst error {worst_error:.2e} of max(|truth|, 1), worst {worst_sigma:.2}σ\n{}",
+                profile.name, estimate.status, estimate.details
+            );
+            if noisy {
+                assert_eq!(
+                    estimate.status,
+                    aeroid::estimation::estimate::Status::Converged,
+                    "{method}"
+                );
+                assert!(worst_sigma < 4.0, "{method}: {worst_sigma:.2}σ");
+            } else if method == "ukf" {
+                match &estimate.status {
+                    aeroid::estimation::estimate::Status::Diverged(reason) => {
+                        assert!(reason.contains("not positive definite"), "{reason}")
+                    }
+                    other => panic!("the UKF on the noise-free record: {other}"),
+                }
+            } else {
+                assert!(worst_error < 1e-6, "{method}: {worst_error:.3e}");
+                assert!(
+                    matches!(
+                        estimate.status,
+                        aeroid::estimation::estimate::Status::Unsettled(_)
+                    ),
+                    "{method}: {}",
+                    estimate.status
+                );
+            }
+        }
+    }
+}
+
+/// Equation error on a linear structure, noise-free (ideal recorder,
+/// 100 Hz): every state measured, ẋ by the differentiator with its
+/// windows kept off the multisteps' control steps, or, for a model whose
+/// rate outputs p_dot and r_dot are recorded, those. With ẋ recorded the
+/// regressions are exact: the p and r equations within 1e-9 of
+/// max(|truth|, 1) (rounding). With ẋ differentiated (every equation of
+/// the plain model, β's of the other), the quartic differentiator's gain
+/// error at the lateral modes (≤ 0.3 Hz: 2e-5 at 0.5 Hz) is what is
+/// left: within 1e-3 of max(|truth|, 1) (measured 1.5e-6).
+#[test]
+fn equation_error_recovers_a_noise_free_linear_flight() {
+    let name = "linear-lateral-attas";
+    let scenario = Scenario::load(name).unwrap();
+    let profile = Profile::load("ideal", None).unwrap();
+    let plain = LinearStructure::load(name).unwrap();
+    let mut file = plain.file.clone();
+    file.rate_outputs = [("p_dot", "p"), ("r_dot", "r")]
+        .into_iter()
+        .map(|(o, s)| (o.to_string(), s.to_string()))
+        .collect();
+    let dir = std::env::temp_dir().join(format!("aeroid-linear-ee-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rated_path = dir.join("linear-lateral-rates.toml");
+    std::fs::write(&rated_path, toml::to_string(&file).unwrap()).unwrap();
+    let rated = LinearStructure::from_file(&file, &rated_path).unwrap();
+    // A scenario file beside the model names it by a relative path.
+    let bundled = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/{name}.toml"));
+    let text = std::fs::read_to_string(&bundled).unwrap().replace(
+        "[linear]\nmodel = \"linear-lateral-attas\"",
+        "[linear]\nmodel = \"linear-lateral-rates.toml\"",
+    );
+    let scenario_path = dir.join("linear-lateral-rates-flight.toml");
+    let rated_scenario =
+        Scenario::from_file(&toml::from_str(&text).unwrap(), &scenario_path).unwrap();
+    for (structure, scenario, recorded) in [(plain, scenario, 1e-3), (rated, rated_scenario, 1e-9)]
+    {
+        let (record, truth) = record_flight(&scenario, &profile, scenario.seed).unwrap();
+        let problem = EstimationProblem::new("ee", vec![record], structure.clone(), &[]).unwrap();
+        let estimate = methods::estimate(&problem, None).unwrap();
+        assert_eq!(
+            estimate.status,
+            aeroid::estimation::estimate::Status::Converged
+        );
+        assert_eq!(estimate.parameters.len(), 16);
+        let mut worst = 0.0_f64;
+        for p in &estimate.parameters {
+            let true_value = truth.parameters[&p.name];
+            let error = (p.value - true_value).abs() / true_value.abs().max(1.0);
+            worst = worst.max(error);
+            let differentiated = !(p.name.starts_with("A_p_")
+                || p.name.starts_with("A_r_")
+                || p.name.starts_with("B_p_")
+                || p.name.starts_with("B_r_"));
+            let tolerance = if differentiated { 1e-3 } else { recorded };
+            assert!(
+                error <= tolerance,
+                "{}: {} = {} against {true_value}",
+                structure.outputs.len(),
+                p.name,
+                p.value
+            );
+        }
+        println!(
+            "ee, {} outputs: worst error {worst:.2e} of max(|truth|, 1)",
+            structure.outputs.len()
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Equation error on the noisy linear lateral flight (flight-test-25hz):
+/// the measured states are its regressors, and their noise biases the
+/// estimates (errors in variables), a bias the Cramér–Rao bound does not
+/// hold. Predicted attenuation of a state's derivative by its noise:
+/// σ_n²/(σ_x² + σ_n²), with 0.1° noise on β and φ against excursions of
+/// some degrees, a few tenths of a per cent; the differentiated noise in
+/// ẋ makes the scatter (the coloured-residual σ) much larger than that.
+/// Measured on the flight's seed: every estimate within 1.5σ (worst
+/// A_beta_roll −1.43σ), relative errors up to 9 % on the weakly excited
+/// entries (B_beta_aileron, truth 0.0014, is +0.75σ and 10 times its
+/// truth). Asserted: every estimate within 3σ (16 parameters).
+#[test]
+fn equation_error_on_a_noisy_linear_flight_shows_errors_in_variables() {
+    let name = "linear-lateral-attas";
+    let scenario = Scenario::load(name).unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let (record, truth) = record_flight(&scenario, &profile, scenario.seed).unwrap();
+    let estimate = estimate("ee", &record, name).unwrap();
+    for p in &estimate.parameters {
+        let true_value = truth.parameters[&p.name];
+        println!(
+            "{}: {:.5} ± {:.2e} (truth {true_value:.5}, {:+.2} %, {:+.2} σ)",
+            p.name,
+            p.value,
+            p.standard_error,
+            100.0 * (p.value - true_value) / true_value,
+            (p.value - true_value) / p.standard_error
+        );
+        assert!(
+            (p.value - true_value).abs() <= 3.0 * p.standard_error,
+            "{}",
+            p.name
+        );
+    }
 }

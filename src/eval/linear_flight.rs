@@ -29,7 +29,7 @@ use crate::record::recorder::{Profile, record_scenario_seeded};
 use crate::sim::aero::ModelKind;
 use crate::sim::scenario::{LinearFlight, Scenario};
 use crate::sim::state::Control;
-use crate::sim::truth::{RunTruth, TrimPoint, TruthKind};
+use crate::sim::truth::RunTruth;
 use nalgebra::{DMatrix, DVector};
 use rand::RngExt;
 use rand_distr::StandardNormal;
@@ -191,29 +191,15 @@ fn equilibrium(a: &DMatrix<f64>, rate: &DVector<f64>) -> DVector<f64> {
 
 /// The exact truth of a linear flight: the model's parameter values.
 fn truth(scenario: &Scenario, structure: &LinearStructure) -> RunTruth {
-    RunTruth {
-        kind: TruthKind::Exact,
-        scenario: scenario.name.clone(),
-        seed: scenario.seed,
-        aircraft: scenario.aircraft.name.clone(),
-        trim: TrimPoint {
-            airspeed: scenario.trim.airspeed,
-            altitude: scenario.trim.altitude,
-            flight_path_angle: scenario.trim.flight_path_angle,
-            heading: scenario.trim.heading,
-            alpha: 0.0,
-            beta: 0.0,
-            pitch: 0.0,
-            controls: Default::default(),
-        },
-        model: ModelKind::Linear,
-        parameters: structure
+    RunTruth::exact_parameters(
+        scenario,
+        (0.0, 0.0, 0.0, Default::default()),
+        ModelKind::Linear,
+        structure
             .names
             .iter()
             .cloned()
             .zip(structure.starts.iter().copied())
             .collect(),
-        local_derivatives: Default::default(),
-        parameter_changes: Vec::new(),
-    }
+    )
 }

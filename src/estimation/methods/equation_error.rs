@@ -55,12 +55,13 @@ use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
 };
+use crate::estimation::methods::linear_equation_error::linear_equation_error;
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
     Reconstruction, ReconstructionOptions, Request, check_channels, reconstruct,
 };
 use crate::estimation::solver::regression::{LagWindow, LeastSquares};
-use crate::estimation::structure::ModelStructure;
+use crate::estimation::structure::{ModelStructure, Structure};
 use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
 use crate::sim::aero::{Coefficient, ForceAxes, ModelKind, Regressor};
@@ -175,12 +176,18 @@ impl Estimator for EquationError {
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         crate::estimation::estimator::one_record(METHOD, problem)?;
-        let options = EquationErrorSettings::read(&problem.settings)?.options();
-        equation_error(
-            problem.record(),
-            problem.structure.six_dof(METHOD)?,
-            &options,
-        )
+        let settings = EquationErrorSettings::read(&problem.settings)?;
+        match &problem.structure {
+            Structure::SixDof(structure) => {
+                equation_error(problem.record(), structure, &settings.options())
+            }
+            Structure::Linear(structure) => linear_equation_error(
+                problem.record(),
+                structure,
+                &settings.differentiator,
+                settings.correlation_lag,
+            ),
+        }
     }
 }
 

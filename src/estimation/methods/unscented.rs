@@ -142,7 +142,7 @@ impl Estimator for UnscentedFilter {
         let run = augmented_estimate(
             METHOD,
             problem.record(),
-            problem.structure.six_dof(METHOD)?,
+            &problem.structure,
             &settings,
             start,
             &|model, initial, noise, observations| {
