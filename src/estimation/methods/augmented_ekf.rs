@@ -11,7 +11,11 @@
 //! state-space view output error simulates
 //! ([`DrivenStateSpace::for_record`]: integrated states from the record's
 //! first samples, the other flight-path states fed in as pseudo-controls);
-//! [`Augmented`] makes θ_a states (Jategaonkar Eq. 7.8).
+//! [`Augmented`] makes θ_a states (Jategaonkar Eq. 7.8). On a linear
+//! structure the postulated model is its linear state-space model driven by the
+//! record's input channels ([`LinearStructure::for_record`]: its exact
+//! discretisation, the model file's `interpolation`), the free entries of
+//! A, B, C, D and the biases the parameter states ([`Filtered`]).
 //!
 //! **Filter**: the continuous–discrete EKF of
 //! [`extended_kalman::filter`] (Jategaonkar §7.2, Eqs. 7.11–7.19: the
@@ -319,6 +323,22 @@ pub struct FilterRun {
 pub type FilterPass<'a> =
     dyn Fn(&Augmented<dyn StateSpaceModel>, Gaussian, &Noise, &Observations) -> Result<Pass> + 'a;
 
+/// A structure's parameters: names, start values, free flags, bounds.
+struct Parameters<'a> {
+    names: &'a [String],
+    values: &'a [f64],
+    free: &'a [bool],
+    bounds: &'a [(f64, f64)],
+}
+
+/// A structure's state-space view on a record's grid.
+struct View {
+    model: Box<dyn StateSpaceModel>,
+    x0: DVector<f64>,
+    state_names: Vec<String>,
+    notes: Vec<String>,
+}
+
 /// The model structure an augmented filter runs on: the 6-DOF equations
 /// driven by the record ([`DrivenStateSpace::for_record`]) or a linear
 /// state-space model driven by its input channels
@@ -368,15 +388,20 @@ impl Filtered<'_> {
 
     /// Every parameter's name, start value (the model file's), free flag
     /// and bounds.
-    fn parameters(&self) -> (&[String], &[f64], &[bool], &[(f64, f64)]) {
+    fn parameters(&self) -> Parameters<'_> {
         match self {
-            Filtered::SixDof(s) => (
-                s.aircraft.aero.parameters.names(),
-                s.aircraft.aero.parameters.values(),
-                &s.free,
-                &s.bounds,
-            ),
-            Filtered::Linear(s) => (&s.names, &s.starts, &s.free, &s.bounds),
+            Filtered::SixDof(s) => Parameters {
+                names: s.aircraft.aero.parameters.names(),
+                values: s.aircraft.aero.parameters.values(),
+                free: &s.free,
+                bounds: &s.bounds,
+            },
+            Filtered::Linear(s) => Parameters {
+                names: &s.names,
+                values: &s.starts,
+                free: &s.free,
+                bounds: &s.bounds,
+            },
         }
     }
 
@@ -413,16 +438,7 @@ impl Filtered<'_> {
 
     /// The state-space view on the record's grid, the initial state, the
     /// state names and the view's notes.
-    fn view(
-        &self,
-        record: &FlightRecord,
-        settings: &FilterSettings,
-    ) -> Result<(
-        Box<dyn StateSpaceModel>,
-        DVector<f64>,
-        Vec<String>,
-        Vec<String>,
-    )> {
+    fn view(&self, record: &FlightRecord, settings: &FilterSettings) -> Result<View> {
         match self {
             Filtered::SixDof(structure) => {
                 let (view, x0) = DrivenStateSpace::for_record(
@@ -433,8 +449,12 @@ impl Filtered<'_> {
                     None,
                 )?;
                 let names = view.state_names().iter().map(|s| s.to_string()).collect();
-                let notes = view.simulation().notes.clone();
-                Ok((Box::new(view), x0, names, notes))
+                Ok(View {
+                    notes: view.simulation().notes.clone(),
+                    model: Box::new(view),
+                    x0,
+                    state_names: names,
+                })
             }
             Filtered::Linear(structure) => {
                 let (model, x0) = structure.for_record(record, settings.step, None)?;
@@ -446,7 +466,12 @@ impl Filtered<'_> {
                         Interpolation::Linear => "linear",
                     }
                 );
-                Ok((Box::new(model), x0, structure.states.clone(), vec![note]))
+                Ok(View {
+                    model: Box::new(model),
+                    x0,
+                    state_names: structure.states.clone(),
+                    notes: vec![note],
+                })
             }
         }
     }
@@ -641,7 +666,7 @@ fn check(method: &str, record: &FlightRecord, structure: Filtered) -> Result<()>
         Filtered::SixDof(s) => missing_channels(record, s),
         Filtered::Linear(s) => s.missing_channels(record),
     };
-    let free = structure.parameters().2;
+    let free = structure.parameters().free;
     free_parameters(method, record, missing, structure.name(), free)?;
     if let Filtered::SixDof(s) = structure {
         unsuitable(method, s)?;
@@ -656,7 +681,12 @@ fn start_values(
     settings: &FilterSettings,
     given: Option<&Estimate>,
 ) -> (Vec<f64>, String) {
-    let (names, values, free, bounds) = structure.parameters();
+    let Parameters {
+        names,
+        values,
+        free,
+        bounds,
+    } = structure.parameters();
     let mut theta = values.to_vec();
     if settings.start == Start::Model {
         return (theta, "θ started from the model file's values".into());
@@ -703,7 +733,8 @@ impl Setup {
         start: Option<&Estimate>,
     ) -> Result<Setup> {
         check(method, record, structure)?;
-        let (names_all, _, free_flags, _) = structure.parameters();
+        let parameters = structure.parameters();
+        let (names_all, free_flags) = (parameters.names, parameters.free);
         let outputs = structure.outputs();
         if let Some(name) = settings
             .pseudonoise_for
@@ -715,7 +746,12 @@ impl Setup {
                 structure.name()
             )));
         }
-        let (view, x0, state_names, view_notes) = structure.view(record, settings)?;
+        let View {
+            model: view,
+            x0,
+            state_names,
+            notes: view_notes,
+        } = structure.view(record, settings)?;
         if view.len() < 2 {
             return Err(Error::Refused(Refusal::TooFewData {
                 method: method.to_string(),

@@ -558,15 +558,14 @@ pub(crate) fn assemble(
         .flat_map(|r| r.parameters.iter().map(|&(i, v, se, _)| (i, v, se)))
         .collect();
     entries.sort_by_key(|e| e.0);
-    let position = |index: usize| entries.iter().position(|e| e.0 == index).unwrap_or(0);
-    let mut covariance = vec![vec![0.0; entries.len()]; entries.len()];
-    for result in results {
-        for (a, &(i, ..)) in result.parameters.iter().enumerate() {
-            for (b, &(j, ..)) in result.parameters.iter().enumerate() {
-                covariance[position(i)][position(j)] = result.covariance[(a, b)];
-            }
-        }
-    }
+    let order: Vec<usize> = entries.iter().map(|e| e.0).collect();
+    let covariance = block_covariance(
+        results.iter().map(|r| {
+            let indices: Vec<usize> = r.parameters.iter().map(|p| p.0).collect();
+            (indices, &r.covariance)
+        }),
+        &order,
+    );
     let problems: Vec<String> = results.iter().filter_map(|r| r.problem.clone()).collect();
     Estimate {
         method: method.to_string(),
@@ -594,6 +593,26 @@ pub(crate) fn assemble(
         notes: Vec::new(),
         details: String::new(),
     }
+}
+
+/// The covariance of separately fitted regressions: each block the
+/// covariance of the parameters it lists (indices into the structure's),
+/// rows and columns in `order` (every listed index once), zero between
+/// blocks.
+pub(crate) fn block_covariance<'a>(
+    blocks: impl Iterator<Item = (Vec<usize>, &'a DMatrix<f64>)>,
+    order: &[usize],
+) -> Vec<Vec<f64>> {
+    let position = |index: usize| order.iter().position(|&i| i == index).unwrap_or(0);
+    let mut covariance = vec![vec![0.0; order.len()]; order.len()];
+    for (indices, block) in blocks {
+        for (a, &i) in indices.iter().enumerate() {
+            for (b, &j) in indices.iter().enumerate() {
+                covariance[position(i)][position(j)] = block[(a, b)];
+            }
+        }
+    }
+    covariance
 }
 
 /// A record's name for estimates: its scenario, else its profile.

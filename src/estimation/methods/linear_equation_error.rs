@@ -31,7 +31,7 @@ use crate::error::{Error, Result};
 use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate, Status};
 use crate::estimation::estimator::{MissingChannel, Refusal};
 use crate::estimation::linear_structure::LinearStructure;
-use crate::estimation::methods::equation_error::{METHOD, record_name};
+use crate::estimation::methods::equation_error::{METHOD, block_covariance, record_name};
 use crate::estimation::model::linear::Matrix;
 use crate::estimation::model::state_space::{fitting_window, integration_step};
 use crate::estimation::reconstruction;
@@ -375,15 +375,14 @@ fn assemble(
         .flat_map(|r| r.parameters.iter().copied())
         .collect();
     entries.sort_by_key(|e| e.0);
-    let position = |p: usize| entries.iter().position(|e| e.0 == p).unwrap_or(0);
-    let mut covariance = vec![vec![0.0; entries.len()]; entries.len()];
-    for result in results {
-        for (a, &(i, ..)) in result.parameters.iter().enumerate() {
-            for (b, &(j, ..)) in result.parameters.iter().enumerate() {
-                covariance[position(i)][position(j)] = result.covariance[(a, b)];
-            }
-        }
-    }
+    let order: Vec<usize> = entries.iter().map(|e| e.0).collect();
+    let covariance = block_covariance(
+        results.iter().map(|r| {
+            let indices: Vec<usize> = r.parameters.iter().map(|p| p.0).collect();
+            (indices, &r.covariance)
+        }),
+        &order,
+    );
     let problems: Vec<String> = results.iter().filter_map(|r| r.problem.clone()).collect();
     let mut notes = vec![format!(
         "white-residual Cramér–Rao bounds s²(XᵀX)⁻¹: {}",
