@@ -276,7 +276,7 @@ impl Estimator for AugmentedEkf {
             title: "extended Kalman filter with the parameters as augmented states, pseudonoise, Fourier R and residual-correlation tuning",
             paper: "EKF parameter estimation for the X-31 drop model and the F-18 HARV (J. Guidance, Engineering Note); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 7; Mehra, IEEE TAC 15(2), 1970",
             equations: "state and output models with process noise and parameter pseudonoise (note Eqs. 1–3); augmented state (Jategaonkar Eq. 7.8); continuous–discrete EKF (Jategaonkar Eqs. 7.11–7.19); R from the spectrum above the motion's bandwidth; R = C₀ − H·P·Hᵀ, Q += K(C₀ − S)Kᵀ (Mehra 1970, zero lag)",
-            needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
+            needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls); on a linear structure, its input and output channels",
             settings: setting_infos(&FilterSettings::default(), &FILTER_SETTINGS),
         }
     }
