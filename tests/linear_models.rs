@@ -470,3 +470,99 @@ fn equation_error_on_a_noisy_linear_flight_shows_errors_in_variables() {
         );
     }
 }
+
+/// The short-period flight in moderate Dryden turbulence instead of white
+/// process noise: the vertical gust w_g enters as an angle of attack
+/// w_g/V, G = (A_αα, A_qα)ᵀ/V in the w_g column (V = 103 m/s).
+fn gusty_short_period(seed: u64, duration: &str) -> Scenario {
+    scenario_with("linear-short-period-attas", |t| {
+        t.replace("seed = 4", &format!("seed = {seed}"))
+            .replace("duration = \"30 s\"", &format!("duration = \"{duration}\""))
+            .replace(
+                "process_noise = { alpha = 0.004, q = 0.01 }",
+                "gusts = { matrix = [[0.0, 0.0, -0.004559], [0.0, 0.0, -0.005410]], intensity = \"moderate\" }",
+            )
+    })
+}
+
+/// The gusts entering a linear flight have the Dryden shape: over 10
+/// seeds of 600 s (100 Hz), w_g's variance is σ_w² and its
+/// autocorrelation at the lag L_w/V is the Dryden form's
+/// σ_w²·(1 − ½)·e⁻¹ = 0.184·σ_w² (MIL-F-8785C: R(τ) = σ²(1 − τV/2L)e^{−τV/L}),
+/// each within 4 standard errors of the seeds' mean (the Monte Carlo
+/// scatter of the per-seed estimates: correlation time L/V ≈ 5 s, about 60
+/// independent stretches a flight).
+#[test]
+fn linear_flight_gusts_have_the_dryden_shape() {
+    let seeds = 10;
+    let (mut variances, mut correlations) = (Vec::new(), Vec::new());
+    let mut expected = None;
+    for seed in 1..=seeds {
+        let scenario = gusty_short_period(seed, "600 s");
+        let linear = scenario.linear.as_ref().unwrap();
+        let spec = &linear.gusts.as_ref().unwrap().turbulence;
+        let parameters = spec.parameters(scenario.trim.altitude).unwrap();
+        let (sigma, length) = (parameters.sigma[2], parameters.length[2]);
+        let lag = (length / scenario.trim.airspeed / scenario.step).round() as usize;
+        expected = Some((sigma, lag));
+        let trace = aeroid::eval::linear_flight::fly(&scenario, linear).unwrap();
+        let w: Vec<f64> = trace.gusts.iter().map(|g| g[2]).collect();
+        let n = w.len();
+        variances.push(w.iter().map(|v| v * v).sum::<f64>() / n as f64 / (sigma * sigma));
+        correlations.push(
+            (0..n - lag).map(|k| w[k] * w[k + lag]).sum::<f64>()
+                / (n - lag) as f64
+                / (sigma * sigma),
+        );
+    }
+    let (sigma, lag) = expected.unwrap();
+    let mean_and_error = |values: &[f64]| {
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+            / (values.len() - 1) as f64)
+            .sqrt();
+        (mean, spread / (values.len() as f64).sqrt())
+    };
+    let (variance, variance_error) = mean_and_error(&variances);
+    let (correlation, correlation_error) = mean_and_error(&correlations);
+    let dryden = 0.5 * (-1.0_f64).exp();
+    println!(
+        "σ_w {sigma:.3} m/s, lag {lag} steps: variance/σ² {variance:.3} ± {variance_error:.3}, R(L/V)/σ² {correlation:.3} ± {correlation_error:.3} (Dryden {dryden:.3})"
+    );
+    assert!((variance - 1.0).abs() <= 4.0 * variance_error, "{variance}");
+    assert!(
+        (correlation - dryden).abs() <= 4.0 * correlation_error,
+        "{correlation}"
+    );
+}
+
+/// Filter error against output error on the gusty short-period flight
+/// (flight-test-25hz, 10 seeds): the mean over seeds of each parameter's
+/// error in σ units and the share inside the 95 % interval.
+#[test]
+fn filter_error_on_a_gusty_linear_flight() {
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let seeds = 10;
+    let mut sums: std::collections::BTreeMap<(&str, String), (f64, usize, usize)> =
+        Default::default();
+    for seed in 1..=seeds {
+        let scenario = gusty_short_period(seed, "30 s");
+        let (record, truth) = record_flight(&scenario, &profile, seed).unwrap();
+        for method in ["oem", "fem"] {
+            let estimate = estimate(method, &record, "linear-short-period-attas").unwrap();
+            for p in &estimate.parameters {
+                let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
+                let entry = sums.entry((method, p.name.clone())).or_default();
+                entry.0 += error;
+                entry.1 += usize::from(error.abs() <= 1.96);
+                entry.2 += 1;
+            }
+        }
+    }
+    for ((method, name), (sum, inside, count)) in &sums {
+        println!(
+            "{method} {name}: mean error {:+.2}σ, {inside}/{count} inside 95 %",
+            sum / *count as f64
+        );
+    }
+}

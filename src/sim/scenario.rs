@@ -113,6 +113,21 @@ pub struct LinearFlightSpec {
     /// ẋ = A·x + B·u + b + F·w, w of unit intensity (state units per √s).
     #[serde(default)]
     pub process_noise: BTreeMap<String, f64>,
+    /// Dryden turbulence entering the states: ẋ = … + G·(u_g, v_g, w_g).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gusts: Option<LinearGusts>,
+}
+
+/// `[linear] gusts`: the Dryden turbulence of `[wind.turbulence]` (an
+/// `intensity` or `sigma_*`, optional `length_*`, at the trim airspeed and
+/// altitude) entering the state equations through `matrix`, G, one row per
+/// state of the model and one column per gust component u_g, v_g, w_g
+/// (body axes, m/s): ẋ = A·x + B·u + b + G·(u_g, v_g, w_g).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LinearGusts {
+    pub matrix: Vec<Vec<f64>>,
+    #[serde(flatten)]
+    pub turbulence: crate::sim::wind::TurbulenceSpec,
 }
 
 /// A validated `[linear]` table.
@@ -120,6 +135,7 @@ pub struct LinearFlightSpec {
 pub struct LinearFlight {
     pub model_path: PathBuf,
     pub process_noise: BTreeMap<String, f64>,
+    pub gusts: Option<LinearGusts>,
 }
 
 /// One `[[parameter_changes]]` table of a scenario file.
@@ -328,6 +344,17 @@ impl Scenario {
                         );
                     }
                 }
+                if let Some(gusts) = &spec.gusts {
+                    gusts.turbulence.validate("linear.gusts", &mut problems);
+                    for (i, row) in gusts.matrix.iter().enumerate() {
+                        if row.len() != 3 || !row.iter().all(|v| v.is_finite()) {
+                            problems.push(
+                                format!("linear.gusts.matrix[{i}]"),
+                                "must hold 3 finite numbers (the factors of u_g, v_g, w_g)",
+                            );
+                        }
+                    }
+                }
                 match catalog::resolve_named(
                     &spec.model,
                     catalog::MODEL_FOLDER,
@@ -337,6 +364,7 @@ impl Scenario {
                     Ok(model_path) => Some(LinearFlight {
                         model_path,
                         process_noise: spec.process_noise.clone(),
+                        gusts: spec.gusts.clone(),
                     }),
                     Err(error) => {
                         problems.push("linear.model", error.to_string());
