@@ -537,8 +537,22 @@ fn linear_flight_gusts_have_the_dryden_shape() {
 }
 
 /// Filter error against output error on the gusty short-period flight
-/// (flight-test-25hz, 10 seeds): the mean over seeds of each parameter's
-/// error in σ units and the share inside the 95 % interval.
+/// (moderate Dryden turbulence, σ_w 2.4 m/s, α moved by about 1.3°;
+/// flight-test-25hz, 10 seeds): the mean over seeds of each parameter's
+/// error in σ units (its scatter 1/√10 ≈ 0.32 for an unbiased estimator
+/// with honest bounds) and the share inside the 95 % interval.
+///
+/// Measured: output error is biased, means +2.1σ to +10.3σ in size
+/// (B_alpha_elevator −1.7σ), 5 of 60 inside. Filter error is better but
+/// NOT within its bounds: means +2.1σ to +4.2σ, 21 of 60 inside. Its
+/// model's process noise is white, while the Dryden gust is coloured
+/// (correlation time L_w/V ≈ 5 s, longer than the short period's ≈ 1.9 s
+/// time constant): the innovations of its steady-state filter are
+/// correlated and its likelihood is not the data's. (With white process
+/// noise it is within its bounds:
+/// `filter_error_is_within_its_bounds_where_output_error_is_biased`.)
+/// Asserted, the finding: output error's worst mean bias at least twice
+/// filter error's, and filter error's coverage below 85 %.
 #[test]
 fn filter_error_on_a_gusty_linear_flight() {
     let profile = Profile::load("flight-test-25hz", None).unwrap();
@@ -559,10 +573,60 @@ fn filter_error_on_a_gusty_linear_flight() {
             }
         }
     }
+    let (mut worst, mut covered) = (
+        std::collections::BTreeMap::<&str, f64>::new(),
+        std::collections::BTreeMap::<&str, (usize, usize)>::new(),
+    );
     for ((method, name), (sum, inside, count)) in &sums {
-        println!(
-            "{method} {name}: mean error {:+.2}σ, {inside}/{count} inside 95 %",
-            sum / *count as f64
-        );
+        let mean = sum / *count as f64;
+        println!("{method} {name}: mean error {mean:+.2}σ, {inside}/{count} inside 95 %");
+        let entry = worst.entry(method).or_default();
+        *entry = entry.max(mean.abs());
+        let coverage = covered.entry(method).or_default();
+        coverage.0 += inside;
+        coverage.1 += count;
     }
+    assert!(
+        worst["oem"] >= 2.0 * worst["fem"],
+        "output error {:.2}σ, filter error {:.2}σ",
+        worst["oem"],
+        worst["fem"]
+    );
+    let (inside, count) = covered["fem"];
+    assert!(
+        (inside as f64) < 0.85 * count as f64,
+        "filter error inside its bounds on the gusts: {inside}/{count}"
+    );
+}
+
+/// A gust matrix that does not fit the model's states, a row of the wrong
+/// length and a misspelt key are errors naming the key.
+#[test]
+fn bad_gust_tables_name_the_key() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/linear-short-period-attas.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let with = |gusts: &str| {
+        text.replace(
+            "process_noise = { alpha = 0.004, q = 0.01 }",
+            &format!("gusts = {gusts}"),
+        )
+    };
+    let rows = with("{ matrix = [[0.0, 0.0, 1.0]], intensity = \"moderate\" }");
+    let scenario = Scenario::from_file(&toml::from_str(&rows).unwrap(), &path).unwrap();
+    let error = aeroid::eval::linear_flight::fly(&scenario, scenario.linear.as_ref().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("linear.gusts.matrix"), "{error}");
+    let short = with("{ matrix = [[0.0, 1.0], [0.0, 0.0, 1.0]], intensity = \"moderate\" }");
+    let error = Scenario::from_file(&toml::from_str(&short).unwrap(), &path)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("linear.gusts.matrix[0]"), "{error}");
+    let misspelt = with("{ matrix = [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]], intensty = \"moderate\" }");
+    let parsed = toml::from_str::<ScenarioFile>(&misspelt)
+        .map_err(|e| e.to_string())
+        .and_then(|file| Scenario::from_file(&file, &path).map_err(|e| e.to_string()));
+    let error = parsed.unwrap_err();
+    assert!(error.contains("intensty"), "{error}");
 }
