@@ -213,6 +213,33 @@ fn linearisation_eigenvalues_are_the_simulators_modes() {
     }
 }
 
+/// Output error and filter error on the short-period model's flights
+/// `scenario(seed)` for seeds 1..=`seeds` (flight-test-25hz): per method
+/// and parameter, the sum of the errors in σ units, how many lie inside
+/// the 95 % interval, and how many there are.
+fn errors_in_sigma(
+    seeds: u64,
+    scenario: impl Fn(u64) -> Scenario,
+) -> std::collections::BTreeMap<(&'static str, String), (f64, usize, usize)> {
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let mut sums: std::collections::BTreeMap<(&str, String), (f64, usize, usize)> =
+        Default::default();
+    for seed in 1..=seeds {
+        let (record, truth) = record_flight(&scenario(seed), &profile, seed).unwrap();
+        for method in ["oem", "fem"] {
+            let estimate = estimate(method, &record, "linear-short-period-attas").unwrap();
+            for p in &estimate.parameters {
+                let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
+                let entry = sums.entry((method, p.name.clone())).or_default();
+                entry.0 += error;
+                entry.1 += usize::from(error.abs() <= 1.96);
+                entry.2 += 1;
+            }
+        }
+    }
+    sums
+}
+
 /// The textbook result (Jategaonkar ch. 5): on flights with process noise
 /// (the short-period model in white noise on α and q, 25 Hz flight-test
 /// recorder), the filter error method's estimates scatter about the truth
@@ -227,26 +254,11 @@ fn linearisation_eigenvalues_are_the_simulators_modes() {
 /// output-error mean beyond 3σ.
 #[test]
 fn filter_error_is_within_its_bounds_where_output_error_is_biased() {
-    let profile = Profile::load("flight-test-25hz", None).unwrap();
-    let seeds = 20;
-    let mut sums: std::collections::BTreeMap<(&str, String), (f64, usize, usize)> =
-        Default::default();
-    for seed in 1..=seeds {
-        let scenario = scenario_with("linear-short-period-attas", |t| {
+    let sums = errors_in_sigma(20, |seed| {
+        scenario_with("linear-short-period-attas", |t| {
             t.replace("seed = 4", &format!("seed = {seed}"))
-        });
-        let (record, truth) = record_flight(&scenario, &profile, seed).unwrap();
-        for method in ["oem", "fem"] {
-            let estimate = estimate(method, &record, "linear-short-period-attas").unwrap();
-            for p in &estimate.parameters {
-                let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
-                let entry = sums.entry((method, p.name.clone())).or_default();
-                entry.0 += error;
-                entry.1 += usize::from(error.abs() <= 1.96);
-                entry.2 += 1;
-            }
-        }
-    }
+        })
+    });
     for ((method, name), (sum, inside, count)) in &sums {
         println!(
             "{method} {name}: mean error {:+.2}σ, {inside}/{count} inside 95 %",
@@ -555,24 +567,7 @@ fn linear_flight_gusts_have_the_dryden_shape() {
 /// filter error's, and filter error's coverage below 85 %.
 #[test]
 fn filter_error_on_a_gusty_linear_flight() {
-    let profile = Profile::load("flight-test-25hz", None).unwrap();
-    let seeds = 10;
-    let mut sums: std::collections::BTreeMap<(&str, String), (f64, usize, usize)> =
-        Default::default();
-    for seed in 1..=seeds {
-        let scenario = gusty_short_period(seed, "30 s");
-        let (record, truth) = record_flight(&scenario, &profile, seed).unwrap();
-        for method in ["oem", "fem"] {
-            let estimate = estimate(method, &record, "linear-short-period-attas").unwrap();
-            for p in &estimate.parameters {
-                let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
-                let entry = sums.entry((method, p.name.clone())).or_default();
-                entry.0 += error;
-                entry.1 += usize::from(error.abs() <= 1.96);
-                entry.2 += 1;
-            }
-        }
-    }
+    let sums = errors_in_sigma(10, |seed| gusty_short_period(seed, "30 s"));
     let (mut worst, mut covered) = (
         std::collections::BTreeMap::<&str, f64>::new(),
         std::collections::BTreeMap::<&str, (usize, usize)>::new(),

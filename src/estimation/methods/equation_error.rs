@@ -233,12 +233,12 @@ impl Plan {
 /// The regression result of one coefficient.
 pub(crate) struct CoefficientResult {
     /// Parameter indices (structure order) with value, corrected and white standard error.
-    parameters: Vec<(usize, f64, f64, f64)>,
-    covariance: DMatrix<f64>,
-    fit: OutputFit,
-    problem: Option<String>,
+    pub(crate) parameters: Vec<(usize, f64, f64, f64)>,
+    pub(crate) covariance: DMatrix<f64>,
+    pub(crate) fit: OutputFit,
+    pub(crate) problem: Option<String>,
     /// Set when the Bartlett lag window replaced the plain truncated sum.
-    window_note: Option<String>,
+    pub(crate) window_note: Option<String>,
 }
 
 /// Estimates the free parameters of `structure` from `record` by equation
@@ -552,7 +552,19 @@ pub(crate) fn assemble(
     results: &[CoefficientResult],
 ) -> Estimate {
     let aero = &structure.aircraft.aero;
-    let (names, starts) = (aero.parameters.names(), aero.parameters.values());
+    let parameters = (aero.parameters.names(), aero.parameters.values());
+    assemble_named(record, &structure.name, parameters, method, results)
+}
+
+/// [`assemble`] for a model named `model` whose parameters have `names`
+/// and start values `starts`.
+pub(crate) fn assemble_named(
+    record: &FlightRecord,
+    model: &str,
+    (names, starts): (&[String], &[f64]),
+    method: &str,
+    results: &[CoefficientResult],
+) -> Estimate {
     let mut entries: Vec<(usize, f64, f64)> = results
         .iter()
         .flat_map(|r| r.parameters.iter().map(|&(i, v, se, _)| (i, v, se)))
@@ -569,7 +581,7 @@ pub(crate) fn assemble(
     let problems: Vec<String> = results.iter().filter_map(|r| r.problem.clone()).collect();
     Estimate {
         method: method.to_string(),
-        model: structure.name.clone(),
+        model: model.to_string(),
         record: record_name(record),
         status: if problems.is_empty() {
             Status::Converged
@@ -653,7 +665,14 @@ pub(crate) fn white_bound_notes(
     structure: &ModelStructure,
     results: &[CoefficientResult],
 ) -> Vec<String> {
-    let names = structure.aircraft.aero.parameters.names();
+    white_bound_notes_named(structure.aircraft.aero.parameters.names(), results)
+}
+
+/// [`white_bound_notes`] for parameters of `names`.
+pub(crate) fn white_bound_notes_named(
+    names: &[String],
+    results: &[CoefficientResult],
+) -> Vec<String> {
     let items: Vec<String> = results
         .iter()
         .flat_map(|r| r.parameters.iter())

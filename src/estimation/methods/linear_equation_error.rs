@@ -28,10 +28,12 @@
 //! it on the linear lateral flight).
 
 use crate::error::{Error, Result};
-use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate, Status};
+use crate::estimation::estimate::{Estimate, OutputFit};
 use crate::estimation::estimator::{MissingChannel, Refusal};
 use crate::estimation::linear_structure::LinearStructure;
-use crate::estimation::methods::equation_error::{METHOD, block_covariance, record_name};
+use crate::estimation::methods::equation_error::{
+    CoefficientResult, METHOD, assemble_named, white_bound_notes_named,
+};
 use crate::estimation::model::linear::Matrix;
 use crate::estimation::model::state_space::{fitting_window, integration_step};
 use crate::estimation::reconstruction;
@@ -180,7 +182,19 @@ pub fn linear_equation_error(
             (correlation_lag / step).round() as usize,
         ));
     }
-    let mut estimate = assemble(record, structure, &results);
+    let mut estimate = assemble_named(
+        record,
+        &structure.name,
+        (&structure.names, &structure.starts),
+        METHOD,
+        &results,
+    );
+    estimate
+        .notes
+        .extend(results.iter().filter_map(|r| r.window_note.clone()));
+    estimate
+        .notes
+        .extend(white_bound_notes_named(&structure.names, &results));
     estimate.notes.extend(notes);
     estimate.wall_time = started.elapsed().as_secs_f64();
     Ok(estimate)
@@ -231,23 +245,13 @@ fn state_rate(
         .collect())
 }
 
-/// One equation's fit: per parameter (index, value, corrected σ, white σ),
-/// its covariance block, its fit and a problem if any.
-struct EquationResult {
-    parameters: Vec<(usize, f64, f64, f64)>,
-    covariance: DMatrix<f64>,
-    fit: OutputFit,
-    problem: Option<String>,
-    bartlett: bool,
-}
-
 fn fit_equation(
     structure: &LinearStructure,
     equation: &Equation,
     left: &[f64],
     (states, inputs): (&[Vec<f64>], &[Vec<f64>]),
     lag: usize,
-) -> EquationResult {
+) -> CoefficientResult {
     // The fixed entries of the row at their values, the free ones at 0.
     let m = &structure.matrices;
     let free_here = |matrix: Matrix, column: usize| {
@@ -304,7 +308,7 @@ fn fit_equation(
         .collect();
     let width = equation.columns.len();
     if rows.len() <= width {
-        return EquationResult {
+        return CoefficientResult {
             parameters: equation
                 .columns
                 .iter()
@@ -317,7 +321,7 @@ fn fit_equation(
                 equation.name,
                 rows.len()
             )),
-            bartlett: false,
+            window_note: None,
         };
     }
     let x = DMatrix::from_fn(rows.len(), width, |r, j| {
@@ -343,7 +347,7 @@ fn fit_equation(
             names.join(", ")
         )
     });
-    EquationResult {
+    CoefficientResult {
         parameters: equation
             .columns
             .iter()
@@ -360,76 +364,11 @@ fn fit_equation(
         covariance,
         fit: OutputFit::new(&equation.name, &measured, &predicted),
         problem,
-        bartlett: window == LagWindow::Bartlett,
-    }
-}
-
-/// The estimate: parameters in the structure's order, block-diagonal covariance.
-fn assemble(
-    record: &FlightRecord,
-    structure: &LinearStructure,
-    results: &[EquationResult],
-) -> Estimate {
-    let mut entries: Vec<(usize, f64, f64, f64)> = results
-        .iter()
-        .flat_map(|r| r.parameters.iter().copied())
-        .collect();
-    entries.sort_by_key(|e| e.0);
-    let order: Vec<usize> = entries.iter().map(|e| e.0).collect();
-    let covariance = block_covariance(
-        results.iter().map(|r| {
-            let indices: Vec<usize> = r.parameters.iter().map(|p| p.0).collect();
-            (indices, &r.covariance)
+        window_note: (window == LagWindow::Bartlett).then(|| {
+            format!(
+                "{}: the truncated residual autocorrelation sum was not positive definite; its standard errors use Bartlett (triangular) lag weights",
+                equation.name
+            )
         }),
-        &order,
-    );
-    let problems: Vec<String> = results.iter().filter_map(|r| r.problem.clone()).collect();
-    let mut notes = vec![format!(
-        "white-residual Cramér–Rao bounds s²(XᵀX)⁻¹: {}",
-        entries
-            .iter()
-            .map(|&(p, _, corrected, white)| format!(
-                "{} {white:.3e} (corrected/white {:.2})",
-                structure.names[p],
-                corrected / white
-            ))
-            .collect::<Vec<_>>()
-            .join(", ")
-    )];
-    for result in results.iter().filter(|r| r.bartlett) {
-        notes.push(format!(
-            "{}: the truncated residual autocorrelation sum was not positive definite; its standard errors use Bartlett (triangular) lag weights",
-            result.fit.channel
-        ));
-    }
-    Estimate {
-        method: METHOD.to_string(),
-        model: structure.name.clone(),
-        record: record_name(record),
-        status: if problems.is_empty() {
-            Status::Converged
-        } else {
-            Status::Diverged(problems.join("; "))
-        },
-        parameters: entries
-            .iter()
-            .map(|&(p, value, standard_error, _)| ParameterEstimate {
-                name: structure.names[p].clone(),
-                value: if value.is_nan() {
-                    structure.starts[p]
-                } else {
-                    value
-                },
-                standard_error,
-                start: structure.starts[p],
-            })
-            .collect(),
-        covariance,
-        fits: results.iter().map(|r| r.fit.clone()).collect(),
-        iterations: 1,
-        cost_history: Vec::new(),
-        wall_time: 0.0,
-        notes,
-        details: String::new(),
     }
 }
