@@ -70,7 +70,7 @@ fn six_dof_methods_refuse_a_linear_structure() {
     let scenario = Scenario::load("linear-short-period-attas").unwrap();
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let (record, _) = record_flight(&scenario, &profile, 1).unwrap();
-    for method in ["ee", "swr", "ebm", "ekf", "ukf"] {
+    for method in ["swr", "ebm"] {
         match estimate(method, &record, "linear-short-period-attas") {
             Err(aeroid::Error::Refused(refusal)) => {
                 assert_eq!(
@@ -213,6 +213,33 @@ fn linearisation_eigenvalues_are_the_simulators_modes() {
     }
 }
 
+/// Output error and filter error on the short-period model's flights
+/// `scenario(seed)` for seeds 1..=`seeds` (flight-test-25hz): per method
+/// and parameter, the sum of the errors in σ units, how many lie inside
+/// the 95 % interval, and how many there are.
+fn errors_in_sigma(
+    seeds: u64,
+    scenario: impl Fn(u64) -> Scenario,
+) -> std::collections::BTreeMap<(&'static str, String), (f64, usize, usize)> {
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let mut sums: std::collections::BTreeMap<(&str, String), (f64, usize, usize)> =
+        Default::default();
+    for seed in 1..=seeds {
+        let (record, truth) = record_flight(&scenario(seed), &profile, seed).unwrap();
+        for method in ["oem", "fem"] {
+            let estimate = estimate(method, &record, "linear-short-period-attas").unwrap();
+            for p in &estimate.parameters {
+                let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
+                let entry = sums.entry((method, p.name.clone())).or_default();
+                entry.0 += error;
+                entry.1 += usize::from(error.abs() <= 1.96);
+                entry.2 += 1;
+            }
+        }
+    }
+    sums
+}
+
 /// The textbook result (Jategaonkar ch. 5): on flights with process noise
 /// (the short-period model in white noise on α and q, 25 Hz flight-test
 /// recorder), the filter error method's estimates scatter about the truth
@@ -227,26 +254,11 @@ fn linearisation_eigenvalues_are_the_simulators_modes() {
 /// output-error mean beyond 3σ.
 #[test]
 fn filter_error_is_within_its_bounds_where_output_error_is_biased() {
-    let profile = Profile::load("flight-test-25hz", None).unwrap();
-    let seeds = 20;
-    let mut sums: std::collections::BTreeMap<(&str, String), (f64, usize, usize)> =
-        Default::default();
-    for seed in 1..=seeds {
-        let scenario = scenario_with("linear-short-period-attas", |t| {
+    let sums = errors_in_sigma(20, |seed| {
+        scenario_with("linear-short-period-attas", |t| {
             t.replace("seed = 4", &format!("seed = {seed}"))
-        });
-        let (record, truth) = record_flight(&scenario, &profile, seed).unwrap();
-        for method in ["oem", "fem"] {
-            let estimate = estimate(method, &record, "linear-short-period-attas").unwrap();
-            for p in &estimate.parameters {
-                let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
-                let entry = sums.entry((method, p.name.clone())).or_default();
-                entry.0 += error;
-                entry.1 += usize::from(error.abs() <= 1.96);
-                entry.2 += 1;
-            }
-        }
-    }
+        })
+    });
     for ((method, name), (sum, inside, count)) in &sums {
         println!(
             "{method} {name}: mean error {:+.2}σ, {inside}/{count} inside 95 %",
@@ -273,4 +285,343 @@ fn filter_error_is_within_its_bounds_where_output_error_is_biased() {
         oem_worst > 3.0,
         "output error is not shown biased: worst mean {oem_worst:.2}σ"
     );
+}
+
+/// A linear structure with every parameter's start value scaled by
+/// `factor` (a linear model's start values are its flight's truth).
+fn started_off(name: &str, factor: f64) -> LinearStructure {
+    let structure = LinearStructure::load(name).unwrap();
+    let mut file = structure.file.clone();
+    for parameter in file.parameters.values_mut() {
+        parameter.start *= factor;
+    }
+    LinearStructure::from_file(&file, &structure.path).unwrap()
+}
+
+/// The augmented-state EKF and UKF on the linear lateral model (16 free
+/// derivatives as augmented states, the model's exact discretisation as
+/// the state's step), the model file's values 20 % off every truth.
+///
+/// Noise-free (ideal recorder, 100 Hz, the flight's own grid), started
+/// from those values (`start = "model"`: equation error is within 1e-4
+/// of the truth here, so starting there would test little): the filter's
+/// model is the truth's exactly, so the estimates reach the truth to
+/// 1e-6 of max(|truth|, 1). The status is honestly not converged: the
+/// innovations are rounding, far below the floor R is held at
+/// (10⁻⁴ of each channel's spread), not white noise of variance R
+/// (measured: 3.5e-14). The UKF does not get there: as on the 6-DOF
+/// lateral record (tests/augmented_filters.rs), its covariance loses
+/// definiteness in the quiet part between the two multisteps (29 s), and
+/// it says so: diverged, naming the covariance.
+///
+/// Noisy (flight-test-25hz: 0.1° on β and φ, 0.002 rad/s on the rates,
+/// 0.01° on the surfaces), equation error's start: converged (settled,
+/// identified, innovations consistent) and every estimate within 4σ of
+/// the truth (16 parameters at 4σ: a chance of 1e-3 that an honest
+/// filter fails here).
+#[test]
+fn augmented_filters_serve_a_linear_structure() {
+    let name = "linear-lateral-attas";
+    let scenario = Scenario::load(name).unwrap();
+    let structure = started_off(name, 1.2);
+    let from_model: aeroid::estimation::estimator::MethodTables =
+        toml::from_str("[ekf]\nstart = \"model\"\n[ukf]\nstart = \"model\"\n").unwrap();
+    for (profile, noisy) in [("ideal", false), ("flight-test-25hz", true)] {
+        let profile = Profile::load(profile, None).unwrap();
+        let (record, truth) = record_flight(&scenario, &profile, scenario.seed).unwrap();
+        for method in ["ekf", "ukf"] {
+            let layers: Vec<&aeroid::estimation::estimator::MethodTables> =
+                if noisy { vec![] } else { vec![&from_model] };
+            let problem =
+                EstimationProblem::new(method, vec![record.clone()], structure.clone(), &layers)
+                    .unwrap();
+            let estimate = methods::estimate(&problem, None).unwrap();
+            assert_eq!(estimate.parameters.len(), 16);
+            let (mut worst_error, mut worst_sigma) = (0.0_f64, 0.0_f64);
+            for p in &estimate.parameters {
+                let true_value = truth.parameters[&p.name];
+                let error = (p.value - true_value).abs();
+                worst_error = worst_error.max(error / true_value.abs().max(1.0));
+                worst_sigma = worst_sigma.max(error / p.standard_error);
+            }
+            println!(
+                "{method} on {}: {}; worst error {worst_error:.2e} of max(|truth|, 1), worst {worst_sigma:.2}σ\n{}",
+                profile.name, estimate.status, estimate.details
+            );
+            if noisy {
+                assert_eq!(
+                    estimate.status,
+                    aeroid::estimation::estimate::Status::Converged,
+                    "{method}"
+                );
+                assert!(worst_sigma < 4.0, "{method}: {worst_sigma:.2}σ");
+            } else if method == "ukf" {
+                match &estimate.status {
+                    aeroid::estimation::estimate::Status::Diverged(reason) => {
+                        assert!(reason.contains("not positive definite"), "{reason}")
+                    }
+                    other => panic!("the UKF on the noise-free record: {other}"),
+                }
+            } else {
+                assert!(worst_error < 1e-6, "{method}: {worst_error:.3e}");
+                assert!(
+                    matches!(
+                        estimate.status,
+                        aeroid::estimation::estimate::Status::Unsettled(_)
+                    ),
+                    "{method}: {}",
+                    estimate.status
+                );
+            }
+        }
+    }
+}
+
+/// Equation error on a linear structure, noise-free (ideal recorder,
+/// 100 Hz): every state measured, ẋ by the differentiator with its
+/// windows kept off the multisteps' control steps, or, for a model whose
+/// rate outputs p_dot and r_dot are recorded, those. With ẋ recorded the
+/// regressions are exact: the p and r equations within 1e-9 of
+/// max(|truth|, 1) (rounding). With ẋ differentiated (every equation of
+/// the plain model, β's of the other), the quartic differentiator's gain
+/// error at the lateral modes (≤ 0.3 Hz: 2e-5 at 0.5 Hz) is what is
+/// left: within 1e-3 of max(|truth|, 1) (measured 1.5e-6).
+#[test]
+fn equation_error_recovers_a_noise_free_linear_flight() {
+    let name = "linear-lateral-attas";
+    let scenario = Scenario::load(name).unwrap();
+    let profile = Profile::load("ideal", None).unwrap();
+    let plain = LinearStructure::load(name).unwrap();
+    let mut file = plain.file.clone();
+    file.rate_outputs = [("p_dot", "p"), ("r_dot", "r")]
+        .into_iter()
+        .map(|(o, s)| (o.to_string(), s.to_string()))
+        .collect();
+    let dir = std::env::temp_dir().join(format!("aeroid-linear-ee-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rated_path = dir.join("linear-lateral-rates.toml");
+    std::fs::write(&rated_path, toml::to_string(&file).unwrap()).unwrap();
+    let rated = LinearStructure::from_file(&file, &rated_path).unwrap();
+    // A scenario file beside the model names it by a relative path.
+    let bundled = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/{name}.toml"));
+    let text = std::fs::read_to_string(&bundled).unwrap().replace(
+        "[linear]\nmodel = \"linear-lateral-attas\"",
+        "[linear]\nmodel = \"linear-lateral-rates.toml\"",
+    );
+    let scenario_path = dir.join("linear-lateral-rates-flight.toml");
+    let rated_scenario =
+        Scenario::from_file(&toml::from_str(&text).unwrap(), &scenario_path).unwrap();
+    for (structure, scenario, recorded) in [(plain, scenario, 1e-3), (rated, rated_scenario, 1e-9)]
+    {
+        let (record, truth) = record_flight(&scenario, &profile, scenario.seed).unwrap();
+        let problem = EstimationProblem::new("ee", vec![record], structure.clone(), &[]).unwrap();
+        let estimate = methods::estimate(&problem, None).unwrap();
+        assert_eq!(
+            estimate.status,
+            aeroid::estimation::estimate::Status::Converged
+        );
+        assert_eq!(estimate.parameters.len(), 16);
+        let mut worst = 0.0_f64;
+        for p in &estimate.parameters {
+            let true_value = truth.parameters[&p.name];
+            let error = (p.value - true_value).abs() / true_value.abs().max(1.0);
+            worst = worst.max(error);
+            let differentiated = !(p.name.starts_with("A_p_")
+                || p.name.starts_with("A_r_")
+                || p.name.starts_with("B_p_")
+                || p.name.starts_with("B_r_"));
+            let tolerance = if differentiated { 1e-3 } else { recorded };
+            assert!(
+                error <= tolerance,
+                "{}: {} = {} against {true_value}",
+                structure.outputs.len(),
+                p.name,
+                p.value
+            );
+        }
+        println!(
+            "ee, {} outputs: worst error {worst:.2e} of max(|truth|, 1)",
+            structure.outputs.len()
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Equation error on the noisy linear lateral flight (flight-test-25hz):
+/// the measured states are its regressors, and their noise biases the
+/// estimates (errors in variables), a bias the Cramér–Rao bound does not
+/// hold. Predicted attenuation of a state's derivative by its noise:
+/// σ_n²/(σ_x² + σ_n²), with 0.1° noise on β and φ against excursions of
+/// some degrees, a few tenths of a per cent; the differentiated noise in
+/// ẋ makes the scatter (the coloured-residual σ) much larger than that.
+/// Measured on the flight's seed: every estimate within 1.5σ (worst
+/// A_beta_roll −1.43σ), relative errors up to 9 % on the weakly excited
+/// entries (B_beta_aileron, truth 0.0014, is +0.75σ and 10 times its
+/// truth). Asserted: every estimate within 3σ (16 parameters).
+#[test]
+fn equation_error_on_a_noisy_linear_flight_shows_errors_in_variables() {
+    let name = "linear-lateral-attas";
+    let scenario = Scenario::load(name).unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let (record, truth) = record_flight(&scenario, &profile, scenario.seed).unwrap();
+    let estimate = estimate("ee", &record, name).unwrap();
+    for p in &estimate.parameters {
+        let true_value = truth.parameters[&p.name];
+        println!(
+            "{}: {:.5} ± {:.2e} (truth {true_value:.5}, {:+.2} %, {:+.2} σ)",
+            p.name,
+            p.value,
+            p.standard_error,
+            100.0 * (p.value - true_value) / true_value,
+            (p.value - true_value) / p.standard_error
+        );
+        assert!(
+            (p.value - true_value).abs() <= 3.0 * p.standard_error,
+            "{}",
+            p.name
+        );
+    }
+}
+
+/// The short-period flight in moderate Dryden turbulence instead of white
+/// process noise: the vertical gust w_g enters as an angle of attack
+/// w_g/V, G = (A_αα, A_qα)ᵀ/V in the w_g column (V = 103 m/s).
+fn gusty_short_period(seed: u64, duration: &str) -> Scenario {
+    scenario_with("linear-short-period-attas", |t| {
+        t.replace("seed = 4", &format!("seed = {seed}"))
+            .replace("duration = \"30 s\"", &format!("duration = \"{duration}\""))
+            .replace(
+                "process_noise = { alpha = 0.004, q = 0.01 }",
+                "gusts = { matrix = [[0.0, 0.0, -0.004559], [0.0, 0.0, -0.005410]], intensity = \"moderate\" }",
+            )
+    })
+}
+
+/// The gusts entering a linear flight have the Dryden shape: over 10
+/// seeds of 600 s (100 Hz), w_g's variance is σ_w² and its
+/// autocorrelation at the lag L_w/V is the Dryden form's
+/// σ_w²·(1 − ½)·e⁻¹ = 0.184·σ_w² (MIL-F-8785C: R(τ) = σ²(1 − τV/2L)e^{−τV/L}),
+/// each within 4 standard errors of the seeds' mean (the Monte Carlo
+/// scatter of the per-seed estimates: correlation time L/V ≈ 5 s, about 60
+/// independent stretches a flight).
+#[test]
+fn linear_flight_gusts_have_the_dryden_shape() {
+    let seeds = 10;
+    let (mut variances, mut correlations) = (Vec::new(), Vec::new());
+    let mut expected = None;
+    for seed in 1..=seeds {
+        let scenario = gusty_short_period(seed, "600 s");
+        let linear = scenario.linear.as_ref().unwrap();
+        let spec = &linear.gusts.as_ref().unwrap().turbulence;
+        let parameters = spec.parameters(scenario.trim.altitude).unwrap();
+        let (sigma, length) = (parameters.sigma[2], parameters.length[2]);
+        let lag = (length / scenario.trim.airspeed / scenario.step).round() as usize;
+        expected = Some((sigma, lag));
+        let trace = aeroid::eval::linear_flight::fly(&scenario, linear).unwrap();
+        let w: Vec<f64> = trace.gusts.iter().map(|g| g[2]).collect();
+        let n = w.len();
+        variances.push(w.iter().map(|v| v * v).sum::<f64>() / n as f64 / (sigma * sigma));
+        correlations.push(
+            (0..n - lag).map(|k| w[k] * w[k + lag]).sum::<f64>()
+                / (n - lag) as f64
+                / (sigma * sigma),
+        );
+    }
+    let (sigma, lag) = expected.unwrap();
+    let mean_and_error = |values: &[f64]| {
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+            / (values.len() - 1) as f64)
+            .sqrt();
+        (mean, spread / (values.len() as f64).sqrt())
+    };
+    let (variance, variance_error) = mean_and_error(&variances);
+    let (correlation, correlation_error) = mean_and_error(&correlations);
+    let dryden = 0.5 * (-1.0_f64).exp();
+    println!(
+        "σ_w {sigma:.3} m/s, lag {lag} steps: variance/σ² {variance:.3} ± {variance_error:.3}, R(L/V)/σ² {correlation:.3} ± {correlation_error:.3} (Dryden {dryden:.3})"
+    );
+    assert!((variance - 1.0).abs() <= 4.0 * variance_error, "{variance}");
+    assert!(
+        (correlation - dryden).abs() <= 4.0 * correlation_error,
+        "{correlation}"
+    );
+}
+
+/// Filter error against output error on the gusty short-period flight
+/// (moderate Dryden turbulence, σ_w 2.4 m/s, α moved by about 1.3°;
+/// flight-test-25hz, 10 seeds): the mean over seeds of each parameter's
+/// error in σ units (its scatter 1/√10 ≈ 0.32 for an unbiased estimator
+/// with honest bounds) and the share inside the 95 % interval.
+///
+/// Measured: output error is biased, means +2.1σ to +10.3σ in size
+/// (B_alpha_elevator −1.7σ), 5 of 60 inside. Filter error is better but
+/// NOT within its bounds: means +2.1σ to +4.2σ, 21 of 60 inside. Its
+/// model's process noise is white, while the Dryden gust is coloured
+/// (correlation time L_w/V ≈ 5 s, longer than the short period's ≈ 1.9 s
+/// time constant): the innovations of its steady-state filter are
+/// correlated and its likelihood is not the data's. (With white process
+/// noise it is within its bounds:
+/// `filter_error_is_within_its_bounds_where_output_error_is_biased`.)
+/// Asserted, the finding: output error's worst mean bias at least twice
+/// filter error's, and filter error's coverage below 85 %.
+#[test]
+fn filter_error_on_a_gusty_linear_flight() {
+    let sums = errors_in_sigma(10, |seed| gusty_short_period(seed, "30 s"));
+    let (mut worst, mut covered) = (
+        std::collections::BTreeMap::<&str, f64>::new(),
+        std::collections::BTreeMap::<&str, (usize, usize)>::new(),
+    );
+    for ((method, name), (sum, inside, count)) in &sums {
+        let mean = sum / *count as f64;
+        println!("{method} {name}: mean error {mean:+.2}σ, {inside}/{count} inside 95 %");
+        let entry = worst.entry(method).or_default();
+        *entry = entry.max(mean.abs());
+        let coverage = covered.entry(method).or_default();
+        coverage.0 += inside;
+        coverage.1 += count;
+    }
+    assert!(
+        worst["oem"] >= 2.0 * worst["fem"],
+        "output error {:.2}σ, filter error {:.2}σ",
+        worst["oem"],
+        worst["fem"]
+    );
+    let (inside, count) = covered["fem"];
+    assert!(
+        (inside as f64) < 0.85 * count as f64,
+        "filter error inside its bounds on the gusts: {inside}/{count}"
+    );
+}
+
+/// A gust matrix that does not fit the model's states, a row of the wrong
+/// length and a misspelt key are errors naming the key.
+#[test]
+fn bad_gust_tables_name_the_key() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/linear-short-period-attas.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let with = |gusts: &str| {
+        text.replace(
+            "process_noise = { alpha = 0.004, q = 0.01 }",
+            &format!("gusts = {gusts}"),
+        )
+    };
+    let rows = with("{ matrix = [[0.0, 0.0, 1.0]], intensity = \"moderate\" }");
+    let scenario = Scenario::from_file(&toml::from_str(&rows).unwrap(), &path).unwrap();
+    let error = aeroid::eval::linear_flight::fly(&scenario, scenario.linear.as_ref().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("linear.gusts.matrix"), "{error}");
+    let short = with("{ matrix = [[0.0, 1.0], [0.0, 0.0, 1.0]], intensity = \"moderate\" }");
+    let error = Scenario::from_file(&toml::from_str(&short).unwrap(), &path)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("linear.gusts.matrix[0]"), "{error}");
+    let misspelt = with("{ matrix = [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]], intensty = \"moderate\" }");
+    let parsed = toml::from_str::<ScenarioFile>(&misspelt)
+        .map_err(|e| e.to_string())
+        .and_then(|file| Scenario::from_file(&file, &path).map_err(|e| e.to_string()));
+    let error = parsed.unwrap_err();
+    assert!(error.contains("intensty"), "{error}");
 }

@@ -335,7 +335,7 @@ impl fmt::Display for Refusal {
                 needs,
             } => write!(
                 f,
-                "{method} fits {needs}; '{model}' is a {structure} model structure: fit it with output error (oem) or filter error (fem)"
+                "{method} fits {needs}; '{model}' is a {structure} model structure: fit it with a method that serves linear structures (ee, oem, fem, ekf, ukf, fdee, fdoe)"
             ),
             Refusal::OneRecordOnly { method, records } => write!(
                 f,

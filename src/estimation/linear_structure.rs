@@ -272,9 +272,30 @@ impl LinearStructure {
         step: f64,
         inputs: Vec<DVector<f64>>,
     ) -> Result<LinearStateSpace> {
+        self.model_disturbed(start, step, inputs, None)
+    }
+
+    /// [`LinearStructure::model`] with more inputs after the model's own,
+    /// entering the states through `disturbance` (states × extra inputs,
+    /// columns after B's) and no output directly: each u_k holds the
+    /// model's inputs, then the disturbances.
+    pub fn model_disturbed(
+        &self,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+        disturbance: Option<&DMatrix<f64>>,
+    ) -> Result<LinearStateSpace> {
         let m = &self.matrices;
+        let (mut b, mut d) = (m.b.clone(), m.d.clone());
+        if let Some(g) = disturbance {
+            let columns = b.ncols();
+            b = b.insert_columns(columns, g.ncols(), 0.0);
+            b.columns_mut(columns, g.ncols()).copy_from(g);
+            d = d.insert_columns(columns, g.ncols(), 0.0);
+        }
         LinearStateSpace::new(
-            [m.a.clone(), m.b.clone(), m.c.clone(), m.d.clone()],
+            [m.a.clone(), b, m.c.clone(), d],
             self.entries.clone(),
             start,
             step,

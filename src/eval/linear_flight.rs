@@ -15,6 +15,12 @@
 //!   from [`random::streams::PROCESS_NOISE`] of the scenario's seed: the
 //!   discrete process of exactly the continuous model that the filter
 //!   error method postulates.
+//! - Gusts (`gusts`): Dryden turbulence ([`crate::sim::wind`], its
+//!   forming filters discretised exactly, seeded by the scenario's seed on
+//!   the turbulence stream, at the trim airspeed and altitude) entering as
+//!   inputs through G: ẋ = A·x + B·u + b + G·(u_g, v_g, w_g), held or
+//!   interpolated over each step as the model's inputs are, so the step
+//!   stays exact and the truth the model's parameters.
 //! - Record: the profile's channels whose quantity is a state, input or
 //!   output of the model, named as in the file ([`Profile::record_signals`]).
 
@@ -27,9 +33,10 @@ use crate::random::{self, streams};
 use crate::record::FlightRecord;
 use crate::record::recorder::{Profile, record_scenario_seeded};
 use crate::sim::aero::ModelKind;
-use crate::sim::scenario::{LinearFlight, Scenario};
+use crate::sim::scenario::{LinearFlight, LinearGusts, Scenario};
 use crate::sim::state::Control;
-use crate::sim::truth::{RunTruth, TrimPoint, TruthKind};
+use crate::sim::truth::RunTruth;
+use crate::sim::wind::{FlightConditions, WindSpec};
 use nalgebra::{DMatrix, DVector};
 use rand::RngExt;
 use rand_distr::StandardNormal;
@@ -40,6 +47,9 @@ pub struct LinearTrace {
     pub times: Vec<f64>,
     /// States, inputs and outputs, each on the grid.
     pub signals: Vec<(String, Vec<f64>)>,
+    /// The Dryden gusts (u_g, v_g, w_g, m/s) at each grid point; empty
+    /// without `[linear] gusts`.
+    pub gusts: Vec<[f64; 3]>,
     pub truth: RunTruth,
 }
 
@@ -75,24 +85,40 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
         .iter()
         .map(|name| Control::ALL.iter().position(|c| c.name() == name))
         .collect();
+    let (distribution, gusts) = match &linear.gusts {
+        Some(spec) => {
+            let (g, gusts) = gust_inputs(scenario, spec, &structure, count)?;
+            (Some(g), gusts)
+        }
+        None => (None, Vec::new()),
+    };
     let inputs: Vec<DVector<f64>> = times
         .iter()
-        .map(|&t| {
+        .enumerate()
+        .map(|(k, &t)| {
             let deviation = scenario.inputs.deviation(t);
+            let gust = gusts.get(k).map_or(&[][..], |g| &g[..]);
             DVector::from_iterator(
-                controls.len(),
-                controls.iter().map(|c| c.map_or(0.0, |i| deviation[i])),
+                controls.len() + gust.len(),
+                controls
+                    .iter()
+                    .map(|c| c.map_or(0.0, |i| deviation[i]))
+                    .chain(gust.iter().copied()),
             )
         })
         .collect();
-    let model = structure.model(0.0, scenario.step, inputs.clone())?;
+    let model =
+        structure.model_disturbed(0.0, scenario.step, inputs.clone(), distribution.as_ref())?;
     let theta = structure.parameter_values();
     let distribution = process_noise(&structure, linear, scenario)?;
     let noise = noise_factor(&model, &distribution)?;
     let matrices = model.at(theta.as_slice())?;
+    // The equilibrium of the control inputs alone: the gusts start from
+    // their stationary distribution, the motion from trim.
+    let controls_at_start = inputs[0].rows(0, structure.inputs.len());
     let mut x = equilibrium(
         &matrices.a,
-        &(&matrices.b * &inputs[0] + &matrices.state_bias),
+        &(matrices.b.columns(0, structure.inputs.len()) * controls_at_start + &matrices.state_bias),
     );
     let mut rng = random::stream(scenario.seed, streams::PROCESS_NOISE);
     let n = structure.states.len();
@@ -129,8 +155,58 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
     Ok(LinearTrace {
         times,
         signals,
+        gusts,
         truth: truth(scenario, &structure),
     })
+}
+
+/// G of `[linear] gusts` (its rows checked against the model's states) and
+/// the Dryden gusts (u_g, v_g, w_g) at every grid point
+/// ([`WindSpec::generate`]: the scenario's seed, the turbulence stream; at
+/// the trim airspeed and altitude).
+fn gust_inputs(
+    scenario: &Scenario,
+    spec: &LinearGusts,
+    structure: &LinearStructure,
+    count: usize,
+) -> Result<(DMatrix<f64>, Vec<[f64; 3]>)> {
+    let invalid = |field: &str, message: String| Error::Invalid {
+        path: scenario.path.clone(),
+        problems: vec![crate::error::Problem {
+            field: field.to_string(),
+            message,
+        }],
+    };
+    let n = structure.states.len();
+    if spec.matrix.len() != n || spec.matrix.iter().any(|row| row.len() != 3) {
+        return Err(invalid(
+            "linear.gusts.matrix",
+            format!(
+                "must have one row of 3 entries per state of '{}' ({}: {n} rows)",
+                structure.name,
+                structure.states.join(", ")
+            ),
+        ));
+    }
+    let g = DMatrix::from_fn(n, 3, |i, j| spec.matrix[i][j]);
+    let wind = WindSpec {
+        turbulence: Some(spec.turbulence.clone()),
+        ..WindSpec::default()
+    };
+    let conditions = FlightConditions {
+        airspeed: scenario.trim.airspeed,
+        altitude: scenario.trim.altitude,
+    };
+    let samples = wind
+        .generate(&conditions, scenario.step, count, scenario.seed)
+        .map_err(|message| invalid("linear.gusts", message))?;
+    Ok((
+        g,
+        samples
+            .iter()
+            .map(|s| [s.body[0], s.body[1], s.body[2]])
+            .collect(),
+    ))
 }
 
 /// F's diagonal from `[linear] process_noise`, named states checked.
@@ -191,29 +267,15 @@ fn equilibrium(a: &DMatrix<f64>, rate: &DVector<f64>) -> DVector<f64> {
 
 /// The exact truth of a linear flight: the model's parameter values.
 fn truth(scenario: &Scenario, structure: &LinearStructure) -> RunTruth {
-    RunTruth {
-        kind: TruthKind::Exact,
-        scenario: scenario.name.clone(),
-        seed: scenario.seed,
-        aircraft: scenario.aircraft.name.clone(),
-        trim: TrimPoint {
-            airspeed: scenario.trim.airspeed,
-            altitude: scenario.trim.altitude,
-            flight_path_angle: scenario.trim.flight_path_angle,
-            heading: scenario.trim.heading,
-            alpha: 0.0,
-            beta: 0.0,
-            pitch: 0.0,
-            controls: Default::default(),
-        },
-        model: ModelKind::Linear,
-        parameters: structure
+    RunTruth::exact_parameters(
+        scenario,
+        (0.0, 0.0, 0.0, Default::default()),
+        ModelKind::Linear,
+        structure
             .names
             .iter()
             .cloned()
             .zip(structure.starts.iter().copied())
             .collect(),
-        local_derivatives: Default::default(),
-        parameter_changes: Vec::new(),
-    }
+    )
 }

@@ -300,8 +300,13 @@ impl Profile {
             .iter()
             .map(|model| model.record(trace, &context, &self.name, &mut rng))
             .collect::<Result<_>>()?;
+        self.record_of(&trace.scenario, seed, channels)
+    }
+
+    /// The record of `scenario` this profile made with `seed`, checked.
+    fn record_of(&self, scenario: &str, seed: u64, channels: Vec<Channel>) -> Result<FlightRecord> {
         let record = FlightRecord {
-            scenario: trace.scenario.clone(),
+            scenario: scenario.to_string(),
             seed: Some(seed),
             profile: self.name.clone(),
             absent: self.absent.clone(),
@@ -347,15 +352,7 @@ impl Profile {
                 )?);
             }
         }
-        let record = FlightRecord {
-            scenario: scenario.to_string(),
-            seed: Some(seed),
-            profile: self.name.clone(),
-            absent: self.absent.clone(),
-            channels,
-        };
-        record.validate(&self.path)?;
-        Ok(record)
+        self.record_of(scenario, seed, channels)
     }
 
     /// The same profile with every channel's white-noise standard deviation

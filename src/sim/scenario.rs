@@ -113,6 +113,60 @@ pub struct LinearFlightSpec {
     /// ẋ = A·x + B·u + b + F·w, w of unit intensity (state units per √s).
     #[serde(default)]
     pub process_noise: BTreeMap<String, f64>,
+    /// Dryden turbulence entering the states: ẋ = … + G·(u_g, v_g, w_g):
+    /// `matrix` and the keys of a `[wind.turbulence]` table ([`LinearGusts`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gusts: Option<toml::Table>,
+}
+
+/// `[linear] gusts`: the Dryden turbulence of `[wind.turbulence]` (an
+/// `intensity` or `sigma_*`, optional `length_*`, at the trim airspeed and
+/// altitude) entering the state equations through `matrix`, G, one row per
+/// state of the model and one column per gust component u_g, v_g, w_g
+/// (body axes, m/s): ẋ = A·x + B·u + b + G·(u_g, v_g, w_g).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearGusts {
+    pub matrix: Vec<Vec<f64>>,
+    pub turbulence: crate::sim::wind::TurbulenceSpec,
+}
+
+impl LinearGusts {
+    /// Reads a `gusts` table, its problems named under `linear.gusts`.
+    fn read(table: &toml::Table, problems: &mut Problems) -> Option<LinearGusts> {
+        let mut rest = table.clone();
+        let matrix = match rest.remove("matrix").map(|m| m.try_into::<Vec<Vec<f64>>>()) {
+            Some(Ok(matrix)) => matrix,
+            Some(Err(error)) => {
+                problems.push("linear.gusts.matrix", error.to_string());
+                return None;
+            }
+            None => {
+                problems.push(
+                    "linear.gusts.matrix",
+                    "missing: G, one row per state, columns u_g, v_g, w_g",
+                );
+                return None;
+            }
+        };
+        for (i, row) in matrix.iter().enumerate() {
+            if row.len() != 3 || !row.iter().all(|v| v.is_finite()) {
+                problems.push(
+                    format!("linear.gusts.matrix[{i}]"),
+                    "must hold 3 finite numbers (the factors of u_g, v_g, w_g)",
+                );
+            }
+        }
+        match toml::Value::Table(rest).try_into::<crate::sim::wind::TurbulenceSpec>() {
+            Ok(turbulence) => {
+                turbulence.validate("linear.gusts", problems);
+                Some(LinearGusts { matrix, turbulence })
+            }
+            Err(error) => {
+                problems.push("linear.gusts", error.to_string());
+                None
+            }
+        }
+    }
 }
 
 /// A validated `[linear]` table.
@@ -120,6 +174,7 @@ pub struct LinearFlightSpec {
 pub struct LinearFlight {
     pub model_path: PathBuf,
     pub process_noise: BTreeMap<String, f64>,
+    pub gusts: Option<LinearGusts>,
 }
 
 /// One `[[parameter_changes]]` table of a scenario file.
@@ -328,6 +383,10 @@ impl Scenario {
                         );
                     }
                 }
+                let gusts = spec
+                    .gusts
+                    .as_ref()
+                    .and_then(|table| LinearGusts::read(table, &mut problems));
                 match catalog::resolve_named(
                     &spec.model,
                     catalog::MODEL_FOLDER,
@@ -337,6 +396,7 @@ impl Scenario {
                     Ok(model_path) => Some(LinearFlight {
                         model_path,
                         process_noise: spec.process_noise.clone(),
+                        gusts,
                     }),
                     Err(error) => {
                         problems.push("linear.model", error.to_string());

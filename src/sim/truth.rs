@@ -84,6 +84,36 @@ impl RunTruth {
             .iter()
             .map(|c| (c.name().to_string(), trim.controls[c.index()]))
             .collect();
+        let parameters = scenario
+            .aircraft
+            .aero
+            .parameters
+            .iter()
+            .map(|(name, value)| (name.to_string(), value))
+            .collect();
+        RunTruth {
+            local_derivatives: trim_derivatives(scenario, trim),
+            parameter_changes: scenario.parameter_changes.clone(),
+            ..RunTruth::exact_parameters(
+                scenario,
+                (trim.alpha, trim.beta, trim.pitch, controls),
+                scenario.aircraft.aero.kind,
+                parameters,
+            )
+        }
+    }
+
+    /// The exact truth of a scenario whose model of kind `model` flew
+    /// `parameters` from the scenario's trim condition with the attitude and
+    /// controls (α, β, θ, controls) `trimmed`: no local derivatives, no
+    /// parameter changes.
+    pub fn exact_parameters(
+        scenario: &Scenario,
+        trimmed: (f64, f64, f64, BTreeMap<String, f64>),
+        model: crate::sim::aero::ModelKind,
+        parameters: BTreeMap<String, f64>,
+    ) -> RunTruth {
+        let (alpha, beta, pitch, controls) = trimmed;
         RunTruth {
             kind: TruthKind::Exact,
             scenario: scenario.name.clone(),
@@ -94,21 +124,15 @@ impl RunTruth {
                 altitude: scenario.trim.altitude,
                 flight_path_angle: scenario.trim.flight_path_angle,
                 heading: scenario.trim.heading,
-                alpha: trim.alpha,
-                beta: trim.beta,
-                pitch: trim.pitch,
+                alpha,
+                beta,
+                pitch,
                 controls,
             },
-            model: scenario.aircraft.aero.kind,
-            parameters: scenario
-                .aircraft
-                .aero
-                .parameters
-                .iter()
-                .map(|(name, value)| (name.to_string(), value))
-                .collect(),
-            local_derivatives: trim_derivatives(scenario, trim),
-            parameter_changes: scenario.parameter_changes.clone(),
+            model,
+            parameters,
+            local_derivatives: Default::default(),
+            parameter_changes: Vec::new(),
         }
     }
 

@@ -519,7 +519,7 @@ impl TurbulenceSpec {
     }
 
     /// Records the problems of this table under `path` ("wind.turbulence").
-    fn validate(&self, path: &str, problems: &mut Problems) {
+    pub fn validate(&self, path: &str, problems: &mut Problems) {
         let field = |name: &str| format!("{path}.{name}");
         let given_sigmas = self
             .sigmas()

@@ -11,7 +11,11 @@
 //! state-space view output error simulates
 //! ([`DrivenStateSpace::for_record`]: integrated states from the record's
 //! first samples, the other flight-path states fed in as pseudo-controls);
-//! [`Augmented`] makes θ_a states (Jategaonkar Eq. 7.8).
+//! [`Augmented`] makes θ_a states (Jategaonkar Eq. 7.8). On a linear
+//! structure the postulated model is its linear state-space model driven by the
+//! record's input channels ([`LinearStructure::for_record`]: its exact
+//! discretisation, the model file's `interpolation`), the free entries of
+//! A, B, C, D and the biases the parameter states ([`Filtered`]).
 //!
 //! **Filter**: the continuous–discrete EKF of
 //! [`extended_kalman::filter`] (Jategaonkar §7.2, Eqs. 7.11–7.19: the
@@ -72,7 +76,10 @@ use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate, Status
 use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
 };
+use crate::estimation::linear_structure::LinearStructure;
 use crate::estimation::methods::equation_error::{self, EquationErrorSettings, equation_error};
+use crate::estimation::methods::filter_error::{enough_data, free_parameters};
+use crate::estimation::methods::linear_equation_error::linear_equation_error;
 use crate::estimation::methods::output_error::{Start, missing_channels, unsuitable};
 use crate::estimation::model::augmented::Augmented;
 use crate::estimation::model::observations::Observations;
@@ -80,7 +87,7 @@ use crate::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel, f
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::extended_kalman::{self, Innovation, Noise, Pass};
 use crate::estimation::solver::kalman::Gaussian;
-use crate::estimation::structure::ModelStructure;
+use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::{Channel, FlightRecord};
 use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DVector};
@@ -269,7 +276,7 @@ impl Estimator for AugmentedEkf {
             title: "extended Kalman filter with the parameters as augmented states, pseudonoise, Fourier R and residual-correlation tuning",
             paper: "EKF parameter estimation for the X-31 drop model and the F-18 HARV (J. Guidance, Engineering Note); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 7; Mehra, IEEE TAC 15(2), 1970",
             equations: "state and output models with process noise and parameter pseudonoise (note Eqs. 1–3); augmented state (Jategaonkar Eq. 7.8); continuous–discrete EKF (Jategaonkar Eqs. 7.11–7.19); R from the spectrum above the motion's bandwidth; R = C₀ − H·P·Hᵀ, Q += K(C₀ − S)Kᵀ (Mehra 1970, zero lag)",
-            needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
+            needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls); on a linear structure, its input and output channels",
             settings: setting_infos(&FilterSettings::default(), &FILTER_SETTINGS),
         }
     }
@@ -288,7 +295,7 @@ impl Estimator for AugmentedEkf {
         let run = augmented_estimate(
             METHOD,
             problem.record(),
-            problem.structure.six_dof(METHOD)?,
+            &problem.structure,
             &settings,
             start,
             &|model, initial, noise, observations| {
@@ -314,7 +321,161 @@ pub struct FilterRun {
 
 /// One filter pass over an augmented model (the EKF's or the UKF's).
 pub type FilterPass<'a> =
-    dyn Fn(&Augmented<DrivenStateSpace>, Gaussian, &Noise, &Observations) -> Result<Pass> + 'a;
+    dyn Fn(&Augmented<dyn StateSpaceModel>, Gaussian, &Noise, &Observations) -> Result<Pass> + 'a;
+
+/// A structure's parameters: names, start values, free flags, bounds.
+struct Parameters<'a> {
+    names: &'a [String],
+    values: &'a [f64],
+    free: &'a [bool],
+    bounds: &'a [(f64, f64)],
+}
+
+/// A structure's state-space view on a record's grid.
+struct View {
+    model: Box<dyn StateSpaceModel>,
+    x0: DVector<f64>,
+    state_names: Vec<String>,
+    notes: Vec<String>,
+}
+
+/// The model structure an augmented filter runs on: the 6-DOF equations
+/// driven by the record ([`DrivenStateSpace::for_record`]) or a linear
+/// state-space model driven by its input channels
+/// ([`LinearStructure::for_record`], its exact discretisation and the
+/// model file's `interpolation`).
+#[derive(Debug, Clone, Copy)]
+pub enum Filtered<'a> {
+    SixDof(&'a ModelStructure),
+    Linear(&'a LinearStructure),
+}
+
+impl<'a> From<&'a ModelStructure> for Filtered<'a> {
+    fn from(structure: &'a ModelStructure) -> Filtered<'a> {
+        Filtered::SixDof(structure)
+    }
+}
+
+impl<'a> From<&'a LinearStructure> for Filtered<'a> {
+    fn from(structure: &'a LinearStructure) -> Filtered<'a> {
+        Filtered::Linear(structure)
+    }
+}
+
+impl<'a> From<&'a Structure> for Filtered<'a> {
+    fn from(structure: &'a Structure) -> Filtered<'a> {
+        match structure {
+            Structure::SixDof(s) => Filtered::SixDof(s),
+            Structure::Linear(s) => Filtered::Linear(s),
+        }
+    }
+}
+
+impl Filtered<'_> {
+    fn name(&self) -> &str {
+        match self {
+            Filtered::SixDof(s) => &s.name,
+            Filtered::Linear(s) => &s.name,
+        }
+    }
+
+    fn outputs(&self) -> &[String] {
+        match self {
+            Filtered::SixDof(s) => &s.outputs,
+            Filtered::Linear(s) => &s.outputs,
+        }
+    }
+
+    /// Every parameter's name, start value (the model file's), free flag
+    /// and bounds.
+    fn parameters(&self) -> Parameters<'_> {
+        match self {
+            Filtered::SixDof(s) => Parameters {
+                names: s.aircraft.aero.parameters.names(),
+                values: s.aircraft.aero.parameters.values(),
+                free: &s.free,
+                bounds: &s.bounds,
+            },
+            Filtered::Linear(s) => Parameters {
+                names: &s.names,
+                values: &s.starts,
+                free: &s.free,
+                bounds: &s.bounds,
+            },
+        }
+    }
+
+    fn free_names(&self) -> Vec<String> {
+        match self {
+            Filtered::SixDof(s) => s.free_names(),
+            Filtered::Linear(s) => s.free_names(),
+        }
+    }
+
+    /// Equation error's estimate on the record, with the model file's
+    /// `[methods.ee]` settings.
+    fn equation_error(&self, record: &FlightRecord) -> Result<Estimate> {
+        match self {
+            Filtered::SixDof(structure) => {
+                let table = merge_settings(equation_error::METHOD, &[&structure.methods]);
+                let options = EquationErrorSettings::read(&table)
+                    .map(|s| s.options())
+                    .unwrap_or_default();
+                equation_error(record, structure, &options)
+            }
+            Filtered::Linear(structure) => {
+                let table = merge_settings(equation_error::METHOD, &[&structure.methods]);
+                let settings = EquationErrorSettings::read(&table).unwrap_or_default();
+                linear_equation_error(
+                    record,
+                    structure,
+                    &settings.differentiator,
+                    settings.correlation_lag,
+                )
+            }
+        }
+    }
+
+    /// The state-space view on the record's grid, the initial state, the
+    /// state names and the view's notes.
+    fn view(&self, record: &FlightRecord, settings: &FilterSettings) -> Result<View> {
+        match self {
+            Filtered::SixDof(structure) => {
+                let (view, x0) = DrivenStateSpace::for_record(
+                    record,
+                    structure,
+                    settings.interpolation,
+                    settings.step,
+                    None,
+                )?;
+                let names = view.state_names().iter().map(|s| s.to_string()).collect();
+                Ok(View {
+                    notes: view.simulation().notes.clone(),
+                    model: Box::new(view),
+                    x0,
+                    state_names: names,
+                })
+            }
+            Filtered::Linear(structure) => {
+                let (model, x0) = structure.for_record(record, settings.step, None)?;
+                let note = format!(
+                    "linear model '{}', exact discretisation, inputs {} between grid points (the model file's `interpolation`)",
+                    structure.name,
+                    match structure.interpolation {
+                        Interpolation::ZeroOrderHold => "held",
+                        Interpolation::Linear => "linear",
+                    }
+                );
+                Ok(View {
+                    model: Box::new(model),
+                    x0,
+                    state_names: structure.states.clone(),
+                    notes: vec![note],
+                })
+            }
+        }
+    }
+}
 
 /// The parameter states at every grid point of a pass.
 #[derive(Debug, Clone, PartialEq)]
@@ -481,7 +642,8 @@ fn channel_noise(channel: &Channel, window: (f64, f64), bandwidth: f64) -> (f64,
 /// What every pass shares: the model view, the start, the prior, the
 /// observations and the noise floors.
 struct Setup {
-    view: DrivenStateSpace,
+    view: Box<dyn StateSpaceModel>,
+    state_names: Vec<String>,
     x0: DVector<f64>,
     /// Every aerodynamic parameter, the free ones at their start.
     theta: Vec<f64>,
@@ -499,17 +661,15 @@ struct Setup {
 }
 
 /// Refuses what no augmented filter can run on.
-fn check(method: &str, record: &FlightRecord, structure: &ModelStructure) -> Result<()> {
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(method, missing_channels(record, structure), present) {
-        return Err(Error::Refused(refusal));
-    }
-    unsuitable(method, structure)?;
-    if !structure.free.iter().any(|&f| f) {
-        return Err(Error::Refused(Refusal::NothingToEstimate {
-            method: method.to_string(),
-            model: structure.name.clone(),
-        }));
+fn check(method: &str, record: &FlightRecord, structure: Filtered) -> Result<()> {
+    let missing = match structure {
+        Filtered::SixDof(s) => missing_channels(record, s),
+        Filtered::Linear(s) => s.missing_channels(record),
+    };
+    let free = structure.parameters().free;
+    free_parameters(method, record, missing, structure.name(), free)?;
+    if let Filtered::SixDof(s) = structure {
+        unsuitable(method, s)?;
     }
     Ok(())
 }
@@ -517,11 +677,17 @@ fn check(method: &str, record: &FlightRecord, structure: &ModelStructure) -> Res
 /// The start θ (module header) and a note saying which.
 fn start_values(
     record: &FlightRecord,
-    structure: &ModelStructure,
+    structure: Filtered,
     settings: &FilterSettings,
     given: Option<&Estimate>,
 ) -> (Vec<f64>, String) {
-    let mut theta = structure.aircraft.aero.parameters.values().to_vec();
+    let Parameters {
+        names,
+        values,
+        free,
+        bounds,
+    } = structure.parameters();
+    let mut theta = values.to_vec();
     if settings.start == Start::Model {
         return (theta, "θ started from the model file's values".into());
     }
@@ -529,22 +695,17 @@ fn start_values(
     let estimate = match given {
         Some(estimate) => Ok(estimate),
         None => {
-            let table = merge_settings(equation_error::METHOD, &[&structure.methods]);
-            let options = EquationErrorSettings::read(&table)
-                .map(|s| s.options())
-                .unwrap_or_default();
-            computed = equation_error(record, structure, &options);
+            computed = structure.equation_error(record);
             computed.as_ref().map_err(|e| e.to_string())
         }
     };
     match estimate {
         Ok(estimate) if estimate.status == Status::Converged => {
-            let names = structure.aircraft.aero.parameters.names();
             for (i, name) in names.iter().enumerate() {
-                if let (true, Some(p)) = (structure.free[i], estimate.parameter(name))
+                if let (true, Some(p)) = (free[i], estimate.parameter(name))
                     && p.value.is_finite()
                 {
-                    theta[i] = p.value.clamp(structure.bounds[i].0, structure.bounds[i].1);
+                    theta[i] = p.value.clamp(bounds[i].0, bounds[i].1);
                 }
             }
             (theta, "θ started from equation error's estimate".into())
@@ -567,12 +728,14 @@ impl Setup {
     fn new(
         method: &str,
         record: &FlightRecord,
-        structure: &ModelStructure,
+        structure: Filtered,
         settings: &FilterSettings,
         start: Option<&Estimate>,
     ) -> Result<Setup> {
         check(method, record, structure)?;
-        let names_all = structure.aircraft.aero.parameters.names().to_vec();
+        let parameters = structure.parameters();
+        let (names_all, free_flags) = (parameters.names, parameters.free);
+        let outputs = structure.outputs();
         if let Some(name) = settings
             .pseudonoise_for
             .keys()
@@ -580,35 +743,34 @@ impl Setup {
         {
             return Err(Error::Other(format!(
                 "[methods.{method}] pseudonoise_for: '{name}' is not a free parameter of model '{}'",
-                structure.name
+                structure.name()
             )));
         }
-        let (view, x0) = DrivenStateSpace::for_record(
-            record,
-            structure,
-            settings.interpolation,
-            settings.step,
-            None,
-        )?;
+        let View {
+            model: view,
+            x0,
+            state_names,
+            notes: view_notes,
+        } = structure.view(record, settings)?;
+        if view.len() < 2 {
+            return Err(Error::Refused(Refusal::TooFewData {
+                method: method.to_string(),
+                data: view.len(),
+                unknowns: 2,
+            }));
+        }
         let (theta, start_note) = start_values(record, structure, settings, start);
-        let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
+        let free: Vec<usize> = (0..theta.len()).filter(|&i| free_flags[i]).collect();
         let names: Vec<String> = free.iter().map(|&i| names_all[i].clone()).collect();
         let step = view.time(1) - view.time(0);
         let observations =
-            Observations::from_record(record, &structure.outputs, view.time(0), step, view.len())?;
-        let data: usize = observations.counts().iter().sum();
-        if data < free.len() {
-            return Err(Error::Refused(Refusal::TooFewData {
-                method: method.to_string(),
-                data,
-                unknowns: free.len(),
-            }));
-        }
-        let window = fitting_window(record, &structure.outputs, None)?;
+            Observations::from_record(record, outputs, view.time(0), step, view.len())?;
+        enough_data(method, &observations, free.len())?;
+        let window = fitting_window(record, outputs, None)?;
         let mut measurement = Vec::new();
         let mut floors = Vec::new();
         let mut noise_notes = Vec::new();
-        for name in &structure.outputs {
+        for name in outputs {
             let channel = record.channel(name)?;
             let (variance, fourier, floor) =
                 channel_noise(channel, window, settings.motion_bandwidth);
@@ -621,12 +783,10 @@ impl Setup {
             ));
         }
         let scale = |v: f64| v.abs().max(PARAMETER_SCALE);
-        let state_names = view.state_names();
         let n = x0.len();
         let mut prior = DMatrix::zeros(n + free.len(), n + free.len());
         for (i, state) in state_names.iter().enumerate() {
-            prior[(i, i)] = structure
-                .outputs
+            prior[(i, i)] = outputs
                 .iter()
                 .position(|o| o == state)
                 .map_or(0.01, |o| measurement[o]);
@@ -655,9 +815,10 @@ impl Setup {
             ),
         ];
         notes.extend(observations.note(step));
-        notes.extend(view.simulation().notes.iter().cloned());
+        notes.extend(view_notes);
         Ok(Setup {
             view,
+            state_names,
             x0,
             theta,
             free,
@@ -738,15 +899,16 @@ fn correlation_update(
 /// Runs the augmented filter `run` with the residual-correlation passes and
 /// assembles the estimate and the last pass's parameter histories (module
 /// header). Shared by the EKF and the UKF.
-pub fn augmented_estimate(
+pub fn augmented_estimate<'a>(
     method: &str,
     record: &FlightRecord,
-    structure: &ModelStructure,
+    structure: impl Into<Filtered<'a>>,
     settings: &FilterSettings,
     start: Option<&Estimate>,
     run: &FilterPass,
 ) -> Result<FilterRun> {
     let started = std::time::Instant::now();
+    let structure: Filtered = structure.into();
     let mut setup = Setup::new(method, record, structure, settings, start)?;
     let n = setup.x0.len();
     let len = setup.view.len();
@@ -758,7 +920,7 @@ pub fn augmented_estimate(
     let mut report = String::from("pass  −ln L  mean ν²/S per output\n");
     let mut last = None;
     for pass_number in 1..=settings.passes {
-        let augmented = Augmented::new(&setup.view, &theta, setup.free.clone())?;
+        let augmented = Augmented::new(setup.view.as_ref(), &theta, setup.free.clone())?;
         let initial = Gaussian {
             mean: augmented.state(setup.x0.as_slice()),
             covariance: setup.prior.clone(),
@@ -792,7 +954,7 @@ pub fn augmented_estimate(
             pass.negative_log_likelihood,
             ratios
                 .iter()
-                .zip(&structure.outputs)
+                .zip(structure.outputs())
                 .map(|(r, o)| format!("{o} {r:.3}"))
                 .collect::<Vec<_>>()
                 .join(", ")
@@ -842,13 +1004,13 @@ pub fn augmented_estimate(
     estimate.notes.push(format!(
         "final noise: R σ {}; process noise intensity on {} {}",
         structure
-            .outputs
+            .outputs()
             .iter()
             .zip(noise.measurement.iter())
             .map(|(o, r)| format!("{o} {:.3e}", r.sqrt()))
             .collect::<Vec<_>>()
             .join(", "),
-        setup.view.state_names().join(", "),
+        setup.state_names.join(", "),
         (0..n)
             .map(|i| format!("{:.3e}", noise.process[(i, i)]))
             .collect::<Vec<_>>()
@@ -865,7 +1027,7 @@ pub fn augmented_estimate(
 /// A diverged filter's estimate: the start values with unknown σ.
 fn diverged(
     method: &str,
-    structure: &ModelStructure,
+    structure: Filtered,
     record: &FlightRecord,
     setup: &Setup,
     start: &[f64],
@@ -874,7 +1036,7 @@ fn diverged(
     let m = setup.names.len();
     Estimate {
         method: method.to_string(),
-        model: structure.name.clone(),
+        model: structure.name().to_string(),
         record: record.scenario.clone(),
         status: Status::Diverged(error.to_string()),
         parameters: (0..m)
@@ -900,7 +1062,7 @@ fn diverged(
 #[allow(clippy::too_many_arguments)]
 fn assemble(
     method: &str,
-    structure: &ModelStructure,
+    structure: Filtered,
     record: &FlightRecord,
     setup: &Setup,
     start: &[f64],
@@ -920,8 +1082,8 @@ fn assemble(
             start: start[j],
         })
         .collect();
-    let fits = structure
-        .outputs
+    let outputs = structure.outputs();
+    let fits = outputs
         .iter()
         .zip(&pass.innovations)
         .map(|(name, innovations)| {
@@ -930,7 +1092,7 @@ fn assemble(
                 .map(|i| {
                     let z = setup.observations.at[i.k]
                         .iter()
-                        .find(|(o, _)| structure.outputs[*o] == *name)
+                        .find(|(o, _)| outputs[*o] == *name)
                         .map_or(f64::NAN, |(_, z)| *z);
                     (z, z - i.value)
                 })
@@ -938,14 +1100,14 @@ fn assemble(
             OutputFit::new(name, &measured, &predicted)
         })
         .collect();
-    let status = status(setup, history, ratios, &structure.outputs);
+    let status = status(setup, history, ratios, outputs);
     let mut notes = setup.notes.clone();
     notes.push(
         "estimate: the filtered parameter states and their covariance at the record's last grid point; fits: the one-step predictions".into(),
     );
     Estimate {
         method: method.to_string(),
-        model: structure.name.clone(),
+        model: structure.name().to_string(),
         record: record.scenario.clone(),
         status,
         parameters,

@@ -55,12 +55,13 @@ use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
 };
+use crate::estimation::methods::linear_equation_error::linear_equation_error;
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
     Reconstruction, ReconstructionOptions, Request, check_channels, reconstruct,
 };
 use crate::estimation::solver::regression::{LagWindow, LeastSquares};
-use crate::estimation::structure::ModelStructure;
+use crate::estimation::structure::{ModelStructure, Structure};
 use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
 use crate::sim::aero::{Coefficient, ForceAxes, ModelKind, Regressor};
@@ -161,7 +162,7 @@ impl Estimator for EquationError {
             title: "equation error: least squares on coefficients reconstructed from accelerations and angular accelerations",
             paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), ch. 5; \"Longitudinal and lateral aerodynamic characterisation of reflex wing UAV from flight tests using ML, LS and neural Gauss Newton methods\"",
             equations: "coefficients from accelerations (reflex-wing UAV paper, Eqs. 17–24); z = Xθ + ε, θ = (XᵀX)⁻¹Xᵀz (Eqs. 25–27); coloured-residual bounds (Morelli & Klein 1997)",
-            needs: "load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude, throttle when the aircraft has thrust; a model linear in its parameters",
+            needs: "load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude, throttle when the aircraft has thrust; a model linear in its parameters; on a linear structure, a channel of every state and input",
             settings: setting_infos(
                 &EquationErrorSettings::default(),
                 &[DIFFERENTIATOR_SETTING, CORRELATION_LAG_SETTING],
@@ -175,12 +176,18 @@ impl Estimator for EquationError {
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         crate::estimation::estimator::one_record(METHOD, problem)?;
-        let options = EquationErrorSettings::read(&problem.settings)?.options();
-        equation_error(
-            problem.record(),
-            problem.structure.six_dof(METHOD)?,
-            &options,
-        )
+        let settings = EquationErrorSettings::read(&problem.settings)?;
+        match &problem.structure {
+            Structure::SixDof(structure) => {
+                equation_error(problem.record(), structure, &settings.options())
+            }
+            Structure::Linear(structure) => linear_equation_error(
+                problem.record(),
+                structure,
+                &settings.differentiator,
+                settings.correlation_lag,
+            ),
+        }
     }
 }
 
@@ -226,12 +233,12 @@ impl Plan {
 /// The regression result of one coefficient.
 pub(crate) struct CoefficientResult {
     /// Parameter indices (structure order) with value, corrected and white standard error.
-    parameters: Vec<(usize, f64, f64, f64)>,
-    covariance: DMatrix<f64>,
-    fit: OutputFit,
-    problem: Option<String>,
+    pub(crate) parameters: Vec<(usize, f64, f64, f64)>,
+    pub(crate) covariance: DMatrix<f64>,
+    pub(crate) fit: OutputFit,
+    pub(crate) problem: Option<String>,
     /// Set when the Bartlett lag window replaced the plain truncated sum.
-    window_note: Option<String>,
+    pub(crate) window_note: Option<String>,
 }
 
 /// Estimates the free parameters of `structure` from `record` by equation
@@ -545,25 +552,36 @@ pub(crate) fn assemble(
     results: &[CoefficientResult],
 ) -> Estimate {
     let aero = &structure.aircraft.aero;
-    let (names, starts) = (aero.parameters.names(), aero.parameters.values());
+    let parameters = (aero.parameters.names(), aero.parameters.values());
+    assemble_named(record, &structure.name, parameters, method, results)
+}
+
+/// [`assemble`] for a model named `model` whose parameters have `names`
+/// and start values `starts`.
+pub(crate) fn assemble_named(
+    record: &FlightRecord,
+    model: &str,
+    (names, starts): (&[String], &[f64]),
+    method: &str,
+    results: &[CoefficientResult],
+) -> Estimate {
     let mut entries: Vec<(usize, f64, f64)> = results
         .iter()
         .flat_map(|r| r.parameters.iter().map(|&(i, v, se, _)| (i, v, se)))
         .collect();
     entries.sort_by_key(|e| e.0);
-    let position = |index: usize| entries.iter().position(|e| e.0 == index).unwrap_or(0);
-    let mut covariance = vec![vec![0.0; entries.len()]; entries.len()];
-    for result in results {
-        for (a, &(i, ..)) in result.parameters.iter().enumerate() {
-            for (b, &(j, ..)) in result.parameters.iter().enumerate() {
-                covariance[position(i)][position(j)] = result.covariance[(a, b)];
-            }
-        }
-    }
+    let order: Vec<usize> = entries.iter().map(|e| e.0).collect();
+    let covariance = block_covariance(
+        results.iter().map(|r| {
+            let indices: Vec<usize> = r.parameters.iter().map(|p| p.0).collect();
+            (indices, &r.covariance)
+        }),
+        &order,
+    );
     let problems: Vec<String> = results.iter().filter_map(|r| r.problem.clone()).collect();
     Estimate {
         method: method.to_string(),
-        model: structure.name.clone(),
+        model: model.to_string(),
         record: record_name(record),
         status: if problems.is_empty() {
             Status::Converged
@@ -587,6 +605,26 @@ pub(crate) fn assemble(
         notes: Vec::new(),
         details: String::new(),
     }
+}
+
+/// The covariance of separately fitted regressions: each block the
+/// covariance of the parameters it lists (indices into the structure's),
+/// rows and columns in `order` (every listed index once), zero between
+/// blocks.
+pub(crate) fn block_covariance<'a>(
+    blocks: impl Iterator<Item = (Vec<usize>, &'a DMatrix<f64>)>,
+    order: &[usize],
+) -> Vec<Vec<f64>> {
+    let position = |index: usize| order.iter().position(|&i| i == index).unwrap_or(0);
+    let mut covariance = vec![vec![0.0; order.len()]; order.len()];
+    for (indices, block) in blocks {
+        for (a, &i) in indices.iter().enumerate() {
+            for (b, &j) in indices.iter().enumerate() {
+                covariance[position(i)][position(j)] = block[(a, b)];
+            }
+        }
+    }
+    covariance
 }
 
 /// A record's name for estimates: its scenario, else its profile.
@@ -627,7 +665,14 @@ pub(crate) fn white_bound_notes(
     structure: &ModelStructure,
     results: &[CoefficientResult],
 ) -> Vec<String> {
-    let names = structure.aircraft.aero.parameters.names();
+    white_bound_notes_named(structure.aircraft.aero.parameters.names(), results)
+}
+
+/// [`white_bound_notes`] for parameters of `names`.
+pub(crate) fn white_bound_notes_named(
+    names: &[String],
+    results: &[CoefficientResult],
+) -> Vec<String> {
     let items: Vec<String> = results
         .iter()
         .flat_map(|r| r.parameters.iter())

@@ -91,7 +91,8 @@
 use crate::error::{Error, Result};
 use crate::estimation::estimate::{Estimate, OutputFit, Status};
 use crate::estimation::estimator::{
-    Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
+    Estimator, MethodInfo, MissingChannel, Refusal, Settings, merge_settings, parse_settings,
+    setting_infos,
 };
 use crate::estimation::linear_structure::LinearStructure;
 use crate::estimation::methods::equation_error::{
@@ -811,24 +812,14 @@ pub fn filter_error_from(
     regression: Option<&Estimate>,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(
+    let free = free_parameters(
         METHOD,
+        record,
         output_error::missing_channels(record, structure),
-        present,
-    ) {
-        return Err(Error::Refused(refusal));
-    }
+        &structure.name,
+        &structure.free,
+    )?;
     output_error::unsuitable(METHOD, structure)?;
-    let free: Vec<usize> = (0..structure.free.len())
-        .filter(|&i| structure.free[i])
-        .collect();
-    if free.is_empty() {
-        return Err(Error::Refused(Refusal::NothingToEstimate {
-            method: METHOD.to_string(),
-            model: structure.name.clone(),
-        }));
-    }
     let (view, initial) = DrivenStateSpace::for_record(
         record,
         structure,
@@ -840,15 +831,7 @@ pub fn filter_error_from(
     let step = view.time(1) - view.time(0);
     let observations =
         Observations::from_record(record, &structure.outputs, view.time(0), step, view.len())?;
-    let data: usize = observations.counts().iter().sum();
-    let unknowns = free.len() + noisy.len();
-    if data < unknowns {
-        return Err(Error::Refused(Refusal::TooFewData {
-            method: METHOD.to_string(),
-            data,
-            unknowns,
-        }));
-    }
+    enough_data(METHOD, &observations, free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
     let file = view.parameters();
     let mut fit = FilterErrorFit::new(
@@ -927,19 +910,13 @@ pub(crate) fn linear_fit(
     options: &LinearFitOptions,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(method, structure.missing_channels(record), present) {
-        return Err(Error::Refused(refusal));
-    }
-    let free: Vec<usize> = (0..structure.free.len())
-        .filter(|&i| structure.free[i])
-        .collect();
-    if free.is_empty() {
-        return Err(Error::Refused(Refusal::NothingToEstimate {
-            method: method.to_string(),
-            model: structure.name.clone(),
-        }));
-    }
+    let free = free_parameters(
+        method,
+        record,
+        structure.missing_channels(record),
+        &structure.name,
+        &structure.free,
+    )?;
     let noisy: Vec<usize> = options
         .process_noise
         .iter()
@@ -957,15 +934,7 @@ pub(crate) fn linear_fit(
     let step = model.time(1) - model.time(0);
     let observations =
         Observations::from_record(record, &structure.outputs, model.time(0), step, model.len())?;
-    let data: usize = observations.counts().iter().sum();
-    let unknowns = free.len() + noisy.len();
-    if data < unknowns {
-        return Err(Error::Refused(Refusal::TooFewData {
-            method: method.to_string(),
-            data,
-            unknowns,
-        }));
-    }
+    enough_data(method, &observations, free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
     notes.push(format!(
         "linear model, inputs {} between grid points, started from the model file's values",
@@ -1006,6 +975,47 @@ pub(crate) fn linear_fit(
         notes,
         started.elapsed().as_secs_f64(),
     ))
+}
+
+/// The free parameters' indices (`free` per parameter of model `model`),
+/// or the refusal of `method`: channels `missing` from the record, or
+/// nothing to estimate.
+pub(crate) fn free_parameters(
+    method: &str,
+    record: &FlightRecord,
+    missing: Vec<MissingChannel>,
+    model: &str,
+    free: &[bool],
+) -> Result<Vec<usize>> {
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    if let Some(refusal) = Refusal::missing(method, missing, present) {
+        return Err(Error::Refused(refusal));
+    }
+    let free: Vec<usize> = (0..free.len()).filter(|&i| free[i]).collect();
+    if free.is_empty() {
+        return Err(Error::Refused(Refusal::NothingToEstimate {
+            method: method.to_string(),
+            model: model.to_string(),
+        }));
+    }
+    Ok(free)
+}
+
+/// The refusal of `method` when `observations` hold fewer data than `unknowns`.
+pub(crate) fn enough_data(
+    method: &str,
+    observations: &Observations,
+    unknowns: usize,
+) -> Result<()> {
+    let data: usize = observations.counts().iter().sum();
+    if data < unknowns {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: method.to_string(),
+            data,
+            unknowns,
+        }));
+    }
+    Ok(())
 }
 
 /// Equation error's estimates as a start (the free parameters, within

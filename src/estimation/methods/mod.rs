@@ -10,6 +10,7 @@ pub mod equation_error;
 pub mod filter_error;
 pub mod frequency_output_error;
 pub mod frequency_regression;
+pub mod linear_equation_error;
 pub mod output_error;
 pub mod smoothed_regression;
 pub mod stepwise;

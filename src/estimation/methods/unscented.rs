@@ -123,7 +123,7 @@ impl Estimator for UnscentedFilter {
             title: "unscented Kalman filter with the parameters as augmented states, pseudonoise, Fourier R and residual-correlation tuning",
             paper: "Wan & van der Merwe, \"The unscented Kalman filter for nonlinear estimation\", IEEE AS-SPCC 2000; Julier & Uhlmann, SPIE 3068, 1997; the X-31/F-18 HARV EKF note",
             equations: "scaled sigma points (Wan & van der Merwe Eq. 15), the UKF with additive noise (Table 3); augmented state and noise tuning as the EKF's (note Eqs. 1–3, Mehra 1970)",
-            needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
+            needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls); on a linear structure, its input and output channels",
             settings,
         }
     }
@@ -142,7 +142,7 @@ impl Estimator for UnscentedFilter {
         let run = augmented_estimate(
             METHOD,
             problem.record(),
-            problem.structure.six_dof(METHOD)?,
+            &problem.structure,
             &settings,
             start,
             &|model, initial, noise, observations| {
