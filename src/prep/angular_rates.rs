@@ -183,20 +183,7 @@ pub fn kinematic_rates(
             best
         }
     });
-    let start = derivatives
-        .iter()
-        .map(|d| d.times[0])
-        .fold(f64::MIN, f64::max);
-    let end = derivatives
-        .iter()
-        .map(|d| d.times[d.times.len() - 1])
-        .fold(f64::MAX, f64::min);
-    let times: Vec<f64> = derivatives[reference]
-        .times
-        .iter()
-        .copied()
-        .filter(|t| (start..=end).contains(t))
-        .collect();
+    let times = crate::record::shared_instants(&derivatives.iter().collect::<Vec<_>>(), reference);
     if times.is_empty() {
         return Err(Error::Other(
             "angular rates: the derivatives of pitch, roll and yaw share no time span".to_string(),

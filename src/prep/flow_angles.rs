@@ -266,17 +266,7 @@ pub fn geometric_flow_angles(record: &FlightRecord, wind: Wind) -> Result<Geomet
             best
         }
     });
-    let start = channels.iter().map(|c| c.times[0]).fold(f64::MIN, f64::max);
-    let end = channels
-        .iter()
-        .map(|c| c.times[c.times.len() - 1])
-        .fold(f64::MAX, f64::min);
-    let times: Vec<f64> = channels[reference]
-        .times
-        .iter()
-        .copied()
-        .filter(|t| (start..=end).contains(t))
-        .collect();
+    let times = crate::record::shared_instants(&channels, reference);
     if times.is_empty() {
         return Err(Error::Other(format!(
             "geometric angle of attack and sideslip: the channels {} share no time span",

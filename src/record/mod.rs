@@ -604,6 +604,26 @@ pub fn put_channel(record: &mut FlightRecord, channel: Channel) {
     }
 }
 
+/// The sample instants of `channels[reference]` inside the span that every
+/// one of `channels` covers (from the latest first sample to the earliest
+/// last one); empty when they share none or a channel has no sample.
+pub fn shared_instants(channels: &[&Channel], reference: usize) -> Vec<f64> {
+    if channels.iter().any(|c| c.times.is_empty()) {
+        return Vec::new();
+    }
+    let start = channels.iter().map(|c| c.times[0]).fold(f64::MIN, f64::max);
+    let end = channels
+        .iter()
+        .map(|c| c.times[c.times.len() - 1])
+        .fold(f64::MAX, f64::min);
+    channels[reference]
+        .times
+        .iter()
+        .copied()
+        .filter(|t| (start..=end).contains(t))
+        .collect()
+}
+
 /// Removes 2π jumps so that an angle varies continuously: each value is
 /// shifted by the whole turns that bring it within π of the valid value
 /// before it. Dropouts (NaN) are skipped.
