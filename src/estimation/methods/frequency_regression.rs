@@ -935,7 +935,7 @@ pub fn linear_frequency_regression(
         } else {
             columns[n + m + row].clone()
         };
-        let matrices = structure.matrices.clone();
+        let matrices = &structure.matrices;
         let fixed = |matrix: Matrix, j: usize| -> f64 {
             match matrix {
                 Matrix::A => matrices.a[(row, j)],
