@@ -833,7 +833,7 @@ fn fly_737(
 /// [`SCORED`]. Prints the table docs/jsbsim.md quotes (`-- --nocapture`).
 #[test]
 fn estimators_recover_the_737_derivatives_from_flight_test_data() {
-    use aeroid::estimation::structure::ModelStructure;
+    use aeroid::estimation::structure::{ModelStructure, Structure};
     println!(
         "{:<9} {:<12} {:>10} {:>10} {:>9} {:>9} {:>7}",
         "parameter", "method", "estimate", "JSBSim", "rel.err", "σ", "err/σ"
@@ -845,13 +845,14 @@ fn estimators_recover_the_737_derivatives_from_flight_test_data() {
     ] {
         let (noisy, clean, truth) = fly_737(scenario_name);
         let structure = ModelStructure::load(model).unwrap();
+        let kinds = Structure::from(structure.clone());
         for (method, record, label) in [
             ("oem", &clean, "oem no noise"),
             ("oem", &noisy, "oem"),
             ("ee", &noisy, "ee"),
         ] {
             let aeroid::eval::run::Outcome::Estimated { estimate, scores } =
-                aeroid::eval::run::estimate_scored(method, record, &truth, &structure, &[], None)
+                aeroid::eval::run::estimate_scored(method, record, &truth, &kinds, &[], None)
             else {
                 panic!("{label} on {scenario_name}: no estimate");
             };
