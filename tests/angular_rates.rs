@@ -2,6 +2,8 @@
 //! against the simulator's true p, q, r, and what an estimator loses when
 //! it reads them instead of rate gyros.
 
+mod common;
+
 use aeroid::estimation::estimate::Status;
 use aeroid::estimation::estimator::RefusalKind;
 use aeroid::estimation::structure::Structure;
@@ -10,10 +12,11 @@ use aeroid::prep::angular_rates::{KinematicRates, kinematic_rates};
 use aeroid::prep::derive::{Options, RatesChoice, derive};
 use aeroid::prep::differentiation::Differentiator;
 use aeroid::record::FlightRecord;
-use aeroid::record::recorder::{Profile, interpolate};
+use aeroid::record::recorder::Profile;
 use aeroid::sim::scenario::Scenario;
 use aeroid::sim::trace::TruthTrace;
 use aeroid::units::DEG;
+use common::truth_at;
 
 fn approach(gusty: bool) -> Scenario {
     let mut scenario = Scenario::load("transport-approach").unwrap();
@@ -25,21 +28,7 @@ fn approach(gusty: bool) -> Scenario {
 }
 
 fn record(scenario: &Scenario, profile: &str) -> (FlightRecord, TruthTrace) {
-    let (trace, _) = aeroid::sim::fly(scenario).unwrap();
-    let record = Profile::load(profile, None)
-        .unwrap()
-        .record(&trace, &scenario.aircraft, scenario.seed)
-        .unwrap();
-    (record, trace)
-}
-
-fn truth_at(trace: &TruthTrace, name: &str, times: &[f64]) -> Vec<f64> {
-    let grid: Vec<f64> = trace.samples.iter().map(|s| s.time).collect();
-    let values = trace.values(name).unwrap();
-    times
-        .iter()
-        .map(|&t| interpolate(&grid, &values, t))
-        .collect()
+    common::fly_and_record(scenario, &Profile::load(profile, None).unwrap())
 }
 
 fn rms(values: &[f64]) -> f64 {

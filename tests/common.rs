@@ -37,3 +37,26 @@ pub fn import_case(
     let map = write(&folder, "map.toml", map);
     aeroid::record::import::import(&data, &map)
 }
+
+/// Flies `scenario` and records it with `profile` (its recorder draws from
+/// the scenario's seed): the record and the truth trace.
+pub fn fly_and_record(
+    scenario: &aeroid::sim::scenario::Scenario,
+    profile: &aeroid::record::recorder::Profile,
+) -> (aeroid::record::FlightRecord, aeroid::sim::trace::TruthTrace) {
+    let (trace, _) = aeroid::sim::fly(scenario).unwrap();
+    let record = profile
+        .record(&trace, &scenario.aircraft, scenario.seed)
+        .unwrap();
+    (record, trace)
+}
+
+/// The truth column `name` at `times`, interpolated linearly.
+pub fn truth_at(trace: &aeroid::sim::trace::TruthTrace, name: &str, times: &[f64]) -> Vec<f64> {
+    let grid: Vec<f64> = trace.samples.iter().map(|s| s.time).collect();
+    let values = trace.values(name).unwrap();
+    times
+        .iter()
+        .map(|&t| aeroid::record::recorder::interpolate(&grid, &values, t))
+        .collect()
+}

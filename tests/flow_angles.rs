@@ -1,15 +1,18 @@
 //! Geometric angle of attack and sideslip (src/prep/flow_angles.rs, Wang et
 //! al. 2012 Eqs. 1–6) against the simulator's true α and β.
 
+mod common;
+
 use aeroid::prep::flow_angles::{
     GeometricFlowAngles, Wind, geometric_flow_angles, resolution_error,
 };
-use aeroid::record::recorder::{Profile, interpolate};
+use aeroid::record::recorder::Profile;
 use aeroid::record::{Channel, FlightRecord};
 use aeroid::sim::scenario::Scenario;
 use aeroid::sim::state::ned_to_body;
 use aeroid::sim::trace::TruthTrace;
 use aeroid::units::DEG;
+use common::{fly_and_record as record, truth_at};
 use nalgebra::Vector3;
 
 /// The transport approach, optionally without gusts and turbulence (its
@@ -21,24 +24,6 @@ fn approach(gusty: bool) -> Scenario {
         scenario.wind.turbulence = None;
     }
     scenario
-}
-
-fn record(scenario: &Scenario, profile: &Profile) -> (FlightRecord, TruthTrace) {
-    let (trace, _) = aeroid::sim::fly(scenario).unwrap();
-    let record = profile
-        .record(&trace, &scenario.aircraft, scenario.seed)
-        .unwrap();
-    (record, trace)
-}
-
-/// The truth column `name` at `times`.
-fn truth_at(trace: &TruthTrace, name: &str, times: &[f64]) -> Vec<f64> {
-    let grid: Vec<f64> = trace.samples.iter().map(|s| s.time).collect();
-    let values = trace.values(name).unwrap();
-    times
-        .iter()
-        .map(|&t| interpolate(&grid, &values, t))
-        .collect()
 }
 
 fn rms(values: &[f64]) -> f64 {
