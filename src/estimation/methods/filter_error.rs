@@ -842,12 +842,12 @@ pub fn filter_error_from(
         free.clone(),
         noisy.clone(),
     )?;
-    let mut solver = Options::new(free.len());
-    solver.max_iterations = options.max_iterations;
-    solver.decrease_tolerance = Some(CONVERGED_DECREASE);
-    for (j, &i) in free.iter().enumerate() {
-        solver.bounds[j] = structure.bounds[i];
-    }
+    let solver = Options::maximum_likelihood(
+        &free,
+        &structure.bounds,
+        options.max_iterations,
+        CONVERGED_DECREASE,
+    );
     let regression = match options.start {
         Start::EquationError => regression_start(record, structure, regression, &file, &mut notes),
         Start::Model => None,
@@ -952,11 +952,13 @@ pub(crate) fn linear_fit(
         free.clone(),
         noisy.clone(),
     )?;
-    let mut solver = Options::new(free.len());
-    solver.max_iterations = options.max_iterations;
-    solver.decrease_tolerance = Some(CONVERGED_DECREASE);
+    let mut solver = Options::maximum_likelihood(
+        &free,
+        &structure.bounds,
+        options.max_iterations,
+        CONVERGED_DECREASE,
+    );
     for (j, &i) in free.iter().enumerate() {
-        solver.bounds[j] = structure.bounds[i];
         solver.typical[j] = 1e-3_f64.max(1e-2 * theta[i].abs());
     }
     let result = fit.fit(&theta, solver)?;

@@ -172,6 +172,25 @@ impl Options {
         }
     }
 
+    /// The settings of a maximum-likelihood fit of the parameters `free`
+    /// (indices into `bounds`, the model's bounds of every parameter): at
+    /// most `max_iterations`, each free parameter within its bounds, and
+    /// converged at a predicted decrease of `decrease`
+    /// ([`Options::decrease_tolerance`]).
+    pub fn maximum_likelihood(
+        free: &[usize],
+        bounds: &[(f64, f64)],
+        max_iterations: usize,
+        decrease: f64,
+    ) -> Self {
+        Options {
+            max_iterations,
+            decrease_tolerance: Some(decrease),
+            bounds: free.iter().map(|&i| bounds[i]).collect(),
+            ..Options::new(free.len())
+        }
+    }
+
     fn project(&self, theta: &mut DVector<f64>) {
         for (value, (low, high)) in theta.iter_mut().zip(&self.bounds) {
             *value = value.clamp(*low, *high);
