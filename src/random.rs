@@ -14,6 +14,8 @@ pub mod streams {
     pub const RECORDER: u64 = 2;
     /// Process noise of a linear model's flight.
     pub const PROCESS_NOISE: u64 = 3;
+    /// Random input weights and biases of a neural estimator's network.
+    pub const NETWORK_WEIGHTS: u64 = 4;
 }
 
 /// The generator for `stream` of `seed`.

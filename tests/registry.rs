@@ -98,6 +98,8 @@ impl Estimator for StartValues {
             wall_time: 0.0,
             notes: Vec::new(),
             details: String::new(),
+            network: None,
+            distributions: Vec::new(),
         })
     }
 }

@@ -133,6 +133,30 @@ pub struct Estimate {
     /// coefficient's search); empty when the method has none.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub details: String,
+    /// The network a neural method trained: its size, seed, MSE and R².
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub network: Option<crate::estimation::neural::NetworkReport>,
+    /// Per parameter, the distribution of its local values over the
+    /// record, for methods that estimate a derivative at every sample
+    /// (the Delta method); empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub distributions: Vec<ParameterDistribution>,
+}
+
+/// The spread of a parameter estimated at every sample of a record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParameterDistribution {
+    pub name: String,
+    pub samples: usize,
+    pub mean: f64,
+    pub standard_deviation: f64,
+    /// The 5th, 50th and 95th percentiles.
+    pub p05: f64,
+    pub median: f64,
+    pub p95: f64,
+    /// The value at the trim point (the record's first sample or the
+    /// method's stated reference condition).
+    pub at_trim: f64,
 }
 
 impl Estimate {
@@ -168,6 +192,8 @@ impl Estimate {
             wall_time: 0.0,
             notes: Vec::new(),
             details: String::new(),
+            network: None,
+            distributions: Vec::new(),
         }
     }
 
@@ -334,6 +360,8 @@ mod tests {
             wall_time: 0.0,
             notes: Vec::new(),
             details: String::new(),
+            network: None,
+            distributions: Vec::new(),
         }
     }
 

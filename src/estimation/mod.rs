@@ -11,6 +11,7 @@ pub mod estimator;
 pub mod linear_structure;
 pub mod methods;
 pub mod model;
+pub mod neural;
 pub mod plugin;
 pub mod problem;
 pub mod reconstruction;

@@ -502,6 +502,8 @@ impl Plugin {
             wall_time: 0.0,
             notes: written.notes,
             details: String::new(),
+            network: None,
+            distributions: Vec::new(),
         })
     }
 }

@@ -157,6 +157,8 @@ mod tests {
             covariance: vec![],
             fits: vec![],
             details: String::new(),
+            network: None,
+            distributions: Vec::new(),
             iterations: 3,
             cost_history: vec![],
             wall_time: 0.0,

@@ -1054,6 +1054,8 @@ fn diverged(
         wall_time: 0.0,
         notes: setup.notes.clone(),
         details: String::new(),
+        network: None,
+        distributions: Vec::new(),
     }
 }
 
@@ -1120,6 +1122,8 @@ fn assemble(
         wall_time: 0.0,
         notes,
         details: String::new(),
+        network: None,
+        distributions: Vec::new(),
     }
 }
 

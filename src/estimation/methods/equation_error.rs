@@ -604,6 +604,8 @@ pub(crate) fn assemble_named(
         wall_time: 0.0,
         notes: Vec::new(),
         details: String::new(),
+        network: None,
+        distributions: Vec::new(),
     }
 }
 

@@ -1062,6 +1062,8 @@ pub fn linear_frequency_regression(
             }
         )],
         details: String::new(),
+        network: None,
+        distributions: Vec::new(),
     };
     Ok(estimate.assess())
 }

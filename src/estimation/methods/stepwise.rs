@@ -838,6 +838,8 @@ impl StepwiseReport {
                 ])
                 .collect(),
             details: String::new(),
+            network: None,
+            distributions: Vec::new(),
         }
     }
 }
