@@ -393,3 +393,152 @@ fn turbulence_input_and_resolution_axes() {
         assert!(message.contains(field), "{field}: {message}");
     }
 }
+
+/// The profile axis: `[sweep] profile` lists recorder profiles in place of
+/// the study's `profile`; points are scenario × profile × the other axes;
+/// each case is recorded by its point's profile (the ideal recorder gives
+/// noise-free data, so equation error's bounds there are far below the
+/// 25 Hz flight-test profile's), and every row and summary row names it.
+/// Both `profile` and the list, neither, or a profile that does not load
+/// are refused under the field to mend.
+#[test]
+fn profile_axis() {
+    let text = SMALL
+        .replace("profile = \"flight-test-25hz\"\n", "")
+        .replace(
+            "noise_scale = [0.5, 2.0]",
+            "profile = [\"ideal\", \"flight-test-25hz\"]\nnoise_scale = [1.0, 2.0]",
+        );
+    let study = Study::load(study_file("mc-profiles", &text).to_str().unwrap()).unwrap();
+    let grid: Vec<(&str, f64)> = study
+        .points
+        .iter()
+        .map(|p| (p.recorder.as_str(), p.noise_scale))
+        .collect();
+    assert_eq!(
+        grid,
+        [
+            ("ideal", 1.0),
+            ("ideal", 2.0),
+            ("flight-test-25hz", 1.0),
+            ("flight-test-25hz", 2.0)
+        ]
+    );
+    assert!(
+        study
+            .point_label(2)
+            .contains("recorded by flight-test-25hz")
+    );
+    let sigma = |point: usize| {
+        let rows = study.run_case(aeroid::eval::study::Case { point, run: 0 });
+        let row = rows
+            .iter()
+            .find(|r| r.parameter == "Cl_da")
+            .unwrap()
+            .clone();
+        assert_eq!(row.profile, study.points[point].recorder);
+        row.standard_error
+    };
+    let (ideal, flight_test) = (sigma(0), sigma(2));
+    assert!(
+        ideal < 0.1 * flight_test,
+        "ideal σ {ideal:.3e} vs flight-test σ {flight_test:.3e}"
+    );
+    let result = run(&study, 2);
+    assert!(
+        result
+            .summary
+            .iter()
+            .all(|s| s.profile == study.points[s.point].recorder)
+    );
+
+    let both = text.replace("models =", "profile = \"ideal\"\nmodels =");
+    let neither = SMALL.replace("profile = \"flight-test-25hz\"\n", "");
+    let missing = text.replace("\"flight-test-25hz\"]", "\"no-such-profile\"]");
+    for (name, text, field) in [
+        ("mc-profiles-both", both, "sweep.profile:"),
+        ("mc-profiles-neither", neither, "profile:"),
+        ("mc-profiles-missing", missing, "sweep.profile[1]"),
+    ] {
+        let message = Study::load(study_file(name, &text).to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains(field), "{name}: {message}");
+    }
+}
+
+/// The missing-channel, per-channel rate and settings axes: points are
+/// missing × channel rates × … × settings; a point without β is recorded
+/// without it (equation error refuses, naming β), a point's own channel
+/// rate reaches its profile, and settings variants fit the same flight and
+/// noise draw (equal seeds) with their settings applied (a longer
+/// correlation lag changes the coloured-residual bound, not the estimate).
+/// A channel the profile lacks and a setting the method lacks are refused
+/// under their field.
+#[test]
+fn missing_channel_rate_and_settings_axes() {
+    let axes = "missing = [[], [\"beta\"]]\nchannel_rate = [{}, { ny = \"5 Hz\" }]\nsettings = [{}, { ee = { correlation_lag = 6.0 } }]";
+    let text = SMALL.replace("noise_scale = [0.5, 2.0]", axes);
+    let study = Study::load(study_file("mc-axes-more", &text).to_str().unwrap()).unwrap();
+    assert_eq!(study.points.len(), 8);
+    let ny_rate = |point: usize| {
+        let profile = &study.points[point].profile;
+        profile
+            .channels
+            .iter()
+            .find(|c| c.measurand.name == "ny")
+            .unwrap()
+            .rate
+    };
+    assert_eq!(ny_rate(0), 25.0);
+    assert_eq!(ny_rate(2), 5.0);
+    assert!(study.points[4].missing == ["beta"]);
+    assert_eq!(
+        (
+            study.points[0].recording,
+            study.points[1].recording,
+            study.points[2].recording
+        ),
+        (0, 0, 1)
+    );
+    let rows = |point: usize| study.run_case(aeroid::eval::study::Case { point, run: 0 });
+    let (plain, longer) = (rows(0), rows(1));
+    let row = |rows: &[Row]| {
+        rows.iter()
+            .find(|r| r.parameter == "Cl_da")
+            .unwrap()
+            .clone()
+    };
+    let (a, b) = (row(&plain), row(&longer));
+    assert_eq!(
+        (a.turbulence_seed, a.recorder_seed),
+        (b.turbulence_seed, b.recorder_seed)
+    );
+    assert_eq!(a.estimate, b.estimate);
+    assert_ne!(a.standard_error, b.standard_error);
+    assert_eq!(b.settings, "ee.correlation_lag=6.0");
+    assert_eq!(row(&rows(2)).channel_rates, "ny:5 Hz");
+    let without_beta = rows(4);
+    assert_eq!(without_beta[0].status, "refused", "{without_beta:?}");
+    assert!(
+        without_beta[0].reason.contains("beta"),
+        "{}",
+        without_beta[0].reason
+    );
+    assert_eq!(without_beta[0].missing, "beta");
+
+    let bad = SMALL.replace(
+        "noise_scale = [0.5, 2.0]",
+        "missing = [[\"no_such_channel\"]]\nchannel_rate = [{ alpha = \"0 Hz\" }]\nsettings = [{ ee = { no_such_setting = 1 } }]",
+    );
+    let message = Study::load(study_file("mc-axes-more-bad", &bad).to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    for field in [
+        "sweep.missing[0]",
+        "sweep.channel_rate[0].alpha",
+        "sweep.settings[0].methods.ee",
+    ] {
+        assert!(message.contains(field), "{field}: {message}");
+    }
+}

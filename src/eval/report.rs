@@ -107,7 +107,7 @@ fn plot_error(error: impl std::fmt::Display) -> Error {
     Error::Other(format!("drawing a plot: {error}"))
 }
 
-/// A series key: method, scenario, noise scale.
+/// A series key: method, scenario with its recorder profile, noise scale.
 type SeriesKey = (String, String, String);
 
 /// The error-against-sweep plot of one model's parameter.
@@ -121,7 +121,7 @@ pub fn error_plot(model: &str, parameter: &str, summary: &[&SummaryRow]) -> Resu
         }
         let key = (
             s.method.clone(),
-            s.scenario.clone(),
+            format!("{} ({})", s.scenario, s.profile),
             format!("noise×{}", s.noise_scale),
         );
         let band = if s.mean_crb.is_finite() {
@@ -403,6 +403,7 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
     for header in [
         "point",
         "scenario",
+        "profile",
         "rate (Hz)",
         "noise×",
         "model",
@@ -423,9 +424,10 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
     for s in &result.summary {
         let _ = writeln!(
             page,
-            "<tr><td>{}</td><td class=\"text\">{}</td><td>{}</td><td>{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td>{:.5}</td><td>{:.5}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.0} %</td><td>{:.3e}</td><td>{}/{}</td><td>{:.0} %</td><td>{:.3}</td><td>{:.0} % {}</td><td class=\"text\">{}</td></tr>",
+            "<tr><td>{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td>{}</td><td>{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td class=\"text\">{}</td><td>{:.5}</td><td>{:.5}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.0} %</td><td>{:.3e}</td><td>{}/{}</td><td>{:.0} %</td><td>{:.3}</td><td>{:.0} % {}</td><td class=\"text\">{}</td></tr>",
             s.point,
             escape(&s.scenario),
+            escape(&s.profile),
             s.sample_rate.map_or("profile".into(), |r| r.to_string()),
             s.noise_scale,
             escape(&s.model),

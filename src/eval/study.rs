@@ -8,23 +8,30 @@
 //! name = "attas-lateral-acceptance"
 //! description = "..."
 //! scenarios = ["attas-lateral-multistep"]   # manoeuvres (bundled names or paths relative to this file)
-//! profile = "flight-test-25hz"              # recorder profile
+//! profile = "flight-test-25hz"              # recorder profile (or several: [sweep] profile)
 //! models = ["attas-lateral"]                # model structures fitted to every record
 //! methods = ["oem", "ee"]                   # ee, swr, oem (as `aeroid run`)
 //! runs = 100                                # runs per sweep point
 //! seed = 4                                  # study seed
 //! [sweep]                                   # optional axes; each defaults to the files as they are
+//! profile = ["ideal", "flight-test-25hz"]   # recorder profiles, instead of `profile` above
 //! turbulence = ["none", "moderate"]         # Dryden turbulence replacing the scenarios'
 //! input_scale = [0.5, 1.0]                  # every input's deviation from trim times this
 //! sample_rate = ["10 Hz", "25 Hz"]          # every channel of the profile at this rate
 //! noise_scale = [0.5, 1.0, 2.0]             # every channel's noise σ times this
 //! resolution_scale = [1.0, 4.0]             # every quantized channel's LSB times this
+//! missing = [[], ["alpha"]]                 # channels left out of the record
+//! channel_rate = [{ alpha = "2 Hz" }]       # channels at their own rate
+//! settings = [{}, { oem = { max_iterations = 3 } }]  # method settings variants
 //! ```
 //!
-//! Sweep points are the product scenario × turbulence × input scale ×
-//! sample rate × noise scale × resolution scale, in that order (the last
-//! varies fastest). A case is one run at one point; it
-//! is keyed by the stream `point·2³² + run` of the study seed (one
+//! Sweep points are the product scenario × profile × missing channels ×
+//! channel rates × turbulence × input scale × sample rate × noise scale ×
+//! resolution scale × settings, in that order (the last varies fastest).
+//! A case is one run at one point; it is keyed by the stream
+//! `recording·2³² + run` of the study seed, the recording being the point
+//! without its settings variant, so that settings are compared on the
+//! same flights (without a settings axis it is the point) (one
 //! ChaCha8 generator per case, [`random::stream`]), from which it draws two
 //! seeds: the turbulence seed (replacing the scenario's `seed`) and the
 //! recorder-noise seed. A case's numbers therefore depend on nothing but the
@@ -74,7 +81,9 @@ pub struct StudyFile {
     #[serde(default)]
     pub description: String,
     pub scenarios: Vec<String>,
-    pub profile: String,
+    /// The recorder profile; absent when `[sweep] profile` lists several.
+    #[serde(default)]
+    pub profile: Option<String>,
     pub models: Vec<String>,
     pub methods: StudyMethods,
     pub runs: usize,
@@ -156,6 +165,9 @@ impl StudyMethods {
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepSpec {
+    /// Recorder profiles (bundled names or paths), in place of the study's `profile`.
+    #[serde(default)]
+    pub profile: Vec<String>,
     /// Dryden turbulence: `none`, `light`, `moderate`, `severe`.
     #[serde(default)]
     pub turbulence: Vec<String>,
@@ -169,6 +181,16 @@ pub struct SweepSpec {
     /// Every quantized channel's resolution (LSB) times this.
     #[serde(default)]
     pub resolution_scale: Vec<f64>,
+    /// Channels left out of the record: each entry a list of channel names.
+    #[serde(default)]
+    pub missing: Vec<Vec<String>>,
+    /// Per-channel sample rates: each entry a table channel → frequency.
+    #[serde(default)]
+    pub channel_rate: Vec<BTreeMap<String, Quantity>>,
+    /// Method settings: each entry `{ NAME = { key = value } }`, over the
+    /// study's `[methods.NAME]` tables.
+    #[serde(default)]
+    pub settings: Vec<MethodTables>,
 }
 
 /// One point of the sweep grid: a scenario and the profile modified for it.
@@ -176,6 +198,9 @@ pub struct SweepSpec {
 pub struct SweepPoint {
     /// Index into [`Study::scenarios`].
     pub scenario: usize,
+    /// The recorder profile's name as the study names it (before the sweep
+    /// modifies its rates, noise or resolution).
+    pub recorder: String,
     /// The turbulence intensity, or None for the scenario's own wind.
     pub turbulence: Option<String>,
     pub input_scale: f64,
@@ -183,6 +208,16 @@ pub struct SweepPoint {
     pub sample_rate: Option<f64>,
     pub noise_scale: f64,
     pub resolution_scale: f64,
+    /// Channels left out of the record.
+    pub missing: Vec<String>,
+    /// Channels sampled at their own rate (Hz), after `sample_rate`.
+    pub channel_rates: Vec<(String, f64)>,
+    /// Index into [`Study::setting_variants`].
+    pub settings: usize,
+    /// The recording this point fits: points that differ only in their
+    /// settings share it (the same flight and noise draw), so settings
+    /// are compared on the same data.
+    pub recording: usize,
     pub profile: Profile,
 }
 
@@ -193,11 +228,15 @@ pub struct Study {
     pub description: String,
     pub path: PathBuf,
     pub scenarios: Vec<Scenario>,
-    pub profile: Profile,
+    /// The recorder profiles: the study's `profile`, or its `[sweep] profile` list.
+    pub profiles: Vec<Profile>,
     pub models: Vec<Structure>,
     pub methods: Vec<String>,
     /// The study's settings per method, overriding the models' and the scenarios'.
     pub settings: MethodTables,
+    /// The settings axis: per variant, tables overriding `settings`
+    /// (one empty variant when the study has no such axis).
+    pub setting_variants: Vec<MethodTables>,
     /// Runs per sweep point.
     pub runs: usize,
     pub seed: u64,
@@ -212,7 +251,8 @@ pub struct Case {
 }
 
 impl Case {
-    /// The case's stream of the study seed: `point·2³² + run`.
+    /// The case's stream of the study seed: `point·2³² + run`, with the
+    /// point's recording index as `point` ([`SweepPoint::recording`]).
     pub fn stream(self) -> u64 {
         ((self.point as u64) << 32) | self.run as u64
     }
@@ -223,6 +263,9 @@ impl Case {
 pub struct Row {
     pub point: usize,
     pub scenario: String,
+    /// The recorder profile (before the sweep's rate, noise and resolution).
+    #[serde(default)]
+    pub profile: String,
     /// The turbulence intensity; empty for the scenario's own wind.
     pub turbulence: String,
     pub input_scale: f64,
@@ -230,6 +273,15 @@ pub struct Row {
     pub sample_rate: Option<f64>,
     pub noise_scale: f64,
     pub resolution_scale: f64,
+    /// Channels left out of the record, comma-separated.
+    #[serde(default)]
+    pub missing: String,
+    /// Channels at their own rate, `channel:rate Hz` comma-separated.
+    #[serde(default)]
+    pub channel_rates: String,
+    /// The settings variant, `method.key=value` comma-separated.
+    #[serde(default)]
+    pub settings: String,
     pub run: usize,
     pub turbulence_seed: u64,
     pub recorder_seed: u64,
@@ -304,9 +356,7 @@ impl Study {
         let models = load_each("models", &file.models, &mut problems, |r| {
             Structure::load(&resolved(r, catalog::MODEL_FOLDER)?)
         });
-        let profile = Profile::load(&file.profile, Some(base))
-            .map_err(|error| problems.push("profile", error.to_string()))
-            .ok();
+        let profiles = study_profiles(file, base, &mut problems);
         check_methods(&file.methods, &mut problems);
         check_method_tables(&file.methods.tables(), &mut problems);
         if let Err(message) = check_runs(file.runs) {
@@ -323,39 +373,67 @@ impl Study {
         );
         let input_scales = scale_axis("input_scale", &sweep.input_scale, true, &mut problems);
         let turbulence = turbulence_axis(&sweep.turbulence, &mut problems);
-        let (Some(profile), true) = (profile, problems.is_empty()) else {
+        let Some(profiles) = profiles else {
             return Err(Error::Invalid {
                 path: path.to_path_buf(),
                 problems: problems.0,
             });
         };
+        let missing = missing_axis(&sweep.missing, &profiles, &mut problems);
+        let channel_rates = channel_rate_axis(&sweep.channel_rate, &profiles, &mut problems);
+        let variants = settings_axis(&sweep.settings, &mut problems);
+        if !problems.is_empty() {
+            return Err(Error::Invalid {
+                path: path.to_path_buf(),
+                problems: problems.0,
+            });
+        }
         let mut points = Vec::new();
+        let mut recordings = 0;
         for scenario in 0..scenarios.len() {
-            for turbulence in &turbulence {
-                for &input_scale in &input_scales {
-                    for &sample_rate in &rates {
-                        let rated =
-                            sample_rate.map_or_else(|| profile.clone(), |r| profile.with_rate(r));
-                        for &noise_scale in &scales {
-                            let noisy = if noise_scale == 1.0 {
-                                rated.clone()
-                            } else {
-                                rated.with_noise_scaled(noise_scale)
-                            };
-                            for &resolution_scale in &resolutions {
-                                points.push(SweepPoint {
-                                    scenario,
-                                    turbulence: turbulence.clone(),
-                                    input_scale,
-                                    sample_rate,
-                                    noise_scale,
-                                    resolution_scale,
-                                    profile: if resolution_scale == 1.0 {
-                                        noisy.clone()
-                                    } else {
-                                        noisy.with_resolution_scaled(resolution_scale)
-                                    },
-                                });
+            for profile in &profiles {
+                for missing in &missing {
+                    let kept = profile.without(missing).map_err(Error::Other)?;
+                    for channel_rates in &channel_rates {
+                        for turbulence in &turbulence {
+                            for &input_scale in &input_scales {
+                                for &sample_rate in &rates {
+                                    let rated = sample_rate
+                                        .map_or_else(|| kept.clone(), |r| kept.with_rate(r))
+                                        .with_channel_rates(channel_rates)
+                                        .map_err(Error::Other)?;
+                                    for &noise_scale in &scales {
+                                        let noisy = if noise_scale == 1.0 {
+                                            rated.clone()
+                                        } else {
+                                            rated.with_noise_scaled(noise_scale)
+                                        };
+                                        for &resolution_scale in &resolutions {
+                                            let recorder = if resolution_scale == 1.0 {
+                                                noisy.clone()
+                                            } else {
+                                                noisy.with_resolution_scaled(resolution_scale)
+                                            };
+                                            for settings in 0..variants.len() {
+                                                points.push(SweepPoint {
+                                                    scenario,
+                                                    recorder: profile.name.clone(),
+                                                    missing: missing.clone(),
+                                                    channel_rates: channel_rates.clone(),
+                                                    turbulence: turbulence.clone(),
+                                                    input_scale,
+                                                    sample_rate,
+                                                    noise_scale,
+                                                    resolution_scale,
+                                                    settings,
+                                                    recording: recordings,
+                                                    profile: recorder.clone(),
+                                                });
+                                            }
+                                            recordings += 1;
+                                        }
+                                    }
+                                }
                             }
                         }
                     }
@@ -367,10 +445,11 @@ impl Study {
             description: file.description.clone(),
             path: path.to_path_buf(),
             scenarios,
-            profile,
+            profiles,
             models,
             methods: file.methods.names(),
             settings: file.methods.tables(),
+            setting_variants: variants,
             runs: file.runs,
             seed: file.seed,
             points,
@@ -426,18 +505,30 @@ impl Study {
             .collect()
     }
 
-    /// A short label of a sweep point: scenario, turbulence, input scale,
-    /// rate, noise scale and resolution scale (the axes not at their
-    /// defaults, and always the noise scale).
+    /// A short label of a sweep point: scenario, profile (when the study
+    /// has several), turbulence, input scale, rate, noise scale and
+    /// resolution scale (the axes not at their defaults, and always the
+    /// noise scale).
     pub fn point_label(&self, point: usize) -> String {
         let p = &self.points[point];
+        let missing = p.missing.join(",");
+        let channel_rates = channel_rates_text(&p.channel_rates);
+        let settings = settings_text(&self.setting_variants[p.settings]);
         label(&Axes {
             scenario: &self.scenarios[p.scenario].name,
+            profile: if self.profiles.len() > 1 {
+                &p.recorder
+            } else {
+                ""
+            },
             turbulence: p.turbulence.as_deref().unwrap_or(""),
             input_scale: p.input_scale,
             sample_rate: p.sample_rate,
             noise_scale: p.noise_scale,
             resolution_scale: p.resolution_scale,
+            missing: &missing,
+            channel_rates: &channel_rates,
+            settings: &settings,
         })
     }
 
@@ -445,7 +536,11 @@ impl Study {
     /// fits every model with every method. Never fails: a failure is a row.
     pub fn run_case(&self, case: Case) -> Vec<Row> {
         let point = &self.points[case.point];
-        let mut rng = random::stream(self.seed, case.stream());
+        let recording = Case {
+            point: point.recording,
+            run: case.run,
+        };
+        let mut rng = random::stream(self.seed, recording.stream());
         let turbulence_seed: u64 = rng.random();
         let recorder_seed: u64 = rng.random();
         let mut scenario = self.scenarios[point.scenario].clone();
@@ -468,11 +563,15 @@ impl Study {
         let template = Row {
             point: case.point,
             scenario: scenario.name.clone(),
+            profile: point.recorder.clone(),
             turbulence: point.turbulence.clone().unwrap_or_default(),
             input_scale: point.input_scale,
             sample_rate: point.sample_rate,
             noise_scale: point.noise_scale,
             resolution_scale: point.resolution_scale,
+            missing: point.missing.join(","),
+            channel_rates: channel_rates_text(&point.channel_rates),
+            settings: settings_text(&self.setting_variants[point.settings]),
             run: case.run,
             turbulence_seed,
             recorder_seed,
@@ -498,7 +597,11 @@ impl Study {
                     record,
                     truth,
                     model,
-                    &[&scenario.methods, &self.settings],
+                    &[
+                        &scenario.methods,
+                        &self.settings,
+                        &self.setting_variants[point.settings],
+                    ],
                 ),
                 Err(error) => self
                     .methods
@@ -649,8 +752,8 @@ impl Study {
     }
 
     /// A hash (FNV-1a, 64 bits) of everything that decides the study's
-    /// numbers: seed, runs, methods and settings, the sweep points' rates
-    /// and noise scales, and the text of every file the study reads (its
+    /// numbers: seed, runs, methods and settings, every sweep point's
+    /// values on every axis, and the text of every file the study reads (its
     /// scenarios and their aircraft, the profile, the models and their
     /// aircraft) — the same on every machine that has the same files,
     /// wherever they are.
@@ -659,8 +762,21 @@ impl Study {
             "{:?}|{}|{}|{:?}|{:?}",
             self.name, self.seed, self.runs, self.methods, self.settings
         );
-        for point in &self.points {
-            identity += &format!("|{:?}|{}", point.sample_rate, point.noise_scale);
+        identity += &format!("|{:?}", self.setting_variants);
+        for p in &self.points {
+            identity += &format!(
+                "|{}|{}|{:?}|{:?}|{:?}|{}|{:?}|{}|{}|{}",
+                p.scenario,
+                p.recorder,
+                p.missing,
+                p.channel_rates,
+                p.turbulence,
+                p.input_scale,
+                p.sample_rate,
+                p.noise_scale,
+                p.resolution_scale,
+                p.settings
+            );
         }
         for scenario in &self.scenarios {
             identity += &read_text(&scenario.path)?;
@@ -669,7 +785,9 @@ impl Study {
                 identity += &read_text(&linear.model_path)?;
             }
         }
-        identity += &read_text(&self.profile.path)?;
+        for profile in &self.profiles {
+            identity += &read_text(&profile.path)?;
+        }
         for model in &self.models {
             identity += &model
                 .files_json()
@@ -759,15 +877,23 @@ pub fn assemble(folders: &[PathBuf], out: &Path) -> Result<StudyResult> {
 /// A sweep point's values.
 struct Axes<'a> {
     scenario: &'a str,
+    /// Empty unless the study sweeps profiles.
+    profile: &'a str,
     turbulence: &'a str,
     input_scale: f64,
     sample_rate: Option<f64>,
     noise_scale: f64,
     resolution_scale: f64,
+    missing: &'a str,
+    channel_rates: &'a str,
+    settings: &'a str,
 }
 
 fn label(axes: &Axes) -> String {
     let mut text = axes.scenario.to_string();
+    if !axes.profile.is_empty() {
+        text += &format!(" recorded by {}", axes.profile);
+    }
     if !axes.turbulence.is_empty() {
         text += &format!(" turbulence {}", axes.turbulence);
     }
@@ -781,7 +907,148 @@ fn label(axes: &Axes) -> String {
     if axes.resolution_scale != 1.0 {
         text += &format!(" lsb×{}", axes.resolution_scale);
     }
+    if !axes.missing.is_empty() {
+        text += &format!(" without {}", axes.missing);
+    }
+    if !axes.channel_rates.is_empty() {
+        text += &format!(" rates {}", axes.channel_rates);
+    }
+    if !axes.settings.is_empty() {
+        text += &format!(" settings {}", axes.settings);
+    }
     text
+}
+
+/// A point's channel rates as `channel:rate Hz` comma-separated.
+fn channel_rates_text(rates: &[(String, f64)]) -> String {
+    rates
+        .iter()
+        .map(|(channel, rate)| format!("{channel}:{} Hz", crate::record::rate_text(*rate)))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// A settings variant as `method.key=value` comma-separated.
+fn settings_text(tables: &MethodTables) -> String {
+    tables
+        .iter()
+        .flat_map(|(method, table)| {
+            table
+                .iter()
+                .map(move |(key, value)| format!("{method}.{key}={value}"))
+        })
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// The missing-channels axis: `[[]]` (every channel kept) when empty; each
+/// entry's channels must be recorded by every profile of the study.
+fn missing_axis(
+    spec: &[Vec<String>],
+    profiles: &[Profile],
+    problems: &mut Problems,
+) -> Vec<Vec<String>> {
+    if spec.is_empty() {
+        return vec![Vec::new()];
+    }
+    for (i, missing) in spec.iter().enumerate() {
+        for profile in profiles {
+            if let Err(message) = profile.without(missing) {
+                problems.push(format!("sweep.missing[{i}]"), message);
+            }
+        }
+    }
+    spec.to_vec()
+}
+
+/// The per-channel rate axis: `[[]]` when empty; each entry a table of
+/// channel → frequency, every channel recorded by every profile.
+fn channel_rate_axis(
+    spec: &[BTreeMap<String, Quantity>],
+    profiles: &[Profile],
+    problems: &mut Problems,
+) -> Vec<Vec<(String, f64)>> {
+    if spec.is_empty() {
+        return vec![Vec::new()];
+    }
+    spec.iter()
+        .enumerate()
+        .map(|(i, table)| {
+            let rates: Vec<(String, f64)> = table
+                .iter()
+                .filter_map(|(channel, quantity)| {
+                    let field = format!("sweep.channel_rate[{i}].{channel}");
+                    match parse_rate(quantity) {
+                        Ok(rate) if rate > crate::limits::MAX_RATE => {
+                            problems.push(field, crate::record::recorder::rate_limit_message(rate))
+                        }
+                        Ok(rate) if rate > 0.0 && rate.is_finite() => {
+                            return Some((channel.clone(), rate));
+                        }
+                        Ok(rate) => problems.push(field, format!("must be positive, is {rate}")),
+                        Err(message) => problems.push(field, message),
+                    }
+                    None
+                })
+                .collect();
+            for profile in profiles {
+                if let Err(message) = profile.with_channel_rates(&rates) {
+                    problems.push(format!("sweep.channel_rate[{i}]"), message);
+                }
+            }
+            rates
+        })
+        .collect()
+}
+
+/// The settings axis: `[{}]` when empty; each variant's tables checked as
+/// the study's `[methods.NAME]` tables are, problems named
+/// `sweep.settings[i].methods.NAME`.
+fn settings_axis(spec: &[MethodTables], problems: &mut Problems) -> Vec<MethodTables> {
+    if spec.is_empty() {
+        return vec![MethodTables::new()];
+    }
+    for (i, variant) in spec.iter().enumerate() {
+        let mut found = Problems::default();
+        check_method_tables(variant, &mut found);
+        for problem in found.0 {
+            problems.push(
+                format!("sweep.settings[{i}].{}", problem.field),
+                problem.message,
+            );
+        }
+    }
+    spec.to_vec()
+}
+
+/// The study's recorder profiles: its `profile`, or every one of `[sweep]
+/// profile` — one of the two, each failure recorded under its field.
+fn study_profiles(file: &StudyFile, base: &Path, problems: &mut Problems) -> Option<Vec<Profile>> {
+    let load = |reference: &str| Profile::load(reference, Some(base));
+    match (&file.profile, file.sweep.profile.is_empty()) {
+        (Some(reference), true) => load(reference)
+            .map_err(|error| problems.push("profile", error.to_string()))
+            .ok()
+            .map(|profile| vec![profile]),
+        (None, false) => {
+            let profiles = load_each("sweep.profile", &file.sweep.profile, problems, load);
+            (profiles.len() == file.sweep.profile.len()).then_some(profiles)
+        }
+        (Some(_), false) => {
+            problems.push(
+                "sweep.profile",
+                "the study names a `profile` too: give one profile, or list several here, not both",
+            );
+            None
+        }
+        (None, true) => {
+            problems.push(
+                "profile",
+                "missing: name a recorder profile, or list several under [sweep] profile",
+            );
+            None
+        }
+    }
 }
 
 /// Loads every reference of a list field, recording each failure under `field[i]`.
@@ -1004,11 +1271,15 @@ impl StudyResult {
                     "point {point}: {}\n",
                     label(&Axes {
                         scenario: &s.scenario,
+                        profile: &s.profile,
                         turbulence: &s.turbulence,
                         input_scale: s.input_scale,
                         sample_rate: s.sample_rate,
                         noise_scale: s.noise_scale,
                         resolution_scale: s.resolution_scale,
+                        missing: &s.missing,
+                        channel_rates: &s.channel_rates,
+                        settings: &s.settings,
                     })
                 );
             }
@@ -1050,11 +1321,15 @@ mod tests {
         Row {
             point: 0,
             scenario: "s".into(),
+            profile: "p".into(),
             turbulence: String::new(),
             input_scale: 1.0,
             sample_rate: None,
             noise_scale: 1.0,
             resolution_scale: 1.0,
+            missing: String::new(),
+            channel_rates: String::new(),
+            settings: String::new(),
             run,
             turbulence_seed: 0,
             recorder_seed: 0,

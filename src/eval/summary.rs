@@ -19,12 +19,24 @@ use std::collections::HashMap;
 pub struct SummaryRow {
     pub point: usize,
     pub scenario: String,
+    /// The recorder profile (before the sweep's rate, noise and resolution).
+    #[serde(default)]
+    pub profile: String,
     /// The turbulence intensity; empty for the scenario's own wind.
     pub turbulence: String,
     pub input_scale: f64,
     pub sample_rate: Option<f64>,
     pub noise_scale: f64,
     pub resolution_scale: f64,
+    /// Channels left out of the record, comma-separated.
+    #[serde(default)]
+    pub missing: String,
+    /// Channels at their own rate, `channel:rate Hz` comma-separated.
+    #[serde(default)]
+    pub channel_rates: String,
+    /// The settings variant, `method.key=value` comma-separated.
+    #[serde(default)]
+    pub settings: String,
     pub model: String,
     pub method: String,
     pub parameter: String,
@@ -270,11 +282,15 @@ impl Summariser {
                 SummaryRow {
                     point: key.0,
                     scenario: group.first.scenario.clone(),
+                    profile: group.first.profile.clone(),
                     turbulence: group.first.turbulence.clone(),
                     input_scale: group.first.input_scale,
                     sample_rate: group.first.sample_rate,
                     noise_scale: group.first.noise_scale,
                     resolution_scale: group.first.resolution_scale,
+                    missing: group.first.missing.clone(),
+                    channel_rates: group.first.channel_rates.clone(),
+                    settings: group.first.settings.clone(),
                     model: key.1.clone(),
                     method: key.2.clone(),
                     parameter: key.3.clone(),

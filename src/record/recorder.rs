@@ -390,6 +390,50 @@ impl Profile {
         }
         profile
     }
+
+    /// The same profile with the channels in `rates` sampled at their
+    /// given rate (Hz), named `NAME@CHANNEL:RATEHz,…`; an error names a
+    /// channel the profile does not record.
+    pub fn with_channel_rates(
+        &self,
+        rates: &[(String, f64)],
+    ) -> std::result::Result<Profile, String> {
+        let mut profile = self.clone();
+        for (name, rate) in rates {
+            let channel = profile
+                .channels
+                .iter_mut()
+                .find(|c| c.measurand.name == name)
+                .ok_or_else(|| {
+                    format!("the profile '{}' records no channel '{name}'", self.name)
+                })?;
+            channel.rate = *rate;
+            profile.name += &format!("@{name}:{rate}Hz");
+        }
+        Ok(profile)
+    }
+
+    /// The same profile without the channels `missing`, which the record
+    /// then states as absent, named `NAME−CHANNEL,…`; an error names a
+    /// channel the profile does not record.
+    pub fn without(&self, missing: &[String]) -> std::result::Result<Profile, String> {
+        let mut profile = self.clone();
+        for name in missing {
+            let before = profile.channels.len();
+            profile.channels.retain(|c| c.measurand.name != name);
+            if profile.channels.len() == before {
+                return Err(format!(
+                    "the profile '{}' records no channel '{name}'",
+                    self.name
+                ));
+            }
+            profile.absent.push(name.clone());
+        }
+        if !missing.is_empty() {
+            profile.name = format!("{}−{}", self.name, missing.join(","));
+        }
+        Ok(profile)
+    }
 }
 
 /// Frame length and words per frame, for placing channels in the frame.
