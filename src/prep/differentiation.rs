@@ -43,7 +43,8 @@
 //! reports. Given the
 //! instants where the derivative may jump
 //! ([`Differentiator::differentiate_with_breaks`]; [`step_times`] finds
-//! them in a control channel), a sample whose window would reach across one
+//! them in a control channel: each step, and both corners of a fast ramp,
+//! as surfaces moved by actuators make), a sample whose window would reach across one
 //! gets no derivative (a dropout, which the estimators leave out): a window
 //! may end at a break but not pass it (the continuous signal's sample at a
 //! break ends the piece before it and starts the next). This costs 2m − 1
@@ -266,15 +267,23 @@ impl Differentiator {
     }
 }
 
-/// Instants where `channel` steps: a sample-to-sample change larger than
-/// both 10 robust standard deviations of the changes (1.4826 × their median
-/// absolute value: sensor noise never reaches it, while a smooth input such
-/// as a multisine changes by comparable amounts at every sample and never
-/// does) and 5 % of the channel's range (quantization steps stay below it),
-/// whose neighbouring changes are both smaller than that (an isolated jump,
-/// as a step input sampled by a recorder looks; a ramp through several
-/// samples is motion the differentiator should follow). The instant is the
-/// first sample with the new value.
+/// Instants where `channel` steps or turns a fast ramp's corner: where the
+/// derivatives it drives may jump or kink.
+///
+/// A change is *large* when it exceeds both 10 robust standard deviations
+/// of the sample-to-sample changes (1.4826 × their median absolute value:
+/// sensor noise never reaches it, while a smooth input such as a multisine
+/// changes by comparable amounts at every sample and never does) and 5 % of
+/// the channel's range (quantization steps stay below it). A *transition*
+/// is a run of consecutive changes above half that threshold holding at
+/// least one large change. A transition of one change is a step, sampled:
+/// its instant is the first sample with the new value. A longer one is a
+/// surface moving through an actuator's ramp, which has two corners: its
+/// instants are the last sample before the motion and the first sample
+/// after it (a window across either corner smears the angular
+/// accelerations' turn, and none fits inside a fast ramp). A slow ramp,
+/// whose changes stay below the threshold, is motion the differentiator
+/// follows.
 pub fn step_times(channel: &Channel) -> Vec<f64> {
     let finite: Vec<(f64, f64)> = channel
         .times
@@ -300,11 +309,26 @@ pub fn step_times(channel: &Channel) -> Vec<f64> {
     if threshold <= 0.0 {
         return Vec::new();
     }
-    let large = |i: usize| changes.get(i).is_some_and(|&c| c > threshold);
-    (0..changes.len())
-        .filter(|&i| large(i) && !large(i + 1) && (i == 0 || !large(i - 1)))
-        .map(|i| finite[i + 1].0)
-        .collect()
+    let mut instants = Vec::new();
+    let mut i = 0;
+    while i < changes.len() {
+        if changes[i] <= 0.5 * threshold {
+            i += 1;
+            continue;
+        }
+        let first = i;
+        while i < changes.len() && changes[i] > 0.5 * threshold {
+            i += 1;
+        }
+        if changes[first..i].iter().any(|&c| c > threshold) {
+            if i - first == 1 {
+                instants.push(finite[i].0);
+            } else {
+                instants.extend([finite[first].0, finite[i].0]);
+            }
+        }
+    }
+    instants
 }
 
 /// The slope of the centred window on a uniform grid as fixed weights
@@ -520,8 +544,9 @@ mod tests {
     }
 
     /// Steps are found in a noisy step input (isolated jumps of 2° against
-    /// 0.01° noise), at the first sample with the new value; a multisine,
-    /// a ramp through several samples and quantization steps give none.
+    /// 0.01° noise), at the first sample with the new value; a fast ramp
+    /// gives its two corners; a multisine, a slow ramp and quantization
+    /// steps give none.
     #[test]
     fn step_times_finds_steps_not_smooth_inputs() {
         let times: Vec<f64> = (0..500).map(|k| k as f64 * 0.04).collect();
@@ -549,10 +574,22 @@ mod tests {
             })
             .collect();
         assert!(step_times(&channel(times.clone(), multisine)).is_empty());
+        // A ramp through four samples has two corners: the last sample
+        // before it (t = 4.0 s) and the first after (4.16 s); a slow ramp
+        // (0.1 % of its range per sample) has none the differentiator
+        // cannot follow.
         let ramp: Vec<f64> = (0..500)
             .map(|k| (k as f64 - 100.0).clamp(0.0, 4.0) * 0.01)
             .collect();
-        assert!(step_times(&channel(times.clone(), ramp)).is_empty());
+        let mut corners = step_times(&channel(times.clone(), ramp));
+        corners
+            .iter_mut()
+            .for_each(|t| *t = (*t * 100.0).round() / 100.0);
+        assert_eq!(corners, vec![4.0, 4.16]);
+        let slow: Vec<f64> = (0..500)
+            .map(|k| (k as f64 - 100.0).clamp(0.0, 1000.0) * 0.01)
+            .collect();
+        assert!(step_times(&channel(times.clone(), slow)).is_empty());
         let quantized: Vec<f64> = times
             .iter()
             .map(|t| ((t * 0.3).sin() * 20.0).round() / 20.0)

@@ -49,6 +49,10 @@ pub struct StepSpec {
     #[serde(default)]
     pub start: Quantity,
     pub amplitude: Quantity,
+    /// Time each change takes, as a linear ramp from its switch time (a
+    /// surface moved by an actuator); 0, the default, is a step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transition: Option<Quantity>,
 }
 
 /// `kind = "doublet"`: +amplitude for `pulse_width`, −amplitude for `pulse_width`, then 0.
@@ -60,6 +64,10 @@ pub struct DoubletSpec {
     pub start: Quantity,
     pub pulse_width: Quantity,
     pub amplitude: Quantity,
+    /// Time each change takes, as a linear ramp from its switch time (a
+    /// surface moved by an actuator); 0, the default, is a step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transition: Option<Quantity>,
 }
 
 /// `kind = "3211"`: +A for 3Δt, −A for 2Δt, +A for Δt, −A for Δt, then 0
@@ -72,6 +80,10 @@ pub struct ThreeTwoOneOneSpec {
     pub start: Quantity,
     pub unit_time: Quantity,
     pub amplitude: Quantity,
+    /// Time each change takes, as a linear ramp from its switch time (a
+    /// surface moved by an actuator); 0, the default, is a step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transition: Option<Quantity>,
 }
 
 /// `kind = "multistep"`: each of `levels` held for `step_time`, then 0.
@@ -83,6 +95,10 @@ pub struct MultistepSpec {
     pub start: Quantity,
     pub step_time: Quantity,
     pub levels: Vec<Quantity>,
+    /// Time each change takes, as a linear ramp from its switch time (a
+    /// surface moved by an actuator); 0, the default, is a step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transition: Option<Quantity>,
 }
 
 /// `kind = "multisine"`: Schroeder-phased multisine on several controls
@@ -255,13 +271,15 @@ impl Signal {
 const SWITCH_TOLERANCE: f64 = 1e-10;
 
 /// Piecewise constant: 0 before `times[0]`, `levels[i]` on
-/// [`times[i]`, `times[i+1]`), `after` from the last time on.
+/// [`times[i]`, `times[i+1]`), `after` from the last time on; each change
+/// a linear ramp over `transition` from its switch time (0: a step).
 #[derive(Debug, Clone)]
 struct Steps {
     control: usize,
     times: Vec<f64>,
     levels: Vec<f64>,
     after: f64,
+    transition: f64,
 }
 
 impl Steps {
@@ -275,7 +293,13 @@ impl Steps {
             times,
             levels,
             after,
+            transition: 0.0,
         }
+    }
+
+    /// The same levels, each change a ramp over `transition`.
+    fn ramped(self, transition: f64) -> Steps {
+        Steps { transition, ..self }
     }
 
     /// A switch within [`SWITCH_TOLERANCE`] (0.1 ns) after `time` counts as reached:
@@ -287,7 +311,16 @@ impl Steps {
             return 0.0;
         }
         let passed = self.times.partition_point(|&t| t <= time);
-        self.levels.get(passed - 1).copied().unwrap_or(self.after)
+        let level = self.levels.get(passed - 1).copied().unwrap_or(self.after);
+        let since = time - self.times[passed - 1];
+        if since >= self.transition {
+            return level;
+        }
+        let previous = match passed {
+            1 => 0.0,
+            _ => self.levels[passed - 2],
+        };
+        previous + (level - previous) * since / self.transition
     }
 }
 
@@ -443,6 +476,24 @@ impl Checker<'_> {
         }
     }
 
+    /// A step input's `transition`: 0 when absent, else not negative and
+    /// at most `hold` (each level is held that long, so one change ends
+    /// before the next begins).
+    fn transition(&mut self, quantity: Option<&Quantity>, hold: f64) -> Option<f64> {
+        let Some(quantity) = quantity else {
+            return Some(0.0);
+        };
+        let value = self.non_negative("transition", quantity, Dimension::Time)?;
+        if value > hold {
+            self.push(
+                "transition",
+                format!("{quantity} is longer than a level is held ({hold} s)"),
+            );
+            return None;
+        }
+        Some(value)
+    }
+
     fn non_negative(
         &mut self,
         field: &str,
@@ -492,13 +543,10 @@ impl StepSpec {
     fn resolve(&self, checker: &mut Checker) -> Option<Signal> {
         let start = checker.time("start", &self.start);
         let amplitude = checker.amplitude("amplitude", &self.amplitude, self.control);
-        Some(Signal::Steps(Steps::new(
-            self.control,
-            start?,
-            0.0,
-            vec![],
-            amplitude?,
-        )))
+        let transition = checker.transition(self.transition.as_ref(), f64::INFINITY);
+        Some(Signal::Steps(
+            Steps::new(self.control, start?, 0.0, vec![], amplitude?).ramped(transition?),
+        ))
     }
 }
 
@@ -508,13 +556,10 @@ impl DoubletSpec {
         let width = checker.positive("pulse_width", &self.pulse_width, Dimension::Time);
         let a = checker.amplitude("amplitude", &self.amplitude, self.control);
         let levels = vec![a?, -a?];
-        Some(Signal::Steps(Steps::new(
-            self.control,
-            start?,
-            width?,
-            levels,
-            0.0,
-        )))
+        let transition = checker.transition(self.transition.as_ref(), width?);
+        Some(Signal::Steps(
+            Steps::new(self.control, start?, width?, levels, 0.0).ramped(transition?),
+        ))
     }
 }
 
@@ -526,13 +571,10 @@ impl ThreeTwoOneOneSpec {
         let a = checker.amplitude("amplitude", &self.amplitude, self.control);
         let a = a?;
         let levels = vec![a, a, a, -a, -a, a, -a];
-        Some(Signal::Steps(Steps::new(
-            self.control,
-            start?,
-            unit_time?,
-            levels,
-            0.0,
-        )))
+        let transition = checker.transition(self.transition.as_ref(), unit_time?);
+        Some(Signal::Steps(
+            Steps::new(self.control, start?, unit_time?, levels, 0.0).ramped(transition?),
+        ))
     }
 }
 
@@ -550,13 +592,10 @@ impl MultistepSpec {
         if levels.is_empty() {
             return None;
         }
-        Some(Signal::Steps(Steps::new(
-            self.control,
-            start?,
-            step_time?,
-            levels,
-            0.0,
-        )))
+        let transition = checker.transition(self.transition.as_ref(), step_time?);
+        Some(Signal::Steps(
+            Steps::new(self.control, start?, step_time?, levels, 0.0).ramped(transition?),
+        ))
     }
 }
 
@@ -1110,6 +1149,42 @@ mod tests {
         assert_eq!(elevator(&s, 7.8), -0.03);
         assert_eq!(elevator(&s, 780.0 * 0.01), -0.03);
         assert_eq!(elevator(&s, 195.0 * 0.04), -0.03);
+    }
+
+    /// With a `transition`, each change of a step input is a linear ramp
+    /// from its switch time: halfway through it the value is halfway, and
+    /// after it the level holds; a transition longer than a level is held,
+    /// or negative, is refused.
+    #[test]
+    fn transitions_ramp_each_change() {
+        let s = schedule(
+            "[[inputs]]\nkind = \"doublet\"\ncontrol = \"elevator\"\nstart = 1\npulse_width = 0.5\namplitude = 0.02\ntransition = \"0.04 s\"",
+        );
+        for (time, expected) in [
+            (0.99, 0.0),
+            (1.02, 0.01),
+            (1.2, 0.02),
+            (1.51, 0.01),
+            (1.52, 0.0),
+            (1.8, -0.02),
+            (2.02, -0.01),
+            (2.5, 0.0),
+        ] {
+            assert!(
+                (elevator(&s, time) - expected).abs() < 1e-9,
+                "{time}: {}",
+                elevator(&s, time)
+            );
+        }
+        let step = schedule(
+            "[[inputs]]\nkind = \"step\"\ncontrol = \"elevator\"\nstart = 1\namplitude = 0.02\ntransition = \"2 s\"",
+        );
+        assert!((elevator(&step, 2.5) - 0.015).abs() < 1e-9);
+        let long = problems(
+            "[[inputs]]\nkind = \"3211\"\ncontrol = \"elevator\"\nunit_time = 0.5\namplitude = 0.02\ntransition = \"0.6 s\"\n\n[[inputs]]\nkind = \"multistep\"\ncontrol = \"rudder\"\nstep_time = 1\nlevels = [0.01]\ntransition = -1",
+        );
+        let fields: Vec<&str> = long.iter().map(|p| p.field.as_str()).collect();
+        assert_eq!(fields, ["inputs[0].transition", "inputs[1].transition"]);
     }
 
     #[test]
