@@ -117,7 +117,7 @@ use crate::estimation::model::driven::{
     Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
 use crate::estimation::model::state_space::{
-    fitting_window, integration_step, observables, recorded_initial_state,
+    fitting_window, model_integration_step, observables, recorded_initial_state,
 };
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{
@@ -179,7 +179,9 @@ pub enum Start {
 pub struct OutputErrorOptions {
     pub start: Start,
     pub max_iterations: usize,
-    /// Integration step (s); None: the fastest compared channel's period.
+    /// Integration step (s); None: the fastest compared channel's period,
+    /// in equal sub-steps where the model's fastest mode needs them
+    /// ([`model_integration_step`]).
     #[serde(
         deserialize_with = "crate::units::optional_seconds",
         skip_serializing_if = "Option::is_none"
@@ -260,7 +262,7 @@ impl Estimator for OutputError {
                     ("max_iterations", "Gauss–Newton iterations at most"),
                     (
                         "step",
-                        "integration step, e.g. \"0.04 s\"; none: the fastest compared channel's period",
+                        "integration step, e.g. \"0.04 s\"; none: the fastest compared channel's period, divided into RK4 sub-steps of h·|λ| ≤ 0.5 for the model's fastest mode (said in the notes)",
                     ),
                     (
                         "interpolation",
@@ -666,14 +668,15 @@ fn segment(
     options: &OutputErrorOptions,
 ) -> Result<Segment> {
     let window = fitting_window(record, &structure.outputs, options.window)?;
-    let step = integration_step(record, &structure.outputs, options.step)?;
-    let simulation = DrivenSimulation::from_record(
+    let (step, note) = model_integration_step(record, structure, options.step, window)?;
+    let mut simulation = DrivenSimulation::from_record(
         record,
         &structure.integrate,
         options.interpolation,
         step,
         window,
     )?;
+    simulation.notes.extend(note);
     let end = simulation.time(simulation.len() - 1);
     let initial = recorded_initial_state(record, structure, &simulation, window.0);
     let outputs = structure
