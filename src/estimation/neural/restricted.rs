@@ -66,7 +66,7 @@ use crate::estimation::methods::equation_error::record_name;
 use crate::estimation::neural::{NetworkReport, Scaling};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
-    Reconstruction, ReconstructionOptions, Request, control_steps, reconstruct,
+    Reconstruction, ReconstructionOptions, Request, check_channels, control_steps, reconstruct,
 };
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
@@ -279,6 +279,36 @@ fn sampled(record: &FlightRecord, name: &str, times: &[f64]) -> Result<Option<Ve
     }
 }
 
+/// Checks that the record has the motion variables and every channel the
+/// coefficients need: one refusal naming all that are missing.
+fn check_motion_and_channels(
+    method: &str,
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    request: &Request,
+    motion_names: &[String],
+) -> Result<()> {
+    let mut missing: Vec<MissingChannel> =
+        match check_channels(record, &structure.aircraft, request, method) {
+            Ok(()) => Vec::new(),
+            Err(Error::Refused(Refusal::MissingChannels { channels, .. })) => channels,
+            Err(error) => return Err(error),
+        };
+    for name in motion_names {
+        if record.channel(name).is_err() && !missing.iter().any(|c| &c.name == name) {
+            missing.push(MissingChannel {
+                name: name.clone(),
+                purpose: "motion variable of the restricted neural model".into(),
+            });
+        }
+    }
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    match Refusal::missing(method, missing, present) {
+        Some(refusal) => Err(Error::Refused(refusal)),
+        None => Ok(()),
+    }
+}
+
 /// Reads the record onto the restricted model's time base.
 fn prepare(
     method: &str,
@@ -296,18 +326,6 @@ fn prepare(
             reason: "the restricted neural model needs coefficients with terms and integrated motion variables".into(),
         }));
     }
-    let missing: Vec<MissingChannel> = motion_names
-        .iter()
-        .filter(|name| record.channel(name).is_err())
-        .map(|name| MissingChannel {
-            name: name.clone(),
-            purpose: "motion variable of the restricted neural model".into(),
-        })
-        .collect();
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(method, missing, present) {
-        return Err(Error::Refused(refusal));
-    }
     let mut request = Request {
         coefficients: coefficients.clone(),
         regressors: Vec::new(),
@@ -318,6 +336,7 @@ fn prepare(
     if aero.kind == ModelKind::Stall {
         request.regressors.push(Regressor::Alpha);
     }
+    check_motion_and_channels(method, record, structure, &request, &motion_names)?;
     let reconstruction = reconstruct(
         record,
         &structure.aircraft,
