@@ -6,12 +6,14 @@
 //! own with [`register`].
 
 pub mod augmented_ekf;
+pub mod elm_gauss_newton;
 pub mod equation_error;
 pub mod filter_error;
 pub mod frequency_output_error;
 pub mod frequency_regression;
 pub mod linear_equation_error;
 pub mod output_error;
+pub mod recurrent_elm;
 pub mod smoothed_regression;
 pub mod stepwise;
 pub mod unscented;
@@ -34,6 +36,8 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(unscented::UnscentedFilter),
         Arc::new(frequency_regression::FrequencyRegression),
         Arc::new(frequency_output_error::FrequencyOutputError),
+        Arc::new(elm_gauss_newton::ElmGaussNewton),
+        Arc::new(recurrent_elm::RecurrentElm),
     ]
 }
 
