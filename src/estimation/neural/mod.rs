@@ -19,6 +19,8 @@
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
+pub mod feedforward;
+
 /// The log-sigmoid activation.
 #[inline]
 pub fn log_sigmoid(s: f64) -> f64 {
