@@ -11,6 +11,7 @@ pub mod filter_error;
 pub mod frequency_output_error;
 pub mod frequency_regression;
 pub mod linear_equation_error;
+pub mod neural_gauss_newton;
 pub mod output_error;
 pub mod smoothed_regression;
 pub mod stepwise;
@@ -34,6 +35,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(unscented::UnscentedFilter),
         Arc::new(frequency_regression::FrequencyRegression),
         Arc::new(frequency_output_error::FrequencyOutputError),
+        Arc::new(neural_gauss_newton::NeuralGaussNewton),
     ]
 }
 

@@ -46,6 +46,7 @@
 //! product per buffer; the training loop allocates nothing per sample.
 
 use crate::error::{Error, Result};
+use crate::estimation::neural::restricted::{Network, Trainer, TrainingSet};
 use crate::estimation::neural::{NetworkReport, fit_metrics};
 use crate::estimation::solver::gauss_newton::NormalEquations;
 use crate::random::{stream, streams};
@@ -190,6 +191,38 @@ impl FeedForward {
         {
             *activation = neuron(row, input);
         }
+    }
+}
+
+impl Network for FeedForward {
+    fn inputs(&self) -> usize {
+        self.inputs
+    }
+
+    fn outputs(&self) -> usize {
+        self.outputs
+    }
+
+    fn predict(&self, input: &[f64], output: &mut [f64]) {
+        FeedForward::predict(self, input, output);
+    }
+}
+
+/// The restricted model's trainer: the network trained on the set, its
+/// report ([`report`]) with the seed and hidden size of these settings.
+impl Trainer for LevenbergMarquardt {
+    fn train(&self, set: &TrainingSet) -> Result<(Box<dyn Network>, NetworkReport)> {
+        let (network, training) = LevenbergMarquardt::train(self, &set.inputs, &set.targets)?;
+        let report = report(
+            &network,
+            &training,
+            self.seed,
+            &set.inputs,
+            &set.targets,
+            &set.input_names,
+            &set.output_names,
+        );
+        Ok((Box::new(network), report))
     }
 }
 
