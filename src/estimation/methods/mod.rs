@@ -6,6 +6,7 @@
 //! own with [`register`].
 
 pub mod augmented_ekf;
+pub mod elm_gauss_newton;
 pub mod equation_error;
 pub mod filter_error;
 pub mod frequency_output_error;
@@ -35,6 +36,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(unscented::UnscentedFilter),
         Arc::new(frequency_regression::FrequencyRegression),
         Arc::new(frequency_output_error::FrequencyOutputError),
+        Arc::new(elm_gauss_newton::ElmGaussNewton),
         Arc::new(neural_gauss_newton::NeuralGaussNewton),
     ]
 }

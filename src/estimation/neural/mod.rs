@@ -16,6 +16,9 @@
 //! NETWORK_WEIGHTS)`: a seed gives the same network, bit for bit, whatever
 //! the thread count.
 
+pub mod elm;
+pub mod restricted;
+
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
