@@ -70,14 +70,16 @@ fn run_scores_every_method_on_the_lateral_scenario() {
 /// before modelling, which needs no rate,
 /// the airspeed and the altitude (observations of Eq. 8: the profile
 /// records calibrated airspeed and pressure altitude, not true airspeed and
-/// altitude).
+/// altitude); the restricted neural models (ELM-GN, neural Gauss–Newton)
+/// the motion variables of the model's axis they lack: airspeed and q,
+/// or β, p and r.
 #[test]
 fn qar_record_is_refused_with_what_each_method_lacks() {
     let mut scenario = Scenario::load("transport-approach").unwrap();
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
     let report = run::run(&scenario, &profile).unwrap();
-    let expected: [(&str, &[&str]); 9] = [
+    let expected: [(&str, &[&str]); 11] = [
         ("ee", &["airspeed", "p", "r"]),
         ("fdee", &["airspeed", "p", "r"]),
         ("fdoe", &["airspeed", "p", "r"]),
@@ -87,6 +89,10 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
         ("fem", &["airspeed", "p", "r"]),
         ("ekf", &["airspeed", "p", "r"]),
         ("ukf", &["airspeed", "p", "r"]),
+        // The motion variables of the model's axis: airspeed and q
+        // (longitudinal) or β, p and r (lateral), checked below.
+        ("elm-gn", &[]),
+        ("ngn", &[]),
     ];
     assert_eq!(report.runs.len(), 2 * expected.len());
     for run in &report.runs {
@@ -99,7 +105,12 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
             .find(|(method, _)| *method == run.method)
             .unwrap();
         let named = refusal.missing_channels();
-        for channel in *channels {
+        let motion: &[&str] = match (run.method.as_str(), run.model.contains("lateral")) {
+            ("elm-gn" | "ngn", true) => &["beta", "p", "r"],
+            ("elm-gn" | "ngn", false) => &["airspeed", "q"],
+            _ => &[],
+        };
+        for channel in channels.iter().chain(motion) {
             assert!(
                 named.contains(channel),
                 "{}/{}: {refusal}",

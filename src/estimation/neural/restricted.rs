@@ -239,12 +239,19 @@ impl Data {
     }
 }
 
-/// The coefficients the structure's terms belong to (in evaluation order).
+/// The coefficients with a free parameter among their terms (in
+/// evaluation order). A coefficient whose terms are all fixed carries no Θ
+/// and may not be computable from the structure alone (CDRW lateral: CD
+/// with a CL² term while CL has no terms is a constant the flight never
+/// had, outside every training sample).
 fn model_coefficients(structure: &ModelStructure) -> Vec<Coefficient> {
     let aero = &structure.aircraft.aero;
     Coefficient::ALL
         .into_iter()
-        .filter(|&c| aero.terms(c).next().is_some())
+        .filter(|&c| {
+            aero.terms(c)
+                .any(|(_, parameter)| structure.free[parameter])
+        })
         .collect()
 }
 
