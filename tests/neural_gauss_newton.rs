@@ -229,68 +229,53 @@ fn refusals_name_what_is_missing() {
     assert!(error.to_string().contains("[methods.ngn]"), "{error}");
 }
 
+/// 20 flight-test records of the ATTAS lateral multistep (one flight,
+/// recorder seeds 100–119), ngn with the bundled settings, beside the
+/// Cramér–Rao bounds it reports. Measured: σ_MC/CRB 1.20 (Cn_beta) to
+/// 3.56 (Cl_da), the bounds understate the scatter for every parameter;
+/// the means are biased, beyond three standard errors of the mean
+/// (3·σ_MC/√20 = 0.67 σ_MC) for 16 of 18 parameters: Cn_dr +40 %
+/// (4.1 σ_MC), Cn_beta +14 % (3.3 σ_MC), Cl_beta +6.4 % (2.2 σ_MC); the
+/// weak derivatives are lost: Cn_da −0.0064 estimated +0.0014 on average,
+/// Cn_p −0.051 estimated −0.006, CY_da +84 %. Asserted: every σ_MC above
+/// its mean bound, and Cn_dr and Cn_beta biased beyond three standard
+/// errors of their mean.
 #[test]
-fn explore() {
-    let cases = std::env::var("NGN_CASES").unwrap_or_default();
-    let settings = std::env::var("NGN_SETTINGS").unwrap_or_default();
-    for case in cases.split(';').filter(|c| !c.is_empty()) {
-        let parts: Vec<&str> = case.split(',').collect();
-        let (record, scenario) = fly(parts[0], parts[1]);
-        for method in parts[3..].iter() {
-            for s in settings.split('|') {
-                let s = if *method == "ngn" {
-                    s.replace('/', "\n")
-                } else {
-                    String::new()
-                };
-                let s = s.as_str();
-                let started = std::time::Instant::now();
-                let estimate = run(method, &record, parts[2], s);
-                eprintln!(
-                    "== {case} {method} {s}: {:?} {:.3} s iterations {}\n{}{:?}\n{:#?}",
-                    estimate.status,
-                    started.elapsed().as_secs_f64(),
-                    estimate.iterations,
-                    table(&against_truth(&estimate, &scenario)),
-                    estimate.network,
-                    estimate.notes
-                );
-            }
-        }
-    }
-}
-
-#[test]
-fn explore_monte_carlo() {
-    let Ok(runs) = std::env::var("NGN_RUNS") else {
-        return;
-    };
-    let runs: u64 = runs.parse().unwrap();
+fn flight_test_monte_carlo_scatter_exceeds_the_bounds_and_the_mean_is_biased() {
+    let runs = 20;
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
-    let mut all: Vec<Vec<(String, f64, f64, f64)>> = Vec::new();
-    for seed in 0..runs {
-        let record = profile
-            .record(&trace, &scenario.aircraft, 100 + seed)
-            .unwrap();
-        let estimate = run("ngn", &record, "attas-lateral", "");
-        all.push(against_truth(&estimate, &scenario));
-    }
+    let all: Vec<Vec<(String, f64, f64, f64)>> = (0..runs)
+        .map(|run_index| {
+            let record = profile
+                .record(&trace, &scenario.aircraft, 100 + run_index)
+                .unwrap();
+            let estimate = run("ngn", &record, "attas-lateral", "");
+            assert_eq!(estimate.status, Status::Converged);
+            against_truth(&estimate, &scenario)
+        })
+        .collect();
+    let n = runs as f64;
+    let mut text = String::new();
     for p in 0..all[0].len() {
-        let name = &all[0][p].0;
-        let truth = all[0][p].3;
-        let values: Vec<f64> = all.iter().map(|r| r[p].1).collect();
-        let mean = values.iter().sum::<f64>() / values.len() as f64;
-        let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
-            / (values.len() - 1) as f64)
-            .sqrt();
-        let crb = all.iter().map(|r| r[p].2).sum::<f64>() / all.len() as f64;
-        eprintln!(
-            "{name}: truth {truth:.5} mean {mean:.5} bias {:+.1} % bias/sd {:+.2} sd {sd:.5} crb {crb:.5} sd/crb {:.2}",
+        let (name, truth) = (&all[0][p].0, all[0][p].3);
+        let mean = all.iter().map(|r| r[p].1).sum::<f64>() / n;
+        let scatter = (all.iter().map(|r| (r[p].1 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let bound = all.iter().map(|r| r[p].2).sum::<f64>() / n;
+        text += &format!(
+            "{name}: truth {truth:.5} mean {mean:.5} ({:+.1} %, {:+.2} σ_MC) σ_MC {scatter:.5} σ_MC/CRB {:.2}\n",
             100.0 * (mean - truth) / truth,
-            (mean - truth) / sd,
-            sd / crb
+            (mean - truth) / scatter,
+            scatter / bound
         );
+        assert!(scatter > bound, "{name}: {text}");
+        if ["Cn_dr", "Cn_beta"].contains(&name.as_str()) {
+            assert!(
+                (mean - truth).abs() > 3.0 * scatter / n.sqrt(),
+                "{name}: {text}"
+            );
+        }
     }
+    eprintln!("{text}");
 }
