@@ -24,8 +24,11 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::sync::Mutex;
 
+/// Inputs and targets, row by row.
+type Pairs = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 /// A trainer that keeps a copy of the training set it is given.
-struct Capture(Mutex<Option<(Vec<Vec<f64>>, Vec<Vec<f64>>)>>);
+struct Capture(Mutex<Option<Pairs>>);
 
 impl Trainer for Capture {
     fn train(&self, set: &TrainingSet) -> aeroid::Result<(Box<dyn Network>, NetworkReport)> {
@@ -38,7 +41,7 @@ impl Trainer for Capture {
 
 /// The restricted model's training pairs of the record (ngn's: the
 /// coefficients at k+1 as outputs too), scaled as the method scales them.
-fn training_set(profile: &str) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+fn training_set(profile: &str) -> Pairs {
     let scenario = Scenario::load("attas-lateral-multistep").expect("bundled scenario");
     let profile = Profile::load(profile, None).expect("bundled profile");
     let (record, _) = record_scenario(&scenario, &profile).expect("record");

@@ -3,10 +3,11 @@
 //! flight-dynamic model, then Gauss–Newton on det(R) of the postulated
 //! aerodynamic model's parameters propagated through it.
 //!
-//! Papers: Kumar, Ghosh et al., "Longitudinal and lateral aerodynamic
-//! characterisation of reflex wing Unmanned Aerial Vehicle from flight
-//! tests using Maximum Likelihood, Least Square and Neural Gauss Newton
-//! methods", Aeronautical J., §3.3, Eqs. 29–30 (the network's input U(k):
+//! Papers: the reflex-wing UAV paper, "Longitudinal and lateral
+//! aerodynamic characterisation of reflex wing Unmanned Aerial Vehicle
+//! from flight tests using Maximum Likelihood, Least Square and Neural
+//! Gauss Newton methods" (its authors are not in the seed text), §3.3,
+//! Eqs. 29–30 (the network's input U(k):
 //! motion variables and the six coefficients at k; its output Z(k+1): the
 //! same at k+1), with the coefficients from the measured accelerations
 //! (its Eqs. 17–24); the Gauss–Newton fit through the trained network of
@@ -144,8 +145,8 @@ impl Estimator for NeuralGaussNewton {
     fn info(&self) -> MethodInfo {
         MethodInfo {
             title: "neural Gauss–Newton: a feed-forward network trained by back-propagation with Levenberg–Marquardt as the restricted flight-dynamic model, then Gauss–Newton on det(R) through it",
-            paper: "Kumar, Ghosh et al., reflex-wing UAV (CDRW), Aeronautical J., §3.3; Peyada & Ghosh's NGN as stated in \"Parameter estimation of aircraft using extreme learning machine and Gauss-Newton algorithm\"; Hagan & Menhaj, IEEE Trans. Neural Networks 5(6), 1994",
-            equations: "U(k) = [motion, coefficients](k) → Z(k+1) = [motion, coefficients](k+1) (Eqs. 29–30); LM Δw = −(JᵀJ + μI)⁻¹Jᵀe with back-propagated J (Hagan & Menhaj Eqs. 12–15); min det(R), Gauss–Newton through the network (ELM paper Eqs. 11–22)",
+            paper: "\"Longitudinal and lateral aerodynamic characterisation of reflex wing UAV from flight tests using ML, LS and neural Gauss Newton methods\" (the reflex-wing UAV paper), §3.3; Peyada & Ghosh's NGN as stated in \"Parameter estimation of aircraft using extreme learning machine and Gauss-Newton algorithm\"; Hagan & Menhaj, IEEE Trans. Neural Networks 5(6), 1994",
+            equations: "U(k) = [motion, coefficients](k) → Z(k+1) = [motion, coefficients](k+1) (Eqs. 29–30); LM Δw = −(JᵀJ + μI)⁻¹Jᵀe with back-propagated J (Hagan & Menhaj); min det(R), Gauss–Newton through the network (ELM paper Eqs. 11–22)",
             needs: "a 6-DOF structure; its integrated motion variables; load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude (coefficients from accelerations)",
             settings: setting_infos(
                 &NeuralGaussNewtonSettings::default(),

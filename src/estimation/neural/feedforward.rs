@@ -1,21 +1,23 @@
 //! The feed-forward network of the neural Gauss–Newton method and its
 //! training by back-propagation with Levenberg–Marquardt.
 //!
-//! - The network: Kumar, Ghosh et al., "Longitudinal and lateral
+//! - The network: the reflex-wing UAV paper, "Longitudinal and lateral
 //!   aerodynamic characterisation of reflex wing Unmanned Aerial Vehicle
 //!   from flight tests using Maximum Likelihood, Least Square and Neural
-//!   Gauss Newton methods", Aeronautical J., §3.3 (a feed-forward network
+//!   Gauss Newton methods" (its authors are not in the seed text), §3.3
+//!   (a feed-forward network
 //!   that maps U(k) to Z(k+1), Eqs. 29–30); the same restricted model as
 //!   Peyada & Ghosh's neural Gauss–Newton method, which the ELM paper
 //!   ("Parameter estimation of aircraft using extreme learning machine and
 //!   Gauss-Newton algorithm") states in its Eqs. 11–13.
 //! - Its training: Hagan & Menhaj, "Training feedforward networks with the
-//!   Marquardt algorithm", IEEE Trans. Neural Networks 5(6), 1994: the
-//!   Jacobian of the network's outputs with respect to every weight by
-//!   back-propagating the Marquardt sensitivities (their Eqs. 13–15, for
-//!   one hidden layer), the step Δw = −(JᵀJ + μI)⁻¹·Jᵀe (their Eq. 12),
-//!   and μ divided by β = 10 after a step that lowers the sum of squared
-//!   errors and multiplied by β until one does (their §III).
+//!   Marquardt algorithm", IEEE Trans. Neural Networks 5(6), 1994 (not
+//!   among the project's seed papers; cited by what it states, not by
+//!   equation number): the Jacobian of the network's outputs with respect
+//!   to every weight by back-propagating the Marquardt sensitivities
+//!   (for one hidden layer: ∂y_o/∂w_ji = v_oj·(1 − h_j²)·x_i), the step
+//!   Δw = −(JᵀJ + μI)⁻¹·Jᵀe, and μ divided by β = 10 after a step that
+//!   lowers the sum of squared errors and multiplied by β until one does.
 //! - Early stopping on held-out samples (every `held_out_every`-th sample,
 //!   the stopping rule of MATLAB's `trainlm`: validation error above its
 //!   best for `patience` epochs in a row), so that the network does not
@@ -117,11 +119,6 @@ impl FeedForward {
         &self.weights
     }
 
-    /// Mutable access to the weights (the order of [`FeedForward::weights`]).
-    pub fn weights_mut(&mut self) -> &mut [f64] {
-        &mut self.weights
-    }
-
     /// The number of hidden-layer weights and biases, H·(n + 1).
     fn hidden_weights(&self) -> usize {
         self.hidden * (self.inputs + 1)
@@ -144,11 +141,9 @@ impl FeedForward {
 
     /// The forward pass keeping the hidden activations.
     fn forward(&self, input: &[f64], hidden: &mut [f64], output: &mut [f64]) {
-        let (n, h) = (self.inputs, self.hidden);
-        let (hidden_layer, output_layer) = self.weights.split_at(self.hidden_weights());
-        for (activation, row) in hidden.iter_mut().zip(hidden_layer.chunks_exact(n + 1)) {
-            *activation = neuron(row, input);
-        }
+        let h = self.hidden;
+        self.forward_hidden(input, hidden);
+        let output_layer = &self.weights[self.hidden_weights()..];
         for (y, row) in output.iter_mut().zip(output_layer.chunks_exact(h + 1)) {
             *y = row[h]
                 + row[..h]
@@ -160,7 +155,7 @@ impl FeedForward {
     }
 
     /// ∂y/∂w for one input by back-propagation of the Marquardt
-    /// sensitivities (Hagan & Menhaj, Eqs. 13–15): row o, column k is
+    /// sensitivities (Hagan & Menhaj): row o, column k is
     /// ∂y_o/∂w_k. `hidden` is a buffer of the hidden-layer size and
     /// `jacobian` is outputs × weights.
     pub fn jacobian(&self, input: &[f64], hidden: &mut [f64], jacobian: &mut DMatrix<f64>) {
@@ -314,8 +309,9 @@ struct Samples<'a> {
     held_out: Vec<usize>,
 }
 
-/// Samples per matrix product when accumulating JᵀJ.
-const BLOCK: usize = 32;
+/// Samples per matrix product when accumulating JᵀJ (the product's
+/// packing buffers are its only allocations inside an epoch).
+pub const BLOCK: usize = 32;
 
 /// The buffers of one training, allocated once.
 struct Workspace {
@@ -355,7 +351,12 @@ impl LevenbergMarquardt {
                     .into(),
             ));
         }
-        if self.damping_factor <= 1.0 || !(self.damping > 0.0) {
+        let damping_valid = self.damping > 0.0
+            && self.damping_factor > 1.0
+            && self.max_damping.is_finite()
+            && self.damping.is_finite()
+            && self.damping_factor.is_finite();
+        if !damping_valid {
             return Err(Error::Other(
                 "Levenberg–Marquardt needs a damping above 0 and a damping factor above 1".into(),
             ));
