@@ -66,20 +66,20 @@ fn run_scores_every_method_on_the_lateral_scenario() {
 /// equation error the roll and yaw rates (the moment equations);
 /// output error, filter error and the augmented-state filters (EKF, UKF)
 /// the roll and yaw rates (a lateral output or pseudo-control), and so do
-/// the frequency-domain methods; estimation
+/// the frequency-domain methods and ELM-GN, RELM-GN and neural
+/// Gauss–Newton (their coefficients from the accelerations, as equation
+/// error's); estimation
 /// before modelling, which needs no rate,
 /// the airspeed and the altitude (observations of Eq. 8: the profile
 /// records calibrated airspeed and pressure altitude, not true airspeed and
-/// altitude); the restricted neural models (ELM-GN, neural Gauss–Newton)
-/// the motion variables of the model's axis they lack: airspeed and q,
-/// or β, p and r.
+/// altitude).
 #[test]
 fn qar_record_is_refused_with_what_each_method_lacks() {
     let mut scenario = Scenario::load("transport-approach").unwrap();
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
     let report = run::run(&scenario, &profile).unwrap();
-    let expected: [(&str, &[&str]); 11] = [
+    let expected: [(&str, &[&str]); 12] = [
         ("ee", &["airspeed", "p", "r"]),
         ("fdee", &["airspeed", "p", "r"]),
         ("fdoe", &["airspeed", "p", "r"]),
@@ -89,10 +89,9 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
         ("fem", &["airspeed", "p", "r"]),
         ("ekf", &["airspeed", "p", "r"]),
         ("ukf", &["airspeed", "p", "r"]),
-        // The motion variables of the model's axis: airspeed and q
-        // (longitudinal) or β, p and r (lateral), checked below.
-        ("elm-gn", &[]),
-        ("ngn", &[]),
+        ("elm-gn", &["airspeed", "p", "r"]),
+        ("relm-gn", &["airspeed", "p", "r"]),
+        ("ngn", &["airspeed", "p", "r"]),
     ];
     assert_eq!(report.runs.len(), 2 * expected.len());
     for run in &report.runs {
@@ -105,12 +104,7 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
             .find(|(method, _)| *method == run.method)
             .unwrap();
         let named = refusal.missing_channels();
-        let motion: &[&str] = match (run.method.as_str(), run.model.contains("lateral")) {
-            ("elm-gn" | "ngn", true) => &["beta", "p", "r"],
-            ("elm-gn" | "ngn", false) => &["airspeed", "q"],
-            _ => &[],
-        };
-        for channel in channels.iter().chain(motion) {
+        for channel in *channels {
             assert!(
                 named.contains(channel),
                 "{}/{}: {refusal}",

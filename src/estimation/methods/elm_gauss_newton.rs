@@ -30,7 +30,7 @@ use crate::estimation::estimator::{
 };
 use crate::estimation::methods::equation_error::{self, EquationErrorOptions, equation_error};
 use crate::estimation::neural::elm::ElmTrainer;
-use crate::estimation::neural::restricted::{self, RestrictedOptions};
+use crate::estimation::neural::restricted::{self, Feedback, RestrictedOptions};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::ReconstructionOptions;
 use crate::prep::differentiation::Differentiator;
@@ -69,6 +69,8 @@ pub struct ElmSettings {
     pub max_iterations: usize,
     /// The differentiator of the angular rates (moment coefficients) and α.
     pub differentiator: Differentiator,
+    /// The motion variables fed to the network during the estimation.
+    pub feedback: Feedback,
 }
 
 impl Default for ElmSettings {
@@ -83,12 +85,13 @@ impl Default for ElmSettings {
             start: Start::default(),
             max_iterations: options.max_iterations,
             differentiator: options.differentiator,
+            feedback: options.feedback,
         }
     }
 }
 
 /// The meanings of the settings ELM-GN and RELM-GN share.
-pub(crate) const SHARED_SETTINGS: [(&str, &str); 7] = [
+pub(crate) const SHARED_SETTINGS: [(&str, &str); 8] = [
     (
         "seed",
         "seed of the network's random input weights and biases",
@@ -111,6 +114,10 @@ pub(crate) const SHARED_SETTINGS: [(&str, &str); 7] = [
     ),
     ("max_iterations", "Gauss–Newton iterations at most"),
     crate::estimation::methods::equation_error::DIFFERENTIATOR_SETTING,
+    (
+        "feedback",
+        "motion variables fed to the network in the estimation: \"measured\" (ELM paper Eq. 11, Verma & Peyada Eq. 23) or \"predicted\" (the network's previous prediction, free-running from the first sample)",
+    ),
 ];
 
 impl ElmSettings {
@@ -158,6 +165,7 @@ impl ElmSettings {
             scaling: (self.scaling[0], self.scaling[1]),
             max_iterations: self.max_iterations,
             differentiator: self.differentiator,
+            feedback: self.feedback,
             ..RestrictedOptions::default()
         }
     }
@@ -172,7 +180,7 @@ pub(crate) fn equation_error_start(
     if settings.start != Start::EquationError {
         return None;
     }
-    let structure = problem.structure.six_dof(METHOD).ok()?;
+    let structure = problem.structure.six_dof(&problem.method).ok()?;
     let options = EquationErrorOptions {
         reconstruction: ReconstructionOptions {
             differentiator: Some(settings.differentiator),
@@ -213,21 +221,33 @@ impl Estimator for ElmGaussNewton {
     }
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
-        let settings = ElmSettings::read(METHOD, &problem.settings)?;
-        problem.structure.six_dof(METHOD)?;
-        let own = match start {
-            Some(_) => None,
-            None => equation_error_start(problem, &settings),
-        };
-        let start = start
-            .filter(|_| settings.start == Start::EquationError)
-            .or(own.as_ref());
-        restricted::estimate(
-            METHOD,
-            problem,
-            start,
-            &settings.trainer("elm"),
-            &settings.options(),
-        )
+        estimate_with(METHOD, "elm", problem, start)
     }
+}
+
+/// ELM-GN or RELM-GN (`method`, its network reported as `kind`): the
+/// settings read, the start chosen (module documentation), the restricted
+/// model fitted.
+pub(crate) fn estimate_with(
+    method: &str,
+    kind: &'static str,
+    problem: &EstimationProblem,
+    start: Option<&Estimate>,
+) -> Result<Estimate> {
+    let settings = ElmSettings::read(method, &problem.settings)?;
+    problem.structure.six_dof(method)?;
+    let own = match start {
+        Some(_) => None,
+        None => equation_error_start(problem, &settings),
+    };
+    let start = start
+        .filter(|_| settings.start == Start::EquationError)
+        .or(own.as_ref());
+    restricted::estimate(
+        method,
+        problem,
+        start,
+        &settings.trainer(kind),
+        &settings.options(),
+    )
 }

@@ -66,7 +66,7 @@ use crate::estimation::methods::equation_error::record_name;
 use crate::estimation::neural::{NetworkReport, Scaling};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
-    Reconstruction, ReconstructionOptions, Request, control_steps, reconstruct,
+    Reconstruction, ReconstructionOptions, Request, check_channels, control_steps, reconstruct,
 };
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
@@ -286,6 +286,36 @@ fn sampled(record: &FlightRecord, name: &str, times: &[f64]) -> Result<Option<Ve
     }
 }
 
+/// Checks that the record has the motion variables and every channel the
+/// coefficients need: one refusal naming all that are missing.
+fn check_motion_and_channels(
+    method: &str,
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    request: &Request,
+    motion_names: &[String],
+) -> Result<()> {
+    let mut missing: Vec<MissingChannel> =
+        match check_channels(record, &structure.aircraft, request, method) {
+            Ok(()) => Vec::new(),
+            Err(Error::Refused(Refusal::MissingChannels { channels, .. })) => channels,
+            Err(error) => return Err(error),
+        };
+    for name in motion_names {
+        if record.channel(name).is_err() && !missing.iter().any(|c| &c.name == name) {
+            missing.push(MissingChannel {
+                name: name.clone(),
+                purpose: "motion variable of the restricted neural model".into(),
+            });
+        }
+    }
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    match Refusal::missing(method, missing, present) {
+        Some(refusal) => Err(Error::Refused(refusal)),
+        None => Ok(()),
+    }
+}
+
 /// Reads the record onto the restricted model's time base.
 fn prepare(
     method: &str,
@@ -303,18 +333,6 @@ fn prepare(
             reason: "the restricted neural model needs coefficients with terms and integrated motion variables".into(),
         }));
     }
-    let missing: Vec<MissingChannel> = motion_names
-        .iter()
-        .filter(|name| record.channel(name).is_err())
-        .map(|name| MissingChannel {
-            name: name.clone(),
-            purpose: "motion variable of the restricted neural model".into(),
-        })
-        .collect();
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(method, missing, present) {
-        return Err(Error::Refused(refusal));
-    }
     let mut request = Request {
         coefficients: coefficients.clone(),
         regressors: Vec::new(),
@@ -325,6 +343,7 @@ fn prepare(
     if aero.kind == ModelKind::Stall {
         request.regressors.push(Regressor::Alpha);
     }
+    check_motion_and_channels(method, record, structure, &request, &motion_names)?;
     let reconstruction = reconstruct(
         record,
         &structure.aircraft,
@@ -492,6 +511,8 @@ struct Fit<'a> {
     predictions: Vec<f64>,
     /// Scaled targets, pair by pair.
     targets: Vec<f64>,
+    /// The Θ `predictions` and `coefficients` are of.
+    predicted_at: Option<DVector<f64>>,
     input: Vec<f64>,
 }
 
@@ -520,6 +541,7 @@ impl<'a> Fit<'a> {
             coefficients: vec![0.0; data.times.len() * data.coefficient_count()],
             predictions: vec![0.0; data.pairs.len() * outputs],
             targets,
+            predicted_at: None,
             input: vec![0.0; data.motion_count() + data.coefficient_count()],
         }
     }
@@ -527,6 +549,7 @@ impl<'a> Fit<'a> {
     /// The model's coefficients at every instant with Θ (χ from the
     /// separation equations, module documentation).
     fn evaluate_coefficients(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
+        self.predicted_at = None;
         for (j, &i) in self.free.iter().enumerate() {
             self.model.parameters.values_mut()[i] = theta[j];
         }
@@ -581,6 +604,10 @@ impl<'a> Fit<'a> {
 
     /// The scaled predictions of every pair at Θ (Eq. 11 or 23).
     fn predict(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
+        if self.predicted_at.as_ref() == Some(theta) {
+            return Ok(());
+        }
+        self.predicted_at = None;
         self.evaluate_coefficients(theta)?;
         let data = self.data;
         let (m, outputs) = (data.motion_count(), data.output_count());
@@ -604,10 +631,11 @@ impl<'a> Fit<'a> {
             );
             previous = Some(k);
         }
-        match self.predictions.iter().all(|v| v.is_finite()) {
-            true => Ok(()),
-            false => Err("the network's predictions are not finite at this Θ".into()),
+        if !self.predictions.iter().all(|v| v.is_finite()) {
+            return Err("the network's predictions are not finite at this Θ".into());
         }
+        self.predicted_at = Some(theta.clone());
+        Ok(())
     }
 
     /// Z − Y, pair by pair (scaled).
@@ -661,26 +689,132 @@ impl LeastSquaresProblem for Fit<'_> {
         Ok(true)
     }
 
-    /// Forward differences (Eq. 19), step 10⁻⁶·max(|Θ_j|, typical).
+    /// Forward differences (Eq. 19), step 10⁻⁶·max(|Θ_j|, typical). With
+    /// measured feedback Θ reaches the network only through the
+    /// coefficients at the same sample, so the difference is taken through
+    /// the chain rule, ∂Y(i+1)/∂Θ_j = Σ_c ∂f/∂C_c·∂C_c(i)/∂Θ_j, each factor
+    /// a forward difference: the model once per parameter, the network
+    /// once per coefficient (3 instead of n_Θ network passes). With
+    /// predicted feedback Θ also reaches Y(i+1) through Y(i): the whole
+    /// free-running prediction is differenced per parameter.
     fn jacobian(
         &mut self,
         theta: &DVector<f64>,
         options: &Options,
     ) -> std::result::Result<DMatrix<f64>, String> {
-        let base = self.residuals(theta)?;
-        let mut jacobian = DMatrix::zeros(base.len(), theta.len());
-        let mut perturbed = theta.clone();
-        for j in 0..theta.len() {
-            let h = options.relative_step
+        let step = |j: usize| {
+            options.relative_step
                 * theta[j]
                     .abs()
-                    .max(options.typical.get(j).copied().unwrap_or(1e-3));
-            perturbed[j] = theta[j] + h;
-            let column = (self.residuals(&perturbed)? - &base) / h;
-            jacobian.set_column(j, &column);
-            perturbed[j] = theta[j];
+                    .max(options.typical.get(j).copied().unwrap_or(1e-3))
+        };
+        if self.feedback == Feedback::Predicted {
+            let base = self.residuals(theta)?;
+            let mut jacobian = DMatrix::zeros(base.len(), theta.len());
+            let mut perturbed = theta.clone();
+            for j in 0..theta.len() {
+                perturbed[j] = theta[j] + step(j);
+                let column = (self.residuals(&perturbed)? - &base) / step(j);
+                jacobian.set_column(j, &column);
+                perturbed[j] = theta[j];
+            }
+            return Ok(jacobian);
+        }
+        let slopes = self.coefficient_slopes(theta, step)?;
+        let network = self.network_slopes(theta)?;
+        let (n, c, parameters) = (
+            self.data.output_count(),
+            self.data.coefficient_count(),
+            theta.len(),
+        );
+        let mut jacobian = DMatrix::zeros(self.data.pairs.len() * n, parameters);
+        let mut response = vec![0.0; n];
+        for (pair, &k) in self.data.pairs.iter().enumerate() {
+            let network = &network[pair * n * c..(pair + 1) * n * c];
+            for j in 0..parameters {
+                let slope = &slopes[(j * self.data.times.len() + k) * c..][..c];
+                for (o, value) in response.iter_mut().enumerate() {
+                    *value = (0..c).map(|i| network[o * c + i] * slope[i]).sum();
+                }
+                for o in 0..n {
+                    jacobian[(pair * n + o, j)] = -(0..=o)
+                        .map(|i| self.whitening[(o, i)] * response[i])
+                        .sum::<f64>();
+                }
+            }
         }
         Ok(jacobian)
+    }
+}
+
+impl Fit<'_> {
+    /// ∂C/∂Θ_j of each instant's coefficients, in the network's scaled
+    /// input units: parameter by parameter, instant by instant, coefficient
+    /// by coefficient. The coefficients at Θ are restored.
+    fn coefficient_slopes(
+        &mut self,
+        theta: &DVector<f64>,
+        step: impl Fn(usize) -> f64,
+    ) -> std::result::Result<Vec<f64>, String> {
+        let data = self.data;
+        let (m, c) = (data.motion_count(), data.coefficient_count());
+        let scale: Vec<f64> = (0..c)
+            .map(|i| match data.input_scaling.unscale_factor(m + i) {
+                f if f > 0.0 => 1.0 / f,
+                _ => 0.0,
+            })
+            .collect();
+        self.evaluate_coefficients(theta)?;
+        let base = self.coefficients.clone();
+        let mut slopes = Vec::with_capacity(theta.len() * base.len());
+        let mut perturbed = theta.clone();
+        for j in 0..theta.len() {
+            let h = step(j);
+            perturbed[j] = theta[j] + h;
+            self.evaluate_coefficients(&perturbed)?;
+            perturbed[j] = theta[j];
+            slopes.extend(
+                self.coefficients
+                    .iter()
+                    .zip(&base)
+                    .enumerate()
+                    .map(|(index, (up, at))| (up - at) / h * scale[index % c]),
+            );
+        }
+        self.coefficients = base;
+        Ok(slopes)
+    }
+
+    /// ∂f/∂x_c of the network at each pair's input at Θ with respect to
+    /// each scaled coefficient input, by forward differences of 10⁻⁶ of the
+    /// scaled range: pair by pair, output by output, coefficient by
+    /// coefficient. Expects the coefficients at Θ (see
+    /// [`Fit::coefficient_slopes`]); the predictions at Θ are kept.
+    fn network_slopes(&mut self, theta: &DVector<f64>) -> std::result::Result<Vec<f64>, String> {
+        self.predict(theta)?;
+        let data = self.data;
+        let (m, c, n) = (
+            data.motion_count(),
+            data.coefficient_count(),
+            data.output_count(),
+        );
+        let delta = 1e-6 * (data.input_scaling.high - data.input_scaling.low);
+        let mut slopes = vec![0.0; data.pairs.len() * n * c];
+        let mut shifted = vec![0.0; n];
+        for (pair, &k) in data.pairs.iter().enumerate() {
+            data.raw_input(k, &self.coefficients, &mut self.input);
+            data.input_scaling.apply(&mut self.input);
+            let base = &self.predictions[pair * n..(pair + 1) * n];
+            for i in 0..c {
+                self.input[m + i] += delta;
+                self.network.predict(&self.input, &mut shifted);
+                self.input[m + i] -= delta;
+                for o in 0..n {
+                    slopes[(pair * n + o) * c + i] = (shifted[o] - base[o]) / delta;
+                }
+            }
+        }
+        Ok(slopes)
     }
 }
 
