@@ -347,3 +347,37 @@ fn training_and_prediction_allocate_nothing_per_sample() {
     }
     assert_eq!(ALLOCATIONS.with(std::cell::Cell::get), before);
 }
+
+/// Where ngn does not recover the parameters on noise-free data (ideal
+/// profile, bundled settings): the longitudinal records of ATTAS (3211)
+/// and Hansa-3 (multistep). The network fits the one-step map to R²
+/// 0.9999999 and better, yet Gauss–Newton through it stops at the
+/// iteration limit far from the truth: Hansa-3 CL_de −0.29 against 0.265,
+/// CD_de −0.023 against 0.026, while Cm_alpha, Cm_de and Cm_q are within
+/// 3.4 %; ATTAS CL_de −0.66 against 0.105, Cm_alpha −0.022 against
+/// −0.176. The cause is not established (the CDRW longitudinal record,
+/// with drag also tied to lift by a CL² term, is recovered within 0.2 %).
+/// On their 25 Hz flight-test records the same fits converge, Hansa-3
+/// within 13 % except CD_de (−38 %). Asserted as the finding: not
+/// converged on the ideal record, CL_de of the wrong sign; converged on
+/// the flight-test record with CL_alpha within 5 %.
+#[test]
+fn ideal_hansa3_and_attas_longitudinal_are_not_recovered() {
+    for (scenario, model) in [
+        ("hansa3-elevator-multistep", "hansa3-longitudinal"),
+        ("attas-elevator-3211", "attas-longitudinal"),
+    ] {
+        let (record, truth) = fly(scenario, "ideal");
+        let estimate = run("ngn", &record, model, "");
+        let text = table(&against_truth(&estimate, &truth));
+        assert_ne!(estimate.status, Status::Converged, "{scenario}\n{text}");
+        let cl_de = estimate.parameter("CL_de").unwrap().value;
+        assert!(cl_de < 0.0, "{scenario}\n{text}");
+    }
+    let (record, truth) = fly("hansa3-elevator-multistep", "flight-test-25hz");
+    let estimate = run("ngn", &record, "hansa3-longitudinal", "");
+    let text = table(&against_truth(&estimate, &truth));
+    assert_eq!(estimate.status, Status::Converged, "{text}");
+    let cl_alpha = estimate.parameter("CL_alpha").unwrap().value;
+    assert!((cl_alpha - 4.978).abs() < 0.05 * 4.978, "{text}");
+}
