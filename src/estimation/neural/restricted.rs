@@ -16,8 +16,8 @@
 //!    i+1, Eq. 30 of the reflex-wing UAV paper). The motion variables are
 //!    the structure's integrated states (χ left out: it is not measured) —
 //!    longitudinal α, θ, q, V or lateral β, φ, p, r, as in the papers — and
-//!    the coefficients those of the structure's terms (CL, CD, Cm or CY,
-//!    Cl, Cn). The controls enter only through the coefficients. For
+//!    the coefficients those with a free parameter among the structure's
+//!    terms (CL, CD, Cm or CY, Cl, Cn). The controls enter only through the coefficients. For
 //!    training the coefficients come from the measured accelerations and
 //!    angular accelerations ([`crate::estimation::reconstruction`], Verma &
 //!    Peyada Eqs. 12–15), on the reconstruction's time base; a pair (i, i+1)
