@@ -45,7 +45,11 @@
 //!    base) and a Gauss–Newton step (Eqs. 16–20) on ½·Σ EᵀR⁻¹E, the
 //!    residuals whitened by the Cholesky factor of R. The response
 //!    gradients are forward differences (Eq. 19), step
-//!    10⁻⁶·max(|Θ_j|, 10⁻³). The Cramér–Rao bounds are the square roots
+//!    10⁻⁶·max(|Θ_j|, 10⁻³); with measured feedback Θ reaches the network
+//!    only through the coefficients of the same sample, so they are taken
+//!    through the chain rule, ∂Y/∂Θ_j = Σ_c ∂f/∂C_c·∂C_c/∂Θ_j, each factor
+//!    a forward difference (the network differenced once per coefficient,
+//!    not once per parameter). The Cramér–Rao bounds are the square roots
 //!    of the diagonal of P = [Σ (∂Y/∂Θ)ᵀR⁻¹(∂Y/∂Θ)]⁻¹ (Eqs. 21–22).
 //!    Residuals are in the network's scaled units (det(R) differs from the
 //!    physical one by a constant factor, so the minimum is the same); the
@@ -438,13 +442,12 @@ fn assemble(
             controls: Controls::from_fn(|i, _| controls[i].as_ref().map_or(0.0, |s| s[k])),
             chi: 1.0,
         };
-        let motion: Vec<f64> = motion_series.iter().map(|s| s[k]).collect();
-        let measured: Vec<f64> = data
+        let motion = motion_series.iter().map(|s| s[k]);
+        let measured = data
             .coefficients
             .iter()
-            .map(|&c| reconstruction.coefficient(c)[k])
-            .collect();
-        let finite = motion.iter().chain(&measured).all(|v| v.is_finite())
+            .map(|&c| reconstruction.coefficient(c)[k]);
+        let finite = motion.clone().chain(measured.clone()).all(f64::is_finite)
             && condition.alpha_dot.is_finite();
         if !finite {
             left_out += 1;
