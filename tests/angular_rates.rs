@@ -233,8 +233,9 @@ fn table_row(outcome: &Outcome) -> String {
 /// The QAR approach end to end: transport-approach recorded by
 /// qar-seed000, derived (combined surfaces, geometric α, β and airspeed,
 /// kinematic rates), and every estimator on both models. Regression-based
-/// methods, the ELM methods (their training coefficients come from the
-/// accelerations, as equation error's) and estimation before modelling
+/// methods, the neural methods (ELM-GN, RELM-GN, neural Gauss–Newton:
+/// their training coefficients come from the accelerations, as equation
+/// error's) and estimation before modelling
 /// refuse with a typed refusal
 /// naming `altitude` and `throttle` (the QAR records pressure altitude and
 /// no throttle); the output-error and filter methods run and each ends
@@ -278,7 +279,7 @@ fn the_qar_approach_end_to_end() {
                             "{method}: {refusal}"
                         );
                         assert!(
-                            ["ee", "swr", "ebm", "fdee", "elm-gn", "relm-gn"]
+                            ["ee", "swr", "ebm", "fdee", "elm-gn", "relm-gn", "ngn"]
                                 .contains(&method.as_str())
                         );
                     }

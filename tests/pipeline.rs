@@ -66,8 +66,9 @@ fn run_scores_every_method_on_the_lateral_scenario() {
 /// equation error the roll and yaw rates (the moment equations);
 /// output error, filter error and the augmented-state filters (EKF, UKF)
 /// the roll and yaw rates (a lateral output or pseudo-control), and so do
-/// the frequency-domain methods and ELM-GN and RELM-GN (their coefficients
-/// from the accelerations, as equation error's); estimation
+/// the frequency-domain methods and ELM-GN, RELM-GN and neural
+/// Gauss–Newton (their coefficients from the accelerations, as equation
+/// error's); estimation
 /// before modelling, which needs no rate,
 /// the airspeed and the altitude (observations of Eq. 8: the profile
 /// records calibrated airspeed and pressure altitude, not true airspeed and
@@ -78,7 +79,7 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
     let report = run::run(&scenario, &profile).unwrap();
-    let expected: [(&str, &[&str]); 11] = [
+    let expected: [(&str, &[&str]); 12] = [
         ("ee", &["airspeed", "p", "r"]),
         ("fdee", &["airspeed", "p", "r"]),
         ("fdoe", &["airspeed", "p", "r"]),
@@ -90,6 +91,7 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
         ("ukf", &["airspeed", "p", "r"]),
         ("elm-gn", &["airspeed", "p", "r"]),
         ("relm-gn", &["airspeed", "p", "r"]),
+        ("ngn", &["airspeed", "p", "r"]),
     ];
     assert_eq!(report.runs.len(), 2 * expected.len());
     for run in &report.runs {

@@ -12,6 +12,7 @@ pub mod filter_error;
 pub mod frequency_output_error;
 pub mod frequency_regression;
 pub mod linear_equation_error;
+pub mod neural_gauss_newton;
 pub mod output_error;
 pub mod recurrent_elm;
 pub mod smoothed_regression;
@@ -38,6 +39,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(frequency_output_error::FrequencyOutputError),
         Arc::new(elm_gauss_newton::ElmGaussNewton),
         Arc::new(recurrent_elm::RecurrentElm),
+        Arc::new(neural_gauss_newton::NeuralGaussNewton),
     ]
 }
 

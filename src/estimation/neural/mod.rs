@@ -22,6 +22,8 @@ pub mod restricted;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
+pub mod feedforward;
+
 /// The log-sigmoid activation.
 #[inline]
 pub fn log_sigmoid(s: f64) -> f64 {

@@ -16,8 +16,8 @@
 //!    i+1, Eq. 30 of the reflex-wing UAV paper). The motion variables are
 //!    the structure's integrated states (χ left out: it is not measured) —
 //!    longitudinal α, θ, q, V or lateral β, φ, p, r, as in the papers — and
-//!    the coefficients those of the structure's terms (CL, CD, Cm or CY,
-//!    Cl, Cn). The controls enter only through the coefficients. For
+//!    the coefficients those with a free parameter among the structure's
+//!    terms (CL, CD, Cm or CY, Cl, Cn). The controls enter only through the coefficients. For
 //!    training the coefficients come from the measured accelerations and
 //!    angular accelerations ([`crate::estimation::reconstruction`], Verma &
 //!    Peyada Eqs. 12–15), on the reconstruction's time base; a pair (i, i+1)
@@ -243,12 +243,19 @@ impl Data {
     }
 }
 
-/// The coefficients the structure's terms belong to (in evaluation order).
+/// The coefficients with a free parameter among their terms (in
+/// evaluation order). A coefficient whose terms are all fixed carries no Θ
+/// and may not be computable from the structure alone (CDRW lateral: CD
+/// with a CL² term while CL has no terms is a constant the flight never
+/// had, outside every training sample).
 fn model_coefficients(structure: &ModelStructure) -> Vec<Coefficient> {
     let aero = &structure.aircraft.aero;
     Coefficient::ALL
         .into_iter()
-        .filter(|&c| aero.terms(c).next().is_some())
+        .filter(|&c| {
+            aero.terms(c)
+                .any(|(_, parameter)| structure.free[parameter])
+        })
         .collect()
 }
 

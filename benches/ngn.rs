@@ -1,0 +1,98 @@
+//! Neural Gauss–Newton (`ngn`) on the ATTAS lateral-directional case
+//! (scenario attas-lateral-multistep: 60 s of aileron and rudder
+//! multisteps recorded at 25 Hz by the flight-test profile; model
+//! attas-lateral, 18 parameters, the bundled settings): `training` times
+//! the feed-forward network's Levenberg–Marquardt training alone on the
+//! restricted model's training set (1 428 pairs of 7 inputs and 7
+//! outputs, 10 tanh neurons, early stopping on every 5th pair), and
+//! `train_and_estimate` the whole method, training and the Gauss–Newton
+//! fit through the network. A second group times the training of 200
+//! epochs on a noise-free record's set, where early stopping does not end
+//! it (`training_200_epochs_ideal`). Run: `cargo bench --bench ngn`.
+
+use aeroid::estimation::methods;
+use aeroid::estimation::neural::NetworkReport;
+use aeroid::estimation::neural::feedforward::LevenbergMarquardt;
+use aeroid::estimation::neural::restricted::{
+    self, Network, RestrictedOptions, Trainer, TrainingSet,
+};
+use aeroid::estimation::problem::EstimationProblem;
+use aeroid::estimation::structure::ModelStructure;
+use aeroid::record::recorder::{Profile, record_scenario};
+use aeroid::sim::scenario::Scenario;
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use std::sync::Mutex;
+
+/// Inputs and targets, row by row.
+type Pairs = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
+/// A trainer that keeps a copy of the training set it is given.
+struct Capture(Mutex<Option<Pairs>>);
+
+impl Trainer for Capture {
+    fn train(&self, set: &TrainingSet) -> aeroid::Result<(Box<dyn Network>, NetworkReport)> {
+        if let Ok(mut kept) = self.0.lock() {
+            *kept = Some((set.inputs.clone(), set.targets.clone()));
+        }
+        Trainer::train(&LevenbergMarquardt::default(), set)
+    }
+}
+
+/// The restricted model's training pairs of the record (ngn's: the
+/// coefficients at k+1 as outputs too), scaled as the method scales them.
+fn training_set(profile: &str) -> Pairs {
+    let scenario = Scenario::load("attas-lateral-multistep").expect("bundled scenario");
+    let profile = Profile::load(profile, None).expect("bundled profile");
+    let (record, _) = record_scenario(&scenario, &profile).expect("record");
+    let structure = ModelStructure::load("attas-lateral").expect("bundled model");
+    let problem = EstimationProblem::new("ngn", vec![record], structure, &[]).expect("problem");
+    let capture = Capture(Mutex::new(None));
+    let options = RestrictedOptions {
+        coefficient_outputs: true,
+        ..RestrictedOptions::default()
+    };
+    restricted::estimate("ngn", &problem, None, &capture, &options).expect("estimate");
+    capture.0.into_inner().ok().flatten().expect("training set")
+}
+
+fn bench_ngn(c: &mut Criterion) {
+    let scenario = Scenario::load("attas-lateral-multistep").expect("bundled scenario");
+    let profile = Profile::load("flight-test-25hz", None).expect("bundled profile");
+    let (record, _) = record_scenario(&scenario, &profile).expect("record");
+    let structure = ModelStructure::load("attas-lateral").expect("bundled model");
+    let problem = EstimationProblem::new("ngn", vec![record], structure, &[]).expect("problem");
+    let (inputs, targets) = training_set("flight-test-25hz");
+    let mut group = c.benchmark_group("attas_lateral_ngn");
+    group.sample_size(20);
+    let trainer = LevenbergMarquardt::default();
+    group.bench_function("training", |b| {
+        b.iter(|| {
+            trainer
+                .train(black_box(&inputs), &targets)
+                .expect("trained")
+        })
+    });
+    group.bench_function("train_and_estimate", |b| {
+        b.iter(|| methods::estimate(black_box(&problem), None).expect("estimate"))
+    });
+    group.finish();
+    let (inputs, targets) = training_set("ideal");
+    let mut group = c.benchmark_group("attas_lateral_ngn_ideal");
+    group.sample_size(10);
+    let trainer = LevenbergMarquardt {
+        held_out_every: 0,
+        ..LevenbergMarquardt::default()
+    };
+    group.bench_function("training_200_epochs_ideal", |b| {
+        b.iter(|| {
+            trainer
+                .train(black_box(&inputs), &targets)
+                .expect("trained")
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_ngn);
+criterion_main!(benches);
