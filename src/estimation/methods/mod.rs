@@ -12,6 +12,7 @@ pub mod frequency_output_error;
 pub mod frequency_regression;
 pub mod linear_equation_error;
 pub mod output_error;
+pub mod rbf_delta;
 pub mod smoothed_regression;
 pub mod stepwise;
 pub mod unscented;
@@ -34,6 +35,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(unscented::UnscentedFilter),
         Arc::new(frequency_regression::FrequencyRegression),
         Arc::new(frequency_output_error::FrequencyOutputError),
+        Arc::new(rbf_delta::RbfDelta),
     ]
 }
 

@@ -16,6 +16,8 @@
 //! NETWORK_WEIGHTS)`: a seed gives the same network, bit for bit, whatever
 //! the thread count.
 
+pub mod rbf;
+
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
