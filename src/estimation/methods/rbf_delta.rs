@@ -17,7 +17,8 @@
 //!    parameter; inputs (Eq. 27) (Mach, α, β, q̂, δe, δf) for CL, CD, Cm and
 //!    (Mach, α, β, p̂, r̂, δa, δr) for CY, Cl, Cn, each as the structure
 //!    defines its regressor (rates nondimensional p̂ = p·b/2V …, Mach as
-//!    Mach − the reference Mach), so that a derivative of the network is
+//!    Mach − the reference Mach, or the Mach number for a structure without
+//!    a Mach term), so that a derivative of the network is
 //!    directly the structure's parameter. An input constant on the record
 //!    (or without a channel) carries no information and is left out, with
 //!    a note.
