@@ -235,8 +235,9 @@ fn table_row(outcome: &Outcome) -> String {
 /// kinematic rates), and every estimator on both models. Regression-based
 /// methods, the neural methods (ELM-GN, RELM-GN, neural Gauss–Newton:
 /// their training coefficients come from the accelerations, as equation
-/// error's) and estimation before modelling
-/// refuse with a typed refusal
+/// error's), estimation before modelling and the RBF + Delta method (whose
+/// reconstruction needs the throttle, so it takes the smoother, which
+/// needs the altitude) refuse with a typed refusal
 /// naming `altitude` and `throttle` (the QAR records pressure altitude and
 /// no throttle); the output-error and filter methods run and each ends
 /// in a status that says the fit is not to be trusted, or fails with the
@@ -279,8 +280,17 @@ fn the_qar_approach_end_to_end() {
                             "{method}: {refusal}"
                         );
                         assert!(
-                            ["ee", "swr", "ebm", "fdee", "elm-gn", "relm-gn", "ngn"]
-                                .contains(&method.as_str())
+                            [
+                                "ee",
+                                "swr",
+                                "ebm",
+                                "fdee",
+                                "elm-gn",
+                                "relm-gn",
+                                "ngn",
+                                "rbf-delta",
+                            ]
+                            .contains(&method.as_str())
                         );
                     }
                     Outcome::Estimated { estimate, .. } => {

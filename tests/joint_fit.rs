@@ -78,12 +78,22 @@ fn two_repeats_fitted_jointly_halve_the_variance() {
 
 /// Every method but output error fits one record at a time (equation
 /// error, stepwise regression, filter error, the EKF and UKF, estimation
-/// before modelling, the frequency-domain methods, the neural methods): given two, each refuses with a typed refusal rather
+/// before modelling, the frequency-domain methods, the neural methods,
+/// the RBF + Delta method): given two, each refuses with a typed refusal rather
 /// than use the first.
 #[test]
 fn one_record_methods_refuse_several() {
     for method in [
         "ee", "swr", "fem", "ekf", "ukf", "ebm", "fdee", "fdoe", "elm-gn", "relm-gn", "ngn",
+        "ee",
+        "swr",
+        "fem",
+        "ekf",
+        "ukf",
+        "ebm",
+        "fdee",
+        "fdoe",
+        "rbf-delta",
     ] {
         let error = fit(method, repeats().to_vec()).unwrap_err();
         let aeroid::Error::Refused(refusal) = &error else {

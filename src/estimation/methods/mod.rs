@@ -15,6 +15,7 @@ pub mod linear_equation_error;
 pub mod neural_gauss_newton;
 pub mod output_error;
 pub mod recurrent_elm;
+pub mod rbf_delta;
 pub mod smoothed_regression;
 pub mod stepwise;
 pub mod unscented;
@@ -40,6 +41,7 @@ fn built_in() -> Vec<Arc<dyn Estimator>> {
         Arc::new(elm_gauss_newton::ElmGaussNewton),
         Arc::new(recurrent_elm::RecurrentElm),
         Arc::new(neural_gauss_newton::NeuralGaussNewton),
+        Arc::new(rbf_delta::RbfDelta),
     ]
 }
 

@@ -764,7 +764,7 @@ fn determination_note(smoothed: &[Gaussian], deviations: &[DVector<f64>]) -> Str
 /// The smoothed coefficients and regressors as the regression's data:
 /// every grid point, the coefficients in the structure's axes, the
 /// regressors from the smoothed states and the recorded controls.
-fn regression_data(
+pub(crate) fn regression_data(
     record: &FlightRecord,
     structure: &ModelStructure,
     smoothed: &Smoothed,

@@ -18,6 +18,7 @@
 
 pub mod elm;
 pub mod restricted;
+pub mod rbf;
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
