@@ -86,8 +86,7 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
     let report = run::run(&scenario, &profile).unwrap();
-    let expected: [(&str, &[&str]); 12] = [
-    let expected: [(&str, &[&str]); 10] = [
+    let expected: [(&str, &[&str]); 13] = [
         ("ee", &["airspeed", "p", "r"]),
         ("fdee", &["airspeed", "p", "r"]),
         ("fdoe", &["airspeed", "p", "r"]),

@@ -17,8 +17,8 @@
 //! the thread count.
 
 pub mod elm;
-pub mod restricted;
 pub mod rbf;
+pub mod restricted;
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
