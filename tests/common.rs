@@ -60,3 +60,37 @@ pub fn truth_at(trace: &aeroid::sim::trace::TruthTrace, name: &str, times: &[f64
         .map(|&t| aeroid::record::recorder::interpolate(&grid, &values, t))
         .collect()
 }
+
+/// Each estimated parameter against the scenario's truth: (name, estimate,
+/// σ, truth); NaN where the truth model has no such parameter.
+pub fn against_truth(
+    estimate: &aeroid::estimation::estimate::Estimate,
+    scenario: &aeroid::sim::scenario::Scenario,
+) -> Vec<(String, f64, f64, f64)> {
+    estimate
+        .parameters
+        .iter()
+        .map(|p| {
+            let truth = scenario
+                .aircraft
+                .aero
+                .parameters
+                .get(&p.name)
+                .unwrap_or(f64::NAN);
+            (p.name.clone(), p.value, p.standard_error, truth)
+        })
+        .collect()
+}
+
+/// Rows of [`against_truth`] as text: value ± σ, truth, error in % and σ.
+pub fn truth_table(rows: &[(String, f64, f64, f64)]) -> String {
+    rows.iter()
+        .map(|(name, value, sigma, truth)| {
+            format!(
+                "{name}: {value:.5} ± {sigma:.5} (truth {truth:.5}, {:+.2} %, {:+.2} σ)\n",
+                100.0 * (value - truth) / truth,
+                (value - truth) / sigma
+            )
+        })
+        .collect()
+}

@@ -34,35 +34,6 @@ fn run(method: &str, record: &FlightRecord, model: &str, settings: &str) -> Esti
     aeroid::estimation::methods::estimate(&problem, None).unwrap()
 }
 
-/// Each estimated parameter: (name, estimate, σ, truth).
-fn against_truth(estimate: &Estimate, scenario: &Scenario) -> Vec<(String, f64, f64, f64)> {
-    estimate
-        .parameters
-        .iter()
-        .map(|p| {
-            let truth = scenario
-                .aircraft
-                .aero
-                .parameters
-                .get(&p.name)
-                .unwrap_or(f64::NAN);
-            (p.name.clone(), p.value, p.standard_error, truth)
-        })
-        .collect()
-}
-
-fn table(rows: &[(String, f64, f64, f64)]) -> String {
-    rows.iter()
-        .map(|(name, value, sigma, truth)| {
-            format!(
-                "{name}: {value:.5} ± {sigma:.5} (truth {truth:.5}, {:+.2} %, {:+.2} σ)\n",
-                100.0 * (value - truth) / truth,
-                (value - truth) / sigma
-            )
-        })
-        .collect()
-}
-
 /// Relative errors of the rows, and the largest |error|/σ.
 fn worst(rows: &[(String, f64, f64, f64)]) -> (f64, f64) {
     rows.iter().fold(
@@ -96,8 +67,8 @@ fn noise_free_records_are_recovered_to_the_network_floor() {
     ] {
         let (record, truth) = fly(scenario, "ideal");
         let estimate = run("ngn", &record, model, "");
-        let rows = against_truth(&estimate, &truth);
-        let text = table(&rows);
+        let rows = common::against_truth(&estimate, &truth);
+        let text = common::truth_table(&rows);
         eprintln!("{scenario}:\n{text}{:?}", estimate.network);
         assert_eq!(estimate.status, Status::Converged, "{scenario}");
         let network = estimate.network.as_ref().unwrap();
@@ -131,8 +102,8 @@ fn noise_free_records_are_recovered_to_the_network_floor() {
 fn flight_test_noise_biases_the_estimates_beyond_their_bounds() {
     let (record, truth) = fly("attas-lateral-multistep", "flight-test-25hz");
     let estimate = run("ngn", &record, "attas-lateral", "");
-    let rows = against_truth(&estimate, &truth);
-    let text = table(&rows);
+    let rows = common::against_truth(&estimate, &truth);
+    let text = common::truth_table(&rows);
     eprintln!("ngn:\n{text}{:?}", estimate.network);
     assert_eq!(estimate.status, Status::Converged);
     assert!(rows.iter().all(|r| r.2.is_finite() && r.2 > 0.0), "{text}");
@@ -141,8 +112,12 @@ fn flight_test_noise_biases_the_estimates_beyond_their_bounds() {
     let network = estimate.network.as_ref().unwrap();
     assert!(network.r_squared < 0.99, "{network:?}");
     let reference = run("oem", &record, "attas-lateral", "");
-    let reference_rows = against_truth(&reference, &truth);
-    assert!(worst(&reference_rows).1 < 3.0, "{}", table(&reference_rows));
+    let reference_rows = common::against_truth(&reference, &truth);
+    assert!(
+        worst(&reference_rows).1 < 3.0,
+        "{}",
+        common::truth_table(&reference_rows)
+    );
 }
 
 /// The CDRW longitudinal record at 25 Hz with flight-test noise: 20 s give
@@ -156,8 +131,8 @@ fn flight_test_noise_biases_the_estimates_beyond_their_bounds() {
 fn short_noisy_cdrw_record_is_beyond_the_network() {
     let (record, truth) = fly("cdrw-longitudinal", "flight-test-25hz");
     let estimate = run("ngn", &record, "cdrw-longitudinal", "");
-    let rows = against_truth(&estimate, &truth);
-    eprintln!("{}{:?}", table(&rows), estimate.network);
+    let rows = common::against_truth(&estimate, &truth);
+    eprintln!("{}{:?}", common::truth_table(&rows), estimate.network);
     let network = estimate.network.as_ref().unwrap();
     assert!(network.r_squared < 0.8, "{network:?}");
     let cl_alpha = estimate.parameter("CL_alpha").unwrap().value;
@@ -253,7 +228,7 @@ fn flight_test_monte_carlo_scatter_exceeds_the_bounds_and_the_mean_is_biased() {
                 .unwrap();
             let estimate = run("ngn", &record, "attas-lateral", "");
             assert_eq!(estimate.status, Status::Converged);
-            against_truth(&estimate, &scenario)
+            common::against_truth(&estimate, &scenario)
         })
         .collect();
     let n = runs as f64;
@@ -280,74 +255,6 @@ fn flight_test_monte_carlo_scatter_exceeds_the_bounds_and_the_mean_is_biased() {
     eprintln!("{text}");
 }
 
-struct CountingAllocator;
-
-thread_local! {
-    /// Allocations made by this thread.
-    static ALLOCATIONS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
-}
-
-unsafe impl std::alloc::GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
-        ALLOCATIONS.with(|count| count.set(count.get() + 1));
-        unsafe { std::alloc::System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
-        unsafe { std::alloc::System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: CountingAllocator = CountingAllocator;
-
-/// No per-sample heap allocation: a prediction allocates nothing, and in
-/// training the only allocations that grow with the samples are the
-/// packing buffers of the one matrix product per block of `BLOCK` (32)
-/// samples that adds them to JᵀJ. Five epochs on 800 samples against 400:
-/// at most 5·(400/32 + 1) = 67 more allocations, never 5·400 (measured:
-/// 135 on 400 samples, 193 on 800, 58 more).
-#[test]
-fn training_and_prediction_allocate_nothing_per_sample() {
-    use aeroid::estimation::neural::feedforward::{BLOCK, FeedForward, LevenbergMarquardt};
-    let samples = |count: usize| -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-        (0..count)
-            .map(|k| {
-                let x: Vec<f64> = (1..=4).map(|i| ((k * i) as f64 * 0.37).sin()).collect();
-                let t = vec![x[0] * x[1], (x[2] + x[3]).tanh()];
-                (x, t)
-            })
-            .unzip()
-    };
-    let trainer = LevenbergMarquardt {
-        hidden: 6,
-        max_epochs: 5,
-        held_out_every: 0,
-        ..LevenbergMarquardt::default()
-    };
-    let count = |n: usize| {
-        let (inputs, targets) = samples(n);
-        let before = ALLOCATIONS.with(std::cell::Cell::get);
-        let (network, training) = trainer.train(&inputs, &targets).unwrap();
-        let after = ALLOCATIONS.with(std::cell::Cell::get);
-        assert_eq!(training.epochs, 5);
-        (after - before, network)
-    };
-    let (small, network) = count(400);
-    let (large, _) = count(800);
-    let per_block = 5 * (400 / BLOCK + 1);
-    assert!(
-        large >= small && large - small <= per_block,
-        "{small} allocations for 400 samples, {large} for 800"
-    );
-    let network: FeedForward = network;
-    let mut output = [0.0; 2];
-    let before = ALLOCATIONS.with(std::cell::Cell::get);
-    for k in 0..1000 {
-        network.predict(&[k as f64 * 1e-3, 0.1, -0.2, 0.3], &mut output);
-    }
-    assert_eq!(ALLOCATIONS.with(std::cell::Cell::get), before);
-}
-
 /// Where ngn does not recover the parameters on noise-free data (ideal
 /// profile, bundled settings): the longitudinal records of ATTAS (3211)
 /// and Hansa-3 (multistep). The network fits the one-step map to R²
@@ -369,14 +276,14 @@ fn ideal_hansa3_and_attas_longitudinal_are_not_recovered() {
     ] {
         let (record, truth) = fly(scenario, "ideal");
         let estimate = run("ngn", &record, model, "");
-        let text = table(&against_truth(&estimate, &truth));
+        let text = common::truth_table(&common::against_truth(&estimate, &truth));
         assert_ne!(estimate.status, Status::Converged, "{scenario}\n{text}");
         let cl_de = estimate.parameter("CL_de").unwrap().value;
         assert!(cl_de < 0.0, "{scenario}\n{text}");
     }
     let (record, truth) = fly("hansa3-elevator-multistep", "flight-test-25hz");
     let estimate = run("ngn", &record, "hansa3-longitudinal", "");
-    let text = table(&against_truth(&estimate, &truth));
+    let text = common::truth_table(&common::against_truth(&estimate, &truth));
     assert_eq!(estimate.status, Status::Converged, "{text}");
     let cl_alpha = estimate.parameter("CL_alpha").unwrap().value;
     assert!((cl_alpha - 4.978).abs() < 0.05 * 4.978, "{text}");

@@ -21,56 +21,6 @@ use aeroid::sim::scenario::Scenario;
 use aeroid::sim::trace::TruthTrace;
 
 /// Counts this thread's heap allocations (the no-allocation test below).
-struct CountingAllocator;
-
-thread_local! {
-    static ALLOCATIONS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
-}
-
-unsafe impl std::alloc::GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
-        ALLOCATIONS.with(|count| count.set(count.get() + 1));
-        unsafe { std::alloc::System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
-        unsafe { std::alloc::System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: CountingAllocator = CountingAllocator;
-
-/// The per-sample work of the Delta method allocates nothing: prediction,
-/// central differences and the analytic gradient write into the caller's
-/// buffers.
-#[test]
-fn per_sample_evaluations_do_not_allocate() {
-    let rows: Vec<Vec<f64>> = (0..400)
-        .map(|k| {
-            let t = k as f64 * 0.05;
-            vec![t.sin(), (0.7 * t).cos(), (0.3 * t).sin()]
-        })
-        .collect();
-    let targets: Vec<f64> = rows.iter().map(|r| r[0] + 0.5 * r[1] * r[2]).collect();
-    let names: Vec<String> = ["a", "b", "c"].iter().map(|s| s.to_string()).collect();
-    let network = RbfNetwork::train(&rows, &names, &targets, &RbfOptions::default()).unwrap();
-    let mut buffer = [0.0; 3];
-    let mut gradient = [0.0; 3];
-    let mut sum = 0.0;
-    let before = ALLOCATIONS.with(std::cell::Cell::get);
-    for row in &rows {
-        sum += network.predict(row, &mut buffer);
-        for j in 0..3 {
-            sum += network.central_difference(&mut buffer, j, 0.01) * network.derivative_factor(j);
-        }
-        network.scaled_gradient(&buffer, &mut gradient);
-        sum += gradient.iter().sum::<f64>();
-    }
-    let after = ALLOCATIONS.with(std::cell::Cell::get);
-    assert!(sum.is_finite());
-    assert_eq!(after - before, 0, "heap allocations in 400 samples");
-}
-
 fn fly(scenario: &str, profile: &str) -> (FlightRecord, TruthTrace, Scenario) {
     let scenario = Scenario::load(scenario).unwrap();
     let profile = Profile::load(profile, None).unwrap();

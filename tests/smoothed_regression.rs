@@ -2,7 +2,9 @@
 //! smoother with the coefficients as Gauss–Markov states, then regression)
 //! on simulated records whose truth is known.
 
-use aeroid::estimation::estimate::{Estimate, Status};
+mod common;
+
+use aeroid::estimation::estimate::Status;
 use aeroid::estimation::methods::smoothed_regression::{
     Smoothed, SmoothedRegressionSettings, smooth_and_regress,
 };
@@ -79,30 +81,6 @@ fn coefficient_errors(
         .collect()
 }
 
-/// Each estimated parameter against the truth: (name, estimate, σ, truth).
-fn against_truth(estimate: &Estimate, scenario: &Scenario) -> Vec<(String, f64, f64, f64)> {
-    estimate
-        .parameters
-        .iter()
-        .map(|p| {
-            let truth = scenario.aircraft.aero.parameters.get(&p.name).unwrap();
-            (p.name.clone(), p.value, p.standard_error, truth)
-        })
-        .collect()
-}
-
-fn report(rows: &[(String, f64, f64, f64)]) -> String {
-    rows.iter()
-        .map(|(name, value, sigma, truth)| {
-            format!(
-                "{name}: {value:.5} ± {sigma:.5} (truth {truth:.5}, {:+.2} %, {:+.2} σ)\n",
-                100.0 * (value - truth) / truth,
-                (value - truth) / sigma
-            )
-        })
-        .collect()
-}
-
 /// Noise-free flight-test records (25 Hz, every channel exact) of the
 /// lateral multistep and the elevator 3211, with the bundled settings.
 ///
@@ -142,8 +120,8 @@ fn ideal_records_give_the_truth_coefficients_and_derivatives() {
                 "{name} {coefficient}: RMS error {rms:.3e} against variation {variation:.3e}"
             );
         }
-        let rows = against_truth(&estimate, &scenario);
-        let text = report(&rows);
+        let rows = common::against_truth(&estimate, &scenario);
+        let text = common::truth_table(&rows);
         eprintln!("{name}:\n{text}");
         assert_eq!(estimate.status, Status::Converged, "{text}");
         for (parameter, value, _, truth) in &rows {
@@ -174,8 +152,8 @@ fn noisy_flight_test_records_within_three_sigma() {
         let (_, estimate) =
             smooth_and_regress(&record, &structure, &SmoothedRegressionSettings::default())
                 .unwrap();
-        let rows = against_truth(&estimate, &scenario);
-        let text = report(&rows);
+        let rows = common::against_truth(&estimate, &scenario);
+        let text = common::truth_table(&rows);
         eprintln!("{name}:\n{text}");
         for (parameter, value, sigma, truth) in &rows {
             assert!(
@@ -208,8 +186,8 @@ fn record_without_angular_rates_says_what_it_could_estimate() {
     let structure = ModelStructure::load("attas-longitudinal").unwrap();
     let problem = EstimationProblem::new("ebm", vec![record], structure, &[]).unwrap();
     let estimate = aeroid::estimation::methods::estimate(&problem, None).unwrap();
-    let rows = against_truth(&estimate, &scenario);
-    let text = report(&rows);
+    let rows = common::against_truth(&estimate, &scenario);
+    let text = common::truth_table(&rows);
     eprintln!("{text}{:#?}", estimate.notes);
     let notes = estimate.notes.join("\n");
     assert!(notes.contains("not in the record: p, q, r"), "{notes}");

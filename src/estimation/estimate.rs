@@ -159,6 +159,19 @@ pub struct ParameterDistribution {
     pub at_trim: f64,
 }
 
+/// The covariance of uncorrelated estimates with these standard errors:
+/// diag(σ²), as the rows of [`Estimate::covariance`].
+pub fn diagonal_covariance(standard_errors: &[f64]) -> Vec<Vec<f64>> {
+    let n = standard_errors.len();
+    (0..n)
+        .map(|i| {
+            let mut row = vec![0.0; n];
+            row[i] = standard_errors[i].powi(2);
+            row
+        })
+        .collect()
+}
+
 impl Estimate {
     /// The estimate of a Gauss–Newton solution: values with Cramér–Rao
     /// standard errors (√ of the covariance diagonal), the covariance, the

@@ -458,19 +458,12 @@ impl Plugin {
                 }
                 covariance
             }
-            None => (0..n)
-                .map(|i| {
-                    (0..n)
-                        .map(|j| {
-                            if i == j {
-                                parameters[i].standard_error.powi(2)
-                            } else {
-                                0.0
-                            }
-                        })
-                        .collect()
-                })
-                .collect(),
+            None => crate::estimation::estimate::diagonal_covariance(
+                &parameters
+                    .iter()
+                    .map(|p| p.standard_error)
+                    .collect::<Vec<_>>(),
+            ),
         };
         let reason = written.reason.unwrap_or_default();
         let status = match written.status.as_str() {

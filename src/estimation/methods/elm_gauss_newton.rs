@@ -39,18 +39,10 @@ use serde::{Deserialize, Serialize};
 /// Method name in estimates.
 pub const METHOD: &str = "elm-gn";
 
-/// Where the Gauss–Newton iterations start.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum Start {
-    /// The model file's values.
-    #[serde(rename = "model")]
-    Model,
-    /// Equation error's estimates where the structure allows equation error
-    /// and its fit converges; otherwise the model file's values.
-    #[default]
-    #[serde(rename = "ee")]
-    EquationError,
-}
+/// Where the Gauss–Newton iterations start, as for output error: the
+/// model file's values, or equation error's estimates where the structure
+/// allows equation error and its fit converges.
+pub use crate::estimation::methods::output_error::Start;
 
 /// The `[methods.elm-gn]` table.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

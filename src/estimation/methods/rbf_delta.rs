@@ -775,19 +775,12 @@ pub fn rbf_delta(
         .iter()
         .map(|d| OutputFit::new(d.data.name, &d.data.targets, &d.predictions))
         .collect();
-    let covariance = (0..parameters.len())
-        .map(|i| {
-            (0..parameters.len())
-                .map(|j| {
-                    if i == j {
-                        parameters[i].standard_error.powi(2)
-                    } else {
-                        0.0
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let covariance = crate::estimation::estimate::diagonal_covariance(
+        &parameters
+            .iter()
+            .map(|p| p.standard_error)
+            .collect::<Vec<_>>(),
+    );
     let details = distribution_table(&distributions);
     Ok(Estimate {
         method: METHOD.to_string(),
