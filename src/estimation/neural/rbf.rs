@@ -16,7 +16,9 @@
 //!   Σ (y − ŷ)²) — on the training samples, or on held-out samples (see
 //!   [`WidthSearch`]);
 //! - output weights by least squares `W = (RᵀR)⁻¹RᵀY` (Eqs. 31–32),
-//!   computed by the shared SVD solver ([`LeastSquares`]).
+//!   computed by the shared SVD solver ([`LeastSquares::fit`]); inside the
+//!   width search, where only the held-out cost is needed, by the same
+//!   truncated solution reduced by QR first ([`LeastSquares::solve`]).
 //!
 //! The gradient of the output with respect to the scaled inputs is
 //! analytic for Gaussians: `∂ŷ/∂xᵢ = −Σⱼ wⱼ·Rⱼ(x)·2(xᵢ − cⱼᵢ)/σ²`
@@ -223,29 +225,42 @@ impl RbfNetwork {
                 fit_rows.len()
             )));
         }
-        let pick = |rows: &[usize]| -> (Vec<f64>, DVector<f64>) {
-            let mut x = Vec::with_capacity(rows.len() * dimension);
-            for &k in rows {
-                x.extend_from_slice(&samples[k * dimension..(k + 1) * dimension]);
-            }
+        // ‖xₖ − cⱼ‖² of the picked samples, in the design's column-major
+        // order: computed once, reused at every λ.
+        let pick = |rows: &[usize]| -> (DMatrix<f64>, DVector<f64>) {
+            let distances = DMatrix::from_fn(rows.len(), count, |r, j| {
+                let k = rows[r];
+                squared_distance(
+                    &samples[k * dimension..(k + 1) * dimension],
+                    &self.centres[j * dimension..(j + 1) * dimension],
+                )
+            });
             (
-                x,
+                distances,
                 DVector::from_iterator(rows.len(), rows.iter().map(|&k| targets[k])),
             )
         };
-        let (fit_x, fit_y) = pick(&fit_rows);
-        let (score_x, score_y) = pick(&score_rows);
+        let (fit_distances, fit_y) = pick(&fit_rows);
+        let (score_distances, score_y) = pick(&score_rows);
         let mut fit_design = DMatrix::zeros(fit_rows.len(), count);
         let mut score_design = DMatrix::zeros(score_rows.len(), count);
-        let centres = self.centres.clone();
         let radius = self.radius;
         let mut history = Vec::new();
         let mut cost = |lambda: f64| -> f64 {
             let sigma = lambda * radius;
-            fill_design(&mut fit_design, &fit_x, &centres, dimension, sigma);
-            let fit = LeastSquares::fit(&fit_design, &fit_y);
-            fill_design(&mut score_design, &score_x, &centres, dimension, sigma);
-            let residual = &score_y - &score_design * &fit.theta;
+            let scale = 1.0 / (sigma * sigma);
+            // Rⱼ(xₖ) as `fill_design` computes it (Eq. 26).
+            let basis = |design: &mut DMatrix<f64>, distances: &DMatrix<f64>| {
+                for (r, d) in design.iter_mut().zip(distances.iter()) {
+                    *r = (-d * scale).exp();
+                }
+            };
+            basis(&mut fit_design, &fit_distances);
+            // Only θ is needed here: the QR-reduced solve, equal to the
+            // final fit's SVD solution to rounding.
+            let theta = LeastSquares::solve(&fit_design, &fit_y);
+            basis(&mut score_design, &score_distances);
+            let residual = &score_y - &score_design * &theta;
             let value = residual.norm_squared();
             history.push((lambda, value));
             if value.is_finite() {
