@@ -587,13 +587,13 @@ fn train_and_differentiate(
         predictions.push(prediction);
         bias.push(prediction - linear);
     }
-    let scaled = |values: &[f64]| -> Vec<Vec<f64>> {
+    let scaled = |values: &[f64]| -> Vec<[f64; 1]> {
         values
             .iter()
             .map(|&y| {
                 let mut v = [y];
                 network.output_scaling.apply(&mut v);
-                vec![v[0]]
+                v
             })
             .collect()
     };

@@ -103,8 +103,8 @@ impl Scaling {
 /// How well a network reproduces its targets: MSE and R² (Eqs. 21–22),
 /// over `targets` and `predictions` given sample by sample (rows), each
 /// row with the same number of outputs. Non-finite pairs are skipped.
-pub fn fit_metrics(targets: &[Vec<f64>], predictions: &[Vec<f64>]) -> (f64, f64) {
-    let outputs = targets.first().map_or(0, Vec::len);
+pub fn fit_metrics<R: AsRef<[f64]>>(targets: &[R], predictions: &[R]) -> (f64, f64) {
+    let outputs = targets.first().map_or(0, |row| row.as_ref().len());
     if outputs == 0 {
         return (f64::NAN, f64::NAN);
     }
@@ -116,7 +116,7 @@ pub fn fit_metrics(targets: &[Vec<f64>], predictions: &[Vec<f64>]) -> (f64, f64)
             targets
                 .iter()
                 .zip(predictions)
-                .map(move |(z, y)| (z[k], y[k]))
+                .map(move |(z, y)| (z.as_ref()[k], y.as_ref()[k]))
                 .filter(|(z, y)| z.is_finite() && y.is_finite())
         };
         let n = pairs().count();
