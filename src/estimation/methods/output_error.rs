@@ -117,7 +117,7 @@ use crate::estimation::model::driven::{
     Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
 use crate::estimation::model::state_space::{
-    fitting_window, model_integration_step, observables, recorded_initial_state,
+    driven_simulation, fitting_window, observables, recorded_initial_state,
 };
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{
@@ -181,7 +181,7 @@ pub struct OutputErrorOptions {
     pub max_iterations: usize,
     /// Integration step (s); None: the fastest compared channel's period,
     /// in equal sub-steps where the model's fastest mode needs them
-    /// ([`model_integration_step`]).
+    /// ([`crate::estimation::model::state_space::driven_simulation`]).
     #[serde(
         deserialize_with = "crate::units::optional_seconds",
         skip_serializing_if = "Option::is_none"
@@ -668,12 +668,11 @@ fn segment(
     options: &OutputErrorOptions,
 ) -> Result<Segment> {
     let window = fitting_window(record, &structure.outputs, options.window)?;
-    let (step, note) = model_integration_step(record, structure, options.step, window)?;
-    let mut simulation = DrivenSimulation::from_record(
+    let (mut simulation, note) = driven_simulation(
         record,
-        &structure.integrate,
+        structure,
         options.interpolation,
-        step,
+        options.step,
         window,
     )?;
     simulation.notes.extend(note);

@@ -113,29 +113,27 @@ pub fn integration_step(
 /// well under 0.1σ when the step is halved.
 pub const RK4_STEP_LIMIT: f64 = 0.5;
 
-/// The integration step of a simulation of `structure` driven by `record`
-/// over `window`: `step` if the user gave one, else the fastest output's
+/// The simulation of `structure` driven by `record` over `window`, on a
+/// grid of `step` if the user gave one, else of the fastest output's
 /// sample period divided into the fewest equal sub-steps that keep h·|λ|
 /// within [`RK4_STEP_LIMIT`], λ the fastest eigenvalue of the model
-/// linearised at the window's start with its start values. Returns the step
-/// and, when it divides the sample period, a note saying so.
-pub fn model_integration_step(
+/// linearised at the window's start with its start values. Returns it and,
+/// when the step divides the sample period, a note saying so.
+pub fn driven_simulation(
     record: &FlightRecord,
     structure: &ModelStructure,
+    interpolation: Interpolation,
     step: Option<f64>,
     window: (f64, f64),
-) -> Result<(f64, Option<String>)> {
+) -> Result<(DrivenSimulation, Option<String>)> {
     let period = integration_step(record, &structure.outputs, step)?;
+    let simulate = |step: f64| {
+        DrivenSimulation::from_record(record, &structure.integrate, interpolation, step, window)
+    };
+    let simulation = simulate(period)?;
     if step.is_some() {
-        return Ok((period, None));
+        return Ok((simulation, None));
     }
-    let simulation = DrivenSimulation::from_record(
-        record,
-        &structure.integrate,
-        Interpolation::ZeroOrderHold,
-        period,
-        window,
-    )?;
     let initial = recorded_initial_state(record, structure, &simulation, window.0);
     let model = FlightModel::new(structure.aircraft.clone(), Default::default());
     let view = DrivenStateSpace::new(simulation, model, Vec::new())?;
@@ -151,11 +149,11 @@ pub fn model_integration_step(
         .fold(0.0, f64::max);
     let substeps = (period * fastest / RK4_STEP_LIMIT).ceil();
     if !(substeps > 1.0 && substeps.is_finite()) {
-        return Ok((period, None));
+        return Ok((view.simulation, None));
     }
     let fine = period / substeps;
     Ok((
-        fine,
+        simulate(fine)?,
         Some(format!(
             "integration step {fine:.4} s: the sample period {period} s would be h·|λ| = {:.2} for the model's fastest mode (|λ| = {fastest:.2}/s at the start), so each sample interval is integrated in {substeps} RK4 steps (`step` sets it)",
             period * fastest
