@@ -16,16 +16,7 @@ use aeroid::record::recorder::Profile;
 use aeroid::sim::scenario::Scenario;
 use aeroid::sim::trace::TruthTrace;
 use aeroid::units::DEG;
-use common::truth_at;
-
-fn approach(gusty: bool) -> Scenario {
-    let mut scenario = Scenario::load("transport-approach").unwrap();
-    if !gusty {
-        scenario.wind.gusts.clear();
-        scenario.wind.turbulence = None;
-    }
-    scenario
-}
+use common::{approach, truth_at};
 
 fn record(scenario: &Scenario, profile: &str) -> (FlightRecord, TruthTrace) {
     common::fly_and_record(scenario, &Profile::load(profile, None).unwrap())

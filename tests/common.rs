@@ -94,3 +94,14 @@ pub fn truth_table(rows: &[(String, f64, f64, f64)]) -> String {
         })
         .collect()
 }
+
+/// The bundled transport approach, optionally without gusts and turbulence
+/// (its steady 20 kt wind from 250° stays).
+pub fn approach(gusty: bool) -> aeroid::sim::scenario::Scenario {
+    let mut scenario = aeroid::sim::scenario::Scenario::load("transport-approach").unwrap();
+    if !gusty {
+        scenario.wind.gusts.clear();
+        scenario.wind.turbulence = None;
+    }
+    scenario
+}

@@ -8,23 +8,11 @@ use aeroid::prep::flow_angles::{
 };
 use aeroid::record::recorder::Profile;
 use aeroid::record::{Channel, FlightRecord};
-use aeroid::sim::scenario::Scenario;
 use aeroid::sim::state::ned_to_body;
 use aeroid::sim::trace::TruthTrace;
 use aeroid::units::DEG;
-use common::{fly_and_record as record, truth_at};
+use common::{approach, fly_and_record as record, truth_at};
 use nalgebra::Vector3;
-
-/// The transport approach, optionally without gusts and turbulence (its
-/// steady 20 kt wind from 250° stays).
-fn approach(gusty: bool) -> Scenario {
-    let mut scenario = Scenario::load("transport-approach").unwrap();
-    if !gusty {
-        scenario.wind.gusts.clear();
-        scenario.wind.turbulence = None;
-    }
-    scenario
-}
 
 fn rms(values: &[f64]) -> f64 {
     (values.iter().map(|v| v * v).sum::<f64>() / values.len() as f64).sqrt()

@@ -295,15 +295,7 @@ mod tests {
     }
 
     fn channel(name: &str, rate: f64, values: Vec<f64>) -> Channel {
-        Channel {
-            name: name.into(),
-            unit: "rad".into(),
-            rate,
-            resolution: None,
-            source: String::new(),
-            times: (0..values.len()).map(|k| k as f64 / rate).collect(),
-            values,
-        }
+        Channel::uniform(name, rate, values)
     }
 
     /// A steady coordinated turn through north (heading recorded in

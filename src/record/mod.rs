@@ -75,6 +75,20 @@ mod nan_as_null {
 }
 
 impl Channel {
+    /// A test channel of `values` at `rate` (Hz) from t = 0, unit `rad`.
+    #[cfg(test)]
+    pub(crate) fn uniform(name: &str, rate: f64, values: Vec<f64>) -> Channel {
+        Channel {
+            name: name.into(),
+            unit: "rad".into(),
+            rate,
+            resolution: None,
+            source: String::new(),
+            times: (0..values.len()).map(|k| k as f64 / rate).collect(),
+            values,
+        }
+    }
+
     /// The CSV column header, `name [unit]`.
     pub fn header(&self) -> String {
         format!("{} [{}]", self.name, self.unit)

@@ -380,15 +380,7 @@ mod tests {
     use super::*;
 
     fn channel(name: &str, rate: f64, values: Vec<f64>) -> Channel {
-        Channel {
-            name: name.into(),
-            unit: "rad".into(),
-            rate,
-            resolution: None,
-            source: String::new(),
-            times: (0..values.len()).map(|k| k as f64 / rate).collect(),
-            values,
-        }
+        Channel::uniform(name, rate, values)
     }
 
     /// A slow sinusoid (a healthy channel).
