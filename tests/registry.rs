@@ -100,6 +100,7 @@ impl Estimator for StartValues {
             details: String::new(),
             network: None,
             distributions: Vec::new(),
+            histories: Vec::new(),
         })
     }
 }

@@ -19,12 +19,18 @@ fn study() -> Study {
     study
 }
 
-/// The bytes of the result files a study writes.
+/// The bytes of the result files a study writes, and of the histories of
+/// its one sweep point's first run.
 fn written(folder: &Path) -> Vec<Vec<u8>> {
-    ["runs.csv", "summary.csv", "study.json"]
-        .iter()
-        .map(|name| std::fs::read(folder.join(name)).unwrap())
-        .collect()
+    [
+        "runs.csv",
+        "summary.csv",
+        "study.json",
+        "histories/point-00000.json",
+    ]
+    .iter()
+    .map(|name| std::fs::read(folder.join(name)).unwrap())
+    .collect()
 }
 
 /// One thread, one journal: the reference bytes. The summary of the
@@ -181,7 +187,11 @@ fn cli_shards_merge_to_the_one_machine_files() {
         String::from_utf8_lossy(&output.stdout).to_string()
     };
     let one = root.join("one");
-    study(&["--out", one.to_str().unwrap()]);
+    let text = study(&["--out", one.to_str().unwrap(), "--report"]);
+    assert!(
+        text.contains("report.html") && one.join("report.html").is_file(),
+        "{text}"
+    );
     let mut shards = Vec::new();
     for k in 1..=2 {
         let folder = root.join(format!("s{k}"));
@@ -196,7 +206,13 @@ fn cli_shards_merge_to_the_one_machine_files() {
     }
     let merged = root.join("merged");
     let output = aeroid()
-        .args(["study", "merge", "--out", merged.to_str().unwrap()])
+        .args([
+            "study",
+            "merge",
+            "--report",
+            "--out",
+            merged.to_str().unwrap(),
+        ])
         .args(&shards)
         .output()
         .unwrap();
@@ -206,6 +222,9 @@ fn cli_shards_merge_to_the_one_machine_files() {
         String::from_utf8_lossy(&output.stderr)
     );
     assert_eq!(written(&merged), written(&one));
+    // The merged report draws the histories its shards kept.
+    let page = std::fs::read_to_string(merged.join("report.html")).unwrap();
+    assert!(page.contains("proof of match"));
     // Merging one shard of two fails with a reason, exit code non-zero.
     let output = aeroid()
         .args([

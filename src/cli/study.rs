@@ -37,6 +37,10 @@ pub struct Args {
     /// Run only shard K of N (cases i with i mod N = K − 1); needs --out.
     #[arg(long, value_name = "K/N", requires = "out")]
     shard: Option<String>,
+    /// Also write the HTML report (OUT/report.html, as `aeroid report
+    /// OUT`) once the study is complete (a shard's is the merge's).
+    #[arg(long, requires = "out")]
+    report: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -60,6 +64,7 @@ pub fn run(args: Args) -> Result<()> {
         out,
         resume,
         shard,
+        report: write_html,
         ..
     } = args;
     let shard = shard
@@ -96,7 +101,7 @@ pub fn run(args: Args) -> Result<()> {
         let result = study.run(threads, &|rows| progress.case(rows))?;
         progress.finish();
         outln!("{cases} cases in {:.1} s", started.elapsed().as_secs_f64());
-        return report(&result, None);
+        return report(&result, None, false);
     };
     let remaining = {
         let header = study.journal_header(shard)?;
@@ -136,10 +141,15 @@ pub fn run(args: Args) -> Result<()> {
             "shard {shard} journaled in {}; when every shard is done: aeroid study merge --out DIR SHARD_DIR…",
             out.join(aeroid::eval::journal::JOURNAL_FILE).display()
         );
+        if write_html {
+            outln!(
+                "the report is written by the merge: aeroid study merge --report --out DIR SHARD_DIR…"
+            );
+        }
         return Ok(());
     }
     let result = aeroid::eval::study::assemble(std::slice::from_ref(&out), &out)?;
-    report(&result, Some(&out))
+    report(&result, Some(&out), write_html)
 }
 
 /// Copies the study file into its output folder (`study.toml`, which the
@@ -174,11 +184,16 @@ fn merge(args: Args) -> Result<()> {
         result.cases,
         result.rows
     );
-    report(&result, Some(&out))
+    report(&result, Some(&out), args.report)
 }
 
-/// Prints the summary and the endings, and where they were written.
-fn report(result: &aeroid::eval::study::StudyResult, out: Option<&PathBuf>) -> Result<()> {
+/// Prints the summary and the endings, and where they were written; with
+/// `html`, writes the report page into `out`.
+fn report(
+    result: &aeroid::eval::study::StudyResult,
+    out: Option<&PathBuf>,
+    html: bool,
+) -> Result<()> {
     out!("{}", result.table());
     // Every fit that is not converged is counted by what it is, with the
     // first one's reason.
@@ -213,6 +228,10 @@ fn report(result: &aeroid::eval::study::StudyResult, out: Option<&PathBuf>) -> R
             "written: {0}/runs.csv, {0}/summary.csv, {0}/study.json",
             out.display()
         );
+        if html {
+            let page = aeroid::eval::report::write_report(out, None)?;
+            outln!("written: {}", page.display());
+        }
     }
     Ok(())
 }

@@ -141,6 +141,24 @@ pub struct Estimate {
     /// (the Delta method); empty otherwise.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub distributions: Vec<ParameterDistribution>,
+    /// Histories the method estimated along the record (the smoothed
+    /// coefficients of estimation before modelling); empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub histories: Vec<History>,
+}
+
+/// A quantity a method estimated at every point of a grid along the
+/// record: its values and, where the method gives them, their standard
+/// deviations.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct History {
+    pub name: String,
+    /// Times (s) of the values.
+    pub times: Vec<f64>,
+    pub values: Vec<f64>,
+    /// Standard deviation of each value; empty when the method gives none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sigma: Vec<f64>,
 }
 
 /// The spread of a parameter estimated at every sample of a record.
@@ -207,6 +225,7 @@ impl Estimate {
             details: String::new(),
             network: None,
             distributions: Vec::new(),
+            histories: Vec::new(),
         }
     }
 
@@ -375,6 +394,7 @@ mod tests {
             details: String::new(),
             network: None,
             distributions: Vec::new(),
+            histories: Vec::new(),
         }
     }
 

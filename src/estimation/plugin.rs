@@ -497,6 +497,7 @@ impl Plugin {
             details: String::new(),
             network: None,
             distributions: Vec::new(),
+            histories: Vec::new(),
         })
     }
 }

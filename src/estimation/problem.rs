@@ -29,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::estimation::estimator::{MethodTables, Settings, merge_settings};
 use crate::estimation::linear_structure::{LinearFile, LinearStructure};
 use crate::estimation::methods;
-use crate::estimation::structure::{ModelStructure, Structure, StructureFile};
+use crate::estimation::structure::{ModelStructure, Structure, StructureFile, ZERO_SOURCE};
 use crate::record::FlightRecord;
 use crate::sim::aircraft::AircraftFile;
 use serde::{Deserialize, Serialize};
@@ -74,12 +74,36 @@ impl EstimationProblem {
                 structure.name()
             )));
         }
+        let records = match &structure {
+            Structure::SixDof(six_dof) => six_dof.with_zero_channels(records),
+            Structure::Linear(_) => records,
+        };
         Ok(EstimationProblem {
             method: method.to_string(),
             records,
             structure,
             settings,
         })
+    }
+
+    /// What the problem holds at 0 for the estimator: a note per channel
+    /// of zeros the model's `zero_when_absent` put in a record.
+    pub fn notes(&self) -> Vec<String> {
+        self.records
+            .iter()
+            .flat_map(|record| {
+                record
+                    .channels
+                    .iter()
+                    .filter(|c| c.source.starts_with(ZERO_SOURCE))
+                    .map(|c| {
+                        format!(
+                            "no '{}' channel in '{}': held at 0 (the model's zero_when_absent)",
+                            c.name, record.scenario
+                        )
+                    })
+            })
+            .collect()
     }
 
     /// The first (or only) record.

@@ -14,6 +14,7 @@
 //! aircraft = "attas"              # mass, inertia, geometry, propulsion of the fitted model
 //! integrate = ["beta", "p", "r", "roll"]   # the rest comes from measured channels
 //! outputs = ["beta", "p", "r", "roll", "ny"]
+//! zero_when_absent = ["q"]        # a record without a q channel: q held at 0 (noted)
 //! [aero]
 //! rate_normalization = "2V"
 //! [aero.Cl]
@@ -34,6 +35,7 @@ use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use crate::estimation::estimator::{MethodTables, Refusal, check_method_tables};
 use crate::estimation::linear_structure::{self, LinearStructure};
 use crate::estimation::model::driven::Observable;
+use crate::record::{Channel, FlightRecord};
 use crate::sim::aero::{AeroModel, AeroSpec};
 use crate::sim::aircraft::{Aircraft, AircraftFile};
 use serde::{Deserialize, Serialize};
@@ -44,6 +46,13 @@ use std::path::{Path, PathBuf};
 pub const FLIGHT_PATH_STATES: [&str; 11] = [
     "airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch", "yaw", "altitude", "chi",
 ];
+
+/// How a channel of zeros put in for `zero_when_absent` names its source.
+pub const ZERO_SOURCE: &str = "zero_when_absent of";
+
+/// The flight-path states a model may hold at 0 when a record lacks them
+/// (`zero_when_absent`): the angles and rates of the other axis.
+const ZERO_CAPABLE: [&str; 8] = ["alpha", "beta", "p", "q", "r", "roll", "pitch", "yaw"];
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -56,6 +65,11 @@ pub struct StructureFile {
     pub integrate: Vec<String>,
     #[serde(default)]
     pub outputs: Vec<String>,
+    /// Flight-path states the model does not integrate (angles and rates)
+    /// that a record may lack: an absent one is a channel of zeros, said
+    /// in the estimate's notes. Any other absent channel is refused.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub zero_when_absent: Vec<String>,
     pub aero: AeroSpec,
     #[serde(default)]
     pub parameters: BTreeMap<String, ParameterSpec>,
@@ -89,6 +103,9 @@ pub struct ModelStructure {
     /// Indices (into [`FLIGHT_PATH_STATES`]) of the integrated states.
     pub integrate: Vec<usize>,
     pub outputs: Vec<String>,
+    /// Indices (into [`FLIGHT_PATH_STATES`]) of the pseudo-controls a
+    /// record may lack (held at 0).
+    pub zero_when_absent: Vec<usize>,
     /// Per aero parameter (same order as `aircraft.aero.parameters`): free?
     pub free: Vec<bool>,
     pub bounds: Vec<(f64, f64)>,
@@ -125,6 +142,27 @@ impl ModelStructure {
         let mut problems = Problems::default();
         aircraft.aero = AeroModel::from_spec(&file.aero, aircraft.geometry, "aero", &mut problems);
         let integrate = state_indices(&file.integrate, "integrate", &mut problems);
+        let zero_when_absent =
+            state_indices(&file.zero_when_absent, "zero_when_absent", &mut problems);
+        for (i, name) in file.zero_when_absent.iter().enumerate() {
+            let index = FLIGHT_PATH_STATES.iter().position(|s| s == name);
+            if index.is_some_and(|index| integrate.contains(&index)) {
+                problems.push(
+                    format!("zero_when_absent[{i}]"),
+                    format!(
+                        "'{name}' is integrated: only a state fed in from the record can be absent"
+                    ),
+                );
+            } else if index.is_some() && !ZERO_CAPABLE.contains(&name.as_str()) {
+                problems.push(
+                    format!("zero_when_absent[{i}]"),
+                    format!(
+                        "'{name}' cannot be held at 0 (no flight has it zero); these can: {}",
+                        ZERO_CAPABLE.join(", ")
+                    ),
+                );
+            }
+        }
         for (i, name) in file.outputs.iter().enumerate() {
             if Observable::parse(name).is_none() {
                 problems.push(
@@ -146,6 +184,7 @@ impl ModelStructure {
             aircraft,
             integrate,
             outputs: file.outputs.clone(),
+            zero_when_absent,
             free,
             bounds,
             methods: file.methods.clone(),
@@ -159,6 +198,46 @@ impl ModelStructure {
         (0..names.len())
             .filter(|&i| self.free[i])
             .map(|i| names[i].clone())
+            .collect()
+    }
+
+    /// `records` with a channel of zeros for each of the model's
+    /// `zero_when_absent` states a record lacks, on the times of the
+    /// record's densest channel, its source [`ZERO_SOURCE`].
+    pub fn with_zero_channels(&self, records: Vec<FlightRecord>) -> Vec<FlightRecord> {
+        records
+            .into_iter()
+            .map(|mut record| {
+                let times = record
+                    .channels
+                    .iter()
+                    .max_by_key(|c| c.times.len())
+                    .map(|c| (c.times.clone(), c.rate));
+                let Some((times, rate)) = times else {
+                    return record;
+                };
+                for &i in &self.zero_when_absent {
+                    let name = FLIGHT_PATH_STATES[i];
+                    if record.channel(name).is_ok() {
+                        continue;
+                    }
+                    record.channels.push(Channel {
+                        name: name.to_string(),
+                        unit: if matches!(name, "p" | "q" | "r") {
+                            "rad/s"
+                        } else {
+                            "rad"
+                        }
+                        .into(),
+                        rate,
+                        resolution: None,
+                        source: format!("{ZERO_SOURCE} model '{}'", self.name),
+                        values: vec![0.0; times.len()],
+                        times: times.clone(),
+                    });
+                }
+                record
+            })
             .collect()
     }
 

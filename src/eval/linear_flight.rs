@@ -31,10 +31,11 @@ use crate::estimation::model::state_space::StateSpaceModel;
 use crate::estimation::solver::kalman;
 use crate::random::{self, streams};
 use crate::record::FlightRecord;
-use crate::record::recorder::{Profile, record_scenario_seeded};
+use crate::record::recorder::Profile;
 use crate::sim::aero::ModelKind;
 use crate::sim::scenario::{LinearFlight, LinearGusts, Scenario};
 use crate::sim::state::Control;
+use crate::sim::trace::TruthTrace;
 use crate::sim::truth::RunTruth;
 use crate::sim::wind::{FlightConditions, WindSpec};
 use nalgebra::{DMatrix, DVector};
@@ -60,8 +61,20 @@ pub fn record_flight(
     profile: &Profile,
     recorder_seed: u64,
 ) -> Result<(FlightRecord, RunTruth)> {
+    record_flight_traced(scenario, profile, recorder_seed).map(|(record, truth, _)| (record, truth))
+}
+
+/// [`record_flight`], and the simulator's truth trace when the simulator
+/// flew (none for a linear model's flight).
+pub fn record_flight_traced(
+    scenario: &Scenario,
+    profile: &Profile,
+    recorder_seed: u64,
+) -> Result<(FlightRecord, RunTruth, Option<TruthTrace>)> {
     let Some(linear) = &scenario.linear else {
-        return record_scenario_seeded(scenario, profile, recorder_seed);
+        let (trace, truth) = crate::sim::fly(scenario)?;
+        let record = profile.record(&trace, &scenario.aircraft, recorder_seed)?;
+        return Ok((record, truth, Some(trace)));
     };
     let trace = fly(scenario, linear)?;
     let step = scenario.step;
@@ -72,7 +85,7 @@ pub fn record_flight(
         &trace.signals,
         recorder_seed,
     )?;
-    Ok((record, trace.truth))
+    Ok((record, trace.truth, None))
 }
 
 /// Flies the linear model of a scenario's `[linear]` table.

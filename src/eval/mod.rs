@@ -3,6 +3,7 @@
 //! studies.
 
 pub mod gate;
+pub mod histories;
 pub mod journal;
 pub mod linear_flight;
 pub mod report;

@@ -15,11 +15,22 @@
 //! - **estimates**: every converged estimate by case, one colour per
 //!   method, the truth as a line.
 //!
+//! Per sweep point, from the histories of its first run
+//! ([`crate::eval::histories`]):
+//! - **proof of match**, per model: one panel per output, the measured
+//!   samples in black and each converged method's model simulated on the
+//!   same record with nothing adjusted, a colour each;
+//! - **smoothed coefficients**, per method that estimates coefficient
+//!   histories (estimation before modelling): one panel per coefficient,
+//!   the smoothed history with its ±1.96σ band dashed and the simulator's
+//!   true coefficient in black.
+//!
 //! A short script in the page marks every plot with the number of its
 //! drawn elements that have a size on screen (`data-drawn`), which a
 //! headless browser can read back to check that the page was drawn.
 
 use crate::error::{Error, Result, read_text, write_error};
+use crate::eval::histories::{CaseHistories, Series};
 use crate::eval::journal::{self, JOURNAL_FILE};
 use crate::eval::study::{CONVERGED, Row, StudyResult};
 use crate::eval::summary::SummaryRow;
@@ -65,6 +76,8 @@ pub struct StudyFolder {
     pub study_file: Option<String>,
     /// The journal's fingerprint, if the folder has a journal.
     pub fingerprint: Option<String>,
+    /// The histories of each sweep point's first run, in point order.
+    pub histories: Vec<CaseHistories>,
 }
 
 impl StudyFolder {
@@ -92,6 +105,7 @@ impl StudyFolder {
             rows,
             study_file,
             fingerprint,
+            histories: CaseHistories::read_all(folder)?,
         })
     }
 }
@@ -229,6 +243,206 @@ pub fn estimates_plot(model: &str, parameter: &str, rows: &[&Row], runs: usize) 
     Ok(Plot { title, svg })
 }
 
+/// The most points a line of a history plot is drawn with: longer
+/// histories are thinned to every k-th sample.
+const MAX_LINE_POINTS: usize = 800;
+
+/// One line of a panel.
+struct Line {
+    label: String,
+    colour: RGBColor,
+    points: Vec<(f64, f64)>,
+    dashed: bool,
+}
+
+impl Line {
+    /// A series' values (offset by `sigma_scale` times its σ when not 0),
+    /// thinned to at most [`MAX_LINE_POINTS`].
+    fn of(series: &Series, label: String, colour: RGBColor, sigma_scale: f64) -> Line {
+        let stride = series.values.len().div_ceil(MAX_LINE_POINTS).max(1);
+        let points = (0..series.values.len())
+            .step_by(stride)
+            .map(|k| {
+                let offset = if sigma_scale == 0.0 {
+                    0.0
+                } else {
+                    sigma_scale * series.sigma.get(k).copied().unwrap_or(f64::NAN)
+                };
+                (series.times[k], series.values[k] + offset)
+            })
+            .filter(|(t, v)| t.is_finite() && v.is_finite())
+            .collect();
+        Line {
+            label,
+            colour,
+            points,
+            dashed: sigma_scale != 0.0,
+        }
+    }
+}
+
+/// One panel of a history plot: a quantity against time.
+struct Panel {
+    name: String,
+    lines: Vec<Line>,
+}
+
+/// Height of one panel of a history plot.
+const PANEL_HEIGHT: u32 = 190;
+
+/// The SVG of panels stacked under one title, each a quantity against
+/// time with its lines; the legend (lines with a label) on the first.
+fn panels_svg(title: &str, panels: &[Panel]) -> Result<String> {
+    let mut svg = String::new();
+    {
+        let height = 40 + PANEL_HEIGHT * panels.len().max(1) as u32;
+        let root = SVGBackend::with_string(&mut svg, (WIDTH, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        let root = root.titled(title, ("sans-serif", 16)).map_err(plot_error)?;
+        let areas = root.split_evenly((panels.len().max(1), 1));
+        for (number, (panel, area)) in panels.iter().zip(&areas).enumerate() {
+            let (x_min, x_max) = range(
+                panel
+                    .lines
+                    .iter()
+                    .flat_map(|l| l.points.iter().map(|p| p.0)),
+            );
+            // The y range holds the solid lines; a dashed band beyond it
+            // (a σ that grows at the record's ends) is cut at the frame.
+            let solid = panel.lines.iter().filter(|l| !l.dashed);
+            let (y_min, y_max) = range(solid.flat_map(|l| l.points.iter().map(|p| p.1)));
+            let mut chart = ChartBuilder::on(area)
+                .margin(6)
+                .x_label_area_size(34)
+                .y_label_area_size(70)
+                .build_cartesian_2d(x_min..x_max, y_min..y_max)
+                .map_err(plot_error)?;
+            chart
+                .configure_mesh()
+                .x_desc("time (s)")
+                .y_desc(panel.name.as_str())
+                .draw()
+                .map_err(plot_error)?;
+            for line in &panel.lines {
+                let colour = line.colour;
+                let drawn = if line.dashed {
+                    chart.draw_series(DashedLineSeries::new(
+                        line.points.iter().copied(),
+                        4,
+                        3,
+                        colour.stroke_width(1),
+                    ))
+                } else {
+                    chart.draw_series(LineSeries::new(
+                        line.points.iter().copied(),
+                        colour.stroke_width(1),
+                    ))
+                }
+                .map_err(plot_error)?;
+                if number == 0 && !line.label.is_empty() {
+                    drawn
+                        .label(line.label.clone())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour));
+                }
+            }
+            if number == 0 {
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .draw()
+                    .map_err(plot_error)?;
+            }
+        }
+        root.present().map_err(plot_error)?;
+    }
+    Ok(svg)
+}
+
+/// The proof of match of one model at one sweep point: per output, the
+/// measured samples and each method's prediction; none when no method
+/// has one.
+pub fn match_plot(histories: &CaseHistories, model: &str) -> Result<Option<Plot>> {
+    let methods: Vec<_> = histories
+        .methods
+        .iter()
+        .filter(|m| m.model == model && !m.predicted.is_empty())
+        .collect();
+    let Some(first) = methods.first() else {
+        return Ok(None);
+    };
+    let colours = method_colours(methods.iter().map(|m| m.method.as_str()));
+    let panels: Vec<Panel> = first
+        .predicted
+        .iter()
+        .map(|output| {
+            let mut lines = Vec::new();
+            if let Some(measured) = histories.measured.iter().find(|s| s.name == output.name) {
+                lines.push(Line::of(measured, "measured".into(), BLACK, 0.0));
+            }
+            for m in &methods {
+                if let Some(predicted) = m.predicted.iter().find(|s| s.name == output.name) {
+                    lines.push(Line::of(
+                        predicted,
+                        m.method.clone(),
+                        colours[&m.method],
+                        0.0,
+                    ));
+                }
+            }
+            Panel {
+                name: output.name.clone(),
+                lines,
+            }
+        })
+        .collect();
+    let title = format!(
+        "{}: {model}, proof of match (run {})",
+        histories.label, histories.run
+    );
+    let svg = panels_svg(&title, &panels)?;
+    Ok(Some(Plot { title, svg }))
+}
+
+/// The coefficient histories one method estimated at one sweep point,
+/// with ±1.96σ and the simulator's true coefficients.
+pub fn smoothed_plot(histories: &CaseHistories, index: usize) -> Result<Option<Plot>> {
+    let method = &histories.methods[index];
+    if method.estimated.is_empty() {
+        return Ok(None);
+    }
+    let colour = PALETTE[0];
+    let panels: Vec<Panel> = method
+        .estimated
+        .iter()
+        .map(|series| {
+            let mut lines = vec![Line::of(
+                series,
+                format!("{} smoothed", method.method),
+                colour,
+                0.0,
+            )];
+            if !series.sigma.is_empty() {
+                lines.push(Line::of(series, "±1.96σ".into(), colour, 1.96));
+                lines.push(Line::of(series, String::new(), colour, -1.96));
+            }
+            if let Some(truth) = histories.truth.iter().find(|s| s.name == series.name) {
+                lines.push(Line::of(truth, "truth".into(), BLACK, 0.0));
+            }
+            Panel {
+                name: series.name.clone(),
+                lines,
+            }
+        })
+        .collect();
+    let title = format!(
+        "{}: {} on {}, smoothed coefficients (run {})",
+        histories.label, method.method, method.model, histories.run
+    );
+    let svg = panels_svg(&title, &panels)?;
+    Ok(Some(Plot { title, svg }))
+}
+
 /// A plot's frame: title, axis ranges and labels.
 struct Frame<'a> {
     title: &'a str,
@@ -303,6 +517,27 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (low - pad, high + pad)
 }
 
+/// Every plot of a study folder's histories: per sweep point, each
+/// model's proof of match and each method's smoothed coefficients.
+pub fn history_plots(folder: &StudyFolder) -> Result<Vec<Plot>> {
+    let mut plots = Vec::new();
+    for histories in &folder.histories {
+        let mut models: Vec<&str> = Vec::new();
+        for m in &histories.methods {
+            if !models.contains(&m.model.as_str()) {
+                models.push(&m.model);
+            }
+        }
+        for model in models {
+            plots.extend(match_plot(histories, model)?);
+        }
+        for index in 0..histories.methods.len() {
+            plots.extend(smoothed_plot(histories, index)?);
+        }
+    }
+    Ok(plots)
+}
+
 /// Every plot of a study folder: per model and parameter, the error plot
 /// and the estimates.
 pub fn plots(folder: &StudyFolder) -> Result<Vec<Plot>> {
@@ -352,6 +587,18 @@ for (const figure of document.querySelectorAll('figure.plot')) {
 document.body.dataset.checked = 'yes';
 </script>"#;
 
+/// Appends each plot to the page as a figure.
+fn figures(page: &mut String, plots: &[Plot]) {
+    for plot in plots {
+        let _ = writeln!(
+            page,
+            "<figure class=\"plot\" data-title=\"{}\">{}</figure>",
+            escape(&plot.title),
+            plot.svg
+        );
+    }
+}
+
 /// The report page of a study folder.
 pub fn html(folder: &StudyFolder) -> Result<String> {
     let result = &folder.result;
@@ -391,13 +638,23 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
         );
     }
     page += "</table>\n<h2>Plots</h2>\n";
-    for plot in &plots {
-        let _ = writeln!(
-            page,
-            "<figure class=\"plot\" data-title=\"{}\">{}</figure>",
-            escape(&plot.title),
-            plot.svg
-        );
+    figures(&mut page, &plots);
+    let histories = history_plots(folder)?;
+    if !histories.is_empty() {
+        page += "<h2>Time histories of each sweep point's first run</h2>\n";
+        figures(&mut page, &histories);
+    }
+    for h in &folder.histories {
+        for m in h.methods.iter().filter(|m| !m.note.is_empty()) {
+            let _ = writeln!(
+                page,
+                "<p>{}: {} on {}: {}</p>",
+                escape(&h.label),
+                escape(&m.method),
+                escape(&m.model),
+                escape(&m.note)
+            );
+        }
     }
     page += "<h2>Summary</h2>\n<table><tr>";
     for header in [
@@ -416,7 +673,12 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
         "bias/CRB",
         "σ/CRB",
         "cov95",
+        "RMSE",
         "conv/runs",
+        "refused",
+        "CRB/|truth|",
+        "|ρ| > 0.9",
+        "identifiability",
     ] {
         let _ = write!(page, "<th>{header}</th>");
     }

@@ -159,6 +159,7 @@ mod tests {
             details: String::new(),
             network: None,
             distributions: Vec::new(),
+            histories: Vec::new(),
             iterations: 3,
             cost_history: vec![],
             wall_time: 0.0,

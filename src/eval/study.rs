@@ -52,6 +52,7 @@ use crate::estimation::estimate::Status;
 use crate::estimation::estimator::{MethodTables, check_method_tables, validate_method_tables};
 use crate::estimation::methods;
 use crate::estimation::structure::Structure;
+use crate::eval::histories::CaseHistories;
 use crate::eval::journal::{self, Finished, Header, Journal, Shard, float_text};
 use crate::eval::run::{self, Outcome};
 use crate::eval::score::ParameterScore;
@@ -535,6 +536,16 @@ impl Study {
     /// Runs one case: draws its seeds, flies and records the scenario, and
     /// fits every model with every method. Never fails: a failure is a row.
     pub fn run_case(&self, case: Case) -> Vec<Row> {
+        self.run_case_with_histories(case, false).0
+    }
+
+    /// [`Study::run_case`], and when `keep` the case's time histories
+    /// (measured, proof of match, estimated and true coefficient histories).
+    pub fn run_case_with_histories(
+        &self,
+        case: Case,
+        keep: bool,
+    ) -> (Vec<Row>, Option<CaseHistories>) {
         let point = &self.points[case.point];
         let recording = Case {
             point: point.recording,
@@ -558,8 +569,21 @@ impl Study {
         if point.input_scale != 1.0 {
             scenario.inputs = scenario.inputs.scaled(point.input_scale);
         }
-        let recorded =
-            crate::eval::linear_flight::record_flight(&scenario, &point.profile, recorder_seed);
+        let recorded = crate::eval::linear_flight::record_flight_traced(
+            &scenario,
+            &point.profile,
+            recorder_seed,
+        );
+        let mut histories = match (&recorded, keep) {
+            (Ok((record, _, _)), true) => Some(CaseHistories::new(
+                case.point,
+                case.run,
+                self.point_label(case.point),
+                record,
+                &self.models,
+            )),
+            _ => None,
+        };
         let template = Row {
             point: case.point,
             scenario: scenario.name.clone(),
@@ -592,7 +616,7 @@ impl Study {
         let mut rows = Vec::new();
         for model in &self.models {
             let outcomes = match &recorded {
-                Ok((record, truth)) => run::estimate_each(
+                Ok((record, truth, _)) => run::estimate_each(
                     &self.methods,
                     record,
                     truth,
@@ -609,6 +633,13 @@ impl Study {
                     .map(|method| (method.clone(), Outcome::Failed(error.to_string())))
                     .collect(),
             };
+            if let (Some(histories), Ok((record, _, trace))) = (&mut histories, &recorded) {
+                for (_, outcome) in &outcomes {
+                    if let Some(estimate) = outcome.estimate() {
+                        histories.add(model, estimate, record, trace.as_ref());
+                    }
+                }
+            }
             for (method, outcome) in outcomes {
                 let fit = Row {
                     model: model.name().to_string(),
@@ -642,7 +673,7 @@ impl Study {
                 }
             }
         }
-        rows
+        (rows, histories)
     }
 
     /// The index of a case in the study's case order (point by point,
@@ -658,7 +689,7 @@ impl Study {
     pub fn run(&self, threads: usize, progress: &(dyn Fn(&[Row]) + Sync)) -> Result<StudyResult> {
         let cases = self.cases();
         let ordered = std::sync::Mutex::new((0usize, BTreeMap::new(), Summariser::default()));
-        self.run_cases(&cases, threads, &|position, rows| {
+        self.run_cases(&cases, threads, false, &|position, rows, _| {
             progress(&rows);
             let mut guard = ordered
                 .lock()
@@ -685,13 +716,15 @@ impl Study {
 
     /// Runs `cases` on `threads` threads (0: one per core), each thread
     /// taking the next case in order, and hands each case's position in
-    /// `cases` and its rows to `finish` as it finishes. The first error
+    /// `cases`, its rows and, when `histories` and the case is a point's
+    /// first run, its histories to `finish` as it finishes. The first error
     /// `finish` returns stops the run (cases already running complete).
     pub fn run_cases(
         &self,
         cases: &[Case],
         threads: usize,
-        finish: &(dyn Fn(usize, Vec<Row>) -> Result<()> + Sync),
+        histories: bool,
+        finish: &(dyn Fn(usize, Vec<Row>, Option<CaseHistories>) -> Result<()> + Sync),
     ) -> Result<()> {
         use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
         let threads = match threads {
@@ -710,7 +743,9 @@ impl Study {
                         let Some(&case) = cases.get(position) else {
                             break;
                         };
-                        if let Err(error) = finish(position, self.run_case(case)) {
+                        let (rows, kept) =
+                            self.run_case_with_histories(case, histories && case.run == 0);
+                        if let Err(error) = finish(position, rows, kept) {
                             stop.store(true, Ordering::Relaxed);
                             if let Ok(mut first) = failure.lock() {
                                 first.get_or_insert(error);
@@ -819,7 +854,10 @@ impl Study {
             (Journal::create(folder, &header)?, Finished::new())
         };
         let remaining = self.remaining(shard, &finished);
-        self.run_cases(&remaining, threads, &|position, rows| {
+        self.run_cases(&remaining, threads, true, &|position, rows, histories| {
+            if let Some(histories) = histories {
+                histories.write(folder)?;
+            }
             journal.append(self.case_index(remaining[position]), &rows)?;
             progress(&rows);
             Ok(())
@@ -849,6 +887,7 @@ pub fn assemble(folders: &[PathBuf], out: &Path) -> Result<StudyResult> {
     let mut cases = journal::open(folders)?;
     let header = cases.header().clone();
     std::fs::create_dir_all(out).map_err(|e| crate::error::write_error(out, e))?;
+    crate::eval::histories::copy_all(folders, out)?;
     let path = out.join("runs.csv");
     let io_error = |e: csv::Error| crate::error::write_error(&path, e);
     let mut writer = csv::Writer::from_path(&path).map_err(io_error)?;

@@ -1056,6 +1056,7 @@ fn diverged(
         details: String::new(),
         network: None,
         distributions: Vec::new(),
+        histories: Vec::new(),
     }
 }
 
@@ -1124,6 +1125,7 @@ fn assemble(
         details: String::new(),
         network: None,
         distributions: Vec::new(),
+        histories: Vec::new(),
     }
 }
 

@@ -606,6 +606,7 @@ pub(crate) fn assemble_named(
         details: String::new(),
         network: None,
         distributions: Vec::new(),
+        histories: Vec::new(),
     }
 }
 

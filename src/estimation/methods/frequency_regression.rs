@@ -1064,6 +1064,7 @@ pub fn linear_frequency_regression(
         details: String::new(),
         network: None,
         distributions: Vec::new(),
+        histories: Vec::new(),
     };
     Ok(estimate.assess())
 }

@@ -125,7 +125,13 @@ pub fn register(estimator: Arc<dyn Estimator>) -> Result<()> {
 /// "converged", whichever method made it.
 pub fn estimate(problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
     let estimator = find(&problem.method)?;
-    estimator.estimate(problem, start).map(Estimate::assess)
+    let mut estimate = estimator.estimate(problem, start)?;
+    for note in problem.notes() {
+        if !estimate.notes.contains(&note) {
+            estimate.notes.push(note);
+        }
+    }
+    Ok(estimate.assess())
 }
 
 #[cfg(test)]

@@ -632,6 +632,29 @@ pub fn proof_of_match(
     structure: &ModelStructure,
     record: &FlightRecord,
 ) -> Result<Vec<OutputFit>> {
+    Ok(match_histories(estimate, structure, record)?
+        .iter()
+        .map(|m| OutputFit::new(&m.channel, &m.measured, &m.predicted))
+        .collect())
+}
+
+/// One output of a proof of match: the measured samples in the fitting
+/// window and the model's prediction at their instants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MatchedOutput {
+    pub channel: String,
+    pub times: Vec<f64>,
+    pub measured: Vec<f64>,
+    pub predicted: Vec<f64>,
+}
+
+/// The histories behind [`proof_of_match`]: per output of the structure,
+/// the measured and predicted values at the record's samples.
+pub fn match_histories(
+    estimate: &Estimate,
+    structure: &ModelStructure,
+    record: &FlightRecord,
+) -> Result<Vec<MatchedOutput>> {
     let mut aircraft = structure.aircraft.clone();
     for p in &estimate.parameters {
         if aircraft.aero.parameters.index(&p.name).is_some() {
@@ -656,9 +679,22 @@ pub fn proof_of_match(
         simulated: None,
         held: None,
     };
-    problem.try_fits(&DVector::zeros(0)).map_err(|reason| {
+    problem.predict(&DVector::zeros(0)).map_err(|reason| {
         Error::Other(format!("proof of match on '{}': {reason}", record.scenario))
-    })
+    })?;
+    let predicted = &problem.predictions()[0];
+    Ok(problem.segments[0]
+        .outputs
+        .iter()
+        .zip(predicted)
+        .zip(&problem.outputs)
+        .map(|((measured, predicted), channel)| MatchedOutput {
+            channel: channel.clone(),
+            times: measured.times.clone(),
+            measured: measured.values.clone(),
+            predicted: predicted.clone(),
+        })
+        .collect())
 }
 
 /// The structure's outputs as model outputs; an error names one the model does not have.

@@ -797,6 +797,7 @@ pub fn rbf_delta(
         details,
         network: Some(network_report(&deltas, settings)),
         distributions,
+        histories: Vec::new(),
     })
 }
 

@@ -43,7 +43,7 @@
 //! attitude when the record has no rates.
 
 use crate::error::{Error, Result};
-use crate::estimation::estimate::Estimate;
+use crate::estimation::estimate::{Estimate, History};
 use crate::estimation::estimator::{
     Estimator, MethodInfo, MissingChannel, Refusal, Settings, parse_settings, setting_infos,
 };
@@ -311,6 +311,7 @@ impl Estimator for SmoothedRegression {
         )?;
         estimate.notes.extend(smoothed.notes.iter().cloned());
         estimate.notes.push(determined_note(&estimate));
+        estimate.histories = smoothed.coefficient_histories();
         estimate.wall_time = started.elapsed().as_secs_f64();
         Ok(estimate)
     }
@@ -398,6 +399,24 @@ fn wind_axes(x: &[f64]) -> (f64, f64) {
 }
 
 impl Smoothed {
+    /// The six smoothed body-axis coefficients (CX … Cn) with their
+    /// standard deviations, as an estimate's histories.
+    pub fn coefficient_histories(&self) -> Vec<History> {
+        COEFFICIENT_NAMES
+            .iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let state = coefficient_states::coefficient(i);
+                History {
+                    name: (*name).to_string(),
+                    times: self.times.clone(),
+                    values: self.states.iter().map(|x| x[state]).collect(),
+                    sigma: self.deviations.iter().map(|d| d[state]).collect(),
+                }
+            })
+            .collect()
+    }
+
     /// Writes the histories as CSV: time, the six body-axis coefficients,
     /// CL, CD, the air data, rates, attitude and altitude, then the
     /// standard deviation of each coefficient (`sigma_CX` …), header

@@ -840,6 +840,7 @@ impl StepwiseReport {
             details: String::new(),
             network: None,
             distributions: Vec::new(),
+            histories: Vec::new(),
         }
     }
 }
