@@ -21,11 +21,18 @@ use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 const LATERAL: [&str; 4] = ["beta", "p", "r", "roll"];
 
-/// The ideal record of the 3-2-1-1, and the same without its lateral channels.
+/// The ideal record of the 3-2-1-1, and the same without its lateral
+/// channels (flown once for both tests).
 fn records() -> (FlightRecord, FlightRecord) {
+    static RECORDS: OnceLock<(FlightRecord, FlightRecord)> = OnceLock::new();
+    RECORDS.get_or_init(fly).clone()
+}
+
+fn fly() -> (FlightRecord, FlightRecord) {
     let folder = common::temp_folder("model_channels_flight");
     common::write(
         &folder,

@@ -48,8 +48,9 @@ pub const REPORT_FILE: &str = "report.html";
 const WIDTH: u32 = 720;
 const HEIGHT: u32 = 420;
 
-/// Colours of the series, in order.
-const PALETTE: [RGBColor; 8] = [
+/// Colours of the series, in order (Tableau's 20 colours, dark shades
+/// first): a study rarely has more methods or series than these.
+const PALETTE: [RGBColor; 16] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -58,8 +59,15 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(140, 86, 75),
     RGBColor(227, 119, 194),
     RGBColor(23, 190, 207),
+    RGBColor(188, 189, 34),
+    RGBColor(127, 127, 127),
+    RGBColor(174, 199, 232),
+    RGBColor(255, 152, 150),
+    RGBColor(152, 223, 138),
+    RGBColor(197, 176, 213),
+    RGBColor(255, 187, 120),
+    RGBColor(196, 156, 148),
 ];
-
 /// One plot: its title and SVG text.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plot {
@@ -253,6 +261,10 @@ struct Line {
     colour: RGBColor,
     points: Vec<(f64, f64)>,
     dashed: bool,
+    /// Whether the panel's y range holds the line (else it is cut at the
+    /// frame: a prediction that runs away, a σ band that grows at the
+    /// record's ends).
+    frames: bool,
 }
 
 impl Line {
@@ -277,6 +289,15 @@ impl Line {
             colour,
             points,
             dashed: sigma_scale != 0.0,
+            frames: sigma_scale == 0.0,
+        }
+    }
+
+    /// The line, not framing the panel's y range.
+    fn unframed(self) -> Line {
+        Line {
+            frames: false,
+            ..self
         }
     }
 }
@@ -290,27 +311,54 @@ struct Panel {
 /// Height of one panel of a history plot.
 const PANEL_HEIGHT: u32 = 190;
 
+/// Width of the legend column beside the panels of a history plot.
+const LEGEND_WIDTH: u32 = 130;
+
 /// The SVG of panels stacked under one title, each a quantity against
-/// time with its lines; the legend (lines with a label) on the first.
+/// time with its lines, and beside them the legend (the first panel's
+/// lines with a label).
 fn panels_svg(title: &str, panels: &[Panel]) -> Result<String> {
     let mut svg = String::new();
     {
         let height = 40 + PANEL_HEIGHT * panels.len().max(1) as u32;
-        let root = SVGBackend::with_string(&mut svg, (WIDTH, height)).into_drawing_area();
+        let root =
+            SVGBackend::with_string(&mut svg, (WIDTH + LEGEND_WIDTH, height)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error)?;
         let root = root.titled(title, ("sans-serif", 16)).map_err(plot_error)?;
-        let areas = root.split_evenly((panels.len().max(1), 1));
-        for (number, (panel, area)) in panels.iter().zip(&areas).enumerate() {
+        let (plots, legend) = root.split_horizontally(WIDTH);
+        if let Some(first) = panels.first() {
+            for (row, line) in first
+                .lines
+                .iter()
+                .filter(|l| !l.label.is_empty())
+                .enumerate()
+            {
+                let y = 20 + 18 * row as i32;
+                legend
+                    .draw(&PathElement::new(
+                        vec![(4, y), (24, y)],
+                        line.colour.stroke_width(2),
+                    ))
+                    .map_err(plot_error)?;
+                legend
+                    .draw(&Text::new(
+                        line.label.clone(),
+                        (30, y - 7),
+                        ("sans-serif", 12),
+                    ))
+                    .map_err(plot_error)?;
+            }
+        }
+        let areas = plots.split_evenly((panels.len().max(1), 1));
+        for (panel, area) in panels.iter().zip(&areas) {
             let (x_min, x_max) = range(
                 panel
                     .lines
                     .iter()
                     .flat_map(|l| l.points.iter().map(|p| p.0)),
             );
-            // The y range holds the solid lines; a dashed band beyond it
-            // (a σ that grows at the record's ends) is cut at the frame.
-            let solid = panel.lines.iter().filter(|l| !l.dashed);
-            let (y_min, y_max) = range(solid.flat_map(|l| l.points.iter().map(|p| p.1)));
+            let framing = panel.lines.iter().filter(|l| l.frames);
+            let (y_min, y_max) = range(framing.flat_map(|l| l.points.iter().map(|p| p.1)));
             let mut chart = ChartBuilder::on(area)
                 .margin(6)
                 .x_label_area_size(34)
@@ -325,33 +373,25 @@ fn panels_svg(title: &str, panels: &[Panel]) -> Result<String> {
                 .map_err(plot_error)?;
             for line in &panel.lines {
                 let colour = line.colour;
-                let drawn = if line.dashed {
-                    chart.draw_series(DashedLineSeries::new(
-                        line.points.iter().copied(),
-                        4,
-                        3,
-                        colour.stroke_width(1),
-                    ))
-                } else {
-                    chart.draw_series(LineSeries::new(
-                        line.points.iter().copied(),
-                        colour.stroke_width(1),
-                    ))
+                // Drawn in the runs of points inside the frame: a line
+                // that leaves it is broken there, not pinned to its edge.
+                let inside = |p: &&(f64, f64)| p.1 >= y_min && p.1 <= y_max;
+                for run in line.points.split(|p| !inside(&p)) {
+                    let drawn = if line.dashed {
+                        chart.draw_series(DashedLineSeries::new(
+                            run.iter().copied(),
+                            4,
+                            3,
+                            colour.stroke_width(1),
+                        ))
+                    } else {
+                        chart.draw_series(LineSeries::new(
+                            run.iter().copied(),
+                            colour.stroke_width(1),
+                        ))
+                    };
+                    drawn.map_err(plot_error)?;
                 }
-                .map_err(plot_error)?;
-                if number == 0 && !line.label.is_empty() {
-                    drawn
-                        .label(line.label.clone())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour));
-                }
-            }
-            if number == 0 {
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK)
-                    .draw()
-                    .map_err(plot_error)?;
             }
         }
         root.present().map_err(plot_error)?;
@@ -382,12 +422,14 @@ pub fn match_plot(histories: &CaseHistories, model: &str) -> Result<Option<Plot>
             }
             for m in &methods {
                 if let Some(predicted) = m.predicted.iter().find(|s| s.name == output.name) {
-                    lines.push(Line::of(
-                        predicted,
-                        m.method.clone(),
-                        colours[&m.method],
-                        0.0,
-                    ));
+                    let line = Line::of(predicted, m.method.clone(), colours[&m.method], 0.0);
+                    // The measured samples frame the panel: a prediction
+                    // that runs away leaves it.
+                    lines.push(if lines.is_empty() {
+                        line
+                    } else {
+                        line.unframed()
+                    });
                 }
             }
             Panel {
