@@ -153,7 +153,8 @@ seed = 7
 /// Only the first run keeps histories.
 #[test]
 fn the_first_run_keeps_the_proof_of_match_and_smoothed_histories() {
-    use aeroid::eval::histories::{CaseHistories, Series};
+    use aeroid::estimation::estimate::History;
+    use aeroid::eval::histories::CaseHistories;
     use aeroid::eval::study::{Case, Study};
     let folder = common::temp_folder("report_histories");
     let path = common::write(&folder, "history-test.toml", HISTORY_STUDY);
@@ -181,7 +182,7 @@ fn the_first_run_keeps_the_proof_of_match_and_smoothed_histories() {
     let fit = study.run_case(Case { point: 0, run: 0 });
     assert_eq!(fit.len(), rows.len(), "keeping histories changes no row");
     for predicted in &oem.predicted {
-        let measured: &Series = histories
+        let measured: &History = histories
             .measured
             .iter()
             .find(|s| s.name == predicted.name)
@@ -246,7 +247,7 @@ fn the_first_run_keeps_the_proof_of_match_and_smoothed_histories() {
 }
 
 /// A series' values interpolated linearly at `times`.
-fn interpolated(series: &aeroid::eval::histories::Series, times: &[f64]) -> Vec<f64> {
+fn interpolated(series: &aeroid::estimation::estimate::History, times: &[f64]) -> Vec<f64> {
     times
         .iter()
         .map(|&t| {

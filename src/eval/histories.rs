@@ -28,37 +28,16 @@ pub const HISTORIES_FOLDER: &str = "histories";
 /// The body-axis coefficients the true histories are kept of.
 const COEFFICIENTS: [&str; 6] = ["CX", "CY", "CZ", "Cl", "Cm", "Cn"];
 
-/// A named series: values (and, where known, standard deviations) at times.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Series {
-    pub name: String,
-    pub times: Vec<f64>,
-    pub values: Vec<f64>,
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub sigma: Vec<f64>,
-}
-
-impl From<History> for Series {
-    fn from(h: History) -> Series {
-        Series {
-            name: h.name,
-            times: h.times,
-            values: h.values,
-            sigma: h.sigma,
-        }
-    }
-}
-
 /// One method's histories on one model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MethodHistories {
     pub model: String,
     pub method: String,
     /// The estimated model's outputs at the measured samples (proof of match).
-    pub predicted: Vec<Series>,
+    pub predicted: Vec<History>,
     /// Histories the method estimated (smoothed coefficients).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub estimated: Vec<Series>,
+    pub estimated: Vec<History>,
     /// Why there is no proof of match, when there is none.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub note: String,
@@ -72,11 +51,11 @@ pub struct CaseHistories {
     /// The sweep point's label.
     pub label: String,
     /// The record's samples of every model's outputs.
-    pub measured: Vec<Series>,
+    pub measured: Vec<History>,
     /// The simulator's true coefficients, kept when a method estimated
     /// coefficient histories to lay them over.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub truth: Vec<Series>,
+    pub truth: Vec<History>,
     pub methods: Vec<MethodHistories>,
 }
 
@@ -89,7 +68,7 @@ impl CaseHistories {
         record: &FlightRecord,
         models: &[Structure],
     ) -> CaseHistories {
-        let mut measured: Vec<Series> = Vec::new();
+        let mut measured: Vec<History> = Vec::new();
         for model in models {
             for name in model.outputs() {
                 if measured.iter().any(|s| &s.name == name) {
@@ -102,7 +81,7 @@ impl CaseHistories {
                         .zip(&channel.values)
                         .filter(|(_, v)| v.is_finite())
                         .unzip();
-                    measured.push(Series {
+                    measured.push(History {
                         name: name.clone(),
                         times,
                         values,
@@ -143,7 +122,7 @@ impl CaseHistories {
                 Ok(matched) => (
                     matched
                         .into_iter()
-                        .map(|m| Series {
+                        .map(|m| History {
                             name: m.channel,
                             times: m.times,
                             values: m.predicted,
@@ -155,12 +134,7 @@ impl CaseHistories {
                 Err(error) => (Vec::new(), format!("no proof of match: {error}")),
             }
         };
-        let estimated: Vec<Series> = estimate
-            .histories
-            .iter()
-            .cloned()
-            .map(Series::from)
-            .collect();
+        let estimated = estimate.histories.clone();
         if !estimated.is_empty() && self.truth.is_empty() {
             self.truth = trace.map_or_else(Vec::new, true_coefficients);
         }
@@ -259,12 +233,12 @@ pub fn copy_all(from: &[PathBuf], out: &Path) -> Result<()> {
 }
 
 /// The simulator's body-axis coefficients along its trace.
-fn true_coefficients(trace: &TruthTrace) -> Vec<Series> {
+fn true_coefficients(trace: &TruthTrace) -> Vec<History> {
     let times: Vec<f64> = trace.samples.iter().map(|s| s.time).collect();
     COEFFICIENTS
         .iter()
         .filter_map(|name| {
-            trace.values(name).ok().map(|values| Series {
+            trace.values(name).ok().map(|values| History {
                 name: (*name).to_string(),
                 times: times.clone(),
                 values,

@@ -30,7 +30,8 @@
 //! headless browser can read back to check that the page was drawn.
 
 use crate::error::{Error, Result, read_text, write_error};
-use crate::eval::histories::{CaseHistories, Series};
+use crate::estimation::estimate::History;
+use crate::eval::histories::CaseHistories;
 use crate::eval::journal::{self, JOURNAL_FILE};
 use crate::eval::study::{CONVERGED, Row, StudyResult};
 use crate::eval::summary::SummaryRow;
@@ -270,7 +271,7 @@ struct Line {
 impl Line {
     /// A series' values (offset by `sigma_scale` times its σ when not 0),
     /// thinned to at most [`MAX_LINE_POINTS`].
-    fn of(series: &Series, label: String, colour: RGBColor, sigma_scale: f64) -> Line {
+    fn of(series: &History, label: String, colour: RGBColor, sigma_scale: f64) -> Line {
         let stride = series.values.len().div_ceil(MAX_LINE_POINTS).max(1);
         let points = (0..series.values.len())
             .step_by(stride)
