@@ -204,41 +204,39 @@ impl ModelStructure {
     /// `records` with a channel of zeros for each of the model's
     /// `zero_when_absent` states a record lacks, on the times of the
     /// record's densest channel, its source [`ZERO_SOURCE`].
-    pub fn with_zero_channels(&self, records: Vec<FlightRecord>) -> Vec<FlightRecord> {
-        records
-            .into_iter()
-            .map(|mut record| {
-                let times = record
-                    .channels
-                    .iter()
-                    .max_by_key(|c| c.times.len())
-                    .map(|c| (c.times.clone(), c.rate));
-                let Some((times, rate)) = times else {
-                    return record;
-                };
-                for &i in &self.zero_when_absent {
-                    let name = FLIGHT_PATH_STATES[i];
-                    if record.channel(name).is_ok() {
-                        continue;
+    pub fn with_zero_channels(&self, mut records: Vec<FlightRecord>) -> Vec<FlightRecord> {
+        for record in &mut records {
+            let absent: Vec<&'static str> = self
+                .zero_when_absent
+                .iter()
+                .map(|&i| FLIGHT_PATH_STATES[i])
+                .filter(|name| record.channel(name).is_err())
+                .collect();
+            if absent.is_empty() {
+                continue;
+            }
+            let Some(densest) = record.channels.iter().max_by_key(|c| c.times.len()) else {
+                continue;
+            };
+            let (times, rate) = (densest.times.clone(), densest.rate);
+            for name in absent {
+                record.channels.push(Channel {
+                    name: name.to_string(),
+                    unit: if matches!(name, "p" | "q" | "r") {
+                        "rad/s"
+                    } else {
+                        "rad"
                     }
-                    record.channels.push(Channel {
-                        name: name.to_string(),
-                        unit: if matches!(name, "p" | "q" | "r") {
-                            "rad/s"
-                        } else {
-                            "rad"
-                        }
-                        .into(),
-                        rate,
-                        resolution: None,
-                        source: format!("{ZERO_SOURCE} model '{}'", self.name),
-                        values: vec![0.0; times.len()],
-                        times: times.clone(),
-                    });
-                }
-                record
-            })
-            .collect()
+                    .into(),
+                    rate,
+                    resolution: None,
+                    source: format!("{ZERO_SOURCE} model '{}'", self.name),
+                    values: vec![0.0; times.len()],
+                    times: times.clone(),
+                });
+            }
+        }
+        records
     }
 
     /// Names of the flight-path states that are not integrated: measured
