@@ -261,3 +261,27 @@ fn interpolated(series: &aeroid::estimation::estimate::History, times: &[f64]) -
         })
         .collect()
 }
+
+/// A report reads the rows of the first `SHOWN_RUNS` runs of each point
+/// only: the page and its memory stay bounded however many runs a study
+/// has, while the summary it prints is over every run.
+#[test]
+fn the_report_plots_a_bounded_share_of_the_runs() {
+    use aeroid::eval::journal::Shard;
+    use aeroid::eval::report::{SHOWN_RUNS, StudyFolder};
+    use aeroid::eval::study::{self, Study};
+    let folder = common::temp_folder("report_bounded");
+    let mut study = Study::load("attas-lateral-acceptance").unwrap();
+    study.methods = vec!["ee".into()];
+    study.set_runs(SHOWN_RUNS + 1, "runs").unwrap();
+    study
+        .run_journaled(&folder, Shard::default(), false, 2, &|_| {})
+        .unwrap();
+    study::assemble(std::slice::from_ref(&folder), &folder).unwrap();
+    let read = StudyFolder::read(&folder).unwrap();
+    assert!(read.result.summary.iter().all(|s| s.runs == SHOWN_RUNS + 1));
+    assert!(read.rows.iter().all(|r| r.run < SHOWN_RUNS));
+    let per_case = read.rows.iter().filter(|r| r.run == 0).count();
+    assert!(per_case > 0);
+    assert_eq!(read.rows.len(), SHOWN_RUNS * per_case);
+}

@@ -12,8 +12,9 @@
 //!   scenario and noise scale (a colour each), with the ±1.96·(mean CRB)
 //!   band of that series as dashed lines: where the bias leaves its band the estimator
 //!   is biased beyond its own stated accuracy;
-//! - **estimates**: every converged estimate by case, one colour per
-//!   method, the truth as a line.
+//! - **estimates**: every converged estimate of the first [`SHOWN_RUNS`]
+//!   runs of each point by case, one colour per method, the truth as a
+//!   line.
 //!
 //! Per sweep point, from the histories of its first run
 //! ([`crate::eval::histories`]):
@@ -45,6 +46,11 @@ use std::path::{Path, PathBuf};
 pub const STUDY_COPY: &str = "study.toml";
 /// The report's default file name inside the study's folder.
 pub const REPORT_FILE: &str = "report.html";
+
+/// Runs per sweep point whose estimates the report plots one by one: the
+/// page and the memory it takes stay bounded whatever the number of runs
+/// (the summary's statistics are over every run).
+pub const SHOWN_RUNS: usize = 200;
 
 const WIDTH: u32 = 720;
 const HEIGHT: u32 = 420;
@@ -80,6 +86,8 @@ pub struct Plot {
 #[derive(Debug, Clone)]
 pub struct StudyFolder {
     pub result: StudyResult,
+    /// The rows of the first [`SHOWN_RUNS`] runs of each sweep point (the
+    /// summary holds every run).
     pub rows: Vec<Row>,
     /// The study file's text, if the folder has its copy.
     pub study_file: Option<String>,
@@ -98,10 +106,13 @@ impl StudyFolder {
             .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
         let path = folder.join("runs.csv");
         let mut reader = csv::Reader::from_path(&path).map_err(|e| csv_error(&path, e))?;
-        let rows = reader
-            .deserialize()
-            .collect::<std::result::Result<Vec<Row>, _>>()
-            .map_err(|e| csv_error(&path, e))?;
+        let mut rows = Vec::new();
+        for row in reader.deserialize::<Row>() {
+            let row = row.map_err(|e| csv_error(&path, e))?;
+            if row.run < SHOWN_RUNS {
+                rows.push(row);
+            }
+        }
         let copy = folder.join(STUDY_COPY);
         let study_file = copy.exists().then(|| read_text(&copy)).transpose()?;
         let fingerprint = folder
@@ -603,7 +614,8 @@ pub fn plots(folder: &StudyFolder) -> Result<Vec<Plot>> {
     for ((model, parameter), summary) in &groups {
         plots.push(error_plot(model, parameter, summary)?);
         if let Some(rows) = rows.get(&(model.clone(), parameter.clone())) {
-            plots.push(estimates_plot(model, parameter, rows, folder.result.runs)?);
+            let shown = folder.result.runs.min(SHOWN_RUNS);
+            plots.push(estimates_plot(model, parameter, rows, shown)?);
         }
     }
     Ok(plots)
