@@ -38,6 +38,7 @@ use crate::estimation::model::driven::Observable;
 use crate::record::{Channel, FlightRecord};
 use crate::sim::aero::{AeroModel, AeroSpec};
 use crate::sim::aircraft::{Aircraft, AircraftFile};
+use crate::sim::trace::TruthTrace;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -222,12 +223,7 @@ impl ModelStructure {
             for name in absent {
                 record.channels.push(Channel {
                     name: name.to_string(),
-                    unit: if matches!(name, "p" | "q" | "r") {
-                        "rad/s"
-                    } else {
-                        "rad"
-                    }
-                    .into(),
+                    unit: TruthTrace::column(name).map_or("rad", |c| c.unit).into(),
                     rate,
                     resolution: None,
                     source: format!("{ZERO_SOURCE} model '{}'", self.name),

@@ -16,6 +16,7 @@
 use crate::error::{Error, Result, read_text, write_error};
 use crate::estimation::estimate::{Estimate, History};
 use crate::estimation::methods::output_error;
+use crate::estimation::model::coefficient_states::COEFFICIENT_NAMES;
 use crate::estimation::structure::Structure;
 use crate::record::FlightRecord;
 use crate::sim::trace::TruthTrace;
@@ -24,9 +25,6 @@ use std::path::{Path, PathBuf};
 
 /// The folder of the histories inside a study's folder.
 pub const HISTORIES_FOLDER: &str = "histories";
-
-/// The body-axis coefficients the true histories are kept of.
-const COEFFICIENTS: [&str; 6] = ["CX", "CY", "CZ", "Cl", "Cm", "Cn"];
 
 /// One method's histories on one model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -235,7 +233,7 @@ pub fn copy_all(from: &[PathBuf], out: &Path) -> Result<()> {
 /// The simulator's body-axis coefficients along its trace.
 fn true_coefficients(trace: &TruthTrace) -> Vec<History> {
     let times: Vec<f64> = trace.samples.iter().map(|s| s.time).collect();
-    COEFFICIENTS
+    COEFFICIENT_NAMES
         .iter()
         .filter_map(|name| {
             trace.values(name).ok().map(|values| History {
