@@ -84,16 +84,74 @@ fn six_dof_methods_refuse_a_linear_structure() {
     }
 }
 
+/// Per output: its name, the recorded channel, and the predicted (time,
+/// value) pairs.
+type Responses = Vec<(String, aeroid::record::Channel, Vec<(f64, f64)>)>;
+
+/// The nonlinear simulator's recorded response to a doublet of `control`
+/// (`amplitude` in degrees, ideal recorder, 100 Hz) and the response of
+/// the linear model `aeroid linearise` writes for `axes`, driven by the
+/// same recorded inputs: per output of the linear model, the recorded
+/// channel and the predicted values on the model's grid.
+fn doublet_responses(name: &str, axes: Axes, control: &str, amplitude: f64) -> Responses {
+    let profile = Profile::load("ideal", None).unwrap();
+    let doublet = format!(
+        "[[inputs]]\nkind = \"doublet\"\ncontrol = \"{control}\"\nstart = \"1 s\"\npulse_width = \"1 s\"\namplitude = \"{amplitude} deg\"\n"
+    );
+    let scenario = scenario_with(name, |text| {
+        let head = text.split("[[inputs]]").next().unwrap().to_string();
+        head.replace("duration = \"60 s\"", "duration = \"12 s\"") + &doublet
+    });
+    let (record, _) = record_scenario(&scenario, &profile).unwrap();
+    let file = linearise_scenario(&scenario, axes).unwrap();
+    let structure = LinearStructure::from_file(&file, Path::new("linearised.toml")).unwrap();
+    let (model, mut x) = structure.for_record(&record, None, None).unwrap();
+    let theta = structure.parameter_values();
+    let mut predicted = vec![Vec::new(); structure.outputs.len()];
+    for k in 0..model.len() {
+        if k > 0 {
+            x = model.step(k - 1, x.as_slice(), theta.as_slice()).unwrap();
+        }
+        let y = model
+            .outputs(model.time(k), x.as_slice(), theta.as_slice())
+            .unwrap();
+        for (o, column) in predicted.iter_mut().enumerate() {
+            column.push((model.time(k), y[o]));
+        }
+    }
+    structure
+        .outputs
+        .iter()
+        .zip(predicted)
+        .map(|(output, predicted)| {
+            (
+                output.clone(),
+                record.channel(output).unwrap().clone(),
+                predicted,
+            )
+        })
+        .collect()
+}
+
 /// The response of the linear model `aeroid linearise` writes, driven by
 /// the recorded inputs of a 1° doublet flown by the nonlinear simulator,
-/// against the simulator's recorded response (ideal recorder, 100 Hz):
-/// within 1 % of each output's largest excursion from its first value (a
-/// 1° doublet excites second-order terms of about 1 % of the linear ones:
-/// α, β and the rates move by ~1°, whose square is 2 % of a radian's
-/// fraction).
+/// against the simulator's recorded response: within 1 % of each output's
+/// largest excursion from its first value.
+///
+/// One output misses that by a hair, and the cause is the simulator's
+/// second-order terms, not the linearisation: an elevator doublet moves
+/// the airspeed by only 0.12 m/s, and the simulator's second-order terms
+/// make 1.02 % of that at 1°, 0.51 % at 0.5° and 2.06 % at 2° — the error
+/// grows with the amplitude, as a second-order term's share does. The odd part of
+/// the response, (y(+1°) − y(−1°))/2, cancels every even-order term: the
+/// linear model reproduces it within 0.05 % for every output, airspeed
+/// included (measured: at most 0.02 % laterally, 0.003 % longitudinally,
+/// airspeed 0.0025 %), which is what "the linearisation is right" means.
+/// Asserted: the direct comparison within 1 % for every output but the
+/// elevator-driven airspeed, that one within 1.1 % (the second-order share
+/// measured above), and the odd part within 0.05 %.
 #[test]
 fn linearisation_reproduces_a_small_doublet() {
-    let profile = Profile::load("ideal", None).unwrap();
     let cases = [
         ("attas-lateral-multistep", Axes::Lateral, "aileron"),
         ("attas-lateral-multistep", Axes::Lateral, "rudder"),
@@ -101,62 +159,42 @@ fn linearisation_reproduces_a_small_doublet() {
         ("attas-elevator-3211", Axes::Longitudinal, "elevator"),
     ];
     for (name, axes, control) in cases {
-        let doublet = format!(
-            "[[inputs]]\nkind = \"doublet\"\ncontrol = \"{control}\"\nstart = \"1 s\"\npulse_width = \"1 s\"\namplitude = \"1 deg\"\n"
-        );
-        let scenario = scenario_with(name, |text| {
-            let head = text.split("[[inputs]]").next().unwrap().to_string();
-            head.replace("duration = \"60 s\"", "duration = \"12 s\"") + &doublet
-        });
-        let (record, _) = record_scenario(&scenario, &profile).unwrap();
-        let file = linearise_scenario(&scenario, axes).unwrap();
-        let structure = LinearStructure::from_file(&file, Path::new("linearised.toml")).unwrap();
-        let (model, mut x) = structure.for_record(&record, None, None).unwrap();
-        let theta = structure.parameter_values();
-        let mut predicted = vec![Vec::new(); structure.outputs.len()];
-        for k in 0..model.len() {
-            if k > 0 {
-                x = model.step(k - 1, x.as_slice(), theta.as_slice()).unwrap();
-            }
-            let y = model
-                .outputs(model.time(k), x.as_slice(), theta.as_slice())
-                .unwrap();
-            for (o, column) in predicted.iter_mut().enumerate() {
-                column.push(y[o]);
-            }
-        }
+        let positive = doublet_responses(name, axes, control, 1.0);
+        let negative = doublet_responses(name, axes, control, -1.0);
         // The short-period approximation holds V and θ: it is compared over
         // the first 6 s only, before the phugoid moves them.
         let horizon = if axes == Axes::ShortPeriod { 6.0 } else { 12.0 };
-        for (o, output) in structure.outputs.iter().enumerate() {
-            let channel = record.channel(output).unwrap();
-            let (mut excursion, mut error) = (0.0_f64, 0.0_f64);
-            for (k, value) in predicted[o].iter().enumerate() {
-                let t = model.time(k);
-                if t > horizon {
-                    break;
-                }
+        for ((output, channel, predicted), (_, mirrored, _)) in positive.iter().zip(&negative) {
+            let (mut excursion, mut error, mut odd_error) = (0.0_f64, 0.0_f64, 0.0_f64);
+            let first = predicted[0].1;
+            for &(t, value) in predicted.iter().take_while(|(t, _)| *t <= horizon) {
                 let measured = channel.value_at(t).unwrap();
+                let odd = 0.5 * (measured - mirrored.value_at(t).unwrap());
                 excursion = excursion.max((measured - channel.values[0]).abs());
                 error = error.max((value - measured).abs());
+                odd_error = odd_error.max((value - first - odd).abs());
             }
             // The short-period approximation (V and θ held) is good to a
-            // few %: measured 0.7 % on α, 2.2 % on q. The airspeed is the
-            // one output an elevator doublet moves only weakly (0.12 m/s
-            // here), so its second-order share is larger: measured 1.02 %.
-            let limit = match (axes, output.as_str()) {
-                (Axes::ShortPeriod, _) => 0.05,
-                (_, "airspeed") => 0.015,
-                _ => 0.01,
+            // few %: measured 0.7 % on α, 2.2 % on q; its odd part too.
+            let (limit, odd_limit) = match (axes, output.as_str()) {
+                (Axes::ShortPeriod, _) => (0.05, 0.05),
+                (_, "airspeed") => (0.011, 0.0005),
+                _ => (0.01, 0.0005),
             };
             println!(
-                "{name} {} {control} {output}: error {:.3} % of the excursion {excursion:.4e}",
+                "{name} {} {control} {output}: error {:.3} %, odd part {:.4} % of the excursion {excursion:.4e}",
                 axes.name(),
-                100.0 * error / excursion
+                100.0 * error / excursion,
+                100.0 * odd_error / excursion
             );
             assert!(
                 error <= limit * excursion,
                 "{name} {} {control}: {output} off by {error:.3e}, excursion {excursion:.3e}",
+                axes.name()
+            );
+            assert!(
+                odd_error <= odd_limit * excursion,
+                "{name} {} {control}: {output}'s odd part off by {odd_error:.3e}, excursion {excursion:.3e}",
                 axes.name()
             );
         }
@@ -213,21 +251,33 @@ fn linearisation_eigenvalues_are_the_simulators_modes() {
     }
 }
 
-/// Output error and filter error on the short-period model's flights
-/// `scenario(seed)` for seeds 1..=`seeds` (flight-test-25hz): per method
-/// and parameter, the sum of the errors in σ units, how many lie inside
-/// the 95 % interval, and how many there are.
+/// Output error and filter error with the short-period model.
+const SHORT_PERIOD: &[(&str, &str)] = &[
+    ("oem", "linear-short-period-attas"),
+    ("fem", "linear-short-period-attas"),
+];
+
+/// The `fits` (method, model) on the short-period flights `scenario(seed)`
+/// for seeds 1..=`seeds` (flight-test-25hz), each fit converged: per
+/// method and parameter, the sum of the errors in σ units, how many lie
+/// inside the 95 % interval, and how many there are.
 fn errors_in_sigma(
     seeds: u64,
     scenario: impl Fn(u64) -> Scenario,
+    fits: &[(&'static str, &str)],
 ) -> std::collections::BTreeMap<(&'static str, String), (f64, usize, usize)> {
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let mut sums: std::collections::BTreeMap<(&str, String), (f64, usize, usize)> =
         Default::default();
     for seed in 1..=seeds {
         let (record, truth) = record_flight(&scenario(seed), &profile, seed).unwrap();
-        for method in ["oem", "fem"] {
-            let estimate = estimate(method, &record, "linear-short-period-attas").unwrap();
+        for &(method, model) in fits {
+            let estimate = estimate(method, &record, model).unwrap();
+            assert_eq!(
+                estimate.status,
+                aeroid::estimation::estimate::Status::Converged,
+                "{method} on {model}, seed {seed}"
+            );
             for p in &estimate.parameters {
                 let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
                 let entry = sums.entry((method, p.name.clone())).or_default();
@@ -254,11 +304,15 @@ fn errors_in_sigma(
 /// output-error mean beyond 3σ.
 #[test]
 fn filter_error_is_within_its_bounds_where_output_error_is_biased() {
-    let sums = errors_in_sigma(20, |seed| {
-        scenario_with("linear-short-period-attas", |t| {
-            t.replace("seed = 4", &format!("seed = {seed}"))
-        })
-    });
+    let sums = errors_in_sigma(
+        20,
+        |seed| {
+            scenario_with("linear-short-period-attas", |t| {
+                t.replace("seed = 4", &format!("seed = {seed}"))
+            })
+        },
+        SHORT_PERIOD,
+    );
     for ((method, name), (sum, inside, count)) in &sums {
         println!(
             "{method} {name}: mean error {:+.2}σ, {inside}/{count} inside 95 %",
@@ -567,7 +621,7 @@ fn linear_flight_gusts_have_the_dryden_shape() {
 /// filter error's, and filter error's coverage below 85 %.
 #[test]
 fn filter_error_on_a_gusty_linear_flight() {
-    let sums = errors_in_sigma(10, |seed| gusty_short_period(seed, "30 s"));
+    let sums = errors_in_sigma(10, |seed| gusty_short_period(seed, "30 s"), SHORT_PERIOD);
     let (mut worst, mut covered) = (
         std::collections::BTreeMap::<&str, f64>::new(),
         std::collections::BTreeMap::<&str, (usize, usize)>::new(),
@@ -591,6 +645,50 @@ fn filter_error_on_a_gusty_linear_flight() {
     assert!(
         (inside as f64) < 0.85 * count as f64,
         "filter error inside its bounds on the gusts: {inside}/{count}"
+    );
+}
+
+/// Filter error on the same gusty flights with the gust's forming filter
+/// in the model (`linear-short-period-attas-dryden`: the Dryden w filter
+/// as two states driven by white noise, F on the second estimated, the
+/// gust entering α and q through the flight's matrix): the process noise
+/// the filter assumes is now the one that drives the flight, so its
+/// likelihood is the data's. Over 20 seeds the mean error of each
+/// parameter in σ units scatters by 1/√20 ≈ 0.22 for an unbiased
+/// estimator with honest bounds, and 95 % of the 120 estimates should lie
+/// inside their 95 % interval (binomial: 114 ± 2.4).
+///
+/// Measured: means −0.39σ to +0.25σ, 106 of 120 inside (over 60 seeds:
+/// −0.05σ… +0.33σ, 324 of 360). Unbiased, but the bounds of the two
+/// parameters of A's α column are optimistic: the RMS of error/σ over 40
+/// seeds is 1.72 for A_alpha_alpha and A_q_alpha (0.94–1.05 for the
+/// others), 1.39 on 300-s flights, and F comes out at 1.70–1.81 ± 0.18
+/// against the gust's 2·√λ·σ_w = 2.11. The steady-state filter starts the
+/// unmeasured gust states at zero while the flight's gust starts from its
+/// stationary spread (σ_w, 1.3° of α), a transient the likelihood does not
+/// model; that it shrinks with the record's length fits this, the
+/// time-varying gain of the filter's start would be the remedy.
+/// Asserted: every mean within 3/√20 ≈ 0.67σ and at least 85 % inside,
+/// the bounds of `filter_error_is_within_its_bounds_where_output_error_is_biased`.
+#[test]
+fn filter_error_with_the_gust_filter_is_within_its_bounds() {
+    let sums = errors_in_sigma(
+        20,
+        |seed| gusty_short_period(seed, "30 s"),
+        &[("fem", "linear-short-period-attas-dryden")],
+    );
+    let (mut inside_all, mut count_all) = (0, 0);
+    for ((method, name), (sum, inside, count)) in &sums {
+        let mean = sum / *count as f64;
+        println!("{method} {name}: mean error {mean:+.2}σ, {inside}/{count} inside 95 %");
+        assert!(mean.abs() <= 3.0 / 20f64.sqrt(), "{name}: mean {mean:+.2}σ");
+        inside_all += inside;
+        count_all += count;
+    }
+    assert_eq!(count_all, 120);
+    assert!(
+        inside_all as f64 >= 0.85 * count_all as f64,
+        "{inside_all}/{count_all} inside"
     );
 }
 

@@ -5,6 +5,9 @@ use aeroid::sim::scenario::Scenario;
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// The widest status the summary table shows in full.
+const STATUS_WIDTH: usize = 40;
+
 /// The whole harness on one scenario: simulate, record (the scenario's
 /// recorder profile unless --profile), run every registered estimator
 /// (`aeroid methods`) on every model structure the scenario names, and
@@ -62,11 +65,40 @@ pub fn run(args: Args) -> Result<()> {
                 .map_or(f64::NAN, |v| *v),
         );
     }
+    // Columns as wide as their longest entry; a status longer than
+    // STATUS_WIDTH is cut with an ellipsis (the estimate files keep it).
+    let model_width = report
+        .runs
+        .iter()
+        .map(|r| r.model.chars().count())
+        .fold(22, usize::max);
+    let method_width = report
+        .runs
+        .iter()
+        .map(|r| r.method.chars().count())
+        .fold(6, usize::max);
+    let status_of = |status: String| {
+        if status.chars().count() > STATUS_WIDTH {
+            status.chars().take(STATUS_WIDTH - 1).chain(['…']).collect()
+        } else {
+            status
+        }
+    };
+    let status_width = report
+        .runs
+        .iter()
+        .filter_map(|r| match &r.outcome {
+            Outcome::Estimated { estimate, .. } => {
+                Some(status_of(estimate.status.to_string()).chars().count())
+            }
+            _ => None,
+        })
+        .fold(16, usize::max);
     if scenario.models.is_empty() {
         outln!("the scenario names no model structures (`models = [...]`): nothing to estimate");
     } else {
         outln!(
-            "{:<22} {:<5} {:<16} {:>6} {:>9} {:>13} {:>10}",
+            "{:<model_width$} {:<method_width$} {:<status_width$} {:>6} {:>9} {:>13} {:>10}",
             "model",
             "method",
             "status",
@@ -80,14 +112,9 @@ pub fn run(args: Args) -> Result<()> {
         match &run.outcome {
             Outcome::Estimated { estimate, scores } => {
                 let (inside, scored, worst) = run.coverage().unwrap_or((0, 0, f64::NAN));
-                let status = estimate
-                    .status
-                    .to_string()
-                    .chars()
-                    .take(16)
-                    .collect::<String>();
+                let status = status_of(estimate.status.to_string());
                 outln!(
-                    "{:<22} {:<5} {:<16} {:>6} {:>9.3} {:>13} {:>10.2}",
+                    "{:<model_width$} {:<method_width$} {:<status_width$} {:>6} {:>9.3} {:>13} {:>10.2}",
                     run.model,
                     run.method,
                     status,
@@ -101,13 +128,17 @@ pub fn run(args: Args) -> Result<()> {
                 }
             }
             Outcome::Refused(refusal) => outln!(
-                "{:<22} {:<5} refused ({}): {refusal}",
+                "{:<model_width$} {:<method_width$} refused ({}): {refusal}",
                 run.model,
                 run.method,
                 refusal.kind()
             ),
             Outcome::Failed(reason) => {
-                outln!("{:<22} {:<5} failed: {reason}", run.model, run.method)
+                outln!(
+                    "{:<model_width$} {:<method_width$} failed: {reason}",
+                    run.model,
+                    run.method
+                )
             }
         }
     }
