@@ -270,6 +270,63 @@ fn every_fault_is_an_error_with_its_reason_and_a_counted_failure() {
     );
 }
 
+/// A plug-in may write only in its work folder where the platform allows
+/// (Linux with Landlock): a script that writes a file in its own working
+/// directory, another in the system's temporary folder (where the work
+/// folders are made) and one in a folder of the user's, then answers,
+/// leaves no file behind and
+/// its answer counts; with `sandbox = false` the same script leaves all
+/// three. Where Landlock is missing the test says so and checks the note
+/// that tells the user.
+#[test]
+fn a_plugin_writes_only_in_its_work_folder() {
+    let folder = common::temp_folder("plugin_sandbox");
+    let outside = common::temp_folder("plugin_sandbox_outside");
+    let targets = [
+        folder.join("escaped.txt"),
+        outside.join("escaped.txt"),
+        std::env::temp_dir().join(format!("aeroid-escaped-{}.txt", std::process::id())),
+    ];
+    let mut script = String::new();
+    for target in &targets {
+        script += &format!("echo escaped > '{}' 2>/dev/null\n", target.display());
+    }
+    script += "cat > \"$1/estimate.json\" <<'END'\n{\"format\": \"aeroid-plugin-estimate-1\", \"status\": \"converged\", \"parameters\": [{\"name\": \"CY_beta\", \"value\": -0.9, \"standard_error\": 0.01}]}\nEND\n";
+    common::write(&folder, "escape.sh", &script);
+    let structure = cy_beta_model(&folder);
+    let record = record();
+    for sandbox in [true, false] {
+        let name = if sandbox { "escape" } else { "escape-open" };
+        let path = common::write(
+            &folder,
+            &format!("{name}.toml"),
+            &format!("command = [\"sh\", \"escape.sh\"]\nsandbox = {sandbox}\n"),
+        );
+        let method = registered(&path);
+        let estimate = estimate(&method, &record, &structure).unwrap();
+        assert_eq!(estimate.parameter("CY_beta").unwrap().value, -0.9);
+        let unsandboxed = estimate
+            .notes
+            .iter()
+            .find(|n| n.starts_with("not sandboxed"));
+        let escaped: Vec<&PathBuf> = targets.iter().filter(|t| t.exists()).collect();
+        if !sandbox {
+            assert_eq!(escaped.len(), 3, "without the sandbox every write lands");
+            assert!(unsandboxed.is_none(), "{:?}", estimate.notes);
+        } else if let Some(note) = unsandboxed {
+            println!("SKIPPED: {note}");
+            for target in &targets {
+                let _ = std::fs::remove_file(target);
+            }
+        } else {
+            assert!(escaped.is_empty(), "the plug-in wrote {escaped:?}");
+        }
+    }
+    for target in &targets {
+        let _ = std::fs::remove_file(target);
+    }
+}
+
 /// A study with a plug-in among its methods is deterministic and resumable
 /// like any other: one thread, or two threads after an interruption that
 /// kept one case, write the same bytes.

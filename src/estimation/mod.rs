@@ -15,6 +15,7 @@ pub mod neural;
 pub mod plugin;
 pub mod problem;
 pub mod reconstruction;
+pub mod sandbox;
 pub mod solver;
 pub mod structure;
 

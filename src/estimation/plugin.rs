@@ -35,6 +35,7 @@ use crate::error::{Error, Result, read_text, write_error};
 use crate::estimation::estimate::{Estimate, ParameterEstimate, Status};
 use crate::estimation::estimator::{Estimator, MethodInfo, Refusal, SettingInfo, Settings};
 use crate::estimation::problem::EstimationProblem;
+use crate::estimation::sandbox::Sandbox;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -155,6 +156,10 @@ pub struct PluginFile {
     /// that reads only problem.json saves the time).
     #[serde(default = "yes")]
     pub record_folders: bool,
+    /// Whether the plug-in may write only in its work folder, where the
+    /// platform allows ([`crate::estimation::sandbox`]).
+    #[serde(default = "yes")]
+    pub sandbox: bool,
 }
 
 fn yes() -> bool {
@@ -179,6 +184,7 @@ pub struct Plugin {
     settings: Option<Vec<String>>,
     environment: BTreeMap<String, String>,
     record_folders: bool,
+    sandbox: bool,
 }
 
 impl Plugin {
@@ -246,6 +252,7 @@ impl Plugin {
             settings: file.settings,
             environment: file.environment,
             record_folders: file.record_folders,
+            sandbox: file.sandbox,
         })
     }
 
@@ -275,7 +282,14 @@ impl Plugin {
                 }
             }
         }
-        let outcome = self.execute(&work.path)?;
+        let sandbox = self.sandbox.then(|| Sandbox::for_work_folder(&work.path));
+        let unsandboxed = match &sandbox {
+            Some(Sandbox::Unavailable(reason)) => Some(format!(
+                "not sandboxed: {reason}; the plug-in could write outside its work folder"
+            )),
+            _ => None,
+        };
+        let outcome = self.execute(&work.path, sandbox)?;
         let stderr = tail(&work.path.join("stderr.txt"));
         let failure = |reason: String| {
             Error::Other(format!(
@@ -321,12 +335,14 @@ impl Plugin {
         if !stderr.is_empty() {
             estimate.notes.push(format!("plug-in stderr: {stderr}"));
         }
+        estimate.notes.extend(unsandboxed);
         estimate.wall_time = started.elapsed().as_secs_f64();
         Ok(estimate)
     }
 
-    /// Runs the command, killing its process group at the time limit.
-    fn execute(&self, work: &Path) -> Result<Outcome> {
+    /// Runs the command, in the sandbox when there is one, killing its
+    /// process group at the time limit.
+    fn execute(&self, work: &Path, sandbox: Option<Sandbox>) -> Result<Outcome> {
         use std::os::unix::process::CommandExt;
         let output = |name: &str| {
             let path = work.join(name);
@@ -343,6 +359,13 @@ impl Plugin {
             .stdout(output("stdout.txt")?)
             .stderr(output("stderr.txt")?)
             .process_group(0);
+        if let Some(Sandbox::Landlock(rules)) = sandbox {
+            // SAFETY: `enter` makes system calls only (no allocation, no
+            // lock), as the time between fork and exec requires.
+            unsafe {
+                command.pre_exec(move || rules.enter());
+            }
+        }
         let mut child = command.spawn().map_err(|e| {
             Error::Other(format!(
                 "plug-in {}: cannot start '{}' (from {}): {e}",
@@ -351,38 +374,45 @@ impl Plugin {
                 self.path.display()
             ))
         })?;
-        let deadline = Instant::now() + Duration::from_secs_f64(self.time_limit);
-        let mut pause = Duration::from_micros(100);
-        loop {
-            match child.try_wait() {
-                Ok(Some(status)) => return Ok(Outcome::Exited(status.code())),
-                Ok(None) if Instant::now() >= deadline => {
-                    // The whole process group (a shell's children too),
-                    // by the system call: the group is the child's own
-                    // (process_group(0) above), never aeroid's.
-                    if let Ok(group) = libc::pid_t::try_from(child.id())
-                        && group > 1
-                    {
-                        // SAFETY: killpg only sends a signal; it touches no memory.
-                        unsafe {
-                            libc::killpg(group, libc::SIGKILL);
-                        }
-                    }
-                    let _ = child.kill();
-                    let _ = child.wait();
-                    return Ok(Outcome::TimedOut);
-                }
-                Ok(None) => {
-                    std::thread::sleep(pause);
-                    pause = (pause * 2).min(Duration::from_millis(10));
-                }
-                Err(e) => {
-                    return Err(Error::Other(format!(
-                        "plug-in {}: waiting for it: {e}",
-                        self.name
-                    )));
+        // A thread blocks in wait() and reports the exit at once; this one
+        // waits for that report until the time limit.
+        let group = libc::pid_t::try_from(child.id()).ok();
+        let (sender, receiver) = std::sync::mpsc::channel();
+        let waiter = std::thread::spawn(move || {
+            let status = child.wait();
+            let _ = sender.send(());
+            status
+        });
+        let limit = Duration::from_secs_f64(self.time_limit);
+        let timed_out = matches!(
+            receiver.recv_timeout(limit),
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout)
+        );
+        if timed_out {
+            // The whole process group (a shell's children too), by the
+            // system call: the group is the child's own (process_group(0)
+            // above), never aeroid's. The child is not yet reaped (the
+            // waiter has not reported), so its pid is still its group's.
+            if let Some(group) = group.filter(|&g| g > 1) {
+                // SAFETY: killpg only sends a signal; it touches no memory.
+                unsafe {
+                    libc::killpg(group, libc::SIGKILL);
                 }
             }
+        }
+        let status = waiter.join().map_err(|_| {
+            Error::Other(format!(
+                "plug-in {}: the thread waiting for it failed",
+                self.name
+            ))
+        })?;
+        match status {
+            _ if timed_out => Ok(Outcome::TimedOut),
+            Ok(status) => Ok(Outcome::Exited(status.code())),
+            Err(e) => Err(Error::Other(format!(
+                "plug-in {}: waiting for it: {e}",
+                self.name
+            ))),
         }
     }
 

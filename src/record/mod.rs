@@ -485,10 +485,13 @@ impl FlightRecord {
             .chain(members.iter().map(|&i| self.channels[i].header()));
         writer.write_record(header).map_err(io_error)?;
         let times = &self.channels[members[0]].times;
+        let mut text = String::new();
         for (k, time) in times.iter().enumerate() {
-            let row = std::iter::once(time.to_string())
-                .chain(members.iter().map(|&i| cell(self.channels[i].values[k])));
-            writer.write_record(row).map_err(io_error)?;
+            write_cell(&mut writer, &mut text, *time).map_err(io_error)?;
+            for &i in members {
+                write_cell(&mut writer, &mut text, self.channels[i].values[k]).map_err(io_error)?;
+            }
+            writer.write_record(None::<&[u8]>).map_err(io_error)?;
         }
         writer
             .flush()
@@ -654,12 +657,19 @@ pub fn unwrap_angles(angles: &mut [f64]) {
     }
 }
 
-fn cell(value: f64) -> String {
-    if value.is_nan() {
-        String::new()
-    } else {
-        value.to_string()
+/// One CSV field of a sample: the shortest text that reads back as the
+/// same number, empty for NaN (a missing sample); `text` is a reused buffer.
+fn write_cell<W: std::io::Write>(
+    writer: &mut csv::Writer<W>,
+    text: &mut String,
+    value: f64,
+) -> csv::Result<()> {
+    use std::fmt::Write as _;
+    text.clear();
+    if !value.is_nan() {
+        let _ = write!(text, "{value}");
     }
+    writer.write_field(text.as_bytes())
 }
 
 /// A channel name must be usable as a CSV header and file name.
