@@ -38,7 +38,7 @@ use crate::catalog;
 use crate::error::{Problems, Result, parse_toml, read_text};
 use crate::estimation::estimator::{MethodTables, check_method_tables};
 use crate::estimation::model::linear::{Entry, LinearStateSpace, Matrices, Matrix};
-use crate::estimation::model::state_space::{fitting_window, integration_step};
+use crate::estimation::model::state_space::{fitting_window, observation_step};
 use crate::record::FlightRecord;
 use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DVector};
@@ -307,8 +307,8 @@ impl LinearStructure {
     }
 
     /// The model driven by `record`: over the window where every output has
-    /// samples (inside `limit`), on a grid of `step` (else the fastest
-    /// output's period), its inputs the input channels at the grid points
+    /// samples (inside `limit`), on a grid of `step` (else
+    /// [`observation_step`]'s), its inputs the input channels at the grid points
     /// (linear between samples), x₀ the record's value of each state named
     /// like a channel at the window's start, else 0.
     pub fn for_record(
@@ -318,7 +318,8 @@ impl LinearStructure {
         limit: Option<(f64, f64)>,
     ) -> Result<(LinearStateSpace, DVector<f64>)> {
         let window = fitting_window(record, &self.outputs, limit)?;
-        let step = integration_step(record, &self.outputs, step)?;
+        let inputs: Vec<&str> = self.inputs.iter().map(String::as_str).collect();
+        let step = observation_step(record, &self.outputs, &inputs, step, window.0)?;
         let count = ((window.1 - window.0) / step + 1e-9).floor() as usize + 1;
         let times: Vec<f64> = (0..count).map(|k| window.0 + k as f64 * step).collect();
         let mut inputs = vec![DVector::zeros(self.inputs.len()); count];

@@ -30,7 +30,7 @@ use crate::estimation::structure::ModelStructure;
 use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
 use crate::sim::integrator::Interpolation;
-use crate::sim::state::Controls;
+use crate::sim::state::{Control, Controls};
 use nalgebra::{DMatrix, DVector};
 
 /// The Jacobians of a state-space model at one point (t, x, θ).
@@ -107,6 +107,76 @@ pub fn integration_step(
     Ok(1.0 / fastest)
 }
 
+/// The most sub-steps of the fastest output's period [`observation_step`]
+/// tries.
+pub const MAX_OBSERVATION_SUBDIVISION: usize = 8;
+
+/// The grid step of a fit: `step` if given, else the fastest output's
+/// period divided into the fewest equal parts (at most
+/// [`MAX_OBSERVATION_SUBDIVISION`]) for which every sample of the outputs
+/// and of the `inputs` (the channels that drive the model; those the
+/// record lacks are skipped) inside the window starting at `start` falls
+/// on a grid point. A channel sampled later in the recorder's frame
+/// (word-slot skew) is then compared with the model at its own instant,
+/// and an input is reconstructed between its own samples as the
+/// interpolation convention says, not between values interpolated to an
+/// offset grid. Where no such division exists, the period: output
+/// samples are then taken at the nearest grid point by the filters
+/// ([`crate::estimation::model::observations`] counts them and the
+/// estimate says so) and interpolated by output error.
+pub fn observation_step(
+    record: &FlightRecord,
+    outputs: &[String],
+    inputs: &[&str],
+    step: Option<f64>,
+    start: f64,
+) -> Result<f64> {
+    let period = integration_step(record, outputs, step)?;
+    if step.is_some() {
+        return Ok(period);
+    }
+    let mut offsets = Vec::with_capacity(outputs.len() + inputs.len());
+    let channels = outputs
+        .iter()
+        .map(|name| record.channel(name).map(Some))
+        .chain(inputs.iter().map(|name| Ok(record.channel(name).ok())));
+    for channel in channels {
+        let Some(channel) = channel? else { continue };
+        if let Some(&first) = channel.times.iter().find(|&&t| t >= start - 1e-9 * period) {
+            offsets.push((first - start, 1.0 / channel.rate));
+        }
+    }
+    let on_grid = |value: f64, h: f64| {
+        let position = value / h;
+        (position - position.round()).abs() <= 1e-6
+    };
+    Ok((1..=MAX_OBSERVATION_SUBDIVISION)
+        .map(|m| period / m as f64)
+        .find(|&h| {
+            offsets
+                .iter()
+                .all(|&(offset, own)| on_grid(offset, h) && on_grid(own, h))
+        })
+        .unwrap_or(period))
+}
+
+/// The record channels that drive a 6-DOF structure's simulation: the
+/// controls and the flight-path states it does not integrate
+/// ([`DrivenSimulation::from_record`]).
+pub fn driving_channels(structure: &ModelStructure) -> Vec<&'static str> {
+    Control::ALL
+        .iter()
+        .map(|c| c.name())
+        .chain(
+            FLIGHT_PATH_STATES
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| !structure.integrate.contains(i))
+                .map(|(_, name)| *name),
+        )
+        .collect()
+}
+
 /// The largest h·|λ| an RK4 step of the postulated model may take, λ the
 /// model's fastest eigenvalue: RK4's error over one step is
 /// (hλ)⁵/120 relative, 2.6e-4 at 0.5, and the estimates then move by
@@ -126,7 +196,9 @@ pub fn driven_simulation(
     step: Option<f64>,
     window: (f64, f64),
 ) -> Result<(DrivenSimulation, Option<String>)> {
-    let period = integration_step(record, &structure.outputs, step)?;
+    let inputs = driving_channels(structure);
+    let sample_period = integration_step(record, &structure.outputs, step)?;
+    let period = observation_step(record, &structure.outputs, &inputs, step, window.0)?;
     let simulate = |step: f64| {
         DrivenSimulation::from_record(record, &structure.integrate, interpolation, step, window)
     };
@@ -134,6 +206,12 @@ pub fn driven_simulation(
     if step.is_some() {
         return Ok((simulation, None));
     }
+    let aligned = (period < sample_period).then(|| {
+        format!(
+            "grid step {period:.4} s, 1/{:.0} of the sample period {sample_period} s: the channels' samples lie at different instants of the recorder's frame, and each falls on a grid point",
+            sample_period / period
+        )
+    });
     let initial = recorded_initial_state(record, structure, &simulation, window.0);
     let model = FlightModel::new(structure.aircraft.clone(), Default::default());
     let view = DrivenStateSpace::new(simulation, model, Vec::new())?;
@@ -149,15 +227,19 @@ pub fn driven_simulation(
         .fold(0.0, f64::max);
     let substeps = (period * fastest / RK4_STEP_LIMIT).ceil();
     if !(substeps > 1.0 && substeps.is_finite()) {
-        return Ok((view.simulation, None));
+        return Ok((view.simulation, aligned));
     }
     let fine = period / substeps;
+    let stiff = format!(
+        "integration step {fine:.4} s: the grid step {period} s would be h·|λ| = {:.2} for the model's fastest mode (|λ| = {fastest:.2}/s at the start), so each grid interval is integrated in {substeps} RK4 steps (`step` sets it)",
+        period * fastest
+    );
     Ok((
         simulate(fine)?,
-        Some(format!(
-            "integration step {fine:.4} s: the sample period {period} s would be h·|λ| = {:.2} for the model's fastest mode (|λ| = {fastest:.2}/s at the start), so each sample interval is integrated in {substeps} RK4 steps (`step` sets it)",
-            period * fastest
-        )),
+        Some(match aligned {
+            Some(aligned) => format!("{aligned}; {stiff}"),
+            None => stiff,
+        }),
     ))
 }
 
@@ -262,7 +344,7 @@ impl DrivenStateSpace {
 
     /// The view of `structure` driven by `record` as output error drives
     /// it: over the window where every output has samples (inside `limit`),
-    /// on a grid of `step` (else the fastest output's period), with the
+    /// on a grid of `step` (else [`observation_step`]'s), with the
     /// state x₀ the record gives at the window's start
     /// ([`recorded_initial_state`]). Returns the view and x₀.
     pub fn for_record(
@@ -273,7 +355,8 @@ impl DrivenStateSpace {
         limit: Option<(f64, f64)>,
     ) -> Result<(DrivenStateSpace, DVector<f64>)> {
         let window = fitting_window(record, &structure.outputs, limit)?;
-        let step = integration_step(record, &structure.outputs, step)?;
+        let inputs = driving_channels(structure);
+        let step = observation_step(record, &structure.outputs, &inputs, step, window.0)?;
         let simulation = DrivenSimulation::from_record(
             record,
             &structure.integrate,
