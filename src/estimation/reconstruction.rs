@@ -11,8 +11,10 @@
 //! - `CY = (m·g0·ny − T_y)/(q̄·S)`                                   (Eq. 22)
 //! - `CL = CX·sin α − CZ·cos α`, `CD = −CX·cos α − CZ·sin α`          (Eqs. 19, 20)
 //!
-//! with `T = δT·Tmax·(ρ/ρ0)^n` along the thrust line (throttle channel,
-//! ρ from the ISA at the altitude channel). The scan of the reflex-wing UAV paper writes
+//! with T along the thrust line: the record's `thrust` channel (N) when it
+//! has one, else `T = δT·Tmax·(ρ/ρ0)^n` from the throttle channel, ρ the
+//! record's `density` channel when it has one, else the ISA at the
+//! altitude channel. The scan of the reflex-wing UAV paper writes
 //! Eq. 18 without thrust; a thrust line inclined to the body x axis has a z
 //! component, so it is subtracted here as in Eq. 17.
 //!
@@ -29,8 +31,11 @@
 //! for Ixz); the standard form above, consistent with the simulator, is used.
 //!
 //! q̄ is the `dynamic_pressure` channel when the record has it, else
-//! ½·ρ(h)·V² from the altitude and airspeed channels. ṗ, q̇, ṙ (and α̇ for
-//! `alpha_dot` terms) come from [`Differentiator`] applied to each channel on
+//! ½·ρ·V² from the airspeed channel and ρ as above. ṗ, q̇, ṙ are the
+//! record's `p_dot`, `q_dot`, `r_dot` channels when asked
+//! ([`AngularAccelerations`]; by default the rates are differentiated and
+//! the notes say when the record has all three); otherwise they (and α̇
+//! for `alpha_dot` terms) come from [`Differentiator`] applied to each channel on
 //! its own time base, with no window across a step in any control channel
 //! ([`control_steps`]: the accelerations jump there). Every channel is then read at the sample instants of
 //! one reference channel with [`Channel::values_at`] (linear interpolation;
@@ -63,6 +68,41 @@ pub struct ReconstructionOptions {
     /// The moments leave out I·ω̇ (no rate is differentiated): the
     /// frequency-domain estimators add it from the rates' transforms.
     pub omit_angular_accelerations: bool,
+    /// Where ṗ, q̇, ṙ come from.
+    pub angular_accelerations: AngularAccelerations,
+}
+
+/// Where the angular accelerations of the moment equations come from (the
+/// `angular_accelerations` setting of the regression methods).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AngularAccelerations {
+    /// The record's `p_dot`, `q_dot`, `r_dot` when it has all three, else
+    /// the differentiated rates.
+    Auto,
+    /// The record's `p_dot`, `q_dot`, `r_dot` (a record without them is
+    /// refused, naming them).
+    Measured,
+    /// The rates differentiated, whatever the record has (the default:
+    /// the estimate's notes say when the record has all three).
+    #[default]
+    Differentiated,
+}
+
+/// The channels of measured angular accelerations.
+const ANGULAR_ACCELERATION_CHANNELS: [&str; 3] = ["p_dot", "q_dot", "r_dot"];
+
+impl AngularAccelerations {
+    /// Whether `record`'s measured angular accelerations are used.
+    fn measured(self, record: &FlightRecord) -> bool {
+        match self {
+            AngularAccelerations::Auto => ANGULAR_ACCELERATION_CHANNELS
+                .iter()
+                .all(|name| record.channel(name).is_ok()),
+            AngularAccelerations::Measured => true,
+            AngularAccelerations::Differentiated => false,
+        }
+    }
 }
 
 /// What to reconstruct: which coefficients (as measured values) and which regressors.
@@ -122,8 +162,15 @@ fn need(needs: &mut Needs, channel: &'static str, why: &str) {
 }
 
 /// The channels a request needs.
-fn needed_channels(record: &FlightRecord, aircraft: &Aircraft, request: &Request) -> Needs {
+fn needed_channels(
+    record: &FlightRecord,
+    aircraft: &Aircraft,
+    request: &Request,
+    options: &ReconstructionOptions,
+) -> Needs {
     let mut needs = Needs::new();
+    let measured_accelerations =
+        !options.omit_angular_accelerations && options.angular_accelerations.measured(record);
     let axes = aircraft.aero.force_axes;
     let mut wants_dynamic_pressure = false;
     let mut wants_thrust = false;
@@ -152,21 +199,33 @@ fn needed_channels(record: &FlightRecord, aircraft: &Aircraft, request: &Request
                 for channel in ["p", "q", "r"] {
                     need(&mut needs, channel, name);
                 }
+                if measured_accelerations {
+                    for channel in ANGULAR_ACCELERATION_CHANNELS {
+                        need(&mut needs, channel, name);
+                    }
+                }
             }
         }
     }
     for &regressor in &request.regressors {
         regressor_needs(aircraft, regressor, &mut needs);
     }
-    if wants_thrust && aircraft.propulsion.max_thrust > 0.0 {
+    let density = if record.channel("density").is_ok() {
+        "density"
+    } else {
+        "altitude"
+    };
+    if wants_thrust && record.channel("thrust").is_ok() {
+        need(&mut needs, "thrust", "thrust");
+    } else if wants_thrust && aircraft.propulsion.max_thrust > 0.0 {
         need(&mut needs, "throttle", "thrust");
         if aircraft.propulsion.density_exponent != 0.0 {
-            need(&mut needs, "altitude", "thrust lapse with density");
+            need(&mut needs, density, "thrust lapse with density");
         }
     }
     if wants_dynamic_pressure && record.channel("dynamic_pressure").is_err() {
         need(&mut needs, "airspeed", "dynamic pressure");
-        need(&mut needs, "altitude", "dynamic pressure");
+        need(&mut needs, density, "dynamic pressure");
     } else if wants_dynamic_pressure {
         need(&mut needs, "dynamic_pressure", "dynamic pressure");
     }
@@ -176,7 +235,7 @@ fn needed_channels(record: &FlightRecord, aircraft: &Aircraft, request: &Request
 /// The lever arm of the thrust line (zero when thrust makes no moment).
 fn thrust_moment_arm(aircraft: &Aircraft) -> Vector3<f64> {
     let p = &aircraft.propulsion;
-    if p.max_thrust == 0.0 || p.position.cross(&p.direction) == Vector3::zeros() {
+    if p.position.cross(&p.direction) == Vector3::zeros() {
         Vector3::zeros()
     } else {
         p.position
@@ -224,13 +283,16 @@ pub fn control_steps(record: &FlightRecord) -> Vec<f64> {
     steps
 }
 
-/// The channels that are differentiated: the rates for moments, α for α̇ terms.
+/// The channels that are differentiated: the rates for moments (unless
+/// the record's angular accelerations are used), α for α̇ terms.
 fn differentiated_channels(
     request: &Request,
     options: &ReconstructionOptions,
+    measured_accelerations: bool,
 ) -> Vec<&'static str> {
-    let moments =
-        !options.omit_angular_accelerations && request.coefficients.iter().any(|c| !c.is_force());
+    let moments = !options.omit_angular_accelerations
+        && !measured_accelerations
+        && request.coefficients.iter().any(|c| !c.is_force());
     let mut names = Vec::new();
     if moments {
         names.extend(["p", "q", "r"]);
@@ -247,7 +309,7 @@ pub fn missing_channels(
     aircraft: &Aircraft,
     request: &Request,
 ) -> Vec<&'static str> {
-    needed_channels(record, aircraft, request)
+    needed_channels(record, aircraft, request, &ReconstructionOptions::default())
         .into_keys()
         .filter(|name| record.channel(name).is_err())
         .collect()
@@ -261,7 +323,11 @@ pub fn check_channels(
     request: &Request,
     method: &str,
 ) -> Result<()> {
-    check_present(record, &needed_channels(record, aircraft, request), method)
+    check_present(
+        record,
+        &needed_channels(record, aircraft, request, &ReconstructionOptions::default()),
+        method,
+    )
 }
 
 /// Checks that every needed channel is present: a refusal naming all
@@ -291,9 +357,12 @@ pub fn reconstruct(
     options: &ReconstructionOptions,
     method: &str,
 ) -> Result<Reconstruction> {
-    let needs = needed_channels(record, aircraft, request);
+    let needs = needed_channels(record, aircraft, request, options);
     check_present(record, &needs, method)?;
-    let differentiated = differentiated_channels(request, options);
+    let measured_accelerations = ANGULAR_ACCELERATION_CHANNELS
+        .iter()
+        .all(|name| needs.contains_key(name));
+    let differentiated = differentiated_channels(request, options, measured_accelerations);
     // The differentiator's windows stop at the control steps: only looked
     // for when something is differentiated.
     let breaks = if differentiated.is_empty() {
@@ -353,6 +422,30 @@ pub fn reconstruct(
             }
             None => dropped += 1,
         }
+    }
+    if measured_accelerations {
+        reconstruction.notes.push(
+            "angular accelerations: the record's p_dot, q_dot, r_dot (`angular_accelerations = \"differentiated\"` differentiates the rates instead)".into(),
+        );
+    }
+    let has_accelerations = ANGULAR_ACCELERATION_CHANNELS
+        .iter()
+        .all(|name| record.channel(name).is_ok());
+    if !measured_accelerations && derivatives.contains_key("p") && has_accelerations {
+        reconstruction.notes.push(
+            "the record has p_dot, q_dot, r_dot: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates".into(),
+        );
+    }
+    if needs.contains_key("thrust") {
+        reconstruction
+            .notes
+            .push("thrust: the record's 'thrust' channel, along the aircraft's thrust line".into());
+    }
+    if needs.contains_key("density") {
+        reconstruction.notes.push(
+            "air density: the record's 'density' channel, not the ISA at the altitude channel"
+                .into(),
+        );
     }
     if !derivatives.is_empty() {
         reconstruction.notes.push(
@@ -461,8 +554,10 @@ struct Signals<'a> {
     alpha: Option<&'a [f64]>,
     altitude: Option<&'a [f64]>,
     beta: Option<&'a [f64]>,
+    density: Option<&'a [f64]>,
     dynamic_pressure: Option<&'a [f64]>,
     mach: Option<&'a [f64]>,
+    thrust: Option<&'a [f64]>,
     throttle: Option<&'a [f64]>,
     /// nx, ny, nz.
     load_factors: [Option<&'a [f64]>; 3],
@@ -496,12 +591,17 @@ impl<'a> Signals<'a> {
             alpha: get("alpha"),
             altitude: get("altitude"),
             beta: get("beta"),
+            density: get("density"),
             dynamic_pressure: get("dynamic_pressure"),
             mach: get("mach"),
+            thrust: get("thrust"),
             throttle: get("throttle"),
             load_factors: ["nx", "ny", "nz"].map(get),
             rates: ["p", "q", "r"].map(get),
-            rate_derivatives: ["p", "q", "r"].map(rate),
+            rate_derivatives: match ANGULAR_ACCELERATION_CHANNELS.map(get) {
+                [Some(p), Some(q), Some(r)] => [Some(p), Some(q), Some(r)],
+                _ => ["p", "q", "r"].map(rate),
+            },
             alpha_dot: rate("alpha"),
             controls,
         }
@@ -549,8 +649,12 @@ fn sample(
     finite.then_some((all, regressors))
 }
 
+/// ρ: the density channel, else the ISA at the altitude channel.
 fn density(signals: &Signals, k: usize) -> f64 {
-    Atmosphere::default().at(at(signals.altitude, k)).density
+    match signals.density {
+        Some(measured) => measured[k],
+        None => Atmosphere::default().at(at(signals.altitude, k)).density,
+    }
 }
 
 fn dynamic_pressure(signals: &Signals, k: usize) -> f64 {
@@ -565,12 +669,17 @@ fn dynamic_pressure(signals: &Signals, k: usize) -> f64 {
 /// Thrust force in body axes (N): zero without propulsion.
 fn thrust_force(aircraft: &Aircraft, signals: &Signals, k: usize) -> Vector3<f64> {
     let propulsion = &aircraft.propulsion;
+    if let Some(thrust) = signals.thrust {
+        return propulsion.direction * thrust[k];
+    }
     let Some(throttle) = signals.throttle.filter(|_| propulsion.max_thrust != 0.0) else {
         return Vector3::zeros();
     };
     // Without a thrust lapse the altitude channel is not needed (nor read).
     let log_density_ratio = if propulsion.density_exponent == 0.0 {
         0.0
+    } else if signals.density.is_some() {
+        (density(signals, k) / crate::sim::atmosphere::SEA_LEVEL_DENSITY).ln()
     } else {
         Atmosphere::default()
             .at(at(signals.altitude, k))

@@ -1,11 +1,13 @@
 //! The derive step (`aeroid derive`): the channels a recorder lacks,
 //! computed from those it has. In order: combined control surfaces from
-//! split ones ([`crate::prep::surfaces`]), the geometric angle of attack
-//! and sideslip ([`crate::prep::flow_angles`]) and the body rates from the
-//! attitude kinematics ([`crate::prep::angular_rates`]). Each derived
+//! split ones ([`crate::prep::surfaces`]), the air density from pressure
+//! altitude and temperature ([`crate::prep::air_data`]), the geometric
+//! angle of attack and sideslip ([`crate::prep::flow_angles`]) and the body
+//! rates from the attitude kinematics ([`crate::prep::angular_rates`]). Each derived
 //! channel names its method and inputs in its `source`.
 
 use crate::error::Result;
+use crate::prep::air_data::with_air_density;
 use crate::prep::angular_rates::{KinematicRates, with_kinematic_rates};
 use crate::prep::differentiation::Differentiator;
 use crate::prep::flow_angles::{GeometricFlowAngles, Wind, with_geometric_flow_angles};
@@ -57,7 +59,9 @@ pub struct Derived {
 
 /// Runs the derive step on a record (see the module documentation).
 pub fn derive(record: &FlightRecord, options: &Options) -> Result<Derived> {
-    let (mut derived, mut notes) = with_combined_surfaces(record)?;
+    let (derived, mut notes) = with_combined_surfaces(record)?;
+    let (mut derived, density_notes) = with_air_density(&derived)?;
+    notes.extend(density_notes);
     let mut angles = None;
     if let Some(wind) = options.flow_angles {
         let derivation = with_geometric_flow_angles(&derived, wind, options.replace)?;

@@ -2,8 +2,10 @@
 //! of recorded channels, and flight-path reconstruction (the data
 //! compatibility check that estimates sensor biases and scale factors),
 //! geometric angle of attack and sideslip, angular rates from the attitude
-//! kinematics, and combined control surfaces from split ones.
+//! kinematics, combined control surfaces from split ones, and air density
+//! from pressure altitude and temperature.
 
+pub mod air_data;
 pub mod angular_rates;
 pub mod compatibility;
 pub mod derive;

@@ -251,6 +251,17 @@ pub fn calibrated_airspeed(mach: f64, pressure: f64) -> f64 {
     sea_level_sound * (5.0 * ((impact / SEA_LEVEL_PRESSURE + 1.0).powf(2.0 / 7.0) - 1.0)).sqrt()
 }
 
+/// The Mach number (subsonic) whose calibrated airspeed at static pressure
+/// `pressure` is `calibrated` (m/s): the inverse of [`calibrated_airspeed`]
+/// through the impact pressure q_c = p0·((1 + 0.2·(V_c/a0)²)^3.5 − 1),
+/// M = √(5·((q_c/p + 1)^(2/7) − 1)).
+pub fn mach_from_calibrated_airspeed(calibrated: f64, pressure: f64) -> f64 {
+    let sea_level_sound = (HEAT_CAPACITY_RATIO * GAS_CONSTANT * SEA_LEVEL_TEMPERATURE).sqrt();
+    let ratio = calibrated / sea_level_sound;
+    let impact = SEA_LEVEL_PRESSURE * ((1.0 + 0.2 * ratio * ratio).powf(3.5) - 1.0);
+    (5.0 * ((impact / pressure + 1.0).powf(2.0 / 7.0) - 1.0)).sqrt()
+}
+
 /// The total wind (steady plus turbulence) in NED axes.
 fn wind_ned(s: &TruthSample) -> Vector3<f64> {
     s.wind.ned + state::body_to_ned(&s.state) * s.wind.body

@@ -58,7 +58,8 @@ use crate::estimation::estimator::{
 use crate::estimation::methods::linear_equation_error::linear_equation_error;
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
-    Reconstruction, ReconstructionOptions, Request, check_channels, reconstruct,
+    AngularAccelerations, Reconstruction, ReconstructionOptions, Request, check_channels,
+    reconstruct,
 };
 use crate::estimation::solver::regression::{LagWindow, LeastSquares};
 use crate::estimation::structure::{ModelStructure, Structure};
@@ -92,6 +93,8 @@ pub struct EquationErrorSettings {
     /// coloured-residual bound.
     #[serde(deserialize_with = "crate::units::seconds")]
     pub correlation_lag: f64,
+    /// Where ṗ, q̇, ṙ come from.
+    pub angular_accelerations: AngularAccelerations,
 }
 
 impl Default for EquationErrorSettings {
@@ -100,6 +103,7 @@ impl Default for EquationErrorSettings {
         EquationErrorSettings {
             differentiator: Differentiator::default(),
             correlation_lag: options.correlation_lag,
+            angular_accelerations: AngularAccelerations::default(),
         }
     }
 }
@@ -112,6 +116,10 @@ pub(crate) const DIFFERENTIATOR_SETTING: (&str, &str) = (
 const CORRELATION_LAG_SETTING: (&str, &str) = (
     "correlation_lag",
     "lag (s) to which residual autocorrelation is summed in the coloured-residual Cramér–Rao bound",
+);
+pub(crate) const ANGULAR_ACCELERATIONS_SETTING: (&str, &str) = (
+    "angular_accelerations",
+    "where ṗ, q̇, ṙ come from: \"differentiated\" (the rates), \"measured\" (the record's p_dot, q_dot, r_dot) or \"auto\" (measured when the record has all three)",
 );
 
 impl EquationErrorSettings {
@@ -126,6 +134,7 @@ impl EquationErrorSettings {
         EquationErrorOptions {
             reconstruction: ReconstructionOptions {
                 differentiator: Some(self.differentiator),
+                angular_accelerations: self.angular_accelerations,
                 ..Default::default()
             },
             correlation_lag: self.correlation_lag,
@@ -165,7 +174,11 @@ impl Estimator for EquationError {
             needs: "load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude, throttle when the aircraft has thrust; a model linear in its parameters; on a linear structure, a channel of every state and input",
             settings: setting_infos(
                 &EquationErrorSettings::default(),
-                &[DIFFERENTIATOR_SETTING, CORRELATION_LAG_SETTING],
+                &[
+                    DIFFERENTIATOR_SETTING,
+                    CORRELATION_LAG_SETTING,
+                    ANGULAR_ACCELERATIONS_SETTING,
+                ],
             ),
         }
     }

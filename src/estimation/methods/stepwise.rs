@@ -54,11 +54,12 @@ use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
 };
 use crate::estimation::methods::equation_error::{
-    DIFFERENTIATOR_SETTING, check_settings, record_name,
+    ANGULAR_ACCELERATIONS_SETTING, DIFFERENTIATOR_SETTING, check_settings, record_name,
 };
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
-    Reconstruction, ReconstructionOptions, Request, missing_channels, reconstruct,
+    AngularAccelerations, Reconstruction, ReconstructionOptions, Request, missing_channels,
+    reconstruct,
 };
 use crate::estimation::solver::regression::LeastSquares;
 use crate::estimation::structure::ModelStructure;
@@ -103,6 +104,8 @@ pub struct StepwiseSettings {
     pub min_r_squared_gain: f64,
     pub candidates: Option<Vec<String>>,
     pub max_steps: usize,
+    /// Where ṗ, q̇, ṙ come from.
+    pub angular_accelerations: AngularAccelerations,
 }
 
 impl Default for StepwiseSettings {
@@ -116,6 +119,7 @@ impl Default for StepwiseSettings {
             min_r_squared_gain: options.min_r_squared_gain,
             candidates: options.candidates,
             max_steps: options.max_steps,
+            angular_accelerations: AngularAccelerations::default(),
         }
     }
 }
@@ -152,6 +156,7 @@ impl StepwiseSettings {
             max_steps: self.max_steps,
             reconstruction: ReconstructionOptions {
                 differentiator: Some(self.differentiator),
+                angular_accelerations: self.angular_accelerations,
                 ..Default::default()
             },
             correlation_lag: self.correlation_lag,
@@ -178,6 +183,7 @@ impl Estimator for StepwiseRegression {
                 &StepwiseSettings::default(),
                 &[
                     DIFFERENTIATOR_SETTING,
+                    ANGULAR_ACCELERATIONS_SETTING,
                     (
                         "correlation_lag",
                         "lag (s) of the coloured-residual bound of the final estimates",
