@@ -122,12 +122,10 @@ fn lateral() -> (Scenario, ModelStructure) {
 /// innovations are that interpolation error, far below the noise floor
 /// R is held at, not white noise of variance R.
 ///
-/// The UKF does not get there: on this record its covariance loses
-/// definiteness during the quiet part between the two multisteps
-/// (16–25 s, from either start, with α = 0.5 or 1, R at 10⁻⁶ or 10⁻⁴ of
-/// the signal), and it says so: diverged, naming the covariance
-/// (docs/findings.md). When that is fixed, this check is to become the
-/// EKF's.
+/// The UKF (square-root form, default α = 0.5) is held to the same: every
+/// derivative within 1e-3 relative, unsettled for the same reason.
+/// Measured worst 5.2e-5 (CY_da): the same interpolation error as the
+/// EKF's, the two estimates within 1e-6 relative of each other elsewhere.
 #[test]
 fn noise_free_record_gives_the_truth() {
     let (scenario, structure) = lateral();
@@ -147,10 +145,13 @@ fn noise_free_record_gives_the_truth() {
         "{text}"
     );
     let run_ukf = run(Filter::Unscented, &record, &structure, &settings);
-    match &run_ukf.estimate.status {
-        Status::Diverged(reason) => assert!(reason.contains("not positive definite"), "{reason}"),
-        other => panic!("the UKF on the noise-free record: {other}"),
-    }
+    let (relative, _, text) = report(&run_ukf.estimate, truth);
+    println!("{text}");
+    assert!(relative < 1e-3, "{relative:e}\n{text}");
+    assert!(
+        matches!(run_ukf.estimate.status, Status::Unsettled(_)),
+        "{text}"
+    );
 }
 
 /// Sensor noise (flight-test profile, controls exact), five recorder seeds
