@@ -108,7 +108,7 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
         }
         pass.predicted.push(Gaussian {
             mean: state.clone(),
-            covariance: &factor * factor.transpose(),
+            covariance: covariance(&factor),
         });
         let present = &observations.at[k];
         if present.is_empty() {
@@ -126,7 +126,7 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
             )?;
             pass.measured_at(k, present, measured);
         }
-        pass.filtered_at(t, &state, &(&factor * factor.transpose()))?;
+        pass.filtered_at(t, &state, &covariance(&factor))?;
     }
     Ok(pass)
 }
@@ -224,13 +224,10 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     }
     weighted_mean(weights, &work.moved, state);
     // Φ·S⁺ = (χ'_{1…n} − χ'_{n+1…2n})/(2c): Sᵀ·Φᵀ = Dᵀ/(2c).
-    let difference =
-        (work.moved.columns(1, n) - work.moved.columns(1 + n, n)) * (0.5 / weights.scale);
-    let transition = factor
-        .tr_solve_lower_triangular(&difference.transpose())
-        .map(|t| t.transpose())
-        .filter(|t| t.iter().all(|v| v.is_finite()))
-        .unwrap_or_else(|| DMatrix::from_element(n, n, f64::NAN));
+    let mut transition = central_difference(&work.moved, n, weights.scale);
+    if !(solve_right_lower(factor, &mut transition) && transition.iter().all(|v| v.is_finite())) {
+        transition.fill(f64::NAN);
+    }
     let r = process.ncols();
     let root = weights.other.sqrt();
     let compound = &mut work.compound;
@@ -261,7 +258,7 @@ fn time_update<M: StateSpaceModel + ?Sized>(
             rows += r;
         }
     }
-    triangularise(compound, rows, factor);
+    triangularise(compound, rows, n, factor);
     let zero = &mut work.vector;
     for i in 0..n {
         zero[i] = work.moved[(i, 0)] - state[i];
@@ -326,11 +323,7 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
         compound[(2 * n + row, row)] = noise.measurement[o].max(0.0).sqrt();
     }
     let mut innovation_factor = DMatrix::zeros(m, m);
-    triangularise(
-        &mut compound.columns_mut(0, m),
-        2 * n + m,
-        &mut innovation_factor,
-    );
+    triangularise(compound, 2 * n + m, m, &mut innovation_factor);
     let mut zero: Vec<f64> = (0..m).map(|i| outputs[(i, 0)] - predicted[i]).collect();
     zeroth_point(&mut innovation_factor, &mut zero, weights.covariance_zero).map_err(|()| {
         Error::Downdate {
@@ -338,8 +331,8 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
             step: "innovation covariance's zeroth sigma point (W₀ᶜ < 0)",
         }
     })?;
-    // (Y_{1…n} − Y_{n+1…2n})/(2c): P_xy = S⁻·Eᵀ and H·S⁻ = E.
-    let difference = (outputs.columns(1, n) - outputs.columns(1 + n, n)) * (0.5 / weights.scale);
+    // E = (Y_{1…n} − Y_{n+1…2n})/(2c): P_xy = S⁻·Eᵀ and H·S⁻ = E.
+    let difference = central_difference(&outputs, n, weights.scale);
     let cross = &*factor * difference.transpose();
     let singular = || {
         Error::Other(
@@ -359,10 +352,10 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
         .and_then(|z| innovation_factor.tr_solve_lower_triangular(&z))
         .ok_or_else(|| at_time(singular(), t))?
         .transpose();
-    let observation = factor
-        .tr_solve_lower_triangular(&difference.transpose())
-        .map(|o| o.transpose())
-        .unwrap_or_else(|| DMatrix::from_element(m, n, f64::NAN));
+    let mut observation = difference;
+    if !solve_right_lower(factor, &mut observation) {
+        observation.fill(f64::NAN);
+    }
     let innovation = DVector::from_iterator(
         m,
         present
@@ -396,6 +389,29 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     })
 }
 
+/// P = S·Sᵀ of a lower-triangular S as the sum of its columns' outer
+/// products, s_k·s_kᵀ touching rows and columns k… only: n³/3
+/// multiply-adds on contiguous columns, and exactly symmetric (both
+/// triangles from the same products in the same order).
+fn covariance(factor: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = factor.nrows();
+    let mut p = DMatrix::zeros(n, n);
+    let s = factor.as_slice();
+    let data = p.as_mut_slice();
+    for k in 0..n {
+        let column = &s[k * n + k..(k + 1) * n];
+        for (j, &f) in (k..n).zip(column) {
+            if f != 0.0 {
+                let target = &mut data[j * n + k..(j + 1) * n];
+                for (t, &v) in target.iter_mut().zip(column) {
+                    *t += f * v;
+                }
+            }
+        }
+    }
+    p
+}
+
 /// x = Σ Wᵐ_i·χ'_i of the columns of `moved`.
 fn weighted_mean(weights: &Weights, moved: &DMatrix<f64>, mean: &mut DVector<f64>) {
     mean.copy_from(&moved.column(0));
@@ -405,44 +421,110 @@ fn weighted_mean(weights: &Weights, moved: &DMatrix<f64>, mean: &mut DVector<f64
     }
 }
 
-/// The Cholesky factor S (n × n, lower) with S·Sᵀ = Aᵀ·A for the leading
-/// `rows` rows of the n-column matrix A, by Householder reflections in
-/// place (A is overwritten): the transpose of QR's R with each column's
-/// sign chosen so that S's diagonal is non-negative.
-fn triangularise<S>(
-    a: &mut nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>,
-    rows: usize,
-    factor: &mut DMatrix<f64>,
-) where
-    S: nalgebra::StorageMut<f64, nalgebra::Dyn, nalgebra::Dyn>,
+/// (Z_{1…n} − Z_{n+1…2n})/(2c) of the columns of `images` (the sigma
+/// points' images Z_i): the central difference that is P_{z x}·P⁻¹·S
+/// for the covariance P = S·Sᵀ the points were drawn from (module header).
+fn central_difference<S>(
+    images: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>,
+    n: usize,
+    scale: f64,
+) -> DMatrix<f64>
+where
+    S: nalgebra::Storage<f64, nalgebra::Dyn, nalgebra::Dyn>,
 {
-    let n = a.ncols();
+    let half = 0.5 / scale;
+    DMatrix::from_fn(images.nrows(), n, |r, i| {
+        half * (images[(r, 1 + i)] - images[(r, 1 + n + i)])
+    })
+}
+
+/// X·L = B for X in place of B (column-major), L lower triangular:
+/// X_{·j} = (B_{·j} − Σ_{k>j} X_{·k}·L_{kj})/L_{jj} from the last column
+/// back, each step an operation on whole contiguous columns. False when
+/// a diagonal element of L is zero.
+fn solve_right_lower(l: &DMatrix<f64>, b: &mut DMatrix<f64>) -> bool {
+    let n = l.nrows();
+    let rows = b.nrows();
+    let data = b.as_mut_slice();
+    for j in (0..n).rev() {
+        let diagonal = l[(j, j)];
+        if diagonal == 0.0 {
+            return false;
+        }
+        let (head, tail) = data.split_at_mut((j + 1) * rows);
+        let column = &mut head[j * rows..];
+        for k in j + 1..n {
+            let f = l[(k, j)];
+            if f != 0.0 {
+                let known = &tail[(k - j - 1) * rows..(k - j) * rows];
+                for (c, x) in column.iter_mut().zip(known) {
+                    *c -= f * x;
+                }
+            }
+        }
+        let inverse = 1.0 / diagonal;
+        for c in column.iter_mut() {
+            *c *= inverse;
+        }
+    }
+    true
+}
+
+/// The Cholesky factor S (`cols` × `cols`, lower) with S·Sᵀ = Aᵀ·A for A
+/// the leading `rows` × `cols` block of `a`, by Householder reflections in
+/// place (A is overwritten): the transpose of QR's R with each column's
+/// sign chosen so that S's diagonal is non-negative. Column-major, each
+/// reflection works on contiguous column slices.
+fn triangularise(a: &mut DMatrix<f64>, rows: usize, cols: usize, factor: &mut DMatrix<f64>) {
+    let ld = a.nrows();
+    let data = a.as_mut_slice();
     factor.fill(0.0);
-    for j in 0..n.min(rows) {
-        let norm = (j..rows).map(|i| a[(i, j)] * a[(i, j)]).sum::<f64>().sqrt();
+    for j in 0..cols.min(rows) {
+        let (left, right) = data.split_at_mut((j + 1) * ld);
+        let v = &mut left[j * ld + j..j * ld + rows];
+        let norm = dot(v, v).sqrt();
         if norm == 0.0 {
             continue;
         }
-        let head = a[(j, j)];
+        let head = v[0];
         let alpha = if head > 0.0 { -norm } else { norm };
         // v = x − α·e₁ in place; vᵀv = 2α(α − x₀).
-        a[(j, j)] = head - alpha;
-        let vv = 2.0 * alpha * (alpha - head);
-        for c in j + 1..n {
-            let dot = (j..rows).map(|i| a[(i, j)] * a[(i, c)]).sum::<f64>();
-            let f = 2.0 * dot / vv;
-            for i in j..rows {
-                a[(i, c)] -= f * a[(i, j)];
+        v[0] = head - alpha;
+        let scale = 1.0 / (alpha * (alpha - head));
+        for c in 0..cols - j - 1 {
+            let column = &mut right[c * ld + j..c * ld + rows];
+            let f = dot(v, column) * scale;
+            for (y, x) in column.iter_mut().zip(v.iter()) {
+                *y -= f * x;
             }
         }
-        a[(j, j)] = alpha;
+        v[0] = alpha;
     }
-    for j in 0..n.min(rows) {
-        let sign = if a[(j, j)] < 0.0 { -1.0 } else { 1.0 };
-        for c in j..n {
-            factor[(c, j)] = sign * a[(j, c)];
+    for j in 0..cols.min(rows) {
+        let sign = if data[j * ld + j] < 0.0 { -1.0 } else { 1.0 };
+        for c in j..cols {
+            factor[(c, j)] = sign * data[c * ld + j];
         }
     }
+}
+
+/// a·b with four running sums (a sum the compiler can keep in vector
+/// registers, where one running sum fixes the order of the additions).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut sums = [0.0; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = a4
+        .remainder()
+        .iter()
+        .zip(b4.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in a4.zip(b4) {
+        for i in 0..4 {
+            sums[i] += x[i] * y[i];
+        }
+    }
+    sums[0] + sums[1] + sums[2] + sums[3] + tail
 }
 
 /// S·Sᵀ + w·v·vᵀ for the zeroth sigma point's weight w: an update by
@@ -465,18 +547,22 @@ fn zeroth_point(factor: &mut DMatrix<f64>, v: &mut [f64], w: f64) -> Result<(), 
 fn cholupdate(l: &mut DMatrix<f64>, x: &mut [f64], sign: f64) -> Result<(), ()> {
     let n = x.len();
     for k in 0..n {
-        let (diagonal, xk) = (l[(k, k)], x[k]);
+        let xk = x[k];
         if xk == 0.0 {
             continue;
         }
+        let column = &mut l.as_mut_slice()[k * n..(k + 1) * n];
+        let diagonal = column[k];
+        let (top, below) = column.split_at_mut(k + 1);
+        let rest = &mut x[k + 1..];
         if sign > 0.0 {
             let r = diagonal.hypot(xk);
             let (c, s) = (diagonal / r, xk / r);
-            l[(k, k)] = r;
-            for i in k + 1..n {
-                let (li, xi) = (l[(i, k)], x[i]);
-                l[(i, k)] = c * li + s * xi;
-                x[i] = c * xi - s * li;
+            top[k] = r;
+            for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
+                let (l0, x0) = (*li, *xi);
+                *li = c * l0 + s * x0;
+                *xi = c * x0 - s * l0;
             }
         } else {
             let square = (diagonal - xk) * (diagonal + xk);
@@ -485,11 +571,10 @@ fn cholupdate(l: &mut DMatrix<f64>, x: &mut [f64], sign: f64) -> Result<(), ()> 
             }
             let r = square.sqrt();
             let (c, s) = (r / diagonal, xk / diagonal);
-            l[(k, k)] = r;
-            for i in k + 1..n {
-                let li = (l[(i, k)] - s * x[i]) / c;
-                l[(i, k)] = li;
-                x[i] = c * x[i] - s * li;
+            top[k] = r;
+            for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
+                *li = (*li - s * *xi) / c;
+                *xi = c * *xi - s * *li;
             }
         }
     }
@@ -505,7 +590,7 @@ fn process_root(process: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     let negative = || Error::Other("the process noise is not positive semi-definite".into());
     let diagonal = (0..n).all(|i| (0..n).all(|j| i == j || process[(i, j)] == 0.0));
     if diagonal {
-        if process.diagonal().iter().any(|&q| !(q >= 0.0)) {
+        if process.diagonal().iter().any(|&q| q.is_nan() || q < 0.0) {
             return Err(negative());
         }
         let kept: Vec<usize> = (0..n).filter(|&i| process[(i, i)] > 0.0).collect();
@@ -641,6 +726,30 @@ mod tests {
         assert!(cholupdate(&mut l, x.as_mut_slice(), -1.0).is_err());
     }
 
+    /// S·Sᵀ from the columns' outer products is the product, symmetric.
+    #[test]
+    fn covariance_is_the_factors_product() {
+        let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
+        let p = covariance(&l);
+        let expected = &l * l.transpose();
+        assert!((&p - &expected).norm() < 1e-15 * expected.norm());
+        assert_eq!(p, p.transpose());
+    }
+
+    /// X·L = B solved from the right against B·L⁻¹ by nalgebra's inverse.
+    #[test]
+    fn solve_right_lower_solves_from_the_right() {
+        let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
+        let b = DMatrix::from_fn(4, 3, |i, j| (i as f64 - 1.3 * j as f64).cos());
+        let mut x = b.clone();
+        assert!(solve_right_lower(&l, &mut x));
+        let expected = &b * l.clone().try_inverse().unwrap();
+        assert!((&x - &expected).norm() < 1e-14 * expected.norm());
+        let mut singular = l.clone();
+        singular[(1, 1)] = 0.0;
+        assert!(!solve_right_lower(&singular, &mut b.clone()));
+    }
+
     /// The Householder triangularisation: S·Sᵀ = Aᵀ·A with a lower S of
     /// non-negative diagonal, for a tall A.
     #[test]
@@ -648,7 +757,7 @@ mod tests {
         let mut a = DMatrix::from_fn(7, 3, |i, j| ((i * 3 + j) as f64 * 0.7).sin() - 0.2);
         let gram = a.transpose() * &a;
         let mut factor = DMatrix::zeros(3, 3);
-        triangularise(&mut a, 7, &mut factor);
+        triangularise(&mut a, 7, 3, &mut factor);
         let error = (&factor * factor.transpose() - &gram).norm() / gram.norm();
         assert!(error < 1e-15, "{error:e}");
         assert!(factor.diagonal().iter().all(|&d| d >= 0.0));
