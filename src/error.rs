@@ -121,6 +121,15 @@ pub enum Error {
     #[error("{0}")]
     Refused(crate::estimation::estimator::Refusal),
 
+    /// A square-root filter's Cholesky downdate that would leave its
+    /// covariance factor without a positive diagonal: the covariance it
+    /// stands for would no longer be positive definite. `step` names the
+    /// filter step.
+    #[error(
+        "at t = {time} s: the {step} would leave the covariance not positive definite (a Cholesky downdate)"
+    )]
+    Downdate { time: f64, step: &'static str },
+
     #[error("{0}")]
     Other(String),
 }

@@ -363,10 +363,14 @@ fn started_off(name: &str, factor: f64) -> LinearStructure {
 /// 1e-6 of max(|truth|, 1). The status is honestly not converged: the
 /// innovations are rounding, far below the floor R is held at
 /// (10⁻⁴ of each channel's spread), not white noise of variance R
-/// (measured: 3.5e-14). The UKF does not get there: as on the 6-DOF
-/// lateral record (tests/augmented_filters.rs), its covariance loses
-/// definiteness in the quiet part between the two multisteps (29 s), and
-/// it says so: diverged, naming the covariance.
+/// (measured: 3.5e-14). The UKF (square-root form) is held to the same
+/// 1e-6 and status: measured 8.4e-8, 0.03σ. It is not the EKF's rounding
+/// floor because the augmented model is bilinear (θ·x): the unscented
+/// mean of a step carries the second-order term the EKF drops (for
+/// E[θ·x] it is the cross-covariance P_θx), so on a noise-free record
+/// the UKF's predictions at the truth differ from the record by a term of
+/// the order of its covariance, and its estimates settle within a small
+/// fraction of their σ of the truth, not at it.
 ///
 /// Noisy (flight-test-25hz: 0.1° on β and φ, 0.002 rad/s on the rates,
 /// 0.01° on the surfaces), equation error's start: converged (settled,
@@ -409,13 +413,6 @@ fn augmented_filters_serve_a_linear_structure() {
                     "{method}"
                 );
                 assert!(worst_sigma < 4.0, "{method}: {worst_sigma:.2}σ");
-            } else if method == "ukf" {
-                match &estimate.status {
-                    aeroid::estimation::estimate::Status::Diverged(reason) => {
-                        assert!(reason.contains("not positive definite"), "{reason}")
-                    }
-                    other => panic!("the UKF on the noise-free record: {other}"),
-                }
             } else {
                 assert!(worst_error < 1e-6, "{method}: {worst_error:.3e}");
                 assert!(

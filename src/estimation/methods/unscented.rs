@@ -9,11 +9,14 @@
 //! histories are the EKF's ([`super::augmented_ekf`], one routine:
 //! [`augmented_estimate`]); only the pass differs: sigma points
 //! propagated through the model's own integration step and its outputs,
-//! additive process and measurement noise
-//! ([`crate::estimation::solver::unscented_kalman`], Wan & van der Merwe
-//! Table 3, sigma points Eq. 15). It needs no Jacobian of the model, and
-//! its mean and covariance are exact to second order in the state's
-//! spread where the EKF's are to first.
+//! additive process and measurement noise, in the square-root form that
+//! carries a Cholesky factor of the covariance
+//! ([`crate::estimation::solver::unscented_kalman`]; van der Merwe & Wan,
+//! "The square-root unscented Kalman filter for state and parameter
+//! estimation", ICASSP 2001, Algorithm 3.1; sigma points Wan & van der
+//! Merwe 2000, Eq. 15). It needs no Jacobian of the model, and its mean
+//! and covariance are exact to second order in the state's spread where
+//! the EKF's are to first.
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Estimate;
@@ -120,9 +123,9 @@ impl Estimator for UnscentedFilter {
             setting_infos(&FilterSettings::default(), &FILTER_SETTINGS);
         settings.extend(setting_infos(&SigmaSettings::default(), &SIGMA_KEYS));
         MethodInfo {
-            title: "unscented Kalman filter with the parameters as augmented states, pseudonoise, Fourier R and residual-correlation tuning",
-            paper: "Wan & van der Merwe, \"The unscented Kalman filter for nonlinear estimation\", IEEE AS-SPCC 2000; Julier & Uhlmann, SPIE 3068, 1997; the X-31/F-18 HARV EKF note",
-            equations: "scaled sigma points (Wan & van der Merwe Eq. 15), the UKF with additive noise (Table 3); augmented state and noise tuning as the EKF's (note Eqs. 1–3, Mehra 1970)",
+            title: "square-root unscented Kalman filter with the parameters as augmented states, pseudonoise, Fourier R and residual-correlation tuning",
+            paper: "van der Merwe & Wan, \"The square-root unscented Kalman filter for state and parameter estimation\", ICASSP 2001; Wan & van der Merwe, \"The unscented Kalman filter for nonlinear estimation\", IEEE AS-SPCC 2000; Julier & Uhlmann, SPIE 3068, 1997; the X-31/F-18 HARV EKF note",
+            equations: "scaled sigma points (Wan & van der Merwe 2000, Eq. 15), the square-root UKF with additive noise (van der Merwe & Wan 2001, Algorithm 3.1: QR of the compound matrix, Cholesky update/downdate); augmented state and noise tuning as the EKF's (note Eqs. 1–3, Mehra 1970)",
             needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls); on a linear structure, its input and output channels",
             settings,
         }

@@ -1,51 +1,74 @@
-//! One pass of the unscented Kalman filter with additive noise over any
-//! state-space model ([`StateSpaceModel`]) and a record's observations on
-//! its grid (Wan & van der Merwe, "The unscented Kalman filter for
-//! nonlinear estimation", IEEE AS-SPCC 2000, Table 3 with additive noise;
-//! Julier & Uhlmann, "A new extension of the Kalman filter to nonlinear
-//! systems", SPIE 3068, 1997). The same [`Pass`] as the extended filter's
+//! One pass of the square-root unscented Kalman filter with additive noise
+//! over any state-space model ([`StateSpaceModel`]) and a record's
+//! observations on its grid (R. van der Merwe & E. A. Wan, "The
+//! square-root unscented Kalman filter for state and parameter
+//! estimation", ICASSP 2001, Algorithm 3.1; the unscented transform of
+//! Wan & van der Merwe, "The unscented Kalman filter for nonlinear
+//! estimation", IEEE AS-SPCC 2000, Eq. 15, and Julier & Uhlmann, SPIE
+//! 3068, 1997). The same [`Pass`] as the extended filter's
 //! ([`super::extended_kalman`]), so that methods, smoothers and
 //! likelihoods take either.
 //!
-//! Time update from grid point k − 1 to k: sigma points χ_i of
-//! (x⁺_{k−1}, P⁺_{k−1}) ([`Unscented::points`], Wan & van der Merwe
-//! Eq. 15), each propagated by the model's own integration step,
-//! χ'_i = step(χ_i); x⁻ = Σ Wᵐ_i·χ'_i and
-//! P⁻ = Σ Wᶜ_i·(χ'_i − x⁻)(χ'_i − x⁻)ᵀ + Q_d. The pass's transition is the
-//! statistical linearisation Φ = P_{x'x}·P⁺⁻¹ with
-//! P_{x'x} = Σ Wᶜ_i·(χ'_i − x⁻)(χ_i − x⁺)ᵀ, with which the RTS smoother's
-//! gain is the unscented RTS smoother's (P_{xx'}·P⁻⁻¹). The process noise
-//! Q_d = ∫₀ʰ e^{A·s}·Q_c·e^{Aᵀ·s} ds is taken by the trapezoidal rule with
-//! that Φ, (Q_c + Φ·Q_c·Φᵀ)·h/2 (the UKF has no Jacobian), within O(h³)
-//! of the extended filter's Van Loan Q_d.
+//! The filter carries the mean x and a lower-triangular Cholesky factor S
+//! of the covariance, P = S·Sᵀ, never P itself: every covariance it forms
+//! is a product S·Sᵀ, positive semi-definite by construction, where the
+//! covariance form (P⁻ − K·S_y·Kᵀ, or Joseph's form with a statistical H)
+//! loses definiteness to rounding on a noise-free record. Weights and the
+//! scale c = √(n + λ) are the scaled transform's ([`Unscented::points`]):
+//! χ₀ = x, χ_i = x + c·s_i, χ_{n+i} = x − c·s_i (s_i the columns of S),
+//! W_i = 1/(2c²) for i ≥ 1, W₀ᵐ = λ/c², W₀ᶜ = W₀ᵐ + 1 − α² + β.
+//!
+//! Algorithm 3.1, step by step. Initialisation: S₀ = chol(P₀).
+//! Time update from grid point k − 1 to k: sigma points of (x⁺, S⁺), each
+//! propagated by the model's own integration step, χ'_i = step(χ_i);
+//! x⁻ = Σ Wᵐ_i·χ'_i; S⁻ = qr([√W₁·(χ'_{1…2n} − x⁻), √Q_d])ᵀ, the
+//! triangular factor of the QR decomposition of the compound matrix's
+//! transpose; then S⁻ = cholupdate(S⁻, χ'₀ − x⁻, W₀ᶜ), an update when
+//! W₀ᶜ ≥ 0 and a downdate when W₀ᶜ < 0 (with κ = 0,
+//! W₀ᶜ = 2 + β − α² − 1/α²: at β = 2 negative for α below 0.52, −0.25 at
+//! the method's default α = 0.5). The process noise
+//! Q_d = ∫₀ʰ e^{A·s}·Q_c·e^{Aᵀ·s} ds is taken by the trapezoidal rule
+//! (Q_c + Φ·Q_c·Φᵀ)·h/2 (the UKF has no Jacobian), within O(h³) of the
+//! extended filter's Van Loan Q_d; its square root enters the compound
+//! matrix as the columns √(h/2)·[G, Φ·G] with G·Gᵀ = Q_c. Φ is the
+//! statistical linearisation P_{x'x}·P⁺⁻¹ with
+//! P_{x'x} = Σ Wᶜ_i·(χ'_i − x⁻)(χ_i − x⁺)ᵀ; with the sigma points above
+//! it is the central difference Φ·S⁺ = (χ'_{1…n} − χ'_{n+1…2n})/(2c),
+//! one triangular solve, and it is the pass's transition (with it the RTS
+//! smoother's gain is the unscented RTS smoother's, P_{xx'}·P⁻⁻¹).
 //!
 //! Measurement update at k with the outputs measured there: sigma points
-//! of (x⁻, P⁻) (redrawn: the additive-noise form), Y_i = h(t_k, χ_i) (rows
+//! of (x⁻, S⁻) (redrawn: the additive-noise form), Y_i = h(t_k, χ_i) (rows
 //! of the measured outputs), ŷ = Σ Wᵐ_i·Y_i,
-//! S = Σ Wᶜ_i·(Y_i − ŷ)(Y_i − ŷ)ᵀ + R,
-//! P_xy = Σ Wᶜ_i·(χ_i − x⁻)(Y_i − ŷ)ᵀ, K = P_xy·S⁻¹ and
-//! x⁺ = x⁻ + K·(z − ŷ). Wan & van der Merwe take P⁺ = P⁻ − K·S·Kᵀ; here
-//! it is Joseph's form (I − K·H)·P⁻·(I − K·H)ᵀ + K·R·Kᵀ with the
-//! statistical H = P_xyᵀ·P⁻⁻¹ (the pass's observation matrix), positive
-//! semi-definite by construction. The two agree for a linear h and
-//! differ by K·(H·P⁻·Hᵀ + R − S)·Kᵀ otherwise, a term of the order of the
-//! unscented transform's correction to the linearised output covariance;
-//! the subtractive form lost definiteness to rounding on a noise-free
-//! record. A covariance that rounding has left short of positive definite
-//! is loaded on its diagonal by at most 10⁻⁸ of itself before it is
-//! factored ([`LOADS`]).
+//! S_y = qr([√W₁·(Y_{1…2n} − ŷ), √R])ᵀ and
+//! S_y = cholupdate(S_y, Y₀ − ŷ, W₀ᶜ); P_xy = Σ Wᶜ_i·(χ_i − x⁻)(Y_i − ŷ)ᵀ
+//! = S⁻·(Y_{1…n} − Y_{n+1…2n})ᵀ/(2c); the gain by two triangular solves,
+//! K = (P_xy/S_yᵀ)/S_y; x⁺ = x⁻ + K·(z − ŷ); U = K·S_y and
+//! S⁺ = cholupdate(S⁻, U, −1), one downdate per column of U. A downdate
+//! that would leave a factor without a positive diagonal (the matrix it
+//! stands for no longer positive definite) is an [`Error::Downdate`]
+//! naming the step and time, never a loaded or repaired factor. The
+//! pass's observation matrix is the statistical H = P_xyᵀ·P⁻⁻¹, again a
+//! central difference, H·S⁻ = (Y_{1…n} − Y_{n+1…2n})/(2c); the innovation
+//! covariance the pass keeps is S_y·S_yᵀ.
+//!
+//! On a linear model the transform is exact and the pass is the linear
+//! Kalman filter's with the trapezoidal Q_d (tests/kalman_oracle.rs).
+//! A step's sigma points, propagated points, outputs and compound matrices
+//! live in buffers allocated once per pass (`Work`); the QR is a
+//! Householder triangularisation in place (`triangularise`).
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::StateSpaceModel;
 use crate::estimation::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
-use crate::estimation::solver::kalman::{Gaussian, Measured, SigmaPoints, Unscented, Update};
+use crate::estimation::solver::kalman::{Gaussian, Measured, Unscented, Update};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// Runs the unscented filter from `initial` at grid point 0 with the
 /// parameters `theta` (a model's own; none for an augmented model) and the
 /// sigma-point scaling `unscented`. An error names the time where the
-/// model departs or a covariance breaks down.
+/// model departs or a covariance factor breaks down.
 pub fn filter<M: StateSpaceModel + ?Sized>(
     model: &M,
     theta: &[f64],
@@ -57,40 +80,35 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
     let n = model.state_count();
     let len = model.len();
     check_sizes("unscented filter", model, &initial, noise, observations)?;
+    let weights = Weights::of(unscented, n)?;
+    let process = process_root(&noise.process)?;
+    let mut work = Work::new(n, process.ncols(), model.output_count());
     let mut pass = Pass::with_capacity(len, model.output_count());
     let mut state = initial.mean;
-    let mut covariance = initial.covariance;
+    let mut factor = Cholesky::new(initial.covariance)
+        .ok_or_else(|| {
+            Error::Other("the UKF's initial covariance is not positive definite".into())
+        })?
+        .unpack();
     for k in 0..len {
         let t = model.time(k);
         if k > 0 {
             let previous = model.time(k - 1);
-            let sigma = points(unscented, &state, &covariance).map_err(|e| at_time(e, previous))?;
-            let moved = sigma
-                .points
-                .iter()
-                .map(|point| model.step(k - 1, point.as_slice(), theta))
-                .collect::<Result<Vec<_>>>()
-                .map_err(|e| at_time(e, previous))?;
-            let mean = sigma.mean_of(&moved);
-            let cross = sigma.cross_covariance(&moved, &mean, &sigma.points, &state);
-            let transition = match loaded(&covariance) {
-                Some((_, c)) => c.solve(&cross.transpose()).transpose(),
-                None => DMatrix::from_element(n, n, f64::NAN),
-            };
-            let spread = sigma.cross_covariance(&moved, &mean, &moved, &mean);
-            let process = if transition.iter().all(|v| v.is_finite()) {
-                (&noise.process + &transition * &noise.process * transition.transpose())
-                    * (0.5 * (t - previous))
-            } else {
-                &noise.process * (t - previous)
-            };
-            covariance = symmetric(spread + process);
-            state = mean;
+            let transition = time_update(
+                model,
+                theta,
+                (k, previous, t - previous),
+                &weights,
+                &process,
+                &mut state,
+                &mut factor,
+                &mut work,
+            )?;
             pass.transitions.push(transition);
         }
         pass.predicted.push(Gaussian {
             mean: state.clone(),
-            covariance: covariance.clone(),
+            covariance: covariance(&factor),
         });
         let present = &observations.at[k];
         if present.is_empty() {
@@ -99,119 +117,504 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
             let measured = measurement_update(
                 model,
                 theta,
-                unscented,
+                &weights,
                 (t, present),
                 noise,
                 &mut state,
-                &mut covariance,
-            )
-            .map_err(|e| at_time(e, t))?;
+                &mut factor,
+                &mut work,
+            )?;
             pass.measured_at(k, present, measured);
         }
-        pass.filtered_at(t, &state, &covariance)?;
+        pass.filtered_at(t, &state, &covariance(&factor))?;
     }
     Ok(pass)
 }
 
-/// The unscented measurement update of (x, P) with the outputs `present`
-/// measured at t (module header).
+/// The sigma points' scale and weights (module header).
+struct Weights {
+    /// c = √(n + λ).
+    scale: f64,
+    /// W₀ᵐ.
+    mean_zero: f64,
+    /// W₀ᶜ.
+    covariance_zero: f64,
+    /// W_i, i ≥ 1 (mean and covariance alike).
+    other: f64,
+}
+
+impl Weights {
+    /// The weights of `unscented`'s sigma points in n dimensions, read from
+    /// its points of (0, I): χ₁ = c·e₁.
+    fn of(unscented: &Unscented, n: usize) -> Result<Weights> {
+        if n == 0 {
+            return Err(Error::Other("the UKF's model has no states".into()));
+        }
+        let unit = unscented.points(&DVector::zeros(n), &DMatrix::identity(n, n))?;
+        Ok(Weights {
+            scale: unit.points[1][0],
+            mean_zero: unit.mean_weights[0],
+            covariance_zero: unit.covariance_weights[0],
+            other: unit.mean_weights[1],
+        })
+    }
+}
+
+/// A pass's buffers: sigma points, propagated points and outputs as
+/// columns (2n + 1 of each), the time update's compound matrix (its
+/// transpose, 2n + 2r rows of n) and the measurement update's (2n + m
+/// rows of at most m columns).
+struct Work {
+    points: DMatrix<f64>,
+    moved: DMatrix<f64>,
+    outputs: DMatrix<f64>,
+    compound: DMatrix<f64>,
+    measured: DMatrix<f64>,
+    vector: DVector<f64>,
+}
+
+impl Work {
+    fn new(n: usize, noise_columns: usize, outputs: usize) -> Work {
+        let count = 2 * n + 1;
+        Work {
+            points: DMatrix::zeros(n, count),
+            moved: DMatrix::zeros(n, count),
+            outputs: DMatrix::zeros(outputs, count),
+            compound: DMatrix::zeros(2 * n + 2 * noise_columns, n),
+            measured: DMatrix::zeros(2 * n + outputs, outputs),
+            vector: DVector::zeros(n.max(outputs)),
+        }
+    }
+
+    /// The sigma points of (x, S) into `points`.
+    fn draw(&mut self, weights: &Weights, mean: &DVector<f64>, factor: &DMatrix<f64>) {
+        let n = mean.len();
+        self.points.column_mut(0).copy_from(mean);
+        for i in 0..n {
+            for r in 0..n {
+                let d = weights.scale * factor[(r, i)];
+                self.points[(r, 1 + i)] = mean[r] + d;
+                self.points[(r, 1 + n + i)] = mean[r] - d;
+            }
+        }
+    }
+}
+
+/// The time update from grid point k − 1 (at `previous`, a step h before
+/// k) to k, in place; returns the statistical transition Φ (module
+/// header).
+#[allow(clippy::too_many_arguments)]
+fn time_update<M: StateSpaceModel + ?Sized>(
+    model: &M,
+    theta: &[f64],
+    (k, previous, h): (usize, f64, f64),
+    weights: &Weights,
+    process: &DMatrix<f64>,
+    state: &mut DVector<f64>,
+    factor: &mut DMatrix<f64>,
+    work: &mut Work,
+) -> Result<DMatrix<f64>> {
+    let n = state.len();
+    work.draw(weights, state, factor);
+    for j in 0..2 * n + 1 {
+        let next = model
+            .step(k - 1, work.points.column(j).as_slice(), theta)
+            .map_err(|e| at_time(e, previous))?;
+        work.moved.column_mut(j).copy_from(&next);
+    }
+    weighted_mean(weights, &work.moved, state);
+    // Φ·S⁺ = (χ'_{1…n} − χ'_{n+1…2n})/(2c): Sᵀ·Φᵀ = Dᵀ/(2c).
+    let mut transition = central_difference(&work.moved, n, weights.scale);
+    if !(solve_right_lower(factor, &mut transition) && transition.iter().all(|v| v.is_finite())) {
+        transition.fill(f64::NAN);
+    }
+    let r = process.ncols();
+    let root = weights.other.sqrt();
+    let compound = &mut work.compound;
+    for j in 0..2 * n {
+        for i in 0..n {
+            compound[(j, i)] = root * (work.moved[(i, 1 + j)] - state[i]);
+        }
+    }
+    let mut rows = 2 * n;
+    if r > 0 {
+        if transition[(0, 0)].is_finite() {
+            let half = (0.5 * h).sqrt();
+            let moved = &transition * process;
+            for j in 0..r {
+                for i in 0..n {
+                    compound[(rows + j, i)] = half * process[(i, j)];
+                    compound[(rows + r + j, i)] = half * moved[(i, j)];
+                }
+            }
+            rows += 2 * r;
+        } else {
+            let whole = h.sqrt();
+            for j in 0..r {
+                for i in 0..n {
+                    compound[(rows + j, i)] = whole * process[(i, j)];
+                }
+            }
+            rows += r;
+        }
+    }
+    triangularise(compound, rows, n, factor);
+    let zero = &mut work.vector;
+    for i in 0..n {
+        zero[i] = work.moved[(i, 0)] - state[i];
+    }
+    zeroth_point(
+        factor,
+        &mut zero.as_mut_slice()[..n],
+        weights.covariance_zero,
+    )
+    .map_err(|()| Error::Downdate {
+        time: previous,
+        step: "time update's zeroth sigma point (W₀ᶜ < 0)",
+    })?;
+    Ok(transition)
+}
+
+/// The measurement update of (x, S) with the outputs `present` measured at
+/// t, in place (module header).
+#[allow(clippy::too_many_arguments)]
 fn measurement_update<M: StateSpaceModel + ?Sized>(
     model: &M,
     theta: &[f64],
-    unscented: &Unscented,
+    weights: &Weights,
     (t, present): (f64, &[(usize, f64)]),
     noise: &Noise,
     state: &mut DVector<f64>,
-    covariance: &mut DMatrix<f64>,
+    factor: &mut DMatrix<f64>,
+    work: &mut Work,
 ) -> Result<Measured> {
-    let sigma = points(unscented, state, covariance)?;
-    let outputs = sigma
-        .points
-        .iter()
-        .map(|point| {
-            let y = model.outputs(t, point.as_slice(), theta)?;
-            Ok(DVector::from_iterator(
-                present.len(),
-                present.iter().map(|&(o, _)| y[o]),
-            ))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let predicted = sigma.mean_of(&outputs);
-    let measurement = DMatrix::from_diagonal(&DVector::from_iterator(
-        present.len(),
-        present.iter().map(|&(o, _)| noise.measurement[o]),
-    ));
-    let s = symmetric(
-        sigma.cross_covariance(&outputs, &predicted, &outputs, &predicted) + &measurement,
-    );
-    let cross = sigma.cross_covariance(&sigma.points, state, &outputs, &predicted);
-    let inverse = Cholesky::new(s.clone())
-        .ok_or_else(|| {
-            Error::Other(
-                "the innovation covariance is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
-            )
-        })?
-        .inverse();
-    let observation = match loaded(covariance) {
-        Some((_, c)) => c.solve(&cross).transpose(),
-        None => DMatrix::from_element(present.len(), state.len(), f64::NAN),
+    let n = state.len();
+    let m = present.len();
+    work.draw(weights, state, factor);
+    for j in 0..2 * n + 1 {
+        let y = model
+            .outputs(t, work.points.column(j).as_slice(), theta)
+            .map_err(|e| at_time(e, t))?;
+        for (row, &(o, _)) in present.iter().enumerate() {
+            work.outputs[(row, j)] = y[o];
+        }
+    }
+    let outputs = work.outputs.rows(0, m);
+    let mut predicted = DVector::zeros(m);
+    for j in 0..2 * n + 1 {
+        let w = if j == 0 {
+            weights.mean_zero
+        } else {
+            weights.other
+        };
+        predicted.axpy(w, &outputs.column(j), 1.0);
+    }
+    let root = weights.other.sqrt();
+    let compound = &mut work.measured;
+    for j in 0..2 * n {
+        for i in 0..m {
+            compound[(j, i)] = root * (outputs[(i, 1 + j)] - predicted[i]);
+        }
+    }
+    for (row, &(o, _)) in present.iter().enumerate() {
+        for i in 0..m {
+            compound[(2 * n + row, i)] = 0.0;
+        }
+        compound[(2 * n + row, row)] = noise.measurement[o].max(0.0).sqrt();
+    }
+    let mut innovation_factor = DMatrix::zeros(m, m);
+    triangularise(compound, 2 * n + m, m, &mut innovation_factor);
+    let mut zero: Vec<f64> = (0..m).map(|i| outputs[(i, 0)] - predicted[i]).collect();
+    zeroth_point(&mut innovation_factor, &mut zero, weights.covariance_zero).map_err(|()| {
+        Error::Downdate {
+            time: t,
+            step: "innovation covariance's zeroth sigma point (W₀ᶜ < 0)",
+        }
+    })?;
+    // E = (Y_{1…n} − Y_{n+1…2n})/(2c): P_xy = S⁻·Eᵀ and H·S⁻ = E.
+    let difference = central_difference(&outputs, n, weights.scale);
+    let cross = &*factor * difference.transpose();
+    let singular = || {
+        Error::Other(
+            "the innovation covariance is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
+        )
     };
-    let gain = &cross * &inverse;
+    if !innovation_factor
+        .diagonal()
+        .iter()
+        .all(|&d| d > 0.0 && d.is_finite())
+    {
+        return Err(at_time(singular(), t));
+    }
+    // K·S_y·S_yᵀ = P_xy: S_y·Z = P_xyᵀ, then S_yᵀ·Kᵀ = Z.
+    let gain = innovation_factor
+        .solve_lower_triangular(&cross.transpose())
+        .and_then(|z| innovation_factor.tr_solve_lower_triangular(&z))
+        .ok_or_else(|| at_time(singular(), t))?
+        .transpose();
+    let mut observation = difference;
+    if !solve_right_lower(factor, &mut observation) {
+        observation.fill(f64::NAN);
+    }
     let innovation = DVector::from_iterator(
-        present.len(),
+        m,
         present
             .iter()
             .zip(predicted.iter())
             .map(|(&(_, z), y)| z - y),
     );
-    *state += &gain * &innovation;
-    // Joseph's form with the statistical H (module header): positive
-    // semi-definite by construction, where P⁻ − K·S·Kᵀ loses definiteness
-    // to rounding once R is small against P⁻.
-    let n = state.len();
-    let reduce = DMatrix::identity(n, n) - &gain * &observation;
-    *covariance = symmetric(
-        &reduce * &*covariance * reduce.transpose() + &gain * &measurement * gain.transpose(),
-    );
+    state.gemv(1.0, &gain, &innovation, 1.0);
+    let spread = &gain * &innovation_factor;
+    let column = &mut work.vector;
+    for j in 0..m {
+        column.rows_mut(0, n).copy_from(&spread.column(j));
+        cholupdate(factor, &mut column.as_mut_slice()[..n], -1.0).map_err(|()| {
+            Error::Downdate {
+                time: t,
+                step: "measurement update (S⁺ = cholupdate(S⁻, K·S_y, −1))",
+            }
+        })?;
+    }
+    let inverse_factor = innovation_factor
+        .solve_lower_triangular(&DMatrix::identity(m, m))
+        .ok_or_else(|| at_time(singular(), t))?;
     Ok(Measured {
         observation,
         update: Update {
             innovation,
-            innovation_covariance: s,
-            innovation_inverse: inverse,
+            innovation_covariance: &innovation_factor * innovation_factor.transpose(),
+            innovation_inverse: inverse_factor.transpose() * &inverse_factor,
             gain,
         },
     })
 }
 
-/// Relative diagonal loads tried, in turn, on a covariance that rounding
-/// has left short of positive definite (correlations within 10⁻¹⁶ of ±1
-/// once R is small): a spread below 10⁻⁴ of each state's σ.
-const LOADS: [f64; 4] = [0.0, 1e-12, 1e-10, 1e-8];
-
-/// P + ε·diag(P) for the first ε of [`LOADS`] whose Cholesky factor
-/// exists, with the factor; None when none does.
-fn loaded(covariance: &DMatrix<f64>) -> Option<(DMatrix<f64>, Cholesky<f64, nalgebra::Dyn>)> {
-    LOADS.iter().find_map(|&epsilon| {
-        let matrix = covariance + DMatrix::from_diagonal(&(covariance.diagonal() * epsilon));
-        Cholesky::new(matrix.clone()).map(|c| (matrix, c))
-    })
+/// P = S·Sᵀ of a lower-triangular S as the sum of its columns' outer
+/// products, s_k·s_kᵀ touching rows and columns k… only: n³/3
+/// multiply-adds on contiguous columns, and exactly symmetric (both
+/// triangles from the same products in the same order).
+fn covariance(factor: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = factor.nrows();
+    let mut p = DMatrix::zeros(n, n);
+    let s = factor.as_slice();
+    let data = p.as_mut_slice();
+    for k in 0..n {
+        let column = &s[k * n + k..(k + 1) * n];
+        for (j, &f) in (k..n).zip(column) {
+            if f != 0.0 {
+                let target = &mut data[j * n + k..(j + 1) * n];
+                for (t, &v) in target.iter_mut().zip(column) {
+                    *t += f * v;
+                }
+            }
+        }
+    }
+    p
 }
 
-/// The sigma points of (x̄, P), P loaded as [`loaded`] does when needed.
-fn points(
-    unscented: &Unscented,
-    mean: &DVector<f64>,
-    covariance: &DMatrix<f64>,
-) -> Result<SigmaPoints> {
-    match loaded(covariance) {
-        Some((matrix, _)) => unscented.points(mean, &matrix),
-        None => unscented.points(mean, covariance),
+/// x = Σ Wᵐ_i·χ'_i of the columns of `moved`.
+fn weighted_mean(weights: &Weights, moved: &DMatrix<f64>, mean: &mut DVector<f64>) {
+    mean.copy_from(&moved.column(0));
+    *mean *= weights.mean_zero;
+    for j in 1..moved.ncols() {
+        mean.axpy(weights.other, &moved.column(j), 1.0);
     }
 }
 
-fn symmetric(m: DMatrix<f64>) -> DMatrix<f64> {
-    (&m + m.transpose()) * 0.5
+/// (Z_{1…n} − Z_{n+1…2n})/(2c) of the columns of `images` (the sigma
+/// points' images Z_i): the central difference that is P_{z x}·P⁻¹·S
+/// for the covariance P = S·Sᵀ the points were drawn from (module header).
+fn central_difference<S>(
+    images: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>,
+    n: usize,
+    scale: f64,
+) -> DMatrix<f64>
+where
+    S: nalgebra::Storage<f64, nalgebra::Dyn, nalgebra::Dyn>,
+{
+    let half = 0.5 / scale;
+    DMatrix::from_fn(images.nrows(), n, |r, i| {
+        half * (images[(r, 1 + i)] - images[(r, 1 + n + i)])
+    })
+}
+
+/// X·L = B for X in place of B (column-major), L lower triangular:
+/// X_{·j} = (B_{·j} − Σ_{k>j} X_{·k}·L_{kj})/L_{jj} from the last column
+/// back, each step an operation on whole contiguous columns. False when
+/// a diagonal element of L is zero.
+fn solve_right_lower(l: &DMatrix<f64>, b: &mut DMatrix<f64>) -> bool {
+    let n = l.nrows();
+    let rows = b.nrows();
+    let data = b.as_mut_slice();
+    for j in (0..n).rev() {
+        let diagonal = l[(j, j)];
+        if diagonal == 0.0 {
+            return false;
+        }
+        let (head, tail) = data.split_at_mut((j + 1) * rows);
+        let column = &mut head[j * rows..];
+        for k in j + 1..n {
+            let f = l[(k, j)];
+            if f != 0.0 {
+                let known = &tail[(k - j - 1) * rows..(k - j) * rows];
+                for (c, x) in column.iter_mut().zip(known) {
+                    *c -= f * x;
+                }
+            }
+        }
+        let inverse = 1.0 / diagonal;
+        for c in column.iter_mut() {
+            *c *= inverse;
+        }
+    }
+    true
+}
+
+/// The Cholesky factor S (`cols` × `cols`, lower) with S·Sᵀ = Aᵀ·A for A
+/// the leading `rows` × `cols` block of `a`, by Householder reflections in
+/// place (A is overwritten): the transpose of QR's R with each column's
+/// sign chosen so that S's diagonal is non-negative. Column-major, each
+/// reflection works on contiguous column slices.
+fn triangularise(a: &mut DMatrix<f64>, rows: usize, cols: usize, factor: &mut DMatrix<f64>) {
+    let ld = a.nrows();
+    let data = a.as_mut_slice();
+    factor.fill(0.0);
+    for j in 0..cols.min(rows) {
+        let (left, right) = data.split_at_mut((j + 1) * ld);
+        let v = &mut left[j * ld + j..j * ld + rows];
+        let norm = dot(v, v).sqrt();
+        if norm == 0.0 {
+            continue;
+        }
+        let head = v[0];
+        let alpha = if head > 0.0 { -norm } else { norm };
+        // v = x − α·e₁ in place; vᵀv = 2α(α − x₀).
+        v[0] = head - alpha;
+        let scale = 1.0 / (alpha * (alpha - head));
+        for c in 0..cols - j - 1 {
+            let column = &mut right[c * ld + j..c * ld + rows];
+            let f = dot(v, column) * scale;
+            for (y, x) in column.iter_mut().zip(v.iter()) {
+                *y -= f * x;
+            }
+        }
+        v[0] = alpha;
+    }
+    for j in 0..cols.min(rows) {
+        let sign = if data[j * ld + j] < 0.0 { -1.0 } else { 1.0 };
+        for c in j..cols {
+            factor[(c, j)] = sign * data[c * ld + j];
+        }
+    }
+}
+
+/// a·b with four running sums (a sum the compiler can keep in vector
+/// registers, where one running sum fixes the order of the additions).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut sums = [0.0; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = a4
+        .remainder()
+        .iter()
+        .zip(b4.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in a4.zip(b4) {
+        for i in 0..4 {
+            sums[i] += x[i] * y[i];
+        }
+    }
+    sums[0] + sums[1] + sums[2] + sums[3] + tail
+}
+
+/// S·Sᵀ + w·v·vᵀ for the zeroth sigma point's weight w: an update by
+/// √w·v when w ≥ 0, a downdate by √(−w)·v when w < 0. `v` is overwritten.
+fn zeroth_point(factor: &mut DMatrix<f64>, v: &mut [f64], w: f64) -> Result<(), ()> {
+    let root = w.abs().sqrt();
+    for x in v.iter_mut() {
+        *x *= root;
+    }
+    cholupdate(factor, v, w.signum())
+}
+
+/// The rank-one update (`sign` = 1) or downdate (`sign` = −1) of the
+/// lower Cholesky factor L in place: L·Lᵀ ± x·xᵀ (`x` is overwritten).
+/// An update by Givens rotations; a downdate by hyperbolic rotations in
+/// the mixed form (LINPACK's `dchdd`; Golub & Van Loan, "Matrix
+/// Computations", 4th ed., §6.5.4), refused (Err) when a new diagonal
+/// element would not be positive: the downdated matrix is not positive
+/// definite.
+fn cholupdate(l: &mut DMatrix<f64>, x: &mut [f64], sign: f64) -> Result<(), ()> {
+    let n = x.len();
+    for k in 0..n {
+        let xk = x[k];
+        if xk == 0.0 {
+            continue;
+        }
+        let column = &mut l.as_mut_slice()[k * n..(k + 1) * n];
+        let diagonal = column[k];
+        let (top, below) = column.split_at_mut(k + 1);
+        let rest = &mut x[k + 1..];
+        if sign > 0.0 {
+            let r = diagonal.hypot(xk);
+            let (c, s) = (diagonal / r, xk / r);
+            top[k] = r;
+            for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
+                let (l0, x0) = (*li, *xi);
+                *li = c * l0 + s * x0;
+                *xi = c * x0 - s * l0;
+            }
+        } else {
+            let square = (diagonal - xk) * (diagonal + xk);
+            if !(square > 0.0 && diagonal > 0.0) {
+                return Err(());
+            }
+            let r = square.sqrt();
+            let (c, s) = (r / diagonal, xk / diagonal);
+            top[k] = r;
+            for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
+                *li = (*li - s * *xi) / c;
+                *xi = c * *xi - s * *li;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// G with G·Gᵀ = Q_c, without its zero columns: for a diagonal Q_c the
+/// square roots of its non-zero diagonal, else from its symmetric
+/// eigendecomposition. An error when Q_c has a negative eigenvalue (past
+/// rounding).
+fn process_root(process: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+    let n = process.nrows();
+    let negative = || Error::Other("the process noise is not positive semi-definite".into());
+    let diagonal = (0..n).all(|i| (0..n).all(|j| i == j || process[(i, j)] == 0.0));
+    if diagonal {
+        if process.diagonal().iter().any(|&q| q.is_nan() || q < 0.0) {
+            return Err(negative());
+        }
+        let kept: Vec<usize> = (0..n).filter(|&i| process[(i, i)] > 0.0).collect();
+        let mut root = DMatrix::zeros(n, kept.len());
+        for (j, &i) in kept.iter().enumerate() {
+            root[(i, j)] = process[(i, i)].sqrt();
+        }
+        return Ok(root);
+    }
+    let symmetric = (process + process.transpose()) * 0.5;
+    let eigen = symmetric.symmetric_eigen();
+    let largest = eigen.eigenvalues.amax();
+    if eigen.eigenvalues.iter().any(|&e| e < -1e-12 * largest) {
+        return Err(negative());
+    }
+    let kept: Vec<usize> = (0..n)
+        .filter(|&i| eigen.eigenvalues[i] > 1e-15 * largest)
+        .collect();
+    let mut root = DMatrix::zeros(n, kept.len());
+    for (j, &i) in kept.iter().enumerate() {
+        root.column_mut(j)
+            .copy_from(&(eigen.eigenvectors.column(i) * eigen.eigenvalues[i].sqrt()));
+    }
+    Ok(root)
 }
 
 #[cfg(test)]
@@ -226,70 +629,138 @@ mod tests {
     /// states measured, a dropout every fifth point). With process noise
     /// the unscented pass takes Q_d by the trapezoidal rule and the
     /// extended one exactly (Van Loan): the rule's relative error is about
-    /// h²·‖2A‖²/12 ≈ 2e-3 at h = 0.01 (‖A‖ ≈ 8), the tolerance 5e-3.
+    /// h²·‖2A‖²/12 ≈ 2e-3 at h = 0.01 (‖A‖ ≈ 8), the tolerance 5e-3. Both
+    /// for α = 1 (W₀ᶜ = 2: the zeroth point an update) and α = 0.5
+    /// (W₀ᶜ = −0.25: a downdate).
     #[test]
     fn on_a_linear_model_it_is_the_kalman_filter() {
         let a = DMatrix::from_row_slice(3, 3, &[-1.2, 1.0, 0.0, -8.0, -2.1, 0.3, 0.0, 0.5, -0.05]);
-        for (process, step, tolerance) in [(0.0, 0.05, 1e-10), (0.2, 0.01, 5e-3)] {
-            let len = (10.0 / step) as usize;
-            let model = LinearStateSpace::new(
-                [
-                    a.clone(),
-                    DMatrix::zeros(3, 1),
-                    DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
-                    DMatrix::zeros(2, 1),
-                ],
-                Vec::new(),
-                0.0,
-                step,
-                vec![DVector::zeros(1); len],
-            )
-            .unwrap();
-            let at = (0..len)
-                .map(|k| {
-                    let t = k as f64 * step;
-                    let mut here = vec![(0, (3.0 * t).sin() * 0.1)];
-                    if k % 5 != 4 {
-                        here.push((1, (0.7 * t).cos() * 0.05));
-                    }
-                    here
-                })
-                .collect();
-            let observations = Observations {
-                names: vec!["a".into(), "b".into()],
-                at,
-                moved: 0,
-            };
-            let initial = Gaussian {
-                mean: DVector::from_vec(vec![0.05, -0.1, 0.02]),
-                covariance: DMatrix::identity(3, 3) * 0.3,
-            };
-            let noise = Noise {
-                process: DMatrix::identity(3, 3) * process,
-                measurement: DVector::from_vec(vec![1e-3, 4e-4]),
-            };
-            let unscented = filter(
-                &model,
-                &[],
-                initial.clone(),
-                &noise,
-                &observations,
-                &Unscented::default(),
-            )
-            .unwrap();
-            let extended =
-                extended_kalman::filter(&model, &[], initial.clone(), &noise, &observations)
-                    .unwrap();
-            for (u, e) in unscented.filtered.iter().zip(&extended.filtered) {
-                let error = (&u.mean - &e.mean).norm() / e.mean.norm().max(1e-3);
-                assert!(error < tolerance, "Q {process}: mean {error:e}");
-                let error = (&u.covariance - &e.covariance).norm() / e.covariance.norm();
-                assert!(error < tolerance, "Q {process}: covariance {error:e}");
+        for alpha in [1.0, 0.5] {
+            for (process, step, tolerance) in [(0.0, 0.05, 1e-10), (0.2, 0.01, 5e-3)] {
+                let len = (10.0 / step) as usize;
+                let model = LinearStateSpace::new(
+                    [
+                        a.clone(),
+                        DMatrix::zeros(3, 1),
+                        DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
+                        DMatrix::zeros(2, 1),
+                    ],
+                    Vec::new(),
+                    0.0,
+                    step,
+                    vec![DVector::zeros(1); len],
+                )
+                .unwrap();
+                let at = (0..len)
+                    .map(|k| {
+                        let t = k as f64 * step;
+                        let mut here = vec![(0, (3.0 * t).sin() * 0.1)];
+                        if k % 5 != 4 {
+                            here.push((1, (0.7 * t).cos() * 0.05));
+                        }
+                        here
+                    })
+                    .collect();
+                let observations = Observations {
+                    names: vec!["a".into(), "b".into()],
+                    at,
+                    moved: 0,
+                };
+                let initial = Gaussian {
+                    mean: DVector::from_vec(vec![0.05, -0.1, 0.02]),
+                    covariance: DMatrix::identity(3, 3) * 0.3,
+                };
+                let noise = Noise {
+                    process: DMatrix::identity(3, 3) * process,
+                    measurement: DVector::from_vec(vec![1e-3, 4e-4]),
+                };
+                let unscented = filter(
+                    &model,
+                    &[],
+                    initial.clone(),
+                    &noise,
+                    &observations,
+                    &Unscented {
+                        alpha,
+                        ..Unscented::default()
+                    },
+                )
+                .unwrap();
+                let extended =
+                    extended_kalman::filter(&model, &[], initial.clone(), &noise, &observations)
+                        .unwrap();
+                for (u, e) in unscented.filtered.iter().zip(&extended.filtered) {
+                    let error = (&u.mean - &e.mean).norm() / e.mean.norm().max(1e-3);
+                    assert!(error < tolerance, "α {alpha}, Q {process}: mean {error:e}");
+                    let error = (&u.covariance - &e.covariance).norm() / e.covariance.norm();
+                    assert!(
+                        error < tolerance,
+                        "α {alpha}, Q {process}: covariance {error:e}"
+                    );
+                }
+                let error = (unscented.negative_log_likelihood - extended.negative_log_likelihood)
+                    .abs()
+                    / extended.negative_log_likelihood.abs();
+                assert!(error < tolerance, "α {alpha}: −ln L {error:e}");
             }
-            let error = (unscented.negative_log_likelihood - extended.negative_log_likelihood)
-                .abs()
-                / extended.negative_log_likelihood.abs();
-            assert!(error < tolerance, "−ln L {error:e}");
         }
+    }
+
+    /// The rank-one update and downdate against the factor of the updated
+    /// matrix, and a downdate past definiteness refused.
+    #[test]
+    fn cholupdate_updates_and_refuses_a_downdate_past_definiteness() {
+        let p = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, -0.2, 0.5, -0.2, 2.0]);
+        let v = DVector::from_vec(vec![0.7, -0.3, 0.9]);
+        for sign in [1.0, -1.0] {
+            let mut l = Cholesky::new(p.clone()).unwrap().unpack();
+            let mut x = v.clone();
+            cholupdate(&mut l, x.as_mut_slice(), sign).unwrap();
+            let expected = &p + &v * v.transpose() * sign;
+            let error = (&l * l.transpose() - &expected).norm() / expected.norm();
+            assert!(error < 1e-15, "sign {sign}: {error:e}");
+            assert!(l.diagonal().iter().all(|&d| d > 0.0));
+        }
+        let mut l = Cholesky::new(p.clone()).unwrap().unpack();
+        let mut x = DVector::from_vec(vec![2.5, 0.0, 0.0]);
+        assert!(cholupdate(&mut l, x.as_mut_slice(), -1.0).is_err());
+    }
+
+    /// S·Sᵀ from the columns' outer products is the product, symmetric.
+    #[test]
+    fn covariance_is_the_factors_product() {
+        let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
+        let p = covariance(&l);
+        let expected = &l * l.transpose();
+        assert!((&p - &expected).norm() < 1e-15 * expected.norm());
+        assert_eq!(p, p.transpose());
+    }
+
+    /// X·L = B solved from the right against B·L⁻¹ by nalgebra's inverse.
+    #[test]
+    fn solve_right_lower_solves_from_the_right() {
+        let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
+        let b = DMatrix::from_fn(4, 3, |i, j| (i as f64 - 1.3 * j as f64).cos());
+        let mut x = b.clone();
+        assert!(solve_right_lower(&l, &mut x));
+        let expected = &b * l.clone().try_inverse().unwrap();
+        assert!((&x - &expected).norm() < 1e-14 * expected.norm());
+        let mut singular = l.clone();
+        singular[(1, 1)] = 0.0;
+        assert!(!solve_right_lower(&singular, &mut b.clone()));
+    }
+
+    /// The Householder triangularisation: S·Sᵀ = Aᵀ·A with a lower S of
+    /// non-negative diagonal, for a tall A.
+    #[test]
+    fn triangularise_gives_the_factor_of_the_gram_matrix() {
+        let mut a = DMatrix::from_fn(7, 3, |i, j| ((i * 3 + j) as f64 * 0.7).sin() - 0.2);
+        let gram = a.transpose() * &a;
+        let mut factor = DMatrix::zeros(3, 3);
+        triangularise(&mut a, 7, 3, &mut factor);
+        let error = (&factor * factor.transpose() - &gram).norm() / gram.norm();
+        assert!(error < 1e-15, "{error:e}");
+        assert!(factor.diagonal().iter().all(|&d| d >= 0.0));
+        assert!(factor.upper_triangle().norm() == factor.diagonal().norm());
     }
 }
