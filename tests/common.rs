@@ -105,3 +105,50 @@ pub fn approach(gusty: bool) -> aeroid::sim::scenario::Scenario {
     }
     scenario
 }
+
+/// A bundled recorder profile (`recorders/BASE.toml`) rewritten channel by
+/// channel and loaded: `header` is appended to the top-level keys; for each
+/// `[[channels]]` table `edit(name, table)` returns its new text, or None
+/// to leave the channel out.
+pub fn profile_variant(
+    folder: &std::path::Path,
+    base: &str,
+    header: &str,
+    edit: impl Fn(&str, &str) -> Option<String>,
+) -> aeroid::record::recorder::Profile {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("recorders/{base}.toml")),
+    )
+    .unwrap();
+    let mut parts = text.split("[[channels]]");
+    let mut out = parts.next().unwrap().to_string() + header + "\n";
+    let mut kept = 0;
+    for part in parts {
+        let name = part.split('"').nth(1).unwrap();
+        if let Some(table) = edit(name, part) {
+            out += "[[channels]]";
+            out += &table;
+            out += "\n";
+            kept += 1;
+        }
+    }
+    let path = write(folder, &format!("{base}-variant-{kept}.toml"), &out);
+    aeroid::record::recorder::Profile::load(path.to_str().unwrap(), None).unwrap()
+}
+
+/// The largest error of an estimate's parameters that have a truth,
+/// relative to max(|truth|, `floor`), with the parameter's name.
+pub fn worst_relative_error(
+    estimate: &aeroid::estimation::estimate::Estimate,
+    truth: &aeroid::sim::truth::RunTruth,
+    floor: f64,
+) -> (f64, String) {
+    estimate
+        .parameters
+        .iter()
+        .filter_map(|p| {
+            let t = *truth.parameters.get(&p.name)?;
+            Some(((p.value - t).abs() / t.abs().max(floor), p.name.clone()))
+        })
+        .fold((0.0, String::new()), |a, b| if b.0 > a.0 { b } else { a })
+}

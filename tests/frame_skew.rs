@@ -29,38 +29,28 @@ use aeroid::sim::truth::RunTruth;
 /// own, measured: output error then 34 % off on CY_da, filter error 14 %
 /// on Cl_dr, skew honoured or not).
 fn skewed_profile(folder: &std::path::Path, skew: bool) -> Profile {
-    let names = [
-        "airspeed",
-        "alpha",
-        "beta",
-        "p",
-        "q",
-        "r",
-        "roll",
-        "pitch",
-        "yaw",
-        "nx",
-        "ny",
-        "nz",
-        "elevator",
-        "aileron",
-        "rudder",
-        "flap",
-        "throttle",
-        "altitude",
-        "mach",
-        "dynamic_pressure",
-    ];
-    let mut text = String::from(
-        "name = \"skewed-25hz\"\ndescription = \"flight-test channels, word-slot skew\"\nframe = \"0.04 s\"\nwords_per_frame = 4\n",
-    );
-    for (i, name) in names.iter().enumerate() {
-        let control = ["elevator", "aileron", "rudder", "flap", "throttle"].contains(name);
-        let word = if skew && !control { i % 4 } else { 0 };
-        text += &format!("\n[[channels]]\nname = \"{name}\"\nrate = \"25 Hz\"\nword = {word}\n");
-    }
-    let path = common::write(folder, &format!("skewed-{skew}.toml"), &text);
-    Profile::load(path.to_str().unwrap(), None).unwrap()
+    let controls = ["elevator", "aileron", "rudder", "flap", "throttle"];
+    let index = std::cell::Cell::new(0);
+    common::profile_variant(
+        folder,
+        "flight-test-25hz",
+        "frame = \"0.04 s\"\nwords_per_frame = 4",
+        |name, table| {
+            let i = index.get();
+            index.set(i + 1);
+            let word = if skew && !controls.contains(&name) {
+                i % 4
+            } else {
+                0
+            };
+            let kept: String = table
+                .lines()
+                .filter(|line| !line.starts_with("noise"))
+                .map(|line| format!("{line}\n"))
+                .collect();
+            Some(format!("{kept}word = {word}\n"))
+        },
+    )
 }
 
 /// The record with every sample stamped with the start of its frame.
@@ -80,17 +70,8 @@ fn fit(method: &str, record: &FlightRecord, model: &str, layers: &[&MethodTables
     methods::estimate(&problem, None).unwrap()
 }
 
-/// The largest error relative to max(|truth|, 0.01) and its parameter,
-/// over the aerodynamic parameters (not biases or initial states).
 fn worst(estimate: &Estimate, truth: &RunTruth) -> (f64, String) {
-    estimate
-        .parameters
-        .iter()
-        .filter_map(|p| {
-            let t = *truth.parameters.get(&p.name)?;
-            Some(((p.value - t).abs() / t.abs().max(0.01), p.name.clone()))
-        })
-        .fold((0.0, String::new()), |a, b| if b.0 > a.0 { b } else { a })
+    common::worst_relative_error(estimate, truth, 0.01)
 }
 
 /// The ATTAS lateral multistep recorded noise-free with word-slot skew

@@ -306,6 +306,23 @@ fn worst_of(ours: &[Gaussian], theirs: impl Iterator<Item = (Vec<f64>, Vec<f64>)
 /// adskalman; against the EKF 4e-13 for the mean and 2e-11 for the
 /// covariance, which without process noise shrinks by orders of magnitude
 /// over the record while the rounding of its factors does not).
+/// One pass of the square-root UKF over the case with sigma-point spread `alpha`.
+fn unscented_pass(case: &Case, alpha: f64) -> aeroid::estimation::solver::extended_kalman::Pass {
+    let unscented = kalman::Unscented {
+        alpha,
+        ..kalman::Unscented::default()
+    };
+    unscented_kalman::filter(
+        &case.model,
+        &[],
+        case.initial.clone(),
+        &case.noise,
+        &case.observations,
+        &unscented,
+    )
+    .unwrap()
+}
+
 #[test]
 fn square_root_unscented_filter_on_a_linear_model_is_the_linear_kalman_filter() {
     let mut case = case();
@@ -314,19 +331,7 @@ fn square_root_unscented_filter_on_a_linear_model_is_the_linear_kalman_filter() 
     let trapezoidal =
         (&case.noise.process + phi * &case.noise.process * phi.transpose()) * (0.5 * h);
     for alpha in [0.5, 1.0] {
-        let unscented = kalman::Unscented {
-            alpha,
-            ..kalman::Unscented::default()
-        };
-        let pass = unscented_kalman::filter(
-            &case.model,
-            &[],
-            case.initial.clone(),
-            &case.noise,
-            &case.observations,
-            &unscented,
-        )
-        .unwrap();
+        let pass = unscented_pass(&case, alpha);
         let filtered = linear_filter(&case, &pass.filtered[0], &trapezoidal);
         let worst = worst_of(
             &pass.filtered,
@@ -357,19 +362,7 @@ fn square_root_unscented_filter_on_a_linear_model_is_the_linear_kalman_filter() 
     )
     .unwrap();
     for alpha in [0.5, 1.0] {
-        let unscented = kalman::Unscented {
-            alpha,
-            ..kalman::Unscented::default()
-        };
-        let pass = unscented_kalman::filter(
-            &case.model,
-            &[],
-            case.initial.clone(),
-            &case.noise,
-            &case.observations,
-            &unscented,
-        )
-        .unwrap();
+        let pass = unscented_pass(&case, alpha);
         let worst = worst_of(
             &pass.filtered,
             extended.filtered[1..]

@@ -21,20 +21,9 @@ use std::path::Path;
 /// The ideal recorder (every quantity at 100 Hz, no error) without the
 /// channels named in `without`.
 fn ideal_without(folder: &Path, without: &[&str]) -> Profile {
-    let text =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("recorders/ideal.toml"))
-            .unwrap();
-    let mut parts = text.split("[[channels]]");
-    let mut kept = parts.next().unwrap().to_string();
-    for part in parts {
-        let name = part.split('"').nth(1).unwrap();
-        if !without.contains(&name) {
-            kept += "[[channels]]";
-            kept += part;
-        }
-    }
-    let path = common::write(folder, &format!("ideal-{}.toml", without.len()), &kept);
-    Profile::load(path.to_str().unwrap(), None).unwrap()
+    common::profile_variant(folder, "ideal", "", |name, table| {
+        (!without.contains(&name)).then(|| table.to_string())
+    })
 }
 
 fn fit(method: &str, record: &FlightRecord, layers: &[&MethodTables]) -> aeroid::Result<Estimate> {
@@ -43,16 +32,8 @@ fn fit(method: &str, record: &FlightRecord, layers: &[&MethodTables]) -> aeroid:
     methods::estimate(&problem, None)
 }
 
-/// The largest error relative to max(|truth|, 0.01), and its parameter.
 fn worst(estimate: &Estimate, truth: &RunTruth) -> (f64, String) {
-    estimate
-        .parameters
-        .iter()
-        .filter_map(|p| {
-            let t = *truth.parameters.get(&p.name)?;
-            Some(((p.value - t).abs() / t.abs().max(0.01), p.name.clone()))
-        })
-        .fold((0.0, String::new()), |a, b| if b.0 > a.0 { b } else { a })
+    common::worst_relative_error(estimate, truth, 0.01)
 }
 
 /// The ATTAS elevator 3-2-1-1 recorded noise-free at 100 Hz with thrust
