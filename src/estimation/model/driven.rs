@@ -29,7 +29,7 @@ use crate::sim::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Kine
 use crate::sim::integrator::{Interpolation, affine, rk4_linear_step, rk4_step};
 use crate::sim::state::{self, CONTROL_COUNT, Control, Controls, SinCos};
 use crate::units::STANDARD_GRAVITY;
-use nalgebra::{DMatrix, SVector, Vector3};
+use nalgebra::{DMatrix, DVector, SVector, Vector3};
 use std::sync::OnceLock;
 
 pub const FLIGHT_PATH_SIZE: usize = 11;
@@ -1131,22 +1131,86 @@ pub(super) fn linearise(
     states: &[usize],
     outputs: &[Observable],
 ) -> Jacobians {
-    let aero = &model.aircraft.aero;
-    let columns: Vec<Column> = (0..aero.parameters.values().len())
-        .map(|i| match aero.term_of(i) {
-            Some(_) => Column::Term(i),
-            None => Column::Nonlinear(i),
-        })
-        .collect();
-    let directions = Directions::new(model, &columns, states, true);
-    let mut linearization = Linearization::new(&directions, outputs.len());
-    let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], (&[], None));
-    linearization.at(model, &directions, x, controls, pseudo, outputs, &mut memo);
+    let mut buffers = LinearisationBuffers::default();
+    linearise_with(model, x, controls, pseudo, states, outputs, &mut buffers);
+    let linearization = buffers.linearization.expect("made by linearise_with");
     Jacobians {
         rates_by_state: linearization.a,
         rates_by_parameter: linearization.b,
         outputs_by_state: linearization.gx,
         outputs_by_parameter: linearization.gtheta,
+    }
+}
+
+/// The buffers of [`linearise`] kept between calls: the directions while
+/// they do not depend on θ (no perturbed models: every parameter a term's,
+/// the forces affine in the coefficients), with the flag they were made
+/// for, and the linearisation's matrices.
+#[derive(Default)]
+pub(super) struct LinearisationBuffers {
+    directions: Option<(bool, Directions)>,
+    linearization: Option<Linearization>,
+}
+
+/// [`linearise`] into `buffers` (the same numbers): the Jacobians are the
+/// linearisation's `a`, `b`, `gx`, `gtheta` ([`LinearisationBuffers::copy_into`]),
+/// the outputs its values.
+pub(super) fn linearise_with(
+    model: &FlightModel,
+    x: &FlightPathState,
+    controls: &Controls,
+    pseudo: PseudoRates,
+    states: &[usize],
+    outputs: &[Observable],
+    buffers: &mut LinearisationBuffers,
+) {
+    let aero = &model.aircraft.aero;
+    let flag = aero.forces_depend_on_alpha_dot();
+    let reusable = matches!(&buffers.directions, Some((made_for, directions))
+        if *made_for == flag && directions.models.is_empty());
+    if !reusable {
+        let columns: Vec<Column> = (0..aero.parameters.values().len())
+            .map(|i| match aero.term_of(i) {
+                Some(_) => Column::Term(i),
+                None => Column::Nonlinear(i),
+            })
+            .collect();
+        let directions = Directions::new(model, &columns, states, true);
+        buffers.linearization = Some(Linearization::new(&directions, outputs.len()));
+        buffers.directions = Some((flag, directions));
+    }
+    let (Some((_, directions)), Some(linearization)) =
+        (&buffers.directions, &mut buffers.linearization)
+    else {
+        unreachable!("both made above");
+    };
+    let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], (&[], None));
+    linearization.at(model, directions, x, controls, pseudo, outputs, &mut memo);
+}
+
+impl LinearisationBuffers {
+    /// The last linearisation's ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ into `into`,
+    /// and its outputs into `outputs` if given.
+    pub(super) fn copy_into(&self, into: &mut Jacobians, outputs: Option<&mut DVector<f64>>) {
+        let Some(linearization) = &self.linearization else {
+            return;
+        };
+        let copy = |from: &DMatrix<f64>, to: &mut DMatrix<f64>| {
+            if to.shape() != from.shape() {
+                *to = DMatrix::zeros(from.nrows(), from.ncols());
+            }
+            to.copy_from(from);
+        };
+        copy(&linearization.a, &mut into.rates_by_state);
+        copy(&linearization.b, &mut into.rates_by_parameter);
+        copy(&linearization.gx, &mut into.outputs_by_state);
+        copy(&linearization.gtheta, &mut into.outputs_by_parameter);
+        if let Some(outputs) = outputs {
+            if outputs.len() != linearization.outputs.len() {
+                *outputs = DVector::zeros(linearization.outputs.len());
+            }
+            outputs.copy_from_slice(&linearization.outputs);
+        }
     }
 }
 

@@ -33,7 +33,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
-use crate::estimation::model::state_space::StateSpaceModel;
+use crate::estimation::model::state_space::{Jacobians, StateSpaceModel};
 use crate::estimation::solver::kalman::{
     self, Exponential, Gaussian, Measured, SparseRows, UpdateWorkspace, resize,
 };
@@ -127,11 +127,16 @@ impl TimeUpdate {
                 self.scaled.transpose_to(transposed);
                 self.sparse.times_transposed(transposed, product);
                 resize(&mut self.transition, n, n);
+                let (phi, squared, b) = (
+                    self.transition.as_mut_slice(),
+                    product.as_slice(),
+                    self.scaled.as_slice(),
+                );
                 for j in 0..n {
                     for i in 0..n {
-                        self.transition[(i, j)] = product[(j, i)] * 0.5 + self.scaled[(i, j)];
+                        phi[i + j * n] = squared[j + i * n] * 0.5 + b[i + j * n];
                     }
-                    self.transition[(j, j)] += 1.0;
+                    phi[j + j * n] += 1.0;
                 }
                 if has_noise {
                     // A·Q_c = (Q_cᵀ·Aᵀ)ᵀ and A·Q_c·Aᵀ = (A·Q_c)·Aᵀ by A's
@@ -144,19 +149,24 @@ impl TimeUpdate {
                     self.sparse.times_transposed(transposed, product);
                     // transposed = A·Q_c, product = A·Q_c·Aᵀ.
                     resize(&mut self.process_noise, n, n);
-                    let q = &mut self.process_noise;
+                    let (q, outer, aq, noise) = (
+                        self.process_noise.as_mut_slice(),
+                        product.as_slice(),
+                        transposed.as_slice(),
+                        noise.as_slice(),
+                    );
                     for j in 0..n {
                         for i in 0..n {
-                            q[(i, j)] = product[(i, j)] * (h * h * h / 3.0)
-                                + (transposed[(i, j)] + transposed[(j, i)]) * (h * h / 2.0)
-                                + noise[(i, j)] * h;
+                            q[i + j * n] = outer[i + j * n] * (h * h * h / 3.0)
+                                + (aq[i + j * n] + aq[j + i * n]) * (h * h / 2.0)
+                                + noise[i + j * n] * h;
                         }
                     }
                     for j in 0..n {
                         for i in 0..j {
-                            let mean = (q[(i, j)] + q[(j, i)]) * 0.5;
-                            q[(i, j)] = mean;
-                            q[(j, i)] = mean;
+                            let mean = (q[i + j * n] + q[j + i * n]) * 0.5;
+                            q[i + j * n] = mean;
+                            q[j + i * n] = mean;
                         }
                     }
                 }
@@ -229,15 +239,24 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     let mut covariance = initial.covariance;
     let mut time_update = TimeUpdate::default();
     let mut update_workspace = UpdateWorkspace::default();
+    let mut linearised = Jacobians {
+        rates_by_state: DMatrix::zeros(0, 0),
+        rates_by_parameter: DMatrix::zeros(0, 0),
+        outputs_by_state: DMatrix::zeros(0, 0),
+        outputs_by_parameter: DMatrix::zeros(0, 0),
+    };
+    let mut predicted = DVector::zeros(0);
     for k in 0..len {
         let t = model.time(k);
         if k > 0 {
             let previous = model.time(k - 1);
-            let a = model
-                .jacobians(previous, state.as_slice(), theta)?
-                .rates_by_state;
-            let has_noise =
-                time_update.discretise(discretisation, &a, &noise.process, t - previous);
+            model.jacobians_into(previous, state.as_slice(), theta, &mut linearised, None)?;
+            let has_noise = time_update.discretise(
+                discretisation,
+                &linearised.rates_by_state,
+                &noise.process,
+                t - previous,
+            );
             state = model
                 .step(k - 1, state.as_slice(), theta)
                 .map_err(|e| at_time(e, previous))?;
@@ -258,11 +277,14 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
             pass.measured.push(None);
         } else {
             let rows: Vec<usize> = present.iter().map(|&(o, _)| o).collect();
-            let predicted = model.outputs(t, state.as_slice(), theta)?;
-            let h = model
-                .jacobians(t, state.as_slice(), theta)?
-                .outputs_by_state
-                .select_rows(&rows);
+            model.jacobians_into(
+                t,
+                state.as_slice(),
+                theta,
+                &mut linearised,
+                Some(&mut predicted),
+            )?;
+            let h = linearised.outputs_by_state.select_rows(&rows);
             let r = DMatrix::from_diagonal(&DVector::from_iterator(
                 rows.len(),
                 rows.iter().map(|&o| noise.measurement[o]),

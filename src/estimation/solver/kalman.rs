@@ -290,6 +290,8 @@ pub struct SparseRows {
     /// Row i's entries (column, value) are `entries[starts[i]..starts[i + 1]]`.
     starts: Vec<usize>,
     entries: Vec<(usize, f64)>,
+    /// Where [`SparseRows::set`] places each row's next entry.
+    cursor: Vec<usize>,
 }
 
 impl SparseRows {
@@ -302,15 +304,30 @@ impl SparseRows {
 
     /// Reads the non-zeros of `matrix`.
     pub fn set(&mut self, matrix: &DMatrix<f64>) {
+        let rows = matrix.nrows();
         self.begin(matrix.ncols());
-        for i in 0..matrix.nrows() {
-            for j in 0..matrix.ncols() {
-                let value = matrix[(i, j)];
+        // Counted per row over the columns, then placed: two passes in
+        // memory order.
+        self.starts.resize(rows + 1, 0);
+        self.starts.fill(0);
+        for column in matrix.column_iter() {
+            for (count, &value) in self.starts[1..].iter_mut().zip(column.iter()) {
+                *count += usize::from(value != 0.0);
+            }
+        }
+        for i in 0..rows {
+            self.starts[i + 1] += self.starts[i];
+        }
+        self.entries.resize(self.starts[rows], (0, 0.0));
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.starts[..rows]);
+        for (j, column) in matrix.column_iter().enumerate() {
+            for (next, &value) in self.cursor.iter_mut().zip(column.iter()) {
                 if value != 0.0 {
-                    self.entries.push((j, value));
+                    self.entries[*next] = (j, value);
+                    *next += 1;
                 }
             }
-            self.starts.push(self.entries.len());
         }
     }
 
@@ -355,15 +372,21 @@ impl SparseRows {
             return;
         }
         let x = x.as_slice();
-        for (i, column) in into.as_mut_slice().chunks_exact_mut(rows).enumerate() {
-            column.fill(0.0);
-            for &(j, value) in self.row(i) {
-                let source = &x[j * rows..(j + 1) * rows];
-                for (into, &x) in column.iter_mut().zip(source) {
-                    *into += value * x;
+        let into = into.as_mut_slice();
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                for (i, column) in into.chunks_exact_mut(rows).enumerate() {
+                    column.fill(0.0);
+                    for &(j, value) in self.row(i) {
+                        let source = &x[j * rows..(j + 1) * rows];
+                        for (into, &x) in column.iter_mut().zip(source) {
+                            *into += value * x;
+                        }
+                    }
                 }
-            }
-        }
+            },
+        )
     }
 }
 
@@ -383,9 +406,12 @@ pub fn predict_covariance_in_place(
     transition.times_transposed(transposed, product);
     let n = product.nrows();
     resize(covariance, n, n);
+    let (p, f) = (covariance.as_mut_slice(), product.as_slice());
     for j in 0..n {
-        for i in 0..n {
-            covariance[(i, j)] = 0.5 * (product[(i, j)] + product[(j, i)]);
+        for i in 0..=j {
+            let value = 0.5 * (f[i + j * n] + f[j + i * n]);
+            p[i + j * n] = value;
+            p[j + i * n] = value;
         }
     }
     if let Some(noise) = process_noise {
@@ -505,26 +531,45 @@ pub fn update_with(
     half.gemm(-0.5, &gain, &s, 1.0);
     // K·Eᵀ, column by column.
     resize(product, n, n);
-    for (c, mut column) in product.column_iter_mut().enumerate() {
-        column.fill(0.0);
-        for o in 0..m {
-            column.axpy(half[(c, o)], &gain.column(o), 1.0);
-        }
+    if n > 0 {
+        let (gain_values, half_values) = (gain.as_slice(), half.as_slice());
+        let product = product.as_mut_slice();
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                for (c, column) in product.chunks_exact_mut(n).enumerate() {
+                    column.fill(0.0);
+                    for o in 0..m {
+                        let factor = half_values[o * n + c];
+                        let source = &gain_values[o * n..(o + 1) * n];
+                        for (into, &k) in column.iter_mut().zip(source) {
+                            *into += factor * k;
+                        }
+                    }
+                }
+            },
+        );
     }
-    for j in 0..n {
-        for i in 0..=j {
-            let value = 0.5 * (covariance[(i, j)] + covariance[(j, i)])
-                - (product[(i, j)] + product[(j, i)]);
-            covariance[(i, j)] = value;
-            covariance[(j, i)] = value;
-        }
-    }
+    symmetric_difference(covariance, product);
     Ok(Update {
         innovation,
         innovation_covariance: s,
         innovation_inverse: inverse,
         gain,
     })
+}
+
+/// P ← ½·(P + Pᵀ) − (F + Fᵀ), both n × n.
+fn symmetric_difference(covariance: &mut DMatrix<f64>, product: &DMatrix<f64>) {
+    let n = covariance.nrows();
+    let (p, f) = (covariance.as_mut_slice(), product.as_slice());
+    for j in 0..n {
+        for i in 0..=j {
+            let value = 0.5 * (p[i + j * n] + p[j + i * n]) - (f[i + j * n] + f[j + i * n]);
+            p[i + j * n] = value;
+            p[j + i * n] = value;
+        }
+    }
 }
 
 /// The steady state of a time-invariant filter.
