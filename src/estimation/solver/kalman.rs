@@ -287,11 +287,10 @@ pub fn predict_covariance(
 #[derive(Debug, Clone, Default)]
 pub struct SparseRows {
     columns: usize,
-    /// Row i's entries (column, value) are `entries[starts[i]..starts[i + 1]]`.
+    /// Row i's entries (column, value) are `entries[starts[i]..starts[i + 1]]`
+    /// (`entries` may hold more, unused).
     starts: Vec<usize>,
     entries: Vec<(usize, f64)>,
-    /// Where [`SparseRows::set`] places each row's next entry.
-    cursor: Vec<usize>,
 }
 
 impl SparseRows {
@@ -304,50 +303,46 @@ impl SparseRows {
 
     /// Reads the non-zeros of `matrix`.
     pub fn set(&mut self, matrix: &DMatrix<f64>) {
-        let rows = matrix.nrows();
-        self.begin(matrix.ncols());
-        // Counted per row over the columns, then placed: two passes in
-        // memory order.
-        self.starts.resize(rows + 1, 0);
-        self.starts.fill(0);
-        for column in matrix.column_iter() {
-            for (count, &value) in self.starts[1..].iter_mut().zip(column.iter()) {
-                *count += usize::from(value != 0.0);
-            }
+        let (rows, columns) = matrix.shape();
+        self.begin(columns);
+        // Every entry is written and only a non-zero one kept (no branch):
+        // `entries` holds room for all of them.
+        if self.entries.len() < matrix.len() {
+            self.entries.resize(matrix.len(), (0, 0.0));
         }
+        let values = matrix.as_slice();
+        let mut count = 0;
         for i in 0..rows {
-            self.starts[i + 1] += self.starts[i];
-        }
-        self.entries.resize(self.starts[rows], (0, 0.0));
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.starts[..rows]);
-        for (j, column) in matrix.column_iter().enumerate() {
-            for (next, &value) in self.cursor.iter_mut().zip(column.iter()) {
-                if value != 0.0 {
-                    self.entries[*next] = (j, value);
-                    *next += 1;
-                }
+            for j in 0..columns {
+                let value = values[i + j * rows];
+                self.entries[count] = (j, value);
+                count += usize::from(value != 0.0);
             }
+            self.starts.push(count);
         }
     }
 
     /// Reads the non-zeros of `matrix`ᵀ (the rows are its columns).
     pub fn set_transposed(&mut self, matrix: &DMatrix<f64>) {
         self.begin(matrix.nrows());
+        // Every entry is written and only a non-zero one kept (no branch):
+        // `entries` holds room for all of them.
+        if self.entries.len() < matrix.len() {
+            self.entries.resize(matrix.len(), (0, 0.0));
+        }
+        let mut count = 0;
         for column in matrix.column_iter() {
             for (i, &value) in column.iter().enumerate() {
-                if value != 0.0 {
-                    self.entries.push((i, value));
-                }
+                self.entries[count] = (i, value);
+                count += usize::from(value != 0.0);
             }
-            self.starts.push(self.entries.len());
+            self.starts.push(count);
         }
     }
 
     fn begin(&mut self, columns: usize) {
         self.columns = columns;
         self.starts.clear();
-        self.entries.clear();
         self.starts.push(0);
     }
 
@@ -862,13 +857,17 @@ pub fn mbf_smooth(
         let [product, outer] = &mut work;
         product.gemm(1.0, &information, &prior.covariance, 0.0);
         outer.gemm(1.0, &prior.covariance, product, 0.0);
+        let (p, q, smoothed) = (
+            prior.covariance.as_slice(),
+            outer.as_slice(),
+            into.covariance.as_mut_slice(),
+        );
         for j in 0..n {
             for i in 0..=j {
-                let value = 0.5
-                    * ((prior.covariance[(i, j)] - outer[(i, j)])
-                        + (prior.covariance[(j, i)] - outer[(j, i)]));
-                into.covariance[(i, j)] = value;
-                into.covariance[(j, i)] = value;
+                let (ij, ji) = (i + j * n, j + i * n);
+                let value = 0.5 * ((p[ij] - q[ij]) + (p[ji] - q[ji]));
+                smoothed[ij] = value;
+                smoothed[ji] = value;
             }
         }
         if k > 0 {
@@ -945,13 +944,17 @@ fn mbf_measurement(
     let [product, outer] = work;
     transposed.times_transposed(half, product);
     transposed.times_transposed(weighted, outer);
+    let (f, w, lambda) = (
+        product.as_slice(),
+        outer.as_slice(),
+        information.as_mut_slice(),
+    );
     for j in 0..n {
         for i in 0..=j {
-            let value = 0.5 * (outer[(i, j)] + outer[(j, i)])
-                + 0.5 * (information[(i, j)] + information[(j, i)])
-                - (product[(i, j)] + product[(j, i)]);
-            information[(i, j)] = value;
-            information[(j, i)] = value;
+            let (ij, ji) = (i + j * n, j + i * n);
+            let value = 0.5 * (w[ij] + w[ji]) + 0.5 * (lambda[ij] + lambda[ji]) - (f[ij] + f[ji]);
+            lambda[ij] = value;
+            lambda[ji] = value;
         }
     }
 }
