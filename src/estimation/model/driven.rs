@@ -1133,13 +1133,14 @@ pub(super) fn linearise(
 ) -> Jacobians {
     let mut buffers = LinearisationBuffers::default();
     linearise_with(model, x, controls, pseudo, states, outputs, &mut buffers);
-    let linearization = buffers.linearization.expect("made by linearise_with");
-    Jacobians {
-        rates_by_state: linearization.a,
-        rates_by_parameter: linearization.b,
-        outputs_by_state: linearization.gx,
-        outputs_by_parameter: linearization.gtheta,
-    }
+    let mut jacobians = Jacobians {
+        rates_by_state: DMatrix::zeros(0, 0),
+        rates_by_parameter: DMatrix::zeros(0, 0),
+        outputs_by_state: DMatrix::zeros(0, 0),
+        outputs_by_parameter: DMatrix::zeros(0, 0),
+    };
+    buffers.copy_into(&mut jacobians, None);
+    jacobians
 }
 
 /// The buffers of [`linearise`] kept between calls: the directions while
@@ -1148,8 +1149,7 @@ pub(super) fn linearise(
 /// for, and the linearisation's matrices.
 #[derive(Default)]
 pub(super) struct LinearisationBuffers {
-    directions: Option<(bool, Directions)>,
-    linearization: Option<Linearization>,
+    made: Option<(bool, Directions, Linearization)>,
 }
 
 /// [`linearise`] into `buffers` (the same numbers): the Jacobians are the
@@ -1166,9 +1166,12 @@ pub(super) fn linearise_with(
 ) {
     let aero = &model.aircraft.aero;
     let flag = aero.forces_depend_on_alpha_dot();
-    let reusable = matches!(&buffers.directions, Some((made_for, directions))
+    let reusable = matches!(&buffers.made, Some((made_for, directions, _))
         if *made_for == flag && directions.models.is_empty());
     if !reusable {
+        buffers.made = None;
+    }
+    let (_, directions, linearization) = buffers.made.get_or_insert_with(|| {
         let columns: Vec<Column> = (0..aero.parameters.values().len())
             .map(|i| match aero.term_of(i) {
                 Some(_) => Column::Term(i),
@@ -1176,14 +1179,9 @@ pub(super) fn linearise_with(
             })
             .collect();
         let directions = Directions::new(model, &columns, states, true);
-        buffers.linearization = Some(Linearization::new(&directions, outputs.len()));
-        buffers.directions = Some((flag, directions));
-    }
-    let (Some((_, directions)), Some(linearization)) =
-        (&buffers.directions, &mut buffers.linearization)
-    else {
-        unreachable!("both made above");
-    };
+        let linearization = Linearization::new(&directions, outputs.len());
+        (flag, directions, linearization)
+    });
     let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], (&[], None));
     linearization.at(model, directions, x, controls, pseudo, outputs, &mut memo);
 }
@@ -1192,7 +1190,7 @@ impl LinearisationBuffers {
     /// The last linearisation's ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ into `into`,
     /// and its outputs into `outputs` if given.
     pub(super) fn copy_into(&self, into: &mut Jacobians, outputs: Option<&mut DVector<f64>>) {
-        let Some(linearization) = &self.linearization else {
+        let Some((_, _, linearization)) = &self.made else {
             return;
         };
         let copy = |from: &DMatrix<f64>, to: &mut DMatrix<f64>| {
