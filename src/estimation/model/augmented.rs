@@ -6,7 +6,7 @@
 //! state is constant over a step (a pseudonoise on it enters only through
 //! the filter's process noise).
 
-use super::state_space::{Jacobians, StateSpaceModel};
+use super::state_space::{Jacobians, Scratch, StateSpaceModel};
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
@@ -18,6 +18,9 @@ pub struct Augmented<'a, M: StateSpaceModel + ?Sized> {
     base: &'a M,
     theta: Vec<f64>,
     augmented: Vec<usize>,
+    /// θ with the parameter states written in, and the base model's
+    /// Jacobians, kept between [`StateSpaceModel::jacobians_into`] calls.
+    scratch: Scratch<(Vec<f64>, Jacobians)>,
 }
 
 impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
@@ -42,6 +45,7 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
             base,
             theta: theta.to_vec(),
             augmented,
+            scratch: Scratch::default(),
         })
     }
 
@@ -57,6 +61,13 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
 
     /// Splits z into the base state and the full θ.
     fn split<'z>(&self, z: &'z [f64]) -> Result<(&'z [f64], Vec<f64>)> {
+        let mut theta = self.theta.clone();
+        let x = self.split_into(z, &mut theta)?;
+        Ok((x, theta))
+    }
+
+    /// The base state of z, with the full θ written into `theta`.
+    fn split_into<'z>(&self, z: &'z [f64], theta: &mut Vec<f64>) -> Result<&'z [f64]> {
         let n = self.base.state_count();
         if z.len() != n + self.augmented.len() {
             return Err(Error::Other(format!(
@@ -65,11 +76,11 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
                 n + self.augmented.len()
             )));
         }
-        let mut theta = self.theta.clone();
+        theta.clone_from(&self.theta);
         for (i, &j) in self.augmented.iter().enumerate() {
             theta[j] = z[n + i];
         }
-        Ok((&z[..n], theta))
+        Ok(&z[..n])
     }
 
     /// The columns of a base Jacobian for the augmented parameters.
@@ -136,6 +147,58 @@ impl<M: StateSpaceModel + ?Sized> StateSpaceModel for Augmented<'_, M> {
             outputs_by_state,
             outputs_by_parameter: DMatrix::zeros(outputs, 0),
         })
+    }
+
+    /// [`StateSpaceModel::jacobians`] from the base's
+    /// [`StateSpaceModel::jacobians_into`], in kept buffers.
+    fn jacobians_into(
+        &self,
+        t: f64,
+        z: &[f64],
+        _theta: &[f64],
+        into: &mut Jacobians,
+        outputs: Option<&mut DVector<f64>>,
+    ) -> Result<()> {
+        let empty = || Jacobians {
+            rates_by_state: DMatrix::zeros(0, 0),
+            rates_by_parameter: DMatrix::zeros(0, 0),
+            outputs_by_state: DMatrix::zeros(0, 0),
+            outputs_by_parameter: DMatrix::zeros(0, 0),
+        };
+        self.scratch.with(
+            || (Vec::new(), empty()),
+            |(theta, base)| {
+                let x = self.split_into(z, theta)?;
+                self.base.jacobians_into(t, x, theta, base, outputs)?;
+                let (n, size) = (x.len(), z.len());
+                let rows = base.outputs_by_state.nrows();
+                let shape = |matrix: &mut DMatrix<f64>, r: usize, c: usize| {
+                    if matrix.shape() != (r, c) {
+                        *matrix = DMatrix::zeros(r, c);
+                    }
+                };
+                shape(&mut into.rates_by_state, size, size);
+                shape(&mut into.rates_by_parameter, size, 0);
+                shape(&mut into.outputs_by_state, rows, size);
+                shape(&mut into.outputs_by_parameter, rows, 0);
+                into.rates_by_state.fill(0.0);
+                into.rates_by_state
+                    .view_mut((0, 0), (n, n))
+                    .copy_from(&base.rates_by_state);
+                into.outputs_by_state
+                    .view_mut((0, 0), (rows, n))
+                    .copy_from(&base.outputs_by_state);
+                for (i, &j) in self.augmented.iter().enumerate() {
+                    into.rates_by_state
+                        .view_mut((0, n + i), (n, 1))
+                        .copy_from(&base.rates_by_parameter.column(j));
+                    into.outputs_by_state
+                        .view_mut((0, n + i), (rows, 1))
+                        .copy_from(&base.outputs_by_parameter.column(j));
+                }
+                Ok(())
+            },
+        )
     }
 
     fn step(&self, k: usize, z: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {

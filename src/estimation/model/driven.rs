@@ -29,7 +29,7 @@ use crate::sim::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Kine
 use crate::sim::integrator::{Interpolation, affine, rk4_linear_step, rk4_step};
 use crate::sim::state::{self, CONTROL_COUNT, Control, Controls, SinCos};
 use crate::units::STANDARD_GRAVITY;
-use nalgebra::{DMatrix, SVector, Vector3};
+use nalgebra::{DMatrix, DVector, SVector, Vector3};
 use std::sync::OnceLock;
 
 pub const FLIGHT_PATH_SIZE: usize = 11;
@@ -1131,22 +1131,84 @@ pub(super) fn linearise(
     states: &[usize],
     outputs: &[Observable],
 ) -> Jacobians {
+    let mut buffers = LinearisationBuffers::default();
+    linearise_with(model, x, controls, pseudo, states, outputs, &mut buffers);
+    let mut jacobians = Jacobians {
+        rates_by_state: DMatrix::zeros(0, 0),
+        rates_by_parameter: DMatrix::zeros(0, 0),
+        outputs_by_state: DMatrix::zeros(0, 0),
+        outputs_by_parameter: DMatrix::zeros(0, 0),
+    };
+    buffers.copy_into(&mut jacobians, None);
+    jacobians
+}
+
+/// The buffers of [`linearise`] kept between calls: the directions while
+/// they do not depend on θ (no perturbed models: every parameter a term's,
+/// the forces affine in the coefficients), with the flag they were made
+/// for, and the linearisation's matrices.
+#[derive(Default)]
+pub(super) struct LinearisationBuffers {
+    made: Option<(bool, Directions, Linearization)>,
+}
+
+/// [`linearise`] into `buffers` (the same numbers): the Jacobians are the
+/// linearisation's `a`, `b`, `gx`, `gtheta` ([`LinearisationBuffers::copy_into`]),
+/// the outputs its values.
+pub(super) fn linearise_with(
+    model: &FlightModel,
+    x: &FlightPathState,
+    controls: &Controls,
+    pseudo: PseudoRates,
+    states: &[usize],
+    outputs: &[Observable],
+    buffers: &mut LinearisationBuffers,
+) {
     let aero = &model.aircraft.aero;
-    let columns: Vec<Column> = (0..aero.parameters.values().len())
-        .map(|i| match aero.term_of(i) {
-            Some(_) => Column::Term(i),
-            None => Column::Nonlinear(i),
-        })
-        .collect();
-    let directions = Directions::new(model, &columns, states, true);
-    let mut linearization = Linearization::new(&directions, outputs.len());
+    let flag = aero.forces_depend_on_alpha_dot();
+    let reusable = matches!(&buffers.made, Some((made_for, directions, _))
+        if *made_for == flag && directions.models.is_empty());
+    if !reusable {
+        buffers.made = None;
+    }
+    let (_, directions, linearization) = buffers.made.get_or_insert_with(|| {
+        let columns: Vec<Column> = (0..aero.parameters.values().len())
+            .map(|i| match aero.term_of(i) {
+                Some(_) => Column::Term(i),
+                None => Column::Nonlinear(i),
+            })
+            .collect();
+        let directions = Directions::new(model, &columns, states, true);
+        let linearization = Linearization::new(&directions, outputs.len());
+        (flag, directions, linearization)
+    });
     let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], (&[], None));
-    linearization.at(model, &directions, x, controls, pseudo, outputs, &mut memo);
-    Jacobians {
-        rates_by_state: linearization.a,
-        rates_by_parameter: linearization.b,
-        outputs_by_state: linearization.gx,
-        outputs_by_parameter: linearization.gtheta,
+    linearization.at(model, directions, x, controls, pseudo, outputs, &mut memo);
+}
+
+impl LinearisationBuffers {
+    /// The last linearisation's ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ into `into`,
+    /// and its outputs into `outputs` if given.
+    pub(super) fn copy_into(&self, into: &mut Jacobians, outputs: Option<&mut DVector<f64>>) {
+        let Some((_, _, linearization)) = &self.made else {
+            return;
+        };
+        let copy = |from: &DMatrix<f64>, to: &mut DMatrix<f64>| {
+            if to.shape() != from.shape() {
+                *to = DMatrix::zeros(from.nrows(), from.ncols());
+            }
+            to.copy_from(from);
+        };
+        copy(&linearization.a, &mut into.rates_by_state);
+        copy(&linearization.b, &mut into.rates_by_parameter);
+        copy(&linearization.gx, &mut into.outputs_by_state);
+        copy(&linearization.gtheta, &mut into.outputs_by_parameter);
+        if let Some(outputs) = outputs {
+            if outputs.len() != linearization.outputs.len() {
+                *outputs = DVector::zeros(linearization.outputs.len());
+            }
+            outputs.copy_from_slice(&linearization.outputs);
+        }
     }
 }
 

@@ -22,7 +22,8 @@
 //! it takes them). How those are made fast stays in [`super::driven`].
 
 use super::driven::{
-    self, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, Observable, PseudoRates,
+    self, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, LinearisationBuffers, Observable,
+    PseudoRates,
 };
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
@@ -32,6 +33,7 @@ use crate::sim::dynamics::FlightModel;
 use crate::sim::integrator::Interpolation;
 use crate::sim::state::{Control, Controls};
 use nalgebra::{DMatrix, DVector};
+use std::sync::Mutex;
 
 /// The Jacobians of a state-space model at one point (t, x, θ).
 #[derive(Debug, Clone, PartialEq)]
@@ -292,6 +294,71 @@ pub trait StateSpaceModel {
     /// The state at grid point k + 1 after one integration step from x at
     /// grid point k.
     fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>>;
+    /// [`StateSpaceModel::jacobians`] written into `into`, and with
+    /// `outputs` [`StateSpaceModel::outputs`] into it, the same numbers: a
+    /// filter's step keeps the buffers, so that a model that can (the
+    /// driven view, the augmented model) neither allocates nor evaluates h
+    /// apart from its linearisation. The default calls the two.
+    fn jacobians_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut Jacobians,
+        outputs: Option<&mut DVector<f64>>,
+    ) -> Result<()> {
+        if let Some(outputs) = outputs {
+            *outputs = self.outputs(t, x, theta)?;
+        }
+        *into = self.jacobians(t, x, theta)?;
+        Ok(())
+    }
+    /// [`StateSpaceModel::step`] written into `into`. The default calls it.
+    fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
+        *into = self.step(k, x, theta)?;
+        Ok(())
+    }
+}
+
+/// Buffers a model reuses between calls behind a lock (a flight model with
+/// θ written in, a linearisation's matrices): a call that finds them in
+/// use, by another thread, works on fresh ones. A clone starts empty.
+pub(crate) struct Scratch<T>(Mutex<Option<T>>);
+
+impl<T> Default for Scratch<T> {
+    fn default() -> Self {
+        Scratch(Mutex::new(None))
+    }
+}
+
+impl<T> Clone for Scratch<T> {
+    fn clone(&self) -> Self {
+        Scratch::default()
+    }
+}
+
+impl<T> std::fmt::Debug for Scratch<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Scratch")
+    }
+}
+
+impl<T> Scratch<T> {
+    /// `f` on the buffers (`make` makes them the first time, or when they
+    /// are in use).
+    pub(crate) fn with<R>(&self, make: impl FnOnce() -> T, f: impl FnOnce(&mut T) -> R) -> R {
+        match self.0.try_lock() {
+            Ok(mut buffers) => f(buffers.get_or_insert_with(make)),
+            Err(_) => f(&mut make()),
+        }
+    }
+}
+
+/// A copy of a view's flight model with θ written in, and the buffers of
+/// its linearisation.
+struct ModelScratch {
+    model: FlightModel,
+    linearisation: LinearisationBuffers,
 }
 
 /// The state-space view of a nonlinear postulated model driven by a
@@ -311,6 +378,7 @@ pub struct DrivenStateSpace {
     /// The flight-path states in x.
     states: Vec<usize>,
     mask: FlightPathState,
+    scratch: Scratch<ModelScratch>,
 }
 
 /// Times within this fraction of a step of a grid point or of a step's
@@ -339,6 +407,7 @@ impl DrivenStateSpace {
             outputs,
             states,
             mask,
+            scratch: Scratch::default(),
         })
     }
 
@@ -406,6 +475,14 @@ impl DrivenStateSpace {
     /// or one that changes which states are integrated (the stall model's
     /// χ is a state only while τ1 > 0).
     pub(crate) fn model_at(&self, theta: &[f64]) -> Result<FlightModel> {
+        let mut model = self.model.clone();
+        self.write_parameters(&mut model, theta)?;
+        Ok(model)
+    }
+
+    /// Writes θ into `model` (a copy of the view's): the checks of
+    /// [`DrivenStateSpace::model_at`].
+    fn write_parameters(&self, model: &mut FlightModel, theta: &[f64]) -> Result<()> {
         let count = self.parameter_count();
         if theta.len() != count {
             return Err(Error::Other(format!(
@@ -413,20 +490,39 @@ impl DrivenStateSpace {
                 theta.len()
             )));
         }
-        let mut model = self.model.clone();
         model
             .aircraft
             .aero
             .parameters
             .values_mut()
             .copy_from_slice(theta);
-        if self.simulation.mask(&model) != self.mask {
+        if self.simulation.mask(model) != self.mask {
             return Err(Error::Other(
                 "θ changes which states the model integrates (χ is a state only while τ1 > 0)"
                     .into(),
             ));
         }
-        Ok(model)
+        Ok(())
+    }
+
+    /// `f` on the model at θ ([`DrivenStateSpace::model_at`]) and the
+    /// linearisation's buffers, from the view's scratch: θ is written into
+    /// a kept copy of the model instead of a fresh clone.
+    fn with_model<R>(
+        &self,
+        theta: &[f64],
+        f: impl FnOnce(&FlightModel, &mut LinearisationBuffers) -> R,
+    ) -> Result<R> {
+        self.scratch.with(
+            || ModelScratch {
+                model: self.model.clone(),
+                linearisation: LinearisationBuffers::default(),
+            },
+            |scratch| {
+                self.write_parameters(&mut scratch.model, theta)?;
+                Ok(f(&scratch.model, &mut scratch.linearisation))
+            },
+        )
     }
 
     /// The full flight-path state with x in its integrated entries and
@@ -470,21 +566,11 @@ impl DrivenStateSpace {
         Ok((k, if k == last { 0.0 } else { position - k as f64 }))
     }
 
-    /// The full state, the model at θ and the inputs at t.
-    fn point(
-        &self,
-        t: f64,
-        x: &[f64],
-        theta: &[f64],
-    ) -> Result<(FlightPathState, FlightModel, Controls, PseudoRates)> {
+    /// The full state and the inputs at t.
+    fn point(&self, t: f64, x: &[f64]) -> Result<(FlightPathState, Controls, PseudoRates)> {
         let (k, fraction) = self.locate(t)?;
         let (measured, controls, pseudo) = self.simulation.inputs_at(k, fraction);
-        Ok((
-            self.full(x, &measured)?,
-            self.model_at(theta)?,
-            controls,
-            pseudo,
-        ))
+        Ok((self.full(x, &measured)?, controls, pseudo))
     }
 }
 
@@ -512,14 +598,18 @@ impl StateSpaceModel for DrivenStateSpace {
     /// The flight-path rates of the integrated states ([`super::driven`]'s
     /// module header gives the equations).
     fn rates(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
-        let (full, model, controls, pseudo) = self.point(t, x, theta)?;
-        let (rates, _) = driven::evaluate(&model, &full, &controls, pseudo, &[]);
+        let (full, controls, pseudo) = self.point(t, x)?;
+        let (rates, _) = self.with_model(theta, |model, _| {
+            driven::evaluate(model, &full, &controls, pseudo, &[])
+        })?;
         Ok(self.state_of(&rates))
     }
 
     fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
-        let (full, model, controls, pseudo) = self.point(t, x, theta)?;
-        let (_, outputs) = driven::evaluate(&model, &full, &controls, pseudo, &self.outputs);
+        let (full, controls, pseudo) = self.point(t, x)?;
+        let (_, outputs) = self.with_model(theta, |model, _| {
+            driven::evaluate(model, &full, &controls, pseudo, &self.outputs)
+        })?;
         Ok(DVector::from_vec(outputs))
     }
 
@@ -531,15 +621,36 @@ impl StateSpaceModel for DrivenStateSpace {
     /// parameter's (e, the stall parameters) a central difference of step
     /// 10⁻⁵·max(|θ|, 10⁻²).
     fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
-        let (full, model, controls, pseudo) = self.point(t, x, theta)?;
-        Ok(driven::linearise(
-            &model,
-            &full,
-            &controls,
-            pseudo,
-            &self.states,
-            &self.outputs,
-        ))
+        let (full, controls, pseudo) = self.point(t, x)?;
+        self.with_model(theta, |model, _| {
+            driven::linearise(model, &full, &controls, pseudo, &self.states, &self.outputs)
+        })
+    }
+
+    /// The linearisation of [`StateSpaceModel::jacobians`] in the view's
+    /// kept buffers, its outputs the linearisation's values (the
+    /// evaluation's: the dual numbers' values are the f64 ones).
+    fn jacobians_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut Jacobians,
+        outputs: Option<&mut DVector<f64>>,
+    ) -> Result<()> {
+        let (full, controls, pseudo) = self.point(t, x)?;
+        self.with_model(theta, |model, buffers| {
+            driven::linearise_with(
+                model,
+                &full,
+                &controls,
+                pseudo,
+                &self.states,
+                &self.outputs,
+                buffers,
+            );
+            buffers.copy_into(into, outputs);
+        })
     }
 
     /// One RK4 step (the project's integrator, [`crate::sim::integrator`])
@@ -556,12 +667,13 @@ impl StateSpaceModel for DrivenStateSpace {
                 simulation.len()
             )));
         }
-        let model = self.model_at(theta)?;
-        let full = self.full(x, &simulation.measured()[k])?;
-        driven::check_departure(&full, simulation.time(k)).map_err(Error::Other)?;
-        let next = simulation.step_plain(&model, k, &full);
-        driven::check_departure(&next, simulation.time(k + 1)).map_err(Error::Other)?;
-        Ok(self.state_of(&next))
+        self.with_model(theta, |model, _| {
+            let full = self.full(x, &simulation.measured()[k])?;
+            driven::check_departure(&full, simulation.time(k)).map_err(Error::Other)?;
+            let next = simulation.step_plain(model, k, &full);
+            driven::check_departure(&next, simulation.time(k + 1)).map_err(Error::Other)?;
+            Ok(self.state_of(&next))
+        })?
     }
 }
 

@@ -33,8 +33,10 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
-use crate::estimation::model::state_space::StateSpaceModel;
-use crate::estimation::solver::kalman::{self, Gaussian, Measured};
+use crate::estimation::model::state_space::{Jacobians, StateSpaceModel};
+use crate::estimation::solver::kalman::{
+    self, Exponential, Gaussian, Measured, SparseRows, UpdateWorkspace, resize,
+};
 use nalgebra::{DMatrix, DVector};
 
 /// The filter's noise: continuous process-noise spectral density over the
@@ -64,31 +66,114 @@ impl Discretisation {
         noise: &DMatrix<f64>,
         h: f64,
     ) -> (DMatrix<f64>, DMatrix<f64>) {
-        match self {
+        let mut time_update = TimeUpdate::default();
+        let has_noise = time_update.discretise(self, a, noise, h);
+        let n = a.nrows();
+        let process = if has_noise {
+            time_update.process_noise
+        } else {
+            DMatrix::zeros(n, n)
+        };
+        (time_update.transition, process)
+    }
+}
+
+/// The buffers of a time update: Φ, Q_d, their makings and Φ's non-zeros.
+#[derive(Debug, Clone, Default)]
+struct TimeUpdate {
+    transition: DMatrix<f64>,
+    process_noise: DMatrix<f64>,
+    sparse: SparseRows,
+    scaled: DMatrix<f64>,
+    exponential: Exponential,
+    work: [DMatrix<f64>; 2],
+}
+
+impl TimeUpdate {
+    /// Φ into `transition` and its non-zeros into `sparse`, Q_d into
+    /// `process_noise`; false when there is no process noise (Q_d = 0,
+    /// `process_noise` not written).
+    fn discretise(
+        &mut self,
+        discretisation: Discretisation,
+        a: &DMatrix<f64>,
+        noise: &DMatrix<f64>,
+        h: f64,
+    ) -> bool {
+        let n = a.nrows();
+        let has_noise = noise.iter().any(|&v| v != 0.0);
+        match discretisation {
             Discretisation::Exact => {
-                let n = a.nrows();
-                // Without process noise Q_d = 0: Van Loan's second
-                // exponential is skipped.
-                let process = noise.iter().any(|&v| v != 0.0).then_some(noise);
-                let discrete = kalman::discretise(a, &DMatrix::zeros(n, 0), process, h);
-                (discrete.transition, discrete.process_noise)
+                if has_noise {
+                    // Van Loan's second exponential ([`kalman::discretise`]).
+                    let discrete = kalman::discretise(a, &DMatrix::zeros(n, 0), Some(noise), h);
+                    self.transition = discrete.transition;
+                    self.process_noise = discrete.process_noise;
+                } else {
+                    self.scaled.clone_from(a);
+                    self.scaled *= h;
+                    self.exponential.of(&self.scaled, &mut self.transition);
+                }
+                self.sparse.set(&self.transition);
             }
             Discretisation::SecondOrder => {
-                let n = a.nrows();
-                let ah = a * h;
-                let mut transition = &ah * &ah * 0.5;
-                transition += &ah;
-                for i in 0..n {
-                    transition[(i, i)] += 1.0;
+                // A·h by its non-zeros; Φ = I + A·h + ½·(A·h)², (A·h)² = (Bᵀ·Bᵀ)ᵀ
+                // with B = A·h.
+                self.scaled.clone_from(a);
+                self.scaled *= h;
+                self.sparse.set(&self.scaled);
+                let [product, transposed] = &mut self.work;
+                resize(transposed, n, n);
+                self.scaled.transpose_to(transposed);
+                self.sparse.times_transposed(transposed, product);
+                resize(&mut self.transition, n, n);
+                let (phi, squared, b) = (
+                    self.transition.as_mut_slice(),
+                    product.as_slice(),
+                    self.scaled.as_slice(),
+                );
+                for j in 0..n {
+                    for i in 0..n {
+                        phi[i + j * n] = squared[j + i * n] * 0.5 + b[i + j * n];
+                    }
+                    phi[j + j * n] += 1.0;
                 }
-                let aq = a * noise;
-                let mut q = &aq * a.transpose() * (h * h * h / 3.0);
-                q += (&aq + aq.transpose()) * (h * h / 2.0);
-                q += noise * h;
-                let q = (&q + q.transpose()) * 0.5;
-                (transition, q)
+                if has_noise {
+                    // A·Q_c = (Q_cᵀ·Aᵀ)ᵀ and A·Q_c·Aᵀ = (A·Q_c)·Aᵀ by A's
+                    // non-zeros.
+                    self.sparse.set(a);
+                    resize(transposed, n, n);
+                    noise.transpose_to(transposed);
+                    self.sparse.times_transposed(transposed, product);
+                    product.transpose_to(transposed);
+                    self.sparse.times_transposed(transposed, product);
+                    // transposed = A·Q_c, product = A·Q_c·Aᵀ.
+                    resize(&mut self.process_noise, n, n);
+                    let (q, outer, aq, noise) = (
+                        self.process_noise.as_mut_slice(),
+                        product.as_slice(),
+                        transposed.as_slice(),
+                        noise.as_slice(),
+                    );
+                    for j in 0..n {
+                        for i in 0..n {
+                            q[i + j * n] = outer[i + j * n] * (h * h * h / 3.0)
+                                + (aq[i + j * n] + aq[j + i * n]) * (h * h / 2.0)
+                                + noise[i + j * n] * h;
+                        }
+                    }
+                    for j in 0..n {
+                        for i in 0..j {
+                            let mean = (q[i + j * n] + q[j + i * n]) * 0.5;
+                            q[i + j * n] = mean;
+                            q[j + i * n] = mean;
+                        }
+                    }
+                }
+                self.sparse.set(&self.transition);
             }
         }
+        has_noise
     }
 }
 
@@ -152,20 +237,36 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     let mut pass = Pass::with_capacity(len, model.output_count());
     let mut state = initial.mean;
     let mut covariance = initial.covariance;
+    let mut time_update = TimeUpdate::default();
+    let mut update_workspace = UpdateWorkspace::default();
+    let mut linearised = Jacobians {
+        rates_by_state: DMatrix::zeros(0, 0),
+        rates_by_parameter: DMatrix::zeros(0, 0),
+        outputs_by_state: DMatrix::zeros(0, 0),
+        outputs_by_parameter: DMatrix::zeros(0, 0),
+    };
+    let mut predicted = DVector::zeros(0);
     for k in 0..len {
         let t = model.time(k);
         if k > 0 {
             let previous = model.time(k - 1);
-            let a = model
-                .jacobians(previous, state.as_slice(), theta)?
-                .rates_by_state;
-            let (transition, process_noise) =
-                discretisation.transition_and_noise(&a, &noise.process, t - previous);
+            model.jacobians_into(previous, state.as_slice(), theta, &mut linearised, None)?;
+            let has_noise = time_update.discretise(
+                discretisation,
+                &linearised.rates_by_state,
+                &noise.process,
+                t - previous,
+            );
             state = model
                 .step(k - 1, state.as_slice(), theta)
                 .map_err(|e| at_time(e, previous))?;
-            covariance = kalman::predict_covariance(&covariance, &transition, &process_noise);
-            pass.transitions.push(transition);
+            kalman::predict_covariance_in_place(
+                &mut covariance,
+                &time_update.sparse,
+                has_noise.then_some(&time_update.process_noise),
+                &mut time_update.work,
+            );
+            pass.transitions.push(time_update.transition.clone());
         }
         pass.predicted.push(Gaussian {
             mean: state.clone(),
@@ -176,19 +277,29 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
             pass.measured.push(None);
         } else {
             let rows: Vec<usize> = present.iter().map(|&(o, _)| o).collect();
-            let predicted = model.outputs(t, state.as_slice(), theta)?;
-            let h = model
-                .jacobians(t, state.as_slice(), theta)?
-                .outputs_by_state
-                .select_rows(&rows);
+            model.jacobians_into(
+                t,
+                state.as_slice(),
+                theta,
+                &mut linearised,
+                Some(&mut predicted),
+            )?;
+            let h = linearised.outputs_by_state.select_rows(&rows);
             let r = DMatrix::from_diagonal(&DVector::from_iterator(
                 rows.len(),
                 rows.iter().map(|&o| noise.measurement[o]),
             ));
             let innovation =
                 DVector::from_iterator(rows.len(), present.iter().map(|&(o, z)| z - predicted[o]));
-            let update = kalman::update(&mut state, &mut covariance, &h, &r, innovation)
-                .map_err(|e| at_time(e, t))?;
+            let update = kalman::update_with(
+                &mut state,
+                &mut covariance,
+                &h,
+                &r,
+                innovation,
+                &mut update_workspace,
+            )
+            .map_err(|e| at_time(e, t))?;
             pass.measured_at(
                 k,
                 present,

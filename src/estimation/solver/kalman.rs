@@ -54,43 +54,131 @@ const TAYLOR_TERMS: usize = 18;
 /// e^M by scaling and squaring (see the module header). When M's last r
 /// rows are zero, M = [[X, Y], [0, 0]] (a discretisation's input block, an
 /// augmented model's parameter rows), e^M = [[e^X, φ₁(X)·Y], [0, I]] is
-/// computed on the blocks: the same scaling, terms and squarings, each
-/// product O(k²·(k + r)) for the k leading rows instead of O((k + r)³).
+/// computed on the blocks ([`Exponential::of`]): the series and squarings
+/// of e^X and φ₁(X) on k × k matrices, then one product with Y, instead
+/// of O((k + r)³) products.
 pub fn exponential(matrix: &DMatrix<f64>) -> DMatrix<f64> {
-    let n = matrix.nrows();
-    let norm = matrix.iter().map(|v| v.abs()).fold(0.0, f64::max) * n as f64;
-    let squarings = if norm > 0.5 {
-        (norm / 0.5).log2().ceil() as i32
-    } else {
-        0
-    };
-    let zero_rows = (0..n)
-        .rev()
-        .take_while(|&i| matrix.row(i).iter().all(|&v| v == 0.0))
-        .count();
-    let k = n - zero_rows;
-    let scale = 2f64.powi(-squarings);
-    let x = matrix.view((0, 0), (k, k)) * scale;
-    let y = matrix.view((0, k), (k, n - k)) * scale;
-    // Taylor series of [[X, Y], [0, 0]]: the k-th term is
-    // [[X^k/k!, X^(k−1)·Y/k!], [0, 0]].
-    let mut top_left = DMatrix::identity(k, k);
-    let mut top_right = DMatrix::zeros(k, n - k);
-    let mut term = DMatrix::identity(k, k);
-    for j in 1..=TAYLOR_TERMS {
-        top_right += &term * &y / j as f64;
-        term = &term * &x / j as f64;
-        top_left += &term;
-    }
-    // [[E, F], [0, I]]² = [[E², E·F + F], [0, I]].
-    for _ in 0..squarings {
-        top_right = &top_left * &top_right + &top_right;
-        top_left = &top_left * &top_left;
-    }
-    let mut result = DMatrix::identity(n, n);
-    result.view_mut((0, 0), (k, k)).copy_from(&top_left);
-    result.view_mut((0, k), (k, n - k)).copy_from(&top_right);
+    let mut result = DMatrix::zeros(0, 0);
+    Exponential::default().of(matrix, &mut result);
     result
+}
+
+/// The buffers of [`exponential`], kept between calls so that a filter's
+/// step takes the exponential without allocating.
+#[derive(Debug, Clone, Default)]
+pub struct Exponential {
+    x: DMatrix<f64>,
+    top_left: DMatrix<f64>,
+    /// φ₁ of the scaled X, squared along with e^X.
+    phi: DMatrix<f64>,
+    term: DMatrix<f64>,
+    product: DMatrix<f64>,
+}
+
+impl Exponential {
+    /// e^`matrix` into `into` ([`exponential`]). With M = [[X, Y], [0, 0]]
+    /// (r trailing zero rows) the series and the squarings run on k × k
+    /// matrices only: the top-right block is linear in Y,
+    /// [[E, Φ₁·Y], [0, I]]² = [[E², (E·Φ₁ + Φ₁)·Y], [0, I]], so
+    /// φ₁(X) = Σ Xʲ/(j + 1)! is squared along with e^X and multiplies Y
+    /// once at the end; the scaling is X's alone (Y does not enter the
+    /// series' convergence).
+    pub fn of(&mut self, matrix: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+        let n = matrix.nrows();
+        let zero_rows = (0..n)
+            .rev()
+            .take_while(|&i| matrix.row(i).iter().all(|&v| v == 0.0))
+            .count();
+        let k = n - zero_rows;
+        let r = n - k;
+        let x = matrix.view((0, 0), (k, k));
+        let norm = x.iter().map(|v| v.abs()).fold(0.0, f64::max) * k as f64;
+        let squarings = if norm > 0.5 {
+            (norm / 0.5).log2().ceil() as i32
+        } else {
+            0
+        };
+        let scale = 2f64.powi(-squarings);
+        resize(&mut self.x, k, k);
+        self.x.copy_from(&x);
+        self.x *= scale;
+        // Taylor series: E = Σ_{j ≤ 18} Xʲ/j!, Φ₁ = Σ_{j < 18} Xʲ/(j + 1)!.
+        resize(&mut self.top_left, k, k);
+        self.top_left.fill_with_identity();
+        resize(&mut self.phi, k, k);
+        self.phi.fill(0.0);
+        resize(&mut self.term, k, k);
+        self.term.fill_with_identity();
+        for j in 1..=TAYLOR_TERMS {
+            let j = j as f64;
+            for (phi, &term) in self.phi.iter_mut().zip(self.term.iter()) {
+                *phi += term / j;
+            }
+            multiply(&self.term, &self.x, &mut self.product);
+            for ((term, left), &p) in self
+                .term
+                .iter_mut()
+                .zip(self.top_left.iter_mut())
+                .zip(self.product.iter())
+            {
+                *term = p / j;
+                *left += *term;
+            }
+        }
+        // [[E, Φ₁], [0, I]]² = [[E², E·Φ₁ + Φ₁], [0, I]].
+        for _ in 0..squarings {
+            multiply(&self.top_left, &self.phi, &mut self.product);
+            for (into, &p) in self.phi.iter_mut().zip(self.product.iter()) {
+                *into += p;
+            }
+            multiply(&self.top_left, &self.top_left, &mut self.product);
+            std::mem::swap(&mut self.top_left, &mut self.product);
+        }
+        resize(into, n, n);
+        into.fill_with_identity();
+        into.view_mut((0, 0), (k, k)).copy_from(&self.top_left);
+        // The top-right block: Φ₁·(Y·2⁻ˢ).
+        for c in 0..r {
+            for i in 0..k {
+                let mut sum = 0.0;
+                for j in 0..k {
+                    sum += self.phi[(i, j)] * (matrix[(j, k + c)] * scale);
+                }
+                into[(i, k + c)] = sum;
+            }
+        }
+    }
+}
+
+/// Gives `matrix` the shape rows × columns (allocating only when it
+/// changes).
+pub(crate) fn resize(matrix: &mut DMatrix<f64>, rows: usize, columns: usize) {
+    if matrix.shape() != (rows, columns) {
+        *matrix = DMatrix::zeros(rows, columns);
+    }
+}
+
+/// `into` = a·b, in place, column by column (for the small matrices of
+/// the exponential's series).
+fn multiply(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+    let rows = a.nrows();
+    resize(into, rows, b.ncols());
+    if rows == 0 {
+        return;
+    }
+    let a = a.as_slice();
+    for (column, b) in into
+        .as_mut_slice()
+        .chunks_exact_mut(rows)
+        .zip(b.column_iter())
+    {
+        column.fill(0.0);
+        for (&factor, a) in b.iter().zip(a.chunks_exact(rows)) {
+            for (into, &a) in column.iter_mut().zip(a) {
+                *into += factor * a;
+            }
+        }
+    }
 }
 
 /// A linear system over one step: x_{k+1} = Φ·x_k + Γ·u_k + w_k,
@@ -177,7 +265,153 @@ pub fn predict_covariance(
     transition: &DMatrix<f64>,
     process_noise: &DMatrix<f64>,
 ) -> DMatrix<f64> {
-    transition * covariance * transition.transpose() + process_noise
+    let mut predicted = covariance.clone();
+    let noise = process_noise
+        .iter()
+        .any(|&v| v != 0.0)
+        .then_some(process_noise);
+    predict_covariance_in_place(
+        &mut predicted,
+        &SparseRows::of(transition),
+        noise,
+        &mut Default::default(),
+    );
+    predicted
+}
+
+/// A matrix's non-zero entries row by row, so that products with it skip
+/// its zeros: an augmented model's transition (its parameter rows are rows
+/// of the identity), the Gauss–Markov chains' rows, an observation's unit
+/// rows. Rebuilt in place ([`SparseRows::set`]) without allocating once
+/// its storage has grown.
+#[derive(Debug, Clone, Default)]
+pub struct SparseRows {
+    columns: usize,
+    /// Row i's entries (column, value) are `entries[starts[i]..starts[i + 1]]`
+    /// (`entries` may hold more, unused).
+    starts: Vec<usize>,
+    entries: Vec<(usize, f64)>,
+}
+
+impl SparseRows {
+    /// The non-zeros of `matrix`.
+    pub fn of(matrix: &DMatrix<f64>) -> SparseRows {
+        let mut sparse = SparseRows::default();
+        sparse.set(matrix);
+        sparse
+    }
+
+    /// Reads the non-zeros of `matrix`.
+    pub fn set(&mut self, matrix: &DMatrix<f64>) {
+        let (rows, columns) = matrix.shape();
+        self.begin(columns);
+        // Every entry is written and only a non-zero one kept (no branch):
+        // `entries` holds room for all of them.
+        if self.entries.len() < matrix.len() {
+            self.entries.resize(matrix.len(), (0, 0.0));
+        }
+        let values = matrix.as_slice();
+        let mut count = 0;
+        for i in 0..rows {
+            for j in 0..columns {
+                let value = values[i + j * rows];
+                self.entries[count] = (j, value);
+                count += usize::from(value != 0.0);
+            }
+            self.starts.push(count);
+        }
+    }
+
+    /// Reads the non-zeros of `matrix`ᵀ (the rows are its columns).
+    pub fn set_transposed(&mut self, matrix: &DMatrix<f64>) {
+        self.begin(matrix.nrows());
+        // Every entry is written and only a non-zero one kept (no branch):
+        // `entries` holds room for all of them.
+        if self.entries.len() < matrix.len() {
+            self.entries.resize(matrix.len(), (0, 0.0));
+        }
+        let mut count = 0;
+        for column in matrix.column_iter() {
+            for (i, &value) in column.iter().enumerate() {
+                self.entries[count] = (i, value);
+                count += usize::from(value != 0.0);
+            }
+            self.starts.push(count);
+        }
+    }
+
+    fn begin(&mut self, columns: usize) {
+        self.columns = columns;
+        self.starts.clear();
+        self.starts.push(0);
+    }
+
+    /// The number of rows.
+    pub fn rows(&self) -> usize {
+        self.starts.len().saturating_sub(1)
+    }
+
+    /// Row i's non-zeros (column, value).
+    pub fn row(&self, i: usize) -> &[(usize, f64)] {
+        &self.entries[self.starts[i]..self.starts[i + 1]]
+    }
+
+    /// `into` = x·Sᵀ (x with as many columns as S, `into` x's rows × S's
+    /// rows): column i of `into` is Σ_j S_ij·(column j of x), a sum over
+    /// row i's non-zeros only.
+    pub fn times_transposed(&self, x: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+        debug_assert_eq!(x.ncols(), self.columns);
+        let rows = x.nrows();
+        resize(into, rows, self.rows());
+        if rows == 0 {
+            return;
+        }
+        let x = x.as_slice();
+        let into = into.as_mut_slice();
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                for (i, column) in into.chunks_exact_mut(rows).enumerate() {
+                    column.fill(0.0);
+                    for &(j, value) in self.row(i) {
+                        let source = &x[j * rows..(j + 1) * rows];
+                        for (into, &x) in column.iter_mut().zip(source) {
+                            *into += value * x;
+                        }
+                    }
+                }
+            },
+        )
+    }
+}
+
+/// P ← Φ·P·Φᵀ + Q_d (`process_noise`; None: zero) in place, Φ by its
+/// non-zeros: U = P·Φᵀ and Φ·U = (Uᵀ·Φᵀ)ᵀ, each O(nnz(Φ)·n) instead of
+/// O(n³), symmetrised; `work` holds U and Uᵀ.
+pub fn predict_covariance_in_place(
+    covariance: &mut DMatrix<f64>,
+    transition: &SparseRows,
+    process_noise: Option<&DMatrix<f64>>,
+    work: &mut [DMatrix<f64>; 2],
+) {
+    let [product, transposed] = work;
+    transition.times_transposed(covariance, product);
+    resize(transposed, product.ncols(), product.nrows());
+    product.transpose_to(transposed);
+    transition.times_transposed(transposed, product);
+    let n = product.nrows();
+    resize(covariance, n, n);
+    let (p, f) = (covariance.as_mut_slice(), product.as_slice());
+    for j in 0..n {
+        for i in 0..=j {
+            let value = 0.5 * (f[i + j * n] + f[j + i * n]);
+            p[i + j * n] = value;
+            p[j + i * n] = value;
+        }
+    }
+    if let Some(noise) = process_noise {
+        *covariance += noise;
+    }
 }
 
 /// What a measurement update used and produced.
@@ -216,27 +450,121 @@ pub fn update(
     noise: &DMatrix<f64>,
     innovation: DVector<f64>,
 ) -> Result<Update> {
+    update_with(
+        state,
+        covariance,
+        observation,
+        noise,
+        innovation,
+        &mut UpdateWorkspace::default(),
+    )
+}
+
+/// The buffers of a measurement update ([`update_with`]).
+#[derive(Debug, Clone, Default)]
+pub struct UpdateWorkspace {
+    observation: SparseRows,
+    /// M = P·Hᵀ.
+    cross: DMatrix<f64>,
+    /// E = M − ½·K·S.
+    half: DMatrix<f64>,
+    /// K·Eᵀ.
+    product: DMatrix<f64>,
+}
+
+/// [`update`] with its buffers in `workspace`. Joseph's form
+/// P⁺ = (I − K·H)·P·(I − K·H)ᵀ + K·R·Kᵀ expanded with M = P·Hᵀ and
+/// S = H·M + R: P⁺ = P − K·Mᵀ − M·Kᵀ + K·S·Kᵀ = P − (K·Eᵀ + E·Kᵀ),
+/// E = M − ½·K·S, products with H over its non-zeros: O(n²·m) for m
+/// outputs instead of O(n³), the same matrix to rounding for any gain.
+pub fn update_with(
+    state: &mut DVector<f64>,
+    covariance: &mut DMatrix<f64>,
+    observation: &DMatrix<f64>,
+    noise: &DMatrix<f64>,
+    innovation: DVector<f64>,
+    workspace: &mut UpdateWorkspace,
+) -> Result<Update> {
     let n = state.len();
-    let ph = &*covariance * observation.transpose();
-    let s = observation * &ph + noise;
-    let s = (&s + s.transpose()) * 0.5;
+    let m = observation.nrows();
+    let UpdateWorkspace {
+        observation: sparse,
+        cross,
+        half,
+        product,
+    } = workspace;
+    sparse.set(observation);
+    sparse.times_transposed(covariance, cross);
+    let mut s = noise.clone();
+    for p in 0..m {
+        let column = cross.column(p);
+        for o in 0..m {
+            s[(o, p)] += sparse
+                .row(o)
+                .iter()
+                .map(|&(j, h)| h * column[j])
+                .sum::<f64>();
+        }
+    }
+    for p in 0..m {
+        for o in 0..p {
+            let mean = 0.5 * (s[(o, p)] + s[(p, o)]);
+            s[(o, p)] = mean;
+            s[(p, o)] = mean;
+        }
+    }
     let cholesky = Cholesky::new(s.clone()).ok_or_else(|| {
         Error::Other(
             "the innovation covariance H·P·Hᵀ + R is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
         )
     })?;
     let inverse = cholesky.inverse();
-    let gain = &ph * &inverse;
-    *state += &gain * &innovation;
-    let reduce = DMatrix::identity(n, n) - &gain * observation;
-    let joseph = &reduce * &*covariance * reduce.transpose() + &gain * noise * gain.transpose();
-    *covariance = (&joseph + joseph.transpose()) * 0.5;
+    let gain = &*cross * &inverse;
+    state.gemv(1.0, &gain, &innovation, 1.0);
+    resize(half, n, m);
+    half.copy_from(cross);
+    half.gemm(-0.5, &gain, &s, 1.0);
+    // K·Eᵀ, column by column.
+    resize(product, n, n);
+    if n > 0 {
+        let (gain_values, half_values) = (gain.as_slice(), half.as_slice());
+        let product = product.as_mut_slice();
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                for (c, column) in product.chunks_exact_mut(n).enumerate() {
+                    column.fill(0.0);
+                    for o in 0..m {
+                        let factor = half_values[o * n + c];
+                        let source = &gain_values[o * n..(o + 1) * n];
+                        for (into, &k) in column.iter_mut().zip(source) {
+                            *into += factor * k;
+                        }
+                    }
+                }
+            },
+        );
+    }
+    symmetric_difference(covariance, product);
     Ok(Update {
         innovation,
         innovation_covariance: s,
         innovation_inverse: inverse,
         gain,
     })
+}
+
+/// P ← ½·(P + Pᵀ) − (F + Fᵀ), both n × n.
+fn symmetric_difference(covariance: &mut DMatrix<f64>, product: &DMatrix<f64>) {
+    let n = covariance.nrows();
+    let (p, f) = (covariance.as_mut_slice(), product.as_slice());
+    for j in 0..n {
+        for i in 0..=j {
+            let value = 0.5 * (p[i + j * n] + p[j + i * n]) - (f[i + j * n] + f[j + i * n]);
+            p[i + j * n] = value;
+            p[j + i * n] = value;
+        }
+    }
 }
 
 /// The steady state of a time-invariant filter.
@@ -476,6 +804,11 @@ pub struct Measured {
 /// pass: `predicted[k]` = (x, P)_{k|k−1} (at k = 0 the initial estimate),
 /// `measured[k]` the update at k if there was one, `transitions[k]` = Φ
 /// from k to k + 1. Returns (x, P)_{k|N}.
+///
+/// The products skip the zeros of Φ and H, and the measurement's term
+/// (I − K·H)ᵀ·Λ·(I − K·H) is expanded with G = Λ·K, C = Kᵀ·G and
+/// E = G − ½·Hᵀ·C as Λ − (E·H + Hᵀ·Eᵀ) (O(n²·m) for m outputs); only
+/// P·Λ·P is a product of two dense n × n matrices.
 pub fn mbf_smooth(
     predicted: &[Gaussian],
     measured: &[Option<Measured>],
@@ -489,31 +822,148 @@ pub fn mbf_smooth(
     let mut adjoint = DVector::zeros(n);
     let mut information = DMatrix::zeros(n, n);
     let mut smoothed = predicted.to_vec();
+    let (mut observation, mut transposed, mut transition) = (
+        SparseRows::default(),
+        SparseRows::default(),
+        SparseRows::default(),
+    );
+    let mut work = [DMatrix::zeros(n, n), DMatrix::zeros(n, n)];
+    let (mut weighted, mut by_gain, mut half) = (
+        DMatrix::zeros(0, 0),
+        DMatrix::zeros(0, 0),
+        DMatrix::zeros(0, 0),
+    );
+    let mut reduced = DVector::zeros(0);
     for k in (0..len).rev() {
         if let Some(Measured {
-            observation,
+            observation: h,
             update,
         }) = &measured[k]
         {
-            let reduce = DMatrix::identity(n, n) - &update.gain * observation;
-            let weighted = observation.transpose() * &update.innovation_inverse;
-            adjoint = -&weighted * &update.innovation + reduce.transpose() * &adjoint;
-            information = &weighted * observation + reduce.transpose() * &information * &reduce;
+            mbf_measurement(
+                h,
+                update,
+                &mut adjoint,
+                &mut information,
+                (&mut observation, &mut transposed),
+                (&mut weighted, &mut by_gain, &mut half, &mut reduced),
+                &mut work,
+            );
         }
         let prior = &predicted[k];
-        let mean = &prior.mean - &prior.covariance * &adjoint;
-        let covariance = &prior.covariance - &prior.covariance * &information * &prior.covariance;
-        smoothed[k] = Gaussian {
-            mean,
-            covariance: (&covariance + covariance.transpose()) * 0.5,
-        };
+        let into = &mut smoothed[k];
+        into.mean.copy_from(&prior.mean);
+        into.mean.gemv(-1.0, &prior.covariance, &adjoint, 1.0);
+        let [product, outer] = &mut work;
+        product.gemm(1.0, &information, &prior.covariance, 0.0);
+        outer.gemm(1.0, &prior.covariance, product, 0.0);
+        let (p, q, smoothed) = (
+            prior.covariance.as_slice(),
+            outer.as_slice(),
+            into.covariance.as_mut_slice(),
+        );
+        for j in 0..n {
+            for i in 0..=j {
+                let (ij, ji) = (i + j * n, j + i * n);
+                let value = 0.5 * ((p[ij] - q[ij]) + (p[ji] - q[ji]));
+                smoothed[ij] = value;
+                smoothed[ji] = value;
+            }
+        }
         if k > 0 {
+            // λ ← Φᵀ·λ, Λ ← Φᵀ·Λ·Φ = (Zᵀ·Φ)ᵀ with Z = Λ·Φ, by Φ's columns.
             let phi = &transitions[k - 1];
-            adjoint = phi.transpose() * &adjoint;
-            information = phi.transpose() * &information * phi;
+            transition.set_transposed(phi);
+            adjoint = phi.tr_mul(&adjoint);
+            transition.times_transposed(&information, product);
+            product.transpose_to(outer);
+            transition.times_transposed(outer, &mut information);
         }
     }
     smoothed
+}
+
+/// The modified Bryson–Frazier smoother's step at a measurement:
+/// λ ← −Hᵀ·S⁻¹·ν + λ − Hᵀ·(Kᵀ·λ) and
+/// Λ ← Hᵀ·S⁻¹·H + Λ − (E·H + Hᵀ·Eᵀ) ([`mbf_smooth`]).
+fn mbf_measurement(
+    h: &DMatrix<f64>,
+    update: &Update,
+    adjoint: &mut DVector<f64>,
+    information: &mut DMatrix<f64>,
+    (observation, transposed): (&mut SparseRows, &mut SparseRows),
+    (weighted, by_gain, half, reduced): (
+        &mut DMatrix<f64>,
+        &mut DMatrix<f64>,
+        &mut DMatrix<f64>,
+        &mut DVector<f64>,
+    ),
+    work: &mut [DMatrix<f64>; 2],
+) {
+    let n = adjoint.len();
+    let m = h.nrows();
+    let gain = &update.gain;
+    observation.set(h);
+    transposed.set_transposed(h);
+    // Hᵀ·v for an m-vector v, over H's non-zeros.
+    let h_transposed_times = |v: &[f64], into: &mut [f64]| {
+        for (i, into) in into.iter_mut().enumerate() {
+            *into = transposed
+                .row(i)
+                .iter()
+                .map(|&(o, value)| value * v[o])
+                .sum();
+        }
+    };
+    // W = Hᵀ·S⁻¹ (S⁻¹ symmetric: column p is Hᵀ·(column p of S⁻¹)).
+    resize(weighted, n, m);
+    for p in 0..m {
+        let column = update.innovation_inverse.column(p);
+        let mut into = weighted.column_mut(p);
+        h_transposed_times(column.as_slice(), into.as_mut_slice());
+    }
+    // λ ← −W·ν + λ − Hᵀ·(Kᵀ·λ).
+    let gain_adjoint = gain.tr_mul(adjoint);
+    resize_vector(reduced, n);
+    h_transposed_times(gain_adjoint.as_slice(), reduced.as_mut_slice());
+    *adjoint -= &*reduced;
+    adjoint.gemv(-1.0, weighted, &update.innovation, 1.0);
+    // G = Λ·K, C = Kᵀ·G, E = G − ½·Hᵀ·C.
+    resize(by_gain, n, m);
+    by_gain.gemm(1.0, information, gain, 0.0);
+    let c = gain.tr_mul(by_gain);
+    resize(half, n, m);
+    half.copy_from(by_gain);
+    resize_vector(reduced, n);
+    for p in 0..m {
+        let column = c.column(p);
+        h_transposed_times(column.as_slice(), reduced.as_mut_slice());
+        half.column_mut(p).axpy(-0.5, &*reduced, 1.0);
+    }
+    // Λ ← W·H + Λ − (E·H + (E·H)ᵀ).
+    let [product, outer] = work;
+    transposed.times_transposed(half, product);
+    transposed.times_transposed(weighted, outer);
+    let (f, w, lambda) = (
+        product.as_slice(),
+        outer.as_slice(),
+        information.as_mut_slice(),
+    );
+    for j in 0..n {
+        for i in 0..=j {
+            let (ij, ji) = (i + j * n, j + i * n);
+            let value = 0.5 * (w[ij] + w[ji]) + 0.5 * (lambda[ij] + lambda[ji]) - (f[ij] + f[ji]);
+            lambda[ij] = value;
+            lambda[ji] = value;
+        }
+    }
+}
+
+/// Gives `vector` the length `len` (allocating only when it changes).
+fn resize_vector(vector: &mut DVector<f64>, len: usize) {
+    if vector.len() != len {
+        *vector = DVector::zeros(len);
+    }
 }
 
 /// The scaled unscented transform's parameters (Wan & van der Merwe 2000).
