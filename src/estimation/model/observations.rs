@@ -79,8 +79,9 @@ impl Observations {
     pub fn note(&self, step: f64) -> Option<String> {
         (self.moved > 0).then(|| {
             format!(
-                "{} samples lie off the {step} s grid and were compared with the model at the nearest grid point",
-                self.moved
+                "{} samples lie off the {} s grid and were compared with the model at the nearest grid point",
+                self.moved,
+                crate::record::rounded(step)
             )
         })
     }
