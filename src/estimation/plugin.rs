@@ -378,11 +378,25 @@ impl Plugin {
         // waits for that report until the time limit.
         let group = libc::pid_t::try_from(child.id()).ok();
         let (sender, receiver) = std::sync::mpsc::channel();
-        let waiter = std::thread::spawn(move || {
-            let status = child.wait();
-            let _ = sender.send(());
-            status
-        });
+        let waiter = std::thread::Builder::new()
+            .name(format!("plug-in {}", self.name))
+            .spawn(move || {
+                let status = child.wait();
+                let _ = sender.send(());
+                status
+            })
+            .map_err(|e| {
+                if let Some(group) = group.filter(|&g| g > 1) {
+                    // SAFETY: killpg only sends a signal; it touches no memory.
+                    unsafe {
+                        libc::killpg(group, libc::SIGKILL);
+                    }
+                }
+                Error::Other(format!(
+                    "plug-in {}: no thread to wait for it ({e}): killed",
+                    self.name
+                ))
+            })?;
         let limit = Duration::from_secs_f64(self.time_limit);
         let timed_out = matches!(
             receiver.recv_timeout(limit),
@@ -391,8 +405,8 @@ impl Plugin {
         if timed_out {
             // The whole process group (a shell's children too), by the
             // system call: the group is the child's own (process_group(0)
-            // above), never aeroid's. The child is not yet reaped (the
-            // waiter has not reported), so its pid is still its group's.
+            // above), never aeroid's. Had the child ended in the instant
+            // between, the signal finds at most its leftover children.
             if let Some(group) = group.filter(|&g| g > 1) {
                 // SAFETY: killpg only sends a signal; it touches no memory.
                 unsafe {
