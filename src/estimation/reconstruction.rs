@@ -92,13 +92,18 @@ pub enum AngularAccelerations {
 /// The channels of measured angular accelerations.
 const ANGULAR_ACCELERATION_CHANNELS: [&str; 3] = ["p_dot", "q_dot", "r_dot"];
 
+/// Whether the record has all three measured angular accelerations.
+fn has_angular_accelerations(record: &FlightRecord) -> bool {
+    ANGULAR_ACCELERATION_CHANNELS
+        .iter()
+        .all(|name| record.channel(name).is_ok())
+}
+
 impl AngularAccelerations {
     /// Whether `record`'s measured angular accelerations are used.
     fn measured(self, record: &FlightRecord) -> bool {
         match self {
-            AngularAccelerations::Auto => ANGULAR_ACCELERATION_CHANNELS
-                .iter()
-                .all(|name| record.channel(name).is_ok()),
+            AngularAccelerations::Auto => has_angular_accelerations(record),
             AngularAccelerations::Measured => true,
             AngularAccelerations::Differentiated => false,
         }
@@ -428,10 +433,8 @@ pub fn reconstruct(
             "angular accelerations: the record's p_dot, q_dot, r_dot (`angular_accelerations = \"differentiated\"` differentiates the rates instead)".into(),
         );
     }
-    let has_accelerations = ANGULAR_ACCELERATION_CHANNELS
-        .iter()
-        .all(|name| record.channel(name).is_ok());
-    if !measured_accelerations && derivatives.contains_key("p") && has_accelerations {
+    if !measured_accelerations && derivatives.contains_key("p") && has_angular_accelerations(record)
+    {
         reconstruction.notes.push(
             "the record has p_dot, q_dot, r_dot: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates".into(),
         );
