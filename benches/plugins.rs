@@ -1,6 +1,7 @@
 //! The plug-in protocol's overhead: one round trip of a plug-in that does
 //! nothing (write the problem and the record folder, start `sh`, read its
-//! estimate back) on the ATTAS lateral record (60 s at 25 Hz).
+//! estimate back) on the ATTAS lateral record (60 s at 25 Hz), and its two
+//! writes alone.
 
 use aeroid::estimation::estimator::Estimator;
 use aeroid::estimation::plugin::Plugin;
@@ -49,6 +50,22 @@ fn round_trip(c: &mut Criterion) {
     });
     c.bench_function("plugin round trip (no-op, problem.json only)", |b| {
         b.iter(|| json_only.estimate(&problem, None).unwrap())
+    });
+    // The two writes of the round trip alone, each into a new file as in a
+    // work folder (rewriting a file in place costs a flush on ext4).
+    let problem_path = folder.join("problem.json");
+    c.bench_function("plugin problem.json written (ATTAS lateral record)", |b| {
+        b.iter(|| {
+            let _ = std::fs::remove_file(&problem_path);
+            problem.write_json(&problem_path).unwrap()
+        })
+    });
+    let record_folder = folder.join("record-0");
+    c.bench_function("plugin record folder written (ATTAS lateral record)", |b| {
+        b.iter(|| {
+            let _ = std::fs::remove_dir_all(&record_folder);
+            problem.records[0].write(&record_folder).unwrap()
+        })
     });
     let _ = std::fs::remove_dir_all(&folder);
 }

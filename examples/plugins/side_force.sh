@@ -8,7 +8,8 @@
 #   CY_beta = Σ β·z / Σ β²,  σ² = Σ e²/(N − 1),  σ(CY_beta) = √(σ²/Σ β²),
 #
 # with p̂ = p·b/(2V), r̂ = r·b/(2V). It reads problem.json (pretty-printed
-# by aeroid: one key per line) and the record folder record-0/, and
+# by aeroid: one key per line, an array of numbers on one line) and the
+# record folder record-0/, and
 # refuses any other free parameter. Usage (by aeroid): side_force.sh WORK
 set -eu
 work=$1

@@ -265,9 +265,7 @@ impl Plugin {
     fn run(&self, problem: &EstimationProblem) -> Result<Estimate> {
         let started = Instant::now();
         let work = WorkFolder::new(self.name)?;
-        let json = problem.to_json()?;
-        let problem_path = work.path.join("problem.json");
-        std::fs::write(&problem_path, json).map_err(|e| write_error(&problem_path, e))?;
+        problem.write_json(&work.path.join("problem.json"))?;
         if self.record_folders {
             for (k, record) in problem.records.iter().enumerate() {
                 let folder = work.path.join(format!("record-{k}"));

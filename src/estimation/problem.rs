@@ -113,9 +113,33 @@ impl EstimationProblem {
 
     /// The problem as JSON (see the module documentation).
     pub fn to_json(&self) -> Result<String> {
-        let document = Document::of(self);
-        serde_json::to_string_pretty(&document)
+        let mut text = Vec::new();
+        self.serialize_into(&mut text)
+            .map_err(|e| Error::Other(format!("estimation problem as JSON: {e}")))?;
+        String::from_utf8(text)
             .map_err(|e| Error::Other(format!("estimation problem as JSON: {e}")))
+    }
+
+    /// Writes the JSON of [`EstimationProblem::to_json`] to `writer`: the
+    /// document through serde, its records (the samples, most of it) by
+    /// [`write_records`] as its last key.
+    fn serialize_into<W: std::io::Write>(&self, mut writer: W) -> serde_json::Result<()> {
+        let samples: usize = self
+            .records
+            .iter()
+            .flat_map(|r| &r.channels)
+            .map(|c| 2 * c.times.len())
+            .sum();
+        let mut text = Vec::with_capacity(16_384 + 24 * samples);
+        let mut serializer = serde_json::Serializer::with_formatter(&mut text, Layout::default());
+        Document::of(self).serialize(&mut serializer)?;
+        // The document without records ends in its closing "\n}".
+        let end = text.len() - b"\n}".len();
+        text.truncate(end);
+        text.extend_from_slice(b",\n  \"records\": ");
+        write_records(&self.records, 1, &mut text);
+        text.extend_from_slice(b"\n}");
+        writer.write_all(&text).map_err(serde_json::Error::io)
     }
 
     /// Reads a problem written by [`EstimationProblem::to_json`]; `origin`
@@ -157,7 +181,7 @@ impl EstimationProblem {
         if document.records.is_empty() {
             return Err(Error::Other(format!("{}: no record", origin.display())));
         }
-        for record in &document.records {
+        for record in document.records.iter() {
             record.validate(origin)?;
         }
         Ok(EstimationProblem {
@@ -168,11 +192,18 @@ impl EstimationProblem {
         })
     }
 
+    /// Writes [`EstimationProblem::to_json`] into the file `path`.
     pub fn write_json(&self, path: &Path) -> Result<()> {
-        std::fs::write(path, self.to_json()?).map_err(|source| Error::Io {
+        let io = |source: std::io::Error| Error::Io {
             path: path.to_path_buf(),
             source,
-        })
+        };
+        let mut writer = std::fs::File::create(path).map_err(io)?;
+        self.serialize_into(&mut writer).map_err(|e| match e.io_error_kind() {
+            Some(kind) => io(std::io::Error::new(kind, e.to_string())),
+            None => Error::Other(format!("estimation problem as JSON: {e}")),
+        })?;
+        std::io::Write::flush(&mut writer).map_err(io)
     }
 
     pub fn read_json(path: &Path) -> Result<EstimationProblem> {
@@ -244,7 +275,8 @@ impl ModelDocument {
     }
 }
 
-/// The JSON form.
+/// The JSON form. Its records are written by [`write_records`], after the
+/// rest.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Document {
@@ -260,6 +292,7 @@ struct Document {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     aircraft: Option<AircraftView>,
     model: ModelDocument,
+    #[serde(skip_serializing)]
     records: Vec<FlightRecord>,
 }
 
@@ -315,6 +348,7 @@ fn value_text<T: Serialize>(value: &T) -> String {
 }
 
 impl Document {
+    /// The problem's document without its records.
     fn of(problem: &EstimationProblem) -> Document {
         let structure = &problem.structure;
         let (integrate, pseudo_controls, aircraft) = match structure {
@@ -335,7 +369,7 @@ impl Document {
             outputs: structure.outputs().to_vec(),
             aircraft,
             model: ModelDocument::of(structure),
-            records: problem.records.clone(),
+            records: Vec::new(),
         }
     }
 
@@ -360,5 +394,375 @@ impl Document {
                 upper: finite(bounds[i].1),
             })
             .collect()
+    }
+}
+
+/// serde_json's pretty layout (one key or value per line, two-space
+/// indent), except that an array of numbers (and nulls: dropouts) stands on
+/// one line: `"times": [0, 0.04, 0.08]`. Line-oriented readers still find
+/// every key on a line of its own; a record's samples take a line per
+/// array instead of one per number.
+#[derive(Default)]
+struct Layout {
+    /// Open arrays and objects, innermost last.
+    open: Vec<Open>,
+    /// A value of the innermost array is about to start (`true`: the first).
+    pending: Option<bool>,
+}
+
+struct Open {
+    /// An array of numbers on one line (decided by its first value).
+    inline: bool,
+    has_value: bool,
+}
+
+impl Layout {
+    const INDENT: &'static [u8] = b"  ";
+
+    fn newline<W: ?Sized + std::io::Write>(&self, writer: &mut W) -> std::io::Result<()> {
+        writer.write_all(b"\n")?;
+        for _ in 0..self.open.len() {
+            writer.write_all(Self::INDENT)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the separator of a pending array value; `number`: the value
+    /// is a number or null.
+    fn start_value<W: ?Sized + std::io::Write>(
+        &mut self,
+        writer: &mut W,
+        number: bool,
+    ) -> std::io::Result<()> {
+        let Some(first) = self.pending.take() else {
+            return Ok(());
+        };
+        let Some(array) = self.open.last_mut() else {
+            return Ok(());
+        };
+        if first {
+            array.inline = number;
+        }
+        match (array.inline, first) {
+            (true, true) => Ok(()),
+            (true, false) => writer.write_all(b", "),
+            (false, first) => {
+                if !first {
+                    writer.write_all(b",")?;
+                }
+                self.newline(writer)
+            }
+        }
+    }
+
+    fn open<W: ?Sized + std::io::Write>(
+        &mut self,
+        writer: &mut W,
+        bracket: &[u8],
+    ) -> std::io::Result<()> {
+        self.start_value(writer, false)?;
+        self.open.push(Open {
+            inline: false,
+            has_value: false,
+        });
+        writer.write_all(bracket)
+    }
+
+    fn close<W: ?Sized + std::io::Write>(
+        &mut self,
+        writer: &mut W,
+        bracket: &[u8],
+    ) -> std::io::Result<()> {
+        let open = self.open.pop();
+        if open.is_some_and(|o| o.has_value && !o.inline) {
+            self.newline(writer)?;
+        }
+        writer.write_all(bracket)
+    }
+}
+
+/// A scalar's writer: the pending separator first, then serde_json's own.
+macro_rules! scalar {
+    ($($name:ident($($arg:ident: $ty:ty),*) $number:expr;)*) => {$(
+        fn $name<W: ?Sized + std::io::Write>(&mut self, writer: &mut W $(, $arg: $ty)*) -> std::io::Result<()> {
+            self.start_value(writer, $number)?;
+            serde_json::ser::CompactFormatter.$name(writer $(, $arg)*)
+        }
+    )*};
+}
+
+impl serde_json::ser::Formatter for Layout {
+    scalar! {
+        write_null() true;
+        write_bool(value: bool) false;
+        write_i8(value: i8) true;
+        write_i16(value: i16) true;
+        write_i32(value: i32) true;
+        write_i64(value: i64) true;
+        write_i128(value: i128) true;
+        write_u8(value: u8) true;
+        write_u16(value: u16) true;
+        write_u32(value: u32) true;
+        write_u64(value: u64) true;
+        write_u128(value: u128) true;
+        write_f32(value: f32) true;
+        write_f64(value: f64) true;
+        write_number_str(value: &str) true;
+        begin_string() false;
+        write_byte_array(value: &[u8]) false;
+        write_raw_fragment(fragment: &str) false;
+    }
+
+    fn begin_array<W: ?Sized + std::io::Write>(&mut self, writer: &mut W) -> std::io::Result<()> {
+        self.open(writer, b"[")
+    }
+
+    fn end_array<W: ?Sized + std::io::Write>(&mut self, writer: &mut W) -> std::io::Result<()> {
+        self.close(writer, b"]")
+    }
+
+    fn begin_array_value<W: ?Sized + std::io::Write>(
+        &mut self,
+        _writer: &mut W,
+        first: bool,
+    ) -> std::io::Result<()> {
+        self.pending = Some(first);
+        Ok(())
+    }
+
+    fn end_array_value<W: ?Sized + std::io::Write>(
+        &mut self,
+        _writer: &mut W,
+    ) -> std::io::Result<()> {
+        if let Some(open) = self.open.last_mut() {
+            open.has_value = true;
+        }
+        Ok(())
+    }
+
+    fn begin_object<W: ?Sized + std::io::Write>(&mut self, writer: &mut W) -> std::io::Result<()> {
+        self.open(writer, b"{")
+    }
+
+    fn end_object<W: ?Sized + std::io::Write>(&mut self, writer: &mut W) -> std::io::Result<()> {
+        self.close(writer, b"}")
+    }
+
+    fn begin_object_key<W: ?Sized + std::io::Write>(
+        &mut self,
+        writer: &mut W,
+        first: bool,
+    ) -> std::io::Result<()> {
+        if !first {
+            writer.write_all(b",")?;
+        }
+        self.newline(writer)
+    }
+
+    fn begin_object_value<W: ?Sized + std::io::Write>(
+        &mut self,
+        writer: &mut W,
+    ) -> std::io::Result<()> {
+        writer.write_all(b": ")
+    }
+
+    fn end_object_value<W: ?Sized + std::io::Write>(
+        &mut self,
+        _writer: &mut W,
+    ) -> std::io::Result<()> {
+        if let Some(open) = self.open.last_mut() {
+            open.has_value = true;
+        }
+        Ok(())
+    }
+}
+
+/// `records` as JSON in [`Layout`]'s layout, `depth` levels in (written
+/// by hand: a problem's samples are most of its JSON). The text equals
+/// serde's serialisation of the records with [`Layout`] byte for byte (a
+/// test checks it); a channel's times equal to the channel's before are
+/// copied as text.
+fn write_records(records: &[FlightRecord], depth: usize, out: &mut Vec<u8>) {
+    fn newline(out: &mut Vec<u8>, depth: usize) {
+        out.push(b'\n');
+        for _ in 0..depth {
+            out.extend_from_slice(Layout::INDENT);
+        }
+    }
+    fn string(out: &mut Vec<u8>, text: &str) {
+        // Writing a string into a Vec cannot fail.
+        let _ = serde_json::to_writer(&mut *out, text);
+    }
+    fn number(out: &mut Vec<u8>, digits: &mut zmij::Buffer, value: f64) {
+        if value.is_finite() {
+            out.extend_from_slice(digits.format_finite(value).as_bytes());
+        } else {
+            out.extend_from_slice(b"null");
+        }
+    }
+    fn numbers(out: &mut Vec<u8>, digits: &mut zmij::Buffer, values: &[f64]) {
+        out.push(b'[');
+        for (k, &value) in values.iter().enumerate() {
+            if k > 0 {
+                out.extend_from_slice(b", ");
+            }
+            number(out, digits, value);
+        }
+        out.push(b']');
+    }
+    fn key(out: &mut Vec<u8>, depth: usize, first: bool, name: &str) {
+        if !first {
+            out.push(b',');
+        }
+        newline(out, depth);
+        string(out, name);
+        out.extend_from_slice(b": ");
+    }
+    let mut digits = zmij::Buffer::new();
+    if records.is_empty() {
+        out.extend_from_slice(b"[]");
+        return;
+    }
+    out.push(b'[');
+    for (r, record) in records.iter().enumerate() {
+        if r > 0 {
+            out.push(b',');
+        }
+        newline(out, depth + 1);
+        out.push(b'{');
+        let inner = depth + 2;
+        key(out, inner, true, "scenario");
+        string(out, &record.scenario);
+        key(out, inner, false, "seed");
+        match record.seed {
+            Some(seed) => out.extend_from_slice(seed.to_string().as_bytes()),
+            None => out.extend_from_slice(b"null"),
+        }
+        key(out, inner, false, "profile");
+        string(out, &record.profile);
+        key(out, inner, false, "absent");
+        if record.absent.is_empty() {
+            out.extend_from_slice(b"[]");
+        } else {
+            out.push(b'[');
+            for (k, name) in record.absent.iter().enumerate() {
+                if k > 0 {
+                    out.push(b',');
+                }
+                newline(out, inner + 1);
+                string(out, name);
+            }
+            newline(out, inner);
+            out.push(b']');
+        }
+        key(out, inner, false, "channels");
+        if record.channels.is_empty() {
+            out.extend_from_slice(b"[]");
+        } else {
+            out.push(b'[');
+            let mut times: Option<(&[f64], std::ops::Range<usize>)> = None;
+            for (c, channel) in record.channels.iter().enumerate() {
+                if c > 0 {
+                    out.push(b',');
+                }
+                newline(out, inner + 1);
+                out.push(b'{');
+                let fields = inner + 2;
+                key(out, fields, true, "name");
+                string(out, &channel.name);
+                key(out, fields, false, "unit");
+                string(out, &channel.unit);
+                key(out, fields, false, "rate");
+                number(out, &mut digits, channel.rate);
+                key(out, fields, false, "resolution");
+                match channel.resolution {
+                    Some(resolution) => number(out, &mut digits, resolution),
+                    None => out.extend_from_slice(b"null"),
+                }
+                key(out, fields, false, "source");
+                string(out, &channel.source);
+                key(out, fields, false, "times");
+                match &times {
+                    Some((previous, text)) if *previous == channel.times.as_slice() => {
+                        out.extend_from_within(text.clone());
+                    }
+                    _ => {
+                        let start = out.len();
+                        numbers(out, &mut digits, &channel.times);
+                        times = Some((&channel.times, start..out.len()));
+                    }
+                }
+                key(out, fields, false, "values");
+                numbers(out, &mut digits, &channel.values);
+                newline(out, inner + 1);
+                out.push(b'}');
+            }
+            newline(out, inner);
+            out.push(b']');
+        }
+        newline(out, depth + 1);
+        out.push(b'}');
+    }
+    newline(out, depth);
+    out.push(b']');
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::Channel;
+
+    /// The hand-written records equal serde's, with dropouts, an unset
+    /// resolution and seed, absent quantities, shared and own time bases.
+    #[test]
+    fn records_are_written_as_serde_writes_them() {
+        let channel = |name: &str, times: Vec<f64>, values: Vec<f64>| Channel {
+            name: name.into(),
+            unit: "rad/s".into(),
+            rate: 25.0,
+            resolution: Some(0.01),
+            source: "profile \"x\", p".into(),
+            times,
+            values,
+        };
+        let base = vec![0.0, 0.04, 0.08];
+        let first = FlightRecord {
+            scenario: "a \u{3b1} scenario".into(),
+            seed: Some(u64::MAX),
+            profile: "flight-test-25hz".into(),
+            absent: vec!["p".into(), "q".into()],
+            channels: vec![
+                channel("p", base.clone(), vec![1.0, f64::NAN, -2.5e-7]),
+                channel("q", base.clone(), vec![0.1, 0.2, 0.30000000000000004]),
+                channel("r", vec![0.01, 1.0], vec![3.0, 1e300]),
+                Channel {
+                    resolution: None,
+                    ..channel("roll", base.clone(), vec![-0.0, 0.0, 2.0])
+                },
+            ],
+        };
+        let second = FlightRecord {
+            seed: None,
+            absent: Vec::new(),
+            channels: vec![channel("beta", vec![0.5], vec![f64::NAN])],
+            ..first.clone()
+        };
+        for records in [vec![], vec![first.clone()], vec![first, second]] {
+            let mut serde = Vec::new();
+            let mut serializer = serde_json::Serializer::with_formatter(&mut serde, Layout {
+                open: vec![Open {
+                    inline: false,
+                    has_value: true,
+                }],
+                pending: None,
+            });
+            records.serialize(&mut serializer).unwrap();
+            let mut ours = Vec::new();
+            write_records(&records, 1, &mut ours);
+            assert_eq!(
+                String::from_utf8(ours).unwrap(),
+                String::from_utf8(serde).unwrap()
+            );
+        }
     }
 }

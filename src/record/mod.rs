@@ -479,23 +479,33 @@ impl FlightRecord {
     }
 
     fn write_time_base(&self, path: &Path, members: &[usize]) -> Result<()> {
-        let io_error = |e: csv::Error| crate::error::write_error(path, e);
-        let mut writer = csv::Writer::from_path(path).map_err(io_error)?;
-        let header = std::iter::once(TIME_HEADER.to_string())
-            .chain(members.iter().map(|&i| self.channels[i].header()));
-        writer.write_record(header).map_err(io_error)?;
+        // The header through the csv crate (quoting), the rows by hand:
+        // a row is numbers and empty cells, which need no quoting.
+        let mut header = csv::Writer::from_writer(Vec::new());
+        header
+            .write_record(
+                std::iter::once(TIME_HEADER.to_string())
+                    .chain(members.iter().map(|&i| self.channels[i].header())),
+            )
+            .map_err(|e| crate::error::write_error(path, e))?;
+        let mut text = header
+            .into_inner()
+            .map_err(|e| crate::error::write_error(path, e.into_error()))?;
         let times = &self.channels[members[0]].times;
-        let mut text = String::new();
-        for (k, time) in times.iter().enumerate() {
-            write_cell(&mut writer, &mut text, *time).map_err(io_error)?;
+        text.reserve(times.len() * (members.len() + 1) * 20);
+        let mut digits = zmij::Buffer::new();
+        for (k, &time) in times.iter().enumerate() {
+            text.extend_from_slice(shortest(&mut digits, time).as_bytes());
             for &i in members {
-                write_cell(&mut writer, &mut text, self.channels[i].values[k]).map_err(io_error)?;
+                text.push(b',');
+                let value = self.channels[i].values[k];
+                if !value.is_nan() {
+                    text.extend_from_slice(shortest(&mut digits, value).as_bytes());
+                }
             }
-            writer.write_record(None::<&[u8]>).map_err(io_error)?;
+            text.push(b'\n');
         }
-        writer
-            .flush()
-            .map_err(|e| crate::error::write_error(path, e))
+        std::fs::write(path, text).map_err(|e| crate::error::write_error(path, e))
     }
 
     /// The `aeroid inspect` table: every channel with its unit, rate,
@@ -659,17 +669,12 @@ pub fn unwrap_angles(angles: &mut [f64]) {
 
 /// One CSV field of a sample: the shortest text that reads back as the
 /// same number, empty for NaN (a missing sample); `text` is a reused buffer.
-fn write_cell<W: std::io::Write>(
-    writer: &mut csv::Writer<W>,
-    text: &mut String,
-    value: f64,
-) -> csv::Result<()> {
-    use std::fmt::Write as _;
-    text.clear();
-    if !value.is_nan() {
-        let _ = write!(text, "{value}");
-    }
-    writer.write_field(text.as_bytes())
+/// The shortest text that reads back as `value` exactly (Schubfach, the
+/// zmij crate), with integral values written without ".0" ("0", "-0",
+/// "4877"); large and small magnitudes in exponent form ("8.9e-5").
+pub(crate) fn shortest(digits: &mut zmij::Buffer, value: f64) -> &str {
+    let text = digits.format(value);
+    text.strip_suffix(".0").unwrap_or(text)
 }
 
 /// A channel name must be usable as a CSV header and file name.
