@@ -41,7 +41,14 @@ pub fn run(args: Args) -> Result<()> {
     let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
     let report = aeroid::eval::run::run(&scenario, &profile)?;
     let truth = match report.truth.kind {
-        aeroid::sim::truth::TruthKind::Exact => format!("{:?} model", report.truth.model),
+        aeroid::sim::truth::TruthKind::Exact => format!(
+            "exact, the parameters {} flew ({})",
+            report.truth.aircraft,
+            match report.truth.model {
+                aeroid::sim::aero::ModelKind::Linear => "linear aerodynamics",
+                aeroid::sim::aero::ModelKind::Stall => "quasi-steady stall aerodynamics",
+            }
+        ),
         aeroid::sim::truth::TruthKind::LocalDerivative => {
             format!("local derivatives of {} at trim", report.truth.aircraft)
         }

@@ -199,10 +199,11 @@ impl EstimationProblem {
             source,
         };
         let mut writer = std::fs::File::create(path).map_err(io)?;
-        self.serialize_into(&mut writer).map_err(|e| match e.io_error_kind() {
-            Some(kind) => io(std::io::Error::new(kind, e.to_string())),
-            None => Error::Other(format!("estimation problem as JSON: {e}")),
-        })?;
+        self.serialize_into(&mut writer)
+            .map_err(|e| match e.io_error_kind() {
+                Some(kind) => io(std::io::Error::new(kind, e.to_string())),
+                None => Error::Other(format!("estimation problem as JSON: {e}")),
+            })?;
         std::io::Write::flush(&mut writer).map_err(io)
     }
 
@@ -749,13 +750,16 @@ mod tests {
         };
         for records in [vec![], vec![first.clone()], vec![first, second]] {
             let mut serde = Vec::new();
-            let mut serializer = serde_json::Serializer::with_formatter(&mut serde, Layout {
-                open: vec![Open {
-                    inline: false,
-                    has_value: true,
-                }],
-                pending: None,
-            });
+            let mut serializer = serde_json::Serializer::with_formatter(
+                &mut serde,
+                Layout {
+                    open: vec![Open {
+                        inline: false,
+                        has_value: true,
+                    }],
+                    pending: None,
+                },
+            );
             records.serialize(&mut serializer).unwrap();
             let mut ours = Vec::new();
             write_records(&records, 1, &mut ours);

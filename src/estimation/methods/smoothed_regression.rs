@@ -103,6 +103,10 @@ pub struct SmoothedRegressionSettings {
     /// between two samples, so its smoothed history ramps across the step.
     #[serde(deserialize_with = "crate::units::seconds")]
     pub step_margin: f64,
+    /// The filter's grid step is the fastest observation's sample period
+    /// divided into the fewest equal parts no longer than this (s).
+    #[serde(deserialize_with = "crate::units::seconds")]
+    pub max_step: f64,
 }
 
 impl Default for SmoothedRegressionSettings {
@@ -142,6 +146,7 @@ impl Default for SmoothedRegressionSettings {
                 .collect(),
             correlation_lag: 2.0,
             step_margin: 0.2,
+            max_step: 0.04,
         }
     }
 }
@@ -190,6 +195,10 @@ const SETTINGS: &[(&str, &str)] = &[
     (
         "step_margin",
         "grid points within this time (s) of a step in a control channel are left out of the regression (the smoothed coefficient ramps across a step)",
+    ),
+    (
+        "max_step",
+        "the filter's grid step is the fastest observation's sample period divided into the fewest equal parts no longer than this (s); the smoothed histories and the regression are at the sample instants",
     ),
 ];
 
@@ -261,6 +270,12 @@ impl SmoothedRegressionSettings {
                     format!("{name} must be a finite value ≥ 0, is {value}"),
                 );
             }
+        }
+        if !(self.max_step > 0.0 && self.max_step.is_finite()) {
+            return refuse(
+                "max_step",
+                format!("must be a finite time > 0, is {} s", self.max_step),
+            );
         }
         if !(self.step_margin >= 0.0 && self.step_margin.is_finite()) {
             return refuse(
@@ -670,12 +685,14 @@ fn smooth_with(
             "ebm: the observations have no sample rate".into(),
         ));
     }
-    let step = 1.0 / fastest;
+    let period = 1.0 / fastest;
+    let parts = ((period / settings.max_step) - 1e-9).ceil().max(1.0) as usize;
+    let step = period / parts as f64;
     let len = ((end - start) / step + 1e-9).floor() as usize + 1;
-    if len < 3 {
+    if len < 3 * parts {
         return Err(Error::Refused(Refusal::TooFewData {
             method: METHOD.to_string(),
-            data: len,
+            data: len / parts,
             unknowns: 3,
         }));
     }
@@ -728,9 +745,24 @@ fn smooth_with(
         &observations,
         Discretisation::SecondOrder,
     )?;
-    let smoothed = kalman::mbf_smooth(&pass.predicted, &pass.measured, &pass.transitions);
+    // The histories at the sample instants: every `parts`-th grid point.
+    let mut smoothed = kalman::mbf_smooth(&pass.predicted, &pass.measured, &pass.transitions);
+    let mut times = times;
+    if parts > 1 {
+        smoothed = smoothed.into_iter().step_by(parts).collect();
+        times = times.into_iter().step_by(parts).collect();
+    }
     let mut notes = vec![format!(
-        "EKF + modified Bryson–Frazier smoother over {len} points of {step} s from {start:.3} s, observing {}{}",
+        "EKF + modified Bryson–Frazier smoother over {len} points of {} s from {start:.3} s{}, observing {}{}",
+        crate::record::rounded(step),
+        if parts > 1 {
+            format!(
+                " ({parts} to the sample period; the histories at the {} s samples)",
+                crate::record::rounded(period)
+            )
+        } else {
+            String::new()
+        },
         names.join(", "),
         if absent.is_empty() {
             String::new()
