@@ -247,7 +247,7 @@ fn the_qar_approach_end_to_end() {
         } else {
             recorded
         };
-        for model in ["attas-longitudinal", "attas-lateral"] {
+        for model in &scenario.models {
             let structure = Structure::load(model).unwrap();
             for method in &names {
                 let outcome = estimate_scored(
