@@ -469,6 +469,13 @@ impl Layout {
         writer.write_all(bracket)
     }
 
+    /// The innermost array or object holds a value.
+    fn mark_value(&mut self) {
+        if let Some(open) = self.open.last_mut() {
+            open.has_value = true;
+        }
+    }
+
     fn close<W: ?Sized + std::io::Write>(
         &mut self,
         writer: &mut W,
@@ -535,9 +542,7 @@ impl serde_json::ser::Formatter for Layout {
         &mut self,
         _writer: &mut W,
     ) -> std::io::Result<()> {
-        if let Some(open) = self.open.last_mut() {
-            open.has_value = true;
-        }
+        self.mark_value();
         Ok(())
     }
 
@@ -571,9 +576,7 @@ impl serde_json::ser::Formatter for Layout {
         &mut self,
         _writer: &mut W,
     ) -> std::io::Result<()> {
-        if let Some(open) = self.open.last_mut() {
-            open.has_value = true;
-        }
+        self.mark_value();
         Ok(())
     }
 }
