@@ -182,9 +182,18 @@ fn needed_channels(
     for &coefficient in &request.coefficients {
         let name = coefficient.name(axes);
         wants_dynamic_pressure = true;
+        // Thrust enters a coefficient only through its component along that
+        // axis: a thrust line in the symmetry plane makes no side force, and
+        // its moment about the centre of gravity is a pitching moment only.
+        let direction = aircraft.propulsion.direction;
+        let moment = aircraft.propulsion.position.cross(&direction);
         match coefficient {
             Coefficient::Lift | Coefficient::Drag => {
-                wants_thrust = true;
+                wants_thrust |= match (axes, coefficient) {
+                    (ForceAxes::Body, Coefficient::Lift) => direction.z != 0.0,
+                    (ForceAxes::Body, _) => direction.x != 0.0,
+                    _ => direction.x != 0.0 || direction.z != 0.0,
+                };
                 if axes == ForceAxes::Wind {
                     for channel in ["nx", "nz", "alpha"] {
                         need(&mut needs, channel, name);
@@ -196,11 +205,16 @@ fn needed_channels(
                 }
             }
             Coefficient::Side => {
-                wants_thrust = true;
+                wants_thrust |= direction.y != 0.0;
                 need(&mut needs, "ny", name);
             }
             Coefficient::Roll | Coefficient::Pitch | Coefficient::Yaw => {
-                wants_thrust |= thrust_moment_arm(aircraft) != Vector3::zeros();
+                let axis = match coefficient {
+                    Coefficient::Roll => 0,
+                    Coefficient::Pitch => 1,
+                    _ => 2,
+                };
+                wants_thrust |= moment[axis] != 0.0;
                 for channel in ["p", "q", "r"] {
                     need(&mut needs, channel, name);
                 }
@@ -235,16 +249,6 @@ fn needed_channels(
         need(&mut needs, "dynamic_pressure", "dynamic pressure");
     }
     needs
-}
-
-/// The lever arm of the thrust line (zero when thrust makes no moment).
-fn thrust_moment_arm(aircraft: &Aircraft) -> Vector3<f64> {
-    let p = &aircraft.propulsion;
-    if p.position.cross(&p.direction) == Vector3::zeros() {
-        Vector3::zeros()
-    } else {
-        p.position
-    }
 }
 
 fn regressor_needs(aircraft: &Aircraft, regressor: Regressor, needs: &mut Needs) {
