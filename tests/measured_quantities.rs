@@ -1,9 +1,13 @@
-//! Measured quantities are used (equation error, stepwise regression): a
-//! record with a `thrust` channel has it in the force equations instead
-//! of the throttle model, one with `density` has it in q̄ (and the thrust
-//! lapse) instead of the ISA at the altitude channel, and with
-//! `angular_accelerations = "measured"` the record's ṗ, q̇, ṙ replace the
-//! differentiated rates. Each is said in the estimate's notes.
+//! Measured quantities are used: a record with a `thrust` channel has it
+//! in the force equations instead of the throttle model, one with
+//! `density` has it in q̄ (and the thrust lapse) instead of the ISA at the
+//! altitude channel — in equation error and stepwise regression, and in
+//! the driven model of output error and the filters, which then need no
+//! altitude channel; with `angular_accelerations = "measured"` the
+//! regressions take the record's ṗ, q̇, ṙ instead of the differentiated
+//! rates. Each is said in the estimate's notes. The altitude convention of
+//! an imported record reaches the ISA: geometric and geopotential twins
+//! give the same estimate.
 
 mod common;
 
