@@ -45,5 +45,7 @@ pub const CHANNELS_READ: &[&str] = &[
     "rudder",
     "flap",
     "throttle",
+    "thrust",
+    "density",
     "chi",
 ];

@@ -93,6 +93,25 @@ impl Atmosphere {
         GEOPOTENTIAL_EARTH_RADIUS * geometric / (GEOPOTENTIAL_EARTH_RADIUS + geometric)
     }
 
+    /// Density altitude: the altitude at which the standard day's (no
+    /// temperature offset) density equals `density` (kg/m³). Below the
+    /// tropopause ρ/ρ0 = (T/T0)^(g0/(R·L) − 1), so T = T0·(ρ/ρ0)^(1/(g0/(R·L) − 1))
+    /// and H = (T0 − T)/L; above it ρ falls exponentially at T11.
+    pub fn density_altitude(density: f64) -> f64 {
+        let exponent = GRAVITY / (GAS_CONSTANT * LAPSE_RATE) - 1.0;
+        let (tropopause_temperature, tropopause_pressure) = Self::standard(TROPOPAUSE);
+        let tropopause_density = tropopause_pressure / (GAS_CONSTANT * tropopause_temperature);
+        if density >= tropopause_density {
+            let temperature =
+                SEA_LEVEL_TEMPERATURE * (density / SEA_LEVEL_DENSITY).powf(1.0 / exponent);
+            (SEA_LEVEL_TEMPERATURE - temperature) / LAPSE_RATE
+        } else {
+            TROPOPAUSE
+                - GAS_CONSTANT * tropopause_temperature / GRAVITY
+                    * (density / tropopause_density).ln()
+        }
+    }
+
     /// Pressure altitude: the ISA altitude at which the standard pressure equals `pressure`.
     pub fn pressure_altitude(pressure: f64) -> f64 {
         let exponent = GAS_CONSTANT * LAPSE_RATE / GRAVITY;
@@ -137,6 +156,7 @@ mod tests {
             );
             assert!((air.speed_of_sound - a).abs() < 0.02, "a at {h}");
             assert!((Atmosphere::pressure_altitude(air.pressure) - h).abs() < 1e-6);
+            assert!((Atmosphere::density_altitude(air.density) - h).abs() < 1e-6);
             assert!((air.log_density_ratio.exp() - air.density / SEA_LEVEL_DENSITY).abs() < 1e-4);
         }
     }

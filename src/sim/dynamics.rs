@@ -209,6 +209,9 @@ pub struct Kinematics<T: Real = f64> {
     pub chi: T,
     /// Rate of the wind, body axes, as seen from the rotating body.
     pub wind_rate_body: Vector3<T>,
+    /// A measured thrust (N, along the thrust line) that replaces the
+    /// propulsion model's δT·Tmax·(ρ/ρ0)ⁿ; None: the propulsion model.
+    pub thrust: Option<f64>,
 }
 
 /// An aircraft in an environment: the right-hand side of the equations of motion.
@@ -290,6 +293,7 @@ impl FlightModel {
                 air_data,
                 chi: x[CHI],
                 wind_rate_body,
+                thrust: None,
             },
             &exogenous.controls,
         );
@@ -319,9 +323,11 @@ impl FlightModel {
             air_data,
             ..
         } = kinematics;
-        let thrust = aircraft
-            .propulsion
-            .thrust(controls[Control::Throttle.index()], air.log_density_ratio);
+        let thrust = kinematics.thrust.unwrap_or_else(|| {
+            aircraft
+                .propulsion
+                .thrust(controls[Control::Throttle.index()], air.log_density_ratio)
+        });
         let context = self.context(kinematics, &controls, thrust);
         let translational = if aircraft.aero.forces_depend_on_alpha_dot() {
             self.solve_alpha_dot(&context)

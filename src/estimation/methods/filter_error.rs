@@ -833,6 +833,7 @@ pub fn filter_error_from(
         Observations::from_record(record, &structure.outputs, view.time(0), step, view.len())?;
     enough_data(METHOD, &observations, free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
+    notes.extend(view.simulation().measured_quantities.iter().cloned());
     let file = view.parameters();
     let mut fit = FilterErrorFit::new(
         &view,

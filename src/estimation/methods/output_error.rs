@@ -114,7 +114,7 @@ use crate::estimation::methods::equation_error::{
 };
 use crate::estimation::methods::filter_error;
 use crate::estimation::model::driven::{
-    Column, DrivenSimulation, FlightPathState, Linearise, Observable,
+    ALTITUDE_SUBSTITUTES, Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
 use crate::estimation::model::state_space::{
     driven_simulation, fitting_window, observables, recorded_initial_state,
@@ -384,7 +384,12 @@ pub(crate) fn missing_channels(
     for name in structure.pseudo_controls() {
         let absent = match name {
             "yaw" | "chi" => false,
-            "altitude" => !has(name) && !has("pressure_altitude"),
+            "altitude" => {
+                !has(name)
+                    && !ALTITUDE_SUBSTITUTES
+                        .iter()
+                        .any(|substitute| has(substitute))
+            }
             _ => !has(name),
         };
         if absent && !missing.iter().any(|m| m.name == name) {

@@ -11,6 +11,10 @@
 //! `V̇ = V·V̇_b/V`, α̇ and β̇ from the state derivative,
 //! `φ̇ = p + tan θ·(q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`,
 //! `ψ̇ = (q sin φ + r cos φ)/cos θ`, `ḣ = −ḋ`.
+//! The air is the ISA's at the altitude, with the density the record's
+//! `density` channel when it has one; the thrust is the record's `thrust`
+//! channel (N, along the thrust line) when it has one, else the throttle
+//! and engine model ([`Ambient`]).
 //! Controls and pseudo-controls are sampled on the integration grid and
 //! taken inside a step with the model's [`Interpolation`] option, through
 //! the one RK4 integrator. Each step is a function of its start state
@@ -24,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
 use crate::record::FlightRecord;
 use crate::sim::aero::{AeroCoefficients, Coefficient, TermRegressors};
-use crate::sim::atmosphere::{Air, Atmosphere};
+use crate::sim::atmosphere::{Air, Atmosphere, SEA_LEVEL_DENSITY};
 use crate::sim::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Kinematics};
 use crate::sim::integrator::{Interpolation, affine, rk4_linear_step, rk4_step};
 use crate::sim::state::{self, CONTROL_COUNT, Control, Controls, SinCos};
@@ -155,35 +159,132 @@ impl Angles {
     }
 }
 
-/// The measured signals' angle sines and cosines and air at the points
-/// where RK4 evaluates them, the grid points (index 2k) and the steps'
-/// midpoints (2k + 1): the same in every simulation of a record, so
-/// computed once (the air for the first atmosphere asked for).
+/// The measured signals' angle sines and cosines, the record's measured
+/// quantities and the air at the points where RK4 evaluates them, the grid
+/// points (index 2k) and the steps' midpoints (2k + 1): the same in every
+/// simulation of a record, so computed once (the air for the first
+/// atmosphere asked for, at the measured altitude).
 #[derive(Debug, Clone, Default)]
 struct Frozen {
     angles: Vec<Angles>,
-    air: OnceLock<(Atmosphere, Vec<Air>)>,
+    ambient: Vec<Ambient>,
+    air: OnceLock<(Atmosphere, Vec<Surroundings>)>,
 }
 
 impl Frozen {
-    fn new(measured: &[FlightPathState]) -> Frozen {
+    fn new(measured: &[FlightPathState], ambient: &[Ambient]) -> Frozen {
         Frozen {
             angles: frozen_points(measured).map(|x| Angles::of(&x)).collect(),
+            ambient: frozen_ambient(ambient).collect(),
             air: OnceLock::new(),
         }
     }
 
-    /// The air at every point for `atmosphere`; None for another atmosphere
-    /// than the first.
-    fn air(&self, measured: &[FlightPathState], atmosphere: &Atmosphere) -> Option<&[Air]> {
+    /// The air and thrust at every point for `atmosphere` and the measured
+    /// altitude; None for another atmosphere than the first.
+    fn air(
+        &self,
+        measured: &[FlightPathState],
+        atmosphere: &Atmosphere,
+    ) -> Option<&[Surroundings]> {
         let (first, air) = self.air.get_or_init(|| {
             let air = frozen_points(measured)
-                .map(|x| atmosphere.at(x[ALTITUDE]))
+                .zip(&self.ambient)
+                .map(|(x, ambient)| ambient.surroundings(atmosphere, x[ALTITUDE]))
                 .collect();
             (*atmosphere, air)
         });
         (first == atmosphere).then_some(air.as_slice())
     }
+
+    /// The frozen points' angles and air (for `atmosphere`), and their
+    /// measured quantities: what a [`Memo`] reads.
+    fn for_memo<'a>(
+        &'a self,
+        measured: &[FlightPathState],
+        atmosphere: &Atmosphere,
+    ) -> FrozenPoints<'a> {
+        FrozenPoints {
+            angles: &self.angles,
+            air: self.air(measured, atmosphere),
+            ambient: &self.ambient,
+        }
+    }
+}
+
+/// What a [`Memo`] reads of [`Frozen`] (empty: nothing frozen).
+#[derive(Debug, Clone, Copy, Default)]
+struct FrozenPoints<'a> {
+    angles: &'a [Angles],
+    air: Option<&'a [Surroundings]>,
+    ambient: &'a [Ambient],
+}
+
+/// What the record measures that replaces part of the model at one
+/// instant: the air density ρ (kg/m³, the `density` channel) instead of
+/// the ISA's at the altitude, and the thrust (N, the `thrust` channel,
+/// along the aircraft's thrust line) instead of the throttle and engine
+/// model δT·Tmax·(ρ/ρ0)ⁿ; None where the record has no such channel.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Ambient {
+    pub density: Option<f64>,
+    pub thrust: Option<f64>,
+}
+
+impl Ambient {
+    /// The values a fraction θ into a step from `self` to `end`: linear,
+    /// as the measured pseudo-controls ([`between`]).
+    fn between(self, end: Ambient, theta: f64) -> Ambient {
+        let mix = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| a + (b - a) * theta);
+        Ambient {
+            density: mix(self.density, end.density),
+            thrust: mix(self.thrust, end.thrust),
+        }
+    }
+
+    /// The air at `altitude`: the atmosphere's, its density (and ln(ρ/ρ0),
+    /// which the thrust lapse reads) the measured one when there is one.
+    /// Temperature, pressure and speed of sound stay the atmosphere's at
+    /// the altitude.
+    pub fn air(self, atmosphere: &Atmosphere, altitude: f64) -> Air {
+        let mut air = atmosphere.at(altitude);
+        if let Some(density) = self.density {
+            air.density = density;
+            air.log_density_ratio = (density / SEA_LEVEL_DENSITY).ln();
+        }
+        air
+    }
+
+    /// The air at `altitude` ([`Ambient::air`]) and the measured thrust.
+    fn surroundings(self, atmosphere: &Atmosphere, altitude: f64) -> Surroundings {
+        Surroundings {
+            air: self.air(atmosphere, altitude),
+            thrust: self.thrust,
+        }
+    }
+}
+
+/// The air and the measured thrust (None: the propulsion model's) an
+/// evaluation of the model takes.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Surroundings {
+    air: Air,
+    thrust: Option<f64>,
+}
+
+impl From<Air> for Surroundings {
+    fn from(air: Air) -> Surroundings {
+        Surroundings { air, thrust: None }
+    }
+}
+
+/// The measured quantities at the grid points and the steps' midpoints,
+/// interpolated as [`frozen_points`].
+fn frozen_ambient(ambient: &[Ambient]) -> impl Iterator<Item = Ambient> + '_ {
+    ambient.iter().enumerate().flat_map(move |(k, &point)| {
+        let midpoint = ambient.get(k + 1).map(|next| point.between(*next, 0.5));
+        std::iter::once(point).chain(midpoint)
+    })
 }
 
 /// The measured state a fraction θ into the step from `start` to `end`:
@@ -214,18 +315,19 @@ struct Memo<'a> {
     /// ([`Angles::moved_from`]), each within an ulp or two of the library's
     /// (no error carried from one to the next).
     anchor: (FlightPathState, Angles),
-    air: Air,
-    /// Which states are measured, the frozen angles and air, and the point.
+    air: Surroundings,
+    /// The record's measured quantities at the point, and those `air` was
+    /// computed with.
+    ambient: Ambient,
+    air_ambient: Ambient,
+    /// Which states are measured, the frozen points, and the point.
     measured: [bool; FLIGHT_PATH_SIZE],
-    frozen: (&'a [Angles], Option<&'a [Air]>),
+    frozen: FrozenPoints<'a>,
     point: usize,
 }
 
 impl<'a> Memo<'a> {
-    fn new(
-        measured: [bool; FLIGHT_PATH_SIZE],
-        frozen: (&'a [Angles], Option<&'a [Air]>),
-    ) -> Memo<'a> {
+    fn new(measured: [bool; FLIGHT_PATH_SIZE], frozen: FrozenPoints<'a>) -> Memo<'a> {
         Memo {
             x: None,
             angles: Angles::of(&FlightPathState::zeros()),
@@ -233,7 +335,9 @@ impl<'a> Memo<'a> {
                 FlightPathState::zeros(),
                 Angles::of(&FlightPathState::zeros()),
             ),
-            air: Air::default(),
+            air: Surroundings::default(),
+            ambient: frozen.ambient.first().copied().unwrap_or_default(),
+            air_ambient: Ambient::default(),
             measured,
             frozen,
             point: 0,
@@ -244,6 +348,9 @@ impl<'a> Memo<'a> {
     /// k; 2k + 1: the midpoint of step k).
     fn at_point(&mut self, index: usize) {
         self.point = index;
+        if let Some(&ambient) = self.frozen.ambient.get(index) {
+            self.ambient = ambient;
+        }
     }
 
     /// Forgets the last state and the anchors: the next state's integrated
@@ -254,9 +361,9 @@ impl<'a> Memo<'a> {
         self.x = None;
     }
 
-    fn of(&mut self, x: &FlightPathState, atmosphere: &Atmosphere) -> (Angles, Air) {
+    fn of(&mut self, x: &FlightPathState, atmosphere: &Atmosphere) -> (Angles, Surroundings) {
         let (first, last) = (self.x.is_none(), self.x.unwrap_or(*x));
-        let (angles, air) = self.frozen;
+        let FrozenPoints { angles, air, .. } = self.frozen;
         let frozen_air = air.map(|air| air[self.point]);
         for i in [ALPHA, BETA, ROLL, PITCH] {
             if self.measured[i] {
@@ -280,10 +387,13 @@ impl<'a> Memo<'a> {
         }
         match frozen_air {
             Some(air) if self.measured[ALTITUDE] => {
-                debug_assert_eq!(air, atmosphere.at(x[ALTITUDE]));
+                debug_assert_eq!(air, self.ambient.surroundings(atmosphere, x[ALTITUDE]));
                 self.air = air
             }
-            _ if first || x[ALTITUDE] != last[ALTITUDE] => self.air = atmosphere.at(x[ALTITUDE]),
+            _ if first || x[ALTITUDE] != last[ALTITUDE] || self.ambient != self.air_ambient => {
+                self.air = self.ambient.surroundings(atmosphere, x[ALTITUDE]);
+                self.air_ambient = self.ambient;
+            }
             _ => {}
         }
         self.x = Some(*x);
@@ -298,8 +408,9 @@ impl<'a> Memo<'a> {
 fn kinematics<T: Real>(
     x: &SVector<T, FLIGHT_PATH_SIZE>,
     angles: &Angles<T>,
-    air: &Air,
+    surroundings: &Surroundings,
 ) -> Kinematics<T> {
+    let air = &surroundings.air;
     let ((sin_alpha, cos_alpha), (sin_beta, cos_beta)) = (angles.alpha, angles.beta);
     let velocity = Vector3::new(cos_alpha * cos_beta, sin_beta, sin_alpha * cos_beta) * x[AIRSPEED];
     Kinematics {
@@ -310,6 +421,7 @@ fn kinematics<T: Real>(
         air_data: AirData::with_alpha_sin_cos(velocity, x[ALPHA], angles.alpha, x[BETA], air),
         chi: x[CHI],
         wind_rate_body: Vector3::zeros(),
+        thrust: surroundings.thrust,
     }
 }
 
@@ -353,7 +465,7 @@ fn derivative<T: Real>(
     model: &FlightModel,
     x: &SVector<T, FLIGHT_PATH_SIZE>,
     angles: &Angles<T>,
-    air: &Air,
+    air: &Surroundings,
     controls: &Controls,
     pseudo: PseudoRates,
 ) -> (SVector<T, FLIGHT_PATH_SIZE>, Evaluation<T>) {
@@ -373,7 +485,7 @@ fn dual_derivative(
     x: &FlightPathState,
     angles: Angles,
     lanes: impl Iterator<Item = usize> + Clone,
-    air: &Air,
+    air: &Surroundings,
     controls: &Controls,
     pseudo: PseudoRates,
 ) -> (
@@ -933,7 +1045,7 @@ impl Linearization {
                     let mut moved = *x;
                     moved[i] += step;
                     let moved_air = if i == ALTITUDE {
-                        atmosphere.at(moved[i])
+                        memo.ambient.surroundings(atmosphere, moved[i])
                     } else {
                         air
                     };
@@ -1099,15 +1211,17 @@ fn fill_fixed<const R: usize>(
 /// ẋ = f and the `outputs` y = h of `model` at the full flight-path state
 /// x with the given inputs: the simulator's equations ([`derivative`]),
 /// the angles' sines and cosines the library's and the air the
-/// atmosphere's at x's altitude.
+/// atmosphere's at x's altitude with the record's measured quantities
+/// ([`Ambient::air`]).
 pub(super) fn evaluate(
     model: &FlightModel,
     x: &FlightPathState,
     controls: &Controls,
     pseudo: PseudoRates,
+    ambient: Ambient,
     outputs: &[Observable],
 ) -> (FlightPathState, Vec<f64>) {
-    let air = model.environment.atmosphere.at(x[ALTITUDE]);
+    let air = ambient.surroundings(&model.environment.atmosphere, x[ALTITUDE]);
     let (rates, evaluation) = derivative(model, x, &Angles::of(x), &air, controls, pseudo);
     let values = outputs.iter().map(|o| o.value(x, &evaluation)).collect();
     (rates, values)
@@ -1126,13 +1240,19 @@ pub(super) fn evaluate(
 pub(super) fn linearise(
     model: &FlightModel,
     x: &FlightPathState,
-    controls: &Controls,
-    pseudo: PseudoRates,
+    (controls, pseudo, ambient): (&Controls, PseudoRates, Ambient),
     states: &[usize],
     outputs: &[Observable],
 ) -> Jacobians {
     let mut buffers = LinearisationBuffers::default();
-    linearise_with(model, x, controls, pseudo, states, outputs, &mut buffers);
+    linearise_with(
+        model,
+        x,
+        (controls, pseudo, ambient),
+        states,
+        outputs,
+        &mut buffers,
+    );
     let mut jacobians = Jacobians {
         rates_by_state: DMatrix::zeros(0, 0),
         rates_by_parameter: DMatrix::zeros(0, 0),
@@ -1158,8 +1278,7 @@ pub(super) struct LinearisationBuffers {
 pub(super) fn linearise_with(
     model: &FlightModel,
     x: &FlightPathState,
-    controls: &Controls,
-    pseudo: PseudoRates,
+    (controls, pseudo, ambient): (&Controls, PseudoRates, Ambient),
     states: &[usize],
     outputs: &[Observable],
     buffers: &mut LinearisationBuffers,
@@ -1182,7 +1301,8 @@ pub(super) fn linearise_with(
         let linearization = Linearization::new(&directions, outputs.len());
         (flag, directions, linearization)
     });
-    let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], (&[], None));
+    let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], FrozenPoints::default());
+    memo.ambient = ambient;
     linearization.at(model, directions, x, controls, pseudo, outputs, &mut memo);
 }
 
@@ -1244,9 +1364,86 @@ pub struct DrivenSimulation {
     pub controls: Vec<Controls>,
     /// Measured flight-path states at the grid points (integrated entries unused).
     measured: Vec<FlightPathState>,
+    /// The record's measured density and thrust at the grid points.
+    ambient: Vec<Ambient>,
     frozen: Frozen,
-    /// Notes for the user (a control held constant because its channel is absent).
+    /// Notes for the user (a control held constant because its channel is
+    /// absent, a measured quantity used).
     pub notes: Vec<String>,
+    /// The notes that name a measured quantity the model takes from the
+    /// record instead of its own (also in `notes`).
+    pub measured_quantities: Vec<String>,
+}
+
+/// The record's measured quantities the model takes instead of its own
+/// ([`Ambient`]).
+pub const MEASURED_QUANTITIES: [&str; 2] = ["density", "thrust"];
+
+/// The channels that stand in for a missing `altitude` pseudo-control, in
+/// order: pressure altitude, else the density altitude of the measured
+/// density, else of the density 2·q̄/V² from the dynamic pressure and the
+/// airspeed ([`DrivenSimulation::from_record`]).
+pub const ALTITUDE_SUBSTITUTES: [&str; 3] = ["pressure_altitude", "density", "dynamic_pressure"];
+
+/// The record's measured density and thrust on the grid (linear between
+/// samples, as the measured pseudo-controls), and the notes saying so.
+fn measured_ambient(record: &FlightRecord, times: &[f64]) -> Result<(Vec<Ambient>, Vec<String>)> {
+    let mut ambient = vec![Ambient::default(); times.len()];
+    let mut notes = Vec::new();
+    let [density, thrust] = MEASURED_QUANTITIES;
+    if let Ok(channel) = record.channel(density) {
+        for (into, value) in ambient.iter_mut().zip(channel.values_at(times)?) {
+            into.density = Some(value);
+        }
+        notes.push(
+            "air density: the record's 'density' channel, not the ISA at the altitude".into(),
+        );
+    } else if ["altitude", ALTITUDE_SUBSTITUTES[0]]
+        .iter()
+        .all(|name| record.channel(name).is_err())
+        && let (Ok(pressure), Ok(airspeed)) = (
+            record.channel(ALTITUDE_SUBSTITUTES[2]),
+            record.channel("airspeed"),
+        )
+    {
+        let speeds = airspeed.values_at(times)?;
+        for ((into, q), v) in ambient
+            .iter_mut()
+            .zip(pressure.values_at(times)?)
+            .zip(speeds)
+        {
+            into.density = Some(2.0 * q / (v * v));
+        }
+        notes.push(
+            "air density: 2·q̄/V² from the record's 'dynamic_pressure' and 'airspeed' channels (it has no density or altitude channel)".into(),
+        );
+    }
+    if let Ok(channel) = record.channel(thrust) {
+        for (into, value) in ambient.iter_mut().zip(channel.values_at(times)?) {
+            into.thrust = Some(value);
+        }
+        notes.push(
+            "thrust: the record's 'thrust' channel, along the aircraft's thrust line, not the throttle and engine model"
+                .into(),
+        );
+    }
+    let bad = |value: Option<f64>, positive: bool| {
+        value.is_some_and(|v| !v.is_finite() || (positive && v <= 0.0))
+    };
+    for (&t, a) in times.iter().zip(&ambient) {
+        if bad(a.density, true) {
+            return Err(Error::Other(format!(
+                "the measured air density at t = {t:.3} s is {}: it must be finite and positive (channel '{density}', or 2·q̄/V² from 'dynamic_pressure' and 'airspeed')",
+                a.density.unwrap_or(f64::NAN)
+            )));
+        }
+        if bad(a.thrust, false) {
+            return Err(Error::Other(format!(
+                "the record's '{thrust}' channel has no finite value at t = {t:.3} s"
+            )));
+        }
+    }
+    Ok((ambient, notes))
 }
 
 impl DrivenSimulation {
@@ -1255,7 +1452,12 @@ impl DrivenSimulation {
     /// their samples with the model's interpolation (a hold keeps a recorded
     /// step a step); measured pseudo-controls, continuous signals, linearly.
     /// A missing control channel is held at 0 (noted); a missing
-    /// pseudo-control that the model needs is an error.
+    /// pseudo-control that the model needs is an error. The record's
+    /// `density` and `thrust` channels, when it has them, are sampled
+    /// linearly too and replace the ISA's density and the throttle model
+    /// ([`Ambient`]); a missing altitude is the pressure altitude, else the
+    /// ISA density altitude of the measured density
+    /// ([`ALTITUDE_SUBSTITUTES`]). Each is noted.
     pub fn from_record(
         record: &FlightRecord,
         integrate: &[usize],
@@ -1265,7 +1467,9 @@ impl DrivenSimulation {
     ) -> Result<DrivenSimulation> {
         let count = ((end - start) / step + 1e-9).floor() as usize + 1;
         let times: Vec<f64> = (0..count).map(|k| start + k as f64 * step).collect();
-        let mut notes = Vec::new();
+        let (ambient, mut measured_quantities) = measured_ambient(record, &times)?;
+        let mut notes = measured_quantities.clone();
+        let thrust_measured = ambient.first().is_some_and(|a| a.thrust.is_some());
         let mut controls = vec![Controls::zeros(); count];
         for control in Control::ALL {
             match record.channel(control.name()) {
@@ -1277,6 +1481,8 @@ impl DrivenSimulation {
                         sample[control.index()] = value;
                     }
                 }
+                // With the thrust measured the throttle is not read.
+                Err(_) if control == Control::Throttle && thrust_measured => {}
                 Err(_) => notes.push(format!("no '{}' channel: held at 0", control.name())),
             }
         }
@@ -1296,11 +1502,21 @@ impl DrivenSimulation {
                 }
                 Err(_) if matches!(*name, "yaw" | "chi") => {}
                 Err(_) if *name == "altitude" => {
-                    let altitude = record
-                        .channel("pressure_altitude")
-                        .map_err(|_| missing(name))?;
-                    for (sample, value) in measured.iter_mut().zip(altitude.values_at(&times)?) {
-                        sample[i] = value;
+                    if let Ok(altitude) = record.channel(ALTITUDE_SUBSTITUTES[0]) {
+                        for (sample, value) in measured.iter_mut().zip(altitude.values_at(&times)?)
+                        {
+                            sample[i] = value;
+                        }
+                    } else if ambient.first().is_some_and(|a| a.density.is_some()) {
+                        for (sample, ambient) in measured.iter_mut().zip(&ambient) {
+                            sample[i] =
+                                Atmosphere::density_altitude(ambient.density.unwrap_or(f64::NAN));
+                        }
+                        let note = "no altitude channel: the altitude is the ISA density altitude of the measured density (the air's temperature and speed of sound the ISA's there)";
+                        notes.push(note.into());
+                        measured_quantities.push(note.into());
+                    } else {
+                        return Err(missing_altitude());
                     }
                 }
                 Err(_) => return Err(missing(name)),
@@ -1313,15 +1529,22 @@ impl DrivenSimulation {
             interpolation,
             integrate: mask,
             controls,
-            frozen: Frozen::new(&measured),
+            frozen: Frozen::new(&measured, &ambient),
             measured,
+            ambient,
             notes,
+            measured_quantities,
         })
     }
 
     /// Measured flight-path states at the grid points (integrated entries unused).
     pub fn measured(&self) -> &[FlightPathState] {
         &self.measured
+    }
+
+    /// The record's measured density and thrust at grid point k.
+    pub fn ambient(&self, k: usize) -> Ambient {
+        self.ambient[k]
     }
 
     /// Number of grid points.
@@ -1397,9 +1620,14 @@ impl DrivenSimulation {
         &self,
         k: usize,
         fraction: f64,
-    ) -> (FlightPathState, Controls, PseudoRates) {
+    ) -> (FlightPathState, Controls, PseudoRates, Ambient) {
         if fraction == 0.0 || k + 1 >= self.len() {
-            return (self.measured[k], self.controls[k], self.pseudo_rates(k));
+            return (
+                self.measured[k],
+                self.controls[k],
+                self.pseudo_rates(k),
+                self.ambient[k],
+            );
         }
         let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
         self.inputs_inside(k, fraction, ends)
@@ -1412,15 +1640,18 @@ impl DrivenSimulation {
         k: usize,
         fraction: f64,
         (start, end): (PseudoRates, PseudoRates),
-    ) -> (FlightPathState, Controls, PseudoRates) {
-        let measured = if fraction == 1.0 {
-            self.measured[k + 1]
+    ) -> (FlightPathState, Controls, PseudoRates, Ambient) {
+        let (measured, ambient) = if fraction == 1.0 {
+            (self.measured[k + 1], self.ambient[k + 1])
         } else {
-            between(&self.measured[k], &self.measured[k + 1], fraction)
+            (
+                between(&self.measured[k], &self.measured[k + 1], fraction),
+                self.ambient[k].between(self.ambient[k + 1], fraction),
+            )
         };
         let w = self.interpolation.weight(fraction);
         let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
-        (measured, controls, start.blend(end, fraction))
+        (measured, controls, start.blend(end, fraction), ambient)
     }
 
     /// The flight-path state at grid point k (or a fraction into step k)
@@ -1464,7 +1695,7 @@ impl DrivenSimulation {
             } else {
                 2 * k + 1
             });
-            let (measured, controls, pseudo) = self.inputs_inside(k, fraction, ends);
+            let (measured, controls, pseudo, _) = self.inputs_inside(k, fraction, ends);
             let merged = Self::merged(x, &measured, mask);
             rates(&merged, &controls, pseudo, memo).component_mul(mask)
         });
@@ -1483,10 +1714,7 @@ impl DrivenSimulation {
         let atmosphere = &model.environment.atmosphere;
         let mask = self.mask(model);
         let measured_states = std::array::from_fn(|i| mask[i] == 0.0);
-        let frozen = (
-            self.frozen.angles.as_slice(),
-            self.frozen.air(&self.measured, atmosphere),
-        );
+        let frozen = self.frozen.for_memo(&self.measured, atmosphere);
         let mut memo = Memo::new(measured_states, frozen);
         memo.at_point(2 * k);
         let (angles, air) = memo.of(x, atmosphere);
@@ -1613,10 +1841,7 @@ impl DrivenSimulation {
             .collect();
         let atmosphere = &model.environment.atmosphere;
         let measured_states = std::array::from_fn(|i| mask[i] == 0.0);
-        let frozen = (
-            self.frozen.angles.as_slice(),
-            self.frozen.air(&self.measured, atmosphere),
-        );
+        let frozen = self.frozen.for_memo(&self.measured, atmosphere);
         let mut memo = Memo::new(measured_states, frozen);
         point.at(
             model,
@@ -1749,6 +1974,13 @@ fn mean(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
         .for_each(|(into, (a, b))| *into = 0.5 * (a + b));
 }
 
+fn missing_altitude() -> Error {
+    Error::Other(format!(
+        "the model needs the measured channel 'altitude' (it is not integrated), or '{}', '{}' or '{}' instead, but the record has none",
+        ALTITUDE_SUBSTITUTES[0], ALTITUDE_SUBSTITUTES[1], ALTITUDE_SUBSTITUTES[2]
+    ))
+}
+
 fn missing(name: &str) -> Error {
     Error::Other(format!(
         "the model needs the measured channel '{name}' (it is not integrated), but the record has none"
@@ -1791,6 +2023,58 @@ mod tests {
                 },
             ),
         ]
+    }
+
+    /// The record's measured quantities replace the model's own
+    /// ([`Ambient`]): given the ISA's density at the altitude and the
+    /// propulsion model's thrust as measured, the rates and outputs are the
+    /// model's own to rounding (1e-12); a measured density 1 % lower makes
+    /// q̄ 1 % lower (1e-12); a measured thrust 1 kN higher moves nx by
+    /// exactly the thrust line's x component of 1 kN/(m·g0), and the
+    /// throttle then moves nothing.
+    #[test]
+    fn measured_density_and_thrust_replace_the_models() {
+        let structure = ModelStructure::load("attas-longitudinal").unwrap();
+        let model = FlightModel::new(structure.aircraft.clone(), Default::default());
+        let (x, controls) = test_point();
+        let outputs = ["nx", "dynamic_pressure"].map(|name| Observable::parse(name).unwrap());
+        let air = model.environment.atmosphere.at(x[ALTITUDE]);
+        let propulsion = &model.aircraft.propulsion;
+        let thrust = propulsion.thrust(controls[Control::Throttle.index()], air.log_density_ratio);
+        assert!(thrust > 1e3);
+        let pseudo = PseudoRates::default();
+        let at = |ambient: Ambient, controls: &Controls| {
+            evaluate(&model, &x, controls, pseudo, ambient, &outputs)
+        };
+        let (rates, own) = at(Ambient::default(), &controls);
+        let measured = Ambient {
+            density: Some(air.density),
+            thrust: Some(thrust),
+        };
+        let (same_rates, same) = at(measured, &controls);
+        assert!((same_rates - rates).amax() <= 1e-12 * rates.amax());
+        for (a, b) in same.iter().zip(&own) {
+            assert!((a - b).abs() <= 1e-12 * b.abs(), "{a} vs {b}");
+        }
+        let thinner = Ambient {
+            density: Some(0.99 * air.density),
+            ..measured
+        };
+        let (_, thin) = at(thinner, &controls);
+        assert!((thin[1] / own[1] - 0.99).abs() <= 1e-12);
+        let stronger = Ambient {
+            thrust: Some(thrust + 1e3),
+            ..measured
+        };
+        let (_, strong) = at(stronger, &controls);
+        let expected = propulsion.direction.x * 1e3 / (model.aircraft.mass.mass * STANDARD_GRAVITY);
+        assert!(
+            (strong[0] - own[0] - expected).abs() <= 1e-12,
+            "{strong:?} vs {own:?}"
+        );
+        let mut throttled = controls;
+        throttled[Control::Throttle.index()] = 0.9;
+        assert_eq!(at(stronger, &throttled), at(stronger, &controls));
     }
 
     /// [`rotated`] against the library's sine and cosine, over base angles
@@ -1838,7 +2122,7 @@ mod tests {
         let (x, controls) = test_point();
         for (structure, pseudo) in cases {
             let model = FlightModel::new(structure.aircraft.clone(), Default::default());
-            let air = model.environment.atmosphere.at(x[ALTITUDE]);
+            let air = Surroundings::from(model.environment.atmosphere.at(x[ALTITUDE]));
             let evaluate = |x: &FlightPathState| {
                 derivative(&model, x, &Angles::of(x), &air, &controls, pseudo)
             };
@@ -1905,7 +2189,10 @@ mod tests {
             let model = FlightModel::new(structure.aircraft.clone(), Default::default());
             assert!(!model.aircraft.aero.forces_depend_on_alpha_dot());
             let (x, controls) = test_point();
-            let (angles, air) = (Angles::of(&x), model.environment.atmosphere.at(x[ALTITUDE]));
+            let (angles, air) = (
+                Angles::of(&x),
+                Surroundings::from(model.environment.atmosphere.at(x[ALTITUDE])),
+            );
             let (rates, at) = derivative(&model, &x, &angles, &air, &controls, pseudo);
             for coefficient in Coefficient::ALL {
                 let offset = offset_response(&model, &at, coefficient);

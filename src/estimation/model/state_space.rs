@@ -22,8 +22,8 @@
 //! it takes them). How those are made fast stays in [`super::driven`].
 
 use super::driven::{
-    self, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, LinearisationBuffers, Observable,
-    PseudoRates,
+    self, Ambient, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, LinearisationBuffers,
+    Observable, PseudoRates,
 };
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
@@ -163,12 +163,14 @@ pub fn observation_step(
 }
 
 /// The record channels that drive a 6-DOF structure's simulation: the
-/// controls and the flight-path states it does not integrate
+/// controls, the flight-path states it does not integrate and the
+/// measured quantities that replace the model's own
 /// ([`DrivenSimulation::from_record`]).
 pub fn driving_channels(structure: &ModelStructure) -> Vec<&'static str> {
     Control::ALL
         .iter()
         .map(|c| c.name())
+        .chain(driven::MEASURED_QUANTITIES)
         .chain(
             FLIGHT_PATH_STATES
                 .iter()
@@ -567,10 +569,14 @@ impl DrivenStateSpace {
     }
 
     /// The full state and the inputs at t.
-    fn point(&self, t: f64, x: &[f64]) -> Result<(FlightPathState, Controls, PseudoRates)> {
+    fn point(
+        &self,
+        t: f64,
+        x: &[f64],
+    ) -> Result<(FlightPathState, (Controls, PseudoRates, Ambient))> {
         let (k, fraction) = self.locate(t)?;
-        let (measured, controls, pseudo) = self.simulation.inputs_at(k, fraction);
-        Ok((self.full(x, &measured)?, controls, pseudo))
+        let (measured, controls, pseudo, ambient) = self.simulation.inputs_at(k, fraction);
+        Ok((self.full(x, &measured)?, (controls, pseudo, ambient)))
     }
 }
 
@@ -598,17 +604,17 @@ impl StateSpaceModel for DrivenStateSpace {
     /// The flight-path rates of the integrated states ([`super::driven`]'s
     /// module header gives the equations).
     fn rates(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
-        let (full, controls, pseudo) = self.point(t, x)?;
+        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
         let (rates, _) = self.with_model(theta, |model, _| {
-            driven::evaluate(model, &full, &controls, pseudo, &[])
+            driven::evaluate(model, &full, &controls, pseudo, ambient, &[])
         })?;
         Ok(self.state_of(&rates))
     }
 
     fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
-        let (full, controls, pseudo) = self.point(t, x)?;
+        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
         let (_, outputs) = self.with_model(theta, |model, _| {
-            driven::evaluate(model, &full, &controls, pseudo, &self.outputs)
+            driven::evaluate(model, &full, &controls, pseudo, ambient, &self.outputs)
         })?;
         Ok(DVector::from_vec(outputs))
     }
@@ -621,9 +627,15 @@ impl StateSpaceModel for DrivenStateSpace {
     /// parameter's (e, the stall parameters) a central difference of step
     /// 10⁻⁵·max(|θ|, 10⁻²).
     fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
-        let (full, controls, pseudo) = self.point(t, x)?;
+        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
         self.with_model(theta, |model, _| {
-            driven::linearise(model, &full, &controls, pseudo, &self.states, &self.outputs)
+            driven::linearise(
+                model,
+                &full,
+                (&controls, pseudo, ambient),
+                &self.states,
+                &self.outputs,
+            )
         })
     }
 
@@ -638,13 +650,12 @@ impl StateSpaceModel for DrivenStateSpace {
         into: &mut Jacobians,
         outputs: Option<&mut DVector<f64>>,
     ) -> Result<()> {
-        let (full, controls, pseudo) = self.point(t, x)?;
+        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
         self.with_model(theta, |model, buffers| {
             driven::linearise_with(
                 model,
                 &full,
-                &controls,
-                pseudo,
+                (&controls, pseudo, ambient),
                 &self.states,
                 &self.outputs,
                 buffers,

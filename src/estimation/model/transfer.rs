@@ -12,7 +12,8 @@
 //! record-driven view ([`LinearisedFlight`]): the integrated flight-path
 //! states are δx; the controls and the measured pseudo-controls (the
 //! flight-path states the model does not integrate, e.g. V, α, q, θ under a
-//! lateral model) are δu; the Jacobians come from central differences of
+//! lateral model) and the record's measured density and thrust where they
+//! replace the model's own are δu; the Jacobians come from central differences of
 //! the same flight-path rates and outputs the time-domain methods integrate
 //! ([`super::driven`]), with the pseudo-controls' own rates at zero (a
 //! steady reference). With a linear aerodynamic model, A…D are affine in
@@ -20,7 +21,7 @@
 //! reference's rates, which a transform at the Fourier frequencies k/T does
 //! not see.
 
-use super::driven::{self, FlightPathState, PseudoRates};
+use super::driven::{self, Ambient, FlightPathState, PseudoRates};
 use super::linear::LinearStateSpace;
 use super::state_space::DrivenStateSpace;
 use crate::error::{Error, Result};
@@ -64,6 +65,10 @@ pub enum Input {
     Control(Control),
     /// A measured flight-path state (index into [`FLIGHT_PATH_STATES`]).
     Measured(usize),
+    /// The record's measured air density, where it replaces the ISA's.
+    Density,
+    /// The record's measured thrust, where it replaces the throttle model.
+    Thrust,
 }
 
 impl Input {
@@ -71,6 +76,8 @@ impl Input {
         match self {
             Input::Control(control) => control.name(),
             Input::Measured(i) => FLIGHT_PATH_STATES[*i],
+            Input::Density => "density",
+            Input::Thrust => "thrust",
         }
     }
 }
@@ -81,6 +88,8 @@ pub struct LinearisedFlight<'a> {
     view: &'a DrivenStateSpace,
     reference: FlightPathState,
     controls: Controls,
+    /// The record's measured density and thrust at the reference point.
+    ambient: Ambient,
     inputs: Vec<Input>,
 }
 
@@ -112,10 +121,14 @@ impl<'a> LinearisedFlight<'a> {
                 .filter(|i| !simulation.integrate[*i])
                 .map(Input::Measured),
         );
+        let ambient = simulation.ambient(k);
+        inputs.extend(ambient.density.map(|_| Input::Density));
+        inputs.extend(ambient.thrust.map(|_| Input::Thrust));
         Ok(LinearisedFlight {
             view,
             reference,
             controls: simulation.controls[k],
+            ambient,
             inputs,
         })
     }
@@ -131,6 +144,8 @@ impl<'a> LinearisedFlight<'a> {
             match self.inputs[i] {
                 Input::Control(c) => simulation.controls[k][c.index()] - self.controls[c.index()],
                 Input::Measured(j) => simulation.measured()[k][j] - self.reference[j],
+                Input::Density => difference(simulation.ambient(k).density, self.ambient.density),
+                Input::Thrust => difference(simulation.ambient(k).thrust, self.ambient.thrust),
             }
         })
     }
@@ -150,13 +165,20 @@ impl<'a> LinearisedFlight<'a> {
         model: &crate::sim::dynamics::FlightModel,
         state: &FlightPathState,
         controls: &Controls,
+        ambient: Ambient,
     ) -> (Vec<f64>, Vec<f64>) {
         let pseudo = PseudoRates {
             airspeed: (!self.view.simulation().integrate[driven::AIRSPEED]).then_some(0.0),
             beta: (!self.view.simulation().integrate[driven::BETA]).then_some(0.0),
         };
-        let (rates, outputs) =
-            driven::evaluate(model, state, controls, pseudo, self.view.observables());
+        let (rates, outputs) = driven::evaluate(
+            model,
+            state,
+            controls,
+            pseudo,
+            ambient,
+            self.view.observables(),
+        );
         (
             self.view.states().iter().map(|&i| rates[i]).collect(),
             outputs,
@@ -164,7 +186,14 @@ impl<'a> LinearisedFlight<'a> {
     }
 }
 
-/// Central-difference step along a flight-path state or control.
+/// A measured quantity's perturbation from the reference's (both present
+/// when it is an input).
+fn difference(value: Option<f64>, reference: Option<f64>) -> f64 {
+    value.zip(reference).map_or(0.0, |(v, r)| v - r)
+}
+
+/// Central-difference step along a flight-path state, control or
+/// measured quantity.
 fn nudge(value: f64) -> f64 {
     1e-6 * value.abs().max(1.0)
 }
@@ -196,18 +225,17 @@ impl TransferModel for LinearisedFlight<'_> {
             let mut sides = [(Vec::new(), Vec::new()), (Vec::new(), Vec::new())];
             let mut step = 0.0;
             for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
-                let (mut state, mut controls) = (self.reference, self.controls);
-                match input {
-                    Input::Control(c) => {
-                        step = nudge(controls[c.index()]);
-                        controls[c.index()] += sign * step;
-                    }
-                    Input::Measured(j) => {
-                        step = nudge(state[j]);
-                        state[j] += sign * step;
-                    }
-                }
-                *side = self.evaluate(&model, &state, &controls);
+                let (mut state, mut controls, mut ambient) =
+                    (self.reference, self.controls, self.ambient);
+                let value = match input {
+                    Input::Control(c) => &mut controls[c.index()],
+                    Input::Measured(j) => &mut state[j],
+                    Input::Density => ambient.density.get_or_insert(0.0),
+                    Input::Thrust => ambient.thrust.get_or_insert(0.0),
+                };
+                step = nudge(*value);
+                *value += sign * step;
+                *side = self.evaluate(&model, &state, &controls, ambient);
             }
             let [(rates_up, outputs_up), (rates_down, outputs_down)] = &sides;
             let (f, h, j) = if is_state {
