@@ -16,6 +16,8 @@ pub mod streams {
     pub const PROCESS_NOISE: u64 = 3;
     /// Random input weights and biases of a neural estimator's network.
     pub const NETWORK_WEIGHTS: u64 = 4;
+    /// The extra start values of output error's several starts.
+    pub const MULTI_START: u64 = 5;
 }
 
 /// The generator for `stream` of `seed`.

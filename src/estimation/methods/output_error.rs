@@ -100,6 +100,17 @@
 //! wrong minimum). Every simulation carries the sensitivities to all
 //! unknowns, so the second stage starts from the first stage's last
 //! simulation.
+//!
+//! Several starts (`starts = N`, [`multi_start`]): the fit above, then
+//! N − 1 fits from the model file's values each moved by a seeded random
+//! fraction: θ_i + spread·max(|θ_i|, 0.01)·u, u uniform on [−1, 1], within
+//! the parameter's bounds (`start_spread`, `start_seed`; the stream
+//! [`crate::random::streams::MULTI_START`]). The estimate is the converged
+//! fit of least cost ½·Σ N_o·ln R_oo; a converged fit whose cost is within
+//! [`EQUAL_COST`] of it but whose parameters differ from it by more than
+//! one standard error is another minimum the data cannot tell from the
+//! best, and the estimate is then `unidentified` naming those parameters.
+//! The notes list every start's outcome and cost; `details` tables them.
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Status;
@@ -196,6 +207,13 @@ pub struct OutputErrorOptions {
     /// Fit only this time window (s) of every record; default the whole record.
     #[serde(skip)]
     pub window: Option<(f64, f64)>,
+    /// Fits from this many starts ([`multi_start`]); 1: one fit.
+    pub starts: usize,
+    /// The extra starts move each free parameter by up to this fraction of
+    /// its magnitude (at least 0.01).
+    pub start_spread: f64,
+    /// Seed of the extra starts' random stream.
+    pub start_seed: u64,
 }
 
 impl Default for OutputErrorOptions {
@@ -208,6 +226,9 @@ impl Default for OutputErrorOptions {
             estimate_initial_state: false,
             output_biases: Vec::new(),
             window: None,
+            starts: 1,
+            start_spread: 0.5,
+            start_seed: 1,
         }
     }
 }
@@ -232,6 +253,17 @@ impl OutputErrorOptions {
         if options.max_iterations == 0 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: max_iterations must be at least 1"
+            )));
+        }
+        if options.starts == 0 {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: starts must be at least 1"
+            )));
+        }
+        if !(options.start_spread > 0.0 && options.start_spread.is_finite()) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: start_spread must be a positive fraction, is {}",
+                options.start_spread
             )));
         }
         Ok(options)
@@ -276,6 +308,15 @@ impl Estimator for OutputError {
                         "output_biases",
                         "outputs with a constant bias as an unknown",
                     ),
+                    (
+                        "starts",
+                        "fits from this many starts: the usual one and N − 1 from the model file's values moved at random; the least-cost converged fit is the estimate, and another converged minimum of equal cost with other parameters makes it unidentified",
+                    ),
+                    (
+                        "start_spread",
+                        "the extra starts move each free parameter by up to this fraction of max(|value|, 0.01)",
+                    ),
+                    ("start_seed", "seed of the extra starts"),
                 ],
             ),
         }
@@ -296,8 +337,148 @@ impl Estimator for OutputError {
             Structure::Linear(linear) => return linear_output_error(problem, linear, &options),
         };
         let records: Vec<&FlightRecord> = problem.records.iter().collect();
+        if options.starts > 1 {
+            return multi_start(&records, structure, &options, start);
+        }
         output_error_from(&records, structure, &options, start)
     }
+}
+
+/// Two converged fits whose costs ½·Σ N_o·ln R_oo differ by less than
+/// this reach minima the data cannot tell apart (a likelihood ratio
+/// below e).
+pub const EQUAL_COST: f64 = 1.0;
+
+/// `options.starts` fits of output error (module header, "Several
+/// starts"). A refusal or an error of the first fit is returned as it is;
+/// an extra start that fails is a line in the notes.
+pub fn multi_start(
+    records: &[&FlightRecord],
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+    regression: Option<&Estimate>,
+) -> Result<Estimate> {
+    let started = std::time::Instant::now();
+    let single = OutputErrorOptions {
+        starts: 1,
+        ..options.clone()
+    };
+    let mut fits = vec![(
+        "the usual start".to_string(),
+        Ok(output_error_from(records, structure, &single, regression)?),
+    )];
+    let mut rng = crate::random::stream(
+        options.start_seed,
+        crate::random::streams::MULTI_START,
+    );
+    let from_model = OutputErrorOptions {
+        start: Start::Model,
+        ..single
+    };
+    for k in 1..options.starts {
+        let mut moved = structure.clone();
+        let values = moved.aircraft.aero.parameters.values_mut();
+        for (i, value) in values.iter_mut().enumerate() {
+            let u: f64 = rand::RngExt::random_range(&mut rng, -1.0..=1.0);
+            if structure.free[i] {
+                let (low, high) = structure.bounds[i];
+                *value = (*value + options.start_spread * value.abs().max(0.01) * u)
+                    .clamp(low, high);
+            }
+        }
+        fits.push((
+            format!("start {k}"),
+            output_error_from(records, &moved, &from_model, None),
+        ));
+    }
+    let cost = |estimate: &Estimate| estimate.cost_history.last().copied().unwrap_or(f64::NAN);
+    let best = fits
+        .iter()
+        .enumerate()
+        .filter_map(|(i, (_, fit))| match fit {
+            Ok(estimate) if estimate.status.is_success() && cost(estimate).is_finite() => {
+                Some((i, cost(estimate)))
+            }
+            _ => None,
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i);
+    let mut lines = Vec::new();
+    let mut details = String::from("start            status                   cost          max |Δθ|/σ\n");
+    let mut apart: Vec<String> = Vec::new();
+    for (i, (label, fit)) in fits.iter().enumerate() {
+        match fit {
+            Ok(estimate) => {
+                let distance = best.and_then(|b| {
+                    let Ok(best) = &fits[b].1 else { return None };
+                    Some(
+                        estimate
+                            .parameters
+                            .iter()
+                            .zip(&best.parameters)
+                            .map(|(p, q)| (p.value - q.value).abs() / q.standard_error)
+                            .fold(0.0, f64::max),
+                    )
+                });
+                details += &format!(
+                    "{label:<16} {:<24} {:<13.6e} {}\n",
+                    estimate.status.to_string().chars().take(24).collect::<String>(),
+                    cost(estimate),
+                    distance.map_or("-".into(), |d| format!("{d:.3}"))
+                );
+                lines.push(format!(
+                    "{label}: {} at cost {:.6e}{}",
+                    estimate.status,
+                    cost(estimate),
+                    distance.map_or(String::new(), |d| format!(
+                        ", parameters within {d:.3}σ of the least-cost fit"
+                    ))
+                ));
+                if let Some(b) = best.filter(|&b| b != i)
+                    && let Ok(best_fit) = &fits[b].1
+                    && estimate.status.is_success()
+                    && (cost(estimate) - cost(best_fit)).abs() < EQUAL_COST
+                {
+                    for (p, q) in estimate.parameters.iter().zip(&best_fit.parameters) {
+                        if (p.value - q.value).abs() > q.standard_error
+                            && !apart.contains(&q.name)
+                        {
+                            apart.push(q.name.clone());
+                        }
+                    }
+                }
+            }
+            Err(error) => {
+                details += &format!("{label:<16} failed: {error}\n");
+                lines.push(format!("{label}: failed: {error}"));
+            }
+        }
+    }
+    let (_, chosen) = fits.swap_remove(best.unwrap_or(0));
+    let mut estimate = chosen?;
+    let converged = fits.iter().filter(|(_, f)| f.as_ref().is_ok_and(|e| e.status.is_success())).count()
+        + usize::from(best.is_some());
+    estimate.notes.push(format!(
+        "{} starts (spread {}, seed {}): {converged} converged; {}; {}",
+        options.starts,
+        options.start_spread,
+        options.start_seed,
+        if apart.is_empty() {
+            "the converged ones agree with the least-cost fit or reach a worse minimum".to_string()
+        } else {
+            format!(
+                "another converged minimum of equal cost (within {EQUAL_COST}) differs by more than 1σ in {}",
+                apart.join(", ")
+            )
+        },
+        lines.join("; ")
+    ));
+    if !apart.is_empty() && estimate.status.is_success() {
+        estimate.status = Status::Unidentified(apart);
+    }
+    estimate.details = format!("{}\n{details}", estimate.details);
+    estimate.wall_time = started.elapsed().as_secs_f64();
+    Ok(estimate)
 }
 
 /// Method name in estimates.
