@@ -43,9 +43,15 @@
 //! output o is [v_o ⊙ d ⊗ x̃ | 0 … h̃ … 0], so JᵀJ has the blocks
 //! hidden–hidden G_jj'·Σ z zᵀ (G = VᵀV, fixed within an epoch),
 //! hidden–output v_oj·Σ z h̃ᵀ and output–output Σ h̃ h̃ᵀ (equal for every
-//! output). The sums Σ w wᵀ of w = [z, h̃] are accumulated sample by
-//! sample into a buffer of a few dozen samples and added by one matrix
-//! product per buffer; the training loop allocates nothing per sample.
+//! output). Σ z zᵀ has the Kronecker structure Σ (d_j·d_j')(x̃_i·x̃_i'):
+//! only its H(H+1)/2 × (n+1)(n+2)/2 distinct sums are accumulated, with
+//! Σ h̃ [z, h̃]ᵀ, sample by sample into buffers of a block of samples and
+//! added by two matrix products per block (about a third of the products
+//! of the full Σ w wᵀ, w = [z, h̃]); the training loop allocates nothing
+//! per sample. The damped system is solved with the output weights
+//! eliminated first (`damped_step`): one Cholesky factor of the
+//! hidden weights' H(n+1)-square Schur complement and one of the
+//! (H+1)-square output block, not one of all the weights'.
 
 use crate::error::{Error, Result};
 use crate::estimation::neural::elm::choose_by_held_out;
@@ -139,21 +145,6 @@ impl FeedForward {
         }
     }
 
-    /// The forward pass keeping the hidden activations.
-    fn forward(&self, input: &[f64], hidden: &mut [f64], output: &mut [f64]) {
-        let h = self.hidden;
-        self.forward_hidden(input, hidden);
-        let output_layer = &self.weights[self.hidden_weights()..];
-        for (y, row) in output.iter_mut().zip(output_layer.chunks_exact(h + 1)) {
-            *y = row[h]
-                + row[..h]
-                    .iter()
-                    .zip(hidden.iter())
-                    .map(|(v, a)| v * a)
-                    .sum::<f64>();
-        }
-    }
-
     /// ∂y/∂w for one input by back-propagation of the Marquardt
     /// sensitivities (Hagan & Menhaj): row o, column k is
     /// ∂y_o/∂w_k. `hidden` is a buffer of the hidden-layer size and
@@ -230,7 +221,7 @@ impl Network for FeedForward {
                 .iter()
                 .zip(&input[from..])
                 .fold(start, |sum, (w, x)| sum + w * x);
-            let activation = (row[n] + sum).tanh();
+            let activation = tanh(row[n] + sum);
             for (o, y) in output.iter_mut().enumerate().take(self.outputs) {
                 *y += output_layer[o * (h + 1) + j] * activation;
             }
@@ -338,7 +329,17 @@ impl Trainer for SizeSearch {
 #[inline]
 fn neuron(row: &[f64], input: &[f64]) -> f64 {
     let (weights, bias) = row.split_at(row.len() - 1);
-    (bias[0] + weights.iter().zip(input).map(|(w, x)| w * x).sum::<f64>()).tanh()
+    tanh(bias[0] + weights.iter().zip(input).map(|(w, x)| w * x).sum::<f64>())
+}
+
+/// The hidden neurons' tanh, as sign(s)·(1 − 2/(e^(2|s|) + 1)): one
+/// exponential instead of the library tanh's expm1 (a third of the
+/// training's time), within 4·10⁻¹⁶ of it absolutely (what the weighted
+/// sums see; its relative error grows below |s| ≈ 10⁻³, where the value is
+/// itself below 10⁻³).
+#[inline]
+fn tanh(s: f64) -> f64 {
+    (1.0 - 2.0 / ((2.0 * s.abs()).exp() + 1.0)).copysign(s)
 }
 
 /// Why training stopped.
@@ -436,11 +437,10 @@ fn packed(p: usize, q: usize) -> usize {
 
 /// The buffers of one training, allocated once.
 struct Workspace {
-    hidden: Vec<f64>,
     output: Vec<f64>,
     error: Vec<f64>,
-    /// Back-propagated error per hidden neuron, (Vᵀe) ⊙ d.
-    delta: Vec<f64>,
+    /// Per hidden neuron of the current sample, d_j = 1 − h_j².
+    slopes: Vec<f64>,
     /// Per sample of the current block (one column each): d_j·d_j' for
     /// j ≤ j' (packed), x̃_i·x̃_i' for i ≤ i' (packed), h̃, and w = [d ⊗ x̃, h̃].
     neuron_pairs: DMatrix<f64>,
@@ -455,19 +455,24 @@ struct Workspace {
     gram: DMatrix<f64>,
     /// Trial weights.
     trial: Vec<f64>,
+    /// Per training sample, the hidden activations and outputs of the
+    /// network's weights and of the trial weights (H + O each): the last
+    /// pass over the training samples (its sum of squares) keeps them for
+    /// the next accumulation.
+    kept: Vec<f64>,
+    kept_trial: Vec<f64>,
 }
 
 impl Workspace {
-    fn new(inputs: usize, hidden: usize, outputs: usize) -> Workspace {
+    fn new(inputs: usize, hidden: usize, outputs: usize, samples: usize) -> Workspace {
         let (n, h) = (inputs, hidden);
         let width = h * (n + 1) + h + 1;
         let neuron_pairs = h * (h + 1) / 2;
         let input_pairs = (n + 1) * (n + 2) / 2;
         Workspace {
-            hidden: vec![0.0; h],
             output: vec![0.0; outputs],
             error: vec![0.0; outputs],
-            delta: vec![0.0; h],
+            slopes: vec![0.0; h],
             neuron_pairs: DMatrix::zeros(neuron_pairs, BLOCK),
             input_pairs: DMatrix::zeros(input_pairs, BLOCK),
             activations: DMatrix::zeros(h + 1, BLOCK),
@@ -476,6 +481,8 @@ impl Workspace {
             products: DMatrix::zeros(h + 1, width),
             gram: DMatrix::zeros(h, h),
             trial: vec![0.0; h * (n + 1) + outputs * (h + 1)],
+            kept: vec![0.0; samples * (h + outputs)],
+            kept_trial: vec![0.0; samples * (h + outputs)],
         }
     }
 
@@ -538,9 +545,9 @@ impl LevenbergMarquardt {
                 samples.training.len()
             )));
         }
-        let mut work = Workspace::new(n, self.hidden, outputs);
+        let mut work = Workspace::new(n, self.hidden, outputs, samples.training.len());
         let count = |set: &[usize]| (set.len() * outputs).max(1) as f64;
-        let mut sse = sum_of_squares(&network, &samples, &samples.training, &mut work);
+        let mut sse = training_sum_of_squares(&network, &samples, &mut work.kept);
         let mut training_mse = vec![sse / count(&samples.training)];
         let mut held_out_mse = Vec::new();
         let mut best = (f64::INFINITY, 0usize, network.weights.clone());
@@ -576,7 +583,7 @@ impl LevenbergMarquardt {
                     {
                         *t = w + s;
                     }
-                    let trial_sse = sum_of_squares(&trial, &samples, &samples.training, &mut work);
+                    let trial_sse = training_sum_of_squares(&trial, &samples, &mut work.kept_trial);
                     work.trial = trial.weights;
                     if trial_sse < sse {
                         accepted = Some(trial_sse);
@@ -590,6 +597,7 @@ impl LevenbergMarquardt {
                 break Stop::DampingLimit;
             };
             std::mem::swap(&mut network.weights, &mut work.trial);
+            std::mem::swap(&mut work.kept, &mut work.kept_trial);
             sse = trial_sse;
             epochs += 1;
             training_mse.push(sse / count(&samples.training));
@@ -664,8 +672,44 @@ fn sum_of_squares(
     sum
 }
 
+/// Σ e² over the training samples, keeping each sample's hidden
+/// activations and outputs in `kept` (the arithmetic of
+/// [`FeedForward::predict`]).
+fn training_sum_of_squares(network: &FeedForward, samples: &Samples, kept: &mut [f64]) -> f64 {
+    let (n, h, outputs) = (network.inputs, network.hidden, network.outputs);
+    let (hidden_layer, output_layer) = network.weights.split_at(network.hidden_weights());
+    // The output weights neuron by neuron (the biases last), contiguous.
+    let by_neuron: Vec<f64> = (0..=h)
+        .flat_map(|j| (0..outputs).map(move |o| output_layer[o * (h + 1) + j]))
+        .collect();
+    let (by_neuron, biases) = by_neuron.split_at(h * outputs);
+    let mut sum = 0.0;
+    for (&k, row) in samples.training.iter().zip(kept.chunks_exact_mut(h + outputs)) {
+        let input = &samples.inputs[k];
+        let (activations, output) = row.split_at_mut(h);
+        output.copy_from_slice(biases);
+        for ((weights, activation), to_outputs) in hidden_layer
+            .chunks_exact(n + 1)
+            .zip(activations.iter_mut())
+            .zip(by_neuron.chunks_exact(outputs))
+        {
+            *activation = neuron(weights, input);
+            for (y, v) in output.iter_mut().zip(to_outputs) {
+                *y += v * *activation;
+            }
+        }
+        sum += output
+            .iter()
+            .zip(&samples.targets[k])
+            .map(|(y, t)| (y - t) * (y - t))
+            .sum::<f64>();
+    }
+    sum
+}
+
 /// Jᵀe of the training samples, e = y − t, and the sums JᵀJ is made of,
-/// accumulated sample by sample (module documentation): G = VᵀV in
+/// accumulated sample by sample from the activations and outputs the last
+/// pass kept for the network's weights (module documentation): G = VᵀV in
 /// `work.gram`, the distinct entries of Σ z zᵀ in `work.kronecker` and
 /// Σ h̃ [z, h̃]ᵀ in `work.products`.
 fn accumulate(network: &FeedForward, samples: &Samples, work: &mut Workspace) -> DVector<f64> {
@@ -681,55 +725,77 @@ fn accumulate(network: &FeedForward, samples: &Samples, work: &mut Workspace) ->
     }
     work.kronecker.fill(0.0);
     work.products.fill(0.0);
-    let mut gradient = DVector::zeros(parameters);
+    let width = hidden_weights + h + 1;
+    let neuron_pairs = work.neuron_pairs.nrows();
+    let input_pairs = work.input_pairs.nrows();
+    // V by neuron: the weights of neuron j to every output, contiguous.
+    let by_neuron: Vec<f64> = (0..h)
+        .flat_map(|j| (0..outputs).map(move |o| v(o, j)))
+        .collect();
+    let mut gradient = vec![0.0; parameters];
+    let (hidden_gradient, output_gradient) = gradient.split_at_mut(hidden_weights);
     let mut filled = 0;
-    for &k in &samples.training {
-        let input = &samples.inputs[k];
-        network.forward(input, &mut work.hidden, &mut work.output);
+    for (index, &k) in samples.training.iter().enumerate() {
+        let input = &samples.inputs[k][..n];
+        let kept = &work.kept[index * (h + outputs)..(index + 1) * (h + outputs)];
+        let (activations, predicted) = kept.split_at(h);
         for ((e, y), t) in work
             .error
             .iter_mut()
-            .zip(&work.output)
+            .zip(predicted)
             .zip(&samples.targets[k])
         {
             *e = y - t;
         }
-        let mut column = work.block.column_mut(filled);
-        let mut activations = work.activations.column_mut(filled);
-        for j in 0..h {
-            let d = 1.0 - work.hidden[j] * work.hidden[j];
-            work.delta[j] = d * (0..outputs).map(|o| v(o, j) * work.error[o]).sum::<f64>();
-            for i in 0..n {
-                column[j * (n + 1) + i] = d * input[i];
-                gradient[j * (n + 1) + i] += work.delta[j] * input[i];
+        let column = &mut work.block.as_mut_slice()[filled * width..(filled + 1) * width];
+        for (j, (&a, slope)) in activations.iter().zip(&mut work.slopes).enumerate() {
+            let d = 1.0 - a * a;
+            *slope = d;
+            let delta = d * by_neuron[j * outputs..(j + 1) * outputs]
+                .iter()
+                .zip(&work.error)
+                .map(|(v, e)| v * e)
+                .sum::<f64>();
+            let z = &mut column[j * (n + 1)..(j + 1) * (n + 1)];
+            let g = &mut hidden_gradient[j * (n + 1)..(j + 1) * (n + 1)];
+            for ((z, g), x) in z.iter_mut().zip(g.iter_mut()).zip(input) {
+                *z = d * x;
+                *g += delta * x;
             }
-            column[j * (n + 1) + n] = d;
-            gradient[j * (n + 1) + n] += work.delta[j];
-            column[hidden_weights + j] = work.hidden[j];
-            activations[j] = work.hidden[j];
+            z[n] = d;
+            g[n] += delta;
         }
-        column[hidden_weights + h] = 1.0;
-        activations[h] = 1.0;
-        let mut pairs = work.neuron_pairs.column_mut(filled);
-        for q in 0..h {
-            let dq = 1.0 - work.hidden[q] * work.hidden[q];
-            for p in 0..=q {
-                pairs[packed(p, q)] = (1.0 - work.hidden[p] * work.hidden[p]) * dq;
+        column[hidden_weights..hidden_weights + h].copy_from_slice(activations);
+        column[width - 1] = 1.0;
+        let tilde = &mut work.activations.as_mut_slice()[filled * (h + 1)..(filled + 1) * (h + 1)];
+        tilde[..h].copy_from_slice(activations);
+        tilde[h] = 1.0;
+        // d_p·d_q and x̃_p·x̃_q for p ≤ q, packed column by column.
+        let pairs =
+            &mut work.neuron_pairs.as_mut_slice()[filled * neuron_pairs..(filled + 1) * neuron_pairs];
+        let mut slot = 0;
+        for (q, &dq) in work.slopes.iter().enumerate() {
+            for (pair, &dp) in pairs[slot..=slot + q].iter_mut().zip(&work.slopes) {
+                *pair = dp * dq;
             }
+            slot += q + 1;
         }
-        let mut pairs = work.input_pairs.column_mut(filled);
-        let x = |i: usize| if i < n { input[i] } else { 1.0 };
+        let pairs =
+            &mut work.input_pairs.as_mut_slice()[filled * input_pairs..(filled + 1) * input_pairs];
+        let mut slot = 0;
         for q in 0..=n {
-            for p in 0..=q {
-                pairs[packed(p, q)] = x(p) * x(q);
+            let xq = if q < n { input[q] } else { 1.0 };
+            for (pair, &xp) in pairs[slot..slot + q].iter_mut().zip(input) {
+                *pair = xp * xq;
             }
+            pairs[slot + q] = xq * xq;
+            slot += q + 1;
         }
-        for o in 0..outputs {
-            let base = hidden_weights + o * (h + 1);
-            for j in 0..h {
-                gradient[base + j] += work.error[o] * work.hidden[j];
+        for (e, g) in work.error.iter().zip(output_gradient.chunks_exact_mut(h + 1)) {
+            for (g, a) in g.iter_mut().zip(activations) {
+                *g += e * a;
             }
-            gradient[base + h] += work.error[o];
+            g[h] += e;
         }
         filled += 1;
         if filled == BLOCK {
@@ -740,7 +806,7 @@ fn accumulate(network: &FeedForward, samples: &Samples, work: &mut Workspace) ->
     if filled > 0 {
         add_block(work, filled);
     }
-    gradient
+    DVector::from_vec(gradient)
 }
 
 /// JᵀJ assembled from the sums [`accumulate`] left in `work`.
@@ -812,7 +878,7 @@ fn damped_step(
     // W = L_A⁻¹·Σ h̃ zᵀ, so that M = WᵀW.
     let mut w = s.view((0, 0), (h + 1, hidden_weights)).into_owned();
     a.l_dirty().solve_lower_triangular_mut(&mut w).then_some(())?;
-    let mut k = w.tr_mul(&w);
+    let mut k = w.transpose() * &w;
     for b in 0..hidden_weights {
         for r in 0..hidden_weights {
             k[(r, b)] = work.gram[(r / (n + 1), b / (n + 1))] * (work.zz(n, r, b) - k[(r, b)]);
@@ -992,7 +1058,8 @@ mod tests {
             held_out: Vec::new(),
         };
         let parameters = network.weights.len();
-        let mut work = Workspace::new(3, 4, 2);
+        let mut work = Workspace::new(3, 4, 2, x.len());
+        training_sum_of_squares(&network, &samples, &mut work.kept);
         let normal_gradient = accumulate(&network, &samples, &mut work);
         let normal_information = information(&network, &work);
         let mut information = DMatrix::zeros(parameters, parameters);
@@ -1090,6 +1157,19 @@ mod tests {
             (10, 1, "feed-forward")
         );
         assert!(report.r_squared > 0.9999, "{}", report.r_squared);
+    }
+
+    /// The neurons' tanh is the library's to 4·10⁻¹⁶ absolutely over
+    /// [−40, 40] (measured worst 2.2e-16), odd, and saturates at ±1.
+    #[test]
+    fn tanh_is_the_library_tanh() {
+        let worst = (-400_000..=400_000)
+            .map(|k| k as f64 * 1e-4 + 1.234_567e-6)
+            .map(|s| (tanh(s) - s.tanh()).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= 4e-16, "{worst:e}");
+        assert_eq!(tanh(-0.3), -tanh(0.3));
+        assert_eq!((tanh(800.0), tanh(-800.0), tanh(0.0)), (1.0, -1.0, 0.0));
     }
 
     /// A seed gives the same weights bit for bit; another seed other ones.
