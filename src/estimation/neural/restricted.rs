@@ -796,7 +796,8 @@ impl LeastSquaresProblem for Fit<'_> {
 impl Fit<'_> {
     /// ∂C/∂Θ_j of each instant's coefficients, in the network's scaled
     /// input units: parameter by parameter, instant by instant, coefficient
-    /// by coefficient. The coefficients at Θ are restored.
+    /// by coefficient. The coefficients at Θ are restored, and with them
+    /// the predictions at Θ when they were computed.
     fn coefficient_slopes(
         &mut self,
         theta: &DVector<f64>,
@@ -810,6 +811,7 @@ impl Fit<'_> {
                 _ => 0.0,
             })
             .collect();
+        let predicted_at = self.predicted_at.take();
         self.evaluate_coefficients(theta)?;
         let base = self.coefficients.clone();
         let mut slopes = Vec::with_capacity(theta.len() * base.len());
@@ -828,6 +830,9 @@ impl Fit<'_> {
             );
         }
         self.coefficients = base;
+        // The predictions at Θ, if they were, still are: only the
+        // coefficients were changed, and they are Θ's again.
+        self.predicted_at = predicted_at.filter(|at| at == theta);
         Ok(slopes)
     }
 
