@@ -66,7 +66,10 @@ fn bench_ngn(c: &mut Criterion) {
     let structure = ModelStructure::load("attas-lateral").expect("bundled model");
     let problem = EstimationProblem::new("ngn", vec![record], structure, &[]).expect("problem");
     let mut tables = MethodTables::new();
-    tables.insert("ngn".into(), toml::from_str("hidden = 20").expect("settings"));
+    tables.insert(
+        "ngn".into(),
+        toml::from_str("hidden = 20").expect("settings"),
+    );
     let fixed = EstimationProblem::new(
         "ngn",
         problem.records.clone(),

@@ -216,6 +216,9 @@ fn mean_square_error(network: &Elm, inputs: &[&[f64]], targets: &[&[f64]]) -> f6
     sum / (inputs.len() * network.outputs).max(1) as f64
 }
 
+/// The held-out residual of each candidate size tried, in the order tried.
+pub type SizeScores = Vec<(usize, f64)>;
+
 /// The held-out residual criterion of the ELM paper's Eq. 6, shared by
 /// every network whose hidden-layer size is chosen from the data (the ELM
 /// here, the feed-forward network of `ngn`): each candidate size in
@@ -228,7 +231,7 @@ fn mean_square_error(network: &Elm, inputs: &[&[f64]], targets: &[&[f64]]) -> f6
 pub fn choose_by_held_out<T>(
     sizes: &[usize],
     mut train: impl FnMut(usize) -> Result<Option<(T, f64)>>,
-) -> Result<Option<(usize, T, Vec<(usize, f64)>)>> {
+) -> Result<Option<(usize, T, SizeScores)>> {
     let mut scores = Vec::with_capacity(sizes.len());
     let mut best: Option<(usize, T, f64)> = None;
     for &size in sizes {

@@ -54,7 +54,7 @@
 //! (H+1)-square output block, not one of all the weights'.
 
 use crate::error::{Error, Result};
-use crate::estimation::neural::elm::choose_by_held_out;
+use crate::estimation::neural::elm::{SizeScores, choose_by_held_out};
 use crate::estimation::neural::restricted::{Network, Trainer, TrainingSet};
 use crate::estimation::neural::{NetworkReport, fit_metrics};
 use crate::random::{stream, streams};
@@ -269,7 +269,7 @@ impl SizeSearch {
         &self,
         inputs: &[Vec<f64>],
         targets: &[Vec<f64>],
-    ) -> Result<(FeedForward, Training, Vec<(usize, f64)>)> {
+    ) -> Result<(FeedForward, Training, SizeScores)> {
         let every = self.training.held_out_every;
         if every < 2 {
             return Err(Error::Other(
@@ -684,7 +684,11 @@ fn training_sum_of_squares(network: &FeedForward, samples: &Samples, kept: &mut 
         .collect();
     let (by_neuron, biases) = by_neuron.split_at(h * outputs);
     let mut sum = 0.0;
-    for (&k, row) in samples.training.iter().zip(kept.chunks_exact_mut(h + outputs)) {
+    for (&k, row) in samples
+        .training
+        .iter()
+        .zip(kept.chunks_exact_mut(h + outputs))
+    {
         let input = &samples.inputs[k];
         let (activations, output) = row.split_at_mut(h);
         output.copy_from_slice(biases);
@@ -771,8 +775,8 @@ fn accumulate(network: &FeedForward, samples: &Samples, work: &mut Workspace) ->
         tilde[..h].copy_from_slice(activations);
         tilde[h] = 1.0;
         // d_p·d_q and x̃_p·x̃_q for p ≤ q, packed column by column.
-        let pairs =
-            &mut work.neuron_pairs.as_mut_slice()[filled * neuron_pairs..(filled + 1) * neuron_pairs];
+        let pairs = &mut work.neuron_pairs.as_mut_slice()
+            [filled * neuron_pairs..(filled + 1) * neuron_pairs];
         let mut slot = 0;
         for (q, &dq) in work.slopes.iter().enumerate() {
             for (pair, &dp) in pairs[slot..=slot + q].iter_mut().zip(&work.slopes) {
@@ -791,7 +795,11 @@ fn accumulate(network: &FeedForward, samples: &Samples, work: &mut Workspace) ->
             pairs[slot + q] = xq * xq;
             slot += q + 1;
         }
-        for (e, g) in work.error.iter().zip(output_gradient.chunks_exact_mut(h + 1)) {
+        for (e, g) in work
+            .error
+            .iter()
+            .zip(output_gradient.chunks_exact_mut(h + 1))
+        {
             for (g, a) in g.iter_mut().zip(activations) {
                 *g += e * a;
             }
@@ -877,7 +885,9 @@ fn damped_step(
     let a = a.cholesky()?;
     // W = L_A⁻¹·Σ h̃ zᵀ, so that M = WᵀW.
     let mut w = s.view((0, 0), (h + 1, hidden_weights)).into_owned();
-    a.l_dirty().solve_lower_triangular_mut(&mut w).then_some(())?;
+    a.l_dirty()
+        .solve_lower_triangular_mut(&mut w)
+        .then_some(())?;
     let mut k = w.transpose() * &w;
     for b in 0..hidden_weights {
         for r in 0..hidden_weights {
@@ -886,7 +896,9 @@ fn damped_step(
         k[(b, b)] += mu;
     }
     // (A + μI)⁻¹·g_o of every output, column by column.
-    let mut u = DMatrix::from_fn(h + 1, outputs, |c, o| gradient[hidden_weights + o * (h + 1) + c]);
+    let mut u = DMatrix::from_fn(h + 1, outputs, |c, o| {
+        gradient[hidden_weights + o * (h + 1) + c]
+    });
     a.solve_mut(&mut u);
     let hz = s.view((0, 0), (h + 1, hidden_weights));
     let pulled = hz.tr_mul(&u);
@@ -896,7 +908,9 @@ fn damped_step(
     });
     let hidden_step = k.cholesky()?.solve(&rhs);
     // g_o + C_oᵀ·Δw_h of every output, then (A + μI)⁻¹ of it, negated.
-    let weighted = DMatrix::from_fn(hidden_weights, outputs, |r, o| v(o, r / (n + 1)) * hidden_step[r]);
+    let weighted = DMatrix::from_fn(hidden_weights, outputs, |r, o| {
+        v(o, r / (n + 1)) * hidden_step[r]
+    });
     let mut output_step = hz * &weighted;
     for o in 0..outputs {
         for c in 0..=h {
