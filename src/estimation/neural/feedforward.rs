@@ -289,7 +289,12 @@ impl SizeSearch {
                 ..self.training.clone()
             };
             let (network, training) = trainer.train(inputs, targets)?;
-            let held_out = training.held_out_mse[training.best_epoch];
+            // Not finite (never chosen) when no sample is held out.
+            let held_out = training
+                .held_out_mse
+                .get(training.best_epoch)
+                .copied()
+                .unwrap_or(f64::NAN);
             Ok(Some(((network, training), held_out)))
         })?;
         let (_, (network, training), scores) = chosen.ok_or_else(|| {
