@@ -1,15 +1,18 @@
 //! Neural Gauss–Newton (`ngn`) on the ATTAS lateral-directional case
 //! (scenario attas-lateral-multistep: 60 s of aileron and rudder
 //! multisteps recorded at 25 Hz by the flight-test profile; model
-//! attas-lateral, 18 parameters, the bundled settings): `training` times
-//! the feed-forward network's Levenberg–Marquardt training alone on the
+//! attas-lateral, 18 parameters): `training` and `training_20` time the
+//! feed-forward network's Levenberg–Marquardt training alone on the
 //! restricted model's training set (1 428 pairs of 7 inputs and 7
-//! outputs, 10 tanh neurons, early stopping on every 5th pair), and
-//! `train_and_estimate` the whole method, training and the Gauss–Newton
-//! fit through the network. A second group times the training of 200
-//! epochs on a noise-free record's set, where early stopping does not end
-//! it (`training_200_epochs_ideal`). Run: `cargo bench --bench ngn`.
+//! outputs, 10 and 20 tanh neurons, early stopping on every 5th pair);
+//! `train_and_estimate` the whole method with the bundled settings
+//! (training, with the hidden-layer size chosen from the data, and the
+//! Gauss–Newton fit through the network), `train_and_estimate_20` the same
+//! with `hidden = 20`. A second group times the training of 200 epochs on
+//! a noise-free record's set, where early stopping does not end it
+//! (`training_200_epochs_ideal`, 10 neurons). Run: `cargo bench --bench ngn`.
 
+use aeroid::estimation::estimator::MethodTables;
 use aeroid::estimation::methods;
 use aeroid::estimation::neural::NetworkReport;
 use aeroid::estimation::neural::feedforward::LevenbergMarquardt;
@@ -62,19 +65,39 @@ fn bench_ngn(c: &mut Criterion) {
     let (record, _) = record_scenario(&scenario, &profile).expect("record");
     let structure = ModelStructure::load("attas-lateral").expect("bundled model");
     let problem = EstimationProblem::new("ngn", vec![record], structure, &[]).expect("problem");
+    let mut tables = MethodTables::new();
+    tables.insert(
+        "ngn".into(),
+        toml::from_str("hidden = 20").expect("settings"),
+    );
+    let fixed = EstimationProblem::new(
+        "ngn",
+        problem.records.clone(),
+        ModelStructure::load("attas-lateral").expect("bundled model"),
+        &[&tables],
+    )
+    .expect("problem");
     let (inputs, targets) = training_set("flight-test-25hz");
     let mut group = c.benchmark_group("attas_lateral_ngn");
     group.sample_size(20);
-    let trainer = LevenbergMarquardt::default();
-    group.bench_function("training", |b| {
-        b.iter(|| {
-            trainer
-                .train(black_box(&inputs), &targets)
-                .expect("trained")
-        })
-    });
+    for (name, hidden) in [("training", 10), ("training_20", 20)] {
+        let trainer = LevenbergMarquardt {
+            hidden,
+            ..LevenbergMarquardt::default()
+        };
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                trainer
+                    .train(black_box(&inputs), &targets)
+                    .expect("trained")
+            })
+        });
+    }
     group.bench_function("train_and_estimate", |b| {
         b.iter(|| methods::estimate(black_box(&problem), None).expect("estimate"))
+    });
+    group.bench_function("train_and_estimate_20", |b| {
+        b.iter(|| methods::estimate(black_box(&fixed), None).expect("estimate"))
     });
     group.finish();
     let (inputs, targets) = training_set("ideal");

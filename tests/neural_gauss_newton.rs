@@ -48,56 +48,78 @@ fn worst(rows: &[(String, f64, f64, f64)]) -> (f64, f64) {
 }
 
 /// Noise-free records (the ideal recorder, 100 Hz) of the paper's aircraft
-/// (CDRW, longitudinal 3211 + doublet and lateral multisteps) and of ATTAS
-/// (lateral multistep), the bundled models and settings (CDRW: the
-/// narrower differentiator of its model files). Every parameter within
-/// 0.5 % of the truth. The floor is the network's: equation error on the
-/// same reconstructed coefficients recovers every parameter to 1e-4 %, so
-/// what ngn adds is its network's approximation of the one-step map
-/// (training MSE 4.7e-8, 4.5e-9 and 1.6e-8 in scaled units, R² above
-/// 0.99999). Measured worst errors: CDRW longitudinal 0.18 % (CL_de),
-/// CDRW lateral 0.02 % (CY_r), ATTAS lateral 0.03 % (CY_da); the tolerance
-/// is 2.8 times the worst.
+/// (CDRW, longitudinal 3211 + doublet and lateral multisteps), of ATTAS
+/// (elevator 3211, lateral multistep) and of HANSA-3 (elevator multistep),
+/// the bundled models and settings (CDRW: the narrower differentiator of
+/// its model files; the hidden-layer size chosen from the data). The
+/// held-out error chooses 20 neurons on every record (measured held-out
+/// MSE 10 → 20 neurons: ATTAS 3211 1.2e-10 → 1.0e-12, HANSA-3 4.6e-9 →
+/// 5.7e-10, ATTAS lateral 1.6e-8 → 5.5e-11, CDRW longitudinal 6.0e-8 →
+/// 7.8e-10, CDRW lateral 4.5e-9 → 2.8e-12, in scaled units), and every
+/// parameter is within 1e-4 of its truth (relative; |truth| floored at
+/// 0.01 for the offsets near zero). The truth is the scenario's model; the
+/// tolerance is the network's approximation floor: equation error on the
+/// same reconstructed coefficients recovers every parameter to 1e-6, so
+/// what ngn adds is its network's one-step error. Measured worst: CDRW
+/// longitudinal 5.3e-5 (Cm_q), HANSA-3 3.0e-5 (Cm_alpha), CDRW lateral
+/// 1.9e-5 (Cl_dr), ATTAS lateral 1.1e-5 (CY_da), ATTAS 3211 6.6e-6
+/// (CL_de); the tolerance is about twice the worst.
 #[test]
 fn noise_free_records_are_recovered_to_the_network_floor() {
-    for (scenario, model, measured) in [
-        ("cdrw-longitudinal", "cdrw-longitudinal", 0.0018),
-        ("cdrw-lateral", "cdrw-lateral", 0.0002),
-        ("attas-lateral-multistep", "attas-lateral", 0.0003),
+    for (scenario, model) in [
+        ("cdrw-longitudinal", "cdrw-longitudinal"),
+        ("cdrw-lateral", "cdrw-lateral"),
+        ("attas-lateral-multistep", "attas-lateral"),
+        ("attas-elevator-3211", "attas-longitudinal"),
+        ("hansa3-elevator-multistep", "hansa3-longitudinal"),
     ] {
         let (record, truth) = fly(scenario, "ideal");
         let estimate = run("ngn", &record, model, "");
         let rows = common::against_truth(&estimate, &truth);
         let text = common::truth_table(&rows);
         eprintln!("{scenario}:\n{text}{:?}", estimate.network);
-        assert_eq!(estimate.status, Status::Converged, "{scenario}");
+        assert_eq!(estimate.status, Status::Converged, "{scenario}\n{text}");
         let network = estimate.network.as_ref().unwrap();
         assert_eq!(
             (network.kind.as_str(), network.hidden, network.seed),
-            ("feed-forward", 10, 1)
+            ("feed-forward", 20, 1),
+            "{scenario}: {network:?}"
+        );
+        let scores: Vec<&str> = network
+            .settings
+            .iter()
+            .filter(|(name, _)| name.starts_with("held-out mse,"))
+            .map(|(name, _)| name.as_str())
+            .collect();
+        assert_eq!(
+            scores,
+            ["held-out mse, 10 neurons", "held-out mse, 20 neurons"],
+            "{scenario}: every candidate size is scored in the report"
         );
         assert!(network.r_squared > 0.99999, "{scenario}: {network:?}");
         assert_eq!(
             network.outputs, network.inputs,
             "Eq. 30: the inputs' variables at k+1"
         );
-        let (relative, _) = worst(&rows);
-        assert!(relative < 0.005, "{scenario}:\n{text}");
-        assert!(
-            relative < 3.0 * measured,
-            "{scenario}: worse than measured\n{text}"
-        );
+        for (name, value, _, truth) in &rows {
+            assert!(
+                (value - truth).abs() <= 1e-4 * truth.abs().max(1e-2),
+                "{scenario} {name}\n{text}"
+            );
+        }
     }
 }
 
 /// The 25 Hz flight-test record of the ATTAS lateral multistep (sensor
-/// noise, the bundled settings): ngn converges, but its network, trained
-/// on noisy coefficients, stops early (held-out error rising after 13
-/// epochs, R² 0.944) and its estimates are biased well beyond their
-/// Cramér–Rao bounds: measured errors 0.1 % (CY_beta) to 55 % (Cn_da),
-/// Cl_p +9.4 %, Cn_beta +12 %, largest 7.7σ (Cl_da). Output error on the
-/// same record is within 2σ on every parameter. Asserted as the finding:
-/// ngn's worst error beyond 5σ and beyond 20 %, output error's within 3σ.
+/// noise, the bundled settings): the held-out error chooses 20 neurons
+/// (held-out MSE 0.003334 against 0.003349 for 10), the network, trained
+/// on noisy coefficients, stops early (held-out error rising after 14
+/// epochs, R² 0.953) and ngn converges, but its estimates are biased
+/// beyond their Cramér–Rao bounds: measured errors 0.09 % (CY_beta) to
+/// 91 % (Cn_da), Cn_p +65 %, Cl_r +22 % (3.9σ, the largest), Cl_beta
+/// +5.4 % (3.1σ). Output error on the same record is within 2σ on every
+/// parameter. Asserted as the finding: ngn's worst error beyond 3σ and
+/// beyond 20 %, output error's within 3σ.
 #[test]
 fn flight_test_noise_biases_the_estimates_beyond_their_bounds() {
     let (record, truth) = fly("attas-lateral-multistep", "flight-test-25hz");
@@ -108,7 +130,7 @@ fn flight_test_noise_biases_the_estimates_beyond_their_bounds() {
     assert_eq!(estimate.status, Status::Converged);
     assert!(rows.iter().all(|r| r.2.is_finite() && r.2 > 0.0), "{text}");
     let (relative, sigmas) = worst(&rows);
-    assert!(relative > 0.2 && sigmas > 5.0, "{text}");
+    assert!(relative > 0.2 && sigmas > 3.0, "{text}");
     let network = estimate.network.as_ref().unwrap();
     assert!(network.r_squared < 0.99, "{network:?}");
     let reference = run("oem", &record, "attas-lateral", "");
@@ -121,12 +143,14 @@ fn flight_test_noise_biases_the_estimates_beyond_their_bounds() {
 }
 
 /// The CDRW longitudinal record at 25 Hz with flight-test noise: 20 s give
-/// 436 training pairs, and the network learns the one-step map only to
-/// R² 0.72 before its held-out error rises (epoch 15). The Gauss–Newton fit
-/// through it converges to a wrong model: measured CL_alpha −0.56 against
-/// 2.98, CL_de −5.8 against 0.40, Cm_q −0.36 against −0.073, each beyond
-/// 8σ of its bound. Output error recovers CL_alpha to 0.2 %. Asserted:
-/// ngn's CL_alpha off by more than half of its value, oem's within 1 %.
+/// 436 training pairs; the held-out error chooses 20 neurons (0.0226
+/// against 0.0239 for 10), and the network learns the one-step map only
+/// to R² 0.72 before its held-out error rises (epoch 6). The Gauss–Newton
+/// fit through it converges to a wrong model: measured CL_alpha 1.75
+/// against 2.98 (−41 %, 6.3σ), Cm_alpha −1.42 against −0.241, Cm_q +0.87
+/// against −0.073 (the wrong sign, 16σ). Output error recovers CL_alpha to
+/// 0.2 %. Asserted: ngn's CL_alpha off by more than a quarter of its
+/// value and its Cm_q of the wrong sign, oem's CL_alpha within 1 %.
 #[test]
 fn short_noisy_cdrw_record_is_beyond_the_network() {
     let (record, truth) = fly("cdrw-longitudinal", "flight-test-25hz");
@@ -136,7 +160,9 @@ fn short_noisy_cdrw_record_is_beyond_the_network() {
     let network = estimate.network.as_ref().unwrap();
     assert!(network.r_squared < 0.8, "{network:?}");
     let cl_alpha = estimate.parameter("CL_alpha").unwrap().value;
-    assert!((cl_alpha - 2.98).abs() > 0.5 * 2.98, "{cl_alpha}");
+    assert!((cl_alpha - 2.98).abs() > 0.25 * 2.98, "{cl_alpha}");
+    let cm_q = estimate.parameter("Cm_q").unwrap().value;
+    assert!(cm_q > 0.0, "{cm_q}");
     let reference = run("oem", &record, "cdrw-longitudinal", "");
     let cl_alpha = reference.parameter("CL_alpha").unwrap().value;
     assert!((cl_alpha - 2.98).abs() < 0.01 * 2.98, "{cl_alpha}");
@@ -206,15 +232,15 @@ fn refusals_name_what_is_missing() {
 
 /// 20 flight-test records of the ATTAS lateral multistep (one flight,
 /// recorder seeds 100–119), ngn with the bundled settings, beside the
-/// Cramér–Rao bounds it reports. Measured: σ_MC/CRB 1.20 (Cn_beta) to
-/// 3.56 (Cl_da), the bounds understate the scatter for every parameter;
-/// the means are biased, beyond three standard errors of the mean
-/// (3·σ_MC/√20 = 0.67 σ_MC) for 16 of 18 parameters: Cn_dr +40 %
-/// (4.1 σ_MC), Cn_beta +14 % (3.3 σ_MC), Cl_beta +6.4 % (2.2 σ_MC); the
-/// weak derivatives are lost: Cn_da −0.0064 estimated +0.0014 on average,
-/// Cn_p −0.051 estimated −0.006, CY_da +84 %. Asserted: every σ_MC above
-/// its mean bound, and Cn_dr and Cn_beta biased beyond three standard
-/// errors of their mean.
+/// Cramér–Rao bounds it reports. Measured: σ_MC/CRB 1.15 (Cn_da) to 3.85
+/// (Cl_da), the bounds understate the scatter for every parameter; the
+/// means are biased beyond three standard errors of the mean
+/// (3·σ_MC/√20 = 0.67 σ_MC) for 13 of 18 parameters: Cn_beta +10 %
+/// (2.0 σ_MC), Cn_dr +28 % (1.7 σ_MC), CY_dr +7 % (1.6 σ_MC), Cl_beta
+/// +4 % (1.0 σ_MC); the weak derivatives are lost: Cn_da −0.0064
+/// estimated −0.0016 on average, Cn_p −0.051 estimated −0.027, CY_da
+/// +62 %, Cn_r +61 %. Asserted: every σ_MC above its mean bound, and Cn_dr
+/// and Cn_beta biased beyond three standard errors of their mean.
 #[test]
 fn flight_test_monte_carlo_scatter_exceeds_the_bounds_and_the_mean_is_biased() {
     let runs = 20;
@@ -255,49 +281,42 @@ fn flight_test_monte_carlo_scatter_exceeds_the_bounds_and_the_mean_is_biased() {
     eprintln!("{text}");
 }
 
-/// Where ngn does not recover the parameters on noise-free data with its
-/// default network (ideal profile, 10 hidden neurons): the longitudinal
-/// records of ATTAS (3211) and Hansa-3 (multistep). The network fits the
-/// one-step map to R² 0.9999999 and better, yet Gauss–Newton through it
-/// stops at the iteration limit far from the truth: Hansa-3 CL_de −0.29
-/// against 0.265, CD_de −0.023 against 0.026, while Cm_alpha, Cm_de and
-/// Cm_q are within 3.4 %; ATTAS CL_de −0.66 against 0.105, Cm_alpha
-/// −0.022 against −0.176. The cause is the network's size: its slopes with
-/// respect to the coefficient inputs, which steer Gauss–Newton, are not
-/// those of the flight; with 20 neurons both records converge and every
-/// parameter is within 1e-4 of the truth (measured: ATTAS CL_de −7e-6
-/// relative, Hansa-3 worst 3e-5 (Cm_alpha)). On their 25 Hz flight-test
-/// records the default fits converge, Hansa-3 within 13 % except CD_de
-/// (−38 %). Asserted as the finding: with 10 neurons not converged on the
-/// ideal record, CL_de of the wrong sign; with 20 converged within 1e-4;
-/// with 10 converged on the flight-test record with CL_alpha within 5 %.
+/// What the size search is for: with 10 hidden neurons (`hidden = 10`) ngn
+/// does not recover the noise-free longitudinal records of ATTAS (3211)
+/// and HANSA-3 (multistep). The network fits the one-step map to R²
+/// 0.9999999 and better, yet Gauss–Newton through it stops at the
+/// iteration limit far from the truth: HANSA-3 CL_de −0.29 against 0.265,
+/// CD_de −0.023 against 0.026, while Cm_alpha, Cm_de and Cm_q are within
+/// 3.4 %; ATTAS CL_de −0.66 against 0.105, Cm_alpha −0.022 against
+/// −0.176. The network's slopes with respect to the coefficient inputs,
+/// which steer Gauss–Newton, are not those of the flight; with 20 neurons,
+/// which the held-out error chooses, both are recovered within 1e-4
+/// (`noise_free_records_are_recovered_to_the_network_floor`). On HANSA-3's
+/// 25 Hz flight-test record the held-out error chooses 10 neurons
+/// (measured held-out MSE 0.0124 against 0.0130 for 20) and the fit
+/// converges, within 13 % except CD_de (−38 %). Asserted as the finding:
+/// with 10 neurons not converged on the ideal records, CL_de of the wrong
+/// sign; on the flight-test record the default converged with CL_alpha
+/// within 5 %.
 #[test]
-fn ideal_hansa3_and_attas_longitudinal_are_not_recovered() {
+fn ten_neurons_do_not_recover_ideal_hansa3_and_attas_longitudinal() {
     for (scenario, model) in [
         ("hansa3-elevator-multistep", "hansa3-longitudinal"),
         ("attas-elevator-3211", "attas-longitudinal"),
     ] {
         let (record, truth) = fly(scenario, "ideal");
-        let estimate = run("ngn", &record, model, "");
+        let estimate = run("ngn", &record, model, "hidden = 10");
         let text = common::truth_table(&common::against_truth(&estimate, &truth));
         assert_ne!(estimate.status, Status::Converged, "{scenario}\n{text}");
         let cl_de = estimate.parameter("CL_de").unwrap().value;
         assert!(cl_de < 0.0, "{scenario}\n{text}");
-        let larger = run("ngn", &record, model, "hidden = 20");
-        let rows = common::against_truth(&larger, &truth);
-        let text = common::truth_table(&rows);
-        assert_eq!(larger.status, Status::Converged, "{scenario}\n{text}");
-        for (name, value, _, truth) in &rows {
-            assert!(
-                (value - truth).abs() <= 1e-4 * truth.abs().max(1e-2),
-                "{scenario} {name}\n{text}"
-            );
-        }
     }
     let (record, truth) = fly("hansa3-elevator-multistep", "flight-test-25hz");
     let estimate = run("ngn", &record, "hansa3-longitudinal", "");
     let text = common::truth_table(&common::against_truth(&estimate, &truth));
+    eprintln!("{text}{:?}", estimate.network);
     assert_eq!(estimate.status, Status::Converged, "{text}");
+    assert_eq!(estimate.network.as_ref().unwrap().hidden, 10);
     let cl_alpha = estimate.parameter("CL_alpha").unwrap().value;
     assert!((cl_alpha - 4.978).abs() < 0.05 * 4.978, "{text}");
 }

@@ -51,8 +51,9 @@ fn every_method_ends_as_the_table_says() {
         expect("qar-seed000", method, "refused");
     }
     // Noise-free: output error is exact, the neural Gauss–Newton within
-    // its network's floor (0.03 %), ELM-GN within its default network's
-    // (6 % on the weak CY_da; tests/elm_gauss_newton.rs).
+    // its network's floor (20 neurons chosen: 0.001 % over 20 runs, worst
+    // CY_da), ELM-GN within its default network's (6 % on the weak CY_da;
+    // tests/elm_gauss_newton.rs).
     let worst = |method: &str| {
         rows.iter()
             .filter(|r| r.profile == "ideal" && r.method == method && !r.parameter.ends_with("_0"))
@@ -63,6 +64,6 @@ fn every_method_ends_as_the_table_says() {
             .fold(0.0, f64::max)
     };
     assert!(worst("oem") < 1e-5, "oem {}", worst("oem"));
-    assert!(worst("ngn") < 1e-3, "ngn {}", worst("ngn"));
+    assert!(worst("ngn") < 1e-4, "ngn {}", worst("ngn"));
     assert!(worst("elm-gn") < 0.07, "elm-gn {}", worst("elm-gn"));
 }

@@ -138,6 +138,41 @@ impl Network for Elm {
             }
         }
     }
+
+    /// One sum per hidden neuron.
+    fn partial_size(&self) -> usize {
+        self.hidden
+    }
+
+    /// Each neuron's sum of Eq. 4 from its bias over the leading inputs,
+    /// in the order [`Elm::neuron`] adds them.
+    fn partial(&self, head: &[f64], state: &mut [f64]) {
+        let stride = self.inputs + 1;
+        for (j, sum) in state.iter_mut().enumerate().take(self.hidden) {
+            let weights = &self.input_weights[j * stride..(j + 1) * stride];
+            *sum = head
+                .iter()
+                .zip(weights)
+                .fold(weights[self.inputs], |sum, (x, w)| sum + x * w);
+        }
+    }
+
+    fn predict_from(&self, state: &[f64], from: usize, input: &[f64], output: &mut [f64]) {
+        let stride = self.inputs + 1;
+        output.fill(0.0);
+        for (j, &start) in state.iter().enumerate().take(self.hidden) {
+            let weights = &self.input_weights[j * stride..(j + 1) * stride];
+            let sum = input[from..]
+                .iter()
+                .zip(&weights[from..self.inputs])
+                .fold(start, |sum, (x, w)| sum + x * w);
+            let h = log_sigmoid(sum);
+            let weights = &self.output_weights[j * self.outputs..(j + 1) * self.outputs];
+            for (y, w) in output.iter_mut().zip(weights) {
+                *y += h * w;
+            }
+        }
+    }
 }
 
 /// Trains an ELM with the hidden-layer size chosen by the held-out
@@ -166,6 +201,7 @@ impl Default for ElmTrainer {
 }
 
 /// Mean square of the differences of a network's predictions from targets.
+#[cfg(test)]
 fn mean_square_error(network: &Elm, inputs: &[&[f64]], targets: &[&[f64]]) -> f64 {
     let mut output = vec![0.0; network.outputs];
     let mut sum = 0.0;
@@ -180,9 +216,57 @@ fn mean_square_error(network: &Elm, inputs: &[&[f64]], targets: &[&[f64]]) -> f6
     sum / (inputs.len() * network.outputs).max(1) as f64
 }
 
+/// The held-out residual of each candidate size tried, in the order tried.
+pub type SizeScores = Vec<(usize, f64)>;
+
+/// The held-out residual criterion of the ELM paper's Eq. 6, shared by
+/// every network whose hidden-layer size is chosen from the data (the ELM
+/// here, the feed-forward network of `ngn`): each candidate size in
+/// `sizes` is trained by `train` on the pairs that are not held out and
+/// scored by its mean square residual on the held-out ones; the size with
+/// the least wins (ties: the one listed first, the smaller of ascending
+/// sizes). `train` returns None for a size the data cannot train (too
+/// many neurons), else what it trained and its held-out residual; what
+/// the chosen size trained is returned with the scores of every size tried.
+pub fn choose_by_held_out<T>(
+    sizes: &[usize],
+    mut train: impl FnMut(usize) -> Result<Option<(T, f64)>>,
+) -> Result<Option<(usize, T, SizeScores)>> {
+    let mut scores = Vec::with_capacity(sizes.len());
+    let mut best: Option<(usize, T, f64)> = None;
+    for &size in sizes {
+        let Some((trained, residual)) = train(size)? else {
+            continue;
+        };
+        scores.push((size, residual));
+        let better = residual.is_finite()
+            && best
+                .as_ref()
+                .is_none_or(|(_, _, least)| residual.total_cmp(least).is_lt());
+        if better {
+            best = Some((size, trained, residual));
+        }
+    }
+    Ok(best.map(|(size, trained, _)| (size, trained, scores)))
+}
+
 impl ElmTrainer {
     /// The held-out mean square residual of each candidate size, and the
-    /// size with the least (ties: the smaller).
+    /// size with the least (ties: the smaller; [`choose_by_held_out`]).
+    ///
+    /// The candidates share their neurons: a network of n neurons from the
+    /// seed has the first n neurons of a larger one (the draws are neuron by
+    /// neuron), so the hidden-layer outputs are computed once, for the
+    /// largest candidate, and a smaller one takes their first columns. Its
+    /// output weights are the same pseudo-inverse solution as
+    /// [`Elm::solve_output_weights`] (the same tolerance) computed by the
+    /// R-SVD (Golub & Van Loan, "Matrix Computations", §5.4.5): one
+    /// Householder QR of the largest candidate's H, whose leading n × n
+    /// block of R and first n entries of Qᵀ·Z are those of the first n
+    /// columns (each reflector acts only on the rows below its column),
+    /// then the SVD of that small block. The same solution up to rounding;
+    /// the chosen size is trained on every sample by
+    /// [`ElmTrainer::train_size`].
     pub fn choose_size(&self, set: &TrainingSet) -> Result<(usize, Vec<(usize, f64)>)> {
         let stride = self.validation_stride.max(2);
         let held_out = |i: &usize| i % stride == stride - 1;
@@ -195,27 +279,63 @@ impl ElmTrainer {
         let (train_x, train_z) = split(true);
         let (test_x, test_z) = split(false);
         let (inputs, outputs) = dimensions(set)?;
-        let mut scores = Vec::with_capacity(self.hidden_sizes.len());
-        for &size in &self.hidden_sizes {
-            if size == 0 || size >= train_x.len() {
-                continue;
-            }
-            let mut network = Elm::random(inputs, size, outputs, self.seed);
-            network.solve_output_weights(&train_x, &train_z)?;
-            scores.push((size, mean_square_error(&network, &test_x, &test_z)));
-        }
-        let best = scores
+        let trainable = |size: usize| size > 0 && size < train_x.len();
+        let none = || {
+            Error::Other(format!(
+                "no hidden-layer size of {:?} can be trained on {} samples",
+                self.hidden_sizes,
+                train_x.len()
+            ))
+        };
+        let largest = self
+            .hidden_sizes
             .iter()
-            .filter(|(_, mse)| mse.is_finite())
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|&(size, _)| size)
-            .ok_or_else(|| {
-                Error::Other(format!(
-                    "no hidden-layer size of {:?} can be trained on {} samples",
-                    self.hidden_sizes,
-                    train_x.len()
-                ))
-            })?;
+            .copied()
+            .filter(|&size| trainable(size))
+            .max()
+            .ok_or_else(none)?;
+        let widest = Elm::random(inputs, largest, outputs, self.seed);
+        let test_h = widest.hidden_matrix(&test_x);
+        let qr = widest.hidden_matrix(&train_x).qr();
+        let r = qr.r();
+        let mut qtz = DMatrix::from_fn(train_z.len(), outputs, |i, k| train_z[i][k]);
+        qr.q_tr_mul(&mut qtz);
+        let mut predicted = vec![0.0; outputs];
+        let chosen = choose_by_held_out(&self.hidden_sizes, |size| {
+            if !trainable(size) {
+                return Ok(None);
+            }
+            let svd = r.view((0, 0), (size, size)).into_owned().svd(true, true);
+            let tolerance =
+                svd.singular_values.max() * train_x.len().max(size) as f64 * f64::EPSILON;
+            let w = svd
+                .solve(&qtz.rows(0, size), tolerance)
+                .map_err(|e| Error::Other(format!("the ELM's pseudo-inverse failed: {e}")))?;
+            if w.iter().any(|v| !v.is_finite()) {
+                return Err(Error::Other(
+                    "the ELM's output weights are not finite".into(),
+                ));
+            }
+            // The held-out mean square residual, each prediction summed as
+            // `Elm::predict` sums it.
+            let mut sum = 0.0;
+            for (i, z) in test_z.iter().enumerate() {
+                predicted.fill(0.0);
+                for j in 0..size {
+                    let h = test_h[(i, j)];
+                    for (k, y) in predicted.iter_mut().enumerate() {
+                        *y += h * w[(j, k)];
+                    }
+                }
+                sum += predicted
+                    .iter()
+                    .zip(z.iter())
+                    .map(|(y, z)| (y - z).powi(2))
+                    .sum::<f64>();
+            }
+            Ok(Some(((), sum / (test_z.len() * outputs).max(1) as f64)))
+        })?;
+        let (best, (), scores) = chosen.ok_or_else(none)?;
         Ok((best, scores))
     }
 
@@ -373,6 +493,21 @@ mod tests {
             mean_square_error(&network, &x, &z)
         };
         assert!(training(320) < training(best));
+    }
+
+    /// An evaluation continued from the state after the leading inputs
+    /// equals the whole evaluation bit for bit.
+    #[test]
+    fn prediction_from_a_partial_state_is_the_prediction() {
+        let set = smooth_map();
+        let network = ElmTrainer::default().train_size(&set, 9).unwrap();
+        let x = [0.3, -0.45];
+        let (mut whole, mut continued) = ([0.0; 2], [0.0; 2]);
+        network.predict(&x, &mut whole);
+        let mut state = vec![0.0; network.partial_size()];
+        network.partial(&x[..1], &mut state);
+        network.predict_from(&state, 1, &x, &mut continued);
+        assert_eq!(whole.map(f64::to_bits), continued.map(f64::to_bits));
     }
 
     /// A seed gives bit-identical weights and predictions; another seed other ones.

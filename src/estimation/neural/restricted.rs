@@ -86,6 +86,19 @@ pub trait Network: Send + Sync {
     fn inputs(&self) -> usize;
     fn outputs(&self) -> usize;
     fn predict(&self, input: &[f64], output: &mut [f64]);
+    /// The length of the state [`Network::partial`] leaves (0: the network
+    /// keeps none and [`Network::predict_from`] evaluates from the start).
+    fn partial_size(&self) -> usize {
+        0
+    }
+    /// The state of an evaluation after the leading inputs `head` (the
+    /// hidden neurons' sums over them).
+    fn partial(&self, _head: &[f64], _state: &mut [f64]) {}
+    /// The output for `input` whose first `from` inputs left `state` in
+    /// [`Network::partial`]: the same as [`Network::predict`], bit for bit.
+    fn predict_from(&self, _state: &[f64], _from: usize, input: &[f64], output: &mut [f64]) {
+        self.predict(input, output);
+    }
 }
 
 /// Scaled training pairs (row i: input at sample k, target at k+1) with channel names.
@@ -517,6 +530,10 @@ struct Fit<'a> {
     /// The Θ `predictions` and `coefficients` are of.
     predicted_at: Option<DVector<f64>>,
     input: Vec<f64>,
+    /// With measured feedback the motion inputs of a pair do not depend on
+    /// Θ: the network's state after them ([`Network::partial`]), pair by
+    /// pair, so that an evaluation at Θ starts from it (empty otherwise).
+    partials: Vec<f64>,
 }
 
 impl<'a> Fit<'a> {
@@ -546,6 +563,33 @@ impl<'a> Fit<'a> {
             targets,
             predicted_at: None,
             input: vec![0.0; data.motion_count() + data.coefficient_count()],
+            partials: match (feedback, network.partial_size()) {
+                (Feedback::Measured, size) if size > 0 => {
+                    let m = data.motion_count();
+                    let mut input = vec![0.0; m + data.coefficient_count()];
+                    let mut partials = vec![0.0; data.pairs.len() * size];
+                    for (state, &k) in partials.chunks_mut(size).zip(&data.pairs) {
+                        data.raw_input(k, &data.measured, &mut input);
+                        data.input_scaling.apply(&mut input);
+                        network.partial(&input[..m], state);
+                    }
+                    partials
+                }
+                _ => Vec::new(),
+            },
+        }
+    }
+
+    /// The network's output for pair `pair` whose input is `self.input`:
+    /// from the pair's partial state when there is one.
+    fn evaluate(&self, pair: usize, output: &mut [f64]) {
+        let size = self.network.partial_size();
+        if self.partials.is_empty() {
+            self.network.predict(&self.input, output);
+        } else {
+            let state = &self.partials[pair * size..(pair + 1) * size];
+            self.network
+                .predict_from(state, self.data.motion_count(), &self.input, output);
         }
     }
 
@@ -628,10 +672,9 @@ impl<'a> Fit<'a> {
                 data.output_scaling.invert(&mut self.input[..m]);
                 data.input_scaling.apply(&mut self.input[..m]);
             }
-            self.network.predict(
-                &self.input,
-                &mut self.predictions[pair * outputs..(pair + 1) * outputs],
-            );
+            let mut output = std::mem::take(&mut self.predictions);
+            self.evaluate(pair, &mut output[pair * outputs..(pair + 1) * outputs]);
+            self.predictions = output;
             previous = Some(k);
         }
         if !self.predictions.iter().all(|v| v.is_finite()) {
@@ -753,7 +796,8 @@ impl LeastSquaresProblem for Fit<'_> {
 impl Fit<'_> {
     /// ∂C/∂Θ_j of each instant's coefficients, in the network's scaled
     /// input units: parameter by parameter, instant by instant, coefficient
-    /// by coefficient. The coefficients at Θ are restored.
+    /// by coefficient. The coefficients at Θ are restored, and with them
+    /// the predictions at Θ when they were computed.
     fn coefficient_slopes(
         &mut self,
         theta: &DVector<f64>,
@@ -767,6 +811,7 @@ impl Fit<'_> {
                 _ => 0.0,
             })
             .collect();
+        let predicted_at = self.predicted_at.take();
         self.evaluate_coefficients(theta)?;
         let base = self.coefficients.clone();
         let mut slopes = Vec::with_capacity(theta.len() * base.len());
@@ -785,6 +830,9 @@ impl Fit<'_> {
             );
         }
         self.coefficients = base;
+        // The predictions at Θ, if they were, still are: only the
+        // coefficients were changed, and they are Θ's again.
+        self.predicted_at = predicted_at.filter(|at| at == theta);
         Ok(slopes)
     }
 
@@ -807,11 +855,11 @@ impl Fit<'_> {
         for (pair, &k) in data.pairs.iter().enumerate() {
             data.raw_input(k, &self.coefficients, &mut self.input);
             data.input_scaling.apply(&mut self.input);
-            let base = &self.predictions[pair * n..(pair + 1) * n];
             for i in 0..c {
                 self.input[m + i] += delta;
-                self.network.predict(&self.input, &mut shifted);
+                self.evaluate(pair, &mut shifted);
                 self.input[m + i] -= delta;
+                let base = &self.predictions[pair * n..(pair + 1) * n];
                 for o in 0..n {
                     slopes[(pair * n + o) * c + i] = (shifted[o] - base[o]) / delta;
                 }
