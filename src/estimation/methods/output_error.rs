@@ -349,6 +349,15 @@ impl Estimator for OutputError {
 /// below e).
 pub const EQUAL_COST: f64 = 1.0;
 
+/// A distance in standard errors, three decimals or three digits.
+fn sigmas(distance: f64) -> String {
+    if distance < 1e4 {
+        format!("{distance:.3}")
+    } else {
+        format!("{distance:.2e}")
+    }
+}
+
 /// `options.starts` fits of output error (module header, "Several
 /// starts"). A refusal or an error of the first fit is returned as it is;
 /// an extra start that fails is a line in the notes.
@@ -367,10 +376,7 @@ pub fn multi_start(
         "the usual start".to_string(),
         Ok(output_error_from(records, structure, &single, regression)?),
     )];
-    let mut rng = crate::random::stream(
-        options.start_seed,
-        crate::random::streams::MULTI_START,
-    );
+    let mut rng = crate::random::stream(options.start_seed, crate::random::streams::MULTI_START);
     let from_model = OutputErrorOptions {
         start: Start::Model,
         ..single
@@ -382,8 +388,8 @@ pub fn multi_start(
             let u: f64 = rand::RngExt::random_range(&mut rng, -1.0..=1.0);
             if structure.free[i] {
                 let (low, high) = structure.bounds[i];
-                *value = (*value + options.start_spread * value.abs().max(0.01) * u)
-                    .clamp(low, high);
+                *value =
+                    (*value + options.start_spread * value.abs().max(0.01) * u).clamp(low, high);
             }
         }
         fits.push((
@@ -391,7 +397,18 @@ pub fn multi_start(
             output_error_from(records, &moved, &from_model, None),
         ));
     }
-    let cost = |estimate: &Estimate| estimate.cost_history.last().copied().unwrap_or(f64::NAN);
+    // The maximum-likelihood cost with R estimated, ½·Σ N_o·ln R_oo, R_oo
+    // the output's mean squared residual (the fits' rms²).
+    let cost = |estimate: &Estimate| {
+        if estimate.fits.is_empty() {
+            return f64::NAN;
+        }
+        estimate
+            .fits
+            .iter()
+            .map(|fit| fit.samples as f64 * fit.rms.ln())
+            .sum::<f64>()
+    };
     let best = fits
         .iter()
         .enumerate()
@@ -404,7 +421,8 @@ pub fn multi_start(
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(i, _)| i);
     let mut lines = Vec::new();
-    let mut details = String::from("start            status                   cost          max |Δθ|/σ\n");
+    let mut details =
+        String::from("start            status                   ½·Σ N·ln R     max |Δθ|/σ\n");
     let mut apart: Vec<String> = Vec::new();
     for (i, (label, fit)) in fits.iter().enumerate() {
         match fit {
@@ -421,17 +439,23 @@ pub fn multi_start(
                     )
                 });
                 details += &format!(
-                    "{label:<16} {:<24} {:<13.6e} {}\n",
-                    estimate.status.to_string().chars().take(24).collect::<String>(),
+                    "{label:<16} {:<24} {:<14.7e} {}\n",
+                    estimate
+                        .status
+                        .to_string()
+                        .chars()
+                        .take(24)
+                        .collect::<String>(),
                     cost(estimate),
-                    distance.map_or("-".into(), |d| format!("{d:.3}"))
+                    distance.map_or("-".into(), sigmas)
                 );
                 lines.push(format!(
-                    "{label}: {} at cost {:.6e}{}",
+                    "{label}: {} at cost {:.7e}{}",
                     estimate.status,
                     cost(estimate),
                     distance.map_or(String::new(), |d| format!(
-                        ", parameters within {d:.3}σ of the least-cost fit"
+                        ", parameters within {}σ of the least-cost fit",
+                        sigmas(d)
                     ))
                 ));
                 if let Some(b) = best.filter(|&b| b != i)
@@ -440,8 +464,7 @@ pub fn multi_start(
                     && (cost(estimate) - cost(best_fit)).abs() < EQUAL_COST
                 {
                     for (p, q) in estimate.parameters.iter().zip(&best_fit.parameters) {
-                        if (p.value - q.value).abs() > q.standard_error
-                            && !apart.contains(&q.name)
+                        if (p.value - q.value).abs() > q.standard_error && !apart.contains(&q.name)
                         {
                             apart.push(q.name.clone());
                         }
@@ -456,7 +479,10 @@ pub fn multi_start(
     }
     let (_, chosen) = fits.swap_remove(best.unwrap_or(0));
     let mut estimate = chosen?;
-    let converged = fits.iter().filter(|(_, f)| f.as_ref().is_ok_and(|e| e.status.is_success())).count()
+    let converged = fits
+        .iter()
+        .filter(|(_, f)| f.as_ref().is_ok_and(|e| e.status.is_success()))
+        .count()
         + usize::from(best.is_some());
     estimate.notes.push(format!(
         "{} starts (spread {}, seed {}): {converged} converged; {}; {}",
