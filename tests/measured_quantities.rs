@@ -169,6 +169,21 @@ fn says(estimate: &Estimate, text: &str) -> bool {
     estimate.notes.iter().any(|n| n.contains(text))
 }
 
+/// A converged estimate whose notes name the record's thrust and density.
+fn converged_on_measured_air(estimate: &Estimate) {
+    assert_eq!(
+        estimate.status,
+        aeroid::estimation::estimate::Status::Converged
+    );
+    for channel in ["thrust", "density"] {
+        assert!(
+            says(estimate, &format!("the record's '{channel}' channel")),
+            "{:?}",
+            estimate.notes
+        );
+    }
+}
+
 /// Output error on the ATTAS 3-2-1-1 recorded noise-free at 100 Hz with
 /// thrust and density measured and no throttle or altitude channel: the
 /// driven model takes the record's thrust in the force equations and its
@@ -192,21 +207,8 @@ fn output_error_takes_thrust_and_density_from_the_record() {
         "oem, measured thrust and density: worst {error:.2e} ({name})\n{:#?}",
         estimate.notes
     );
-    assert_eq!(
-        estimate.status,
-        aeroid::estimation::estimate::Status::Converged
-    );
+    converged_on_measured_air(&estimate);
     assert!(error <= 1e-4, "{error:.2e} ({name})");
-    assert!(
-        says(&estimate, "the record's 'thrust' channel"),
-        "{:?}",
-        estimate.notes
-    );
-    assert!(
-        says(&estimate, "the record's 'density' channel"),
-        "{:?}",
-        estimate.notes
-    );
     assert!(says(&estimate, "density altitude"), "{:?}", estimate.notes);
     // The throttle is not read, so its absence is not a note.
     assert!(
@@ -244,21 +246,8 @@ fn filter_error_takes_thrust_and_density_from_the_record() {
         "fem, measured thrust and density: worst {error:.2e} ({name})\n{:#?}",
         estimate.notes
     );
-    assert_eq!(
-        estimate.status,
-        aeroid::estimation::estimate::Status::Converged
-    );
+    converged_on_measured_air(&estimate);
     assert!(error <= 1e-4, "{error:.2e} ({name})");
-    assert!(
-        says(&estimate, "the record's 'thrust' channel"),
-        "{:?}",
-        estimate.notes
-    );
-    assert!(
-        says(&estimate, "the record's 'density' channel"),
-        "{:?}",
-        estimate.notes
-    );
     let estimate = fit("ekf", &record, &[]).unwrap();
     let (error, name) = worst(&estimate, &truth);
     println!(
