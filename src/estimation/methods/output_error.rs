@@ -477,13 +477,12 @@ pub fn multi_start(
             }
         }
     }
-    let (_, chosen) = fits.swap_remove(best.unwrap_or(0));
-    let mut estimate = chosen?;
     let converged = fits
         .iter()
         .filter(|(_, f)| f.as_ref().is_ok_and(|e| e.status.is_success()))
-        .count()
-        + usize::from(best.is_some());
+        .count();
+    let (_, chosen) = fits.swap_remove(best.unwrap_or(0));
+    let mut estimate = chosen?;
     estimate.notes.push(format!(
         "{} starts (spread {}, seed {}): {converged} converged; {}; {}",
         options.starts,
