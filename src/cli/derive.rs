@@ -5,6 +5,7 @@ use aeroid::prep::angular_rates::DEFAULT_DIFFERENTIATOR;
 use aeroid::prep::derive::{Options, RatesChoice, derive};
 use aeroid::prep::differentiation::Differentiator;
 use aeroid::prep::flow_angles::Wind;
+use aeroid::prep::thrust::FuelFlowThrust;
 use aeroid::units::DEG;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
@@ -17,7 +18,7 @@ use std::path::PathBuf;
 /// differentiated attitude. A recorded alpha or beta that the quality
 /// check finds stuck or stepping is replaced; a usable one is kept and the
 /// geometric one added as alpha_geometric, beta_geometric (unless
-/// --replace). See docs/cli.md.
+/// --replace); on request the thrust from the fuel flow. See docs/cli.md.
 #[derive(clap::Args)]
 pub struct Args {
     /// The record folder.
@@ -49,6 +50,15 @@ pub struct Args {
     /// Replace a usable recorded alpha, beta (and p, q, r with --rates) too.
     #[arg(long)]
     replace: bool,
+    /// Add a `thrust` channel (N) from the engines' fuel flow
+    /// (`fuel_flow` or `fuel_flow_*`, kg/s) with this thrust-specific fuel
+    /// consumption in kg/(N·s): T = Σ (flow − idle)/TSFC. The engine model
+    /// is yours; an error in it scales the thrust (docs/cli.md).
+    #[arg(long, value_name = "TSFC")]
+    thrust_from_fuel_flow: Option<f64>,
+    /// Fuel flow at zero thrust, kg/s per engine (with --thrust-from-fuel-flow).
+    #[arg(long, default_value_t = 0.0, requires = "thrust_from_fuel_flow")]
+    idle_fuel_flow: f64,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -70,6 +80,12 @@ pub fn run(args: Args) -> Result<()> {
             degree: args.rates_degree,
         },
         replace: args.replace,
+        thrust: args
+            .thrust_from_fuel_flow
+            .map(|specific_fuel_consumption| FuelFlowThrust {
+                specific_fuel_consumption,
+                idle_fuel_flow: args.idle_fuel_flow,
+            }),
     };
     let derived = derive(&record, &options).with_context(|| args.record.display().to_string())?;
     derived.record.write(&args.out)?;

@@ -77,6 +77,38 @@ pub struct GateCase {
     /// Settings per method for this case, overriding the model's and the scenario's.
     #[serde(default)]
     pub methods: MethodTables,
+    /// Run the derive step (`aeroid derive` with its defaults) on the
+    /// record before the estimator: for recorders that lack channels the
+    /// estimators need (the QAR).
+    #[serde(default)]
+    pub derive: Option<GateDerive>,
+}
+
+/// The `derive` table of a gate case.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GateDerive {
+    /// `--thrust-from-fuel-flow`: thrust-specific fuel consumption, kg/(N·s).
+    #[serde(default)]
+    pub thrust_from_fuel_flow: Option<f64>,
+    /// `--idle-fuel-flow`: kg/s per engine.
+    #[serde(default)]
+    pub idle_fuel_flow: f64,
+}
+
+impl GateDerive {
+    /// The derive step's options.
+    pub fn options(&self) -> crate::prep::derive::Options {
+        crate::prep::derive::Options {
+            thrust: self.thrust_from_fuel_flow.map(|specific_fuel_consumption| {
+                crate::prep::thrust::FuelFlowThrust {
+                    specific_fuel_consumption,
+                    idle_fuel_flow: self.idle_fuel_flow,
+                }
+            }),
+            ..Default::default()
+        }
+    }
 }
 
 impl GateCase {
@@ -322,6 +354,10 @@ pub fn run_case(case: &GateCase) -> Result<GateResult> {
     let structure = Structure::load(&case.model)?;
     let (record, truth) =
         crate::eval::linear_flight::record_flight(&scenario, &profile, scenario.seed)?;
+    let record = match &case.derive {
+        Some(derive) => crate::prep::derive::derive(&record, &derive.options())?.record,
+        None => record,
+    };
     let (estimate, _) = match run::estimate_scored(
         &case.method,
         &record,

@@ -1,7 +1,9 @@
 //! The derive step (`aeroid derive`): the channels a recorder lacks,
 //! computed from those it has. In order: combined control surfaces from
 //! split ones ([`crate::prep::surfaces`]), the air density from pressure
-//! altitude and temperature ([`crate::prep::air_data`]), the geometric
+//! altitude and temperature ([`crate::prep::air_data`]), on request the
+//! thrust from the fuel flow by the user's engine model
+//! ([`crate::prep::thrust`]), the geometric
 //! angle of attack and sideslip ([`crate::prep::flow_angles`]) and the body
 //! rates from the attitude kinematics ([`crate::prep::angular_rates`]). Each derived
 //! channel names its method and inputs in its `source`.
@@ -12,6 +14,7 @@ use crate::prep::angular_rates::{KinematicRates, with_kinematic_rates};
 use crate::prep::differentiation::Differentiator;
 use crate::prep::flow_angles::{GeometricFlowAngles, Wind, with_geometric_flow_angles};
 use crate::prep::surfaces::with_combined_surfaces;
+use crate::prep::thrust::{FuelFlowThrust, with_thrust_from_fuel_flow};
 use crate::record::FlightRecord;
 
 /// When the body rates are derived.
@@ -34,6 +37,8 @@ pub struct Options {
     pub differentiator: Differentiator,
     /// Replace usable recorded channels too (flow angles, rates).
     pub replace: bool,
+    /// Add a `thrust` channel from the fuel flow with this engine model.
+    pub thrust: Option<FuelFlowThrust>,
 }
 
 impl Default for Options {
@@ -43,6 +48,7 @@ impl Default for Options {
             rates: RatesChoice::WhenAbsent,
             differentiator: crate::prep::angular_rates::DEFAULT_DIFFERENTIATOR,
             replace: false,
+            thrust: None,
         }
     }
 }
@@ -62,6 +68,11 @@ pub fn derive(record: &FlightRecord, options: &Options) -> Result<Derived> {
     let (derived, mut notes) = with_combined_surfaces(record)?;
     let (mut derived, density_notes) = with_air_density(&derived)?;
     notes.extend(density_notes);
+    if let Some(model) = &options.thrust {
+        let (with_thrust, thrust_notes) = with_thrust_from_fuel_flow(&derived, model)?;
+        derived = with_thrust;
+        notes.extend(thrust_notes);
+    }
     let mut angles = None;
     if let Some(wind) = options.flow_angles {
         let derivation = with_geometric_flow_angles(&derived, wind, options.replace)?;

@@ -2,8 +2,8 @@
 //! of recorded channels, and flight-path reconstruction (the data
 //! compatibility check that estimates sensor biases and scale factors),
 //! geometric angle of attack and sideslip, angular rates from the attitude
-//! kinematics, combined control surfaces from split ones, and air density
-//! from pressure altitude and temperature.
+//! kinematics, combined control surfaces from split ones, air density
+//! from pressure altitude and temperature, and thrust from fuel flow.
 
 pub mod air_data;
 pub mod angular_rates;
@@ -12,3 +12,4 @@ pub mod derive;
 pub mod differentiation;
 pub mod flow_angles;
 pub mod surfaces;
+pub mod thrust;

@@ -14,7 +14,10 @@
 //!    the third derivative white noise of spectral density
 //!    `force_noise` / `moment_noise`); observed through nx, ny, nz, φ, θ, ψ,
 //!    V, h (`observations`) and α, β, p, q, r where the record has them
-//!    (`optional_observations`). No angular rate is needed.
+//!    (`optional_observations`). No angular rate is needed. Without an
+//!    `altitude` channel the pressure altitude observes h; the thrust is
+//!    the record's `thrust` channel when it has one (a QAR's, derived from
+//!    the fuel flow), else the throttle through the engine model.
 //! 2. Forward pass (Eqs. 10–16): the continuous–discrete EKF
 //!    ([`extended_kalman::filter_with`]) with the state propagated by RK4
 //!    (Eq. 12) and the covariance by Φ = I + F·Δt + ½(F·Δt)² (Eq. 11b).
@@ -306,7 +309,7 @@ impl Estimator for SmoothedRegression {
             title: "estimation before modelling: coefficients as Gauss–Markov states of an EKF, smoothed by the modified Bryson–Frazier smoother, regressed on the model's terms",
             paper: "Wang et al., \"Aerodynamic modeling and parameter estimation from QAR data of an airplane approaching a high-altitude airport\", Chinese J. Aeronautics 25 (2012); Bierman, \"Fixed interval smoothing with discrete measurements\" (1973); Klein & Morelli (2006), ch. 5",
             equations: "6-DOF kinematics with third-order Gauss–Markov coefficients (Eq. 7), observations (Eq. 8), coefficients (Eq. 9), EKF (Eqs. 10–16), modified Bryson–Frazier smoother (Eqs. 17–24); least squares on the smoothed coefficients (Eqs. 25–27 of the reflex-wing UAV paper)",
-            needs: "load factors, attitude angles, airspeed, altitude (α, β, p, q, r used when present), the controls of the model's terms, throttle when the aircraft has thrust; a model linear in its parameters",
+            needs: "load factors, attitude angles, airspeed, altitude or pressure altitude (α, β, p, q, r used when present), the controls of the model's terms, thrust or throttle when the aircraft has thrust; a model linear in its parameters",
             settings: setting_infos(&SmoothedRegressionSettings::default(), SETTINGS),
         }
     }
@@ -493,6 +496,52 @@ fn needed_inputs(structure: &ModelStructure, plans: &[Plan]) -> Vec<(&'static st
     needs
 }
 
+/// The thrust input on the grid `times`: the record's `thrust` channel (N)
+/// when it has one, else the throttle when the aircraft has propulsion
+/// (zeros without), and whether it is the measured thrust.
+fn thrust_input(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    times: &[f64],
+) -> Result<(Vec<f64>, bool)> {
+    let finite = |values: Vec<f64>| -> Vec<f64> {
+        values
+            .into_iter()
+            .map(|v| if v.is_finite() { v } else { 0.0 })
+            .collect()
+    };
+    if let Ok(thrust) = record.channel("thrust") {
+        return Ok((finite(thrust.values_at(times)?), true));
+    }
+    Ok(match record.channel("throttle") {
+        Ok(channel) if structure.aircraft.propulsion.max_thrust > 0.0 => {
+            (finite(channel.values_at(times)?), false)
+        }
+        _ => (vec![0.0; times.len()], false),
+    })
+}
+
+/// The record with an `altitude` channel: its own, else the pressure
+/// altitude (the ISA altitude of the static pressure, which on a standard
+/// day is the altitude the model's ISA density is read at), with a note.
+fn with_altitude(record: &FlightRecord) -> (std::borrow::Cow<'_, FlightRecord>, Option<String>) {
+    if record.channel("altitude").is_ok() {
+        return (std::borrow::Cow::Borrowed(record), None);
+    }
+    let Ok(pressure) = record.channel("pressure_altitude") else {
+        return (std::borrow::Cow::Borrowed(record), None);
+    };
+    let mut altitude = pressure.clone();
+    altitude.name = "altitude".into();
+    altitude.source = format!("the record's pressure_altitude ({})", pressure.source);
+    let mut with = record.clone();
+    with.channels.push(altitude);
+    (
+        std::borrow::Cow::Owned(with),
+        Some("no altitude channel: the pressure altitude observes h (the ISA of a standard day; a temperature offset would scale ḣ by T/T_ISA)".into()),
+    )
+}
+
 /// The filter's observations: the needed ones, then the optional ones the
 /// record has; a refusal naming every needed channel that is missing (and
 /// every missing input).
@@ -515,7 +564,8 @@ fn observations_and_inputs(
         }
     }
     for (name, purpose) in needed_inputs(structure, plans) {
-        if record.channel(name).is_err() {
+        let measured_thrust = name == "throttle" && record.channel("thrust").is_ok();
+        if record.channel(name).is_err() && !measured_thrust {
             missing.push(MissingChannel {
                 name: name.to_string(),
                 purpose,
@@ -605,7 +655,10 @@ fn initial_estimate(
     let scale = 0.5 * air.density * airspeed * airspeed * aircraft.wing_area;
     let throttle = value_or(record, "throttle", start, 0.0);
     let propulsion = &aircraft.propulsion;
-    let thrust = if propulsion.max_thrust > 0.0 {
+    let measured = value_or(record, "thrust", start, f64::NAN);
+    let thrust = if measured.is_finite() {
+        propulsion.direction * measured
+    } else if propulsion.max_thrust > 0.0 {
         propulsion.direction * propulsion.thrust(throttle, air.log_density_ratio)
     } else {
         Vector3::zeros()
@@ -673,6 +726,8 @@ fn smooth_with(
     settings: &SmoothedRegressionSettings,
     plans: &[Plan],
 ) -> Result<Smoothed> {
+    let (record, altitude_note) = with_altitude(record);
+    let record = record.as_ref();
     let (outputs, absent) = observations_and_inputs(record, structure, settings, plans)?;
     let names: Vec<String> = outputs.iter().map(|o| o.channel().to_string()).collect();
     let (start, end) = fitting_window(record, &settings.observations, None)?;
@@ -697,22 +752,18 @@ fn smooth_with(
         }));
     }
     let times: Vec<f64> = (0..len).map(|k| start + k as f64 * step).collect();
-    let throttle = match record.channel("throttle") {
-        Ok(channel) if structure.aircraft.propulsion.max_thrust > 0.0 => channel
-            .values_at(&times)?
-            .into_iter()
-            .map(|v| if v.is_finite() { v } else { 0.0 })
-            .collect(),
-        _ => vec![0.0; len],
-    };
+    let (thrust, thrust_measured) = thrust_input(record, structure, &times)?;
     let record = unwrapped_yaw(record);
-    let model = CoefficientStates::new(
+    let mut model = CoefficientStates::new(
         structure.aircraft.clone(),
         start,
         step,
-        throttle,
+        thrust,
         outputs.clone(),
     )?;
+    if thrust_measured {
+        model = model.with_measured_thrust();
+    }
     let observations = Observations::from_record(&record, &names, start, step, len)?;
     let defaults = SmoothedRegressionSettings::default().measurement_noise;
     let measurement = DVector::from_iterator(
@@ -771,6 +822,12 @@ fn smooth_with(
         }
     )];
     notes.extend(observations.note(step));
+    notes.extend(altitude_note);
+    if thrust_measured {
+        notes.push(
+            "thrust: the record's 'thrust' channel, along the aircraft's thrust line, not the throttle and engine model".into(),
+        );
+    }
     let deviations: Vec<DVector<f64>> = smoothed
         .iter()
         .map(|g| g.covariance.diagonal().map(|v| v.max(0.0).sqrt()))
@@ -835,13 +892,17 @@ pub(crate) fn regression_data(
             controls[control.index()] = channel.values_at(&smoothed.times)?;
         }
     }
-    let model = CoefficientStates::new(
+    let (thrust, thrust_measured) = thrust_input(record, structure, &smoothed.times)?;
+    let mut model = CoefficientStates::new(
         structure.aircraft.clone(),
         smoothed.times[0],
         smoothed.times[1] - smoothed.times[0],
-        vec![0.0; smoothed.times.len()],
+        thrust,
         Vec::new(),
     )?;
+    if thrust_measured {
+        model = model.with_measured_thrust();
+    }
     let atmosphere = Atmosphere::default();
     let mut data = Reconstruction {
         times: Vec::new(),

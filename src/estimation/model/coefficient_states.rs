@@ -25,7 +25,8 @@
 //!
 //! q̄ = ½·ρ(h)·(u² + v² + w²) (ISA), thrust T = δT·Tmax·(ρ/ρ0)ⁿ along the
 //! thrust line from the recorded throttle (the simulator's engine model,
-//! [`crate::sim::aircraft::Propulsion::thrust`]). The paper writes the
+//! [`crate::sim::aircraft::Propulsion::thrust`]), or the record's measured
+//! thrust ([`CoefficientStates::with_measured_thrust`]). The paper writes the
 //! inertia terms with its A_ij constants, which are the components of
 //! I⁻¹·(−ω × I·ω) for I with Ixz; the vector form above is the same. The
 //! transcript's Eq. 7 treats the thrust as along body x only (X + P); here
@@ -184,8 +185,11 @@ pub struct CoefficientStates {
     atmosphere: Atmosphere,
     start: f64,
     step: f64,
-    /// Throttle at each grid point (0 without propulsion).
+    /// Throttle at each grid point (0 without propulsion), or the thrust
+    /// (N) when `thrust_measured`.
     throttle: Vec<f64>,
+    /// `throttle` holds the measured thrust magnitude along the thrust line.
+    thrust_measured: bool,
     outputs: Vec<Output>,
 }
 
@@ -215,8 +219,17 @@ impl CoefficientStates {
             start,
             step,
             throttle,
+            thrust_measured: false,
             outputs,
         })
+    }
+
+    /// The same model with the grid's values read as the measured thrust
+    /// (N, along the thrust line) instead of the throttle: no engine model,
+    /// no thrust lapse with altitude.
+    pub fn with_measured_thrust(mut self) -> CoefficientStates {
+        self.thrust_measured = true;
+        self
     }
 
     pub fn observed(&self) -> &[Output] {
@@ -241,7 +254,9 @@ impl CoefficientStates {
         let air = self.atmosphere.at(altitude);
         let speed_squared = x[U] * x[U] + x[U + 1] * x[U + 1] + x[U + 2] * x[U + 2];
         let propulsion = &self.aircraft.propulsion;
-        let thrust_magnitude = if propulsion.max_thrust == 0.0 {
+        let thrust_magnitude = if self.thrust_measured {
+            throttle
+        } else if propulsion.max_thrust == 0.0 {
             0.0
         } else {
             propulsion.thrust(throttle, air.log_density_ratio)
@@ -394,7 +409,11 @@ impl StateSpaceModel for CoefficientStates {
         let density = loads.air.density;
         let area = self.aircraft.wing_area;
         let slope = loads.log_density_slope;
-        let lapse = self.aircraft.propulsion.density_exponent;
+        let lapse = if self.thrust_measured {
+            0.0
+        } else {
+            self.aircraft.propulsion.density_exponent
+        };
         let arms = self.arms();
         let mut a = DMatrix::<f64>::zeros(STATE_COUNT, STATE_COUNT);
         // Translational: F/m, gravity, −ω × V.
