@@ -177,9 +177,10 @@ mod tests {
             with_thrust_from_fuel_flow(&record(vec![right, left]), &MODEL).unwrap();
         let thrust = derived.channel("thrust").unwrap();
         assert_eq!(thrust.times, [0.0, 1.0, 2.0]);
-        // right at 1.0 s: 0.17 (halfway between 0.12 and 0.22).
+        // Right: held at 0.12 before its first sample, 0.17 at 1.0 s and
+        // 0.27 at 2.0 s (linear); each minus the idle 0.02 kg/s.
         let expected = [
-            (0.20 + 0.12) / 2e-5,
+            (0.20 + 0.10) / 2e-5,
             (0.30 + 0.15) / 2e-5,
             (0.40 + 0.25) / 2e-5,
         ];

@@ -553,8 +553,12 @@ fn observations_and_inputs(
 ) -> Result<(Vec<Output>, Vec<String>)> {
     let mut missing: Vec<MissingChannel> = Vec::new();
     let mut outputs: Vec<Output> = Vec::new();
+    let has = |name: &str| {
+        record.channel(name).is_ok()
+            || (name == "altitude" && record.channel("pressure_altitude").is_ok())
+    };
     for name in &settings.observations {
-        if record.channel(name).is_err() {
+        if !has(name) {
             missing.push(MissingChannel {
                 name: name.clone(),
                 purpose: "observation (Wang et al. 2012, Eq. 8)".into(),
@@ -726,9 +730,9 @@ fn smooth_with(
     settings: &SmoothedRegressionSettings,
     plans: &[Plan],
 ) -> Result<Smoothed> {
+    let (outputs, absent) = observations_and_inputs(record, structure, settings, plans)?;
     let (record, altitude_note) = with_altitude(record);
     let record = record.as_ref();
-    let (outputs, absent) = observations_and_inputs(record, structure, settings, plans)?;
     let names: Vec<String> = outputs.iter().map(|o| o.channel().to_string()).collect();
     let (start, end) = fitting_window(record, &settings.observations, None)?;
     let mut fastest: f64 = 0.0;
