@@ -23,12 +23,33 @@
 //! information matrix output error uses, evaluated at the truth with the
 //! true R). Parameters in the null space of M get σ = ∞.
 //!
+//! Model errors the bound does not know (Jategaonkar, "Flight Vehicle
+//! System Identification", 2nd ed., §4.17 on the bias of a maximum
+//! likelihood estimate under a model error: to first order the estimate
+//! moves by δθ = M⁻¹·Σ Sᵀ·R⁻¹·r, r the output error at the truth):
+//! - the *inputs as recorded*: an estimator knows the controls only from
+//!   the record's samples (at the channel's rate, word slot, delay and lag;
+//!   split surfaces combined), reconstructed linearly between them
+//!   (the scenario's interpolation). The flight flown with those inputs
+//!   instead of the true ones, from the same segment states, gives r, and
+//!   δθ_inputs the first-order error of every estimator that takes the
+//!   recorded inputs as exact. A record that lacks a control (the QAR has
+//!   no throttle) leaves it as flown.
+//! - the *unknown wind*: the flight flown in the scenario's steady wind
+//!   without its gusts and turbulence gives δθ_wind, the error of a fit
+//!   that ignores them (output error, the regressions) on this seed's
+//!   turbulence; the filters model it as process noise and avoid it.
+//!
 //! A parameter is *identifiable* when σ_j/|θ_j| is below a threshold,
 //! 10 % by default: its 95 % interval (±2σ) is then within ±20 % of the
 //! value, the accuracy of the wind-tunnel and handbook values an analyst
 //! already has before flight (DATCOM-type estimates of damping and control
 //! derivatives are commonly quoted at ±20–30 %); an estimate less certain
-//! than that adds nothing to the a-priori value.
+//! than that adds nothing to the a-priori value. With the inputs as
+//! recorded it must also have |δθ_inputs| < 2·threshold·|θ_j|: an error
+//! larger than the ±20 % interval the threshold stands for makes the
+//! estimate no better than the a-priori value either. δθ_wind is reported
+//! beside it and not part of the verdict (a filter does not suffer it).
 //!
 //! These are lower bounds for estimators that know the wind: with
 //! turbulence in the flight, an output-error fit that ignores it does worse,
@@ -47,8 +68,8 @@ use crate::record::FlightRecord;
 use crate::record::recorder::Profile;
 use crate::sim::Simulation;
 use crate::sim::scenario::Scenario;
-use crate::sim::state::{self, StateVector};
-use nalgebra::{DMatrix, UnitQuaternion, Vector3};
+use crate::sim::state::{self, CONTROL_COUNT, Control, StateVector};
+use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
 
 /// Settings of an identifiability analysis.
 #[derive(Debug, Clone, PartialEq)]
@@ -94,6 +115,10 @@ pub struct IdentifiabilityRow {
     pub parameter: String,
     pub truth: f64,
     pub sigma: f64,
+    /// First-order error from the inputs as recorded (module documentation).
+    pub input_error: f64,
+    /// First-order error of a fit that ignores the gusts and turbulence.
+    pub wind_error: f64,
     pub identifiable: bool,
 }
 
@@ -125,18 +150,21 @@ impl Identifiability {
             "{} recorded by {}: Cramér–Rao bounds at the truth, {} s segments with unknown initial states; identifiable when σ/|truth| < {}\n",
             self.scenario, self.profile, self.segment, self.threshold
         );
+        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict)\n";
         text += &format!(
-            "{:<14} {:>12} {:>11} {:>10}  {}\n",
-            "parameter", "truth", "σ", "σ/|truth|", "verdict"
+            "{:<14} {:>12} {:>11} {:>10} {:>12} {:>12}  {}\n",
+            "parameter", "truth", "σ", "σ/|truth|", "inputs/|θ|", "wind/|θ|", "verdict"
         );
         for row in &self.rows {
             text += &format!(
-                "{:<14} {:>12.6} {:>11.3e} {:>10.3e}  {}\n",
+                "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e}  {}\n",
                 row.parameter,
                 row.truth,
                 row.sigma,
                 row.relative_sigma(),
-                verdict(row.identifiable)
+                row.input_error / row.truth.abs(),
+                row.wind_error / row.truth.abs(),
+                verdict(row, self.threshold)
             );
         }
         let count = self.rows.iter().filter(|r| r.identifiable).count();
@@ -163,10 +191,12 @@ impl Identifiability {
         );
         for row in &self.rows {
             text += &format!(
-                "{} σ/|truth| = {}  {}\n",
+                "{} σ/|truth| = {}  inputs {}  wind {}  {}\n",
                 row.parameter,
                 crate::record::significant(row.relative_sigma(), 2),
-                verdict(row.identifiable)
+                crate::record::significant(row.input_error / row.truth.abs(), 2),
+                crate::record::significant(row.wind_error / row.truth.abs(), 2),
+                verdict(row, self.threshold)
             );
         }
         text += &format!(
@@ -181,9 +211,11 @@ impl Identifiability {
     }
 }
 
-fn verdict(identifiable: bool) -> &'static str {
-    if identifiable {
+fn verdict(row: &IdentifiabilityRow, threshold: f64) -> &'static str {
+    if row.identifiable {
         "identifiable"
+    } else if row.sigma < threshold * row.truth.abs() {
+        "NOT identifiable (recorded inputs)"
     } else {
         "NOT identifiable"
     }
@@ -359,6 +391,24 @@ pub fn analyse(
     }
     let information = sensitivities.transpose() * &sensitivities;
     let covariance = pseudo_inverse_or_infinite(&marginal_information(&information, names.len()));
+    // The model errors: the nominal record minus the record of the flight
+    // an estimator's model flies, weighted as the sensitivities.
+    let errors = |flight: &Simulation| -> Result<DVector<f64>> {
+        let trace = flight
+            .run_with_restarts(|k| (k % segment_steps == 0).then(|| nominal_states[k]))
+            .map_err(|error| {
+                Error::Other(format!(
+                    "identifiability of '{}': the flight with {} failed: {error}",
+                    scenario.name, "the inputs as recorded or without gusts"
+                ))
+            })?;
+        let modelled = clean.record(&trace, &scenario.aircraft, scenario.seed)?;
+        // (nominal − modelled)/(2·1): `difference` divides by 2h.
+        Ok(DVector::from_vec(difference(&nominal, &modelled, 0.5)?))
+    };
+    let solve = least_squares_solver(&sensitivities);
+    let input_error = solve(&errors(&with_recorded_inputs(&simulation, &nominal)?)?);
+    let wind_error = solve(&errors(&without_gusts(scenario, &simulation)?)?);
     let rows = names
         .iter()
         .zip(&truths)
@@ -369,7 +419,10 @@ pub fn analyse(
                 parameter: name.clone(),
                 truth,
                 sigma,
-                identifiable: sigma < options.threshold * truth.abs(),
+                input_error: input_error[j],
+                wind_error: wind_error[j],
+                identifiable: sigma < options.threshold * truth.abs()
+                    && input_error[j].abs() < 2.0 * options.threshold * truth.abs(),
             }
         })
         .collect();
@@ -382,6 +435,72 @@ pub fn analyse(
         excluded,
         rows,
     })
+}
+
+/// δ = S⁺·r for a weighted output error r: the first-order move of every
+/// unknown (parameters, then the segments' initial states) of a
+/// least-squares fit, by the SVD of S with unit-norm columns; directions
+/// the data cannot separate (σ = ∞) drop out.
+fn least_squares_solver(sensitivities: &DMatrix<f64>) -> impl Fn(&DVector<f64>) -> DVector<f64> {
+    let norms: Vec<f64> = sensitivities
+        .column_iter()
+        .map(|c| {
+            let n = c.norm();
+            if n > 0.0 { 1.0 / n } else { 0.0 }
+        })
+        .collect();
+    let scaled = DMatrix::from_fn(sensitivities.nrows(), sensitivities.ncols(), |i, j| {
+        sensitivities[(i, j)] * norms[j]
+    });
+    let svd = scaled.svd(true, true);
+    let tolerance = 1e-12 * svd.singular_values.max();
+    move |residual: &DVector<f64>| {
+        let solution = svd
+            .solve(residual, tolerance)
+            .unwrap_or_else(|_| DVector::zeros(norms.len()));
+        DVector::from_iterator(norms.len(), solution.iter().zip(&norms).map(|(x, n)| x * n))
+    }
+}
+
+/// The flight with the controls an estimator knows: each control channel
+/// of the (noise-free) record, split surfaces combined, reconstructed at
+/// every simulation step by the scenario's interpolation; a control the
+/// record lacks stays as flown.
+fn with_recorded_inputs(simulation: &Simulation, record: &FlightRecord) -> Result<Simulation> {
+    let (record, _) = crate::prep::surfaces::with_combined_surfaces(record)?;
+    let times: Vec<f64> = (0..simulation.exogenous.len())
+        .map(|k| k as f64 * simulation.step)
+        .collect();
+    let mut flight = simulation.clone();
+    for control in Control::ALL {
+        let Ok(channel) = record.channel(control.name()) else {
+            continue;
+        };
+        let values = channel.sampled_at(&times, simulation.interpolation)?;
+        for (exogenous, value) in flight.exogenous.iter_mut().zip(values) {
+            if value.is_finite() {
+                exogenous[control.index()] = value;
+            }
+        }
+    }
+    Ok(flight)
+}
+
+/// The flight in the scenario's steady wind, without gusts or turbulence,
+/// the controls as flown.
+fn without_gusts(scenario: &Scenario, simulation: &Simulation) -> Result<Simulation> {
+    let mut calm = scenario.clone();
+    calm.wind.gusts.clear();
+    calm.wind.turbulence = None;
+    let calm = Simulation::prepare(&calm)?;
+    let mut flight = simulation.clone();
+    for (exogenous, steady) in flight.exogenous.iter_mut().zip(&calm.exogenous) {
+        for i in CONTROL_COUNT..exogenous.len() {
+            exogenous[i] = steady[i];
+        }
+    }
+    flight.winds = calm.winds;
+    Ok(flight)
 }
 
 /// The information about the first `count` unknowns with the others
