@@ -175,9 +175,10 @@ fn flight_test_lateral_moments_are_a_poor_fit() {
 }
 
 /// The QAR of Wang et al. records no angular rates: `auto` takes the
-/// smoothed coefficients (their pipeline), and the smoother needs true
-/// airspeed and altitude, which this recorder does not record (it records
-/// calibrated airspeed and pressure altitude): refused, naming them.
+/// smoothed coefficients (their pipeline), and the smoother needs the true
+/// airspeed and the thrust, which this recorder does not record (it records
+/// calibrated airspeed and fuel flow; its pressure altitude observes h):
+/// refused, naming them.
 #[test]
 fn qar_record_is_refused_naming_what_the_smoother_lacks() {
     let mut scenario = Scenario::load("transport-approach").unwrap();
@@ -192,7 +193,7 @@ fn qar_record_is_refused_naming_what_the_smoother_lacks() {
     assert_eq!(refusal.kind(), RefusalKind::MissingChannels);
     let named = refusal.missing_channels();
     assert!(
-        named.contains(&"airspeed") && named.contains(&"altitude"),
+        named.contains(&"airspeed") && named.contains(&"throttle") && !named.contains(&"altitude"),
         "{refusal}"
     );
     assert!(refusal.to_string().starts_with("rbf-delta"), "{refusal}");
