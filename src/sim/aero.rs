@@ -112,6 +112,150 @@ impl Regressor {
     }
 }
 
+/// Highest total degree of a term's product of regressors (`alpha^3*de` is 4).
+pub const MAX_DEGREE: usize = 4;
+
+/// Most distinct products (terms of degree 2 or more) one model may have:
+/// their values are kept in a fixed-size table ([`TermRegressors`]) so that
+/// evaluation does not allocate.
+pub const MAX_PRODUCTS: usize = 16;
+
+/// What a term's parameter multiplies: one regressor, or a product of
+/// regressors with integer powers (`alpha^2`, `alpha*dMach`, `alpha^2*de`).
+///
+/// Its key is canonical, so that one term has one parameter name whatever
+/// file states it: the factors in the order of [`Regressor::ALL`] (`0`,
+/// `alpha`, `beta`, `p`, `q`, `r`, `alpha_dot`, `de`, `da`, `dr`, `df`,
+/// `dV`, `dMach`, `chi`, `CL2`), joined by `*`, a repeated factor written
+/// once with its power `^n` (n ≥ 2), total degree at most [`MAX_DEGREE`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Monomial {
+    /// The factors in [`Regressor::ALL`] order, a power repeating its regressor.
+    factors: [Regressor; MAX_DEGREE],
+    degree: u8,
+}
+
+impl From<Regressor> for Monomial {
+    fn from(regressor: Regressor) -> Monomial {
+        Monomial {
+            factors: [regressor; MAX_DEGREE],
+            degree: 1,
+        }
+    }
+}
+
+impl Monomial {
+    /// Parses a coefficient-table key: a regressor key, or factors
+    /// `key` / `key^n` joined by `*`, in canonical form (the error names
+    /// the canonical spelling of a key that is otherwise valid).
+    pub fn parse(text: &str) -> Result<Monomial, String> {
+        let mut factors = Vec::new();
+        for factor in text.split('*') {
+            let (key, power) = match factor.split_once('^') {
+                Some((key, power)) => (key, power),
+                None => (factor, "1"),
+            };
+            let regressor = Regressor::from_key(key.trim()).ok_or_else(|| {
+                format!(
+                    "unknown regressor '{}' in term '{text}'; known: {}",
+                    key.trim(),
+                    Regressor::keys()
+                )
+            })?;
+            let power: usize = match power.trim().parse::<i64>() {
+                Ok(power) if power >= 1 => power as usize,
+                _ => {
+                    return Err(format!(
+                        "the power '{}' of '{}' in term '{text}' must be an integer ≥ 1",
+                        power.trim(),
+                        key.trim()
+                    ));
+                }
+            };
+            factors.extend(std::iter::repeat_n(regressor, power.min(MAX_DEGREE + 1)));
+            if factors.len() > MAX_DEGREE {
+                return Err(format!(
+                    "term '{text}' has a degree above {MAX_DEGREE}, the most a term may have"
+                ));
+            }
+        }
+        if factors.len() > 1 && factors.contains(&Regressor::Constant) {
+            return Err(format!(
+                "term '{text}': the constant 0 cannot be a factor of a product"
+            ));
+        }
+        let monomial = Monomial::from_factors(&factors)
+            .ok_or_else(|| format!("term '{text}' has no factor"))?;
+        let canonical = monomial.key();
+        if canonical != text {
+            return Err(format!(
+                "write term '{text}' as '{canonical}' (factors in the order {}, a repeated factor once with its power ^n)",
+                Regressor::keys()
+            ));
+        }
+        Ok(monomial)
+    }
+
+    /// The product of `factors` (in any order); None when there are none
+    /// or more than [`MAX_DEGREE`].
+    pub fn from_factors(factors: &[Regressor]) -> Option<Monomial> {
+        if factors.is_empty() || factors.len() > MAX_DEGREE {
+            return None;
+        }
+        let mut monomial = Monomial::from(factors[0]);
+        monomial.factors[..factors.len()].copy_from_slice(factors);
+        monomial.factors[..factors.len()].sort_by_key(|r| *r as usize);
+        monomial.degree = factors.len() as u8;
+        Some(monomial)
+    }
+
+    /// The canonical key (`alpha`, `alpha^2`, `alpha*dMach`).
+    pub fn key(&self) -> String {
+        let mut parts: Vec<String> = Vec::new();
+        let factors = self.factors();
+        let mut start = 0;
+        while start < factors.len() {
+            let regressor = factors[start];
+            let power = factors[start..]
+                .iter()
+                .take_while(|&&r| r == regressor)
+                .count();
+            parts.push(match power {
+                1 => regressor.key().to_string(),
+                n => format!("{}^{n}", regressor.key()),
+            });
+            start += power;
+        }
+        parts.join("*")
+    }
+
+    /// The factors, a power repeating its regressor.
+    pub fn factors(&self) -> &[Regressor] {
+        &self.factors[..self.degree as usize]
+    }
+
+    /// The regressor of a degree-1 term; None for a product.
+    pub fn single(&self) -> Option<Regressor> {
+        (self.degree == 1).then_some(self.factors[0])
+    }
+
+    /// Whether `regressor` is one of the factors.
+    pub fn contains(&self, regressor: Regressor) -> bool {
+        self.factors().contains(&regressor)
+    }
+
+    /// The product of the factors' values (`regressors` indexed by `Regressor as usize`).
+    #[inline(always)]
+    pub fn value<T: Real>(&self, regressors: &[T]) -> T {
+        let factors = self.factors();
+        factors[1..]
+            .iter()
+            .fold(regressors[factors[0] as usize], |product, &r| {
+                product * regressors[r as usize]
+            })
+    }
+}
+
 /// Which axes the force coefficients are written in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -213,6 +357,48 @@ pub struct StallSpec {
     pub tau2: f64,
 }
 
+/// Where the moment coefficients of a file are taken about, when not the
+/// centre of gravity: an `offset` in metres, or the reference point and the
+/// CG as fractions of c̄ aft of the leading edge of the mean aerodynamic
+/// chord (`point_mac`, `cg_mac`; the offset is then along body x only).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MomentReferenceSpec {
+    /// From the CG to the reference point, body axes (x forward, y right, z down), m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<Vec<f64>>,
+    /// The reference point, fraction of c̄ aft of the MAC leading edge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point_mac: Option<f64>,
+    /// The CG, fraction of c̄ aft of the MAC leading edge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cg_mac: Option<f64>,
+}
+
+impl MomentReferenceSpec {
+    /// The offset from the CG to the reference point (body axes, m) for a
+    /// chord `chord`, or what is wrong with the table.
+    fn offset(&self, chord: f64) -> Result<Vector3<f64>, String> {
+        let offset = match (&self.offset, self.point_mac, self.cg_mac) {
+            (Some(offset), None, None) => match offset[..] {
+                [x, y, z] => Vector3::new(x, y, z),
+                _ => return Err("offset must be three numbers [x, y, z] (m)".into()),
+            },
+            (None, Some(point), Some(cg)) => Vector3::new((cg - point) * chord, 0.0, 0.0),
+            _ => {
+                return Err(
+                    "give either offset = [x, y, z] (m) or both point_mac and cg_mac (fractions of c̄)"
+                        .into(),
+                );
+            }
+        };
+        match offset.iter().all(|v| v.is_finite()) {
+            true => Ok(offset),
+            false => Err("the offset must be finite numbers".into()),
+        }
+    }
+}
+
 /// The `[aero]` table of an aircraft or model-structure file. Unknown keys
 /// are taken as coefficient tables and reported as unknown coefficients.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -236,6 +422,9 @@ pub struct AeroSpec {
     pub oswald_efficiency: Option<f64>,
     #[serde(default)]
     pub stall: Option<StallSpec>,
+    /// The point the moment coefficients are taken about; the CG when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moment_reference: Option<MomentReferenceSpec>,
     /// Coefficient tables, keyed by coefficient name then regressor key.
     #[serde(flatten)]
     pub coefficients: BTreeMap<String, BTreeMap<String, f64>>,
@@ -251,7 +440,7 @@ pub struct ReferenceGeometry {
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Term {
-    regressor: Regressor,
+    monomial: Monomial,
     parameter: usize,
 }
 
@@ -339,8 +528,14 @@ pub struct AeroModel {
     pub reference_airspeed: f64,
     pub reference_mach: f64,
     pub geometry: ReferenceGeometry,
+    /// From the CG to the point the moment coefficients are taken about
+    /// (body axes, m); zero when they are taken about the CG.
+    pub moment_reference: Vector3<f64>,
     pub parameters: ParameterSet,
     terms: [Vec<Term>; 6],
+    /// The distinct products (terms of degree ≥ 2), in the order their
+    /// values follow the regressors in [`TermRegressors`].
+    products: Vec<Monomial>,
     oswald: Option<usize>,
     stall: Option<StallIndices>,
     /// Whether any coefficient has an α̇ term (fixed by the structure, not the values).
@@ -358,19 +553,20 @@ pub struct AeroModel {
 /// offset), as one table ([`TermRegressors::slot`]): the lift-type
 /// coefficient's (`alpha` carrying the Kirchhoff factor), then every other
 /// coefficient's (`CL2` the lift-type coefficient squared), then 1 (at
-/// [`TermRegressors::ONE`], for what enters unscaled).
+/// [`TermRegressors::ONE`], for what enters unscaled), then the value of
+/// each of the model's products (not scaled by the Kirchhoff factor).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TermRegressors {
-    /// By slot: lift-type regressors, other regressors, 1.
-    pub values: [f64; 2 * REGRESSOR_COUNT + 1],
+    /// By slot: lift-type regressors, other regressors, 1, products.
+    pub values: [f64; 2 * REGRESSOR_COUNT + 1 + MAX_PRODUCTS],
 }
 
 impl TermRegressors {
     /// The slot of the constant 1.
     pub const ONE: usize = 2 * REGRESSOR_COUNT;
 
-    /// The slot of a term's regressor: the lift-type coefficient's (`lift`)
-    /// or another coefficient's.
+    /// The slot of a single-regressor term's regressor: the lift-type
+    /// coefficient's (`lift`) or another coefficient's.
     pub fn slot(lift: bool, regressor: Regressor) -> usize {
         regressor as usize + if lift { 0 } else { REGRESSOR_COUNT }
     }
@@ -379,7 +575,7 @@ impl TermRegressors {
 impl Default for TermRegressors {
     /// Every regressor 0 (and the constant 1).
     fn default() -> Self {
-        let mut values = [0.0; 2 * REGRESSOR_COUNT + 1];
+        let mut values = [0.0; 2 * REGRESSOR_COUNT + 1 + MAX_PRODUCTS];
         values[TermRegressors::ONE] = 1.0;
         TermRegressors { values }
     }
@@ -401,8 +597,10 @@ impl AeroModel {
             reference_airspeed: spec.reference_airspeed.unwrap_or(f64::NAN),
             reference_mach: spec.reference_mach.unwrap_or(f64::NAN),
             geometry,
+            moment_reference: Vector3::zeros(),
             parameters: ParameterSet::default(),
             terms: Default::default(),
+            products: Vec::new(),
             oswald: None,
             stall: None,
             has_alpha_dot_terms: false,
@@ -414,7 +612,7 @@ impl AeroModel {
             .terms
             .iter()
             .flatten()
-            .any(|t| t.regressor == Regressor::AlphaDot);
+            .any(|t| t.monomial.contains(Regressor::AlphaDot));
         model
     }
 
@@ -438,13 +636,14 @@ impl AeroModel {
             for (key, &value) in table {
                 let field = format!("{prefix}.{name}.{key}");
                 match self.check_term(Coefficient::ALL[position], key, value) {
-                    Ok(regressor) => {
+                    Ok(monomial) => {
                         let parameter =
                             self.add_parameter(&format!("{name}_{key}"), value, &field, problems);
                         self.terms[position].push(Term {
-                            regressor,
+                            monomial,
                             parameter,
                         });
+                        self.add_product(monomial, &field, problems);
                     }
                     Err(message) => problems.push(field, message),
                 }
@@ -457,23 +656,47 @@ impl AeroModel {
         coefficient: Coefficient,
         key: &str,
         value: f64,
-    ) -> Result<Regressor, String> {
-        let regressor = Regressor::from_key(key)
-            .ok_or_else(|| format!("unknown term '{key}'; known: {}", Regressor::keys()))?;
+    ) -> Result<Monomial, String> {
+        let monomial = match Regressor::from_key(key) {
+            Some(regressor) => Monomial::from(regressor),
+            None if key.contains(['*', '^']) => Monomial::parse(key)?,
+            None => {
+                return Err(format!(
+                    "unknown term '{key}'; known: {} and their products ('alpha^2', 'alpha*de')",
+                    Regressor::keys()
+                ));
+            }
+        };
         if !value.is_finite() {
             return Err(format!("{value} is not a finite number"));
         }
-        match regressor {
-            Regressor::LiftSquared
-                if coefficient != Coefficient::Drag || self.force_axes != ForceAxes::Wind =>
-            {
-                Err("CL2 is a drag term of a wind-axis model".into())
-            }
-            Regressor::Separation if self.kind != ModelKind::Stall => {
-                Err("chi terms need model = \"stall\"".into())
-            }
-            _ => Ok(regressor),
+        let lift_squared = monomial.contains(Regressor::LiftSquared);
+        if lift_squared && (coefficient != Coefficient::Drag || self.force_axes != ForceAxes::Wind)
+        {
+            return Err("CL2 is a drag term of a wind-axis model".into());
         }
+        if lift_squared && monomial.single().is_none() {
+            return Err("CL2 cannot be a factor of a product".into());
+        }
+        if monomial.contains(Regressor::Separation) && self.kind != ModelKind::Stall {
+            return Err("chi terms need model = \"stall\"".into());
+        }
+        Ok(monomial)
+    }
+
+    /// Registers a product's slot in [`TermRegressors`] (once per distinct product).
+    fn add_product(&mut self, monomial: Monomial, field: &str, problems: &mut Problems) {
+        if monomial.single().is_some() || self.products.contains(&monomial) {
+            return;
+        }
+        if self.products.len() == MAX_PRODUCTS {
+            problems.push(
+                field,
+                format!("more than {MAX_PRODUCTS} distinct product terms in one model"),
+            );
+            return;
+        }
+        self.products.push(monomial);
     }
 
     fn add_parameter(
@@ -501,6 +724,12 @@ impl AeroModel {
         }
         self.read_stall(spec, prefix, problems);
         self.check_references(spec, prefix, problems);
+        if let Some(reference) = &spec.moment_reference {
+            match reference.offset(self.geometry.chord) {
+                Ok(offset) => self.moment_reference = offset,
+                Err(message) => problems.push(format!("{prefix}.moment_reference"), message),
+            }
+        }
     }
 
     fn read_stall(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
@@ -558,7 +787,7 @@ impl AeroModel {
             self.terms
                 .iter()
                 .flatten()
-                .any(|t| t.regressor == regressor)
+                .any(|t| t.monomial.contains(regressor))
         };
         let needs_speed = uses(Regressor::SpeedRatio) || self.rate_speed == RateSpeed::Reference;
         match spec.reference_airspeed {
@@ -729,9 +958,10 @@ impl AeroModel {
         self.terms[coefficient as usize]
             .iter()
             .fold(T::constant(-0.0), |sum, t| {
-                let regressor = match t.regressor {
-                    Regressor::Alpha => regressors[Regressor::Alpha as usize] * alpha_factor,
-                    r => regressors[r as usize],
+                let regressor = match t.monomial.single() {
+                    Some(Regressor::Alpha) => regressors[Regressor::Alpha as usize] * alpha_factor,
+                    Some(r) => regressors[r as usize],
+                    None => t.monomial.value(regressors),
                 };
                 sum + regressor * values[t.parameter]
             })
@@ -773,17 +1003,32 @@ impl AeroModel {
         lift[Regressor::Alpha as usize] *= kirchhoff;
         lift[Regressor::LiftSquared as usize] = 0.0;
         rest[..REGRESSOR_COUNT].copy_from_slice(&other);
+        let products = &mut rest[REGRESSOR_COUNT + 1..];
+        for (value, product) in products.iter_mut().zip(&self.products) {
+            *value = product.value(&other);
+        }
         regressors
+    }
+
+    /// The slot in [`TermRegressors`] of the value a term of `coefficient` multiplies.
+    pub fn term_slot(&self, coefficient: Coefficient, monomial: Monomial) -> usize {
+        match monomial.single() {
+            Some(regressor) => TermRegressors::slot(coefficient == Coefficient::Lift, regressor),
+            None => {
+                let k = self.products.iter().position(|p| *p == monomial);
+                TermRegressors::ONE + 1 + k.expect("every product of a term has a slot")
+            }
+        }
     }
 
     /// The coefficient and term of a parameter that enters linearly (`{coefficient}_{term}`);
     /// None for `e` and the stall parameters.
-    pub fn term_of(&self, parameter: usize) -> Option<(Coefficient, Regressor)> {
+    pub fn term_of(&self, parameter: usize) -> Option<(Coefficient, Monomial)> {
         Coefficient::ALL.into_iter().find_map(|coefficient| {
             self.terms[coefficient as usize]
                 .iter()
                 .find(|t| t.parameter == parameter)
-                .map(|t| (coefficient, t.regressor))
+                .map(|t| (coefficient, t.monomial))
         })
     }
 
@@ -824,7 +1069,7 @@ impl AeroModel {
         moment: Vector3<T>,
         (sin_alpha, cos_alpha): (T, T),
     ) -> AeroCoefficients<T> {
-        match self.force_axes {
+        let mut coefficients = match self.force_axes {
             ForceAxes::Wind => AeroCoefficients {
                 force: Vector3::new(
                     -drag_type * cos_alpha + lift_type * sin_alpha,
@@ -841,6 +1086,37 @@ impl AeroModel {
                 lift: -lift_type * cos_alpha + drag_type * sin_alpha,
                 drag: -drag_type * cos_alpha - lift_type * sin_alpha,
             },
+        };
+        if self.moment_reference != Vector3::zeros() {
+            coefficients.moment += self.moment_transfer(&coefficients.force);
+        }
+        coefficients
+    }
+
+    /// What the body-axis force coefficients `force` (CX, CY, CZ) add to
+    /// the moment coefficients when these are taken about the reference
+    /// point r (from the CG, [`AeroModel::moment_reference`]) and the
+    /// moments about the CG are wanted: M_cg = M_ref + r × F, non-dimensional
+    /// (r × C_F)/(b, c̄, b). Zero for r = 0.
+    pub fn moment_transfer<T: Real>(&self, force: &Vector3<T>) -> Vector3<T> {
+        let r = &self.moment_reference;
+        let g = &self.geometry;
+        Vector3::new(
+            (force.z * r.y - force.y * r.z) / g.span,
+            (force.x * r.z - force.z * r.x) / g.chord,
+            (force.y * r.x - force.x * r.y) / g.span,
+        )
+    }
+
+    /// Which body-axis force coefficients (CX, CY, CZ) the transfer of the
+    /// moment `coefficient` to the CG uses ([`AeroModel::moment_transfer`]).
+    pub fn transfer_uses(&self, coefficient: Coefficient) -> [bool; 3] {
+        let r = self.moment_reference.map(|v| v != 0.0);
+        match coefficient {
+            Coefficient::Roll => [false, r.z, r.y],
+            Coefficient::Pitch => [r.z, false, r.x],
+            Coefficient::Yaw => [r.y, r.x, false],
+            _ => [false; 3],
         }
     }
 
@@ -861,7 +1137,7 @@ impl AeroModel {
             let values = self.parameters.values();
             let mut slope: f64 = self.terms[Coefficient::Drag as usize]
                 .iter()
-                .filter(|t| t.regressor == Regressor::LiftSquared)
+                .filter(|t| t.monomial == Monomial::from(Regressor::LiftSquared))
                 .map(|t| values[t.parameter])
                 .sum();
             if let Some(e) = self.oswald {
@@ -957,11 +1233,12 @@ impl AeroModel {
         derivatives
     }
 
-    /// The terms of one coefficient as (regressor, parameter index), in file order.
-    pub fn terms(&self, coefficient: Coefficient) -> impl Iterator<Item = (Regressor, usize)> + '_ {
+    /// The terms of one coefficient as (what the parameter multiplies,
+    /// parameter index), in file order.
+    pub fn terms(&self, coefficient: Coefficient) -> impl Iterator<Item = (Monomial, usize)> + '_ {
         self.terms[coefficient as usize]
             .iter()
-            .map(|t| (t.regressor, t.parameter))
+            .map(|t| (t.monomial, t.parameter))
     }
 
     /// Names of the terms of one coefficient, in file order (for reports and model-structure code).

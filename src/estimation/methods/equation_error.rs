@@ -65,7 +65,7 @@ use crate::estimation::solver::regression::{LagWindow, LeastSquares};
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
-use crate::sim::aero::{Coefficient, ForceAxes, ModelKind, Regressor};
+use crate::sim::aero::{Coefficient, ForceAxes, ModelKind, Monomial, Regressor};
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 
@@ -218,8 +218,8 @@ impl Default for EquationErrorOptions {
 #[derive(Debug, Clone)]
 pub(crate) struct Plan {
     pub(crate) coefficient: Coefficient,
-    /// (regressor, parameter index) of every term.
-    pub(crate) terms: Vec<(Regressor, usize)>,
+    /// (what the parameter multiplies, parameter index) of every term.
+    pub(crate) terms: Vec<(Monomial, usize)>,
     /// Index of the Oswald factor e when this is wind-axis drag with one.
     oswald: Option<usize>,
 }
@@ -228,7 +228,7 @@ impl Plan {
     fn free_terms<'a>(
         &'a self,
         structure: &'a ModelStructure,
-    ) -> impl Iterator<Item = (Regressor, usize)> + 'a {
+    ) -> impl Iterator<Item = (Monomial, usize)> + 'a {
         self.terms
             .iter()
             .copied()
@@ -375,9 +375,12 @@ pub(crate) fn request(plans: &[Plan]) -> Request {
         request.coefficients.push(plan.coefficient);
         request
             .regressors
-            .extend(plan.terms.iter().map(|(regressor, _)| *regressor));
-        let uses_lift =
-            plan.oswald.is_some() || plan.terms.iter().any(|(r, _)| *r == Regressor::LiftSquared);
+            .extend(plan.terms.iter().flat_map(|(term, _)| term.factors()));
+        let uses_lift = plan.oswald.is_some()
+            || plan
+                .terms
+                .iter()
+                .any(|(term, _)| term.contains(Regressor::LiftSquared));
         if uses_lift && !request.coefficients.contains(&Coefficient::Lift) {
             request.coefficients.push(Coefficient::Lift);
         }
@@ -501,7 +504,7 @@ pub(crate) fn regression_problem(
     let count = measured.len();
     let x = DMatrix::from_fn(count, columns.len(), |k, j| {
         match plan.terms.iter().find(|(_, i)| *i == columns[j]) {
-            Some((regressor, _)) => data.regressors[k][*regressor as usize],
+            Some((term, _)) => term.value(&data.regressors[k]),
             None => induced_drag_regressor(structure, lift[k]),
         }
     });
@@ -510,7 +513,7 @@ pub(crate) fn regression_problem(
             .terms
             .iter()
             .filter(|(_, i)| !structure.free[*i])
-            .map(|(regressor, i)| values[*i] * data.regressors[k][*regressor as usize])
+            .map(|(term, i)| values[*i] * term.value(&data.regressors[k]))
             .sum();
         let induced = match plan.oswald {
             Some(e) if !structure.free[e] => induced_drag_regressor(structure, lift[k]) / values[e],

@@ -322,7 +322,7 @@ pub(crate) fn model_controls(structure: &ModelStructure) -> Vec<Regressor> {
     .filter(|r| {
         Coefficient::ALL
             .into_iter()
-            .any(|c| aero.terms(c).any(|(t, _)| t == *r))
+            .any(|c| aero.terms(c).any(|(t, _)| t.contains(*r)))
     })
     .collect()
 }
@@ -543,7 +543,7 @@ pub fn frequency_regression(
     let constant_free = plans.iter().any(|p| {
         p.terms
             .iter()
-            .any(|&(r, i)| r == Regressor::Constant && structure.free[i])
+            .any(|&(r, i)| r.single() == Some(Regressor::Constant) && structure.free[i])
     });
     let zero = options.zero_frequency.unwrap_or(constant_free);
     let (omegas, band_note) =

@@ -472,7 +472,7 @@ impl Smoothed {
 fn needed_inputs(structure: &ModelStructure, plans: &[Plan]) -> Vec<(&'static str, String)> {
     let mut needs: Vec<(&'static str, String)> = Vec::new();
     for plan in plans {
-        for (regressor, _) in &plan.terms {
+        for regressor in plan.terms.iter().flat_map(|(term, _)| term.factors()) {
             let control = match regressor {
                 Regressor::Elevator => Some(Control::Elevator),
                 Regressor::Aileron => Some(Control::Aileron),

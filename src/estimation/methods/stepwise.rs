@@ -65,7 +65,7 @@ use crate::estimation::solver::regression::LeastSquares;
 use crate::estimation::structure::ModelStructure;
 use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
-use crate::sim::aero::{Coefficient, ForceAxes, Regressor};
+use crate::sim::aero::{Coefficient, ForceAxes, Monomial, Regressor};
 use nalgebra::{DMatrix, DVector};
 use std::fmt;
 
@@ -238,7 +238,8 @@ impl Default for StepwiseOptions {
     }
 }
 
-/// A candidate term: one regressor, or the product of two.
+/// A candidate term: one regressor, or a product of regressors with
+/// integer powers, spelt as a model file's term ([`Monomial`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Candidate {
     pub name: String,
@@ -246,30 +247,22 @@ pub struct Candidate {
 }
 
 impl Candidate {
-    /// Parses `alpha`, `alpha*beta` or `alpha^2`.
+    /// Parses `alpha`, `alpha*beta`, `alpha^2` (any term key but the constant `0`).
     pub fn parse(text: &str) -> Result<Candidate> {
         let text = text.trim();
-        let keys: Vec<&str> = match text.strip_suffix("^2") {
-            Some(base) => vec![base, base],
-            None => text.split('*').map(str::trim).collect(),
-        };
-        let factors = keys
-            .iter()
-            .map(|key| Regressor::from_key(key))
-            .collect::<Option<Vec<_>>>()
-            .filter(|f| (1..=2).contains(&f.len()) && !f.contains(&Regressor::Constant));
-        let known: Vec<&str> = Regressor::ALL.iter().map(|r| r.key()).collect();
-        factors
-            .map(|factors| Candidate {
-                name: text.to_string(),
-                factors,
+        let monomial = Monomial::parse(text)
+            .and_then(|m| match m.single() {
+                Some(Regressor::Constant) => Err(format!(
+                    "the constant '0' is always in the model; keys: {}",
+                    Regressor::ALL.map(Regressor::key).join(", ")
+                )),
+                _ => Ok(m),
             })
-            .ok_or_else(|| {
-                Error::Other(format!(
-                    "candidate term '{text}': write a regressor key, a product 'a*b' or a square 'a^2' of keys other than 0; keys: {}",
-                    known.join(", ")
-                ))
-            })
+            .map_err(|message| Error::Other(format!("candidate term '{text}': {message}")))?;
+        Ok(Candidate {
+            name: text.to_string(),
+            factors: monomial.factors().to_vec(),
+        })
     }
 
     /// The candidate at one instant: the regressor, or the product of the
@@ -769,9 +762,11 @@ impl<'a> Problem<'a> {
     }
 
     /// The plain-basis terms of a model (the constant `0`, the selected
-    /// terms, then linear terms a product needs but the search did not
-    /// select) and the matrix T from the searched (mean-removed) estimates
-    /// to theirs: (a − ā)(b − b̄) = a·b − b̄·a − ā·b + ā·b̄.
+    /// terms, then lower-degree terms a product needs but the search did
+    /// not select) and the matrix T from the searched (mean-removed)
+    /// estimates to theirs: a product of mean-removed factors expands over
+    /// the subsets S of its factors, Π(xᵢ − x̄ᵢ) = Σ_S Π_{i∈S} xᵢ · Π_{i∉S}(−x̄ᵢ),
+    /// e.g. (a − ā)(b − b̄) = a·b − b̄·a − ā·b + ā·b̄.
     fn plain_basis(&self, model: &[usize]) -> (Vec<String>, DMatrix<f64>) {
         let mut terms: Vec<String> = std::iter::once("0".to_string())
             .chain(model.iter().map(|&j| self.candidates[j].name.clone()))
@@ -782,21 +777,30 @@ impl<'a> Problem<'a> {
             .collect();
         for (position, &j) in model.iter().enumerate() {
             let column = position + 1;
-            let [a, b] = self.candidates[j].factors[..] else {
+            let factors = &self.candidates[j].factors;
+            if factors.len() < 2 {
                 continue;
-            };
-            let (mean_a, mean_b) = (self.means[a as usize], self.means[b as usize]);
-            rows[0][column] += mean_a * mean_b;
-            for (factor, other_mean) in [(a, mean_b), (b, mean_a)] {
-                let row = match terms.iter().position(|t| t == factor.key()) {
+            }
+            // Every proper subset of the factors (the full one is the term itself).
+            for subset in 0..(1usize << factors.len()) - 1 {
+                let kept: Vec<Regressor> = (0..factors.len())
+                    .filter(|i| subset & (1 << i) != 0)
+                    .map(|i| factors[i])
+                    .collect();
+                let weight: f64 = (0..factors.len())
+                    .filter(|i| subset & (1 << i) == 0)
+                    .map(|i| -self.means[factors[i] as usize])
+                    .product();
+                let key = Monomial::from_factors(&kept).map_or("0".to_string(), |m| m.key());
+                let row = match terms.iter().position(|t| *t == key) {
                     Some(row) => row,
                     None => {
-                        terms.push(factor.key().to_string());
+                        terms.push(key);
                         rows.push(vec![0.0; searched]);
                         rows.len() - 1
                     }
                 };
-                rows[row][column] -= other_mean;
+                rows[row][column] += weight;
             }
         }
         let transform = DMatrix::from_fn(rows.len(), searched, |i, j| rows[i][j]);
@@ -934,7 +938,12 @@ mod tests {
         assert_eq!(square.factors, [Regressor::Alpha, Regressor::Alpha]);
         let product = Candidate::parse("alpha*de").unwrap();
         assert_eq!(product.factors, [Regressor::Alpha, Regressor::Elevator]);
-        for bad in ["bogus", "0", "alpha*beta*de", "alpha*0"] {
+        let cubic = Candidate::parse("alpha^2*de").unwrap();
+        assert_eq!(
+            cubic.factors,
+            [Regressor::Alpha, Regressor::Alpha, Regressor::Elevator]
+        );
+        for bad in ["bogus", "0", "de*alpha", "alpha*0", "alpha^0"] {
             let message = Candidate::parse(bad).unwrap_err().to_string();
             assert!(
                 message.contains(bad) && message.contains("alpha"),

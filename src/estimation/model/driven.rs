@@ -852,7 +852,7 @@ impl Directions {
         for column in columns {
             let source = match *column {
                 Column::Term(j) => match aero.term_of(j) {
-                    Some((coefficient, regressor)) => {
+                    Some((coefficient, monomial)) => {
                         let c = coefficient as usize;
                         let direction = *offsets[c].get_or_insert_with(|| {
                             if affine {
@@ -865,10 +865,7 @@ impl Directions {
                         });
                         Source::Term {
                             direction,
-                            regressor: TermRegressors::slot(
-                                coefficient == Coefficient::Lift,
-                                regressor,
-                            ),
+                            regressor: aero.term_slot(coefficient, monomial),
                         }
                     }
                     None => directions.nonlinear(model, j),

@@ -277,7 +277,7 @@ fn needs_alpha_dot(aero: &AeroModel) -> bool {
     aero.kind == ModelKind::Stall
         || Coefficient::ALL
             .into_iter()
-            .any(|c| aero.terms(c).any(|(r, _)| r == Regressor::AlphaDot))
+            .any(|c| aero.terms(c).any(|(r, _)| r.contains(Regressor::AlphaDot)))
 }
 
 /// The motion variables: the option's, else the structure's integrated
@@ -355,7 +355,9 @@ fn prepare(
         regressors: Vec::new(),
     };
     for &c in &coefficients {
-        request.regressors.extend(aero.terms(c).map(|(r, _)| r));
+        request
+            .regressors
+            .extend(aero.terms(c).flat_map(|(r, _)| r.factors().to_vec()));
     }
     if aero.kind == ModelKind::Stall {
         request.regressors.push(Regressor::Alpha);
