@@ -442,6 +442,39 @@ pub struct ReferenceGeometry {
 struct Term {
     monomial: Monomial,
     parameter: usize,
+    /// The relation the parameter follows, when it is tied to another.
+    tie: Option<Tie>,
+}
+
+impl Term {
+    /// The term's coefficient given every parameter's value: its own, or
+    /// for a tied term c·θ_master + d.
+    #[inline(always)]
+    fn coefficient(&self, values: &[f64]) -> f64 {
+        match self.tie {
+            None => values[self.parameter],
+            Some(tie) => tie.value(values),
+        }
+    }
+}
+
+/// A linear relation θ = factor·θ_master + offset that a term's parameter
+/// follows (a model file's `[parameters.NAME] tie`): the parameter is no
+/// unknown of any estimator, and wherever the model is evaluated its term
+/// takes the value the relation gives from the master's current value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tie {
+    /// Index of the master parameter.
+    pub master: usize,
+    pub factor: f64,
+    pub offset: f64,
+}
+
+impl Tie {
+    /// factor·θ_master + offset.
+    pub fn value(&self, values: &[f64]) -> f64 {
+        self.factor * values[self.master] + self.offset
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -642,6 +675,7 @@ impl AeroModel {
                         self.terms[position].push(Term {
                             monomial,
                             parameter,
+                            tie: None,
                         });
                         self.add_product(monomial, &field, problems);
                     }
@@ -963,7 +997,7 @@ impl AeroModel {
                     Some(r) => regressors[r as usize],
                     None => t.monomial.value(regressors),
                 };
-                sum + regressor * values[t.parameter]
+                sum + regressor * t.coefficient(values)
             })
             + self.offsets[coefficient as usize]
     }
@@ -1021,9 +1055,102 @@ impl AeroModel {
         }
     }
 
-    /// The coefficient and term of a parameter that enters linearly (`{coefficient}_{term}`);
-    /// None for `e` and the stall parameters.
+    /// Ties term parameter `tied` to term parameter `master` by
+    /// θ_tied = factor·θ_master + offset, and sets θ_tied so. Errors: either
+    /// is not a term's parameter, they are the same, the master is tied
+    /// itself, the tied one is already tied or is another's master.
+    pub fn tie(&mut self, tied: usize, tie: Tie) -> Result<(), String> {
+        let names = self.parameters.names();
+        let name = |i: usize| names[i].clone();
+        if !(tie.factor.is_finite() && tie.offset.is_finite()) {
+            return Err("the factor and offset must be finite numbers".into());
+        }
+        if tie.master == tied {
+            return Err(format!("'{}' cannot be tied to itself", name(tied)));
+        }
+        let is_term = |i: usize| self.terms.iter().flatten().any(|t| t.parameter == i);
+        for (i, role) in [(tied, "tied"), (tie.master, "a master")] {
+            if !is_term(i) {
+                return Err(format!(
+                    "'{}' is not a term's parameter ({{coefficient}}_{{term}}): only those can be {role}",
+                    name(i)
+                ));
+            }
+        }
+        if let Some(other) = self.tie_of(tie.master) {
+            return Err(format!(
+                "the master '{}' is tied itself (to '{}'): tie to a free or fixed parameter",
+                name(tie.master),
+                name(other.master)
+            ));
+        }
+        if let Some(other) = self.tie_of(tied) {
+            return Err(format!(
+                "'{}' is tied already (to '{}')",
+                name(tied),
+                name(other.master)
+            ));
+        }
+        if let Some(dependent) = self.dependents(tied).next() {
+            return Err(format!(
+                "'{}' is the master of '{}': a master cannot be tied itself",
+                name(tied),
+                name(dependent)
+            ));
+        }
+        for term in self.terms.iter_mut().flatten() {
+            if term.parameter == tied {
+                term.tie = Some(tie);
+            }
+        }
+        let value = tie.value(self.parameters.values());
+        self.parameters.values_mut()[tied] = value;
+        Ok(())
+    }
+
+    /// The relation a parameter is tied by; None when it is not tied.
+    pub fn tie_of(&self, parameter: usize) -> Option<Tie> {
+        self.terms
+            .iter()
+            .flatten()
+            .find(|t| t.parameter == parameter)
+            .and_then(|t| t.tie)
+    }
+
+    /// The parameters tied to `master`.
+    pub fn dependents(&self, master: usize) -> impl Iterator<Item = usize> + '_ {
+        self.terms
+            .iter()
+            .flatten()
+            .filter(move |t| t.tie.is_some_and(|tie| tie.master == master))
+            .map(|t| t.parameter)
+    }
+
+    /// Whether any parameter is tied to another.
+    pub fn has_ties(&self) -> bool {
+        self.terms.iter().flatten().any(|t| t.tie.is_some())
+    }
+
+    /// Sets every tied parameter's value from its master's (what the
+    /// evaluation uses already), e.g. after the masters were estimated.
+    pub fn update_tied_values(&mut self) {
+        let ties: Vec<(usize, Tie)> = (self.terms.iter().flatten())
+            .filter_map(|t| t.tie.map(|tie| (t.parameter, tie)))
+            .collect();
+        for (tied, tie) in ties {
+            let value = tie.value(self.parameters.values());
+            self.parameters.values_mut()[tied] = value;
+        }
+    }
+
+    /// The coefficient and term of a parameter that enters linearly
+    /// (`{coefficient}_{term}`) in exactly one term, its own: None for `e`,
+    /// the stall parameters, a tied parameter and the master of one (whose
+    /// value moves other terms too).
     pub fn term_of(&self, parameter: usize) -> Option<(Coefficient, Monomial)> {
+        if self.tie_of(parameter).is_some() || self.dependents(parameter).next().is_some() {
+            return None;
+        }
         Coefficient::ALL.into_iter().find_map(|coefficient| {
             self.terms[coefficient as usize]
                 .iter()
@@ -1138,7 +1265,7 @@ impl AeroModel {
             let mut slope: f64 = self.terms[Coefficient::Drag as usize]
                 .iter()
                 .filter(|t| t.monomial == Monomial::from(Regressor::LiftSquared))
-                .map(|t| values[t.parameter])
+                .map(|t| t.coefficient(values))
                 .sum();
             if let Some(e) = self.oswald {
                 slope += 1.0 / (values[e] * std::f64::consts::PI * self.geometry.aspect_ratio);

@@ -381,6 +381,11 @@ impl Estimator for FrequencyRegression {
         FrequencyRegressionSettings::read(settings).map(|_| ())
     }
 
+    /// Its moment equations are about the CG, in its own form.
+    fn fits_moment_reference(&self) -> bool {
+        false
+    }
+
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         crate::estimation::estimator::one_record(METHOD, problem)?;
         let options = FrequencyRegressionSettings::read(&problem.settings)?;
@@ -449,7 +454,8 @@ impl Signals {
                 .map(|q| q * aircraft.wing_area)
                 .collect();
             let free = plan.columns(structure);
-            let (x, z) = regression_problem(plan, structure, data, &free);
+            let values = structure.aircraft.aero.parameters.values();
+            let (x, z) = regression_problem(plan, structure, data, &free, values);
             let z_column = columns.len();
             columns.push((0..count).map(|k| z[k] * scale[k] * length).collect());
             let mut regressors = Vec::with_capacity(free.len());

@@ -315,6 +315,11 @@ impl Estimator for SmoothedRegression {
         SmoothedRegressionSettings::read(settings).map(|_| ())
     }
 
+    /// Its moment equations are about the CG, in its own form.
+    fn fits_moment_reference(&self) -> bool {
+        false
+    }
+
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         let settings = SmoothedRegressionSettings::read(&problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;
