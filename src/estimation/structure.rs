@@ -25,6 +25,8 @@
 //! [parameters.Cn_beta]
 //! lower = 0.0
 //! upper = 1.0
+//! [parameters.Cn_dr]
+//! tie = { to = "Cl_dr", factor = -3.2 }   # θ = c·θ_master + d: no unknown, reported as tied
 //! [methods.oem]
 //! estimate_initial_state = true
 //! output_biases = ["ny"]

@@ -14,6 +14,35 @@
 //! `dr`, `df` (rad), `dV` = V/V0 − 1, `dMach` = M − M0, `chi` = 1 − χ
 //! (stall model), and `CL2` = CL² (drag only, wind axes).
 //!
+//! Products ([`Monomial`]): a key may be a product of regressors with
+//! integer powers, `alpha^2`, `alpha^3`, `alpha*dMach`, `alpha^2*de`
+//! (factors in the order of the list above, a repeated factor once with
+//! its power, total degree ≤ 4; quoted in TOML: `"alpha^2" = 0.6`), its
+//! parameter `{coefficient}_{key}` (`CD_alpha^2`). It is evaluated by the
+//! same sum as every term, so the simulator, equation error's regression
+//! columns and the state-space methods' model and Jacobians all see it.
+//! The stall model's Kirchhoff factor multiplies the plain `alpha` term of
+//! the lift-type coefficient only; `CL2` is never a factor of a product.
+//!
+//! Tied parameters ([`Tie`], a model file's `[parameters.NAME] tie`): a
+//! term's coefficient θ = c·θ_master + d, taken from the master's current
+//! value wherever the model is evaluated.
+//!
+//! Moment reference point (`[aero.moment_reference]`): the moment
+//! coefficients of the file are taken about a point at r (body axes, from
+//! the CG); the forces act there, so about the CG
+//! `M_cg = M_ref + r × F` (rigid-body transfer of a force system, as
+//! flight-test analyses refer moments measured about a reference point to
+//! the CG: Jategaonkar, Flight Vehicle System Identification, 2nd ed.,
+//! AIAA 2015, ch. 3; Klein & Morelli, Aircraft System Identification,
+//! AIAA 2006, ch. 3), non-dimensional
+//! `Cl += (r_y·CZ − r_z·CY)/b`, `Cm += (r_z·CX − r_x·CZ)/c̄`,
+//! `Cn += (r_x·CY − r_y·CX)/b` with body-axis CX, CY, CZ. For the pitching
+//! moment this is the textbook `Cm_α,cg = Cm_α,ref + CL_α·(x̄_cg − x̄_ref)`
+//! (x̄ in c̄ aft of the MAC leading edge; Etkin & Reid, Dynamics of Flight,
+//! 3rd ed., §2.3) when CX, r_z are small. The coefficients this model
+//! returns are about the CG.
+//!
 //! Quasi-steady stall (Verma & Peyada 2020, Eqs. 2–4, after
 //! Fischenberg):
 //! `τ1·dχ/dt + χ = ½·(1 − tanh(a1·(α − τ2·α̇ − α*)))`            (Eq. 2; Eq. 3 when τ1 = 0)
@@ -28,7 +57,7 @@
 //! and CY along the body y axis, the usual flight-test convention:
 //! `CX = −CD·cos α + CL·sin α`, `CZ = −CD·sin α − CL·cos α`.
 //! "body" gives CX, CY, CZ directly. Moments are body-axis, about the centre
-//! of gravity.
+//! of gravity (after the transfer from the moment reference point, if any).
 
 use crate::dual::Real;
 use crate::error::Problems;
@@ -1418,6 +1447,66 @@ mod tests {
         assert!((c.moment.y + 0.05).abs() < 1e-15);
         let cz = -c.drag * 0.1f64.sin() - lift * 0.1f64.cos();
         assert!((c.force.z - cz).abs() < 1e-15);
+    }
+
+    #[test]
+    fn products_are_canonical_and_multiply_their_factors() {
+        let term = Monomial::parse("alpha^2*de").unwrap();
+        assert_eq!(term.key(), "alpha^2*de");
+        assert_eq!(
+            term.factors(),
+            [Regressor::Alpha, Regressor::Alpha, Regressor::Elevator]
+        );
+        let mut regressors = [0.0; REGRESSOR_COUNT];
+        regressors[Regressor::Alpha as usize] = 0.1;
+        regressors[Regressor::Elevator as usize] = -0.05;
+        assert!((term.value(&regressors) - 0.1 * 0.1 * -0.05).abs() < 1e-18);
+        assert_eq!(Monomial::parse("alpha").unwrap(), Regressor::Alpha.into());
+        for bad in [
+            "de*alpha",
+            "alpha*alpha",
+            "alpha^1",
+            "alpha^2.5",
+            "alpha^",
+            "*alpha",
+        ] {
+            assert!(Monomial::parse(bad).is_err(), "{bad}");
+        }
+        let (model, problems) =
+            parse("[CL]\nalpha = 5.0\n\"alpha^2\" = -2.0\n[Cm]\n\"alpha*de\" = -1.0\n");
+        assert!(problems.is_empty(), "{problems:?}");
+        let mut input = AeroInput {
+            alpha: 0.1,
+            airspeed: 100.0,
+            ..Default::default()
+        };
+        input.controls[Control::Elevator.index()] = 0.05;
+        let c = model.coefficients(&input);
+        assert!((c.lift - (0.5 - 0.02)).abs() < 1e-15);
+        assert!((c.moment.y + 0.005).abs() < 1e-15);
+        let regressors = model.term_regressors(&input);
+        let (coefficient, term) = model.term_of(1).unwrap();
+        let slot = model.term_slot(coefficient, term);
+        assert_eq!(regressors.values[slot], 0.1 * 0.1);
+    }
+
+    /// M_cg = M_ref + r × F: a reference point ahead of the CG (x > 0)
+    /// with lift (CZ < 0) pitches the nose up about the CG.
+    #[test]
+    fn moments_are_transferred_to_the_cg() {
+        let (model, problems) =
+            parse("[moment_reference]\noffset = [0.5, 0.0, 0.2]\n[CL]\n0 = 1.0\n[CD]\n0 = 0.1\n");
+        assert!(problems.is_empty(), "{problems:?}");
+        let input = AeroInput {
+            airspeed: 100.0,
+            ..Default::default()
+        };
+        let c = model.coefficients(&input);
+        // α = 0: CX = −CD = −0.1, CZ = −CL = −1: (z·CX − x·CZ)/c̄.
+        let expected = (0.2 * -0.1 - 0.5 * -1.0) / 3.159;
+        assert!((c.moment.y - expected).abs() < 1e-15 && expected > 0.0);
+        assert_eq!(c.moment.x, 0.0);
+        assert_eq!(c.moment.z, 0.0);
     }
 
     #[test]

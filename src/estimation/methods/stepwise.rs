@@ -7,8 +7,9 @@
 //! Inputs: a flight record, a model structure (for the aircraft's mass,
 //! inertia, geometry, propulsion and rate normalisation — its terms are not
 //! used), one coefficient, and a pool of candidate terms: regressor keys
-//! (`alpha`, `q`, `de`, …) and products of two (`alpha*beta`, squares as
-//! `alpha^2`). Products are searched as MEAN-REMOVED regressors,
+//! (`alpha`, `q`, `de`, …) and their products, spelt as a model file's
+//! product terms (`alpha*beta`, `alpha^2`, `alpha^2*de`; [`Monomial`]).
+//! Products are searched as MEAN-REMOVED regressors,
 //! `alpha^2` = (α − ᾱ)², so that around a trim point α² is not a near copy
 //! of α (α² = ᾱ² + 2ᾱ·(α − ᾱ) + (α − ᾱ)²); the means are given in the
 //! notes. The selected model is reported in the plain basis of the model's
@@ -1075,6 +1076,33 @@ mod tests {
         let expected = [0.02 + 0.8 * mean * mean, 0.8, -1.6 * mean];
         for (value, truth) in theta.iter().zip(expected) {
             assert!((value - truth).abs() < 1e-12, "{theta}");
+        }
+    }
+
+    /// A cubic searched alone, CD = 0.02 + 2·(α − ᾱ)³, comes back as the
+    /// plain polynomial with the square and linear terms it needs added:
+    /// 2·(α³ − 3ᾱα² + 3ᾱ²α − ᾱ³).
+    #[test]
+    fn cubes_are_reported_in_the_plain_basis() {
+        let mean = quadratic_data(|_, _| 0.0)
+            .regressors
+            .iter()
+            .map(|r| r[1])
+            .sum::<f64>()
+            / 400.0;
+        let data = quadratic_data(|alpha, _| 0.02 + 2.0 * (alpha - mean).powi(3));
+        let candidates = [Candidate::parse("alpha^3").unwrap()];
+        let problem = Problem::new(&data, Coefficient::Drag, &candidates);
+        let (terms, theta, _) = plain_estimates(&problem, &[0]);
+        assert_eq!(terms, ["0", "alpha^3", "alpha", "alpha^2"]);
+        let expected = [
+            0.02 - 2.0 * mean.powi(3),
+            2.0,
+            6.0 * mean * mean,
+            -6.0 * mean,
+        ];
+        for (value, truth) in theta.iter().zip(expected) {
+            assert!((value - truth).abs() < 1e-10, "{theta}");
         }
     }
 
