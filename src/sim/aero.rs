@@ -51,7 +51,13 @@
 //! `Cm = Cm0 + Cmα·α + Cmq·q̂ + Cmδe·δe + Cmχ·(1 − χ)`            (Eq. 4).
 //! Here the Kirchhoff factor multiplies the `alpha` term of CL; any other
 //! term may be added to any coefficient. χ is a simulator state when τ1 > 0
-//! and algebraic (Eq. 3) when τ1 = 0.
+//! and algebraic (Eq. 3) when τ1 = 0. Variants the `[stall]` table states:
+//! τ1 and τ2 in seconds or in units of c̄/V (`time_unit = "chord/V"`, τ in
+//! seconds = τ·c̄/V, V the airspeed or V0 as `rate_speed` says); τ2 acting
+//! only while α̇ < 0 (`tau2_only_while_decreasing`: α̇ replaced by
+//! min(α̇, 0) in Eq. 2); the induced drag from the attached-flow lift
+//! (`induced_drag_lift = "attached"`: CL with the Kirchhoff factor 1 in
+//! CL²/(e·π·Λ), the lift the wing would make without separation).
 //!
 //! Force axes: "wind" gives CL and CD in stability axes (rotated by α only)
 //! and CY along the body y axis, the usual flight-test convention:
@@ -384,6 +390,44 @@ pub struct StallSpec {
     pub tau1: f64,
     /// Quasi-steady hysteresis time constant τ2 (s).
     pub tau2: f64,
+    /// The unit of τ1 and τ2.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub time_unit: StallTimeUnit,
+    /// τ2 acts only while α̇ < 0 (the lag on the way down only).
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub tau2_only_while_decreasing: bool,
+    /// The lift the induced drag CL²/(e·π·Λ) is formed from.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub induced_drag_lift: InducedDragLift,
+}
+
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
+}
+
+/// The unit of the stall time constants τ1 and τ2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum StallTimeUnit {
+    /// Seconds.
+    #[default]
+    #[serde(rename = "s")]
+    Seconds,
+    /// Units of c̄/V (V the airspeed, or V0 with `rate_speed = "reference"`):
+    /// τ in seconds is τ·c̄/V.
+    #[serde(rename = "chord/V")]
+    ChordTimes,
+}
+
+/// Which lift coefficient the Oswald induced drag CL²/(e·π·Λ) of a stall
+/// model squares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InducedDragLift {
+    /// The lift coefficient itself (with the Kirchhoff factor).
+    #[default]
+    Total,
+    /// The attached-flow lift (χ = 1: the Kirchhoff factor taken as 1).
+    Attached,
 }
 
 /// Where the moment coefficients of a file are taken about, when not the
@@ -600,6 +644,8 @@ pub struct AeroModel {
     products: Vec<Monomial>,
     oswald: Option<usize>,
     stall: Option<StallIndices>,
+    /// The stall model's options (unit of τ, one-sided τ2, induced-drag lift).
+    stall_options: (StallTimeUnit, bool, InducedDragLift),
     /// Whether any coefficient has an α̇ term (fixed by the structure, not the values).
     has_alpha_dot_terms: bool,
     /// Added to each coefficient (in [`Coefficient`] order; the lift-type one
@@ -665,6 +711,7 @@ impl AeroModel {
             products: Vec::new(),
             oswald: None,
             stall: None,
+            stall_options: Default::default(),
             has_alpha_dot_terms: false,
             offsets: [0.0; 6],
         };
@@ -821,6 +868,11 @@ impl AeroModel {
                 if stall.tau1 < 0.0 {
                     problems.push(format!("{field}.tau1"), "must be ≥ 0 (0 makes χ algebraic)");
                 }
+                self.stall_options = (
+                    stall.time_unit,
+                    stall.tau2_only_while_decreasing,
+                    stall.induced_drag_lift,
+                );
                 self.stall = Some(StallIndices {
                     a1: self.add_parameter("a1", stall.a1, &field, problems),
                     alpha_star: self.add_parameter(
@@ -921,38 +973,80 @@ impl AeroModel {
     }
 
     /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (Verma & Peyada 2020, Eq. 3); 1 without stall model.
-    pub fn separation_target<T: Real>(&self, alpha: T, alpha_dot: T) -> T {
+    /// at `airspeed` (it scales τ given in units of c̄/V); τ2·α̇ acts only
+    /// while α̇ < 0 when the model says so.
+    pub fn separation_target<T: Real>(&self, alpha: T, alpha_dot: T, airspeed: T) -> T {
         match self.stall {
             Some(s) => {
                 let v = self.parameters.values();
-                (T::constant(1.0)
-                    - ((alpha - alpha_dot * v[s.tau2] - v[s.alpha_star]) * v[s.a1]).tanh())
-                    * 0.5
+                let rate = self.hysteresis_rate(alpha_dot);
+                let lag = match self.chord_time(airspeed) {
+                    None => rate * v[s.tau2],
+                    Some(scale) => rate * scale * v[s.tau2],
+                };
+                (T::constant(1.0) - ((alpha - lag - v[s.alpha_star]) * v[s.a1]).tanh()) * 0.5
             }
             None => T::constant(1.0),
         }
     }
 
+    /// χ∞ at α̇ = 0 (Eq. 3 with no hysteresis lag, whatever the airspeed).
+    pub fn steady_separation(&self, alpha: f64) -> f64 {
+        self.separation_target(alpha, 0.0, 1.0)
+    }
+
     /// dχ/dt = (χ∞ − χ)/τ1 (Verma & Peyada 2020, Eq. 2); 0 when χ is not a state.
-    pub fn separation_rate<T: Real>(&self, alpha: T, alpha_dot: T, chi: T) -> T {
+    pub fn separation_rate<T: Real>(&self, alpha: T, alpha_dot: T, chi: T, airspeed: T) -> T {
         match self.stall {
             Some(s) if self.chi_is_state() => {
-                (self.separation_target(alpha, alpha_dot) - chi) / self.parameters.values()[s.tau1]
+                let tau1 = self.parameters.values()[s.tau1];
+                let lag = self.separation_target(alpha, alpha_dot, airspeed) - chi;
+                match self.chord_time(airspeed) {
+                    None => lag / tau1,
+                    Some(scale) => lag / (scale * tau1),
+                }
             }
             _ => T::zero(),
         }
     }
 
-    /// ∂(dχ/dt)/∂α̇ = ½·a1·τ2·(1 − tanh²(a1·(α − τ2·α̇ − α*)))/τ1 (from Eqs. 2–3);
-    /// 0 when χ is not a state.
-    pub fn separation_rate_slope(&self, alpha: f64, alpha_dot: f64) -> f64 {
+    /// ∂(dχ/dt)/∂α̇ = ½·a1·τ2·(1 − tanh²(a1·(α − τ2·α̇ − α*)))/τ1 (from Eqs. 2–3,
+    /// τ in seconds); 0 when χ is not a state, or τ2 does not act (α̇ ≥ 0
+    /// with `tau2_only_while_decreasing`).
+    pub fn separation_rate_slope(&self, alpha: f64, alpha_dot: f64, airspeed: f64) -> f64 {
         match self.stall {
-            Some(s) if self.chi_is_state() => {
+            Some(s) if self.chi_is_state() && !(self.stall_options.1 && alpha_dot >= 0.0) => {
                 let v = self.parameters.values();
-                let t = (v[s.a1] * (alpha - v[s.tau2] * alpha_dot - v[s.alpha_star])).tanh();
-                0.5 * v[s.a1] * v[s.tau2] * (1.0 - t * t) / v[s.tau1]
+                let scale = self.chord_time(airspeed).unwrap_or(1.0);
+                let (tau1, tau2) = (v[s.tau1] * scale, v[s.tau2] * scale);
+                let t = (v[s.a1] * (alpha - tau2 * alpha_dot - v[s.alpha_star])).tanh();
+                0.5 * v[s.a1] * tau2 * (1.0 - t * t) / tau1
             }
             _ => 0.0,
+        }
+    }
+
+    /// Seconds per unit of the stall time constants at `airspeed`: None
+    /// for τ in seconds, c̄/V for τ in units of c̄/V.
+    fn chord_time<T: Real>(&self, airspeed: T) -> Option<T> {
+        match self.stall_options.0 {
+            StallTimeUnit::Seconds => None,
+            StallTimeUnit::ChordTimes => {
+                let speed = match self.rate_speed {
+                    RateSpeed::Airspeed => airspeed,
+                    RateSpeed::Reference => T::constant(self.reference_airspeed),
+                };
+                Some(T::constant(self.geometry.chord) / speed)
+            }
+        }
+    }
+
+    /// The α̇ the hysteresis τ2 acts on: α̇, or with
+    /// `tau2_only_while_decreasing` α̇ while it is negative and 0 otherwise.
+    fn hysteresis_rate<T: Real>(&self, alpha_dot: T) -> T {
+        match self.stall_options.1 && alpha_dot.value() >= 0.0 {
+            true => T::zero(),
+            false => alpha_dot,
         }
     }
 
@@ -961,8 +1055,17 @@ impl AeroModel {
         if self.chi_is_state() {
             input.chi
         } else {
-            self.separation_target(input.alpha, input.alpha_dot)
+            self.separation_target(input.alpha, input.alpha_dot, input.airspeed)
         }
+    }
+
+    /// Whether [`AeroModel::offset_response`] is the exact response of the
+    /// coefficients to a coefficient's offset: not when the forces depend
+    /// on α̇ (the equations are solved for it), nor when the induced drag
+    /// squares the attached-flow lift (not in the coefficients it is given).
+    pub fn offset_response_is_exact(&self) -> bool {
+        !self.forces_depend_on_alpha_dot()
+            && !(self.stall.is_some() && self.stall_options.2 == InducedDragLift::Attached)
     }
 
     /// Normalising speed for rates: the airspeed or V0, times 2 or 1.
@@ -1202,7 +1305,11 @@ impl AeroModel {
         let (regressors, lift_type, _) = self.regressors_and_lift(input);
         let mut drag_type = self.sum(Coefficient::Drag, &regressors);
         if let Some(e) = self.oswald {
-            drag_type += lift_type * lift_type
+            let induced = match (self.stall, self.stall_options.2) {
+                (Some(_), InducedDragLift::Attached) => self.sum(Coefficient::Lift, &regressors),
+                _ => lift_type,
+            };
+            drag_type += induced * induced
                 / (self.parameters.values()[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
         }
         let side = self.sum(Coefficient::Side, &regressors);
@@ -1334,7 +1441,7 @@ impl AeroModel {
         let (b, c) = (self.geometry.span, self.geometry.chord);
         let evaluate = |input: &AeroInput| {
             let mut input = *input;
-            input.chi = self.separation_target(input.alpha, input.alpha_dot);
+            input.chi = self.separation_target(input.alpha, input.alpha_dot, input.airspeed);
             self.coefficient_values(&self.coefficients(&input))
         };
         let perturbations: [(Regressor, f64, Perturbation); 9] = [
@@ -1507,6 +1614,61 @@ mod tests {
         assert!((c.moment.y - expected).abs() < 1e-15 && expected > 0.0);
         assert_eq!(c.moment.x, 0.0);
         assert_eq!(c.moment.z, 0.0);
+    }
+
+    fn stall(options: &str) -> AeroModel {
+        let (model, problems) = parse(&format!(
+            "model = \"stall\"\noswald_efficiency = 0.8\n[stall]\na1 = 20.0\nalpha_star = 0.3\ntau1 = 0.2\ntau2 = 0.5\n{options}\n[CL]\n0 = 0.1\nalpha = 4.0\n"
+        ));
+        assert!(problems.is_empty(), "{problems:?}");
+        model
+    }
+
+    /// τ in units of c̄/V is τ·c̄/V seconds; τ2 acting only while α̇ < 0
+    /// leaves χ∞ at its α̇ = 0 value while α rises; the attached-flow
+    /// induced drag squares CL with χ = 1.
+    #[test]
+    fn stall_variants_change_what_they_say() {
+        let seconds = stall("");
+        let chord = stall("time_unit = \"chord/V\"");
+        let (alpha, alpha_dot, airspeed) = (0.32, -0.05, 80.0);
+        let scale = 3.159 / airspeed;
+        let mut equivalent = seconds.clone();
+        equivalent.parameters.set("tau1", 0.2 * scale).unwrap();
+        equivalent.parameters.set("tau2", 0.5 * scale).unwrap();
+        let target = chord.separation_target(alpha, alpha_dot, airspeed);
+        assert!((target - equivalent.separation_target(alpha, alpha_dot, 1.0)).abs() < 1e-15);
+        let rate = chord.separation_rate(alpha, alpha_dot, 0.5, airspeed);
+        assert!((rate - equivalent.separation_rate(alpha, alpha_dot, 0.5, 1.0)).abs() < 1e-12);
+        assert_ne!(
+            target,
+            seconds.separation_target(alpha, alpha_dot, airspeed)
+        );
+        let one_sided = stall("tau2_only_while_decreasing = true");
+        let steady = one_sided.steady_separation(alpha);
+        assert_eq!(one_sided.separation_target(alpha, 0.05, 1.0), steady);
+        assert_ne!(seconds.separation_target(alpha, 0.05, 1.0), steady);
+        assert_eq!(
+            one_sided.separation_target(alpha, -0.05, 1.0),
+            seconds.separation_target(alpha, -0.05, 1.0)
+        );
+        assert_eq!(one_sided.separation_rate_slope(alpha, 0.05, 1.0), 0.0);
+        let attached = stall("induced_drag_lift = \"attached\"");
+        let input = AeroInput {
+            alpha,
+            airspeed,
+            chi: 0.3,
+            ..Default::default()
+        };
+        let induced =
+            |lift: f64| lift * lift / (0.8 * std::f64::consts::PI * geometry().aspect_ratio);
+        let lift_attached = 0.1 + 4.0 * alpha;
+        let c = attached.coefficients(&input);
+        assert!(c.lift < lift_attached - 0.1);
+        assert!((c.drag - induced(lift_attached)).abs() < 1e-15);
+        let c = seconds.coefficients(&input);
+        assert!((c.drag - induced(c.lift)).abs() < 1e-15);
+        assert!(!attached.offset_response_is_exact() && seconds.offset_response_is_exact());
     }
 
     #[test]
