@@ -1064,8 +1064,8 @@ impl AeroModel {
     /// on α̇ (the equations are solved for it), nor when the induced drag
     /// squares the attached-flow lift (not in the coefficients it is given).
     pub fn offset_response_is_exact(&self) -> bool {
-        !self.forces_depend_on_alpha_dot()
-            && !(self.stall.is_some() && self.stall_options.2 == InducedDragLift::Attached)
+        let attached = self.stall.is_some() && self.stall_options.2 == InducedDragLift::Attached;
+        !(self.forces_depend_on_alpha_dot() || attached)
     }
 
     /// Normalising speed for rates: the airspeed or V0, times 2 or 1.
@@ -1610,7 +1610,8 @@ mod tests {
         };
         let c = model.coefficients(&input);
         // α = 0: CX = −CD = −0.1, CZ = −CL = −1: (z·CX − x·CZ)/c̄.
-        let expected = (0.2 * -0.1 - 0.5 * -1.0) / 3.159;
+        let (cx, cz) = (-0.1, -1.0);
+        let expected = (0.2 * cx - 0.5 * cz) / 3.159;
         assert!((c.moment.y - expected).abs() < 1e-15 && expected > 0.0);
         assert_eq!(c.moment.x, 0.0);
         assert_eq!(c.moment.z, 0.0);
