@@ -517,11 +517,27 @@ fn tied_parameters_are_reported_and_refused_where_unsupported() {
     );
     let truth = scenario.aircraft.aero.parameters.get("CL_de").unwrap();
     assert!(((value - truth) / truth).abs() < 1e-4, "{value} vs {truth}");
-    let problem = EstimationProblem::new("rbf-delta", vec![record], structure, &[]).unwrap();
+    let problem =
+        EstimationProblem::new("rbf-delta", vec![record.clone()], structure, &[]).unwrap();
     let error = aeroid::estimation::methods::estimate(&problem, None)
         .unwrap_err()
         .to_string();
     assert!(error.contains("tied parameters"), "{error}");
+    // Equation error fits masters first: ties both ways between CL and Cm
+    // leave no order, and are refused.
+    let both_ways = format!(
+        "{}[parameters.Cm_q]\ntie = {{ to = \"CL_q\", factor = -2.0 }}\n",
+        ties()
+    );
+    let structure = case.model("both-ways", "", &tables, &both_ways);
+    let problem = EstimationProblem::new("ee", vec![record], structure, &[]).unwrap();
+    let error = aeroid::estimation::methods::estimate(&problem, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("tied in a cycle") && error.contains("CL"),
+        "{error}"
+    );
 }
 
 /// A tie to an unknown parameter, to itself, to a tied parameter, in a

@@ -21,6 +21,14 @@
 //!    factor e: the induced drag `CL²/(e·π·Λ)` uses the measured CL; with e
 //!    free the regressor `CL²/(π·Λ)` is fitted with parameter 1/e and e is
 //!    reported with the delta-method variance `σ_e = σ_{1/e}·e²`.
+//!    A product term's regressor is the product of its measured factors
+//!    (`alpha^2` → α²). A term tied to a parameter (θ = c·θ_master + d)
+//!    adds c times its regressor to the master's column when the master is
+//!    in the same regression, and is a known term otherwise, the master's
+//!    coefficient fitted first (ties in a cycle between coefficients are
+//!    refused). Moments taken about a point other than the CG are moved
+//!    there from the measured moments about the CG with the measured
+//!    forces, M_ref = M_cg − r × F ([`crate::sim::aero::AeroModel::moment_transfer`]).
 //! 3. The cost `½·εᵀε` (Eq. 26) is minimised by `θ̂ = (XᵀX)⁻¹·Xᵀz` (Eq. 27),
 //!    computed by SVD ([`crate::estimation::solver::regression`]), with the
 //!    Cramér–Rao bound `s²·(XᵀX)⁻¹` and the bound corrected for coloured
