@@ -77,13 +77,13 @@ fn separation_point_lags_alpha_step_with_tau1() {
     let model = stall_aircraft(tau1, 0.9).aero;
     assert!(model.chi_is_state());
     let (alpha_before, alpha_after) = (0.25, 0.33);
-    let target = model.separation_target(alpha_after, 0.0);
-    let mut chi = Vector1::new(model.separation_target(alpha_before, 0.0));
+    let target = model.steady_separation(alpha_after);
+    let mut chi = Vector1::new(model.steady_separation(alpha_before));
     let step = tau1 / 100.0;
     let (mut times, mut logs) = (Vec::new(), Vec::new());
     for k in 1..=300 {
         chi = rk4_step(&chi, step, |c, _| {
-            Vector1::new(model.separation_rate(alpha_after, 0.0, c[0]))
+            Vector1::new(model.separation_rate(alpha_after, 0.0, c[0], 100.0))
         });
         times.push(k as f64 * step);
         logs.push((chi[0] - target).abs().ln());

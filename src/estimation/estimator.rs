@@ -67,6 +67,21 @@ pub trait Estimator: Send + Sync {
         None
     }
 
+    /// Whether the method fits a model with parameters tied to others
+    /// (`[parameters.NAME] tie`): its model is evaluated through
+    /// [`crate::sim::aero::AeroModel`], which gives a tied term its value
+    /// from its master, and its unknowns are the masters. A model with ties
+    /// is refused by a method that does not.
+    fn fits_tied_parameters(&self) -> bool {
+        false
+    }
+
+    /// Whether the method fits a model whose moments are taken about a
+    /// point other than the CG (`[aero.moment_reference]`); refused otherwise.
+    fn fits_moment_reference(&self) -> bool {
+        true
+    }
+
     /// Estimates the problem's parameters, or refuses it
     /// ([`Error::Refused`]) when the record or the model cannot serve.
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate>;

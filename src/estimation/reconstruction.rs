@@ -223,6 +223,15 @@ fn needed_channels(
                         need(&mut needs, channel, name);
                     }
                 }
+                // A moment taken about a point other than the CG: the
+                // measured forces carry it there.
+                let transfer = aircraft.aero.transfer_uses(coefficient);
+                for (axis, channel) in ["nx", "ny", "nz"].into_iter().enumerate() {
+                    if transfer[axis] {
+                        wants_thrust |= direction[axis] != 0.0;
+                        need(&mut needs, channel, "moment reference point");
+                    }
+                }
             }
         }
     }
@@ -633,7 +642,8 @@ fn sample(
     }
     let thrust = thrust_force(aircraft, signals, k);
     let force = force_coefficients(aircraft, signals, k, dynamic_pressure, &thrust);
-    let moment = moment_coefficients(aircraft, signals, k, dynamic_pressure, &thrust);
+    let moment = moment_coefficients(aircraft, signals, k, dynamic_pressure, &thrust)
+        - moment_transfer(aircraft, request, &force);
     let alpha = at(signals.alpha, k);
     let (lift, drag) = match aircraft.aero.force_axes {
         ForceAxes::Wind => (
@@ -654,6 +664,26 @@ fn sample(
             .iter()
             .all(|&r| regressors[r as usize].is_finite());
     finite.then_some((all, regressors))
+}
+
+/// What the transfer of the requested moments from the model's reference
+/// point to the CG adds ([`crate::sim::aero::AeroModel::moment_transfer`]),
+/// from the measured body-axis force coefficients (only the components it
+/// uses, the others not having been read); zero about the CG.
+fn moment_transfer(aircraft: &Aircraft, request: &Request, force: &Vector3<f64>) -> Vector3<f64> {
+    let aero = &aircraft.aero;
+    let used = (request.coefficients.iter()).fold([false; 3], |used, &c| {
+        let uses = aero.transfer_uses(c);
+        [0, 1, 2].map(|i| used[i] || uses[i])
+    });
+    if used == [false; 3] {
+        return Vector3::zeros();
+    }
+    aero.moment_transfer(&Vector3::from_fn(
+        |i, _| {
+            if used[i] { force[i] } else { 0.0 }
+        },
+    ))
 }
 
 /// ρ: the density channel, else the ISA at the altitude channel.

@@ -25,6 +25,8 @@
 //! [parameters.Cn_beta]
 //! lower = 0.0
 //! upper = 1.0
+//! [parameters.Cn_dr]
+//! tie = { to = "Cl_dr", factor = -3.2 }   # θ = c·θ_master + d: no unknown, reported as tied
 //! [methods.oem]
 //! estimate_initial_state = true
 //! output_biases = ["ny"]
@@ -86,6 +88,21 @@ pub struct ParameterSpec {
     pub fixed: bool,
     pub lower: Option<f64>,
     pub upper: Option<f64>,
+    /// θ = factor·θ_to + offset: the parameter follows another, is no
+    /// unknown, and is reported as tied.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tie: Option<TieSpec>,
+}
+
+/// `tie = { to = "Cm_de", factor = -0.268, offset = 0.0 }`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TieSpec {
+    /// The master parameter.
+    pub to: String,
+    pub factor: f64,
+    #[serde(default)]
+    pub offset: f64,
 }
 
 /// A validated model structure.
@@ -175,6 +192,7 @@ impl ModelStructure {
                 );
             }
         }
+        tie_parameters(&mut aircraft.aero, &file.parameters, &mut problems);
         let (free, bounds) = parameter_settings(&aircraft.aero, &file.parameters, &mut problems);
         check_method_tables(&file.methods, &mut problems);
         let structure = ModelStructure {
@@ -397,6 +415,40 @@ fn state_indices(names: &[String], field: &str, problems: &mut Problems) -> Vec<
         .collect()
 }
 
+/// Applies the `tie` of each parameter setting to the model
+/// ([`AeroModel::tie`]), naming the setting in each problem.
+fn tie_parameters(
+    aero: &mut AeroModel,
+    settings: &BTreeMap<String, ParameterSpec>,
+    problems: &mut Problems,
+) {
+    for (name, spec) in settings {
+        let (Some(tie), Some(tied)) = (&spec.tie, aero.parameters.index(name)) else {
+            continue;
+        };
+        let field = format!("parameters.{name}.tie");
+        let Some(master) = aero.parameters.index(&tie.to) else {
+            problems.push(
+                field,
+                format!(
+                    "unknown parameter '{}'; known: {}",
+                    tie.to,
+                    aero.parameters.names().join(", ")
+                ),
+            );
+            continue;
+        };
+        let relation = crate::sim::aero::Tie {
+            master,
+            factor: tie.factor,
+            offset: tie.offset,
+        };
+        if let Err(message) = aero.tie(tied, relation) {
+            problems.push(field, message);
+        }
+    }
+}
+
 fn parameter_settings(
     aero: &AeroModel,
     settings: &BTreeMap<String, ParameterSpec>,
@@ -418,7 +470,13 @@ fn parameter_settings(
             );
             continue;
         };
-        free[index] = !spec.fixed;
+        free[index] = !spec.fixed && spec.tie.is_none();
+        if spec.tie.is_some() && (spec.fixed || spec.lower.is_some() || spec.upper.is_some()) {
+            problems.push(
+                format!("parameters.{name}.tie"),
+                "a tied parameter follows its master: it is neither fixed nor bounded",
+            );
+        }
         bounds[index] = (
             spec.lower.unwrap_or(f64::NEG_INFINITY),
             spec.upper.unwrap_or(f64::INFINITY),

@@ -14,6 +14,35 @@
 //! `dr`, `df` (rad), `dV` = V/V0 − 1, `dMach` = M − M0, `chi` = 1 − χ
 //! (stall model), and `CL2` = CL² (drag only, wind axes).
 //!
+//! Products ([`Monomial`]): a key may be a product of regressors with
+//! integer powers, `alpha^2`, `alpha^3`, `alpha*dMach`, `alpha^2*de`
+//! (factors in the order of the list above, a repeated factor once with
+//! its power, total degree ≤ 4; quoted in TOML: `"alpha^2" = 0.6`), its
+//! parameter `{coefficient}_{key}` (`CD_alpha^2`). It is evaluated by the
+//! same sum as every term, so the simulator, equation error's regression
+//! columns and the state-space methods' model and Jacobians all see it.
+//! The stall model's Kirchhoff factor multiplies the plain `alpha` term of
+//! the lift-type coefficient only; `CL2` is never a factor of a product.
+//!
+//! Tied parameters ([`Tie`], a model file's `[parameters.NAME] tie`): a
+//! term's coefficient θ = c·θ_master + d, taken from the master's current
+//! value wherever the model is evaluated.
+//!
+//! Moment reference point (`[aero.moment_reference]`): the moment
+//! coefficients of the file are taken about a point at r (body axes, from
+//! the CG); the forces act there, so about the CG
+//! `M_cg = M_ref + r × F` (rigid-body transfer of a force system, as
+//! flight-test analyses refer moments measured about a reference point to
+//! the CG: Jategaonkar, Flight Vehicle System Identification, 2nd ed.,
+//! AIAA 2015, ch. 3; Klein & Morelli, Aircraft System Identification,
+//! AIAA 2006, ch. 3), non-dimensional
+//! `Cl += (r_y·CZ − r_z·CY)/b`, `Cm += (r_z·CX − r_x·CZ)/c̄`,
+//! `Cn += (r_x·CY − r_y·CX)/b` with body-axis CX, CY, CZ. For the pitching
+//! moment this is the textbook `Cm_α,cg = Cm_α,ref + CL_α·(x̄_cg − x̄_ref)`
+//! (x̄ in c̄ aft of the MAC leading edge; Etkin & Reid, Dynamics of Flight,
+//! 3rd ed., §2.3) when CX, r_z are small. The coefficients this model
+//! returns are about the CG.
+//!
 //! Quasi-steady stall (Verma & Peyada 2020, Eqs. 2–4, after
 //! Fischenberg):
 //! `τ1·dχ/dt + χ = ½·(1 − tanh(a1·(α − τ2·α̇ − α*)))`            (Eq. 2; Eq. 3 when τ1 = 0)
@@ -22,13 +51,19 @@
 //! `Cm = Cm0 + Cmα·α + Cmq·q̂ + Cmδe·δe + Cmχ·(1 − χ)`            (Eq. 4).
 //! Here the Kirchhoff factor multiplies the `alpha` term of CL; any other
 //! term may be added to any coefficient. χ is a simulator state when τ1 > 0
-//! and algebraic (Eq. 3) when τ1 = 0.
+//! and algebraic (Eq. 3) when τ1 = 0. Variants the `[stall]` table states:
+//! τ1 and τ2 in seconds or in units of c̄/V (`time_unit = "chord/V"`, τ in
+//! seconds = τ·c̄/V, V the airspeed or V0 as `rate_speed` says); τ2 acting
+//! only while α̇ < 0 (`tau2_only_while_decreasing`: α̇ replaced by
+//! min(α̇, 0) in Eq. 2); the induced drag from the attached-flow lift
+//! (`induced_drag_lift = "attached"`: CL with the Kirchhoff factor 1 in
+//! CL²/(e·π·Λ), the lift the wing would make without separation).
 //!
 //! Force axes: "wind" gives CL and CD in stability axes (rotated by α only)
 //! and CY along the body y axis, the usual flight-test convention:
 //! `CX = −CD·cos α + CL·sin α`, `CZ = −CD·sin α − CL·cos α`.
 //! "body" gives CX, CY, CZ directly. Moments are body-axis, about the centre
-//! of gravity.
+//! of gravity (after the transfer from the moment reference point, if any).
 
 use crate::dual::Real;
 use crate::error::Problems;
@@ -109,6 +144,150 @@ impl Regressor {
 
     fn keys() -> String {
         Regressor::ALL.map(Regressor::key).join(", ")
+    }
+}
+
+/// Highest total degree of a term's product of regressors (`alpha^3*de` is 4).
+pub const MAX_DEGREE: usize = 4;
+
+/// Most distinct products (terms of degree 2 or more) one model may have:
+/// their values are kept in a fixed-size table ([`TermRegressors`]) so that
+/// evaluation does not allocate.
+pub const MAX_PRODUCTS: usize = 16;
+
+/// What a term's parameter multiplies: one regressor, or a product of
+/// regressors with integer powers (`alpha^2`, `alpha*dMach`, `alpha^2*de`).
+///
+/// Its key is canonical, so that one term has one parameter name whatever
+/// file states it: the factors in the order of [`Regressor::ALL`] (`0`,
+/// `alpha`, `beta`, `p`, `q`, `r`, `alpha_dot`, `de`, `da`, `dr`, `df`,
+/// `dV`, `dMach`, `chi`, `CL2`), joined by `*`, a repeated factor written
+/// once with its power `^n` (n ≥ 2), total degree at most [`MAX_DEGREE`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Monomial {
+    /// The factors in [`Regressor::ALL`] order, a power repeating its regressor.
+    factors: [Regressor; MAX_DEGREE],
+    degree: u8,
+}
+
+impl From<Regressor> for Monomial {
+    fn from(regressor: Regressor) -> Monomial {
+        Monomial {
+            factors: [regressor; MAX_DEGREE],
+            degree: 1,
+        }
+    }
+}
+
+impl Monomial {
+    /// Parses a coefficient-table key: a regressor key, or factors
+    /// `key` / `key^n` joined by `*`, in canonical form (the error names
+    /// the canonical spelling of a key that is otherwise valid).
+    pub fn parse(text: &str) -> Result<Monomial, String> {
+        let mut factors = Vec::new();
+        for factor in text.split('*') {
+            let (key, power) = match factor.split_once('^') {
+                Some((key, power)) => (key, power),
+                None => (factor, "1"),
+            };
+            let regressor = Regressor::from_key(key.trim()).ok_or_else(|| {
+                format!(
+                    "unknown regressor '{}' in term '{text}'; known: {}",
+                    key.trim(),
+                    Regressor::keys()
+                )
+            })?;
+            let power: usize = match power.trim().parse::<i64>() {
+                Ok(power) if power >= 1 => power as usize,
+                _ => {
+                    return Err(format!(
+                        "the power '{}' of '{}' in term '{text}' must be an integer ≥ 1",
+                        power.trim(),
+                        key.trim()
+                    ));
+                }
+            };
+            factors.extend(std::iter::repeat_n(regressor, power.min(MAX_DEGREE + 1)));
+            if factors.len() > MAX_DEGREE {
+                return Err(format!(
+                    "term '{text}' has a degree above {MAX_DEGREE}, the most a term may have"
+                ));
+            }
+        }
+        if factors.len() > 1 && factors.contains(&Regressor::Constant) {
+            return Err(format!(
+                "term '{text}': the constant 0 cannot be a factor of a product"
+            ));
+        }
+        let monomial = Monomial::from_factors(&factors)
+            .ok_or_else(|| format!("term '{text}' has no factor"))?;
+        let canonical = monomial.key();
+        if canonical != text {
+            return Err(format!(
+                "write term '{text}' as '{canonical}' (factors in the order {}, a repeated factor once with its power ^n)",
+                Regressor::keys()
+            ));
+        }
+        Ok(monomial)
+    }
+
+    /// The product of `factors` (in any order); None when there are none
+    /// or more than [`MAX_DEGREE`].
+    pub fn from_factors(factors: &[Regressor]) -> Option<Monomial> {
+        if factors.is_empty() || factors.len() > MAX_DEGREE {
+            return None;
+        }
+        let mut monomial = Monomial::from(factors[0]);
+        monomial.factors[..factors.len()].copy_from_slice(factors);
+        monomial.factors[..factors.len()].sort_by_key(|r| *r as usize);
+        monomial.degree = factors.len() as u8;
+        Some(monomial)
+    }
+
+    /// The canonical key (`alpha`, `alpha^2`, `alpha*dMach`).
+    pub fn key(&self) -> String {
+        let mut parts: Vec<String> = Vec::new();
+        let factors = self.factors();
+        let mut start = 0;
+        while start < factors.len() {
+            let regressor = factors[start];
+            let power = factors[start..]
+                .iter()
+                .take_while(|&&r| r == regressor)
+                .count();
+            parts.push(match power {
+                1 => regressor.key().to_string(),
+                n => format!("{}^{n}", regressor.key()),
+            });
+            start += power;
+        }
+        parts.join("*")
+    }
+
+    /// The factors, a power repeating its regressor.
+    pub fn factors(&self) -> &[Regressor] {
+        &self.factors[..self.degree as usize]
+    }
+
+    /// The regressor of a degree-1 term; None for a product.
+    pub fn single(&self) -> Option<Regressor> {
+        (self.degree == 1).then_some(self.factors[0])
+    }
+
+    /// Whether `regressor` is one of the factors.
+    pub fn contains(&self, regressor: Regressor) -> bool {
+        self.factors().contains(&regressor)
+    }
+
+    /// The product of the factors' values (`regressors` indexed by `Regressor as usize`).
+    #[inline(always)]
+    pub fn value<T: Real>(&self, regressors: &[T]) -> T {
+        let factors = self.factors();
+        factors[1..]
+            .iter()
+            .fold(regressors[factors[0] as usize], |product, &r| {
+                product * regressors[r as usize]
+            })
     }
 }
 
@@ -211,6 +390,86 @@ pub struct StallSpec {
     pub tau1: f64,
     /// Quasi-steady hysteresis time constant τ2 (s).
     pub tau2: f64,
+    /// The unit of τ1 and τ2.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub time_unit: StallTimeUnit,
+    /// τ2 acts only while α̇ < 0 (the lag on the way down only).
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub tau2_only_while_decreasing: bool,
+    /// The lift the induced drag CL²/(e·π·Λ) is formed from.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub induced_drag_lift: InducedDragLift,
+}
+
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
+}
+
+/// The unit of the stall time constants τ1 and τ2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum StallTimeUnit {
+    /// Seconds.
+    #[default]
+    #[serde(rename = "s")]
+    Seconds,
+    /// Units of c̄/V (V the airspeed, or V0 with `rate_speed = "reference"`):
+    /// τ in seconds is τ·c̄/V.
+    #[serde(rename = "chord/V")]
+    ChordTimes,
+}
+
+/// Which lift coefficient the Oswald induced drag CL²/(e·π·Λ) of a stall
+/// model squares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InducedDragLift {
+    /// The lift coefficient itself (with the Kirchhoff factor).
+    #[default]
+    Total,
+    /// The attached-flow lift (χ = 1: the Kirchhoff factor taken as 1).
+    Attached,
+}
+
+/// Where the moment coefficients of a file are taken about, when not the
+/// centre of gravity: an `offset` in metres, or the reference point and the
+/// CG as fractions of c̄ aft of the leading edge of the mean aerodynamic
+/// chord (`point_mac`, `cg_mac`; the offset is then along body x only).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MomentReferenceSpec {
+    /// From the CG to the reference point, body axes (x forward, y right, z down), m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<Vec<f64>>,
+    /// The reference point, fraction of c̄ aft of the MAC leading edge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point_mac: Option<f64>,
+    /// The CG, fraction of c̄ aft of the MAC leading edge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cg_mac: Option<f64>,
+}
+
+impl MomentReferenceSpec {
+    /// The offset from the CG to the reference point (body axes, m) for a
+    /// chord `chord`, or what is wrong with the table.
+    fn offset(&self, chord: f64) -> Result<Vector3<f64>, String> {
+        let offset = match (&self.offset, self.point_mac, self.cg_mac) {
+            (Some(offset), None, None) => match offset[..] {
+                [x, y, z] => Vector3::new(x, y, z),
+                _ => return Err("offset must be three numbers [x, y, z] (m)".into()),
+            },
+            (None, Some(point), Some(cg)) => Vector3::new((cg - point) * chord, 0.0, 0.0),
+            _ => {
+                return Err(
+                    "give either offset = [x, y, z] (m) or both point_mac and cg_mac (fractions of c̄)"
+                        .into(),
+                );
+            }
+        };
+        match offset.iter().all(|v| v.is_finite()) {
+            true => Ok(offset),
+            false => Err("the offset must be finite numbers".into()),
+        }
+    }
 }
 
 /// The `[aero]` table of an aircraft or model-structure file. Unknown keys
@@ -236,6 +495,9 @@ pub struct AeroSpec {
     pub oswald_efficiency: Option<f64>,
     #[serde(default)]
     pub stall: Option<StallSpec>,
+    /// The point the moment coefficients are taken about; the CG when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moment_reference: Option<MomentReferenceSpec>,
     /// Coefficient tables, keyed by coefficient name then regressor key.
     #[serde(flatten)]
     pub coefficients: BTreeMap<String, BTreeMap<String, f64>>,
@@ -251,8 +513,41 @@ pub struct ReferenceGeometry {
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Term {
-    regressor: Regressor,
+    monomial: Monomial,
     parameter: usize,
+    /// The relation the parameter follows, when it is tied to another.
+    tie: Option<Tie>,
+}
+
+impl Term {
+    /// The term's coefficient given every parameter's value: its own, or
+    /// for a tied term c·θ_master + d.
+    #[inline(always)]
+    fn coefficient(&self, values: &[f64]) -> f64 {
+        match self.tie {
+            None => values[self.parameter],
+            Some(tie) => tie.value(values),
+        }
+    }
+}
+
+/// A linear relation θ = factor·θ_master + offset that a term's parameter
+/// follows (a model file's `[parameters.NAME] tie`): the parameter is no
+/// unknown of any estimator, and wherever the model is evaluated its term
+/// takes the value the relation gives from the master's current value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tie {
+    /// Index of the master parameter.
+    pub master: usize,
+    pub factor: f64,
+    pub offset: f64,
+}
+
+impl Tie {
+    /// factor·θ_master + offset.
+    pub fn value(&self, values: &[f64]) -> f64 {
+        self.factor * values[self.master] + self.offset
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -339,10 +634,18 @@ pub struct AeroModel {
     pub reference_airspeed: f64,
     pub reference_mach: f64,
     pub geometry: ReferenceGeometry,
+    /// From the CG to the point the moment coefficients are taken about
+    /// (body axes, m); zero when they are taken about the CG.
+    pub moment_reference: Vector3<f64>,
     pub parameters: ParameterSet,
     terms: [Vec<Term>; 6],
+    /// The distinct products (terms of degree ≥ 2), in the order their
+    /// values follow the regressors in [`TermRegressors`].
+    products: Vec<Monomial>,
     oswald: Option<usize>,
     stall: Option<StallIndices>,
+    /// The stall model's options (unit of τ, one-sided τ2, induced-drag lift).
+    stall_options: (StallTimeUnit, bool, InducedDragLift),
     /// Whether any coefficient has an α̇ term (fixed by the structure, not the values).
     has_alpha_dot_terms: bool,
     /// Added to each coefficient (in [`Coefficient`] order; the lift-type one
@@ -358,19 +661,20 @@ pub struct AeroModel {
 /// offset), as one table ([`TermRegressors::slot`]): the lift-type
 /// coefficient's (`alpha` carrying the Kirchhoff factor), then every other
 /// coefficient's (`CL2` the lift-type coefficient squared), then 1 (at
-/// [`TermRegressors::ONE`], for what enters unscaled).
+/// [`TermRegressors::ONE`], for what enters unscaled), then the value of
+/// each of the model's products (not scaled by the Kirchhoff factor).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TermRegressors {
-    /// By slot: lift-type regressors, other regressors, 1.
-    pub values: [f64; 2 * REGRESSOR_COUNT + 1],
+    /// By slot: lift-type regressors, other regressors, 1, products.
+    pub values: [f64; 2 * REGRESSOR_COUNT + 1 + MAX_PRODUCTS],
 }
 
 impl TermRegressors {
     /// The slot of the constant 1.
     pub const ONE: usize = 2 * REGRESSOR_COUNT;
 
-    /// The slot of a term's regressor: the lift-type coefficient's (`lift`)
-    /// or another coefficient's.
+    /// The slot of a single-regressor term's regressor: the lift-type
+    /// coefficient's (`lift`) or another coefficient's.
     pub fn slot(lift: bool, regressor: Regressor) -> usize {
         regressor as usize + if lift { 0 } else { REGRESSOR_COUNT }
     }
@@ -379,7 +683,7 @@ impl TermRegressors {
 impl Default for TermRegressors {
     /// Every regressor 0 (and the constant 1).
     fn default() -> Self {
-        let mut values = [0.0; 2 * REGRESSOR_COUNT + 1];
+        let mut values = [0.0; 2 * REGRESSOR_COUNT + 1 + MAX_PRODUCTS];
         values[TermRegressors::ONE] = 1.0;
         TermRegressors { values }
     }
@@ -401,10 +705,13 @@ impl AeroModel {
             reference_airspeed: spec.reference_airspeed.unwrap_or(f64::NAN),
             reference_mach: spec.reference_mach.unwrap_or(f64::NAN),
             geometry,
+            moment_reference: Vector3::zeros(),
             parameters: ParameterSet::default(),
             terms: Default::default(),
+            products: Vec::new(),
             oswald: None,
             stall: None,
+            stall_options: Default::default(),
             has_alpha_dot_terms: false,
             offsets: [0.0; 6],
         };
@@ -414,7 +721,7 @@ impl AeroModel {
             .terms
             .iter()
             .flatten()
-            .any(|t| t.regressor == Regressor::AlphaDot);
+            .any(|t| t.monomial.contains(Regressor::AlphaDot));
         model
     }
 
@@ -438,13 +745,15 @@ impl AeroModel {
             for (key, &value) in table {
                 let field = format!("{prefix}.{name}.{key}");
                 match self.check_term(Coefficient::ALL[position], key, value) {
-                    Ok(regressor) => {
+                    Ok(monomial) => {
                         let parameter =
                             self.add_parameter(&format!("{name}_{key}"), value, &field, problems);
                         self.terms[position].push(Term {
-                            regressor,
+                            monomial,
                             parameter,
+                            tie: None,
                         });
+                        self.add_product(monomial, &field, problems);
                     }
                     Err(message) => problems.push(field, message),
                 }
@@ -457,23 +766,47 @@ impl AeroModel {
         coefficient: Coefficient,
         key: &str,
         value: f64,
-    ) -> Result<Regressor, String> {
-        let regressor = Regressor::from_key(key)
-            .ok_or_else(|| format!("unknown term '{key}'; known: {}", Regressor::keys()))?;
+    ) -> Result<Monomial, String> {
+        let monomial = match Regressor::from_key(key) {
+            Some(regressor) => Monomial::from(regressor),
+            None if key.contains(['*', '^']) => Monomial::parse(key)?,
+            None => {
+                return Err(format!(
+                    "unknown term '{key}'; known: {} and their products ('alpha^2', 'alpha*de')",
+                    Regressor::keys()
+                ));
+            }
+        };
         if !value.is_finite() {
             return Err(format!("{value} is not a finite number"));
         }
-        match regressor {
-            Regressor::LiftSquared
-                if coefficient != Coefficient::Drag || self.force_axes != ForceAxes::Wind =>
-            {
-                Err("CL2 is a drag term of a wind-axis model".into())
-            }
-            Regressor::Separation if self.kind != ModelKind::Stall => {
-                Err("chi terms need model = \"stall\"".into())
-            }
-            _ => Ok(regressor),
+        let lift_squared = monomial.contains(Regressor::LiftSquared);
+        if lift_squared && (coefficient != Coefficient::Drag || self.force_axes != ForceAxes::Wind)
+        {
+            return Err("CL2 is a drag term of a wind-axis model".into());
         }
+        if lift_squared && monomial.single().is_none() {
+            return Err("CL2 cannot be a factor of a product".into());
+        }
+        if monomial.contains(Regressor::Separation) && self.kind != ModelKind::Stall {
+            return Err("chi terms need model = \"stall\"".into());
+        }
+        Ok(monomial)
+    }
+
+    /// Registers a product's slot in [`TermRegressors`] (once per distinct product).
+    fn add_product(&mut self, monomial: Monomial, field: &str, problems: &mut Problems) {
+        if monomial.single().is_some() || self.products.contains(&monomial) {
+            return;
+        }
+        if self.products.len() == MAX_PRODUCTS {
+            problems.push(
+                field,
+                format!("more than {MAX_PRODUCTS} distinct product terms in one model"),
+            );
+            return;
+        }
+        self.products.push(monomial);
     }
 
     fn add_parameter(
@@ -501,6 +834,12 @@ impl AeroModel {
         }
         self.read_stall(spec, prefix, problems);
         self.check_references(spec, prefix, problems);
+        if let Some(reference) = &spec.moment_reference {
+            match reference.offset(self.geometry.chord) {
+                Ok(offset) => self.moment_reference = offset,
+                Err(message) => problems.push(format!("{prefix}.moment_reference"), message),
+            }
+        }
     }
 
     fn read_stall(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
@@ -529,6 +868,11 @@ impl AeroModel {
                 if stall.tau1 < 0.0 {
                     problems.push(format!("{field}.tau1"), "must be ≥ 0 (0 makes χ algebraic)");
                 }
+                self.stall_options = (
+                    stall.time_unit,
+                    stall.tau2_only_while_decreasing,
+                    stall.induced_drag_lift,
+                );
                 self.stall = Some(StallIndices {
                     a1: self.add_parameter("a1", stall.a1, &field, problems),
                     alpha_star: self.add_parameter(
@@ -558,7 +902,7 @@ impl AeroModel {
             self.terms
                 .iter()
                 .flatten()
-                .any(|t| t.regressor == regressor)
+                .any(|t| t.monomial.contains(regressor))
         };
         let needs_speed = uses(Regressor::SpeedRatio) || self.rate_speed == RateSpeed::Reference;
         match spec.reference_airspeed {
@@ -629,38 +973,80 @@ impl AeroModel {
     }
 
     /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (Verma & Peyada 2020, Eq. 3); 1 without stall model.
-    pub fn separation_target<T: Real>(&self, alpha: T, alpha_dot: T) -> T {
+    /// at `airspeed` (it scales τ given in units of c̄/V); τ2·α̇ acts only
+    /// while α̇ < 0 when the model says so.
+    pub fn separation_target<T: Real>(&self, alpha: T, alpha_dot: T, airspeed: T) -> T {
         match self.stall {
             Some(s) => {
                 let v = self.parameters.values();
-                (T::constant(1.0)
-                    - ((alpha - alpha_dot * v[s.tau2] - v[s.alpha_star]) * v[s.a1]).tanh())
-                    * 0.5
+                let rate = self.hysteresis_rate(alpha_dot);
+                let lag = match self.chord_time(airspeed) {
+                    None => rate * v[s.tau2],
+                    Some(scale) => rate * scale * v[s.tau2],
+                };
+                (T::constant(1.0) - ((alpha - lag - v[s.alpha_star]) * v[s.a1]).tanh()) * 0.5
             }
             None => T::constant(1.0),
         }
     }
 
+    /// χ∞ at α̇ = 0 (Eq. 3 with no hysteresis lag, whatever the airspeed).
+    pub fn steady_separation(&self, alpha: f64) -> f64 {
+        self.separation_target(alpha, 0.0, 1.0)
+    }
+
     /// dχ/dt = (χ∞ − χ)/τ1 (Verma & Peyada 2020, Eq. 2); 0 when χ is not a state.
-    pub fn separation_rate<T: Real>(&self, alpha: T, alpha_dot: T, chi: T) -> T {
+    pub fn separation_rate<T: Real>(&self, alpha: T, alpha_dot: T, chi: T, airspeed: T) -> T {
         match self.stall {
             Some(s) if self.chi_is_state() => {
-                (self.separation_target(alpha, alpha_dot) - chi) / self.parameters.values()[s.tau1]
+                let tau1 = self.parameters.values()[s.tau1];
+                let lag = self.separation_target(alpha, alpha_dot, airspeed) - chi;
+                match self.chord_time(airspeed) {
+                    None => lag / tau1,
+                    Some(scale) => lag / (scale * tau1),
+                }
             }
             _ => T::zero(),
         }
     }
 
-    /// ∂(dχ/dt)/∂α̇ = ½·a1·τ2·(1 − tanh²(a1·(α − τ2·α̇ − α*)))/τ1 (from Eqs. 2–3);
-    /// 0 when χ is not a state.
-    pub fn separation_rate_slope(&self, alpha: f64, alpha_dot: f64) -> f64 {
+    /// ∂(dχ/dt)/∂α̇ = ½·a1·τ2·(1 − tanh²(a1·(α − τ2·α̇ − α*)))/τ1 (from Eqs. 2–3,
+    /// τ in seconds); 0 when χ is not a state, or τ2 does not act (α̇ ≥ 0
+    /// with `tau2_only_while_decreasing`).
+    pub fn separation_rate_slope(&self, alpha: f64, alpha_dot: f64, airspeed: f64) -> f64 {
         match self.stall {
-            Some(s) if self.chi_is_state() => {
+            Some(s) if self.chi_is_state() && !(self.stall_options.1 && alpha_dot >= 0.0) => {
                 let v = self.parameters.values();
-                let t = (v[s.a1] * (alpha - v[s.tau2] * alpha_dot - v[s.alpha_star])).tanh();
-                0.5 * v[s.a1] * v[s.tau2] * (1.0 - t * t) / v[s.tau1]
+                let scale = self.chord_time(airspeed).unwrap_or(1.0);
+                let (tau1, tau2) = (v[s.tau1] * scale, v[s.tau2] * scale);
+                let t = (v[s.a1] * (alpha - tau2 * alpha_dot - v[s.alpha_star])).tanh();
+                0.5 * v[s.a1] * tau2 * (1.0 - t * t) / tau1
             }
             _ => 0.0,
+        }
+    }
+
+    /// Seconds per unit of the stall time constants at `airspeed`: None
+    /// for τ in seconds, c̄/V for τ in units of c̄/V.
+    fn chord_time<T: Real>(&self, airspeed: T) -> Option<T> {
+        match self.stall_options.0 {
+            StallTimeUnit::Seconds => None,
+            StallTimeUnit::ChordTimes => {
+                let speed = match self.rate_speed {
+                    RateSpeed::Airspeed => airspeed,
+                    RateSpeed::Reference => T::constant(self.reference_airspeed),
+                };
+                Some(T::constant(self.geometry.chord) / speed)
+            }
+        }
+    }
+
+    /// The α̇ the hysteresis τ2 acts on: α̇, or with
+    /// `tau2_only_while_decreasing` α̇ while it is negative and 0 otherwise.
+    fn hysteresis_rate<T: Real>(&self, alpha_dot: T) -> T {
+        match self.stall_options.1 && alpha_dot.value() >= 0.0 {
+            true => T::zero(),
+            false => alpha_dot,
         }
     }
 
@@ -669,8 +1055,17 @@ impl AeroModel {
         if self.chi_is_state() {
             input.chi
         } else {
-            self.separation_target(input.alpha, input.alpha_dot)
+            self.separation_target(input.alpha, input.alpha_dot, input.airspeed)
         }
+    }
+
+    /// Whether [`AeroModel::offset_response`] is the exact response of the
+    /// coefficients to a coefficient's offset: not when the forces depend
+    /// on α̇ (the equations are solved for it), nor when the induced drag
+    /// squares the attached-flow lift (not in the coefficients it is given).
+    pub fn offset_response_is_exact(&self) -> bool {
+        let attached = self.stall.is_some() && self.stall_options.2 == InducedDragLift::Attached;
+        !(self.forces_depend_on_alpha_dot() || attached)
     }
 
     /// Normalising speed for rates: the airspeed or V0, times 2 or 1.
@@ -729,11 +1124,12 @@ impl AeroModel {
         self.terms[coefficient as usize]
             .iter()
             .fold(T::constant(-0.0), |sum, t| {
-                let regressor = match t.regressor {
-                    Regressor::Alpha => regressors[Regressor::Alpha as usize] * alpha_factor,
-                    r => regressors[r as usize],
+                let regressor = match t.monomial.single() {
+                    Some(Regressor::Alpha) => regressors[Regressor::Alpha as usize] * alpha_factor,
+                    Some(r) => regressors[r as usize],
+                    None => t.monomial.value(regressors),
                 };
-                sum + regressor * values[t.parameter]
+                sum + regressor * t.coefficient(values)
             })
             + self.offsets[coefficient as usize]
     }
@@ -773,17 +1169,125 @@ impl AeroModel {
         lift[Regressor::Alpha as usize] *= kirchhoff;
         lift[Regressor::LiftSquared as usize] = 0.0;
         rest[..REGRESSOR_COUNT].copy_from_slice(&other);
+        let products = &mut rest[REGRESSOR_COUNT + 1..];
+        for (value, product) in products.iter_mut().zip(&self.products) {
+            *value = product.value(&other);
+        }
         regressors
     }
 
-    /// The coefficient and term of a parameter that enters linearly (`{coefficient}_{term}`);
-    /// None for `e` and the stall parameters.
-    pub fn term_of(&self, parameter: usize) -> Option<(Coefficient, Regressor)> {
+    /// The slot in [`TermRegressors`] of the value a term of `coefficient` multiplies.
+    pub fn term_slot(&self, coefficient: Coefficient, monomial: Monomial) -> usize {
+        match monomial.single() {
+            Some(regressor) => TermRegressors::slot(coefficient == Coefficient::Lift, regressor),
+            None => {
+                let k = self.products.iter().position(|p| *p == monomial);
+                TermRegressors::ONE + 1 + k.expect("every product of a term has a slot")
+            }
+        }
+    }
+
+    /// Ties term parameter `tied` to term parameter `master` by
+    /// θ_tied = factor·θ_master + offset, and sets θ_tied so. Errors: either
+    /// is not a term's parameter, they are the same, the master is tied
+    /// itself, the tied one is already tied or is another's master.
+    pub fn tie(&mut self, tied: usize, tie: Tie) -> Result<(), String> {
+        let names = self.parameters.names();
+        let name = |i: usize| names[i].clone();
+        if !(tie.factor.is_finite() && tie.offset.is_finite()) {
+            return Err("the factor and offset must be finite numbers".into());
+        }
+        if tie.master == tied {
+            return Err(format!("'{}' cannot be tied to itself", name(tied)));
+        }
+        let is_term = |i: usize| self.terms.iter().flatten().any(|t| t.parameter == i);
+        for (i, role) in [(tied, "tied"), (tie.master, "a master")] {
+            if !is_term(i) {
+                return Err(format!(
+                    "'{}' is not a term's parameter ({{coefficient}}_{{term}}): only those can be {role}",
+                    name(i)
+                ));
+            }
+        }
+        if let Some(other) = self.tie_of(tie.master) {
+            return Err(format!(
+                "the master '{}' is tied itself (to '{}'): tie to a free or fixed parameter",
+                name(tie.master),
+                name(other.master)
+            ));
+        }
+        if let Some(other) = self.tie_of(tied) {
+            return Err(format!(
+                "'{}' is tied already (to '{}')",
+                name(tied),
+                name(other.master)
+            ));
+        }
+        if let Some(dependent) = self.dependents(tied).next() {
+            return Err(format!(
+                "'{}' is the master of '{}': a master cannot be tied itself",
+                name(tied),
+                name(dependent)
+            ));
+        }
+        for term in self.terms.iter_mut().flatten() {
+            if term.parameter == tied {
+                term.tie = Some(tie);
+            }
+        }
+        let value = tie.value(self.parameters.values());
+        self.parameters.values_mut()[tied] = value;
+        Ok(())
+    }
+
+    /// The relation a parameter is tied by; None when it is not tied.
+    pub fn tie_of(&self, parameter: usize) -> Option<Tie> {
+        self.terms
+            .iter()
+            .flatten()
+            .find(|t| t.parameter == parameter)
+            .and_then(|t| t.tie)
+    }
+
+    /// The parameters tied to `master`.
+    pub fn dependents(&self, master: usize) -> impl Iterator<Item = usize> + '_ {
+        self.terms
+            .iter()
+            .flatten()
+            .filter(move |t| t.tie.is_some_and(|tie| tie.master == master))
+            .map(|t| t.parameter)
+    }
+
+    /// Whether any parameter is tied to another.
+    pub fn has_ties(&self) -> bool {
+        self.terms.iter().flatten().any(|t| t.tie.is_some())
+    }
+
+    /// Sets every tied parameter's value from its master's (what the
+    /// evaluation uses already), e.g. after the masters were estimated.
+    pub fn update_tied_values(&mut self) {
+        let ties: Vec<(usize, Tie)> = (self.terms.iter().flatten())
+            .filter_map(|t| t.tie.map(|tie| (t.parameter, tie)))
+            .collect();
+        for (tied, tie) in ties {
+            let value = tie.value(self.parameters.values());
+            self.parameters.values_mut()[tied] = value;
+        }
+    }
+
+    /// The coefficient and term of a parameter that enters linearly
+    /// (`{coefficient}_{term}`) in exactly one term, its own: None for `e`,
+    /// the stall parameters, a tied parameter and the master of one (whose
+    /// value moves other terms too).
+    pub fn term_of(&self, parameter: usize) -> Option<(Coefficient, Monomial)> {
+        if self.tie_of(parameter).is_some() || self.dependents(parameter).next().is_some() {
+            return None;
+        }
         Coefficient::ALL.into_iter().find_map(|coefficient| {
             self.terms[coefficient as usize]
                 .iter()
                 .find(|t| t.parameter == parameter)
-                .map(|t| (coefficient, t.regressor))
+                .map(|t| (coefficient, t.monomial))
         })
     }
 
@@ -801,7 +1305,11 @@ impl AeroModel {
         let (regressors, lift_type, _) = self.regressors_and_lift(input);
         let mut drag_type = self.sum(Coefficient::Drag, &regressors);
         if let Some(e) = self.oswald {
-            drag_type += lift_type * lift_type
+            let induced = match (self.stall, self.stall_options.2) {
+                (Some(_), InducedDragLift::Attached) => self.sum(Coefficient::Lift, &regressors),
+                _ => lift_type,
+            };
+            drag_type += induced * induced
                 / (self.parameters.values()[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
         }
         let side = self.sum(Coefficient::Side, &regressors);
@@ -824,7 +1332,7 @@ impl AeroModel {
         moment: Vector3<T>,
         (sin_alpha, cos_alpha): (T, T),
     ) -> AeroCoefficients<T> {
-        match self.force_axes {
+        let mut coefficients = match self.force_axes {
             ForceAxes::Wind => AeroCoefficients {
                 force: Vector3::new(
                     -drag_type * cos_alpha + lift_type * sin_alpha,
@@ -841,6 +1349,37 @@ impl AeroModel {
                 lift: -lift_type * cos_alpha + drag_type * sin_alpha,
                 drag: -drag_type * cos_alpha - lift_type * sin_alpha,
             },
+        };
+        if self.moment_reference != Vector3::zeros() {
+            coefficients.moment += self.moment_transfer(&coefficients.force);
+        }
+        coefficients
+    }
+
+    /// What the body-axis force coefficients `force` (CX, CY, CZ) add to
+    /// the moment coefficients when these are taken about the reference
+    /// point r (from the CG, [`AeroModel::moment_reference`]) and the
+    /// moments about the CG are wanted: M_cg = M_ref + r × F, non-dimensional
+    /// (r × C_F)/(b, c̄, b). Zero for r = 0.
+    pub fn moment_transfer<T: Real>(&self, force: &Vector3<T>) -> Vector3<T> {
+        let r = &self.moment_reference;
+        let g = &self.geometry;
+        Vector3::new(
+            (force.z * r.y - force.y * r.z) / g.span,
+            (force.x * r.z - force.z * r.x) / g.chord,
+            (force.y * r.x - force.x * r.y) / g.span,
+        )
+    }
+
+    /// Which body-axis force coefficients (CX, CY, CZ) the transfer of the
+    /// moment `coefficient` to the CG uses ([`AeroModel::moment_transfer`]).
+    pub fn transfer_uses(&self, coefficient: Coefficient) -> [bool; 3] {
+        let r = self.moment_reference.map(|v| v != 0.0);
+        match coefficient {
+            Coefficient::Roll => [false, r.z, r.y],
+            Coefficient::Pitch => [r.z, false, r.x],
+            Coefficient::Yaw => [r.y, r.x, false],
+            _ => [false; 3],
         }
     }
 
@@ -861,8 +1400,8 @@ impl AeroModel {
             let values = self.parameters.values();
             let mut slope: f64 = self.terms[Coefficient::Drag as usize]
                 .iter()
-                .filter(|t| t.regressor == Regressor::LiftSquared)
-                .map(|t| values[t.parameter])
+                .filter(|t| t.monomial == Monomial::from(Regressor::LiftSquared))
+                .map(|t| t.coefficient(values))
                 .sum();
             if let Some(e) = self.oswald {
                 slope += 1.0 / (values[e] * std::f64::consts::PI * self.geometry.aspect_ratio);
@@ -902,7 +1441,7 @@ impl AeroModel {
         let (b, c) = (self.geometry.span, self.geometry.chord);
         let evaluate = |input: &AeroInput| {
             let mut input = *input;
-            input.chi = self.separation_target(input.alpha, input.alpha_dot);
+            input.chi = self.separation_target(input.alpha, input.alpha_dot, input.airspeed);
             self.coefficient_values(&self.coefficients(&input))
         };
         let perturbations: [(Regressor, f64, Perturbation); 9] = [
@@ -957,11 +1496,12 @@ impl AeroModel {
         derivatives
     }
 
-    /// The terms of one coefficient as (regressor, parameter index), in file order.
-    pub fn terms(&self, coefficient: Coefficient) -> impl Iterator<Item = (Regressor, usize)> + '_ {
+    /// The terms of one coefficient as (what the parameter multiplies,
+    /// parameter index), in file order.
+    pub fn terms(&self, coefficient: Coefficient) -> impl Iterator<Item = (Monomial, usize)> + '_ {
         self.terms[coefficient as usize]
             .iter()
-            .map(|t| (t.regressor, t.parameter))
+            .map(|t| (t.monomial, t.parameter))
     }
 
     /// Names of the terms of one coefficient, in file order (for reports and model-structure code).
@@ -1014,6 +1554,122 @@ mod tests {
         assert!((c.moment.y + 0.05).abs() < 1e-15);
         let cz = -c.drag * 0.1f64.sin() - lift * 0.1f64.cos();
         assert!((c.force.z - cz).abs() < 1e-15);
+    }
+
+    #[test]
+    fn products_are_canonical_and_multiply_their_factors() {
+        let term = Monomial::parse("alpha^2*de").unwrap();
+        assert_eq!(term.key(), "alpha^2*de");
+        assert_eq!(
+            term.factors(),
+            [Regressor::Alpha, Regressor::Alpha, Regressor::Elevator]
+        );
+        let mut regressors = [0.0; REGRESSOR_COUNT];
+        regressors[Regressor::Alpha as usize] = 0.1;
+        regressors[Regressor::Elevator as usize] = -0.05;
+        assert!((term.value(&regressors) - 0.1 * 0.1 * -0.05).abs() < 1e-18);
+        assert_eq!(Monomial::parse("alpha").unwrap(), Regressor::Alpha.into());
+        for bad in [
+            "de*alpha",
+            "alpha*alpha",
+            "alpha^1",
+            "alpha^2.5",
+            "alpha^",
+            "*alpha",
+        ] {
+            assert!(Monomial::parse(bad).is_err(), "{bad}");
+        }
+        let (model, problems) =
+            parse("[CL]\nalpha = 5.0\n\"alpha^2\" = -2.0\n[Cm]\n\"alpha*de\" = -1.0\n");
+        assert!(problems.is_empty(), "{problems:?}");
+        let mut input = AeroInput {
+            alpha: 0.1,
+            airspeed: 100.0,
+            ..Default::default()
+        };
+        input.controls[Control::Elevator.index()] = 0.05;
+        let c = model.coefficients(&input);
+        assert!((c.lift - (0.5 - 0.02)).abs() < 1e-15);
+        assert!((c.moment.y + 0.005).abs() < 1e-15);
+        let regressors = model.term_regressors(&input);
+        let (coefficient, term) = model.term_of(1).unwrap();
+        let slot = model.term_slot(coefficient, term);
+        assert_eq!(regressors.values[slot], 0.1 * 0.1);
+    }
+
+    /// M_cg = M_ref + r × F: a reference point ahead of the CG (x > 0)
+    /// with lift (CZ < 0) pitches the nose up about the CG.
+    #[test]
+    fn moments_are_transferred_to_the_cg() {
+        let (model, problems) =
+            parse("[moment_reference]\noffset = [0.5, 0.0, 0.2]\n[CL]\n0 = 1.0\n[CD]\n0 = 0.1\n");
+        assert!(problems.is_empty(), "{problems:?}");
+        let input = AeroInput {
+            airspeed: 100.0,
+            ..Default::default()
+        };
+        let c = model.coefficients(&input);
+        // α = 0: CX = −CD = −0.1, CZ = −CL = −1: (z·CX − x·CZ)/c̄.
+        let (cx, cz) = (-0.1, -1.0);
+        let expected = (0.2 * cx - 0.5 * cz) / 3.159;
+        assert!((c.moment.y - expected).abs() < 1e-15 && expected > 0.0);
+        assert_eq!(c.moment.x, 0.0);
+        assert_eq!(c.moment.z, 0.0);
+    }
+
+    fn stall(options: &str) -> AeroModel {
+        let (model, problems) = parse(&format!(
+            "model = \"stall\"\noswald_efficiency = 0.8\n[stall]\na1 = 20.0\nalpha_star = 0.3\ntau1 = 0.2\ntau2 = 0.5\n{options}\n[CL]\n0 = 0.1\nalpha = 4.0\n"
+        ));
+        assert!(problems.is_empty(), "{problems:?}");
+        model
+    }
+
+    /// τ in units of c̄/V is τ·c̄/V seconds; τ2 acting only while α̇ < 0
+    /// leaves χ∞ at its α̇ = 0 value while α rises; the attached-flow
+    /// induced drag squares CL with χ = 1.
+    #[test]
+    fn stall_variants_change_what_they_say() {
+        let seconds = stall("");
+        let chord = stall("time_unit = \"chord/V\"");
+        let (alpha, alpha_dot, airspeed) = (0.32, -0.05, 80.0);
+        let scale = 3.159 / airspeed;
+        let mut equivalent = seconds.clone();
+        equivalent.parameters.set("tau1", 0.2 * scale).unwrap();
+        equivalent.parameters.set("tau2", 0.5 * scale).unwrap();
+        let target = chord.separation_target(alpha, alpha_dot, airspeed);
+        assert!((target - equivalent.separation_target(alpha, alpha_dot, 1.0)).abs() < 1e-15);
+        let rate = chord.separation_rate(alpha, alpha_dot, 0.5, airspeed);
+        assert!((rate - equivalent.separation_rate(alpha, alpha_dot, 0.5, 1.0)).abs() < 1e-12);
+        assert_ne!(
+            target,
+            seconds.separation_target(alpha, alpha_dot, airspeed)
+        );
+        let one_sided = stall("tau2_only_while_decreasing = true");
+        let steady = one_sided.steady_separation(alpha);
+        assert_eq!(one_sided.separation_target(alpha, 0.05, 1.0), steady);
+        assert_ne!(seconds.separation_target(alpha, 0.05, 1.0), steady);
+        assert_eq!(
+            one_sided.separation_target(alpha, -0.05, 1.0),
+            seconds.separation_target(alpha, -0.05, 1.0)
+        );
+        assert_eq!(one_sided.separation_rate_slope(alpha, 0.05, 1.0), 0.0);
+        let attached = stall("induced_drag_lift = \"attached\"");
+        let input = AeroInput {
+            alpha,
+            airspeed,
+            chi: 0.3,
+            ..Default::default()
+        };
+        let induced =
+            |lift: f64| lift * lift / (0.8 * std::f64::consts::PI * geometry().aspect_ratio);
+        let lift_attached = 0.1 + 4.0 * alpha;
+        let c = attached.coefficients(&input);
+        assert!(c.lift < lift_attached - 0.1);
+        assert!((c.drag - induced(lift_attached)).abs() < 1e-15);
+        let c = seconds.coefficients(&input);
+        assert!((c.drag - induced(c.lift)).abs() < 1e-15);
+        assert!(!attached.offset_response_is_exact() && seconds.offset_response_is_exact());
     }
 
     #[test]

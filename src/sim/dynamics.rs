@@ -349,9 +349,12 @@ impl FlightModel {
         derivative
             .fixed_rows_mut::<3>(NORTH)
             .copy_from(&ned_to_body.tr_mul(velocity));
-        derivative[CHI] = aircraft
-            .aero
-            .separation_rate(air_data.alpha, alpha_dot, kinematics.chi);
+        derivative[CHI] = aircraft.aero.separation_rate(
+            air_data.alpha,
+            alpha_dot,
+            kinematics.chi,
+            air_data.airspeed,
+        );
         debug_assert_eq!(DOWN, NORTH + 2);
         Evaluation {
             derivative,

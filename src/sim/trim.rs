@@ -159,7 +159,7 @@ impl TrimProblem<'_> {
         x.fixed_rows_mut::<3>(U)
             .copy_from(&(air_velocity + wind_body));
         x[DOWN] = -self.condition.altitude;
-        x[CHI] = self.model.aircraft.aero.separation_target(alpha, 0.0);
+        x[CHI] = self.model.aircraft.aero.steady_separation(alpha);
         let mut controls = Controls::zeros();
         controls[Control::Elevator.index()] = z[2];
         controls[Control::Aileron.index()] = z[3];

@@ -197,7 +197,7 @@ fn trim_derivatives(scenario: &Scenario, trim: &Trim) -> BTreeMap<String, f64> {
         airspeed: scenario.trim.airspeed,
         mach: scenario.trim.airspeed / air.speed_of_sound,
         controls: trim.controls,
-        chi: aero.separation_target(trim.alpha, 0.0),
+        chi: aero.steady_separation(trim.alpha),
         ..Default::default()
     };
     aero.local_derivatives(&at).into_iter().collect()

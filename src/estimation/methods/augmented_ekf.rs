@@ -289,6 +289,10 @@ impl Estimator for AugmentedEkf {
         Some(equation_error::METHOD)
     }
 
+    fn fits_tied_parameters(&self) -> bool {
+        true
+    }
+
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let settings = FilterSettings::read(METHOD, &problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;

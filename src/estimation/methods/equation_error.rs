@@ -21,6 +21,14 @@
 //!    factor e: the induced drag `CL²/(e·π·Λ)` uses the measured CL; with e
 //!    free the regressor `CL²/(π·Λ)` is fitted with parameter 1/e and e is
 //!    reported with the delta-method variance `σ_e = σ_{1/e}·e²`.
+//!    A product term's regressor is the product of its measured factors
+//!    (`alpha^2` → α²). A term tied to a parameter (θ = c·θ_master + d)
+//!    adds c times its regressor to the master's column when the master is
+//!    in the same regression, and is a known term otherwise, the master's
+//!    coefficient fitted first (ties in a cycle between coefficients are
+//!    refused). Moments taken about a point other than the CG are moved
+//!    there from the measured moments about the CG with the measured
+//!    forces, M_ref = M_cg − r × F ([`crate::sim::aero::AeroModel::moment_transfer`]).
 //! 3. The cost `½·εᵀε` (Eq. 26) is minimised by `θ̂ = (XᵀX)⁻¹·Xᵀz` (Eq. 27),
 //!    computed by SVD ([`crate::estimation::solver::regression`]), with the
 //!    Cramér–Rao bound `s²·(XᵀX)⁻¹` and the bound corrected for coloured
@@ -65,7 +73,7 @@ use crate::estimation::solver::regression::{LagWindow, LeastSquares};
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
-use crate::sim::aero::{Coefficient, ForceAxes, ModelKind, Regressor};
+use crate::sim::aero::{Coefficient, ForceAxes, ModelKind, Monomial, Regressor};
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 
@@ -187,6 +195,10 @@ impl Estimator for EquationError {
         EquationErrorSettings::read(settings).map(|_| ())
     }
 
+    fn fits_tied_parameters(&self) -> bool {
+        true
+    }
+
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         crate::estimation::estimator::one_record(METHOD, problem)?;
         let settings = EquationErrorSettings::read(&problem.settings)?;
@@ -218,8 +230,8 @@ impl Default for EquationErrorOptions {
 #[derive(Debug, Clone)]
 pub(crate) struct Plan {
     pub(crate) coefficient: Coefficient,
-    /// (regressor, parameter index) of every term.
-    pub(crate) terms: Vec<(Regressor, usize)>,
+    /// (what the parameter multiplies, parameter index) of every term.
+    pub(crate) terms: Vec<(Monomial, usize)>,
     /// Index of the Oswald factor e when this is wind-axis drag with one.
     oswald: Option<usize>,
 }
@@ -228,7 +240,7 @@ impl Plan {
     fn free_terms<'a>(
         &'a self,
         structure: &'a ModelStructure,
-    ) -> impl Iterator<Item = (Regressor, usize)> + 'a {
+    ) -> impl Iterator<Item = (Monomial, usize)> + 'a {
         self.terms
             .iter()
             .copied()
@@ -302,16 +314,30 @@ pub(crate) fn regress(
     groups: &[(Vec<Plan>, Reconstruction)],
     correlation_lag: f64,
 ) -> Estimate {
-    let mut results: Vec<CoefficientResult> = Vec::new();
     let mut notes: Vec<String> = Vec::new();
     let mut lag = 0;
-    for (group, reconstruction) in groups {
+    let pending: Vec<(&Plan, &Reconstruction)> = groups
+        .iter()
+        .flat_map(|(group, reconstruction)| group.iter().map(move |plan| (plan, reconstruction)))
+        .collect();
+    let plans: Vec<&Plan> = pending.iter().map(|(plan, _)| *plan).collect();
+    // The values the fixed and tied terms take: a tied term's master is
+    // estimated (its coefficient fitted first) before the tied term is used.
+    let mut values = structure.aircraft.aero.parameters.values().to_vec();
+    let mut results: Vec<Option<CoefficientResult>> = (0..pending.len()).map(|_| None).collect();
+    // [`plans`] refuses ties in a cycle; were there one, the given order.
+    let order = fit_order(&plans, structure).unwrap_or_else(|_| (0..plans.len()).collect());
+    for index in order {
+        let (plan, reconstruction) = pending[index];
         lag = (correlation_lag * reconstruction.rate).round() as usize;
-        results.extend(
-            group
-                .iter()
-                .map(|plan| fit_coefficient(plan, structure, reconstruction, lag)),
-        );
+        let result = fit_coefficient(plan, structure, reconstruction, lag, &values);
+        for &(i, value, ..) in &result.parameters {
+            values[i] = value;
+        }
+        results[index] = Some(result);
+    }
+    let results: Vec<CoefficientResult> = results.into_iter().flatten().collect();
+    for (_, reconstruction) in groups {
         for note in &reconstruction.notes {
             if !notes.contains(note) {
                 notes.push(note.clone());
@@ -333,6 +359,38 @@ pub(crate) fn regress(
         .notes
         .extend(outside_bounds_notes(structure, &results));
     estimate
+}
+
+/// The order the plans are fitted in: as given, except that a plan with a
+/// term tied to a parameter another plan estimates comes after that plan
+/// (a tied term is a known one once its master is estimated). Err with
+/// the plans left when their ties form a cycle.
+fn fit_order(
+    plans: &[&Plan],
+    structure: &ModelStructure,
+) -> std::result::Result<Vec<usize>, Vec<usize>> {
+    let depends = |a: usize, b: usize| {
+        a != b && masters(plans[a], structure).any(|m| plans[b].columns(structure).contains(&m))
+    };
+    let mut order: Vec<usize> = Vec::with_capacity(plans.len());
+    while order.len() < plans.len() {
+        let ready = (0..plans.len()).find(|&a| {
+            !order.contains(&a) && (0..plans.len()).all(|b| order.contains(&b) || !depends(a, b))
+        });
+        match ready {
+            Some(a) => order.push(a),
+            None => return Err((0..plans.len()).filter(|a| !order.contains(a)).collect()),
+        }
+    }
+    Ok(order)
+}
+
+/// The masters of a plan's tied terms.
+fn masters<'a>(plan: &'a Plan, structure: &'a ModelStructure) -> impl Iterator<Item = usize> + 'a {
+    let aero = &structure.aircraft.aero;
+    plan.terms
+        .iter()
+        .filter_map(|(_, i)| aero.tie_of(*i).map(|tie| tie.master))
 }
 
 /// One plan per coefficient that has a free parameter; `method` names the
@@ -364,6 +422,20 @@ pub(crate) fn plans(structure: &ModelStructure, method: &str) -> Result<Vec<Plan
             model: structure.name.clone(),
         }));
     }
+    let all: Vec<&Plan> = plans.iter().collect();
+    if let Err(cycle) = fit_order(&all, structure) {
+        let names: Vec<&str> = (cycle.iter())
+            .map(|&i| plans[i].coefficient.name(aero.force_axes))
+            .collect();
+        return Err(Error::Refused(Refusal::UnsuitableModel {
+            method: method.to_string(),
+            model: structure.name.clone(),
+            reason: format!(
+                "the terms of {} are tied in a cycle to each other's parameters: the regressions fit one coefficient at a time, a master's before the terms tied to it",
+                names.join(", ")
+            ),
+        }));
+    }
     Ok(plans)
 }
 
@@ -375,9 +447,12 @@ pub(crate) fn request(plans: &[Plan]) -> Request {
         request.coefficients.push(plan.coefficient);
         request
             .regressors
-            .extend(plan.terms.iter().map(|(regressor, _)| *regressor));
-        let uses_lift =
-            plan.oswald.is_some() || plan.terms.iter().any(|(r, _)| *r == Regressor::LiftSquared);
+            .extend(plan.terms.iter().flat_map(|(term, _)| term.factors()));
+        let uses_lift = plan.oswald.is_some()
+            || plan
+                .terms
+                .iter()
+                .any(|(term, _)| term.contains(Regressor::LiftSquared));
         if uses_lift && !request.coefficients.contains(&Coefficient::Lift) {
             request.coefficients.push(Coefficient::Lift);
         }
@@ -396,6 +471,7 @@ fn fit_coefficient(
     structure: &ModelStructure,
     data: &Reconstruction,
     lag: usize,
+    values: &[f64],
 ) -> CoefficientResult {
     let name = plan.coefficient.name(structure.aircraft.aero.force_axes);
     let columns = plan.columns(structure);
@@ -408,7 +484,7 @@ fn fit_coefficient(
         );
         return failed_coefficient(name, &columns, reason);
     }
-    let (x, z) = regression_problem(plan, structure, data, &columns);
+    let (x, z) = regression_problem(plan, structure, data, &columns, values);
     fit_regression(
         plan,
         structure,
@@ -488,29 +564,60 @@ pub(crate) fn fit_regression(
 }
 
 /// X (regressors of the free terms, then CL²/(π·Λ) for a free e) and z (the
-/// measured coefficient minus the fixed terms) of one coefficient.
+/// measured coefficient minus the fixed terms) of one coefficient, the
+/// fixed terms at `values`. A term tied to a parameter of this regression
+/// (θ = c·θ_master + d) adds c times its regressor to the master's column
+/// and d times it to the known part; one tied to another coefficient's
+/// parameter is known, at `values`.
 pub(crate) fn regression_problem(
     plan: &Plan,
     structure: &ModelStructure,
     data: &Reconstruction,
     columns: &[usize],
+    values: &[f64],
 ) -> (DMatrix<f64>, DVector<f64>) {
-    let values = structure.aircraft.aero.parameters.values();
+    let aero = &structure.aircraft.aero;
     let measured = data.coefficient(plan.coefficient);
     let lift = data.coefficient(Coefficient::Lift);
     let count = measured.len();
-    let x = DMatrix::from_fn(count, columns.len(), |k, j| {
-        match plan.terms.iter().find(|(_, i)| *i == columns[j]) {
-            Some((regressor, _)) => data.regressors[k][*regressor as usize],
-            None => induced_drag_regressor(structure, lift[k]),
+    // Per term: the column its regressor goes to with its factor, or None (known).
+    let placement = |i: usize| -> Option<(usize, f64)> {
+        let (parameter, factor) = match aero.tie_of(i) {
+            Some(tie) => (tie.master, tie.factor),
+            None => (i, 1.0),
+        };
+        columns
+            .iter()
+            .position(|&c| c == parameter)
+            .map(|j| (j, factor))
+    };
+    let mut x = DMatrix::zeros(count, columns.len());
+    for (j, &i) in columns.iter().enumerate() {
+        if plan.oswald == Some(i) {
+            x.column_mut(j)
+                .iter_mut()
+                .zip(lift)
+                .for_each(|(x, &lift)| *x = induced_drag_regressor(structure, lift));
         }
-    });
+    }
+    for (term, i) in &plan.terms {
+        if let Some((j, factor)) = placement(*i) {
+            for k in 0..count {
+                x[(k, j)] += factor * term.value(&data.regressors[k]);
+            }
+        }
+    }
+    let known = |i: usize| match (aero.tie_of(i), placement(i)) {
+        (Some(tie), Some(_)) => tie.offset,
+        (Some(tie), None) => tie.value(values),
+        (None, _) => values[i],
+    };
     let fixed_part = |k: usize| -> f64 {
         let terms: f64 = plan
             .terms
             .iter()
             .filter(|(_, i)| !structure.free[*i])
-            .map(|(regressor, i)| values[*i] * data.regressors[k][*regressor as usize])
+            .map(|(term, i)| known(*i) * term.value(&data.regressors[k]))
             .sum();
         let induced = match plan.oswald {
             Some(e) if !structure.free[e] => induced_drag_regressor(structure, lift[k]) / values[e],

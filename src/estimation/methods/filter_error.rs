@@ -233,6 +233,10 @@ impl Estimator for FilterError {
         Some(equation_error::METHOD)
     }
 
+    fn fits_tied_parameters(&self) -> bool {
+        true
+    }
+
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let options = FilterErrorOptions::read(&problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;

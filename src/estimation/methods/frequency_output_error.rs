@@ -451,7 +451,7 @@ pub fn frequency_output_error(
             structure.free[i]
                 && aero
                     .term_of(i)
-                    .is_some_and(|(_, r)| r == Regressor::Constant)
+                    .is_some_and(|(_, r)| r.single() == Some(Regressor::Constant))
         })
         .collect();
     let free: Vec<usize> = (0..names.len())

@@ -322,7 +322,7 @@ pub(crate) fn model_controls(structure: &ModelStructure) -> Vec<Regressor> {
     .filter(|r| {
         Coefficient::ALL
             .into_iter()
-            .any(|c| aero.terms(c).any(|(t, _)| t == *r))
+            .any(|c| aero.terms(c).any(|(t, _)| t.contains(*r)))
     })
     .collect()
 }
@@ -379,6 +379,11 @@ impl Estimator for FrequencyRegression {
 
     fn check_settings(&self, settings: &Settings) -> Result<()> {
         FrequencyRegressionSettings::read(settings).map(|_| ())
+    }
+
+    /// Its moment equations are about the CG, in its own form.
+    fn fits_moment_reference(&self) -> bool {
+        false
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
@@ -449,7 +454,8 @@ impl Signals {
                 .map(|q| q * aircraft.wing_area)
                 .collect();
             let free = plan.columns(structure);
-            let (x, z) = regression_problem(plan, structure, data, &free);
+            let values = structure.aircraft.aero.parameters.values();
+            let (x, z) = regression_problem(plan, structure, data, &free, values);
             let z_column = columns.len();
             columns.push((0..count).map(|k| z[k] * scale[k] * length).collect());
             let mut regressors = Vec::with_capacity(free.len());
@@ -543,7 +549,7 @@ pub fn frequency_regression(
     let constant_free = plans.iter().any(|p| {
         p.terms
             .iter()
-            .any(|&(r, i)| r == Regressor::Constant && structure.free[i])
+            .any(|&(r, i)| r.single() == Some(Regressor::Constant) && structure.free[i])
     });
     let zero = options.zero_frequency.unwrap_or(constant_free);
     let (omegas, band_note) =

@@ -22,8 +22,9 @@ pub mod unscented;
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Estimate;
-use crate::estimation::estimator::Estimator;
+use crate::estimation::estimator::{Estimator, Refusal};
 use crate::estimation::problem::EstimationProblem;
+use crate::estimation::structure::{ModelStructure, Structure};
 use std::sync::{Arc, OnceLock, RwLock};
 
 /// The built-in estimators, in the order `aeroid run` runs them.
@@ -125,13 +126,69 @@ pub fn register(estimator: Arc<dyn Estimator>) -> Result<()> {
 /// "converged", whichever method made it.
 pub fn estimate(problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
     let estimator = find(&problem.method)?;
+    if let Structure::SixDof(structure) = &problem.structure {
+        check_model_features(estimator.as_ref(), structure)?;
+    }
     let mut estimate = estimator.estimate(problem, start)?;
+    if let Structure::SixDof(structure) = &problem.structure {
+        estimate.notes.extend(tied_notes(structure, &estimate));
+    }
     for note in problem.notes() {
         if !estimate.notes.contains(&note) {
             estimate.notes.push(note);
         }
     }
     Ok(estimate.assess())
+}
+
+/// Refuses a model that uses a feature the method does not fit (tied
+/// parameters, a moment reference point off the CG).
+fn check_model_features(estimator: &dyn Estimator, structure: &ModelStructure) -> Result<()> {
+    let aero = &structure.aircraft.aero;
+    let reason = if aero.has_ties() && !estimator.fits_tied_parameters() {
+        "it has tied parameters ([parameters.NAME] tie), which this method does not fit"
+    } else if aero.moment_reference != nalgebra::Vector3::zeros()
+        && !estimator.fits_moment_reference()
+    {
+        "its moments are taken about a point other than the CG ([aero.moment_reference]), which this method does not fit"
+    } else {
+        return Ok(());
+    };
+    Err(Error::Refused(Refusal::UnsuitableModel {
+        method: estimator.name().to_string(),
+        model: structure.name.clone(),
+        reason: reason.into(),
+    }))
+}
+
+/// A note per tied parameter: its relation, and its value and standard
+/// error from its master's estimate (σ = |c|·σ_master). A tied parameter
+/// is not in the estimate's parameters, so it is not scored as if it had
+/// been estimated independently (as a fixed one is not).
+pub fn tied_notes(structure: &ModelStructure, estimate: &Estimate) -> Vec<String> {
+    let aero = &structure.aircraft.aero;
+    let names = aero.parameters.names();
+    (0..names.len())
+        .filter_map(|i| aero.tie_of(i).map(|tie| (i, tie)))
+        .map(|(i, tie)| {
+            let master = &names[tie.master];
+            let relation = format!(
+                "{} is tied: {} = {}·{master} + {}",
+                names[i], names[i], tie.factor, tie.offset
+            );
+            match estimate.parameter(master) {
+                Some(p) => format!(
+                    "{relation} = {:.6e} ± {:.3e} (from {master}'s estimate; not estimated independently)",
+                    tie.factor * p.value + tie.offset,
+                    tie.factor.abs() * p.standard_error
+                ),
+                None => format!(
+                    "{relation} = {:.6e} ({master} not estimated)",
+                    aero.parameters.values()[i]
+                ),
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]

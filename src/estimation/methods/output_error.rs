@@ -330,6 +330,10 @@ impl Estimator for OutputError {
         Some(equation_error::METHOD)
     }
 
+    fn fits_tied_parameters(&self) -> bool {
+        true
+    }
+
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let options = OutputErrorOptions::read(&problem.settings)?;
         let structure = match &problem.structure {

@@ -567,7 +567,7 @@ fn train_and_differentiate(
     let in_structure: Vec<bool> = data
         .inputs
         .iter()
-        .map(|r| plan.terms.iter().any(|(t, _)| t == r))
+        .map(|r| plan.terms.iter().any(|(t, _)| t.single() == Some(*r)))
         .collect();
     let mut derivatives = vec![Vec::with_capacity(n); m];
     let mut bias = Vec::with_capacity(n);
@@ -695,21 +695,26 @@ pub fn rbf_delta(
         };
         let trim = trim_index(&delta.data.times, settings.trim);
         let mut covered = Vec::new();
-        for &(regressor, index) in &plan.terms {
+        for &(term, index) in &plan.terms {
             if !structure.free[index] {
                 continue;
             }
-            let values = if regressor == Regressor::Constant {
+            // A product is no network input: its parameter is not estimated.
+            let regressor = term.single();
+            let values = if regressor == Some(Regressor::Constant) {
                 // C₀ needs every other term of the coefficient: one whose
                 // regressor is no input (CL², the Oswald factor) stays in it.
                 let complete = plan.columns(structure).iter().all(|&i| {
                     plan.terms.iter().any(|&(r, t)| {
-                        t == i && (r == Regressor::Constant || delta.data.inputs.contains(&r))
+                        t == i
+                            && r.single().is_some_and(|r| {
+                                r == Regressor::Constant || delta.data.inputs.contains(&r)
+                            })
                     })
                 });
                 complete.then_some(&delta.bias)
             } else {
-                let position = delta.data.inputs.iter().position(|&r| r == regressor);
+                let position = (delta.data.inputs.iter()).position(|&r| Some(r) == regressor);
                 position.map(|j| &delta.derivatives[j])
             };
             let Some(values) = values else { continue };
@@ -720,7 +725,7 @@ pub fn rbf_delta(
                 standard_error: spread.standard_deviation,
                 start: starts[index],
             });
-            if regressor != Regressor::Constant {
+            if regressor != Some(Regressor::Constant) {
                 derivative_names.push(names[index].clone());
             }
             distributions.push(spread);

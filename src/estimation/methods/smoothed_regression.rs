@@ -318,6 +318,11 @@ impl Estimator for SmoothedRegression {
         SmoothedRegressionSettings::read(settings).map(|_| ())
     }
 
+    /// Its moment equations are about the CG, in its own form.
+    fn fits_moment_reference(&self) -> bool {
+        false
+    }
+
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         let settings = SmoothedRegressionSettings::read(&problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;
@@ -475,7 +480,7 @@ impl Smoothed {
 fn needed_inputs(structure: &ModelStructure, plans: &[Plan]) -> Vec<(&'static str, String)> {
     let mut needs: Vec<(&'static str, String)> = Vec::new();
     for plan in plans {
-        for (regressor, _) in &plan.terms {
+        for regressor in plan.terms.iter().flat_map(|(term, _)| term.factors()) {
             let control = match regressor {
                 Regressor::Elevator => Some(Control::Elevator),
                 Regressor::Aileron => Some(Control::Aileron),

@@ -7,8 +7,9 @@
 //! Inputs: a flight record, a model structure (for the aircraft's mass,
 //! inertia, geometry, propulsion and rate normalisation — its terms are not
 //! used), one coefficient, and a pool of candidate terms: regressor keys
-//! (`alpha`, `q`, `de`, …) and products of two (`alpha*beta`, squares as
-//! `alpha^2`). Products are searched as MEAN-REMOVED regressors,
+//! (`alpha`, `q`, `de`, …) and their products, spelt as a model file's
+//! product terms (`alpha*beta`, `alpha^2`, `alpha^2*de`; [`Monomial`]).
+//! Products are searched as MEAN-REMOVED regressors,
 //! `alpha^2` = (α − ᾱ)², so that around a trim point α² is not a near copy
 //! of α (α² = ᾱ² + 2ᾱ·(α − ᾱ) + (α − ᾱ)²); the means are given in the
 //! notes. The selected model is reported in the plain basis of the model's
@@ -65,7 +66,7 @@ use crate::estimation::solver::regression::LeastSquares;
 use crate::estimation::structure::ModelStructure;
 use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
-use crate::sim::aero::{Coefficient, ForceAxes, Regressor};
+use crate::sim::aero::{Coefficient, ForceAxes, Monomial, Regressor};
 use nalgebra::{DMatrix, DVector};
 use std::fmt;
 
@@ -238,7 +239,8 @@ impl Default for StepwiseOptions {
     }
 }
 
-/// A candidate term: one regressor, or the product of two.
+/// A candidate term: one regressor, or a product of regressors with
+/// integer powers, spelt as a model file's term ([`Monomial`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Candidate {
     pub name: String,
@@ -246,30 +248,22 @@ pub struct Candidate {
 }
 
 impl Candidate {
-    /// Parses `alpha`, `alpha*beta` or `alpha^2`.
+    /// Parses `alpha`, `alpha*beta`, `alpha^2` (any term key but the constant `0`).
     pub fn parse(text: &str) -> Result<Candidate> {
         let text = text.trim();
-        let keys: Vec<&str> = match text.strip_suffix("^2") {
-            Some(base) => vec![base, base],
-            None => text.split('*').map(str::trim).collect(),
-        };
-        let factors = keys
-            .iter()
-            .map(|key| Regressor::from_key(key))
-            .collect::<Option<Vec<_>>>()
-            .filter(|f| (1..=2).contains(&f.len()) && !f.contains(&Regressor::Constant));
-        let known: Vec<&str> = Regressor::ALL.iter().map(|r| r.key()).collect();
-        factors
-            .map(|factors| Candidate {
-                name: text.to_string(),
-                factors,
+        let monomial = Monomial::parse(text)
+            .and_then(|m| match m.single() {
+                Some(Regressor::Constant) => Err(format!(
+                    "the constant '0' is always in the model; keys: {}",
+                    Regressor::ALL.map(Regressor::key).join(", ")
+                )),
+                _ => Ok(m),
             })
-            .ok_or_else(|| {
-                Error::Other(format!(
-                    "candidate term '{text}': write a regressor key, a product 'a*b' or a square 'a^2' of keys other than 0; keys: {}",
-                    known.join(", ")
-                ))
-            })
+            .map_err(|message| Error::Other(format!("candidate term '{text}': {message}")))?;
+        Ok(Candidate {
+            name: text.to_string(),
+            factors: monomial.factors().to_vec(),
+        })
     }
 
     /// The candidate at one instant: the regressor, or the product of the
@@ -769,9 +763,11 @@ impl<'a> Problem<'a> {
     }
 
     /// The plain-basis terms of a model (the constant `0`, the selected
-    /// terms, then linear terms a product needs but the search did not
-    /// select) and the matrix T from the searched (mean-removed) estimates
-    /// to theirs: (a − ā)(b − b̄) = a·b − b̄·a − ā·b + ā·b̄.
+    /// terms, then lower-degree terms a product needs but the search did
+    /// not select) and the matrix T from the searched (mean-removed)
+    /// estimates to theirs: a product of mean-removed factors expands over
+    /// the subsets S of its factors, Π(xᵢ − x̄ᵢ) = Σ_S Π_{i∈S} xᵢ · Π_{i∉S}(−x̄ᵢ),
+    /// e.g. (a − ā)(b − b̄) = a·b − b̄·a − ā·b + ā·b̄.
     fn plain_basis(&self, model: &[usize]) -> (Vec<String>, DMatrix<f64>) {
         let mut terms: Vec<String> = std::iter::once("0".to_string())
             .chain(model.iter().map(|&j| self.candidates[j].name.clone()))
@@ -782,21 +778,30 @@ impl<'a> Problem<'a> {
             .collect();
         for (position, &j) in model.iter().enumerate() {
             let column = position + 1;
-            let [a, b] = self.candidates[j].factors[..] else {
+            let factors = &self.candidates[j].factors;
+            if factors.len() < 2 {
                 continue;
-            };
-            let (mean_a, mean_b) = (self.means[a as usize], self.means[b as usize]);
-            rows[0][column] += mean_a * mean_b;
-            for (factor, other_mean) in [(a, mean_b), (b, mean_a)] {
-                let row = match terms.iter().position(|t| t == factor.key()) {
+            }
+            // Every proper subset of the factors (the full one is the term itself).
+            for subset in 0..(1usize << factors.len()) - 1 {
+                let kept: Vec<Regressor> = (0..factors.len())
+                    .filter(|i| subset & (1 << i) != 0)
+                    .map(|i| factors[i])
+                    .collect();
+                let weight: f64 = (0..factors.len())
+                    .filter(|i| subset & (1 << i) == 0)
+                    .map(|i| -self.means[factors[i] as usize])
+                    .product();
+                let key = Monomial::from_factors(&kept).map_or("0".to_string(), |m| m.key());
+                let row = match terms.iter().position(|t| *t == key) {
                     Some(row) => row,
                     None => {
-                        terms.push(factor.key().to_string());
+                        terms.push(key);
                         rows.push(vec![0.0; searched]);
                         rows.len() - 1
                     }
                 };
-                rows[row][column] -= other_mean;
+                rows[row][column] += weight;
             }
         }
         let transform = DMatrix::from_fn(rows.len(), searched, |i, j| rows[i][j]);
@@ -934,7 +939,12 @@ mod tests {
         assert_eq!(square.factors, [Regressor::Alpha, Regressor::Alpha]);
         let product = Candidate::parse("alpha*de").unwrap();
         assert_eq!(product.factors, [Regressor::Alpha, Regressor::Elevator]);
-        for bad in ["bogus", "0", "alpha*beta*de", "alpha*0"] {
+        let cubic = Candidate::parse("alpha^2*de").unwrap();
+        assert_eq!(
+            cubic.factors,
+            [Regressor::Alpha, Regressor::Alpha, Regressor::Elevator]
+        );
+        for bad in ["bogus", "0", "de*alpha", "alpha*0", "alpha^0"] {
             let message = Candidate::parse(bad).unwrap_err().to_string();
             assert!(
                 message.contains(bad) && message.contains("alpha"),
@@ -1066,6 +1076,33 @@ mod tests {
         let expected = [0.02 + 0.8 * mean * mean, 0.8, -1.6 * mean];
         for (value, truth) in theta.iter().zip(expected) {
             assert!((value - truth).abs() < 1e-12, "{theta}");
+        }
+    }
+
+    /// A cubic searched alone, CD = 0.02 + 2·(α − ᾱ)³, comes back as the
+    /// plain polynomial with the square and linear terms it needs added:
+    /// 2·(α³ − 3ᾱα² + 3ᾱ²α − ᾱ³).
+    #[test]
+    fn cubes_are_reported_in_the_plain_basis() {
+        let mean = quadratic_data(|_, _| 0.0)
+            .regressors
+            .iter()
+            .map(|r| r[1])
+            .sum::<f64>()
+            / 400.0;
+        let data = quadratic_data(|alpha, _| 0.02 + 2.0 * (alpha - mean).powi(3));
+        let candidates = [Candidate::parse("alpha^3").unwrap()];
+        let problem = Problem::new(&data, Coefficient::Drag, &candidates);
+        let (terms, theta, _) = plain_estimates(&problem, &[0]);
+        assert_eq!(terms, ["0", "alpha^3", "alpha", "alpha^2"]);
+        let expected = [
+            0.02 - 2.0 * mean.powi(3),
+            2.0,
+            6.0 * mean * mean,
+            -6.0 * mean,
+        ];
+        for (value, truth) in theta.iter().zip(expected) {
+            assert!((value - truth).abs() < 1e-10, "{theta}");
         }
     }
 

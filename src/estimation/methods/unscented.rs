@@ -139,6 +139,10 @@ impl Estimator for UnscentedFilter {
         Some(equation_error::METHOD)
     }
 
+    fn fits_tied_parameters(&self) -> bool {
+        true
+    }
+
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let (settings, unscented) = read(&problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;

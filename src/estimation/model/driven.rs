@@ -621,7 +621,9 @@ fn offset_response(
     let aero = &model.aircraft.aero;
     let direction = aero.offset_response(coefficient, &at.coefficients, at.air_data.alpha_sin_cos);
     let response = model.acceleration_response(&at.air_data, &direction);
-    let chi_rate = aero.separation_rate_slope(at.air_data.alpha, at.alpha_dot) * response.alpha_dot;
+    let chi_rate =
+        aero.separation_rate_slope(at.air_data.alpha, at.alpha_dot, at.air_data.airspeed)
+            * response.alpha_dot;
     (direction, response, chi_rate)
 }
 
@@ -848,11 +850,11 @@ impl Directions {
         };
         let mut offsets: [Option<usize>; 6] = [None; 6];
         let aero = &model.aircraft.aero;
-        let affine = !aero.forces_depend_on_alpha_dot();
+        let affine = aero.offset_response_is_exact();
         for column in columns {
             let source = match *column {
                 Column::Term(j) => match aero.term_of(j) {
-                    Some((coefficient, regressor)) => {
+                    Some((coefficient, monomial)) => {
                         let c = coefficient as usize;
                         let direction = *offsets[c].get_or_insert_with(|| {
                             if affine {
@@ -865,10 +867,7 @@ impl Directions {
                         });
                         Source::Term {
                             direction,
-                            regressor: TermRegressors::slot(
-                                coefficient == Coefficient::Lift,
-                                regressor,
-                            ),
+                            regressor: aero.term_slot(coefficient, monomial),
                         }
                     }
                     None => directions.nonlinear(model, j),
@@ -1774,7 +1773,7 @@ impl DrivenSimulation {
         let mut x = self.merge(initial, &self.measured[0]);
         let chi_from_alpha = aero.chi_is_state() && !self.integrate[CHI];
         if chi_from_alpha {
-            x[CHI] = aero.separation_target(x[ALPHA], 0.0);
+            x[CHI] = aero.steady_separation(x[ALPHA]);
         }
         let mask = self.mask(model);
         let active: Vec<usize> = (0..FLIGHT_PATH_SIZE).filter(|&i| mask[i] == 1.0).collect();
@@ -1790,9 +1789,8 @@ impl DrivenSimulation {
             }
             if let (true, Some(chi)) = (chi_from_alpha, row(CHI)) {
                 // χ(0) = χ∞(α(0)) moves with α(0) and the stall parameters.
-                let target = |model: &FlightModel, alpha: f64| {
-                    model.aircraft.aero.separation_target(alpha, 0.0)
-                };
+                let target =
+                    |model: &FlightModel, alpha: f64| model.aircraft.aero.steady_separation(alpha);
                 sensitivity[(chi, j)] = match (*column, directions.sources[j]) {
                     (Column::Initial(ALPHA), _) => {
                         let step = state_step(x[ALPHA]);

@@ -265,7 +265,7 @@ pub fn recorded_initial_state(
             .and_then(|c| c.value_at(start))
             .unwrap_or(0.0);
     }
-    initial[10] = structure.aircraft.aero.separation_target(initial[1], 0.0);
+    initial[10] = structure.aircraft.aero.steady_separation(initial[1]);
     initial
 }
 
@@ -743,7 +743,7 @@ mod tests {
                 .value_at(window.0)
                 .unwrap();
         }
-        initial[10] = structure.aircraft.aero.separation_target(initial[1], 0.0);
+        initial[10] = structure.aircraft.aero.steady_separation(initial[1]);
         let model = FlightModel::new(structure.aircraft.clone(), Default::default());
         let outputs = structure
             .outputs

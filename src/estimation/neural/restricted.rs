@@ -277,7 +277,7 @@ fn needs_alpha_dot(aero: &AeroModel) -> bool {
     aero.kind == ModelKind::Stall
         || Coefficient::ALL
             .into_iter()
-            .any(|c| aero.terms(c).any(|(r, _)| r == Regressor::AlphaDot))
+            .any(|c| aero.terms(c).any(|(r, _)| r.contains(Regressor::AlphaDot)))
 }
 
 /// The motion variables: the option's, else the structure's integrated
@@ -355,7 +355,9 @@ fn prepare(
         regressors: Vec::new(),
     };
     for &c in &coefficients {
-        request.regressors.extend(aero.terms(c).map(|(r, _)| r));
+        request
+            .regressors
+            .extend(aero.terms(c).flat_map(|(r, _)| r.factors().to_vec()));
     }
     if aero.kind == ModelKind::Stall {
         request.regressors.push(Regressor::Alpha);
@@ -634,9 +636,11 @@ impl<'a> Fit<'a> {
             && (self.data.times[k] - self.data.times[k - 1] - self.data.period).abs()
                 < 0.5 * self.data.period;
         if !contiguous {
-            return self
-                .model
-                .separation_target(conditions[k].alpha, conditions[k].alpha_dot);
+            return self.model.separation_target(
+                conditions[k].alpha,
+                conditions[k].alpha_dot,
+                conditions[k].airspeed,
+            );
         }
         let (start, end) = (&conditions[k - 1], &conditions[k]);
         let step = self.data.times[k] - self.data.times[k - 1];
@@ -644,7 +648,8 @@ impl<'a> Fit<'a> {
         let next = crate::sim::integrator::rk4_step(&x, step, |x, fraction| {
             let alpha = start.alpha + fraction * (end.alpha - start.alpha);
             let alpha_dot = start.alpha_dot + fraction * (end.alpha_dot - start.alpha_dot);
-            SVector::<f64, 1>::new(self.model.separation_rate(alpha, alpha_dot, x[0]))
+            let airspeed = start.airspeed + fraction * (end.airspeed - start.airspeed);
+            SVector::<f64, 1>::new(self.model.separation_rate(alpha, alpha_dot, x[0], airspeed))
         });
         next[0]
     }
