@@ -663,8 +663,9 @@ fn filter_error_on_a_gusty_linear_flight() {
 /// against the gust's 2·√λ·σ_w = 2.11. The steady-state filter starts the
 /// unmeasured gust states at zero while the flight's gust starts from its
 /// stationary spread (σ_w, 1.3° of α), a transient the likelihood does not
-/// model; that it shrinks with the record's length fits this, the
-/// time-varying gain of the filter's start would be the remedy.
+/// model; that it shrinks with the record's length fits this (the
+/// time-varying gain takes most of it away:
+/// `time_varying_filter_error_starts_the_gust_states_unknown`).
 /// Asserted: every mean within 3/√20 ≈ 0.67σ and at least 85 % inside,
 /// the bounds of `filter_error_is_within_its_bounds_where_output_error_is_biased`.
 #[test]
