@@ -95,11 +95,11 @@
 //! re-weighting also proposes the relaxation of G·Gᵀ, one Fisher-scoring
 //! step of the likelihood in G·Gᵀ with P̃ held, taken where it lowers the
 //! cost (on noise-free data it reaches the vanishing noise in a few
-//! iterations where the step linear in G halves it at each). G·Gᵀ by
-//! relaxation alone (with the compensation of F) was tried: on the 6-DOF
-//! turbulence records it ran p's measurement noise to its floor while F
-//! on p grew, the two trading along the likelihood's valley, and hit the
-//! iteration limit; jointly the step follows the valley. With G·Gᵀ
+//! iterations where the step linear in G halves it at each). G·Gᵀ is not
+//! left to relaxation alone (with the compensation of F): on the 6-DOF
+//! turbulence records that runs p's measurement noise to its floor while F
+//! on p grows, the two trading along the likelihood's valley, up to the
+//! iteration limit; estimated jointly, the step follows the valley. With G·Gᵀ
 //! positive definite, S_k is, and the filter exists at every point: there
 //! is no constraint on K·C and no compensation of F. The start (R, F's
 //! factor) is the steady form's, with G·Gᵀ in R's place and the pass's
