@@ -540,6 +540,8 @@ fn linear_output_error(
             step: options.step,
             window: options.window,
             process_noise: None,
+            gain: filter_error::Gain::Steady,
+            initial_variance: Default::default(),
         },
     )
 }
