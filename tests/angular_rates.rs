@@ -276,6 +276,16 @@ fn the_qar_approach_end_to_end() {
                 );
                 println!("{} {model} {method}: {}", profile.name, table_row(&outcome));
                 if !qar {
+                    // Filter error stalls on the 25 Hz approach (coloured
+                    // gusts, a white-noise filter): after 16 iterations no
+                    // step lowers the cost while the Gauss–Newton step
+                    // predicts 2 % of it, and the status says so.
+                    if model == "transport-longitudinal" && method == "fem" {
+                        let Outcome::Estimated { estimate, .. } = &outcome else {
+                            panic!("fem: {:?}", outcome.reason())
+                        };
+                        assert_eq!(estimate.status, Status::NoProgress);
+                    }
                     continue;
                 }
                 match &outcome {

@@ -216,6 +216,29 @@ fn oracle_case() -> OracleCase {
 /// measurement noise `noise`, from the case's initial state with
 /// covariance `covariance`: the likelihood ½·Σ(νᵀS⁻¹ν + ln det S) and
 /// the innovations.
+/// A filter error pass's negative log-likelihood and innovations against
+/// adskalman's (`reference`), each within 1e-9 relative.
+fn agrees_with_adskalman(
+    form: &str,
+    negative_log_likelihood: f64,
+    innovations: &[f64],
+    (likelihood, reference): (f64, Vec<f64>),
+) {
+    let error = (negative_log_likelihood - likelihood).abs() / likelihood.abs();
+    assert!(
+        error < 1e-9,
+        "{form} filter error {negative_log_likelihood} against adskalman {likelihood}: {error:e}"
+    );
+    let difference: f64 = innovations
+        .iter()
+        .zip(&reference)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum();
+    let scale: f64 = reference.iter().map(|y| y * y).sum();
+    let relative = (difference / scale).sqrt();
+    assert!(relative < 1e-9, "{form} innovations {relative:e}");
+}
+
 fn adskalman_pass(
     case: &OracleCase,
     noise: &DMatrix<f64>,
@@ -306,22 +329,12 @@ fn likelihood_is_the_linear_kalman_filters() {
         &case.observations,
     )
     .unwrap();
-    let (likelihood, innovations) =
-        adskalman_pass(&case, &pass.measurement_noise, &pass.steady.covariance);
-    let error = (pass.negative_log_likelihood - likelihood).abs() / likelihood.abs();
-    assert!(
-        error < 1e-9,
-        "filter error {} against adskalman {likelihood}: {error:e}",
-        pass.negative_log_likelihood
+    agrees_with_adskalman(
+        "steady",
+        pass.negative_log_likelihood,
+        &pass.innovations,
+        adskalman_pass(&case, &pass.measurement_noise, &pass.steady.covariance),
     );
-    let difference: f64 = pass
-        .innovations
-        .iter()
-        .zip(&innovations)
-        .map(|(x, y)| (x - y).powi(2))
-        .sum();
-    let scale: f64 = innovations.iter().map(|y| y * y).sum();
-    assert!((difference / scale).sqrt() < 1e-9);
     // The steady state is not trivial: the gain corrects every state.
     assert!(pass.steady.gain.iter().filter(|k| k.abs() > 1e-3).count() >= 4);
 }
@@ -354,25 +367,11 @@ fn time_varying_likelihood_is_the_linear_kalman_filters() {
         &case.observations,
     )
     .unwrap();
-    let (likelihood, innovations) =
-        adskalman_pass(&case, &DMatrix::from_diagonal(&noise), &covariance);
-    let error = (pass.negative_log_likelihood - likelihood).abs() / likelihood.abs();
-    assert!(
-        error < 1e-9,
-        "time-varying filter error {} against adskalman {likelihood}: {error:e}",
-        pass.negative_log_likelihood
-    );
-    let difference: f64 = pass
-        .innovations
-        .iter()
-        .zip(&innovations)
-        .map(|(x, y)| (x - y).powi(2))
-        .sum();
-    let scale: f64 = innovations.iter().map(|y| y * y).sum();
-    assert!(
-        (difference / scale).sqrt() < 1e-9,
-        "innovations {:e}",
-        (difference / scale).sqrt()
+    agrees_with_adskalman(
+        "time-varying",
+        pass.negative_log_likelihood,
+        &pass.innovations,
+        adskalman_pass(&case, &DMatrix::from_diagonal(&noise), &covariance),
     );
     let first = &pass.updates[0].2;
     let last = &pass.updates[pass.updates.len() - 1].2;

@@ -9,7 +9,7 @@
 //! leaves the parameters of its null space with infinite ones), the
 //! covariance is finite and every output is reproduced better than by its
 //! mean (R² ≥ 0). Otherwise it says what it is: unidentified parameters by
-//! name, a degenerate covariance, no progress from the start, a poor fit.
+//! name, a degenerate covariance, no progress short of a minimum, a poor fit.
 
 use crate::error::{Error, Result};
 use crate::estimation::solver::gauss_newton::Solution;
@@ -27,7 +27,9 @@ pub enum Status {
     IterationLimit,
     /// The model could not be evaluated (a departing simulation, a NaN).
     Diverged(String),
-    /// No step lowered the cost from the start.
+    /// No step lowers the cost while the Gauss–Newton step still predicts
+    /// a decrease beyond the convergence tolerance (from the start, or after
+    /// some iterations: the fit stalled short of a minimum).
     NoProgress,
     /// These parameters have a non-finite standard error: the data do not
     /// determine them.
@@ -55,7 +57,9 @@ impl std::fmt::Display for Status {
             Status::Converged => f.write_str("converged"),
             Status::IterationLimit => f.write_str("iteration limit"),
             Status::Diverged(reason) => write!(f, "diverged: {reason}"),
-            Status::NoProgress => f.write_str("no progress from the start"),
+            Status::NoProgress => {
+                f.write_str("no progress: no step lowers the cost short of the minimum")
+            }
             Status::Unidentified(names) => write!(f, "unidentified: {}", names.join(", ")),
             Status::Degenerate(reason) => write!(f, "degenerate: {reason}"),
             Status::PoorFit(outputs) => write!(f, "poor fit (R² < 0): {}", outputs.join(", ")),

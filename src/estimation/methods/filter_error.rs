@@ -1025,8 +1025,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         let pseudo = DVector::from_vec(pseudo);
         let mut columns = Vec::with_capacity(unknowns.len());
         for j in 0..unknowns.len() {
-            let typical = options.typical.get(j).copied().unwrap_or(1e-3);
-            let h = options.relative_step * unknowns[j].abs().max(typical);
+            let h = options.difference_step(unknowns, j);
             let mut moved = unknowns.clone();
             moved[j] += h;
             let (moved_pass, step) = match self.pass(&moved) {
@@ -1257,8 +1256,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         let here = self.residuals(unknowns)?;
         let mut columns = Vec::with_capacity(unknowns.len());
         for j in 0..unknowns.len() {
-            let typical = options.typical.get(j).copied().unwrap_or(1e-3);
-            let h = options.relative_step * unknowns[j].abs().max(typical);
+            let h = options.difference_step(unknowns, j);
             let mut moved = unknowns.clone();
             moved[j] += h;
             let column = match self.residuals(&moved) {

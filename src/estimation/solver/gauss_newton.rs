@@ -202,6 +202,11 @@ impl Options {
             .abs()
             .max(self.typical.get(j).copied().unwrap_or(1e-3))
     }
+
+    /// The finite-difference step of unknown j: `relative_step`·max(|θ_j|, typical_j).
+    pub fn difference_step(&self, theta: &DVector<f64>, j: usize) -> f64 {
+        self.relative_step * self.scale(theta, j)
+    }
 }
 
 /// One iteration's record.
@@ -296,7 +301,7 @@ pub fn finite_difference_jacobian<P: LeastSquaresProblem + ?Sized>(
 ) -> Result<DMatrix<f64>, String> {
     let mut columns = Vec::with_capacity(theta.len());
     for j in 0..theta.len() {
-        let h = options.relative_step * options.scale(theta, j);
+        let h = options.difference_step(theta, j);
         let (mut plus, mut minus) = (theta.clone(), theta.clone());
         plus[j] += h;
         minus[j] -= h;
@@ -402,16 +407,17 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             if refine(problem, &mut held) {
                 continue;
             }
-            // Converged at θ (the predicted decrease is below the tolerance,
-            // or no step lowers the cost), whose residuals and Jacobian are
-            // at hand; but where no step ever lowered the cost from the
-            // start while the Gauss–Newton step predicts a decrease beyond
-            // rounding, the iterations made no progress.
+            // Converged at θ when the predicted decrease is below the
+            // tolerance, whose residuals and Jacobian are at hand; where no
+            // step lowers the cost while the Gauss–Newton step predicts a
+            // decrease beyond the tolerance, the fit stalled short of a
+            // minimum (from the start or after some iterations: a
+            // constraint's boundary, a kink in the cost) and says so.
             let at_optimum = converged || predicted <= options.cost_tolerance * cost;
             return Solution {
                 theta,
                 cost,
-                status: if history.is_empty() && !at_optimum {
+                status: if !at_optimum {
                     Status::NoProgress
                 } else {
                     Status::Converged
@@ -755,6 +761,37 @@ mod tests {
         let solved = solve(&mut Misleading(1.0), &start, &Options::new(1));
         assert_eq!(solved.status, Status::Converged);
         assert!((solved.theta[0] - 1.0).abs() < 1e-12);
+    }
+
+    /// A fit that makes progress and then stalls: the first Jacobian is
+    /// twice the true slope (the step goes half way, 3 → 2), every later
+    /// one points the wrong way, so no step lowers the cost while the
+    /// Gauss–Newton step predicts halving it. That is no progress short of
+    /// the minimum, not convergence.
+    #[test]
+    fn a_stall_after_progress_is_no_progress() {
+        struct Stalling(usize);
+        impl LeastSquaresProblem for Stalling {
+            fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, String> {
+                Ok(DVector::from_element(1, t[0] - 1.0))
+            }
+            fn jacobian(&mut self, _: &DVector<f64>, _: &Options) -> Result<DMatrix<f64>, String> {
+                self.0 += 1;
+                Ok(DMatrix::from_element(
+                    1,
+                    1,
+                    if self.0 == 1 { 2.0 } else { -1.0 },
+                ))
+            }
+        }
+        let stalled = solve(
+            &mut Stalling(0),
+            &DVector::from_element(1, 3.0),
+            &Options::new(1),
+        );
+        assert_eq!(stalled.status, Status::NoProgress);
+        assert_eq!(stalled.history.len(), 1);
+        assert!((stalled.theta[0] - 2.0).abs() < 1e-12);
     }
 
     /// Linear model y = a + b·t with white noise of σ: the Cramér–Rao variance
