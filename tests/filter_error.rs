@@ -470,6 +470,57 @@ impl StateSpaceModel for Lateral {
     }
 }
 
+/// The lateral fits' start: 10 % off the truth.
+fn lateral_start(model: &Lateral) -> DVector<f64> {
+    DVector::from_iterator(4, model.truth().iter().map(|v| v * 1.1))
+}
+
+/// A filter error fit of the lateral model's four parameters from
+/// [`lateral_start`], with F on the states `noisy`.
+fn lateral_filter<'a>(
+    model: &'a Lateral,
+    observations: &'a Observations,
+    initial: &DVector<f64>,
+    noisy: Vec<usize>,
+) -> FilterErrorFit<'a, Lateral> {
+    FilterErrorFit::new(
+        model,
+        observations,
+        initial.clone(),
+        lateral_start(model),
+        (0..4).collect(),
+        noisy,
+    )
+    .unwrap()
+}
+
+/// The lateral fits' solver options: 40 iterations, converged below a
+/// predicted decrease of 1e-4.
+fn lateral_options() -> Options {
+    let mut options = Options::new(4);
+    options.max_iterations = 40;
+    options.decrease_tolerance = Some(1e-4);
+    options
+}
+
+/// The lateral model with process noise on v, p, r of turbulence
+/// strength: (model, its A matrix, truth, F's diagonal).
+fn lateral_with_process_noise() -> (Lateral, DMatrix<f64>, Vec<f64>, DVector<f64>) {
+    let (a, b) = attas_lateral();
+    let model = Lateral {
+        a: a.clone(),
+        b,
+        inputs: inputs(1500),
+    };
+    let truth = model.truth();
+    (
+        model,
+        a,
+        truth,
+        DVector::from_vec(vec![0.5, 0.005, 0.003, 0.0]),
+    )
+}
+
 /// One fit of the lateral model from 10 % off the truth: values and
 /// Cramér–Rao bounds of θ, with F on the states `noisy` (none: output
 /// error, the filter being the simulation).
@@ -479,20 +530,10 @@ fn lateral_fit(
     initial: &DVector<f64>,
     noisy: Vec<usize>,
 ) -> (Vec<f64>, Vec<f64>, Status) {
-    let start = DVector::from_iterator(4, model.truth().iter().map(|v| v * 1.1));
-    let mut fit = FilterErrorFit::new(
-        model,
-        observations,
-        initial.clone(),
-        start.clone(),
-        (0..4).collect(),
-        noisy,
-    )
-    .unwrap();
-    let mut options = Options::new(4);
-    options.max_iterations = 40;
-    options.decrease_tolerance = Some(1e-4);
-    let result = fit.fit(&start, options).unwrap();
+    let start = lateral_start(model);
+    let result = lateral_filter(model, observations, initial, noisy)
+        .fit(&start, lateral_options())
+        .unwrap();
     let covariance = result.solution.covariance();
     (
         result.solution.theta.iter().take(4).copied().collect(),
@@ -518,15 +559,7 @@ fn lateral_fit(
 /// error's for every parameter (measured: 12–46 bounds, 7–12 times).
 #[test]
 fn filter_error_is_unbiased_with_process_noise_where_output_error_is_not() {
-    let (a, b) = attas_lateral();
-    let points = 1500;
-    let model = Lateral {
-        a: a.clone(),
-        b,
-        inputs: inputs(points),
-    };
-    let truth = model.truth();
-    let distribution = DVector::from_vec(vec![0.5, 0.005, 0.003, 0.0]);
+    let (model, a, truth, distribution) = lateral_with_process_noise();
     let measurement = DVector::from_vec(vec![0.01, 1e-6, 1e-6, 1e-5]);
     let initial = DVector::zeros(4);
     let runs = 20;
@@ -848,15 +881,7 @@ fn time_varying_gain_on_dryden_turbulence() {
 /// within 1.5σ of each other.
 #[test]
 fn filter_error_converges_with_the_gain_constraint_active() {
-    let (a, b) = attas_lateral();
-    let points = 1500;
-    let model = Lateral {
-        a: a.clone(),
-        b,
-        inputs: inputs(points),
-    };
-    let truth = model.truth();
-    let distribution = DVector::from_vec(vec![0.5, 0.005, 0.003, 0.0]);
+    let (model, a, truth, distribution) = lateral_with_process_noise();
     let measurement = DVector::from_vec(vec![0.01, 0.0, 1e-6, 1e-5]);
     let initial = DVector::zeros(4);
     let mut report = String::new();
@@ -870,20 +895,9 @@ fn filter_error_converges_with_the_gain_constraint_active() {
             &initial,
             300 + seed,
         );
-        let start = DVector::from_iterator(4, truth.iter().map(|v| v * 1.1));
-        let mut fit = FilterErrorFit::new(
-            &model,
-            &observations,
-            initial.clone(),
-            start.clone(),
-            (0..4).collect(),
-            vec![0, 1, 2],
-        )
-        .unwrap();
-        let mut options = Options::new(4);
-        options.max_iterations = 40;
-        options.decrease_tolerance = Some(1e-4);
-        let result = fit.fit(&start, options).unwrap();
+        let start = lateral_start(&model);
+        let mut fit = lateral_filter(&model, &observations, &initial, vec![0, 1, 2]);
+        let result = fit.fit(&start, lateral_options()).unwrap();
         let Some(aeroid::estimation::methods::filter_error::FilterPass::Steady(pass)) =
             &result.pass
         else {
@@ -906,21 +920,10 @@ fn filter_error_converges_with_the_gain_constraint_active() {
             .iter()
             .map(|i| i.halvings.abs())
             .sum();
-        let mut varying = FilterErrorFit::new(
-            &model,
-            &observations,
-            initial.clone(),
-            start.clone(),
-            (0..4).collect(),
-            vec![0, 1, 2],
-        )
-        .unwrap()
-        .with_time_varying_gain(DMatrix::zeros(4, 4))
-        .unwrap();
-        let mut options = Options::new(4);
-        options.max_iterations = 40;
-        options.decrease_tolerance = Some(1e-4);
-        let tv = varying.fit(&start, options).unwrap();
+        let mut varying = lateral_filter(&model, &observations, &initial, vec![0, 1, 2])
+            .with_time_varying_gain(DMatrix::zeros(4, 4))
+            .unwrap();
+        let tv = varying.fit(&start, lateral_options()).unwrap();
         let tv_covariance = tv.solution.covariance();
         assert_eq!(tv.solution.status, Status::Converged, "seed {seed}");
         for j in 0..4 {

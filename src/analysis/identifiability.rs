@@ -393,13 +393,13 @@ pub fn analyse(
     let covariance = pseudo_inverse_or_infinite(&marginal_information(&information, names.len()));
     // The model errors: the nominal record minus the record of the flight
     // an estimator's model flies, weighted as the sensitivities.
-    let errors = |flight: &Simulation| -> Result<DVector<f64>> {
+    let errors = |flight: &Simulation, what: &str| -> Result<DVector<f64>> {
         let trace = flight
             .run_with_restarts(|k| (k % segment_steps == 0).then(|| nominal_states[k]))
             .map_err(|error| {
                 Error::Other(format!(
-                    "identifiability of '{}': the flight with {} failed: {error}",
-                    scenario.name, "the inputs as recorded or without gusts"
+                    "identifiability of '{}': the flight {what} failed: {error}",
+                    scenario.name
                 ))
             })?;
         let modelled = clean.record(&trace, &scenario.aircraft, scenario.seed)?;
@@ -407,8 +407,14 @@ pub fn analyse(
         Ok(DVector::from_vec(difference(&nominal, &modelled, 0.5)?))
     };
     let solve = least_squares_solver(&sensitivities);
-    let input_error = solve(&errors(&with_recorded_inputs(&simulation, &nominal)?)?);
-    let wind_error = solve(&errors(&without_gusts(scenario, &simulation)?)?);
+    let input_error = solve(&errors(
+        &with_recorded_inputs(&simulation, &nominal)?,
+        "with the inputs as recorded",
+    )?);
+    let wind_error = solve(&errors(
+        &without_gusts(scenario, &simulation)?,
+        "without gusts and turbulence",
+    )?);
     let rows = names
         .iter()
         .zip(&truths)

@@ -54,6 +54,7 @@ use crate::estimation::methods::equation_error::{self, Plan};
 use crate::estimation::model::coefficient_states::{
     self, COEFFICIENT_NAMES, CoefficientStates, H, Output, P, PHI, PSI, STATE_COUNT, THETA, U,
 };
+use crate::estimation::model::driven::ALTITUDE_SUBSTITUTES;
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{StateSpaceModel, fitting_window};
 use crate::estimation::problem::EstimationProblem;
@@ -533,7 +534,7 @@ fn with_altitude(record: &FlightRecord) -> (std::borrow::Cow<'_, FlightRecord>, 
     if record.channel("altitude").is_ok() {
         return (std::borrow::Cow::Borrowed(record), None);
     }
-    let Ok(pressure) = record.channel("pressure_altitude") else {
+    let Ok(pressure) = record.channel(ALTITUDE_SUBSTITUTES[0]) else {
         return (std::borrow::Cow::Borrowed(record), None);
     };
     let mut altitude = pressure.clone();
@@ -560,7 +561,7 @@ fn observations_and_inputs(
     let mut outputs: Vec<Output> = Vec::new();
     let has = |name: &str| {
         record.channel(name).is_ok()
-            || (name == "altitude" && record.channel("pressure_altitude").is_ok())
+            || (name == "altitude" && record.channel(ALTITUDE_SUBSTITUTES[0]).is_ok())
     };
     for name in &settings.observations {
         if !has(name) {
