@@ -116,6 +116,67 @@ fn run_without_models_prints_no_table_header() {
     assert!(!text.contains("inside 95 %"), "{text}");
 }
 
+/// `run --derive` on the QAR: the raw record has no rates, true airspeed or
+/// combined surfaces, so without the derive step every estimator refuses;
+/// with it the estimators run, the derive step's notes are printed and
+/// Fourier-transform regression converges (as its gate
+/// transport-qar-derived-fdee asserts). The derive flags without
+/// `--derive` are an error, not silently ignored.
+#[test]
+fn run_derives_the_qar_record_when_asked() {
+    let raw = stdout_of(aeroid().args(["run", "transport-approach", "--profile", "qar-seed000"]));
+    let rows = |text: &str, prefix: &str| {
+        text.lines()
+            .filter(|line| line.starts_with(prefix))
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    let raw_rows = rows(&raw, "transport-longitudinal");
+    assert!(!raw_rows.is_empty(), "{raw}");
+    assert!(raw_rows.iter().all(|row| row.contains("refused")), "{raw}");
+    let derived = stdout_of(aeroid().args([
+        "run",
+        "transport-approach",
+        "--profile",
+        "qar-seed000",
+        "--derive",
+        "--thrust-from-fuel-flow",
+        "2.0e-5",
+        "--idle-fuel-flow",
+        "0.02",
+    ]));
+    assert!(derived.contains("after the derive step"), "{derived}");
+    assert!(
+        derived.contains("thrust: added from fuel_flow_left + fuel_flow_right"),
+        "{derived}"
+    );
+    let fdee = rows(&derived, "transport-longitudinal fdee");
+    assert!(
+        fdee.len() == 1 && fdee[0].contains("converged"),
+        "{derived}"
+    );
+    assert!(
+        rows(&derived, "transport-longitudinal")
+            .iter()
+            .all(|row| !row.contains("refused")),
+        "{derived}"
+    );
+    let output = aeroid()
+        .args([
+            "run",
+            "transport-approach",
+            "--profile",
+            "qar-seed000",
+            "--thrust-from-fuel-flow",
+            "2.0e-5",
+        ])
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("need --derive"), "{stderr}");
+}
+
 /// A departing flight: `simulate` writes the trace up to the departure,
 /// says where it is and fails.
 #[test]

@@ -14,7 +14,7 @@ use aeroid::sim::scenario::Scenario;
 fn run_scores_every_method_on_the_lateral_scenario() {
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
     let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
-    let report = run::run(&scenario, &profile).unwrap();
+    let report = run::run(&scenario, &profile, None).unwrap();
     let methods: Vec<String> = report.runs.iter().map(|r| r.method.clone()).collect();
     assert_eq!(methods, aeroid::estimation::methods::names());
     for run in &report.runs {
@@ -81,7 +81,7 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
     let mut scenario = Scenario::load("transport-approach").unwrap();
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
-    let report = run::run(&scenario, &profile).unwrap();
+    let report = run::run(&scenario, &profile, None).unwrap();
     let expected: [(&str, &[&str]); 13] = [
         ("ee", &["airspeed", "p", "r"]),
         ("fdee", &["airspeed", "p", "r"]),
@@ -146,7 +146,7 @@ fn a_scenario_with_wrong_method_settings_is_refused() {
         std::fs::write(&path, format!("{text}\n{table}")).unwrap();
         let scenario = Scenario::load(path.to_str().unwrap()).unwrap();
         let profile = Profile::load("ideal", None).unwrap();
-        let error = run::run(&scenario, &profile).unwrap_err().to_string();
+        let error = run::run(&scenario, &profile, None).unwrap_err().to_string();
         assert!(
             error.contains("scenario.toml") && error.contains(expected),
             "{error}"

@@ -160,7 +160,7 @@ fn a_registered_estimator_runs_everywhere() {
     assert!(error.contains("scael"), "{error}");
 
     // run: every registered method, the toy among them, scored.
-    let report = run::run(&scenario, &profile).unwrap();
+    let report = run::run(&scenario, &profile, None).unwrap();
     let toy = report
         .runs
         .iter()

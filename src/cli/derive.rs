@@ -26,6 +26,13 @@ pub struct Args {
     /// The record folder to write.
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    options: DeriveFlags,
+}
+
+/// The derive step's options, shared by `aeroid derive` and `aeroid run --derive`.
+#[derive(clap::Args)]
+pub struct DeriveFlags {
     /// Relative to the ground: leave the recorded wind out (wind_speed and
     /// wind_direction are then not needed).
     #[arg(long)]
@@ -61,34 +68,48 @@ pub struct Args {
     idle_fuel_flow: f64,
 }
 
+impl DeriveFlags {
+    /// The derive step's options these flags state.
+    pub fn options(&self) -> Options {
+        Options {
+            flow_angles: match (self.no_flow_angles, self.no_wind_correction) {
+                (true, _) => None,
+                (false, true) => Some(Wind::Uncorrected),
+                (false, false) => Some(Wind::Corrected),
+            },
+            rates: match (self.rates, self.no_rates) {
+                (true, _) => RatesChoice::Always,
+                (_, true) => RatesChoice::Never,
+                _ => RatesChoice::WhenAbsent,
+            },
+            differentiator: Differentiator {
+                half_width: self.rates_half_width,
+                degree: self.rates_degree,
+            },
+            replace: self.replace,
+            thrust: self
+                .thrust_from_fuel_flow
+                .map(|specific_fuel_consumption| FuelFlowThrust {
+                    specific_fuel_consumption,
+                    idle_fuel_flow: self.idle_fuel_flow,
+                }),
+        }
+    }
+}
+
 pub fn run(args: Args) -> Result<()> {
     aeroid::paths::check_output_folder(&args.out)?;
     let record = aeroid::record::FlightRecord::read(&args.record)?;
-    let options = Options {
-        flow_angles: match (args.no_flow_angles, args.no_wind_correction) {
-            (true, _) => None,
-            (false, true) => Some(Wind::Uncorrected),
-            (false, false) => Some(Wind::Corrected),
-        },
-        rates: match (args.rates, args.no_rates) {
-            (true, _) => RatesChoice::Always,
-            (_, true) => RatesChoice::Never,
-            _ => RatesChoice::WhenAbsent,
-        },
-        differentiator: Differentiator {
-            half_width: args.rates_half_width,
-            degree: args.rates_degree,
-        },
-        replace: args.replace,
-        thrust: args
-            .thrust_from_fuel_flow
-            .map(|specific_fuel_consumption| FuelFlowThrust {
-                specific_fuel_consumption,
-                idle_fuel_flow: args.idle_fuel_flow,
-            }),
-    };
+    let options = args.options.options();
     let derived = derive(&record, &options).with_context(|| args.record.display().to_string())?;
     derived.record.write(&args.out)?;
+    print_summary(&derived, &options)?;
+    outln!("record written to {}", args.out.display());
+    Ok(())
+}
+
+/// What the derive step did, one line per derived quantity.
+pub fn print_summary(derived: &aeroid::prep::derive::Derived, options: &Options) -> Result<()> {
     if let Some(angles) = &derived.angles {
         outln!(
             "geometric angle of attack and sideslip{}: {} samples at the instants of {}",
@@ -129,6 +150,5 @@ pub fn run(args: Args) -> Result<()> {
     for note in &derived.notes {
         outln!("  {note}");
     }
-    outln!("record written to {}", args.out.display());
     Ok(())
 }

@@ -25,6 +25,13 @@ pub struct Args {
     /// A folder for the record, truth.toml and one estimate per model and method.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Run the derive step on the record before the estimators, as
+    /// `aeroid derive` does, with the flags below (a recorder without
+    /// angular rates, true airspeed or combined surfaces, such as the QAR).
+    #[arg(long)]
+    derive: bool,
+    #[command(flatten)]
+    derive_flags: crate::cli::derive::DeriveFlags,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -33,13 +40,19 @@ pub fn run(args: Args) -> Result<()> {
         profile,
         verbose,
         out,
+        derive,
+        derive_flags,
     } = args;
     if let Some(out) = &out {
         aeroid::paths::check_output_folder(out)?;
     }
+    let derive_options = derive_flags.options();
+    if !derive && derive_options != aeroid::prep::derive::Options::default() {
+        anyhow::bail!("the derive step's flags need --derive");
+    }
     let scenario = Scenario::load(&scenario)?;
     let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
-    let report = aeroid::eval::run::run(&scenario, &profile)?;
+    let report = aeroid::eval::run::run(&scenario, &profile, derive.then_some(&derive_options))?;
     let truth = match report.truth.kind {
         aeroid::sim::truth::TruthKind::Exact => format!(
             "exact, the parameters {} flew ({})",
@@ -54,11 +67,20 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     outln!(
-        "{}: recorded with {} ({} channels); truth: {truth}",
+        "{}: recorded with {} ({} channels{}); truth: {truth}",
         report.scenario,
         report.profile,
         report.record.channels.len(),
+        if report.derived.is_some() {
+            " after the derive step"
+        } else {
+            ""
+        },
     );
+    if let Some(derived) = &report.derived {
+        outln!("the derive step:");
+        crate::cli::derive::print_summary(derived, &derive_options)?;
+    }
     for change in &report.truth.parameter_changes {
         outln!(
             "{} changes to {} at {} s: scored against its value at the start, {}",

@@ -94,16 +94,32 @@ impl MethodRun {
 pub struct RunReport {
     pub scenario: String,
     pub profile: String,
+    /// The record the estimators read (after the derive step, if asked).
     pub record: FlightRecord,
+    /// What the derive step did, when it ran.
+    pub derived: Option<crate::prep::derive::Derived>,
     pub truth: RunTruth,
     pub runs: Vec<MethodRun>,
 }
 
-/// Simulates, records and estimates; fails only when the flight itself cannot be made.
-pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
+/// Simulates, records, runs the derive step when `derive` is given (the
+/// record the estimators read is then the derived one) and estimates;
+/// fails only when the flight itself cannot be made or derived.
+pub fn run(
+    scenario: &Scenario,
+    profile: &Profile,
+    derive: Option<&crate::prep::derive::Options>,
+) -> Result<RunReport> {
     validate_method_tables(&scenario.methods, &scenario.path)?;
-    let (record, truth) =
+    let (recorded, truth) =
         crate::eval::linear_flight::record_flight(scenario, profile, scenario.seed)?;
+    let derived = derive
+        .map(|options| crate::prep::derive::derive(&recorded, options))
+        .transpose()?;
+    let record = match &derived {
+        Some(derived) => derived.record.clone(),
+        None => recorded,
+    };
     let names = methods::names();
     let mut runs = Vec::new();
     for (index, reference) in scenario.models.iter().enumerate() {
@@ -134,6 +150,7 @@ pub fn run(scenario: &Scenario, profile: &Profile) -> Result<RunReport> {
         scenario: scenario.name.clone(),
         profile: profile.name.clone(),
         record,
+        derived,
         truth,
         runs,
     })
