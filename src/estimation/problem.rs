@@ -38,6 +38,32 @@ use std::path::{Path, PathBuf};
 /// The format tag of a problem's JSON.
 pub const FORMAT: &str = "aeroid-estimation-problem-1";
 
+/// The end of a channel's source once the problem has unwrapped it.
+pub const UNWRAPPED_SOURCE: &str = "unwrapped for the estimators";
+
+/// Unwraps every heading or direction channel (yaw, track, wind direction:
+/// recorders wrap them at 360°) whose successive samples jump by more than
+/// 180°, so that an estimator comparing or differentiating it sees a
+/// continuous angle; its source then ends with [`UNWRAPPED_SOURCE`].
+fn unwrap_headings(records: &mut [FlightRecord]) {
+    for channel in records.iter_mut().flat_map(|r| r.channels.iter_mut()) {
+        let wraps = crate::record::derived::measurand(&channel.name).is_some_and(|m| m.wraps);
+        let finite: Vec<f64> = channel
+            .values
+            .iter()
+            .copied()
+            .filter(|v| !v.is_nan())
+            .collect();
+        let jumps = finite
+            .windows(2)
+            .any(|pair| (pair[1] - pair[0]).abs() > std::f64::consts::PI);
+        if wraps && jumps {
+            crate::record::unwrap_angles(&mut channel.values);
+            channel.source = format!("{}; {UNWRAPPED_SOURCE}", channel.source);
+        }
+    }
+}
+
 /// One estimator's problem.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EstimationProblem {
@@ -74,10 +100,11 @@ impl EstimationProblem {
                 structure.name()
             )));
         }
-        let records = match &structure {
+        let mut records = match &structure {
             Structure::SixDof(six_dof) => six_dof.with_zero_channels(records),
             Structure::Linear(_) => records,
         };
+        unwrap_headings(&mut records);
         Ok(EstimationProblem {
             method: method.to_string(),
             records,
@@ -86,22 +113,28 @@ impl EstimationProblem {
         })
     }
 
-    /// What the problem holds at 0 for the estimator: a note per channel
-    /// of zeros the model's `zero_when_absent` put in a record.
+    /// What the problem changed for the estimator: a note per channel of
+    /// zeros the model's `zero_when_absent` put in a record, and per
+    /// heading or direction it unwrapped.
     pub fn notes(&self) -> Vec<String> {
         self.records
             .iter()
             .flat_map(|record| {
-                record
-                    .channels
-                    .iter()
-                    .filter(|c| c.source.starts_with(ZERO_SOURCE))
-                    .map(|c| {
-                        format!(
+                record.channels.iter().filter_map(|c| {
+                    if c.source.starts_with(ZERO_SOURCE) {
+                        Some(format!(
                             "no '{}' channel in '{}': held at 0 (the model's zero_when_absent)",
                             c.name, record.scenario
-                        )
-                    })
+                        ))
+                    } else if c.source.ends_with(UNWRAPPED_SOURCE) {
+                        Some(format!(
+                            "'{}' in '{}': unwrapped (the record wraps it at 360°; the estimator sees a continuous angle)",
+                            c.name, record.scenario
+                        ))
+                    } else {
+                        None
+                    }
+                })
             })
             .collect()
     }
@@ -715,6 +748,64 @@ fn write_records(records: &[FlightRecord], depth: usize, out: &mut Vec<u8>) {
 mod tests {
     use super::*;
     use crate::record::Channel;
+
+    /// A heading that the recorder wraps at 360° reaches the estimators
+    /// continuous (359.7° → 0.3° is +0.6°, not −359.4°), across a dropout
+    /// too, and the problem says so; an angle that does not wrap (pitch)
+    /// and a heading without a jump are left as they are.
+    #[test]
+    fn wrapped_headings_are_unwrapped_for_the_estimators() {
+        let degrees = |values: &[f64]| values.iter().map(|v| v.to_radians()).collect::<Vec<_>>();
+        let channel = |name: &str, values: Vec<f64>| Channel {
+            name: name.into(),
+            unit: "rad".into(),
+            rate: 1.0,
+            resolution: None,
+            source: "profile \"qar\"".into(),
+            times: (0..values.len()).map(|i| i as f64).collect(),
+            values,
+        };
+        let mut records = vec![FlightRecord {
+            scenario: "turn".into(),
+            seed: None,
+            profile: "qar".into(),
+            absent: Vec::new(),
+            channels: vec![
+                channel("yaw", degrees(&[359.4, 359.7, 0.3, f64::NAN, 1.2, 359.0])),
+                channel("pitch", degrees(&[-179.0, 179.0, 0.0, 1.0, 2.0, 3.0])),
+                channel("track", degrees(&[10.0, 11.0, 12.0, 13.0, 14.0, 15.0])),
+            ],
+        }];
+        unwrap_headings(&mut records);
+        let yaw = &records[0].channels[0];
+        let expected = degrees(&[359.4, 359.7, 360.3, f64::NAN, 361.2, 359.0]);
+        for (got, want) in yaw.values.iter().zip(&expected) {
+            assert!(
+                (got.is_nan() && want.is_nan()) || (got - want).abs() < 1e-12,
+                "{:?}",
+                yaw.values
+            );
+        }
+        assert!(yaw.source.ends_with(UNWRAPPED_SOURCE));
+        assert_eq!(
+            records[0].channels[1].values,
+            degrees(&[-179.0, 179.0, 0.0, 1.0, 2.0, 3.0])
+        );
+        assert!(!records[0].channels[2].source.ends_with(UNWRAPPED_SOURCE));
+        let problem = EstimationProblem::new(
+            "oem",
+            records,
+            crate::estimation::structure::Structure::load("attas-lateral").unwrap(),
+            &[],
+        )
+        .unwrap();
+        assert_eq!(
+            problem.notes(),
+            [
+                "'yaw' in 'turn': unwrapped (the record wraps it at 360°; the estimator sees a continuous angle)"
+            ]
+        );
+    }
 
     /// The hand-written records equal serde's, with dropouts, an unset
     /// resolution and seed, absent quantities, shared and own time bases.
