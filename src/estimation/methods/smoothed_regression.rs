@@ -601,20 +601,12 @@ fn observations_and_inputs(
 }
 
 /// The record with its yaw channel unwrapped (no jump of 2π between
-/// samples), so that the filter compares a continuous heading.
+/// samples), so that the filter compares a continuous heading (an
+/// estimation problem's records are already; `smooth` may be given others).
 fn unwrapped_yaw(record: &FlightRecord) -> FlightRecord {
     let mut record = record.clone();
     if let Some(channel) = record.channels.iter_mut().find(|c| c.name == "yaw") {
-        let mut previous: Option<f64> = None;
-        let mut offset = 0.0;
-        for value in channel.values.iter_mut().filter(|v| v.is_finite()) {
-            if let Some(last) = previous {
-                let jump = *value + offset - last;
-                offset -= (jump / std::f64::consts::TAU).round() * std::f64::consts::TAU;
-            }
-            *value += offset;
-            previous = Some(*value);
-        }
+        crate::record::unwrap_angles(&mut channel.values);
     }
     record
 }
