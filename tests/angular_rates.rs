@@ -313,14 +313,17 @@ fn the_qar_approach_end_to_end() {
     }
     // "Converged" says the fit ended as the method defines it, not that
     // 1 Hz data in turbulence carry the derivatives: of these only fdee's
-    // bounds cover its errors; equation error's CL_alpha is −78 % at 13σ
-    // and stepwise regression's lateral terms are 14–1500 % off.
+    // bounds cover its errors; equation error's CL_alpha is −78 % at 13σ,
+    // filter error, started from it, stops in a minimum beside it (CL_alpha
+    // −78 % at 37σ), and stepwise regression's lateral terms are 14–1500 %
+    // off.
     assert_eq!(
         converged,
         [
             "transport-longitudinal ee",
             "transport-longitudinal swr",
             "transport-longitudinal oem",
+            "transport-longitudinal fem",
             "transport-longitudinal fdee",
             "transport-longitudinal elm-gn",
             "transport-longitudinal relm-gn",

@@ -410,3 +410,90 @@ fn bad_settings_are_refused_by_name() {
         "{error}"
     );
 }
+
+/// The filters' integration step is never a silent bias either: on the
+/// HANSA-3 multistep recorded at 1.25 Hz (as output error's
+/// `coarse_records_are_integrated_in_sub_steps`) the EKF, the UKF and
+/// filter error predict through sub-steps of h·|λ| ≤ 0.5 and say so. With
+/// the sample period as the step (RK4 at h·|λ| = 2.3 for the short period)
+/// the EKF's and UKF's model departs mid-record; in sub-steps they reach
+/// the end, though 60 s at 1.25 Hz leave most parameters unidentified
+/// (their variances stay near the prior: measured, a finding). Filter
+/// error converges, and halving its step moves no estimate by more than
+/// 0.1σ (measured 0.014σ).
+#[test]
+fn coarse_records_are_filtered_in_sub_steps() {
+    let mut scenario = Scenario::load("hansa3-elevator-multistep").unwrap();
+    scenario.seed = 5;
+    let profile = Profile::load("flight-test-25hz", None)
+        .unwrap()
+        .with_rate(1.25);
+    let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
+    let record = profile.record(&trace, &scenario.aircraft, 5).unwrap();
+    let structure = ModelStructure::load("hansa3-longitudinal").unwrap();
+    for method in ["ekf", "ukf", "fem"] {
+        let fit = |step: Option<f64>| {
+            let mut table = toml::Table::new();
+            if let Some(step) = step {
+                table.insert("step".into(), format!("{step} s").into());
+            }
+            let mut layer = aeroid::estimation::estimator::MethodTables::default();
+            layer.insert(method.to_string(), table);
+            let problem =
+                EstimationProblem::new(method, vec![record.clone()], structure.clone(), &[&layer])
+                    .unwrap();
+            methods::estimate(&problem, None).unwrap()
+        };
+        let auto = fit(None);
+        let note = auto
+            .notes
+            .iter()
+            .find(|n| n.starts_with("integration step"))
+            .unwrap_or_else(|| panic!("{method}: no step note: {:?}", auto.notes));
+        let step: f64 = note["integration step ".len()..]
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            step < 0.8 && (0.8 / step - (0.8 / step).round()).abs() < 1e-3,
+            "{method}: {note}"
+        );
+        let coarse = fit(Some(0.8));
+        println!(
+            "{method}: {}; {note}; at the sample period: {}",
+            auto.status, coarse.status
+        );
+        if method == "fem" {
+            let halved = fit(Some(step / 2.0));
+            let moved = auto
+                .parameters
+                .iter()
+                .zip(&halved.parameters)
+                .map(|(a, b)| ((a.value - b.value) / a.standard_error).abs())
+                .fold(0.0, f64::max);
+            println!(
+                "fem, step halved: {}, worst move {moved:.3}σ",
+                halved.status
+            );
+            assert_eq!(auto.status, Status::Converged);
+            assert_eq!(halved.status, Status::Converged);
+            assert!(
+                moved <= 0.1,
+                "fem: halving the step moved an estimate by {moved}σ"
+            );
+        } else {
+            assert!(
+                !matches!(auto.status, Status::Diverged(_)),
+                "{method}: {}",
+                auto.status
+            );
+            assert!(
+                matches!(&coarse.status, Status::Diverged(reason) if reason.contains("departed")),
+                "{method} at the sample period: {}",
+                coarse.status
+            );
+        }
+    }
+}

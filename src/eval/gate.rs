@@ -13,7 +13,7 @@
 //! added, with the reason in the file.
 
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
-use crate::estimation::estimate::{Estimate, Status};
+use crate::estimation::estimate::Estimate;
 use crate::estimation::estimator::{
     MethodTables, Refusal, RefusalKind, check_method_tables, validate_method_tables,
 };
@@ -74,11 +74,6 @@ pub struct GateCase {
     /// With `expect_refusal = "missing-channels"`: channels the refusal must name.
     #[serde(default)]
     pub expect_missing: Vec<String>,
-    /// The estimate's status must be "unidentified" naming exactly these
-    /// parameters (the estimator says the data do not determine them);
-    /// they are reported, not gated, and every other parameter is.
-    #[serde(default)]
-    pub expect_unidentified: Vec<String>,
     /// Settings per method for this case, overriding the model's and the scenario's.
     #[serde(default)]
     pub methods: MethodTables,
@@ -178,20 +173,11 @@ impl GateResult {
             }
             (Some(_), None) | (None, Some(_)) => false,
             (None, None) => {
-                let status_as_expected = self.estimate.as_ref().is_some_and(|e| {
-                    match (&e.status, self.case.expect_unidentified.is_empty()) {
-                        (status, true) => status.is_success(),
-                        (Status::Unidentified(names), false) => {
-                            let mut names = names.clone();
-                            let mut expected = self.case.expect_unidentified.clone();
-                            names.sort();
-                            expected.sort();
-                            names == expected
-                        }
-                        (_, false) => false,
-                    }
-                });
-                status_as_expected && !self.rows.is_empty() && self.rows.iter().all(GateRow::passed)
+                let converged = self
+                    .estimate
+                    .as_ref()
+                    .is_some_and(|e| e.status.is_success());
+                converged && !self.rows.is_empty() && self.rows.iter().all(GateRow::passed)
             }
         }
     }
@@ -333,12 +319,6 @@ pub fn load(path: &Path) -> Result<GateFile> {
                 "give exactly one of relative_tolerance and sigma_tolerance, or expect_refusal alone",
             ),
         }
-        if !case.expect_unidentified.is_empty() && case.expect_refusal.is_some() {
-            problems.push(
-                format!("{field}.expect_unidentified"),
-                "goes with a tolerance, not with expect_refusal",
-            );
-        }
         if !case.expect_missing.is_empty()
             && case.expect_refusal != Some(RefusalKind::MissingChannels)
         {
@@ -415,8 +395,7 @@ pub fn run_case(case: &GateCase) -> Result<GateResult> {
             };
             let identifiable = case
                 .identifiable_below
-                .is_none_or(|limit| p.standard_error < limit * truth.abs())
-                && !case.expect_unidentified.contains(&p.name);
+                .is_none_or(|limit| p.standard_error < limit * truth.abs());
             Some(GateRow {
                 parameter: p.name.clone(),
                 estimate: p.value,

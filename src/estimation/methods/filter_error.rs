@@ -27,7 +27,9 @@
 //!   the record (A = ∂f/∂x, C = ∂h/∂x there, Eqs. 5.50–5.51).
 //!   P solves the discrete Riccati equation
 //!   P = Φ·(P − P·Cᵀ·R⁻¹·C·P)·Φᵀ + Q_d, Φ = e^{A·Δt}, Q_d the process noise
-//!   F·Fᵀ discretised (Van Loan), solved exactly
+//!   F·Fᵀ discretised (Van Loan) over Δt, the interval between an output's
+//!   corrections (the fastest output's sample period: several grid steps
+//!   where the grid is divided into sub-steps), solved exactly
 //!   ([`kalman::steady_state_for_innovation`]: Newton's method started
 //!   from [`kalman::steady_state`]). Jategaonkar (§5.3, and
 //!   `gainmat` by Potter's method, Eqs. 5.15–5.17) solves the continuous equation
@@ -137,7 +139,7 @@
 //! an unknown). R starts from the innovations with no process noise (the
 //! output-error residuals; where that simulation departs, an unstable
 //! mode, from the measurements' variances), F from a scale where the process noise over one
-//! step equals the output residual level seen through C,
+//! sample period Δt equals the output residual level seen through C,
 //! F_ref,i = (Σ_j C_ji²/R_jj)^{−½}/√Δt, times the factor among 1, 0.3,
 //! 0.1, 0.03, 0.01 with the lowest cost ½·Σ N_o·ln R_oo after two R
 //! updates.
@@ -466,12 +468,15 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
         };
         (steady, r)
     } else {
+        // The gain is the steady state of one sample period, the interval
+        // between an output's successive corrections, which spans several
+        // grid steps where the grid is divided into sub-steps.
         let spectral = DMatrix::from_diagonal(&distribution.map(|f| f * f));
         let discrete = kalman::discretise(
             &jacobians.rates_by_state,
             &DMatrix::zeros(n, 0),
             Some(&spectral),
-            model.time(1) - start,
+            (model.time(1) - start) * observations.stride() as f64,
         );
         kalman::steady_state_for_innovation(&discrete.transition, &c, &discrete.process_noise, &r)?
     };
@@ -1105,7 +1110,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// spread equals the residual level seen through C = ∂h/∂x at the
     /// first point.
     fn reference_distribution(&self, c: &DMatrix<f64>) -> DVector<f64> {
-        let step = self.model.time(1) - self.model.time(0);
+        let step = (self.model.time(1) - self.model.time(0)) * self.observations.stride() as f64;
         let mut reference = DVector::zeros(self.model.state_count());
         for &i in &self.noisy {
             let information: f64 = (0..c.nrows())
@@ -1431,7 +1436,7 @@ pub fn filter_error_from(
         Observations::from_record(record, &structure.outputs, view.time(0), step, view.len())?;
     enough_data(METHOD, &observations, free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
-    notes.extend(view.simulation().measured_quantities.iter().cloned());
+    notes.extend(view.simulation().notes.iter().cloned());
     let file = view.parameters();
     let mut fit = FilterErrorFit::new(
         &view,

@@ -23,6 +23,28 @@ pub struct Observations {
 }
 
 impl Observations {
+    /// The fewest grid steps between two successive samples of one output
+    /// (the fastest output's sample period in steps: 1 where every output
+    /// is sampled at every grid point, more on a grid divided into
+    /// sub-steps); 1 when no output has two samples.
+    pub fn stride(&self) -> usize {
+        let mut last: Vec<Option<usize>> = vec![None; self.names.len()];
+        let mut stride = usize::MAX;
+        for (k, present) in self.at.iter().enumerate() {
+            for &(o, _) in present {
+                if let Some(previous) = last[o] {
+                    stride = stride.min(k - previous);
+                }
+                last[o] = Some(k);
+            }
+        }
+        if stride == usize::MAX {
+            1
+        } else {
+            stride.max(1)
+        }
+    }
+
     /// The samples of the channels `outputs` of `record` on the grid
     /// start + k·step, k < len. An error for a channel the record lacks.
     pub fn from_record(

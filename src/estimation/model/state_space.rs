@@ -415,9 +415,12 @@ impl DrivenStateSpace {
 
     /// The view of `structure` driven by `record` as output error drives
     /// it: over the window where every output has samples (inside `limit`),
-    /// on a grid of `step` (else [`observation_step`]'s), with the
-    /// state x₀ the record gives at the window's start
-    /// ([`recorded_initial_state`]). Returns the view and x₀.
+    /// on [`driven_simulation`]'s grid (`step` if given, else the fastest
+    /// output's period divided for the channels' instants and for RK4's
+    /// accuracy on the model's fastest mode; the simulation's notes say
+    /// why when it is divided), with the state x₀ the record gives at
+    /// the window's start ([`recorded_initial_state`]). Returns the view
+    /// and x₀.
     pub fn for_record(
         record: &FlightRecord,
         structure: &ModelStructure,
@@ -426,15 +429,9 @@ impl DrivenStateSpace {
         limit: Option<(f64, f64)>,
     ) -> Result<(DrivenStateSpace, DVector<f64>)> {
         let window = fitting_window(record, &structure.outputs, limit)?;
-        let inputs = driving_channels(structure);
-        let step = observation_step(record, &structure.outputs, &inputs, step, window.0)?;
-        let simulation = DrivenSimulation::from_record(
-            record,
-            &structure.integrate,
-            interpolation,
-            step,
-            window,
-        )?;
+        let (mut simulation, grid_note) =
+            driven_simulation(record, structure, interpolation, step, window)?;
+        simulation.notes.extend(grid_note);
         let initial = recorded_initial_state(record, structure, &simulation, window.0);
         let outputs = observables(structure)?;
         let model = FlightModel::new(structure.aircraft.clone(), Default::default());
