@@ -3,6 +3,8 @@
 //! stall manoeuvre, a parameter that changes in flight, their innovations'
 //! whiteness and their settings.
 
+mod common;
+
 use aeroid::estimation::estimate::{Estimate, Status};
 use aeroid::estimation::estimator::Settings;
 use aeroid::estimation::methods;
@@ -423,13 +425,7 @@ fn bad_settings_are_refused_by_name() {
 /// 0.1σ (measured 0.014σ).
 #[test]
 fn coarse_records_are_filtered_in_sub_steps() {
-    let mut scenario = Scenario::load("hansa3-elevator-multistep").unwrap();
-    scenario.seed = 5;
-    let profile = Profile::load("flight-test-25hz", None)
-        .unwrap()
-        .with_rate(1.25);
-    let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
-    let record = profile.record(&trace, &scenario.aircraft, 5).unwrap();
+    let record = common::hansa3_at_1_25_hz();
     let structure = ModelStructure::load("hansa3-longitudinal").unwrap();
     for method in ["ekf", "ukf", "fem"] {
         let fit = |step: Option<f64>| {
@@ -445,17 +441,7 @@ fn coarse_records_are_filtered_in_sub_steps() {
             methods::estimate(&problem, None).unwrap()
         };
         let auto = fit(None);
-        let note = auto
-            .notes
-            .iter()
-            .find(|n| n.starts_with("integration step"))
-            .unwrap_or_else(|| panic!("{method}: no step note: {:?}", auto.notes));
-        let step: f64 = note["integration step ".len()..]
-            .split(' ')
-            .next()
-            .unwrap()
-            .parse()
-            .unwrap();
+        let (note, step) = common::integration_step_note(&auto);
         assert!(
             step < 0.8 && (0.8 / step - (0.8 / step).round()).abs() < 1e-3,
             "{method}: {note}"
@@ -467,12 +453,7 @@ fn coarse_records_are_filtered_in_sub_steps() {
         );
         if method == "fem" {
             let halved = fit(Some(step / 2.0));
-            let moved = auto
-                .parameters
-                .iter()
-                .zip(&halved.parameters)
-                .map(|(a, b)| ((a.value - b.value) / a.standard_error).abs())
-                .fold(0.0, f64::max);
+            let moved = common::largest_move_in_sigma(&auto, &halved);
             println!(
                 "fem, step halved: {}, worst move {moved:.3}σ",
                 halved.status

@@ -152,3 +152,46 @@ pub fn worst_relative_error(
         })
         .fold((0.0, String::new()), |a, b| if b.0 > a.0 { b } else { a })
 }
+
+/// The HANSA-3 longitudinal multistep (seed 5) recorded by the
+/// flight-test profile at 1.25 Hz: a record whose sample period is coarse
+/// for the short period (h·|λ| = 2.3).
+pub fn hansa3_at_1_25_hz() -> aeroid::record::FlightRecord {
+    let mut scenario = aeroid::sim::scenario::Scenario::load("hansa3-elevator-multistep").unwrap();
+    scenario.seed = 5;
+    let profile = aeroid::record::recorder::Profile::load("flight-test-25hz", None)
+        .unwrap()
+        .with_rate(1.25);
+    let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
+    profile.record(&trace, &scenario.aircraft, 5).unwrap()
+}
+
+/// The note an estimate gives when it integrates in sub-steps, and the
+/// step it names.
+pub fn integration_step_note(estimate: &aeroid::estimation::estimate::Estimate) -> (String, f64) {
+    let note = estimate
+        .notes
+        .iter()
+        .find(|n| n.starts_with("integration step"))
+        .unwrap_or_else(|| panic!("no step note: {:?}", estimate.notes));
+    let step = note["integration step ".len()..]
+        .split(' ')
+        .next()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no step in '{note}'"));
+    (note.clone(), step)
+}
+
+/// The largest change of an estimate between two fits, in the first
+/// fit's standard errors.
+pub fn largest_move_in_sigma(
+    first: &aeroid::estimation::estimate::Estimate,
+    second: &aeroid::estimation::estimate::Estimate,
+) -> f64 {
+    first
+        .parameters
+        .iter()
+        .zip(&second.parameters)
+        .map(|(a, b)| ((a.value - b.value) / a.standard_error).abs())
+        .fold(0.0, f64::max)
+}

@@ -531,13 +531,7 @@ fn several_starts_find_one_minimum_or_name_the_worse_ones() {
 /// moves Cm_q by more than 3σ.
 #[test]
 fn coarse_records_are_integrated_in_sub_steps() {
-    let mut scenario = Scenario::load("hansa3-elevator-multistep").unwrap();
-    scenario.seed = 5;
-    let profile = Profile::load("flight-test-25hz", None)
-        .unwrap()
-        .with_rate(1.25);
-    let (record, _) = aeroid::sim::fly(&scenario).unwrap();
-    let record = profile.record(&record, &scenario.aircraft, 5).unwrap();
+    let record = common::hansa3_at_1_25_hz();
     let structure = ModelStructure::load("hansa3-longitudinal").unwrap();
     let fit = |step: Option<f64>| {
         let options = OutputErrorOptions {
@@ -548,29 +542,14 @@ fn coarse_records_are_integrated_in_sub_steps() {
     };
     let auto = fit(None);
     assert_eq!(auto.status, Status::Converged, "{:?}", auto.notes);
-    let note = auto
-        .notes
-        .iter()
-        .find(|n| n.starts_with("integration step"))
-        .unwrap_or_else(|| panic!("no step note: {:?}", auto.notes));
-    let step: f64 = note["integration step ".len()..]
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let (note, step) = common::integration_step_note(&auto);
     assert!(
         step < 0.8 && (0.8 / step - (0.8 / step).round()).abs() < 1e-3,
         "{note}"
     );
     let halved = fit(Some(step / 2.0));
     assert_eq!(halved.status, Status::Converged, "{:?}", halved.notes);
-    let moved = auto
-        .parameters
-        .iter()
-        .zip(&halved.parameters)
-        .map(|(a, b)| ((a.value - b.value) / a.standard_error).abs())
-        .fold(0.0, f64::max);
+    let moved = common::largest_move_in_sigma(&auto, &halved);
     let coarse = fit(Some(0.8));
     let cm_q = |e: &aeroid::estimation::estimate::Estimate| {
         let p = e.parameters.iter().find(|p| p.name == "Cm_q").unwrap();
