@@ -156,7 +156,7 @@ impl Default for SmoothedRegressionSettings {
             moment_noise: 1000.0,
             force_change_bound: 2.0,
             moment_change_bound: 0.25,
-            velocity_noise: 1e-4,
+            velocity_noise: 1.0,
             rate_noise: 1e-8,
             initial_force_std: [0.02, 0.05, 0.2],
             initial_moment_std: [0.01, 0.02, 0.1],
@@ -209,7 +209,7 @@ const SETTINGS: &[(&str, &str)] = &[
     ),
     (
         "velocity_noise",
-        "process noise spectral density on u̇, v̇, ẇ (m²/s³): wind and model error",
+        "process noise spectral density on u̇, v̇, ẇ (m²/s³): the wind's changes (gusts, turbulence), which the still-air model does not carry, and model error",
     ),
     (
         "rate_noise",
