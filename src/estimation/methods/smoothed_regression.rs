@@ -1230,6 +1230,57 @@ mod tests {
         }
     }
 
+    /// The change bound: for a transport at q̄ = 10 kPa (accelerations per
+    /// unit coefficient 36 m/s² for the forces, 103, 8 and 38 rad/s² for
+    /// Cl, Cm, Cn) the default chains are left alone at 25 Hz; at 1 Hz each
+    /// is lowered so that its spread over one sample period, the (0, 0)
+    /// entry of the exact (Van Loan) discrete noise of the chain, times the
+    /// gain is the bound, its initial derivative deviations to σ_C/T and
+    /// 2·σ_C/T², and its axis takes white noise of bound²·T.
+    #[test]
+    fn change_bounds_hold_the_spread_over_one_sample_period() {
+        use crate::estimation::solver::extended_kalman::Discretisation;
+        let settings = SmoothedRegressionSettings::default();
+        let gains = [36.0, 36.0, 36.0, 103.0, 8.0, 38.0];
+        let fast = GaussMarkov::for_period(&settings, &gains, 0.04);
+        assert!(fast.bounded.is_empty(), "{:?}", fast.bounded);
+        assert_eq!(fast.white, [0.0; 6]);
+        assert_eq!(fast.density[3], settings.moment_noise);
+        let period = 1.0;
+        let slow = GaussMarkov::for_period(&settings, &gains, period);
+        assert_eq!(slow.bounded, COEFFICIENT_NAMES.to_vec());
+        let chain = DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+        for (i, gain) in gains.iter().enumerate() {
+            let bound = if i < 3 {
+                settings.force_change_bound
+            } else {
+                settings.moment_change_bound
+            };
+            let mut density = DMatrix::zeros(3, 3);
+            density[(2, 2)] = slow.density[i];
+            let (_, noise) = Discretisation::Exact.transition_and_noise(&chain, &density, period);
+            let spread = noise[(0, 0)].sqrt() * gain;
+            assert!(
+                (spread / bound - 1.0).abs() < 1e-9,
+                "{i}: {spread} against {bound}"
+            );
+            let sigma = bound / gain;
+            let initial = slow.initial[i];
+            assert!(
+                initial[1] <= sigma / period * (1.0 + 1e-12),
+                "{i}: {initial:?}"
+            );
+            assert!(initial[2] <= 2.0 * sigma / (period * period) * (1.0 + 1e-12));
+            assert_eq!(slow.white[i], bound * bound * period);
+        }
+        let q = process_noise(&settings, &slow);
+        assert_eq!(q[(U, U)], settings.force_change_bound.powi(2) * period);
+        assert_eq!(
+            q[(P + 1, P + 1)],
+            settings.moment_change_bound.powi(2) * period
+        );
+    }
+
     /// The process noise puts each setting on its states: the third
     /// derivatives of the coefficients, the velocities and the rates, and
     /// nothing on the kinematic angles, height or lower derivatives.
