@@ -793,18 +793,20 @@ impl GaussMarkov {
     /// axis takes white process noise of density bound²·T instead
     /// ([`GaussMarkov::white`]).
     ///
-    /// Why: the chain extrapolates the coefficient's slope and curvature
-    /// between two samples, and nothing restores the motion (the model has
+    /// Why: between two samples nothing restores the motion (the model has
     /// no aerodynamic stiffness or damping). At 25 Hz a sample follows
-    /// within 0.04 s; on a 1 Hz QAR the default chains spread Cl by 2 in
-    /// one second, the predicted σ of p reaches 1–2 rad/s, and the
-    /// predicted yaw rate and sideslip overshoot from sample to sample
-    /// (the ψ, β and r innovations alternate in sign, growing from 5σ to
-    /// 10σ) until the body velocity departs. Lowered chains without the
-    /// white noise are overconfident instead: the turbulence moves the
-    /// coefficients faster than they may follow (airspeed innovations of
-    /// 10–40σ) and the filter departs later. The white noise gives the
-    /// same spread over one sample without an extrapolated slope.
+    /// within 0.04 s; on a 1 Hz QAR the default moment chains spread each
+    /// moment coefficient by σ = 7 in one second, the predicted σ of p
+    /// reaches about 200 rad/s (103 rad/s² per unit Cl times
+    /// √(q·T⁷/252)) and the body velocity departs after 3 s. Lowered
+    /// chains without the white noise are overconfident instead: the
+    /// turbulence moves the coefficients faster than they may follow, the
+    /// extrapolated slope and curvature make the predicted yaw rate and
+    /// sideslip overshoot from sample to sample (the ψ, β and r
+    /// innovations alternate in sign, growing from 5σ to 10σ; airspeed
+    /// innovations of 10–40σ), and the filter departs after 15–55 s. The
+    /// white noise gives the same spread over one sample without an
+    /// extrapolated slope.
     ///
     /// For a transport at 25 Hz the default bounds lie above the default
     /// densities (the tightest, Cl at q̄ = 10 kPa, allows about 1100 1/s⁵ against
