@@ -314,15 +314,17 @@ fn the_qar_approach_end_to_end() {
     // "Converged" says the fit ended as the method defines it, not that
     // 1 Hz data in turbulence carry the derivatives: of these only fdee's
     // bounds cover its errors; equation error's CL_alpha is −78 % at 13σ,
-    // filter error, started from it, stops in a minimum beside it (CL_alpha
-    // −78 % at 37σ), and stepwise regression's lateral terms are 14–1500 %
-    // off.
+    // ebm's −76 % at 13σ (its smoothed α errs as the geometric α does),
+    // filter error, started from equation error's estimates, stops in a
+    // minimum beside them (CL_alpha −78 % at 37σ), and stepwise
+    // regression's lateral terms are 14–1500 % off.
     assert_eq!(
         converged,
         [
             "transport-longitudinal ee",
             "transport-longitudinal swr",
             "transport-longitudinal oem",
+            "transport-longitudinal ebm",
             "transport-longitudinal fem",
             "transport-longitudinal fdee",
             "transport-longitudinal elm-gn",

@@ -86,6 +86,14 @@ pub struct SmoothedRegressionSettings {
     pub force_noise: f64,
     /// Spectral density of d³C/dt³ for Cl, Cm, Cn (1/s⁵).
     pub moment_noise: f64,
+    /// The most a force coefficient's Gauss–Markov model may spread the
+    /// specific force over one sample period of the observations (m/s²):
+    /// a larger `force_noise` or initial derivative deviation is lowered
+    /// to it (the rate-aware bound of [`GaussMarkov::for_period`]).
+    pub force_change_bound: f64,
+    /// The same for a moment coefficient and the angular acceleration
+    /// (rad/s²).
+    pub moment_change_bound: f64,
     /// Spectral density of the process noise on u̇, v̇, ẇ (m²/s³).
     pub velocity_noise: f64,
     /// Spectral density of the process noise on ṗ, q̇, ṙ (rad²/s³).
@@ -98,6 +106,12 @@ pub struct SmoothedRegressionSettings {
     /// Measurement noise standard deviation per channel (SI units), before
     /// the channel's quantization (LSB²/12) is added.
     pub measurement_noise: BTreeMap<String, f64>,
+    /// Measurement noise standard deviation (SI units) of a channel the
+    /// derive step computed rather than a sensor measured (its source
+    /// begins "geometric" or "kinematic": the geometric flow angles and
+    /// airspeed, the kinematic rates); the channels not named here take
+    /// `measurement_noise`.
+    pub derived_measurement_noise: BTreeMap<String, f64>,
     /// Lag (s) to which the residual autocorrelation is summed in the
     /// coloured-residual bound of the regression.
     #[serde(deserialize_with = "crate::units::seconds")]
@@ -140,7 +154,9 @@ impl Default for SmoothedRegressionSettings {
             optional_observations: ["alpha", "beta", "p", "q", "r"].map(String::from).to_vec(),
             force_noise: 100.0,
             moment_noise: 1000.0,
-            velocity_noise: 1e-4,
+            force_change_bound: 2.0,
+            moment_change_bound: 0.25,
+            velocity_noise: 1.0,
             rate_noise: 1e-8,
             initial_force_std: [0.02, 0.05, 0.2],
             initial_moment_std: [0.01, 0.02, 0.1],
@@ -148,6 +164,17 @@ impl Default for SmoothedRegressionSettings {
                 .iter()
                 .map(|(name, value)| (name.to_string(), *value))
                 .collect(),
+            derived_measurement_noise: [
+                ("alpha", 0.02),
+                ("beta", 0.02),
+                ("airspeed", 1.5),
+                ("p", 0.03),
+                ("q", 0.01),
+                ("r", 0.03),
+            ]
+            .iter()
+            .map(|(name, value)| (name.to_string(), *value))
+            .collect(),
             correlation_lag: 2.0,
             step_margin: 0.2,
             max_step: 0.04,
@@ -173,8 +200,16 @@ const SETTINGS: &[(&str, &str)] = &[
         "spectral density of the third derivative of Cl, Cm, Cn (1/s⁵)",
     ),
     (
+        "force_change_bound",
+        "the most a force coefficient's Gauss–Markov model may spread the specific force over one sample period of the observations (m/s²); force_noise and the initial derivative deviations are lowered to it (bites on slow records such as a 1 Hz QAR, not at 10–25 Hz)",
+    ),
+    (
+        "moment_change_bound",
+        "the same for a moment coefficient and the angular acceleration (rad/s²), per axis through its inertia and arm",
+    ),
+    (
         "velocity_noise",
-        "process noise spectral density on u̇, v̇, ẇ (m²/s³): wind and model error",
+        "process noise spectral density on u̇, v̇, ẇ (m²/s³): the wind's changes (gusts, turbulence), which the still-air model does not carry, and model error",
     ),
     (
         "rate_noise",
@@ -191,6 +226,10 @@ const SETTINGS: &[(&str, &str)] = &[
     (
         "measurement_noise",
         "measurement noise standard deviation per channel (SI: load factor, rad, m/s, m, rad/s); the channel's quantization LSB²/12 is added",
+    ),
+    (
+        "derived_measurement_noise",
+        "measurement noise standard deviation (SI) of a channel the derive step computed (geometric α, β, airspeed; kinematic p, q, r): the unknown vertical and lateral gusts in the geometric flow angles (≈ 0.02 rad in moderate turbulence), the turbulence and roll response a 1 Hz attitude cannot carry in the kinematic rates",
     ),
     (
         "correlation_lag",
@@ -243,6 +282,8 @@ impl SmoothedRegressionSettings {
         for (key, value) in [
             ("force_noise", self.force_noise),
             ("moment_noise", self.moment_noise),
+            ("force_change_bound", self.force_change_bound),
+            ("moment_change_bound", self.moment_change_bound),
             ("velocity_noise", self.velocity_noise),
             ("rate_noise", self.rate_noise),
         ] {
@@ -261,7 +302,11 @@ impl SmoothedRegressionSettings {
                 );
             }
         }
-        for (name, value) in &self.measurement_noise {
+        for (name, value) in self
+            .measurement_noise
+            .iter()
+            .chain(&self.derived_measurement_noise)
+        {
             if Output::parse(name).is_none() {
                 return refuse(
                     "measurement_noise",
@@ -611,6 +656,12 @@ fn unwrapped_yaw(record: &FlightRecord) -> FlightRecord {
     record
 }
 
+/// Whether a channel's source says the derive step computed it (the
+/// geometric flow angles and airspeed, the kinematic rates).
+fn is_derived(source: &str) -> bool {
+    source.starts_with("geometric") || source.starts_with("kinematic")
+}
+
 /// A channel's value at t, or `default` when the record lacks it.
 fn value_or(record: &FlightRecord, name: &str, t: f64, default: f64) -> f64 {
     record
@@ -631,7 +682,8 @@ fn initial_estimate(
     model: &CoefficientStates,
     settings: &SmoothedRegressionSettings,
     start: f64,
-) -> Gaussian {
+    period: f64,
+) -> (Gaussian, GaussMarkov) {
     let aircraft = model.aircraft();
     let pitch = value_or(record, "pitch", start, 0.0);
     let airspeed = value_or(record, "airspeed", start, 100.0);
@@ -679,32 +731,134 @@ fn initial_estimate(
         x[coefficient_states::coefficient(i)] = (load[i] * weight - thrust[i]) / scale;
         x[coefficient_states::coefficient(3 + i)] = moment[i] / (scale * arms[i]);
     }
-    let mut deviations = vec![1.0, 1.0, 1.0, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 5.0];
-    for _ in 0..3 {
-        deviations.extend(settings.initial_force_std);
+    let mut gains = [0.0; 6];
+    for i in 0..3 {
+        gains[i] = scale / aircraft.mass.mass;
+        gains[3 + i] = aircraft.mass.inertia_inverse[(i, i)] * arms[i] * scale;
     }
-    for _ in 0..3 {
-        deviations.extend(settings.initial_moment_std);
+    let markov = GaussMarkov::for_period(settings, &gains, period);
+    let mut deviations = vec![1.0, 1.0, 1.0, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 5.0];
+    for initial in &markov.initial {
+        deviations.extend(initial);
     }
     let covariance = DMatrix::from_diagonal(&DVector::from_iterator(
         STATE_COUNT,
         deviations.iter().map(|s| s * s),
     ));
-    Gaussian {
-        mean: x,
-        covariance,
+    (
+        Gaussian {
+            mean: x,
+            covariance,
+        },
+        markov,
+    )
+}
+
+/// The Gauss–Markov model of each coefficient (CX, CY, CZ, Cl, Cm, Cn) for
+/// observations sampled every T: the spectral density of its third
+/// derivative and the initial standard deviations of the coefficient and
+/// its two derivatives.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GaussMarkov {
+    pub density: [f64; 6],
+    pub initial: [[f64; 3]; 6],
+    /// For a lowered coefficient, the white process noise density its axis
+    /// takes instead (on u̇, v̇, ẇ for CX, CY, CZ in m²/s³; on ṗ, q̇, ṙ for
+    /// Cl, Cm, Cn in rad²/s³): bound²·T, the bound's spread over one
+    /// sample period as white noise; 0 where the chain is not lowered.
+    pub white: [f64; 6],
+    /// Coefficients whose density or initial deviations the bound lowered.
+    pub bounded: Vec<&'static str>,
+}
+
+impl GaussMarkov {
+    /// The settings' densities and deviations, each lowered where over one
+    /// sample period T of the observations it would spread the
+    /// coefficient's specific force or angular acceleration by more than
+    /// `force_change_bound` or `moment_change_bound` (`gains`: the
+    /// acceleration per unit coefficient, q̄S/m for a force,
+    /// I⁻¹_ii·L_i·q̄S for a moment, L the span or chord). With σ_C =
+    /// bound/gain the coefficient's largest spread over T: a white third
+    /// derivative of density q spreads it by q·T⁵/20 (variance), so
+    /// q ≤ 20·σ_C²/T⁵; the initial first and second derivatives by σ′·T and
+    /// σ″·T²/2, so σ′ ≤ σ_C/T and σ″ ≤ 2·σ_C/T². A lowered coefficient's
+    /// axis takes white process noise of density bound²·T instead
+    /// ([`GaussMarkov::white`]).
+    ///
+    /// Why: between two samples nothing restores the motion (the model has
+    /// no aerodynamic stiffness or damping). At 25 Hz a sample follows
+    /// within 0.04 s; on a 1 Hz QAR the default moment chains spread each
+    /// moment coefficient by σ = 7 in one second, the predicted σ of p
+    /// reaches about 200 rad/s (103 rad/s² per unit Cl times
+    /// √(q·T⁷/252)) and the body velocity departs after 3 s. Lowered
+    /// chains without the white noise are overconfident instead: the
+    /// turbulence moves the coefficients faster than they may follow, the
+    /// extrapolated slope and curvature make the predicted yaw rate and
+    /// sideslip overshoot from sample to sample (the ψ, β and r
+    /// innovations alternate in sign, growing from 5σ to 10σ; airspeed
+    /// innovations of 10–40σ), and the filter departs after 15–55 s. The
+    /// white noise gives the same spread over one sample without an
+    /// extrapolated slope.
+    ///
+    /// For a transport at 25 Hz the default bounds lie above the default
+    /// densities (the tightest, Cl at q̄ = 10 kPa, allows about 1100 1/s⁵ against
+    /// the 1000 set) and change nothing; at 10 Hz they lower Cl and Cn.
+    pub fn for_period(
+        settings: &SmoothedRegressionSettings,
+        gains: &[f64; 6],
+        period: f64,
+    ) -> GaussMarkov {
+        let mut markov = GaussMarkov {
+            density: [0.0; 6],
+            initial: [[0.0; 3]; 6],
+            white: [0.0; 6],
+            bounded: Vec::new(),
+        };
+        for (i, gain) in gains.iter().enumerate() {
+            let (density, initial, bound) = if i < 3 {
+                (
+                    settings.force_noise,
+                    settings.initial_force_std,
+                    settings.force_change_bound,
+                )
+            } else {
+                (
+                    settings.moment_noise,
+                    settings.initial_moment_std,
+                    settings.moment_change_bound,
+                )
+            };
+            let spread = if *gain > 0.0 && gain.is_finite() {
+                bound / gain
+            } else {
+                f64::INFINITY
+            };
+            let lowered = [
+                density.min(20.0 * spread * spread / period.powi(5)),
+                initial[1].min(spread / period),
+                initial[2].min(2.0 * spread / (period * period)),
+            ];
+            if lowered != [density, initial[1], initial[2]] {
+                markov.bounded.push(COEFFICIENT_NAMES[i]);
+                markov.white[i] = bound * bound * period;
+            }
+            markov.density[i] = lowered[0];
+            markov.initial[i] = [initial[0], lowered[1], lowered[2]];
+        }
+        markov
     }
 }
 
 /// The process noise spectral density (diagonal): velocities, rates, the
 /// coefficients' third derivatives.
-fn process_noise(settings: &SmoothedRegressionSettings) -> DMatrix<f64> {
+fn process_noise(settings: &SmoothedRegressionSettings, markov: &GaussMarkov) -> DMatrix<f64> {
     let mut density = DVector::zeros(STATE_COUNT);
     for i in 0..3 {
-        density[U + i] = settings.velocity_noise;
-        density[P + i] = settings.rate_noise;
-        density[coefficient_states::coefficient(i) + 2] = settings.force_noise;
-        density[coefficient_states::coefficient(3 + i) + 2] = settings.moment_noise;
+        density[U + i] = settings.velocity_noise.max(markov.white[i]);
+        density[P + i] = settings.rate_noise.max(markov.white[3 + i]);
+    }
+    for (i, value) in markov.density.iter().enumerate() {
+        density[coefficient_states::coefficient(i) + 2] = *value;
     }
     DMatrix::from_diagonal(&density)
 }
@@ -768,15 +922,25 @@ fn smooth_with(
     }
     let observations = Observations::from_record(&record, &names, start, step, len)?;
     let defaults = SmoothedRegressionSettings::default().measurement_noise;
+    let mut derived = Vec::new();
     let measurement = DVector::from_iterator(
         names.len(),
         names.iter().map(|name| {
-            let sigma = settings
-                .measurement_noise
-                .get(name)
-                .or_else(|| defaults.get(name))
-                .copied()
-                .unwrap_or(0.0);
+            let computed = record.channel(name).is_ok_and(|c| is_derived(&c.source))
+                && settings.derived_measurement_noise.contains_key(name);
+            if computed {
+                derived.push(name.clone());
+            }
+            let sigma = if computed {
+                settings.derived_measurement_noise[name]
+            } else {
+                settings
+                    .measurement_noise
+                    .get(name)
+                    .or_else(|| defaults.get(name))
+                    .copied()
+                    .unwrap_or(0.0)
+            };
             let resolution = record
                 .channel(name)
                 .ok()
@@ -785,11 +949,11 @@ fn smooth_with(
             (sigma * sigma + resolution * resolution / 12.0).max(1e-16)
         }),
     );
+    let (initial, markov) = initial_estimate(&record, &model, settings, start, period);
     let noise = Noise {
-        process: process_noise(settings),
+        process: process_noise(settings, &markov),
         measurement,
     };
-    let initial = initial_estimate(&record, &model, settings, start);
     let pass = extended_kalman::filter_with(
         &model,
         &[],
@@ -824,6 +988,26 @@ fn smooth_with(
         }
     )];
     notes.extend(observations.note(step));
+    if !derived.is_empty() {
+        notes.push(format!(
+            "derived channels weighted by derived_measurement_noise: {}",
+            derived.join(", ")
+        ));
+    }
+    if !markov.bounded.is_empty() {
+        notes.push(format!(
+            "the Gauss–Markov models of {} lowered to the change bounds over the {} s sample period (third-derivative densities {})",
+            markov.bounded.join(", "),
+            crate::record::rounded(period),
+            markov
+                .density
+                .iter()
+                .zip(COEFFICIENT_NAMES)
+                .map(|(q, name)| format!("{name} {q:.2e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     notes.extend(altitude_note);
     if thrust_measured {
         notes.push(
@@ -1040,13 +1224,65 @@ mod tests {
         }
     }
 
+    /// The change bound: for a transport at q̄ = 10 kPa (accelerations per
+    /// unit coefficient 36 m/s² for the forces, 103, 8 and 38 rad/s² for
+    /// Cl, Cm, Cn) the default chains are left alone at 25 Hz; at 1 Hz each
+    /// is lowered so that its spread over one sample period, the (0, 0)
+    /// entry of the exact (Van Loan) discrete noise of the chain, times the
+    /// gain is the bound, its initial derivative deviations to σ_C/T and
+    /// 2·σ_C/T², and its axis takes white noise of bound²·T.
+    #[test]
+    fn change_bounds_hold_the_spread_over_one_sample_period() {
+        use crate::estimation::solver::extended_kalman::Discretisation;
+        let settings = SmoothedRegressionSettings::default();
+        let gains = [36.0, 36.0, 36.0, 103.0, 8.0, 38.0];
+        let fast = GaussMarkov::for_period(&settings, &gains, 0.04);
+        assert!(fast.bounded.is_empty(), "{:?}", fast.bounded);
+        assert_eq!(fast.white, [0.0; 6]);
+        assert_eq!(fast.density[3], settings.moment_noise);
+        let period = 1.0;
+        let slow = GaussMarkov::for_period(&settings, &gains, period);
+        assert_eq!(slow.bounded, COEFFICIENT_NAMES.to_vec());
+        let chain = DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+        for (i, gain) in gains.iter().enumerate() {
+            let bound = if i < 3 {
+                settings.force_change_bound
+            } else {
+                settings.moment_change_bound
+            };
+            let mut density = DMatrix::zeros(3, 3);
+            density[(2, 2)] = slow.density[i];
+            let (_, noise) = Discretisation::Exact.transition_and_noise(&chain, &density, period);
+            let spread = noise[(0, 0)].sqrt() * gain;
+            assert!(
+                (spread / bound - 1.0).abs() < 1e-9,
+                "{i}: {spread} against {bound}"
+            );
+            let sigma = bound / gain;
+            let initial = slow.initial[i];
+            assert!(
+                initial[1] <= sigma / period * (1.0 + 1e-12),
+                "{i}: {initial:?}"
+            );
+            assert!(initial[2] <= 2.0 * sigma / (period * period) * (1.0 + 1e-12));
+            assert_eq!(slow.white[i], bound * bound * period);
+        }
+        let q = process_noise(&settings, &slow);
+        assert_eq!(q[(U, U)], settings.force_change_bound.powi(2) * period);
+        assert_eq!(
+            q[(P + 1, P + 1)],
+            settings.moment_change_bound.powi(2) * period
+        );
+    }
+
     /// The process noise puts each setting on its states: the third
     /// derivatives of the coefficients, the velocities and the rates, and
     /// nothing on the kinematic angles, height or lower derivatives.
     #[test]
     fn process_noise_sits_on_the_third_derivatives_and_velocities() {
         let settings = SmoothedRegressionSettings::default();
-        let q = process_noise(&settings);
+        let markov = GaussMarkov::for_period(&settings, &[1.0; 6], 0.04);
+        let q = process_noise(&settings, &markov);
         for i in 0..3 {
             let force = coefficient_states::coefficient(i);
             let moment = coefficient_states::coefficient(3 + i);
