@@ -53,6 +53,14 @@ impl Default for Options {
     }
 }
 
+/// Whether a channel's source says the derive step computed it from other
+/// channels: the geometric flow angles and airspeed ("geometric (Wang et
+/// al. …"), the kinematic rates ("kinematic (p = …"). A measured channel,
+/// or one a compatibility check corrected, is not.
+pub fn is_derived(source: &str) -> bool {
+    source.starts_with("geometric") || source.starts_with("kinematic (")
+}
+
 /// A derived record and what was done.
 #[derive(Debug, Clone)]
 pub struct Derived {

@@ -10,8 +10,9 @@
 //!    [`super::smoothed_regression`]), or the coefficients reconstructed from
 //!    measured accelerations and angular accelerations
 //!    ([`crate::estimation::reconstruction`]). `auto`: reconstructed when the
-//!    record has the load factors, α, β and angular rates that needs, else
-//!    smoothed (a QAR records no angular rates).
+//!    record has the load factors, α, β and measured angular rates that
+//!    needs, else smoothed (a QAR records no angular rates; rates the derive
+//!    step took from the attitude would be differentiated a second time).
 //! 2. **Networks** (Eqs. 25–32, [`crate::estimation::neural::rbf`]): one
 //!    multi-input single-output network per coefficient with a free
 //!    parameter; inputs (Eq. 27) (Mach, α, β, q̂, δe, δf) for CL, CD, Cm and
@@ -332,6 +333,14 @@ fn as_own(error: Error) -> Error {
 /// Whether the record has what reconstructing the plans' coefficients
 /// needs (accelerations, α, β, rates, dynamic pressure, thrust).
 fn can_reconstruct(record: &FlightRecord, structure: &ModelStructure, plans: &[Plan]) -> bool {
+    let measured_rates = ["p", "q", "r"].iter().all(|name| {
+        record
+            .channel(name)
+            .is_ok_and(|c| !crate::prep::derive::is_derived(&c.source))
+    });
+    if !measured_rates {
+        return false;
+    }
     let mut request = Request {
         coefficients: plans.iter().map(|p| p.coefficient).collect(),
         regressors: vec![Regressor::Alpha, Regressor::Beta],

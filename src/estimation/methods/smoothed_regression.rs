@@ -656,12 +656,6 @@ fn unwrapped_yaw(record: &FlightRecord) -> FlightRecord {
     record
 }
 
-/// Whether a channel's source says the derive step computed it (the
-/// geometric flow angles and airspeed, the kinematic rates).
-fn is_derived(source: &str) -> bool {
-    source.starts_with("geometric") || source.starts_with("kinematic")
-}
-
 /// A channel's value at t, or `default` when the record lacks it.
 fn value_or(record: &FlightRecord, name: &str, t: f64, default: f64) -> f64 {
     record
@@ -926,7 +920,9 @@ fn smooth_with(
     let measurement = DVector::from_iterator(
         names.len(),
         names.iter().map(|name| {
-            let computed = record.channel(name).is_ok_and(|c| is_derived(&c.source))
+            let computed = record
+                .channel(name)
+                .is_ok_and(|c| crate::prep::derive::is_derived(&c.source))
                 && settings.derived_measurement_noise.contains_key(name);
             if computed {
                 derived.push(name.clone());
