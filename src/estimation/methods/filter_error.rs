@@ -158,7 +158,7 @@ use crate::estimation::methods::output_error::{self, Start};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
 use crate::estimation::problem::EstimationProblem;
-use crate::estimation::solver::extended_kalman::{self, Noise};
+use crate::estimation::solver::extended_kalman::{self, Discretisation, Keep, Noise};
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::estimation::solver::kalman::{self, Gaussian, SteadyState};
 use crate::estimation::structure::{ModelStructure, Structure};
@@ -571,7 +571,19 @@ pub fn time_varying_pass<M: StateSpaceModel + ?Sized>(
         process: DMatrix::from_diagonal(&distribution.map(|f| f * f)),
         measurement: measurement_noise.clone(),
     };
-    let filtered = extended_kalman::filter(model, theta, initial.clone(), &noise, observations)?;
+    // The likelihood and the updates are all the pass reads.
+    let filtered = extended_kalman::filter_with(
+        model,
+        theta,
+        initial.clone(),
+        &noise,
+        observations,
+        Discretisation::Exact,
+        Keep {
+            smoother: false,
+            filtered_covariances: false,
+        },
+    )?;
     let count: usize = observations.at.iter().map(Vec::len).sum();
     let mut pass = TimeVaryingPass {
         innovations: Vec::with_capacity(count),

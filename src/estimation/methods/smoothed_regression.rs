@@ -59,7 +59,7 @@ use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{StateSpaceModel, fitting_window};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::Reconstruction;
-use crate::estimation::solver::extended_kalman::{self, Discretisation, Noise};
+use crate::estimation::solver::extended_kalman::{self, Discretisation, Keep, Noise};
 use crate::estimation::solver::kalman::{self, Gaussian};
 use crate::estimation::structure::ModelStructure;
 use crate::record::FlightRecord;
@@ -957,9 +957,15 @@ fn smooth_with(
         &noise,
         &observations,
         Discretisation::SecondOrder,
+        Keep {
+            smoother: true,
+            filtered_covariances: false,
+        },
     )?;
     // The histories at the sample instants: every `parts`-th grid point.
-    let mut smoothed = kalman::mbf_smooth(&pass.predicted, &pass.measured, &pass.transitions);
+    // The means and variances are all the histories read of the smoother.
+    let mut smoothed =
+        kalman::mbf_smooth_variances(&pass.predicted, &pass.measured, &pass.transitions);
     let mut times = times;
     if parts > 1 {
         smoothed = smoothed.into_iter().step_by(parts).collect();
@@ -1012,12 +1018,13 @@ fn smooth_with(
     }
     let deviations: Vec<DVector<f64>> = smoothed
         .iter()
-        .map(|g| g.covariance.diagonal().map(|v| v.max(0.0).sqrt()))
+        .map(|(_, variances)| variances.map(|v| v.max(0.0).sqrt()))
         .collect();
-    notes.push(determination_note(&smoothed, &deviations));
+    let states: Vec<DVector<f64>> = smoothed.into_iter().map(|(mean, _)| mean).collect();
+    notes.push(determination_note(&states, &deviations));
     Ok(Smoothed {
         times,
-        states: smoothed.into_iter().map(|g| g.mean).collect(),
+        states,
         deviations,
         observations: names,
         notes,
@@ -1027,20 +1034,16 @@ fn smooth_with(
 /// How well each coefficient history is determined: its smoothed standard
 /// deviation (RMS over the record) against its variation (standard
 /// deviation about its mean).
-fn determination_note(smoothed: &[Gaussian], deviations: &[DVector<f64>]) -> String {
+fn determination_note(smoothed: &[DVector<f64>], deviations: &[DVector<f64>]) -> String {
     let items: Vec<String> = COEFFICIENT_NAMES
         .iter()
         .enumerate()
         .map(|(i, name)| {
             let c = coefficient_states::coefficient(i);
             let n = smoothed.len() as f64;
-            let mean = smoothed.iter().map(|g| g.mean[c]).sum::<f64>() / n;
-            let variation = (smoothed
-                .iter()
-                .map(|g| (g.mean[c] - mean).powi(2))
-                .sum::<f64>()
-                / n)
-                .sqrt();
+            let mean = smoothed.iter().map(|x| x[c]).sum::<f64>() / n;
+            let variation =
+                (smoothed.iter().map(|x| (x[c] - mean).powi(2)).sum::<f64>() / n).sqrt();
             let sigma = (deviations.iter().map(|d| d[c] * d[c]).sum::<f64>() / n).sqrt();
             format!("{name} σ {sigma:.2e} (variation {variation:.2e})")
         })

@@ -35,7 +35,7 @@ use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{Jacobians, StateSpaceModel};
 use crate::estimation::solver::kalman::{
-    self, Exponential, Gaussian, Measured, SparseRows, UpdateWorkspace, resize,
+    self, Exponential, Gaussian, Measured, ProcessNoise, SparseRows, UpdateWorkspace, resize,
 };
 use nalgebra::{DMatrix, DVector};
 
@@ -87,6 +87,7 @@ struct TimeUpdate {
     scaled: DMatrix<f64>,
     exponential: Exponential,
     work: [DMatrix<f64>; 2],
+    noise: ProcessNoise,
 }
 
 impl TimeUpdate {
@@ -104,15 +105,11 @@ impl TimeUpdate {
         let has_noise = noise.iter().any(|&v| v != 0.0);
         match discretisation {
             Discretisation::Exact => {
+                self.scaled.clone_from(a);
+                self.scaled *= h;
+                self.exponential.of(&self.scaled, &mut self.transition);
                 if has_noise {
-                    // Van Loan's second exponential ([`kalman::discretise`]).
-                    let discrete = kalman::discretise(a, &DMatrix::zeros(n, 0), Some(noise), h);
-                    self.transition = discrete.transition;
-                    self.process_noise = discrete.process_noise;
-                } else {
-                    self.scaled.clone_from(a);
-                    self.scaled *= h;
-                    self.exponential.of(&self.scaled, &mut self.transition);
+                    self.noise.of(a, noise, h, &mut self.process_noise);
                 }
                 self.sparse.set(&self.transition);
             }
@@ -185,16 +182,37 @@ pub struct Innovation {
     pub variance: f64,
 }
 
+/// What a pass keeps at every grid point beyond the filtered states, the
+/// updates, the innovations and the likelihood: a caller that reads less
+/// spares the copies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Keep {
+    /// The predicted estimates and the transitions (what a smoother reads).
+    pub smoother: bool,
+    /// The filtered covariance at every grid point (else at the last only).
+    pub filtered_covariances: bool,
+}
+
+impl Keep {
+    /// Everything.
+    pub const ALL: Keep = Keep {
+        smoother: true,
+        filtered_covariances: true,
+    };
+}
+
 /// What one filter pass produced.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pass {
-    /// (x, P)_{k|k−1}; at k = 0 the initial estimate.
+    /// (x, P)_{k|k−1}; at k = 0 the initial estimate (empty unless
+    /// [`Keep::smoother`]).
     pub predicted: Vec<Gaussian>,
-    /// (x, P)_{k|k}.
+    /// (x, P)_{k|k}; without [`Keep::filtered_covariances`] the covariance
+    /// is empty (0 × 0) but at the last grid point.
     pub filtered: Vec<Gaussian>,
     /// The update at each grid point with measurements.
     pub measured: Vec<Option<Measured>>,
-    /// Φ from k to k + 1 (len − 1 of them).
+    /// Φ from k to k + 1 (len − 1 of them; empty unless [`Keep::smoother`]).
     pub transitions: Vec<DMatrix<f64>>,
     /// Per output, its innovations.
     pub innovations: Vec<Vec<Innovation>>,
@@ -219,11 +237,12 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
         noise,
         observations,
         Discretisation::Exact,
+        Keep::ALL,
     )
 }
 
 /// [`filter`] with the covariance's transition and process noise
-/// discretised as `discretisation` says.
+/// discretised as `discretisation` says, keeping what `keep` says.
 pub fn filter_with<M: StateSpaceModel + ?Sized>(
     model: &M,
     theta: &[f64],
@@ -231,6 +250,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     noise: &Noise,
     observations: &Observations,
     discretisation: Discretisation,
+    keep: Keep,
 ) -> Result<Pass> {
     let len = model.len();
     check_sizes("filter", model, &initial, noise, observations)?;
@@ -266,12 +286,16 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 has_noise.then_some(&time_update.process_noise),
                 &mut time_update.work,
             );
-            pass.transitions.push(time_update.transition.clone());
+            if keep.smoother {
+                pass.transitions.push(time_update.transition.clone());
+            }
         }
-        pass.predicted.push(Gaussian {
-            mean: state.clone(),
-            covariance: covariance.clone(),
-        });
+        if keep.smoother {
+            pass.predicted.push(Gaussian {
+                mean: state.clone(),
+                covariance: covariance.clone(),
+            });
+        }
         let present = &observations.at[k];
         if present.is_empty() {
             pass.measured.push(None);
@@ -309,7 +333,8 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 },
             );
         }
-        pass.filtered_at(t, &state, &covariance)?;
+        let kept = keep.filtered_covariances || k + 1 == len;
+        pass.filtered_at(t, &state, kept.then_some(&covariance))?;
     }
     Ok(pass)
 }
@@ -343,13 +368,13 @@ impl Pass {
         self.measured.push(Some(measured));
     }
 
-    /// Keeps the filtered estimate at time t; an error when the state went
-    /// non-finite.
+    /// Keeps the filtered estimate at time t (its covariance if given,
+    /// else an empty one); an error when the state went non-finite.
     pub(crate) fn filtered_at(
         &mut self,
         t: f64,
         state: &DVector<f64>,
-        covariance: &DMatrix<f64>,
+        covariance: Option<&DMatrix<f64>>,
     ) -> Result<()> {
         if !state.iter().all(|v| v.is_finite()) {
             return Err(Error::Other(format!(
@@ -358,7 +383,7 @@ impl Pass {
         }
         self.filtered.push(Gaussian {
             mean: state.clone(),
-            covariance: covariance.clone(),
+            covariance: covariance.cloned().unwrap_or_else(|| DMatrix::zeros(0, 0)),
         });
         Ok(())
     }

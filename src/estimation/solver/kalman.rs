@@ -9,11 +9,14 @@
 //!   E[w·wᵀ] = Q_c, the step h transition Φ = e^{A·h}, the input matrix
 //!   Γ = ∫₀ʰ e^{A·s} ds·B and the discrete process noise
 //!   Q_d = ∫₀ʰ e^{A·s}·G·Q_c·Gᵀ·e^{Aᵀ·s} ds come from the exponentials of
-//!   the block matrices [[A, B], [0, 0]]·h and [[−A, GQ_cGᵀ], [0, Aᵀ]]·h.
+//!   the block matrices [[A, B], [0, 0]]·h and [[−A, GQ_cGᵀ], [0, Aᵀ]]·h;
+//!   Q_d, the second's top-right block times Φ, is summed as that block's
+//!   series on n × n matrices with doubling ([`ProcessNoise`]).
 //!   The exponential is by scaling and squaring with a Taylor series
 //!   (Moler & Van Loan, "Nineteen dubious ways…", SIAM Rev. 45, 2003,
-//!   method 3): the matrix scaled to norm ≤ ½, 18 terms (truncation below
-//!   10⁻¹⁸ relative); on its blocks when its trailing rows are zero.
+//!   method 3): the matrix scaled to norm ≤ ½, at most 18 terms (truncation
+//!   below 10⁻¹⁸ relative), fewer where the terms fall below 2⁻⁶⁰ sooner;
+//!   on its blocks when its trailing rows are zero.
 //! - Time update P⁻ = Φ·P⁺·Φᵀ + Q_d; measurement update with gain
 //!   K = P⁻·Hᵀ·S⁻¹, S = H·P⁻·Hᵀ + R, state x⁺ = x⁻ + K·ν and covariance in
 //!   Joseph's form P⁺ = (I − K·H)·P⁻·(I − K·H)ᵀ + K·R·Kᵀ (Jategaonkar,
@@ -87,14 +90,21 @@ impl Exponential {
     /// series' convergence).
     pub fn of(&mut self, matrix: &DMatrix<f64>, into: &mut DMatrix<f64>) {
         let n = matrix.nrows();
-        let zero_rows = (0..n)
-            .rev()
-            .take_while(|&i| matrix.row(i).iter().all(|&v| v == 0.0))
-            .count();
-        let k = n - zero_rows;
-        let r = n - k;
-        let x = matrix.view((0, 0), (k, k));
-        let norm = x.iter().map(|v| v.abs()).fold(0.0, f64::max) * k as f64;
+        let values = matrix.as_slice();
+        // The rows below the last non-zero entry of any column are zero.
+        let mut k = 0;
+        for column in values.chunks_exact(n.max(1)) {
+            for (i, &v) in column.iter().enumerate() {
+                k = if v != 0.0 { k.max(i + 1) } else { k };
+            }
+        }
+        let mut largest = 0.0f64;
+        for column in values.chunks_exact(n.max(1)).take(k) {
+            for &v in &column[..k] {
+                largest = largest.max(v.abs());
+            }
+        }
+        let norm = largest * k as f64;
         let squarings = if norm > 0.5 {
             (norm / 0.5).log2().ceil() as i32
         } else {
@@ -102,21 +112,34 @@ impl Exponential {
         };
         let scale = 2f64.powi(-squarings);
         resize(&mut self.x, k, k);
-        self.x.copy_from(&x);
-        self.x *= scale;
-        // Taylor series: E = Σ_{j ≤ 18} Xʲ/j!, Φ₁ = Σ_{j < 18} Xʲ/(j + 1)!.
+        for (into, column) in self
+            .x
+            .as_mut_slice()
+            .chunks_exact_mut(k.max(1))
+            .zip(values.chunks_exact(n.max(1)))
+        {
+            for (into, &v) in into.iter_mut().zip(&column[..k]) {
+                *into = v * scale;
+            }
+        }
+        // Taylor series: E = Σ_{j ≤ J} Xʲ/j!, Φ₁ = Σ_{j < J} Xʲ/(j + 1)!,
+        // J ≤ 18, ended early where a term's bound k·max|Xʲ/j!| is below
+        // 2⁻⁶⁰ (‖X‖∞ ≤ ½, so the rest of either series is smaller still:
+        // below the rounding of E's unit diagonal).
         resize(&mut self.top_left, k, k);
         self.top_left.fill_with_identity();
         resize(&mut self.phi, k, k);
         self.phi.fill(0.0);
         resize(&mut self.term, k, k);
         self.term.fill_with_identity();
+        let negligible = 2f64.powi(-60) / k.max(1) as f64;
         for j in 1..=TAYLOR_TERMS {
             let j = j as f64;
             for (phi, &term) in self.phi.iter_mut().zip(self.term.iter()) {
                 *phi += term / j;
             }
             multiply(&self.term, &self.x, &mut self.product);
+            let mut size = 0.0f64;
             for ((term, left), &p) in self
                 .term
                 .iter_mut()
@@ -125,6 +148,14 @@ impl Exponential {
             {
                 *term = p / j;
                 *left += *term;
+                size = size.max(term.abs());
+            }
+            if size < negligible {
+                // Φ₁'s next term, Xʲ/(j + 1)!, is this one over j + 1.
+                for (phi, &term) in self.phi.iter_mut().zip(self.term.iter()) {
+                    *phi += term / (j + 1.0);
+                }
+                break;
             }
         }
         // [[E, Φ₁], [0, I]]² = [[E², E·Φ₁ + Φ₁], [0, I]].
@@ -139,14 +170,118 @@ impl Exponential {
         resize(into, n, n);
         into.fill_with_identity();
         into.view_mut((0, 0), (k, k)).copy_from(&self.top_left);
-        // The top-right block: Φ₁·(Y·2⁻ˢ).
-        for c in 0..r {
-            for i in 0..k {
-                let mut sum = 0.0;
-                for j in 0..k {
-                    sum += self.phi[(i, j)] * (matrix[(j, k + c)] * scale);
+        // The top-right block: Φ₁·(Y·2⁻ˢ), column by column.
+        if k > 0 {
+            let phi = self.phi.as_slice();
+            let into = into.as_mut_slice();
+            for c in k..n {
+                let source = &values[c * n..c * n + k];
+                let column = &mut into[c * n..c * n + k];
+                column.fill(0.0);
+                for (&y, phi) in source.iter().zip(phi.chunks_exact(k)) {
+                    let y = y * scale;
+                    for (into, &phi) in column.iter_mut().zip(phi) {
+                        *into += phi * y;
+                    }
                 }
-                into[(i, k + c)] = sum;
+            }
+        }
+    }
+}
+
+/// The most terms of [`ProcessNoise`]'s series.
+const NOISE_TERMS: usize = 24;
+
+/// The discrete process noise Q_d = ∫₀ʰ e^{A·s}·Q_c·e^{Aᵀ·s} ds of
+/// ẋ = A·x + w, E[w·wᵀ] = Q_c·δ, by its Taylor series and doubling: the
+/// integrand's derivatives at 0 are L_j = A·L_{j−1} + L_{j−1}·Aᵀ, L_0 = Q_c,
+/// so Q_d(τ) = Σ_j τ^{j+1}/(j + 1)!·L_j, taken for τ = h·2⁻ˢ with A·τ
+/// scaled as [`Exponential`] scales it (‖A·τ‖ ≤ ½: the j-th term below
+/// ‖Q_c‖·τ/(j + 1)!; ended where n times a term's largest entry falls
+/// below 2⁻⁶⁰ of Q_c's, at most 24 terms); then s doublings
+/// Q_d(2τ) = Q_d(τ) + Φ(τ)·Q_d(τ)·Φ(τ)ᵀ,
+/// Φ(2τ) = Φ(τ)². The same matrix as Van Loan's block exponential (module
+/// header) to rounding, from products of n × n matrices over A's non-zeros
+/// instead of the series of a 2n × 2n one. The buffers are kept between
+/// calls, so that a filter's step takes it without allocating.
+#[derive(Debug, Clone, Default)]
+pub struct ProcessNoise {
+    scaled: DMatrix<f64>,
+    sparse: SparseRows,
+    term: DMatrix<f64>,
+    product: DMatrix<f64>,
+    transition: DMatrix<f64>,
+    exponential: Exponential,
+    work: [DMatrix<f64>; 2],
+}
+
+impl ProcessNoise {
+    /// Q_d of A = `a`, Q_c = `noise` (symmetric) over a step h into `into`,
+    /// symmetric.
+    pub fn of(&mut self, a: &DMatrix<f64>, noise: &DMatrix<f64>, h: f64, into: &mut DMatrix<f64>) {
+        let n = a.nrows();
+        let norm = a.iter().map(|v| (v * h).abs()).fold(0.0, f64::max) * n as f64;
+        let squarings = if norm > 0.5 {
+            (norm / 0.5).log2().ceil() as i32
+        } else {
+            0
+        };
+        let tau = h * 2f64.powi(-squarings);
+        resize(&mut self.scaled, n, n);
+        for (into, &a) in self.scaled.iter_mut().zip(a.iter()) {
+            *into = a * tau;
+        }
+        self.sparse.set(&self.scaled);
+        // The sum Σ_j L_j·τʲ/(j + 1)! (times τ at the end), its term
+        // M_j = L_j·τʲ = X·M_{j−1} + (X·M_{j−1})ᵀ, X·M = (M·Xᵀ)ᵀ (M symmetric).
+        resize(into, n, n);
+        into.copy_from(noise);
+        resize(&mut self.term, n, n);
+        self.term.copy_from(noise);
+        let largest = noise.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut factor = 1.0;
+        for j in 1..=NOISE_TERMS {
+            self.sparse.times_transposed(&self.term, &mut self.product);
+            factor /= (j + 1) as f64;
+            let (term, product, sum) = (
+                self.term.as_mut_slice(),
+                self.product.as_slice(),
+                into.as_mut_slice(),
+            );
+            let mut size = 0.0f64;
+            for c in 0..n {
+                for r in 0..n {
+                    let value = product[r + c * n] + product[c + r * n];
+                    term[r + c * n] = value;
+                    sum[r + c * n] += factor * value;
+                    size = size.max(value.abs());
+                }
+            }
+            if size * factor * n as f64 <= 2f64.powi(-60) * largest {
+                break;
+            }
+        }
+        *into *= tau;
+        if squarings > 0 {
+            self.exponential.of(&self.scaled, &mut self.transition);
+            let [product, outer] = &mut self.work;
+            for _ in 0..squarings {
+                // Q ← Q + Φ·Q·Φᵀ, Φ ← Φ².
+                resize(product, n, n);
+                product.gemm(1.0, into, &self.transition.transpose(), 0.0);
+                resize(outer, n, n);
+                outer.gemm(1.0, &self.transition, product, 0.0);
+                *into += &*outer;
+                multiply(&self.transition, &self.transition, product);
+                std::mem::swap(&mut self.transition, product);
+            }
+        }
+        let q = into.as_mut_slice();
+        for j in 0..n {
+            for i in 0..j {
+                let mean = (q[i + j * n] + q[j + i * n]) * 0.5;
+                q[i + j * n] = mean;
+                q[j + i * n] = mean;
             }
         }
     }
@@ -215,16 +350,9 @@ pub fn discretise(
     let process_noise = match noise {
         None => DMatrix::zeros(n, n),
         Some(noise) => {
-            let mut block = DMatrix::zeros(2 * n, 2 * n);
-            block.view_mut((0, 0), (n, n)).copy_from(&(-a * h));
-            block.view_mut((0, n), (n, n)).copy_from(&(noise * h));
-            block
-                .view_mut((n, n), (n, n))
-                .copy_from(&(a.transpose() * h));
-            let exp = exponential(&block);
-            // Q_d = Φ·(upper-right block); symmetrised against rounding.
-            let q = &transition * exp.view((0, n), (n, n));
-            (&q + q.transpose()) * 0.5
+            let mut process_noise = DMatrix::zeros(n, n);
+            ProcessNoise::default().of(a, noise, h, &mut process_noise);
+            process_noise
         }
     };
     Discrete {
@@ -816,19 +944,85 @@ pub fn mbf_smooth(
     measured: &[Option<Measured>],
     transitions: &[DMatrix<f64>],
 ) -> Vec<Gaussian> {
+    let mut smoothed = predicted.to_vec();
+    mbf_backward(
+        predicted,
+        measured,
+        transitions,
+        |k, prior, adjoint, information, work| {
+            let n = adjoint.len();
+            let into = &mut smoothed[k];
+            into.mean.copy_from(&prior.mean);
+            into.mean.gemv(-1.0, &prior.covariance, adjoint, 1.0);
+            let [product, outer] = work;
+            product.gemm(1.0, information, &prior.covariance, 0.0);
+            outer.gemm(1.0, &prior.covariance, product, 0.0);
+            let (p, q, smoothed) = (
+                prior.covariance.as_slice(),
+                outer.as_slice(),
+                into.covariance.as_mut_slice(),
+            );
+            for j in 0..n {
+                for i in 0..=j {
+                    let (ij, ji) = (i + j * n, j + i * n);
+                    let value = 0.5 * ((p[ij] - q[ij]) + (p[ji] - q[ji]));
+                    smoothed[ij] = value;
+                    smoothed[ji] = value;
+                }
+            }
+        },
+    );
+    smoothed
+}
+
+/// [`mbf_smooth`]'s means x_{k|N} and variances, the diagonal of P_{k|N}
+/// (as a column): P_ii − p_iᵀ·(Λ·p_i) with p_i column i of P = P_{k|k−1},
+/// one dense n × n product where the covariance takes two.
+pub fn mbf_smooth_variances(
+    predicted: &[Gaussian],
+    measured: &[Option<Measured>],
+    transitions: &[DMatrix<f64>],
+) -> Vec<(DVector<f64>, DVector<f64>)> {
+    let mut smoothed = vec![(DVector::zeros(0), DVector::zeros(0)); predicted.len()];
+    mbf_backward(
+        predicted,
+        measured,
+        transitions,
+        |k, prior, adjoint, information, work| {
+            let n = adjoint.len();
+            let mut mean = prior.mean.clone();
+            mean.gemv(-1.0, &prior.covariance, adjoint, 1.0);
+            let [product, _] = work;
+            product.gemm(1.0, information, &prior.covariance, 0.0);
+            let variances = DVector::from_iterator(
+                n,
+                (0..n).map(|i| {
+                    prior.covariance[(i, i)] - prior.covariance.column(i).dot(&product.column(i))
+                }),
+            );
+            smoothed[k] = (mean, variances);
+        },
+    );
+    smoothed
+}
+
+/// The smoother's backward sweep (module header): at each grid point k,
+/// from the last down, `at`(k, (x, P)_{k|k−1}, λ̃_k, Λ̃_k, two n × n work
+/// matrices).
+fn mbf_backward(
+    predicted: &[Gaussian],
+    measured: &[Option<Measured>],
+    transitions: &[DMatrix<f64>],
+    mut at: impl FnMut(usize, &Gaussian, &DVector<f64>, &DMatrix<f64>, &mut [DMatrix<f64>; 2]),
+) {
     let len = predicted.len();
     let Some(first) = predicted.first() else {
-        return Vec::new();
+        return;
     };
     let n = first.mean.len();
     let mut adjoint = DVector::zeros(n);
     let mut information = DMatrix::zeros(n, n);
-    let mut smoothed = predicted.to_vec();
-    let (mut observation, mut transposed, mut transition) = (
-        SparseRows::default(),
-        SparseRows::default(),
-        SparseRows::default(),
-    );
+    let (mut transposed, mut transition) = (SparseRows::default(), SparseRows::default());
     let mut work = [DMatrix::zeros(n, n), DMatrix::zeros(n, n)];
     let (mut weighted, mut by_gain, mut half) = (
         DMatrix::zeros(0, 0),
@@ -847,33 +1041,15 @@ pub fn mbf_smooth(
                 update,
                 &mut adjoint,
                 &mut information,
-                (&mut observation, &mut transposed),
+                &mut transposed,
                 (&mut weighted, &mut by_gain, &mut half, &mut reduced),
                 &mut work,
             );
         }
-        let prior = &predicted[k];
-        let into = &mut smoothed[k];
-        into.mean.copy_from(&prior.mean);
-        into.mean.gemv(-1.0, &prior.covariance, &adjoint, 1.0);
-        let [product, outer] = &mut work;
-        product.gemm(1.0, &information, &prior.covariance, 0.0);
-        outer.gemm(1.0, &prior.covariance, product, 0.0);
-        let (p, q, smoothed) = (
-            prior.covariance.as_slice(),
-            outer.as_slice(),
-            into.covariance.as_mut_slice(),
-        );
-        for j in 0..n {
-            for i in 0..=j {
-                let (ij, ji) = (i + j * n, j + i * n);
-                let value = 0.5 * ((p[ij] - q[ij]) + (p[ji] - q[ji]));
-                smoothed[ij] = value;
-                smoothed[ji] = value;
-            }
-        }
+        at(k, &predicted[k], &adjoint, &information, &mut work);
         if k > 0 {
             // λ ← Φᵀ·λ, Λ ← Φᵀ·Λ·Φ = (Zᵀ·Φ)ᵀ with Z = Λ·Φ, by Φ's columns.
+            let [product, outer] = &mut work;
             let phi = &transitions[k - 1];
             transition.set_transposed(phi);
             adjoint = phi.tr_mul(&adjoint);
@@ -882,7 +1058,6 @@ pub fn mbf_smooth(
             transition.times_transposed(outer, &mut information);
         }
     }
-    smoothed
 }
 
 /// The modified Bryson–Frazier smoother's step at a measurement:
@@ -893,7 +1068,7 @@ fn mbf_measurement(
     update: &Update,
     adjoint: &mut DVector<f64>,
     information: &mut DMatrix<f64>,
-    (observation, transposed): (&mut SparseRows, &mut SparseRows),
+    transposed: &mut SparseRows,
     (weighted, by_gain, half, reduced): (
         &mut DMatrix<f64>,
         &mut DMatrix<f64>,
@@ -905,7 +1080,6 @@ fn mbf_measurement(
     let n = adjoint.len();
     let m = h.nrows();
     let gain = &update.gain;
-    observation.set(h);
     transposed.set_transposed(h);
     // Hᵀ·v for an m-vector v, over H's non-zeros.
     let h_transposed_times = |v: &[f64], into: &mut [f64]| {
@@ -1287,6 +1461,45 @@ mod tests {
         assert_close(&discrete.transition, &exponential(&(&a * h)), 1e-14, "Φ");
         assert_close(&discrete.input, &gamma, 1e-9, "Γ");
         assert_close(&discrete.process_noise, &q, 1e-9, "Q_d");
+    }
+
+    /// The series with doubling against Van Loan's block exponential
+    /// itself, Q_d = Φ·F with e^{[[−A, Q_c], [0, Aᵀ]]·h} = [[·, F], [0, ·]]:
+    /// within 10⁻¹⁴ relative (Frobenius norm) for a step inside the series'
+    /// radius (no doubling), one of 5 doublings, and an augmented model's A
+    /// (trailing zero rows, noise on a constant state too); exactly
+    /// symmetric.
+    #[test]
+    fn process_noise_series_is_van_loans_block_exponential() {
+        let van_loan = |a: &DMatrix<f64>, noise: &DMatrix<f64>, h: f64| {
+            let n = a.nrows();
+            let mut block = DMatrix::zeros(2 * n, 2 * n);
+            block.view_mut((0, 0), (n, n)).copy_from(&(-a * h));
+            block.view_mut((0, n), (n, n)).copy_from(&(noise * h));
+            block
+                .view_mut((n, n), (n, n))
+                .copy_from(&(a.transpose() * h));
+            exponential(&(a * h)) * exponential(&block).view((0, n), (n, n))
+        };
+        let (a, b) = system();
+        let mut augmented = DMatrix::zeros(4, 4);
+        augmented.view_mut((0, 0), (3, 3)).copy_from(&a);
+        augmented.view_mut((0, 3), (3, 1)).copy_from(&b);
+        let noise = DMatrix::from_diagonal(&DVector::from_vec(vec![0.3, 2.0, 0.01]));
+        let augmented_noise =
+            DMatrix::from_diagonal(&DVector::from_vec(vec![0.3, 2.0, 0.01, 1e-4]));
+        let mut series = ProcessNoise::default();
+        for (a, noise, h) in [
+            (&a, &noise, 0.01),
+            (&a, &noise, 0.5),
+            (&augmented, &augmented_noise, 0.04),
+        ] {
+            let mut q = DMatrix::zeros(0, 0);
+            series.of(a, noise, h, &mut q);
+            let expected = van_loan(a, noise, h);
+            assert_close(&q, &expected, 1e-14, &format!("h = {h}"));
+            assert_eq!(q, q.transpose());
+        }
     }
 
     #[test]

@@ -126,7 +126,7 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
             )?;
             pass.measured_at(k, present, measured);
         }
-        pass.filtered_at(t, &state, &covariance(&factor))?;
+        pass.filtered_at(t, &state, Some(&covariance(&factor)))?;
     }
     Ok(pass)
 }
