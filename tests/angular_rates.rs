@@ -276,15 +276,29 @@ fn the_qar_approach_end_to_end() {
                 );
                 println!("{} {model} {method}: {}", profile.name, table_row(&outcome));
                 if !qar {
-                    // Filter error stalls on the 25 Hz approach (coloured
-                    // gusts, a white-noise filter): after 16 iterations no
-                    // step lowers the cost while the Gauss–Newton step
-                    // predicts 2 % of it, and the status says so.
+                    // Filter error on the 25 Hz approach (coloured gusts, a
+                    // white-noise filter) ends at the edge of its
+                    // convergence test, converged after 17 iterations or
+                    // stalled with the step predicting 2 % of the cost
+                    // (rounding decides which), and either way its moment
+                    // derivatives are biased beyond 3σ (measured Cm_q
+                    // 5.3σ, Cm_α 4.5σ, Cm_0 4.0σ).
                     if model == "transport-longitudinal" && method == "fem" {
-                        let Outcome::Estimated { estimate, .. } = &outcome else {
+                        let Outcome::Estimated { estimate, scores } = &outcome else {
                             panic!("fem: {:?}", outcome.reason())
                         };
-                        assert_eq!(estimate.status, Status::NoProgress);
+                        assert!(
+                            matches!(estimate.status, Status::Converged | Status::NoProgress),
+                            "fem: {}",
+                            estimate.status
+                        );
+                        let worst_moment = scores
+                            .iter()
+                            .filter(|s| s.name.starts_with("Cm_"))
+                            .filter_map(|s| s.error_sigma)
+                            .map(f64::abs)
+                            .fold(0.0, f64::max);
+                        assert!(worst_moment > 3.0, "fem's moments within {worst_moment}σ");
                     }
                     continue;
                 }
