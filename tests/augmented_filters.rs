@@ -459,7 +459,11 @@ fn coarse_records_are_filtered_in_sub_steps() {
                 halved.status
             );
             assert_eq!(auto.status, Status::Converged);
-            assert!(!matches!(halved.status, Status::Diverged(_)), "{}", halved.status);
+            assert!(
+                !matches!(halved.status, Status::Diverged(_)),
+                "{}",
+                halved.status
+            );
             assert!(
                 moved <= 0.1,
                 "fem: halving the step moved an estimate by {moved}σ"

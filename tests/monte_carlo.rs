@@ -542,3 +542,25 @@ fn missing_channel_rate_and_settings_axes() {
         assert!(message.contains(field), "{field}: {message}");
     }
 }
+
+/// A study's derive step names profiles of the study: another is refused
+/// under `derive.profiles`, naming the study's profiles.
+#[test]
+fn derive_names_the_studys_profiles() {
+    let text = SMALL.replace(
+        "seed = ",
+        "derive = { profiles = [\"qar-seed000\"] }\nseed = ",
+    );
+    let path = study_file("mc-derive", &text);
+    let error = Study::load(path.to_str().unwrap()).unwrap_err();
+    let message = error.to_string();
+    let Error::Invalid { problems, .. } = &error else {
+        panic!("expected a validation error, got {message}");
+    };
+    assert_eq!(problems.len(), 1, "{message}");
+    assert_eq!(problems[0].field, "derive.profiles", "{message}");
+    assert!(
+        message.contains("'qar-seed000' is not one of the study's profiles"),
+        "{message}"
+    );
+}

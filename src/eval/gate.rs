@@ -81,34 +81,7 @@ pub struct GateCase {
     /// record before the estimator: for recorders that lack channels the
     /// estimators need (the QAR).
     #[serde(default)]
-    pub derive: Option<GateDerive>,
-}
-
-/// The `derive` table of a gate case.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct GateDerive {
-    /// `--thrust-from-fuel-flow`: thrust-specific fuel consumption, kg/(N·s).
-    #[serde(default)]
-    pub thrust_from_fuel_flow: Option<f64>,
-    /// `--idle-fuel-flow`: kg/s per engine.
-    #[serde(default)]
-    pub idle_fuel_flow: f64,
-}
-
-impl GateDerive {
-    /// The derive step's options.
-    pub fn options(&self) -> crate::prep::derive::Options {
-        crate::prep::derive::Options {
-            thrust: self.thrust_from_fuel_flow.map(|specific_fuel_consumption| {
-                crate::prep::thrust::FuelFlowThrust {
-                    specific_fuel_consumption,
-                    idle_fuel_flow: self.idle_fuel_flow,
-                }
-            }),
-            ..Default::default()
-        }
-    }
+    pub derive: Option<crate::prep::derive::DeriveTable>,
 }
 
 impl GateCase {
@@ -318,6 +291,12 @@ pub fn load(path: &Path) -> Result<GateFile> {
                 field.clone(),
                 "give exactly one of relative_tolerance and sigma_tolerance, or expect_refusal alone",
             ),
+        }
+        if case.derive.as_ref().is_some_and(|d| !d.profiles.is_empty()) {
+            problems.push(
+                format!("{field}.derive.profiles"),
+                "is for studies: a gate case records with its one profile",
+            );
         }
         if !case.expect_missing.is_empty()
             && case.expect_refusal != Some(RefusalKind::MissingChannels)

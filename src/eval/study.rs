@@ -91,6 +91,11 @@ pub struct StudyFile {
     pub seed: u64,
     #[serde(default)]
     pub sweep: SweepSpec,
+    /// The derive step on the records of the named profiles (all when none
+    /// is named) before the estimators: for recorders that lack channels
+    /// the estimators need (the QAR).
+    #[serde(default)]
+    pub derive: Option<crate::prep::derive::DeriveTable>,
 }
 
 /// A study's methods: a list of names (`methods = ["ee", "oem"]`), or one
@@ -242,6 +247,8 @@ pub struct Study {
     pub runs: usize,
     pub seed: u64,
     pub points: Vec<SweepPoint>,
+    /// The derive step, on the records of the profiles it names.
+    pub derive: Option<crate::prep::derive::DeriveTable>,
 }
 
 /// One run at one sweep point.
@@ -380,6 +387,21 @@ impl Study {
                 problems: problems.0,
             });
         };
+        for name in file.derive.iter().flat_map(|d| &d.profiles) {
+            if !profiles.iter().any(|p| &p.name == name) {
+                problems.push(
+                    "derive.profiles",
+                    format!(
+                        "'{name}' is not one of the study's profiles ({})",
+                        profiles
+                            .iter()
+                            .map(|p| p.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                );
+            }
+        }
         let missing = missing_axis(&sweep.missing, &profiles, &mut problems);
         let channel_rates = channel_rate_axis(&sweep.channel_rate, &profiles, &mut problems);
         let variants = settings_axis(&sweep.settings, &mut problems);
@@ -454,6 +476,7 @@ impl Study {
             runs: file.runs,
             seed: file.seed,
             points,
+            derive: file.derive.clone(),
         };
         study.check_size("runs")?;
         Ok(study)
@@ -573,7 +596,14 @@ impl Study {
             &scenario,
             &point.profile,
             recorder_seed,
-        );
+        )
+        .and_then(|(record, truth, trace)| match &self.derive {
+            Some(derive) if derive.applies_to(&point.recorder) => {
+                crate::prep::derive::derive(&record, &derive.options())
+                    .map(|derived| (derived.record, truth, trace))
+            }
+            _ => Ok((record, truth, trace)),
+        });
         let mut histories = match (&recorded, keep) {
             (Ok((record, _, _)), true) => Some(CaseHistories::new(
                 case.point,

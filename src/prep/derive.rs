@@ -61,6 +61,44 @@ pub fn is_derived(source: &str) -> bool {
     source.starts_with("geometric") || source.starts_with("kinematic (")
 }
 
+/// The derive step as a gate case or a study states it: `aeroid derive`
+/// with its defaults, and the thrust from the fuel flow when
+/// `thrust_from_fuel_flow` is given.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeriveTable {
+    /// `--thrust-from-fuel-flow`: thrust-specific fuel consumption, kg/(N·s).
+    #[serde(default)]
+    pub thrust_from_fuel_flow: Option<f64>,
+    /// `--idle-fuel-flow`: kg/s per engine.
+    #[serde(default)]
+    pub idle_fuel_flow: f64,
+    /// In a study: the recorder profiles whose records are derived (every
+    /// record when empty). Not used by a gate case, which has one profile.
+    #[serde(default)]
+    pub profiles: Vec<String>,
+}
+
+impl DeriveTable {
+    /// The derive step's options.
+    pub fn options(&self) -> Options {
+        Options {
+            thrust: self
+                .thrust_from_fuel_flow
+                .map(|specific_fuel_consumption| FuelFlowThrust {
+                    specific_fuel_consumption,
+                    idle_fuel_flow: self.idle_fuel_flow,
+                }),
+            ..Default::default()
+        }
+    }
+
+    /// Whether a record of the profile `name` is derived.
+    pub fn applies_to(&self, profile: &str) -> bool {
+        self.profiles.is_empty() || self.profiles.iter().any(|p| p == profile)
+    }
+}
+
 /// A derived record and what was done.
 #[derive(Debug, Clone)]
 pub struct Derived {
