@@ -239,7 +239,8 @@ fn input_reconstruction_follows_the_interpolation_option() {
 
 /// Flight-test profile (25 Hz, DATA.md white noise on the sensors), exact
 /// control-surface channels (output error treats inputs as known), full 6-DOF
-/// structure, initial states estimated. With one seed every parameter lies
+/// structure, initial states estimated (the heading's unidentified: no
+/// output depends on it). With one seed every parameter lies
 /// within 4 Cramér–Rao standard errors: for 28 Gaussian estimates the chance
 /// that any exceeds 4σ is 28·6.3e-5 ≈ 0.2 %, so a failure means bias or bounds
 /// that are too optimistic. The bounds must also be informative: Cm_q, Cl_p
@@ -254,9 +255,13 @@ fn noisy_flight_test_record_within_cramer_rao_bounds() {
         ..Default::default()
     };
     let estimate = output_error(&[&record], &structure, &options).unwrap();
+    // The heading is integrated but no output depends on it (the forces do
+    // not depend on the heading), so its initial value has no sensitivity:
+    // its σ is infinite, and the fit says so. Every aerodynamic parameter
+    // has a finite σ.
     assert_eq!(
         estimate.status,
-        Status::Converged,
+        Status::Unidentified(vec!["x0[0].yaw".to_string()]),
         "{:?}",
         estimate.cost_history
     );
@@ -536,9 +541,10 @@ fn several_starts_find_one_minimum_or_name_the_worse_ones() {
 /// 0.8 s): integrated at the sample period, RK4 would take h·|λ| > 1 for
 /// the short period. Output error divides each interval into sub-steps of
 /// h·|λ| ≤ 0.5 and says so in its notes; halving that step moves no
-/// estimate by more than 0.1σ (its Cramér–Rao σ). At the sample period
-/// itself the fit is not a converged estimate near the truth: it fails or
-/// moves Cm_q by more than 3σ.
+/// estimate by more than 0.1σ (its Cramér–Rao σ). Both fits are poor fits
+/// of q, reproduced worse than by its mean at 0.8 s (measured: R² −0.49). At the
+/// sample period itself the fit is not an estimate near the truth: it
+/// fails or moves Cm_q by more than 3σ.
 #[test]
 fn coarse_records_are_integrated_in_sub_steps() {
     let mut scenario = Scenario::load("hansa3-elevator-multistep").unwrap();
@@ -556,8 +562,17 @@ fn coarse_records_are_integrated_in_sub_steps() {
         };
         output_error(&[&record], &structure, &options).unwrap()
     };
+    // At 0.8 s q, the fastest output, is reproduced worse than by its mean
+    // (R² < 0): a poor fit of q. (38 samples are too few for the whiteness
+    // figures, which need 40.)
+    let poor_q = Status::PoorFit(vec!["q".to_string()]);
+    let q_fit = |e: &aeroid::estimation::estimate::Estimate| {
+        let q = e.fits.iter().find(|f| f.channel == "q").unwrap();
+        format!("R² {:.3}, {} samples", q.r_squared, q.samples)
+    };
     let auto = fit(None);
-    assert_eq!(auto.status, Status::Converged, "{:?}", auto.notes);
+    println!("q at 1.25 Hz: {}", q_fit(&auto));
+    assert_eq!(auto.status, poor_q, "{:?}", auto.notes);
     let note = auto
         .notes
         .iter()
@@ -574,7 +589,7 @@ fn coarse_records_are_integrated_in_sub_steps() {
         "{note}"
     );
     let halved = fit(Some(step / 2.0));
-    assert_eq!(halved.status, Status::Converged, "{:?}", halved.notes);
+    assert_eq!(halved.status, poor_q, "{:?}", halved.notes);
     let moved = auto
         .parameters
         .iter()
@@ -599,7 +614,8 @@ fn coarse_records_are_integrated_in_sub_steps() {
     let (coarse_q, _) = cm_q(&coarse);
     let (auto_q, sigma) = cm_q(&auto);
     assert!(
-        coarse.status != Status::Converged || (coarse_q - auto_q).abs() > 3.0 * sigma,
+        !matches!(coarse.status, Status::Converged | Status::PoorFit(_))
+            || (coarse_q - auto_q).abs() > 3.0 * sigma,
         "the sample period as step should fail or bias Cm_q"
     );
 }
