@@ -16,8 +16,12 @@
 //!   does not know). Asserted: never optimistic (σ_MC/CRB ≤ 1.3, coverage
 //!   ≥ 88 %), and the conservatism pinned (σ_MC/CRB ≥ 0.35), so a change
 //!   in either direction is seen;
-//! - output error on the same records is biased far beyond its bounds:
-//!   coverage 5–57 %, σ_MC/CRB 2.4–19 for every derivative.
+//! - output error on the same records says it cannot fit them: 97 of the
+//!   100 fits are poor fits (the gust response left in its residuals is
+//!   structured, docs/methods.md "Fit quality"), 3 stop at the iteration
+//!   limit, so the study scores none of them (its statistics are over
+//!   converged fits). Asserted: none converged, at least 95 not converged
+//!   for a reason other than the iteration limit.
 
 use aeroid::eval::study::Study;
 
@@ -66,11 +70,12 @@ fn filter_error_is_unbiased_in_turbulence_where_output_error_is_not() {
     assert_eq!(oem.len(), 18, "{table}");
     for s in &oem {
         assert!(
-            s.std_over_crb > 2.0 && s.coverage < 0.7,
-            "oem {}: σ_MC/CRB {:.2}, coverage {:.2}: expected its bounds to miss the turbulence\n{table}",
+            s.converged == 0 && s.not_converged >= 95,
+            "oem {}: {} of {} converged, {} otherwise not: expected poor fits in turbulence\n{table}",
             s.parameter,
-            s.std_over_crb,
-            s.coverage
+            s.converged,
+            s.runs,
+            s.not_converged
         );
     }
 }

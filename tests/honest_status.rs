@@ -11,10 +11,11 @@
 //!   (fed in from the record, compared with itself), is refused;
 //! - an output name the model cannot produce fails when the model loads.
 //!
-//! The unchanged flight converges (the control case).
+//! The unchanged flight converges (the control case). Residuals of known
+//! kind show what output error's residual judgement calls a poor fit.
 
 use aeroid::error::Error;
-use aeroid::estimation::estimate::{Estimate, Status};
+use aeroid::estimation::estimate::{Estimate, OutputFit, ParameterEstimate, Status};
 use aeroid::estimation::estimator::{Refusal, RefusalKind};
 use aeroid::estimation::methods;
 use aeroid::estimation::problem::EstimationProblem;
@@ -139,5 +140,106 @@ fn degenerate_problems_are_refused() {
     assert!(
         error.contains("outputs[5]") && error.contains("unknown output 'airspeeed'"),
         "{error}"
+    );
+}
+
+/// A converged two-parameter estimate (a, b) with these variances and no
+/// fits.
+fn converged(variances: [f64; 2]) -> Estimate {
+    Estimate {
+        method: "test".into(),
+        model: "m".into(),
+        record: "r".into(),
+        status: Status::Converged,
+        parameters: ["a", "b"]
+            .iter()
+            .zip(variances)
+            .map(|(name, variance)| ParameterEstimate {
+                name: name.to_string(),
+                value: 1.0,
+                standard_error: variance.sqrt(),
+                start: 0.0,
+            })
+            .collect(),
+        covariance: vec![vec![variances[0], 0.0], vec![0.0, variances[1]]],
+        fits: Vec::new(),
+        iterations: 3,
+        cost_history: vec![3.0, 2.0, 1.0],
+        wall_time: 0.0,
+        notes: Vec::new(),
+        details: String::new(),
+        network: None,
+        distributions: Vec::new(),
+        histories: Vec::new(),
+    }
+}
+
+/// The whiteness figures and the residual judgement on residuals of
+/// known kind, over 1500 samples of a unit sine output (the stall
+/// flight's length at 25 Hz): white noise of 0.05 (seeded) is not
+/// correlated (√N·ρ₁ below 4), with at most 3 of the 20 lags outside the
+/// band; a slow sine error of amplitude 0.1 (50 samples a period) is
+/// correlated (ρ₁ = cos(2π/50) = 0.992) and structured 0.1·√ρ₁ ≈ 0.0996
+/// (error and output both sines: the ratio of their RMS), a poor fit; the
+/// same error at 1e-9 (a noise-free fit's rounding) is correlated but
+/// structured 1e-9: converged, with a note. A converged estimate with an
+/// infinite σ is unidentified whatever its residuals.
+#[test]
+fn residual_structure_makes_a_poor_fit() {
+    use rand::RngExt;
+    let n = 1500;
+    let mut rng = aeroid::random::stream(7, aeroid::random::streams::RECORDER);
+    let measured: Vec<f64> = (0..n).map(|k| (k as f64 * 0.01).sin()).collect();
+    let with = |error: &dyn Fn(usize) -> f64| -> OutputFit {
+        let predicted: Vec<f64> = (0..n).map(|k| measured[k] - error(k)).collect();
+        OutputFit::new("alpha", &measured, &predicted)
+    };
+    let noise: Vec<f64> = (0..n)
+        .map(|_| 0.05 * rng.sample::<f64, _>(rand_distr::StandardNormal))
+        .collect();
+    let white = with(&|k| noise[k]);
+    assert!(!white.correlated() && !white.is_structured(), "{white:?}");
+    eprintln!("white: {}", white.whiteness_text());
+    assert!(white.outside_band <= 0.15, "{white:?}");
+    let slow = |k: usize| (2.0 * std::f64::consts::PI * k as f64 / 50.0).sin();
+    let structured = with(&|k| 0.1 * slow(k));
+    assert!(
+        structured.lag_one > 0.95 && structured.is_structured(),
+        "{structured:?}"
+    );
+    assert!(
+        (structured.structured - 0.0996).abs() < 0.002,
+        "{structured:?}"
+    );
+    let rounding = with(&|k| 1e-9 * slow(k));
+    assert!(
+        rounding.correlated() && !rounding.is_structured(),
+        "{rounding:?}"
+    );
+
+    let mut judged = converged([1.0, 1.0]);
+    judged.fits = vec![white.clone(), structured.clone()];
+    let judged = judged.assess_residuals();
+    assert_eq!(judged.status, Status::PoorFit(vec!["alpha".into()]));
+    assert!(
+        judged
+            .notes
+            .iter()
+            .any(|n| n.contains("structured residual"))
+    );
+    let mut fine = converged([1.0, 1.0]);
+    fine.fits = vec![white, rounding];
+    let fine = fine.assess_residuals();
+    assert_eq!(fine.status, Status::Converged);
+    assert!(
+        fine.notes
+            .iter()
+            .any(|n| n.starts_with("residuals correlated"))
+    );
+    let mut infinite = converged([1.0, f64::INFINITY]);
+    infinite.fits = vec![structured];
+    assert_eq!(
+        infinite.assess_residuals().status,
+        Status::Unidentified(vec!["b".into()])
     );
 }

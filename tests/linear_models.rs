@@ -258,9 +258,12 @@ const SHORT_PERIOD: &[(&str, &str)] = &[
 ];
 
 /// The `fits` (method, model) on the short-period flights `scenario(seed)`
-/// for seeds 1..=`seeds` (flight-test-25hz), each fit converged: per
-/// method and parameter, the sum of the errors in σ units, how many lie
-/// inside the 95 % interval, and how many there are.
+/// for seeds 1..=`seeds` (flight-test-25hz), each fit converged, except
+/// output error's, which are poor fits (the process noise leaves the
+/// noise-driven motion in its residuals, structured: methods.md, "Fit
+/// quality") and are scored all the same, to show their bias: per method
+/// and parameter, the sum of the errors in σ units, how many lie inside
+/// the 95 % interval, and how many there are.
 fn errors_in_sigma(
     seeds: u64,
     scenario: impl Fn(u64) -> Scenario,
@@ -273,10 +276,17 @@ fn errors_in_sigma(
         let (record, truth) = record_flight(&scenario(seed), &profile, seed).unwrap();
         for &(method, model) in fits {
             let estimate = estimate(method, &record, model).unwrap();
-            assert_eq!(
-                estimate.status,
-                aeroid::estimation::estimate::Status::Converged,
-                "{method} on {model}, seed {seed}"
+            let expected = match method {
+                "oem" => matches!(
+                    estimate.status,
+                    aeroid::estimation::estimate::Status::PoorFit(_)
+                ),
+                _ => estimate.status == aeroid::estimation::estimate::Status::Converged,
+            };
+            assert!(
+                expected,
+                "{method} on {model}, seed {seed}: {}",
+                estimate.status
             );
             for p in &estimate.parameters {
                 let error = (p.value - truth.parameters[&p.name]) / p.standard_error;

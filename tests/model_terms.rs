@@ -718,13 +718,10 @@ fn stall_time_constants_in_chord_units_are_flown_and_recovered() {
 
 /// τ2 acting only while α̇ < 0: the separation follows α without lag on
 /// the way up, and lags it on the way down (hysteresis). A known gap: on
-/// the flight-test record τ2 lies 7.0σ from the truth (seeds 7 and 8:
-/// −9.6σ, +3.3σ; every other parameter within 2σ), the Cramér–Rao bound
-/// understating its scatter. The switch at α̇ = 0 is a kink in the
-/// equations; the sensitivities, difference quotients across it, are then
-/// not the cost's gradient, so Gauss–Newton can stop where the approximate
-/// gradient vanishes (a likely cause, not established). The bound here
-/// pins the measured state (10σ).
+/// the flight-test record τ2 lies 7.0σ from the truth, its Cramér–Rao
+/// bound about 5.6 times smaller than its scatter over seeds
+/// (`one_sided_hysteresis_bound_understates_its_scatter`); every other
+/// parameter within 2σ here. The bound here pins the measured state (10σ).
 #[test]
 fn one_sided_hysteresis_is_flown_and_recovered() {
     let (case, structure) = stall_case(
@@ -745,4 +742,363 @@ fn induced_drag_from_attached_lift_is_flown_and_recovered() {
         "a1 = 20.0\nalpha_star = 0.29\ntau1 = 0.0\ntau2 = 0.6\ninduced_drag_lift = \"attached\"",
     );
     stall_checks(&case, &structure, "attached induced drag", &[]);
+}
+
+/// The `[aero.stall]` tables of the stall variants, truth and a-priori
+/// start (a1 −16 %, α* −6 %, τ2 −33 % off): (label, truth, start).
+fn stall_variants() -> Vec<(&'static str, String, String)> {
+    let truth = "a1 = 23.7\nalpha_star = 0.309\ntau1 = 0.0\ntau2 = 0.9";
+    let start = "a1 = 20.0\nalpha_star = 0.29\ntau1 = 0.0\ntau2 = 0.6";
+    let both = |extra: &str| (format!("{truth}\n{extra}"), format!("{start}\n{extra}"));
+    let chord = (
+        "a1 = 23.7\nalpha_star = 0.309\ntau1 = 0.0\ntau2 = 27.0\ntime_unit = \"chord/V\""
+            .to_string(),
+        "a1 = 20.0\nalpha_star = 0.29\ntau1 = 0.0\ntau2 = 18.0\ntime_unit = \"chord/V\""
+            .to_string(),
+    );
+    let one_sided = both("tau2_only_while_decreasing = true");
+    let attached = both("induced_drag_lift = \"attached\"");
+    vec![
+        ("τ2 in s", truth.to_string(), start.to_string()),
+        ("τ2 in c̄/V", chord.0, chord.1),
+        ("τ2 while α̇ < 0", one_sided.0, one_sided.1),
+        ("attached induced drag", attached.0, attached.1),
+    ]
+}
+
+fn from_model_values(structure: &ModelStructure, starts: usize) -> OutputErrorOptions {
+    OutputErrorOptions {
+        start: aeroid::estimation::methods::output_error::Start::Model,
+        starts,
+        ..OutputErrorOptions::for_structure(structure).unwrap()
+    }
+}
+
+/// The stall parameters, which the bound of 2σ applies to.
+const STALL_PARAMETERS: [&str; 3] = ["a1", "alpha_star", "tau2"];
+
+/// Each stall variant flown with flight-test noise (seeds 6, 7, 8) and
+/// fitted by output error with the matching structure from the a-priori
+/// start values (`start = "model"`, the staged fit).
+///
+/// Truth: the bundled ATTAS stall values (a1 23.7, α* 0.309, τ2 0.9 s or
+/// 27 c̄/V, CD_χ 0.079, Cm_χ −0.126, …). Tolerance, and why: the issue's
+/// target is the stall parameters (a1, α*, τ2) within 2σ. Over the 27
+/// values of the three variants that meet it (the one-sided hysteresis
+/// apart, below) an unbiased estimate with an honest bound falls outside
+/// 2σ 4.6 % of the time, so a test of each against 2σ would fail on some
+/// seed by chance; what is asserted is that the bounds hold: the RMS of
+/// error/σ over the 27 is at most 1.45 (χ² with 27 degrees of freedom
+/// exceeds 1.45²·27 = 57 with probability below 1e-3), and each within 3σ.
+/// Measured: RMS 1.02, 25 of 27 within 2σ, worst 2.65σ (a1, c̄/V, seed
+/// 8). Every other parameter (10 per fit) within 4.5σ: measured worst
+/// 4.26σ (Cm_χ, c̄/V, seed 8), the others within 3σ. The one-sided
+/// hysteresis is the known gap (`one_sided_hysteresis_is_flown_and_recovered`,
+/// docs/findings.md): its stall parameters land up to 9.6σ off (τ2; a1
+/// 4.9σ, α* 3.7σ on seed 7), every parameter bounded by 10σ here.
+///
+/// A single fit either converges there, or lands in another minimum and
+/// says so: on seed 8 (τ2 in s, and the attached induced drag) the staged
+/// fit stops with τ2 131–134σ off, reproducing α, q and nx with a
+/// structured residual of 0.2–0.38 of their variation: a poor fit, never
+/// "converged". Four starts (`starts = 4`, spread 0.5) always reach the
+/// minimum at the truth, converged, and their notes say how the other
+/// starts ended.
+#[test]
+fn stall_variants_from_a_priori_starts_reach_the_truth() {
+    let mut wrong_minima = 0;
+    let mut stall_errors = Vec::new();
+    for (index, (label, truth, start)) in stall_variants().into_iter().enumerate() {
+        let (case, structure) = stall_case(&format!("stall-start-{index}"), &truth, &start);
+        // The one-sided hysteresis is a known gap (docs/findings.md): its
+        // parameters are bounded by 10σ and its stall parameters kept out
+        // of the RMS.
+        let one_sided = label == "τ2 while α̇ < 0";
+        let (stall_bound, rest_bound) = if one_sided { (10.0, 10.0) } else { (3.0, 4.5) };
+        let bounded = |name: &str| STALL_PARAMETERS.contains(&name);
+        for seed in [6, 7, 8] {
+            let (record, scenario) = case.record("flight-test-25hz", seed);
+            let within = |estimate: &Estimate, what: &str| {
+                let rows = rows(estimate, &scenario);
+                let table = common::truth_table(&rows);
+                let (stall, stall_name) = worst_sigma(&rows, bounded);
+                let (rest, rest_name) = worst_sigma(&rows, |n| !STALL_PARAMETERS.contains(&n));
+                eprintln!(
+                    "{label}, seed {seed}, {what}: {}; stall parameters {stall:.2}σ ({stall_name}), others {rest:.2}σ ({rest_name})",
+                    estimate.status
+                );
+                let errors: Vec<f64> = rows
+                    .iter()
+                    .filter(|(name, ..)| bounded(name))
+                    .map(|(_, value, sigma, truth)| (value - truth) / sigma)
+                    .collect();
+                (stall < stall_bound && rest < rest_bound, table, errors)
+            };
+            let single =
+                output_error(&[&record], &structure, &from_model_values(&structure, 1)).unwrap();
+            let (good, table, _) = within(&single, "one start");
+            match &single.status {
+                Status::Converged => assert!(good, "{label}, seed {seed}:\n{table}"),
+                Status::PoorFit(outputs) => {
+                    assert!(
+                        !good && outputs.contains(&"q".to_string()),
+                        "{label}, seed {seed}: {outputs:?}\n{table}"
+                    );
+                    wrong_minima += 1;
+                }
+                other => panic!("{label}, seed {seed}: {other}"),
+            }
+            let several = aeroid::estimation::methods::output_error::multi_start(
+                &[&record],
+                &structure,
+                &from_model_values(&structure, 4),
+                None,
+            )
+            .unwrap();
+            let (good, table, errors) = within(&several, "four starts");
+            assert_eq!(
+                several.status,
+                Status::Converged,
+                "{label}, seed {seed}: {:?}",
+                several.notes
+            );
+            assert!(good, "{label}, seed {seed}, four starts:\n{table}");
+            assert!(several.notes.iter().any(|n| n.starts_with("4 starts")));
+            if !one_sided {
+                stall_errors.extend(errors);
+            }
+        }
+    }
+    let rms = (stall_errors.iter().map(|z| z * z).sum::<f64>() / stall_errors.len() as f64).sqrt();
+    let within_two = stall_errors.iter().filter(|z| z.abs() <= 2.0).count();
+    eprintln!(
+        "stall parameters: RMS {rms:.2}σ over {}, {within_two} within 2σ",
+        stall_errors.len()
+    );
+    assert_eq!(stall_errors.len(), 27);
+    assert!(rms <= 1.45, "RMS {rms:.2}σ");
+    assert_eq!(
+        wrong_minima, 2,
+        "seed 8 of τ2 in s and of the attached induced drag"
+    );
+}
+
+/// Fits of the stall flight (flight-test-25hz, seed 6) with a structure
+/// that lacks what the truth has. The criterion (src/estimation/estimate.rs,
+/// `assess_residuals`): a poor fit when an output's residuals are
+/// correlated (√N·ρ₁ > 4, which white residuals exceed with probability
+/// 3e-5) and their structured part √(ρ₁·(1 − R²)) exceeds 0.05 of the
+/// output's variation; matched fits stay at or below 0.025 (the gates'
+/// and `stall_variants_from_a_priori_starts_reach_the_truth`'s). Measured:
+/// a linear model (CL_0, CL_alpha, CD_0, Cm_0, Cm_alpha, Cm_q, Cm_de, e)
+/// leaves 0.47–0.95 on α, q, pitch, nx, nz (0.07 on the airspeed); the
+/// stall model without hysteresis (τ2 held at 0) 0.25–0.37 on α, q, nx, nz
+/// (0.085 on pitch); the two-sided τ2 on a one-sided flight 0.10–0.11 on
+/// α, q, nx (0.063 on nz). All three are poor fits naming exactly the
+/// outputs beyond 0.05, and none has an infinite σ.
+///
+/// Two variants a fit cannot tell on this manoeuvre (a finding): τ2 in
+/// seconds on a flight in c̄/V (the airspeed falls from 95 to about 80 m/s
+/// into the stall, so 27 c̄/V is 0.90–1.07 s; a constant τ2 comes close),
+/// and the induced drag from the separated lift on a flight with the
+/// attached-flow lift (CD_χ absorbs it, 145σ off). Their residuals are
+/// correlated (ρ₁ 0.12–0.59 on α, q, pitch, nx, nz, and 0.31 on nx; 95–100 %
+/// of the 20 lags outside the band) but their structured part is at most
+/// 0.017 and 0.023, within what matched fits leave: converged, with a note
+/// that names the correlated outputs.
+#[test]
+fn stall_fits_with_a_mismatched_structure_report_a_poor_fit() {
+    let variants = stall_variants();
+    let (base_truth, base_start) = (&variants[0].1, &variants[0].2);
+    let (case, _) = stall_case("stall-mismatch", base_truth, base_start);
+    let (record, _) = case.record("flight-test-25hz", 6);
+    // A linear model: the stall model's file without χ.
+    let text = std::fs::read_to_string(format!(
+        "{}/models/attas-stall.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let cut = text.find("[aero.stall]").unwrap();
+    let end = cut + text[cut..].find("\n[aero.C").unwrap();
+    let linear = format!("{}{}", &text[..cut], &text[end..])
+        .replace("model = \"stall\"", "model = \"linear\"")
+        .replace("chi = 0.06\n", "")
+        .replace("chi = -0.1\n", "")
+        .replace("[parameters.tau1]\nfixed = true\n", "")
+        .replace("aircraft = \"attas-stall\"", "aircraft = \"truth.toml\"");
+    let linear = ModelStructure::load(
+        common::write(&case.folder, "linear.toml", &linear)
+            .to_str()
+            .unwrap(),
+    )
+    .unwrap();
+    let (_, mut no_hysteresis) = stall_case(
+        "stall-no-hysteresis",
+        base_truth,
+        &base_start.replace("tau2 = 0.6", "tau2 = 0.0"),
+    );
+    let tau2 = no_hysteresis
+        .aircraft
+        .aero
+        .parameters
+        .index("tau2")
+        .unwrap();
+    no_hysteresis.free[tau2] = false;
+    let (one_sided_case, _) = stall_case("stall-one-sided-flight", &variants[2].1, &variants[2].2);
+    let (one_sided_record, _) = one_sided_case.record("flight-test-25hz", 6);
+    let (_, two_sided) = stall_case("stall-two-sided-model", &variants[2].1, base_start);
+    let (chord_case, _) = stall_case("stall-chord-flight", &variants[1].1, &variants[1].2);
+    let (chord_record, _) = chord_case.record("flight-test-25hz", 6);
+    let (attached_case, _) = stall_case("stall-attached-flight", &variants[3].1, &variants[3].2);
+    let (attached_record, _) = attached_case.record("flight-test-25hz", 6);
+    let fit = |record: &FlightRecord, structure: &ModelStructure| {
+        output_error(&[record], structure, &from_model_values(structure, 1)).unwrap()
+    };
+    let report = |label: &str, estimate: &Estimate| {
+        eprintln!("{label}: {}", estimate.status);
+        for f in &estimate.fits {
+            eprintln!(
+                "  {label} {}  R² {:.4}  TIC {:.4}",
+                f.whiteness_text(),
+                f.r_squared,
+                f.theil
+            );
+        }
+        assert!(
+            estimate
+                .parameters
+                .iter()
+                .all(|p| p.standard_error.is_finite()),
+            "{label}: {:?}",
+            estimate.parameters
+        );
+    };
+    for (label, record, structure, poor) in [
+        (
+            "linear model",
+            &record,
+            &linear,
+            &["alpha", "q", "pitch", "nx", "nz"][..],
+        ),
+        (
+            "no hysteresis",
+            &record,
+            &no_hysteresis,
+            &["alpha", "q", "pitch", "nx", "nz"][..],
+        ),
+        (
+            "two-sided τ2 on a one-sided flight",
+            &one_sided_record,
+            &two_sided,
+            &["alpha", "q", "nx", "nz"][..],
+        ),
+    ] {
+        let estimate = fit(record, structure);
+        report(label, &estimate);
+        let Status::PoorFit(outputs) = &estimate.status else {
+            panic!("{label}: {}", estimate.status)
+        };
+        for output in poor {
+            assert!(
+                outputs.contains(&output.to_string()),
+                "{label}: {outputs:?}"
+            );
+        }
+        for f in &estimate.fits {
+            assert_eq!(
+                outputs.contains(&f.channel),
+                f.is_structured(),
+                "{label}: {}",
+                f.whiteness_text()
+            );
+        }
+        assert!(
+            estimate
+                .notes
+                .iter()
+                .any(|n| n.contains("structured residual"))
+        );
+    }
+    let (_, seconds) = stall_case("stall-seconds-model", &variants[1].1, base_start);
+    let (_, separated) = stall_case("stall-separated-model", &variants[3].1, base_start);
+    for (label, record, structure, correlated) in [
+        ("τ2 in s on a c̄/V flight", &chord_record, &seconds, "alpha"),
+        (
+            "separated-lift induced drag on an attached-lift flight",
+            &attached_record,
+            &separated,
+            "nx",
+        ),
+    ] {
+        let estimate = fit(record, structure);
+        report(label, &estimate);
+        assert_eq!(estimate.status, Status::Converged, "{label}");
+        let fit = estimate
+            .fits
+            .iter()
+            .find(|f| f.channel == correlated)
+            .unwrap();
+        assert!(
+            fit.correlated() && fit.structured < 0.03,
+            "{label}: {}",
+            fit.whiteness_text()
+        );
+        assert!(
+            estimate
+                .notes
+                .iter()
+                .any(|n| n.starts_with("residuals correlated") && n.contains(correlated)),
+            "{label}: {:?}",
+            estimate.notes
+        );
+    }
+}
+
+/// How far the Cramér–Rao bound of τ2 understates its scatter, two-sided
+/// against one-sided hysteresis: twelve flight-test records (seeds 1–12)
+/// of each, single fits from the a-priori start. Two-sided: 10 converge,
+/// with error/σ of mean −0.58 and standard deviation 1.24 (an honest
+/// bound gives 1; asserted below 1.6), and seeds 3 and 8 end in the other
+/// minimum (τ2 ≈ 0.35, 132σ off), each a poor fit. One-sided: all 12
+/// converge, with mean +1.71 and standard deviation 5.56 (+6.5σ to
+/// −9.6σ; asserted above 3): the bound is about 5.6 times too small,
+/// while the residuals stay white (structured residual ≤ 0.003). The
+/// switch at α̇ = 0 makes the equations non-smooth in the state, so the
+/// cost is not the quadratic bowl the information matrix describes;
+/// whether a smoothed switch or exact sensitivities across it would close
+/// the gap is open (docs/findings.md).
+#[test]
+fn one_sided_hysteresis_bound_understates_its_scatter() {
+    let variants = stall_variants();
+    for (index, poor_seeds, low, high) in [(0, vec![3, 8], 0.6, 1.6), (2, vec![], 3.0, 10.0)] {
+        let (label, truth, start) = &variants[index];
+        let (case, structure) = stall_case(&format!("stall-scatter-{index}"), truth, start);
+        let mut errors = Vec::new();
+        for seed in 1..=12 {
+            let (record, scenario) = case.record("flight-test-25hz", seed);
+            let estimate =
+                output_error(&[&record], &structure, &from_model_values(&structure, 1)).unwrap();
+            let (_, value, sigma, truth) = rows(&estimate, &scenario)
+                .into_iter()
+                .find(|r| r.0 == "tau2")
+                .unwrap();
+            let error = (value - truth) / sigma;
+            eprintln!("{label}, seed {seed}: {}, τ2 {error:+.2}σ", estimate.status);
+            if poor_seeds.contains(&seed) {
+                assert!(
+                    matches!(estimate.status, Status::PoorFit(_)) && error.abs() > 100.0,
+                    "{label}, seed {seed}: {}",
+                    estimate.status
+                );
+            } else {
+                assert_eq!(estimate.status, Status::Converged, "{label}, seed {seed}");
+                errors.push(error);
+            }
+        }
+        let n = errors.len() as f64;
+        let mean = errors.iter().sum::<f64>() / n;
+        let spread = (errors.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        eprintln!("{label}: τ2 error/σ mean {mean:+.2}, standard deviation {spread:.2}");
+        assert!(spread > low && spread < high, "{label}: {spread:.2}");
+    }
 }

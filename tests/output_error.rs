@@ -239,7 +239,8 @@ fn input_reconstruction_follows_the_interpolation_option() {
 
 /// Flight-test profile (25 Hz, DATA.md white noise on the sensors), exact
 /// control-surface channels (output error treats inputs as known), full 6-DOF
-/// structure, initial states estimated. With one seed every parameter lies
+/// structure, initial states estimated (the heading's unidentified: no
+/// output depends on it). With one seed every parameter lies
 /// within 4 Cramér–Rao standard errors: for 28 Gaussian estimates the chance
 /// that any exceeds 4σ is 28·6.3e-5 ≈ 0.2 %, so a failure means bias or bounds
 /// that are too optimistic. The bounds must also be informative: Cm_q, Cl_p
@@ -254,9 +255,13 @@ fn noisy_flight_test_record_within_cramer_rao_bounds() {
         ..Default::default()
     };
     let estimate = output_error(&[&record], &structure, &options).unwrap();
+    // The heading is integrated but no output depends on it (the forces do
+    // not depend on the heading), so its initial value has no sensitivity:
+    // its σ is infinite, and the fit says so. Every aerodynamic parameter
+    // has a finite σ.
     assert_eq!(
         estimate.status,
-        Status::Converged,
+        Status::Unidentified(vec!["x0[0].yaw".to_string()]),
         "{:?}",
         estimate.cost_history
     );
@@ -432,11 +437,14 @@ fn both_starts_reach_the_same_optimum() {
 /// Several starts (`starts = N`). On the ATTAS lateral flight-test
 /// record, a well-posed fit, the usual start and three starts moved by up
 /// to ±50 % reach one minimum: every start converges, the estimate is
-/// within 0.01σ of the single fit, and the notes list the four. On the
+/// within 0.01σ of the single fit, and the notes say the converged starts
+/// agree and list the four. On the
 /// stall flight (attas-stall, flight-test-25hz) the fit from a-priori
-/// starts is not: of six starts, two end "converged" in a minimum whose
-/// cost ½·Σ N·ln R is worse by 1.6e4 and 2.8e4 (measured) with parameters
-/// off by orders of magnitude, one stops at the iteration limit; the
+/// starts is not: of six starts, two end in a minimum whose cost ½·Σ N·ln R
+/// is worse by 1.6e4 and 2.8e4 (measured) with parameters off by orders of
+/// magnitude, and say so: "unidentified" (infinite σ: e, or CD_χ, Cm_χ, e
+/// and the stall parameters), never "converged"; one stops at the
+/// iteration limit; the
 /// least-cost fit is the estimate (the usual start's): the stall
 /// parameters within 2σ of the truth (a1 0.29σ, α* 0.50σ, τ2 0.07σ
 /// measured), every parameter within 3σ (worst Cm_chi 2.24σ, as in its
@@ -481,23 +489,30 @@ fn several_starts_find_one_minimum_or_name_the_worse_ones() {
             .find(|n| n.starts_with(&format!("{starts} starts")))
             .unwrap_or_else(|| panic!("{name}: {:?}", estimate.notes));
         eprintln!("{name}: {note}");
+        assert!(
+            note.contains("the converged starts agree: each within 1σ"),
+            "{note}"
+        );
         let lines: Vec<&str> = note.split("; ").filter(|l| l.contains("at cost")).collect();
         assert_eq!(lines.len(), starts, "{note}");
         let least = lines.iter().map(|l| cost(l)).fold(f64::INFINITY, f64::min);
-        let worse = lines
-            .iter()
-            .filter(|l| l.contains(": converged") && cost(l) > least + EQUAL_COST)
-            .count();
+        let worse = |status: &str| {
+            lines
+                .iter()
+                .filter(|l| l.contains(status) && cost(l) > least + EQUAL_COST)
+                .count()
+        };
         if model == "attas-lateral" {
             assert!(note.contains(&format!("{starts} converged")), "{note}");
-            assert_eq!(worse, 0, "{note}");
+            assert_eq!(worse(": converged") + worse(": poor fit"), 0, "{note}");
             let one = output_error(&[&record], &structure, &single).unwrap();
             for (a, b) in estimate.parameters.iter().zip(&one.parameters) {
                 let apart = (a.value - b.value).abs() / b.standard_error;
                 assert!(apart < 0.01, "{}: {apart:.4}σ from the single fit", a.name);
             }
         } else {
-            assert!(worse >= 1, "{note}");
+            assert!(worse(": unidentified") + worse(": poor fit") >= 2, "{note}");
+            assert_eq!(worse(": converged"), 0, "{note}");
             let rows = common::against_truth(&estimate, &scenario);
             for (parameter, value, sigma, truth) in rows.iter().filter(|r| r.3.is_finite()) {
                 let bound = if ["a1", "alpha_star", "tau2"].contains(&parameter.as_str()) {
@@ -526,9 +541,10 @@ fn several_starts_find_one_minimum_or_name_the_worse_ones() {
 /// 0.8 s): integrated at the sample period, RK4 would take h·|λ| > 1 for
 /// the short period. Output error divides each interval into sub-steps of
 /// h·|λ| ≤ 0.5 and says so in its notes; halving that step moves no
-/// estimate by more than 0.1σ (its Cramér–Rao σ). At the sample period
-/// itself the fit is not a converged estimate near the truth: it fails or
-/// moves Cm_q by more than 3σ.
+/// estimate by more than 0.1σ (its Cramér–Rao σ). Both fits are poor fits
+/// of q, reproduced worse than by its mean at 0.8 s (measured: R² −0.49). At the
+/// sample period itself the fit is not an estimate near the truth: it
+/// fails or moves Cm_q by more than 3σ.
 #[test]
 fn coarse_records_are_integrated_in_sub_steps() {
     let record = common::hansa3_at_1_25_hz();
@@ -540,15 +556,24 @@ fn coarse_records_are_integrated_in_sub_steps() {
         };
         output_error(&[&record], &structure, &options).unwrap()
     };
+    // At 0.8 s q, the fastest output, is reproduced worse than by its mean
+    // (R² < 0): a poor fit of q. (38 samples are too few for the whiteness
+    // figures, which need 40.)
+    let poor_q = Status::PoorFit(vec!["q".to_string()]);
+    let q_fit = |e: &aeroid::estimation::estimate::Estimate| {
+        let q = e.fits.iter().find(|f| f.channel == "q").unwrap();
+        format!("R² {:.3}, {} samples", q.r_squared, q.samples)
+    };
     let auto = fit(None);
-    assert_eq!(auto.status, Status::Converged, "{:?}", auto.notes);
+    println!("q at 1.25 Hz: {}", q_fit(&auto));
+    assert_eq!(auto.status, poor_q, "{:?}", auto.notes);
     let (note, step) = common::integration_step_note(&auto);
     assert!(
         step < 0.8 && (0.8 / step - (0.8 / step).round()).abs() < 1e-3,
         "{note}"
     );
     let halved = fit(Some(step / 2.0));
-    assert_eq!(halved.status, Status::Converged, "{:?}", halved.notes);
+    assert_eq!(halved.status, poor_q, "{:?}", halved.notes);
     let moved = common::largest_move_in_sigma(&auto, &halved);
     let coarse = fit(Some(0.8));
     let cm_q = |e: &aeroid::estimation::estimate::Estimate| {
@@ -568,7 +593,8 @@ fn coarse_records_are_integrated_in_sub_steps() {
     let (coarse_q, _) = cm_q(&coarse);
     let (auto_q, sigma) = cm_q(&auto);
     assert!(
-        coarse.status != Status::Converged || (coarse_q - auto_q).abs() > 3.0 * sigma,
+        !matches!(coarse.status, Status::Converged | Status::PoorFit(_))
+            || (coarse_q - auto_q).abs() > 3.0 * sigma,
         "the sample period as step should fail or bias Cm_q"
     );
 }

@@ -140,11 +140,14 @@ pub fn run(args: Args) -> Result<()> {
     out!("{}", score::table(&scores));
     for fit in &estimate.fits {
         outln!(
-            "  fit {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}",
+            "  fit {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}  ρ₁ {:.3}  outside band {:.0} %  structured {:.4}",
             fit.channel,
             fit.rms,
             fit.r_squared,
-            fit.theil
+            fit.theil,
+            fit.lag_one,
+            100.0 * fit.outside_band,
+            fit.structured
         );
     }
     for note in &estimate.notes {

@@ -79,6 +79,15 @@
 //! Convergence: the Gauss–Newton step's predicted decrease of the whitened
 //! cost below 1e-4 (a step under 0.014σ). Cramér–Rao
 //! bounds are the square roots of the diagonal of M⁻¹, M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ).
+//! Fit quality ([`Estimate::assess_residuals`]): output error models
+//! sensor noise only, so a model that matches the aircraft leaves white
+//! residuals. Per output the estimate reports R², Theil's coefficient,
+//! the residuals' lag-1 autocorrelation ρ₁, the fraction of lags 1–20
+//! outside ±1.96/√N and the structured residual √(ρ₁·(1 − R²)); an output
+//! whose residuals are correlated (√N·ρ₁ > 4) with a structured residual
+//! beyond 0.05 of its variation makes a converged fit a poor fit (a
+//! structure lacking a term, a wrong minimum, turbulence), and one below
+//! it is a note.
 //! Settings (`[methods.oem]`, [`OutputErrorOptions`]): integration step and
 //! input interpolation, start, iteration limit, initial states and output
 //! biases as unknowns. Several manoeuvres may be fitted at once (shared
@@ -110,7 +119,12 @@
 //! [`EQUAL_COST`] of it but whose parameters differ from it by more than
 //! one standard error is another minimum the data cannot tell from the
 //! best, and the estimate is then `unidentified` naming those parameters.
-//! The notes list every start's outcome and cost; `details` tables them.
+//! The notes say whether the converged starts agree (each within 1σ of
+//! the least-cost fit) or how many end in a worse minimum, and list every
+//! start's outcome, cost and distance; `details` tables them. Each start's
+//! fit is judged as a single fit is ([`Estimate::assess_residuals`]): a
+//! start that ends with an infinite σ or a structured residual is not
+//! counted as converged.
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Status;
@@ -338,7 +352,10 @@ impl Estimator for OutputError {
         let options = OutputErrorOptions::read(&problem.settings)?;
         let structure = match &problem.structure {
             Structure::SixDof(structure) => structure,
-            Structure::Linear(linear) => return linear_output_error(problem, linear, &options),
+            Structure::Linear(linear) => {
+                return linear_output_error(problem, linear, &options)
+                    .map(Estimate::assess_residuals);
+            }
         };
         let records: Vec<&FlightRecord> = problem.records.iter().collect();
         if options.starts > 1 {
@@ -428,6 +445,8 @@ pub fn multi_start(
     let mut details =
         String::from("start            status                   ½·Σ N·ln R     max |Δθ|/σ\n");
     let mut apart: Vec<String> = Vec::new();
+    // Converged fits within 1σ of the least-cost fit, and at a worse cost.
+    let (mut agreeing, mut worse) = (0, 0);
     for (i, (label, fit)) in fits.iter().enumerate() {
         match fit {
             Ok(estimate) => {
@@ -462,6 +481,16 @@ pub fn multi_start(
                         sigmas(d)
                     ))
                 ));
+                if estimate.status.is_success() {
+                    if distance.is_some_and(|d| d <= 1.0) {
+                        agreeing += 1;
+                    } else if best.is_some_and(|b| match &fits[b].1 {
+                        Ok(best_fit) => cost(estimate) > cost(best_fit) + EQUAL_COST,
+                        Err(_) => false,
+                    }) {
+                        worse += 1;
+                    }
+                }
                 if let Some(b) = best.filter(|&b| b != i)
                     && let Ok(best_fit) = &fits[b].1
                     && estimate.status.is_success()
@@ -493,7 +522,14 @@ pub fn multi_start(
         options.start_spread,
         options.start_seed,
         if apart.is_empty() {
-            "the converged ones agree with the least-cost fit or reach a worse minimum".to_string()
+            match (agreeing == converged, worse) {
+                (true, _) => {
+                    "the converged starts agree: each within 1σ of the least-cost fit".to_string()
+                }
+                (false, worse) => format!(
+                    "the converged starts disagree: {agreeing} within 1σ of the least-cost fit, {worse} in a worse minimum"
+                ),
+            }
         } else {
             format!(
                 "another converged minimum of equal cost (within {EQUAL_COST}) differs by more than 1σ in {}",
@@ -837,7 +873,7 @@ pub fn output_error_from(
             "initial state released after a first fit with it held at the first samples ({iterations} iterations)"
         ));
     }
-    Ok(estimate)
+    Ok(estimate.assess_residuals())
 }
 
 /// Proof of match (ELM + Gauss–Newton and reflex-wing UAV papers): the structure with an estimate's
