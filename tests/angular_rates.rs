@@ -10,7 +10,6 @@ use aeroid::eval::run::{Outcome, estimate_scored};
 use aeroid::prep::angular_rates::{KinematicRates, kinematic_rates};
 use aeroid::prep::derive::{Options, RatesChoice, derive};
 use aeroid::prep::differentiation::Differentiator;
-use aeroid::prep::thrust::FuelFlowThrust;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::Profile;
 use aeroid::sim::scenario::Scenario;
@@ -222,20 +221,6 @@ fn table_row(outcome: &Outcome) -> String {
     }
 }
 
-/// The derive step for the QAR: its defaults, and the thrust from the fuel
-/// flow by the engine model the recorder's engine channels come from
-/// (src/sim/engine.rs: TSFC 2.0e-5 kg/(N·s), idle 0.02 kg/s per engine),
-/// as an analyst states it from the engine deck.
-fn qar_derive() -> Options {
-    Options {
-        thrust: Some(FuelFlowThrust {
-            specific_fuel_consumption: 2.0e-5,
-            idle_fuel_flow: 0.02,
-        }),
-        ..Options::default()
-    }
-}
-
 /// The QAR approach end to end: transport-approach recorded by
 /// qar-seed000, derived (combined surfaces, density, geometric α, β and
 /// airspeed, kinematic rates, the thrust from the fuel flow), and every
@@ -259,7 +244,9 @@ fn the_qar_approach_end_to_end() {
             aeroid::eval::linear_flight::record_flight(&scenario, &profile, scenario.seed).unwrap();
         let qar = profile.name == "qar-seed000";
         let record = if qar {
-            derive(&recorded, &qar_derive()).unwrap().record
+            derive(&recorded, &common::qar_derive_options())
+                .unwrap()
+                .record
         } else {
             recorded
         };

@@ -195,3 +195,28 @@ pub fn largest_move_in_sigma(
         .map(|(a, b)| ((a.value - b.value) / a.standard_error).abs())
         .fold(0.0, f64::max)
 }
+
+/// The derive step as the QAR approach's tests take it: its defaults and
+/// the thrust from the fuel flow by the engine map the recorder's flows
+/// come from (TSFC 2.0e-5 kg/(N·s), idle 0.02 kg/s per engine).
+pub fn qar_derive_options() -> aeroid::prep::derive::Options {
+    aeroid::prep::derive::Options {
+        thrust: Some(aeroid::prep::thrust::FuelFlowThrust {
+            specific_fuel_consumption: 2.0e-5,
+            idle_fuel_flow: 0.02,
+        }),
+        ..aeroid::prep::derive::Options::default()
+    }
+}
+
+/// The gusty transport approach recorded by the QAR profile and derived
+/// ([`qar_derive_options`]), with the truth trace.
+pub fn derived_qar_approach() -> (aeroid::record::FlightRecord, aeroid::sim::trace::TruthTrace) {
+    let scenario = approach(true);
+    let profile = aeroid::record::recorder::Profile::load("qar-seed000", None).unwrap();
+    let (recorded, trace) = fly_and_record(&scenario, &profile);
+    let record = aeroid::prep::derive::derive(&recorded, &qar_derive_options())
+        .unwrap()
+        .record;
+    (record, trace)
+}

@@ -368,19 +368,8 @@ fn smoothed_coefficients_feed_the_networks() {
 /// unidentified, CL_alpha −70 %.
 #[test]
 fn smoothed_coefficients_of_the_derived_qar_feed_the_networks() {
-    use aeroid::prep::derive::{Options, derive};
-    use aeroid::prep::thrust::FuelFlowThrust;
     let scenario = common::approach(true);
-    let profile = Profile::load("qar-seed000", None).unwrap();
-    let (recorded, _) = common::fly_and_record(&scenario, &profile);
-    let options = Options {
-        thrust: Some(FuelFlowThrust {
-            specific_fuel_consumption: 2.0e-5,
-            idle_fuel_flow: 0.02,
-        }),
-        ..Options::default()
-    };
-    let record = derive(&recorded, &options).unwrap().record;
+    let (record, _) = common::derived_qar_approach();
     let settings = RbfDeltaSettings {
         coefficients: CoefficientSource::Smoothed,
         ..RbfDeltaSettings::default()

@@ -394,19 +394,8 @@ fn missing_channels_and_nonlinear_models_are_refused() {
 ///    sideslip between samples.
 #[test]
 fn the_derived_qar_approach_is_smoothed_to_the_end() {
-    use aeroid::prep::derive::{Options, derive};
-    use aeroid::prep::thrust::FuelFlowThrust;
     let scenario = common::approach(true);
-    let profile = Profile::load("qar-seed000", None).unwrap();
-    let (recorded, trace) = common::fly_and_record(&scenario, &profile);
-    let options = Options {
-        thrust: Some(FuelFlowThrust {
-            specific_fuel_consumption: 2.0e-5,
-            idle_fuel_flow: 0.02,
-        }),
-        ..Options::default()
-    };
-    let record = derive(&recorded, &options).unwrap().record;
+    let (record, trace) = common::derived_qar_approach();
     let structure = ModelStructure::load("transport-longitudinal").unwrap();
     let settings = SmoothedRegressionSettings::default();
     let (smoothed, estimate) = smooth_and_regress(&record, &structure, &settings).unwrap();
