@@ -200,13 +200,12 @@ pub fn largest_move_in_sigma(
 /// the thrust from the fuel flow by the engine map the recorder's flows
 /// come from (TSFC 2.0e-5 kg/(N·s), idle 0.02 kg/s per engine).
 pub fn qar_derive_options() -> aeroid::prep::derive::Options {
-    aeroid::prep::derive::Options {
-        thrust: Some(aeroid::prep::thrust::FuelFlowThrust {
-            specific_fuel_consumption: 2.0e-5,
-            idle_fuel_flow: 0.02,
-        }),
-        ..aeroid::prep::derive::Options::default()
+    aeroid::prep::derive::DeriveTable {
+        thrust_from_fuel_flow: Some(2.0e-5),
+        idle_fuel_flow: 0.02,
+        ..Default::default()
     }
+    .options()
 }
 
 /// The gusty transport approach recorded by the QAR profile and derived

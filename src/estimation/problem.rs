@@ -48,16 +48,16 @@ pub const UNWRAPPED_SOURCE: &str = "unwrapped for the estimators";
 fn unwrap_headings(records: &mut [FlightRecord]) {
     for channel in records.iter_mut().flat_map(|r| r.channels.iter_mut()) {
         let wraps = crate::record::derived::measurand(&channel.name).is_some_and(|m| m.wraps);
-        let finite: Vec<f64> = channel
-            .values
-            .iter()
-            .copied()
-            .filter(|v| !v.is_nan())
-            .collect();
-        let jumps = finite
-            .windows(2)
-            .any(|pair| (pair[1] - pair[0]).abs() > std::f64::consts::PI);
-        if wraps && jumps {
+        if !wraps {
+            continue;
+        }
+        let mut previous: Option<f64> = None;
+        let jumps = channel.values.iter().filter(|v| !v.is_nan()).any(|&v| {
+            let jump = previous.is_some_and(|p| (v - p).abs() > std::f64::consts::PI);
+            previous = Some(v);
+            jump
+        });
+        if jumps {
             crate::record::unwrap_angles(&mut channel.values);
             channel.source = format!("{}; {UNWRAPPED_SOURCE}", channel.source);
         }

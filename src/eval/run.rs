@@ -96,7 +96,8 @@ pub struct RunReport {
     pub profile: String,
     /// The record the estimators read (after the derive step, if asked).
     pub record: FlightRecord,
-    /// What the derive step did, when it ran.
+    /// What the derive step did, when it ran (its record moved to
+    /// `record`, so empty here).
     pub derived: Option<crate::prep::derive::Derived>,
     pub truth: RunTruth,
     pub runs: Vec<MethodRun>,
@@ -113,11 +114,11 @@ pub fn run(
     validate_method_tables(&scenario.methods, &scenario.path)?;
     let (recorded, truth) =
         crate::eval::linear_flight::record_flight(scenario, profile, scenario.seed)?;
-    let derived = derive
+    let mut derived = derive
         .map(|options| crate::prep::derive::derive(&recorded, options))
         .transpose()?;
-    let record = match &derived {
-        Some(derived) => derived.record.clone(),
+    let record = match &mut derived {
+        Some(derived) => std::mem::take(&mut derived.record),
         None => recorded,
     };
     let names = methods::names();

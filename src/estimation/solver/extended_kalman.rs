@@ -159,13 +159,7 @@ impl TimeUpdate {
                                 + noise[i + j * n] * h;
                         }
                     }
-                    for j in 0..n {
-                        for i in 0..j {
-                            let mean = (q[i + j * n] + q[j + i * n]) * 0.5;
-                            q[i + j * n] = mean;
-                            q[j + i * n] = mean;
-                        }
-                    }
+                    kalman::symmetrise(&mut self.process_noise);
                 }
                 self.sparse.set(&self.transition);
             }

@@ -104,12 +104,7 @@ impl Exponential {
                 largest = largest.max(v.abs());
             }
         }
-        let norm = largest * k as f64;
-        let squarings = if norm > 0.5 {
-            (norm / 0.5).log2().ceil() as i32
-        } else {
-            0
-        };
+        let squarings = squarings_for(largest * k as f64);
         let scale = 2f64.powi(-squarings);
         resize(&mut self.x, k, k);
         for (into, column) in self
@@ -220,12 +215,8 @@ impl ProcessNoise {
     /// symmetric.
     pub fn of(&mut self, a: &DMatrix<f64>, noise: &DMatrix<f64>, h: f64, into: &mut DMatrix<f64>) {
         let n = a.nrows();
-        let norm = a.iter().map(|v| (v * h).abs()).fold(0.0, f64::max) * n as f64;
-        let squarings = if norm > 0.5 {
-            (norm / 0.5).log2().ceil() as i32
-        } else {
-            0
-        };
+        let squarings =
+            squarings_for(a.iter().map(|v| (v * h).abs()).fold(0.0, f64::max) * n as f64);
         let tau = h * 2f64.powi(-squarings);
         resize(&mut self.scaled, n, n);
         for (into, &a) in self.scaled.iter_mut().zip(a.iter()) {
@@ -276,13 +267,30 @@ impl ProcessNoise {
                 std::mem::swap(&mut self.transition, product);
             }
         }
-        let q = into.as_mut_slice();
-        for j in 0..n {
-            for i in 0..j {
-                let mean = (q[i + j * n] + q[j + i * n]) * 0.5;
-                q[i + j * n] = mean;
-                q[j + i * n] = mean;
-            }
+        symmetrise(into);
+    }
+}
+
+/// The squarings that bring a matrix of norm bound `norm` (n times its
+/// largest entry) to ½ or below, where the Taylor series of
+/// [`Exponential`] and [`ProcessNoise`] converge fast.
+fn squarings_for(norm: f64) -> i32 {
+    if norm > 0.5 {
+        (norm / 0.5).log2().ceil() as i32
+    } else {
+        0
+    }
+}
+
+/// Replaces a square matrix by its symmetric part, (M + Mᵀ)/2, in place.
+pub(crate) fn symmetrise(matrix: &mut DMatrix<f64>) {
+    let n = matrix.nrows();
+    let m = matrix.as_mut_slice();
+    for j in 0..n {
+        for i in 0..j {
+            let mean = (m[i + j * n] + m[j + i * n]) * 0.5;
+            m[i + j * n] = mean;
+            m[j + i * n] = mean;
         }
     }
 }
