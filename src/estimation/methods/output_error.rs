@@ -148,6 +148,7 @@ use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{
     self, LeastSquaresProblem, NormalEquations, Options,
 };
+use crate::estimation::solver::regression;
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
@@ -228,6 +229,19 @@ pub struct OutputErrorOptions {
     pub start_spread: f64,
     /// Seed of the extra starts' random stream.
     pub start_seed: u64,
+    /// Split each record's fitting window into pieces of about this length
+    /// (s), each simulated from its own initial state (multiple shooting);
+    /// none: one piece per record.
+    #[serde(
+        deserialize_with = "crate::units::optional_seconds",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub segment: Option<f64>,
+    /// Lag (s) to which the residuals' autocorrelation is summed in the
+    /// Cramér–Rao bounds (Morelli & Klein 1997); 0: the bounds assume
+    /// white residuals.
+    #[serde(deserialize_with = "crate::units::seconds")]
+    pub correlation_lag: f64,
 }
 
 impl Default for OutputErrorOptions {
@@ -243,6 +257,8 @@ impl Default for OutputErrorOptions {
             starts: 1,
             start_spread: 0.5,
             start_seed: 1,
+            segment: None,
+            correlation_lag: 0.0,
         }
     }
 }
@@ -272,6 +288,19 @@ impl OutputErrorOptions {
         if options.starts == 0 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: starts must be at least 1"
+            )));
+        }
+        if options
+            .segment
+            .is_some_and(|length| !(length > 0.0 && length.is_finite()))
+        {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: segment must be a positive duration"
+            )));
+        }
+        if !(options.correlation_lag >= 0.0 && options.correlation_lag.is_finite()) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: correlation_lag must be a duration of 0 s or more"
             )));
         }
         if !(options.start_spread > 0.0 && options.start_spread.is_finite()) {
@@ -331,6 +360,14 @@ impl Estimator for OutputError {
                         "the extra starts move each free parameter by up to this fraction of max(|value|, 0.01)",
                     ),
                     ("start_seed", "seed of the extra starts"),
+                    (
+                        "segment",
+                        "split each record into pieces of about this length, e.g. \"20 s\", each simulated from its own initial state (multiple shooting; with estimate_initial_state, per piece); none: one piece per record",
+                    ),
+                    (
+                        "correlation_lag",
+                        "lag, e.g. \"20 s\", to which the residuals' autocorrelation is summed in the Cramér–Rao bounds (Morelli & Klein 1997, for coloured residuals); 0: white residuals assumed",
+                    ),
                 ],
             ),
         }
@@ -564,6 +601,12 @@ fn linear_output_error(
         return Err(Error::Other(format!(
             "[methods.{METHOD}]: estimate_initial_state and output_biases are for 6-DOF structures; \
              a linear model ('{}') states its biases as `state_bias` and `output_bias` parameters",
+            structure.name
+        )));
+    }
+    if options.segment.is_some() || options.correlation_lag > 0.0 {
+        return Err(Error::Other(format!(
+            "[methods.{METHOD}]: segment and correlation_lag are for 6-DOF structures, not the linear model '{}'",
             structure.name
         )));
     }
@@ -868,6 +911,22 @@ pub fn output_error_from(
         started.elapsed().as_secs_f64(),
     );
     estimate.notes.extend(notes);
+    if options.segment.is_some() {
+        estimate.notes.push(format!(
+            "multiple shooting: {} pieces of about {} s, each simulated from {}",
+            problem.segments.len(),
+            options.segment.unwrap_or_default(),
+            if options.estimate_initial_state {
+                "its own estimated initial state"
+            } else {
+                "its first recorded samples"
+            }
+        ));
+    }
+    if options.correlation_lag > 0.0 && !matches!(solution.status, Status::Diverged(_)) {
+        let note = problem.coloured_bounds(&solution, options.correlation_lag, &mut estimate);
+        estimate.notes.push(note);
+    }
     if let Some((_, _, iterations)) = staged {
         estimate.notes.push(format!(
             "initial state released after a first fit with it held at the first samples ({iterations} iterations)"
@@ -948,6 +1007,49 @@ pub fn match_histories(
             predicted: predicted.clone(),
         })
         .collect())
+}
+
+/// The fitting window of `record` cut into pieces of equal length, as
+/// close to `length` as a whole number of them allows, each half-open (a
+/// sample on a boundary belongs to the later piece); an error when a piece
+/// would hold fewer than two samples of an output.
+fn pieces(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+    length: f64,
+) -> Result<Vec<(f64, f64)>> {
+    let (start, end) = fitting_window(record, &structure.outputs, options.window)?;
+    let count = ((end - start) / length).round().max(1.0) as usize;
+    let piece = (end - start) / count as f64;
+    let windows: Vec<(f64, f64)> = (0..count)
+        .map(|k| {
+            let from = start + k as f64 * piece;
+            let to = if k + 1 == count {
+                end
+            } else {
+                start + (k + 1) as f64 * piece - 1e-9 * piece
+            };
+            (from, to)
+        })
+        .collect();
+    for name in &structure.outputs {
+        let channel = record.channel(name)?;
+        for &(from, to) in &windows {
+            let samples = channel
+                .times
+                .iter()
+                .filter(|t| **t >= from && **t <= to)
+                .count();
+            if samples < 2 {
+                return Err(Error::Other(format!(
+                    "[methods.{METHOD}] segment = {length} s: the piece {from:.3}–{to:.3} s of '{}' holds {samples} sample(s) of '{name}'; give a longer segment",
+                    record.scenario
+                )));
+            }
+        }
+    }
+    Ok(windows)
 }
 
 /// The structure's outputs as model outputs; an error names one the model does not have.
@@ -1032,10 +1134,21 @@ impl Problem {
         options: &OutputErrorOptions,
     ) -> Result<Problem> {
         let observables = observables(structure)?;
-        let segments = records
-            .iter()
-            .map(|record| segment(record, structure, options))
-            .collect::<Result<Vec<_>>>()?;
+        let mut segments = Vec::with_capacity(records.len());
+        for record in records {
+            match options.segment {
+                None => segments.push(segment(record, structure, options)?),
+                Some(length) => {
+                    for window in pieces(record, structure, options, length)? {
+                        let piece = OutputErrorOptions {
+                            window: Some(window),
+                            ..options.clone()
+                        };
+                        segments.push(segment(record, structure, &piece)?);
+                    }
+                }
+            }
+        }
         let all = unknowns(structure, options, &segments);
         Ok(Problem {
             model: FlightModel::new(structure.aircraft.clone(), Default::default()),
@@ -1352,6 +1465,19 @@ impl Problem {
             .collect();
         notes.sort();
         notes.dedup();
+        // Pieces of one record each choose their step: one note says it.
+        let steps: Vec<usize> = (0..notes.len())
+            .filter(|&i| notes[i].starts_with("integration step"))
+            .collect();
+        if steps.len() > 1 && self.segments.len() > 1 {
+            notes[steps[0]].push_str(&format!(
+                " (the finest of {} different steps, each piece's and record's own)",
+                steps.len()
+            ));
+            for &i in steps[1..].iter().rev() {
+                notes.remove(i);
+            }
+        }
         let determinant: f64 = self.weights.iter().map(|w| w.powi(-2)).product();
         notes.push(format!(
             "R is diagonal; det(R) = {determinant:.4e} at the solution"
@@ -1579,6 +1705,121 @@ impl LeastSquaresProblem for Problem {
 }
 
 impl Problem {
+    /// Replaces the estimate's white Cramér–Rao bounds by the bounds
+    /// corrected for coloured residuals (Morelli & Klein 1997, Eq. 19 for
+    /// output error: Cov = M⁻¹·[Σᵢ Σⱼ Jᵢᵀ·R_rr(i − j)·Jⱼ]·M⁻¹, J the
+    /// whitened residuals' Jacobian at the solution, M = JᵀJ, R_rr each
+    /// output's autocorrelation of its whitened residuals, pooled over the
+    /// pieces, summed to `lag` seconds within each piece, a pair never
+    /// spanning two; the truncated sum by the rectangular window, or the
+    /// Bartlett one where that is not positive, as the regressions do).
+    /// Returns the note that says so, or why the bounds stay white.
+    fn coloured_bounds(
+        &mut self,
+        solution: &gauss_newton::Solution,
+        lag: f64,
+        estimate: &mut Estimate,
+    ) -> String {
+        let white = solution.covariance();
+        if (0..white.nrows()).any(|j| !white[(j, j)].is_finite()) {
+            return "Cramér–Rao bounds left white: a parameter is unidentifiable".to_string();
+        }
+        // Each output's pieces (rows per segment) and its lag in samples.
+        let counts: Vec<Vec<usize>> = (0..self.outputs.len())
+            .map(|o| {
+                self.segments
+                    .iter()
+                    .map(|s| s.outputs[o].times.len())
+                    .collect()
+            })
+            .collect();
+        let lags: Vec<usize> = (0..self.outputs.len())
+            .map(|o| {
+                let (span, intervals) = self
+                    .segments
+                    .iter()
+                    .map(|s| &s.outputs[o].times)
+                    .filter(|t| t.len() > 1)
+                    .fold((0.0, 0usize), |(span, n), t| {
+                        (span + (t[t.len() - 1] - t[0]), n + t.len() - 1)
+                    });
+                if intervals == 0 {
+                    0
+                } else {
+                    ((lag * intervals as f64 / span).round() as usize).max(1)
+                }
+            })
+            .collect();
+        let residuals = solution.residuals.clone();
+        let Ok((weights, assembled)) = self.sensitivities_at(&solution.theta) else {
+            return "Cramér–Rao bounds left white: no Jacobian at the solution".to_string();
+        };
+        let m = assembled.unknowns.len();
+        if residuals.len() != assembled.rows.last().map_or(0, |r| r.end) || m != white.nrows() {
+            return "Cramér–Rao bounds left white: the residuals do not match the Jacobian"
+                .to_string();
+        }
+        // Whitened Jacobian rows (the sign of J drops out of the products).
+        let blocks: Vec<Vec<(DMatrix<f64>, std::ops::Range<usize>)>> = assembled
+            .rows
+            .iter()
+            .zip(&weights)
+            .zip(&counts)
+            .map(|((rows, weight), counts)| {
+                let mut start = rows.start;
+                counts
+                    .iter()
+                    .map(|&count| {
+                        let range = start..start + count;
+                        start += count;
+                        let x = DMatrix::from_fn(count, m, |i, j| {
+                            weight * assembled.row(range.start + i)[j]
+                        });
+                        (x, range)
+                    })
+                    .collect()
+            })
+            .collect();
+        let middle = |window| {
+            let mut middle = DMatrix::zeros(m, m);
+            for (output, lag) in blocks.iter().zip(&lags) {
+                let views: Vec<regression::Block> = output
+                    .iter()
+                    .map(|(x, range)| (x.as_view(), residuals.rows(range.start, range.len())))
+                    .collect();
+                middle += regression::coloured_middle(&views, *lag, window);
+            }
+            regression::sandwich(&white, &middle)
+        };
+        let mut window = regression::LagWindow::Rectangular;
+        let mut covariance = middle(window);
+        if !covariance.diagonal().iter().all(|v| *v > 0.0) {
+            window = regression::LagWindow::Bartlett;
+            covariance = middle(window);
+        }
+        let mut largest = (1.0, String::new());
+        for (j, parameter) in estimate.parameters.iter_mut().enumerate() {
+            let corrected = covariance[(j, j)].max(0.0).sqrt();
+            let ratio = corrected / parameter.standard_error;
+            if ratio > largest.0 || largest.1.is_empty() {
+                largest = (ratio, parameter.name.clone());
+            }
+            parameter.standard_error = corrected;
+        }
+        estimate.covariance = (0..m)
+            .map(|i| covariance.row(i).iter().copied().collect())
+            .collect();
+        format!(
+            "Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein 1997), autocorrelation summed to {lag} s ({} window): up to {:.2} times the white bounds ({})",
+            match window {
+                regression::LagWindow::Rectangular => "rectangular",
+                regression::LagWindow::Bartlett => "Bartlett",
+            },
+            largest.0,
+            largest.1
+        )
+    }
+
     /// The weights 1/σ and ∂y/∂θ at the samples ([`Problem::assembled`])
     /// for the Jacobian at θ: the held simulation's, else θ's (simulated
     /// with sensitivities if it was not).

@@ -24,7 +24,7 @@
 //!   singular vectors) for PRESS = Σ (eᵢ/(1 − h_ii))² (K&M Eq. 5.81).
 
 use crate::estimation::solver::gauss_newton::pseudo_inverse_or_infinite;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView};
 
 /// Weights of the residual autocorrelation in the coloured-residual bound.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -156,22 +156,10 @@ impl LeastSquares {
         if !self.unidentifiable.is_empty() {
             return self.white_covariance();
         }
-        let count = x.nrows();
-        let e = &self.residuals;
-        let mut middle = x.tr_mul(x) * (e.norm_squared() / count as f64);
-        for k in 1..=lag.min(count.saturating_sub(1)) {
-            let early = x.rows(0, count - k);
-            let late = x.rows(k, count - k);
-            let weight = match window {
-                LagWindow::Rectangular => 1.0,
-                LagWindow::Bartlett => 1.0 - k as f64 / (lag as f64 + 1.0),
-            };
-            let correlation =
-                weight * e.rows(0, count - k).dot(&e.rows(k, count - k)) / count as f64;
-            let product = early.tr_mul(&late);
-            middle += (&product + product.transpose()) * correlation;
-        }
-        &self.inverse_information * middle * &self.inverse_information
+        sandwich(
+            &self.inverse_information,
+            &coloured_middle(&[(x.as_view(), self.residuals.as_view())], lag, window),
+        )
     }
 
     /// The bound for independent residuals of unequal variance v_i (row i):
@@ -194,13 +182,14 @@ impl LeastSquares {
     /// not positive for some parameter, the Bartlett-weighted one; with the
     /// window used.
     pub fn corrected_covariance(&self, x: &DMatrix<f64>, lag: usize) -> (DMatrix<f64>, LagWindow) {
-        let plain = self.coloured_covariance(x, lag, LagWindow::Rectangular);
-        if plain.diagonal().iter().all(|v| *v > 0.0) {
-            (plain, LagWindow::Rectangular)
-        } else {
-            let weighted = self.coloured_covariance(x, lag, LagWindow::Bartlett);
-            (weighted, LagWindow::Bartlett)
+        if !self.unidentifiable.is_empty() {
+            return (self.white_covariance(), LagWindow::Rectangular);
         }
+        corrected_covariance(
+            &self.inverse_information,
+            &[(x.as_view(), self.residuals.as_view())],
+            lag,
+        )
     }
 
     /// Predicted residual sum of squares, Σ (eᵢ/(1 − h_ii))².
@@ -210,6 +199,78 @@ impl LeastSquares {
             .zip(&self.leverage)
             .map(|(e, h)| (e / (1.0 - h)).powi(2))
             .sum()
+    }
+}
+
+/// Rows of a regressor (or sensitivity) matrix and the residuals at them:
+/// one stretch of consecutive samples.
+pub type Block<'a> = (DMatrixView<'a, f64>, DVectorView<'a, f64>);
+
+/// The middle of the Morelli–Klein bound, Σᵢ Σⱼ xᵢ·R_ee(i − j)·xⱼᵀ over
+/// |i − j| ≤ `lag` within each block, R_ee(k) = (1/N)·Σ eᵢ·e_{i+k} the
+/// residuals' autocorrelation pooled over the blocks (N their samples in
+/// all; a pair never spans two blocks), lag k weighted by the window.
+pub fn coloured_middle(blocks: &[Block], lag: usize, window: LagWindow) -> DMatrix<f64> {
+    let columns = blocks.first().map_or(0, |(x, _)| x.ncols());
+    let count: usize = blocks.iter().map(|(_, e)| e.len()).sum();
+    let mut middle = DMatrix::zeros(columns, columns);
+    if count == 0 {
+        return middle;
+    }
+    // Σ eᵢ·e_{i+k} over the blocks (each block's own pairs).
+    let lagged = |k: usize| {
+        blocks
+            .iter()
+            .filter(|(_, e)| e.len() > k)
+            .map(|(_, e)| e.rows(0, e.len() - k).dot(&e.rows(k, e.len() - k)))
+            .sum::<f64>()
+    };
+    let zero = blocks.iter().map(|(_, e)| e.norm_squared()).sum::<f64>() / count as f64;
+    for (x, _) in blocks {
+        middle += x.tr_mul(x) * zero;
+    }
+    let longest = blocks.iter().map(|(_, e)| e.len()).max().unwrap_or(0);
+    for k in 1..=lag.min(longest.saturating_sub(1)) {
+        let weight = match window {
+            LagWindow::Rectangular => 1.0,
+            LagWindow::Bartlett => 1.0 - k as f64 / (lag as f64 + 1.0),
+        };
+        let correlation = weight * lagged(k) / count as f64;
+        for (x, _) in blocks.iter().filter(|(x, _)| x.nrows() > k) {
+            let rows = x.nrows() - k;
+            let product = x.rows(0, rows).tr_mul(&x.rows(k, rows));
+            middle += (&product + product.transpose()) * correlation;
+        }
+    }
+    middle
+}
+
+/// A⁻¹·B·A⁻¹ for the inverse information A⁻¹ and the middle B.
+pub fn sandwich(inverse_information: &DMatrix<f64>, middle: &DMatrix<f64>) -> DMatrix<f64> {
+    inverse_information * middle * inverse_information
+}
+
+/// The Morelli–Klein bound (module documentation) for the inverse
+/// information `inverse_information` and the blocks of rows with their
+/// residuals: the plain truncated sum, or, when that is not positive for
+/// some parameter, the Bartlett-weighted one; with the window used.
+pub fn corrected_covariance(
+    inverse_information: &DMatrix<f64>,
+    blocks: &[Block],
+    lag: usize,
+) -> (DMatrix<f64>, LagWindow) {
+    let plain = sandwich(
+        inverse_information,
+        &coloured_middle(blocks, lag, LagWindow::Rectangular),
+    );
+    if plain.diagonal().iter().all(|v| *v > 0.0) {
+        (plain, LagWindow::Rectangular)
+    } else {
+        let weighted = sandwich(
+            inverse_information,
+            &coloured_middle(blocks, lag, LagWindow::Bartlett),
+        );
+        (weighted, LagWindow::Bartlett)
     }
 }
 
