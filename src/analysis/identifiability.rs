@@ -28,8 +28,9 @@
 //! likelihood estimate under a model error: to first order the estimate
 //! moves by δθ = M⁻¹·Σ Sᵀ·R⁻¹·r, r the output error at the truth):
 //! - the *inputs as recorded*: an estimator knows the controls only from
-//!   the record's samples (at the channel's rate, word slot, delay and lag;
-//!   split surfaces combined), reconstructed linearly between them
+//!   the record's samples (at the channel's rate, word slot, delay and lag,
+//!   quantized to its resolution; split surfaces combined), reconstructed
+//!   linearly between them
 //!   (the scenario's interpolation). The flight flown with those inputs
 //!   instead of the true ones, from the same segment states, gives r, and
 //!   δθ_inputs the first-order error of every estimator that takes the
@@ -150,7 +151,7 @@ impl Identifiability {
             "{} recorded by {}: Cramér–Rao bounds at the truth, {} s segments with unknown initial states; identifiable when σ/|truth| < {}\n",
             self.scenario, self.profile, self.segment, self.threshold
         );
-        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict)\n";
+        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate and resolution, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict)\n";
         text += &format!(
             "{:<14} {:>12} {:>11} {:>10} {:>12} {:>12}  {}\n",
             "parameter", "truth", "σ", "σ/|truth|", "inputs/|θ|", "wind/|θ|", "verdict"
@@ -407,8 +408,14 @@ pub fn analyse(
         Ok(DVector::from_vec(difference(&nominal, &modelled, 0.5)?))
     };
     let solve = least_squares_solver(&sensitivities);
+    // The controls as the recorder writes them: at their rate, slot,
+    // delay and lag, and quantized to their resolution.
+    let controls =
+        profile
+            .without_noise()
+            .record(&nominal_trace, &scenario.aircraft, scenario.seed)?;
     let input_error = solve(&errors(
-        &with_recorded_inputs(&simulation, &nominal)?,
+        &with_recorded_inputs(&simulation, &controls)?,
         "with the inputs as recorded",
     )?);
     let wind_error = solve(&errors(

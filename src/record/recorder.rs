@@ -254,6 +254,17 @@ impl Profile {
         clean
     }
 
+    /// The profile without its random errors but with its resolution: the
+    /// record a noise-free recorder of this resolution writes
+    /// (quantization is deterministic given the flight).
+    pub fn without_noise(&self) -> Profile {
+        let mut quantized = self.without_random_errors();
+        for (channel, original) in quantized.channels.iter_mut().zip(&self.channels) {
+            channel.resolution = original.resolution;
+        }
+        quantized
+    }
+
     /// Records a truth trace of `aircraft` with this profile; random draws come from `seed`.
     pub fn record(
         &self,
