@@ -12,7 +12,8 @@ use aeroid::sim::scenario::Scenario;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn round_trip(c: &mut Criterion) {
-    let folder = std::env::temp_dir().join(format!("aeroid-bench-plugin-{}", std::process::id()));
+    let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-bench-plugin-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
     let structure = ModelStructure::load("attas-lateral").unwrap();
     let parameters: Vec<String> = structure

@@ -39,7 +39,8 @@ fn flight_test_variant(test: &str, strip: impl Fn(&str) -> bool) -> Profile {
             out += "\n";
         }
     }
-    let path = std::env::temp_dir().join(format!("aeroid-{test}-{}.toml", std::process::id()));
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-{test}-{}.toml", std::process::id()));
     std::fs::write(&path, out).unwrap();
     Profile::load(path.to_str().unwrap(), None).unwrap()
 }
@@ -347,7 +348,8 @@ fn ekf_tracks_a_parameter_that_changes_in_flight() {
             assert!((value - old).abs() > 4.0 * sigma, "{line}");
         }
     }
-    let folder = std::env::temp_dir().join(format!("aeroid-history-{}", std::process::id()));
+    let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-history-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
     let path = folder.join("history.csv");
     history.write_csv(&path).unwrap();

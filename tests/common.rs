@@ -3,9 +3,11 @@
 
 use std::path::PathBuf;
 
-/// A fresh folder under the system temp folder, unique per test and process.
+/// A fresh folder in cargo's scratch folder for integration tests
+/// (`target/tmp`), unique per test and process.
 pub fn temp_folder(test: &str) -> PathBuf {
-    let folder = std::env::temp_dir().join(format!("aeroid-{test}-{}", std::process::id()));
+    let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-{test}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&folder);
     std::fs::create_dir_all(&folder).unwrap();
     folder

@@ -49,7 +49,8 @@ fn biased_profile(test: &str, rate: &str, noisy: bool) -> Profile {
         channel("r", "bias = \"0.0015 rad/s\"\n", "0.002 rad/s"),
     ]
     .concat();
-    let path = std::env::temp_dir().join(format!("aeroid-{test}-{}.toml", std::process::id()));
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-{test}-{}.toml", std::process::id()));
     std::fs::write(&path, text).unwrap();
     Profile::load(path.to_str().unwrap(), None).unwrap()
 }

@@ -42,7 +42,8 @@ fn refusal(result: aeroid::Result<Estimate>) -> Refusal {
 /// each edited by `edit`.
 fn edited(name: &str, scenario_edit: impl Fn(&str) -> String) -> (Scenario, Profile) {
     let root = env!("CARGO_MANIFEST_DIR");
-    let folder = std::env::temp_dir().join(format!("aeroid-honest-{name}-{}", std::process::id()));
+    let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-honest-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
     let scenario_text =
         std::fs::read_to_string(format!("{root}/scenarios/attas-lateral-multistep.toml")).unwrap();

@@ -165,7 +165,8 @@ fn inputs_as_recorded_bias_what_a_slow_control_channel_hides() {
             row.sigma
         );
     }
-    let folder = std::env::temp_dir().join(format!("aeroid-ident-{}", std::process::id()));
+    let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-ident-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
     let slow = common::profile_variant(&folder, "flight-test-25hz", "", |name, table| {
         Some(if name == "elevator" {

@@ -541,7 +541,7 @@ fn import_refuses_non_finite_cells_unless_mapped_to_dropouts() {
         assert!(
             message.ends_with(&format!(
                 "flight.csv: line 3, column 'AOA': '{cell}' reads as {reads}, not a finite number; to record such cells as dropouts, set non_finite = \"dropout\" for channel 'alpha' in {}",
-                std::env::temp_dir()
+                std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
                     .join(format!("aeroid-import-inf-{}", std::process::id()))
                     .join("map.toml")
                     .display()

@@ -458,7 +458,8 @@ fn equation_error_recovers_a_noise_free_linear_flight() {
         .into_iter()
         .map(|(o, s)| (o.to_string(), s.to_string()))
         .collect();
-    let dir = std::env::temp_dir().join(format!("aeroid-linear-ee-{}", std::process::id()));
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-linear-ee-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let rated_path = dir.join("linear-lateral-rates.toml");
     std::fs::write(&rated_path, toml::to_string(&file).unwrap()).unwrap();

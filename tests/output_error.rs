@@ -173,7 +173,8 @@ fn flight_test_variant(test: &str, noise: impl Fn(&str) -> Option<&'static str>)
             }
         }
     }
-    let path = std::env::temp_dir().join(format!("aeroid-{test}-{}.toml", std::process::id()));
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-{test}-{}.toml", std::process::id()));
     std::fs::write(&path, out).unwrap();
     path.to_string_lossy().into_owned()
 }

@@ -129,8 +129,8 @@ fn a_scenario_with_wrong_method_settings_is_refused() {
         "/scenarios/attas-lateral-multistep.toml"
     ))
     .unwrap();
-    let folder =
-        std::env::temp_dir().join(format!("aeroid-scenario-methods-{}", std::process::id()));
+    let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-scenario-methods-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
     for (table, expected) in [
         (

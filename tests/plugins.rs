@@ -285,7 +285,8 @@ fn a_plugin_writes_only_in_its_work_folder() {
     let targets = [
         folder.join("escaped.txt"),
         outside.join("escaped.txt"),
-        std::env::temp_dir().join(format!("aeroid-escaped-{}.txt", std::process::id())),
+        std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("aeroid-escaped-{}.txt", std::process::id())),
     ];
     let mut script = String::new();
     for target in &targets {

@@ -135,7 +135,7 @@ struct CaseFolder(PathBuf);
 impl CaseFolder {
     fn new(kind: &str) -> CaseFolder {
         static NEXT: AtomicUsize = AtomicUsize::new(0);
-        let folder = std::env::temp_dir().join(format!(
+        let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!(
             "aeroid-fuzz-{kind}-{}-{}",
             std::process::id(),
             NEXT.fetch_add(1, Ordering::Relaxed)

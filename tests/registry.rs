@@ -170,7 +170,8 @@ fn a_registered_estimator_runs_everywhere() {
     let _ = truth;
 
     // gate: a gate file naming the toy, with its settings table.
-    let folder = std::env::temp_dir().join(format!("aeroid-registry-{}", std::process::id()));
+    let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-registry-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
     let gate_file = folder.join("gates.toml");
     std::fs::write(

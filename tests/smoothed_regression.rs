@@ -34,7 +34,8 @@ fn flight_test_variant(test: &str, strip: impl Fn(&str) -> bool) -> String {
             out += "\n";
         }
     }
-    let path = std::env::temp_dir().join(format!("aeroid-ebm-{test}-{}.toml", std::process::id()));
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-ebm-{test}-{}.toml", std::process::id()));
     std::fs::write(&path, out).unwrap();
     path.to_string_lossy().into_owned()
 }
@@ -273,7 +274,8 @@ fn smoothed_histories_are_written_as_csv() {
     let structure = ModelStructure::load("attas-longitudinal").unwrap();
     let (smoothed, _) =
         smooth_and_regress(&record, &structure, &SmoothedRegressionSettings::default()).unwrap();
-    let folder = std::env::temp_dir().join(format!("aeroid-ebm-csv-{}", std::process::id()));
+    let folder = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("aeroid-ebm-csv-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
     let path = folder.join("smoothed.csv");
     smoothed.write_csv(&path).unwrap();
