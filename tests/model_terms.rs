@@ -782,8 +782,8 @@ fn stall_alpha_dot_from_the_measured_alpha() {
 /// (τ1·c̄/V: 5 ms at 0.14 c̄/V) is far below the RK4 sub-step chosen for
 /// the start values (10 ms on the 100 Hz record), the simulation departs
 /// and the sensitivities are NaN; the fit then ends "diverged", naming
-/// them. (Before the solver checked them, nalgebra's SVD of the NaN
-/// information matrix never returned: the fit "did not finish".) With
+/// them (the solver checks them: nalgebra's SVD of a NaN information
+/// matrix never returns, and the fit would not end). With
 /// the bound at 0.3 c̄/V seed 8 still ends there; at 1 c̄/V (|λ| ≈ 30/s,
 /// h·|λ| ≤ 0.6 at the sub-steps chosen) every fit converges.
 ///
