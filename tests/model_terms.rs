@@ -716,12 +716,143 @@ fn stall_time_constants_in_chord_units_are_flown_and_recovered() {
     stall_checks(&case, &structure, "τ in c̄/V", &[]);
 }
 
+/// The α̇ of the separation equation from the smoothed derivative of the
+/// measured α (`alpha_dot = "measured"`), on the bundled stall flight
+/// (τ2 0.9 s; the truth is simulated with the state's α̇, which the
+/// simulator alone has). Bounds, and why:
+/// - ideal record (100 Hz): 1e-4 relative, the gate. The model
+///   differs from the truth only by the differentiator's error (degree 4,
+///   ±0.1 s: a gain within 2e-5 of the derivative's at 0.5 Hz, and the
+///   first and last 0.1 s held); measured worst 1.6e-5 (a1), τ2 2e-5.
+/// - flight-test noise (0.1° on α, 25 Hz; seeds 6, 7, 8): a finding,
+///   asserted as measured. The differentiated α carries noise of 0.1°·12.8/s ≈ 0.022
+///   rad/s (the 7-sample quartic's noise gain), twice the stall entry's α̇
+///   (0.01 rad/s); in the separation equation it is an error in a
+///   variable, which biases a1 by +11 to +15 % (23–34σ), α* and τ2 by
+///   up to 18σ, and its trace in nx and nz makes the fit a poor fit.
+#[test]
+fn stall_alpha_dot_from_the_measured_alpha() {
+    let truth = "a1 = 23.7\nalpha_star = 0.309\ntau1 = 0.0\ntau2 = 0.9";
+    let start = "a1 = 20.0\nalpha_star = 0.29\ntau1 = 0.0\ntau2 = 0.6\nalpha_dot = \"measured\"";
+    let (case, structure) = stall_case("stall-measured-alpha-dot", truth, start);
+    let (record, scenario) = case.record("ideal", 6);
+    let estimate = fit_output_error(&record, &structure);
+    assert!(
+        estimate.notes.iter().any(|n| n
+            .starts_with("α̇ of the separation equation: the derivative of the record's 'alpha'")),
+        "{:?}",
+        estimate.notes
+    );
+    let rows_ideal = rows(&estimate, &scenario);
+    assert_eq!(rows_ideal.len(), structure.free_names().len());
+    let (worst, name) = worst_relative(&rows_ideal, |_| true);
+    eprintln!("measured α̇, ideal: worst {worst:.2e} ({name})");
+    assert!(worst < 1e-4, "{}", common::truth_table(&rows_ideal));
+    let noisy = Profile::load("flight-test-25hz", None).unwrap();
+    for seed in [6, 7, 8] {
+        let scenario = case.scenario(seed);
+        let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
+        let record = noisy.record(&trace, &scenario.aircraft, seed).unwrap();
+        let options = OutputErrorOptions::for_structure(&structure).unwrap();
+        let estimate = output_error(&[&record], &structure, &options).unwrap();
+        let rows_noisy = rows(&estimate, &scenario);
+        let (_, value, sigma, truth) = rows_noisy.iter().find(|r| r.0 == "a1").unwrap();
+        let a1 = (value - truth) / sigma;
+        eprintln!(
+            "measured α̇, noise on α, seed {seed}: {}, a1 {a1:+.1} σ",
+            estimate.status
+        );
+        let table = common::truth_table(&rows_noisy);
+        assert!(
+            matches!(&estimate.status, Status::PoorFit(outputs) if outputs.contains(&"nx".to_string())),
+            "seed {seed}: {}\n{table}",
+            estimate.status
+        );
+        assert!(a1 > 10.0, "seed {seed}:\n{table}");
+    }
+}
+
+/// τ1 in units of c̄/V with χ a state (Eq. 2): the truth τ1 = 3 c̄/V
+/// (0.10 s at 95 m/s), τ2 = 27 c̄/V; fitted with τ1 free from 2 c̄/V within
+/// [1, 10] c̄/V, τ2 from 18, the other stall values as in the other
+/// variants' tests.
+///
+/// The lower bound, and why: from the a-priori start the first stage
+/// (initial state held) drives τ1 toward 0, where χ's time constant
+/// (τ1·c̄/V: 5 ms at 0.14 c̄/V) is far below the RK4 sub-step chosen for
+/// the start values (10 ms on the 100 Hz record), the simulation departs
+/// and the sensitivities are NaN; the fit then ends "diverged", naming
+/// them (the solver checks them: nalgebra's SVD of a NaN information
+/// matrix never returns, and the fit would not end). With
+/// the bound at 0.3 c̄/V seed 8 still ends there; at 1 c̄/V (|λ| ≈ 30/s,
+/// h·|λ| ≤ 0.6 at the sub-steps chosen) every fit converges.
+///
+/// Bounds: ideal record within 1e-4 (measured 3e-7, τ1). Flight-test
+/// records, seeds 1–12: each converges and every parameter is within 6σ
+/// (measured worst 5.14σ, τ1 on seed 12; 5.01σ a1 on seed 8). A finding:
+/// τ1's error/σ has mean −0.50 and standard deviation 2.64 over the
+/// twelve (τ2's, the same seeds with τ1 = 0, 1.24 in
+/// `one_sided_hysteresis_bound_understates_its_scatter`), a1's RMS 2.3:
+/// with χ a state the bounds of τ1 and a1 are about 2.5 times too small
+/// on this manoeuvre (τ1 and τ2 are strongly anticorrelated: on slow α
+/// changes χ lags χ∞(α) by about (τ1 + τ2)·α̇ alone). Asserted: the
+/// standard deviation between 1.6 and 4 (an honest bound gives 1).
+#[test]
+fn stall_lag_in_chord_units_is_flown_and_recovered() {
+    let (case, _) = stall_case(
+        "stall-chord-tau1",
+        "a1 = 23.7\nalpha_star = 0.309\ntau1 = 3.0\ntau2 = 27.0\ntime_unit = \"chord/V\"",
+        "a1 = 20.0\nalpha_star = 0.29\ntau1 = 2.0\ntau2 = 18.0\ntime_unit = \"chord/V\"",
+    );
+    let text = std::fs::read_to_string(case.path("model.toml"))
+        .unwrap()
+        .replace(
+            "[parameters.tau1]\nfixed = true",
+            "[parameters.tau1]\nlower = 1.0\nupper = 10.0",
+        );
+    let path = common::write(&case.folder, "model-tau1.toml", &text);
+    let structure = ModelStructure::load(path.to_str().unwrap()).unwrap();
+    let tau1 = structure.aircraft.aero.parameters.index("tau1").unwrap();
+    assert!(structure.free[tau1] && structure.aircraft.aero.chi_is_state());
+    let (record, scenario) = case.record("ideal", 6);
+    let rows_ideal = rows(&fit_output_error(&record, &structure), &scenario);
+    assert_eq!(rows_ideal.len(), structure.free_names().len());
+    let (worst, name) = worst_relative(&rows_ideal, |_| true);
+    eprintln!("τ1 in c̄/V, ideal: worst {worst:.2e} ({name})");
+    assert!(worst < 1e-4, "{}", common::truth_table(&rows_ideal));
+    let mut errors = Vec::new();
+    for seed in 1..=12 {
+        let (record, scenario) = case.record("flight-test-25hz", seed);
+        let r = rows(&fit_output_error(&record, &structure), &scenario);
+        let (worst, name) = worst_sigma(&r, |_| true);
+        let z = |n: &str| {
+            let (_, value, sigma, truth) = r.iter().find(|row| row.0 == n).unwrap();
+            (value - truth) / sigma
+        };
+        eprintln!(
+            "τ1 in c̄/V, seed {seed}: τ1 {:+.2}σ, τ2 {:+.2}σ, a1 {:+.2}σ, α* {:+.2}σ, worst {worst:.2}σ ({name})",
+            z("tau1"),
+            z("tau2"),
+            z("a1"),
+            z("alpha_star")
+        );
+        assert!(worst < 6.0, "seed {seed}:\n{}", common::truth_table(&r));
+        errors.push(z("tau1"));
+    }
+    let n = errors.len() as f64;
+    let mean = errors.iter().sum::<f64>() / n;
+    let spread = (errors.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    eprintln!("τ1 in c̄/V: τ1 error/σ mean {mean:+.2}, standard deviation {spread:.2}");
+    assert!(spread > 1.6 && spread < 4.0, "{spread:.2}");
+}
+
 /// τ2 acting only while α̇ < 0: the separation follows α without lag on
-/// the way up, and lags it on the way down (hysteresis). A known gap: on
-/// the flight-test record τ2 lies 7.0σ from the truth, its Cramér–Rao
-/// bound about 5.6 times smaller than its scatter over seeds
-/// (`one_sided_hysteresis_bound_understates_its_scatter`); every other
-/// parameter within 2σ here. The bound here pins the measured state (10σ).
+/// the way up, and lags it on the way down (hysteresis). A known gap of
+/// the sharp switch min(α̇, 0): on the flight-test record τ2 lies 7.0σ
+/// from the truth, its Cramér–Rao bound about 5.6 times smaller than its
+/// scatter over seeds (`one_sided_hysteresis_bound_understates_its_scatter`,
+/// where a smooth switch makes it honest); every other parameter within
+/// 2σ here. The bound here pins the measured state (10σ).
 #[test]
 fn one_sided_hysteresis_is_flown_and_recovered() {
     let (case, structure) = stall_case(
@@ -1063,16 +1194,36 @@ fn stall_fits_with_a_mismatched_structure_report_a_poor_fit() {
 /// converge, with mean +1.71 and standard deviation 5.56 (+6.5σ to
 /// −9.6σ; asserted above 3): the bound is about 5.6 times too small,
 /// while the residuals stay white (structured residual ≤ 0.003). The
-/// switch at α̇ = 0 makes the equations non-smooth in the state, so the
-/// cost is not the quadratic bowl the information matrix describes;
-/// whether a smoothed switch or exact sensitivities across it would close
-/// the gap is open (docs/findings.md).
+/// switch at α̇ = 0 makes the equations non-smooth in the state. With the
+/// switch smoothed (`tau2_switch_band = 0.03`: α̇·½(1 − tanh(α̇/0.03)),
+/// truth and model alike) all 12 converge with mean −0.42 and standard
+/// deviation 1.31 (asserted between 0.6 and 1.6, the control's range):
+/// the bound holds, so the kink, not the sensitivities' accuracy
+/// elsewhere, is what the information matrix misses. Measured with other
+/// widths (truth and model alike, same seeds): 0.01 rad/s 4.52, 0.1
+/// rad/s 1.76. A smooth switch is another model, though: the sharp-switch
+/// flight fitted with it ends 54–63σ off in τ2 (docs/findings.md).
 #[test]
 fn one_sided_hysteresis_bound_understates_its_scatter() {
     let variants = stall_variants();
-    for (index, poor_seeds, low, high) in [(0, vec![3, 8], 0.6, 1.6), (2, vec![], 3.0, 10.0)] {
-        let (label, truth, start) = &variants[index];
-        let (case, structure) = stall_case(&format!("stall-scatter-{index}"), truth, start);
+    let smooth = |table: &str| format!("{table}\ntau2_switch_band = 0.03");
+    let (_, one_sided_truth, one_sided_start) = &variants[2];
+    let cases = [
+        (variants[0].clone(), vec![3, 8], 0.6, 1.6),
+        (variants[2].clone(), vec![], 3.0, 10.0),
+        (
+            (
+                "τ2 while α̇ < 0, smooth switch",
+                smooth(one_sided_truth),
+                smooth(one_sided_start),
+            ),
+            vec![],
+            0.6,
+            1.6,
+        ),
+    ];
+    for (index, ((label, truth, start), poor_seeds, low, high)) in cases.into_iter().enumerate() {
+        let (case, structure) = stall_case(&format!("stall-scatter-{index}"), &truth, &start);
         let mut errors = Vec::new();
         for seed in 1..=12 {
             let (record, scenario) = case.record("flight-test-25hz", seed);

@@ -773,6 +773,7 @@ fn regressors(aircraft: &Aircraft, signals: &Signals, k: usize) -> [f64; REGRESS
         mach: at(signals.mach, k),
         rates: signals.rates(k),
         alpha_dot: at(signals.alpha_dot, k),
+        measured_alpha_dot: None,
         controls,
         chi: 1.0,
     };

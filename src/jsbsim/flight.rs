@@ -381,6 +381,7 @@ impl JsbsimFlight {
                 mach: air_data.mach,
                 rates: state::rates(&x),
                 alpha_dot,
+                measured_alpha_dot: None,
                 controls,
                 chi: 1.0,
             },

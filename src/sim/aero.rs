@@ -55,9 +55,14 @@
 //! τ1 and τ2 in seconds or in units of c̄/V (`time_unit = "chord/V"`, τ in
 //! seconds = τ·c̄/V, V the airspeed or V0 as `rate_speed` says); τ2 acting
 //! only while α̇ < 0 (`tau2_only_while_decreasing`: α̇ replaced by
-//! min(α̇, 0) in Eq. 2); the induced drag from the attached-flow lift
+//! min(α̇, 0) in Eq. 2, or with `tau2_switch_band = b` by the smooth step
+//! α̇·½(1 − tanh(α̇/b))); the induced drag from the attached-flow lift
 //! (`induced_drag_lift = "attached"`: CL with the Kirchhoff factor 1 in
-//! CL²/(e·π·Λ), the lift the wing would make without separation).
+//! CL²/(e·π·Λ), the lift the wing would make without separation); the α̇
+//! of Eq. 2 from the state derivative (`alpha_dot = "state"`) or from the
+//! smoothed derivative of the measured α (`alpha_dot = "measured"`,
+//! [`AeroInput::measured_alpha_dot`]: an input of a model driven by a
+//! record; the simulator, which has none, takes the state derivative).
 //!
 //! Force axes: "wind" gives CL and CD in stability axes (rotated by α only)
 //! and CY along the body y axis, the usual flight-test convention:
@@ -396,9 +401,42 @@ pub struct StallSpec {
     /// τ2 acts only while α̇ < 0 (the lag on the way down only).
     #[serde(default, skip_serializing_if = "is_default")]
     pub tau2_only_while_decreasing: bool,
+    /// The width b (rad/s) of a smooth switch of the one-sided τ2:
+    /// α̇·½(1 − tanh(α̇/b)) in place of min(α̇, 0); 0: the sharp switch.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub tau2_switch_band: f64,
     /// The lift the induced drag CL²/(e·π·Λ) is formed from.
     #[serde(default, skip_serializing_if = "is_default")]
     pub induced_drag_lift: InducedDragLift,
+    /// Where the α̇ of the separation equation (Eq. 2) comes from.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub alpha_dot: StallAlphaDot,
+}
+
+/// The options of a stall model besides its parameters ([`StallSpec`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct StallOptions {
+    time_unit: StallTimeUnit,
+    tau2_only_while_decreasing: bool,
+    induced_drag_lift: InducedDragLift,
+    alpha_dot: StallAlphaDot,
+    tau2_switch_band: f64,
+}
+
+/// Where the α̇ in the separation equation τ1·χ̇ + χ = χ∞(α − τ2·α̇) comes
+/// from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StallAlphaDot {
+    /// The state derivative: the α̇ the equations of motion give (for
+    /// algebraic χ, solved together with the forces it changes).
+    #[default]
+    State,
+    /// The smoothed derivative of the measured α, an input where the model
+    /// is driven by a record ([`AeroInput::measured_alpha_dot`]); where
+    /// there is no measurement (the simulator flying a truth) the state
+    /// derivative.
+    Measured,
 }
 
 fn is_default<T: Default + PartialEq>(value: &T) -> bool {
@@ -568,6 +606,10 @@ pub struct AeroInput<T: Real = f64> {
     pub mach: T,
     pub rates: Vector3<T>,
     pub alpha_dot: T,
+    /// The derivative of the measured α (rad/s), which a stall model with
+    /// `alpha_dot = "measured"` takes in its separation equation instead of
+    /// `alpha_dot`; None: no measurement (`alpha_dot` is used).
+    pub measured_alpha_dot: Option<f64>,
     pub controls: Controls,
     /// Flow separation point χ (1 attached, 0 separated); ignored by linear models.
     pub chi: T,
@@ -594,6 +636,7 @@ impl<T: Real> AeroInput<T> {
             mach: self.mach.value(),
             rates: self.rates.map(T::value),
             alpha_dot: self.alpha_dot.value(),
+            measured_alpha_dot: self.measured_alpha_dot,
             controls: self.controls,
             chi: self.chi.value(),
         }
@@ -644,8 +687,9 @@ pub struct AeroModel {
     products: Vec<Monomial>,
     oswald: Option<usize>,
     stall: Option<StallIndices>,
-    /// The stall model's options (unit of τ, one-sided τ2, induced-drag lift).
-    stall_options: (StallTimeUnit, bool, InducedDragLift),
+    /// The stall model's options (unit of τ, one-sided τ2, induced-drag
+    /// lift, source of α̇).
+    stall_options: StallOptions,
     /// Whether any coefficient has an α̇ term (fixed by the structure, not the values).
     has_alpha_dot_terms: bool,
     /// Added to each coefficient (in [`Coefficient`] order; the lift-type one
@@ -868,11 +912,25 @@ impl AeroModel {
                 if stall.tau1 < 0.0 {
                     problems.push(format!("{field}.tau1"), "must be ≥ 0 (0 makes χ algebraic)");
                 }
-                self.stall_options = (
-                    stall.time_unit,
-                    stall.tau2_only_while_decreasing,
-                    stall.induced_drag_lift,
-                );
+                let band = stall.tau2_switch_band;
+                if !(band.is_finite() && band >= 0.0) {
+                    problems.push(
+                        format!("{field}.tau2_switch_band"),
+                        "must be a rate ≥ 0 (rad/s; 0: the sharp switch)",
+                    );
+                } else if band > 0.0 && !stall.tau2_only_while_decreasing {
+                    problems.push(
+                        format!("{field}.tau2_switch_band"),
+                        "needs tau2_only_while_decreasing = true",
+                    );
+                }
+                self.stall_options = StallOptions {
+                    time_unit: stall.time_unit,
+                    tau2_only_while_decreasing: stall.tau2_only_while_decreasing,
+                    induced_drag_lift: stall.induced_drag_lift,
+                    alpha_dot: stall.alpha_dot,
+                    tau2_switch_band: stall.tau2_switch_band,
+                };
                 self.stall = Some(StallIndices {
                     a1: self.add_parameter("a1", stall.a1, &field, problems),
                     alpha_star: self.add_parameter(
@@ -962,14 +1020,42 @@ impl AeroModel {
             .is_some_and(|s| self.parameters.values()[s.tau1] > 0.0)
     }
 
-    /// True when the forces depend on α̇ algebraically (α̇ terms, or algebraic χ with τ2 ≠ 0),
-    /// so the equations of motion must be solved for α̇.
+    /// True when the forces depend on the state's α̇ algebraically (α̇
+    /// terms, or algebraic χ with τ2 ≠ 0), so the equations of motion must
+    /// be solved for α̇, in a model driven by a record: one whose
+    /// separation takes the measured α̇ (`alpha_dot = "measured"`) is given
+    /// it there, and its χ does not depend on the state's α̇.
     pub fn forces_depend_on_alpha_dot(&self) -> bool {
+        self.forces_depend_on_state_alpha_dot(true)
+    }
+
+    /// [`AeroModel::forces_depend_on_alpha_dot`] where a measured α̇ is
+    /// given (`measured`) or not (the simulator flying a truth, whose
+    /// separation then takes the state's α̇ whatever the option).
+    pub fn forces_depend_on_state_alpha_dot(&self, measured: bool) -> bool {
         let values = self.parameters.values();
-        let stall = self
-            .stall
-            .is_some_and(|s| values[s.tau1] == 0.0 && values[s.tau2] != 0.0);
+        let stall = self.stall.is_some_and(|s| {
+            values[s.tau1] == 0.0
+                && values[s.tau2] != 0.0
+                && !(measured && self.takes_measured_alpha_dot())
+        });
         stall || self.has_alpha_dot_terms
+    }
+
+    /// Whether the separation equation takes the measured α̇ where there is
+    /// one (`alpha_dot = "measured"`).
+    pub fn takes_measured_alpha_dot(&self) -> bool {
+        self.stall.is_some() && self.stall_options.alpha_dot == StallAlphaDot::Measured
+    }
+
+    /// The α̇ of the separation equation: the measured one with
+    /// `alpha_dot = "measured"` when there is one, else the state's
+    /// `alpha_dot`.
+    pub fn separation_alpha_dot<T: Real>(&self, alpha_dot: T, measured: Option<f64>) -> T {
+        match measured {
+            Some(rate) if self.takes_measured_alpha_dot() => T::constant(rate),
+            _ => alpha_dot,
+        }
     }
 
     /// Steady-state separation point χ∞ = ½(1 − tanh(a1·(α − τ2·α̇ − α*))) (Verma & Peyada 2020, Eq. 3); 1 without stall model.
@@ -1012,15 +1098,17 @@ impl AeroModel {
 
     /// ∂(dχ/dt)/∂α̇ = ½·a1·τ2·(1 − tanh²(a1·(α − τ2·α̇ − α*)))/τ1 (from Eqs. 2–3,
     /// τ in seconds); 0 when χ is not a state, or τ2 does not act (α̇ ≥ 0
-    /// with `tau2_only_while_decreasing`).
+    /// with `tau2_only_while_decreasing`), or the separation takes the
+    /// measured α̇ (in a model driven by a record, which gives it).
     pub fn separation_rate_slope(&self, alpha: f64, alpha_dot: f64, airspeed: f64) -> f64 {
         match self.stall {
-            Some(s) if self.chi_is_state() && !(self.stall_options.1 && alpha_dot >= 0.0) => {
+            Some(s) if self.chi_is_state() && !self.takes_measured_alpha_dot() => {
                 let v = self.parameters.values();
                 let scale = self.chord_time(airspeed).unwrap_or(1.0);
                 let (tau1, tau2) = (v[s.tau1] * scale, v[s.tau2] * scale);
-                let t = (v[s.a1] * (alpha - tau2 * alpha_dot - v[s.alpha_star])).tanh();
-                0.5 * v[s.a1] * tau2 * (1.0 - t * t) / tau1
+                let rate = self.hysteresis_rate(alpha_dot);
+                let t = (v[s.a1] * (alpha - tau2 * rate - v[s.alpha_star])).tanh();
+                0.5 * v[s.a1] * tau2 * (1.0 - t * t) * self.hysteresis_rate_slope(alpha_dot) / tau1
             }
             _ => 0.0,
         }
@@ -1029,7 +1117,7 @@ impl AeroModel {
     /// Seconds per unit of the stall time constants at `airspeed`: None
     /// for τ in seconds, c̄/V for τ in units of c̄/V.
     fn chord_time<T: Real>(&self, airspeed: T) -> Option<T> {
-        match self.stall_options.0 {
+        match self.stall_options.time_unit {
             StallTimeUnit::Seconds => None,
             StallTimeUnit::ChordTimes => {
                 let speed = match self.rate_speed {
@@ -1043,10 +1131,31 @@ impl AeroModel {
 
     /// The α̇ the hysteresis τ2 acts on: α̇, or with
     /// `tau2_only_while_decreasing` α̇ while it is negative and 0 otherwise.
+    /// With a `tau2_switch_band` b > 0 the switch is the smooth step
+    /// α̇·½(1 − tanh(α̇/b)): α̇ below −2b (within 2 %), 0 above 2b.
     fn hysteresis_rate<T: Real>(&self, alpha_dot: T) -> T {
-        match self.stall_options.1 && alpha_dot.value() >= 0.0 {
-            true => T::zero(),
-            false => alpha_dot,
+        let band = self.stall_options.tau2_switch_band;
+        match (self.stall_options.tau2_only_while_decreasing, band > 0.0) {
+            (false, _) => alpha_dot,
+            (true, true) => {
+                alpha_dot * (T::constant(1.0) - (alpha_dot * (1.0 / band)).tanh()) * 0.5
+            }
+            (true, false) if alpha_dot.value() >= 0.0 => T::zero(),
+            (true, false) => alpha_dot,
+        }
+    }
+
+    /// d/dα̇ of [`AeroModel::hysteresis_rate`] (0 at α̇ = 0 of the sharp switch).
+    fn hysteresis_rate_slope(&self, alpha_dot: f64) -> f64 {
+        let band = self.stall_options.tau2_switch_band;
+        match (self.stall_options.tau2_only_while_decreasing, band > 0.0) {
+            (false, _) => 1.0,
+            (true, true) => {
+                let t = (alpha_dot / band).tanh();
+                0.5 * (1.0 - t) - 0.5 * alpha_dot / band * (1.0 - t * t)
+            }
+            (true, false) if alpha_dot >= 0.0 => 0.0,
+            (true, false) => 1.0,
         }
     }
 
@@ -1055,7 +1164,8 @@ impl AeroModel {
         if self.chi_is_state() {
             input.chi
         } else {
-            self.separation_target(input.alpha, input.alpha_dot, input.airspeed)
+            let alpha_dot = self.separation_alpha_dot(input.alpha_dot, input.measured_alpha_dot);
+            self.separation_target(input.alpha, alpha_dot, input.airspeed)
         }
     }
 
@@ -1064,7 +1174,8 @@ impl AeroModel {
     /// on α̇ (the equations are solved for it), nor when the induced drag
     /// squares the attached-flow lift (not in the coefficients it is given).
     pub fn offset_response_is_exact(&self) -> bool {
-        let attached = self.stall.is_some() && self.stall_options.2 == InducedDragLift::Attached;
+        let attached = self.stall.is_some()
+            && self.stall_options.induced_drag_lift == InducedDragLift::Attached;
         !(self.forces_depend_on_alpha_dot() || attached)
     }
 
@@ -1305,7 +1416,7 @@ impl AeroModel {
         let (regressors, lift_type, _) = self.regressors_and_lift(input);
         let mut drag_type = self.sum(Coefficient::Drag, &regressors);
         if let Some(e) = self.oswald {
-            let induced = match (self.stall, self.stall_options.2) {
+            let induced = match (self.stall, self.stall_options.induced_drag_lift) {
                 (Some(_), InducedDragLift::Attached) => self.sum(Coefficient::Lift, &regressors),
                 _ => lift_type,
             };
@@ -1670,6 +1781,60 @@ mod tests {
         let c = seconds.coefficients(&input);
         assert!((c.drag - induced(c.lift)).abs() < 1e-15);
         assert!(!attached.offset_response_is_exact() && seconds.offset_response_is_exact());
+    }
+
+    /// The smooth switch of the one-sided τ2 is α̇ well below −2b and 0
+    /// well above 2b, and ∂χ̇/∂α̇ is its derivative (to a central
+    /// difference's error); the measured α̇ replaces the state's in χ only
+    /// with `alpha_dot = "measured"`, and only where one is given.
+    #[test]
+    fn smooth_switch_and_measured_alpha_dot() {
+        let (alpha, airspeed) = (0.32, 80.0);
+        let smooth = stall("tau2_only_while_decreasing = true\ntau2_switch_band = 0.01");
+        let sharp = stall("tau2_only_while_decreasing = true");
+        for alpha_dot in [-0.1, 0.1] {
+            let (a, b) = (
+                smooth.separation_target(alpha, alpha_dot, 1.0),
+                sharp.separation_target(alpha, alpha_dot, 1.0),
+            );
+            assert!((a - b).abs() < 1e-8, "{alpha_dot}: {a} vs {b}");
+        }
+        for alpha_dot in [-0.02, -0.005, 0.0, 0.004, 0.03] {
+            let h = 1e-6;
+            let rate = |d: f64| smooth.separation_rate(alpha, d, 0.5, airspeed);
+            let difference = (rate(alpha_dot + h) - rate(alpha_dot - h)) / (2.0 * h);
+            let slope = smooth.separation_rate_slope(alpha, alpha_dot, airspeed);
+            assert!(
+                (slope - difference).abs() < 1e-6 * difference.abs().max(1.0),
+                "{alpha_dot}: {slope} vs {difference}"
+            );
+        }
+        let (_, problems) = parse(
+            "model = \"stall\"\n[stall]\na1 = 20.0\nalpha_star = 0.3\ntau1 = 0.0\ntau2 = 0.5\ntau2_switch_band = 0.01\n[CL]\nalpha = 4.0\n",
+        );
+        let fields: Vec<&str> = problems.0.iter().map(|p| p.field.as_str()).collect();
+        assert_eq!(fields, ["aero.stall.tau2_switch_band"]);
+        let measured = stall("alpha_dot = \"measured\"");
+        let state = stall("");
+        assert!(measured.takes_measured_alpha_dot() && !state.takes_measured_alpha_dot());
+        assert_eq!(measured.separation_alpha_dot(-0.05, Some(0.02)), 0.02);
+        assert_eq!(measured.separation_alpha_dot(-0.05, None), -0.05);
+        assert_eq!(state.separation_alpha_dot(-0.05, Some(0.02)), -0.05);
+        let mut algebraic = measured.clone();
+        algebraic.parameters.set("tau1", 0.0).unwrap();
+        assert!(!algebraic.forces_depend_on_alpha_dot());
+        assert!(algebraic.forces_depend_on_state_alpha_dot(false));
+        let input = AeroInput {
+            alpha,
+            airspeed,
+            alpha_dot: -0.05,
+            measured_alpha_dot: Some(0.02),
+            ..Default::default()
+        };
+        assert_eq!(
+            algebraic.effective_chi(&input),
+            algebraic.separation_target(alpha, 0.02, airspeed)
+        );
     }
 
     #[test]

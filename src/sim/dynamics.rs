@@ -212,6 +212,9 @@ pub struct Kinematics<T: Real = f64> {
     /// A measured thrust (N, along the thrust line) that replaces the
     /// propulsion model's δT·Tmax·(ρ/ρ0)ⁿ; None: the propulsion model.
     pub thrust: Option<f64>,
+    /// The derivative of the measured α (rad/s), for a stall model whose
+    /// separation takes it (`alpha_dot = "measured"`); None: the state's α̇.
+    pub measured_alpha_dot: Option<f64>,
 }
 
 /// An aircraft in an environment: the right-hand side of the equations of motion.
@@ -294,6 +297,7 @@ impl FlightModel {
                 chi: x[CHI],
                 wind_rate_body,
                 thrust: None,
+                measured_alpha_dot: None,
             },
             &exogenous.controls,
         );
@@ -329,7 +333,11 @@ impl FlightModel {
                 .thrust(controls[Control::Throttle.index()], air.log_density_ratio)
         });
         let context = self.context(kinematics, &controls, thrust);
-        let translational = if aircraft.aero.forces_depend_on_alpha_dot() {
+        let measured_alpha_dot = kinematics.measured_alpha_dot.is_some();
+        let translational = if aircraft
+            .aero
+            .forces_depend_on_state_alpha_dot(measured_alpha_dot)
+        {
             self.solve_alpha_dot(&context)
         } else {
             self.translational(&context, T::zero())
@@ -351,7 +359,9 @@ impl FlightModel {
             .copy_from(&ned_to_body.tr_mul(velocity));
         derivative[CHI] = aircraft.aero.separation_rate(
             air_data.alpha,
-            alpha_dot,
+            aircraft
+                .aero
+                .separation_alpha_dot(alpha_dot, kinematics.measured_alpha_dot),
             kinematics.chi,
             air_data.airspeed,
         );
@@ -452,6 +462,7 @@ impl FlightModel {
             mach: air_data.mach,
             rates: context.kinematics.omega,
             alpha_dot: alpha_dot_guess,
+            measured_alpha_dot: context.kinematics.measured_alpha_dot,
             controls: *context.controls,
             chi: context.kinematics.chi,
         };

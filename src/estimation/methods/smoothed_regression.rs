@@ -1119,6 +1119,7 @@ pub(crate) fn regression_data(
             mach: airspeed / atmosphere.at(x[H]).speed_of_sound,
             rates: Vector3::new(x[P], x[P + 1], x[P + 2]),
             alpha_dot,
+            measured_alpha_dot: None,
             controls: Controls::from_fn(|i, _| controls[i][k]),
             chi: 1.0,
         };

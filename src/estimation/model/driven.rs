@@ -25,7 +25,9 @@
 use super::state_space::Jacobians;
 use crate::dual::{Dual, LANES, Real};
 use crate::error::{Error, Result};
+use crate::estimation::reconstruction::control_steps;
 use crate::estimation::structure::FLIGHT_PATH_STATES;
+use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
 use crate::sim::aero::{AeroCoefficients, Coefficient, TermRegressors};
 use crate::sim::atmosphere::{Air, Atmosphere, SEA_LEVEL_DENSITY};
@@ -224,11 +226,14 @@ struct FrozenPoints<'a> {
 /// instant: the air density ρ (kg/m³, the `density` channel) instead of
 /// the ISA's at the altitude, and the thrust (N, the `thrust` channel,
 /// along the aircraft's thrust line) instead of the throttle and engine
-/// model δT·Tmax·(ρ/ρ0)ⁿ; None where the record has no such channel.
+/// model δT·Tmax·(ρ/ρ0)ⁿ; None where the record has no such channel. And
+/// the derivative of the measured α (rad/s) for a stall model whose
+/// separation takes it ([`measured_alpha_dot`]), None for any other.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Ambient {
     pub density: Option<f64>,
     pub thrust: Option<f64>,
+    pub alpha_dot: Option<f64>,
 }
 
 impl Ambient {
@@ -239,6 +244,7 @@ impl Ambient {
         Ambient {
             density: mix(self.density, end.density),
             thrust: mix(self.thrust, end.thrust),
+            alpha_dot: mix(self.alpha_dot, end.alpha_dot),
         }
     }
 
@@ -255,26 +261,32 @@ impl Ambient {
         air
     }
 
-    /// The air at `altitude` ([`Ambient::air`]) and the measured thrust.
+    /// The air at `altitude` ([`Ambient::air`]), the measured thrust and α̇.
     fn surroundings(self, atmosphere: &Atmosphere, altitude: f64) -> Surroundings {
         Surroundings {
             air: self.air(atmosphere, altitude),
             thrust: self.thrust,
+            alpha_dot: self.alpha_dot,
         }
     }
 }
 
-/// The air and the measured thrust (None: the propulsion model's) an
-/// evaluation of the model takes.
+/// The air, the measured thrust (None: the propulsion model's) and the
+/// measured α̇ (None: the state's) an evaluation of the model takes.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct Surroundings {
     air: Air,
     thrust: Option<f64>,
+    alpha_dot: Option<f64>,
 }
 
 impl From<Air> for Surroundings {
     fn from(air: Air) -> Surroundings {
-        Surroundings { air, thrust: None }
+        Surroundings {
+            air,
+            thrust: None,
+            alpha_dot: None,
+        }
     }
 }
 
@@ -422,6 +434,7 @@ fn kinematics<T: Real>(
         chi: x[CHI],
         wind_rate_body: Vector3::zeros(),
         thrust: surroundings.thrust,
+        measured_alpha_dot: surroundings.alpha_dot,
     }
 }
 
@@ -1445,6 +1458,39 @@ fn measured_ambient(record: &FlightRecord, times: &[f64]) -> Result<(Vec<Ambient
     Ok((ambient, notes))
 }
 
+/// The smoothed derivative of the record's α, written into `ambient` at
+/// `times`, and the note saying so: the project's local polynomial
+/// differentiator ([`Differentiator`], its default: degree 4, ±0.1 s) with
+/// no window across a control step ([`control_steps`], as the regression
+/// methods differentiate), linear between its samples and, where it has
+/// none (the first and last half-window of the record, and beside a
+/// step), bridged from its neighbours or held at the ends.
+fn measured_alpha_dot(
+    record: &FlightRecord,
+    times: &[f64],
+    ambient: &mut [Ambient],
+) -> Result<String> {
+    let alpha = record.channel("alpha").map_err(|_| {
+        Error::Other(
+            "the stall model takes α̇ from the measured α (`alpha_dot = \"measured\"`), but the record has no 'alpha' channel".into(),
+        )
+    })?;
+    let differentiator = Differentiator::default();
+    let steps = control_steps(record);
+    let derivative = differentiator.differentiate_with_breaks(alpha, &steps);
+    for (into, value) in ambient.iter_mut().zip(derivative.values_at(times)?) {
+        into.alpha_dot = Some(value);
+    }
+    let m = differentiator.half_window(alpha.rate);
+    Ok(format!(
+        "α̇ of the separation equation: the derivative of the record's 'alpha' (local polynomial, degree {}, ±{m} samples at {} Hz, not across {} control steps; held over the first and last {:.2} s)",
+        differentiator.degree,
+        crate::record::rate_text(alpha.rate),
+        steps.len(),
+        m as f64 / alpha.rate
+    ))
+}
+
 impl DrivenSimulation {
     /// Samples controls and pseudo-controls from the record on the grid
     /// start, start + step, …, end. Control channels are reconstructed between
@@ -1456,17 +1502,23 @@ impl DrivenSimulation {
     /// linearly too and replace the ISA's density and the throttle model
     /// ([`Ambient`]); a missing altitude is the pressure altitude, else the
     /// ISA density altitude of the measured density
-    /// ([`ALTITUDE_SUBSTITUTES`]). Each is noted.
+    /// ([`ALTITUDE_SUBSTITUTES`]). With `alpha_dot` the derivative of the
+    /// record's α is sampled too ([`measured_alpha_dot`]), for a stall
+    /// model whose separation takes it. Each is noted.
     pub fn from_record(
         record: &FlightRecord,
         integrate: &[usize],
         interpolation: Interpolation,
         step: f64,
         (start, end): (f64, f64),
+        alpha_dot: bool,
     ) -> Result<DrivenSimulation> {
         let count = ((end - start) / step + 1e-9).floor() as usize + 1;
         let times: Vec<f64> = (0..count).map(|k| start + k as f64 * step).collect();
-        let (ambient, mut measured_quantities) = measured_ambient(record, &times)?;
+        let (mut ambient, mut measured_quantities) = measured_ambient(record, &times)?;
+        if alpha_dot {
+            measured_quantities.push(measured_alpha_dot(record, &times, &mut ambient)?);
+        }
         let mut notes = measured_quantities.clone();
         let thrust_measured = ambient.first().is_some_and(|a| a.thrust.is_some());
         let mut controls = vec![Controls::zeros(); count];
@@ -2048,6 +2100,7 @@ mod tests {
         let measured = Ambient {
             density: Some(air.density),
             thrust: Some(thrust),
+            alpha_dot: None,
         };
         let (same_rates, same) = at(measured, &controls);
         assert!((same_rates - rates).amax() <= 1e-12 * rates.amax());

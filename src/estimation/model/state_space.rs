@@ -203,8 +203,16 @@ pub fn driven_simulation(
     let inputs = driving_channels(structure);
     let sample_period = integration_step(record, &structure.outputs, step)?;
     let period = observation_step(record, &structure.outputs, &inputs, step, window.0)?;
+    let alpha_dot = structure.aircraft.aero.takes_measured_alpha_dot();
     let simulate = |step: f64| {
-        DrivenSimulation::from_record(record, &structure.integrate, interpolation, step, window)
+        DrivenSimulation::from_record(
+            record,
+            &structure.integrate,
+            interpolation,
+            step,
+            window,
+            alpha_dot,
+        )
     };
     let simulation = simulate(period)?;
     if step.is_some() {
@@ -730,6 +738,7 @@ mod tests {
             interpolation,
             step,
             window,
+            structure.aircraft.aero.takes_measured_alpha_dot(),
         )
         .unwrap();
         let mut initial = simulation.measured()[0];

@@ -454,6 +454,7 @@ fn assemble(
             mach: value(&mach, k),
             rates: Vector3::new(value(&p, k), value(&q, k), value(&r, k)),
             alpha_dot: alpha_dot.as_ref().map_or(0.0, |s| s[k]),
+            measured_alpha_dot: None,
             controls: Controls::from_fn(|i, _| controls[i].as_ref().map_or(0.0, |s| s[k])),
             chi: 1.0,
         };

@@ -258,6 +258,11 @@ impl Solution {
 /// finds collinear parameters, not merely parameters with small units.
 pub fn pseudo_inverse_or_infinite(matrix: &DMatrix<f64>) -> DMatrix<f64> {
     let n = matrix.nrows();
+    if matrix.iter().any(|v| !v.is_finite()) {
+        // Nothing is known of a direction with a non-finite entry (and
+        // the SVD of such a matrix never ends).
+        return DMatrix::from_element(n, n, f64::INFINITY);
+    }
     let scale = unit_diagonal_scale(matrix);
     let scaled = DMatrix::from_fn(n, n, |i, j| matrix[(i, j)] * scale[i] * scale[j]);
     let svd = scaled.svd(true, true);
@@ -347,7 +352,7 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             .and_then(|_| problem.residuals(&theta))
             .and_then(|r| finite_cost(&r).map(|cost| (r, cost)))
             .and_then(|(r, cost)| {
-                let normal = problem.normal_equations(&theta, &r, options)?;
+                let normal = finite_normal(problem.normal_equations(&theta, &r, options)?)?;
                 Ok((r, cost, normal))
             });
         let (
@@ -479,6 +484,27 @@ fn refine<P: LeastSquaresProblem + ?Sized>(problem: &mut P, held: &mut Option<f6
     refined
 }
 
+/// The normal equations if every entry is finite; else the unknowns whose
+/// sensitivities are not (a model evaluated where it has no derivative:
+/// the SVD of a matrix with a NaN never ends).
+fn finite_normal(normal: NormalEquations) -> Result<NormalEquations, String> {
+    let n = normal.gradient.len();
+    let bad: Vec<String> = (0..n)
+        .filter(|&j| {
+            !normal.gradient[j].is_finite()
+                || normal.information.column(j).iter().any(|v| !v.is_finite())
+        })
+        .map(|j| j.to_string())
+        .collect();
+    match bad.is_empty() {
+        true => Ok(normal),
+        false => Err(format!(
+            "the sensitivities to unknowns {} (by position) are not finite",
+            bad.join(", ")
+        )),
+    }
+}
+
 fn finite_cost(residuals: &DVector<f64>) -> Result<f64, String> {
     let cost = cost_of(residuals);
     if cost.is_finite() {
@@ -573,6 +599,9 @@ fn improving_step<P: LeastSquaresProblem + ?Sized>(
 /// are collinear, not ones whose parameters have small units.
 fn solve_symmetric(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     let n = a.nrows();
+    if a.iter().any(|v| !v.is_finite()) {
+        return DVector::from_element(n, f64::NAN);
+    }
     let scale = unit_diagonal_scale(a);
     let scaled = DMatrix::from_fn(n, n, |i, j| a[(i, j)] * scale[i] * scale[j]);
     let svd = scaled.svd(true, true);
