@@ -229,7 +229,9 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
     ));
     let y = model.outputs(t, state.as_slice(), &[]).unwrap();
     assert!(same(y.as_slice(), outputs.as_slice()));
-    model.outputs_into(t, state.as_slice(), &[], &mut outputs).unwrap();
+    model
+        .outputs_into(t, state.as_slice(), &[], &mut outputs)
+        .unwrap();
     assert!(same(y.as_slice(), outputs.as_slice()));
     let stepped = model.step(101, state.as_slice(), &[]).unwrap();
     model
@@ -242,7 +244,13 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
     Exponential::default().of(&(&rates.rates_by_state * h), &mut scaled);
     assert!(same(transition.as_slice(), scaled.as_slice()));
     assert_eq!(leading, 4);
-    assert!(transition.rows(4, n - 4).columns(0, 4).iter().all(|&v| v == 0.0));
+    assert!(
+        transition
+            .rows(4, n - 4)
+            .columns(0, 4)
+            .iter()
+            .all(|&v| v == 0.0)
+    );
     assert!(
         transition
             .view((4, 4), (n - 4, n - 4))
