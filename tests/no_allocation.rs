@@ -129,3 +129,132 @@ fn rbf_per_sample_evaluations_do_not_allocate() {
     assert!(sum.is_finite());
     assert_eq!(after - before, 0, "heap allocations in 400 samples");
 }
+
+/// The work of an extended Kalman filter's step on the augmented ATTAS
+/// lateral model (4 kinematic states, 18 parameter states) allocates
+/// nothing once its buffers have grown: the time update's linearisation
+/// (∂f/∂x and ∂f/∂θ only), Φ = e^{A·h} and its non-zeros, the RK4 step of
+/// the state, P⁻ = Φ·P·Φᵀ, and the measurement update's linearisation
+/// with the outputs, 100 grid points after a first one. (The measurement
+/// update's S, S⁻¹ and K are the pass's kept results, allocated as it
+/// keeps them.) The buffered calls give the plain calls' numbers bit for
+/// bit: the state, the outputs and every Jacobian.
+#[test]
+fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
+    use aeroid::estimation::model::augmented::Augmented;
+    use aeroid::estimation::model::state_space::{DrivenStateSpace, Jacobians, StateSpaceModel};
+    use aeroid::estimation::solver::kalman::{self, Exponential, SparseRows};
+    use aeroid::estimation::structure::ModelStructure;
+    use aeroid::record::recorder::{Profile, record_scenario};
+    use nalgebra::{DMatrix, DVector};
+
+    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let (record, _) = record_scenario(&scenario, &profile).unwrap();
+    let structure = ModelStructure::load("attas-lateral").unwrap();
+    let (view, x0) =
+        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None).unwrap();
+    let theta = view.parameters();
+    let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
+    let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
+    let n = model.state_count();
+    assert_eq!((x0.len(), n), (4, 22));
+    let empty = || Jacobians {
+        rates_by_state: DMatrix::zeros(0, 0),
+        rates_by_parameter: DMatrix::zeros(0, 0),
+        outputs_by_state: DMatrix::zeros(0, 0),
+        outputs_by_parameter: DMatrix::zeros(0, 0),
+    };
+    let (mut rates, mut full) = (empty(), empty());
+    let (mut outputs, mut next) = (DVector::zeros(0), DVector::zeros(0));
+    let mut exponential = Exponential::default();
+    let (mut transition, mut sparse) = (DMatrix::zeros(0, 0), SparseRows::default());
+    let mut work = [DMatrix::zeros(0, 0), DMatrix::zeros(0, 0)];
+    let mut covariance = DMatrix::from_diagonal_element(n, n, 1e-4);
+    let mut state = model.state(x0.as_slice());
+    let h = model.time(1) - model.time(0);
+    let mut step = |k: usize, state: &mut DVector<f64>, covariance: &mut DMatrix<f64>| {
+        model
+            .rate_jacobians_into(model.time(k), state.as_slice(), &[], &mut rates)
+            .unwrap();
+        let leading = exponential.of_scaled(&rates.rates_by_state, h, &mut transition);
+        sparse.set_leading(&transition, leading);
+        model
+            .step_into(k, state.as_slice(), &[], &mut next)
+            .unwrap();
+        std::mem::swap(state, &mut next);
+        kalman::predict_covariance_in_place(covariance, &sparse, None, &mut work);
+        model
+            .jacobians_into(
+                model.time(k + 1),
+                state.as_slice(),
+                &[],
+                &mut full,
+                Some(&mut outputs),
+            )
+            .unwrap();
+        leading
+    };
+    assert_eq!(step(0, &mut state, &mut covariance), 4, "Φ's dynamic rows");
+    let before = ALLOCATIONS.with(Cell::get);
+    for k in 1..=100 {
+        step(k, &mut state, &mut covariance);
+    }
+    let after = ALLOCATIONS.with(Cell::get);
+    assert_eq!(after - before, 0, "heap allocations in 100 steps' work");
+
+    // The buffered calls are the plain ones, bit for bit.
+    let same = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits())
+    };
+    let t = model.time(101);
+    let plain = model.jacobians(t, state.as_slice(), &[]).unwrap();
+    model
+        .rate_jacobians_into(t, state.as_slice(), &[], &mut rates)
+        .unwrap();
+    model
+        .jacobians_into(t, state.as_slice(), &[], &mut full, Some(&mut outputs))
+        .unwrap();
+    assert!(same(
+        plain.rates_by_state.as_slice(),
+        rates.rates_by_state.as_slice()
+    ));
+    assert!(same(
+        plain.rates_by_state.as_slice(),
+        full.rates_by_state.as_slice()
+    ));
+    assert!(same(
+        plain.outputs_by_state.as_slice(),
+        full.outputs_by_state.as_slice()
+    ));
+    let y = model.outputs(t, state.as_slice(), &[]).unwrap();
+    assert!(same(y.as_slice(), outputs.as_slice()));
+    model
+        .outputs_into(t, state.as_slice(), &[], &mut outputs)
+        .unwrap();
+    assert!(same(y.as_slice(), outputs.as_slice()));
+    let stepped = model.step(101, state.as_slice(), &[]).unwrap();
+    model
+        .step_into(101, state.as_slice(), &[], &mut next)
+        .unwrap();
+    assert!(same(stepped.as_slice(), next.as_slice()));
+    // Φ from the scaled exponential is the exponential of A·h.
+    let mut scaled = DMatrix::zeros(0, 0);
+    let leading = exponential.of_scaled(&rates.rates_by_state, h, &mut transition);
+    Exponential::default().of(&(&rates.rates_by_state * h), &mut scaled);
+    assert!(same(transition.as_slice(), scaled.as_slice()));
+    assert_eq!(leading, 4);
+    assert!(
+        transition
+            .rows(4, n - 4)
+            .columns(0, 4)
+            .iter()
+            .all(|&v| v == 0.0)
+    );
+    assert!(
+        transition
+            .view((4, 4), (n - 4, n - 4))
+            .into_owned()
+            .is_identity(0.0)
+    );
+}

@@ -18,9 +18,32 @@ pub struct Augmented<'a, M: StateSpaceModel + ?Sized> {
     base: &'a M,
     theta: Vec<f64>,
     augmented: Vec<usize>,
-    /// θ with the parameter states written in, and the base model's
-    /// Jacobians, kept between [`StateSpaceModel::jacobians_into`] calls.
-    scratch: Scratch<(Vec<f64>, Jacobians)>,
+    /// θ with the parameter states written in, the base model's Jacobians
+    /// and its state or outputs, kept between calls.
+    scratch: Scratch<Buffers>,
+}
+
+/// The buffers of an [`Augmented`] model's calls.
+struct Buffers {
+    theta: Vec<f64>,
+    base: Jacobians,
+    values: DVector<f64>,
+}
+
+impl Buffers {
+    fn new() -> Buffers {
+        let empty = || DMatrix::zeros(0, 0);
+        Buffers {
+            theta: Vec::new(),
+            base: Jacobians {
+                rates_by_state: empty(),
+                rates_by_parameter: empty(),
+                outputs_by_state: empty(),
+                outputs_by_parameter: empty(),
+            },
+            values: DVector::zeros(0),
+        }
+    }
 }
 
 impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
@@ -86,6 +109,53 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
     /// The columns of a base Jacobian for the augmented parameters.
     fn augmented_columns(&self, by_parameter: &DMatrix<f64>) -> DMatrix<f64> {
         by_parameter.select_columns(&self.augmented)
+    }
+
+    /// [[∂f/∂x, ∂f/∂θ_a], [0, 0]] of the base's Jacobians into `into`
+    /// (`rates_by_parameter` of no columns).
+    fn rates_into(&self, base: &Jacobians, into: &mut Jacobians) {
+        let n = base.rates_by_state.nrows();
+        let size = n + self.augmented.len();
+        shape(&mut into.rates_by_state, size, size);
+        shape(&mut into.rates_by_parameter, size, 0);
+        place(
+            &base.rates_by_state,
+            &base.rates_by_parameter,
+            &self.augmented,
+            &mut into.rates_by_state,
+        );
+    }
+}
+
+/// Gives `matrix` the shape r × c (allocating only when it changes).
+fn shape(matrix: &mut DMatrix<f64>, r: usize, c: usize) {
+    if matrix.shape() != (r, c) {
+        *matrix = DMatrix::zeros(r, c);
+    }
+}
+
+/// [`by_state`, the `columns` of `by_parameter`] into the top rows of
+/// `into`, its rows below them zero.
+fn place(
+    by_state: &DMatrix<f64>,
+    by_parameter: &DMatrix<f64>,
+    columns: &[usize],
+    into: &mut DMatrix<f64>,
+) {
+    let (rows, n) = by_state.shape();
+    let size = into.nrows();
+    let sources = by_state.as_slice().chunks_exact(rows.max(1)).take(n).chain(
+        columns
+            .iter()
+            .map(|&j| &by_parameter.as_slice()[j * rows..(j + 1) * rows]),
+    );
+    for (column, source) in into
+        .as_mut_slice()
+        .chunks_exact_mut(size.max(1))
+        .zip(sources)
+    {
+        column[..rows].copy_from_slice(source);
+        column[rows..].fill(0.0);
     }
 }
 
@@ -159,46 +229,77 @@ impl<M: StateSpaceModel + ?Sized> StateSpaceModel for Augmented<'_, M> {
         into: &mut Jacobians,
         outputs: Option<&mut DVector<f64>>,
     ) -> Result<()> {
-        let empty = || Jacobians {
-            rates_by_state: DMatrix::zeros(0, 0),
-            rates_by_parameter: DMatrix::zeros(0, 0),
-            outputs_by_state: DMatrix::zeros(0, 0),
-            outputs_by_parameter: DMatrix::zeros(0, 0),
-        };
-        self.scratch.with(
-            || (Vec::new(), empty()),
-            |(theta, base)| {
-                let x = self.split_into(z, theta)?;
-                self.base.jacobians_into(t, x, theta, base, outputs)?;
-                let (n, size) = (x.len(), z.len());
-                let rows = base.outputs_by_state.nrows();
-                let shape = |matrix: &mut DMatrix<f64>, r: usize, c: usize| {
-                    if matrix.shape() != (r, c) {
-                        *matrix = DMatrix::zeros(r, c);
-                    }
-                };
-                shape(&mut into.rates_by_state, size, size);
-                shape(&mut into.rates_by_parameter, size, 0);
-                shape(&mut into.outputs_by_state, rows, size);
-                shape(&mut into.outputs_by_parameter, rows, 0);
-                into.rates_by_state.fill(0.0);
-                into.rates_by_state
-                    .view_mut((0, 0), (n, n))
-                    .copy_from(&base.rates_by_state);
-                into.outputs_by_state
-                    .view_mut((0, 0), (rows, n))
-                    .copy_from(&base.outputs_by_state);
-                for (i, &j) in self.augmented.iter().enumerate() {
-                    into.rates_by_state
-                        .view_mut((0, n + i), (n, 1))
-                        .copy_from(&base.rates_by_parameter.column(j));
-                    into.outputs_by_state
-                        .view_mut((0, n + i), (rows, 1))
-                        .copy_from(&base.outputs_by_parameter.column(j));
-                }
-                Ok(())
-            },
-        )
+        self.scratch.with(Buffers::new, |buffers| {
+            let x = self.split_into(z, &mut buffers.theta)?;
+            let base = &mut buffers.base;
+            self.base
+                .jacobians_into(t, x, &buffers.theta, base, outputs)?;
+            self.rates_into(base, into);
+            let (n, size) = (x.len(), z.len());
+            let rows = base.outputs_by_state.nrows();
+            shape(&mut into.outputs_by_state, rows, size);
+            shape(&mut into.outputs_by_parameter, rows, 0);
+            place(
+                &base.outputs_by_state,
+                &base.outputs_by_parameter,
+                &self.augmented,
+                &mut into.outputs_by_state,
+            );
+            debug_assert_eq!(into.outputs_by_state.ncols(), n + self.augmented.len());
+            Ok(())
+        })
+    }
+
+    /// [[∂f/∂x, ∂f/∂θ_a], [0, 0]] from the base's
+    /// [`StateSpaceModel::rate_jacobians_into`].
+    fn rate_jacobians_into(
+        &self,
+        t: f64,
+        z: &[f64],
+        _theta: &[f64],
+        into: &mut Jacobians,
+    ) -> Result<()> {
+        self.scratch.with(Buffers::new, |buffers| {
+            let x = self.split_into(z, &mut buffers.theta)?;
+            self.base
+                .rate_jacobians_into(t, x, &buffers.theta, &mut buffers.base)?;
+            self.rates_into(&buffers.base, into);
+            Ok(())
+        })
+    }
+
+    fn outputs_into(
+        &self,
+        t: f64,
+        z: &[f64],
+        _theta: &[f64],
+        into: &mut DVector<f64>,
+    ) -> Result<()> {
+        self.scratch.with(Buffers::new, |buffers| {
+            let x = self.split_into(z, &mut buffers.theta)?;
+            self.base.outputs_into(t, x, &buffers.theta, into)
+        })
+    }
+
+    fn step_into(
+        &self,
+        k: usize,
+        z: &[f64],
+        _theta: &[f64],
+        into: &mut DVector<f64>,
+    ) -> Result<()> {
+        self.scratch.with(Buffers::new, |buffers| {
+            let x = self.split_into(z, &mut buffers.theta)?;
+            let n = x.len();
+            self.base
+                .step_into(k, x, &buffers.theta, &mut buffers.values)?;
+            if into.len() != z.len() {
+                *into = DVector::zeros(z.len());
+            }
+            into.as_mut_slice()[..n].copy_from_slice(buffers.values.as_slice());
+            into.as_mut_slice()[n..].copy_from_slice(&z[n..]);
+            Ok(())
+        })
     }
 
     fn step(&self, k: usize, z: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {

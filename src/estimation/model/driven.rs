@@ -1233,10 +1233,28 @@ pub(super) fn evaluate(
     ambient: Ambient,
     outputs: &[Observable],
 ) -> (FlightPathState, Vec<f64>) {
+    let mut values = vec![0.0; outputs.len()];
+    let rates = evaluate_into(model, x, controls, pseudo, ambient, outputs, &mut values);
+    (rates, values)
+}
+
+/// [`evaluate`] with the outputs written into `values` (as long as
+/// `outputs`).
+pub(super) fn evaluate_into(
+    model: &FlightModel,
+    x: &FlightPathState,
+    controls: &Controls,
+    pseudo: PseudoRates,
+    ambient: Ambient,
+    outputs: &[Observable],
+    values: &mut [f64],
+) -> FlightPathState {
     let air = ambient.surroundings(&model.environment.atmosphere, x[ALTITUDE]);
     let (rates, evaluation) = derivative(model, x, &Angles::of(x), &air, controls, pseudo);
-    let values = outputs.iter().map(|o| o.value(x, &evaluation)).collect();
-    (rates, values)
+    for (value, output) in values.iter_mut().zip(outputs) {
+        *value = output.value(x, &evaluation);
+    }
+    rates
 }
 
 /// The Jacobians of f (rows: `states`) and of the `outputs` at the full
@@ -1263,6 +1281,7 @@ pub(super) fn linearise(
         (controls, pseudo, ambient),
         states,
         outputs,
+        true,
         &mut buffers,
     );
     let mut jacobians = Jacobians {
@@ -1286,13 +1305,16 @@ pub(super) struct LinearisationBuffers {
 
 /// [`linearise`] into `buffers` (the same numbers): the Jacobians are the
 /// linearisation's `a`, `b`, `gx`, `gtheta` ([`LinearisationBuffers::copy_into`]),
-/// the outputs its values.
+/// the outputs its values. Without `with_outputs` the outputs and their
+/// derivatives are not evaluated (`a` and `b` only:
+/// [`LinearisationBuffers::copy_rates_into`]).
 pub(super) fn linearise_with(
     model: &FlightModel,
     x: &FlightPathState,
     (controls, pseudo, ambient): (&Controls, PseudoRates, Ambient),
     states: &[usize],
     outputs: &[Observable],
+    with_outputs: bool,
     buffers: &mut LinearisationBuffers,
 ) {
     let aero = &model.aircraft.aero;
@@ -1315,6 +1337,7 @@ pub(super) fn linearise_with(
     });
     let mut memo = Memo::new([false; FLIGHT_PATH_SIZE], FrozenPoints::default());
     memo.ambient = ambient;
+    let outputs = if with_outputs { outputs } else { &[] };
     linearization.at(model, directions, x, controls, pseudo, outputs, &mut memo);
 }
 
@@ -1325,14 +1348,7 @@ impl LinearisationBuffers {
         let Some((_, _, linearization)) = &self.made else {
             return;
         };
-        let copy = |from: &DMatrix<f64>, to: &mut DMatrix<f64>| {
-            if to.shape() != from.shape() {
-                *to = DMatrix::zeros(from.nrows(), from.ncols());
-            }
-            to.copy_from(from);
-        };
-        copy(&linearization.a, &mut into.rates_by_state);
-        copy(&linearization.b, &mut into.rates_by_parameter);
+        self.copy_rates_into(into);
         copy(&linearization.gx, &mut into.outputs_by_state);
         copy(&linearization.gtheta, &mut into.outputs_by_parameter);
         if let Some(outputs) = outputs {
@@ -1342,6 +1358,23 @@ impl LinearisationBuffers {
             outputs.copy_from_slice(&linearization.outputs);
         }
     }
+
+    /// The last linearisation's ∂f/∂x and ∂f/∂θ into `into`.
+    pub(super) fn copy_rates_into(&self, into: &mut Jacobians) {
+        let Some((_, _, linearization)) = &self.made else {
+            return;
+        };
+        copy(&linearization.a, &mut into.rates_by_state);
+        copy(&linearization.b, &mut into.rates_by_parameter);
+    }
+}
+
+/// `from` into `to`, reshaped if it differs.
+fn copy(from: &DMatrix<f64>, to: &mut DMatrix<f64>) {
+    if to.shape() != from.shape() {
+        *to = DMatrix::zeros(from.nrows(), from.ncols());
+    }
+    to.copy_from(from);
 }
 
 /// Where [`DrivenSimulation::simulate`] linearises the model for the

@@ -323,9 +323,34 @@ pub trait StateSpaceModel {
         *into = self.jacobians(t, x, theta)?;
         Ok(())
     }
+    /// ∂f/∂x and ∂f/∂θ of [`StateSpaceModel::jacobians_into`] only (what a
+    /// filter's time update reads), into `into`'s `rates_by_state` and
+    /// `rates_by_parameter`; its output Jacobians are left unspecified. The
+    /// default calls [`StateSpaceModel::jacobians_into`].
+    fn rate_jacobians_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut Jacobians,
+    ) -> Result<()> {
+        self.jacobians_into(t, x, theta, into, None)
+    }
     /// [`StateSpaceModel::step`] written into `into`. The default calls it.
     fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
         *into = self.step(k, x, theta)?;
+        Ok(())
+    }
+    /// [`StateSpaceModel::outputs`] written into `into`. The default calls
+    /// it.
+    fn outputs_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut DVector<f64>,
+    ) -> Result<()> {
+        *into = self.outputs(t, x, theta)?;
         Ok(())
     }
 }
@@ -617,11 +642,34 @@ impl StateSpaceModel for DrivenStateSpace {
     }
 
     fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        let mut outputs = DVector::zeros(0);
+        self.outputs_into(t, x, theta, &mut outputs)?;
+        Ok(outputs)
+    }
+
+    fn outputs_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut DVector<f64>,
+    ) -> Result<()> {
         let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
-        let (_, outputs) = self.with_model(theta, |model, _| {
-            driven::evaluate(model, &full, &controls, pseudo, ambient, &self.outputs)
+        if into.len() != self.outputs.len() {
+            *into = DVector::zeros(self.outputs.len());
+        }
+        self.with_model(theta, |model, _| {
+            driven::evaluate_into(
+                model,
+                &full,
+                &controls,
+                pseudo,
+                ambient,
+                &self.outputs,
+                into.as_mut_slice(),
+            )
         })?;
-        Ok(DVector::from_vec(outputs))
+        Ok(())
     }
 
     /// The Jacobians by the sensitivity equations' own linearisation
@@ -663,9 +711,34 @@ impl StateSpaceModel for DrivenStateSpace {
                 (&controls, pseudo, ambient),
                 &self.states,
                 &self.outputs,
+                true,
                 buffers,
             );
             buffers.copy_into(into, outputs);
+        })
+    }
+
+    /// The linearisation of [`StateSpaceModel::jacobians_into`] without
+    /// the outputs' (their values and derivatives are not evaluated).
+    fn rate_jacobians_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut Jacobians,
+    ) -> Result<()> {
+        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
+        self.with_model(theta, |model, buffers| {
+            driven::linearise_with(
+                model,
+                &full,
+                (&controls, pseudo, ambient),
+                &self.states,
+                &self.outputs,
+                false,
+                buffers,
+            );
+            buffers.copy_rates_into(into);
         })
     }
 
@@ -676,6 +749,12 @@ impl StateSpaceModel for DrivenStateSpace {
     /// An error when k is not a step of the grid, or when the model departs
     /// (a non-finite state, |α| or |β| beyond 90°, airspeed not positive).
     fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        let mut next = DVector::zeros(0);
+        self.step_into(k, x, theta, &mut next)?;
+        Ok(next)
+    }
+
+    fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
         let simulation = &self.simulation;
         if k + 1 >= simulation.len() {
             return Err(Error::Other(format!(
@@ -688,7 +767,13 @@ impl StateSpaceModel for DrivenStateSpace {
             driven::check_departure(&full, simulation.time(k)).map_err(Error::Other)?;
             let next = simulation.step_plain(model, k, &full);
             driven::check_departure(&next, simulation.time(k + 1)).map_err(Error::Other)?;
-            Ok(self.state_of(&next))
+            if into.len() != self.states.len() {
+                *into = DVector::zeros(self.states.len());
+            }
+            for (into, &i) in into.iter_mut().zip(&self.states) {
+                *into = next[i];
+            }
+            Ok(())
         })?
     }
 }

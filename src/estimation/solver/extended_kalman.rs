@@ -67,7 +67,8 @@ impl Discretisation {
         h: f64,
     ) -> (DMatrix<f64>, DMatrix<f64>) {
         let mut time_update = TimeUpdate::default();
-        let has_noise = time_update.discretise(self, a, noise, h);
+        let has_noise = noise.iter().any(|&v| v != 0.0);
+        time_update.discretise(self, a, has_noise.then_some(noise), h);
         let n = a.nrows();
         let process = if has_noise {
             time_update.process_noise
@@ -91,27 +92,26 @@ struct TimeUpdate {
 }
 
 impl TimeUpdate {
-    /// Φ into `transition` and its non-zeros into `sparse`, Q_d into
-    /// `process_noise`; false when there is no process noise (Q_d = 0,
-    /// `process_noise` not written).
+    /// Φ into `transition` and its non-zeros into `sparse`, Q_d of the
+    /// spectral density `noise` into `process_noise` (None: no process
+    /// noise, `process_noise` not written).
     fn discretise(
         &mut self,
         discretisation: Discretisation,
         a: &DMatrix<f64>,
-        noise: &DMatrix<f64>,
+        noise: Option<&DMatrix<f64>>,
         h: f64,
-    ) -> bool {
+    ) {
         let n = a.nrows();
-        let has_noise = noise.iter().any(|&v| v != 0.0);
         match discretisation {
             Discretisation::Exact => {
-                self.scaled.clone_from(a);
-                self.scaled *= h;
-                self.exponential.of(&self.scaled, &mut self.transition);
-                if has_noise {
+                // Φ's rows past the last non-zero row of A are the
+                // identity's (an augmented model's constant parameters).
+                let leading = self.exponential.of_scaled(a, h, &mut self.transition);
+                if let Some(noise) = noise {
                     self.noise.of(a, noise, h, &mut self.process_noise);
                 }
-                self.sparse.set(&self.transition);
+                self.sparse.set_leading(&self.transition, leading);
             }
             Discretisation::SecondOrder => {
                 // A·h by its non-zeros; Φ = I + A·h + ½·(A·h)², (A·h)² = (Bᵀ·Bᵀ)ᵀ
@@ -135,7 +135,7 @@ impl TimeUpdate {
                     }
                     phi[j + j * n] += 1.0;
                 }
-                if has_noise {
+                if let Some(noise) = noise {
                     // A·Q_c = (Q_cᵀ·Aᵀ)ᵀ and A·Q_c·Aᵀ = (A·Q_c)·Aᵀ by A's
                     // non-zeros.
                     self.sparse.set(a);
@@ -164,7 +164,6 @@ impl TimeUpdate {
                 self.sparse.set(&self.transition);
             }
         }
-        has_noise
     }
 }
 
@@ -251,6 +250,11 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     let mut pass = Pass::with_capacity(len, model.output_count());
     let mut state = initial.mean;
     let mut covariance = initial.covariance;
+    let process_noise = noise
+        .process
+        .iter()
+        .any(|&v| v != 0.0)
+        .then_some(&noise.process);
     let mut time_update = TimeUpdate::default();
     let mut update_workspace = UpdateWorkspace::default();
     let mut linearised = Jacobians {
@@ -260,24 +264,28 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
         outputs_by_parameter: DMatrix::zeros(0, 0),
     };
     let mut predicted = DVector::zeros(0);
+    let mut next = DVector::zeros(0);
+    let mut rows = Vec::with_capacity(model.output_count());
+    let mut r = DMatrix::zeros(0, 0);
     for k in 0..len {
         let t = model.time(k);
         if k > 0 {
             let previous = model.time(k - 1);
-            model.jacobians_into(previous, state.as_slice(), theta, &mut linearised, None)?;
-            let has_noise = time_update.discretise(
+            model.rate_jacobians_into(previous, state.as_slice(), theta, &mut linearised)?;
+            time_update.discretise(
                 discretisation,
                 &linearised.rates_by_state,
-                &noise.process,
+                process_noise,
                 t - previous,
             );
-            state = model
-                .step(k - 1, state.as_slice(), theta)
+            model
+                .step_into(k - 1, state.as_slice(), theta, &mut next)
                 .map_err(|e| at_time(e, previous))?;
+            std::mem::swap(&mut state, &mut next);
             kalman::predict_covariance_in_place(
                 &mut covariance,
                 &time_update.sparse,
-                has_noise.then_some(&time_update.process_noise),
+                process_noise.map(|_| &time_update.process_noise),
                 &mut time_update.work,
             );
             if keep.smoother {
@@ -294,7 +302,8 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
         if present.is_empty() {
             pass.measured.push(None);
         } else {
-            let rows: Vec<usize> = present.iter().map(|&(o, _)| o).collect();
+            rows.clear();
+            rows.extend(present.iter().map(|&(o, _)| o));
             model.jacobians_into(
                 t,
                 state.as_slice(),
@@ -303,10 +312,11 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 Some(&mut predicted),
             )?;
             let h = linearised.outputs_by_state.select_rows(&rows);
-            let r = DMatrix::from_diagonal(&DVector::from_iterator(
-                rows.len(),
-                rows.iter().map(|&o| noise.measurement[o]),
-            ));
+            resize(&mut r, rows.len(), rows.len());
+            r.fill(0.0);
+            for (i, &o) in rows.iter().enumerate() {
+                r[(i, i)] = noise.measurement[o];
+            }
             let innovation =
                 DVector::from_iterator(rows.len(), present.iter().map(|&(o, z)| z - predicted[o]));
             let update = kalman::update_with(
@@ -318,13 +328,15 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 &mut update_workspace,
             )
             .map_err(|e| at_time(e, t))?;
-            pass.measured_at(
+            let term = update.log_likelihood_term_with(update_workspace.log_determinant);
+            pass.measured_with(
                 k,
                 present,
                 Measured {
                     observation: h,
                     update,
                 },
+                term,
             );
         }
         let kept = keep.filtered_covariances || k + 1 == len;
@@ -350,8 +362,21 @@ impl Pass {
     /// `present` (in its rows' order): its likelihood term, each output's
     /// innovation and the update itself.
     pub(crate) fn measured_at(&mut self, k: usize, present: &[(usize, f64)], measured: Measured) {
+        let term = measured.update.log_likelihood_term();
+        self.measured_with(k, present, measured, term);
+    }
+
+    /// [`Pass::measured_at`] with the update's likelihood term
+    /// ([`kalman::Update::log_likelihood_term`]) given.
+    pub(crate) fn measured_with(
+        &mut self,
+        k: usize,
+        present: &[(usize, f64)],
+        measured: Measured,
+        term: f64,
+    ) {
         let update = &measured.update;
-        self.negative_log_likelihood += 0.5 * update.log_likelihood_term();
+        self.negative_log_likelihood += 0.5 * term;
         for (i, &(o, _)) in present.iter().enumerate() {
             self.innovations[o].push(Innovation {
                 k,

@@ -89,19 +89,28 @@ impl Exponential {
     /// once at the end; the scaling is X's alone (Y does not enter the
     /// series' convergence).
     pub fn of(&mut self, matrix: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+        self.of_scaled(matrix, 1.0, into);
+    }
+
+    /// e^{`matrix`·h} into `into` (the same numbers as [`Exponential::of`]
+    /// of the matrix times h, without forming it). Returns k, the rows of
+    /// the matrix up to its last non-zero one: the rows of `into` from k on
+    /// are the identity's.
+    pub fn of_scaled(&mut self, matrix: &DMatrix<f64>, h: f64, into: &mut DMatrix<f64>) -> usize {
         let n = matrix.nrows();
         let values = matrix.as_slice();
-        // The rows below the last non-zero entry of any column are zero.
+        // The rows below the last non-zero entry of any column are zero
+        // (each column read from its end down to the rows known non-zero).
         let mut k = 0;
         for column in values.chunks_exact(n.max(1)) {
-            for (i, &v) in column.iter().enumerate() {
-                k = if v != 0.0 { k.max(i + 1) } else { k };
+            if let Some(i) = column[k..].iter().rposition(|&v| v != 0.0) {
+                k += i + 1;
             }
         }
         let mut largest = 0.0f64;
         for column in values.chunks_exact(n.max(1)).take(k) {
             for &v in &column[..k] {
-                largest = largest.max(v.abs());
+                largest = largest.max((v * h).abs());
             }
         }
         let squarings = squarings_for(largest * k as f64);
@@ -114,7 +123,7 @@ impl Exponential {
             .zip(values.chunks_exact(n.max(1)))
         {
             for (into, &v) in into.iter_mut().zip(&column[..k]) {
-                *into = v * scale;
+                *into = (v * h) * scale;
             }
         }
         // Taylor series: E = Σ_{j ≤ J} Xʲ/j!, Φ₁ = Σ_{j < J} Xʲ/(j + 1)!,
@@ -130,16 +139,17 @@ impl Exponential {
         let negligible = 2f64.powi(-60) / k.max(1) as f64;
         for j in 1..=TAYLOR_TERMS {
             let j = j as f64;
-            for (phi, &term) in self.phi.iter_mut().zip(self.term.iter()) {
+            for (phi, &term) in self.phi.as_mut_slice().iter_mut().zip(self.term.as_slice()) {
                 *phi += term / j;
             }
             multiply(&self.term, &self.x, &mut self.product);
             let mut size = 0.0f64;
             for ((term, left), &p) in self
                 .term
+                .as_mut_slice()
                 .iter_mut()
-                .zip(self.top_left.iter_mut())
-                .zip(self.product.iter())
+                .zip(self.top_left.as_mut_slice())
+                .zip(self.product.as_slice())
             {
                 *term = p / j;
                 *left += *term;
@@ -147,7 +157,7 @@ impl Exponential {
             }
             if size < negligible {
                 // Φ₁'s next term, Xʲ/(j + 1)!, is this one over j + 1.
-                for (phi, &term) in self.phi.iter_mut().zip(self.term.iter()) {
+                for (phi, &term) in self.phi.as_mut_slice().iter_mut().zip(self.term.as_slice()) {
                     *phi += term / (j + 1.0);
                 }
                 break;
@@ -156,31 +166,42 @@ impl Exponential {
         // [[E, Φ₁], [0, I]]² = [[E², E·Φ₁ + Φ₁], [0, I]].
         for _ in 0..squarings {
             multiply(&self.top_left, &self.phi, &mut self.product);
-            for (into, &p) in self.phi.iter_mut().zip(self.product.iter()) {
+            for (into, &p) in self
+                .phi
+                .as_mut_slice()
+                .iter_mut()
+                .zip(self.product.as_slice())
+            {
                 *into += p;
             }
             multiply(&self.top_left, &self.top_left, &mut self.product);
             std::mem::swap(&mut self.top_left, &mut self.product);
         }
         resize(into, n, n);
-        into.fill_with_identity();
-        into.view_mut((0, 0), (k, k)).copy_from(&self.top_left);
-        // The top-right block: Φ₁·(Y·2⁻ˢ), column by column.
+        let result = into.as_mut_slice();
+        result.fill(0.0);
+        for (c, column) in result.chunks_exact_mut(n.max(1)).enumerate() {
+            if c < k {
+                column[..k].copy_from_slice(&self.top_left.as_slice()[c * k..(c + 1) * k]);
+            } else {
+                column[c] = 1.0;
+            }
+        }
+        // The top-right block: Φ₁·(Y·h·2⁻ˢ), column by column.
         if k > 0 {
             let phi = self.phi.as_slice();
-            let into = into.as_mut_slice();
             for c in k..n {
                 let source = &values[c * n..c * n + k];
-                let column = &mut into[c * n..c * n + k];
-                column.fill(0.0);
+                let column = &mut result[c * n..c * n + k];
                 for (&y, phi) in source.iter().zip(phi.chunks_exact(k)) {
-                    let y = y * scale;
+                    let y = (y * h) * scale;
                     for (into, &phi) in column.iter_mut().zip(phi) {
                         *into += phi * y;
                     }
                 }
             }
         }
+        k
     }
 }
 
@@ -315,7 +336,7 @@ fn multiply(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
     for (column, b) in into
         .as_mut_slice()
         .chunks_exact_mut(rows)
-        .zip(b.column_iter())
+        .zip(b.as_slice().chunks_exact(b.nrows().max(1)))
     {
         column.fill(0.0);
         for (&factor, a) in b.iter().zip(a.chunks_exact(rows)) {
@@ -441,6 +462,13 @@ impl SparseRows {
 
     /// Reads the non-zeros of `matrix`.
     pub fn set(&mut self, matrix: &DMatrix<f64>) {
+        self.set_leading(matrix, matrix.nrows());
+    }
+
+    /// Reads the non-zeros of the first `leading` rows of `matrix`; its
+    /// rows from `leading` on are taken as the identity's (a transition's
+    /// rows of constant states, [`Exponential::of_scaled`]).
+    pub fn set_leading(&mut self, matrix: &DMatrix<f64>, leading: usize) {
         let (rows, columns) = matrix.shape();
         self.begin(columns);
         // Every entry is written and only a non-zero one kept (no branch):
@@ -449,29 +477,36 @@ impl SparseRows {
             self.entries.resize(matrix.len(), (0, 0.0));
         }
         let values = matrix.as_slice();
+        let entries = self.entries.as_mut_slice();
         let mut count = 0;
-        for i in 0..rows {
-            for j in 0..columns {
-                let value = values[i + j * rows];
-                self.entries[count] = (j, value);
+        for i in 0..leading.min(rows) {
+            for (j, &value) in values[i..].iter().step_by(rows).enumerate() {
+                entries[count] = (j, value);
                 count += usize::from(value != 0.0);
             }
+            self.starts.push(count);
+        }
+        for i in leading.min(rows)..rows {
+            entries[count] = (i, 1.0);
+            count += 1;
             self.starts.push(count);
         }
     }
 
     /// Reads the non-zeros of `matrix`ᵀ (the rows are its columns).
     pub fn set_transposed(&mut self, matrix: &DMatrix<f64>) {
-        self.begin(matrix.nrows());
+        let rows = matrix.nrows();
+        self.begin(rows);
         // Every entry is written and only a non-zero one kept (no branch):
         // `entries` holds room for all of them.
         if self.entries.len() < matrix.len() {
             self.entries.resize(matrix.len(), (0, 0.0));
         }
+        let entries = self.entries.as_mut_slice();
         let mut count = 0;
-        for column in matrix.column_iter() {
+        for column in matrix.as_slice().chunks_exact(rows.max(1)) {
             for (i, &value) in column.iter().enumerate() {
-                self.entries[count] = (i, value);
+                entries[count] = (i, value);
                 count += usize::from(value != 0.0);
             }
             self.starts.push(count);
@@ -568,14 +603,29 @@ pub struct Update {
 impl Update {
     /// νᵀ·S⁻¹·ν + ln det S, the update's term of −2·ln L (without 2π).
     pub fn log_likelihood_term(&self) -> f64 {
-        let weighted = &self.innovation_inverse * &self.innovation;
-        let quadratic = self.innovation.dot(&weighted);
         let log_det = match Cholesky::new(self.innovation_covariance.clone()) {
-            Some(c) => 2.0 * c.l().diagonal().iter().map(|d| d.ln()).sum::<f64>(),
+            Some(c) => log_determinant(&c),
             None => f64::INFINITY,
         };
+        self.log_likelihood_term_with(log_det)
+    }
+
+    /// [`Update::log_likelihood_term`] given ln det S.
+    pub(crate) fn log_likelihood_term_with(&self, log_det: f64) -> f64 {
+        let weighted = &self.innovation_inverse * &self.innovation;
+        let quadratic = self.innovation.dot(&weighted);
         quadratic + log_det
     }
+}
+
+/// ln det S = 2·Σ ln L_ii of S's Cholesky factor L.
+fn log_determinant(cholesky: &Cholesky<f64, Dyn>) -> f64 {
+    2.0 * cholesky
+        .l_dirty()
+        .diagonal()
+        .iter()
+        .map(|d| d.ln())
+        .sum::<f64>()
 }
 
 /// The measurement update of (x, P) with the innovation ν, its
@@ -608,6 +658,8 @@ pub struct UpdateWorkspace {
     half: DMatrix<f64>,
     /// K·Eᵀ.
     product: DMatrix<f64>,
+    /// ln det S of the last update (its Cholesky factor's).
+    pub(crate) log_determinant: f64,
 }
 
 /// [`update`] with its buffers in `workspace`. Joseph's form
@@ -630,6 +682,7 @@ pub fn update_with(
         cross,
         half,
         product,
+        log_determinant: log_det,
     } = workspace;
     sparse.set(observation);
     sparse.times_transposed(covariance, cross);
@@ -656,6 +709,7 @@ pub fn update_with(
             "the innovation covariance H·P·Hᵀ + R is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
         )
     })?;
+    *log_det = log_determinant(&cholesky);
     let inverse = cholesky.inverse();
     let gain = &*cross * &inverse;
     state.gemv(1.0, &gain, &innovation, 1.0);

@@ -171,6 +171,8 @@ struct Work {
     compound: DMatrix<f64>,
     measured: DMatrix<f64>,
     vector: DVector<f64>,
+    /// One propagated point or one point's outputs.
+    value: DVector<f64>,
 }
 
 impl Work {
@@ -183,6 +185,7 @@ impl Work {
             compound: DMatrix::zeros(2 * n + 2 * noise_columns, n),
             measured: DMatrix::zeros(2 * n + outputs, outputs),
             vector: DVector::zeros(n.max(outputs)),
+            value: DVector::zeros(0),
         }
     }
 
@@ -217,10 +220,15 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     let n = state.len();
     work.draw(weights, state, factor);
     for j in 0..2 * n + 1 {
-        let next = model
-            .step(k - 1, work.points.column(j).as_slice(), theta)
+        model
+            .step_into(
+                k - 1,
+                work.points.column(j).as_slice(),
+                theta,
+                &mut work.value,
+            )
             .map_err(|e| at_time(e, previous))?;
-        work.moved.column_mut(j).copy_from(&next);
+        work.moved.column_mut(j).copy_from(&work.value);
     }
     weighted_mean(weights, &work.moved, state);
     // Φ·S⁺ = (χ'_{1…n} − χ'_{n+1…2n})/(2c): Sᵀ·Φᵀ = Dᵀ/(2c).
@@ -292,11 +300,11 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     let m = present.len();
     work.draw(weights, state, factor);
     for j in 0..2 * n + 1 {
-        let y = model
-            .outputs(t, work.points.column(j).as_slice(), theta)
+        model
+            .outputs_into(t, work.points.column(j).as_slice(), theta, &mut work.value)
             .map_err(|e| at_time(e, t))?;
         for (row, &(o, _)) in present.iter().enumerate() {
-            work.outputs[(row, j)] = y[o];
+            work.outputs[(row, j)] = work.value[o];
         }
     }
     let outputs = work.outputs.rows(0, m);
