@@ -869,16 +869,28 @@ fn time_varying_gain_on_dryden_turbulence() {
 /// entry to 1), so it shows where the likelihood's optimum on the
 /// boundary is. Five seeds from 10 % off the truth.
 ///
-/// Asserted, for every seed: the steady fit converged on the boundary
-/// (diag(K·C) on p within 10⁻⁴ of 1) at the optimum of the constrained
-/// problem, by its KKT conditions at the solution with the Jacobian of
-/// whole passes differenced (independent of the fit's own steps): the
-/// multiplier λ of the constraint positive (the unconstrained step would
-/// cross it: its predicted decrease ½·gᵀM⁻¹g beyond 1) and the Gauss–Newton
-/// step along the boundary, −M⁻¹(g + λ·a) with a = ∂diag(K·C)_p/∂u and
-/// aᵀΔ = 0, predicted to lower the cost by less than 10⁻³ (a step under
-/// 0.045σ); every error within 3σ for both forms and the forms within
-/// 0.5σ of each other (measured: see the printed report).
+/// The KKT conditions of the constrained problem are measured at each
+/// steady solution with the Jacobian of whole passes differenced
+/// (independent of the fit's own steps) and R held at its final value:
+/// the unconstrained step's predicted decrease ½·gᵀM⁻¹g, the multiplier
+/// λ of the constraint on p (a = ∂diag(K·C)_p/∂u, λ = −aᵀM⁻¹g/aᵀM⁻¹a) and
+/// the predicted decrease of the step along the constraint, −M⁻¹(g + λ·a).
+///
+/// Measured: on seeds 0 and 4 the constraint does not bind (diag(K·C) on p
+/// 0.981 and 0.993, the unconstrained decrease 6e-5 and 5e-6: interior
+/// optima, no step constrained). On seeds 1–3 it binds (λ 72, 79, 15, the
+/// unconstrained step predicting 1.94, 2.36, 0.085); the constrained steps
+/// (with their second-order corrections) end where the step along the
+/// constraint predicts 1.4e-8, 2.2e-7, 4.6e-8: the KKT point, diag(K·C)
+/// on p 0.9958, 0.9956, 0.9963 after the last R update and F's
+/// compensation. The steady and time-varying estimates agree within
+/// 0.12σ on every seed (0.01σ where the constraint does not bind; with
+/// the unconstrained step cut instead, up to 1.12σ). Asserted: every fit
+/// converged with diag(K·C) on p in [0.98, 1]; where the constraint binds
+/// (on at least two seeds) the last step constrained, λ > 0 and the step
+/// along the constraint predicting below 10⁻⁵ (a step under 0.0045σ);
+/// where it does not, no step constrained and below 10⁻³; every error
+/// within 3σ for both forms, the forms within 0.25σ of each other.
 #[test]
 fn filter_error_converges_with_the_gain_constraint_active() {
     use aeroid::estimation::solver::gauss_newton::LeastSquaresProblem;
@@ -886,7 +898,7 @@ fn filter_error_converges_with_the_gain_constraint_active() {
     let measurement = DVector::from_vec(vec![0.01, 0.0, 1e-6, 1e-5]);
     let initial = DVector::zeros(4);
     let mut report = String::new();
-    let mut boundary = 0;
+    let mut binding = 0;
     for seed in 0..5 {
         let observations = fly(
             &model,
@@ -924,7 +936,7 @@ fn filter_error_converges_with_the_gain_constraint_active() {
         let product_p = |u: &DVector<f64>| {
             let theta: Vec<f64> = u.iter().take(4).copied().collect();
             let f = DVector::from_vec(vec![u[4], u[5], u[6], 0.0]);
-            let pass = steady_state_pass(
+            steady_state_pass(
                 &model,
                 &theta,
                 &initial,
@@ -932,37 +944,45 @@ fn filter_error_converges_with_the_gain_constraint_active() {
                 &result.variances,
                 &observations,
             )
-            .unwrap();
-            (&pass.steady.gain * &pass.output_matrix)[(1, 1)]
+            .ok()
+            .map(|pass| (&pass.steady.gain * &pass.output_matrix)[(1, 1)])
         };
+        // Central differences; one-sided where the filter does not exist on
+        // one side (across the boundary).
+        let here = product_p(&u).unwrap();
         let slope = DVector::from_fn(u.len(), |j, _| {
             let h = options.difference_step(&u, j);
             let mut moved = u.clone();
             moved[j] += h;
             let forward = product_p(&moved);
             moved[j] -= 2.0 * h;
-            (forward - product_p(&moved)) / (2.0 * h)
+            match (forward, product_p(&moved)) {
+                (Some(f), Some(b)) => (f - b) / (2.0 * h),
+                (Some(f), None) => (f - here) / h,
+                (None, Some(b)) => (here - b) / h,
+                (None, None) => panic!("seed {seed}: no filter either side of unknown {j}"),
+            }
         });
         let inverse = information.clone().pseudo_inverse(1e-14).unwrap();
         let unconstrained = 0.5 * gradient.dot(&(&inverse * &gradient));
         let multiplier = -slope.dot(&(&inverse * &gradient)) / slope.dot(&(&inverse * &slope));
         let reduced = &gradient + &slope * multiplier;
         let along = 0.5 * reduced.dot(&(&inverse * &reduced));
-        let on_boundary = kc[(1, 1)] >= 1.0 - 1e-4;
-        boundary += usize::from(on_boundary);
         let kkt = format!(
             "seed {seed}: diag(K·C) on p {:.7}, λ {multiplier:.3e}, unconstrained decrease {unconstrained:.3e}, along the boundary {along:.3e}",
             kc[(1, 1)]
         );
         assert_eq!(result.solution.status, Status::Converged, "{kkt}");
-        assert!(kc[(1, 1)] <= 1.0, "{kkt}");
-        if on_boundary {
+        assert!(kc[(1, 1)] >= 0.98 && kc[(1, 1)] <= 1.0, "{kkt}");
+        if unconstrained > 1e-3 {
+            // The constraint binds: the unconstrained step would cross it.
+            binding += 1;
             assert!(
-                multiplier > 0.0 && unconstrained > 1e-3 && along < 1e-3,
+                result.constrained && multiplier > 0.0 && along < 1e-5,
                 "{kkt}"
             );
         } else {
-            assert!(unconstrained < 1e-3, "{kkt}");
+            assert!(!result.constrained && along < 1e-3, "{kkt}");
         }
         let covariance = result.solution.covariance();
         let errors: Vec<f64> = (0..4)
@@ -1012,13 +1032,16 @@ fn filter_error_converges_with_the_gain_constraint_active() {
         for j in 0..4 {
             let (steady, varying) = (errors[j], tv_errors[j]);
             assert!(
-                steady.abs() < 3.0 && varying.abs() < 3.0 && (steady - varying).abs() < 0.5,
+                steady.abs() < 3.0 && varying.abs() < 3.0 && (steady - varying).abs() < 0.25,
                 "seed {seed}, θ{j}: {steady:.2}σ steady, {varying:.2}σ time-varying\n{report}"
             );
         }
     }
     println!("{report}");
-    assert!(boundary >= 2, "{boundary} fits on the boundary\n{report}");
+    assert!(
+        binding >= 2,
+        "the constraint binds on {binding} seeds\n{report}"
+    );
 }
 
 /// The steady-state filter's Jacobian by its sensitivity equations
