@@ -124,9 +124,11 @@
 //! linear model its likelihood and innovations are adskalman's to 1e-9
 //! (`tests/filter_error.rs`); with the gust filter's states started
 //! unknown (`tests/linear_models.rs`) the RMS error/σ of the α column of
-//! A is 1.29 against the steady form's 1.78; each fit costs about 20
+//! A is 1.29 against the steady form's 1.78; each fit costs about 25
 //! times the steady form's (a covariance propagated at every point in
-//! every pass).
+//! every pass, and a pass per unknown for the Jacobian: the steady
+//! form's sensitivity equations would here need those of the covariance
+//! recursion, the model's second derivatives).
 //!
 //! Sensitivities (steady gain): the filter's own sensitivity equations,
 //! carried through one pass for every unknown u (θ's free entries and F;
