@@ -51,25 +51,38 @@
 //! `fcompn` codes it: F_ii ← F_ii·Σ_j C_ji²·R_jj,old⁻¹·√(R_jj,new/R_jj,old)
 //! / Σ_j C_ji²·R_jj,old⁻¹, so that the gain, which depends on both, does
 //! not jump with R ([`LeastSquaresProblem::compensate`]).
-//! Constraint (Jategaonkar §5.3): the diagonal of K·C must stay ≤ 1. A
-//! step that violates it, or for which no steady-state filter with the
-//! current R exists (R − C·P·Cᵀ not positive definite, an eigenvalue of
-//! K·C at or above 1), cannot be evaluated, and the solver cuts it
-//! (halvings, then Levenberg–Marquardt damping) until it is feasible;
-//! Jategaonkar instead solves the step as a constrained quadratic
-//! program (FVSysID's `kcle1`). A compensated F that violates it is halved
+//! Constraint (Jategaonkar §5.3): the diagonal of K·C must stay ≤ 1 (a
+//! channel's share of R left to measurement noise cannot be negative).
+//! Where the Gauss–Newton step would cross it (diag(K·C) at the full step
+//! above 1), the step is the quadratic program Jategaonkar describes
+//! (FVSysID's `kcle1`): min gᵀΔ + ½·ΔᵀMΔ (g = Jᵀr, M = JᵀJ) subject to
+//! diag(K·C)(u) + A·Δ ≤ 1 − 10⁻⁶ on every state with a gain, A the
+//! constraint linearised in the unknowns (central differences of the
+//! steady-state gain, a Riccati solution each), solved by the active-set
+//! method ([`active_set_step`]: the violated constraints held as
+//! equalities through the KKT system, one with a negative multiplier
+//! released, the most violated one added). diag(K·C) curves up towards
+//! 1, so the step to the linearised boundary crosses the true one: up to
+//! four second-order corrections (Nocedal & Wright, "Numerical
+//! Optimization", §18.3) move the bound of each constraint the step holds
+//! by its overshoot at the step's end (halve it where no filter exists
+//! there) and solve again. The solver halves the step as any other and
+//! judges convergence by its predicted decrease. Measured in
+//! `tests/filter_error.rs`
+//! (`filter_error_converges_with_the_gain_constraint_active`, a channel
+//! recorded without noise): where the constraint binds, the fits stop
+//! where the KKT conditions hold (multiplier positive, the step along the
+//! constraint predicting below 3·10⁻⁷), diag(K·C) on that channel at
+//! 0.9956–0.9963 after the last R update and F's compensation, and agree
+//! with the time-varying form, which has no constraint, within 0.12σ.
+//! The estimate's notes say when the last step was the constrained one.
+//! A step that the program cannot give, or for which no steady-state filter with the current R exists
+//! (R − C·P·Cᵀ not positive definite), cannot be evaluated, and the
+//! solver cuts it (halvings, then Levenberg–Marquardt damping) until it
+//! is feasible. A compensated F that violates the constraint is halved
 //! until it does not; when no F gives a filter with the new R (an unstable
 //! mode needs more gain than R's measurement-noise share allows), the R
-//! update is undone for that iteration. Cutting suffices where the
-//! optimum lies inside the constraint, as on the bundled records (the
-//! measurement noise of every channel is well above zero). Where it lies
-//! on it, cutting stops where a step meets the boundary instead of moving
-//! along it: measured in `tests/filter_error.rs`
-//! (`filter_error_converges_with_the_gain_constraint_active`, a channel
-//! recorded without noise, diag(K·C) 0.981–0.996 at the end), the fits
-//! end converged but, after 42–133 cut steps, up to 1.1σ from the optimum
-//! the time-varying form finds on the boundary; the constrained step is
-//! not built.
+//! update is undone for that iteration.
 //!
 //! Time-varying form (`gain = "time_varying"`): the filter in the loop is
 //! the continuous–discrete extended Kalman filter of
@@ -111,20 +124,46 @@
 //! linear model its likelihood and innovations are adskalman's to 1e-9
 //! (`tests/filter_error.rs`); with the gust filter's states started
 //! unknown (`tests/linear_models.rs`) the RMS error/σ of the α column of
-//! A is 1.29 against the steady form's 1.78; each fit costs about 20
+//! A is 1.29 against the steady form's 1.78; each fit costs about 25
 //! times the steady form's (a covariance propagated at every point in
-//! every pass).
+//! every pass, and a pass per unknown for the Jacobian: the steady
+//! form's sensitivity equations would here need those of the covariance
+//! recursion, the model's second derivatives).
 //!
-//! Sensitivities: by forward differences of whole filter passes (each
-//! perturbed θ or F gets its own linearisation, Riccati solution and gain,
-//! as FVSysID perturbs the gain with the parameters; one pass per unknown,
-//! half the cost of central differences, for a Jacobian within ~10⁻⁶
-//! relative), with the shared core's relative step 10⁻⁶·max(|θ_j|,
-//! typical_j) (typical 10⁻³ for an aerodynamic parameter, a tenth of the
-//! start value for an F entry); where the forward pass is infeasible (an
-//! iterate on the constraint), the backward difference
-//! ([`LeastSquaresProblem::jacobian`]; the core's default is central
-//! differences). Cramér–Rao bounds are the square roots of
+//! Sensitivities (steady gain): the filter's own sensitivity equations,
+//! carried through one pass for every unknown u (θ's free entries and F;
+//! Jategaonkar §5.5's gradient of the innovations, with the model's exact
+//! step derivative):
+//! - prediction: S̃_k = ∂x̃_k/∂u through the integration step,
+//!   S̃_k = Φ_k·Ŝ_{k−1} + ∂step/∂u, the step's exact derivative
+//!   ([`StateSpaceModel::step_sensitivity`]: for the 6-DOF view, the RK4
+//!   step of Ṡ = (∂f/∂x)·S + ∂f/∂θ with the model linearised at its four
+//!   stages, output error's exact Jacobian, Jategaonkar §4.6); an F entry
+//!   does not enter f;
+//! - outputs: ∂ỹ_k/∂u = C_k·S̃_k + ∂h/∂θ at (t_k, x̃_k), and
+//!   ∂ν_k/∂u = −∂ỹ_k/∂u;
+//! - correction: Ŝ_k = S̃_k + K·∂ν_k/∂u + (∂K/∂u)·ν_k, over the outputs
+//!   measured at the point; S is zero before the first correction (the
+//!   initial state is not an unknown);
+//! - ∂K/∂u_j: central differences of the steady-state gain (the model
+//!   relinearised at the first point for a parameter, the Riccati equation
+//!   solved again; one-sided where the filter does not exist on one side),
+//!   step 10⁻⁶·max(|u_j|, typical_j), the shared core's (typical 10⁻³ for
+//!   an aerodynamic parameter, a tenth of the start value for an F entry),
+//!   as FVSysID perturbs the gain with the parameters.
+//!
+//! The Jacobian is then the derivative of the discrete filter up to ∂K's
+//! O(h²) difference: on the ATTAS lateral record in turbulence within
+//! 3·10⁻⁷ of each column's norm of central differences of whole passes,
+//! closer than forward differences of whole passes (within 9·10⁻⁷;
+//! `sensitivity_jacobian_is_the_filters_derivative` in
+//! `tests/filter_error.rs`). A model that does not propagate sensitivities
+//! (the linear structures' exact discretisation, a test's own model) gets
+//! forward differences of whole filter passes instead, one pass per
+//! unknown, each perturbed u with its own linearisation, Riccati solution
+//! and gain (backward where the forward pass is infeasible: an iterate on
+//! the constraint; [`FilterErrorFit::difference_jacobian`]).
+//! Cramér–Rao bounds are the square roots of
 //! the diagonal of M⁻¹, M = Σ (∂ν/∂θ)ᵀ R⁻¹ (∂ν/∂θ) at the optimum, the F
 //! entries among the unknowns; only the aerodynamic parameters (with the
 //! aerodynamic block of M⁻¹) are the estimate's parameters, scored against
@@ -166,6 +205,7 @@ use crate::record::FlightRecord;
 use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
+use std::cell::RefCell;
 use std::collections::BTreeMap;
 
 /// Method name in estimates.
@@ -458,28 +498,13 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
     }
     let start = model.time(0);
     let jacobians = model.jacobians(start, initial.as_slice(), theta)?;
+    let (steady, measurement_noise) = steady_gain(
+        &jacobians,
+        distribution,
+        variances,
+        (model.time(1) - start) * observations.stride() as f64,
+    )?;
     let c = jacobians.outputs_by_state;
-    let r = DMatrix::from_diagonal(variances);
-    let (steady, measurement_noise) = if distribution.iter().all(|f| *f == 0.0) {
-        let steady = SteadyState {
-            covariance: DMatrix::zeros(n, n),
-            gain: DMatrix::zeros(n, outputs),
-            innovation_covariance: r.clone(),
-        };
-        (steady, r)
-    } else {
-        // The gain is the steady state of one sample period, the interval
-        // between an output's successive corrections, which spans several
-        // grid steps where the grid is divided into sub-steps.
-        let spectral = DMatrix::from_diagonal(&distribution.map(|f| f * f));
-        let discrete = kalman::discretise(
-            &jacobians.rates_by_state,
-            &DMatrix::zeros(n, 0),
-            Some(&spectral),
-            (model.time(1) - start) * observations.stride() as f64,
-        );
-        kalman::steady_state_for_innovation(&discrete.transition, &c, &discrete.process_noise, &r)?
-    };
     let kc = &steady.gain * &c;
     if let Some(i) = (0..n).find(|&i| kc[(i, i)] > 1.0) {
         return Err(Error::Other(format!(
@@ -487,7 +512,6 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
             kc[(i, i)]
         )));
     }
-    let log_variances = variances.map(f64::ln);
     let count: usize = observations.at.iter().map(Vec::len).sum();
     let mut pass = SteadyPass {
         innovations: Vec::with_capacity(count),
@@ -497,18 +521,136 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
         measurement_noise,
         output_matrix: c,
     };
+    filter_steadily(
+        model,
+        theta,
+        initial,
+        variances,
+        observations,
+        &mut pass,
+        None,
+    )?;
+    Ok(pass)
+}
+
+/// The steady-state filter of the model linearised as `jacobians` (at the
+/// first grid point): K, P and R (Jategaonkar Eq. 5.48) with process noise
+/// F·Fᵀ, F = diag(`distribution`), discretised over `interval` (the
+/// interval between an output's corrections), and G·Gᵀ = R − C·P·Cᵀ. With
+/// no process noise the gain is zero.
+fn steady_gain(
+    jacobians: &crate::estimation::model::state_space::Jacobians,
+    distribution: &DVector<f64>,
+    variances: &DVector<f64>,
+    interval: f64,
+) -> Result<(SteadyState, DMatrix<f64>)> {
+    let a = &jacobians.rates_by_state;
+    let c = &jacobians.outputs_by_state;
+    let (n, outputs) = (a.nrows(), c.nrows());
+    let r = DMatrix::from_diagonal(variances);
+    if distribution.iter().all(|f| *f == 0.0) {
+        let steady = SteadyState {
+            covariance: DMatrix::zeros(n, n),
+            gain: DMatrix::zeros(n, outputs),
+            innovation_covariance: r.clone(),
+        };
+        return Ok((steady, r));
+    }
+    let spectral = DMatrix::from_diagonal(&distribution.map(|f| f * f));
+    let discrete = kalman::discretise(a, &DMatrix::zeros(n, 0), Some(&spectral), interval);
+    kalman::steady_state_for_innovation(&discrete.transition, c, &discrete.process_noise, &r)
+}
+
+/// The sensitivities a steady-state pass carries (Jategaonkar §5.5 style:
+/// the filter's own sensitivity equations): the unknowns' `columns` (the
+/// parameter each is, None for an F entry), ∂K/∂u_j for each, and the
+/// rows ∂ν/∂u written, one per measurement.
+struct Tangent<'a> {
+    columns: &'a [Option<usize>],
+    gains: &'a [DMatrix<f64>],
+    rows: DMatrix<f64>,
+}
+
+/// The steady-state filter's pass over `observations` with `pass`'s gain,
+/// writing its innovations, predictions and likelihood into `pass`; with a
+/// `tangent`, the sensitivities S = ∂x/∂u through it (module
+/// documentation): returns false when the model does not propagate them
+/// ([`StateSpaceModel::step_sensitivity`]).
+fn filter_steadily<M: StateSpaceModel + ?Sized>(
+    model: &M,
+    theta: &[f64],
+    initial: &DVector<f64>,
+    variances: &DVector<f64>,
+    observations: &Observations,
+    pass: &mut SteadyPass,
+    mut tangent: Option<&mut Tangent<'_>>,
+) -> Result<bool> {
+    let (n, outputs) = (model.state_count(), model.output_count());
+    let m = tangent.as_ref().map_or(0, |t| t.columns.len());
+    let log_variances = variances.map(f64::ln);
+    let mut sensitivity = DMatrix::<f64>::zeros(n, m);
+    let mut output_sensitivity = DMatrix::<f64>::zeros(outputs, m);
+    let mut correction = DMatrix::<f64>::zeros(n, m);
+    let mut linear = crate::estimation::model::state_space::Jacobians {
+        rates_by_state: DMatrix::zeros(0, 0),
+        rates_by_parameter: DMatrix::zeros(0, 0),
+        outputs_by_state: DMatrix::zeros(0, 0),
+        outputs_by_parameter: DMatrix::zeros(0, 0),
+    };
+    let mut predicted = DVector::zeros(outputs);
+    let mut row = 0;
     let mut state = initial.clone();
     for (k, present) in observations.at.iter().enumerate() {
         if k > 0 {
-            state = model
-                .step(k - 1, state.as_slice(), theta)
-                .map_err(|e| at_time(e, model.time(k - 1)))?;
+            let stepped = match tangent {
+                Some(ref tangent) => model
+                    .step_sensitivity(
+                        k - 1,
+                        state.as_slice(),
+                        theta,
+                        tangent.columns,
+                        &mut sensitivity,
+                    )
+                    .map_err(|e| at_time(e, model.time(k - 1)))?,
+                None => Some(
+                    model
+                        .step(k - 1, state.as_slice(), theta)
+                        .map_err(|e| at_time(e, model.time(k - 1)))?,
+                ),
+            };
+            let Some(stepped) = stepped else {
+                return Ok(false);
+            };
+            state = stepped;
         }
         if present.is_empty() {
             continue;
         }
         let t = model.time(k);
-        let predicted = model.outputs(t, state.as_slice(), theta)?;
+        match tangent {
+            Some(ref tangent) => {
+                model.jacobians_into(
+                    t,
+                    state.as_slice(),
+                    theta,
+                    &mut linear,
+                    Some(&mut predicted),
+                )?;
+                // ∂ỹ/∂u = C·S̃ + ∂h/∂θ
+                output_sensitivity.gemm(1.0, &linear.outputs_by_state, &sensitivity, 0.0);
+                for (j, column) in tangent.columns.iter().enumerate() {
+                    if let Some(p) = *column {
+                        output_sensitivity.column_mut(j).axpy(
+                            1.0,
+                            &linear.outputs_by_parameter.column(p),
+                            1.0,
+                        );
+                    }
+                }
+                correction.fill(0.0);
+            }
+            None => predicted = model.outputs(t, state.as_slice(), theta)?,
+        }
         for &(o, z) in present {
             let innovation = z - predicted[o];
             pass.innovations.push(innovation);
@@ -516,6 +658,22 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
             pass.negative_log_likelihood +=
                 0.5 * (innovation * innovation / variances[o] + log_variances[o]);
             state.axpy(innovation, &pass.steady.gain.column(o), 1.0);
+            if let Some(ref mut tangent) = tangent {
+                // ∂ν/∂u = −∂ỹ/∂u; Ŝ = S̃ + K·∂ν + ∂K·ν
+                let gain = pass.steady.gain.column(o);
+                for j in 0..m {
+                    let d_innovation = -output_sensitivity[(o, j)];
+                    tangent.rows[(row, j)] = d_innovation;
+                    correction.column_mut(j).axpy(d_innovation, &gain, 1.0);
+                    correction
+                        .column_mut(j)
+                        .axpy(innovation, &tangent.gains[j].column(o), 1.0);
+                }
+            }
+            row += 1;
+        }
+        if tangent.is_some() {
+            sensitivity += &correction;
         }
         if !state.iter().all(|v| v.is_finite()) {
             return Err(Error::Other(format!(
@@ -523,7 +681,7 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
             )));
         }
     }
-    Ok(pass)
+    Ok(true)
 }
 
 /// What one pass of the time-varying filter gives.
@@ -662,7 +820,20 @@ pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
     /// re-weighting, taken by [`LeastSquaresProblem::compensate`] where it
     /// lowers the cost.
     proposed: Option<DVector<f64>>,
+    /// Steady gain: the Jacobian by whole passes differenced even where
+    /// the model propagates sensitivities.
+    differences: bool,
+    /// The last pass, with the θ, F and noise it was run with: the solver
+    /// asks for the same pass more than once an iteration (the step's
+    /// residuals, then the re-weighting at that point; the compensated F's
+    /// check, then its residuals).
+    last_pass: RefCell<Option<KeptPass>>,
+    /// Whether the last Gauss–Newton step was constrained by diag(K·C) ≤ 1.
+    constrained: bool,
 }
+
+/// A pass kept with the θ, F and noise it was run with.
+type KeptPass = (DVector<f64>, DVector<f64>, DVector<f64>, FilterPass);
 
 /// A pass of the filter in the loop.
 #[derive(Debug, Clone, PartialEq)]
@@ -721,6 +892,9 @@ pub struct FitResult {
     pub pass: Option<FilterPass>,
     /// The start factor of F_ref chosen (module documentation).
     pub start_factor: f64,
+    /// Whether the last Gauss–Newton step was the one constrained by
+    /// diag(K·C) ≤ 1: the constraint active at the solution.
+    pub constrained: bool,
 }
 
 impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
@@ -763,6 +937,9 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             joint: false,
             noise_floor: DVector::zeros(model.output_count()),
             proposed: None,
+            differences: false,
+            last_pass: RefCell::new(None),
+            constrained: false,
         })
     }
 
@@ -779,6 +956,15 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         self.gain = Gain::TimeVarying;
         self.initial_covariance = initial_covariance;
         Ok(self)
+    }
+
+    /// The fit with the steady gain's Jacobian by forward differences of
+    /// whole passes ([`FilterErrorFit::difference_jacobian`]) instead of
+    /// the filter's sensitivity equations: the reference the sensitivities
+    /// are checked against.
+    pub fn with_difference_jacobian(mut self) -> Self {
+        self.differences = true;
+        self
     }
 
     /// The unknowns' count: free parameters, F entries and, in the joint
@@ -850,13 +1036,34 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// or G·Gᵀ (time-varying gain).
     pub fn pass(&self, unknowns: &DVector<f64>) -> Result<FilterPass> {
         let (theta, distribution) = self.split(unknowns);
+        let noise = self.noise_of(unknowns);
+        if let Some((t, d, n, pass)) = &*self.last_pass.borrow()
+            && *t == theta
+            && *d == distribution
+            && *n == noise
+        {
+            return Ok(pass.clone());
+        }
+        let pass = self.pass_at(&theta, &distribution, &noise)?;
+        *self.last_pass.borrow_mut() = Some((theta, distribution, noise, pass.clone()));
+        Ok(pass)
+    }
+
+    /// The filter pass at (θ, F = diag(`distribution`)) with `noise` the
+    /// R (steady gain) or G·Gᵀ (time-varying gain) it is given.
+    fn pass_at(
+        &self,
+        theta: &DVector<f64>,
+        distribution: &DVector<f64>,
+        noise: &DVector<f64>,
+    ) -> Result<FilterPass> {
         match self.gain {
             Gain::Steady => steady_state_pass(
                 self.model,
                 theta.as_slice(),
                 &self.initial,
-                &distribution,
-                &self.variances,
+                distribution,
+                noise,
                 self.observations,
             )
             .map(FilterPass::Steady),
@@ -867,8 +1074,8 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
                     mean: self.initial.clone(),
                     covariance: self.initial_covariance.clone(),
                 },
-                &distribution,
-                &self.noise_of(unknowns),
+                distribution,
+                noise,
                 self.observations,
             )
             .map(FilterPass::TimeVarying),
@@ -1192,6 +1399,221 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         }
     }
 
+    /// ∂r/∂u by forward differences of whole filter passes (backward
+    /// where the forward pass is infeasible: an iterate on the constraint
+    /// diag(K·C) ≤ 1 or at the edge of the filters that exist with this
+    /// R), one pass per unknown: the Jacobian of a model that does not
+    /// propagate sensitivities ([`StateSpaceModel::step_sensitivity`]).
+    pub fn difference_jacobian(
+        &mut self,
+        unknowns: &DVector<f64>,
+        options: &Options,
+    ) -> std::result::Result<DMatrix<f64>, String> {
+        let here = self.residuals(unknowns)?;
+        let mut columns = Vec::with_capacity(unknowns.len());
+        for j in 0..unknowns.len() {
+            let h = options.difference_step(unknowns, j);
+            let mut moved = unknowns.clone();
+            moved[j] += h;
+            let column = match self.residuals(&moved) {
+                Ok(forward) => (forward - &here) / h,
+                Err(_) => {
+                    moved[j] = unknowns[j] - h;
+                    (&here - self.residuals(&moved)?) / h
+                }
+            };
+            columns.push(column);
+        }
+        Ok(DMatrix::from_columns(&columns))
+    }
+
+    /// ∂r/∂u of the steady-state filter by its sensitivity equations
+    /// (module documentation) in one pass for every unknown; None when the
+    /// model does not propagate sensitivities. ∂K/∂u_j by central
+    /// differences of the gain (one-sided where the filter does not exist
+    /// on one side), with the steps of [`Options::difference_step`].
+    pub fn sensitivity_jacobian(
+        &self,
+        unknowns: &DVector<f64>,
+        options: &Options,
+    ) -> Result<Option<DMatrix<f64>>> {
+        let (theta, distribution) = self.split(unknowns);
+        let start = self.model.time(0);
+        let interval = (self.model.time(1) - start) * self.observations.stride() as f64;
+        let here = self
+            .model
+            .jacobians(start, self.initial.as_slice(), theta.as_slice())?;
+        let gain_at = |moved: &DVector<f64>, j: usize| -> Result<DMatrix<f64>> {
+            let (theta, distribution) = self.split(moved);
+            let moved_jacobians;
+            let jacobians = if j < self.free.len() {
+                moved_jacobians =
+                    self.model
+                        .jacobians(start, self.initial.as_slice(), theta.as_slice())?;
+                &moved_jacobians
+            } else {
+                &here
+            };
+            Ok(
+                steady_gain(jacobians, &distribution, &self.variances, interval)?
+                    .0
+                    .gain,
+            )
+        };
+        let gain = gain_at(unknowns, unknowns.len())?;
+        let mut gains = Vec::with_capacity(unknowns.len());
+        for j in 0..unknowns.len() {
+            let h = options.difference_step(unknowns, j);
+            let mut moved = unknowns.clone();
+            moved[j] = unknowns[j] + h;
+            let forward = gain_at(&moved, j);
+            moved[j] = unknowns[j] - h;
+            let backward = gain_at(&moved, j);
+            gains.push(match (forward, backward) {
+                (Ok(forward), Ok(backward)) => (forward - backward) / (2.0 * h),
+                (Ok(forward), Err(_)) => (forward - &gain) / h,
+                (Err(_), Ok(backward)) => (&gain - backward) / h,
+                (Err(error), Err(_)) => return Err(error),
+            });
+        }
+        let columns: Vec<Option<usize>> = self
+            .free
+            .iter()
+            .map(|&i| Some(i))
+            .chain(self.noisy.iter().map(|_| None))
+            .collect();
+        let (steady, measurement_noise) =
+            steady_gain(&here, &distribution, &self.variances, interval)?;
+        let mut pass = SteadyPass {
+            innovations: Vec::with_capacity(self.outputs.len()),
+            predicted: Vec::with_capacity(self.outputs.len()),
+            negative_log_likelihood: 0.0,
+            steady,
+            measurement_noise,
+            output_matrix: here.outputs_by_state,
+        };
+        let mut tangent = Tangent {
+            columns: &columns,
+            gains: &gains,
+            rows: DMatrix::zeros(self.outputs.len(), columns.len()),
+        };
+        if !filter_steadily(
+            self.model,
+            theta.as_slice(),
+            &self.initial,
+            &self.variances,
+            self.observations,
+            &mut pass,
+            Some(&mut tangent),
+        )? {
+            return Ok(None);
+        }
+        let mut jacobian = tangent.rows;
+        for (mut row, &o) in jacobian.row_iter_mut().zip(&self.outputs) {
+            row /= self.variances[o].sqrt();
+        }
+        Ok(Some(jacobian))
+    }
+
+    /// diag(K·C) of the steady-state filter at the unknowns u (K and C at
+    /// the first grid point, with the current R).
+    fn gain_products(&self, unknowns: &DVector<f64>) -> Result<DVector<f64>> {
+        let (theta, distribution) = self.split(unknowns);
+        let start = self.model.time(0);
+        let interval = (self.model.time(1) - start) * self.observations.stride() as f64;
+        let jacobians = self
+            .model
+            .jacobians(start, self.initial.as_slice(), theta.as_slice())?;
+        let (steady, _) = steady_gain(&jacobians, &distribution, &self.variances, interval)?;
+        Ok((steady.gain * &jacobians.outputs_by_state).diagonal())
+    }
+
+    /// The Gauss–Newton step subject to diag(K·C) ≤ 1 (Jategaonkar §5.3,
+    /// FVSysID's `kcle1`; module documentation): None when the
+    /// unconstrained step keeps to it, at its end and, where an entry is
+    /// near 1 ([`NEAR_ACTIVE`]), linearised (or there is no gain), else the
+    /// solution of the quadratic program min gᵀΔ + ½·ΔᵀMΔ subject to
+    /// diag(K·C)(u) + A·Δ ≤ [`GAIN_LIMIT`], A = ∂diag(K·C)/∂u by central
+    /// differences of the gain, by the active-set method over the states
+    /// with a gain; None (the step is then cut as any infeasible one) when
+    /// it fails.
+    fn gain_constrained_step(
+        &self,
+        unknowns: &DVector<f64>,
+        gradient: &DVector<f64>,
+        information: &DMatrix<f64>,
+        unconstrained: &DVector<f64>,
+        options: &Options,
+    ) -> Option<DVector<f64>> {
+        if self.gain != Gain::Steady || self.noisy.is_empty() {
+            return None;
+        }
+        let target = unknowns + unconstrained;
+        let crosses = self
+            .gain_products(&target)
+            .map_or(true, |products| products.iter().any(|p| *p > 1.0));
+        let here = self.gain_products(unknowns).ok()?;
+        if !crosses && here.max() < NEAR_ACTIVE {
+            return None;
+        }
+        let (n, m) = (here.len(), unknowns.len());
+        let mut slopes = DMatrix::zeros(n, m);
+        for j in 0..m {
+            let h = options.difference_step(unknowns, j);
+            let mut moved = unknowns.clone();
+            moved[j] = unknowns[j] + h;
+            let forward = self.gain_products(&moved);
+            moved[j] = unknowns[j] - h;
+            let backward = self.gain_products(&moved);
+            let column = match (forward, backward) {
+                (Ok(forward), Ok(backward)) => (forward - backward) / (2.0 * h),
+                (Ok(forward), Err(_)) => (forward - &here) / h,
+                (Err(_), Ok(backward)) => (&here - backward) / h,
+                (Err(_), Err(_)) => return None,
+            };
+            slopes.set_column(j, &column);
+        }
+        let rows: Vec<usize> = (0..n).filter(|&i| slopes.row(i).amax() > 0.0).collect();
+        let bounds = DVector::from_fn(n, |i, _| GAIN_LIMIT - here[i]);
+        let linearised = &slopes * unconstrained;
+        if !crosses && rows.iter().all(|&i| linearised[i] <= bounds[i]) {
+            return None;
+        }
+        // Second-order correction (Nocedal & Wright, "Numerical
+        // Optimization", §18.3): diag(K·C) curves up towards 1, so the step
+        // to the linearised boundary crosses the true one; each correction
+        // moves the bound of a constraint the step holds by its overshoot
+        // (or, where no filter exists at the step's end, halves it).
+        let mut bounds = bounds;
+        let mut step = active_set_step(gradient, information, &slopes, &bounds, &rows)?;
+        for _ in 0..CORRECTIONS {
+            let reached = &slopes * &step;
+            let held: Vec<usize> = rows
+                .iter()
+                .copied()
+                .filter(|&i| reached[i] >= bounds[i] - 1e-9 * bounds[i].abs().max(1e-12))
+                .collect();
+            match self.gain_products(&(unknowns + &step)) {
+                Ok(products) if products.iter().all(|p| *p <= 1.0) => break,
+                Ok(products) => {
+                    for &i in &held {
+                        bounds[i] -= (products[i] - GAIN_LIMIT).max(0.0);
+                    }
+                }
+                Err(_) => {
+                    for &i in &held {
+                        bounds[i] *= 0.5;
+                    }
+                }
+            }
+            if held.is_empty() {
+                break;
+            }
+            step = active_set_step(gradient, information, &slopes, &bounds, &rows)?;
+        }
+        Some(step)
+    }
+
     /// Fits from `theta` (every parameter) with the solver `options`
     /// (bounds of the free parameters; those of F are set here).
     pub fn fit(&mut self, theta: &DVector<f64>, mut options: Options) -> Result<FitResult> {
@@ -1227,9 +1649,11 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
                 options.typical[j] = (0.1 * start[j]).max(f64::MIN_POSITIVE);
             }
         }
+        self.constrained = false;
         let solution = gauss_newton::solve(self, &start, &options);
         let pass = self.pass(&solution.theta).ok();
         Ok(FitResult {
+            constrained: self.constrained,
             variances: self.noise_of(&solution.theta),
             solution,
             start,
@@ -1270,22 +1694,15 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         unknowns: &DVector<f64>,
         options: &Options,
     ) -> std::result::Result<DMatrix<f64>, String> {
-        let here = self.residuals(unknowns)?;
-        let mut columns = Vec::with_capacity(unknowns.len());
-        for j in 0..unknowns.len() {
-            let h = options.difference_step(unknowns, j);
-            let mut moved = unknowns.clone();
-            moved[j] += h;
-            let column = match self.residuals(&moved) {
-                Ok(forward) => (forward - &here) / h,
-                Err(_) => {
-                    moved[j] = unknowns[j] - h;
-                    (&here - self.residuals(&moved)?) / h
-                }
-            };
-            columns.push(column);
+        if self.gain == Gain::Steady
+            && !self.differences
+            && let Some(jacobian) = self
+                .sensitivity_jacobian(unknowns, options)
+                .map_err(|e| e.to_string())?
+        {
+            return Ok(jacobian);
         }
-        Ok(DMatrix::from_columns(&columns))
+        self.difference_jacobian(unknowns, options)
     }
 
     /// R = (1/N)·Σ ν·νᵀ (diagonal) at the current (θ, F) (steady gain);
@@ -1386,6 +1803,123 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         self.variances = old;
         None
     }
+
+    /// The Gauss–Newton step subject to diag(K·C) ≤ 1
+    /// ([`FilterErrorFit::gain_constrained_step`]).
+    fn constrained_step(
+        &mut self,
+        unknowns: &DVector<f64>,
+        gradient: &DVector<f64>,
+        information: &DMatrix<f64>,
+        unconstrained: &DVector<f64>,
+        options: &Options,
+    ) -> Option<DVector<f64>> {
+        let step =
+            self.gain_constrained_step(unknowns, gradient, information, unconstrained, options);
+        self.constrained = step.is_some();
+        step
+    }
+}
+
+/// Where the constrained step puts diag(K·C) on an active constraint: just
+/// inside 1, where R − C·P·Cᵀ, the channel's measurement noise, is still
+/// positive (at 1 it vanishes and the steady-state filter is singular).
+const GAIN_LIMIT: f64 = 1.0 - 1e-6;
+
+/// The second-order corrections of a constrained step at most
+/// ([`FilterErrorFit::gain_constrained_step`]).
+const CORRECTIONS: usize = 4;
+
+/// Where diag(K·C) has an entry at least this, the Gauss–Newton step is
+/// checked against the constraint linearised, not only at its end: the
+/// feasible set need not be convex, and a step whose end keeps to the
+/// constraint can cross it on the way.
+const NEAR_ACTIVE: f64 = 0.9;
+
+/// The minimiser of gᵀΔ + ½·ΔᵀMΔ subject to A_i·Δ ≤ b_i for the rows i in
+/// `rows`, by the active-set method (Nocedal & Wright, "Numerical
+/// Optimization", §16.5): starting from the constraints the unconstrained
+/// step violates, each equality-constrained program is solved through its
+/// KKT system (M Jacobi-scaled, solved by SVD so that unknowns with no
+/// effect drop out); a constraint with a negative multiplier is released,
+/// the most violated one added, until the step keeps to every constraint
+/// with multipliers not below zero. None when that does not settle.
+fn active_set_step(
+    gradient: &DVector<f64>,
+    information: &DMatrix<f64>,
+    slopes: &DMatrix<f64>,
+    bounds: &DVector<f64>,
+    rows: &[usize],
+) -> Option<DVector<f64>> {
+    let m = gradient.len();
+    let scale = gauss_newton::unit_diagonal_scale(information);
+    let scaled = DMatrix::from_fn(m, m, |i, j| information[(i, j)] * scale[i] * scale[j]);
+    let solve = |active: &[usize]| -> Option<(DVector<f64>, DVector<f64>)> {
+        let size = m + active.len();
+        let mut kkt = DMatrix::zeros(size, size);
+        let mut right = DVector::zeros(size);
+        kkt.view_mut((0, 0), (m, m)).copy_from(&scaled);
+        for j in 0..m {
+            right[j] = -gradient[j] * scale[j];
+        }
+        for (r, &i) in active.iter().enumerate() {
+            let row = DVector::from_fn(m, |j, _| slopes[(i, j)] * scale[j]);
+            let norm = row.norm();
+            if norm == 0.0 {
+                return None;
+            }
+            for j in 0..m {
+                kkt[(m + r, j)] = row[j] / norm;
+                kkt[(j, m + r)] = row[j] / norm;
+            }
+            right[m + r] = bounds[i] / norm;
+        }
+        let svd = kkt.svd(true, true);
+        let threshold = svd.singular_values.max() * 1e-12;
+        let solution = svd.solve(&right, threshold).ok()?;
+        let delta = DVector::from_fn(m, |j, _| solution[j] * scale[j]);
+        let multipliers = DVector::from_fn(active.len(), |r, _| solution[m + r]);
+        Some((delta, multipliers))
+    };
+    let violation = |delta: &DVector<f64>, i: usize| (slopes.row(i) * delta)[0] - bounds[i];
+    let (unconstrained, _) = solve(&[])?;
+    let mut active: Vec<usize> = rows
+        .iter()
+        .copied()
+        .filter(|&i| violation(&unconstrained, i) > 0.0)
+        .collect();
+    if active.is_empty() {
+        // The linearisation keeps the step inside where the gain does not:
+        // hold the most nearly active constraint.
+        active.push(*rows.iter().max_by(|&&a, &&b| {
+            violation(&unconstrained, a).total_cmp(&violation(&unconstrained, b))
+        })?);
+    }
+    for _ in 0..4 * (rows.len() + 1) {
+        let (delta, multipliers) = solve(&active)?;
+        if let Some((r, _)) = multipliers
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| **l < 0.0)
+            .min_by(|a, b| a.1.total_cmp(b.1))
+        {
+            active.remove(r);
+            continue;
+        }
+        let tolerance = 1e-9;
+        match rows
+            .iter()
+            .copied()
+            .filter(|i| !active.contains(i))
+            .map(|i| (i, violation(&delta, i)))
+            .filter(|(_, v)| *v > tolerance)
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+        {
+            Some((i, _)) => active.push(i),
+            None => return Some(delta),
+        }
+    }
+    None
 }
 
 /// Fits `structure` to `record` by filter error.
@@ -1502,6 +2036,7 @@ pub fn filter_error_from(
                 &structure.outputs,
                 options.gain,
             ),
+            states: state_names.iter().map(|s| s.to_string()).collect(),
         },
         notes,
         started.elapsed().as_secs_f64(),
@@ -1605,6 +2140,7 @@ pub(crate) fn linear_fit(
                 &structure.outputs,
                 options.gain,
             ),
+            states: structure.states.clone(),
         },
         notes,
         started.elapsed().as_secs_f64(),
@@ -1727,6 +2263,8 @@ fn noise_names<'a>(
 struct Names {
     parameters: Vec<String>,
     noise: Vec<String>,
+    /// The model's integrated states, in x's order.
+    states: Vec<String>,
 }
 
 /// The estimate of a fit by `method` of model `name` with `outputs`: the
@@ -1797,6 +2335,18 @@ fn assemble<M: StateSpaceModel + ?Sized>(
                 .collect::<Vec<_>>()
                 .join(", "),
             result.start_factor
+        ));
+    }
+    if let (true, Some(FilterPass::Steady(pass))) = (result.constrained, &result.pass) {
+        let products = (&pass.steady.gain * &pass.output_matrix).diagonal();
+        let largest = products
+            .iter()
+            .zip(&names.states)
+            .max_by(|a, b| a.0.total_cmp(b.0))
+            .map(|(p, name)| format!("{name} ({p:.6})"))
+            .unwrap_or_default();
+        notes.push(format!(
+            "the constraint diag(K·C) ≤ 1 (Jategaonkar §5.3) is active at the solution: the last Gauss–Newton step was the quadratic program constrained by it; largest entry after the last R update and F compensation {largest}"
         ));
     }
     let determinant = result.variances.iter().product::<f64>();

@@ -1342,6 +1342,15 @@ pub(super) fn linearise_with(
 }
 
 impl LinearisationBuffers {
+    /// The last linearisation's rates (the full flight-path state's), ∂f/∂x
+    /// and ∂f/∂θ; None before the first.
+    pub(super) fn rates_and_jacobians(
+        &self,
+    ) -> Option<(&FlightPathState, &DMatrix<f64>, &DMatrix<f64>)> {
+        let (_, _, linearization) = self.made.as_ref()?;
+        Some((&linearization.rates, &linearization.a, &linearization.b))
+    }
+
     /// The last linearisation's ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ into `into`,
     /// and its outputs into `outputs` if given.
     pub(super) fn copy_into(&self, into: &mut Jacobians, outputs: Option<&mut DVector<f64>>) {
@@ -1657,7 +1666,7 @@ impl DrivenSimulation {
     /// continuous at the grid points, so a step's last stage and the next
     /// grid point see the same model (what the grid-point linearisation of
     /// [`DrivenSimulation::simulate`] relies on).
-    fn pseudo_rates(&self, k: usize) -> PseudoRates {
+    pub(super) fn pseudo_rates(&self, k: usize) -> PseudoRates {
         let last = self.len() - 1;
         let (previous, next) = (k.saturating_sub(1), (k + 1).min(last));
         if next == previous {
@@ -1719,7 +1728,7 @@ impl DrivenSimulation {
 
     /// [`DrivenSimulation::inputs_at`] a fraction in (0, 1] into step k,
     /// given the pseudo-control rates at the step's two ends.
-    fn inputs_inside(
+    pub(super) fn inputs_inside(
         &self,
         k: usize,
         fraction: f64,

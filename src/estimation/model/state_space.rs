@@ -30,7 +30,7 @@ use crate::estimation::structure::FLIGHT_PATH_STATES;
 use crate::estimation::structure::ModelStructure;
 use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
-use crate::sim::integrator::Interpolation;
+use crate::sim::integrator::{Interpolation, rk4_linear_step};
 use crate::sim::state::{Control, Controls};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
@@ -352,6 +352,25 @@ pub trait StateSpaceModel {
     ) -> Result<()> {
         *into = self.outputs(t, x, theta)?;
         Ok(())
+    }
+
+    /// [`StateSpaceModel::step`] with the sensitivities S = ∂x/∂u carried
+    /// through it: S ← (∂step/∂x)·S + ∂step/∂u, the step's exact
+    /// derivative. Column j of S is the derivative by an unknown u_j,
+    /// `columns[j]` the parameter it is (an index into θ), or None for an
+    /// unknown that does not enter f (it moves x only through S). Returns
+    /// the step's value (the same as [`StateSpaceModel::step`]'s), or None
+    /// for a model that does not propagate sensitivities (the default; a
+    /// caller then differences whole steps or passes).
+    fn step_sensitivity(
+        &self,
+        _k: usize,
+        _x: &[f64],
+        _theta: &[f64],
+        _columns: &[Option<usize>],
+        _sensitivity: &mut DMatrix<f64>,
+    ) -> Result<Option<DVector<f64>>> {
+        Ok(None)
     }
 }
 
@@ -740,6 +759,87 @@ impl StateSpaceModel for DrivenStateSpace {
             );
             buffers.copy_rates_into(into);
         })
+    }
+
+    /// The step's exact derivative: the sensitivity equations
+    /// Ṡ = (∂f/∂x)·S + ∂f/∂u taken through the RK4 step with the model
+    /// linearised at each of its four stages, at the stage's state and
+    /// inputs ([`rk4_linear_step`], as output error's exact Jacobian;
+    /// Jategaonkar §4.6): the derivative of the discrete step itself.
+    fn step_sensitivity(
+        &self,
+        k: usize,
+        x: &[f64],
+        theta: &[f64],
+        columns: &[Option<usize>],
+        sensitivity: &mut DMatrix<f64>,
+    ) -> Result<Option<DVector<f64>>> {
+        let next = self.step(k, x, theta)?;
+        let (n, m) = (self.states.len(), columns.len());
+        if sensitivity.shape() != (n, m) || columns.iter().flatten().any(|&p| p >= theta.len()) {
+            return Err(Error::Other(format!(
+                "the sensitivities are {:?} for {n} states and {m} unknowns",
+                sensitivity.shape()
+            )));
+        }
+        let simulation = &self.simulation;
+        let h = simulation.step;
+        let ends = (simulation.pseudo_rates(k), simulation.pseudo_rates(k + 1));
+        let mut a: [DMatrix<f64>; 4] = std::array::from_fn(|_| DMatrix::zeros(n, n));
+        let mut b: [DMatrix<f64>; 4] = std::array::from_fn(|_| DMatrix::zeros(n, m));
+        self.with_model(theta, |model, buffers| -> Result<()> {
+            let start = DVector::from_column_slice(x);
+            let mut stage = start.clone();
+            for (i, (fraction, next_offset)) in [(0.0, 0.5), (0.5, 0.5), (0.5, 1.0), (1.0, 0.0)]
+                .into_iter()
+                .enumerate()
+            {
+                let (measured, controls, pseudo, ambient) = if i == 0 {
+                    simulation.inputs_at(k, 0.0)
+                } else {
+                    simulation.inputs_inside(k, fraction, ends)
+                };
+                let full = self.full(stage.as_slice(), &measured)?;
+                driven::linearise_with(
+                    model,
+                    &full,
+                    (&controls, pseudo, ambient),
+                    &self.states,
+                    &self.outputs,
+                    false,
+                    buffers,
+                );
+                let (rates, by_state, by_parameter) = buffers
+                    .rates_and_jacobians()
+                    .ok_or_else(|| Error::Other("no linearisation".into()))?;
+                a[i].copy_from(by_state);
+                for (j, column) in columns.iter().enumerate() {
+                    if let Some(p) = *column {
+                        b[i].set_column(j, &by_parameter.column(p));
+                    }
+                }
+                if i < 3 {
+                    stage.copy_from(&start);
+                    for (s, &state) in stage.iter_mut().zip(&self.states) {
+                        *s += next_offset * h * rates[state];
+                    }
+                }
+            }
+            Ok(())
+        })??;
+        let mut work: [DMatrix<f64>; 3] = std::array::from_fn(|_| DMatrix::zeros(n, m));
+        rk4_linear_step(
+            sensitivity,
+            h,
+            [
+                (&a[0], &b[0]),
+                (&a[1], &b[1]),
+                (&a[2], &b[2]),
+                (&a[3], &b[3]),
+            ],
+            &mut work,
+        );
+        Ok(Some(next))
     }
 
     /// One RK4 step (the project's integrator, [`crate::sim::integrator`])

@@ -37,6 +37,25 @@ pub trait LeastSquaresProblem {
     /// Weighted residuals at θ; an error string when the model cannot be evaluated there.
     fn residuals(&mut self, theta: &DVector<f64>) -> Result<DVector<f64>, String>;
 
+    /// For a problem with inequality constraints on its unknowns (filter
+    /// error's diag(K·C) ≤ 1): the Gauss–Newton step at θ subject to them,
+    /// the minimiser of gᵀΔ + ½·ΔᵀMΔ (g the `gradient`, M the
+    /// `information`) under the constraints linearised at θ, given the
+    /// unconstrained step `unconstrained`; None to take the unconstrained
+    /// step (no constraint active, or the constrained program failed). The
+    /// solver halves the step it returns as any other and judges
+    /// convergence by its predicted decrease.
+    fn constrained_step(
+        &mut self,
+        _theta: &DVector<f64>,
+        _gradient: &DVector<f64>,
+        _information: &DMatrix<f64>,
+        _unconstrained: &DVector<f64>,
+        _options: &Options,
+    ) -> Option<DVector<f64>> {
+        None
+    }
+
     /// Called at the start of each iteration with the current estimate and its
     /// unweighted state; a problem that re-estimates its weights (output error's
     /// R) does so here. Returns true when the weights changed.
@@ -366,7 +385,16 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             Ok(evaluated) => evaluated,
             Err(reason) => return Solution::diverged(theta, history, reason),
         };
-        let gauss_newton = GaussNewton::of(gradient, &information);
+        let mut gauss_newton = GaussNewton::of(gradient, &information);
+        if let Some(delta) = problem.constrained_step(
+            &theta,
+            &gauss_newton.gradient,
+            &information,
+            &gauss_newton.delta,
+            options,
+        ) {
+            gauss_newton = GaussNewton::constrained(gauss_newton.gradient, &information, delta);
+        }
         let predicted = gauss_newton.predicted;
         let converged = options.decrease_tolerance.is_some_and(|t| predicted <= t);
         match held {
@@ -532,6 +560,21 @@ impl GaussNewton {
     fn of(gradient: DVector<f64>, information: &DMatrix<f64>) -> GaussNewton {
         let delta = solve_symmetric(information, &(-&gradient));
         let predicted = -0.5 * gradient.dot(&delta);
+        GaussNewton {
+            gradient,
+            delta,
+            predicted,
+        }
+    }
+
+    /// A step Δ other than the unconstrained one (a constrained step), its
+    /// predicted decrease −(gᵀΔ + ½·ΔᵀMΔ).
+    fn constrained(
+        gradient: DVector<f64>,
+        information: &DMatrix<f64>,
+        delta: DVector<f64>,
+    ) -> GaussNewton {
+        let predicted = -(gradient.dot(&delta) + 0.5 * delta.dot(&(information * &delta)));
         GaussNewton {
             gradient,
             delta,
