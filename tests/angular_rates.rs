@@ -316,8 +316,9 @@ fn the_qar_approach_end_to_end() {
     // 1 Hz data in turbulence carry the derivatives: of these only fdee's
     // bounds cover its errors; equation error's CL_alpha is −78 % at 13σ,
     // ebm's −76 % at 13σ (its smoothed α errs as the geometric α does),
-    // filter error, started from equation error's estimates, stops in a
-    // minimum beside them (CL_alpha −78 % at 37σ), and stepwise
+    // filter error leaves equation error's start but ends at its
+    // iteration limit (every parameter within 2.7σ, its relaxation of R
+    // moving the cost from one iteration to the next), and stepwise
     // regression's lateral terms are 14–1500 % off. Output error judges
     // its residuals, which hold the gust response: a poor fit of every
     // output.
@@ -327,7 +328,6 @@ fn the_qar_approach_end_to_end() {
             "transport-longitudinal ee",
             "transport-longitudinal swr",
             "transport-longitudinal ebm",
-            "transport-longitudinal fem",
             "transport-longitudinal fdee",
             "transport-longitudinal elm-gn",
             "transport-longitudinal relm-gn",

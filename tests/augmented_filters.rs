@@ -424,7 +424,7 @@ fn bad_settings_are_refused_by_name() {
 /// the end, though 60 s at 1.25 Hz leave most parameters unidentified
 /// (their variances stay near the prior: measured, a finding). Filter
 /// error converges, and halving its step moves no estimate by more than
-/// 0.1σ (measured 0.022σ; that fit ends at its iteration limit).
+/// 0.1σ (measured 0.015σ).
 #[test]
 fn coarse_records_are_filtered_in_sub_steps() {
     let record = common::hansa3_at_1_25_hz();
@@ -434,6 +434,15 @@ fn coarse_records_are_filtered_in_sub_steps() {
             let mut table = toml::Table::new();
             if let Some(step) = step {
                 table.insert("step".into(), format!("{step} s").into());
+            }
+            if method == "fem" {
+                // Near its minimum on this record filter error's relaxation
+                // of R moves the cost by about 1e-4 of its value from one
+                // iteration to the next, and the fit needs more than the
+                // default 30 iterations (measured from the model file's
+                // values: 29 with the sensitivity Jacobian, 37 with whole
+                // passes differenced).
+                table.insert("max_iterations".into(), 60.into());
             }
             let mut layer = aeroid::estimation::estimator::MethodTables::default();
             layer.insert(method.to_string(), table);
