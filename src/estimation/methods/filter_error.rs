@@ -195,7 +195,7 @@ use crate::estimation::methods::equation_error::{
 };
 use crate::estimation::methods::output_error::{self, Start};
 use crate::estimation::model::observations::Observations;
-use crate::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
+use crate::estimation::model::state_space::{DrivenStateSpace, Jacobians, StateSpaceModel};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::extended_kalman::{self, Discretisation, Keep, Noise};
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options};
@@ -1439,10 +1439,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     ) -> Result<Option<DMatrix<f64>>> {
         let (theta, distribution) = self.split(unknowns);
         let start = self.model.time(0);
-        let interval = (self.model.time(1) - start) * self.observations.stride() as f64;
-        let here = self
-            .model
-            .jacobians(start, self.initial.as_slice(), theta.as_slice())?;
+        let (interval, here) = self.first_point(&theta)?;
         let gain_at = |moved: &DVector<f64>, j: usize| -> Result<DMatrix<f64>> {
             let (theta, distribution) = self.split(moved);
             let moved_jacobians;
@@ -1519,13 +1516,20 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// the first grid point, with the current R).
     fn gain_products(&self, unknowns: &DVector<f64>) -> Result<DVector<f64>> {
         let (theta, distribution) = self.split(unknowns);
+        let (interval, jacobians) = self.first_point(&theta)?;
+        let (steady, _) = steady_gain(&jacobians, &distribution, &self.variances, interval)?;
+        Ok((steady.gain * &jacobians.outputs_by_state).diagonal())
+    }
+
+    /// The sample period the steady gain spans and the model's Jacobians
+    /// at the first grid point with θ, where the steady gain is taken.
+    fn first_point(&self, theta: &DVector<f64>) -> Result<(f64, Jacobians)> {
         let start = self.model.time(0);
         let interval = (self.model.time(1) - start) * self.observations.stride() as f64;
         let jacobians = self
             .model
             .jacobians(start, self.initial.as_slice(), theta.as_slice())?;
-        let (steady, _) = steady_gain(&jacobians, &distribution, &self.variances, interval)?;
-        Ok((steady.gain * &jacobians.outputs_by_state).diagonal())
+        Ok((interval, jacobians))
     }
 
     /// The Gauss–Newton step subject to diag(K·C) ≤ 1 (Jategaonkar §5.3,

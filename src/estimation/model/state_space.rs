@@ -559,6 +559,31 @@ impl DrivenStateSpace {
     /// `f` on the model at θ ([`DrivenStateSpace::model_at`]) and the
     /// linearisation's buffers, from the view's scratch: θ is written into
     /// a kept copy of the model instead of a fresh clone.
+    /// The driven model linearised at (t, x) with θ written in (its
+    /// outputs' derivatives too when `with_outputs`), handed to `read`.
+    fn linearised<R>(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        with_outputs: bool,
+        read: impl FnOnce(&LinearisationBuffers) -> R,
+    ) -> Result<R> {
+        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
+        self.with_model(theta, |model, buffers| {
+            driven::linearise_with(
+                model,
+                &full,
+                (&controls, pseudo, ambient),
+                &self.states,
+                &self.outputs,
+                with_outputs,
+                buffers,
+            );
+            read(buffers)
+        })
+    }
+
     fn with_model<R>(
         &self,
         theta: &[f64],
@@ -722,18 +747,8 @@ impl StateSpaceModel for DrivenStateSpace {
         into: &mut Jacobians,
         outputs: Option<&mut DVector<f64>>,
     ) -> Result<()> {
-        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
-        self.with_model(theta, |model, buffers| {
-            driven::linearise_with(
-                model,
-                &full,
-                (&controls, pseudo, ambient),
-                &self.states,
-                &self.outputs,
-                true,
-                buffers,
-            );
-            buffers.copy_into(into, outputs);
+        self.linearised(t, x, theta, true, |buffers| {
+            buffers.copy_into(into, outputs)
         })
     }
 
@@ -746,19 +761,7 @@ impl StateSpaceModel for DrivenStateSpace {
         theta: &[f64],
         into: &mut Jacobians,
     ) -> Result<()> {
-        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
-        self.with_model(theta, |model, buffers| {
-            driven::linearise_with(
-                model,
-                &full,
-                (&controls, pseudo, ambient),
-                &self.states,
-                &self.outputs,
-                false,
-                buffers,
-            );
-            buffers.copy_rates_into(into);
-        })
+        self.linearised(t, x, theta, false, |buffers| buffers.copy_rates_into(into))
     }
 
     /// The step's exact derivative: the sensitivity equations
