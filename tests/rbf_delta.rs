@@ -33,6 +33,31 @@ fn estimate(record: &FlightRecord, model: &str, settings: &RbfDeltaSettings) -> 
     rbf_delta(record, &structure, settings).unwrap().assess()
 }
 
+/// The networks fitted to the EKF + MBF smoothed coefficients
+/// (`coefficients = "smoothed"`), which the notes must say: the estimate
+/// and its rows against the scenario's truth.
+fn on_smoothed_coefficients(
+    record: &FlightRecord,
+    model: &str,
+    scenario: &Scenario,
+) -> (Estimate, Vec<(String, f64, f64)>) {
+    let settings = RbfDeltaSettings {
+        coefficients: CoefficientSource::Smoothed,
+        ..RbfDeltaSettings::default()
+    };
+    let estimate = estimate(record, model, &settings);
+    assert!(
+        estimate
+            .notes
+            .iter()
+            .any(|n| n.contains("Bryson–Frazier smoother (Wang")),
+        "{:?}",
+        estimate.notes
+    );
+    let rows = against_truth(&estimate, scenario);
+    (estimate, rows)
+}
+
 fn distribution<'a>(estimate: &'a Estimate, name: &str) -> &'a ParameterDistribution {
     estimate
         .distributions
@@ -327,18 +352,7 @@ fn stall_record_shows_the_lift_slope_change() {
 #[test]
 fn smoothed_coefficients_feed_the_networks() {
     let (record, _, scenario) = fly("attas-lateral-multistep", "ideal");
-    let settings = RbfDeltaSettings {
-        coefficients: CoefficientSource::Smoothed,
-        ..RbfDeltaSettings::default()
-    };
-    let estimate = estimate(&record, "attas-lateral", &settings);
-    let rows = against_truth(&estimate, &scenario);
-    assert!(
-        estimate
-            .notes
-            .iter()
-            .any(|n| n.contains("Bryson–Frazier smoother (Wang"))
-    );
+    let (estimate, rows) = on_smoothed_coefficients(&record, "attas-lateral", &scenario);
     assert_eq!(rows.len(), 18);
     let dominant = [
         "CY_beta", "Cl_beta", "Cl_p", "Cl_da", "Cl_r", "Cn_beta", "Cn_dr", "Cn_r",
@@ -370,18 +384,7 @@ fn smoothed_coefficients_feed_the_networks() {
 fn smoothed_coefficients_of_the_derived_qar_feed_the_networks() {
     let scenario = common::approach(true);
     let (record, _) = common::derived_qar_approach();
-    let settings = RbfDeltaSettings {
-        coefficients: CoefficientSource::Smoothed,
-        ..RbfDeltaSettings::default()
-    };
-    let estimate = estimate(&record, "transport-longitudinal", &settings);
-    let rows = against_truth(&estimate, &scenario);
-    assert!(
-        estimate
-            .notes
-            .iter()
-            .any(|n| n.contains("Bryson–Frazier smoother (Wang"))
-    );
+    let (estimate, rows) = on_smoothed_coefficients(&record, "transport-longitudinal", &scenario);
     assert_eq!(
         estimate.status,
         Status::Unidentified(vec![

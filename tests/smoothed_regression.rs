@@ -168,6 +168,37 @@ fn noisy_flight_test_records_within_three_sigma() {
     }
 }
 
+/// The lateral multistep and the elevator 3211 with their models: the
+/// slow-record cases.
+const SLOW_CASES: [(&str, &str); 2] = [
+    ("attas-lateral-multistep", "attas-lateral"),
+    ("attas-elevator-3211", "attas-longitudinal"),
+];
+
+/// `name` flown and recorded by the flight-test profile at `rate` Hz
+/// (recorder seed 1), smoothed and regressed on `model` with the default
+/// settings: the scenario, the smoothed histories and the estimate.
+fn smoothed_at(
+    rate: f64,
+    name: &str,
+    model: &str,
+) -> (
+    Scenario,
+    aeroid::estimation::methods::smoothed_regression::Smoothed,
+    aeroid::estimation::estimate::Estimate,
+) {
+    let profile = Profile::load("flight-test-25hz", None)
+        .unwrap()
+        .with_rate(rate);
+    let scenario = Scenario::load(name).unwrap();
+    let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
+    let record = profile.record(&trace, &scenario.aircraft, 1).unwrap();
+    let structure = ModelStructure::load(model).unwrap();
+    let (smoothed, estimate) =
+        smooth_and_regress(&record, &structure, &SmoothedRegressionSettings::default()).unwrap();
+    (scenario, smoothed, estimate)
+}
+
 /// The same flights with every channel at 10 Hz: the filter's grid
 /// divides the 0.1 s sample period into three 0.033 s steps (`max_step`
 /// 0.04 s; with the sample period as its step the coefficient-state EKF
@@ -178,20 +209,8 @@ fn noisy_flight_test_records_within_three_sigma() {
 /// 25 Hz (28 parameters, P(|z| > 3) 0.3 % each).
 #[test]
 fn ten_hertz_records_are_filtered_on_a_divided_grid_within_three_sigma() {
-    let profile = Profile::load("flight-test-25hz", None)
-        .unwrap()
-        .with_rate(10.0);
-    for (name, model) in [
-        ("attas-lateral-multistep", "attas-lateral"),
-        ("attas-elevator-3211", "attas-longitudinal"),
-    ] {
-        let scenario = Scenario::load(name).unwrap();
-        let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
-        let record = profile.record(&trace, &scenario.aircraft, 1).unwrap();
-        let structure = ModelStructure::load(model).unwrap();
-        let (smoothed, estimate) =
-            smooth_and_regress(&record, &structure, &SmoothedRegressionSettings::default())
-                .unwrap();
+    for (name, model) in SLOW_CASES {
+        let (scenario, smoothed, estimate) = smoothed_at(10.0, name, model);
         assert!(
             (smoothed.times[1] - smoothed.times[0] - 0.1).abs() < 1e-9,
             "the histories are at the 10 Hz samples"
@@ -476,20 +495,8 @@ fn the_derived_qar_approach_is_smoothed_to_the_end() {
 #[test]
 fn two_and_five_hertz_records_are_smoothed() {
     for rate in [2.0, 5.0] {
-        let profile = Profile::load("flight-test-25hz", None)
-            .unwrap()
-            .with_rate(rate);
-        for (name, model) in [
-            ("attas-lateral-multistep", "attas-lateral"),
-            ("attas-elevator-3211", "attas-longitudinal"),
-        ] {
-            let scenario = Scenario::load(name).unwrap();
-            let (trace, _) = aeroid::sim::fly(&scenario).unwrap();
-            let record = profile.record(&trace, &scenario.aircraft, 1).unwrap();
-            let structure = ModelStructure::load(model).unwrap();
-            let (smoothed, estimate) =
-                smooth_and_regress(&record, &structure, &SmoothedRegressionSettings::default())
-                    .unwrap();
+        for (name, model) in SLOW_CASES {
+            let (scenario, smoothed, estimate) = smoothed_at(rate, name, model);
             assert!(
                 smoothed.notes.iter().any(|n| n.contains("lowered")),
                 "{:?}",

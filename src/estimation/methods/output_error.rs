@@ -1720,8 +1720,10 @@ impl Problem {
         lag: f64,
         estimate: &mut Estimate,
     ) -> String {
-        let white = solution.covariance();
-        if (0..white.nrows()).any(|j| !white[(j, j)].is_finite()) {
+        // The white bound the estimate already holds, M⁻¹.
+        let m = estimate.covariance.len();
+        let white = DMatrix::from_fn(m, m, |i, j| estimate.covariance[i][j]);
+        if (0..m).any(|j| !white[(j, j)].is_finite()) {
             return "Cramér–Rao bounds left white: a parameter is unidentifiable".to_string();
         }
         // Each output's pieces (rows per segment) and its lag in samples.
@@ -1754,8 +1756,9 @@ impl Problem {
         let Ok((weights, assembled)) = self.sensitivities_at(&solution.theta) else {
             return "Cramér–Rao bounds left white: no Jacobian at the solution".to_string();
         };
-        let m = assembled.unknowns.len();
-        if residuals.len() != assembled.rows.last().map_or(0, |r| r.end) || m != white.nrows() {
+        if residuals.len() != assembled.rows.last().map_or(0, |r| r.end)
+            || m != assembled.unknowns.len()
+        {
             return "Cramér–Rao bounds left white: the residuals do not match the Jacobian"
                 .to_string();
         }
