@@ -238,6 +238,7 @@ fn the_qar_approach_end_to_end() {
     let scenario = approach(true);
     let names = aeroid::estimation::methods::names();
     let mut converged = Vec::new();
+    let mut reached = std::collections::BTreeSet::new();
     for profile in ["qar-seed000", "flight-test-25hz"] {
         let profile = Profile::load(profile, None).unwrap();
         let (recorded, truth) =
@@ -296,6 +297,22 @@ fn the_qar_approach_end_to_end() {
                     Outcome::Estimated { estimate, scores } => {
                         if matches!(estimate.status, Status::Converged) {
                             converged.push(format!("{model} {method}"));
+                            // Reached: within 3σ with a bound smaller than
+                            // the value (a wider one does not fix the sign).
+                            for score in scores.iter() {
+                                let (Some(truth), Some(k)) = (score.truth, score.error_sigma)
+                                else {
+                                    continue;
+                                };
+                                let relative = score.standard_error / truth.abs();
+                                if k.abs() <= 3.0 && relative < 1.0 {
+                                    println!(
+                                        "reached {} by {model} {method}: {k:+.2}σ, σ/|truth| {relative:.3}",
+                                        score.name
+                                    );
+                                    reached.insert(score.name.clone());
+                                }
+                            }
                         }
                         if model == "transport-longitudinal" && method == "fdee" {
                             assert!(matches!(estimate.status, Status::Converged));
@@ -332,8 +349,29 @@ fn the_qar_approach_end_to_end() {
             "transport-longitudinal elm-gn",
             "transport-longitudinal relm-gn",
             "transport-longitudinal ngn",
-            "attas-lateral swr",
+            "transport-lateral swr",
+            "transport-lateral ebm",
+            "transport-lateral fem",
+            "transport-lateral fdee",
         ],
         "converged on the QAR"
     );
+    // The issue's bar: every parameter the a-priori analysis calls
+    // identifiable estimated within 3σ by at least one method that
+    // converged, with a bound below its value. The longitudinal ones by
+    // fdee (and CD_0, Cm_q by others); the lateral ones by filter error
+    // (Cl_beta 1.1σ, Cl_da 0.1σ, Cl_p 1.5σ, Cl_r 0.7σ, CY_beta 0.8σ, Cn_r
+    // 1.5σ; bounds 7.5–14 % of the value but CY_beta's 20 % and Cn_r's
+    // 40 %) and CY_r by fdee (0.6σ, a bound of 87 %). Not reached (findings.md, "The QAR
+    // approach"): CY_p, which the analysis, knowing the gusts, bounds at
+    // 6.7 % and the estimators, treating them as unknown, at 3.3 times its
+    // value or more (filter error 9 times, 3.7σ off); and Cn_beta, −36 %
+    // (−9σ) from filter error and −23 to −31 % from output error on the
+    // derived 1 Hz channels in turbulence (+2.6 % without turbulence,
+    // −3.5 % from the 25 Hz gyros and vane).
+    let unreached: Vec<&str> = common::APPROACH_IDENTIFIABLE
+        .into_iter()
+        .filter(|name| !reached.contains(*name))
+        .collect();
+    assert_eq!(unreached, ["CY_p", "Cn_beta"], "reached: {reached:?}");
 }

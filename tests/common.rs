@@ -97,6 +97,16 @@ pub fn truth_table(rows: &[(String, f64, f64, f64)]) -> String {
         .collect()
 }
 
+/// The parameters the a-priori identifiability analysis calls identifiable
+/// on the bundled transport approach recorded by qar-seed000, in 20-s
+/// segments with the controls as recorded (`qar_identifiability_table` in
+/// tests/identifiability.rs checks the analysis against this list; the
+/// QAR end-to-end test checks which of them an estimator reaches).
+pub const APPROACH_IDENTIFIABLE: [&str; 20] = [
+    "CD_0", "CD_df", "CL_0", "CL_alpha", "CL_df", "CY_beta", "CY_p", "CY_r", "Cl_beta", "Cl_da",
+    "Cl_p", "Cl_r", "Cm_0", "Cm_alpha", "Cm_de", "Cm_df", "Cm_q", "Cn_beta", "Cn_r", "e",
+];
+
 /// The bundled transport approach, optionally without gusts and turbulence
 /// (its steady 20 kt wind from 250° stays).
 pub fn approach(gusty: bool) -> aeroid::sim::scenario::Scenario {

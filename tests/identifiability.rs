@@ -51,6 +51,15 @@ fn qar_identifiability_table() {
         );
     }
     assert!(result.excluded.iter().any(|(name, _)| name == "alpha"));
+    let identifiable: Vec<&str> = result
+        .rows
+        .iter()
+        .filter(|r| r.identifiable)
+        .map(|r| r.parameter.as_str())
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    assert_eq!(identifiable, common::APPROACH_IDENTIFIABLE);
     insta::assert_snapshot!("qar_identifiability", result.snapshot());
 }
 
