@@ -830,6 +830,8 @@ pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
     last_pass: RefCell<Option<KeptPass>>,
     /// Whether the last Gauss–Newton step was constrained by diag(K·C) ≤ 1.
     constrained: bool,
+    /// The unknowns' names ([`FilterErrorFit::with_names`]); empty: by position.
+    names: Vec<String>,
 }
 
 /// A pass kept with the θ, F and noise it was run with.
@@ -940,7 +942,15 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             differences: false,
             last_pass: RefCell::new(None),
             constrained: false,
+            names: Vec::new(),
         })
+    }
+
+    /// The fit with its unknowns named (the free parameters, then F's and
+    /// G's entries), for the messages that name them.
+    pub fn with_names(mut self, names: Vec<String>) -> Self {
+        self.names = names;
+        self
     }
 
     /// The fit with the time-varying (extended) filter in the loop, started
@@ -1668,6 +1678,10 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
 }
 
 impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> {
+    fn unknown_name(&self, index: usize) -> Option<String> {
+        self.names.get(index).cloned()
+    }
+
     /// ν/√R_oo at every measurement (steady gain); the time-varying
     /// pass's whitened residuals ([`FilterErrorFit::time_varying_residuals`]).
     fn residuals(&mut self, unknowns: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
@@ -1988,6 +2002,17 @@ pub fn filter_error_from(
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
     notes.extend(view.simulation().notes.iter().cloned());
     let file = view.parameters();
+    let state_names = view.state_names();
+    let parameter_names = structure.aircraft.aero.parameters.names();
+    let names = Names {
+        parameters: free.iter().map(|&i| parameter_names[i].clone()).collect(),
+        noise: noise_names(
+            noisy.iter().map(|&i| state_names[i]),
+            &structure.outputs,
+            options.gain,
+        ),
+        states: state_names.iter().map(|s| s.to_string()).collect(),
+    };
     let mut fit = FilterErrorFit::new(
         &view,
         &observations,
@@ -1995,7 +2020,8 @@ pub fn filter_error_from(
         file.clone(),
         free.clone(),
         noisy.clone(),
-    )?;
+    )?
+    .with_names(names.unknowns());
     if options.gain == Gain::TimeVarying {
         let covariance =
             initial_covariance(METHOD, &view.state_names(), &options.initial_variance)?;
@@ -2026,22 +2052,12 @@ pub fn filter_error_from(
         },
         None => fit.fit(&file, solver),
     }?;
-    let state_names = view.state_names();
-    let parameter_names = structure.aircraft.aero.parameters.names();
     Ok(assemble(
         (METHOD, &structure.name, &structure.outputs),
         record,
         &fit,
         &result,
-        &Names {
-            parameters: free.iter().map(|&i| parameter_names[i].clone()).collect(),
-            noise: noise_names(
-                noisy.iter().map(|&i| state_names[i]),
-                &structure.outputs,
-                options.gain,
-            ),
-            states: state_names.iter().map(|s| s.to_string()).collect(),
-        },
+        &names,
         notes,
         started.elapsed().as_secs_f64(),
     ))
@@ -2109,6 +2125,15 @@ pub(crate) fn linear_fit(
         }
     ));
     let theta = structure.parameter_values();
+    let names = Names {
+        parameters: free.iter().map(|&i| structure.names[i].clone()).collect(),
+        noise: noise_names(
+            noisy.iter().map(|&i| structure.states[i].as_str()),
+            &structure.outputs,
+            options.gain,
+        ),
+        states: structure.states.clone(),
+    };
     let mut fit = FilterErrorFit::new(
         &model,
         &observations,
@@ -2116,7 +2141,8 @@ pub(crate) fn linear_fit(
         theta.clone(),
         free.clone(),
         noisy.clone(),
-    )?;
+    )?
+    .with_names(names.unknowns());
     if options.gain == Gain::TimeVarying {
         let names: Vec<&str> = structure.states.iter().map(String::as_str).collect();
         let covariance = initial_covariance(method, &names, &options.initial_variance)?;
@@ -2137,15 +2163,7 @@ pub(crate) fn linear_fit(
         record,
         &fit,
         &result,
-        &Names {
-            parameters: free.iter().map(|&i| structure.names[i].clone()).collect(),
-            noise: noise_names(
-                noisy.iter().map(|&i| structure.states[i].as_str()),
-                &structure.outputs,
-                options.gain,
-            ),
-            states: structure.states.clone(),
-        },
+        &names,
         notes,
         started.elapsed().as_secs_f64(),
     ))
@@ -2269,6 +2287,13 @@ struct Names {
     noise: Vec<String>,
     /// The model's integrated states, in x's order.
     states: Vec<String>,
+}
+
+impl Names {
+    /// Every unknown's name in θ's order.
+    fn unknowns(&self) -> Vec<String> {
+        self.parameters.iter().chain(&self.noise).cloned().collect()
+    }
 }
 
 /// The estimate of a fit by `method` of model `name` with `outputs`: the

@@ -1580,6 +1580,10 @@ fn at_bracket((k, fraction): (usize, f64), series: impl Fn(usize) -> f64) -> f64
 }
 
 impl LeastSquaresProblem for Problem {
+    fn unknown_name(&self, index: usize) -> Option<String> {
+        self.unknowns.get(index).map(|&unknown| self.name(unknown))
+    }
+
     /// In the last stage, switches the iterations from the grid-point to
     /// the exact (stage) linearisation.
     fn refine(&mut self) -> bool {

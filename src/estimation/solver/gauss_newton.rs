@@ -56,6 +56,13 @@ pub trait LeastSquaresProblem {
         None
     }
 
+    /// The name of the unknown at `index` of θ (a parameter, an initial
+    /// state, a noise entry), for the messages that name unknowns; None
+    /// names it by its position.
+    fn unknown_name(&self, _index: usize) -> Option<String> {
+        None
+    }
+
     /// Called at the start of each iteration with the current estimate and its
     /// unweighted state; a problem that re-estimates its weights (output error's
     /// R) does so here. Returns true when the weights changed.
@@ -371,7 +378,8 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             .and_then(|_| problem.residuals(&theta))
             .and_then(|r| finite_cost(&r).map(|cost| (r, cost)))
             .and_then(|(r, cost)| {
-                let normal = finite_normal(problem.normal_equations(&theta, &r, options)?)?;
+                let normal = problem.normal_equations(&theta, &r, options)?;
+                let normal = finite_normal(normal, |j| problem.unknown_name(j))?;
                 Ok((r, cost, normal))
             });
         let (
@@ -515,22 +523,30 @@ fn refine<P: LeastSquaresProblem + ?Sized>(problem: &mut P, held: &mut Option<f6
 /// The normal equations if every entry is finite; else the unknowns whose
 /// sensitivities are not (a model evaluated where it has no derivative:
 /// the SVD of a matrix with a NaN never ends).
-fn finite_normal(normal: NormalEquations) -> Result<NormalEquations, String> {
+fn finite_normal(
+    normal: NormalEquations,
+    name: impl Fn(usize) -> Option<String>,
+) -> Result<NormalEquations, String> {
     let n = normal.gradient.len();
-    let bad: Vec<String> = (0..n)
-        .filter(|&j| {
-            !normal.gradient[j].is_finite()
-                || normal.information.column(j).iter().any(|v| !v.is_finite())
-        })
-        .map(|j| j.to_string())
-        .collect();
-    match bad.is_empty() {
-        true => Ok(normal),
-        false => Err(format!(
-            "the sensitivities to unknowns {} (by position) are not finite",
-            bad.join(", ")
-        )),
+    let column = |j: usize| normal.information.column(j).iter().all(|v| v.is_finite());
+    if (0..n).all(|j| normal.gradient[j].is_finite() && column(j)) {
+        return Ok(normal);
     }
+    // A non-finite sensitivity spreads over its unknown's row and column
+    // of JᵀJ: the unknowns are those whose own entries are not finite.
+    let own = |j: usize| normal.gradient[j].is_finite() && normal.information[(j, j)].is_finite();
+    let mut bad: Vec<usize> = (0..n).filter(|&j| !own(j)).collect();
+    if bad.is_empty() {
+        bad = (0..n).filter(|&j| !column(j)).collect();
+    }
+    let bad: Vec<String> = bad
+        .into_iter()
+        .map(|j| name(j).unwrap_or_else(|| format!("#{j} (by position)")))
+        .collect();
+    Err(format!(
+        "the sensitivities to {} are not finite",
+        bad.join(", ")
+    ))
 }
 
 fn finite_cost(residuals: &DVector<f64>) -> Result<f64, String> {
@@ -808,6 +824,42 @@ mod tests {
         );
         assert_eq!(solution.status, Status::Converged);
         assert!((solution.theta[0] - 1.0).abs() < 1e-12);
+    }
+
+    /// Sensitivities that are not finite (a model evaluated where it has no
+    /// derivative) end the fit as diverged, naming the unknowns the problem
+    /// names and the others by position.
+    #[test]
+    fn non_finite_sensitivities_are_diverged_by_name() {
+        struct Kinked {
+            named: bool,
+        }
+        impl LeastSquaresProblem for Kinked {
+            fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, String> {
+                Ok(DVector::from_vec(vec![t[0] - 1.0, t[1] - 2.0, t[0] + t[1]]))
+            }
+            fn jacobian(&mut self, _: &DVector<f64>, _: &Options) -> Result<DMatrix<f64>, String> {
+                Ok(DMatrix::from_row_slice(
+                    3,
+                    2,
+                    &[1.0, 0.0, 0.0, f64::NAN, 1.0, 1.0],
+                ))
+            }
+            fn unknown_name(&self, index: usize) -> Option<String> {
+                self.named.then(|| ["tau1", "a1"][index].to_string())
+            }
+        }
+        let start = DVector::from_vec(vec![0.5, 0.5]);
+        for (named, expected) in [(true, "a1"), (false, "#1 (by position)")] {
+            let solution = solve(&mut Kinked { named }, &start, &Options::new(2));
+            let Status::Diverged(reason) = &solution.status else {
+                panic!("{:?}", solution.status)
+            };
+            assert_eq!(
+                reason,
+                &format!("the sensitivities to {expected} are not finite")
+            );
+        }
     }
 
     /// A problem whose Jacobian points the wrong way: every Gauss–Newton
