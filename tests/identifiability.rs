@@ -60,6 +60,17 @@ fn qar_identifiability_table() {
         .into_iter()
         .collect();
     assert_eq!(identifiable, common::APPROACH_IDENTIFIABLE);
+    // The calm flight (the same controls, the steady wind) identifies the
+    // static and control derivatives on its own; CY_p only the
+    // turbulence's excitation brings within the threshold, and the rate
+    // derivatives lose to the 1 Hz aileron without it.
+    let through_gusts: Vec<&str> = result
+        .rows
+        .iter()
+        .filter(|r| r.through_gusts(result.threshold))
+        .map(|r| r.parameter.as_str())
+        .collect();
+    assert_eq!(through_gusts, ["CY_p", "CY_r", "Cl_p", "Cl_r", "Cn_r"]);
     insta::assert_snapshot!("qar_identifiability", result.snapshot());
 }
 
@@ -81,6 +92,8 @@ fn bounds_scale_with_the_noise() {
     let doubled = analyse(&scenario, &noisier, &options).unwrap();
     for (a, b) in base.rows.iter().zip(&doubled.rows) {
         assert!(a.sigma.is_finite() && a.sigma > 0.0, "{a:?}");
+        // A flight without gusts or turbulence has no calm twin.
+        assert_eq!(a.calm, None);
         let ratio = b.sigma / a.sigma;
         assert!((ratio - 2.0).abs() < 1e-6, "{}: ratio {ratio}", a.parameter);
     }

@@ -52,6 +52,13 @@
 //! estimate no better than the a-priori value either. δθ_wind is reported
 //! beside it and not part of the verdict (a filter does not suffer it).
 //!
+//! For a flight with gusts or turbulence the same bound and input error
+//! are computed for the flight without them (the controls as flown, the
+//! steady wind). A parameter identifiable in the gusty flight but not in
+//! the calm one is identifiable *through the gusts*: its information is in
+//! the turbulent motion, which an estimator reaches only by knowing the
+//! wind or by drawing on that motion as a filter with process noise does.
+//!
 //! These are lower bounds for estimators that know the wind: with
 //! turbulence in the flight, an output-error fit that ignores it does worse,
 //! so "not identifiable" here is definitive, while "identifiable" is
@@ -120,6 +127,10 @@ pub struct IdentifiabilityRow {
     pub input_error: f64,
     /// First-order error of a fit that ignores the gusts and turbulence.
     pub wind_error: f64,
+    /// The bound and the recorded inputs' error of the same flight without
+    /// its gusts and turbulence (the controls' excitation alone); None for
+    /// a flight without them.
+    pub calm: Option<(f64, f64)>,
     pub identifiable: bool,
 }
 
@@ -127,6 +138,19 @@ impl IdentifiabilityRow {
     /// σ/|truth| (∞ for a zero truth with a non-zero bound).
     pub fn relative_sigma(&self) -> f64 {
         self.sigma / self.truth.abs()
+    }
+
+    /// Identifiable only through the gusts and turbulence: the flight
+    /// without them fails the verdict (its bound at or above the threshold,
+    /// or its recorded inputs' error beyond twice it). An estimator must
+    /// then know the wind, or draw the information from the turbulent
+    /// motion as a filter does, to reach the bound.
+    pub fn through_gusts(&self, threshold: f64) -> bool {
+        let limit = threshold * self.truth.abs();
+        self.identifiable
+            && self
+                .calm
+                .is_some_and(|(sigma, error)| !(sigma < limit && error.abs() < 2.0 * limit))
     }
 }
 
@@ -151,25 +175,44 @@ impl Identifiability {
             "{} recorded by {}: Cramér–Rao bounds at the truth, {} s segments with unknown initial states; identifiable when σ/|truth| < {}\n",
             self.scenario, self.profile, self.segment, self.threshold
         );
-        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate and resolution, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict)\n";
+        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate and resolution, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict); calm σ: the bound of the flight without its gusts and turbulence (identifiable \"through the gusts\" when that flight fails the verdict: its bound or its inputs' error)\n";
         text += &format!(
-            "{:<14} {:>12} {:>11} {:>10} {:>12} {:>12}  {}\n",
-            "parameter", "truth", "σ", "σ/|truth|", "inputs/|θ|", "wind/|θ|", "verdict"
+            "{:<14} {:>12} {:>11} {:>10} {:>12} {:>12} {:>12}  {}\n",
+            "parameter",
+            "truth",
+            "σ",
+            "σ/|truth|",
+            "inputs/|θ|",
+            "wind/|θ|",
+            "calm σ/|θ|",
+            "verdict"
         );
         for row in &self.rows {
             text += &format!(
-                "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e}  {}\n",
+                "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e} {:>12}  {}\n",
                 row.parameter,
                 row.truth,
                 row.sigma,
                 row.relative_sigma(),
                 row.input_error / row.truth.abs(),
                 row.wind_error / row.truth.abs(),
+                row.calm.map_or("-".to_string(), |(s, _)| format!(
+                    "{:.3e}",
+                    s / row.truth.abs()
+                )),
                 verdict(row, self.threshold)
             );
         }
         let count = self.rows.iter().filter(|r| r.identifiable).count();
-        text += &format!("{count} of {} identifiable\n", self.rows.len());
+        let gusts = self
+            .rows
+            .iter()
+            .filter(|r| r.through_gusts(self.threshold))
+            .count();
+        text += &format!(
+            "{count} of {} identifiable ({gusts} through the gusts)\n",
+            self.rows.len()
+        );
         text += &format!(
             "channels used: {}\n",
             self.channels
@@ -191,8 +234,15 @@ impl Identifiability {
             self.scenario, self.profile, self.segment, self.threshold
         );
         for row in &self.rows {
+            let calm = row.calm.map_or(String::new(), |(s, error)| {
+                format!(
+                    "  calm {} inputs {}",
+                    crate::record::significant(s / row.truth.abs(), 2),
+                    crate::record::significant(error / row.truth.abs(), 2)
+                )
+            });
             text += &format!(
-                "{} σ/|truth| = {}  inputs {}  wind {}  {}\n",
+                "{} σ/|truth| = {}  inputs {}  wind {}{calm}  {}\n",
                 row.parameter,
                 crate::record::significant(row.relative_sigma(), 2),
                 crate::record::significant(row.input_error / row.truth.abs(), 2),
@@ -213,7 +263,9 @@ impl Identifiability {
 }
 
 fn verdict(row: &IdentifiabilityRow, threshold: f64) -> &'static str {
-    if row.identifiable {
+    if row.through_gusts(threshold) {
+        "identifiable (through the gusts)"
+    } else if row.identifiable {
         "identifiable"
     } else if row.sigma < threshold * row.truth.abs() {
         "NOT identifiable (recorded inputs)"
@@ -301,10 +353,13 @@ pub fn analyse(
         .unwrap_or(duration.max(simulation.step));
     let segment_steps = ((segment / simulation.step).round() as usize).max(1);
     let segments = nominal_states.len().div_ceil(segment_steps);
-    // Flies the scenario with one parameter changed or one initial-state
+    // Flies `simulation` with one parameter changed or one initial-state
     // component moved in every segment, restarting every segment from the
     // nominal flight's state there.
-    let fly = |parameter: Option<(&str, f64)>, nuisance: Option<(usize, f64)>| {
+    let fly = |simulation: &Simulation,
+               nominal_states: &[StateVector],
+               parameter: Option<(&str, f64)>,
+               nuisance: Option<(usize, f64)>| {
         let mut simulation = simulation.clone();
         if let Some((name, value)) = parameter {
             simulation.model.aircraft.aero.parameters.set(name, value)?;
@@ -352,7 +407,6 @@ pub fn analyse(
     }
     let rows_total = segment_of_row.len();
     let columns = names.len() + NUISANCE * segments;
-    let mut sensitivities = DMatrix::zeros(rows_total, columns);
     // Weighted central difference of the recorded channels, row by row.
     let difference = |plus: &FlightRecord, minus: &FlightRecord, h: f64| -> Result<Vec<f64>> {
         let mut column = Vec::with_capacity(rows_total);
@@ -370,33 +424,51 @@ pub fn analyse(
         }
         Ok(column)
     };
-    for (j, (name, truth)) in names.iter().zip(&truths).enumerate() {
-        let h = options.relative_step * truth.abs().max(1e-2);
-        let plus = fly(Some((name, truth + h)), None)?;
-        let minus = fly(Some((name, truth - h)), None)?;
-        for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
-            sensitivities[(row, j)] = value;
+    // The weighted sensitivities of a flight (its simulation and states)
+    // to the parameters, then to each segment's initial state.
+    let sensitivities_of = |simulation: &Simulation, states: &[StateVector]| {
+        let mut sensitivities = DMatrix::zeros(rows_total, columns);
+        for (j, (name, truth)) in names.iter().zip(&truths).enumerate() {
+            let h = options.relative_step * truth.abs().max(1e-2);
+            let plus = fly(simulation, states, Some((name, truth + h)), None)?;
+            let minus = fly(simulation, states, Some((name, truth - h)), None)?;
+            for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
+                sensitivities[(row, j)] = value;
+            }
         }
-    }
-    // An initial-state component moved in every segment at once: segments
-    // are independent, so each row's difference belongs to its own segment's
-    // unknown.
-    for component in 0..NUISANCE {
-        let h = nuisance_step(component);
-        let plus = fly(None, Some((component, h)))?;
-        let minus = fly(None, Some((component, -h)))?;
-        for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
-            let column = names.len() + NUISANCE * segment_of_row[row] + component;
-            sensitivities[(row, column)] = value;
+        // An initial-state component moved in every segment at once:
+        // segments are independent, so each row's difference belongs to
+        // its own segment's unknown.
+        for component in 0..NUISANCE {
+            let h = nuisance_step(component);
+            let plus = fly(simulation, states, None, Some((component, h)))?;
+            let minus = fly(simulation, states, None, Some((component, -h)))?;
+            for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
+                let column = names.len() + NUISANCE * segment_of_row[row] + component;
+                sensitivities[(row, column)] = value;
+            }
         }
-    }
-    let information = sensitivities.transpose() * &sensitivities;
-    let covariance = pseudo_inverse_or_infinite(&marginal_information(&information, names.len()));
-    // The model errors: the nominal record minus the record of the flight
-    // an estimator's model flies, weighted as the sensitivities.
-    let errors = |flight: &Simulation, what: &str| -> Result<DVector<f64>> {
+        Ok::<_, Error>(sensitivities)
+    };
+    // The bounds σ_j of the parameters from a flight's sensitivities.
+    let bounds = |sensitivities: &DMatrix<f64>| {
+        let information = sensitivities.transpose() * sensitivities;
+        let covariance =
+            pseudo_inverse_or_infinite(&marginal_information(&information, names.len()));
+        (0..names.len())
+            .map(|j| covariance[(j, j)].max(0.0).sqrt())
+            .collect::<Vec<f64>>()
+    };
+    // The model errors: the record of a flight (its states and record)
+    // minus the record of the flight an estimator's model flies, weighted
+    // as the sensitivities.
+    let errors = |flight: &Simulation,
+                  states: &[StateVector],
+                  nominal: &FlightRecord,
+                  what: &str|
+     -> Result<DVector<f64>> {
         let trace = flight
-            .run_with_restarts(|k| (k % segment_steps == 0).then(|| nominal_states[k]))
+            .run_with_restarts(|k| (k % segment_steps == 0).then(|| states[k]))
             .map_err(|error| {
                 Error::Other(format!(
                     "identifiability of '{}': the flight {what} failed: {error}",
@@ -405,33 +477,56 @@ pub fn analyse(
             })?;
         let modelled = clean.record(&trace, &scenario.aircraft, scenario.seed)?;
         // (nominal − modelled)/(2·1): `difference` divides by 2h.
-        Ok(DVector::from_vec(difference(&nominal, &modelled, 0.5)?))
+        Ok(DVector::from_vec(difference(nominal, &modelled, 0.5)?))
     };
-    let solve = least_squares_solver(&sensitivities);
-    // The controls as the recorder writes them: at their rate, slot,
-    // delay and lag, and quantized to their resolution.
-    let controls =
-        profile
+    // A flight's bounds, its least-squares solver and the first-order
+    // error of the controls as the recorder writes them (at their rate,
+    // slot, delay and lag, and quantized to their resolution).
+    let analyse_flight = |simulation: &Simulation, trace: &crate::sim::trace::TruthTrace| {
+        let states: Vec<StateVector> = trace.samples.iter().map(|s| s.state).collect();
+        let record = clean.record(trace, &scenario.aircraft, scenario.seed)?;
+        let sensitivities = sensitivities_of(simulation, &states)?;
+        let solve = least_squares_solver(&sensitivities);
+        let controls = profile
             .without_noise()
-            .record(&nominal_trace, &scenario.aircraft, scenario.seed)?;
-    let input_error = solve(&errors(
-        &with_recorded_inputs(&simulation, &controls)?,
-        "with the inputs as recorded",
-    )?);
+            .record(trace, &scenario.aircraft, scenario.seed)?;
+        let input_error = solve(&errors(
+            &with_recorded_inputs(simulation, &controls)?,
+            &states,
+            &record,
+            "with the inputs as recorded",
+        )?);
+        Ok::<_, Error>((bounds(&sensitivities), input_error, solve))
+    };
+    let (sigmas, input_error, solve) = analyse_flight(&simulation, &nominal_trace)?;
     let wind_error = solve(&errors(
         &without_gusts(scenario, &simulation)?,
+        &nominal_states,
+        &nominal,
         "without gusts and turbulence",
     )?);
+    // The same flight without its gusts and turbulence: what the controls
+    // alone give.
+    let gusty = !scenario.wind.gusts.is_empty() || scenario.wind.turbulence.is_some();
+    let calm = match gusty {
+        true => {
+            let calm = without_gusts(scenario, &simulation)?;
+            let (sigmas, input_error, _) = analyse_flight(&calm, &calm.run()?)?;
+            Some((sigmas, input_error))
+        }
+        false => None,
+    };
     let rows = names
         .iter()
         .zip(&truths)
         .enumerate()
         .map(|(j, (name, &truth))| {
-            let sigma = covariance[(j, j)].max(0.0).sqrt();
+            let sigma = sigmas[j];
             IdentifiabilityRow {
                 parameter: name.clone(),
                 truth,
                 sigma,
+                calm: calm.as_ref().map(|(sigmas, errors)| (sigmas[j], errors[j])),
                 input_error: input_error[j],
                 wind_error: wind_error[j],
                 identifiable: sigma < options.threshold * truth.abs()
@@ -454,7 +549,9 @@ pub fn analyse(
 /// unknown (parameters, then the segments' initial states) of a
 /// least-squares fit, by the SVD of S with unit-norm columns; directions
 /// the data cannot separate (σ = ∞) drop out.
-fn least_squares_solver(sensitivities: &DMatrix<f64>) -> impl Fn(&DVector<f64>) -> DVector<f64> {
+fn least_squares_solver(
+    sensitivities: &DMatrix<f64>,
+) -> impl Fn(&DVector<f64>) -> DVector<f64> + use<> {
     let norms: Vec<f64> = sensitivities
         .column_iter()
         .map(|c| {
