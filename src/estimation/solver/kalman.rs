@@ -598,10 +598,11 @@ impl SparseRows {
 /// non-zeros: U = P·Φᵀ and Φ·U = (Uᵀ·Φᵀ)ᵀ, each O(nnz(Φ)·n) instead of
 /// O(n³), symmetrised; `work` holds U and Uᵀ. Where Φ's rows from k on are
 /// the identity's ([`SparseRows::set_leading`]: an augmented model's
-/// constant parameters), Φ = [[Φ₁₁, Φ₁₂], [0, I]] and the blocks are
-/// P₁₁ ← Φ₁·P·Φ₁ᵀ, P₁₂ ← Φ₁·P₂ᵀ·ᵀ (Φ₁ = [Φ₁₁, Φ₁₂], P₂ = [P₂₁, P₂₂],
-/// i.e. Φ₁₁·P₁₂ + Φ₁₂·P₂₂), P₂₂ unchanged: W = P·Φ₁ᵀ (n × k) once, the
-/// same numbers as the dense form's for a symmetric P.
+/// constant parameters), Φ = [[Φ₁₁, Φ₁₂], [0, I]] = [[Φ₁], [0, I]] and
+/// the blocks are P₁₁ ← Φ₁·P·Φ₁ᵀ, P₁₂ ← Φ₁₁·P₁₂ + Φ₁₂·P₂₂ (the rows of
+/// W = P·Φ₁ᵀ, n × k, past k, transposed), P₂₂ unchanged: the same numbers
+/// as the dense form's for a symmetric P, without its products over the
+/// identity's rows.
 pub fn predict_covariance_in_place(
     covariance: &mut DMatrix<f64>,
     transition: &SparseRows,
