@@ -258,3 +258,86 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
             .is_identity(0.0)
     );
 }
+
+/// A whole EKF pass over the augmented ATTAS lateral record (1501 grid
+/// points, 22 states) allocates per grid point only what it keeps and two
+/// packing buffers: keeping the updates alone, the filtered mean at every
+/// point and, where there are measurements, the update's H, ν, S, S⁻¹ and
+/// K, the copy of S its Cholesky factorisation consumes, and the packing
+/// buffer of each of the two small products K = M·S⁻¹ and K·S (nalgebra's
+/// matrix product allocates one a call), plus a bounded set-up (the
+/// buffers' first growth, the innovations' lists doubling: under a hundred);
+/// keeping everything adds exactly the predicted mean and covariance at
+/// every point, the transition and the filtered covariance at every point
+/// but the last (which is always kept): 4·len − 2 more.
+#[test]
+fn an_ekf_pass_allocates_per_point_only_what_it_keeps() {
+    use aeroid::estimation::model::augmented::Augmented;
+    use aeroid::estimation::model::observations::Observations;
+    use aeroid::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
+    use aeroid::estimation::solver::extended_kalman::{self, Discretisation, Keep, Noise};
+    use aeroid::estimation::solver::kalman::Gaussian;
+    use aeroid::estimation::structure::ModelStructure;
+    use aeroid::record::recorder::{Profile, record_scenario};
+    use nalgebra::{DMatrix, DVector};
+
+    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let (record, _) = record_scenario(&scenario, &profile).unwrap();
+    let structure = ModelStructure::load("attas-lateral").unwrap();
+    let (view, x0) =
+        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None).unwrap();
+    let theta = view.parameters();
+    let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
+    let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
+    let (n, len) = (model.state_count(), model.len());
+    let mut prior = DMatrix::from_diagonal_element(n, n, 1e-5);
+    for i in x0.len()..n {
+        prior[(i, i)] = 1e-2;
+    }
+    let initial = Gaussian {
+        mean: model.state(x0.as_slice()),
+        covariance: prior,
+    };
+    let noise = Noise {
+        process: DMatrix::zeros(n, n),
+        measurement: DVector::from_element(structure.outputs.len(), 1e-5),
+    };
+    let observations = Observations::from_record(
+        &record,
+        &structure.outputs,
+        view.time(0),
+        view.time(1) - view.time(0),
+        len,
+    )
+    .unwrap();
+    let measured = observations.at.iter().filter(|a| !a.is_empty()).count();
+    let count = |keep: Keep| {
+        let initial = initial.clone();
+        let before = ALLOCATIONS.with(Cell::get);
+        let pass = extended_kalman::filter_with(
+            &model,
+            &[],
+            initial,
+            &noise,
+            &observations,
+            Discretisation::Exact,
+            keep,
+        )
+        .unwrap();
+        let after = ALLOCATIONS.with(Cell::get);
+        assert!(pass.negative_log_likelihood.is_finite());
+        after - before
+    };
+    // A first pass makes the model's own buffers (kept between calls).
+    count(Keep::UPDATES);
+    let updates = count(Keep::UPDATES);
+    let everything = count(Keep::ALL);
+    let kept = len + 8 * measured;
+    assert!(
+        (kept..=kept + 200).contains(&updates),
+        "{updates} allocations keeping the updates over {len} points ({measured} measured): \
+         the kept objects and the products' buffers are {kept}"
+    );
+    assert_eq!(everything - updates, 4 * len - 2);
+}

@@ -99,7 +99,9 @@ use crate::estimation::model::augmented::Augmented;
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel, fitting_window};
 use crate::estimation::problem::EstimationProblem;
-use crate::estimation::solver::extended_kalman::{self, Innovation, Noise, Pass};
+use crate::estimation::solver::extended_kalman::{
+    self, Discretisation, Innovation, Keep, Noise, Pass,
+};
 use crate::estimation::solver::kalman::{self, Gaussian};
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::{Channel, FlightRecord};
@@ -325,7 +327,7 @@ impl Estimator for AugmentedEkf {
             &settings,
             start,
             &|model, initial, noise, observations| {
-                extended_kalman::filter(model, &[], initial, noise, observations)
+                extended_pass(&settings, model, initial, noise, observations)
             },
         )?;
         if let Some(path) = &settings.history {
@@ -333,6 +335,33 @@ impl Estimator for AugmentedEkf {
         }
         Ok(run.estimate)
     }
+}
+
+/// The `ekf` method's filter pass ([`extended_kalman::filter_with`], exact
+/// discretisation), keeping what the method reads: the filtered
+/// covariances (the parameter histories' σ) and, for Mehra's method
+/// (`correlation_lags` ≥ 1), the transitions; not the predicted estimates.
+pub fn extended_pass<M: StateSpaceModel + ?Sized>(
+    settings: &FilterSettings,
+    model: &M,
+    initial: Gaussian,
+    noise: &Noise,
+    observations: &Observations,
+) -> Result<Pass> {
+    let keep = Keep {
+        predicted: false,
+        transitions: settings.correlation_lags > 0,
+        filtered_covariances: true,
+    };
+    extended_kalman::filter_with(
+        model,
+        &[],
+        initial,
+        noise,
+        observations,
+        Discretisation::Exact,
+        keep,
+    )
 }
 
 /// What an augmented filter produced: the estimate, the last pass's

@@ -737,10 +737,7 @@ pub fn time_varying_pass<M: StateSpaceModel + ?Sized>(
         &noise,
         observations,
         Discretisation::Exact,
-        Keep {
-            smoother: false,
-            filtered_covariances: false,
-        },
+        Keep::UPDATES,
     )?;
     let count: usize = observations.at.iter().map(Vec::len).sum();
     let mut pass = TimeVaryingPass {

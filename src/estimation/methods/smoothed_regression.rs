@@ -957,10 +957,7 @@ fn smooth_with(
         &noise,
         &observations,
         Discretisation::SecondOrder,
-        Keep {
-            smoother: true,
-            filtered_covariances: false,
-        },
+        Keep::SMOOTHER,
     )?;
     // The histories at the sample instants: every `parts`-th grid point.
     // The means and variances are all the histories read of the smoother.

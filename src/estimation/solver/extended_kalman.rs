@@ -180,8 +180,10 @@ pub struct Innovation {
 /// spares the copies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Keep {
-    /// The predicted estimates and the transitions (what a smoother reads).
-    pub smoother: bool,
+    /// The predicted estimates (what a smoother reads).
+    pub predicted: bool,
+    /// The transitions (what a smoother and Mehra's tuning read).
+    pub transitions: bool,
     /// The filtered covariance at every grid point (else at the last only).
     pub filtered_covariances: bool,
 }
@@ -189,8 +191,22 @@ pub struct Keep {
 impl Keep {
     /// Everything.
     pub const ALL: Keep = Keep {
-        smoother: true,
+        predicted: true,
+        transitions: true,
         filtered_covariances: true,
+    };
+    /// What a smoother reads: the predicted estimates and the transitions.
+    pub const SMOOTHER: Keep = Keep {
+        predicted: true,
+        transitions: true,
+        filtered_covariances: false,
+    };
+    /// Nothing beyond the filtered states, the updates, the innovations,
+    /// the likelihood and the last covariance.
+    pub const UPDATES: Keep = Keep {
+        predicted: false,
+        transitions: false,
+        filtered_covariances: false,
     };
 }
 
@@ -198,14 +214,14 @@ impl Keep {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pass {
     /// (x, P)_{k|k−1}; at k = 0 the initial estimate (empty unless
-    /// [`Keep::smoother`]).
+    /// [`Keep::predicted`]).
     pub predicted: Vec<Gaussian>,
     /// (x, P)_{k|k}; without [`Keep::filtered_covariances`] the covariance
     /// is empty (0 × 0) but at the last grid point.
     pub filtered: Vec<Gaussian>,
     /// The update at each grid point with measurements.
     pub measured: Vec<Option<Measured>>,
-    /// Φ from k to k + 1 (len − 1 of them; empty unless [`Keep::smoother`]).
+    /// Φ from k to k + 1 (len − 1 of them; empty unless [`Keep::transitions`]).
     pub transitions: Vec<DMatrix<f64>>,
     /// Per output, its innovations.
     pub innovations: Vec<Vec<Innovation>>,
@@ -288,11 +304,11 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 process_noise.map(|_| &time_update.process_noise),
                 &mut time_update.work,
             );
-            if keep.smoother {
+            if keep.transitions {
                 pass.transitions.push(time_update.transition.clone());
             }
         }
-        if keep.smoother {
+        if keep.predicted {
             pass.predicted.push(Gaussian {
                 mean: state.clone(),
                 covariance: covariance.clone(),

@@ -332,6 +332,19 @@ fn multiply(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
     if rows == 0 {
         return;
     }
+    if a.is_square() && b.shape() == a.shape() {
+        let (a, b, into) = (a.as_slice(), b.as_slice(), into.as_mut_slice());
+        match rows {
+            2 => return multiply_square::<2>(a, b, into),
+            3 => return multiply_square::<3>(a, b, into),
+            4 => return multiply_square::<4>(a, b, into),
+            5 => return multiply_square::<5>(a, b, into),
+            6 => return multiply_square::<6>(a, b, into),
+            7 => return multiply_square::<7>(a, b, into),
+            8 => return multiply_square::<8>(a, b, into),
+            _ => {}
+        }
+    }
     let a = a.as_slice();
     for (column, b) in into
         .as_mut_slice()
@@ -344,6 +357,24 @@ fn multiply(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
                 *into += factor * a;
             }
         }
+    }
+}
+
+/// [`multiply`] of two N × N matrices (column-major slices) with N known
+/// at compile time, so that the loops unroll: the same sums in the same
+/// order.
+#[inline(always)]
+fn multiply_square<const N: usize>(a: &[f64], b: &[f64], into: &mut [f64]) {
+    let (a, b) = (&a[..N * N], &b[..N * N]);
+    for (c, into) in into[..N * N].chunks_exact_mut(N).enumerate() {
+        let mut column = [0.0; N];
+        for l in 0..N {
+            let factor = b[l + c * N];
+            for (sum, &a) in column.iter_mut().zip(&a[l * N..(l + 1) * N]) {
+                *sum += factor * a;
+            }
+        }
+        into.copy_from_slice(&column);
     }
 }
 
@@ -446,6 +477,9 @@ pub fn predict_covariance(
 #[derive(Debug, Clone, Default)]
 pub struct SparseRows {
     columns: usize,
+    /// The rows from this one on are the identity's
+    /// ([`SparseRows::set_leading`]; all rows where none are known to be).
+    leading: usize,
     /// Row i's entries (column, value) are `entries[starts[i]..starts[i + 1]]`
     /// (`entries` may hold more, unused).
     starts: Vec<usize>,
@@ -471,6 +505,7 @@ impl SparseRows {
     pub fn set_leading(&mut self, matrix: &DMatrix<f64>, leading: usize) {
         let (rows, columns) = matrix.shape();
         self.begin(columns);
+        self.leading = leading.min(rows);
         // Every entry is written and only a non-zero one kept (no branch):
         // `entries` holds room for all of them.
         if self.entries.len() < matrix.len() {
@@ -497,6 +532,7 @@ impl SparseRows {
     pub fn set_transposed(&mut self, matrix: &DMatrix<f64>) {
         let rows = matrix.nrows();
         self.begin(rows);
+        self.leading = matrix.ncols();
         // Every entry is written and only a non-zero one kept (no branch):
         // `entries` holds room for all of them.
         if self.entries.len() < matrix.len() {
@@ -560,30 +596,102 @@ impl SparseRows {
 
 /// P ← Φ·P·Φᵀ + Q_d (`process_noise`; None: zero) in place, Φ by its
 /// non-zeros: U = P·Φᵀ and Φ·U = (Uᵀ·Φᵀ)ᵀ, each O(nnz(Φ)·n) instead of
-/// O(n³), symmetrised; `work` holds U and Uᵀ.
+/// O(n³), symmetrised; `work` holds U and Uᵀ. Where Φ's rows from k on are
+/// the identity's ([`SparseRows::set_leading`]: an augmented model's
+/// constant parameters), Φ = [[Φ₁₁, Φ₁₂], [0, I]] = [[Φ₁], [0, I]] and
+/// the blocks are P₁₁ ← Φ₁·P·Φ₁ᵀ, P₁₂ ← Φ₁₁·P₁₂ + Φ₁₂·P₂₂ (the rows of
+/// W = P·Φ₁ᵀ, n × k, past k, transposed), P₂₂ unchanged: the same numbers
+/// as the dense form's for a symmetric P, without its products over the
+/// identity's rows.
 pub fn predict_covariance_in_place(
     covariance: &mut DMatrix<f64>,
     transition: &SparseRows,
     process_noise: Option<&DMatrix<f64>>,
     work: &mut [DMatrix<f64>; 2],
 ) {
-    let [product, transposed] = work;
-    transition.times_transposed(covariance, product);
-    resize(transposed, product.ncols(), product.nrows());
-    product.transpose_to(transposed);
-    transition.times_transposed(transposed, product);
-    let n = product.nrows();
-    resize(covariance, n, n);
-    let (p, f) = (covariance.as_mut_slice(), product.as_slice());
-    for j in 0..n {
-        for i in 0..=j {
-            let value = 0.5 * (f[i + j * n] + f[j + i * n]);
-            p[i + j * n] = value;
-            p[j + i * n] = value;
+    let n = covariance.nrows();
+    if transition.leading < n && transition.rows() == n && covariance.ncols() == n {
+        predict_constant_rows(covariance, transition, &mut work[0]);
+    } else {
+        let [product, transposed] = work;
+        transition.times_transposed(covariance, product);
+        resize(transposed, product.ncols(), product.nrows());
+        product.transpose_to(transposed);
+        transition.times_transposed(transposed, product);
+        let n = product.nrows();
+        resize(covariance, n, n);
+        let (p, f) = (covariance.as_mut_slice(), product.as_slice());
+        for j in 0..n {
+            for i in 0..=j {
+                let value = 0.5 * (f[i + j * n] + f[j + i * n]);
+                p[i + j * n] = value;
+                p[j + i * n] = value;
+            }
         }
     }
     if let Some(noise) = process_noise {
         *covariance += noise;
+    }
+}
+
+/// Φ·P·Φᵀ in place for a Φ whose rows from k = `transition.leading` on
+/// are the identity's ([`predict_covariance_in_place`]). With W = P·Φ₁ᵀ
+/// (column r: Σ_j Φ_rj·P_{·j} over row r's non-zeros, as the dense form's
+/// first product): (Φ·P·Φᵀ)_rc = Σ_j Φ_cj·W_jr for r, c < k, W_cr for
+/// c ≥ k, P_rc for both ≥ k; symmetrised as the dense form symmetrises
+/// (P is first made symmetric, which leaves a symmetric one as it is).
+fn predict_constant_rows(
+    covariance: &mut DMatrix<f64>,
+    transition: &SparseRows,
+    w: &mut DMatrix<f64>,
+) {
+    let n = covariance.nrows();
+    let k = transition.leading;
+    symmetrise(covariance);
+    resize(w, n, k);
+    let p = covariance.as_mut_slice();
+    {
+        let w = w.as_mut_slice();
+        let p = &*p;
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                for (r, column) in w.chunks_exact_mut(n).enumerate() {
+                    column.fill(0.0);
+                    for &(j, value) in transition.row(r) {
+                        let source = &p[j * n..(j + 1) * n];
+                        for (into, &x) in column.iter_mut().zip(source) {
+                            *into += value * x;
+                        }
+                    }
+                }
+            },
+        );
+    }
+    let w = w.as_slice();
+    // The leading block: F_rc = Σ_j Φ_cj·W_jr, P_rc = ½·(F_rc + F_cr).
+    let product = |r: usize, c: usize| {
+        let column = &w[r * n..(r + 1) * n];
+        let mut sum = 0.0;
+        for &(j, value) in transition.row(c) {
+            sum += value * column[j];
+        }
+        sum
+    };
+    for c in 0..k {
+        for r in 0..=c {
+            let value = 0.5 * (product(r, c) + product(c, r));
+            p[r + c * n] = value;
+            p[c + r * n] = value;
+        }
+    }
+    // The cross blocks: P_rc = P_cr = W_cr (r < k ≤ c).
+    for r in 0..k {
+        for c in k..n {
+            let value = w[c + r * n];
+            p[r + c * n] = value;
+            p[c + r * n] = value;
+        }
     }
 }
 
@@ -1501,6 +1609,77 @@ mod tests {
         assert_close(&structured, &dense, 1e-14, "blocks");
         assert_eq!(structured[(3, 3)], 1.0);
         assert_eq!(structured[(3, 0)], 0.0);
+    }
+
+    /// The prediction by blocks for a transition whose trailing rows are
+    /// the identity's (an augmented model's constant parameters) gives the
+    /// dense prediction's numbers bit for bit, with and without process
+    /// noise, and leaves the constant block as it was.
+    #[test]
+    fn prediction_with_constant_rows_is_the_dense_one_bit_for_bit() {
+        let (n, k) = (9, 3);
+        let value = |i: usize, j: usize| ((i * 7 + j * 13) as f64 * 0.37).sin();
+        let mut transition = DMatrix::identity(n, n);
+        for i in 0..k {
+            for j in 0..n {
+                // Zeros in the leading rows too, where a model's are.
+                if (i + j) % 4 != 1 {
+                    transition[(i, j)] = 0.1 * value(i, j) + if i == j { 1.0 } else { 0.0 };
+                }
+            }
+        }
+        let root = DMatrix::from_fn(n, n, value);
+        let covariance = &root * root.transpose() + DMatrix::identity(n, n);
+        let noise = DMatrix::from_fn(n, n, |i, j| 1e-3 * value(i.min(j), i.max(j)));
+        let mut blocks = SparseRows::default();
+        blocks.set_leading(&transition, k);
+        let dense = SparseRows::of(&transition);
+        assert_eq!((blocks.leading, dense.leading), (k, n));
+        for process in [None, Some(&noise)] {
+            let (mut by_blocks, mut by_dense) = (covariance.clone(), covariance.clone());
+            let mut work = Default::default();
+            predict_covariance_in_place(&mut by_blocks, &blocks, process, &mut work);
+            predict_covariance_in_place(&mut by_dense, &dense, process, &mut work);
+            assert!(
+                by_blocks
+                    .iter()
+                    .zip(by_dense.iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{by_blocks}\n{by_dense}"
+            );
+            if process.is_none() {
+                assert_eq!(
+                    by_blocks.view((k, k), (n - k, n - k)),
+                    covariance.view((k, k), (n - k, n - k))
+                );
+            }
+        }
+    }
+
+    /// The unrolled product of small square matrices is the general loop's,
+    /// bit for bit.
+    #[test]
+    fn small_square_products_are_the_general_ones() {
+        for n in 2..=9 {
+            let a = DMatrix::from_fn(n, n, |i, j| ((i * 5 + j * 3) as f64 * 0.71).cos() / 3.0);
+            let b = DMatrix::from_fn(n, n, |i, j| ((i * 2 + j * 11) as f64 * 0.29).sin() * 1e3);
+            let mut fast = DMatrix::zeros(0, 0);
+            multiply(&a, &b, &mut fast);
+            let mut general = DMatrix::<f64>::zeros(n, n);
+            for c in 0..n {
+                for l in 0..n {
+                    for r in 0..n {
+                        general[(r, c)] += b[(l, c)] * a[(r, l)];
+                    }
+                }
+            }
+            assert!(
+                fast.iter()
+                    .zip(general.iter())
+                    .all(|(x, y)| x.to_bits() == y.to_bits()),
+                "n = {n}"
+            );
+        }
     }
 
     #[test]
