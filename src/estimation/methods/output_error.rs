@@ -996,11 +996,8 @@ pub fn match_histories(
             aircraft.aero.parameters.set(&p.name, p.value)?;
         }
     }
-    let segment = segment(
-        record,
-        structure,
-        &OutputErrorOptions::for_structure(structure)?,
-    )?;
+    let options = OutputErrorOptions::for_structure(structure)?;
+    let segment = segment(record, structure, &options)?;
     let mut problem = Problem {
         model: FlightModel::new(aircraft, Default::default()),
         all: Vec::new(),
@@ -1014,13 +1011,18 @@ pub fn match_histories(
         simulated: None,
         held: None,
         integrate: structure.integrate.clone(),
-        interpolation: Interpolation::default(),
-        alpha_dot: false,
+        interpolation: options.interpolation,
+        alpha_dot: structure.aircraft.aero.takes_measured_alpha_dot(),
         chi_is_state: structure.aircraft.aero.chi_is_state(),
     };
-    problem.predict(&DVector::zeros(0)).map_err(|reason| {
-        Error::Other(format!("proof of match on '{}': {reason}", record.scenario))
-    })?;
+    // The grid for the estimate's values, not the model file's.
+    let nothing = DVector::zeros(0);
+    problem
+        .resolve_steps(&nothing)
+        .and_then(|_| problem.predict(&nothing))
+        .map_err(|reason| {
+            Error::Other(format!("proof of match on '{}': {reason}", record.scenario))
+        })?;
     let predicted = &problem.predictions()[0];
     Ok(problem.segments[0]
         .outputs
@@ -1179,7 +1181,7 @@ impl Segment<'_> {
     /// Re-chooses the RK4 steps of each grid interval for `model`'s
     /// fastest mode at the segment's initial state ([`fastest_mode`]),
     /// where the user gave no step: finer when h·|λ| exceeds
-    /// [`RK4_STEP_LIMIT`], coarser when it has fallen below a fifth of it
+    /// [`RK4_STEP_LIMIT`], coarser when it has fallen below 0.2
     /// ([`RECHOSEN_MARGIN`]); a new step takes h·|λ| ≤ 0.4. Returns whether
     /// the grid changed (the simulation is then rebuilt).
     fn resolve(

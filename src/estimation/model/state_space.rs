@@ -242,13 +242,13 @@ pub fn driven_simulation(
 
 /// The largest |λ| of `model` (with its parameters' values) driven as
 /// `simulation` drives it, linearised at the simulation's start at the
-/// flight-path state `initial`.
+/// flight-path state `initial` (reading its first grid points only).
 pub fn fastest_mode(
     simulation: &DrivenSimulation,
     model: &FlightModel,
     initial: &FlightPathState,
 ) -> Result<f64> {
-    let view = DrivenStateSpace::new(simulation.clone(), model.clone(), Vec::new())?;
+    let view = DrivenStateSpace::new(simulation.head(3), model.clone(), Vec::new())?;
     let x0 = view.state_of(initial);
     let theta = view.parameters();
     let a = view
