@@ -926,15 +926,14 @@ fn bound_honesty(label: &str, fits: &[(f64, f64, f64)]) -> (f64, f64, f64, f64) 
 ///
 /// A finding, asserted as measured: from these start values the descent
 /// runs τ1 to 0 on the ideal record too, where the truth has zero cost.
-/// The sub-steps follow (1, 5, 22 per 10 ms grid interval in the first,
-/// initial-state-held stage, then up to 32, the most a fit takes), and
-/// the fit stops at that edge, "no progress", with τ1 = 0.005 c̄/V (χ's
+/// The sub-steps follow, up to 32 per 10 ms grid interval (the most a
+/// fit takes), and the fit stops at that edge, "no progress", with τ1 = 0.005 c̄/V (χ's
 /// |λ| 6400/s) and the note saying so, far from the truth: a1 −37 %, CD_χ
 /// +113 %, Cm_χ −64 %. Flight-test seeds 1 and 2 end the same way
-/// (τ1 0.02 c̄/V, a1 −34 %). A valley toward the algebraic limit τ1 = 0,
+/// (τ1 0.02 c̄/V, a1 −35 %). A valley toward the algebraic limit τ1 = 0,
 /// where τ2 alone makes the lag (on slow α changes χ lags χ∞(α) by about
-/// (τ1 + τ2)·α̇), not the truth; allowing a trial step to speed the mode
-/// up only twofold per iteration (h·|λ| ≤ 0.8 instead of 2) ends in the
+/// (τ1 + τ2)·α̇), not the truth; allowing a trial step to reach only
+/// h·|λ| = 0.8 on the iteration's grid (instead of 2) ends in the
 /// same valley (a1 −38 %). On this manoeuvre τ1 needs a lower bound (1
 /// c̄/V reaches the truth within 3e-7) or a start nearer the truth.
 #[test]
