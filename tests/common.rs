@@ -186,11 +186,16 @@ pub fn integration_step_note(estimate: &aeroid::estimation::estimate::Estimate) 
         .iter()
         .find(|n| n.starts_with("integration step"))
         .unwrap_or_else(|| panic!("no step note: {:?}", estimate.notes));
-    let step = note["integration step ".len()..]
-        .split(' ')
-        .next()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("no step in '{note}'"));
+    // The grid step over the RK4 steps per grid interval where the note
+    // gives them (the step itself is printed to 4 decimals).
+    let after = |key: &str| -> Option<f64> {
+        let start = note.find(key)? + key.len();
+        note[start..].split(' ').next()?.parse().ok()
+    };
+    let step = match (after("the grid step "), after("integrated in ")) {
+        (Some(grid), Some(substeps)) => grid / substeps,
+        _ => after("integration step ").unwrap_or_else(|| panic!("no step in '{note}'")),
+    };
     (note.clone(), step)
 }
 

@@ -142,7 +142,8 @@ use crate::estimation::model::driven::{
     ALTITUDE_SUBSTITUTES, Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
 use crate::estimation::model::state_space::{
-    driven_simulation, fitting_window, observables, recorded_initial_state,
+    RK4_STEP_LIMIT, driven_simulation, driving_channels, fastest_mode, fitting_window, observables,
+    observation_step, recorded_initial_state, rk4_substeps, substep_note,
 };
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{
@@ -207,7 +208,8 @@ pub struct OutputErrorOptions {
     pub max_iterations: usize,
     /// Integration step (s); None: the fastest compared channel's period,
     /// in equal sub-steps where the model's fastest mode needs them
-    /// ([`crate::estimation::model::state_space::driven_simulation`]).
+    /// ([`crate::estimation::model::state_space::driven_simulation`]),
+    /// re-chosen at every iteration for the parameters there.
     #[serde(
         deserialize_with = "crate::units::optional_seconds",
         skip_serializing_if = "Option::is_none"
@@ -337,7 +339,7 @@ impl Estimator for OutputError {
                     ("max_iterations", "Gauss–Newton iterations at most"),
                     (
                         "step",
-                        "integration step, e.g. \"0.04 s\"; none: the fastest compared channel's period, divided into RK4 sub-steps of h·|λ| ≤ 0.5 for the model's fastest mode (said in the notes)",
+                        "integration step, e.g. \"0.04 s\"; none: the fastest compared channel's period, divided into RK4 sub-steps of h·|λ| ≤ 0.5 for the model's fastest mode, re-chosen as the parameters move (said in the notes)",
                     ),
                     (
                         "interpolation",
@@ -713,15 +715,29 @@ struct Measured {
 
 /// One manoeuvre: its driven simulation, initial state and measured outputs.
 #[derive(Debug, Clone)]
-struct Segment {
+struct Segment<'a> {
     simulation: DrivenSimulation,
     initial: FlightPathState,
     outputs: Vec<Measured>,
+    /// The record and window it is driven by, for a new integration step.
+    record: &'a FlightRecord,
+    window: (f64, f64),
+    /// The grid step the samples fall on, and the RK4 steps each of its
+    /// intervals is integrated in ([`Segment::resolve`]); None where the
+    /// user gave the step.
+    substeps: Option<(f64, usize)>,
+    /// The notes of the grid that stay when the step is re-chosen (the
+    /// channels' instants).
+    grid_notes: Vec<String>,
+    /// How often the sub-steps were re-chosen as the parameters moved, and
+    /// the fastest |λ| at the last choice.
+    rechosen: usize,
+    fastest: f64,
 }
 
-struct Problem {
+struct Problem<'a> {
     model: FlightModel,
-    segments: Vec<Segment>,
+    segments: Vec<Segment<'a>>,
     /// Every unknown of the fit: the simulations' sensitivity columns.
     all: Vec<Unknown>,
     /// The unknowns the solver adjusts now (all of them, or all but the
@@ -744,6 +760,15 @@ struct Problem {
     /// ([`LeastSquaresProblem::hold`]): while Some, simulations are plain
     /// and the Jacobian is its grids'.
     held: Option<Simulated>,
+    /// How the segments are simulated: the integrated states, the inputs'
+    /// interpolation, and whether χ takes the measured α̇.
+    integrate: Vec<usize>,
+    interpolation: Interpolation,
+    alpha_dot: bool,
+    /// Whether χ is a state (τ1 > 0): a θ that changes it cannot be simulated.
+    chi_is_state: bool,
+    /// Whether the last re-weighting re-chose a grid ([`Problem::resolve_steps`]).
+    regridded: bool,
 }
 
 /// A simulation at θ: predictions at the samples, and the grids with
@@ -902,7 +927,19 @@ pub fn output_error_from(
     let mut final_options = solver_options(&problem.unknowns, CONVERGED_DECREASE);
     final_options.refine_below = Some(REFINE_DECREASE);
     problem.refinable = true;
-    let solution = gauss_newton::solve(&mut problem, &start, &final_options);
+    let mut solution = gauss_newton::solve(&mut problem, &start, &final_options);
+    // The solver re-weights once more where it stops: a grid re-chosen
+    // there leaves θ the optimum of the grid before, so the fit goes on
+    // from it on the new grid (at most twice more).
+    for _ in 0..2 {
+        if !problem.regridded || matches!(solution.status, Status::Diverged(_)) {
+            break;
+        }
+        let mut history = solution.history;
+        solution = gauss_newton::solve(&mut problem, &solution.theta, &final_options);
+        history.append(&mut solution.history);
+        solution.history = history;
+    }
     let mut estimate = problem.estimate(
         structure,
         records,
@@ -973,11 +1010,8 @@ pub fn match_histories(
             aircraft.aero.parameters.set(&p.name, p.value)?;
         }
     }
-    let segment = segment(
-        record,
-        structure,
-        &OutputErrorOptions::for_structure(structure)?,
-    )?;
+    let options = OutputErrorOptions::for_structure(structure)?;
+    let segment = segment(record, structure, &options)?;
     let mut problem = Problem {
         model: FlightModel::new(aircraft, Default::default()),
         all: Vec::new(),
@@ -990,10 +1024,20 @@ pub fn match_histories(
         refinable: false,
         simulated: None,
         held: None,
+        integrate: structure.integrate.clone(),
+        interpolation: options.interpolation,
+        alpha_dot: structure.aircraft.aero.takes_measured_alpha_dot(),
+        chi_is_state: structure.aircraft.aero.chi_is_state(),
+        regridded: false,
     };
-    problem.predict(&DVector::zeros(0)).map_err(|reason| {
-        Error::Other(format!("proof of match on '{}': {reason}", record.scenario))
-    })?;
+    // The grid for the estimate's values, not the model file's.
+    let nothing = DVector::zeros(0);
+    problem
+        .resolve_steps(&nothing)
+        .and_then(|_| problem.predict(&nothing))
+        .map_err(|reason| {
+            Error::Other(format!("proof of match on '{}': {reason}", record.scenario))
+        })?;
     let predicted = &problem.predictions()[0];
     Ok(problem.segments[0]
         .outputs
@@ -1052,21 +1096,33 @@ fn pieces(
     Ok(windows)
 }
 
-/// The structure's outputs as model outputs; an error names one the model does not have.
-fn segment(
-    record: &FlightRecord,
+/// One record's (or piece's) segment over its fitting window, on
+/// [`driven_simulation`]'s grid.
+fn segment<'a>(
+    record: &'a FlightRecord,
     structure: &ModelStructure,
     options: &OutputErrorOptions,
-) -> Result<Segment> {
+) -> Result<Segment<'a>> {
     let window = fitting_window(record, &structure.outputs, options.window)?;
-    let (mut simulation, note) = driven_simulation(
+    let (mut simulation, notes) = driven_simulation(
         record,
         structure,
         options.interpolation,
         options.step,
         window,
     )?;
-    simulation.notes.extend(note);
+    let inputs = driving_channels(structure);
+    let period = observation_step(record, &structure.outputs, &inputs, options.step, window.0)?;
+    let substeps = options
+        .step
+        .is_none()
+        .then(|| (period, (period / simulation.step).round().max(1.0) as usize));
+    let grid_notes = notes
+        .iter()
+        .filter(|note| note.starts_with("grid step"))
+        .cloned()
+        .collect();
+    simulation.notes.extend(notes);
     let end = simulation.time(simulation.len() - 1);
     let initial = recorded_initial_state(record, structure, &simulation, window.0);
     let outputs = structure
@@ -1081,22 +1137,158 @@ fn segment(
                 .filter(|(t, v)| **t >= window.0 && **t <= end && v.is_finite())
                 .map(|(t, v)| (*t, *v))
                 .unzip();
-            let brackets = times
-                .iter()
-                .map(|&t| grid_bracket(simulation.len(), simulation.start, simulation.step, t))
-                .collect();
             Ok(Measured {
                 times,
                 values,
-                brackets,
+                brackets: Vec::new(),
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    Ok(Segment {
+    let mut segment = Segment {
         simulation,
         initial,
         outputs,
-    })
+        record,
+        window,
+        substeps,
+        grid_notes,
+        rechosen: 0,
+        fastest: f64::NAN,
+    };
+    segment.locate_samples();
+    Ok(segment)
+}
+
+/// The factor by which the RK4 steps of a re-chosen grid are finer than
+/// h·|λ| ≤ [`RK4_STEP_LIMIT`] asks (h·|λ| ≤ 0.4), and the factor by which
+/// the mode must then slow before the steps are coarsened again (h·|λ| <
+/// 0.2).
+const RECHOSEN_MARGIN: f64 = 1.25;
+
+/// How far beyond [`RK4_STEP_LIMIT`] the fastest mode may move before the
+/// grid is re-chosen finer (h·|λ| > 1, RK4's error per step then 0.8 %):
+/// a new grid changes the cost the fit descends, and on the 1.25 Hz
+/// HANSA-3 record a grid re-chosen for h·|λ| = 0.69 at the estimate moved
+/// it by 0.1σ from the fit on that grid throughout, the scatter of its
+/// path; a fit whose modes move a little keeps the grid it started on.
+const REFINE_BEYOND: f64 = 2.0;
+
+/// The largest h·|λ| of the model's fastest mode at which a θ is simulated
+/// on the grid of the iteration's start: RK4 is stable to 2.78 and, from
+/// the grid's h·|λ| of 0.4 to 1, this lets a step speed the mode up two-
+/// to fivefold (τ1 fall to a half or a fifth); beyond it the simulation is
+/// refused and the step shortened. The next iteration's grid resolves the
+/// new θ.
+const RK4_STEP_REACH: f64 = 2.0;
+
+/// The most RK4 steps a grid interval is divided into as the parameters
+/// move: every grid point's sensitivities are kept, so the memory grows
+/// with them (32 on a 60 s record at 100 Hz with 17 unknowns and 6
+/// outputs: about 160 MB per simulation). A θ whose fastest mode needs
+/// more is not simulated, and a fit that goes there stops at that edge.
+const MAX_SUBSTEPS: usize = 32;
+
+impl Segment<'_> {
+    /// Where each output sample lies on the simulation's grid.
+    fn locate_samples(&mut self) {
+        let simulation = &self.simulation;
+        for measured in &mut self.outputs {
+            measured.brackets = measured
+                .times
+                .iter()
+                .map(|&t| grid_bracket(simulation.len(), simulation.start, simulation.step, t))
+                .collect();
+        }
+    }
+
+    /// Re-chooses the RK4 steps of each grid interval for `model`'s
+    /// fastest mode at the segment's initial state ([`fastest_mode`]),
+    /// where the user gave no step: finer when h·|λ| exceeds 1
+    /// ([`REFINE_BEYOND`]), coarser when it has fallen below 0.2
+    /// ([`RECHOSEN_MARGIN`]); a new step takes h·|λ| ≤ 0.4. Returns whether
+    /// the grid changed (the simulation is then rebuilt).
+    fn resolve(
+        &mut self,
+        model: &FlightModel,
+        integrate: &[usize],
+        interpolation: Interpolation,
+        alpha_dot: bool,
+    ) -> std::result::Result<bool, String> {
+        let Some((period, current)) = self.substeps else {
+            return Ok(false);
+        };
+        let fastest =
+            fastest_mode(&self.simulation, model, &self.initial).map_err(|e| e.to_string())?;
+        let needed = period * fastest / RK4_STEP_LIMIT;
+        if !needed.is_finite()
+            || (needed <= REFINE_BEYOND * current as f64
+                && 2.0 * RECHOSEN_MARGIN * needed >= current as f64)
+        {
+            return Ok(false);
+        }
+        let substeps = rk4_substeps(period, RECHOSEN_MARGIN * fastest).min(MAX_SUBSTEPS);
+        if substeps == current {
+            return Ok(false);
+        }
+        let mut simulation = DrivenSimulation::from_record(
+            self.record,
+            integrate,
+            interpolation,
+            period / substeps as f64,
+            self.window,
+            alpha_dot,
+        )
+        .map_err(|e| e.to_string())?;
+        simulation.notes.extend(self.grid_notes.iter().cloned());
+        self.simulation = simulation;
+        self.substeps = Some((period, substeps));
+        self.rechosen += 1;
+        self.fastest = fastest;
+        self.locate_samples();
+        Ok(true)
+    }
+
+    /// An error when `model`'s fastest mode at the segment's initial state
+    /// is beyond what the grid's RK4 steps integrate ([`RK4_STEP_REACH`]).
+    fn check_reach(&self, model: &FlightModel) -> std::result::Result<(), String> {
+        let Some((period, substeps)) = self.substeps else {
+            return Ok(());
+        };
+        let step = period / substeps as f64;
+        let fastest =
+            fastest_mode(&self.simulation, model, &self.initial).map_err(|e| e.to_string())?;
+        if step * fastest > RK4_STEP_REACH {
+            return Err(format!(
+                "the model's fastest mode (|λ| = {fastest:.1}/s) is beyond RK4 steps of {step:.5} s (h·|λ| = {:.2} > {RK4_STEP_REACH}){}",
+                step * fastest,
+                if substeps >= MAX_SUBSTEPS {
+                    format!(", the finest a fit takes ({MAX_SUBSTEPS} per grid interval)")
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        Ok(())
+    }
+
+    /// The note on a grid whose sub-steps were re-chosen.
+    fn rechosen_note(&self) -> Option<String> {
+        let (period, substeps) = self.substeps?;
+        (self.rechosen > 0).then(|| {
+            format!(
+                "{}; re-chosen {} time(s) as the parameters moved, for the fastest mode at the parameters of the last choice (at the initial state){}",
+                substep_note(period, substeps, self.fastest, "there"),
+                self.rechosen,
+                if substeps >= MAX_SUBSTEPS {
+                    format!(
+                        ": the finest a fit takes ({MAX_SUBSTEPS} per grid interval); a step that speeds the mode beyond h·|λ| = {RK4_STEP_REACH} is not simulated, so a fit that stops here stopped at that edge, not at a minimum (a time constant driven toward 0, the stall model's τ1: fit its limit, τ1 = 0)"
+                    )
+                } else {
+                    String::new()
+                }
+            )
+        })
+    }
 }
 
 fn unknowns(
@@ -1127,12 +1319,12 @@ fn unknowns(
     unknowns
 }
 
-impl Problem {
+impl<'a> Problem<'a> {
     fn new(
-        records: &[&FlightRecord],
+        records: &[&'a FlightRecord],
         structure: &ModelStructure,
         options: &OutputErrorOptions,
-    ) -> Result<Problem> {
+    ) -> Result<Problem<'a>> {
         let observables = observables(structure)?;
         let mut segments = Vec::with_capacity(records.len());
         for record in records {
@@ -1162,7 +1354,37 @@ impl Problem {
             refinable: false,
             simulated: None,
             held: None,
+            integrate: structure.integrate.clone(),
+            interpolation: options.interpolation,
+            alpha_dot: structure.aircraft.aero.takes_measured_alpha_dot(),
+            chi_is_state: structure.aircraft.aero.chi_is_state(),
+            regridded: false,
         })
+    }
+
+    /// Re-chooses each segment's RK4 sub-steps for the model at θ
+    /// ([`Segment::resolve`]); a changed grid drops the simulations made
+    /// on the old one. Returns whether any grid changed.
+    fn resolve_steps(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
+        self.apply(theta);
+        if self.model.aircraft.aero.chi_is_state() != self.chi_is_state {
+            return Err(tau1_sign());
+        }
+        let mut changed = false;
+        for segment in &mut self.segments {
+            changed |= segment.resolve(
+                &self.model,
+                &self.integrate,
+                self.interpolation,
+                self.alpha_dot,
+            )?;
+        }
+        if changed {
+            self.simulated = None;
+            self.held = None;
+        }
+        self.regridded = changed;
+        Ok(changed)
     }
 
     /// The current values of the solver's unknowns.
@@ -1372,6 +1594,12 @@ impl Problem {
     ) -> std::result::Result<(), String> {
         self.simulated = None;
         let biases = self.apply(theta);
+        if self.model.aircraft.aero.chi_is_state() != self.chi_is_state {
+            return Err(tau1_sign());
+        }
+        for segment in &self.segments {
+            segment.check_reach(&self.model)?;
+        }
         let key = self.values(&self.all, &biases);
         let grids = (0..self.segments.len())
             .map(|index| self.grid(index, sensitivities))
@@ -1461,7 +1689,7 @@ impl Problem {
         let mut notes: Vec<String> = self
             .segments
             .iter()
-            .flat_map(|s| s.simulation.notes.clone())
+            .flat_map(|s| s.simulation.notes.iter().cloned().chain(s.rechosen_note()))
             .collect();
         notes.sort();
         notes.dedup();
@@ -1527,6 +1755,11 @@ impl Problem {
     }
 }
 
+/// Why a θ cannot be simulated whose τ1 changes whether χ is a state.
+fn tau1_sign() -> String {
+    "τ1 must stay on the side of 0 it starts on (χ is a state only while τ1 > 0)".to_string()
+}
+
 /// Weights 1/σ per output of a diagonal R re-estimated from the residuals,
 /// R_ii = mean square residual (Verma & Peyada 2020, Eq. 8), with a floor of 10⁻¹² of the
 /// output's RMS so that a noise-free fit stays finite.
@@ -1579,7 +1812,7 @@ fn at_bracket((k, fraction): (usize, f64), series: impl Fn(usize) -> f64) -> f64
     }
 }
 
-impl LeastSquaresProblem for Problem {
+impl LeastSquaresProblem for Problem<'_> {
     fn unknown_name(&self, index: usize) -> Option<String> {
         self.unknowns.get(index).map(|&unknown| self.name(unknown))
     }
@@ -1634,7 +1867,11 @@ impl LeastSquaresProblem for Problem {
 
     /// R = diag(mean square residual per output) at θ (Verma & Peyada 2020, Eq. 8), with a
     /// floor of 10⁻¹² of the output's RMS so that a noise-free fit stays finite.
+    /// It first re-chooses the integration sub-steps for the model at θ
+    /// ([`Problem::resolve_steps`]): a fit whose parameters speed up a mode
+    /// (τ1 of the stall model's χ falling) integrates it as the model asks.
     fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
+        self.resolve_steps(theta)?;
         let errors = self.errors(theta)?;
         let measured: Vec<Vec<f64>> = (0..self.outputs.len())
             .map(|o| {
@@ -1708,7 +1945,7 @@ impl LeastSquaresProblem for Problem {
     }
 }
 
-impl Problem {
+impl Problem<'_> {
     /// Replaces the estimate's white Cramér–Rao bounds by the bounds
     /// corrected for coloured residuals (Morelli & Klein 1997, Eq. 19 for
     /// output error: Cov = M⁻¹·[Σᵢ Σⱼ Jᵢᵀ·R_rr(i − j)·Jⱼ]·M⁻¹, J the

@@ -1630,6 +1630,27 @@ impl DrivenSimulation {
         })
     }
 
+    /// The simulation over its first `points` grid points (at least two,
+    /// at most all): what a linearisation at its start reads, without a
+    /// copy of the whole record's inputs.
+    pub fn head(&self, points: usize) -> DrivenSimulation {
+        let n = points.max(2).min(self.len());
+        let measured = self.measured[..n].to_vec();
+        let ambient = self.ambient[..n].to_vec();
+        DrivenSimulation {
+            start: self.start,
+            step: self.step,
+            interpolation: self.interpolation,
+            integrate: self.integrate,
+            controls: self.controls[..n].to_vec(),
+            frozen: Frozen::new(&measured, &ambient),
+            measured,
+            ambient,
+            notes: Vec::new(),
+            measured_quantities: Vec::new(),
+        }
+    }
+
     /// Measured flight-path states at the grid points (integrated entries unused).
     pub fn measured(&self) -> &[FlightPathState] {
         &self.measured

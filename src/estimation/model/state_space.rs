@@ -191,15 +191,17 @@ pub const RK4_STEP_LIMIT: f64 = 0.5;
 /// grid of `step` if the user gave one, else of the fastest output's
 /// sample period divided into the fewest equal sub-steps that keep h·|λ|
 /// within [`RK4_STEP_LIMIT`], λ the fastest eigenvalue of the model
-/// linearised at the window's start with its start values. Returns it and,
-/// when the step divides the sample period, a note saying so.
+/// linearised at the window's start with its start values
+/// ([`fastest_mode`]). Returns it and the notes that say why the sample
+/// period is divided, if it is: the channels' instants, then the model's
+/// fastest mode ([`substep_note`]).
 pub fn driven_simulation(
     record: &FlightRecord,
     structure: &ModelStructure,
     interpolation: Interpolation,
     step: Option<f64>,
     window: (f64, f64),
-) -> Result<(DrivenSimulation, Option<String>)> {
+) -> Result<(DrivenSimulation, Vec<String>)> {
     let inputs = driving_channels(structure);
     let sample_period = integration_step(record, &structure.outputs, step)?;
     let period = observation_step(record, &structure.outputs, &inputs, step, window.0)?;
@@ -216,43 +218,69 @@ pub fn driven_simulation(
     };
     let simulation = simulate(period)?;
     if step.is_some() {
-        return Ok((simulation, None));
+        return Ok((simulation, Vec::new()));
     }
-    let aligned = (period < sample_period).then(|| {
-        format!(
-            "grid step {period:.4} s, 1/{:.0} of the sample period {sample_period} s: the channels' samples lie at different instants of the recorder's frame, and each falls on a grid point",
-            sample_period / period
-        )
-    });
+    let mut notes: Vec<String> = (period < sample_period)
+        .then(|| {
+            format!(
+                "grid step {period:.4} s, 1/{:.0} of the sample period {sample_period} s: the channels' samples lie at different instants of the recorder's frame, and each falls on a grid point",
+                sample_period / period
+            )
+        })
+        .into_iter()
+        .collect();
     let initial = recorded_initial_state(record, structure, &simulation, window.0);
     let model = FlightModel::new(structure.aircraft.clone(), Default::default());
-    let view = DrivenStateSpace::new(simulation, model, Vec::new())?;
-    let x0 = view.state_of(&initial);
+    let fastest = fastest_mode(&simulation, &model, &initial)?;
+    let substeps = rk4_substeps(period, fastest);
+    if substeps == 1 {
+        return Ok((simulation, notes));
+    }
+    notes.push(substep_note(period, substeps, fastest, "at the start"));
+    Ok((simulate(period / substeps as f64)?, notes))
+}
+
+/// The largest |λ| of `model` (with its parameters' values) driven as
+/// `simulation` drives it, linearised at the simulation's start at the
+/// flight-path state `initial` (reading its first grid points only).
+pub fn fastest_mode(
+    simulation: &DrivenSimulation,
+    model: &FlightModel,
+    initial: &FlightPathState,
+) -> Result<f64> {
+    let view = DrivenStateSpace::new(simulation.head(3), model.clone(), Vec::new())?;
+    let x0 = view.state_of(initial);
     let theta = view.parameters();
     let a = view
-        .jacobians(window.0, x0.as_slice(), theta.as_slice())?
+        .jacobians(simulation.start, x0.as_slice(), theta.as_slice())?
         .rates_by_state;
-    let fastest = a
-        .complex_eigenvalues()
+    Ok(a.complex_eigenvalues()
         .iter()
         .map(|lambda| lambda.norm())
-        .fold(0.0, f64::max);
+        .fold(0.0, f64::max))
+}
+
+/// The fewest equal RK4 steps of a grid interval `period` that keep
+/// h·|λ| within [`RK4_STEP_LIMIT`] for the fastest mode |λ| = `fastest`;
+/// 1 where one step does, or `fastest` is not a number.
+pub fn rk4_substeps(period: f64, fastest: f64) -> usize {
     let substeps = (period * fastest / RK4_STEP_LIMIT).ceil();
-    if !(substeps > 1.0 && substeps.is_finite()) {
-        return Ok((view.simulation, aligned));
+    if substeps > 1.0 && substeps.is_finite() {
+        substeps as usize
+    } else {
+        1
     }
-    let fine = period / substeps;
-    let stiff = format!(
-        "integration step {fine:.4} s: the grid step {period} s would be h·|λ| = {:.2} for the model's fastest mode (|λ| = {fastest:.2}/s at the start), so each grid interval is integrated in {substeps} RK4 steps (`step` sets it)",
+}
+
+/// The note of a grid interval `period` integrated in `substeps` RK4
+/// steps for the model's fastest mode |λ| = `fastest` (`when`: at the
+/// start, at the estimate).
+pub fn substep_note(period: f64, substeps: usize, fastest: f64, when: &str) -> String {
+    format!(
+        "integration step {:.4} s: the grid step {period} s would be h·|λ| = {:.2} for the model's fastest mode (|λ| = {fastest:.2}/s {when}), so each grid interval is integrated in {substeps} RK4 steps (`step` sets it)",
+        period / substeps as f64,
         period * fastest
-    );
-    Ok((
-        simulate(fine)?,
-        Some(match aligned {
-            Some(aligned) => format!("{aligned}; {stiff}"),
-            None => stiff,
-        }),
-    ))
+    )
 }
 
 /// The full flight-path state a simulation of `structure` starts from at
