@@ -128,7 +128,7 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
 }
 
 /// Gives `matrix` the shape r × c (allocating only when it changes).
-fn shape(matrix: &mut DMatrix<f64>, r: usize, c: usize) {
+pub(crate) fn shape(matrix: &mut DMatrix<f64>, r: usize, c: usize) {
     if matrix.shape() != (r, c) {
         *matrix = DMatrix::zeros(r, c);
     }

@@ -73,6 +73,7 @@
 //! Householder triangularisation in place (`triangularise`).
 
 use crate::error::{Error, Result};
+use crate::estimation::model::augmented::shape;
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::StateSpaceModel;
 use crate::estimation::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
@@ -252,13 +253,6 @@ impl Work {
             }
         }
         p
-    }
-}
-
-/// Gives `matrix` the shape r × c (allocating only when it changes).
-fn shape(matrix: &mut DMatrix<f64>, r: usize, c: usize) {
-    if matrix.shape() != (r, c) {
-        *matrix = DMatrix::zeros(r, c);
     }
 }
 
