@@ -99,7 +99,11 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
                 n + self.augmented.len()
             )));
         }
-        theta.clone_from(&self.theta);
+        // Only the augmented entries are ever written: the others are
+        // the held θ's once copied.
+        if theta.len() != self.theta.len() {
+            theta.clone_from(&self.theta);
+        }
         for (i, &j) in self.augmented.iter().enumerate() {
             theta[j] = z[n + i];
         }

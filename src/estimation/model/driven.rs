@@ -1741,6 +1741,15 @@ impl DrivenSimulation {
     /// Which flight-path states `model` integrates (1) and which are
     /// measured (0): the structure's integrated states, and χ wherever the
     /// model makes it a state (fed back from α when not integrated).
+    /// Whether [`DrivenSimulation::mask`] of `model` is `mask`, for a
+    /// `mask` this simulation gave (for any model): the two can differ
+    /// only in χ, a state where the simulation integrates it or the
+    /// model's stall makes it one.
+    pub(super) fn gives_mask(&self, model: &FlightModel, mask: &FlightPathState) -> bool {
+        let chi = self.integrate[CHI] || model.aircraft.aero.chi_is_state();
+        (mask[CHI] == 1.0) == chi
+    }
+
     pub(super) fn mask(&self, model: &FlightModel) -> FlightPathState {
         let chi_is_state = model.aircraft.aero.chi_is_state();
         FlightPathState::from_fn(|i, _| {

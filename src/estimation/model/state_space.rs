@@ -549,7 +549,7 @@ impl DrivenStateSpace {
             .parameters
             .values_mut()
             .copy_from_slice(theta);
-        if self.simulation.mask(model) != self.mask {
+        if !self.simulation.gives_mask(model, &self.mask) {
             return Err(Error::Other(
                 "θ changes which states the model integrates (χ is a state only while τ1 > 0)"
                     .into(),
