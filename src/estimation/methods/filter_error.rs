@@ -73,7 +73,9 @@
 //! recorded without noise): where the constraint binds, the fits stop
 //! where the KKT conditions hold (multiplier positive, the step along the
 //! constraint predicting below 3·10⁻⁷), diag(K·C) on that channel at
-//! 0.9956–0.9963 after the last R update and F's compensation, and agree
+//! 0.9956–0.9963 after the last R update and F's compensation with K·C's
+//! largest eigenvalue within 3·10⁻⁷ of 1 (on the edge of the filters that
+//! exist: the diagonal of a non-symmetric K·C stays below it), and agree
 //! with the time-varying form, which has no constraint, within 0.12σ.
 //! The estimate's notes say when the last step was the constrained one.
 //! A step that the program cannot give, or for which no steady-state filter with the current R exists

@@ -99,7 +99,11 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
                 n + self.augmented.len()
             )));
         }
-        theta.clone_from(&self.theta);
+        // Only the augmented entries are ever written: the others are
+        // the held θ's once copied.
+        if theta.len() != self.theta.len() {
+            theta.clone_from(&self.theta);
+        }
         for (i, &j) in self.augmented.iter().enumerate() {
             theta[j] = z[n + i];
         }
@@ -128,7 +132,7 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
 }
 
 /// Gives `matrix` the shape r × c (allocating only when it changes).
-fn shape(matrix: &mut DMatrix<f64>, r: usize, c: usize) {
+pub(crate) fn shape(matrix: &mut DMatrix<f64>, r: usize, c: usize) {
     if matrix.shape() != (r, c) {
         *matrix = DMatrix::zeros(r, c);
     }

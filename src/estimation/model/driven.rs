@@ -92,6 +92,14 @@ impl<T: Real> Angles<T> {
 }
 
 impl Angles {
+    /// The sines and cosines of angles of zero (the library's).
+    const ZERO: Angles = Angles {
+        alpha: (0.0, 1.0),
+        beta: (0.0, 1.0),
+        roll: (0.0, 1.0),
+        pitch: (0.0, 1.0),
+    };
+
     fn of(x: &FlightPathState) -> Angles {
         Angles {
             alpha: x[ALPHA].sin_cos(),
@@ -342,11 +350,8 @@ impl<'a> Memo<'a> {
     fn new(measured: [bool; FLIGHT_PATH_SIZE], frozen: FrozenPoints<'a>) -> Memo<'a> {
         Memo {
             x: None,
-            angles: Angles::of(&FlightPathState::zeros()),
-            anchor: (
-                FlightPathState::zeros(),
-                Angles::of(&FlightPathState::zeros()),
-            ),
+            angles: Angles::ZERO,
+            anchor: (FlightPathState::zeros(), Angles::ZERO),
             air: Surroundings::default(),
             ambient: frozen.ambient.first().copied().unwrap_or_default(),
             air_ambient: Ambient::default(),
@@ -1234,12 +1239,56 @@ pub(super) fn evaluate(
     outputs: &[Observable],
 ) -> (FlightPathState, Vec<f64>) {
     let mut values = vec![0.0; outputs.len()];
-    let rates = evaluate_into(model, x, controls, pseudo, ambient, outputs, &mut values);
+    let rates = evaluate_into(
+        model,
+        x,
+        controls,
+        pseudo,
+        ambient,
+        outputs,
+        &mut values,
+        &mut PointMemo::default(),
+    );
     (rates, values)
 }
 
+/// The angles' sines and cosines and the air of the last full state an
+/// evaluation was at (with the measured quantities and the atmosphere it
+/// was taken with): a filter evaluates its sigma points' outputs at one
+/// time, most of them (those that move only an augmented model's
+/// parameters) at one state, and they share them.
+#[derive(Debug, Clone, Default)]
+pub(super) struct PointMemo {
+    last: Option<(FlightPathState, Ambient, Atmosphere, Angles, Surroundings)>,
+}
+
+impl PointMemo {
+    /// The library's sines and cosines of x's angles and the air at x's
+    /// altitude ([`Ambient::surroundings`]), the kept ones when x, the
+    /// measured quantities and the atmosphere are the last call's.
+    fn of(
+        &mut self,
+        x: &FlightPathState,
+        ambient: Ambient,
+        atmosphere: &Atmosphere,
+    ) -> (Angles, Surroundings) {
+        if let Some((at, was, air_of, angles, air)) = &self.last
+            && at == x
+            && *was == ambient
+            && air_of == atmosphere
+        {
+            return (*angles, *air);
+        }
+        let angles = Angles::of(x);
+        let air = ambient.surroundings(atmosphere, x[ALTITUDE]);
+        self.last = Some((*x, ambient, *atmosphere, angles, air));
+        (angles, air)
+    }
+}
+
 /// [`evaluate`] with the outputs written into `values` (as long as
-/// `outputs`).
+/// `outputs`), the angles and air from `memo`.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn evaluate_into(
     model: &FlightModel,
     x: &FlightPathState,
@@ -1248,9 +1297,10 @@ pub(super) fn evaluate_into(
     ambient: Ambient,
     outputs: &[Observable],
     values: &mut [f64],
+    memo: &mut PointMemo,
 ) -> FlightPathState {
-    let air = ambient.surroundings(&model.environment.atmosphere, x[ALTITUDE]);
-    let (rates, evaluation) = derivative(model, x, &Angles::of(x), &air, controls, pseudo);
+    let (angles, air) = memo.of(x, ambient, &model.environment.atmosphere);
+    let (rates, evaluation) = derivative(model, x, &angles, &air, controls, pseudo);
     for (value, output) in values.iter_mut().zip(outputs) {
         *value = output.value(x, &evaluation);
     }
@@ -1712,6 +1762,15 @@ impl DrivenSimulation {
     /// Which flight-path states `model` integrates (1) and which are
     /// measured (0): the structure's integrated states, and χ wherever the
     /// model makes it a state (fed back from α when not integrated).
+    /// Whether [`DrivenSimulation::mask`] of `model` is `mask`, for a
+    /// `mask` this simulation gave (for any model): the two can differ
+    /// only in χ, a state where the simulation integrates it or the
+    /// model's stall makes it one.
+    pub(super) fn gives_mask(&self, model: &FlightModel, mask: &FlightPathState) -> bool {
+        let chi = self.integrate[CHI] || model.aircraft.aero.chi_is_state();
+        (mask[CHI] == 1.0) == chi
+    }
+
     pub(super) fn mask(&self, model: &FlightModel) -> FlightPathState {
         let chi_is_state = model.aircraft.aero.chi_is_state();
         FlightPathState::from_fn(|i, _| {

@@ -23,7 +23,7 @@
 
 use super::driven::{
     self, Ambient, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, LinearisationBuffers,
-    Observable, PseudoRates,
+    Observable, PointMemo, PseudoRates,
 };
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
@@ -436,11 +436,13 @@ impl<T> Scratch<T> {
     }
 }
 
-/// A copy of a view's flight model with θ written in, and the buffers of
-/// its linearisation.
+/// A copy of a view's flight model with θ written in, the buffers of its
+/// linearisation, and the angles and air of the last state its outputs
+/// were evaluated at.
 struct ModelScratch {
     model: FlightModel,
     linearisation: LinearisationBuffers,
+    points: PointMemo,
 }
 
 /// The state-space view of a nonlinear postulated model driven by a
@@ -575,7 +577,7 @@ impl DrivenStateSpace {
             .parameters
             .values_mut()
             .copy_from_slice(theta);
-        if self.simulation.mask(model) != self.mask {
+        if !self.simulation.gives_mask(model, &self.mask) {
             return Err(Error::Other(
                 "θ changes which states the model integrates (χ is a state only while τ1 > 0)"
                     .into(),
@@ -598,7 +600,7 @@ impl DrivenStateSpace {
         read: impl FnOnce(&LinearisationBuffers) -> R,
     ) -> Result<R> {
         let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
-        self.with_model(theta, |model, buffers| {
+        self.with_model(theta, |model, buffers, _| {
             driven::linearise_with(
                 model,
                 &full,
@@ -615,16 +617,21 @@ impl DrivenStateSpace {
     fn with_model<R>(
         &self,
         theta: &[f64],
-        f: impl FnOnce(&FlightModel, &mut LinearisationBuffers) -> R,
+        f: impl FnOnce(&FlightModel, &mut LinearisationBuffers, &mut PointMemo) -> R,
     ) -> Result<R> {
         self.scratch.with(
             || ModelScratch {
                 model: self.model.clone(),
                 linearisation: LinearisationBuffers::default(),
+                points: PointMemo::default(),
             },
             |scratch| {
                 self.write_parameters(&mut scratch.model, theta)?;
-                Ok(f(&scratch.model, &mut scratch.linearisation))
+                Ok(f(
+                    &scratch.model,
+                    &mut scratch.linearisation,
+                    &mut scratch.points,
+                ))
             },
         )
     }
@@ -707,7 +714,7 @@ impl StateSpaceModel for DrivenStateSpace {
     /// module header gives the equations).
     fn rates(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
         let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
-        let (rates, _) = self.with_model(theta, |model, _| {
+        let (rates, _) = self.with_model(theta, |model, _, _| {
             driven::evaluate(model, &full, &controls, pseudo, ambient, &[])
         })?;
         Ok(self.state_of(&rates))
@@ -730,7 +737,7 @@ impl StateSpaceModel for DrivenStateSpace {
         if into.len() != self.outputs.len() {
             *into = DVector::zeros(self.outputs.len());
         }
-        self.with_model(theta, |model, _| {
+        self.with_model(theta, |model, _, points| {
             driven::evaluate_into(
                 model,
                 &full,
@@ -739,6 +746,7 @@ impl StateSpaceModel for DrivenStateSpace {
                 ambient,
                 &self.outputs,
                 into.as_mut_slice(),
+                points,
             )
         })?;
         Ok(())
@@ -753,7 +761,7 @@ impl StateSpaceModel for DrivenStateSpace {
     /// 10⁻⁵·max(|θ|, 10⁻²).
     fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
         let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
-        self.with_model(theta, |model, _| {
+        self.with_model(theta, |model, _, _| {
             driven::linearise(
                 model,
                 &full,
@@ -818,7 +826,7 @@ impl StateSpaceModel for DrivenStateSpace {
         let ends = (simulation.pseudo_rates(k), simulation.pseudo_rates(k + 1));
         let mut a: [DMatrix<f64>; 4] = std::array::from_fn(|_| DMatrix::zeros(n, n));
         let mut b: [DMatrix<f64>; 4] = std::array::from_fn(|_| DMatrix::zeros(n, m));
-        self.with_model(theta, |model, buffers| -> Result<()> {
+        self.with_model(theta, |model, buffers, _| -> Result<()> {
             let start = DVector::from_column_slice(x);
             let mut stage = start.clone();
             for (i, (fraction, next_offset)) in [(0.0, 0.5), (0.5, 0.5), (0.5, 1.0), (1.0, 0.0)]
@@ -893,7 +901,7 @@ impl StateSpaceModel for DrivenStateSpace {
                 simulation.len()
             )));
         }
-        self.with_model(theta, |model, _| {
+        self.with_model(theta, |model, _, _| {
             let full = self.full(x, &simulation.measured()[k])?;
             driven::check_departure(&full, simulation.time(k)).map_err(Error::Other)?;
             let next = simulation.step_plain(model, k, &full);

@@ -52,6 +52,20 @@
 //! central difference, H·S⁻ = (Y_{1…n} − Y_{n+1…2n})/(2c); the innovation
 //! covariance the pass keeps is S_y·S_yᵀ.
 //!
+//! The time update's compound matrix is taken in an equivalent form with
+//! fewer rows. Its rows for χ'_{1+i} and χ'_{1+n+i}, rotated together by
+//! 45° (an orthogonal change, so the same S⁻), are the central difference
+//! d_i = (χ'_{1+i} − χ'_{1+n+i})/(2c), column i of Φ·S⁺, and the second
+//! difference e_i = (χ'_{1+i} + χ'_{1+n+i} − 2x⁻)/(2c). States the step
+//! leaves unchanged in every sigma point (the constant parameters of an
+//! augmented model, the states p… of n; `Work::moving`) have d_i = s_i
+//! (their rows of S⁺ itself, not a difference of propagated points),
+//! e_i = 0 and rows of Φ the identity's: Φ's other p rows are one
+//! triangular solve, and the n second differences, non-zero in p columns
+//! only, enter as the p rows of their own triangular factor, so the QR
+//! works on n + p (+ noise) rows instead of 2n. The result is the
+//! algorithm's to rounding.
+//!
 //! On a linear model the transform is exact and the pass is the linear
 //! Kalman filter's with the trapezoidal Q_d (tests/kalman_oracle.rs).
 //! A step's sigma points, propagated points, outputs and compound matrices
@@ -59,6 +73,7 @@
 //! Householder triangularisation in place (`triangularise`).
 
 use crate::error::{Error, Result};
+use crate::estimation::model::augmented::shape;
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::StateSpaceModel;
 use crate::estimation::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
@@ -106,14 +121,17 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
             )?;
             pass.transitions.push(transition);
         }
-        pass.predicted.push(Gaussian {
-            mean: state.clone(),
-            covariance: covariance(&factor),
-        });
+        let predicted = covariance(&factor);
         let present = &observations.at[k];
         if present.is_empty() {
             pass.measured.push(None);
-        } else {
+            pass.filtered_at(t, &state, Some(&predicted))?;
+        }
+        pass.predicted.push(Gaussian {
+            mean: state.clone(),
+            covariance: predicted,
+        });
+        if !present.is_empty() {
             let measured = measurement_update(
                 model,
                 theta,
@@ -125,8 +143,13 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
                 &mut work,
             )?;
             pass.measured_at(k, present, measured);
+            // The state kept (and checked) by the pass, the covariance
+            // moved in.
+            pass.filtered_at(t, &state, None)?;
+            if let Some(filtered) = pass.filtered.last_mut() {
+                filtered.covariance = covariance(&factor);
+            }
         }
-        pass.filtered_at(t, &state, Some(&covariance(&factor)))?;
     }
     Ok(pass)
 }
@@ -162,13 +185,19 @@ impl Weights {
 
 /// A pass's buffers: sigma points, propagated points and outputs as
 /// columns (2n + 1 of each), the time update's compound matrix (its
-/// transpose, 2n + 2r rows of n) and the measurement update's (2n + m
-/// rows of at most m columns).
+/// transpose, at most 2n + 2r rows of n), its second differences (n rows
+/// of the p changing states) and the leading rows of the central
+/// difference Φ is solved from, and the measurement update's compound
+/// matrix (2n + m rows of at most m columns). Matrices whose shape depends
+/// on p or m are reshaped only when it changes.
 struct Work {
     points: DMatrix<f64>,
     moved: DMatrix<f64>,
     outputs: DMatrix<f64>,
     compound: DMatrix<f64>,
+    curvature: DMatrix<f64>,
+    curvature_factor: DMatrix<f64>,
+    leading: DMatrix<f64>,
     measured: DMatrix<f64>,
     vector: DVector<f64>,
     /// One propagated point or one point's outputs.
@@ -183,6 +212,9 @@ impl Work {
             moved: DMatrix::zeros(n, count),
             outputs: DMatrix::zeros(outputs, count),
             compound: DMatrix::zeros(2 * n + 2 * noise_columns, n),
+            curvature: DMatrix::zeros(0, 0),
+            curvature_factor: DMatrix::zeros(0, 0),
+            leading: DMatrix::zeros(0, 0),
             measured: DMatrix::zeros(2 * n + outputs, outputs),
             vector: DVector::zeros(n.max(outputs)),
             value: DVector::zeros(0),
@@ -200,6 +232,27 @@ impl Work {
                 self.points[(r, 1 + n + i)] = mean[r] - d;
             }
         }
+    }
+
+    /// The number p of leading states the step moved: every sigma point's
+    /// states p… came through it unchanged (the constant parameters of an
+    /// augmented model), so that Φ's rows p… are the identity's and the
+    /// propagated spread's columns p… are S⁺'s own (module header).
+    fn moving(&self) -> usize {
+        let n = self.points.nrows();
+        let mut p = 0;
+        for (before, after) in self
+            .points
+            .as_slice()
+            .chunks_exact(n)
+            .zip(self.moved.as_slice().chunks_exact(n))
+        {
+            // The last state this point moved, looked for above p only.
+            if let Some(r) = (p..n).rev().find(|&r| before[r] != after[r]) {
+                p = r + 1;
+            }
+        }
+        p
     }
 }
 
@@ -231,20 +284,65 @@ fn time_update<M: StateSpaceModel + ?Sized>(
         work.moved.column_mut(j).copy_from(&work.value);
     }
     weighted_mean(weights, &work.moved, state);
-    // Φ·S⁺ = (χ'_{1…n} − χ'_{n+1…2n})/(2c): Sᵀ·Φᵀ = Dᵀ/(2c).
-    let mut transition = central_difference(&work.moved, n, weights.scale);
-    if !(solve_right_lower(factor, &mut transition) && transition.iter().all(|v| v.is_finite())) {
-        transition.fill(f64::NAN);
-    }
-    let r = process.ncols();
-    let root = weights.other.sqrt();
+    let p = work.moving();
+    // The compound matrix's rows i and n + i (the points χ_{1+i} and
+    // χ_{1+n+i}) rotated by 45°, an orthogonal change that leaves its Gram
+    // matrix alone: √W₁·(χ'_{1+i} − χ'_{1+n+i})/√2, the central difference
+    // D = (χ'_{1+i} − χ'_{1+n+i})/(2c), and √W₁·(χ'_{1+i} + χ'_{1+n+i} −
+    // 2x⁻)/√2, the second difference. In the unchanged states p… D is
+    // S⁺'s own row (2c·s_i/(2c)) and the second difference nothing.
+    let root = weights.other.sqrt() * std::f64::consts::FRAC_1_SQRT_2;
     let compound = &mut work.compound;
-    for j in 0..2 * n {
-        for i in 0..n {
-            compound[(j, i)] = root * (work.moved[(i, 1 + j)] - state[i]);
+    shape(&mut work.curvature, n, p);
+    for j in 0..n {
+        for i in 0..p {
+            let (plus, minus) = (work.moved[(i, 1 + j)], work.moved[(i, 1 + n + j)]);
+            compound[(j, i)] = root * (plus - minus);
+            work.curvature[(j, i)] = root * ((plus - state[i]) + (minus - state[i]));
+        }
+        for i in p..n {
+            compound[(j, i)] = factor[(i, j)];
         }
     }
-    let mut rows = 2 * n;
+    // Φ·S⁺ = D, Sᵀ·Φᵀ = Dᵀ, for the rows 0…p; the rows p… are the identity's.
+    shape(&mut work.leading, p, n);
+    let half = 0.5 / weights.scale;
+    for j in 0..n {
+        for i in 0..p {
+            work.leading[(i, j)] = half * (work.moved[(i, 1 + j)] - work.moved[(i, 1 + n + j)]);
+        }
+    }
+    let mut transition = DMatrix::identity(n, n);
+    if solve_right_lower(factor, &mut work.leading) && work.leading.iter().all(|v| v.is_finite()) {
+        transition.rows_mut(0, p).copy_from(&work.leading);
+    } else {
+        transition.fill(f64::NAN);
+    }
+    // The second differences' n rows of p non-zero columns as the p rows
+    // of their triangular factor (the same Gram matrix).
+    let mut rows = n;
+    if p < n {
+        shape(&mut work.curvature_factor, p, p);
+        triangularise(&mut work.curvature, n, p, &mut work.curvature_factor);
+        for r in 0..p {
+            for i in 0..n {
+                compound[(rows + r, i)] = if i < p {
+                    work.curvature_factor[(i, r)]
+                } else {
+                    0.0
+                };
+            }
+        }
+        rows += p;
+    } else {
+        for j in 0..n {
+            for i in 0..n {
+                compound[(rows + j, i)] = work.curvature[(j, i)];
+            }
+        }
+        rows += n;
+    }
+    let r = process.ncols();
     if r > 0 {
         if transition[(0, 0)].is_finite() {
             let half = (0.5 * h).sqrt();
@@ -579,9 +677,10 @@ fn cholupdate(l: &mut DMatrix<f64>, x: &mut [f64], sign: f64) -> Result<(), ()> 
             }
             let r = square.sqrt();
             let (c, s) = (r / diagonal, xk / diagonal);
+            let inverse = diagonal / r;
             top[k] = r;
             for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
-                *li = (*li - s * *xi) / c;
+                *li = (*li - s * *xi) * inverse;
                 *xi = c * *xi - s * *li;
             }
         }
@@ -643,16 +742,44 @@ mod tests {
     #[test]
     fn on_a_linear_model_it_is_the_kalman_filter() {
         let a = DMatrix::from_row_slice(3, 3, &[-1.2, 1.0, 0.0, -8.0, -2.1, 0.3, 0.0, 0.5, -0.05]);
+        against_the_kalman_filter(&a, &[0.05, -0.1, 0.02]);
+    }
+
+    /// The same with a fourth state that no step moves (A's last row zero,
+    /// so e^{A·h} leaves it exactly), driving the second: the time update
+    /// takes the form for unchanged states (module header), Φ's last row
+    /// exactly the identity's, and the pass is still the Kalman filter's.
+    #[test]
+    fn with_a_constant_state_it_is_the_kalman_filter() {
+        let a = DMatrix::from_row_slice(
+            4,
+            4,
+            &[
+                -1.2, 1.0, 0.0, 0.0, -8.0, -2.1, 0.3, 0.5, 0.0, 0.5, -0.05, 0.0, 0.0, 0.0, 0.0, 0.0,
+            ],
+        );
+        let transitions = against_the_kalman_filter(&a, &[0.05, -0.1, 0.02, 0.4]);
+        for transition in &transitions {
+            let last = transition.row(3).clone_owned();
+            assert_eq!(last.as_slice(), &[0.0, 0.0, 0.0, 1.0]);
+        }
+    }
+
+    /// The unscented and the extended pass over a model ẋ = A·x with the
+    /// first and last of the first three states measured (module test
+    /// above), for both α and with and without process noise; returns the
+    /// unscented passes' transitions.
+    fn against_the_kalman_filter(a: &DMatrix<f64>, mean: &[f64]) -> Vec<DMatrix<f64>> {
+        let n = a.nrows();
+        let mut transitions = Vec::new();
         for alpha in [1.0, 0.5] {
             for (process, step, tolerance) in [(0.0, 0.05, 1e-10), (0.2, 0.01, 5e-3)] {
                 let len = (10.0 / step) as usize;
+                let mut c = DMatrix::zeros(2, n);
+                c[(0, 0)] = 1.0;
+                c[(1, 2)] = 1.0;
                 let model = LinearStateSpace::new(
-                    [
-                        a.clone(),
-                        DMatrix::zeros(3, 1),
-                        DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 0.0, 1.0]),
-                        DMatrix::zeros(2, 1),
-                    ],
+                    [a.clone(), DMatrix::zeros(n, 1), c, DMatrix::zeros(2, 1)],
                     Vec::new(),
                     0.0,
                     step,
@@ -675,11 +802,11 @@ mod tests {
                     moved: 0,
                 };
                 let initial = Gaussian {
-                    mean: DVector::from_vec(vec![0.05, -0.1, 0.02]),
-                    covariance: DMatrix::identity(3, 3) * 0.3,
+                    mean: DVector::from_column_slice(mean),
+                    covariance: DMatrix::identity(n, n) * 0.3,
                 };
                 let noise = Noise {
-                    process: DMatrix::identity(3, 3) * process,
+                    process: DMatrix::identity(n, n) * process,
                     measurement: DVector::from_vec(vec![1e-3, 4e-4]),
                 };
                 let unscented = filter(
@@ -710,8 +837,10 @@ mod tests {
                     .abs()
                     / extended.negative_log_likelihood.abs();
                 assert!(error < tolerance, "α {alpha}: −ln L {error:e}");
+                transitions.extend(unscented.transitions);
             }
         }
+        transitions
     }
 
     /// The rank-one update and downdate against the factor of the updated
