@@ -142,18 +142,11 @@ fn rbf_per_sample_evaluations_do_not_allocate() {
 #[test]
 fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
     use aeroid::estimation::model::augmented::Augmented;
-    use aeroid::estimation::model::state_space::{DrivenStateSpace, Jacobians, StateSpaceModel};
+    use aeroid::estimation::model::state_space::{Jacobians, StateSpaceModel};
     use aeroid::estimation::solver::kalman::{self, Exponential, SparseRows};
-    use aeroid::estimation::structure::ModelStructure;
-    use aeroid::record::recorder::{Profile, record_scenario};
     use nalgebra::{DMatrix, DVector};
 
-    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
-    let profile = Profile::load("flight-test-25hz", None).unwrap();
-    let (record, _) = record_scenario(&scenario, &profile).unwrap();
-    let structure = ModelStructure::load("attas-lateral").unwrap();
-    let (view, x0) =
-        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None).unwrap();
+    let (_, structure, view, x0) = attas_lateral_view();
     let theta = view.parameters();
     let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
     let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
@@ -274,19 +267,12 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
 fn an_ekf_pass_allocates_per_point_only_what_it_keeps() {
     use aeroid::estimation::model::augmented::Augmented;
     use aeroid::estimation::model::observations::Observations;
-    use aeroid::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
+    use aeroid::estimation::model::state_space::StateSpaceModel;
     use aeroid::estimation::solver::extended_kalman::{self, Discretisation, Keep, Noise};
     use aeroid::estimation::solver::kalman::Gaussian;
-    use aeroid::estimation::structure::ModelStructure;
-    use aeroid::record::recorder::{Profile, record_scenario};
     use nalgebra::{DMatrix, DVector};
 
-    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
-    let profile = Profile::load("flight-test-25hz", None).unwrap();
-    let (record, _) = record_scenario(&scenario, &profile).unwrap();
-    let structure = ModelStructure::load("attas-lateral").unwrap();
-    let (view, x0) =
-        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None).unwrap();
+    let (record, structure, view, x0) = attas_lateral_view();
     let theta = view.parameters();
     let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
     let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
@@ -340,4 +326,25 @@ fn an_ekf_pass_allocates_per_point_only_what_it_keeps() {
          the kept objects and the products' buffers are {kept}"
     );
     assert_eq!(everything - updates, 4 * len - 2);
+}
+
+/// The ATTAS lateral multistep recorded by flight-test-25hz, the
+/// `attas-lateral` structure, its driven view and initial state: the
+/// record the filter benches run on.
+fn attas_lateral_view() -> (
+    aeroid::record::FlightRecord,
+    aeroid::estimation::structure::ModelStructure,
+    aeroid::estimation::model::state_space::DrivenStateSpace,
+    nalgebra::DVector<f64>,
+) {
+    use aeroid::estimation::model::state_space::DrivenStateSpace;
+    use aeroid::estimation::structure::ModelStructure;
+    use aeroid::record::recorder::{Profile, record_scenario};
+    let scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let (record, _) = record_scenario(&scenario, &profile).unwrap();
+    let structure = ModelStructure::load("attas-lateral").unwrap();
+    let (view, x0) =
+        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None).unwrap();
+    (record, structure, view, x0)
 }
