@@ -481,26 +481,30 @@ pub fn analyse(
     };
     // A flight's bounds, its least-squares solver and the first-order
     // error of the controls as the recorder writes them (at their rate,
-    // slot, delay and lag, and quantized to their resolution).
-    let analyse_flight = |simulation: &Simulation, trace: &crate::sim::trace::TruthTrace| {
-        let states: Vec<StateVector> = trace.samples.iter().map(|s| s.state).collect();
-        let record = clean.record(trace, &scenario.aircraft, scenario.seed)?;
-        let sensitivities = sensitivities_of(simulation, &states)?;
+    // slot, delay and lag, and quantized to their resolution), from the
+    // flight's trace, its states and its record.
+    let analyse_flight = |simulation: &Simulation,
+                          trace: &crate::sim::trace::TruthTrace,
+                          states: &[StateVector],
+                          record: &FlightRecord| {
+        let sensitivities = sensitivities_of(simulation, states)?;
         let solve = least_squares_solver(&sensitivities);
         let controls = profile
             .without_noise()
             .record(trace, &scenario.aircraft, scenario.seed)?;
         let input_error = solve(&errors(
             &with_recorded_inputs(simulation, &controls)?,
-            &states,
-            &record,
+            states,
+            record,
             "with the inputs as recorded",
         )?);
         Ok::<_, Error>((bounds(&sensitivities), input_error, solve))
     };
-    let (sigmas, input_error, solve) = analyse_flight(&simulation, &nominal_trace)?;
+    let (sigmas, input_error, solve) =
+        analyse_flight(&simulation, &nominal_trace, &nominal_states, &nominal)?;
+    let calm = without_gusts(scenario, &simulation)?;
     let wind_error = solve(&errors(
-        &without_gusts(scenario, &simulation)?,
+        &calm,
         &nominal_states,
         &nominal,
         "without gusts and turbulence",
@@ -510,8 +514,10 @@ pub fn analyse(
     let gusty = !scenario.wind.gusts.is_empty() || scenario.wind.turbulence.is_some();
     let calm = match gusty {
         true => {
-            let calm = without_gusts(scenario, &simulation)?;
-            let (sigmas, input_error, _) = analyse_flight(&calm, &calm.run()?)?;
+            let trace = calm.run()?;
+            let states: Vec<StateVector> = trace.samples.iter().map(|s| s.state).collect();
+            let record = clean.record(&trace, &scenario.aircraft, scenario.seed)?;
+            let (sigmas, input_error, _) = analyse_flight(&calm, &trace, &states, &record)?;
             Some((sigmas, input_error))
         }
         false => None,
