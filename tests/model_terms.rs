@@ -772,6 +772,12 @@ fn stall_alpha_dot_from_the_measured_alpha() {
     }
 }
 
+/// The stall lag τ1 and τ2 in c̄/V: the flown values and the a-priori start.
+const CHORD_LAG_TRUTH: &str =
+    "a1 = 23.7\nalpha_star = 0.309\ntau1 = 3.0\ntau2 = 27.0\ntime_unit = \"chord/V\"";
+const CHORD_LAG_START: &str =
+    "a1 = 20.0\nalpha_star = 0.29\ntau1 = 2.0\ntau2 = 18.0\ntime_unit = \"chord/V\"";
+
 /// τ1 in units of c̄/V with χ a state (Eq. 2): the truth τ1 = 3 c̄/V
 /// (0.10 s at 95 m/s), τ2 = 27 c̄/V; fitted with τ1 free from 2 c̄/V within
 /// [1, 10] c̄/V, τ2 from 18, the other stall values as in the other
@@ -803,11 +809,7 @@ fn stall_alpha_dot_from_the_measured_alpha() {
 /// the coloured bound within 20 % of the white.
 #[test]
 fn stall_lag_in_chord_units_is_flown_and_recovered() {
-    let (case, _) = stall_case(
-        "stall-chord-tau1",
-        "a1 = 23.7\nalpha_star = 0.309\ntau1 = 3.0\ntau2 = 27.0\ntime_unit = \"chord/V\"",
-        "a1 = 20.0\nalpha_star = 0.29\ntau1 = 2.0\ntau2 = 18.0\ntime_unit = \"chord/V\"",
-    );
+    let (case, _) = stall_case("stall-chord-tau1", CHORD_LAG_TRUTH, CHORD_LAG_START);
     let text = std::fs::read_to_string(case.path("model.toml"))
         .unwrap()
         .replace(
@@ -938,11 +940,7 @@ fn bound_honesty(label: &str, fits: &[(f64, f64, f64)]) -> (f64, f64, f64, f64) 
 /// c̄/V reaches the truth within 3e-7) or a start nearer the truth.
 #[test]
 fn stall_lag_free_from_a_priori_values_runs_to_zero() {
-    let (case, _) = stall_case(
-        "stall-chord-tau1-free",
-        "a1 = 23.7\nalpha_star = 0.309\ntau1 = 3.0\ntau2 = 27.0\ntime_unit = \"chord/V\"",
-        "a1 = 20.0\nalpha_star = 0.29\ntau1 = 2.0\ntau2 = 18.0\ntime_unit = \"chord/V\"",
-    );
+    let (case, _) = stall_case("stall-chord-tau1-free", CHORD_LAG_TRUTH, CHORD_LAG_START);
     let text = std::fs::read_to_string(case.path("model.toml"))
         .unwrap()
         .replace("[parameters.tau1]\nfixed = true\n", "");
