@@ -154,8 +154,14 @@ use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure, Structure
 use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
 use crate::sim::integrator::Interpolation;
+use crate::units::Quantity;
 use nalgebra::{DMatrix, DMatrixView, DVector};
+use rand::rngs::ChaCha8Rng;
+use rand::{RngExt, SeedableRng};
+use rand_distr::StandardNormal;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// Convergence: the Gauss–Newton step's predicted decrease of the
 /// whitened cost, ½·ΔθᵀMΔθ ≤ 1e-4, a step under 0.014σ
@@ -244,6 +250,18 @@ pub struct OutputErrorOptions {
     /// white residuals.
     #[serde(deserialize_with = "crate::units::seconds")]
     pub correlation_lag: f64,
+    /// The standard deviation of each recorded input's noise, by channel
+    /// (e.g. `elevator = "0.01 deg"`): the Cramér–Rao bounds then include
+    /// what that noise does to the estimates ([`Problem::input_noise_bounds`]);
+    /// empty: the inputs are taken as exact, as output error's likelihood
+    /// takes them.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub input_noise: BTreeMap<String, Quantity>,
+    /// Simulated draws of the inputs' noise that measure its share of the
+    /// bounds (the share's standard deviations within about 1/√(2·draws)).
+    pub input_noise_draws: usize,
+    /// Seed of those draws' random stream.
+    pub input_noise_seed: u64,
 }
 
 impl Default for OutputErrorOptions {
@@ -261,6 +279,9 @@ impl Default for OutputErrorOptions {
             start_seed: 1,
             segment: None,
             correlation_lag: 0.0,
+            input_noise: BTreeMap::new(),
+            input_noise_draws: 200,
+            input_noise_seed: 1,
         }
     }
 }
@@ -305,6 +326,12 @@ impl OutputErrorOptions {
                 "[methods.{METHOD}]: correlation_lag must be a duration of 0 s or more"
             )));
         }
+        options.input_sigmas()?;
+        if !options.input_noise.is_empty() && options.input_noise_draws < 2 {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: input_noise_draws must be at least 2"
+            )));
+        }
         if !(options.start_spread > 0.0 && options.start_spread.is_finite()) {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: start_spread must be a positive fraction, is {}",
@@ -312,6 +339,30 @@ impl OutputErrorOptions {
             )));
         }
         Ok(options)
+    }
+
+    /// `input_noise` in SI units (each channel's own), checked: a known
+    /// quantity, a finite standard deviation of 0 or more.
+    pub fn input_sigmas(&self) -> Result<Vec<(String, f64)>> {
+        self.input_noise
+            .iter()
+            .map(|(name, noise)| {
+                let measurand = crate::record::derived::measurand(name).ok_or_else(|| {
+                    Error::Other(format!(
+                        "[methods.{METHOD}] input_noise: unknown channel '{name}'"
+                    ))
+                })?;
+                let sigma = noise.si(measurand.dimension).map_err(|e| {
+                    Error::Other(format!("[methods.{METHOD}] input_noise.{name}: {e}"))
+                })?;
+                if sigma < 0.0 {
+                    return Err(Error::Other(format!(
+                        "[methods.{METHOD}] input_noise.{name}: a standard deviation must not be negative"
+                    )));
+                }
+                Ok((name.clone(), sigma))
+            })
+            .collect()
     }
 }
 
@@ -370,6 +421,15 @@ impl Estimator for OutputError {
                         "correlation_lag",
                         "lag, e.g. \"20 s\", to which the residuals' autocorrelation is summed in the Cramér–Rao bounds (Morelli & Klein 1997, for coloured residuals); 0: white residuals assumed",
                     ),
+                    (
+                        "input_noise",
+                        "the recorded inputs' noise by channel, e.g. { elevator = \"0.01 deg\" }: the Cramér–Rao bounds then include its effect on the estimates (errors in the inputs, which output error takes as exact), measured by simulated draws of it; none: exact inputs",
+                    ),
+                    (
+                        "input_noise_draws",
+                        "simulated draws of the inputs' noise for those bounds (their share's σ within about 1/√(2·draws))",
+                    ),
+                    ("input_noise_seed", "seed of those draws"),
                 ],
             ),
         }
@@ -856,6 +916,22 @@ pub fn output_error_from(
         )));
     }
     unsuitable(METHOD, structure)?;
+    let input_noise = options.input_sigmas()?;
+    let inputs = driving_channels(structure);
+    for (name, _) in &input_noise {
+        if !inputs.contains(&name.as_str()) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}] input_noise: '{name}' is not an input of model '{}' (its inputs: {})",
+                structure.name,
+                inputs.join(", ")
+            )));
+        }
+        if records.iter().all(|record| record.channel(name).is_err()) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}] input_noise: no record has a '{name}' channel"
+            )));
+        }
+    }
     let mut problem = Problem::new(records, structure, options)?;
     let data: usize = problem
         .segments
@@ -894,22 +970,32 @@ pub fn output_error_from(
     // STAGE_DECREASE (a step of about 4.5σ).
     // Its simulations carry the initial states' sensitivities too, so that
     // the second stage starts from the first's last simulation.
+    // The stall's τ1 (χ a state) is held at its start value there too:
+    // from a-priori values the full problem runs τ1 to 0 on the stall
+    // flight, ideal record included (a valley toward the algebraic limit,
+    // where τ2 alone makes the lag), while from the first fit's a1, α* and
+    // τ2 it reaches the truth (docs/findings.md, "τ1 in c̄/V").
     let all = problem.all.clone();
+    let aero = &structure.aircraft.aero;
+    let lag = aero
+        .parameters
+        .index("tau1")
+        .filter(|_| aero.chi_is_state());
+    let held_first = |u: &Unknown| {
+        matches!(u, Unknown::Initial { .. }) || matches!(u, Unknown::Aero(i) if Some(*i) == lag)
+    };
     let mut staged = None;
-    if !from_equation_error && all.iter().any(|u| matches!(u, Unknown::Initial { .. })) {
-        problem.unknowns = all
-            .iter()
-            .copied()
-            .filter(|u| !matches!(u, Unknown::Initial { .. }))
-            .collect();
+    if !from_equation_error && all.iter().any(held_first) {
+        problem.unknowns = all.iter().copied().filter(|u| !held_first(u)).collect();
         let first_start = problem.current();
         let first_options = solver_options(&problem.unknowns, STAGE_DECREASE);
         let first = gauss_newton::solve(&mut problem, &first_start, &first_options);
         if !matches!(first.status, Status::Diverged(_)) {
             staged = Some((problem.unknowns.clone(), first.theta, first.history.len()));
         }
-        problem.unknowns = all;
+        problem.unknowns = all.clone();
     }
+    let all_unknowns = all;
     let mut start = original_start.clone();
     if let Some((unknowns, theta, _)) = &staged {
         for (j, unknown) in problem.unknowns.iter().enumerate() {
@@ -960,13 +1046,44 @@ pub fn output_error_from(
             }
         ));
     }
+    let white = estimate.covariance.clone();
     if options.correlation_lag > 0.0 && !matches!(solution.status, Status::Diverged(_)) {
         let note = problem.coloured_bounds(&solution, options.correlation_lag, &mut estimate);
         estimate.notes.push(note);
     }
-    if let Some((_, _, iterations)) = staged {
+    if !input_noise.is_empty() && !matches!(solution.status, Status::Diverged(_)) {
+        let note = problem.input_noise_bounds(
+            records,
+            &solution,
+            &white,
+            (
+                &input_noise,
+                options.input_noise_draws,
+                options.input_noise_seed,
+            ),
+            &mut estimate,
+        );
+        estimate.notes.push(note);
+    }
+    if let Some((unknowns, _, iterations)) = staged {
+        let mut held = Vec::new();
+        if all_unknowns
+            .iter()
+            .any(|u| matches!(u, Unknown::Initial { .. }))
+        {
+            held.push(("initial state", "at the first samples"));
+        }
+        if lag.is_some_and(|i| {
+            all_unknowns.contains(&Unknown::Aero(i)) && !unknowns.contains(&Unknown::Aero(i))
+        }) {
+            held.push(("tau1", "at its start value"));
+        }
+        let (names, details): (Vec<&str>, Vec<&str>) = held.into_iter().unzip();
         estimate.notes.push(format!(
-            "initial state released after a first fit with it held at the first samples ({iterations} iterations)"
+            "{} released after a first fit with {} held ({}; {iterations} iterations)",
+            names.join(" and "),
+            if names.len() > 1 { "them" } else { "it" },
+            details.join(", ")
         ));
     }
     Ok(estimate.assess_residuals())
@@ -2059,6 +2176,179 @@ impl Problem<'_> {
                 regression::LagWindow::Rectangular => "rectangular",
                 regression::LagWindow::Bartlett => "Bartlett",
             },
+            largest.0,
+            largest.1
+        )
+    }
+
+    /// Adds to the estimate's covariance the share of the recorded inputs'
+    /// noise (errors in the inputs). Output error takes the inputs u as
+    /// exact; recorded with white noise w of standard deviation σ_u, the
+    /// simulation driven by u + w departs from the one driven by u by
+    /// δy ≈ T·w (T the model's response to its inputs, linearised at θ̂),
+    /// and a Gauss–Newton step moves θ̂ by δθ = M⁻¹·Σ (∂y/∂θ)ᵀ·R⁻¹·δy
+    /// (M the information matrix, `white` its inverse): Cov(δθ) =
+    /// M⁻¹·Σ(∂y/∂θ)ᵀR⁻¹·Cov(T·w)·R⁻¹(∂y/∂θ)·M⁻¹, which the Cramér–Rao
+    /// bound, by its assumptions, does not hold. It is measured here by
+    /// `draws` draws of w (`seed`, a stream per draw: the same numbers for
+    /// any thread count), each a plain simulation at θ̂ with the noised
+    /// inputs: Cov(δθ) ≈ (1/draws)·Σ δθ·δθᵀ (w has zero mean), its
+    /// standard deviations within about 1/√(2·draws). Fast modes excited
+    /// through an input's direct effect (the stall's χ through α̇) make this
+    /// share large: 0.01° of elevator noise triples the bound of τ1 in c̄/V
+    /// (docs/findings.md). Returns the note that says what was added, or
+    /// why nothing was.
+    fn input_noise_bounds(
+        &mut self,
+        records: &[&FlightRecord],
+        solution: &gauss_newton::Solution,
+        white: &[Vec<f64>],
+        (noise, draws, seed): (&[(String, f64)], usize, u64),
+        estimate: &mut Estimate,
+    ) -> String {
+        let m = white.len();
+        // An unidentifiable unknown (infinite bound) keeps its bound and
+        // takes no share; the others' shares come from the finite block.
+        let finite: Vec<bool> = (0..m).map(|j| white[j][j].is_finite()).collect();
+        let inverse = DMatrix::from_fn(m, m, |i, j| {
+            if finite[i] && finite[j] {
+                white[i][j]
+            } else {
+                0.0
+            }
+        });
+        if !finite.iter().any(|f| *f) {
+            return "Cramér–Rao bounds without the inputs' noise: no parameter is identifiable"
+                .to_string();
+        }
+        let (weights, sensitivities, rows) = match self.sensitivities_at(&solution.theta) {
+            Ok((weights, assembled)) if assembled.unknowns.len() == m => (
+                weights,
+                assembled.sensitivities.clone(),
+                assembled.rows.clone(),
+            ),
+            _ => {
+                return "Cramér–Rao bounds without the inputs' noise: no Jacobian at the solution"
+                    .to_string();
+            }
+        };
+        self.apply(&solution.theta);
+        let record_of: Vec<usize> = self
+            .segments
+            .iter()
+            .map(|segment| {
+                records
+                    .iter()
+                    .position(|r| std::ptr::eq(*r, segment.record))
+                    .unwrap_or(0)
+            })
+            .collect();
+        // The outputs at the samples, output after output and segment
+        // after segment (the Jacobian's rows), driven by `records`.
+        let outputs = |records: &[FlightRecord]| -> std::result::Result<Vec<f64>, String> {
+            let mut by_output = vec![Vec::new(); self.outputs.len()];
+            for (segment, &r) in self.segments.iter().zip(&record_of) {
+                let simulation = DrivenSimulation::from_record(
+                    &records[r],
+                    &self.integrate,
+                    self.interpolation,
+                    segment.simulation.step,
+                    segment.window,
+                    self.alpha_dot,
+                )
+                .map_err(|e| e.to_string())?;
+                let mut grid = vec![Vec::with_capacity(simulation.len()); self.outputs.len()];
+                simulation.simulate(
+                    &self.model,
+                    &segment.initial,
+                    &self.observables,
+                    &[],
+                    self.linearise,
+                    |_, y, _| grid.iter_mut().zip(y).for_each(|(g, y)| g.push(*y)),
+                )?;
+                for ((into, measured), values) in
+                    by_output.iter_mut().zip(&segment.outputs).zip(&grid)
+                {
+                    into.extend(measured.brackets.iter().map(|&at| on_grid(values, at)));
+                }
+            }
+            Ok(by_output.concat())
+        };
+        let exact: Vec<FlightRecord> = records.iter().map(|r| (*r).clone()).collect();
+        let nominal = match outputs(&exact) {
+            Ok(nominal) if nominal.len() == rows.last().map_or(0, |r| r.end) => nominal,
+            _ => {
+                return "Cramér–Rao bounds without the inputs' noise: the recorded inputs' simulation failed"
+                    .to_string();
+            }
+        };
+        let shifts: Vec<Option<DVector<f64>>> = (0..draws)
+            .into_par_iter()
+            .map(|draw| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                rng.set_stream(draw as u64);
+                let mut noised = exact.clone();
+                for record in &mut noised {
+                    for (name, sigma) in noise {
+                        if let Some(channel) = record.channels.iter_mut().find(|c| &c.name == name)
+                        {
+                            for value in &mut channel.values {
+                                *value += sigma * rng.sample::<f64, _>(StandardNormal);
+                            }
+                        }
+                    }
+                }
+                let moved = outputs(&noised).ok()?;
+                let mut gradient = DVector::zeros(m);
+                for (range, weight) in rows.iter().zip(&weights) {
+                    let w2 = weight * weight;
+                    for i in range.clone() {
+                        let dy = (moved[i] - nominal[i]) * w2;
+                        for (g, s) in gradient.iter_mut().zip(&sensitivities[i * m..(i + 1) * m]) {
+                            *g += s * dy;
+                        }
+                    }
+                }
+                Some(&inverse * gradient)
+            })
+            .collect();
+        let valid: Vec<&DVector<f64>> = shifts.iter().flatten().collect();
+        if 2 * valid.len() < draws {
+            return format!(
+                "Cramér–Rao bounds without the inputs' noise: {} of {draws} noised simulations departed",
+                draws - valid.len()
+            );
+        }
+        let mut share = DMatrix::zeros(m, m);
+        for shift in &valid {
+            share += *shift * shift.transpose();
+        }
+        share /= valid.len() as f64;
+        let held = DMatrix::from_fn(m, m, |i, j| estimate.covariance[i][j]);
+        let covariance = held + share;
+        let mut largest = (1.0, String::new());
+        for (j, parameter) in estimate.parameters.iter_mut().enumerate() {
+            if !finite[j] {
+                continue;
+            }
+            let widened = covariance[(j, j)].max(0.0).sqrt();
+            let ratio = widened / parameter.standard_error;
+            if ratio > largest.0 || largest.1.is_empty() {
+                largest = (ratio, parameter.name.clone());
+            }
+            parameter.standard_error = widened;
+        }
+        estimate.covariance = (0..m)
+            .map(|i| covariance.row(i).iter().copied().collect())
+            .collect();
+        let channels: Vec<String> = noise
+            .iter()
+            .map(|(name, sigma)| format!("{name} {sigma:.3e}"))
+            .collect();
+        format!(
+            "Cramér–Rao bounds with the recorded inputs' noise (σ in SI: {}), its share from {} simulated draws: up to {:.2} times the bounds without it ({})",
+            channels.join(", "),
+            valid.len(),
             largest.0,
             largest.1
         )
