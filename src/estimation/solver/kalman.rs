@@ -872,27 +872,32 @@ pub fn update_with(
     if n > 0 {
         let (m_values, k_values) = (cross.as_slice(), gain.as_mut_slice());
         let (inverse, s) = (inverse.as_slice(), s.as_slice());
-        for p in 0..m {
-            let column = &mut k_values[p * n..(p + 1) * n];
-            column.fill(0.0);
-            for o in 0..m {
-                let factor = inverse[o + p * m];
-                for (into, &x) in column.iter_mut().zip(&m_values[o * n..(o + 1) * n]) {
-                    *into += factor * x;
-                }
-            }
-        }
         let e_values = half.as_mut_slice();
-        e_values.copy_from_slice(m_values);
-        for p in 0..m {
-            let column = &mut e_values[p * n..(p + 1) * n];
-            for o in 0..m {
-                let factor = -0.5 * s[o + p * m];
-                for (into, &k) in column.iter_mut().zip(&k_values[o * n..(o + 1) * n]) {
-                    *into += factor * k;
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                for p in 0..m {
+                    let column = &mut k_values[p * n..(p + 1) * n];
+                    column.fill(0.0);
+                    for o in 0..m {
+                        let factor = inverse[o + p * m];
+                        for (into, &x) in column.iter_mut().zip(&m_values[o * n..(o + 1) * n]) {
+                            *into += factor * x;
+                        }
+                    }
                 }
-            }
-        }
+                e_values.copy_from_slice(m_values);
+                for p in 0..m {
+                    let column = &mut e_values[p * n..(p + 1) * n];
+                    for o in 0..m {
+                        let factor = -0.5 * s[o + p * m];
+                        for (into, &k) in column.iter_mut().zip(&k_values[o * n..(o + 1) * n]) {
+                            *into += factor * k;
+                        }
+                    }
+                }
+            },
+        );
     }
     state.gemv(1.0, gain, innovation, 1.0);
     // K·Eᵀ, column by column.
