@@ -253,18 +253,15 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
 }
 
 /// A whole EKF pass over the augmented ATTAS lateral record (1501 grid
-/// points, 22 states) allocates per grid point only what it keeps and two
-/// packing buffers: keeping the updates alone, the filtered mean at every
-/// point and, where there are measurements, the update's H, ν, S, S⁻¹ and
-/// K, the copy of S its Cholesky factorisation consumes, and the packing
-/// buffer of each of the two small products K = M·S⁻¹ and K·S (nalgebra's
-/// matrix product allocates one a call), plus a bounded set-up (the
-/// buffers' first growth, the innovations' lists doubling: under a hundred);
-/// keeping everything adds exactly the predicted mean and covariance at
-/// every point, the transition and the filtered covariance at every point
-/// but the last (which is always kept): 4·len − 2 more.
+/// points, 22 states) allocates nothing per grid point, whatever it keeps:
+/// what it keeps goes into buffers reserved once per pass
+/// (`aeroid::estimation::solver::kept`), the update's S, S⁻¹ and K into
+/// the update's own buffers (no packing buffer of a matrix product), so a
+/// pass makes a fixed set-up's allocations (the pass's buffers, the
+/// step's buffers' first growth): under a hundred over 1501 points, where
+/// a single allocation per point would make 1501.
 #[test]
-fn an_ekf_pass_allocates_per_point_only_what_it_keeps() {
+fn an_ekf_pass_allocates_nothing_per_grid_point() {
     use aeroid::estimation::model::augmented::Augmented;
     use aeroid::estimation::model::observations::Observations;
     use aeroid::estimation::model::state_space::StateSpaceModel;
@@ -317,15 +314,14 @@ fn an_ekf_pass_allocates_per_point_only_what_it_keeps() {
     };
     // A first pass makes the model's own buffers (kept between calls).
     count(Keep::UPDATES);
-    let updates = count(Keep::UPDATES);
-    let everything = count(Keep::ALL);
-    let kept = len + 8 * measured;
-    assert!(
-        (kept..=kept + 200).contains(&updates),
-        "{updates} allocations keeping the updates over {len} points ({measured} measured): \
-         the kept objects and the products' buffers are {kept}"
-    );
-    assert_eq!(everything - updates, 4 * len - 2);
+    for keep in [Keep::UPDATES, Keep::SMOOTHER, Keep::ALL] {
+        let allocations = count(keep);
+        println!("{keep:?}: {allocations} allocations over {len} points ({measured} measured)");
+        assert!(
+            allocations < 100,
+            "{allocations} allocations in a pass keeping {keep:?} over {len} points ({measured} measured)"
+        );
+    }
 }
 
 /// The ATTAS lateral multistep recorded by flight-test-25hz, the

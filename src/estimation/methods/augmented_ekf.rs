@@ -103,6 +103,7 @@ use crate::estimation::solver::extended_kalman::{
     self, Discretisation, Innovation, Keep, Noise, Pass,
 };
 use crate::estimation::solver::kalman::{self, Gaussian};
+use crate::estimation::solver::kept::UpdateView;
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::{Channel, FlightRecord};
 use crate::sim::integrator::Interpolation;
@@ -550,12 +551,12 @@ impl History {
         let m = names.len();
         let values = pass
             .filtered
-            .iter()
+            .views()
             .map(|g| (0..m).map(|j| g.mean[states + j]).collect())
             .collect();
         let sigmas = pass
             .filtered
-            .iter()
+            .views()
             .map(|g| {
                 (0..m)
                     .map(|j| g.covariance[(states + j, states + j)].max(0.0).sqrt())
@@ -931,11 +932,10 @@ fn correlation_update(
     };
     let mut change = vec![0.0; states];
     let mut count = 0usize;
-    for measured in pass.measured.iter().skip(len / 2).flatten() {
-        let update = &measured.update;
+    for update in pass.measured.iter().skip(len / 2).flatten() {
         let gain = update.gain.rows(0, states);
         let excess =
-            &update.innovation * update.innovation.transpose() - &update.innovation_covariance;
+            update.innovation * update.innovation.transpose() - update.innovation_covariance;
         let delta = gain * excess * gain.transpose();
         for (i, c) in change.iter_mut().enumerate() {
             *c += delta[(i, i)];
@@ -972,14 +972,14 @@ fn mehra_update(
     process: Option<&mut [f64]>,
 ) -> Option<()> {
     let outputs = measurement.len();
-    let window: Vec<(usize, &kalman::Measured)> = pass
+    let window: Vec<(usize, UpdateView)> = pass
         .measured
         .iter()
         .enumerate()
         .skip(len / 2)
-        .filter_map(|(k, m)| m.as_ref().map(|m| (k, m)))
+        .filter_map(|(k, m)| m.map(|m| (k, m)))
         // A grid point's measurements are in the outputs' order.
-        .filter(|(_, m)| m.update.innovation.len() == outputs)
+        .filter(|(_, m)| m.innovation.len() == outputs)
         .collect();
     let &(middle, at_middle) = window.get(window.len() / 2)?;
     let (_, last) = window.last()?;
@@ -989,10 +989,10 @@ fn mehra_update(
         .view((0, 0), (states, states))
         .into_owned();
     let observation = at_middle.observation.columns(0, states).into_owned();
-    let gain = last.update.gain.rows(0, states).into_owned();
+    let gain = last.gain.rows(0, states).into_owned();
     let innovations: Vec<DVector<f64>> = window
         .iter()
-        .map(|(_, m)| m.update.innovation.clone())
+        .map(|(_, m)| m.innovation.into_owned())
         .collect();
     let noisy: Vec<usize> = (0..states).collect();
     let tuned =
@@ -1108,7 +1108,11 @@ pub fn augmented_estimate<'a>(
                         .then_some(&mut process_states[..]),
                 );
             }
-            let end = &pass.filtered[len - 1].mean;
+            let end = pass
+                .filtered
+                .get(len - 1)
+                .expect("a pass keeps every point")
+                .mean;
             for (j, &i) in setup.free.iter().enumerate() {
                 if end[n + j].is_finite() {
                     theta[i] = end[n + j];

@@ -748,17 +748,16 @@ pub fn time_varying_pass<M: StateSpaceModel + ?Sized>(
         negative_log_likelihood: filtered.negative_log_likelihood,
         updates: Vec::new(),
     };
-    for (present, measured) in observations.at.iter().zip(filtered.measured) {
-        let Some(measured) = measured else { continue };
-        let update = measured.update;
+    for (present, update) in observations.at.iter().zip(filtered.measured.iter()) {
+        let Some(update) = update else { continue };
         for (i, &(_, z)) in present.iter().enumerate() {
             pass.innovations.push(update.innovation[i]);
             pass.predicted.push(z - update.innovation[i]);
         }
         pass.updates.push((
             present.iter().map(|&(o, _)| o).collect(),
-            update.innovation,
-            update.innovation_covariance,
+            update.innovation.into_owned(),
+            update.innovation_covariance.into_owned(),
         ));
     }
     Ok(pass)

@@ -29,7 +29,10 @@
 //! The pass keeps what smoothers and likelihoods need: predicted and
 //! filtered estimates, each update and each transition, the innovations
 //! per output with their variances, and the negative log-likelihood
-//! −ln L = ½·Σ_k (νᵀS⁻¹ν + ln det S) + const (Jategaonkar Eq. 5.16).
+//! −ln L = ½·Σ_k (νᵀS⁻¹ν + ln det S) + const (Jategaonkar Eq. 5.16),
+//! each kept quantity in one buffer reserved once per pass
+//! ([`crate::estimation::solver::kept`]); a step allocates nothing once
+//! its buffers have grown.
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
@@ -37,6 +40,7 @@ use crate::estimation::model::state_space::{Jacobians, StateSpaceModel};
 use crate::estimation::solver::kalman::{
     self, Exponential, Gaussian, Measured, ProcessNoise, SparseRows, UpdateWorkspace, resize,
 };
+use crate::estimation::solver::kept::{Gaussians, Matrices, Updates};
 use nalgebra::{DMatrix, DVector};
 
 /// The filter's noise: continuous process-noise spectral density over the
@@ -215,14 +219,14 @@ impl Keep {
 pub struct Pass {
     /// (x, P)_{k|k−1}; at k = 0 the initial estimate (empty unless
     /// [`Keep::predicted`]).
-    pub predicted: Vec<Gaussian>,
+    pub predicted: Gaussians,
     /// (x, P)_{k|k}; without [`Keep::filtered_covariances`] the covariance
     /// is empty (0 × 0) but at the last grid point.
-    pub filtered: Vec<Gaussian>,
-    /// The update at each grid point with measurements.
-    pub measured: Vec<Option<Measured>>,
+    pub filtered: Gaussians,
+    /// The update at each grid point (None where nothing is measured).
+    pub measured: Updates,
     /// Φ from k to k + 1 (len − 1 of them; empty unless [`Keep::transitions`]).
-    pub transitions: Vec<DMatrix<f64>>,
+    pub transitions: Matrices,
     /// Per output, its innovations.
     pub innovations: Vec<Vec<Innovation>>,
     /// ½·Σ (νᵀS⁻¹ν + ln det S).
@@ -263,7 +267,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
 ) -> Result<Pass> {
     let len = model.len();
     check_sizes("filter", model, &initial, noise, observations)?;
-    let mut pass = Pass::with_capacity(len, model.output_count());
+    let mut pass = Pass::keeping(len, model.output_count(), keep);
     let mut state = initial.mean;
     let mut covariance = initial.covariance;
     let process_noise = noise
@@ -281,8 +285,8 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     };
     let mut predicted = DVector::zeros(0);
     let mut next = DVector::zeros(0);
-    let mut rows = Vec::with_capacity(model.output_count());
-    let mut r = DMatrix::zeros(0, 0);
+    let mut innovation = DVector::zeros(0);
+    let (mut h, mut r) = (DMatrix::zeros(0, 0), DMatrix::zeros(0, 0));
     for k in 0..len {
         let t = model.time(k);
         if k > 0 {
@@ -305,21 +309,16 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 &mut time_update.work,
             );
             if keep.transitions {
-                pass.transitions.push(time_update.transition.clone());
+                pass.transitions.push(&time_update.transition);
             }
         }
         if keep.predicted {
-            pass.predicted.push(Gaussian {
-                mean: state.clone(),
-                covariance: covariance.clone(),
-            });
+            pass.predicted.push_parts(&state, Some(&covariance));
         }
         let present = &observations.at[k];
         if present.is_empty() {
             pass.measured.push(None);
         } else {
-            rows.clear();
-            rows.extend(present.iter().map(|&(o, _)| o));
             model.jacobians_into(
                 t,
                 state.as_slice(),
@@ -327,32 +326,46 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 &mut linearised,
                 Some(&mut predicted),
             )?;
-            let h = linearised.outputs_by_state.select_rows(&rows);
-            resize(&mut r, rows.len(), rows.len());
+            // H's rows and R of the measured outputs, ν = z − ŷ.
+            let (m, n) = (present.len(), state.len());
+            resize(&mut h, m, n);
+            resize(&mut r, m, m);
             r.fill(0.0);
-            for (i, &o) in rows.iter().enumerate() {
-                r[(i, i)] = noise.measurement[o];
+            if innovation.len() != m {
+                innovation = DVector::zeros(m);
             }
-            let innovation =
-                DVector::from_iterator(rows.len(), present.iter().map(|&(o, z)| z - predicted[o]));
-            let update = kalman::update_with(
+            for (i, &(o, z)) in present.iter().enumerate() {
+                for j in 0..n {
+                    h[(i, j)] = linearised.outputs_by_state[(o, j)];
+                }
+                r[(i, i)] = noise.measurement[o];
+                innovation[i] = z - predicted[o];
+            }
+            kalman::update_with(
                 &mut state,
                 &mut covariance,
                 &h,
                 &r,
-                innovation,
+                &innovation,
                 &mut update_workspace,
             )
             .map_err(|e| at_time(e, t))?;
-            let term = update.log_likelihood_term_with(update_workspace.log_determinant);
-            pass.measured_with(
-                k,
-                present,
-                Measured {
-                    observation: h,
-                    update,
-                },
-                term,
+            let term = update_workspace.log_likelihood_term(&innovation);
+            pass.negative_log_likelihood += 0.5 * term;
+            let covariance = &update_workspace.innovation_covariance;
+            for (i, &(o, _)) in present.iter().enumerate() {
+                pass.innovations[o].push(Innovation {
+                    k,
+                    value: innovation[i],
+                    variance: covariance[(i, i)],
+                });
+            }
+            pass.measured.push_update(
+                &h,
+                &innovation,
+                covariance,
+                &update_workspace.innovation_inverse,
+                &update_workspace.gain,
             );
         }
         let kept = keep.filtered_covariances || k + 1 == len;
@@ -362,14 +375,25 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
 }
 
 impl Pass {
-    /// An empty pass over `len` grid points and `outputs` outputs.
+    /// An empty pass over `len` grid points and `outputs` outputs that
+    /// keeps everything.
     pub(crate) fn with_capacity(len: usize, outputs: usize) -> Pass {
+        Pass::keeping(len, outputs, Keep::ALL)
+    }
+
+    /// An empty pass over `len` grid points and `outputs` outputs with
+    /// room for what `keep` says it keeps.
+    pub(crate) fn keeping(len: usize, outputs: usize, keep: Keep) -> Pass {
         Pass {
-            predicted: Vec::with_capacity(len),
-            filtered: Vec::with_capacity(len),
-            measured: Vec::with_capacity(len),
-            transitions: Vec::with_capacity(len.saturating_sub(1)),
-            innovations: vec![Vec::new(); outputs],
+            predicted: Gaussians::with_capacity(if keep.predicted { len } else { 0 }, true),
+            filtered: Gaussians::with_capacity(len, keep.filtered_covariances),
+            measured: Updates::with_capacity(len, outputs),
+            transitions: Matrices::with_capacity(if keep.transitions {
+                len.saturating_sub(1)
+            } else {
+                0
+            }),
+            innovations: (0..outputs).map(|_| Vec::with_capacity(len)).collect(),
             negative_log_likelihood: 0.0,
         }
     }
@@ -379,18 +403,6 @@ impl Pass {
     /// innovation and the update itself.
     pub(crate) fn measured_at(&mut self, k: usize, present: &[(usize, f64)], measured: Measured) {
         let term = measured.update.log_likelihood_term();
-        self.measured_with(k, present, measured, term);
-    }
-
-    /// [`Pass::measured_at`] with the update's likelihood term
-    /// ([`kalman::Update::log_likelihood_term`]) given.
-    pub(crate) fn measured_with(
-        &mut self,
-        k: usize,
-        present: &[(usize, f64)],
-        measured: Measured,
-        term: f64,
-    ) {
         let update = &measured.update;
         self.negative_log_likelihood += 0.5 * term;
         for (i, &(o, _)) in present.iter().enumerate() {
@@ -416,10 +428,7 @@ impl Pass {
                 "the filter's state went non-finite at t = {t} s"
             )));
         }
-        self.filtered.push(Gaussian {
-            mean: state.clone(),
-            covariance: covariance.cloned().unwrap_or_else(|| DMatrix::zeros(0, 0)),
-        });
+        self.filtered.push_parts(state, covariance);
         Ok(())
     }
 }

@@ -51,6 +51,7 @@
 //!   W₀ᶜ = W₀ᵐ + 1 − α² + β, Wᵢ = 1/(2(n + λ)).
 
 use crate::error::{Error, Result};
+use crate::estimation::solver::kept::{GaussianView, Gaussians, Matrices, UpdateView, Updates};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// Taylor terms of the scaled exponential.
@@ -530,17 +531,22 @@ impl SparseRows {
 
     /// Reads the non-zeros of `matrix`ᵀ (the rows are its columns).
     pub fn set_transposed(&mut self, matrix: &DMatrix<f64>) {
-        let rows = matrix.nrows();
+        self.set_transposed_values(matrix.as_slice(), matrix.nrows());
+    }
+
+    /// [`SparseRows::set_transposed`] of the matrix of `rows` rows whose
+    /// values (column-major) are `values`.
+    pub fn set_transposed_values(&mut self, values: &[f64], rows: usize) {
         self.begin(rows);
-        self.leading = matrix.ncols();
+        self.leading = values.len().checked_div(rows).unwrap_or(0);
         // Every entry is written and only a non-zero one kept (no branch):
         // `entries` holds room for all of them.
-        if self.entries.len() < matrix.len() {
-            self.entries.resize(matrix.len(), (0, 0.0));
+        if self.entries.len() < values.len() {
+            self.entries.resize(values.len(), (0, 0.0));
         }
         let entries = self.entries.as_mut_slice();
         let mut count = 0;
-        for column in matrix.as_slice().chunks_exact(rows.max(1)) {
+        for column in values.chunks_exact(rows.max(1)) {
             for (i, &value) in column.iter().enumerate() {
                 entries[count] = (i, value);
                 count += usize::from(value != 0.0);
@@ -746,17 +752,31 @@ pub fn update(
     noise: &DMatrix<f64>,
     innovation: DVector<f64>,
 ) -> Result<Update> {
+    let mut workspace = UpdateWorkspace::default();
     update_with(
         state,
         covariance,
         observation,
         noise,
+        &innovation,
+        &mut workspace,
+    )?;
+    let UpdateWorkspace {
+        innovation_covariance,
+        innovation_inverse,
+        gain,
+        ..
+    } = workspace;
+    Ok(Update {
         innovation,
-        &mut UpdateWorkspace::default(),
-    )
+        innovation_covariance,
+        innovation_inverse,
+        gain,
+    })
 }
 
-/// The buffers of a measurement update ([`update_with`]).
+/// The buffers of a measurement update ([`update_with`]) and what it
+/// produced: S, S⁻¹, K, ln det S.
 #[derive(Debug, Clone, Default)]
 pub struct UpdateWorkspace {
     observation: SparseRows,
@@ -766,23 +786,47 @@ pub struct UpdateWorkspace {
     half: DMatrix<f64>,
     /// K·Eᵀ.
     product: DMatrix<f64>,
-    /// ln det S of the last update (its Cholesky factor's).
-    pub(crate) log_determinant: f64,
+    /// L⁻¹ of S's Cholesky factor L (lower triangle).
+    root_inverse: DMatrix<f64>,
+    /// S = H·P⁻·Hᵀ + R.
+    pub innovation_covariance: DMatrix<f64>,
+    /// S⁻¹.
+    pub innovation_inverse: DMatrix<f64>,
+    /// K = P⁻·Hᵀ·S⁻¹.
+    pub gain: DMatrix<f64>,
+    /// ln det S (its Cholesky factor's).
+    pub log_determinant: f64,
 }
 
-/// [`update`] with its buffers in `workspace`. Joseph's form
-/// P⁺ = (I − K·H)·P·(I − K·H)ᵀ + K·R·Kᵀ expanded with M = P·Hᵀ and
-/// S = H·M + R: P⁺ = P − K·Mᵀ − M·Kᵀ + K·S·Kᵀ = P − (K·Eᵀ + E·Kᵀ),
-/// E = M − ½·K·S, products with H over its non-zeros: O(n²·m) for m
-/// outputs instead of O(n³), the same matrix to rounding for any gain.
+impl UpdateWorkspace {
+    /// νᵀ·S⁻¹·ν + ln det S of the last update with the innovation ν, its
+    /// term of −2·ln L (without 2π; [`Update::log_likelihood_term`]).
+    pub fn log_likelihood_term(&self, innovation: &DVector<f64>) -> f64 {
+        let m = innovation.len();
+        let (inverse, nu) = (self.innovation_inverse.as_slice(), innovation.as_slice());
+        let mut quadratic = 0.0;
+        for (j, column) in inverse.chunks_exact(m.max(1)).enumerate().take(m) {
+            quadratic += nu[j] * column.iter().zip(nu).map(|(s, v)| s * v).sum::<f64>();
+        }
+        quadratic + self.log_determinant
+    }
+}
+
+/// [`update`] with its buffers and its S, S⁻¹ and K in `workspace`.
+/// Joseph's form P⁺ = (I − K·H)·P·(I − K·H)ᵀ + K·R·Kᵀ expanded with
+/// M = P·Hᵀ and S = H·M + R: P⁺ = P − K·Mᵀ − M·Kᵀ + K·S·Kᵀ
+/// = P − (K·Eᵀ + E·Kᵀ), E = M − ½·K·S, products with H over its
+/// non-zeros: O(n²·m) for m outputs instead of O(n³), the same matrix to
+/// rounding for any gain. S⁻¹ = L⁻ᵀ·L⁻¹ from S = L·Lᵀ with L⁻¹ formed
+/// once (m divisions). Allocates nothing once the buffers have grown.
 pub fn update_with(
     state: &mut DVector<f64>,
     covariance: &mut DMatrix<f64>,
     observation: &DMatrix<f64>,
     noise: &DMatrix<f64>,
-    innovation: DVector<f64>,
+    innovation: &DVector<f64>,
     workspace: &mut UpdateWorkspace,
-) -> Result<Update> {
+) -> Result<()> {
     let n = state.len();
     let m = observation.nrows();
     let UpdateWorkspace {
@@ -790,11 +834,16 @@ pub fn update_with(
         cross,
         half,
         product,
+        root_inverse,
+        innovation_covariance: s,
+        innovation_inverse: inverse,
+        gain,
         log_determinant: log_det,
     } = workspace;
     sparse.set(observation);
     sparse.times_transposed(covariance, cross);
-    let mut s = noise.clone();
+    resize(s, m, m);
+    s.copy_from(noise);
     for p in 0..m {
         let column = cross.column(p);
         for o in 0..m {
@@ -812,18 +861,45 @@ pub fn update_with(
             s[(p, o)] = mean;
         }
     }
-    let cholesky = Cholesky::new(s.clone()).ok_or_else(|| {
+    *log_det = inverse_by_root(s, root_inverse, inverse).ok_or_else(|| {
         Error::Other(
             "the innovation covariance H·P·Hᵀ + R is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
         )
     })?;
-    *log_det = log_determinant(&cholesky);
-    let inverse = cholesky.inverse();
-    let gain = &*cross * &inverse;
-    state.gemv(1.0, &gain, &innovation, 1.0);
+    // K = M·S⁻¹ and E = M − ½·K·S, column by column.
+    resize(gain, n, m);
     resize(half, n, m);
-    half.copy_from(cross);
-    half.gemm(-0.5, &gain, &s, 1.0);
+    if n > 0 {
+        let (m_values, k_values) = (cross.as_slice(), gain.as_mut_slice());
+        let (inverse, s) = (inverse.as_slice(), s.as_slice());
+        let e_values = half.as_mut_slice();
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                for p in 0..m {
+                    let column = &mut k_values[p * n..(p + 1) * n];
+                    column.fill(0.0);
+                    for o in 0..m {
+                        let factor = inverse[o + p * m];
+                        for (into, &x) in column.iter_mut().zip(&m_values[o * n..(o + 1) * n]) {
+                            *into += factor * x;
+                        }
+                    }
+                }
+                e_values.copy_from_slice(m_values);
+                for p in 0..m {
+                    let column = &mut e_values[p * n..(p + 1) * n];
+                    for o in 0..m {
+                        let factor = -0.5 * s[o + p * m];
+                        for (into, &k) in column.iter_mut().zip(&k_values[o * n..(o + 1) * n]) {
+                            *into += factor * k;
+                        }
+                    }
+                }
+            },
+        );
+    }
+    state.gemv(1.0, gain, innovation, 1.0);
     // K·Eᵀ, column by column.
     resize(product, n, n);
     if n > 0 {
@@ -846,12 +922,69 @@ pub fn update_with(
         );
     }
     symmetric_difference(covariance, product);
-    Ok(Update {
-        innovation,
-        innovation_covariance: s,
-        innovation_inverse: inverse,
-        gain,
-    })
+    Ok(())
+}
+
+/// S⁻¹ of a symmetric positive definite S into `inverse` by its Cholesky
+/// factor S = L·Lᵀ: L⁻¹ into `root_inverse` (lower triangle; one division
+/// per row), S⁻¹ = L⁻ᵀ·L⁻¹ (exactly symmetric). Returns ln det S, or None
+/// when S is not positive definite (or not finite).
+fn inverse_by_root(
+    s: &DMatrix<f64>,
+    root_inverse: &mut DMatrix<f64>,
+    inverse: &mut DMatrix<f64>,
+) -> Option<f64> {
+    let m = s.nrows();
+    // L by columns into the lower triangle of `inverse` (a scratch here),
+    // the reciprocals of its diagonal into `root_inverse`'s.
+    resize(inverse, m, m);
+    resize(root_inverse, m, m);
+    let (l, t, s) = (
+        inverse.as_mut_slice(),
+        root_inverse.as_mut_slice(),
+        s.as_slice(),
+    );
+    let mut log_det = 0.0;
+    for j in 0..m {
+        let mut d = s[j + j * m];
+        for k in 0..j {
+            d -= l[j + k * m] * l[j + k * m];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return None;
+        }
+        let root = d.sqrt();
+        log_det += root.ln();
+        let reciprocal = 1.0 / root;
+        l[j + j * m] = root;
+        t[j + j * m] = reciprocal;
+        for i in j + 1..m {
+            let mut v = s[i + j * m];
+            for k in 0..j {
+                v -= l[i + k * m] * l[j + k * m];
+            }
+            l[i + j * m] = v * reciprocal;
+        }
+    }
+    // T = L⁻¹ column by column: T_jj = 1/L_jj, T_ij = −(Σ_{j≤k<i} L_ik·T_kj)/L_ii.
+    for j in 0..m {
+        for i in j + 1..m {
+            let mut v = 0.0;
+            for k in j..i {
+                v += l[i + k * m] * t[k + j * m];
+            }
+            t[i + j * m] = -v * t[i + i * m];
+        }
+    }
+    // S⁻¹_ij = Σ_{k ≥ max(i, j)} T_ki·T_kj: dot products of T's columns.
+    for j in 0..m {
+        for i in 0..=j {
+            let value = (j..m).map(|k| t[k + i * m] * t[k + j * m]).sum::<f64>();
+            l[i + j * m] = value;
+            l[j + i * m] = value;
+        }
+    }
+    Some(2.0 * log_det)
 }
 
 /// P ← ½·(P + Pᵀ) − (F + Fᵀ), both n × n.
@@ -1057,22 +1190,37 @@ pub struct Gaussian {
     pub covariance: DMatrix<f64>,
 }
 
-/// The RTS smoother over a filter's pass: `filtered[k]` = (x, P)_{k|k},
-/// `predicted[k]` = (x, P)_{k|k−1} (predicted[0] unused),
-/// `transitions[k]` = Φ from k to k + 1. Returns (x, P)_{k|N}.
+/// The RTS smoother over a filter's pass: `filtered[k]` = (x, P)_{k|k}
+/// (every covariance kept), `predicted[k]` = (x, P)_{k|k−1} (predicted[0]
+/// unused), `transitions[k]` = Φ from k to k + 1. Returns (x, P)_{k|N}.
 pub fn rts_smooth(
-    filtered: &[Gaussian],
-    predicted: &[Gaussian],
-    transitions: &[DMatrix<f64>],
+    filtered: &Gaussians,
+    predicted: &Gaussians,
+    transitions: &Matrices,
 ) -> Result<Vec<Gaussian>> {
     let n = filtered.len();
     if n == 0 {
         return Ok(Vec::new());
     }
     let mut smoothed = filtered.to_vec();
+    let dimension = smoothed[0].mean.len();
+    let complete = predicted.len() >= n
+        && transitions.len() + 1 >= n
+        && smoothed.iter().all(|g| g.covariance.nrows() == dimension)
+        && (1..n).all(|k| {
+            predicted
+                .get(k)
+                .is_some_and(|g| g.covariance.nrows() == dimension)
+        });
+    if !complete {
+        return Err(Error::Other(
+            "the RTS smoother needs every filtered and predicted covariance and every transition"
+                .into(),
+        ));
+    }
     for k in (0..n - 1).rev() {
-        let prior = &predicted[k + 1];
-        let inverse = Cholesky::new(prior.covariance.clone())
+        let prior = predicted.get(k + 1).expect("checked above");
+        let inverse = Cholesky::new(prior.covariance.into_owned())
             .ok_or_else(|| {
                 Error::Other(format!(
                     "the RTS smoother: the predicted covariance at step {} is not positive definite",
@@ -1080,10 +1228,11 @@ pub fn rts_smooth(
                 ))
             })?
             .inverse();
-        let gain = &filtered[k].covariance * transitions[k].transpose() * inverse;
-        let mean = &filtered[k].mean + &gain * (&smoothed[k + 1].mean - &prior.mean);
-        let covariance = &filtered[k].covariance
-            + &gain * (&smoothed[k + 1].covariance - &prior.covariance) * gain.transpose();
+        let phi = transitions.get(k).expect("checked above");
+        let gain = &smoothed[k].covariance * phi.transpose() * inverse;
+        let mean = &smoothed[k].mean + &gain * (&smoothed[k + 1].mean - prior.mean);
+        let covariance = &smoothed[k].covariance
+            + &gain * (&smoothed[k + 1].covariance - prior.covariance) * gain.transpose();
         smoothed[k] = Gaussian {
             mean,
             covariance: (&covariance + covariance.transpose()) * 0.5,
@@ -1110,16 +1259,16 @@ pub struct Measured {
 /// E = G − ½·Hᵀ·C as Λ − (E·H + Hᵀ·Eᵀ) (O(n²·m) for m outputs); only
 /// P·Λ·P is a product of two dense n × n matrices.
 pub fn mbf_smooth(
-    predicted: &[Gaussian],
-    measured: &[Option<Measured>],
-    transitions: &[DMatrix<f64>],
+    predicted: &Gaussians,
+    measured: &Updates,
+    transitions: &Matrices,
 ) -> Vec<Gaussian> {
     let mut smoothed = predicted.to_vec();
     mbf_backward(
         predicted,
         measured,
         transitions,
-        |k, prior, adjoint, information, work| {
+        |k, prior, p, adjoint, information, work| {
             let n = adjoint.len();
             let into = &mut smoothed[k];
             into.mean.copy_from(&prior.mean);
@@ -1127,11 +1276,7 @@ pub fn mbf_smooth(
             let [product, outer] = work;
             product.gemm(1.0, information, &prior.covariance, 0.0);
             outer.gemm(1.0, &prior.covariance, product, 0.0);
-            let (p, q, smoothed) = (
-                prior.covariance.as_slice(),
-                outer.as_slice(),
-                into.covariance.as_mut_slice(),
-            );
+            let (p, q, smoothed) = (p, outer.as_slice(), into.covariance.as_mut_slice());
             for j in 0..n {
                 for i in 0..=j {
                     let (ij, ji) = (i + j * n, j + i * n);
@@ -1149,18 +1294,18 @@ pub fn mbf_smooth(
 /// (as a column): P_ii − p_iᵀ·(Λ·p_i) with p_i column i of P = P_{k|k−1},
 /// one dense n × n product where the covariance takes two.
 pub fn mbf_smooth_variances(
-    predicted: &[Gaussian],
-    measured: &[Option<Measured>],
-    transitions: &[DMatrix<f64>],
+    predicted: &Gaussians,
+    measured: &Updates,
+    transitions: &Matrices,
 ) -> Vec<(DVector<f64>, DVector<f64>)> {
     let mut smoothed = vec![(DVector::zeros(0), DVector::zeros(0)); predicted.len()];
     mbf_backward(
         predicted,
         measured,
         transitions,
-        |k, prior, adjoint, information, work| {
+        |k, prior, _, adjoint, information, work| {
             let n = adjoint.len();
-            let mut mean = prior.mean.clone();
+            let mut mean = prior.mean.into_owned();
             mean.gemv(-1.0, &prior.covariance, adjoint, 1.0);
             let [product, _] = work;
             product.gemm(1.0, information, &prior.covariance, 0.0);
@@ -1177,13 +1322,20 @@ pub fn mbf_smooth_variances(
 }
 
 /// The smoother's backward sweep (module header): at each grid point k,
-/// from the last down, `at`(k, (x, P)_{k|k−1}, λ̃_k, Λ̃_k, two n × n work
-/// matrices).
+/// from the last down, `at`(k, (x, P)_{k|k−1}, P_{k|k−1}'s values, λ̃_k,
+/// Λ̃_k, two n × n work matrices).
 fn mbf_backward(
-    predicted: &[Gaussian],
-    measured: &[Option<Measured>],
-    transitions: &[DMatrix<f64>],
-    mut at: impl FnMut(usize, &Gaussian, &DVector<f64>, &DMatrix<f64>, &mut [DMatrix<f64>; 2]),
+    predicted: &Gaussians,
+    measured: &Updates,
+    transitions: &Matrices,
+    mut at: impl FnMut(
+        usize,
+        GaussianView,
+        &[f64],
+        &DVector<f64>,
+        &DMatrix<f64>,
+        &mut [DMatrix<f64>; 2],
+    ),
 ) {
     let len = predicted.len();
     let Some(first) = predicted.first() else {
@@ -1201,14 +1353,10 @@ fn mbf_backward(
     );
     let mut reduced = DVector::zeros(0);
     for k in (0..len).rev() {
-        if let Some(Measured {
-            observation: h,
-            update,
-        }) = &measured[k]
-        {
+        if let Some(update) = measured.get(k) {
             mbf_measurement(
-                h,
-                update,
+                &update,
+                measured.observation_values(k).expect("an update at k"),
                 &mut adjoint,
                 &mut information,
                 &mut transposed,
@@ -1216,12 +1364,19 @@ fn mbf_backward(
                 &mut work,
             );
         }
-        at(k, &predicted[k], &adjoint, &information, &mut work);
+        let prior = predicted.get(k).expect("k < len");
+        let (_, covariance) = predicted.values(k).expect("k < len");
+        at(k, prior, covariance, &adjoint, &information, &mut work);
         if k > 0 {
             // λ ← Φᵀ·λ, Λ ← Φᵀ·Λ·Φ = (Zᵀ·Φ)ᵀ with Z = Λ·Φ, by Φ's columns.
             let [product, outer] = &mut work;
-            let phi = &transitions[k - 1];
-            transition.set_transposed(phi);
+            let phi = transitions.get(k - 1).expect("a transition between points");
+            transition.set_transposed_values(
+                transitions
+                    .values(k - 1)
+                    .expect("a transition between points"),
+                n,
+            );
             adjoint = phi.tr_mul(&adjoint);
             transition.times_transposed(&information, product);
             product.transpose_to(outer);
@@ -1230,12 +1385,13 @@ fn mbf_backward(
     }
 }
 
-/// The modified Bryson–Frazier smoother's step at a measurement:
+/// The modified Bryson–Frazier smoother's step at a measurement (H's
+/// values `observation`, column-major):
 /// λ ← −Hᵀ·S⁻¹·ν + λ − Hᵀ·(Kᵀ·λ) and
 /// Λ ← Hᵀ·S⁻¹·H + Λ − (E·H + Hᵀ·Eᵀ) ([`mbf_smooth`]).
 fn mbf_measurement(
-    h: &DMatrix<f64>,
-    update: &Update,
+    update: &UpdateView,
+    observation: &[f64],
     adjoint: &mut DVector<f64>,
     information: &mut DMatrix<f64>,
     transposed: &mut SparseRows,
@@ -1248,9 +1404,10 @@ fn mbf_measurement(
     work: &mut [DMatrix<f64>; 2],
 ) {
     let n = adjoint.len();
+    let h = &update.observation;
     let m = h.nrows();
     let gain = &update.gain;
-    transposed.set_transposed(h);
+    transposed.set_transposed_values(observation, m);
     // Hᵀ·v for an m-vector v, over H's non-zeros.
     let h_transposed_times = |v: &[f64], into: &mut [f64]| {
         for (i, into) in into.iter_mut().enumerate() {
@@ -1818,8 +1975,12 @@ mod tests {
         let r = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-3, 4e-3]));
         let mut x = DVector::from_vec(vec![0.1, -0.2, 0.05]);
         let mut p = DMatrix::identity(3, 3) * 0.5;
-        let (mut filtered, mut predicted, mut measured, mut transitions) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut filtered, mut predicted, mut measured, mut transitions) = (
+            Gaussians::with_capacity(80, true),
+            Gaussians::with_capacity(80, true),
+            Updates::with_capacity(80, 2),
+            Matrices::with_capacity(80),
+        );
         for k in 0..80 {
             if k > 0 {
                 x = &d.transition * &x;

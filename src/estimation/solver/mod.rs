@@ -6,5 +6,6 @@ pub mod extended_kalman;
 pub mod fourier;
 pub mod gauss_newton;
 pub mod kalman;
+pub mod kept;
 pub mod regression;
 pub mod unscented_kalman;
