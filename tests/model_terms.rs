@@ -849,8 +849,8 @@ fn stall_lag_in_chord_units_is_flown_and_recovered() {
     let mut fits = Vec::new();
     let mut exact = Vec::new();
     for seed in 1..=12 {
-        let (record, scenario) = case.record("flight-test-25hz", seed);
-        let (bounds, r, status) = three_bounds(&record, &structure, &scenario, "tau1", &options);
+        let (bounds, r, status, exact_bounds) =
+            bounds_of_seed(&case, &structure, "tau1", &options, (seed, &exact_inputs));
         assert_eq!(status, Status::Converged, "seed {seed}");
         let (worst, name) = worst_sigma(&r, |_| true);
         let z = |n: &str| {
@@ -866,14 +866,7 @@ fn stall_lag_in_chord_units_is_flown_and_recovered() {
         );
         assert!(worst < 6.0, "seed {seed}:\n{}", common::truth_table(&r));
         fits.push(bounds);
-        exact.push(white_bound(
-            &case,
-            &exact_inputs,
-            seed,
-            &structure,
-            "tau1",
-            &options,
-        ));
+        exact.push(exact_bounds);
     }
     let ([white, coloured, inputs], _) = bound_honesty("τ1 in c̄/V", &fits);
     assert!(white > 1.6 && white < 4.0, "{white:.2}");
@@ -903,31 +896,6 @@ fn exact_inputs_profile(case: &Case) -> String {
     path.to_str().unwrap().to_string()
 }
 
-/// `parameter`'s error and white bound from a fit of `structure` to the
-/// flight of `seed` recorded by `profile` (the other bounds not computed).
-fn white_bound(
-    case: &Case,
-    profile: &str,
-    seed: u64,
-    structure: &ModelStructure,
-    parameter: &str,
-    options: &OutputErrorOptions,
-) -> Bounds {
-    let (record, scenario) = case.record(profile, seed);
-    let estimate = output_error(&[&record], structure, options).unwrap();
-    assert_eq!(estimate.status, Status::Converged, "{profile}, seed {seed}");
-    let (_, value, sigma, truth) = rows(&estimate, &scenario)
-        .into_iter()
-        .find(|r| r.0 == parameter)
-        .unwrap();
-    Bounds {
-        error: value - truth,
-        white: sigma,
-        coloured: f64::NAN,
-        inputs: f64::NAN,
-    }
-}
-
 /// The residuals' autocorrelation summed to this lag in the coloured
 /// Cramér–Rao bounds (`correlation_lag`).
 const COLOURED_LAG: f64 = 1.0;
@@ -950,16 +918,19 @@ struct Bounds {
     inputs: f64,
 }
 
-/// `parameter`'s [`Bounds`] from fits of `structure` to `record` with
-/// `options` (white), then with the coloured correction, then with the
-/// inputs' noise; and the white fit's rows.
-fn three_bounds(
-    record: &FlightRecord,
+/// `parameter`'s [`Bounds`] on the flight of `seed` recorded by
+/// `flight-test-25hz`, from fits of `structure` with `white` (white),
+/// then with the coloured correction, then with the inputs' noise; the
+/// white fit's rows and status; and its error and white bound on the same
+/// flight recorded with exact inputs (`exact_inputs`, the other bounds
+/// not computed).
+fn bounds_of_seed(
+    case: &Case,
     structure: &ModelStructure,
-    scenario: &Scenario,
     parameter: &str,
     white: &OutputErrorOptions,
-) -> (Bounds, Rows, Status) {
+    (seed, exact_inputs): (u64, &str),
+) -> (Bounds, Rows, Status, Bounds) {
     let coloured = OutputErrorOptions {
         correlation_lag: COLOURED_LAG,
         ..white.clone()
@@ -970,23 +941,34 @@ fn three_bounds(
             .input_noise
             .insert(name.into(), aeroid::units::Quantity::Text(noise.into()));
     }
-    let fit = |options: &OutputErrorOptions| {
+    let fit = |record: &FlightRecord, scenario: &Scenario, options: &OutputErrorOptions| {
         let estimate = output_error(&[record], structure, options).unwrap();
         (rows(&estimate, scenario), estimate.status)
     };
-    let find = |rows: &[(String, f64, f64, f64)]| {
+    let find = |rows: &Rows| {
         let (_, value, sigma, truth) = rows.iter().find(|r| r.0 == parameter).unwrap();
         (value - truth, *sigma)
     };
-    let (white_rows, status) = fit(white);
+    let (record, scenario) = case.record("flight-test-25hz", seed);
+    let (white_rows, status) = fit(&record, &scenario, white);
     let (error, white_sigma) = find(&white_rows);
     let bounds = Bounds {
         error,
         white: white_sigma,
-        coloured: find(&fit(&coloured).0).1,
-        inputs: find(&fit(&inputs).0).1,
+        coloured: find(&fit(&record, &scenario, &coloured).0).1,
+        inputs: find(&fit(&record, &scenario, &inputs).0).1,
     };
-    (bounds, white_rows, status)
+    let (record, scenario) = case.record(exact_inputs, seed);
+    let (exact_rows, exact_status) = fit(&record, &scenario, white);
+    assert_eq!(exact_status, Status::Converged, "exact inputs, seed {seed}");
+    let (error, white_sigma) = find(&exact_rows);
+    let exact = Bounds {
+        error,
+        white: white_sigma,
+        coloured: f64::NAN,
+        inputs: f64::NAN,
+    };
+    (bounds, white_rows, status, exact)
 }
 
 /// How honest each bound is over seeds: the scatter of the estimates (their
@@ -1427,22 +1409,15 @@ fn one_sided_hysteresis_bounds_hold_with_the_inputs_noise() {
         let mut fits = Vec::new();
         let mut exact = Vec::new();
         for seed in 1..=12 {
-            let (record, scenario) = case.record("flight-test-25hz", seed);
             let (error, status) = if index == 1 {
-                let (bounds, _, status) =
-                    three_bounds(&record, &structure, &scenario, "tau2", &options);
+                let (bounds, _, status, exact_bounds) =
+                    bounds_of_seed(&case, &structure, "tau2", &options, (seed, &exact_inputs));
                 let error = bounds.error / bounds.white;
                 fits.push(bounds);
-                exact.push(white_bound(
-                    &case,
-                    &exact_inputs,
-                    seed,
-                    &structure,
-                    "tau2",
-                    &options,
-                ));
+                exact.push(exact_bounds);
                 (error, status)
             } else {
+                let (record, scenario) = case.record("flight-test-25hz", seed);
                 let estimate = output_error(&[&record], &structure, &options).unwrap();
                 let (_, value, sigma, truth) = rows(&estimate, &scenario)
                     .into_iter()

@@ -2158,18 +2158,7 @@ impl Problem<'_> {
             window = regression::LagWindow::Bartlett;
             covariance = middle(window);
         }
-        let mut largest = (1.0, String::new());
-        for (j, parameter) in estimate.parameters.iter_mut().enumerate() {
-            let corrected = covariance[(j, j)].max(0.0).sqrt();
-            let ratio = corrected / parameter.standard_error;
-            if ratio > largest.0 || largest.1.is_empty() {
-                largest = (ratio, parameter.name.clone());
-            }
-            parameter.standard_error = corrected;
-        }
-        estimate.covariance = (0..m)
-            .map(|i| covariance.row(i).iter().copied().collect())
-            .collect();
+        let largest = replace_covariance(estimate, &covariance, |_| true);
         format!(
             "Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein 1997), autocorrelation summed to {lag} s ({} window): up to {:.2} times the white bounds ({})",
             match window {
@@ -2326,21 +2315,7 @@ impl Problem<'_> {
         share /= valid.len() as f64;
         let held = DMatrix::from_fn(m, m, |i, j| estimate.covariance[i][j]);
         let covariance = held + share;
-        let mut largest = (1.0, String::new());
-        for (j, parameter) in estimate.parameters.iter_mut().enumerate() {
-            if !finite[j] {
-                continue;
-            }
-            let widened = covariance[(j, j)].max(0.0).sqrt();
-            let ratio = widened / parameter.standard_error;
-            if ratio > largest.0 || largest.1.is_empty() {
-                largest = (ratio, parameter.name.clone());
-            }
-            parameter.standard_error = widened;
-        }
-        estimate.covariance = (0..m)
-            .map(|i| covariance.row(i).iter().copied().collect())
-            .collect();
+        let largest = replace_covariance(estimate, &covariance, |j| finite[j]);
         let channels: Vec<String> = noise
             .iter()
             .map(|(name, sigma)| format!("{name} {sigma:.3e}"))
@@ -2401,6 +2376,32 @@ impl Problem<'_> {
         }
         assembled.as_mut().expect("assembled above")
     }
+}
+
+/// Sets the estimate's covariance to `covariance` and the standard errors
+/// of the parameters `changed` selects to its diagonal's roots; returns
+/// the largest ratio of a new standard error to the old one, and whose.
+fn replace_covariance(
+    estimate: &mut Estimate,
+    covariance: &DMatrix<f64>,
+    changed: impl Fn(usize) -> bool,
+) -> (f64, String) {
+    let mut largest = (1.0, String::new());
+    for (j, parameter) in estimate.parameters.iter_mut().enumerate() {
+        if !changed(j) {
+            continue;
+        }
+        let new = covariance[(j, j)].max(0.0).sqrt();
+        let ratio = new / parameter.standard_error;
+        if ratio > largest.0 || largest.1.is_empty() {
+            largest = (ratio, parameter.name.clone());
+        }
+        parameter.standard_error = new;
+    }
+    estimate.covariance = (0..covariance.nrows())
+        .map(|i| covariance.row(i).iter().copied().collect())
+        .collect();
+    largest
 }
 
 /// ∂y/∂θ at the samples for `unknowns` from the grids' sensitivities to
