@@ -327,6 +327,7 @@ fn frozen_points(measured: &[FlightPathState]) -> impl Iterator<Item = FlightPat
 /// measured pseudo-controls, and a step's last stage has the next grid
 /// point's, so most are reused; measured ones come from [`Frozen`] at the
 /// point set by [`Memo::at_point`].
+#[derive(Clone, Copy)]
 struct Memo<'a> {
     x: Option<FlightPathState>,
     angles: Angles,
@@ -1837,25 +1838,44 @@ impl DrivenSimulation {
         FlightPathState::from_fn(|i, _| if mask[i] == 1.0 { x[i] } else { measured[i] })
     }
 
+    /// The measured states, controls and pseudo-control rates at the
+    /// later RK4 stage times of step k, its midpoint and its end
+    /// ([`DrivenSimulation::inputs_inside`]): the same for every state the
+    /// step starts from.
+    pub(super) fn stage_inputs(&self, k: usize) -> StageInputs {
+        let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
+        let at = |fraction: f64| {
+            let (measured, controls, pseudo, _) = self.inputs_inside(k, fraction, ends);
+            (measured, controls, pseudo)
+        };
+        StageInputs {
+            k,
+            middle: at(0.5),
+            end: at(1.0),
+        }
+    }
+
     /// The one integration step of the postulated model: RK4
     /// ([`rk4_step`]) from the state `x` at grid point k (`first` its
     /// rates, evaluated by the caller) to grid point k + 1, the `mask`ed
     /// states integrated and the others the next grid point's measured
-    /// values. `rates(state, controls, pseudo, memo)` evaluates ẋ at the
-    /// three later stages, given the stage's merged state and inputs
-    /// ([`DrivenSimulation::inputs_at`]) with `memo` at its frozen point.
+    /// values, the later stages' inputs `inputs` (step k's,
+    /// [`DrivenSimulation::stage_inputs`]). `rates(state, controls, pseudo,
+    /// memo)` evaluates ẋ at the three later stages, given the stage's
+    /// merged state and inputs with `memo` at its frozen point.
     /// Both [`DrivenSimulation::simulate`] and the state-space view's step
-    /// ([`super::state_space`]) take their steps here.
+    /// ([`super::state_space`], through [`PlainSteps`]) take their steps
+    /// here.
     fn step_from(
         &self,
-        k: usize,
+        inputs: &StageInputs,
         x: &FlightPathState,
         mask: &FlightPathState,
         first: &FlightPathState,
         memo: &mut Memo,
         mut rates: impl FnMut(&FlightPathState, &Controls, PseudoRates, &mut Memo) -> FlightPathState,
     ) -> FlightPathState {
-        let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
+        let k = inputs.k;
         let next = rk4_step(x, self.step, |x, fraction| {
             // The first stage is the grid point, evaluated by the caller.
             if fraction == 0.0 {
@@ -1863,53 +1883,40 @@ impl DrivenSimulation {
             }
             // The step's end is the next grid point; the middle stages are
             // at the step's midpoint.
-            memo.at_point(if fraction == 1.0 {
-                2 * k + 2
+            let (point, (measured, controls, pseudo)) = if fraction == 1.0 {
+                (2 * k + 2, &inputs.end)
             } else {
-                2 * k + 1
-            });
-            let (measured, controls, pseudo, _) = self.inputs_inside(k, fraction, ends);
-            let merged = Self::merged(x, &measured, mask);
-            rates(&merged, &controls, pseudo, memo).component_mul(mask)
+                (2 * k + 1, &inputs.middle)
+            };
+            memo.at_point(point);
+            let merged = Self::merged(x, measured, mask);
+            rates(&merged, controls, *pseudo, memo).component_mul(mask)
         });
         Self::merged(&next, &self.measured[k + 1], mask)
     }
 
-    /// One plain step of `model` from the full flight-path state `x` at
-    /// grid point k ([`DrivenSimulation::step_from`], a fresh memo): the
-    /// step [`DrivenSimulation::simulate`] takes from the same state.
-    pub(super) fn step_plain(
-        &self,
-        model: &FlightModel,
+    /// Plain steps of `model`'s form (which states `mask` integrates, the
+    /// air of `atmosphere`) from grid point k, for many start states
+    /// ([`PlainSteps::step`]).
+    pub(super) fn plain_steps<'a>(
+        &'a self,
         k: usize,
-        x: &FlightPathState,
-    ) -> FlightPathState {
-        let atmosphere = &model.environment.atmosphere;
-        let mask = self.mask(model);
+        mask: &FlightPathState,
+        atmosphere: &Atmosphere,
+    ) -> PlainSteps<'a> {
         let measured_states = std::array::from_fn(|i| mask[i] == 0.0);
         let frozen = self.frozen.for_memo(&self.measured, atmosphere);
         let mut memo = Memo::new(measured_states, frozen);
         memo.at_point(2 * k);
-        let (angles, air) = memo.of(x, atmosphere);
-        let (first, _) = derivative(
-            model,
-            x,
-            &angles,
-            &air,
-            &self.controls[k],
-            self.pseudo_rates(k),
-        );
-        self.step_from(
-            k,
-            x,
-            &mask,
-            &first,
-            &mut memo,
-            |x, controls, pseudo, memo| {
-                let (angles, air) = memo.of(x, atmosphere);
-                derivative(model, x, &angles, &air, controls, pseudo).0
-            },
-        )
+        PlainSteps {
+            simulation: self,
+            mask: *mask,
+            atmosphere: *atmosphere,
+            inputs: self.stage_inputs(k),
+            start: (self.controls[k], self.pseudo_rates(k)),
+            memo,
+            first: None,
+        }
     }
 
     /// Simulates from `initial`, calling `sink(k, y, (∂y/∂θ)ᵀ)` at every
@@ -2061,7 +2068,7 @@ impl DrivenSimulation {
             let end_pseudo = self.pseudo_rates(k + 1);
             let mut stage = 0;
             x = self.step_from(
-                k,
+                &self.stage_inputs(k),
                 &x,
                 &mask,
                 &point.rates,
@@ -2125,6 +2132,66 @@ impl DrivenSimulation {
             std::mem::swap(&mut point, &mut next_point);
         }
         Ok(())
+    }
+}
+
+/// The inputs of step k's later RK4 stages ([`DrivenSimulation::stage_inputs`]):
+/// the measured state, controls and pseudo-control rates at its midpoint
+/// and at its end.
+pub(super) struct StageInputs {
+    k: usize,
+    middle: (FlightPathState, Controls, PseudoRates),
+    end: (FlightPathState, Controls, PseudoRates),
+}
+
+/// Plain steps from one grid point for many start states (and models that
+/// differ in their parameters only: the sigma points of an unscented
+/// filter), with what they share taken once: the stages' inputs and
+/// frozen points, and the first stage's angles and air for start states
+/// equal to the last one's ([`DrivenSimulation::plain_steps`]). Each step
+/// is the one a fresh simulation takes from its start state, bit for bit.
+pub(super) struct PlainSteps<'a> {
+    simulation: &'a DrivenSimulation,
+    mask: FlightPathState,
+    atmosphere: Atmosphere,
+    inputs: StageInputs,
+    /// The controls and pseudo-control rates at the grid point.
+    start: (Controls, PseudoRates),
+    /// A fresh memo at the grid point.
+    memo: Memo<'a>,
+    /// The last start state, its memo after the first stage and the
+    /// angles and air that stage took.
+    first: Option<(FlightPathState, Memo<'a>, Angles, Surroundings)>,
+}
+
+impl PlainSteps<'_> {
+    /// One plain step of `model` from the full flight-path state `x`
+    /// ([`DrivenSimulation::step_from`]). `model` has the form the steps
+    /// were made for (its atmosphere, the states it integrates).
+    pub(super) fn step(&mut self, model: &FlightModel, x: &FlightPathState) -> FlightPathState {
+        let (mut memo, angles, air) = match self.first {
+            Some((last, memo, angles, air)) if last == *x => (memo, angles, air),
+            _ => {
+                let mut memo = self.memo;
+                let (angles, air) = memo.of(x, &self.atmosphere);
+                self.first = Some((*x, memo, angles, air));
+                (memo, angles, air)
+            }
+        };
+        let (controls, pseudo) = &self.start;
+        let (first, _) = derivative(model, x, &angles, &air, controls, *pseudo);
+        let atmosphere = &self.atmosphere;
+        self.simulation.step_from(
+            &self.inputs,
+            x,
+            &self.mask,
+            &first,
+            &mut memo,
+            |x, controls, pseudo, memo| {
+                let (angles, air) = memo.of(x, atmosphere);
+                derivative(model, x, &angles, &air, controls, pseudo).0
+            },
+        )
     }
 }
 
