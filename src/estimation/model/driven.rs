@@ -31,7 +31,7 @@ use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
 use crate::sim::aero::{AeroCoefficients, Coefficient, TermRegressors};
 use crate::sim::atmosphere::{Air, Atmosphere, SEA_LEVEL_DENSITY};
-use crate::sim::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Kinematics};
+use crate::sim::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Forcing, Kinematics};
 use crate::sim::integrator::{Interpolation, affine, rk4_linear_step, rk4_step};
 use crate::sim::state::{self, CONTROL_COUNT, Control, Controls, SinCos};
 use crate::units::STANDARD_GRAVITY;
@@ -488,7 +488,24 @@ fn derivative<T: Real>(
     controls: &Controls,
     pseudo: PseudoRates,
 ) -> (SVector<T, FLIGHT_PATH_SIZE>, Evaluation<T>) {
-    let evaluation = model.evaluate_kinematics(&kinematics(x, angles, air), controls);
+    let kinematics = kinematics(x, angles, air);
+    let forcing = model.forcing(&kinematics, controls);
+    derivative_at(model, x, angles, &kinematics, &forcing, pseudo)
+}
+
+/// [`derivative`] with x's kinematics and their forcing given
+/// ([`FlightModel::forcing`]): what models that differ in their
+/// aerodynamic parameters share at one state and input.
+#[inline(always)]
+fn derivative_at<T: Real>(
+    model: &FlightModel,
+    x: &SVector<T, FLIGHT_PATH_SIZE>,
+    angles: &Angles<T>,
+    kinematics: &Kinematics<T>,
+    forcing: &Forcing<T>,
+    pseudo: PseudoRates,
+) -> (SVector<T, FLIGHT_PATH_SIZE>, Evaluation<T>) {
+    let evaluation = model.evaluate_forced(kinematics, forcing);
     (
         flight_path_rates(x, angles, &Motion::of(&evaluation), pseudo),
         evaluation,
@@ -1253,42 +1270,71 @@ pub(super) fn evaluate(
     (rates, values)
 }
 
-/// The angles' sines and cosines and the air of the last full state an
+/// The angles' sines and cosines, the kinematics and the forcing
+/// ([`FlightModel::forcing`]) of the last full state and controls an
 /// evaluation was at (with the measured quantities and the atmosphere it
 /// was taken with): a filter evaluates its sigma points' outputs at one
 /// time, most of them (those that move only an augmented model's
 /// parameters) at one state, and they share them.
 #[derive(Debug, Clone, Default)]
 pub(super) struct PointMemo {
-    last: Option<(FlightPathState, Ambient, Atmosphere, Angles, Surroundings)>,
+    last: Option<PointKey>,
+}
+
+/// What a [`PointMemo`] keeps: the point, and what was computed there.
+#[derive(Debug, Clone)]
+struct PointKey {
+    x: FlightPathState,
+    controls: Controls,
+    ambient: Ambient,
+    atmosphere: Atmosphere,
+    angles: Angles,
+    kinematics: Kinematics,
+    forcing: Forcing,
 }
 
 impl PointMemo {
-    /// The library's sines and cosines of x's angles and the air at x's
-    /// altitude ([`Ambient::surroundings`]), the kept ones when x, the
-    /// measured quantities and the atmosphere are the last call's.
+    /// The library's sines and cosines of x's angles, the kinematics with
+    /// the air at x's altitude ([`Ambient::surroundings`]) and their
+    /// forcing by `model` with `controls`; the kept ones when x, the
+    /// controls, the measured quantities and the atmosphere are the last
+    /// call's (`model` differing from the last call's in its aerodynamic
+    /// parameters at most).
     fn of(
         &mut self,
+        model: &FlightModel,
         x: &FlightPathState,
+        controls: &Controls,
         ambient: Ambient,
-        atmosphere: &Atmosphere,
-    ) -> (Angles, Surroundings) {
-        if let Some((at, was, air_of, angles, air)) = &self.last
-            && at == x
-            && *was == ambient
-            && air_of == atmosphere
+    ) -> (Angles, Kinematics, Forcing) {
+        let atmosphere = &model.environment.atmosphere;
+        if let Some(last) = &self.last
+            && last.x == *x
+            && last.controls == *controls
+            && last.ambient == ambient
+            && last.atmosphere == *atmosphere
         {
-            return (*angles, *air);
+            return (last.angles, last.kinematics, last.forcing);
         }
         let angles = Angles::of(x);
         let air = ambient.surroundings(atmosphere, x[ALTITUDE]);
-        self.last = Some((*x, ambient, *atmosphere, angles, air));
-        (angles, air)
+        let kinematics = kinematics(x, &angles, &air);
+        let forcing = model.forcing(&kinematics, controls);
+        self.last = Some(PointKey {
+            x: *x,
+            controls: *controls,
+            ambient,
+            atmosphere: *atmosphere,
+            angles,
+            kinematics,
+            forcing,
+        });
+        (angles, kinematics, forcing)
     }
 }
 
 /// [`evaluate`] with the outputs written into `values` (as long as
-/// `outputs`), the angles and air from `memo`.
+/// `outputs`), the angles, kinematics and forcing from `memo`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn evaluate_into(
     model: &FlightModel,
@@ -1300,8 +1346,8 @@ pub(super) fn evaluate_into(
     values: &mut [f64],
     memo: &mut PointMemo,
 ) -> FlightPathState {
-    let (angles, air) = memo.of(x, ambient, &model.environment.atmosphere);
-    let (rates, evaluation) = derivative(model, x, &angles, &air, controls, pseudo);
+    let (angles, kinematics, forcing) = memo.of(model, x, controls, ambient);
+    let (rates, evaluation) = derivative_at(model, x, &angles, &kinematics, &forcing, pseudo);
     for (value, output) in values.iter_mut().zip(outputs) {
         *value = output.value(x, &evaluation);
     }
@@ -2148,7 +2194,8 @@ pub(super) struct StageInputs {
 /// differ in their parameters only: the sigma points of an unscented
 /// filter), with what they share taken once: the stages' inputs and
 /// frozen points, and the first stage's angles and air for start states
-/// equal to the last one's ([`DrivenSimulation::plain_steps`]). Each step
+/// equal to the last one's, with their kinematics and forcing
+/// ([`DrivenSimulation::plain_steps`]). Each step
 /// is the one a fresh simulation takes from its start state, bit for bit.
 pub(super) struct PlainSteps<'a> {
     simulation: &'a DrivenSimulation,
@@ -2160,8 +2207,8 @@ pub(super) struct PlainSteps<'a> {
     /// A fresh memo at the grid point.
     memo: Memo<'a>,
     /// The last start state, its memo after the first stage and the
-    /// angles and air that stage took.
-    first: Option<(FlightPathState, Memo<'a>, Angles, Surroundings)>,
+    /// angles, kinematics and forcing that stage took.
+    first: Option<(FlightPathState, Memo<'a>, Angles, Kinematics, Forcing)>,
 }
 
 impl PlainSteps<'_> {
@@ -2169,17 +2216,21 @@ impl PlainSteps<'_> {
     /// ([`DrivenSimulation::step_from`]). `model` has the form the steps
     /// were made for (its atmosphere, the states it integrates).
     pub(super) fn step(&mut self, model: &FlightModel, x: &FlightPathState) -> FlightPathState {
-        let (mut memo, angles, air) = match self.first {
-            Some((last, memo, angles, air)) if last == *x => (memo, angles, air),
+        let (controls, pseudo) = &self.start;
+        let (mut memo, angles, kinematics, forcing) = match self.first {
+            Some((last, memo, angles, kinematics, forcing)) if last == *x => {
+                (memo, angles, kinematics, forcing)
+            }
             _ => {
                 let mut memo = self.memo;
                 let (angles, air) = memo.of(x, &self.atmosphere);
-                self.first = Some((*x, memo, angles, air));
-                (memo, angles, air)
+                let kinematics = kinematics(x, &angles, &air);
+                let forcing = model.forcing(&kinematics, controls);
+                self.first = Some((*x, memo, angles, kinematics, forcing));
+                (memo, angles, kinematics, forcing)
             }
         };
-        let (controls, pseudo) = &self.start;
-        let (first, _) = derivative(model, x, &angles, &air, controls, *pseudo);
+        let (first, _) = derivative_at(model, x, &angles, &kinematics, &forcing, *pseudo);
         let atmosphere = &self.atmosphere;
         self.simulation.step_from(
             &self.inputs,
