@@ -1232,17 +1232,16 @@ impl AeroModel {
         alpha_factor: T,
     ) -> T {
         let values = self.parameters.values();
-        self.terms[coefficient as usize]
-            .iter()
-            .fold(T::constant(-0.0), |sum, t| {
-                let regressor = match t.monomial.single() {
-                    Some(Regressor::Alpha) => regressors[Regressor::Alpha as usize] * alpha_factor,
-                    Some(r) => regressors[r as usize],
-                    None => t.monomial.value(regressors),
-                };
-                sum + regressor * t.coefficient(values)
-            })
-            + self.offsets[coefficient as usize]
+        let mut sum = T::constant(-0.0);
+        for t in &self.terms[coefficient as usize] {
+            let regressor = match t.monomial.single() {
+                Some(Regressor::Alpha) => regressors[Regressor::Alpha as usize] * alpha_factor,
+                Some(r) => regressors[r as usize],
+                None => t.monomial.value(regressors),
+            };
+            sum = sum + regressor * t.coefficient(values);
+        }
+        sum + self.offsets[coefficient as usize]
     }
 
     /// The factor on the lift-type `alpha` term: the Kirchhoff
