@@ -414,11 +414,20 @@ fn a_ukf_steps_sigma_point_evaluations_do_not_allocate() {
         model
             .step_into(k, point.as_slice(), &[], &mut value)
             .unwrap();
-        assert!(same(value.as_slice(), moved.column(j).as_slice()), "step of point {j}");
+        assert!(
+            same(value.as_slice(), moved.column(j).as_slice()),
+            "step of point {j}"
+        );
         let plain = model.step(k, point.as_slice(), &[]).unwrap();
-        assert!(same(plain.as_slice(), value.as_slice()), "step of point {j}");
+        assert!(
+            same(plain.as_slice(), value.as_slice()),
+            "step of point {j}"
+        );
         let y = model.outputs(model.time(k), point.as_slice(), &[]).unwrap();
-        assert!(same(y.as_slice(), outputs.column(j).as_slice()), "outputs of point {j}");
+        assert!(
+            same(y.as_slice(), outputs.column(j).as_slice()),
+            "outputs of point {j}"
+        );
     }
     // The parameter points moved only the kinematic states.
     assert_eq!(moved.rows(4, n - 4), points.rows(4, n - 4));

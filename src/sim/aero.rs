@@ -1160,8 +1160,11 @@ impl AeroModel {
     }
 
     /// The χ the forces use: the state when τ1 > 0, Eq. 3 when τ1 = 0, 1 without stall.
+    #[inline(always)]
     pub fn effective_chi<T: Real>(&self, input: &AeroInput<T>) -> T {
-        if self.chi_is_state() {
+        if self.stall.is_none() {
+            T::constant(1.0)
+        } else if self.chi_is_state() {
             input.chi
         } else {
             let alpha_dot = self.separation_alpha_dot(input.alpha_dot, input.measured_alpha_dot);
@@ -1239,7 +1242,7 @@ impl AeroModel {
                 Some(r) => regressors[r as usize],
                 None => t.monomial.value(regressors),
             };
-            sum = sum + regressor * t.coefficient(values);
+            sum += regressor * t.coefficient(values);
         }
         sum + self.offsets[coefficient as usize]
     }
