@@ -1102,7 +1102,7 @@ impl StateSpaceModel for DrivenStateSpace {
     }
 
     /// The steps of every point from grid point k, what they share taken
-    /// once ([`driven::PlainSteps`]): the stages' inputs, the kept model
+    /// once (`driven::PlainSteps`): the stages' inputs, the kept model
     /// (θ written in once per point, once for all when they share it), and
     /// the first stage's angles and air for consecutive points at one full
     /// state (the sigma points that move only parameters).

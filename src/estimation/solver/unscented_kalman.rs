@@ -69,8 +69,12 @@
 //! On a linear model the transform is exact and the pass is the linear
 //! Kalman filter's with the trapezoidal Q_d (tests/kalman_oracle.rs).
 //! A step's sigma points, propagated points, outputs and compound matrices
-//! live in buffers allocated once per pass (`Work`); the QR is a
-//! Householder triangularisation in place (`triangularise`).
+//! live in buffers allocated once per pass (`Work`); the model steps the
+//! sigma points and evaluates their outputs in one call each
+//! ([`StateSpaceModel::step_points_into`],
+//! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
+//! share once; the QR is a Householder triangularisation in place
+//! (`triangularise`).
 
 use crate::error::{Error, Result};
 use crate::estimation::model::augmented::shape;
