@@ -344,3 +344,87 @@ fn attas_lateral_view() -> (
         DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None).unwrap();
     (record, structure, view, x0)
 }
+
+/// The unscented filter's evaluations of its sigma points: a step's 45
+/// points (the mean, and ± a spread in each of the 4 kinematic and 18
+/// parameter states, as the filter draws them) stepped and their outputs
+/// evaluated in one call each ([`StateSpaceModel::step_points_into`],
+/// [`StateSpaceModel::outputs_points_into`]) give the per-point calls'
+/// numbers bit for bit (the batch shares the step's inputs, the kept
+/// model and, among the 37 points at one kinematic state, the first
+/// stage's angles, kinematics and forcing: sharing must not change a
+/// bit), and after the first call the batched calls allocate nothing in
+/// 100 steps.
+#[test]
+fn a_ukf_steps_sigma_point_evaluations_do_not_allocate() {
+    use aeroid::estimation::model::augmented::Augmented;
+    use aeroid::estimation::model::state_space::{Points, StateSpaceModel};
+    use nalgebra::{DMatrix, DVector};
+
+    let (_, structure, view, x0) = attas_lateral_view();
+    let theta = view.parameters();
+    let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
+    let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
+    let n = model.state_count();
+    let mean = model.state(x0.as_slice());
+    let mut points = DMatrix::zeros(n, 2 * n + 1);
+    for j in 0..2 * n + 1 {
+        points.set_column(j, &mean);
+    }
+    for i in 0..n {
+        let spread = 1e-3 * mean[i].abs().max(0.01);
+        points[(i, 1 + i)] += spread;
+        points[(i, 1 + n + i)] -= spread;
+    }
+    let m = model.output_count();
+    let (mut moved, mut outputs) = (DMatrix::zeros(n, 2 * n + 1), DMatrix::zeros(m, 2 * n + 1));
+    let batch = |k: usize, moved: &mut DMatrix<f64>, outputs: &mut DMatrix<f64>| {
+        model
+            .step_points_into(k, Points::shared(&points, &[]), moved.as_mut_slice(), n)
+            .unwrap();
+        model
+            .outputs_points_into(
+                model.time(k),
+                Points::shared(&points, &[]),
+                outputs.as_mut_slice(),
+                m,
+            )
+            .unwrap();
+    };
+    batch(0, &mut moved, &mut outputs);
+    let before = ALLOCATIONS.with(Cell::get);
+    for k in 1..=100 {
+        batch(k, &mut moved, &mut outputs);
+    }
+    let after = ALLOCATIONS.with(Cell::get);
+    assert_eq!(after - before, 0, "heap allocations in 100 steps' batches");
+
+    let same = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits())
+    };
+    let k = 101;
+    batch(k, &mut moved, &mut outputs);
+    let mut value = DVector::zeros(0);
+    for j in 0..2 * n + 1 {
+        let point = points.column(j).clone_owned();
+        model
+            .step_into(k, point.as_slice(), &[], &mut value)
+            .unwrap();
+        assert!(
+            same(value.as_slice(), moved.column(j).as_slice()),
+            "step of point {j}"
+        );
+        let plain = model.step(k, point.as_slice(), &[]).unwrap();
+        assert!(
+            same(plain.as_slice(), value.as_slice()),
+            "step of point {j}"
+        );
+        let y = model.outputs(model.time(k), point.as_slice(), &[]).unwrap();
+        assert!(
+            same(y.as_slice(), outputs.column(j).as_slice()),
+            "outputs of point {j}"
+        );
+    }
+    // The parameter points moved only the kinematic states.
+    assert_eq!(moved.rows(4, n - 4), points.rows(4, n - 4));
+}

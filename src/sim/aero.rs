@@ -1160,8 +1160,11 @@ impl AeroModel {
     }
 
     /// The χ the forces use: the state when τ1 > 0, Eq. 3 when τ1 = 0, 1 without stall.
+    #[inline(always)]
     pub fn effective_chi<T: Real>(&self, input: &AeroInput<T>) -> T {
-        if self.chi_is_state() {
+        if self.stall.is_none() {
+            T::constant(1.0)
+        } else if self.chi_is_state() {
             input.chi
         } else {
             let alpha_dot = self.separation_alpha_dot(input.alpha_dot, input.measured_alpha_dot);
@@ -1232,17 +1235,16 @@ impl AeroModel {
         alpha_factor: T,
     ) -> T {
         let values = self.parameters.values();
-        self.terms[coefficient as usize]
-            .iter()
-            .fold(T::constant(-0.0), |sum, t| {
-                let regressor = match t.monomial.single() {
-                    Some(Regressor::Alpha) => regressors[Regressor::Alpha as usize] * alpha_factor,
-                    Some(r) => regressors[r as usize],
-                    None => t.monomial.value(regressors),
-                };
-                sum + regressor * t.coefficient(values)
-            })
-            + self.offsets[coefficient as usize]
+        let mut sum = T::constant(-0.0);
+        for t in &self.terms[coefficient as usize] {
+            let regressor = match t.monomial.single() {
+                Some(Regressor::Alpha) => regressors[Regressor::Alpha as usize] * alpha_factor,
+                Some(r) => regressors[r as usize],
+                None => t.monomial.value(regressors),
+            };
+            sum += regressor * t.coefficient(values);
+        }
+        sum + self.offsets[coefficient as usize]
     }
 
     /// The factor on the lift-type `alpha` term: the Kirchhoff

@@ -194,6 +194,18 @@ impl<T: Real> Evaluation<T> {
     }
 }
 
+/// What an evaluation of the equations of motion takes besides the
+/// kinematics and the aerodynamic model ([`FlightModel::forcing`]): the
+/// controls after saturation, the thrust, and in body axes gravity and the
+/// thrust force.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Forcing<T: Real = f64> {
+    pub controls: Controls,
+    pub thrust: f64,
+    gravity_body: Vector3<T>,
+    thrust_force: Vector3<f64>,
+}
+
 /// What the equations of motion need of the state and the wind at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Kinematics<T: Real = f64> {
@@ -317,9 +329,44 @@ impl FlightModel {
         kinematics: &Kinematics<T>,
         controls: &Controls,
     ) -> Evaluation<T> {
+        self.evaluate_forced(kinematics, &self.forcing(kinematics, controls))
+    }
+
+    /// What an evaluation at `kinematics` with `controls` takes besides the
+    /// aerodynamic model ([`Forcing`]): the same for models that differ in
+    /// their aerodynamic parameters only.
+    #[inline(always)]
+    pub fn forcing<T: Real>(&self, kinematics: &Kinematics<T>, controls: &Controls) -> Forcing<T> {
         let aircraft = &self.aircraft;
         let mut controls = *controls;
         aircraft.saturate(&mut controls);
+        let thrust = kinematics.thrust.unwrap_or_else(|| {
+            aircraft.propulsion.thrust(
+                controls[Control::Throttle.index()],
+                kinematics.air.log_density_ratio,
+            )
+        });
+        Forcing {
+            controls,
+            thrust,
+            gravity_body: kinematics
+                .ned_to_body
+                .column(2)
+                .map(|e| e * self.environment.gravity),
+            thrust_force: aircraft.propulsion.direction * thrust,
+        }
+    }
+
+    /// [`FlightModel::evaluate_kinematics`] with its [`Forcing`] given (this
+    /// model's, or that of one that differs in its aerodynamic parameters
+    /// only).
+    #[inline(always)]
+    pub fn evaluate_forced<T: Real>(
+        &self,
+        kinematics: &Kinematics<T>,
+        forcing: &Forcing<T>,
+    ) -> Evaluation<T> {
+        let aircraft = &self.aircraft;
         let Kinematics {
             velocity,
             ned_to_body,
@@ -327,12 +374,13 @@ impl FlightModel {
             air_data,
             ..
         } = kinematics;
-        let thrust = kinematics.thrust.unwrap_or_else(|| {
-            aircraft
-                .propulsion
-                .thrust(controls[Control::Throttle.index()], air.log_density_ratio)
-        });
-        let context = self.context(kinematics, &controls, thrust);
+        let (controls, thrust) = (forcing.controls, forcing.thrust);
+        let context = TranslationalContext {
+            kinematics,
+            controls: &controls,
+            gravity_body: forcing.gravity_body,
+            thrust_force: forcing.thrust_force,
+        };
         let measured_alpha_dot = kinematics.measured_alpha_dot.is_some();
         let translational = if aircraft
             .aero
@@ -423,26 +471,6 @@ impl FlightModel {
             c.y * geometry.chord,
             c.z * geometry.span,
         ) * scale
-    }
-
-    /// What the translational and rotational equations need besides the
-    /// coefficients: gravity in body axes and the thrust force.
-    #[inline(always)]
-    fn context<'a, T: Real>(
-        &self,
-        kinematics: &'a Kinematics<T>,
-        controls: &'a Controls,
-        thrust: f64,
-    ) -> TranslationalContext<'a, T> {
-        TranslationalContext {
-            kinematics,
-            controls,
-            gravity_body: kinematics
-                .ned_to_body
-                .column(2)
-                .map(|e| e * self.environment.gravity),
-            thrust_force: self.aircraft.propulsion.direction * thrust,
-        }
     }
 
     /// Translational acceleration for a guess of α̇ (used by the aero model),

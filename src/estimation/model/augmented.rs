@@ -6,7 +6,7 @@
 //! state is constant over a step (a pseudonoise on it enters only through
 //! the filter's process noise).
 
-use super::state_space::{Jacobians, Scratch, StateSpaceModel};
+use super::state_space::{Jacobians, Points, Scratch, StateSpaceModel};
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
@@ -27,7 +27,8 @@ pub struct Augmented<'a, M: StateSpaceModel + ?Sized> {
 struct Buffers {
     theta: Vec<f64>,
     base: Jacobians,
-    values: DVector<f64>,
+    /// The full θ of each of many points, one after the other.
+    thetas: Vec<f64>,
 }
 
 impl Buffers {
@@ -41,7 +42,7 @@ impl Buffers {
                 outputs_by_state: empty(),
                 outputs_by_parameter: empty(),
             },
-            values: DVector::zeros(0),
+            thetas: Vec::new(),
         }
     }
 }
@@ -108,6 +109,38 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
             theta[j] = z[n + i];
         }
         Ok(&z[..n])
+    }
+
+    /// The base model's points of augmented `points`: their base states,
+    /// each with its full θ (written into `thetas`, its entries other than
+    /// the augmented ones the held θ's once copied).
+    fn base_points<'p>(&self, points: Points<'p>, thetas: &'p mut Vec<f64>) -> Result<Points<'p>> {
+        let n = self.base.state_count();
+        let size = n + self.augmented.len();
+        if points.rows() != size {
+            return Err(Error::Other(format!(
+                "the augmented state has {} values; expected {size}",
+                points.rows()
+            )));
+        }
+        let p = self.theta.len();
+        if thetas.len() != p * points.len() {
+            thetas.clear();
+            for _ in 0..points.len() {
+                thetas.extend_from_slice(&self.theta);
+            }
+        }
+        for (j, theta) in thetas
+            .chunks_exact_mut(p.max(1))
+            .enumerate()
+            .take(points.len())
+        {
+            let z = points.state(j);
+            for (i, &k) in self.augmented.iter().enumerate() {
+                theta[k] = z[n + i];
+            }
+        }
+        points.with_parameters(n, thetas, p)
     }
 
     /// The columns of a base Jacobian for the augmented parameters.
@@ -279,9 +312,24 @@ impl<M: StateSpaceModel + ?Sized> StateSpaceModel for Augmented<'_, M> {
         _theta: &[f64],
         into: &mut DVector<f64>,
     ) -> Result<()> {
+        let m = self.base.output_count();
+        if into.len() != m {
+            *into = DVector::zeros(m);
+        }
+        self.outputs_points_into(t, Points::one(z, &[]), into.as_mut_slice(), m)
+    }
+
+    /// The base's outputs of every point, in one call with each point's θ.
+    fn outputs_points_into(
+        &self,
+        t: f64,
+        points: Points,
+        into: &mut [f64],
+        stride: usize,
+    ) -> Result<()> {
         self.scratch.with(Buffers::new, |buffers| {
-            let x = self.split_into(z, &mut buffers.theta)?;
-            self.base.outputs_into(t, x, &buffers.theta, into)
+            let base = self.base_points(points, &mut buffers.thetas)?;
+            self.base.outputs_points_into(t, base, into, stride)
         })
     }
 
@@ -292,18 +340,32 @@ impl<M: StateSpaceModel + ?Sized> StateSpaceModel for Augmented<'_, M> {
         _theta: &[f64],
         into: &mut DVector<f64>,
     ) -> Result<()> {
+        if into.len() != z.len() {
+            *into = DVector::zeros(z.len());
+        }
+        self.step_points_into(k, Points::one(z, &[]), into.as_mut_slice(), z.len())
+    }
+
+    /// The base's steps of every point, in one call with each point's θ;
+    /// the parameter states carried over.
+    fn step_points_into(
+        &self,
+        k: usize,
+        points: Points,
+        into: &mut [f64],
+        stride: usize,
+    ) -> Result<()> {
+        points.check_into(into.len(), stride, self.state_count())?;
+        let n = self.base.state_count();
         self.scratch.with(Buffers::new, |buffers| {
-            let x = self.split_into(z, &mut buffers.theta)?;
-            let n = x.len();
-            self.base
-                .step_into(k, x, &buffers.theta, &mut buffers.values)?;
-            if into.len() != z.len() {
-                *into = DVector::zeros(z.len());
-            }
-            into.as_mut_slice()[..n].copy_from_slice(buffers.values.as_slice());
-            into.as_mut_slice()[n..].copy_from_slice(&z[n..]);
-            Ok(())
-        })
+            let base = self.base_points(points, &mut buffers.thetas)?;
+            self.base.step_points_into(k, base, into, stride)
+        })?;
+        for j in 0..points.len() {
+            let z = points.state(j);
+            into[j * stride + n..j * stride + z.len()].copy_from_slice(&z[n..]);
+        }
+        Ok(())
     }
 
     fn step(&self, k: usize, z: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {

@@ -31,7 +31,7 @@ use crate::prep::differentiation::Differentiator;
 use crate::record::FlightRecord;
 use crate::sim::aero::{AeroCoefficients, Coefficient, TermRegressors};
 use crate::sim::atmosphere::{Air, Atmosphere, SEA_LEVEL_DENSITY};
-use crate::sim::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Kinematics};
+use crate::sim::dynamics::{Accelerations, AirData, Evaluation, FlightModel, Forcing, Kinematics};
 use crate::sim::integrator::{Interpolation, affine, rk4_linear_step, rk4_step};
 use crate::sim::state::{self, CONTROL_COUNT, Control, Controls, SinCos};
 use crate::units::STANDARD_GRAVITY;
@@ -327,6 +327,7 @@ fn frozen_points(measured: &[FlightPathState]) -> impl Iterator<Item = FlightPat
 /// measured pseudo-controls, and a step's last stage has the next grid
 /// point's, so most are reused; measured ones come from [`Frozen`] at the
 /// point set by [`Memo::at_point`].
+#[derive(Clone, Copy)]
 struct Memo<'a> {
     x: Option<FlightPathState>,
     angles: Angles,
@@ -487,7 +488,24 @@ fn derivative<T: Real>(
     controls: &Controls,
     pseudo: PseudoRates,
 ) -> (SVector<T, FLIGHT_PATH_SIZE>, Evaluation<T>) {
-    let evaluation = model.evaluate_kinematics(&kinematics(x, angles, air), controls);
+    let kinematics = kinematics(x, angles, air);
+    let forcing = model.forcing(&kinematics, controls);
+    derivative_at(model, x, angles, &kinematics, &forcing, pseudo)
+}
+
+/// [`derivative`] with x's kinematics and their forcing given
+/// ([`FlightModel::forcing`]): what models that differ in their
+/// aerodynamic parameters share at one state and input.
+#[inline(always)]
+fn derivative_at<T: Real>(
+    model: &FlightModel,
+    x: &SVector<T, FLIGHT_PATH_SIZE>,
+    angles: &Angles<T>,
+    kinematics: &Kinematics<T>,
+    forcing: &Forcing<T>,
+    pseudo: PseudoRates,
+) -> (SVector<T, FLIGHT_PATH_SIZE>, Evaluation<T>) {
+    let evaluation = model.evaluate_forced(kinematics, forcing);
     (
         flight_path_rates(x, angles, &Motion::of(&evaluation), pseudo),
         evaluation,
@@ -1252,42 +1270,71 @@ pub(super) fn evaluate(
     (rates, values)
 }
 
-/// The angles' sines and cosines and the air of the last full state an
+/// The angles' sines and cosines, the kinematics and the forcing
+/// ([`FlightModel::forcing`]) of the last full state and controls an
 /// evaluation was at (with the measured quantities and the atmosphere it
 /// was taken with): a filter evaluates its sigma points' outputs at one
 /// time, most of them (those that move only an augmented model's
 /// parameters) at one state, and they share them.
 #[derive(Debug, Clone, Default)]
 pub(super) struct PointMemo {
-    last: Option<(FlightPathState, Ambient, Atmosphere, Angles, Surroundings)>,
+    last: Option<PointKey>,
+}
+
+/// What a [`PointMemo`] keeps: the point, and what was computed there.
+#[derive(Debug, Clone)]
+struct PointKey {
+    x: FlightPathState,
+    controls: Controls,
+    ambient: Ambient,
+    atmosphere: Atmosphere,
+    angles: Angles,
+    kinematics: Kinematics,
+    forcing: Forcing,
 }
 
 impl PointMemo {
-    /// The library's sines and cosines of x's angles and the air at x's
-    /// altitude ([`Ambient::surroundings`]), the kept ones when x, the
-    /// measured quantities and the atmosphere are the last call's.
+    /// The library's sines and cosines of x's angles, the kinematics with
+    /// the air at x's altitude ([`Ambient::surroundings`]) and their
+    /// forcing by `model` with `controls`; the kept ones when x, the
+    /// controls, the measured quantities and the atmosphere are the last
+    /// call's (`model` differing from the last call's in its aerodynamic
+    /// parameters at most).
     fn of(
         &mut self,
+        model: &FlightModel,
         x: &FlightPathState,
+        controls: &Controls,
         ambient: Ambient,
-        atmosphere: &Atmosphere,
-    ) -> (Angles, Surroundings) {
-        if let Some((at, was, air_of, angles, air)) = &self.last
-            && at == x
-            && *was == ambient
-            && air_of == atmosphere
+    ) -> (Angles, Kinematics, Forcing) {
+        let atmosphere = &model.environment.atmosphere;
+        if let Some(last) = &self.last
+            && last.x == *x
+            && last.controls == *controls
+            && last.ambient == ambient
+            && last.atmosphere == *atmosphere
         {
-            return (*angles, *air);
+            return (last.angles, last.kinematics, last.forcing);
         }
         let angles = Angles::of(x);
         let air = ambient.surroundings(atmosphere, x[ALTITUDE]);
-        self.last = Some((*x, ambient, *atmosphere, angles, air));
-        (angles, air)
+        let kinematics = kinematics(x, &angles, &air);
+        let forcing = model.forcing(&kinematics, controls);
+        self.last = Some(PointKey {
+            x: *x,
+            controls: *controls,
+            ambient,
+            atmosphere: *atmosphere,
+            angles,
+            kinematics,
+            forcing,
+        });
+        (angles, kinematics, forcing)
     }
 }
 
 /// [`evaluate`] with the outputs written into `values` (as long as
-/// `outputs`), the angles and air from `memo`.
+/// `outputs`), the angles, kinematics and forcing from `memo`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn evaluate_into(
     model: &FlightModel,
@@ -1299,8 +1346,8 @@ pub(super) fn evaluate_into(
     values: &mut [f64],
     memo: &mut PointMemo,
 ) -> FlightPathState {
-    let (angles, air) = memo.of(x, ambient, &model.environment.atmosphere);
-    let (rates, evaluation) = derivative(model, x, &angles, &air, controls, pseudo);
+    let (angles, kinematics, forcing) = memo.of(model, x, controls, ambient);
+    let (rates, evaluation) = derivative_at(model, x, &angles, &kinematics, &forcing, pseudo);
     for (value, output) in values.iter_mut().zip(outputs) {
         *value = output.value(x, &evaluation);
     }
@@ -1837,25 +1884,44 @@ impl DrivenSimulation {
         FlightPathState::from_fn(|i, _| if mask[i] == 1.0 { x[i] } else { measured[i] })
     }
 
+    /// The measured states, controls and pseudo-control rates at the
+    /// later RK4 stage times of step k, its midpoint and its end
+    /// ([`DrivenSimulation::inputs_inside`]): the same for every state the
+    /// step starts from.
+    pub(super) fn stage_inputs(&self, k: usize) -> StageInputs {
+        let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
+        let at = |fraction: f64| {
+            let (measured, controls, pseudo, _) = self.inputs_inside(k, fraction, ends);
+            (measured, controls, pseudo)
+        };
+        StageInputs {
+            k,
+            middle: at(0.5),
+            end: at(1.0),
+        }
+    }
+
     /// The one integration step of the postulated model: RK4
     /// ([`rk4_step`]) from the state `x` at grid point k (`first` its
     /// rates, evaluated by the caller) to grid point k + 1, the `mask`ed
     /// states integrated and the others the next grid point's measured
-    /// values. `rates(state, controls, pseudo, memo)` evaluates ẋ at the
-    /// three later stages, given the stage's merged state and inputs
-    /// ([`DrivenSimulation::inputs_at`]) with `memo` at its frozen point.
+    /// values, the later stages' inputs `inputs` (step k's,
+    /// [`DrivenSimulation::stage_inputs`]). `rates(state, controls, pseudo,
+    /// memo)` evaluates ẋ at the three later stages, given the stage's
+    /// merged state and inputs with `memo` at its frozen point.
     /// Both [`DrivenSimulation::simulate`] and the state-space view's step
-    /// ([`super::state_space`]) take their steps here.
+    /// ([`super::state_space`], through [`PlainSteps`]) take their steps
+    /// here.
     fn step_from(
         &self,
-        k: usize,
+        inputs: &StageInputs,
         x: &FlightPathState,
         mask: &FlightPathState,
         first: &FlightPathState,
         memo: &mut Memo,
         mut rates: impl FnMut(&FlightPathState, &Controls, PseudoRates, &mut Memo) -> FlightPathState,
     ) -> FlightPathState {
-        let ends = (self.pseudo_rates(k), self.pseudo_rates(k + 1));
+        let k = inputs.k;
         let next = rk4_step(x, self.step, |x, fraction| {
             // The first stage is the grid point, evaluated by the caller.
             if fraction == 0.0 {
@@ -1863,53 +1929,40 @@ impl DrivenSimulation {
             }
             // The step's end is the next grid point; the middle stages are
             // at the step's midpoint.
-            memo.at_point(if fraction == 1.0 {
-                2 * k + 2
+            let (point, (measured, controls, pseudo)) = if fraction == 1.0 {
+                (2 * k + 2, &inputs.end)
             } else {
-                2 * k + 1
-            });
-            let (measured, controls, pseudo, _) = self.inputs_inside(k, fraction, ends);
-            let merged = Self::merged(x, &measured, mask);
-            rates(&merged, &controls, pseudo, memo).component_mul(mask)
+                (2 * k + 1, &inputs.middle)
+            };
+            memo.at_point(point);
+            let merged = Self::merged(x, measured, mask);
+            rates(&merged, controls, *pseudo, memo).component_mul(mask)
         });
         Self::merged(&next, &self.measured[k + 1], mask)
     }
 
-    /// One plain step of `model` from the full flight-path state `x` at
-    /// grid point k ([`DrivenSimulation::step_from`], a fresh memo): the
-    /// step [`DrivenSimulation::simulate`] takes from the same state.
-    pub(super) fn step_plain(
-        &self,
-        model: &FlightModel,
+    /// Plain steps of `model`'s form (which states `mask` integrates, the
+    /// air of `atmosphere`) from grid point k, for many start states
+    /// ([`PlainSteps::step`]).
+    pub(super) fn plain_steps<'a>(
+        &'a self,
         k: usize,
-        x: &FlightPathState,
-    ) -> FlightPathState {
-        let atmosphere = &model.environment.atmosphere;
-        let mask = self.mask(model);
+        mask: &FlightPathState,
+        atmosphere: &Atmosphere,
+    ) -> PlainSteps<'a> {
         let measured_states = std::array::from_fn(|i| mask[i] == 0.0);
         let frozen = self.frozen.for_memo(&self.measured, atmosphere);
         let mut memo = Memo::new(measured_states, frozen);
         memo.at_point(2 * k);
-        let (angles, air) = memo.of(x, atmosphere);
-        let (first, _) = derivative(
-            model,
-            x,
-            &angles,
-            &air,
-            &self.controls[k],
-            self.pseudo_rates(k),
-        );
-        self.step_from(
-            k,
-            x,
-            &mask,
-            &first,
-            &mut memo,
-            |x, controls, pseudo, memo| {
-                let (angles, air) = memo.of(x, atmosphere);
-                derivative(model, x, &angles, &air, controls, pseudo).0
-            },
-        )
+        PlainSteps {
+            simulation: self,
+            mask: *mask,
+            atmosphere: *atmosphere,
+            inputs: self.stage_inputs(k),
+            start: (self.controls[k], self.pseudo_rates(k)),
+            memo,
+            first: None,
+        }
     }
 
     /// Simulates from `initial`, calling `sink(k, y, (∂y/∂θ)ᵀ)` at every
@@ -2061,7 +2114,7 @@ impl DrivenSimulation {
             let end_pseudo = self.pseudo_rates(k + 1);
             let mut stage = 0;
             x = self.step_from(
-                k,
+                &self.stage_inputs(k),
                 &x,
                 &mask,
                 &point.rates,
@@ -2125,6 +2178,71 @@ impl DrivenSimulation {
             std::mem::swap(&mut point, &mut next_point);
         }
         Ok(())
+    }
+}
+
+/// The inputs of step k's later RK4 stages ([`DrivenSimulation::stage_inputs`]):
+/// the measured state, controls and pseudo-control rates at its midpoint
+/// and at its end.
+pub(super) struct StageInputs {
+    k: usize,
+    middle: (FlightPathState, Controls, PseudoRates),
+    end: (FlightPathState, Controls, PseudoRates),
+}
+
+/// Plain steps from one grid point for many start states (and models that
+/// differ in their parameters only: the sigma points of an unscented
+/// filter), with what they share taken once: the stages' inputs and
+/// frozen points, and the first stage's angles and air for start states
+/// equal to the last one's, with their kinematics and forcing
+/// ([`DrivenSimulation::plain_steps`]). Each step
+/// is the one a fresh simulation takes from its start state, bit for bit.
+pub(super) struct PlainSteps<'a> {
+    simulation: &'a DrivenSimulation,
+    mask: FlightPathState,
+    atmosphere: Atmosphere,
+    inputs: StageInputs,
+    /// The controls and pseudo-control rates at the grid point.
+    start: (Controls, PseudoRates),
+    /// A fresh memo at the grid point.
+    memo: Memo<'a>,
+    /// The last start state, its memo after the first stage and the
+    /// angles, kinematics and forcing that stage took.
+    first: Option<(FlightPathState, Memo<'a>, Angles, Kinematics, Forcing)>,
+}
+
+impl PlainSteps<'_> {
+    /// One plain step of `model` from the full flight-path state `x`
+    /// ([`DrivenSimulation::step_from`]). `model` has the form the steps
+    /// were made for (its atmosphere, the states it integrates).
+    pub(super) fn step(&mut self, model: &FlightModel, x: &FlightPathState) -> FlightPathState {
+        let (controls, pseudo) = &self.start;
+        let (mut memo, angles, kinematics, forcing) = match self.first {
+            Some((last, memo, angles, kinematics, forcing)) if last == *x => {
+                (memo, angles, kinematics, forcing)
+            }
+            _ => {
+                let mut memo = self.memo;
+                let (angles, air) = memo.of(x, &self.atmosphere);
+                let kinematics = kinematics(x, &angles, &air);
+                let forcing = model.forcing(&kinematics, controls);
+                self.first = Some((*x, memo, angles, kinematics, forcing));
+                (memo, angles, kinematics, forcing)
+            }
+        };
+        let (first, _) = derivative_at(model, x, &angles, &kinematics, &forcing, *pseudo);
+        let atmosphere = &self.atmosphere;
+        self.simulation.step_from(
+            &self.inputs,
+            x,
+            &self.mask,
+            &first,
+            &mut memo,
+            |x, controls, pseudo, memo| {
+                let (angles, air) = memo.of(x, atmosphere);
+                derivative(model, x, &angles, &air, controls, pseudo).0
+            },
+        )
     }
 }
 

@@ -381,6 +381,47 @@ pub trait StateSpaceModel {
         *into = self.outputs(t, x, theta)?;
         Ok(())
     }
+    /// [`StateSpaceModel::step_into`] from grid point k for many points
+    /// (x_j, θ_j) at once, x_{j+1} written into column j of `into` (columns
+    /// `stride` apart, [`Points::check_into`]): the same numbers as one
+    /// call per point. A model that can takes what the points share (the
+    /// step's inputs, its kept buffers) once; the default calls
+    /// [`StateSpaceModel::step_into`] per point. An error (the first
+    /// point's that fails) leaves `into` unspecified.
+    fn step_points_into(
+        &self,
+        k: usize,
+        points: Points,
+        into: &mut [f64],
+        stride: usize,
+    ) -> Result<()> {
+        points.check_into(into.len(), stride, self.state_count())?;
+        let mut value = DVector::zeros(0);
+        for j in 0..points.len() {
+            self.step_into(k, points.state(j), points.theta(j), &mut value)?;
+            into[j * stride..j * stride + value.len()].copy_from_slice(value.as_slice());
+        }
+        Ok(())
+    }
+    /// [`StateSpaceModel::outputs_into`] at t for many points (x_j, θ_j) at
+    /// once, y_j written into column j of `into` (columns `stride` apart):
+    /// the same numbers as one call per point, what the points share taken
+    /// once where the model can ([`StateSpaceModel::step_points_into`]).
+    fn outputs_points_into(
+        &self,
+        t: f64,
+        points: Points,
+        into: &mut [f64],
+        stride: usize,
+    ) -> Result<()> {
+        points.check_into(into.len(), stride, self.output_count())?;
+        let mut value = DVector::zeros(0);
+        for j in 0..points.len() {
+            self.outputs_into(t, points.state(j), points.theta(j), &mut value)?;
+            into[j * stride..j * stride + value.len()].copy_from_slice(value.as_slice());
+        }
+        Ok(())
+    }
 
     /// [`StateSpaceModel::step`] with the sensitivities S = ∂x/∂u carried
     /// through it: S ← (∂step/∂x)·S + ∂step/∂u, the step's exact
@@ -399,6 +440,119 @@ pub trait StateSpaceModel {
         _sensitivity: &mut DMatrix<f64>,
     ) -> Result<Option<DVector<f64>>> {
         Ok(None)
+    }
+}
+
+/// Many points (x_j, θ_j), j = 0 … len − 1, of a model evaluated at one
+/// time ([`StateSpaceModel::step_points_into`]): x_j the first `rows`
+/// values of column j of a column-major array whose columns are `stride`
+/// apart, θ_j column j of another (columns `parameter_stride` apart), or
+/// one θ for every point.
+#[derive(Debug, Clone, Copy)]
+pub struct Points<'a> {
+    states: &'a [f64],
+    rows: usize,
+    stride: usize,
+    count: usize,
+    parameters: &'a [f64],
+    parameter_stride: usize,
+}
+
+impl<'a> Points<'a> {
+    /// The columns of `states`, each with the parameters `theta`.
+    pub fn shared(states: &'a DMatrix<f64>, theta: &'a [f64]) -> Points<'a> {
+        Points {
+            states: states.as_slice(),
+            rows: states.nrows(),
+            stride: states.nrows(),
+            count: states.ncols(),
+            parameters: theta,
+            parameter_stride: 0,
+        }
+    }
+
+    /// The one point (x, θ).
+    pub fn one(x: &'a [f64], theta: &'a [f64]) -> Points<'a> {
+        Points {
+            states: x,
+            rows: x.len(),
+            stride: x.len(),
+            count: 1,
+            parameters: theta,
+            parameter_stride: 0,
+        }
+    }
+
+    /// The leading `rows` of each point's state, each point with its own θ:
+    /// column j of `parameters` (`count` columns of `parameter_rows`). An
+    /// error when there are fewer rows or parameters than that.
+    pub fn with_parameters(
+        &self,
+        rows: usize,
+        parameters: &'a [f64],
+        parameter_rows: usize,
+    ) -> Result<Points<'a>> {
+        if rows > self.rows || parameters.len() != parameter_rows * self.count {
+            return Err(Error::Other(format!(
+                "{} points of {} states: no {rows} states with {} parameters of {parameter_rows}",
+                self.count,
+                self.rows,
+                parameters.len()
+            )));
+        }
+        Ok(Points {
+            rows,
+            parameters,
+            parameter_stride: parameter_rows,
+            ..*self
+        })
+    }
+
+    /// The number of points.
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// The number of values in each point's state.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// x_j.
+    pub fn state(&self, j: usize) -> &'a [f64] {
+        &self.states[j * self.stride..j * self.stride + self.rows]
+    }
+
+    /// θ_j.
+    pub fn theta(&self, j: usize) -> &'a [f64] {
+        if self.parameter_stride == 0 {
+            self.parameters
+        } else {
+            &self.parameters[j * self.parameter_stride..(j + 1) * self.parameter_stride]
+        }
+    }
+
+    /// Whether every point has the same θ.
+    pub fn share_parameters(&self) -> bool {
+        self.parameter_stride == 0
+    }
+
+    /// An error unless `len` values hold a column of `rows` for each point,
+    /// columns `stride` apart.
+    pub fn check_into(&self, len: usize, stride: usize, rows: usize) -> Result<()> {
+        let needed = self.count.saturating_sub(1) * stride + rows;
+        if self.count > 0 && (stride < rows || len < needed) {
+            return Err(Error::Other(format!(
+                "{} points: {len} values do not hold columns of {rows} values {stride} apart",
+                self.count
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -620,11 +774,7 @@ impl DrivenStateSpace {
         f: impl FnOnce(&FlightModel, &mut LinearisationBuffers, &mut PointMemo) -> R,
     ) -> Result<R> {
         self.scratch.with(
-            || ModelScratch {
-                model: self.model.clone(),
-                linearisation: LinearisationBuffers::default(),
-                points: PointMemo::default(),
-            },
+            || self.fresh_scratch(),
             |scratch| {
                 self.write_parameters(&mut scratch.model, theta)?;
                 Ok(f(
@@ -634,6 +784,37 @@ impl DrivenStateSpace {
                 ))
             },
         )
+    }
+
+    /// `f(model, j, x_j, memo)` for every point j in turn, on the kept
+    /// model with θ_j written in (once for all points when they share θ)
+    /// and the kept outputs' memo; the first error stops it.
+    fn with_points(
+        &self,
+        points: Points,
+        mut f: impl FnMut(&FlightModel, usize, &[f64], &mut PointMemo) -> Result<()>,
+    ) -> Result<()> {
+        self.scratch.with(
+            || self.fresh_scratch(),
+            |scratch| {
+                for j in 0..points.len() {
+                    if j == 0 || !points.share_parameters() {
+                        self.write_parameters(&mut scratch.model, points.theta(j))?;
+                    }
+                    f(&scratch.model, j, points.state(j), &mut scratch.points)?;
+                }
+                Ok(())
+            },
+        )
+    }
+
+    /// The kept buffers as first made: a copy of the view's model.
+    fn fresh_scratch(&self) -> ModelScratch {
+        ModelScratch {
+            model: self.model.clone(),
+            linearisation: LinearisationBuffers::default(),
+            points: PointMemo::default(),
+        }
     }
 
     /// The full flight-path state with x in its integrated entries and
@@ -733,11 +914,30 @@ impl StateSpaceModel for DrivenStateSpace {
         theta: &[f64],
         into: &mut DVector<f64>,
     ) -> Result<()> {
-        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
         if into.len() != self.outputs.len() {
             *into = DVector::zeros(self.outputs.len());
         }
-        self.with_model(theta, |model, _, points| {
+        let m = self.outputs.len();
+        self.outputs_points_into(t, Points::one(x, theta), into.as_mut_slice(), m)
+    }
+
+    /// The outputs at t of every point, the time located, the inputs
+    /// interpolated and the kept model taken once; θ written into it once
+    /// per point (once for all when they share it), the angles and air
+    /// shared by consecutive points at one full state.
+    fn outputs_points_into(
+        &self,
+        t: f64,
+        points: Points,
+        into: &mut [f64],
+        stride: usize,
+    ) -> Result<()> {
+        let m = self.outputs.len();
+        points.check_into(into.len(), stride, m)?;
+        let (k, fraction) = self.locate(t)?;
+        let (measured, controls, pseudo, ambient) = self.simulation.inputs_at(k, fraction);
+        self.with_points(points, |model, j, x, memo| {
+            let full = self.full(x, &measured)?;
             driven::evaluate_into(
                 model,
                 &full,
@@ -745,11 +945,11 @@ impl StateSpaceModel for DrivenStateSpace {
                 pseudo,
                 ambient,
                 &self.outputs,
-                into.as_mut_slice(),
-                points,
-            )
-        })?;
-        Ok(())
+                &mut into[j * stride..j * stride + m],
+                memo,
+            );
+            Ok(())
+        })
     }
 
     /// The Jacobians by the sensitivity equations' own linearisation
@@ -894,6 +1094,25 @@ impl StateSpaceModel for DrivenStateSpace {
     }
 
     fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
+        let n = self.states.len();
+        if into.len() != n {
+            *into = DVector::zeros(n);
+        }
+        self.step_points_into(k, Points::one(x, theta), into.as_mut_slice(), n)
+    }
+
+    /// The steps of every point from grid point k, what they share taken
+    /// once (`driven::PlainSteps`): the stages' inputs, the kept model
+    /// (θ written in once per point, once for all when they share it), and
+    /// the first stage's angles and air for consecutive points at one full
+    /// state (the sigma points that move only parameters).
+    fn step_points_into(
+        &self,
+        k: usize,
+        points: Points,
+        into: &mut [f64],
+        stride: usize,
+    ) -> Result<()> {
         let simulation = &self.simulation;
         if k + 1 >= simulation.len() {
             return Err(Error::Other(format!(
@@ -901,19 +1120,23 @@ impl StateSpaceModel for DrivenStateSpace {
                 simulation.len()
             )));
         }
-        self.with_model(theta, |model, _, _| {
-            let full = self.full(x, &simulation.measured()[k])?;
+        let n = self.states.len();
+        points.check_into(into.len(), stride, n)?;
+        let mut steps = simulation.plain_steps(k, &self.mask, &self.model.environment.atmosphere);
+        let measured = &simulation.measured()[k];
+        self.with_points(points, |model, j, x, _| {
+            let full = self.full(x, measured)?;
             driven::check_departure(&full, simulation.time(k)).map_err(Error::Other)?;
-            let next = simulation.step_plain(model, k, &full);
+            let next = steps.step(model, &full);
             driven::check_departure(&next, simulation.time(k + 1)).map_err(Error::Other)?;
-            if into.len() != self.states.len() {
-                *into = DVector::zeros(self.states.len());
-            }
-            for (into, &i) in into.iter_mut().zip(&self.states) {
+            for (into, &i) in into[j * stride..j * stride + n]
+                .iter_mut()
+                .zip(&self.states)
+            {
                 *into = next[i];
             }
             Ok(())
-        })?
+        })
     }
 }
 

@@ -69,13 +69,17 @@
 //! On a linear model the transform is exact and the pass is the linear
 //! Kalman filter's with the trapezoidal Q_d (tests/kalman_oracle.rs).
 //! A step's sigma points, propagated points, outputs and compound matrices
-//! live in buffers allocated once per pass (`Work`); the QR is a
-//! Householder triangularisation in place (`triangularise`).
+//! live in buffers allocated once per pass (`Work`); the model steps the
+//! sigma points and evaluates their outputs in one call each
+//! ([`StateSpaceModel::step_points_into`],
+//! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
+//! share once; the QR is a Householder triangularisation in place
+//! (`triangularise`).
 
 use crate::error::{Error, Result};
 use crate::estimation::model::augmented::shape;
 use crate::estimation::model::observations::Observations;
-use crate::estimation::model::state_space::StateSpaceModel;
+use crate::estimation::model::state_space::{Points, StateSpaceModel};
 use crate::estimation::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
 use crate::estimation::solver::kalman::{Gaussian, Measured, Unscented, Update};
 use nalgebra::{Cholesky, DMatrix, DVector};
@@ -200,8 +204,8 @@ struct Work {
     leading: DMatrix<f64>,
     measured: DMatrix<f64>,
     vector: DVector<f64>,
-    /// One propagated point or one point's outputs.
-    value: DVector<f64>,
+    /// Every output of each sigma point (`outputs` holds the measured ones).
+    all_outputs: DMatrix<f64>,
 }
 
 impl Work {
@@ -217,7 +221,7 @@ impl Work {
             leading: DMatrix::zeros(0, 0),
             measured: DMatrix::zeros(2 * n + outputs, outputs),
             vector: DVector::zeros(n.max(outputs)),
-            value: DVector::zeros(0),
+            all_outputs: DMatrix::zeros(outputs, count),
         }
     }
 
@@ -272,17 +276,14 @@ fn time_update<M: StateSpaceModel + ?Sized>(
 ) -> Result<DMatrix<f64>> {
     let n = state.len();
     work.draw(weights, state, factor);
-    for j in 0..2 * n + 1 {
-        model
-            .step_into(
-                k - 1,
-                work.points.column(j).as_slice(),
-                theta,
-                &mut work.value,
-            )
-            .map_err(|e| at_time(e, previous))?;
-        work.moved.column_mut(j).copy_from(&work.value);
-    }
+    model
+        .step_points_into(
+            k - 1,
+            Points::shared(&work.points, theta),
+            work.moved.as_mut_slice(),
+            n,
+        )
+        .map_err(|e| at_time(e, previous))?;
     weighted_mean(weights, &work.moved, state);
     let p = work.moving();
     // The compound matrix's rows i and n + i (the points χ_{1+i} and
@@ -397,12 +398,18 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     let n = state.len();
     let m = present.len();
     work.draw(weights, state, factor);
+    let all = work.all_outputs.nrows();
+    model
+        .outputs_points_into(
+            t,
+            Points::shared(&work.points, theta),
+            work.all_outputs.as_mut_slice(),
+            all,
+        )
+        .map_err(|e| at_time(e, t))?;
     for j in 0..2 * n + 1 {
-        model
-            .outputs_into(t, work.points.column(j).as_slice(), theta, &mut work.value)
-            .map_err(|e| at_time(e, t))?;
         for (row, &(o, _)) in present.iter().enumerate() {
-            work.outputs[(row, j)] = work.value[o];
+            work.outputs[(row, j)] = work.all_outputs[(o, j)];
         }
     }
     let outputs = work.outputs.rows(0, m);
