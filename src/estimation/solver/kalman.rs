@@ -1090,49 +1090,55 @@ pub fn sequential_update_with(
     gains.clear();
     gains.resize(n * m, 0.0);
     let p = covariance.as_mut_slice();
-    for i in 0..m {
-        let row = sparse.row(i);
-        let nu = innovation[i] - row.iter().map(|&(j, h)| h * shift[j]).sum::<f64>();
-        // m = P·h over h's non-zeros, s = hᵀ·m + r.
-        cross.fill(0.0);
-        for &(j, h) in row {
-            for (into, &value) in cross.iter_mut().zip(&p[j * n..(j + 1) * n]) {
-                *into += h * value;
-            }
-        }
-        let s = row.iter().map(|&(j, h)| h * cross[j]).sum::<f64>() + noise[i];
-        if !(s > 0.0 && s.is_finite()) {
-            return Err(Error::Other(
-                "an innovation variance hᵀ·P·h + r is not positive (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
-            ));
-        }
-        let gain = &mut gains[i * n..(i + 1) * n];
-        for ((k, e), &mi) in gain.iter_mut().zip(half.iter_mut()).zip(cross.iter()) {
-            *k = mi / s;
-            *e = mi - 0.5 * s * *k;
-        }
-        for ((x, d), &k) in state.iter_mut().zip(shift.iter_mut()).zip(gain.iter()) {
-            *x += k * nu;
-            *d += k * nu;
-        }
-        // P ← P − (k·eᵀ + e·kᵀ): entries (a, b) and (b, a) take the same
-        // products, so a symmetric P stays symmetric.
-        let (gain, half) = (&*gain, &*half);
-        crate::simd::wide(
-            #[inline(always)]
-            || {
+    let x = state.as_mut_slice();
+    let positive = crate::simd::wide(
+        #[inline(always)]
+        || {
+            for i in 0..m {
+                let row = sparse.row(i);
+                let nu = innovation[i] - row.iter().map(|&(j, h)| h * shift[j]).sum::<f64>();
+                // m = P·h over h's non-zeros, s = hᵀ·m + r.
+                cross.fill(0.0);
+                for &(j, h) in row {
+                    for (into, &value) in cross.iter_mut().zip(&p[j * n..(j + 1) * n]) {
+                        *into += h * value;
+                    }
+                }
+                let s = row.iter().map(|&(j, h)| h * cross[j]).sum::<f64>() + noise[i];
+                if !(s > 0.0 && s.is_finite()) {
+                    return false;
+                }
+                let gain = &mut gains[i * n..(i + 1) * n];
+                for ((k, e), &mi) in gain.iter_mut().zip(half.iter_mut()).zip(cross.iter()) {
+                    *k = mi / s;
+                    *e = mi - 0.5 * s * *k;
+                }
+                for ((x, d), &k) in x.iter_mut().zip(shift.iter_mut()).zip(gain.iter()) {
+                    *x += k * nu;
+                    *d += k * nu;
+                }
+                // P ← P − (k·eᵀ + e·kᵀ): entries (a, b) and (b, a) take the
+                // same products, so a symmetric P stays symmetric.
+                let (gain, half) = (&*gain, &*half);
                 for (b, column) in p.chunks_exact_mut(n).enumerate() {
                     let (kb, eb) = (gain[b], half[b]);
                     for ((into, &k), &e) in column.iter_mut().zip(gain).zip(half) {
                         *into -= k * eb + e * kb;
                     }
                 }
-            },
-        );
-        innovations.push(nu);
-        variances.push(s);
+                innovations.push(nu);
+                variances.push(s);
+            }
+            true
+        },
+    );
+    if positive {
+        Ok(())
+    } else {
+        Err(Error::Other(
+            "an innovation variance hᵀ·P·h + r is not positive (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
+        ))
     }
-    Ok(())
 }
 
 /// The steady state of a time-invariant filter.
@@ -1533,57 +1539,54 @@ impl SmootherUpdates for ScalarUpdates {
         } = scratch;
         e.clear();
         e.resize(n, 0.0);
-        for i in (0..count).rev() {
-            let update = self.get(k, i).expect("i < count");
-            let (h, gain) = (update.observation, update.gain);
-            support.clear();
-            support.extend(
-                h.iter()
-                    .enumerate()
-                    .filter(|(_, v)| **v != 0.0)
-                    .map(|(j, &v)| (j, v)),
-            );
-            let weight = gain
-                .iter()
-                .zip(adjoint.iter())
-                .map(|(k, l)| k * l)
-                .sum::<f64>()
-                + update.innovation / update.variance;
-            for &(j, value) in support.iter() {
-                adjoint[j] -= value * weight;
-            }
-            // g = Λ·k, c = kᵀ·g, e = g − ½·(c + 1/s)·h.
-            e.fill(0.0);
-            crate::simd::wide(
-                #[inline(always)]
-                || {
+        let adjoint = adjoint.as_mut_slice();
+        crate::simd::wide(
+            #[inline(always)]
+            || {
+                for i in (0..count).rev() {
+                    let update = self.get(k, i).expect("i < count");
+                    let (h, gain) = (update.observation, update.gain);
+                    support.clear();
+                    for (j, &value) in h.iter().enumerate() {
+                        if value != 0.0 {
+                            support.push((j, value));
+                        }
+                    }
+                    let weight = gain.iter().zip(&*adjoint).map(|(k, l)| k * l).sum::<f64>()
+                        + update.innovation / update.variance;
+                    for &(j, value) in support.iter() {
+                        adjoint[j] -= value * weight;
+                    }
+                    // g = Λ·k, c = kᵀ·g, e = g − ½·(c + 1/s)·h.
+                    e.fill(0.0);
                     for (column, &factor) in lambda.chunks_exact(n).zip(gain) {
                         for (into, &value) in e.iter_mut().zip(column) {
                             *into += factor * value;
                         }
                     }
-                },
-            );
-            let c = gain.iter().zip(e.iter()).map(|(k, g)| k * g).sum::<f64>();
-            let half = 0.5 * (c + 1.0 / update.variance);
-            for &(j, value) in support.iter() {
-                e[j] -= half * value;
-            }
-            // Λ_ab −= e_a·h_b + h_a·e_b: whole columns b of h's non-zeros,
-            // elsewhere only the rows a of h's non-zeros (e_a·0 + x = x).
-            for (b, column) in lambda.chunks_exact_mut(n).enumerate() {
-                let (hb, eb) = (h[b], e[b]);
-                if hb != 0.0 {
-                    for ((into, &ea), &ha) in column.iter_mut().zip(e.iter()).zip(h) {
-                        *into -= ea * hb + ha * eb;
+                    let c = gain.iter().zip(e.iter()).map(|(k, g)| k * g).sum::<f64>();
+                    let half = 0.5 * (c + 1.0 / update.variance);
+                    for &(j, value) in support.iter() {
+                        e[j] -= half * value;
                     }
-                } else {
-                    for &(a, ha) in support.iter() {
-                        column[a] -= ha * eb;
+                    // Λ_ab −= e_a·h_b + h_a·e_b: whole columns b of h's
+                    // non-zeros, elsewhere only the rows a of h's non-zeros
+                    // (e_a·0 + x = x).
+                    for (b, column) in lambda.chunks_exact_mut(n).enumerate() {
+                        let (hb, eb) = (h[b], e[b]);
+                        if hb != 0.0 {
+                            for ((into, &ea), &ha) in column.iter_mut().zip(e.iter()).zip(h) {
+                                *into -= ea * hb + ha * eb;
+                            }
+                        } else {
+                            for &(a, ha) in support.iter() {
+                                column[a] -= ha * eb;
+                            }
+                        }
                     }
                 }
-            }
-        }
+            },
+        );
     }
 }
 
