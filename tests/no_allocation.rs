@@ -314,7 +314,12 @@ fn an_ekf_pass_allocates_nothing_per_grid_point() {
     };
     // A first pass makes the model's own buffers (kept between calls).
     count(Keep::UPDATES);
-    for keep in [Keep::UPDATES, Keep::SMOOTHER, Keep::ALL] {
+    for keep in [
+        Keep::UPDATES,
+        Keep::SMOOTHER,
+        Keep::SEQUENTIAL_SMOOTHER,
+        Keep::ALL,
+    ] {
         let allocations = count(keep);
         println!("{keep:?}: {allocations} allocations over {len} points ({measured} measured)");
         assert!(

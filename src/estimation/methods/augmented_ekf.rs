@@ -353,6 +353,7 @@ pub fn extended_pass<M: StateSpaceModel + ?Sized>(
         predicted: false,
         transitions: settings.correlation_lags > 0,
         filtered_covariances: true,
+        sequential: false,
     };
     extended_kalman::filter_with(
         model,

@@ -12,9 +12,12 @@
 //! discretised continuous process noise (Van Loan; [`kalman::discretise`]).
 //! Measurement update at k with the outputs measured there: ŷ = h(t_k, x⁻_k),
 //! H = ∂h/∂x at (t_k, x⁻_k) (rows of the measured outputs), R their noise
-//! variances (diagonal), [`kalman::update`]. For a linear model whose step is
-//! exact ([`crate::estimation::model::linear`]) this is the linear Kalman
-//! filter.
+//! variances (diagonal), [`kalman::update`]; with [`Keep::sequential`] the
+//! same update as one scalar update per measured output
+//! ([`kalman::sequential_update_with`], Bierman 1977, ch. II), kept for the
+//! modified Bryson–Frazier smoother's scalar form. For a linear model whose
+//! step is exact ([`crate::estimation::model::linear`]) this is the linear
+//! Kalman filter.
 //!
 //! The covariance's transition is exact (Van Loan) by default; with
 //! [`Discretisation::SecondOrder`] it is the truncated series of Wang et
@@ -38,9 +41,10 @@ use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{Jacobians, StateSpaceModel};
 use crate::estimation::solver::kalman::{
-    self, Exponential, Gaussian, Measured, ProcessNoise, SparseRows, UpdateWorkspace, resize,
+    self, Exponential, Gaussian, Measured, ProcessNoise, SequentialWorkspace, SparseRows,
+    UpdateWorkspace, resize,
 };
-use crate::estimation::solver::kept::{Gaussians, Matrices, Updates};
+use crate::estimation::solver::kept::{Gaussians, Matrices, ScalarUpdates, Updates};
 use nalgebra::{DMatrix, DVector};
 
 /// The filter's noise: continuous process-noise spectral density over the
@@ -190,6 +194,13 @@ pub struct Keep {
     pub transitions: bool,
     /// The filtered covariance at every grid point (else at the last only).
     pub filtered_covariances: bool,
+    /// The measurement update as a sequence of scalar updates, one per
+    /// measured output ([`kalman::sequential_update_with`]), kept in
+    /// [`Pass::scalar_updates`] instead of [`Pass::measured`] (what the
+    /// modified Bryson–Frazier smoother reads; no S, S⁻¹ or K). The
+    /// innovations are then the sequential ones: νᵢ against the estimate
+    /// updated by the outputs before i, with its variance sᵢ.
+    pub sequential: bool,
 }
 
 impl Keep {
@@ -198,12 +209,20 @@ impl Keep {
         predicted: true,
         transitions: true,
         filtered_covariances: true,
+        sequential: false,
     };
     /// What a smoother reads: the predicted estimates and the transitions.
     pub const SMOOTHER: Keep = Keep {
         predicted: true,
         transitions: true,
         filtered_covariances: false,
+        sequential: false,
+    };
+    /// What a smoother reads, the measurement updates as sequences of
+    /// scalar updates ([`Keep::sequential`]).
+    pub const SEQUENTIAL_SMOOTHER: Keep = Keep {
+        sequential: true,
+        ..Keep::SMOOTHER
     };
     /// Nothing beyond the filtered states, the updates, the innovations,
     /// the likelihood and the last covariance.
@@ -211,6 +230,7 @@ impl Keep {
         predicted: false,
         transitions: false,
         filtered_covariances: false,
+        sequential: false,
     };
 }
 
@@ -223,8 +243,12 @@ pub struct Pass {
     /// (x, P)_{k|k}; without [`Keep::filtered_covariances`] the covariance
     /// is empty (0 × 0) but at the last grid point.
     pub filtered: Gaussians,
-    /// The update at each grid point (None where nothing is measured).
+    /// The update at each grid point (None where nothing is measured;
+    /// empty with [`Keep::sequential`]).
     pub measured: Updates,
+    /// The scalar updates at each grid point (empty unless
+    /// [`Keep::sequential`]).
+    pub scalar_updates: ScalarUpdates,
     /// Φ from k to k + 1 (len − 1 of them; empty unless [`Keep::transitions`]).
     pub transitions: Matrices,
     /// Per output, its innovations.
@@ -277,6 +301,8 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
         .then_some(&noise.process);
     let mut time_update = TimeUpdate::default();
     let mut update_workspace = UpdateWorkspace::default();
+    let mut sequential_workspace = SequentialWorkspace::default();
+    let mut variances = Vec::new();
     let mut linearised = Jacobians {
         rates_by_state: DMatrix::zeros(0, 0),
         rates_by_parameter: DMatrix::zeros(0, 0),
@@ -317,7 +343,11 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
         }
         let present = &observations.at[k];
         if present.is_empty() {
-            pass.measured.push(None);
+            if keep.sequential {
+                pass.scalar_updates.push_none();
+            } else {
+                pass.measured.push(None);
+            }
         } else {
             model.jacobians_into(
                 t,
@@ -329,44 +359,75 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
             // H's rows and R of the measured outputs, ν = z − ŷ.
             let (m, n) = (present.len(), state.len());
             resize(&mut h, m, n);
-            resize(&mut r, m, m);
-            r.fill(0.0);
             if innovation.len() != m {
                 innovation = DVector::zeros(m);
             }
+            variances.clear();
             for (i, &(o, z)) in present.iter().enumerate() {
                 for j in 0..n {
                     h[(i, j)] = linearised.outputs_by_state[(o, j)];
                 }
-                r[(i, i)] = noise.measurement[o];
+                variances.push(noise.measurement[o]);
                 innovation[i] = z - predicted[o];
             }
-            kalman::update_with(
-                &mut state,
-                &mut covariance,
-                &h,
-                &r,
-                &innovation,
-                &mut update_workspace,
-            )
-            .map_err(|e| at_time(e, t))?;
-            let term = update_workspace.log_likelihood_term(&innovation);
-            pass.negative_log_likelihood += 0.5 * term;
-            let covariance = &update_workspace.innovation_covariance;
-            for (i, &(o, _)) in present.iter().enumerate() {
-                pass.innovations[o].push(Innovation {
-                    k,
-                    value: innovation[i],
-                    variance: covariance[(i, i)],
-                });
+            if keep.sequential {
+                let workspace = &mut sequential_workspace;
+                kalman::sequential_update_with(
+                    &mut state,
+                    &mut covariance,
+                    &h,
+                    &variances,
+                    &innovation,
+                    workspace,
+                )
+                .map_err(|e| at_time(e, t))?;
+                pass.negative_log_likelihood += 0.5 * workspace.log_likelihood_term();
+                for (i, &(o, _)) in present.iter().enumerate() {
+                    pass.innovations[o].push(Innovation {
+                        k,
+                        value: workspace.innovations[i],
+                        variance: workspace.variances[i],
+                    });
+                }
+                pass.scalar_updates.push_sequence(
+                    &h,
+                    &workspace.gains,
+                    &workspace.innovations,
+                    &workspace.variances,
+                );
+            } else {
+                resize(&mut r, m, m);
+                r.fill(0.0);
+                for (i, &variance) in variances.iter().enumerate() {
+                    r[(i, i)] = variance;
+                }
+                kalman::update_with(
+                    &mut state,
+                    &mut covariance,
+                    &h,
+                    &r,
+                    &innovation,
+                    &mut update_workspace,
+                )
+                .map_err(|e| at_time(e, t))?;
+                let term = update_workspace.log_likelihood_term(&innovation);
+                pass.negative_log_likelihood += 0.5 * term;
+                let covariance = &update_workspace.innovation_covariance;
+                for (i, &(o, _)) in present.iter().enumerate() {
+                    pass.innovations[o].push(Innovation {
+                        k,
+                        value: innovation[i],
+                        variance: covariance[(i, i)],
+                    });
+                }
+                pass.measured.push_update(
+                    &h,
+                    &innovation,
+                    covariance,
+                    &update_workspace.innovation_inverse,
+                    &update_workspace.gain,
+                );
             }
-            pass.measured.push_update(
-                &h,
-                &innovation,
-                covariance,
-                &update_workspace.innovation_inverse,
-                &update_workspace.gain,
-            );
         }
         let kept = keep.filtered_covariances || k + 1 == len;
         pass.filtered_at(t, &state, kept.then_some(&covariance))?;
@@ -387,7 +448,11 @@ impl Pass {
         Pass {
             predicted: Gaussians::with_capacity(if keep.predicted { len } else { 0 }, true),
             filtered: Gaussians::with_capacity(len, keep.filtered_covariances),
-            measured: Updates::with_capacity(len, outputs),
+            measured: Updates::with_capacity(if keep.sequential { 0 } else { len }, outputs),
+            scalar_updates: ScalarUpdates::with_capacity(
+                if keep.sequential { len } else { 0 },
+                outputs,
+            ),
             transitions: Matrices::with_capacity(if keep.transitions {
                 len.saturating_sub(1)
             } else {

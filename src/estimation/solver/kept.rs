@@ -1,8 +1,9 @@
 //! What a filter pass keeps at its grid points, each quantity in one
 //! buffer reserved once per pass: equal-shaped matrices ([`Matrices`]: the
 //! transitions), Gaussian estimates ([`Gaussians`]: the predicted and the
-//! filtered ones) and the measurement updates ([`Updates`]), read back as
-//! views into the buffers. A pass over any number of grid points makes the
+//! filtered ones) and the measurement updates ([`Updates`]; as sequences
+//! of scalar updates, [`ScalarUpdates`]), read back as views into the
+//! buffers. A pass over any number of grid points makes the
 //! same few allocations (tests/no_allocation.rs).
 //!
 //! The buffers are megabytes (a pass over 1501 points of 22 states keeping
@@ -539,6 +540,137 @@ impl Updates {
     }
 }
 
+/// One scalar measurement update of a sequence (Bierman 1977, ch. II):
+/// the output's row h of H (n), the gain k = P·h/s (n), the sequential
+/// innovation ν and its variance s = hᵀ·P·h + r.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScalarUpdate<'a> {
+    pub observation: &'a [f64],
+    pub gain: &'a [f64],
+    pub innovation: f64,
+    pub variance: f64,
+}
+
+/// The measurement updates of a pass processed output by output
+/// ([`crate::estimation::solver::kalman::sequential_update_with`]), at
+/// most one sequence per grid point, one after another in one buffer: per
+/// output h, k, ν and s.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ScalarUpdates {
+    /// How many grid points and outputs the buffer is reserved for when
+    /// the first update gives the number of states.
+    capacity: (usize, usize),
+    /// Per grid point: where its sequence starts in `values` and its
+    /// number of scalar updates (None: no update there).
+    at: Vec<Option<(usize, usize)>>,
+    states: usize,
+    values: Vec<f64>,
+}
+
+impl Drop for ScalarUpdates {
+    fn drop(&mut self) {
+        recycle(&mut self.values);
+    }
+}
+
+impl ScalarUpdates {
+    /// None yet; room for `points` grid points with at most `outputs`
+    /// measured outputs each.
+    pub fn with_capacity(points: usize, outputs: usize) -> ScalarUpdates {
+        ScalarUpdates {
+            capacity: (points, outputs),
+            at: Vec::with_capacity(points),
+            states: 0,
+            values: Vec::new(),
+        }
+    }
+
+    /// The number of grid points kept (with an update or without).
+    pub fn len(&self) -> usize {
+        self.at.len()
+    }
+
+    /// Whether no grid point is kept.
+    pub fn is_empty(&self) -> bool {
+        self.at.is_empty()
+    }
+
+    /// Appends a grid point without a measurement.
+    pub fn push_none(&mut self) {
+        self.at.push(None);
+    }
+
+    /// Appends a grid point's sequence of m scalar updates over n states:
+    /// H (m × n, its rows in the order they were processed), the gains
+    /// (n × m, column i the i-th update's), the sequential innovations
+    /// and their variances (m each).
+    ///
+    /// # Panics
+    /// When the parts' shapes do not agree, or n differs from the first
+    /// sequence's.
+    pub fn push_sequence(
+        &mut self,
+        observation: &DMatrix<f64>,
+        gains: &[f64],
+        innovations: &[f64],
+        variances: &[f64],
+    ) {
+        let (m, n) = observation.shape();
+        if self.values.is_empty() {
+            self.states = n;
+            let (points, outputs) = self.capacity;
+            recycle(&mut self.values);
+            self.values = buffer(points.max(1) * outputs.max(m) * Self::size(n));
+        }
+        assert!(
+            n == self.states
+                && gains.len() == n * m
+                && innovations.len() == m
+                && variances.len() == m,
+            "a sequence's parts agree in shape"
+        );
+        self.at.push(Some((self.values.len(), m)));
+        let h = observation.as_slice();
+        for i in 0..m {
+            self.values.extend(h[i..].iter().step_by(m.max(1)).take(n));
+            self.values.extend_from_slice(&gains[i * n..(i + 1) * n]);
+            self.values.push(innovations[i]);
+            self.values.push(variances[i]);
+        }
+    }
+
+    /// The values a scalar update over n states takes.
+    #[inline]
+    fn size(n: usize) -> usize {
+        2 * n + 2
+    }
+
+    /// The number of scalar updates at grid point k (0: none there or k
+    /// past the last).
+    pub fn count(&self, k: usize) -> usize {
+        self.at.get(k).copied().flatten().map_or(0, |(_, m)| m)
+    }
+
+    /// The i-th scalar update at grid point k, in the order processed.
+    pub fn get(&self, k: usize, i: usize) -> Option<ScalarUpdate<'_>> {
+        let (start, m) = (*self.at.get(k)?)?;
+        if i >= m {
+            return None;
+        }
+        let n = self.states;
+        let start = start + i * Self::size(n);
+        let values = &self.values[start..start + Self::size(n)];
+        let (observation, rest) = values.split_at(n);
+        let (gain, rest) = rest.split_at(n);
+        Some(ScalarUpdate {
+            observation,
+            gain,
+            innovation: rest[0],
+            variance: rest[1],
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -640,5 +772,36 @@ mod tests {
         assert_eq!(kept.get(1).unwrap(), pushed[1]);
         assert!(kept.get(3).is_none());
         assert_eq!(kept.into_iter().collect::<Vec<_>>(), pushed);
+    }
+
+    /// Sequences of scalar updates, and grid points without one, come
+    /// back output by output as pushed: H's rows, the gains' columns, ν, s.
+    #[test]
+    fn scalar_updates_keep_each_output_of_each_sequence() {
+        let n = 3;
+        let mut kept = ScalarUpdates::with_capacity(3, 2);
+        let h = DMatrix::from_fn(2, n, |i, j| (i * n + j) as f64 + 0.5);
+        let gains: Vec<f64> = (0..2 * n).map(|v| -(v as f64)).collect();
+        kept.push_none();
+        kept.push_sequence(&h, &gains, &[1.0, 2.0], &[3.0, 4.0]);
+        let one = DMatrix::from_row_slice(1, n, &[7.0, 8.0, 9.0]);
+        kept.push_sequence(&one, &[1.0, 1.5, 2.0], &[5.0], &[6.0]);
+        assert_eq!(kept.len(), 3);
+        assert_eq!((kept.count(0), kept.count(1), kept.count(2)), (0, 2, 1));
+        assert!(kept.get(0, 0).is_none() && kept.get(1, 2).is_none());
+        for i in 0..2 {
+            let got = kept.get(1, i).unwrap();
+            let row: Vec<f64> = h.row(i).iter().copied().collect();
+            assert_eq!(got.observation, row.as_slice());
+            assert_eq!(got.gain, &gains[i * n..(i + 1) * n]);
+            assert_eq!(
+                (got.innovation, got.variance),
+                (1.0 + i as f64, 3.0 + i as f64)
+            );
+        }
+        let got = kept.get(2, 0).unwrap();
+        assert_eq!(got.observation, &[7.0, 8.0, 9.0]);
+        assert_eq!(got.gain, &[1.0, 1.5, 2.0]);
+        assert_eq!((got.innovation, got.variance), (5.0, 6.0));
     }
 }
