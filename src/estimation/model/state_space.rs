@@ -395,13 +395,9 @@ pub trait StateSpaceModel {
         into: &mut [f64],
         stride: usize,
     ) -> Result<()> {
-        points.check_into(into.len(), stride, self.state_count())?;
-        let mut value = DVector::zeros(0);
-        for j in 0..points.len() {
-            self.step_into(k, points.state(j), points.theta(j), &mut value)?;
-            into[j * stride..j * stride + value.len()].copy_from_slice(value.as_slice());
-        }
-        Ok(())
+        points.each_into(into, stride, self.state_count(), |j, value| {
+            self.step_into(k, points.state(j), points.theta(j), value)
+        })
     }
     /// [`StateSpaceModel::outputs_into`] at t for many points (x_j, θ_j) at
     /// once, y_j written into column j of `into` (columns `stride` apart):
@@ -414,13 +410,9 @@ pub trait StateSpaceModel {
         into: &mut [f64],
         stride: usize,
     ) -> Result<()> {
-        points.check_into(into.len(), stride, self.output_count())?;
-        let mut value = DVector::zeros(0);
-        for j in 0..points.len() {
-            self.outputs_into(t, points.state(j), points.theta(j), &mut value)?;
-            into[j * stride..j * stride + value.len()].copy_from_slice(value.as_slice());
-        }
-        Ok(())
+        points.each_into(into, stride, self.output_count(), |j, value| {
+            self.outputs_into(t, points.state(j), points.theta(j), value)
+        })
     }
 
     /// [`StateSpaceModel::step`] with the sensitivities S = ∂x/∂u carried
@@ -459,6 +451,25 @@ pub struct Points<'a> {
 }
 
 impl<'a> Points<'a> {
+    /// One call of `one` per point, each point's value (of `size` entries)
+    /// copied into column j of `into` (columns `stride` apart): the default
+    /// of the batched calls ([`StateSpaceModel::step_points_into`]).
+    fn each_into(
+        &self,
+        into: &mut [f64],
+        stride: usize,
+        size: usize,
+        mut one: impl FnMut(usize, &mut DVector<f64>) -> Result<()>,
+    ) -> Result<()> {
+        self.check_into(into.len(), stride, size)?;
+        let mut value = DVector::zeros(0);
+        for j in 0..self.len() {
+            one(j, &mut value)?;
+            into[j * stride..j * stride + value.len()].copy_from_slice(value.as_slice());
+        }
+        Ok(())
+    }
+
     /// The columns of `states`, each with the parameters `theta`.
     pub fn shared(states: &'a DMatrix<f64>, theta: &'a [f64]) -> Points<'a> {
         Points {
