@@ -666,9 +666,10 @@ fn linear_output_error(
             structure.name
         )));
     }
-    if options.segment.is_some() || options.correlation_lag > 0.0 {
+    if options.segment.is_some() || options.correlation_lag > 0.0 || !options.input_noise.is_empty()
+    {
         return Err(Error::Other(format!(
-            "[methods.{METHOD}]: segment and correlation_lag are for 6-DOF structures, not the linear model '{}'",
+            "[methods.{METHOD}]: segment, correlation_lag and input_noise are for 6-DOF structures, not the linear model '{}'",
             structure.name
         )));
     }
