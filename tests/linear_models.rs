@@ -920,3 +920,32 @@ fn ekf_residual_correlation_tunes_the_process_noise() {
         assert!(sums[0][i] < 0.01 * truth[i], "zero lag {i}: {}", sums[0][i]);
     }
 }
+
+/// Settings of output error that only a 6-DOF structure has are refused
+/// on a linear model, naming them, not silently unused.
+#[test]
+fn output_error_refuses_six_dof_settings_on_a_linear_model() {
+    let name = "linear-short-period-attas";
+    let scenario = scenario_with(name, |t| t);
+    let profile = Profile::load("ideal", None).unwrap();
+    let (record, _) = record_flight(&scenario, &profile, scenario.seed).unwrap();
+    for table in [
+        "[oem]\ninput_noise = { elevator = \"0.01 deg\" }\n",
+        "[oem]\ncorrelation_lag = \"1 s\"\n",
+    ] {
+        let layer: aeroid::estimation::estimator::MethodTables = toml::from_str(table).unwrap();
+        let error = EstimationProblem::new(
+            "oem",
+            vec![record.clone()],
+            Structure::load(name).unwrap(),
+            &[&layer],
+        )
+        .and_then(|problem| methods::estimate(&problem, None))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            error.contains("input_noise are for 6-DOF structures") && error.contains(name),
+            "{table}: {error}"
+        );
+    }
+}
