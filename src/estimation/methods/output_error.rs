@@ -994,9 +994,8 @@ pub fn output_error_from(
         if !matches!(first.status, Status::Diverged(_)) {
             staged = Some((problem.unknowns.clone(), first.theta, first.history.len()));
         }
-        problem.unknowns = all.clone();
+        problem.unknowns = all;
     }
-    let all_unknowns = all;
     let mut start = original_start.clone();
     if let Some((unknowns, theta, _)) = &staged {
         for (j, unknown) in problem.unknowns.iter().enumerate() {
@@ -1047,12 +1046,15 @@ pub fn output_error_from(
             }
         ));
     }
-    let white = estimate.covariance.clone();
+    // M⁻¹ before any correction: the input-noise share's projection.
+    let white = (!input_noise.is_empty()).then(|| estimate.covariance.clone());
     if options.correlation_lag > 0.0 && !matches!(solution.status, Status::Diverged(_)) {
         let note = problem.coloured_bounds(&solution, options.correlation_lag, &mut estimate);
         estimate.notes.push(note);
     }
-    if !input_noise.is_empty() && !matches!(solution.status, Status::Diverged(_)) {
+    if let Some(white) = white
+        && !matches!(solution.status, Status::Diverged(_))
+    {
         let note = problem.input_noise_bounds(
             records,
             &solution,
@@ -1068,14 +1070,15 @@ pub fn output_error_from(
     }
     if let Some((unknowns, _, iterations)) = staged {
         let mut held = Vec::new();
-        if all_unknowns
+        if problem
+            .all
             .iter()
             .any(|u| matches!(u, Unknown::Initial { .. }))
         {
             held.push(("initial state", "at the first samples"));
         }
         if lag.is_some_and(|i| {
-            all_unknowns.contains(&Unknown::Aero(i)) && !unknowns.contains(&Unknown::Aero(i))
+            problem.all.contains(&Unknown::Aero(i)) && !unknowns.contains(&Unknown::Aero(i))
         }) {
             held.push(("tau1", "at its start value"));
         }
