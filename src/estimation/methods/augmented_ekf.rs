@@ -91,7 +91,7 @@ use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
 };
 use crate::estimation::linear_structure::LinearStructure;
-use crate::estimation::methods::equation_error::{self, EquationErrorSettings, equation_error};
+use crate::estimation::methods::equation_error::{self, EquationErrorSettings, start_estimate};
 use crate::estimation::methods::filter_error::{enough_data, free_parameters};
 use crate::estimation::methods::linear_equation_error::linear_equation_error;
 use crate::estimation::methods::output_error::{Start, missing_channels, unsuitable};
@@ -469,26 +469,30 @@ impl Filtered<'_> {
         }
     }
 
-    /// Equation error's estimate on the record, with the model file's
-    /// `[methods.ee]` settings.
-    fn equation_error(&self, record: &FlightRecord) -> Result<Estimate> {
+    /// Equation error's estimate on the record as a start, with the model
+    /// file's `[methods.ee]` settings ([`start_estimate`] on a 6-DOF
+    /// structure), or the reason there is none.
+    fn equation_error_start(
+        &self,
+        record: &FlightRecord,
+        given: Option<&Estimate>,
+    ) -> std::result::Result<Estimate, String> {
         match self {
-            Filtered::SixDof(structure) => {
-                let table = merge_settings(equation_error::METHOD, &[&structure.methods]);
-                let options = EquationErrorSettings::read(&table)
-                    .map(|s| s.options())
-                    .unwrap_or_default();
-                equation_error(record, structure, &options)
-            }
+            Filtered::SixDof(structure) => start_estimate(record, structure, given),
             Filtered::Linear(structure) => {
-                let table = merge_settings(equation_error::METHOD, &[&structure.methods]);
-                let settings = EquationErrorSettings::read(&table).unwrap_or_default();
-                linear_equation_error(
-                    record,
-                    structure,
-                    &settings.differentiator,
-                    settings.correlation_lag,
-                )
+                let estimate = match given {
+                    Some(estimate) => estimate.clone(),
+                    None => {
+                        let table = merge_settings(equation_error::METHOD, &[&structure.methods]);
+                        let settings = EquationErrorSettings::read(&table).unwrap_or_default();
+                        linear_equation_error(record, structure, &settings.differentiator, 0.0)
+                            .map_err(|error| format!("no equation-error start ({error})"))?
+                    }
+                };
+                match &estimate.status {
+                    Status::Converged => Ok(estimate),
+                    status => Err(format!("equation error ended {status}")),
+                }
             }
         }
     }
@@ -748,16 +752,8 @@ fn start_values(
     if settings.start == Start::Model {
         return (theta, "θ started from the model file's values".into());
     }
-    let computed;
-    let estimate = match given {
-        Some(estimate) => Ok(estimate),
-        None => {
-            computed = structure.equation_error(record);
-            computed.as_ref().map_err(|e| e.to_string())
-        }
-    };
-    match estimate {
-        Ok(estimate) if estimate.status == Status::Converged => {
+    match structure.equation_error_start(record, given) {
+        Ok(estimate) => {
             for (i, name) in names.iter().enumerate() {
                 if let (true, Some(p)) = (free[i], estimate.parameter(name))
                     && p.value.is_finite()
@@ -767,16 +763,9 @@ fn start_values(
             }
             (theta, "θ started from equation error's estimate".into())
         }
-        Ok(estimate) => (
-            theta,
-            format!(
-                "θ started from the model file's values: equation error ended {}",
-                estimate.status
-            ),
-        ),
         Err(reason) => (
             theta,
-            format!("θ started from the model file's values: no equation-error start ({reason})"),
+            format!("θ started from the model file's values: {reason}"),
         ),
     }
 }

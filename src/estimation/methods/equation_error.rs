@@ -61,7 +61,7 @@ use crate::error::{Error, Result};
 use crate::estimation::estimate::Status;
 use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimation::estimator::{
-    Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
+    Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
 };
 use crate::estimation::methods::linear_equation_error::linear_equation_error;
 use crate::estimation::problem::EstimationProblem;
@@ -264,6 +264,40 @@ pub(crate) struct CoefficientResult {
     pub(crate) problem: Option<String>,
     /// Set when the Bartlett lag window replaced the plain truncated sum.
     pub(crate) window_note: Option<String>,
+}
+
+/// Equation error's estimate on `record` as the start of an iterative
+/// method (output error, filter error, the augmented filters), with the
+/// model file's `[methods.ee]` settings and white bounds (a start's bounds
+/// are not read). `given`, an estimate already made on the record, is
+/// used when it converged. Otherwise the reason the model file's values
+/// must serve ("equation error ended …" or "no equation-error start (…)").
+///
+/// Equation error is not fitted again with the regressors it cannot
+/// separate held at the model file's values: on the gusty 1 Hz approach
+/// (docs/findings.md) that start left filter error further from the
+/// truth than the model file's values did.
+pub(crate) fn start_estimate(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    given: Option<&Estimate>,
+) -> std::result::Result<Estimate, String> {
+    let table = merge_settings(METHOD, &[&structure.methods]);
+    let options = EquationErrorOptions {
+        correlation_lag: 0.0,
+        ..EquationErrorSettings::read(&table)
+            .map(|settings| settings.options())
+            .unwrap_or_default()
+    };
+    let estimate = match given {
+        Some(estimate) => estimate.clone(),
+        None => equation_error(record, structure, &options)
+            .map_err(|error| format!("no equation-error start ({error})"))?,
+    };
+    match &estimate.status {
+        Status::Converged => Ok(estimate),
+        status => Err(format!("equation error ended {status}")),
+    }
 }
 
 /// Estimates the free parameters of `structure` from `record` by equation

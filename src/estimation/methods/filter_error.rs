@@ -186,15 +186,13 @@
 //! updates.
 
 use crate::error::{Error, Result};
-use crate::estimation::estimate::{Estimate, OutputFit, Status};
+use crate::estimation::estimate::{Estimate, OutputFit};
 use crate::estimation::estimator::{
     Estimator, MethodInfo, MissingChannel, Refusal, Settings, merge_settings, parse_settings,
     setting_infos,
 };
 use crate::estimation::linear_structure::LinearStructure;
-use crate::estimation::methods::equation_error::{
-    self, EquationErrorOptions, EquationErrorSettings, equation_error,
-};
+use crate::estimation::methods::equation_error;
 use crate::estimation::methods::output_error::{self, Start};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{DrivenStateSpace, Jacobians, StateSpaceModel};
@@ -2209,7 +2207,8 @@ pub(crate) fn enough_data(
 }
 
 /// Equation error's estimates as a start (the free parameters, within
-/// their bounds), when it converged; None with a note otherwise.
+/// their bounds, [`equation_error::start_estimate`]); None with a note
+/// when there is none.
 fn regression_start(
     record: &FlightRecord,
     structure: &ModelStructure,
@@ -2217,23 +2216,8 @@ fn regression_start(
     file: &DVector<f64>,
     notes: &mut Vec<String>,
 ) -> Option<DVector<f64>> {
-    let computed;
-    let estimate = match given {
-        Some(estimate) => Ok(estimate),
-        None => {
-            let settings = merge_settings(equation_error::METHOD, &[&structure.methods]);
-            let options = EquationErrorOptions {
-                correlation_lag: 0.0,
-                ..EquationErrorSettings::read(&settings)
-                    .map(|settings| settings.options())
-                    .unwrap_or_default()
-            };
-            computed = equation_error(record, structure, &options);
-            computed.as_ref().map_err(|e| e.to_string())
-        }
-    };
-    match estimate {
-        Ok(estimate) if estimate.status == Status::Converged => {
+    match equation_error::start_estimate(record, structure, given) {
+        Ok(estimate) => {
             let names = structure.aircraft.aero.parameters.names();
             let mut theta = file.clone();
             for (i, name) in names.iter().enumerate() {
@@ -2244,17 +2228,8 @@ fn regression_start(
             }
             Some(theta)
         }
-        Ok(estimate) => {
-            notes.push(format!(
-                "started from the model file's values: equation error ended {}",
-                estimate.status
-            ));
-            None
-        }
-        Err(error) => {
-            notes.push(format!(
-                "started from the model file's values: no equation-error start ({error})"
-            ));
+        Err(reason) => {
+            notes.push(format!("started from the model file's values: {reason}"));
             None
         }
     }

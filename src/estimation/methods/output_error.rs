@@ -134,9 +134,7 @@ use crate::estimation::estimator::{
     setting_infos,
 };
 use crate::estimation::linear_structure::LinearStructure;
-use crate::estimation::methods::equation_error::{
-    self, EquationErrorOptions, EquationErrorSettings, equation_error,
-};
+use crate::estimation::methods::equation_error;
 use crate::estimation::methods::filter_error;
 use crate::estimation::model::driven::{
     ALTITUDE_SUBSTITUTES, Column, DrivenSimulation, FlightPathState, Linearise, Observable,
@@ -1524,36 +1522,10 @@ impl<'a> Problem<'a> {
         given: Option<&Estimate>,
         notes: &mut Vec<String>,
     ) -> bool {
-        // Equation error as the model's `[methods.ee]` table sets it; its
-        // bounds are not needed.
-        let ee_settings = merge_settings(equation_error::METHOD, &[&structure.methods]);
-        let options = EquationErrorOptions {
-            correlation_lag: 0.0,
-            ..EquationErrorSettings::read(&ee_settings)
-                .map(|settings| settings.options())
-                .unwrap_or_default()
-        };
-        let computed;
-        let estimate = match given {
-            Some(estimate) => Ok(estimate),
-            None => {
-                computed = equation_error(record, structure, &options);
-                computed.as_ref().map_err(|e| e.to_string())
-            }
-        };
-        let estimate = match estimate {
-            Ok(estimate) if estimate.status == Status::Converged => estimate,
-            Ok(estimate) => {
-                notes.push(format!(
-                    "started from the model file's values: equation error ended {:?}",
-                    estimate.status
-                ));
-                return false;
-            }
-            Err(error) => {
-                notes.push(format!(
-                    "started from the model file's values: no equation-error start ({error})"
-                ));
+        let estimate = match equation_error::start_estimate(record, structure, given) {
+            Ok(estimate) => estimate,
+            Err(reason) => {
+                notes.push(format!("started from the model file's values: {reason}"));
                 return false;
             }
         };
