@@ -32,7 +32,7 @@
 //! A parameter appears in exactly one entry. The model is continuous in
 //! time and discretised exactly ([`LinearStateSpace`]). The parameters'
 //! start values are the model's own values: a linear flight
-//! ([`crate::sim::linear_flight`]) flies them as its truth.
+//! ([`crate::eval::linear_flight`]) flies them as its truth.
 
 use crate::catalog;
 use crate::error::{Problems, Result, parse_toml, read_text};

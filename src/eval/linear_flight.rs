@@ -55,7 +55,7 @@ pub struct LinearTrace {
 }
 
 /// Records a scenario's flight: a linear model's when it has a `[linear]`
-/// table, else the simulator's ([`record_scenario_seeded`]).
+/// table, else the simulator's ([`crate::record::recorder::record_scenario_seeded`]).
 pub fn record_flight(
     scenario: &Scenario,
     profile: &Profile,

@@ -543,9 +543,9 @@ impl Filtered<'_> {
 pub struct History {
     pub names: Vec<String>,
     pub times: Vec<f64>,
-    /// [k][j]: θ_j at grid point k (filtered).
+    /// \[k\]\[j\]: θ_j at grid point k (filtered).
     pub values: Vec<Vec<f64>>,
-    /// [k][j]: its σ.
+    /// \[k\]\[j\]: its σ.
     pub sigmas: Vec<Vec<f64>>,
 }
 

@@ -59,7 +59,7 @@
 //! diag(K·C)(u) + A·Δ ≤ 1 − 10⁻⁶ on every state with a gain, A the
 //! constraint linearised in the unknowns (central differences of the
 //! steady-state gain, a Riccati solution each), solved by the active-set
-//! method ([`active_set_step`]: the violated constraints held as
+//! method (`active_set_step`: the violated constraints held as
 //! equalities through the KKT system, one with a negative multiplier
 //! released, the most violated one added). diag(K·C) curves up towards
 //! 1, so the step to the linearised boundary crosses the true one: up to
@@ -1679,7 +1679,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
     }
 
     /// ν/√R_oo at every measurement (steady gain); the time-varying
-    /// pass's whitened residuals ([`FilterErrorFit::time_varying_residuals`]).
+    /// pass's whitened residuals (`FilterErrorFit::time_varying_residuals`).
     fn residuals(&mut self, unknowns: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
         let pass = match self.pass(unknowns).map_err(|e| e.to_string())? {
             FilterPass::Steady(pass) => pass,
@@ -1760,7 +1760,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
     }
 
     /// JᵀJ and Jᵀr of [`LeastSquaresProblem::jacobian`] (steady gain);
-    /// Fisher scoring ([`FilterErrorFit::fisher_scoring`], time-varying).
+    /// Fisher scoring (`FilterErrorFit::fisher_scoring`, time-varying).
     fn normal_equations(
         &mut self,
         unknowns: &DVector<f64>,
@@ -1819,7 +1819,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
     }
 
     /// The Gauss–Newton step subject to diag(K·C) ≤ 1
-    /// ([`FilterErrorFit::gain_constrained_step`]).
+    /// (`FilterErrorFit::gain_constrained_step`).
     fn constrained_step(
         &mut self,
         unknowns: &DVector<f64>,

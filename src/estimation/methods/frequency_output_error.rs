@@ -170,7 +170,7 @@ impl Estimator for FrequencyOutputError {
 
 /// The Fourier transforms a linear model is fitted to, at angular
 /// frequencies ω (rad/s): inputs Ũ, measured outputs Z̃ and the end-state
-/// terms E, each indexed [signal][frequency].
+/// terms E, each indexed \[signal\]\[frequency\].
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrequencyData {
     pub frequencies: Vec<f64>,
@@ -211,7 +211,7 @@ impl FrequencyData {
         })
     }
 
-    /// Ỹ of the model at θ, [output][frequency].
+    /// Ỹ of the model at θ, \[output\]\[frequency\].
     pub fn predicted(&self, [a, b, c, d]: &[DMatrix<f64>; 4]) -> Result<Vec<Vec<Complex<f64>>>> {
         let (n, m, l) = (a.nrows(), b.ncols(), c.nrows());
         if m != self.inputs.len() || l != self.outputs.len() || n != self.ends.len() {

@@ -45,7 +45,7 @@
 //!    of the smoothed coefficient on the structure's terms, the regressors
 //!    from the smoothed states (α, β, V, p̂, q̂, r̂, α̇, Mach) and the recorded
 //!    controls — the regression equation error runs
-//!    ([`super::equation_error::regress`]), with its coloured-residual
+//!    (`equation_error::regress`), with its coloured-residual
 //!    Cramér–Rao bounds.
 //!
 //! Outputs: an [`Estimate`] of the structure's free parameters, and on

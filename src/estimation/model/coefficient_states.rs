@@ -395,7 +395,7 @@ impl StateSpaceModel for CoefficientStates {
     /// ∂f/∂x and ∂h/∂x, analytic: the force and moment terms through
     /// q̄S = ½ρ(h)·S·(u² + v² + w²) (∂q̄S/∂u = ρ·S·u, ∂q̄S/∂h = q̄S·d ln ρ/dh)
     /// and the thrust lapse (∂T/∂h = n·T·d ln ρ/dh); the gyroscopic term
-    /// ∂(ω × I·ω)/∂ω = [ω]×·I − [I·ω]×; gravity, Euler kinematics and
+    /// ∂(ω × I·ω)/∂ω = \[ω\]×·I − \[I·ω\]×; gravity, Euler kinematics and
     /// ḣ differentiated term by term; the Gauss–Markov chains' ones.
     fn jacobians(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<Jacobians> {
         self.check(x)?;

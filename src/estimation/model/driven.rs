@@ -236,7 +236,7 @@ struct FrozenPoints<'a> {
 /// along the aircraft's thrust line) instead of the throttle and engine
 /// model δT·Tmax·(ρ/ρ0)ⁿ; None where the record has no such channel. And
 /// the derivative of the measured α (rad/s) for a stall model whose
-/// separation takes it ([`measured_alpha_dot`]), None for any other.
+/// separation takes it (`measured_alpha_dot`), None for any other.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Ambient {
     pub density: Option<f64>,
@@ -1642,7 +1642,7 @@ impl DrivenSimulation {
     /// ([`Ambient`]); a missing altitude is the pressure altitude, else the
     /// ISA density altitude of the measured density
     /// ([`ALTITUDE_SUBSTITUTES`]). With `alpha_dot` the derivative of the
-    /// record's α is sampled too ([`measured_alpha_dot`]), for a stall
+    /// record's α is sampled too (`measured_alpha_dot`), for a stall
     /// model whose separation takes it. Each is noted.
     pub fn from_record(
         record: &FlightRecord,

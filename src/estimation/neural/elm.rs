@@ -145,7 +145,7 @@ impl Network for Elm {
     }
 
     /// Each neuron's sum of Eq. 4 from its bias over the leading inputs,
-    /// in the order [`Elm::neuron`] adds them.
+    /// in the order `Elm::neuron` adds them.
     fn partial(&self, head: &[f64], state: &mut [f64]) {
         let stride = self.inputs + 1;
         for (j, sum) in state.iter_mut().enumerate().take(self.hidden) {

@@ -199,7 +199,7 @@ impl Network for FeedForward {
     }
 
     /// Each neuron's sum of weighted inputs over the leading inputs, in
-    /// the order [`neuron`] adds them (its bias is added last).
+    /// the order `neuron` adds them (its bias is added last).
     fn partial(&self, head: &[f64], state: &mut [f64]) {
         let hidden_layer = &self.weights[..self.hidden_weights()];
         for (sum, row) in state

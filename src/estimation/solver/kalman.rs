@@ -626,7 +626,7 @@ impl SparseRows {
 /// non-zeros: U = P·Φᵀ and Φ·U = (Uᵀ·Φᵀ)ᵀ, each O(nnz(Φ)·n) instead of
 /// O(n³), symmetrised; `work` holds U and Uᵀ. Where Φ's rows from k on are
 /// the identity's ([`SparseRows::set_leading`]: an augmented model's
-/// constant parameters), Φ = [[Φ₁₁, Φ₁₂], [0, I]] = [[Φ₁], [0, I]] and
+/// constant parameters), Φ = \[\[Φ₁₁, Φ₁₂\], \[0, I\]\] = \[\[Φ₁\], \[0, I\]\] and
 /// the blocks are P₁₁ ← Φ₁·P·Φ₁ᵀ, P₁₂ ← Φ₁₁·P₁₂ + Φ₁₂·P₂₂ (the rows of
 /// W = P·Φ₁ᵀ, n × k, past k, transposed), P₂₂ unchanged: the same numbers
 /// as the dense form's for a symmetric P, without its products over the
@@ -1332,7 +1332,7 @@ pub struct Gaussian {
 }
 
 /// The RTS smoother over a filter's pass: `filtered[k]` = (x, P)_{k|k}
-/// (every covariance kept), `predicted[k]` = (x, P)_{k|k−1} (predicted[0]
+/// (every covariance kept), `predicted[k]` = (x, P)_{k|k−1} (`predicted[0]`
 /// unused), `transitions[k]` = Φ from k to k + 1. Returns (x, P)_{k|N}.
 pub fn rts_smooth(
     filtered: &Gaussians,
