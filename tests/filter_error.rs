@@ -7,7 +7,8 @@ use aeroid::analysis::linearize::{self, LATERAL};
 use aeroid::error::Result;
 use aeroid::estimation::estimate::Status;
 use aeroid::estimation::methods::filter_error::{
-    FilterErrorFit, FilterErrorOptions, Gain, filter_error, steady_state_pass, time_varying_pass,
+    FilterErrorFit, FilterErrorOptions, Gain, InnovationCovariance, filter_error,
+    steady_state_pass, time_varying_pass,
 };
 use aeroid::estimation::methods::output_error::Start;
 use aeroid::estimation::model::linear::{Entry, LinearStateSpace, Matrix};
@@ -318,19 +319,36 @@ fn adskalman_pass(
 /// as Γ·u added to its predicted state.
 #[test]
 fn likelihood_is_the_linear_kalman_filters() {
-    let case = oracle_case();
     let variances = DVector::from_vec(vec![0.2, 2e-5, 1e-5, 4e-5]);
+    steady_pass_agrees_with_adskalman("steady", &InnovationCovariance::diagonal(&variances));
+    // A full R (the innovations of the second and third outputs correlated
+    // at 0.3, the first and fourth at −0.2): the same filter, its gain
+    // K = P·Cᵀ·R⁻¹ and likelihood ½·Σ(νᵀR⁻¹ν + ln det R) those of the
+    // linear Kalman filter whose measurement noise is R − C·P·Cᵀ.
+    let mut full = DMatrix::from_diagonal(&variances);
+    let mut correlate = |a: usize, b: usize, rho: f64| {
+        let value = rho * (variances[a] * variances[b]).sqrt();
+        full[(a, b)] = value;
+        full[(b, a)] = value;
+    };
+    correlate(1, 2, 0.3);
+    correlate(0, 3, -0.2);
+    steady_pass_agrees_with_adskalman("steady, full R", &InnovationCovariance::full(full).unwrap());
+}
+
+fn steady_pass_agrees_with_adskalman(form: &str, innovation: &InnovationCovariance) {
+    let case = oracle_case();
     let pass = steady_state_pass(
         &case.model,
         case.theta.as_slice(),
         &case.initial,
         &case.distribution,
-        &variances,
+        innovation,
         &case.observations,
     )
     .unwrap();
     agrees_with_adskalman(
-        "steady",
+        form,
         pass.negative_log_likelihood,
         &pass.innovations,
         adskalman_pass(&case, &pass.measurement_noise, &pass.steady.covariance),
@@ -944,7 +962,7 @@ fn filter_error_converges_with_the_gain_constraint_active() {
                 &theta,
                 &initial,
                 &f,
-                &result.variances,
+                &result.innovation_covariance().unwrap(),
                 &observations,
             )
             .ok()
@@ -1211,4 +1229,29 @@ fn sensitivity_jacobian_is_the_filters_derivative() {
         assert!(shift < 0.02 && bound < 0.01, "{comparison}");
     }
     println!("{comparison}");
+}
+
+/// `innovation_covariance`: "full" with the time-varying gain (whose
+/// innovation covariance is full already) and an unknown form are refused
+/// naming the key; "full" with the steady gain is accepted.
+#[test]
+fn innovation_covariance_settings_are_checked() {
+    let check = |pairs: &[(&str, &str)]| {
+        let mut settings = aeroid::estimation::estimator::Settings::new();
+        for (key, value) in pairs {
+            settings.insert(key.to_string(), serde_json::Value::from(*value));
+        }
+        aeroid::estimation::methods::find("fem")
+            .unwrap()
+            .check_settings(&settings)
+            .map_err(|e| e.to_string())
+    };
+    check(&[("innovation_covariance", "full")]).unwrap();
+    let error = check(&[("innovation_covariance", "full"), ("gain", "time_varying")]).unwrap_err();
+    assert!(error.contains("innovation_covariance"), "{error}");
+    let error = check(&[("innovation_covariance", "whole")]).unwrap_err();
+    assert!(
+        error.contains("innovation_covariance") || error.contains("whole"),
+        "{error}"
+    );
 }

@@ -43,12 +43,24 @@
 //! Cost and relaxation (Jategaonkar §5.3): the negative
 //! log-likelihood of the innovations, ½·Σ_k (ν_kᵀR⁻¹ν_k + ln det R),
 //! minimised by relaxation: at every iteration R is re-estimated from the
-//! innovations at the current (θ, F), R = (1/N)·Σ ν·νᵀ (diagonal, as output
-//! error's: the channels may have different time bases), then one
-//! Gauss–Newton step on ½·Σ νᵀR⁻¹ν with R fixed is taken on θ and F
-//! together, by the shared core ([`gauss_newton`]). After each R update F
+//! innovations at the current (θ, F), R = (1/N)·Σ ν·νᵀ (Jategaonkar
+//! Eq. 5.37), then one Gauss–Newton step on ½·Σ νᵀR⁻¹ν with R fixed is
+//! taken on θ and F together, by the shared core ([`gauss_newton`]), on
+//! the innovations whitened by R ([`InnovationCovariance`]). R is
+//! diagonal by default (one variance per output, as output error's);
+//! with `innovation_covariance = "full"` it is the whole (1/N)·Σ ν·νᵀ
+//! where every grid point with a measurement measures every output. The
+//! innovations of outputs that share a state's prediction error are
+//! correlated (β and n_y through β, −0.85 on the ATTAS lateral flight in
+//! turbulence), and the diagonal R weighs that error twice: its bounds
+//! on the side-force derivatives are about twice their scatter, the full
+//! R's honest (docs/findings.md, "The full innovation covariance"). On a
+//! multi-rate record, each output correcting at its own instants, and
+//! without process noise (output error), R stays diagonal. The full R
+//! starts from the first filter's innovations (R's start from the
+//! simulation without the filter is diagonal). After each R update F
 //! is compensated by the heuristic of Jategaonkar Eq. 5.41 as FVSysID's
-//! `fcompn` codes it: F_ii ← F_ii·Σ_j C_ji²·R_jj,old⁻¹·√(R_jj,new/R_jj,old)
+//! `fcompn` codes it, on R's diagonal: F_ii ← F_ii·Σ_j C_ji²·R_jj,old⁻¹·√(R_jj,new/R_jj,old)
 //! / Σ_j C_ji²·R_jj,old⁻¹, so that the gain, which depends on both, does
 //! not jump with R ([`LeastSquaresProblem::compensate`]).
 //! Constraint (Jategaonkar §5.3): the diagonal of K·C must stay ≤ 1 (a
@@ -248,9 +260,24 @@ pub struct FilterErrorOptions {
     /// known, variance 0).
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub initial_variance: BTreeMap<String, f64>,
+    /// The steady gain's innovation covariance R: diagonal, or full where
+    /// every output shares one time base ([`InnovationCovariance`]).
+    pub innovation_covariance: InnovationForm,
     /// Fit only this time window (s) of the record; default the whole record.
     #[serde(skip)]
     pub window: Option<(f64, f64)>,
+}
+
+/// The steady gain's innovation covariance R (`innovation_covariance`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InnovationForm {
+    /// One variance per output.
+    #[default]
+    Diagonal,
+    /// R = (1/N)·Σ ν·νᵀ whole, where every grid point with a measurement
+    /// measures every output (else diagonal, with a note).
+    Full,
 }
 
 /// The filter in the filter error method's loop (module documentation).
@@ -277,6 +304,7 @@ impl Default for FilterErrorOptions {
             process_noise: None,
             gain: Gain::default(),
             initial_variance: BTreeMap::new(),
+            innovation_covariance: InnovationForm::default(),
             window: None,
         }
     }
@@ -300,6 +328,13 @@ impl FilterErrorOptions {
             )));
         }
         check_initial_variance(METHOD, options.gain, &options.initial_variance)?;
+        if options.gain == Gain::TimeVarying
+            && options.innovation_covariance == InnovationForm::Full
+        {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}] innovation_covariance = \"full\" needs gain = \"steady\": the time-varying filter's innovation covariance C·P̃·Cᵀ + G·Gᵀ is full already"
+            )));
+        }
         Ok(options)
     }
 
@@ -365,7 +400,7 @@ impl Estimator for FilterError {
         MethodInfo {
             title: "filter error: maximum likelihood with a steady-state extended Kalman filter in the loop, for flights with turbulence",
             paper: "Maine & Iliff, \"Identification of dynamic systems\" (NASA RP-1138, 1985); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 5",
-            equations: "innovations ν = z − ỹ of x̃_k = step(x̂_{k−1}), x̂ = x̃ + K·ν, K = P·Cᵀ·R⁻¹ (Jategaonkar §5.5, Eq. 5.48), P from the discrete Riccati equation of the model linearised at the first point; cost ½·Σ(νᵀR⁻¹ν + ln det R), R = (1/N)·Σ ν·νᵀ, Gauss–Newton on θ and F with R fixed, F compensated after each R update (Eq. 5.41), diag(K·C) ≤ 1 (§5.3); Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ). gain = \"time_varying\": the EKF in the loop (Jategaonkar §7.2, Eqs. 7.11–7.19), P̃_k = Φ_k·P̂_{k−1}·Φ_kᵀ + Q_d, K_k = P̃_k·C_kᵀ·(C_k·P̃_k·C_kᵀ + G·Gᵀ)⁻¹, cost ½·Σ(νᵀS_k⁻¹ν + ln det S_k), θ, F and G by Fisher scoring",
+            equations: "innovations ν = z − ỹ of x̃_k = step(x̂_{k−1}), x̂ = x̃ + K·ν, K = P·Cᵀ·R⁻¹ (Jategaonkar §5.5, Eq. 5.48), P from the discrete Riccati equation of the model linearised at the first point; cost ½·Σ(νᵀR⁻¹ν + ln det R), R = (1/N)·Σ ν·νᵀ (diagonal, or with innovation_covariance = \"full\" whole where the outputs share one time base), Gauss–Newton on θ and F with R fixed, F compensated after each R update (Eq. 5.41), diag(K·C) ≤ 1 (§5.3); Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ). gain = \"time_varying\": the EKF in the loop (Jategaonkar §7.2, Eqs. 7.11–7.19), P̃_k = Φ_k·P̂_{k−1}·Φ_kᵀ + Q_d, K_k = P̃_k·C_kᵀ·(C_k·P̃_k·C_kᵀ + G·Gᵀ)⁻¹, cost ½·Σ(νᵀS_k⁻¹ν + ln det S_k), θ, F and G by Fisher scoring",
             needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
             settings: setting_infos(
                 &FilterErrorOptions::default(),
@@ -394,6 +429,10 @@ impl Estimator for FilterError {
                     (
                         "initial_variance",
                         "with gain = \"time_varying\": the initial state's error variance per state, e.g. { z1 = 5.8 }; states not named start known",
+                    ),
+                    (
+                        "innovation_covariance",
+                        "with gain = \"steady\": \"diagonal\" (one variance per output) or \"full\" (R = (1/N)·Σ ν·νᵀ whole where every output shares one time base: honest bounds where outputs share a state's prediction error, e.g. β and n_y)",
                     ),
                 ],
             ),
@@ -459,11 +498,93 @@ pub struct SteadyPass {
     pub output_matrix: DMatrix<f64>,
 }
 
+/// The steady-state filter's innovation covariance R (Jategaonkar
+/// Eq. 5.37, R = (1/N)·Σ ν·νᵀ): a full matrix where every grid point with
+/// a measurement measures every output (one time base; the innovations of
+/// outputs that share a state's prediction error are correlated: β and
+/// n_y through β), else its diagonal (outputs on different time bases,
+/// each correcting alone).
+#[derive(Debug, Clone, PartialEq)]
+pub struct InnovationCovariance {
+    matrix: DMatrix<f64>,
+    /// L⁻¹ (R = L·Lᵀ) and ln det R of a full R; None for a diagonal one.
+    whitening: Option<(DMatrix<f64>, f64)>,
+}
+
+impl InnovationCovariance {
+    /// R = diag(`variances`).
+    pub fn diagonal(variances: &DVector<f64>) -> InnovationCovariance {
+        InnovationCovariance {
+            matrix: DMatrix::from_diagonal(variances),
+            whitening: None,
+        }
+    }
+
+    /// A full R; an error when it is not positive definite.
+    pub fn full(matrix: DMatrix<f64>) -> Result<InnovationCovariance> {
+        let (root, log_det) = lower_root(&matrix)?;
+        let n = root.nrows();
+        let inverse = root
+            .solve_lower_triangular(&DMatrix::identity(n, n))
+            .ok_or_else(|| Error::Other("a singular innovation covariance".into()))?;
+        Ok(InnovationCovariance {
+            matrix,
+            whitening: Some((inverse, log_det)),
+        })
+    }
+
+    /// R.
+    pub fn matrix(&self) -> &DMatrix<f64> {
+        &self.matrix
+    }
+
+    /// R's diagonal, each output's innovation variance.
+    pub fn variances(&self) -> DVector<f64> {
+        self.matrix.diagonal()
+    }
+
+    /// Whether R is full (its off-diagonal entries estimated).
+    pub fn is_full(&self) -> bool {
+        self.whitening.is_some()
+    }
+
+    /// Rows in the observations' order (one per measurement) whitened in
+    /// place: each grid point's block by L⁻¹ where R is full and the point
+    /// measures every output, else each row by 1/√R_oo. ½ of the squared
+    /// sum of whitened innovations is ½·Σ νᵀR⁻¹ν.
+    fn whiten(&self, observations: &Observations, rows: &mut DMatrix<f64>) {
+        let outputs = self.matrix.nrows();
+        let mut row = 0;
+        for present in &observations.at {
+            match &self.whitening {
+                Some((inverse, _)) if present.len() == outputs => {
+                    // The block in the outputs' order, whitened, put back.
+                    let mut block = DMatrix::zeros(outputs, rows.ncols());
+                    for (i, &(o, _)) in present.iter().enumerate() {
+                        block.row_mut(o).copy_from(&rows.row(row + i));
+                    }
+                    let whitened = inverse * block;
+                    for (i, &(o, _)) in present.iter().enumerate() {
+                        rows.row_mut(row + i).copy_from(&whitened.row(o));
+                    }
+                }
+                _ => {
+                    for (i, &(o, _)) in present.iter().enumerate() {
+                        let scale = 1.0 / self.matrix[(o, o)].sqrt();
+                        rows.row_mut(row + i).scale_mut(scale);
+                    }
+                }
+            }
+            row += present.len();
+        }
+    }
+}
+
 /// One pass of the steady-state filter (module documentation) over
 /// `observations` on the model's grid, from `initial` at grid point 0,
 /// with parameters `theta`, process-noise distribution F = diag(`distribution`)
 /// (one entry per state, zero for a state without noise) and innovation
-/// covariance R = diag(`variances`), one per output. With no process noise
+/// covariance R ([`InnovationCovariance`]). With no process noise
 /// the gain is zero and the pass is the model's simulation. An error when
 /// the model cannot be evaluated, no steady-state filter has this R, or
 /// the constraint diag(K·C) ≤ 1 is violated.
@@ -472,10 +593,11 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
     theta: &[f64],
     initial: &DVector<f64>,
     distribution: &DVector<f64>,
-    variances: &DVector<f64>,
+    innovation: &InnovationCovariance,
     observations: &Observations,
 ) -> Result<SteadyPass> {
     let (n, outputs) = (model.state_count(), model.output_count());
+    let variances = innovation.variances();
     if initial.len() != n
         || distribution.len() != n
         || variances.len() != outputs
@@ -501,7 +623,7 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
     let (steady, measurement_noise) = steady_gain(
         &jacobians,
         distribution,
-        variances,
+        innovation,
         (model.time(1) - start) * observations.stride() as f64,
     )?;
     let c = jacobians.outputs_by_state;
@@ -525,7 +647,7 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
         model,
         theta,
         initial,
-        variances,
+        innovation,
         observations,
         &mut pass,
         None,
@@ -541,13 +663,13 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
 fn steady_gain(
     jacobians: &crate::estimation::model::state_space::Jacobians,
     distribution: &DVector<f64>,
-    variances: &DVector<f64>,
+    innovation: &InnovationCovariance,
     interval: f64,
 ) -> Result<(SteadyState, DMatrix<f64>)> {
     let a = &jacobians.rates_by_state;
     let c = &jacobians.outputs_by_state;
     let (n, outputs) = (a.nrows(), c.nrows());
-    let r = DMatrix::from_diagonal(variances);
+    let r = innovation.matrix().clone();
     if distribution.iter().all(|f| *f == 0.0) {
         let steady = SteadyState {
             covariance: DMatrix::zeros(n, n),
@@ -580,14 +702,16 @@ fn filter_steadily<M: StateSpaceModel + ?Sized>(
     model: &M,
     theta: &[f64],
     initial: &DVector<f64>,
-    variances: &DVector<f64>,
+    innovation: &InnovationCovariance,
     observations: &Observations,
     pass: &mut SteadyPass,
     mut tangent: Option<&mut Tangent<'_>>,
 ) -> Result<bool> {
     let (n, outputs) = (model.state_count(), model.output_count());
     let m = tangent.as_ref().map_or(0, |t| t.columns.len());
+    let variances = innovation.variances();
     let log_variances = variances.map(f64::ln);
+    let mut innovations = DVector::zeros(outputs);
     let mut sensitivity = DMatrix::<f64>::zeros(n, m);
     let mut output_sensitivity = DMatrix::<f64>::zeros(outputs, m);
     let mut correction = DMatrix::<f64>::zeros(n, m);
@@ -651,12 +775,21 @@ fn filter_steadily<M: StateSpaceModel + ?Sized>(
             }
             None => predicted = model.outputs(t, state.as_slice(), theta)?,
         }
+        // ½·(νᵀR⁻¹ν + ln det R) over the outputs measured here: with R
+        // full at a point that measures them all, else output by output.
+        let joint = match &innovation.whitening {
+            Some((inverse, log_det)) if present.len() == outputs => Some((inverse, *log_det)),
+            _ => None,
+        };
         for &(o, z) in present {
             let innovation = z - predicted[o];
+            innovations[o] = innovation;
             pass.innovations.push(innovation);
             pass.predicted.push(predicted[o]);
-            pass.negative_log_likelihood +=
-                0.5 * (innovation * innovation / variances[o] + log_variances[o]);
+            if joint.is_none() {
+                pass.negative_log_likelihood +=
+                    0.5 * (innovation * innovation / variances[o] + log_variances[o]);
+            }
             state.axpy(innovation, &pass.steady.gain.column(o), 1.0);
             if let Some(ref mut tangent) = tangent {
                 // ∂ν/∂u = −∂ỹ/∂u; Ŝ = S̃ + K·∂ν + ∂K·ν
@@ -671,6 +804,10 @@ fn filter_steadily<M: StateSpaceModel + ?Sized>(
                 }
             }
             row += 1;
+        }
+        if let Some((inverse, log_det)) = joint {
+            let whitened = inverse * &innovations;
+            pass.negative_log_likelihood += 0.5 * (whitened.norm_squared() + log_det);
         }
         if tangent.is_some() {
             sensitivity += &correction;
@@ -772,6 +909,9 @@ fn lower_root(covariance: &DMatrix<f64>) -> Result<(DMatrix<f64>, f64)> {
     Ok((root, log_det))
 }
 
+/// R's diagonal and, where it is full, the whole R.
+type Relaxed = (DVector<f64>, Option<DMatrix<f64>>);
+
 fn at_time(error: Error, t: f64) -> Error {
     Error::Other(format!("at t = {t} s: {error}"))
 }
@@ -792,11 +932,18 @@ pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
     outputs: Vec<usize>,
     /// The measured values, in the same order.
     measured: Vec<f64>,
-    /// R = diag(variances), the current innovation covariance.
+    /// R's diagonal, the current innovation variances.
     variances: DVector<f64>,
-    /// R before the last update and the C of that update's pass, for the
-    /// compensation of F.
-    previous: Option<(DVector<f64>, DMatrix<f64>)>,
+    /// The full R (steady gain, one time base: [`InnovationCovariance`]),
+    /// its diagonal `variances`; None where R is diagonal.
+    full: Option<DMatrix<f64>>,
+    /// Whether every grid point with a measurement measures every output.
+    one_time_base: bool,
+    /// Whether R is to be full where it can ([`InnovationForm::Full`]).
+    full_wanted: bool,
+    /// R (diagonal and full) before the last update and the C of that
+    /// update's pass, for the compensation of F.
+    previous: Option<(Relaxed, DMatrix<f64>)>,
     /// F_ref of each F entry at the start: an entry below [`COLLAPSED`] of
     /// it is zero (see [`FilterErrorFit::split`]).
     scale: Vec<f64>,
@@ -831,7 +978,13 @@ pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
 }
 
 /// A pass kept with the θ, F and noise it was run with.
-type KeptPass = (DVector<f64>, DVector<f64>, DVector<f64>, FilterPass);
+type KeptPass = (
+    DVector<f64>,
+    DVector<f64>,
+    DVector<f64>,
+    Option<DMatrix<f64>>,
+    FilterPass,
+);
 
 /// A pass of the filter in the loop.
 #[derive(Debug, Clone, PartialEq)]
@@ -884,8 +1037,10 @@ pub struct FitResult {
     pub solution: gauss_newton::Solution,
     /// The unknowns where the iterations started.
     pub start: DVector<f64>,
-    /// R = diag(variances) at the solution.
+    /// R's diagonal (steady gain; G·Gᵀ's, time-varying) at the solution.
     pub variances: DVector<f64>,
+    /// The full R at the solution, where it is full ([`InnovationCovariance`]).
+    pub full: Option<DMatrix<f64>>,
     /// The pass at the solution (None when it cannot be evaluated).
     pub pass: Option<FilterPass>,
     /// The start factor of F_ref chosen (module documentation).
@@ -893,6 +1048,16 @@ pub struct FitResult {
     /// Whether the last Gauss–Newton step was the one constrained by
     /// diag(K·C) ≤ 1: the constraint active at the solution.
     pub constrained: bool,
+}
+
+impl FitResult {
+    /// The steady filter's R at the solution (full or diagonal).
+    pub fn innovation_covariance(&self) -> Result<InnovationCovariance> {
+        match &self.full {
+            Some(full) => InnovationCovariance::full(full.clone()),
+            None => Ok(InnovationCovariance::diagonal(&self.variances)),
+        }
+    }
 }
 
 impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
@@ -928,6 +1093,12 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             outputs,
             measured,
             variances: DVector::from_element(model.output_count(), 1.0),
+            full: None,
+            one_time_base: observations
+                .at
+                .iter()
+                .all(|present| present.is_empty() || present.len() == model.output_count()),
+            full_wanted: false,
             previous: None,
             scale: Vec::new(),
             gain: Gain::Steady,
@@ -962,6 +1133,19 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         self.gain = Gain::TimeVarying;
         self.initial_covariance = initial_covariance;
         Ok(self)
+    }
+
+    /// The fit with a full innovation covariance R where every output
+    /// shares one time base ([`InnovationForm::Full`]; steady gain).
+    pub fn with_full_innovation_covariance(mut self) -> Self {
+        self.full_wanted = true;
+        self
+    }
+
+    /// Whether R is full ([`FilterErrorFit::with_full_innovation_covariance`]
+    /// on a record whose outputs share one time base).
+    pub fn full_innovation_covariance(&self) -> bool {
+        self.full_wanted && self.one_time_base
     }
 
     /// The fit with the steady gain's Jacobian by forward differences of
@@ -1043,15 +1227,17 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     pub fn pass(&self, unknowns: &DVector<f64>) -> Result<FilterPass> {
         let (theta, distribution) = self.split(unknowns);
         let noise = self.noise_of(unknowns);
-        if let Some((t, d, n, pass)) = &*self.last_pass.borrow()
+        if let Some((t, d, n, full, pass)) = &*self.last_pass.borrow()
             && *t == theta
             && *d == distribution
             && *n == noise
+            && *full == self.full
         {
             return Ok(pass.clone());
         }
         let pass = self.pass_at(&theta, &distribution, &noise)?;
-        *self.last_pass.borrow_mut() = Some((theta, distribution, noise, pass.clone()));
+        *self.last_pass.borrow_mut() =
+            Some((theta, distribution, noise, self.full.clone(), pass.clone()));
         Ok(pass)
     }
 
@@ -1069,7 +1255,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
                 theta.as_slice(),
                 &self.initial,
                 distribution,
-                noise,
+                &self.innovation_covariance(noise)?,
                 self.observations,
             )
             .map(FilterPass::Steady),
@@ -1086,6 +1272,53 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             )
             .map(FilterPass::TimeVarying),
         }
+    }
+
+    /// The steady filter's R: the full R where it is kept (its diagonal
+    /// `variances`), else diag(`variances`).
+    fn innovation_covariance(&self, variances: &DVector<f64>) -> Result<InnovationCovariance> {
+        match &self.full {
+            Some(full) => InnovationCovariance::full(full.clone()),
+            None => Ok(InnovationCovariance::diagonal(variances)),
+        }
+    }
+
+    /// The steady filter's R from a pass's innovations: the diagonal
+    /// ([`FilterErrorFit::variances_of`]) and, where a full R is wanted, with
+    /// the steady gain, process noise and one time base, the full R = (1/N)·Σ ν·νᵀ with that
+    /// diagonal (None where it is not positive definite: the diagonal
+    /// serves). Without process noise the fit is output error, whose R is
+    /// diagonal as the `oem` method's.
+    fn covariance_of(&self, innovations: &[f64]) -> Relaxed {
+        let variances = self.variances_of(innovations);
+        let outputs = self.model.output_count();
+        if self.gain != Gain::Steady
+            || !self.full_wanted
+            || self.noisy.is_empty()
+            || !self.one_time_base
+            || outputs < 2
+        {
+            return (variances, None);
+        }
+        let mut sum = DMatrix::zeros(outputs, outputs);
+        let mut count = 0usize;
+        let mut at = 0;
+        for present in &self.observations.at {
+            if present.is_empty() {
+                continue;
+            }
+            let mut nu = DVector::zeros(outputs);
+            for (i, &(o, _)) in present.iter().enumerate() {
+                nu[o] = innovations[at + i];
+            }
+            sum.ger(1.0, &nu, &nu, 1.0);
+            count += 1;
+            at += present.len();
+        }
+        let mut full = sum / count.max(1) as f64;
+        full.set_diagonal(&variances);
+        let full = InnovationCovariance::full(full.clone()).ok().map(|_| full);
+        (variances, full)
     }
 
     /// The diagonal R of a pass's innovations: each output's mean square,
@@ -1190,10 +1423,10 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
 
     /// The relaxation of the noise covariance the filter is given: R from
     /// the innovations (steady gain), a scoring step of G·Gᵀ (time-varying).
-    fn relaxed(&self, pass: &FilterPass) -> DVector<f64> {
+    fn relaxed(&self, pass: &FilterPass) -> Relaxed {
         match pass {
-            FilterPass::Steady(pass) => self.variances_of(&pass.innovations),
-            FilterPass::TimeVarying(pass) => self.measurement_noise_of(pass),
+            FilterPass::Steady(pass) => self.covariance_of(&pass.innovations),
+            FilterPass::TimeVarying(pass) => (self.measurement_noise_of(pass), None),
         }
     }
 
@@ -1318,8 +1551,21 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         )
     }
 
-    /// ½·Σ_o N_o·ln R_oo: the likelihood with R estimated, up to a constant.
+    /// ½·Σ_o N_o·ln R_oo (R diagonal) or ½·N·ln det R (R full, N the
+    /// grid points measured): the likelihood with R estimated, up to a
+    /// constant.
     fn determinant_cost(&self) -> f64 {
+        if let Some(Ok(full)) = self.full.clone().map(InnovationCovariance::full)
+            && let Some((_, log_det)) = full.whitening
+        {
+            let points = self
+                .observations
+                .at
+                .iter()
+                .filter(|p| !p.is_empty())
+                .count();
+            return 0.5 * points as f64 * log_det;
+        }
         let mut counts = vec![0usize; self.model.output_count()];
         for &o in &self.outputs {
             counts[o] += 1;
@@ -1355,6 +1601,11 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// and the factor chosen.
     fn start(&mut self, theta: &DVector<f64>) -> Result<(DVector<f64>, f64)> {
         let zero = DVector::zeros(self.model.state_count());
+        // R starts diagonal, from the simulation's output errors: those of
+        // a model without its filter drift together, and a full R of them
+        // would weigh the filter's first innovations by correlations that
+        // are the simulation's, not the filter's.
+        self.full = None;
         match self.pass(&self.join(theta, &zero)) {
             Ok(simulation) => self.variances = self.variances_of(simulation.innovations()),
             // A simulation that departs (an unstable mode) is no reason to
@@ -1372,15 +1623,15 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             .jacobians(start, self.initial.as_slice(), theta.as_slice())?
             .outputs_by_state;
         let reference = self.reference_distribution(&c);
-        let simulated = self.variances.clone();
-        let mut best: Option<(f64, f64, DVector<f64>)> = None;
+        let simulated = (self.variances.clone(), self.full.clone());
+        let mut best: Option<(f64, f64, Relaxed)> = None;
         let mut failure = None;
         for factor in START_FACTORS {
-            self.variances = simulated.clone();
+            (self.variances, self.full) = simulated.clone();
             let unknowns = self.join(theta, &(&reference * factor));
             let relaxed = (0..2).try_for_each(|_| {
                 let pass = self.pass(&unknowns)?;
-                self.variances = self.relaxed(&pass);
+                (self.variances, self.full) = self.relaxed(&pass);
                 Ok::<(), Error>(())
             });
             match relaxed.and_then(|_| self.pass(&unknowns)) {
@@ -1390,15 +1641,15 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
                         Gain::TimeVarying => pass.negative_log_likelihood(),
                     };
                     if best.as_ref().is_none_or(|(c, _, _)| cost < *c) {
-                        best = Some((cost, factor, self.variances.clone()));
+                        best = Some((cost, factor, (self.variances.clone(), self.full.clone())));
                     }
                 }
                 Err(error) => failure = Some(error),
             }
         }
         match best {
-            Some((_, factor, variances)) => {
-                self.variances = variances;
+            Some((_, factor, relaxed)) => {
+                (self.variances, self.full) = relaxed;
                 Ok((self.join(theta, &(&reference * factor)), factor))
             }
             None => Err(failure.unwrap_or_else(|| Error::Other("no start for F".into()))),
@@ -1446,6 +1697,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         let (theta, distribution) = self.split(unknowns);
         let start = self.model.time(0);
         let (interval, here) = self.first_point(&theta)?;
+        let innovation = self.innovation_covariance(&self.variances)?;
         let gain_at = |moved: &DVector<f64>, j: usize| -> Result<DMatrix<f64>> {
             let (theta, distribution) = self.split(moved);
             let moved_jacobians;
@@ -1458,7 +1710,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
                 &here
             };
             Ok(
-                steady_gain(jacobians, &distribution, &self.variances, interval)?
+                steady_gain(jacobians, &distribution, &innovation, interval)?
                     .0
                     .gain,
             )
@@ -1485,8 +1737,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             .map(|&i| Some(i))
             .chain(self.noisy.iter().map(|_| None))
             .collect();
-        let (steady, measurement_noise) =
-            steady_gain(&here, &distribution, &self.variances, interval)?;
+        let (steady, measurement_noise) = steady_gain(&here, &distribution, &innovation, interval)?;
         let mut pass = SteadyPass {
             innovations: Vec::with_capacity(self.outputs.len()),
             predicted: Vec::with_capacity(self.outputs.len()),
@@ -1504,7 +1755,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             self.model,
             theta.as_slice(),
             &self.initial,
-            &self.variances,
+            &innovation,
             self.observations,
             &mut pass,
             Some(&mut tangent),
@@ -1512,9 +1763,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             return Ok(None);
         }
         let mut jacobian = tangent.rows;
-        for (mut row, &o) in jacobian.row_iter_mut().zip(&self.outputs) {
-            row /= self.variances[o].sqrt();
-        }
+        innovation.whiten(self.observations, &mut jacobian);
         Ok(Some(jacobian))
     }
 
@@ -1523,7 +1772,8 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     fn gain_products(&self, unknowns: &DVector<f64>) -> Result<DVector<f64>> {
         let (theta, distribution) = self.split(unknowns);
         let (interval, jacobians) = self.first_point(&theta)?;
-        let (steady, _) = steady_gain(&jacobians, &distribution, &self.variances, interval)?;
+        let innovation = self.innovation_covariance(&self.variances)?;
+        let (steady, _) = steady_gain(&jacobians, &distribution, &innovation, interval)?;
         Ok((steady.gain * &jacobians.outputs_by_state).diagonal())
     }
 
@@ -1665,6 +1915,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         Ok(FitResult {
             constrained: self.constrained,
             variances: self.noise_of(&solution.theta),
+            full: self.full.clone(),
             solution,
             start,
             pass,
@@ -1678,7 +1929,8 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         self.names.get(index).cloned()
     }
 
-    /// ν/√R_oo at every measurement (steady gain); the time-varying
+    /// The innovations whitened by R ([`InnovationCovariance`]: L⁻¹·ν at a
+    /// point where R is full, ν/√R_oo otherwise; steady gain); the time-varying
     /// pass's whitened residuals (`FilterErrorFit::time_varying_residuals`).
     fn residuals(&mut self, unknowns: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
         let pass = match self.pass(unknowns).map_err(|e| e.to_string())? {
@@ -1689,14 +1941,13 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
                     .map_err(|e| e.to_string());
             }
         };
-        let weights = self.variances.map(|v| 1.0 / v.sqrt());
-        Ok(DVector::from_iterator(
-            pass.innovations.len(),
-            pass.innovations
-                .iter()
-                .zip(&self.outputs)
-                .map(|(nu, &o)| nu * weights[o]),
-        ))
+        let innovation = self
+            .innovation_covariance(&self.variances)
+            .map_err(|e| e.to_string())?;
+        let mut residuals =
+            DMatrix::from_column_slice(pass.innovations.len(), 1, &pass.innovations);
+        innovation.whiten(self.observations, &mut residuals);
+        Ok(residuals.column(0).into_owned())
     }
 
     /// Forward differences of whole filter passes (module documentation);
@@ -1719,7 +1970,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         self.difference_jacobian(unknowns, options)
     }
 
-    /// R = (1/N)·Σ ν·νᵀ (diagonal) at the current (θ, F) (steady gain);
+    /// R = (1/N)·Σ ν·νᵀ ([`InnovationCovariance`]) at the current (θ, F) (steady gain);
     /// a scoring step of G·Gᵀ (time-varying gain). Either is followed by
     /// the compensation of F ([`LeastSquaresProblem::compensate`]) with C
     /// at the first grid point.
@@ -1738,9 +1989,12 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
             return Ok(true);
         }
         let pass = self.pass(unknowns).map_err(|e| e.to_string())?;
-        let variances = self.relaxed(&pass);
-        let changed = variances != self.variances;
-        let previous = std::mem::replace(&mut self.variances, variances);
+        let (variances, full) = self.relaxed(&pass);
+        let changed = variances != self.variances || full != self.full;
+        let previous = (
+            std::mem::replace(&mut self.variances, variances),
+            std::mem::replace(&mut self.full, full),
+        );
         let output_matrix = match pass {
             FilterPass::Steady(pass) => pass.output_matrix,
             FilterPass::TimeVarying(_) => {
@@ -1790,7 +2044,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         if self.joint {
             return self.relax_jointly(unknowns);
         }
-        let (old, c) = self.previous.take()?;
+        let ((old, old_full), c) = self.previous.take()?;
         if self.noisy.is_empty() {
             return None;
         }
@@ -1815,6 +2069,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
             }
         }
         self.variances = old;
+        self.full = old_full;
         None
     }
 
@@ -2022,6 +2277,14 @@ pub fn filter_error_from(
         let covariance =
             initial_covariance(METHOD, &view.state_names(), &options.initial_variance)?;
         fit = fit.with_time_varying_gain(covariance)?;
+    }
+    if options.innovation_covariance == InnovationForm::Full {
+        fit = fit.with_full_innovation_covariance();
+        if !fit.full_innovation_covariance() {
+            notes.push(
+                "innovation_covariance = \"full\": the outputs are not all measured at the same instants, so R is diagonal".into(),
+            );
+        }
     }
     let solver = Options::maximum_likelihood(
         &free,
@@ -2312,12 +2575,26 @@ fn assemble<M: StateSpaceModel + ?Sized>(
             p.start
         ));
     }
-    details.push_str(match fit.gain {
-        Gain::Steady => "innovation covariance R (diagonal):\n",
-        Gain::TimeVarying => "measurement noise G·Gᵀ (diagonal):\n",
+    details.push_str(match (fit.gain, &result.full) {
+        (Gain::Steady, None) => "innovation covariance R (diagonal):\n",
+        (Gain::Steady, Some(_)) => {
+            "innovation covariance R (full, one time base): variances, then correlations:\n"
+        }
+        (Gain::TimeVarying, _) => "measurement noise G·Gᵀ (diagonal):\n",
     });
     for (name, r) in outputs.iter().zip(result.variances.iter()) {
         details.push_str(&format!("  {name}: {r:.6e}\n"));
+    }
+    if let Some(full) = &result.full {
+        for a in 0..full.nrows() {
+            for b in 0..a {
+                let correlation = full[(a, b)] / (full[(a, a)] * full[(b, b)]).sqrt();
+                details.push_str(&format!(
+                    "  {} · {}: {correlation:+.3}\n",
+                    outputs[a], outputs[b]
+                ));
+            }
+        }
     }
     if !names.noise.is_empty() {
         notes.push(format!(
@@ -2351,12 +2628,18 @@ fn assemble<M: StateSpaceModel + ?Sized>(
             "the constraint diag(K·C) ≤ 1 (Jategaonkar §5.3) is active at the solution: the last Gauss–Newton step was the quadratic program constrained by it; largest entry after the last R update and F compensation {largest}"
         ));
     }
-    let determinant = result.variances.iter().product::<f64>();
-    notes.push(match fit.gain {
-        Gain::Steady => format!(
+    let determinant = match &result.full {
+        Some(full) => full.determinant(),
+        None => result.variances.iter().product::<f64>(),
+    };
+    notes.push(match (fit.gain, &result.full) {
+        (Gain::Steady, None) => format!(
             "R (innovation covariance) is diagonal; det(R) = {determinant:.4e} at the solution"
         ),
-        Gain::TimeVarying => format!(
+        (Gain::Steady, Some(_)) => format!(
+            "R (innovation covariance) is full (every output on one time base; its correlations in the details); det(R) = {determinant:.4e} at the solution"
+        ),
+        (Gain::TimeVarying, _) => format!(
             "time-varying gain (extended Kalman filter in the loop); G·Gᵀ (measurement noise) is diagonal, det(G·Gᵀ) = {determinant:.4e} at the solution; P0 diagonal {}",
             fit.initial_covariance
                 .diagonal()
