@@ -77,11 +77,13 @@
 //! (`triangularise`).
 
 use crate::error::{Error, Result};
-use crate::estimation::model::augmented::shape;
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{Points, StateSpaceModel};
+use crate::estimation::solver::extended_kalman::Innovation;
 use crate::estimation::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
-use crate::estimation::solver::kalman::{Gaussian, Measured, Unscented, Update};
+use crate::estimation::solver::kalman::{
+    Gaussian, Unscented, UpdateWorkspace, multiply, resize, resize_vector,
+};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// Runs the unscented filter from `initial` at grid point 0 with the
@@ -113,7 +115,7 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
         let t = model.time(k);
         if k > 0 {
             let previous = model.time(k - 1);
-            let transition = time_update(
+            time_update(
                 model,
                 theta,
                 (k, previous, t - previous),
@@ -123,20 +125,15 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
                 &mut factor,
                 &mut work,
             )?;
-            pass.transitions.push(transition);
+            pass.transitions.push(&work.transition);
         }
-        let predicted = covariance(&factor);
+        covariance_into(&factor, &mut work.covariance);
+        pass.predicted.push_parts(&state, Some(&work.covariance));
         let present = &observations.at[k];
         if present.is_empty() {
             pass.measured.push(None);
-            pass.filtered_at(t, &state, Some(&predicted))?;
-        }
-        pass.predicted.push(Gaussian {
-            mean: state.clone(),
-            covariance: predicted,
-        });
-        if !present.is_empty() {
-            let measured = measurement_update(
+        } else {
+            measurement_update(
                 model,
                 theta,
                 &weights,
@@ -146,16 +143,35 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
                 &mut factor,
                 &mut work,
             )?;
-            pass.measured_at(k, present, measured);
-            // The state kept (and checked) by the pass, the covariance
-            // moved in.
-            pass.filtered_at(t, &state, None)?;
-            if let Some(filtered) = pass.filtered.last_mut() {
-                filtered.covariance = covariance(&factor);
-            }
+            keep_update(&mut pass, k, present, &work);
+            covariance_into(&factor, &mut work.covariance);
         }
+        pass.filtered_at(t, &state, Some(&work.covariance))?;
     }
     Ok(pass)
+}
+
+/// Keeps the measurement update at grid point k of the outputs `present`
+/// (in its rows' order) from the buffers it was made in: its likelihood
+/// term, each output's innovation and H, ν, S, S⁻¹ and K.
+fn keep_update(pass: &mut Pass, k: usize, present: &[(usize, f64)], work: &Work) {
+    let update = &work.update;
+    let innovation = &work.innovation;
+    pass.negative_log_likelihood += 0.5 * update.log_likelihood_term(innovation);
+    for (i, &(o, _)) in present.iter().enumerate() {
+        pass.innovations[o].push(Innovation {
+            k,
+            value: innovation[i],
+            variance: update.innovation_covariance[(i, i)],
+        });
+    }
+    pass.measured.push_update(
+        &work.observation,
+        innovation,
+        &update.innovation_covariance,
+        &update.innovation_inverse,
+        &update.gain,
+    );
 }
 
 /// The sigma points' scale and weights (module header).
@@ -187,13 +203,15 @@ impl Weights {
     }
 }
 
-/// A pass's buffers: sigma points, propagated points and outputs as
-/// columns (2n + 1 of each), the time update's compound matrix (its
-/// transpose, at most 2n + 2r rows of n), its second differences (n rows
-/// of the p changing states) and the leading rows of the central
-/// difference Φ is solved from, and the measurement update's compound
-/// matrix (2n + m rows of at most m columns). Matrices whose shape depends
-/// on p or m are reshaped only when it changes.
+/// A pass's buffers, allocated once: sigma points, propagated points and
+/// outputs as columns (2n + 1 of each), the time update's compound matrix
+/// (its transpose, at most 2n + 2r rows of n), its second differences (n
+/// rows of the p changing states), the leading rows of the central
+/// difference Φ is solved from, Φ and Φ·G, the covariance S·Sᵀ, and the
+/// measurement update's compound matrix (2n + m rows of at most m
+/// columns) and its products. Matrices whose shape depends on p or m
+/// keep their storage when it changes (`kalman::resize`): a pass
+/// allocates nothing per grid point (tests/no_allocation.rs).
 struct Work {
     points: DMatrix<f64>,
     moved: DMatrix<f64>,
@@ -206,22 +224,92 @@ struct Work {
     vector: DVector<f64>,
     /// Every output of each sigma point (`outputs` holds the measured ones).
     all_outputs: DMatrix<f64>,
+    /// Φ of the last time update (n × n).
+    transition: DMatrix<f64>,
+    /// Φ·G (n × r).
+    moved_noise: DMatrix<f64>,
+    /// S·Sᵀ of the last factor (n × n).
+    covariance: DMatrix<f64>,
+    /// ŷ (m).
+    predicted: DVector<f64>,
+    /// ν = z − ŷ (m).
+    innovation: DVector<f64>,
+    /// S_y (m × m, lower).
+    innovation_factor: DMatrix<f64>,
+    /// E = H·S⁻, then H (m × n).
+    observation: DMatrix<f64>,
+    /// Eᵀ (n × m).
+    difference: DMatrix<f64>,
+    /// P_xy = S⁻·Eᵀ (n × m).
+    cross: DMatrix<f64>,
+    /// P_xyᵀ solved for Kᵀ (m × n).
+    solved: DMatrix<f64>,
+    /// K·S_y (n × m).
+    spread: DMatrix<f64>,
+    /// S_y⁻¹ (m × m).
+    inverse_factor: DMatrix<f64>,
+    /// The transpose of S_y or of S_y⁻¹ (m × m).
+    transposed: DMatrix<f64>,
+    /// S = S_y·S_yᵀ, S⁻¹, K and ln det S of the last measurement update.
+    update: UpdateWorkspace,
 }
 
 impl Work {
     fn new(n: usize, noise_columns: usize, outputs: usize) -> Work {
         let count = 2 * n + 1;
+        let m = outputs;
         Work {
             points: DMatrix::zeros(n, count),
             moved: DMatrix::zeros(n, count),
             outputs: DMatrix::zeros(outputs, count),
             compound: DMatrix::zeros(2 * n + 2 * noise_columns, n),
-            curvature: DMatrix::zeros(0, 0),
-            curvature_factor: DMatrix::zeros(0, 0),
-            leading: DMatrix::zeros(0, 0),
+            curvature: DMatrix::zeros(n, n),
+            curvature_factor: DMatrix::zeros(n, n),
+            leading: DMatrix::zeros(n, n),
             measured: DMatrix::zeros(2 * n + outputs, outputs),
             vector: DVector::zeros(n.max(outputs)),
             all_outputs: DMatrix::zeros(outputs, count),
+            transition: DMatrix::zeros(n, n),
+            moved_noise: DMatrix::zeros(n, noise_columns),
+            covariance: DMatrix::zeros(n, n),
+            predicted: DVector::zeros(m),
+            innovation: DVector::zeros(m),
+            innovation_factor: DMatrix::zeros(m, m),
+            observation: DMatrix::zeros(m, n),
+            difference: DMatrix::zeros(n, m),
+            cross: DMatrix::zeros(n, m),
+            solved: DMatrix::zeros(m, n),
+            spread: DMatrix::zeros(n, m),
+            inverse_factor: DMatrix::zeros(m, m),
+            transposed: DMatrix::zeros(m, m),
+            update: UpdateWorkspace::default(),
+        }
+    }
+
+    /// Gives the measurement update's buffers the shape of m measured
+    /// outputs over n states.
+    fn measuring(&mut self, n: usize, m: usize) {
+        resize_vector(&mut self.predicted, m);
+        resize_vector(&mut self.innovation, m);
+        for matrix in [
+            &mut self.innovation_factor,
+            &mut self.inverse_factor,
+            &mut self.transposed,
+            &mut self.update.innovation_covariance,
+            &mut self.update.innovation_inverse,
+        ] {
+            resize(matrix, m, m);
+        }
+        for matrix in [&mut self.observation, &mut self.solved] {
+            resize(matrix, m, n);
+        }
+        for matrix in [
+            &mut self.difference,
+            &mut self.cross,
+            &mut self.spread,
+            &mut self.update.gain,
+        ] {
+            resize(matrix, n, m);
         }
     }
 
@@ -261,8 +349,8 @@ impl Work {
 }
 
 /// The time update from grid point k − 1 (at `previous`, a step h before
-/// k) to k, in place; returns the statistical transition Φ (module
-/// header).
+/// k) to k, in place; the statistical transition Φ into `work.transition`
+/// (module header).
 #[allow(clippy::too_many_arguments)]
 fn time_update<M: StateSpaceModel + ?Sized>(
     model: &M,
@@ -273,7 +361,7 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     state: &mut DVector<f64>,
     factor: &mut DMatrix<f64>,
     work: &mut Work,
-) -> Result<DMatrix<f64>> {
+) -> Result<()> {
     let n = state.len();
     work.draw(weights, state, factor);
     model
@@ -294,7 +382,7 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     // S⁺'s own row (2c·s_i/(2c)) and the second difference nothing.
     let root = weights.other.sqrt() * std::f64::consts::FRAC_1_SQRT_2;
     let compound = &mut work.compound;
-    shape(&mut work.curvature, n, p);
+    resize(&mut work.curvature, n, p);
     for j in 0..n {
         for i in 0..p {
             let (plus, minus) = (work.moved[(i, 1 + j)], work.moved[(i, 1 + n + j)]);
@@ -306,14 +394,15 @@ fn time_update<M: StateSpaceModel + ?Sized>(
         }
     }
     // Φ·S⁺ = D, Sᵀ·Φᵀ = Dᵀ, for the rows 0…p; the rows p… are the identity's.
-    shape(&mut work.leading, p, n);
+    resize(&mut work.leading, p, n);
     let half = 0.5 / weights.scale;
     for j in 0..n {
         for i in 0..p {
             work.leading[(i, j)] = half * (work.moved[(i, 1 + j)] - work.moved[(i, 1 + n + j)]);
         }
     }
-    let mut transition = DMatrix::identity(n, n);
+    let transition = &mut work.transition;
+    transition.fill_with_identity();
     if solve_right_lower(factor, &mut work.leading) && work.leading.iter().all(|v| v.is_finite()) {
         transition.rows_mut(0, p).copy_from(&work.leading);
     } else {
@@ -323,7 +412,7 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     // of their triangular factor (the same Gram matrix).
     let mut rows = n;
     if p < n {
-        shape(&mut work.curvature_factor, p, p);
+        resize(&mut work.curvature_factor, p, p);
         triangularise(&mut work.curvature, n, p, &mut work.curvature_factor);
         for r in 0..p {
             for i in 0..n {
@@ -347,7 +436,8 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     if r > 0 {
         if transition[(0, 0)].is_finite() {
             let half = (0.5 * h).sqrt();
-            let moved = &transition * process;
+            let moved = &mut work.moved_noise;
+            transition_times(transition, p, process, moved);
             for j in 0..r {
                 for i in 0..n {
                     compound[(rows + j, i)] = half * process[(i, j)];
@@ -378,12 +468,38 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     .map_err(|()| Error::Downdate {
         time: previous,
         step: "time update's zeroth sigma point (W₀ᶜ < 0)",
-    })?;
-    Ok(transition)
+    })
+}
+
+/// Φ·G into `into` (n × r) for a Φ whose rows p… are the identity's:
+/// column j is Σ_k G_kj·Φ_{·k} over G's non-zeros, its rows p… G's own.
+/// For a diagonal Q_c (one non-zero per column of G) every element is a
+/// single product, the same as any order of summation gives.
+fn transition_times(
+    transition: &DMatrix<f64>,
+    p: usize,
+    process: &DMatrix<f64>,
+    into: &mut DMatrix<f64>,
+) {
+    let n = transition.nrows();
+    into.copy_from(process);
+    for j in 0..process.ncols() {
+        let column = &mut into.as_mut_slice()[j * n..j * n + p];
+        column.fill(0.0);
+        for k in 0..n {
+            let g = process[(k, j)];
+            if g != 0.0 {
+                let source = &transition.as_slice()[k * n..k * n + p];
+                for (c, &f) in column.iter_mut().zip(source) {
+                    *c += f * g;
+                }
+            }
+        }
+    }
 }
 
 /// The measurement update of (x, S) with the outputs `present` measured at
-/// t, in place (module header).
+/// t, in place (module header); H, ν, S, S⁻¹ and K into `work`.
 #[allow(clippy::too_many_arguments)]
 fn measurement_update<M: StateSpaceModel + ?Sized>(
     model: &M,
@@ -394,9 +510,10 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     state: &mut DVector<f64>,
     factor: &mut DMatrix<f64>,
     work: &mut Work,
-) -> Result<Measured> {
+) -> Result<()> {
     let n = state.len();
     let m = present.len();
+    work.measuring(n, m);
     work.draw(weights, state, factor);
     let all = work.all_outputs.nrows();
     model
@@ -413,7 +530,8 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
         }
     }
     let outputs = work.outputs.rows(0, m);
-    let mut predicted = DVector::zeros(m);
+    let predicted = &mut work.predicted;
+    predicted.fill(0.0);
     for j in 0..2 * n + 1 {
         let w = if j == 0 {
             weights.mean_zero
@@ -435,52 +553,55 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
         }
         compound[(2 * n + row, row)] = noise.measurement[o].max(0.0).sqrt();
     }
-    let mut innovation_factor = DMatrix::zeros(m, m);
-    triangularise(compound, 2 * n + m, m, &mut innovation_factor);
-    let mut zero: Vec<f64> = (0..m).map(|i| outputs[(i, 0)] - predicted[i]).collect();
-    zeroth_point(&mut innovation_factor, &mut zero, weights.covariance_zero).map_err(|()| {
+    let innovation_factor = &mut work.innovation_factor;
+    triangularise(compound, 2 * n + m, m, innovation_factor);
+    let zero = &mut work.vector.as_mut_slice()[..m];
+    for (i, z) in zero.iter_mut().enumerate() {
+        *z = outputs[(i, 0)] - predicted[i];
+    }
+    zeroth_point(innovation_factor, zero, weights.covariance_zero).map_err(|()| {
         Error::Downdate {
             time: t,
             step: "innovation covariance's zeroth sigma point (W₀ᶜ < 0)",
         }
     })?;
     // E = (Y_{1…n} − Y_{n+1…2n})/(2c): P_xy = S⁻·Eᵀ and H·S⁻ = E.
-    let difference = central_difference(&outputs, n, weights.scale);
-    let cross = &*factor * difference.transpose();
+    central_difference_into(&outputs, n, weights.scale, &mut work.observation);
+    work.observation.transpose_to(&mut work.difference);
+    multiply(factor, &work.difference, &mut work.cross);
     let singular = || {
         Error::Other(
             "the innovation covariance is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
         )
     };
-    if !innovation_factor
-        .diagonal()
-        .iter()
-        .all(|&d| d > 0.0 && d.is_finite())
-    {
+    if !(0..m).all(|i| {
+        let d = innovation_factor[(i, i)];
+        d > 0.0 && d.is_finite()
+    }) {
         return Err(at_time(singular(), t));
     }
     // K·S_y·S_yᵀ = P_xy: S_y·Z = P_xyᵀ, then S_yᵀ·Kᵀ = Z.
-    let gain = innovation_factor
-        .solve_lower_triangular(&cross.transpose())
-        .and_then(|z| innovation_factor.tr_solve_lower_triangular(&z))
-        .ok_or_else(|| at_time(singular(), t))?
-        .transpose();
-    let mut observation = difference;
-    if !solve_right_lower(factor, &mut observation) {
-        observation.fill(f64::NAN);
+    let solved = &mut work.solved;
+    work.cross.transpose_to(solved);
+    if !(innovation_factor.solve_lower_triangular_mut(solved)
+        && innovation_factor.tr_solve_lower_triangular_mut(solved))
+    {
+        return Err(at_time(singular(), t));
     }
-    let innovation = DVector::from_iterator(
-        m,
-        present
-            .iter()
-            .zip(predicted.iter())
-            .map(|(&(_, z), y)| z - y),
-    );
-    state.gemv(1.0, &gain, &innovation, 1.0);
-    let spread = &gain * &innovation_factor;
+    let update = &mut work.update;
+    solved.transpose_to(&mut update.gain);
+    if !solve_right_lower(factor, &mut work.observation) {
+        work.observation.fill(f64::NAN);
+    }
+    let innovation = &mut work.innovation;
+    for (i, &(_, z)) in present.iter().enumerate() {
+        innovation[i] = z - predicted[i];
+    }
+    state.gemv(1.0, &update.gain, innovation, 1.0);
+    multiply(&update.gain, innovation_factor, &mut work.spread);
     let column = &mut work.vector;
     for j in 0..m {
-        column.rows_mut(0, n).copy_from(&spread.column(j));
+        column.rows_mut(0, n).copy_from(&work.spread.column(j));
         cholupdate(factor, &mut column.as_mut_slice()[..n], -1.0).map_err(|()| {
             Error::Downdate {
                 time: t,
@@ -488,27 +609,33 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
             }
         })?;
     }
-    let inverse_factor = innovation_factor
-        .solve_lower_triangular(&DMatrix::identity(m, m))
-        .ok_or_else(|| at_time(singular(), t))?;
-    Ok(Measured {
-        observation,
-        update: Update {
-            innovation,
-            innovation_covariance: &innovation_factor * innovation_factor.transpose(),
-            innovation_inverse: inverse_factor.transpose() * &inverse_factor,
-            gain,
-        },
-    })
+    let inverse_factor = &mut work.inverse_factor;
+    inverse_factor.fill_with_identity();
+    if !innovation_factor.solve_lower_triangular_mut(inverse_factor) {
+        return Err(at_time(singular(), t));
+    }
+    let transposed = &mut work.transposed;
+    innovation_factor.transpose_to(transposed);
+    multiply(
+        innovation_factor,
+        transposed,
+        &mut update.innovation_covariance,
+    );
+    inverse_factor.transpose_to(transposed);
+    multiply(transposed, inverse_factor, &mut update.innovation_inverse);
+    // ln det S = 2·Σ ln of S_y's diagonal.
+    update.log_determinant = 2.0 * (0..m).map(|i| innovation_factor[(i, i)].ln()).sum::<f64>();
+    Ok(())
 }
 
-/// P = S·Sᵀ of a lower-triangular S as the sum of its columns' outer
-/// products, s_k·s_kᵀ touching rows and columns k… only: n³/3
+/// P = S·Sᵀ of a lower-triangular S into `p` as the sum of its columns'
+/// outer products, s_k·s_kᵀ touching rows and columns k… only: n³/3
 /// multiply-adds on contiguous columns, and exactly symmetric (both
 /// triangles from the same products in the same order).
-fn covariance(factor: &DMatrix<f64>) -> DMatrix<f64> {
+fn covariance_into(factor: &DMatrix<f64>, p: &mut DMatrix<f64>) {
     let n = factor.nrows();
-    let mut p = DMatrix::zeros(n, n);
+    resize(p, n, n);
+    p.fill(0.0);
     let s = factor.as_slice();
     let data = p.as_mut_slice();
     for k in 0..n {
@@ -522,7 +649,6 @@ fn covariance(factor: &DMatrix<f64>) -> DMatrix<f64> {
             }
         }
     }
-    p
 }
 
 /// x = Σ Wᵐ_i·χ'_i of the columns of `moved`.
@@ -535,20 +661,23 @@ fn weighted_mean(weights: &Weights, moved: &DMatrix<f64>, mean: &mut DVector<f64
 }
 
 /// (Z_{1…n} − Z_{n+1…2n})/(2c) of the columns of `images` (the sigma
-/// points' images Z_i): the central difference that is P_{z x}·P⁻¹·S
-/// for the covariance P = S·Sᵀ the points were drawn from (module header).
-fn central_difference<S>(
+/// points' images Z_i) into `into` (its rows × n): the central difference
+/// that is P_{z x}·P⁻¹·S for the covariance P = S·Sᵀ the points were drawn
+/// from (module header).
+fn central_difference_into<S>(
     images: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>,
     n: usize,
     scale: f64,
-) -> DMatrix<f64>
-where
+    into: &mut DMatrix<f64>,
+) where
     S: nalgebra::Storage<f64, nalgebra::Dyn, nalgebra::Dyn>,
 {
     let half = 0.5 / scale;
-    DMatrix::from_fn(images.nrows(), n, |r, i| {
-        half * (images[(r, 1 + i)] - images[(r, 1 + n + i)])
-    })
+    for i in 0..n {
+        for r in 0..images.nrows() {
+            into[(r, i)] = half * (images[(r, 1 + i)] - images[(r, 1 + n + i)]);
+        }
+    }
 }
 
 /// X·L = B for X in place of B (column-major), L lower triangular:
@@ -874,7 +1003,8 @@ mod tests {
     #[test]
     fn covariance_is_the_factors_product() {
         let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
-        let p = covariance(&l);
+        let mut p = DMatrix::zeros(0, 0);
+        covariance_into(&l, &mut p);
         let expected = &l * l.transpose();
         assert!((&p - &expected).norm() < 1e-15 * expected.norm());
         assert_eq!(p, p.transpose());
