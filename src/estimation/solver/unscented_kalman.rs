@@ -68,13 +68,19 @@
 //!
 //! On a linear model the transform is exact and the pass is the linear
 //! Kalman filter's with the trapezoidal Q_d (tests/kalman_oracle.rs).
-//! A step's sigma points, propagated points, outputs and compound matrices
-//! live in buffers allocated once per pass (`Work`); the model steps the
-//! sigma points and evaluates their outputs in one call each
-//! ([`StateSpaceModel::step_points_into`],
+//! No step allocates. A step's sigma points, propagated points, outputs,
+//! compound matrices and every product of its measurement update (ŷ, S_y,
+//! H, P_xy, K, K·S_y, S, S⁻¹, ν), Φ, Φ·G and S·Sᵀ live in buffers
+//! allocated once per pass (`Work`; a buffer whose shape follows the
+//! number of measured outputs keeps its storage when it changes); what
+//! the pass keeps goes from them into buffers reserved once per pass
+//! ([`super::kept`]); tests/no_allocation.rs counts a whole pass's
+//! allocations. The model steps the sigma points and evaluates their
+//! outputs in one call each ([`StateSpaceModel::step_points_into`],
 //! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
 //! share once; the QR is a Householder triangularisation in place
-//! (`triangularise`).
+//! (`triangularise`), the products and triangular solves are written
+//! for the shapes at hand (S lower triangular, a few rows).
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
@@ -382,15 +388,26 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     // S⁺'s own row (2c·s_i/(2c)) and the second difference nothing.
     let root = weights.other.sqrt() * std::f64::consts::FRAC_1_SQRT_2;
     let compound = &mut work.compound;
+    let ld = compound.nrows();
     resize(&mut work.curvature, n, p);
-    for j in 0..n {
-        for i in 0..p {
-            let (plus, minus) = (work.moved[(i, 1 + j)], work.moved[(i, 1 + n + j)]);
-            compound[(j, i)] = root * (plus - minus);
-            work.curvature[(j, i)] = root * ((plus - state[i]) + (minus - state[i]));
+    // Column by column of the compound matrix (contiguous), the sigma
+    // points' states i of their columns 1 + j and 1 + n + j.
+    let moved = work.moved.as_slice();
+    for i in 0..p {
+        let column = &mut compound.as_mut_slice()[i * ld..i * ld + n];
+        let curvature = &mut work.curvature.as_mut_slice()[i * n..(i + 1) * n];
+        let mean = state[i];
+        for (j, (c, e)) in column.iter_mut().zip(curvature).enumerate() {
+            let (plus, minus) = (moved[(1 + j) * n + i], moved[(1 + n + j) * n + i]);
+            *c = root * (plus - minus);
+            *e = root * ((plus - mean) + (minus - mean));
         }
-        for i in p..n {
-            compound[(j, i)] = factor[(i, j)];
+    }
+    let s = factor.as_slice();
+    for i in p..n {
+        let column = &mut compound.as_mut_slice()[i * ld..i * ld + n];
+        for (j, c) in column.iter_mut().enumerate() {
+            *c = s[j * n + i];
         }
     }
     // Φ·S⁺ = D, Sᵀ·Φᵀ = Dᵀ, for the rows 0…p; the rows p… are the identity's.
@@ -414,9 +431,10 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     if p < n {
         resize(&mut work.curvature_factor, p, p);
         triangularise(&mut work.curvature, n, p, &mut work.curvature_factor);
-        for r in 0..p {
-            for i in 0..n {
-                compound[(rows + r, i)] = if i < p {
+        for i in 0..n {
+            let column = &mut compound.as_mut_slice()[i * ld + rows..i * ld + rows + p];
+            for (r, c) in column.iter_mut().enumerate() {
+                *c = if i < p {
                     work.curvature_factor[(i, r)]
                 } else {
                     0.0
@@ -568,7 +586,7 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     // E = (Y_{1…n} − Y_{n+1…2n})/(2c): P_xy = S⁻·Eᵀ and H·S⁻ = E.
     central_difference_into(&outputs, n, weights.scale, &mut work.observation);
     work.observation.transpose_to(&mut work.difference);
-    multiply(factor, &work.difference, &mut work.cross);
+    multiply_lower(factor, &work.difference, &mut work.cross);
     let singular = || {
         Error::Other(
             "the innovation covariance is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
@@ -654,6 +672,27 @@ fn covariance_into(factor: &DMatrix<f64>, p: &mut DMatrix<f64>) {
     for j in 0..n {
         for i in j + 1..n {
             data[i * n + j] = data[j * n + i];
+        }
+    }
+}
+
+/// `into` = L·B for L lower triangular (n × n), B n × m: column j the
+/// sum over k of B_kj·L_{·k} in order of k, each over L's rows k… only
+/// (the rows above add zeros: the same numbers as the dense product).
+fn multiply_lower(l: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+    let n = l.nrows();
+    resize(into, n, b.ncols());
+    let l = l.as_slice();
+    for (column, b) in into
+        .as_mut_slice()
+        .chunks_exact_mut(n.max(1))
+        .zip(b.as_slice().chunks_exact(n.max(1)))
+    {
+        column.fill(0.0);
+        for (k, &factor) in b.iter().enumerate() {
+            for (into, &l) in column[k..].iter_mut().zip(&l[k * n + k..(k + 1) * n]) {
+                *into += factor * l;
+            }
         }
     }
 }
@@ -1060,6 +1099,30 @@ mod tests {
         let expected = &l * l.transpose();
         assert!((&p - &expected).norm() < 1e-15 * expected.norm());
         assert_eq!(p, p.transpose());
+    }
+
+    /// L·B over L's lower triangle is the dense product bit for bit.
+    #[test]
+    fn multiply_lower_is_the_dense_product() {
+        let l = DMatrix::from_fn(6, 6, |i, j| {
+            if i < j {
+                0.0
+            } else {
+                ((i * 6 + j) as f64 * 0.61).cos() + 0.3
+            }
+        });
+        let b = DMatrix::from_fn(6, 3, |i, j| ((i + 5 * j) as f64 * 0.23).sin());
+        let mut lower = DMatrix::zeros(0, 0);
+        multiply_lower(&l, &b, &mut lower);
+        let mut dense = DMatrix::zeros(0, 0);
+        multiply(&l, &b, &mut dense);
+        assert!(
+            lower
+                .iter()
+                .zip(dense.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+        assert!((&lower - &l * &b).norm() < 1e-15 * lower.norm());
     }
 
     /// X·L = B solved from the right against B·L⁻¹ by nalgebra's inverse,
