@@ -433,3 +433,79 @@ fn a_ukf_steps_sigma_point_evaluations_do_not_allocate() {
     // The parameter points moved only the kinematic states.
     assert_eq!(moved.rows(4, n - 4), points.rows(4, n - 4));
 }
+
+/// A whole UKF pass (`unscented_kalman::filter`, ATTAS lateral: 4
+/// kinematic and 18 parameter states, 45 sigma points, 1501 points)
+/// allocates nothing per grid point: its step's buffers, what it keeps
+/// (reserved once per pass, `kept`) and its set-up (the weights, read from
+/// the sigma points of (0, I); the process noise's root; the initial
+/// factor) make a fixed number of allocations, under a hundred over 1501
+/// points, where a single allocation per point would make 1501 — with
+/// process noise (the time update's Φ·G and its noise rows) and without.
+#[test]
+fn a_ukf_pass_allocates_nothing_per_grid_point() {
+    use aeroid::estimation::model::augmented::Augmented;
+    use aeroid::estimation::model::observations::Observations;
+    use aeroid::estimation::model::state_space::StateSpaceModel;
+    use aeroid::estimation::solver::extended_kalman::Noise;
+    use aeroid::estimation::solver::kalman::{Gaussian, Unscented};
+    use aeroid::estimation::solver::unscented_kalman;
+    use nalgebra::{DMatrix, DVector};
+
+    let (record, structure, view, x0) = attas_lateral_view();
+    let theta = view.parameters();
+    let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
+    let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
+    let (n, len) = (model.state_count(), model.len());
+    let mut prior = DMatrix::from_diagonal_element(n, n, 1e-5);
+    for i in x0.len()..n {
+        prior[(i, i)] = 1e-2;
+    }
+    let initial = Gaussian {
+        mean: model.state(x0.as_slice()),
+        covariance: prior,
+    };
+    let observations = Observations::from_record(
+        &record,
+        &structure.outputs,
+        view.time(0),
+        view.time(1) - view.time(0),
+        len,
+    )
+    .unwrap();
+    let measured = observations.at.iter().filter(|a| !a.is_empty()).count();
+    let unscented = Unscented {
+        alpha: 0.5,
+        ..Unscented::default()
+    };
+    let count = |process: f64| {
+        let mut noise = Noise {
+            process: DMatrix::zeros(n, n),
+            measurement: DVector::from_element(structure.outputs.len(), 1e-5),
+        };
+        for i in 0..x0.len() {
+            noise.process[(i, i)] = process;
+        }
+        let initial = initial.clone();
+        let before = ALLOCATIONS.with(Cell::get);
+        let pass =
+            unscented_kalman::filter(&model, &[], initial, &noise, &observations, &unscented)
+                .unwrap();
+        let after = ALLOCATIONS.with(Cell::get);
+        assert!(pass.negative_log_likelihood.is_finite());
+        assert_eq!(pass.filtered.len(), len);
+        after - before
+    };
+    // A first pass makes the model's own buffers (kept between calls).
+    count(0.0);
+    for process in [0.0, 1e-6] {
+        let allocations = count(process);
+        println!(
+            "Q_c {process}: {allocations} allocations over {len} points ({measured} measured)"
+        );
+        assert!(
+            allocations < 100,
+            "{allocations} allocations in a UKF pass (Q_c {process}) over {len} points ({measured} measured)"
+        );
+    }
+}

@@ -41,8 +41,8 @@ use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{Jacobians, StateSpaceModel};
 use crate::estimation::solver::kalman::{
-    self, Exponential, Gaussian, Measured, ProcessNoise, SequentialWorkspace, SparseRows,
-    UpdateWorkspace, resize,
+    self, Exponential, Gaussian, ProcessNoise, SequentialWorkspace, SparseRows, UpdateWorkspace,
+    resize,
 };
 use crate::estimation::solver::kept::{Gaussians, Matrices, ScalarUpdates, Updates};
 use nalgebra::{DMatrix, DVector};
@@ -461,23 +461,6 @@ impl Pass {
             innovations: (0..outputs).map(|_| Vec::with_capacity(len)).collect(),
             negative_log_likelihood: 0.0,
         }
-    }
-
-    /// Keeps the measurement update at grid point k of the outputs
-    /// `present` (in its rows' order): its likelihood term, each output's
-    /// innovation and the update itself.
-    pub(crate) fn measured_at(&mut self, k: usize, present: &[(usize, f64)], measured: Measured) {
-        let term = measured.update.log_likelihood_term();
-        let update = &measured.update;
-        self.negative_log_likelihood += 0.5 * term;
-        for (i, &(o, _)) in present.iter().enumerate() {
-            self.innovations[o].push(Innovation {
-                k,
-                value: update.innovation[i],
-                variance: update.innovation_covariance[(i, i)],
-            });
-        }
-        self.measured.push(Some(measured));
     }
 
     /// Keeps the filtered estimate at time t (its covariance if given,

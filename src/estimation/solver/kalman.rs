@@ -339,17 +339,20 @@ pub(crate) fn symmetrise(matrix: &mut DMatrix<f64>) {
     }
 }
 
-/// Gives `matrix` the shape rows × columns (allocating only when it
-/// changes).
+/// Gives `matrix` the shape rows × columns, zeros when it changes, in its
+/// own storage (allocating only when it needs more room than it had).
 pub(crate) fn resize(matrix: &mut DMatrix<f64>, rows: usize, columns: usize) {
     if matrix.shape() != (rows, columns) {
-        *matrix = DMatrix::zeros(rows, columns);
+        let mut values: Vec<f64> = std::mem::replace(matrix, DMatrix::zeros(0, 0)).data.into();
+        values.clear();
+        values.resize(rows * columns, 0.0);
+        *matrix = DMatrix::from_vec(rows, columns, values);
     }
 }
 
-/// `into` = a·b, in place, column by column (for the small matrices of
-/// the exponential's series).
-fn multiply(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+/// `into` = a·b, in place, column by column (for small matrices: the
+/// exponential's series, the UKF's measurement update).
+pub(crate) fn multiply(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
     let rows = a.nrows();
     resize(into, rows, b.ncols());
     if rows == 0 {
@@ -1718,10 +1721,14 @@ fn mbf_measurement(
     }
 }
 
-/// Gives `vector` the length `len` (allocating only when it changes).
-fn resize_vector(vector: &mut DVector<f64>, len: usize) {
+/// Gives `vector` the length `len`, zeros when it changes, in its own
+/// storage (allocating only when it needs more room than it had).
+pub(crate) fn resize_vector(vector: &mut DVector<f64>, len: usize) {
     if vector.len() != len {
-        *vector = DVector::zeros(len);
+        let mut values: Vec<f64> = std::mem::replace(vector, DVector::zeros(0)).data.into();
+        values.clear();
+        values.resize(len, 0.0);
+        *vector = DVector::from_vec(values);
     }
 }
 

@@ -68,20 +68,28 @@
 //!
 //! On a linear model the transform is exact and the pass is the linear
 //! Kalman filter's with the trapezoidal Q_d (tests/kalman_oracle.rs).
-//! A step's sigma points, propagated points, outputs and compound matrices
-//! live in buffers allocated once per pass (`Work`); the model steps the
-//! sigma points and evaluates their outputs in one call each
-//! ([`StateSpaceModel::step_points_into`],
+//! No step allocates. A step's sigma points, propagated points, outputs,
+//! compound matrices and every product of its measurement update (ŷ, S_y,
+//! H, P_xy, K, K·S_y, S, S⁻¹, ν), Φ, Φ·G and S·Sᵀ live in buffers
+//! allocated once per pass (`Work`; a buffer whose shape follows the
+//! number of measured outputs keeps its storage when it changes); what
+//! the pass keeps goes from them into buffers reserved once per pass
+//! ([`super::kept`]); tests/no_allocation.rs counts a whole pass's
+//! allocations. The model steps the sigma points and evaluates their
+//! outputs in one call each ([`StateSpaceModel::step_points_into`],
 //! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
 //! share once; the QR is a Householder triangularisation in place
-//! (`triangularise`).
+//! (`triangularise`), the products and triangular solves are written
+//! for the shapes at hand (S lower triangular, a few rows).
 
 use crate::error::{Error, Result};
-use crate::estimation::model::augmented::shape;
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{Points, StateSpaceModel};
+use crate::estimation::solver::extended_kalman::Innovation;
 use crate::estimation::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
-use crate::estimation::solver::kalman::{Gaussian, Measured, Unscented, Update};
+use crate::estimation::solver::kalman::{
+    Gaussian, Unscented, UpdateWorkspace, multiply, resize, resize_vector,
+};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// Runs the unscented filter from `initial` at grid point 0 with the
@@ -113,7 +121,7 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
         let t = model.time(k);
         if k > 0 {
             let previous = model.time(k - 1);
-            let transition = time_update(
+            time_update(
                 model,
                 theta,
                 (k, previous, t - previous),
@@ -123,20 +131,15 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
                 &mut factor,
                 &mut work,
             )?;
-            pass.transitions.push(transition);
+            pass.transitions.push(&work.transition);
         }
-        let predicted = covariance(&factor);
+        covariance_into(&factor, &mut work.covariance);
+        pass.predicted.push_parts(&state, Some(&work.covariance));
         let present = &observations.at[k];
         if present.is_empty() {
             pass.measured.push(None);
-            pass.filtered_at(t, &state, Some(&predicted))?;
-        }
-        pass.predicted.push(Gaussian {
-            mean: state.clone(),
-            covariance: predicted,
-        });
-        if !present.is_empty() {
-            let measured = measurement_update(
+        } else {
+            measurement_update(
                 model,
                 theta,
                 &weights,
@@ -146,16 +149,35 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
                 &mut factor,
                 &mut work,
             )?;
-            pass.measured_at(k, present, measured);
-            // The state kept (and checked) by the pass, the covariance
-            // moved in.
-            pass.filtered_at(t, &state, None)?;
-            if let Some(filtered) = pass.filtered.last_mut() {
-                filtered.covariance = covariance(&factor);
-            }
+            keep_update(&mut pass, k, present, &work);
+            covariance_into(&factor, &mut work.covariance);
         }
+        pass.filtered_at(t, &state, Some(&work.covariance))?;
     }
     Ok(pass)
+}
+
+/// Keeps the measurement update at grid point k of the outputs `present`
+/// (in its rows' order) from the buffers it was made in: its likelihood
+/// term, each output's innovation and H, ν, S, S⁻¹ and K.
+fn keep_update(pass: &mut Pass, k: usize, present: &[(usize, f64)], work: &Work) {
+    let update = &work.update;
+    let innovation = &work.innovation;
+    pass.negative_log_likelihood += 0.5 * update.log_likelihood_term(innovation);
+    for (i, &(o, _)) in present.iter().enumerate() {
+        pass.innovations[o].push(Innovation {
+            k,
+            value: innovation[i],
+            variance: update.innovation_covariance[(i, i)],
+        });
+    }
+    pass.measured.push_update(
+        &work.observation,
+        innovation,
+        &update.innovation_covariance,
+        &update.innovation_inverse,
+        &update.gain,
+    );
 }
 
 /// The sigma points' scale and weights (module header).
@@ -187,13 +209,15 @@ impl Weights {
     }
 }
 
-/// A pass's buffers: sigma points, propagated points and outputs as
-/// columns (2n + 1 of each), the time update's compound matrix (its
-/// transpose, at most 2n + 2r rows of n), its second differences (n rows
-/// of the p changing states) and the leading rows of the central
-/// difference Φ is solved from, and the measurement update's compound
-/// matrix (2n + m rows of at most m columns). Matrices whose shape depends
-/// on p or m are reshaped only when it changes.
+/// A pass's buffers, allocated once: sigma points, propagated points and
+/// outputs as columns (2n + 1 of each), the time update's compound matrix
+/// (its transpose, at most 2n + 2r rows of n), its second differences (n
+/// rows of the p changing states), the leading rows of the central
+/// difference Φ is solved from, Φ and Φ·G, the covariance S·Sᵀ, and the
+/// measurement update's compound matrix (2n + m rows of at most m
+/// columns) and its products. Matrices whose shape depends on p or m
+/// keep their storage when it changes (`kalman::resize`): a pass
+/// allocates nothing per grid point (tests/no_allocation.rs).
 struct Work {
     points: DMatrix<f64>,
     moved: DMatrix<f64>,
@@ -206,22 +230,92 @@ struct Work {
     vector: DVector<f64>,
     /// Every output of each sigma point (`outputs` holds the measured ones).
     all_outputs: DMatrix<f64>,
+    /// Φ of the last time update (n × n).
+    transition: DMatrix<f64>,
+    /// Φ·G (n × r).
+    moved_noise: DMatrix<f64>,
+    /// S·Sᵀ of the last factor (n × n).
+    covariance: DMatrix<f64>,
+    /// ŷ (m).
+    predicted: DVector<f64>,
+    /// ν = z − ŷ (m).
+    innovation: DVector<f64>,
+    /// S_y (m × m, lower).
+    innovation_factor: DMatrix<f64>,
+    /// E = H·S⁻, then H (m × n).
+    observation: DMatrix<f64>,
+    /// Eᵀ (n × m).
+    difference: DMatrix<f64>,
+    /// P_xy = S⁻·Eᵀ (n × m).
+    cross: DMatrix<f64>,
+    /// P_xyᵀ solved for Kᵀ (m × n).
+    solved: DMatrix<f64>,
+    /// K·S_y (n × m).
+    spread: DMatrix<f64>,
+    /// S_y⁻¹ (m × m).
+    inverse_factor: DMatrix<f64>,
+    /// The transpose of S_y or of S_y⁻¹ (m × m).
+    transposed: DMatrix<f64>,
+    /// S = S_y·S_yᵀ, S⁻¹, K and ln det S of the last measurement update.
+    update: UpdateWorkspace,
 }
 
 impl Work {
     fn new(n: usize, noise_columns: usize, outputs: usize) -> Work {
         let count = 2 * n + 1;
+        let m = outputs;
         Work {
             points: DMatrix::zeros(n, count),
             moved: DMatrix::zeros(n, count),
             outputs: DMatrix::zeros(outputs, count),
             compound: DMatrix::zeros(2 * n + 2 * noise_columns, n),
-            curvature: DMatrix::zeros(0, 0),
-            curvature_factor: DMatrix::zeros(0, 0),
-            leading: DMatrix::zeros(0, 0),
+            curvature: DMatrix::zeros(n, n),
+            curvature_factor: DMatrix::zeros(n, n),
+            leading: DMatrix::zeros(n, n),
             measured: DMatrix::zeros(2 * n + outputs, outputs),
             vector: DVector::zeros(n.max(outputs)),
             all_outputs: DMatrix::zeros(outputs, count),
+            transition: DMatrix::zeros(n, n),
+            moved_noise: DMatrix::zeros(n, noise_columns),
+            covariance: DMatrix::zeros(n, n),
+            predicted: DVector::zeros(m),
+            innovation: DVector::zeros(m),
+            innovation_factor: DMatrix::zeros(m, m),
+            observation: DMatrix::zeros(m, n),
+            difference: DMatrix::zeros(n, m),
+            cross: DMatrix::zeros(n, m),
+            solved: DMatrix::zeros(m, n),
+            spread: DMatrix::zeros(n, m),
+            inverse_factor: DMatrix::zeros(m, m),
+            transposed: DMatrix::zeros(m, m),
+            update: UpdateWorkspace::default(),
+        }
+    }
+
+    /// Gives the measurement update's buffers the shape of m measured
+    /// outputs over n states.
+    fn measuring(&mut self, n: usize, m: usize) {
+        resize_vector(&mut self.predicted, m);
+        resize_vector(&mut self.innovation, m);
+        for matrix in [
+            &mut self.innovation_factor,
+            &mut self.inverse_factor,
+            &mut self.transposed,
+            &mut self.update.innovation_covariance,
+            &mut self.update.innovation_inverse,
+        ] {
+            resize(matrix, m, m);
+        }
+        for matrix in [&mut self.observation, &mut self.solved] {
+            resize(matrix, m, n);
+        }
+        for matrix in [
+            &mut self.difference,
+            &mut self.cross,
+            &mut self.spread,
+            &mut self.update.gain,
+        ] {
+            resize(matrix, n, m);
         }
     }
 
@@ -261,8 +355,8 @@ impl Work {
 }
 
 /// The time update from grid point k − 1 (at `previous`, a step h before
-/// k) to k, in place; returns the statistical transition Φ (module
-/// header).
+/// k) to k, in place; the statistical transition Φ into `work.transition`
+/// (module header).
 #[allow(clippy::too_many_arguments)]
 fn time_update<M: StateSpaceModel + ?Sized>(
     model: &M,
@@ -273,7 +367,7 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     state: &mut DVector<f64>,
     factor: &mut DMatrix<f64>,
     work: &mut Work,
-) -> Result<DMatrix<f64>> {
+) -> Result<()> {
     let n = state.len();
     work.draw(weights, state, factor);
     model
@@ -294,26 +388,38 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     // S⁺'s own row (2c·s_i/(2c)) and the second difference nothing.
     let root = weights.other.sqrt() * std::f64::consts::FRAC_1_SQRT_2;
     let compound = &mut work.compound;
-    shape(&mut work.curvature, n, p);
-    for j in 0..n {
-        for i in 0..p {
-            let (plus, minus) = (work.moved[(i, 1 + j)], work.moved[(i, 1 + n + j)]);
-            compound[(j, i)] = root * (plus - minus);
-            work.curvature[(j, i)] = root * ((plus - state[i]) + (minus - state[i]));
+    let ld = compound.nrows();
+    resize(&mut work.curvature, n, p);
+    // Column by column of the compound matrix (contiguous), the sigma
+    // points' states i of their columns 1 + j and 1 + n + j.
+    let moved = work.moved.as_slice();
+    for i in 0..p {
+        let column = &mut compound.as_mut_slice()[i * ld..i * ld + n];
+        let curvature = &mut work.curvature.as_mut_slice()[i * n..(i + 1) * n];
+        let mean = state[i];
+        for (j, (c, e)) in column.iter_mut().zip(curvature).enumerate() {
+            let (plus, minus) = (moved[(1 + j) * n + i], moved[(1 + n + j) * n + i]);
+            *c = root * (plus - minus);
+            *e = root * ((plus - mean) + (minus - mean));
         }
-        for i in p..n {
-            compound[(j, i)] = factor[(i, j)];
+    }
+    let s = factor.as_slice();
+    for i in p..n {
+        let column = &mut compound.as_mut_slice()[i * ld..i * ld + n];
+        for (j, c) in column.iter_mut().enumerate() {
+            *c = s[j * n + i];
         }
     }
     // Φ·S⁺ = D, Sᵀ·Φᵀ = Dᵀ, for the rows 0…p; the rows p… are the identity's.
-    shape(&mut work.leading, p, n);
+    resize(&mut work.leading, p, n);
     let half = 0.5 / weights.scale;
     for j in 0..n {
         for i in 0..p {
             work.leading[(i, j)] = half * (work.moved[(i, 1 + j)] - work.moved[(i, 1 + n + j)]);
         }
     }
-    let mut transition = DMatrix::identity(n, n);
+    let transition = &mut work.transition;
+    transition.fill_with_identity();
     if solve_right_lower(factor, &mut work.leading) && work.leading.iter().all(|v| v.is_finite()) {
         transition.rows_mut(0, p).copy_from(&work.leading);
     } else {
@@ -323,11 +429,12 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     // of their triangular factor (the same Gram matrix).
     let mut rows = n;
     if p < n {
-        shape(&mut work.curvature_factor, p, p);
+        resize(&mut work.curvature_factor, p, p);
         triangularise(&mut work.curvature, n, p, &mut work.curvature_factor);
-        for r in 0..p {
-            for i in 0..n {
-                compound[(rows + r, i)] = if i < p {
+        for i in 0..n {
+            let column = &mut compound.as_mut_slice()[i * ld + rows..i * ld + rows + p];
+            for (r, c) in column.iter_mut().enumerate() {
+                *c = if i < p {
                     work.curvature_factor[(i, r)]
                 } else {
                     0.0
@@ -347,7 +454,8 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     if r > 0 {
         if transition[(0, 0)].is_finite() {
             let half = (0.5 * h).sqrt();
-            let moved = &transition * process;
+            let moved = &mut work.moved_noise;
+            transition_times(transition, p, process, moved);
             for j in 0..r {
                 for i in 0..n {
                     compound[(rows + j, i)] = half * process[(i, j)];
@@ -378,12 +486,38 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     .map_err(|()| Error::Downdate {
         time: previous,
         step: "time update's zeroth sigma point (W₀ᶜ < 0)",
-    })?;
-    Ok(transition)
+    })
+}
+
+/// Φ·G into `into` (n × r) for a Φ whose rows p… are the identity's:
+/// column j is Σ_k G_kj·Φ_{·k} over G's non-zeros, its rows p… G's own.
+/// For a diagonal Q_c (one non-zero per column of G) every element is a
+/// single product, the same as any order of summation gives.
+fn transition_times(
+    transition: &DMatrix<f64>,
+    p: usize,
+    process: &DMatrix<f64>,
+    into: &mut DMatrix<f64>,
+) {
+    let n = transition.nrows();
+    into.copy_from(process);
+    for j in 0..process.ncols() {
+        let column = &mut into.as_mut_slice()[j * n..j * n + p];
+        column.fill(0.0);
+        for k in 0..n {
+            let g = process[(k, j)];
+            if g != 0.0 {
+                let source = &transition.as_slice()[k * n..k * n + p];
+                for (c, &f) in column.iter_mut().zip(source) {
+                    *c += f * g;
+                }
+            }
+        }
+    }
 }
 
 /// The measurement update of (x, S) with the outputs `present` measured at
-/// t, in place (module header).
+/// t, in place (module header); H, ν, S, S⁻¹ and K into `work`.
 #[allow(clippy::too_many_arguments)]
 fn measurement_update<M: StateSpaceModel + ?Sized>(
     model: &M,
@@ -394,9 +528,10 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     state: &mut DVector<f64>,
     factor: &mut DMatrix<f64>,
     work: &mut Work,
-) -> Result<Measured> {
+) -> Result<()> {
     let n = state.len();
     let m = present.len();
+    work.measuring(n, m);
     work.draw(weights, state, factor);
     let all = work.all_outputs.nrows();
     model
@@ -413,7 +548,8 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
         }
     }
     let outputs = work.outputs.rows(0, m);
-    let mut predicted = DVector::zeros(m);
+    let predicted = &mut work.predicted;
+    predicted.fill(0.0);
     for j in 0..2 * n + 1 {
         let w = if j == 0 {
             weights.mean_zero
@@ -435,52 +571,55 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
         }
         compound[(2 * n + row, row)] = noise.measurement[o].max(0.0).sqrt();
     }
-    let mut innovation_factor = DMatrix::zeros(m, m);
-    triangularise(compound, 2 * n + m, m, &mut innovation_factor);
-    let mut zero: Vec<f64> = (0..m).map(|i| outputs[(i, 0)] - predicted[i]).collect();
-    zeroth_point(&mut innovation_factor, &mut zero, weights.covariance_zero).map_err(|()| {
+    let innovation_factor = &mut work.innovation_factor;
+    triangularise(compound, 2 * n + m, m, innovation_factor);
+    let zero = &mut work.vector.as_mut_slice()[..m];
+    for (i, z) in zero.iter_mut().enumerate() {
+        *z = outputs[(i, 0)] - predicted[i];
+    }
+    zeroth_point(innovation_factor, zero, weights.covariance_zero).map_err(|()| {
         Error::Downdate {
             time: t,
             step: "innovation covariance's zeroth sigma point (W₀ᶜ < 0)",
         }
     })?;
     // E = (Y_{1…n} − Y_{n+1…2n})/(2c): P_xy = S⁻·Eᵀ and H·S⁻ = E.
-    let difference = central_difference(&outputs, n, weights.scale);
-    let cross = &*factor * difference.transpose();
+    central_difference_into(&outputs, n, weights.scale, &mut work.observation);
+    work.observation.transpose_to(&mut work.difference);
+    multiply_lower(factor, &work.difference, &mut work.cross);
     let singular = || {
         Error::Other(
             "the innovation covariance is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
         )
     };
-    if !innovation_factor
-        .diagonal()
-        .iter()
-        .all(|&d| d > 0.0 && d.is_finite())
-    {
+    if !(0..m).all(|i| {
+        let d = innovation_factor[(i, i)];
+        d > 0.0 && d.is_finite()
+    }) {
         return Err(at_time(singular(), t));
     }
     // K·S_y·S_yᵀ = P_xy: S_y·Z = P_xyᵀ, then S_yᵀ·Kᵀ = Z.
-    let gain = innovation_factor
-        .solve_lower_triangular(&cross.transpose())
-        .and_then(|z| innovation_factor.tr_solve_lower_triangular(&z))
-        .ok_or_else(|| at_time(singular(), t))?
-        .transpose();
-    let mut observation = difference;
-    if !solve_right_lower(factor, &mut observation) {
-        observation.fill(f64::NAN);
+    let solved = &mut work.solved;
+    work.cross.transpose_to(solved);
+    if !(innovation_factor.solve_lower_triangular_mut(solved)
+        && innovation_factor.tr_solve_lower_triangular_mut(solved))
+    {
+        return Err(at_time(singular(), t));
     }
-    let innovation = DVector::from_iterator(
-        m,
-        present
-            .iter()
-            .zip(predicted.iter())
-            .map(|(&(_, z), y)| z - y),
-    );
-    state.gemv(1.0, &gain, &innovation, 1.0);
-    let spread = &gain * &innovation_factor;
+    let update = &mut work.update;
+    solved.transpose_to(&mut update.gain);
+    if !solve_right_lower(factor, &mut work.observation) {
+        work.observation.fill(f64::NAN);
+    }
+    let innovation = &mut work.innovation;
+    for (i, &(_, z)) in present.iter().enumerate() {
+        innovation[i] = z - predicted[i];
+    }
+    state.gemv(1.0, &update.gain, innovation, 1.0);
+    multiply(&update.gain, innovation_factor, &mut work.spread);
     let column = &mut work.vector;
     for j in 0..m {
-        column.rows_mut(0, n).copy_from(&spread.column(j));
+        column.rows_mut(0, n).copy_from(&work.spread.column(j));
         cholupdate(factor, &mut column.as_mut_slice()[..n], -1.0).map_err(|()| {
             Error::Downdate {
                 time: t,
@@ -488,41 +627,74 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
             }
         })?;
     }
-    let inverse_factor = innovation_factor
-        .solve_lower_triangular(&DMatrix::identity(m, m))
-        .ok_or_else(|| at_time(singular(), t))?;
-    Ok(Measured {
-        observation,
-        update: Update {
-            innovation,
-            innovation_covariance: &innovation_factor * innovation_factor.transpose(),
-            innovation_inverse: inverse_factor.transpose() * &inverse_factor,
-            gain,
-        },
-    })
+    let inverse_factor = &mut work.inverse_factor;
+    inverse_factor.fill_with_identity();
+    if !innovation_factor.solve_lower_triangular_mut(inverse_factor) {
+        return Err(at_time(singular(), t));
+    }
+    let transposed = &mut work.transposed;
+    innovation_factor.transpose_to(transposed);
+    multiply(
+        innovation_factor,
+        transposed,
+        &mut update.innovation_covariance,
+    );
+    inverse_factor.transpose_to(transposed);
+    multiply(transposed, inverse_factor, &mut update.innovation_inverse);
+    // ln det S = 2·Σ ln of S_y's diagonal.
+    update.log_determinant = 2.0 * (0..m).map(|i| innovation_factor[(i, i)].ln()).sum::<f64>();
+    Ok(())
 }
 
-/// P = S·Sᵀ of a lower-triangular S as the sum of its columns' outer
-/// products, s_k·s_kᵀ touching rows and columns k… only: n³/3
-/// multiply-adds on contiguous columns, and exactly symmetric (both
-/// triangles from the same products in the same order).
-fn covariance(factor: &DMatrix<f64>) -> DMatrix<f64> {
+/// P = S·Sᵀ of a lower-triangular S into `p` as the sum of its columns'
+/// outer products, s_k·s_kᵀ touching rows and columns k… only, formed in
+/// the lower triangle (n³/6 multiply-adds on contiguous columns) and
+/// mirrored: exactly symmetric, each element of the upper triangle the
+/// same products (a·b = b·a) summed in the same order as its mirror.
+fn covariance_into(factor: &DMatrix<f64>, p: &mut DMatrix<f64>) {
     let n = factor.nrows();
-    let mut p = DMatrix::zeros(n, n);
+    resize(p, n, n);
+    p.fill(0.0);
     let s = factor.as_slice();
     let data = p.as_mut_slice();
     for k in 0..n {
-        let column = &s[k * n + k..(k + 1) * n];
-        for (j, &f) in (k..n).zip(column) {
+        let column = &s[k * n..(k + 1) * n];
+        for j in k..n {
+            let f = column[j];
             if f != 0.0 {
-                let target = &mut data[j * n + k..(j + 1) * n];
-                for (t, &v) in target.iter_mut().zip(column) {
+                let target = &mut data[j * n + j..(j + 1) * n];
+                for (t, &v) in target.iter_mut().zip(&column[j..]) {
                     *t += f * v;
                 }
             }
         }
     }
-    p
+    for j in 0..n {
+        for i in j + 1..n {
+            data[i * n + j] = data[j * n + i];
+        }
+    }
+}
+
+/// `into` = L·B for L lower triangular (n × n), B n × m: column j the
+/// sum over k of B_kj·L_{·k} in order of k, each over L's rows k… only
+/// (the rows above add zeros: the same numbers as the dense product).
+fn multiply_lower(l: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+    let n = l.nrows();
+    resize(into, n, b.ncols());
+    let l = l.as_slice();
+    for (column, b) in into
+        .as_mut_slice()
+        .chunks_exact_mut(n.max(1))
+        .zip(b.as_slice().chunks_exact(n.max(1)))
+    {
+        column.fill(0.0);
+        for (k, &factor) in b.iter().enumerate() {
+            for (into, &l) in column[k..].iter_mut().zip(&l[k * n + k..(k + 1) * n]) {
+                *into += factor * l;
+            }
+        }
+    }
 }
 
 /// x = Σ Wᵐ_i·χ'_i of the columns of `moved`.
@@ -535,39 +707,59 @@ fn weighted_mean(weights: &Weights, moved: &DMatrix<f64>, mean: &mut DVector<f64
 }
 
 /// (Z_{1…n} − Z_{n+1…2n})/(2c) of the columns of `images` (the sigma
-/// points' images Z_i): the central difference that is P_{z x}·P⁻¹·S
-/// for the covariance P = S·Sᵀ the points were drawn from (module header).
-fn central_difference<S>(
+/// points' images Z_i) into `into` (its rows × n): the central difference
+/// that is P_{z x}·P⁻¹·S for the covariance P = S·Sᵀ the points were drawn
+/// from (module header).
+fn central_difference_into<S>(
     images: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>,
     n: usize,
     scale: f64,
-) -> DMatrix<f64>
-where
+    into: &mut DMatrix<f64>,
+) where
     S: nalgebra::Storage<f64, nalgebra::Dyn, nalgebra::Dyn>,
 {
     let half = 0.5 / scale;
-    DMatrix::from_fn(images.nrows(), n, |r, i| {
-        half * (images[(r, 1 + i)] - images[(r, 1 + n + i)])
-    })
+    for i in 0..n {
+        for r in 0..images.nrows() {
+            into[(r, i)] = half * (images[(r, 1 + i)] - images[(r, 1 + n + i)]);
+        }
+    }
 }
 
 /// X·L = B for X in place of B (column-major), L lower triangular:
 /// X_{·j} = (B_{·j} − Σ_{k>j} X_{·k}·L_{kj})/L_{jj} from the last column
-/// back, each step an operation on whole contiguous columns. False when
-/// a diagonal element of L is zero.
+/// back, each step an operation on whole contiguous columns (of a length
+/// known at compile time for B of up to 8 rows, so that the loops
+/// unroll: the same operations in the same order). False when a diagonal
+/// element of L is zero.
 fn solve_right_lower(l: &DMatrix<f64>, b: &mut DMatrix<f64>) -> bool {
-    let n = l.nrows();
+    let (l, n) = (l.as_slice(), l.nrows());
     let rows = b.nrows();
     let data = b.as_mut_slice();
+    match rows {
+        1 => solve_right_lower_rows::<1>(l, n, data),
+        2 => solve_right_lower_rows::<2>(l, n, data),
+        3 => solve_right_lower_rows::<3>(l, n, data),
+        4 => solve_right_lower_rows::<4>(l, n, data),
+        5 => solve_right_lower_rows::<5>(l, n, data),
+        6 => solve_right_lower_rows::<6>(l, n, data),
+        7 => solve_right_lower_rows::<7>(l, n, data),
+        8 => solve_right_lower_rows::<8>(l, n, data),
+        _ => solve_right_lower_any(l, n, rows, data),
+    }
+}
+
+/// [`solve_right_lower`] for B of any number of rows.
+fn solve_right_lower_any(l: &[f64], n: usize, rows: usize, data: &mut [f64]) -> bool {
     for j in (0..n).rev() {
-        let diagonal = l[(j, j)];
+        let diagonal = l[j * n + j];
         if diagonal == 0.0 {
             return false;
         }
         let (head, tail) = data.split_at_mut((j + 1) * rows);
         let column = &mut head[j * rows..];
         for k in j + 1..n {
-            let f = l[(k, j)];
+            let f = l[j * n + k];
             if f != 0.0 {
                 let known = &tail[(k - j - 1) * rows..(k - j) * rows];
                 for (c, x) in column.iter_mut().zip(known) {
@@ -579,6 +771,34 @@ fn solve_right_lower(l: &DMatrix<f64>, b: &mut DMatrix<f64>) -> bool {
         for c in column.iter_mut() {
             *c *= inverse;
         }
+    }
+    true
+}
+
+/// [`solve_right_lower`] for B of R rows (L n × n, both column-major).
+#[inline(always)]
+fn solve_right_lower_rows<const R: usize>(l: &[f64], n: usize, data: &mut [f64]) -> bool {
+    for j in (0..n).rev() {
+        let diagonal = l[j * n + j];
+        if diagonal == 0.0 {
+            return false;
+        }
+        let mut column = [0.0; R];
+        column.copy_from_slice(&data[j * R..(j + 1) * R]);
+        for k in j + 1..n {
+            let f = l[j * n + k];
+            if f != 0.0 {
+                let known = &data[k * R..(k + 1) * R];
+                for (c, x) in column.iter_mut().zip(known) {
+                    *c -= f * x;
+                }
+            }
+        }
+        let inverse = 1.0 / diagonal;
+        for c in column.iter_mut() {
+            *c *= inverse;
+        }
+        data[j * R..(j + 1) * R].copy_from_slice(&column);
     }
     true
 }
@@ -874,23 +1094,77 @@ mod tests {
     #[test]
     fn covariance_is_the_factors_product() {
         let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
-        let p = covariance(&l);
+        let mut p = DMatrix::zeros(0, 0);
+        covariance_into(&l, &mut p);
         let expected = &l * l.transpose();
         assert!((&p - &expected).norm() < 1e-15 * expected.norm());
         assert_eq!(p, p.transpose());
     }
 
-    /// X·L = B solved from the right against B·L⁻¹ by nalgebra's inverse.
+    /// L·B over L's lower triangle is the dense product bit for bit.
+    #[test]
+    fn multiply_lower_is_the_dense_product() {
+        let l = DMatrix::from_fn(6, 6, |i, j| {
+            if i < j {
+                0.0
+            } else {
+                ((i * 6 + j) as f64 * 0.61).cos() + 0.3
+            }
+        });
+        let b = DMatrix::from_fn(6, 3, |i, j| ((i + 5 * j) as f64 * 0.23).sin());
+        let mut lower = DMatrix::zeros(0, 0);
+        multiply_lower(&l, &b, &mut lower);
+        let mut dense = DMatrix::zeros(0, 0);
+        multiply(&l, &b, &mut dense);
+        assert!(
+            lower
+                .iter()
+                .zip(dense.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+        assert!((&lower - &l * &b).norm() < 1e-15 * lower.norm());
+    }
+
+    /// X·L = B solved from the right against B·L⁻¹ by nalgebra's inverse,
+    /// for B of 1 to 10 rows; the forms unrolled for up to 8 rows give the
+    /// general form's numbers bit for bit.
     #[test]
     fn solve_right_lower_solves_from_the_right() {
-        let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
-        let b = DMatrix::from_fn(4, 3, |i, j| (i as f64 - 1.3 * j as f64).cos());
-        let mut x = b.clone();
-        assert!(solve_right_lower(&l, &mut x));
-        let expected = &b * l.clone().try_inverse().unwrap();
-        assert!((&x - &expected).norm() < 1e-14 * expected.norm());
+        let l = DMatrix::from_fn(9, 9, |i, j| {
+            if i < j {
+                0.0
+            } else if i == j {
+                1.5 + 0.1 * i as f64
+            } else {
+                ((i * 9 + j) as f64 * 0.37).sin()
+            }
+        });
+        for rows in 1..=10 {
+            let b = DMatrix::from_fn(rows, 9, |i, j| (i as f64 - 1.3 * j as f64).cos());
+            let mut x = b.clone();
+            assert!(solve_right_lower(&l, &mut x));
+            let expected = &b * l.clone().try_inverse().unwrap();
+            assert!(
+                (&x - &expected).norm() < 1e-13 * expected.norm(),
+                "{rows} rows"
+            );
+            let mut general = b.clone();
+            assert!(solve_right_lower_any(
+                l.as_slice(),
+                9,
+                rows,
+                general.as_mut_slice()
+            ));
+            assert!(
+                x.iter()
+                    .zip(general.iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{rows} rows"
+            );
+        }
         let mut singular = l.clone();
         singular[(1, 1)] = 0.0;
+        let b = DMatrix::from_fn(4, 9, |i, j| (i + j) as f64);
         assert!(!solve_right_lower(&singular, &mut b.clone()));
     }
 
