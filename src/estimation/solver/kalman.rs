@@ -498,9 +498,9 @@ pub fn predict_covariance(
 /// rows. Rebuilt in place ([`SparseRows::set`]) without allocating once
 /// its storage has grown. A filter reads matrices of one sparsity pattern
 /// at every step (a model's Jacobian, its transition, the observation
-/// matrix): when the matrix read has the pattern already held (as many
-/// non-zeros, all of them where the held ones are), only the values are
-/// gathered on it.
+/// matrix): when every non-zero of the matrix read lies on the pattern
+/// already held, only the values are gathered on it (an entry of the
+/// pattern may then hold a zero, which a product adds as 0·x).
 #[derive(Debug, Clone, Default)]
 pub struct SparseRows {
     /// Read as the transpose ([`SparseRows::set_transposed_values`]).
@@ -608,8 +608,8 @@ impl SparseRows {
     /// Gathers the values of the matrix (`rows` × `columns`, column-major
     /// `values`; read as its transpose if `transposed`, its rows from
     /// `leading` on as the identity's otherwise) on the pattern held, and
-    /// says whether that is the matrix's pattern: the same shape and
-    /// orientation, as many non-zeros as held and each held entry non-zero.
+    /// says whether the pattern holds the matrix: the same shape and
+    /// orientation, and as many non-zeros gathered as the matrix has.
     /// False leaves the held values to be rebuilt.
     fn values_on_pattern(
         &mut self,
@@ -646,10 +646,10 @@ impl SparseRows {
                 })
                 .sum()
         };
-        if counted != held {
+        if counted > held {
             return false;
         }
-        let mut all_non_zero = true;
+        let mut gathered = 0;
         for i in 0..kept {
             let (from, to) = (self.starts[i], self.starts[i + 1]);
             for entry in &mut self.entries[from..to] {
@@ -659,10 +659,10 @@ impl SparseRows {
                     values[i + entry.0 * rows]
                 };
                 entry.1 = value;
-                all_non_zero &= value != 0.0;
+                gathered += usize::from(value != 0.0);
             }
         }
-        all_non_zero
+        gathered == counted
     }
 
     fn begin(&mut self, columns: usize) {
@@ -2280,9 +2280,10 @@ mod tests {
     }
 
     /// Reading a matrix into a SparseRows that holds another's pattern
-    /// gives a fresh read's rows whether the pattern is the same (values
-    /// gathered on it), has one more non-zero, one fewer, or as many with
-    /// one moved (read afresh), as rows and as the transpose, with trailing
+    /// gives a fresh read's non-zeros whether the pattern is the same or
+    /// holds entries the matrix has as zeros (values gathered on it,
+    /// the zeros kept as entries), or the matrix has a non-zero off the
+    /// pattern (read afresh), as rows and as the transpose, with trailing
     /// identity rows or without.
     #[test]
     fn sparse_rows_read_on_a_held_pattern_are_a_fresh_read() {
@@ -2302,12 +2303,18 @@ mod tests {
         moved[(1, 2)] = 0.25;
         scaled[(6, 6)] = 3.0;
         let rows_of = |s: &SparseRows| -> Vec<Vec<(usize, f64)>> {
-            (0..s.rows()).map(|i| s.row(i).to_vec()).collect()
+            (0..s.rows())
+                .map(|i| s.row(i).iter().copied().filter(|e| e.1 != 0.0).collect())
+                .collect()
         };
         for leading in [7, 4] {
             let (mut held, mut transposed) = (SparseRows::default(), SparseRows::default());
             for matrix in [&base, &base, &scaled, &more, &fewer, &moved, &base] {
                 held.set_leading(matrix, leading);
+                if std::ptr::eq(matrix, &fewer) {
+                    // Read on the pattern of `more`, which holds (0, 0).
+                    assert_eq!(held.row(0).first(), Some(&(0, 0.0)));
+                }
                 let mut fresh = SparseRows::default();
                 fresh.set_leading(matrix, leading);
                 assert_eq!(rows_of(&held), rows_of(&fresh), "leading {leading}");
