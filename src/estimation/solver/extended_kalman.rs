@@ -88,8 +88,9 @@ impl Discretisation {
 }
 
 /// The buffers of a time update: Φ, Q_d, their makings and Φ's non-zeros
-/// (and, for the second-order form, those of A·h and of A: each kept
-/// apart, so that each keeps its pattern from step to step).
+/// (and, for the second-order form, A's and A·h's on A's pattern: each
+/// kept apart, so that Φ's and A's patterns are held from step to step,
+/// [`SparseRows`]).
 #[derive(Debug, Clone, Default)]
 struct TimeUpdate {
     transition: DMatrix<f64>,
