@@ -87,12 +87,17 @@ impl Discretisation {
     }
 }
 
-/// The buffers of a time update: Φ, Q_d, their makings and Φ's non-zeros.
+/// The buffers of a time update: Φ, Q_d, their makings and Φ's non-zeros
+/// (and, for the second-order form, A's and A·h's on A's pattern: each
+/// kept apart, so that Φ's and A's patterns are held from step to step,
+/// [`SparseRows`]).
 #[derive(Debug, Clone, Default)]
 struct TimeUpdate {
     transition: DMatrix<f64>,
     process_noise: DMatrix<f64>,
     sparse: SparseRows,
+    sparse_scaled: SparseRows,
+    sparse_rates: SparseRows,
     scaled: DMatrix<f64>,
     exponential: Exponential,
     work: [DMatrix<f64>; 2],
@@ -122,15 +127,16 @@ impl TimeUpdate {
                 self.sparse.set_leading(&self.transition, leading);
             }
             Discretisation::SecondOrder => {
-                // A·h by its non-zeros; Φ = I + A·h + ½·(A·h)², (A·h)² = (Bᵀ·Bᵀ)ᵀ
-                // with B = A·h.
+                // A·h by A's non-zeros; Φ = I + A·h + ½·(A·h)²,
+                // (A·h)² = (Bᵀ·Bᵀ)ᵀ with B = A·h.
+                self.sparse_rates.set(a);
+                self.sparse_scaled.scaled_from(&self.sparse_rates, h);
                 self.scaled.clone_from(a);
                 self.scaled *= h;
-                self.sparse.set(&self.scaled);
                 let [product, transposed] = &mut self.work;
                 resize(transposed, n, n);
                 self.scaled.transpose_to(transposed);
-                self.sparse.times_transposed(transposed, product);
+                self.sparse_scaled.times_transposed(transposed, product);
                 resize(&mut self.transition, n, n);
                 let (phi, squared, b) = (
                     self.transition.as_mut_slice(),
@@ -146,12 +152,11 @@ impl TimeUpdate {
                 if let Some(noise) = noise {
                     // A·Q_c = (Q_cᵀ·Aᵀ)ᵀ and A·Q_c·Aᵀ = (A·Q_c)·Aᵀ by A's
                     // non-zeros.
-                    self.sparse.set(a);
                     resize(transposed, n, n);
                     noise.transpose_to(transposed);
-                    self.sparse.times_transposed(transposed, product);
+                    self.sparse_rates.times_transposed(transposed, product);
                     product.transpose_to(transposed);
-                    self.sparse.times_transposed(transposed, product);
+                    self.sparse_rates.times_transposed(transposed, product);
                     // transposed = A·Q_c, product = A·Q_c·Aᵀ.
                     resize(&mut self.process_noise, n, n);
                     let (q, outer, aq, noise) = (

@@ -499,9 +499,15 @@ pub fn predict_covariance(
 /// its zeros: an augmented model's transition (its parameter rows are rows
 /// of the identity), the Gauss–Markov chains' rows, an observation's unit
 /// rows. Rebuilt in place ([`SparseRows::set`]) without allocating once
-/// its storage has grown.
+/// its storage has grown. A filter reads matrices of one sparsity pattern
+/// at every step (a model's Jacobian, its transition, the observation
+/// matrix): when every non-zero of the matrix read lies on the pattern
+/// already held, only the values are gathered on it (an entry of the
+/// pattern may then hold a zero, which a product adds as 0·x).
 #[derive(Debug, Clone, Default)]
 pub struct SparseRows {
+    /// Read as the transpose ([`SparseRows::set_transposed_values`]).
+    transposed: bool,
     columns: usize,
     /// The rows from this one on are the identity's
     /// ([`SparseRows::set_leading`]; all rows where none are known to be).
@@ -530,8 +536,13 @@ impl SparseRows {
     /// rows of constant states, [`Exponential::of_scaled`]).
     pub fn set_leading(&mut self, matrix: &DMatrix<f64>, leading: usize) {
         let (rows, columns) = matrix.shape();
+        let leading = leading.min(rows);
+        if self.values_on_pattern(false, matrix.as_slice(), rows, columns, leading) {
+            return;
+        }
+        self.transposed = false;
         self.begin(columns);
-        self.leading = leading.min(rows);
+        self.leading = leading;
         // Every entry is written and only a non-zero one kept (no branch):
         // `entries` holds room for all of them.
         if self.entries.len() < matrix.len() {
@@ -554,6 +565,18 @@ impl SparseRows {
         }
     }
 
+    /// The non-zeros of `other` times `factor`, on `other`'s pattern
+    /// (those of a matrix and of its multiple: A and A·h).
+    pub fn scaled_from(&mut self, other: &SparseRows, factor: f64) {
+        (self.transposed, self.columns, self.leading) =
+            (other.transposed, other.columns, other.leading);
+        self.starts.clone_from(&other.starts);
+        self.entries.clear();
+        let used = &other.entries[..other.starts.last().copied().unwrap_or(0)];
+        self.entries
+            .extend(used.iter().map(|&(j, value)| (j, value * factor)));
+    }
+
     /// Reads the non-zeros of `matrix`ᵀ (the rows are its columns).
     pub fn set_transposed(&mut self, matrix: &DMatrix<f64>) {
         self.set_transposed_values(matrix.as_slice(), matrix.nrows());
@@ -562,8 +585,13 @@ impl SparseRows {
     /// [`SparseRows::set_transposed`] of the matrix of `rows` rows whose
     /// values (column-major) are `values`.
     pub fn set_transposed_values(&mut self, values: &[f64], rows: usize) {
+        let columns = values.len().checked_div(rows).unwrap_or(0);
+        if self.values_on_pattern(true, values, rows, columns, rows) {
+            return;
+        }
+        self.transposed = true;
         self.begin(rows);
-        self.leading = values.len().checked_div(rows).unwrap_or(0);
+        self.leading = columns;
         // Every entry is written and only a non-zero one kept (no branch):
         // `entries` holds room for all of them.
         if self.entries.len() < values.len() {
@@ -578,6 +606,66 @@ impl SparseRows {
             }
             self.starts.push(count);
         }
+    }
+
+    /// Gathers the values of the matrix (`rows` × `columns`, column-major
+    /// `values`; read as its transpose if `transposed`, its rows from
+    /// `leading` on as the identity's otherwise) on the pattern held, and
+    /// says whether the pattern holds the matrix: the same shape and
+    /// orientation, and as many non-zeros gathered as the matrix has.
+    /// False leaves the held values to be rebuilt.
+    fn values_on_pattern(
+        &mut self,
+        transposed: bool,
+        values: &[f64],
+        rows: usize,
+        columns: usize,
+        leading: usize,
+    ) -> bool {
+        let (held_rows, kept) = if transposed {
+            (columns, columns)
+        } else {
+            (rows, leading)
+        };
+        let same_shape = self.transposed == transposed
+            && self.columns == if transposed { rows } else { columns }
+            && self.starts.len() == held_rows + 1
+            && self.leading == kept
+            && values.len() == rows * columns;
+        if !same_shape || rows == 0 {
+            return false;
+        }
+        let held = self.starts[kept];
+        let counted: usize = if transposed || leading == rows {
+            values.iter().map(|&v| usize::from(v != 0.0)).sum()
+        } else {
+            values
+                .chunks_exact(rows)
+                .map(|column| {
+                    column[..leading]
+                        .iter()
+                        .map(|&v| usize::from(v != 0.0))
+                        .sum::<usize>()
+                })
+                .sum()
+        };
+        if counted > held {
+            return false;
+        }
+        let mut gathered = 0;
+        for i in 0..kept {
+            let (from, to) = (self.starts[i], self.starts[i + 1]);
+            for entry in &mut self.entries[from..to] {
+                let value = if transposed {
+                    values[entry.0 + i * rows]
+                } else {
+                    values[i + entry.0 * rows]
+                };
+                entry.1 = value;
+                gathered += usize::from(value != 0.0);
+            }
+        }
+        gathered == counted
     }
 
     fn begin(&mut self, columns: usize) {
@@ -612,16 +700,92 @@ impl SparseRows {
             #[inline(always)]
             || {
                 for (i, column) in into.chunks_exact_mut(rows).enumerate() {
-                    column.fill(0.0);
-                    for &(j, value) in self.row(i) {
-                        let source = &x[j * rows..(j + 1) * rows];
-                        for (into, &x) in column.iter_mut().zip(source) {
-                            *into += value * x;
-                        }
-                    }
+                    combine_columns(column, x, self.row(i).iter().copied());
                 }
             },
         )
+    }
+}
+
+/// `into` = Σ f·(column j of `x`) over the terms (j, f) in order, x
+/// column-major with `into.len()` rows: each entry summed from zero in the
+/// terms' order (the numbers of a loop that adds each term's column into
+/// `into` in turn), by blocks of 16 and 4 rows held in registers across
+/// the terms instead of read and written back for each term. Inlined into
+/// the caller's [`crate::simd::wide`] kernel.
+#[inline(always)]
+pub(crate) fn combine_columns<I>(into: &mut [f64], x: &[f64], terms: I)
+where
+    I: Iterator<Item = (usize, f64)> + Clone,
+{
+    #[inline(always)]
+    fn block<const B: usize, I: Iterator<Item = (usize, f64)>>(
+        into: &mut [f64],
+        x: &[f64],
+        rows: usize,
+        start: usize,
+        terms: I,
+    ) {
+        let mut sum = [0.0; B];
+        for (j, factor) in terms {
+            let source: &[f64; B] = x[j * rows + start..j * rows + start + B]
+                .try_into()
+                .expect("a block of B rows");
+            for (sum, &value) in sum.iter_mut().zip(source) {
+                *sum += factor * value;
+            }
+        }
+        into[start..start + B].copy_from_slice(&sum);
+    }
+    let rows = into.len();
+    let mut start = 0;
+    while start + 16 <= rows {
+        block::<16, _>(into, x, rows, start, terms.clone());
+        start += 16;
+    }
+    while start + 4 <= rows {
+        block::<4, _>(into, x, rows, start, terms.clone());
+        start += 4;
+    }
+    while start < rows {
+        block::<1, _>(into, x, rows, start, terms.clone());
+        start += 1;
+    }
+}
+
+/// `into`_i = Σ_a x_ia·y_ia over the columns a of x and y (column-major,
+/// `into.len()` rows each), summed in the columns' order by blocks of 16
+/// and 4 rows held in registers ([`combine_columns`]).
+#[inline(always)]
+fn sum_of_products(into: &mut [f64], x: &[f64], y: &[f64]) {
+    #[inline(always)]
+    fn block<const B: usize>(into: &mut [f64], x: &[f64], y: &[f64], rows: usize, start: usize) {
+        let mut sum = [0.0; B];
+        for (x, y) in x.chunks_exact(rows).zip(y.chunks_exact(rows)) {
+            let x: &[f64; B] = x[start..start + B].try_into().expect("B rows");
+            let y: &[f64; B] = y[start..start + B].try_into().expect("B rows");
+            for ((sum, &x), &y) in sum.iter_mut().zip(x).zip(y) {
+                *sum += x * y;
+            }
+        }
+        into[start..start + B].copy_from_slice(&sum);
+    }
+    let rows = into.len();
+    if rows == 0 {
+        return;
+    }
+    let mut start = 0;
+    while start + 16 <= rows {
+        block::<16>(into, x, y, rows, start);
+        start += 16;
+    }
+    while start + 4 <= rows {
+        block::<4>(into, x, y, rows, start);
+        start += 4;
+    }
+    while start < rows {
+        block::<1>(into, x, y, rows, start);
+        start += 1;
     }
 }
 
@@ -688,13 +852,7 @@ fn predict_constant_rows(
             #[inline(always)]
             || {
                 for (r, column) in w.chunks_exact_mut(n).enumerate() {
-                    column.fill(0.0);
-                    for &(j, value) in transition.row(r) {
-                        let source = &p[j * n..(j + 1) * n];
-                        for (into, &x) in column.iter_mut().zip(source) {
-                            *into += value * x;
-                        }
-                    }
+                    combine_columns(column, p, transition.row(r).iter().copied());
                 }
             },
         );
@@ -1101,12 +1259,7 @@ pub fn sequential_update_with(
                 let row = sparse.row(i);
                 let nu = innovation[i] - row.iter().map(|&(j, h)| h * shift[j]).sum::<f64>();
                 // m = P·h over h's non-zeros, s = hᵀ·m + r.
-                cross.fill(0.0);
-                for &(j, h) in row {
-                    for (into, &value) in cross.iter_mut().zip(&p[j * n..(j + 1) * n]) {
-                        *into += h * value;
-                    }
-                }
+                combine_columns(cross, p, row.iter().copied());
                 let s = row.iter().map(|&(j, h)| h * cross[j]).sum::<f64>() + noise[i];
                 if !(s > 0.0 && s.is_finite()) {
                     return false;
@@ -1415,8 +1568,12 @@ pub fn mbf_smooth<U: SmootherUpdates + ?Sized>(
         |k, prior, p, adjoint, information, work| {
             let n = adjoint.len();
             let into = &mut smoothed[k];
-            into.mean.copy_from(&prior.mean);
-            into.mean.gemv(-1.0, &prior.covariance, adjoint, 1.0);
+            let (x, lambda) = (prior.mean.as_slice(), adjoint.as_slice());
+            let mean = into.mean.as_mut_slice();
+            crate::simd::wide(
+                #[inline(always)]
+                || smoothed_mean(mean, x, p, lambda),
+            );
             let [product, outer] = work;
             product.gemm(1.0, information, &prior.covariance, 0.0);
             outer.gemm(1.0, &prior.covariance, product, 0.0);
@@ -1435,8 +1592,10 @@ pub fn mbf_smooth<U: SmootherUpdates + ?Sized>(
 }
 
 /// [`mbf_smooth`]'s means x_{k|N} and variances, the diagonal of P_{k|N}
-/// (as a column): P_ii − p_iᵀ·(Λ·p_i) with p_i column i of P = P_{k|k−1},
-/// one dense n × n product where the covariance takes two.
+/// (as a column): with P = P_{k|k−1} (symmetric) and W = P·Λ, the
+/// variance P_ii − Σ_a P_ia·W_ia, each sum taken along P's and W's columns
+/// a for all i at once; one dense n × n product where the covariance takes
+/// two.
 pub fn mbf_smooth_variances<U: SmootherUpdates + ?Sized>(
     predicted: &Gaussians,
     measured: &U,
@@ -1447,22 +1606,41 @@ pub fn mbf_smooth_variances<U: SmootherUpdates + ?Sized>(
         predicted,
         measured,
         transitions,
-        |k, prior, _, adjoint, information, work| {
+        |k, prior, p, adjoint, information, work| {
             let n = adjoint.len();
-            let mut mean = prior.mean.into_owned();
-            mean.gemv(-1.0, &prior.covariance, adjoint, 1.0);
             let [product, _] = work;
-            product.gemm(1.0, information, &prior.covariance, 0.0);
-            let variances = DVector::from_iterator(
-                n,
-                (0..n).map(|i| {
-                    prior.covariance[(i, i)] - prior.covariance.column(i).dot(&product.column(i))
-                }),
+            product.gemm(1.0, &prior.covariance, information, 0.0);
+            let (mut mean, mut variances) = (DVector::zeros(n), DVector::zeros(n));
+            let (w, x, lambda) = (
+                product.as_slice(),
+                prior.mean.as_slice(),
+                adjoint.as_slice(),
+            );
+            let (mean_values, sums) = (mean.as_mut_slice(), variances.as_mut_slice());
+            crate::simd::wide(
+                #[inline(always)]
+                || {
+                    smoothed_mean(mean_values, x, p, lambda);
+                    sum_of_products(sums, p, w);
+                    for (i, sum) in sums.iter_mut().enumerate() {
+                        *sum = p[i + i * n] - *sum;
+                    }
+                },
             );
             smoothed[k] = (mean, variances);
         },
     );
     smoothed
+}
+
+/// The smoothed mean x − P·λ into `into` (P column-major, the columns
+/// combined in registers: [`combine_columns`]); both smoothers' means.
+#[inline(always)]
+fn smoothed_mean(into: &mut [f64], x: &[f64], p: &[f64], lambda: &[f64]) {
+    combine_columns(into, p, lambda.iter().copied().enumerate());
+    for (into, &x) in into.iter_mut().zip(x) {
+        *into = x - *into;
+    }
 }
 
 /// A pass's measurement updates as the modified Bryson–Frazier smoother
@@ -1549,24 +1727,24 @@ impl SmootherUpdates for ScalarUpdates {
                 for i in (0..count).rev() {
                     let update = self.get(k, i).expect("i < count");
                     let (h, gain) = (update.observation, update.gain);
-                    support.clear();
-                    for (j, &value) in h.iter().enumerate() {
-                        if value != 0.0 {
-                            support.push((j, value));
-                        }
+                    // h's non-zeros, each entry written and only a
+                    // non-zero one kept (no branch).
+                    if support.len() < n {
+                        support.resize(n, (0, 0.0));
                     }
+                    let mut count = 0;
+                    for (j, &value) in h.iter().enumerate() {
+                        support[count] = (j, value);
+                        count += usize::from(value != 0.0);
+                    }
+                    let support = &support[..count];
                     let weight = gain.iter().zip(&*adjoint).map(|(k, l)| k * l).sum::<f64>()
                         + update.innovation / update.variance;
                     for &(j, value) in support.iter() {
                         adjoint[j] -= value * weight;
                     }
                     // g = Λ·k, c = kᵀ·g, e = g − ½·(c + 1/s)·h.
-                    e.fill(0.0);
-                    for (column, &factor) in lambda.chunks_exact(n).zip(gain) {
-                        for (into, &value) in e.iter_mut().zip(column) {
-                            *into += factor * value;
-                        }
-                    }
+                    combine_columns(e, lambda, gain.iter().copied().enumerate());
                     let c = gain.iter().zip(e.iter()).map(|(k, g)| k * g).sum::<f64>();
                     let half = 0.5 * (c + 1.0 / update.variance);
                     for &(j, value) in support.iter() {
@@ -1614,7 +1792,7 @@ fn mbf_backward<U: SmootherUpdates + ?Sized>(
         return;
     };
     let n = first.mean.len();
-    let mut adjoint = DVector::zeros(n);
+    let (mut adjoint, mut transposed_adjoint) = (DVector::zeros(n), DVector::zeros(n));
     let mut information = DMatrix::zeros(n, n);
     let mut transition = SparseRows::default();
     let mut work = [DMatrix::zeros(n, n), DMatrix::zeros(n, n)];
@@ -1627,14 +1805,20 @@ fn mbf_backward<U: SmootherUpdates + ?Sized>(
         if k > 0 {
             // λ ← Φᵀ·λ, Λ ← Φᵀ·Λ·Φ = (Zᵀ·Φ)ᵀ with Z = Λ·Φ, by Φ's columns.
             let [product, outer] = &mut work;
-            let phi = transitions.get(k - 1).expect("a transition between points");
             transition.set_transposed_values(
                 transitions
                     .values(k - 1)
                     .expect("a transition between points"),
                 n,
             );
-            adjoint = phi.tr_mul(&adjoint);
+            for (i, into) in transposed_adjoint.iter_mut().enumerate() {
+                *into = transition
+                    .row(i)
+                    .iter()
+                    .map(|&(j, value)| value * adjoint[j])
+                    .sum();
+            }
+            std::mem::swap(&mut adjoint, &mut transposed_adjoint);
             transition.times_transposed(&information, product);
             product.transpose_to(outer);
             transition.times_transposed(outer, &mut information);
@@ -2098,6 +2282,86 @@ mod tests {
                     .zip(general.iter())
                     .all(|(x, y)| x.to_bits() == y.to_bits()),
                 "n = {n}"
+            );
+        }
+    }
+
+    /// Reading a matrix into a SparseRows that holds another's pattern
+    /// gives a fresh read's non-zeros whether the pattern is the same or
+    /// holds entries the matrix has as zeros (values gathered on it,
+    /// the zeros kept as entries), or the matrix has a non-zero off the
+    /// pattern (read afresh), as rows and as the transpose, with trailing
+    /// identity rows or without.
+    #[test]
+    fn sparse_rows_read_on_a_held_pattern_are_a_fresh_read() {
+        let base = DMatrix::from_fn(7, 7, |i, j| {
+            if (i * 3 + j * 5) % 4 == 0 {
+                ((i * 7 + j) as f64 * 0.37).sin() + 2.0
+            } else {
+                0.0
+            }
+        });
+        let mut scaled = base.clone() * -1.5;
+        let mut more = base.clone();
+        more[(1, 2)] = 0.5;
+        let mut fewer = base.clone();
+        fewer[(0, 0)] = 0.0;
+        let mut moved = fewer.clone();
+        moved[(1, 2)] = 0.25;
+        scaled[(6, 6)] = 3.0;
+        let rows_of = |s: &SparseRows| -> Vec<Vec<(usize, f64)>> {
+            (0..s.rows())
+                .map(|i| s.row(i).iter().copied().filter(|e| e.1 != 0.0).collect())
+                .collect()
+        };
+        for leading in [7, 4] {
+            let (mut held, mut transposed) = (SparseRows::default(), SparseRows::default());
+            for matrix in [&base, &base, &scaled, &more, &fewer, &moved, &base] {
+                held.set_leading(matrix, leading);
+                if std::ptr::eq(matrix, &fewer) {
+                    // Read on the pattern of `more`, which holds (0, 0).
+                    assert_eq!(held.row(0).first(), Some(&(0, 0.0)));
+                }
+                let mut fresh = SparseRows::default();
+                fresh.set_leading(matrix, leading);
+                assert_eq!(rows_of(&held), rows_of(&fresh), "leading {leading}");
+                transposed.set_transposed(matrix);
+                let mut fresh = SparseRows::default();
+                fresh.set_transposed(matrix);
+                assert_eq!(rows_of(&transposed), rows_of(&fresh));
+                assert_eq!(
+                    rows_of(&fresh),
+                    rows_of(&SparseRows::of(&matrix.transpose()))
+                );
+            }
+        }
+    }
+
+    /// The columns combined in registers are the loop that adds each
+    /// term's column in turn, bit for bit, for row counts around the
+    /// blocks of 16 and 4.
+    #[test]
+    fn combined_columns_are_the_plain_loop() {
+        for rows in [1, 3, 4, 5, 16, 17, 20, 28, 33] {
+            let x: Vec<f64> = (0..rows * 9)
+                .map(|i| (i as f64 * 0.77).sin() * 1e2)
+                .collect();
+            let terms: Vec<(usize, f64)> = [(0, 0.3), (4, -1.7), (2, 1e-3), (8, 2.5), (4, 0.1)]
+                .into_iter()
+                .collect();
+            let mut fast = vec![f64::NAN; rows];
+            combine_columns(&mut fast, &x, terms.iter().copied());
+            let mut plain = vec![0.0; rows];
+            for &(j, factor) in &terms {
+                for (into, &value) in plain.iter_mut().zip(&x[j * rows..(j + 1) * rows]) {
+                    *into += factor * value;
+                }
+            }
+            assert!(
+                fast.iter()
+                    .zip(&plain)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "rows {rows}"
             );
         }
     }

@@ -632,7 +632,7 @@ impl ScalarUpdates {
         self.at.push(Some((self.values.len(), m)));
         let h = observation.as_slice();
         for i in 0..m {
-            self.values.extend(h[i..].iter().step_by(m.max(1)).take(n));
+            self.values.extend((0..n).map(|j| h[i + j * m]));
             self.values.extend_from_slice(&gains[i * n..(i + 1) * n]);
             self.values.push(innovations[i]);
             self.values.push(variances[i]);
