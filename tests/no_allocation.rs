@@ -262,71 +262,50 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
 /// a single allocation per point would make 1501.
 #[test]
 fn an_ekf_pass_allocates_nothing_per_grid_point() {
-    use aeroid::estimation::model::augmented::Augmented;
-    use aeroid::estimation::model::observations::Observations;
     use aeroid::estimation::model::state_space::StateSpaceModel;
     use aeroid::estimation::solver::extended_kalman::{self, Discretisation, Keep, Noise};
-    use aeroid::estimation::solver::kalman::Gaussian;
     use nalgebra::{DMatrix, DVector};
 
-    let (record, structure, view, x0) = attas_lateral_view();
-    let theta = view.parameters();
-    let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
-    let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
-    let (n, len) = (model.state_count(), model.len());
-    let mut prior = DMatrix::from_diagonal_element(n, n, 1e-5);
-    for i in x0.len()..n {
-        prior[(i, i)] = 1e-2;
-    }
-    let initial = Gaussian {
-        mean: model.state(x0.as_slice()),
-        covariance: prior,
-    };
-    let noise = Noise {
-        process: DMatrix::zeros(n, n),
-        measurement: DVector::from_element(structure.outputs.len(), 1e-5),
-    };
-    let observations = Observations::from_record(
-        &record,
-        &structure.outputs,
-        view.time(0),
-        view.time(1) - view.time(0),
-        len,
-    )
-    .unwrap();
-    let measured = observations.at.iter().filter(|a| !a.is_empty()).count();
-    let count = |keep: Keep| {
-        let initial = initial.clone();
-        let before = ALLOCATIONS.with(Cell::get);
-        let pass = extended_kalman::filter_with(
-            &model,
-            &[],
-            initial,
-            &noise,
-            &observations,
-            Discretisation::Exact,
-            keep,
-        )
-        .unwrap();
-        let after = ALLOCATIONS.with(Cell::get);
-        assert!(pass.negative_log_likelihood.is_finite());
-        after - before
-    };
-    // A first pass makes the model's own buffers (kept between calls).
-    count(Keep::UPDATES);
-    for keep in [
-        Keep::UPDATES,
-        Keep::SMOOTHER,
-        Keep::SEQUENTIAL_SMOOTHER,
-        Keep::ALL,
-    ] {
-        let allocations = count(keep);
-        println!("{keep:?}: {allocations} allocations over {len} points ({measured} measured)");
-        assert!(
-            allocations < 100,
-            "{allocations} allocations in a pass keeping {keep:?} over {len} points ({measured} measured)"
-        );
-    }
+    with_augmented_lateral(|model, initial, observations, (outputs, _)| {
+        let (n, len) = (model.state_count(), model.len());
+        let noise = Noise {
+            process: DMatrix::zeros(n, n),
+            measurement: DVector::from_element(outputs, 1e-5),
+        };
+        let measured = observations.at.iter().filter(|a| !a.is_empty()).count();
+        let count = |keep: Keep| {
+            let initial = initial.clone();
+            let before = ALLOCATIONS.with(Cell::get);
+            let pass = extended_kalman::filter_with(
+                model,
+                &[],
+                initial,
+                &noise,
+                observations,
+                Discretisation::Exact,
+                keep,
+            )
+            .unwrap();
+            let after = ALLOCATIONS.with(Cell::get);
+            assert!(pass.negative_log_likelihood.is_finite());
+            after - before
+        };
+        // A first pass makes the model's own buffers (kept between calls).
+        count(Keep::UPDATES);
+        for keep in [
+            Keep::UPDATES,
+            Keep::SMOOTHER,
+            Keep::SEQUENTIAL_SMOOTHER,
+            Keep::ALL,
+        ] {
+            let allocations = count(keep);
+            println!("{keep:?}: {allocations} allocations over {len} points ({measured} measured)");
+            assert!(
+                allocations < 100,
+                "{allocations} allocations in a pass keeping {keep:?} over {len} points ({measured} measured)"
+            );
+        }
+    });
 }
 
 /// The ATTAS lateral multistep recorded by flight-test-25hz, the
@@ -444,19 +423,79 @@ fn a_ukf_steps_sigma_point_evaluations_do_not_allocate() {
 /// process noise (the time update's Φ·G and its noise rows) and without.
 #[test]
 fn a_ukf_pass_allocates_nothing_per_grid_point() {
+    use aeroid::estimation::model::state_space::StateSpaceModel;
+    use aeroid::estimation::solver::extended_kalman::Noise;
+    use aeroid::estimation::solver::kalman::Unscented;
+    use aeroid::estimation::solver::unscented_kalman;
+    use nalgebra::{DMatrix, DVector};
+
+    with_augmented_lateral(|model, initial, observations, (outputs, kinematic)| {
+        let (n, len) = (model.state_count(), model.len());
+        let measured = observations.at.iter().filter(|a| !a.is_empty()).count();
+        let unscented = Unscented {
+            alpha: 0.5,
+            ..Unscented::default()
+        };
+        let count = |process: f64| {
+            let mut noise = Noise {
+                process: DMatrix::zeros(n, n),
+                measurement: DVector::from_element(outputs, 1e-5),
+            };
+            for i in 0..kinematic {
+                noise.process[(i, i)] = process;
+            }
+            let initial = initial.clone();
+            let before = ALLOCATIONS.with(Cell::get);
+            let pass =
+                unscented_kalman::filter(model, &[], initial, &noise, observations, &unscented)
+                    .unwrap();
+            let after = ALLOCATIONS.with(Cell::get);
+            assert!(pass.negative_log_likelihood.is_finite());
+            assert_eq!(pass.filtered.len(), len);
+            after - before
+        };
+        // A first pass makes the model's own buffers (kept between calls).
+        count(0.0);
+        for process in [0.0, 1e-6] {
+            let allocations = count(process);
+            println!(
+                "Q_c {process}: {allocations} allocations over {len} points ({measured} measured)"
+            );
+            assert!(
+                allocations < 100,
+                "{allocations} allocations in a UKF pass (Q_c {process}) over {len} points ({measured} measured)"
+            );
+        }
+    });
+}
+
+/// The augmented ATTAS lateral filter's set-up both pass tests share: the
+/// model (4 kinematic and 18 parameter states), its initial Gaussian
+/// (kinematic variance 10⁻⁵, parameters 10⁻²), the observations on its
+/// grid, and the numbers of outputs and of kinematic states, handed to
+/// `run`.
+fn with_augmented_lateral(
+    run: impl FnOnce(
+        &aeroid::estimation::model::augmented::Augmented<
+            '_,
+            aeroid::estimation::model::state_space::DrivenStateSpace,
+        >,
+        &aeroid::estimation::solver::kalman::Gaussian,
+        &aeroid::estimation::model::observations::Observations,
+        (usize, usize),
+    ),
+) {
     use aeroid::estimation::model::augmented::Augmented;
     use aeroid::estimation::model::observations::Observations;
     use aeroid::estimation::model::state_space::StateSpaceModel;
-    use aeroid::estimation::solver::extended_kalman::Noise;
-    use aeroid::estimation::solver::kalman::{Gaussian, Unscented};
-    use aeroid::estimation::solver::unscented_kalman;
-    use nalgebra::{DMatrix, DVector};
+    use aeroid::estimation::solver::kalman::Gaussian;
+    use nalgebra::DMatrix;
 
     let (record, structure, view, x0) = attas_lateral_view();
     let theta = view.parameters();
     let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();
     let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
-    let (n, len) = (model.state_count(), model.len());
+    let n = model.state_count();
     let mut prior = DMatrix::from_diagonal_element(n, n, 1e-5);
     for i in x0.len()..n {
         prior[(i, i)] = 1e-2;
@@ -470,42 +509,13 @@ fn a_ukf_pass_allocates_nothing_per_grid_point() {
         &structure.outputs,
         view.time(0),
         view.time(1) - view.time(0),
-        len,
+        model.len(),
     )
     .unwrap();
-    let measured = observations.at.iter().filter(|a| !a.is_empty()).count();
-    let unscented = Unscented {
-        alpha: 0.5,
-        ..Unscented::default()
-    };
-    let count = |process: f64| {
-        let mut noise = Noise {
-            process: DMatrix::zeros(n, n),
-            measurement: DVector::from_element(structure.outputs.len(), 1e-5),
-        };
-        for i in 0..x0.len() {
-            noise.process[(i, i)] = process;
-        }
-        let initial = initial.clone();
-        let before = ALLOCATIONS.with(Cell::get);
-        let pass =
-            unscented_kalman::filter(&model, &[], initial, &noise, &observations, &unscented)
-                .unwrap();
-        let after = ALLOCATIONS.with(Cell::get);
-        assert!(pass.negative_log_likelihood.is_finite());
-        assert_eq!(pass.filtered.len(), len);
-        after - before
-    };
-    // A first pass makes the model's own buffers (kept between calls).
-    count(0.0);
-    for process in [0.0, 1e-6] {
-        let allocations = count(process);
-        println!(
-            "Q_c {process}: {allocations} allocations over {len} points ({measured} measured)"
-        );
-        assert!(
-            allocations < 100,
-            "{allocations} allocations in a UKF pass (Q_c {process}) over {len} points ({measured} measured)"
-        );
-    }
+    run(
+        &model,
+        &initial,
+        &observations,
+        (structure.outputs.len(), x0.len()),
+    );
 }
