@@ -962,7 +962,7 @@ fn filter_error_converges_with_the_gain_constraint_active() {
                 &theta,
                 &initial,
                 &f,
-                &result.innovation_covariance().unwrap(),
+                &result.innovation_covariance(),
                 &observations,
             )
             .ok()

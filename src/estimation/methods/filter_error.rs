@@ -543,11 +543,6 @@ impl InnovationCovariance {
         self.matrix.diagonal()
     }
 
-    /// Whether R is full (its off-diagonal entries estimated).
-    pub fn is_full(&self) -> bool {
-        self.whitening.is_some()
-    }
-
     /// Rows in the observations' order (one per measurement) whitened in
     /// place: each grid point's block by L⁻¹ where R is full and the point
     /// measures every output, else each row by 1/√R_oo. ½ of the squared
@@ -910,7 +905,7 @@ fn lower_root(covariance: &DMatrix<f64>) -> Result<(DMatrix<f64>, f64)> {
 }
 
 /// R's diagonal and, where it is full, the whole R.
-type Relaxed = (DVector<f64>, Option<DMatrix<f64>>);
+type Relaxed = (DVector<f64>, Option<InnovationCovariance>);
 
 fn at_time(error: Error, t: f64) -> Error {
     Error::Other(format!("at t = {t} s: {error}"))
@@ -936,7 +931,7 @@ pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
     variances: DVector<f64>,
     /// The full R (steady gain, one time base: [`InnovationCovariance`]),
     /// its diagonal `variances`; None where R is diagonal.
-    full: Option<DMatrix<f64>>,
+    full: Option<InnovationCovariance>,
     /// Whether every grid point with a measurement measures every output.
     one_time_base: bool,
     /// Whether R is to be full where it can ([`InnovationForm::Full`]).
@@ -982,7 +977,7 @@ type KeptPass = (
     DVector<f64>,
     DVector<f64>,
     DVector<f64>,
-    Option<DMatrix<f64>>,
+    Option<InnovationCovariance>,
     FilterPass,
 );
 
@@ -1040,7 +1035,7 @@ pub struct FitResult {
     /// R's diagonal (steady gain; G·Gᵀ's, time-varying) at the solution.
     pub variances: DVector<f64>,
     /// The full R at the solution, where it is full ([`InnovationCovariance`]).
-    pub full: Option<DMatrix<f64>>,
+    pub full: Option<InnovationCovariance>,
     /// The pass at the solution (None when it cannot be evaluated).
     pub pass: Option<FilterPass>,
     /// The start factor of F_ref chosen (module documentation).
@@ -1052,11 +1047,10 @@ pub struct FitResult {
 
 impl FitResult {
     /// The steady filter's R at the solution (full or diagonal).
-    pub fn innovation_covariance(&self) -> Result<InnovationCovariance> {
-        match &self.full {
-            Some(full) => InnovationCovariance::full(full.clone()),
-            None => Ok(InnovationCovariance::diagonal(&self.variances)),
-        }
+    pub fn innovation_covariance(&self) -> InnovationCovariance {
+        self.full
+            .clone()
+            .unwrap_or_else(|| InnovationCovariance::diagonal(&self.variances))
     }
 }
 
@@ -1255,7 +1249,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
                 theta.as_slice(),
                 &self.initial,
                 distribution,
-                &self.innovation_covariance(noise)?,
+                &self.innovation_covariance(noise),
                 self.observations,
             )
             .map(FilterPass::Steady),
@@ -1276,11 +1270,10 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
 
     /// The steady filter's R: the full R where it is kept (its diagonal
     /// `variances`), else diag(`variances`).
-    fn innovation_covariance(&self, variances: &DVector<f64>) -> Result<InnovationCovariance> {
-        match &self.full {
-            Some(full) => InnovationCovariance::full(full.clone()),
-            None => Ok(InnovationCovariance::diagonal(variances)),
-        }
+    fn innovation_covariance(&self, variances: &DVector<f64>) -> InnovationCovariance {
+        self.full
+            .clone()
+            .unwrap_or_else(|| InnovationCovariance::diagonal(variances))
     }
 
     /// The steady filter's R from a pass's innovations: the diagonal
@@ -1317,8 +1310,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         }
         let mut full = sum / count.max(1) as f64;
         full.set_diagonal(&variances);
-        let full = InnovationCovariance::full(full.clone()).ok().map(|_| full);
-        (variances, full)
+        (variances, InnovationCovariance::full(full).ok())
     }
 
     /// The diagonal R of a pass's innovations: each output's mean square,
@@ -1555,9 +1547,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// grid points measured): the likelihood with R estimated, up to a
     /// constant.
     fn determinant_cost(&self) -> f64 {
-        if let Some(Ok(full)) = self.full.clone().map(InnovationCovariance::full)
-            && let Some((_, log_det)) = full.whitening
-        {
+        if let Some((_, log_det)) = self.full.as_ref().and_then(|full| full.whitening.as_ref()) {
             let points = self
                 .observations
                 .at
@@ -1697,7 +1687,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         let (theta, distribution) = self.split(unknowns);
         let start = self.model.time(0);
         let (interval, here) = self.first_point(&theta)?;
-        let innovation = self.innovation_covariance(&self.variances)?;
+        let innovation = self.innovation_covariance(&self.variances);
         let gain_at = |moved: &DVector<f64>, j: usize| -> Result<DMatrix<f64>> {
             let (theta, distribution) = self.split(moved);
             let moved_jacobians;
@@ -1772,7 +1762,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     fn gain_products(&self, unknowns: &DVector<f64>) -> Result<DVector<f64>> {
         let (theta, distribution) = self.split(unknowns);
         let (interval, jacobians) = self.first_point(&theta)?;
-        let innovation = self.innovation_covariance(&self.variances)?;
+        let innovation = self.innovation_covariance(&self.variances);
         let (steady, _) = steady_gain(&jacobians, &distribution, &innovation, interval)?;
         Ok((steady.gain * &jacobians.outputs_by_state).diagonal())
     }
@@ -1941,9 +1931,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
                     .map_err(|e| e.to_string());
             }
         };
-        let innovation = self
-            .innovation_covariance(&self.variances)
-            .map_err(|e| e.to_string())?;
+        let innovation = self.innovation_covariance(&self.variances);
         let mut residuals =
             DMatrix::from_column_slice(pass.innovations.len(), 1, &pass.innovations);
         innovation.whiten(self.observations, &mut residuals);
@@ -2585,7 +2573,7 @@ fn assemble<M: StateSpaceModel + ?Sized>(
     for (name, r) in outputs.iter().zip(result.variances.iter()) {
         details.push_str(&format!("  {name}: {r:.6e}\n"));
     }
-    if let Some(full) = &result.full {
+    if let Some(full) = result.full.as_ref().map(InnovationCovariance::matrix) {
         for a in 0..full.nrows() {
             for b in 0..a {
                 let correlation = full[(a, b)] / (full[(a, a)] * full[(b, b)]).sqrt();
@@ -2629,7 +2617,7 @@ fn assemble<M: StateSpaceModel + ?Sized>(
         ));
     }
     let determinant = match &result.full {
-        Some(full) => full.determinant(),
+        Some(full) => full.matrix().determinant(),
         None => result.variances.iter().product::<f64>(),
     };
     notes.push(match (fit.gain, &result.full) {
