@@ -666,9 +666,10 @@ fn filter_error_on_a_gusty_linear_flight() {
 /// estimator with honest bounds, and 95 % of the 120 estimates should lie
 /// inside their 95 % interval (binomial: 114 ± 2.4).
 ///
-/// Measured: means −0.39σ to +0.25σ, 106 of 120 inside (over 60 seeds:
-/// −0.05σ… +0.33σ, 324 of 360). Unbiased, but the bounds of the two
-/// parameters of A's α column are optimistic: the RMS of error/σ over 40
+/// Measured with the full R (the default): means −0.37σ to +0.24σ, 109 of
+/// 120 inside; with a diagonal R −0.39σ to +0.25σ, 106 of 120 (over 60
+/// seeds: −0.05σ… +0.33σ, 324 of 360). Unbiased, but with the diagonal R
+/// the bounds of the two parameters of A's α column are optimistic: the RMS of error/σ over 40
 /// seeds is 1.72 for A_alpha_alpha and A_q_alpha (0.94–1.05 for the
 /// others), 1.39 on 300-s flights, and F comes out at 1.70–1.81 ± 0.18
 /// against the gust's 2·√λ·σ_w = 2.11. The steady-state filter starts the

@@ -46,19 +46,22 @@
 //! innovations at the current (θ, F), R = (1/N)·Σ ν·νᵀ (Jategaonkar
 //! Eq. 5.37), then one Gauss–Newton step on ½·Σ νᵀR⁻¹ν with R fixed is
 //! taken on θ and F together, by the shared core ([`gauss_newton`]), on
-//! the innovations whitened by R ([`InnovationCovariance`]). R is
-//! diagonal by default (one variance per output, as output error's);
-//! with `innovation_covariance = "full"` it is the whole (1/N)·Σ ν·νᵀ
-//! where every grid point with a measurement measures every output. The
-//! innovations of outputs that share a state's prediction error are
-//! correlated (β and n_y through β, −0.85 on the ATTAS lateral flight in
-//! turbulence), and the diagonal R weighs that error twice: its bounds
-//! on the side-force derivatives are about twice their scatter, the full
-//! R's honest (docs/findings.md, "The full innovation covariance"). On a
-//! multi-rate record, each output correcting at its own instants, and
-//! without process noise (output error), R stays diagonal. The full R
-//! starts from the first filter's innovations (R's start from the
-//! simulation without the filter is diagonal). After each R update F
+//! the innovations whitened by R ([`InnovationCovariance`]). With process
+//! noise and the steady gain, R is by default the whole (1/N)·Σ ν·νᵀ where
+//! every grid point with a measurement measures every output
+//! (`innovation_covariance = "diagonal"`: one variance per output, as
+//! output error's). The innovations of outputs that share a state's
+//! prediction error are correlated (β and n_y through β, −0.85 on the
+//! ATTAS lateral flight in turbulence), and a diagonal R weighs that error
+//! twice: its bounds on the side-force derivatives are about twice their
+//! scatter, the full R's honest (docs/findings.md, "The full innovation
+//! covariance"). The full R is fitted in two stages
+//! ([`FilterErrorFit::fit`]): with a diagonal R to convergence, then with
+//! the full R from that estimate; where either stage does not converge
+//! the diagonal R's estimate is the result, with a note. On a multi-rate
+//! record, each output correcting at its own instants, and without
+//! process noise (output error), R stays diagonal. R's start, from the
+//! simulation without the filter, is diagonal. After each R update F
 //! is compensated by the heuristic of Jategaonkar Eq. 5.41 as FVSysID's
 //! `fcompn` codes it, on R's diagonal: F_ii ← F_ii·Σ_j C_ji²·R_jj,old⁻¹·√(R_jj,new/R_jj,old)
 //! / Σ_j C_ji²·R_jj,old⁻¹, so that the gain, which depends on both, does
@@ -261,19 +264,20 @@ pub struct FilterErrorOptions {
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub initial_variance: BTreeMap<String, f64>,
     /// The steady gain's innovation covariance R: diagonal, or full where
-    /// every output shares one time base ([`InnovationCovariance`]).
-    pub innovation_covariance: InnovationForm,
+    /// every output shares one time base ([`InnovationCovariance`]); not
+    /// set: full with the steady gain ([`FilterErrorOptions::innovation_form`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub innovation_covariance: Option<InnovationForm>,
     /// Fit only this time window (s) of the record; default the whole record.
     #[serde(skip)]
     pub window: Option<(f64, f64)>,
 }
 
 /// The steady gain's innovation covariance R (`innovation_covariance`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum InnovationForm {
     /// One variance per output.
-    #[default]
     Diagonal,
     /// R = (1/N)·Σ ν·νᵀ whole, where every grid point with a measurement
     /// measures every output (else diagonal, with a note).
@@ -304,7 +308,7 @@ impl Default for FilterErrorOptions {
             process_noise: None,
             gain: Gain::default(),
             initial_variance: BTreeMap::new(),
-            innovation_covariance: InnovationForm::default(),
+            innovation_covariance: None,
             window: None,
         }
     }
@@ -329,13 +333,22 @@ impl FilterErrorOptions {
         }
         check_initial_variance(METHOD, options.gain, &options.initial_variance)?;
         if options.gain == Gain::TimeVarying
-            && options.innovation_covariance == InnovationForm::Full
+            && options.innovation_covariance == Some(InnovationForm::Full)
         {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}] innovation_covariance = \"full\" needs gain = \"steady\": the time-varying filter's innovation covariance C·P̃·Cᵀ + G·Gᵀ is full already"
             )));
         }
         Ok(options)
+    }
+
+    /// The form of R: as set, else full with the steady gain (the
+    /// time-varying gain's innovation covariance is full already).
+    pub fn innovation_form(&self) -> InnovationForm {
+        self.innovation_covariance.unwrap_or(match self.gain {
+            Gain::Steady => InnovationForm::Full,
+            Gain::TimeVarying => InnovationForm::Diagonal,
+        })
     }
 
     /// The options a model file's `[methods.fem]` table sets.
@@ -400,7 +413,7 @@ impl Estimator for FilterError {
         MethodInfo {
             title: "filter error: maximum likelihood with a steady-state extended Kalman filter in the loop, for flights with turbulence",
             paper: "Maine & Iliff, \"Identification of dynamic systems\" (NASA RP-1138, 1985); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 5",
-            equations: "innovations ν = z − ỹ of x̃_k = step(x̂_{k−1}), x̂ = x̃ + K·ν, K = P·Cᵀ·R⁻¹ (Jategaonkar §5.5, Eq. 5.48), P from the discrete Riccati equation of the model linearised at the first point; cost ½·Σ(νᵀR⁻¹ν + ln det R), R = (1/N)·Σ ν·νᵀ (diagonal, or with innovation_covariance = \"full\" whole where the outputs share one time base), Gauss–Newton on θ and F with R fixed, F compensated after each R update (Eq. 5.41), diag(K·C) ≤ 1 (§5.3); Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ). gain = \"time_varying\": the EKF in the loop (Jategaonkar §7.2, Eqs. 7.11–7.19), P̃_k = Φ_k·P̂_{k−1}·Φ_kᵀ + Q_d, K_k = P̃_k·C_kᵀ·(C_k·P̃_k·C_kᵀ + G·Gᵀ)⁻¹, cost ½·Σ(νᵀS_k⁻¹ν + ln det S_k), θ, F and G by Fisher scoring",
+            equations: "innovations ν = z − ỹ of x̃_k = step(x̂_{k−1}), x̂ = x̃ + K·ν, K = P·Cᵀ·R⁻¹ (Jategaonkar §5.5, Eq. 5.48), P from the discrete Riccati equation of the model linearised at the first point; cost ½·Σ(νᵀR⁻¹ν + ln det R), R = (1/N)·Σ ν·νᵀ (whole where the outputs share one time base, fitted from the diagonal R's estimate; diagonal with innovation_covariance = \"diagonal\" or on a multi-rate record), Gauss–Newton on θ and F with R fixed, F compensated after each R update (Eq. 5.41), diag(K·C) ≤ 1 (§5.3); Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ). gain = \"time_varying\": the EKF in the loop (Jategaonkar §7.2, Eqs. 7.11–7.19), P̃_k = Φ_k·P̂_{k−1}·Φ_kᵀ + Q_d, K_k = P̃_k·C_kᵀ·(C_k·P̃_k·C_kᵀ + G·Gᵀ)⁻¹, cost ½·Σ(νᵀS_k⁻¹ν + ln det S_k), θ, F and G by Fisher scoring",
             needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
             settings: setting_infos(
                 &FilterErrorOptions::default(),
@@ -432,7 +445,7 @@ impl Estimator for FilterError {
                     ),
                     (
                         "innovation_covariance",
-                        "with gain = \"steady\": \"diagonal\" (one variance per output) or \"full\" (R = (1/N)·Σ ν·νᵀ whole where every output shares one time base: honest bounds where outputs share a state's prediction error, e.g. β and n_y)",
+                        "with gain = \"steady\": \"full\" (the default; R = (1/N)·Σ ν·νᵀ whole where every output shares one time base, fitted from the diagonal R's estimate: honest bounds where outputs share a state's prediction error, e.g. β and n_y) or \"diagonal\" (one variance per output)",
                     ),
                 ],
             ),
@@ -468,6 +481,7 @@ impl Estimator for FilterError {
                     window: options.window,
                     gain: options.gain,
                     initial_variance: options.initial_variance.clone(),
+                    innovation_covariance: options.innovation_form(),
                     process_noise: Some(
                         options
                             .process_noise
@@ -1043,6 +1057,9 @@ pub struct FitResult {
     /// Whether the last Gauss–Newton step was the one constrained by
     /// diag(K·C) ≤ 1: the constraint active at the solution.
     pub constrained: bool,
+    /// Why R is diagonal where a full R was asked for: the fit with the
+    /// full R did not converge, or was not tried ([`FilterErrorFit::fit`]).
+    pub full_refused: Option<String>,
 }
 
 impl FitResult {
@@ -1133,6 +1150,21 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// shares one time base ([`InnovationForm::Full`]; steady gain).
     pub fn with_full_innovation_covariance(mut self) -> Self {
         self.full_wanted = true;
+        self
+    }
+
+    /// The fit with R of the `form` asked for; where a full R is asked for
+    /// with process noise on a record whose outputs do not share one time
+    /// base, a note in `notes` says R is diagonal.
+    pub fn with_innovation_form(mut self, form: InnovationForm, notes: &mut Vec<String>) -> Self {
+        if form == InnovationForm::Full {
+            self = self.with_full_innovation_covariance();
+            if !self.one_time_base && self.gain == Gain::Steady && !self.noisy.is_empty() {
+                notes.push(
+                    "R is diagonal: the outputs are not all measured at the same instants, and a full R (innovation_covariance = \"full\") needs one time base".into(),
+                );
+            }
+        }
         self
     }
 
@@ -1865,8 +1897,114 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     }
 
     /// Fits from `theta` (every parameter) with the solver `options`
-    /// (bounds of the free parameters; those of F are set here).
-    pub fn fit(&mut self, theta: &DVector<f64>, mut options: Options) -> Result<FitResult> {
+    /// (bounds of the free parameters; those of F are set here). Where R
+    /// is to be full ([`FilterErrorFit::full_innovation_covariance`], with
+    /// the steady gain and process noise), in two stages: the fit with a
+    /// diagonal R, then, from its converged estimate, the fit with the
+    /// full R (its diagonal the same, so F needs no compensation); where
+    /// the second stage does not converge, the first stage's estimate is
+    /// the result, with the reason ([`FitResult::full_refused`]).
+    pub fn fit(&mut self, theta: &DVector<f64>, options: Options) -> Result<FitResult> {
+        if !(self.full_innovation_covariance()
+            && self.gain == Gain::Steady
+            && !self.noisy.is_empty()
+            && self.model.output_count() > 1)
+        {
+            return self.fit_once(theta, options);
+        }
+        self.full_wanted = false;
+        let diagonal = self.fit_once(theta, options.clone());
+        self.full_wanted = true;
+        let mut diagonal = diagonal?;
+        if !diagonal.solution.status.is_success() {
+            diagonal.full_refused = Some(format!(
+                "not tried: the fit with a diagonal R, its first stage, did not converge ({})",
+                diagonal.solution.status
+            ));
+            return Ok(diagonal);
+        }
+        let options = self.prepared(&diagonal.start, options);
+        let full = self
+            .pass(&diagonal.solution.theta)
+            .map(|pass| self.relaxed(&pass).1);
+        let refused = match full {
+            Ok(Some(full)) => 'full: {
+                self.full = Some(full);
+                self.previous = None;
+                self.constrained = false;
+                // With the full R the filter at the diagonal R's F need not
+                // exist (R − C·P·Cᵀ no longer positive definite): F is
+                // halved until it does, as after an R update.
+                let Some(start) = self.feasible(diagonal.solution.theta.clone()) else {
+                    break 'full "no F gives a steady-state filter with the full R at the diagonal R's estimate".to_string();
+                };
+                let solution = gauss_newton::solve(self, &start, &options);
+                if solution.status.is_success() {
+                    let mut history = diagonal.solution.history.clone();
+                    history.extend(solution.history.iter().cloned());
+                    let pass = self.pass(&solution.theta).ok();
+                    return Ok(FitResult {
+                        constrained: self.constrained,
+                        variances: self.noise_of(&solution.theta),
+                        full: self.full.clone(),
+                        solution: gauss_newton::Solution {
+                            history,
+                            ..solution
+                        },
+                        pass,
+                        full_refused: None,
+                        ..diagonal
+                    });
+                }
+                format!(
+                    "the fit with the full R from the diagonal R's estimate did not converge ({})",
+                    solution.status
+                )
+            }
+            Ok(None) => {
+                "the innovations' covariance at the diagonal R's estimate is not positive definite"
+                    .into()
+            }
+            Err(error) => format!("no filter pass at the diagonal R's estimate ({error})"),
+        };
+        self.full = None;
+        self.variances = diagonal.variances.clone();
+        *self.last_pass.borrow_mut() = None;
+        diagonal.full_refused = Some(refused);
+        Ok(diagonal)
+    }
+
+    /// `unknowns` with F halved until a filter exists with the current R
+    /// (at most 40 times); None when none does.
+    fn feasible(&self, mut unknowns: DVector<f64>) -> Option<DVector<f64>> {
+        for _ in 0..40 {
+            if self.pass(&unknowns).is_ok() {
+                return Some(unknowns);
+            }
+            for j in self.free.len()..unknowns.len() {
+                unknowns[j] *= 0.5;
+            }
+        }
+        None
+    }
+
+    /// The solver options with F's (and G's) typical values and bounds
+    /// set from the `start` unknowns.
+    fn prepared(&self, start: &DVector<f64>, mut options: Options) -> Options {
+        let aero = self.free.len();
+        options.typical.resize(self.unknown_count(), 1e-3);
+        options
+            .bounds
+            .resize(self.unknown_count(), (f64::NEG_INFINITY, f64::INFINITY));
+        for j in aero..self.unknown_count() {
+            options.typical[j] = (0.1 * start[j]).max(f64::MIN_POSITIVE);
+        }
+        options
+    }
+
+    /// One fit from `theta` with R as `full_wanted` says (module
+    /// documentation).
+    fn fit_once(&mut self, theta: &DVector<f64>, options: Options) -> Result<FitResult> {
         let (start, start_factor) = self.start(theta)?;
         let aero = self.free.len();
         self.scale = start
@@ -1877,13 +2015,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         // F enters only through F·Fᵀ: its sign means nothing, so it is not
         // bounded (a bound at zero would project steps, which need not
         // then descend); its magnitude is reported.
-        options.typical.resize(self.unknown_count(), 1e-3);
-        options
-            .bounds
-            .resize(self.unknown_count(), (f64::NEG_INFINITY, f64::INFINITY));
-        for j in aero..self.unknown_count() {
-            options.typical[j] = (0.1 * start[j]).max(f64::MIN_POSITIVE);
-        }
+        let mut options = self.prepared(&start, options);
         let mut start = start;
         if self.gain == Gain::TimeVarying {
             // The joint fit of θ, F and G (module documentation).
@@ -1910,6 +2042,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             start,
             pass,
             start_factor,
+            full_refused: None,
         })
     }
 }
@@ -2048,13 +2181,8 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
                 compensated[self.free.len() + j] *= weighted / plain;
             }
         }
-        for _ in 0..40 {
-            if self.pass(&compensated).is_ok() {
-                return Some(compensated);
-            }
-            for j in self.free.len()..compensated.len() {
-                compensated[j] *= 0.5;
-            }
+        if let Some(feasible) = self.feasible(compensated) {
+            return Some(feasible);
         }
         self.variances = old;
         self.full = old_full;
@@ -2266,14 +2394,7 @@ pub fn filter_error_from(
             initial_covariance(METHOD, &view.state_names(), &options.initial_variance)?;
         fit = fit.with_time_varying_gain(covariance)?;
     }
-    if options.innovation_covariance == InnovationForm::Full {
-        fit = fit.with_full_innovation_covariance();
-        if !fit.full_innovation_covariance() {
-            notes.push(
-                "innovation_covariance = \"full\": the outputs are not all measured at the same instants, so R is diagonal".into(),
-            );
-        }
-    }
+    let mut fit = fit.with_innovation_form(options.innovation_form(), &mut notes);
     let solver = Options::maximum_likelihood(
         &free,
         &structure.bounds,
@@ -2324,6 +2445,8 @@ pub(crate) struct LinearFitOptions {
     pub gain: Gain,
     /// P0's diagonal by state name (time-varying gain).
     pub initial_variance: BTreeMap<String, f64>,
+    /// The steady gain's R (with process noise).
+    pub innovation_covariance: InnovationForm,
 }
 
 /// Output error (no process noise) or filter error on a linear structure:
@@ -2395,6 +2518,7 @@ pub(crate) fn linear_fit(
         let covariance = initial_covariance(method, &names, &options.initial_variance)?;
         fit = fit.with_time_varying_gain(covariance)?;
     }
+    let mut fit = fit.with_innovation_form(options.innovation_covariance, &mut notes);
     let mut solver = Options::maximum_likelihood(
         &free,
         &structure.bounds,
@@ -2615,6 +2739,11 @@ fn assemble<M: StateSpaceModel + ?Sized>(
         notes.push(format!(
             "the constraint diag(K·C) ≤ 1 (Jategaonkar §5.3) is active at the solution: the last Gauss–Newton step was the quadratic program constrained by it; largest entry after the last R update and F compensation {largest}"
         ));
+    }
+    if let Some(reason) = &result.full_refused {
+        notes.push(format!("R is diagonal, not full: {reason}"));
+    } else if result.full.is_some() {
+        notes.push("R full, fitted from the estimate with a diagonal R".into());
     }
     let determinant = match &result.full {
         Some(full) => full.matrix().determinant(),

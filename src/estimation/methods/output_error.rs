@@ -682,6 +682,7 @@ fn linear_output_error(
             process_noise: None,
             gain: filter_error::Gain::Steady,
             initial_variance: Default::default(),
+            innovation_covariance: filter_error::InnovationForm::Diagonal,
         },
     )
 }
