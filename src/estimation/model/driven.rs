@@ -1336,6 +1336,7 @@ impl PointMemo {
 /// [`evaluate`] with the outputs written into `values` (as long as
 /// `outputs`), the angles, kinematics and forcing from `memo`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(super) fn evaluate_into(
     model: &FlightModel,
     x: &FlightPathState,
