@@ -1133,7 +1133,10 @@ mod tests {
         assert!(cholupdate(&mut l, x.as_mut_slice(), -1.0).is_err());
     }
 
-    /// S·Sᵀ from the columns' outer products is the product, symmetric.
+    /// S·Sᵀ is the product, symmetric; for a factor of the augmented
+    /// filters' size (22, blocks of 4 rows and a tail) with a zero below
+    /// the diagonal each element is Σ_k S_ik·S_jk summed from zero in order
+    /// of k, bit for bit.
     #[test]
     fn covariance_is_the_factors_product() {
         let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
@@ -1142,6 +1145,77 @@ mod tests {
         let expected = &l * l.transpose();
         assert!((&p - &expected).norm() < 1e-15 * expected.norm());
         assert_eq!(p, p.transpose());
+        let l = lower_factor(22);
+        covariance_into(&l, &mut p);
+        for j in 0..22 {
+            for i in j..22 {
+                let mut sum = 0.0;
+                for k in 0..=j {
+                    if l[(j, k)] != 0.0 {
+                        sum += l[(j, k)] * l[(i, k)];
+                    }
+                }
+                assert_eq!(p[(i, j)].to_bits(), sum.to_bits(), "({i}, {j})");
+                assert_eq!(p[(j, i)].to_bits(), sum.to_bits(), "({j}, {i})");
+            }
+        }
+    }
+
+    /// A lower-triangular n × n factor with a positive diagonal and one zero
+    /// below it.
+    fn lower_factor(n: usize) -> DMatrix<f64> {
+        let mut l = DMatrix::from_fn(n, n, |i, j| {
+            if i < j {
+                0.0
+            } else if i == j {
+                1.0 + 0.05 * i as f64
+            } else {
+                ((i * n + j) as f64 * 0.37).sin() * 0.3
+            }
+        });
+        l[(n - 1, 1)] = 0.0;
+        l
+    }
+
+    /// The kernels compiled for AVX2 where the CPU has it
+    /// ([`crate::simd::wide`]) give the build's own instruction set's
+    /// numbers bit for bit, at the augmented filters' sizes (22 states, the
+    /// time update's compound matrix of 26 rows, 5 outputs): S·Sᵀ, the
+    /// Householder triangularisation, the rank-one update and downdate,
+    /// L·B and the right triangular solve.
+    #[test]
+    fn wide_kernels_match_the_baseline() {
+        let n = 22;
+        let l = lower_factor(n);
+        let compound = DMatrix::from_fn(26, n, |i, j| ((i * 31 + j * 7) as f64 * 0.11).cos());
+        let b = DMatrix::from_fn(n, 5, |i, j| ((i + 3 * j) as f64 * 0.29).sin());
+        let x = DVector::from_fn(n, |i, _| 0.1 * ((i as f64) * 0.7).sin());
+        let run = || {
+            let mut p = DMatrix::zeros(0, 0);
+            covariance_into(&l, &mut p);
+            let mut a = compound.clone();
+            let mut factor = DMatrix::zeros(n, n);
+            triangularise(&mut a, 26, n, &mut factor);
+            let mut updated = l.clone();
+            let mut v = x.clone();
+            cholupdate(&mut updated, v.as_mut_slice(), 1.0).unwrap();
+            let mut v = x.clone();
+            cholupdate(&mut updated, v.as_mut_slice(), -1.0).unwrap();
+            let mut product = DMatrix::zeros(0, 0);
+            multiply_lower(&l, &b, &mut product);
+            let mut solved = b.transpose();
+            assert!(solve_right_lower(&l, &mut solved));
+            [p, factor, updated, product, solved]
+        };
+        let wide = run();
+        let baseline = crate::simd::baseline(run);
+        for (w, b) in wide.iter().zip(&baseline) {
+            assert!(
+                w.iter()
+                    .zip(b.iter())
+                    .all(|(w, b)| w.to_bits() == b.to_bits())
+            );
+        }
     }
 
     /// L·B over L's lower triangle is the dense product bit for bit.
