@@ -58,7 +58,6 @@ impl Interpolation {
 
 /// One RK4 step of length `step` from `x`. `derivative(x, θ)` returns ẋ at the
 /// stage whose time is t_k + θ·step (θ = 0, ½, ½, 1).
-#[inline(always)]
 pub fn rk4_step<const N: usize>(
     x: &SVector<f64, N>,
     step: f64,
