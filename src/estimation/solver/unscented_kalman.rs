@@ -80,7 +80,9 @@
 //! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
 //! share once; the QR is a Householder triangularisation in place
 //! (`triangularise`), the products and triangular solves are written
-//! for the shapes at hand (S lower triangular, a few rows).
+//! for the shapes at hand (S lower triangular, a few rows), and these
+//! kernels and the rank-one updates are compiled for AVX2 where the CPU
+//! has it (`simd::wide`: the same numbers bit for bit).
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
