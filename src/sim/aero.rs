@@ -1183,6 +1183,7 @@ impl AeroModel {
     }
 
     /// Normalising speed for rates: the airspeed or V0, times 2 or 1.
+    #[inline(always)]
     fn rate_divisor<T: Real>(&self, airspeed: T) -> T {
         let speed = match self.rate_speed {
             RateSpeed::Airspeed => airspeed,
@@ -1196,6 +1197,7 @@ impl AeroModel {
 
     /// The value of every regressor (indexed by `Regressor as usize`) at a
     /// flight condition; `CL2` is left 0 (it needs the lift coefficient).
+    #[inline(always)]
     pub fn regressors<T: Real>(&self, input: &AeroInput<T>, chi: T) -> [T; REGRESSOR_COUNT] {
         let per_speed = T::constant(1.0) / self.rate_divisor(input.airspeed);
         let (b, c) = (self.geometry.span, self.geometry.chord);
@@ -1220,6 +1222,7 @@ impl AeroModel {
         ]
     }
 
+    #[inline(always)]
     fn sum<T: Real>(&self, coefficient: Coefficient, regressors: &[T; REGRESSOR_COUNT]) -> T {
         self.sum_scaled(coefficient, regressors, T::constant(1.0))
     }
@@ -1249,6 +1252,7 @@ impl AeroModel {
 
     /// The factor on the lift-type `alpha` term: the Kirchhoff
     /// ((1 + √χ)/2)² of the stall model, 1 for a linear one.
+    #[inline(always)]
     fn kirchhoff<T: Real>(&self, chi: T) -> T {
         match self.kind {
             ModelKind::Stall => {
@@ -1263,6 +1267,7 @@ impl AeroModel {
     /// (`CL2` = CL² included) and the lift-type coefficient, at a flight
     /// condition; the lift-type `alpha` regressor is the `alpha` one times
     /// the Kirchhoff factor (also returned).
+    #[inline(always)]
     fn regressors_and_lift<T: Real>(&self, input: &AeroInput<T>) -> ([T; REGRESSOR_COUNT], T, T) {
         let chi = self.effective_chi(input);
         let mut other = self.regressors(input, chi);
@@ -1410,6 +1415,7 @@ impl AeroModel {
     }
 
     /// As [`AeroModel::coefficients`], with sin α and cos α of `input.alpha` given.
+    #[inline(always)]
     pub fn coefficients_at<T: Real>(
         &self,
         input: &AeroInput<T>,

@@ -1306,36 +1306,38 @@ impl PointMemo {
         x: &FlightPathState,
         controls: &Controls,
         ambient: Ambient,
-    ) -> (Angles, Kinematics, Forcing) {
+    ) -> (&Angles, &Kinematics, &Forcing) {
         let atmosphere = &model.environment.atmosphere;
-        if let Some(last) = &self.last
-            && last.x == *x
+        let kept = matches!(&self.last, Some(last) if last.x == *x
             && last.controls == *controls
             && last.ambient == ambient
-            && last.atmosphere == *atmosphere
-        {
-            return (last.angles, last.kinematics, last.forcing);
+            && last.atmosphere == *atmosphere);
+        if !kept {
+            self.last = None;
         }
-        let angles = Angles::of(x);
-        let air = ambient.surroundings(atmosphere, x[ALTITUDE]);
-        let kinematics = kinematics(x, &angles, &air);
-        let forcing = model.forcing(&kinematics, controls);
-        self.last = Some(PointKey {
-            x: *x,
-            controls: *controls,
-            ambient,
-            atmosphere: *atmosphere,
-            angles,
-            kinematics,
-            forcing,
+        let last = self.last.get_or_insert_with(|| {
+            let angles = Angles::of(x);
+            let air = ambient.surroundings(atmosphere, x[ALTITUDE]);
+            let kinematics = kinematics(x, &angles, &air);
+            let forcing = model.forcing(&kinematics, controls);
+            PointKey {
+                x: *x,
+                controls: *controls,
+                ambient,
+                atmosphere: *atmosphere,
+                angles,
+                kinematics,
+                forcing,
+            }
         });
-        (angles, kinematics, forcing)
+        (&last.angles, &last.kinematics, &last.forcing)
     }
 }
 
 /// [`evaluate`] with the outputs written into `values` (as long as
 /// `outputs`), the angles, kinematics and forcing from `memo`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(super) fn evaluate_into(
     model: &FlightModel,
     x: &FlightPathState,
@@ -1347,7 +1349,7 @@ pub(super) fn evaluate_into(
     memo: &mut PointMemo,
 ) -> FlightPathState {
     let (angles, kinematics, forcing) = memo.of(model, x, controls, ambient);
-    let (rates, evaluation) = derivative_at(model, x, &angles, &kinematics, &forcing, pseudo);
+    let (rates, evaluation) = derivative_at(model, x, angles, kinematics, forcing, pseudo);
     for (value, output) in values.iter_mut().zip(outputs) {
         *value = output.value(x, &evaluation);
     }
@@ -2217,20 +2219,18 @@ impl PlainSteps<'_> {
     /// were made for (its atmosphere, the states it integrates).
     pub(super) fn step(&mut self, model: &FlightModel, x: &FlightPathState) -> FlightPathState {
         let (controls, pseudo) = &self.start;
-        let (mut memo, angles, kinematics, forcing) = match self.first {
-            Some((last, memo, angles, kinematics, forcing)) if last == *x => {
-                (memo, angles, kinematics, forcing)
-            }
+        let (_, memo, angles, kinematics, forcing) = match &self.first {
+            Some(first) if first.0 == *x => first,
             _ => {
                 let mut memo = self.memo;
                 let (angles, air) = memo.of(x, &self.atmosphere);
                 let kinematics = kinematics(x, &angles, &air);
                 let forcing = model.forcing(&kinematics, controls);
-                self.first = Some((*x, memo, angles, kinematics, forcing));
-                (memo, angles, kinematics, forcing)
+                &*self.first.insert((*x, memo, angles, kinematics, forcing))
             }
         };
-        let (first, _) = derivative_at(model, x, &angles, &kinematics, &forcing, *pseudo);
+        let mut memo = *memo;
+        let (first, _) = derivative_at(model, x, angles, kinematics, forcing, *pseudo);
         let atmosphere = &self.atmosphere;
         self.simulation.step_from(
             &self.inputs,

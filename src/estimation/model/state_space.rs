@@ -830,6 +830,7 @@ impl DrivenStateSpace {
 
     /// The full flight-path state with x in its integrated entries and
     /// `measured` in the others.
+    #[inline(always)]
     fn full(&self, x: &[f64], measured: &FlightPathState) -> Result<FlightPathState> {
         if x.len() != self.states.len() {
             return Err(Error::Other(format!(

@@ -80,7 +80,9 @@
 //! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
 //! share once; the QR is a Householder triangularisation in place
 //! (`triangularise`), the products and triangular solves are written
-//! for the shapes at hand (S lower triangular, a few rows).
+//! for the shapes at hand (S lower triangular, a few rows), and these
+//! kernels and the rank-one updates are compiled for AVX2 where the CPU
+//! has it (`simd::wide`: the same numbers bit for bit).
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
@@ -646,55 +648,84 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     Ok(())
 }
 
-/// P = S·Sᵀ of a lower-triangular S into `p` as the sum of its columns'
-/// outer products, s_k·s_kᵀ touching rows and columns k… only, formed in
-/// the lower triangle (n³/6 multiply-adds on contiguous columns) and
-/// mirrored: exactly symmetric, each element of the upper triangle the
-/// same products (a·b = b·a) summed in the same order as its mirror.
+/// P = S·Sᵀ of a lower-triangular S into `p`, formed in its lower
+/// triangle and mirrored: column j of the lower triangle (rows j…) is
+/// Σ_{k ≤ j} S_jk·(rows j… of S's column k), summed in order of k from
+/// zero (the zero factors skipped) in registers, by blocks of 4 and 1 rows
+/// (n³/6 multiply-adds, compiled for AVX2 where the CPU has it:
+/// [`crate::simd::wide`]). Exactly symmetric, each element of the upper
+/// triangle its mirror's.
 fn covariance_into(factor: &DMatrix<f64>, p: &mut DMatrix<f64>) {
     let n = factor.nrows();
     resize(p, n, n);
-    p.fill(0.0);
     let s = factor.as_slice();
     let data = p.as_mut_slice();
-    for k in 0..n {
-        let column = &s[k * n..(k + 1) * n];
-        for j in k..n {
-            let f = column[j];
-            if f != 0.0 {
-                let target = &mut data[j * n + j..(j + 1) * n];
-                for (t, &v) in target.iter_mut().zip(&column[j..]) {
-                    *t += f * v;
+    crate::simd::wide(
+        #[inline(always)]
+        || {
+            for j in 0..n {
+                let mut start = j;
+                while start + 4 <= n {
+                    lower_block::<4>(s, n, j, start, data);
+                    start += 4;
                 }
+                while start < n {
+                    lower_block::<1>(s, n, j, start, data);
+                    start += 1;
+                }
+            }
+            for j in 0..n {
+                for i in j + 1..n {
+                    data[i * n + j] = data[j * n + i];
+                }
+            }
+        },
+    )
+}
+
+/// Rows `start`…`start` + B of column j of S·Sᵀ (S lower triangular, n × n,
+/// column-major) into `into` ([`covariance_into`]).
+#[inline(always)]
+fn lower_block<const B: usize>(s: &[f64], n: usize, j: usize, start: usize, into: &mut [f64]) {
+    let mut sum = [0.0; B];
+    for k in 0..=j {
+        let f = s[k * n + j];
+        if f != 0.0 {
+            let column: &[f64; B] = s[k * n + start..k * n + start + B]
+                .try_into()
+                .expect("a block of B rows");
+            for (sum, &value) in sum.iter_mut().zip(column) {
+                *sum += f * value;
             }
         }
     }
-    for j in 0..n {
-        for i in j + 1..n {
-            data[i * n + j] = data[j * n + i];
-        }
-    }
+    into[j * n + start..j * n + start + B].copy_from_slice(&sum);
 }
 
 /// `into` = L·B for L lower triangular (n × n), B n × m: column j the
 /// sum over k of B_kj·L_{·k} in order of k, each over L's rows k… only
 /// (the rows above add zeros: the same numbers as the dense product).
 fn multiply_lower(l: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
-    let n = l.nrows();
-    resize(into, n, b.ncols());
-    let l = l.as_slice();
-    for (column, b) in into
-        .as_mut_slice()
-        .chunks_exact_mut(n.max(1))
-        .zip(b.as_slice().chunks_exact(n.max(1)))
-    {
-        column.fill(0.0);
-        for (k, &factor) in b.iter().enumerate() {
-            for (into, &l) in column[k..].iter_mut().zip(&l[k * n + k..(k + 1) * n]) {
-                *into += factor * l;
+    crate::simd::wide(
+        #[inline(always)]
+        || {
+            let n = l.nrows();
+            resize(into, n, b.ncols());
+            let l = l.as_slice();
+            for (column, b) in into
+                .as_mut_slice()
+                .chunks_exact_mut(n.max(1))
+                .zip(b.as_slice().chunks_exact(n.max(1)))
+            {
+                column.fill(0.0);
+                for (k, &factor) in b.iter().enumerate() {
+                    for (into, &l) in column[k..].iter_mut().zip(&l[k * n + k..(k + 1) * n]) {
+                        *into += factor * l;
+                    }
+                }
             }
-        }
-    }
+        },
+    )
 }
 
 /// x = Σ Wᵐ_i·χ'_i of the columns of `moved`.
@@ -736,17 +767,20 @@ fn solve_right_lower(l: &DMatrix<f64>, b: &mut DMatrix<f64>) -> bool {
     let (l, n) = (l.as_slice(), l.nrows());
     let rows = b.nrows();
     let data = b.as_mut_slice();
-    match rows {
-        1 => solve_right_lower_rows::<1>(l, n, data),
-        2 => solve_right_lower_rows::<2>(l, n, data),
-        3 => solve_right_lower_rows::<3>(l, n, data),
-        4 => solve_right_lower_rows::<4>(l, n, data),
-        5 => solve_right_lower_rows::<5>(l, n, data),
-        6 => solve_right_lower_rows::<6>(l, n, data),
-        7 => solve_right_lower_rows::<7>(l, n, data),
-        8 => solve_right_lower_rows::<8>(l, n, data),
-        _ => solve_right_lower_any(l, n, rows, data),
-    }
+    crate::simd::wide(
+        #[inline(always)]
+        || match rows {
+            1 => solve_right_lower_rows::<1>(l, n, data),
+            2 => solve_right_lower_rows::<2>(l, n, data),
+            3 => solve_right_lower_rows::<3>(l, n, data),
+            4 => solve_right_lower_rows::<4>(l, n, data),
+            5 => solve_right_lower_rows::<5>(l, n, data),
+            6 => solve_right_lower_rows::<6>(l, n, data),
+            7 => solve_right_lower_rows::<7>(l, n, data),
+            8 => solve_right_lower_rows::<8>(l, n, data),
+            _ => solve_right_lower_any(l, n, rows, data),
+        },
+    )
 }
 
 /// [`solve_right_lower`] for B of any number of rows.
@@ -809,40 +843,46 @@ fn solve_right_lower_rows<const R: usize>(l: &[f64], n: usize, data: &mut [f64])
 /// sign chosen so that S's diagonal is non-negative. Column-major, each
 /// reflection works on contiguous column slices.
 fn triangularise(a: &mut DMatrix<f64>, rows: usize, cols: usize, factor: &mut DMatrix<f64>) {
-    let ld = a.nrows();
-    let data = a.as_mut_slice();
-    factor.fill(0.0);
-    for j in 0..cols.min(rows) {
-        let (left, right) = data.split_at_mut((j + 1) * ld);
-        let v = &mut left[j * ld + j..j * ld + rows];
-        let norm = dot(v, v).sqrt();
-        if norm == 0.0 {
-            continue;
-        }
-        let head = v[0];
-        let alpha = if head > 0.0 { -norm } else { norm };
-        // v = x − α·e₁ in place; vᵀv = 2α(α − x₀).
-        v[0] = head - alpha;
-        let scale = 1.0 / (alpha * (alpha - head));
-        for c in 0..cols - j - 1 {
-            let column = &mut right[c * ld + j..c * ld + rows];
-            let f = dot(v, column) * scale;
-            for (y, x) in column.iter_mut().zip(v.iter()) {
-                *y -= f * x;
+    crate::simd::wide(
+        #[inline(always)]
+        || {
+            let ld = a.nrows();
+            let data = a.as_mut_slice();
+            factor.fill(0.0);
+            for j in 0..cols.min(rows) {
+                let (left, right) = data.split_at_mut((j + 1) * ld);
+                let v = &mut left[j * ld + j..j * ld + rows];
+                let norm = dot(v, v).sqrt();
+                if norm == 0.0 {
+                    continue;
+                }
+                let head = v[0];
+                let alpha = if head > 0.0 { -norm } else { norm };
+                // v = x − α·e₁ in place; vᵀv = 2α(α − x₀).
+                v[0] = head - alpha;
+                let scale = 1.0 / (alpha * (alpha - head));
+                for c in 0..cols - j - 1 {
+                    let column = &mut right[c * ld + j..c * ld + rows];
+                    let f = dot(v, column) * scale;
+                    for (y, x) in column.iter_mut().zip(v.iter()) {
+                        *y -= f * x;
+                    }
+                }
+                v[0] = alpha;
             }
-        }
-        v[0] = alpha;
-    }
-    for j in 0..cols.min(rows) {
-        let sign = if data[j * ld + j] < 0.0 { -1.0 } else { 1.0 };
-        for c in j..cols {
-            factor[(c, j)] = sign * data[c * ld + j];
-        }
-    }
+            for j in 0..cols.min(rows) {
+                let sign = if data[j * ld + j] < 0.0 { -1.0 } else { 1.0 };
+                for c in j..cols {
+                    factor[(c, j)] = sign * data[c * ld + j];
+                }
+            }
+        },
+    )
 }
 
 /// a·b with four running sums (a sum the compiler can keep in vector
 /// registers, where one running sum fixes the order of the additions).
+#[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut sums = [0.0; 4];
     let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
@@ -878,41 +918,46 @@ fn zeroth_point(factor: &mut DMatrix<f64>, v: &mut [f64], w: f64) -> Result<(), 
 /// element would not be positive: the downdated matrix is not positive
 /// definite.
 fn cholupdate(l: &mut DMatrix<f64>, x: &mut [f64], sign: f64) -> Result<(), ()> {
-    let n = x.len();
-    for k in 0..n {
-        let xk = x[k];
-        if xk == 0.0 {
-            continue;
-        }
-        let column = &mut l.as_mut_slice()[k * n..(k + 1) * n];
-        let diagonal = column[k];
-        let (top, below) = column.split_at_mut(k + 1);
-        let rest = &mut x[k + 1..];
-        if sign > 0.0 {
-            let r = diagonal.hypot(xk);
-            let (c, s) = (diagonal / r, xk / r);
-            top[k] = r;
-            for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
-                let (l0, x0) = (*li, *xi);
-                *li = c * l0 + s * x0;
-                *xi = c * x0 - s * l0;
+    crate::simd::wide(
+        #[inline(always)]
+        || {
+            let n = x.len();
+            for k in 0..n {
+                let xk = x[k];
+                if xk == 0.0 {
+                    continue;
+                }
+                let column = &mut l.as_mut_slice()[k * n..(k + 1) * n];
+                let diagonal = column[k];
+                let (top, below) = column.split_at_mut(k + 1);
+                let rest = &mut x[k + 1..];
+                if sign > 0.0 {
+                    let r = diagonal.hypot(xk);
+                    let (c, s) = (diagonal / r, xk / r);
+                    top[k] = r;
+                    for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
+                        let (l0, x0) = (*li, *xi);
+                        *li = c * l0 + s * x0;
+                        *xi = c * x0 - s * l0;
+                    }
+                } else {
+                    let square = (diagonal - xk) * (diagonal + xk);
+                    if !(square > 0.0 && diagonal > 0.0) {
+                        return Err(());
+                    }
+                    let r = square.sqrt();
+                    let (c, s) = (r / diagonal, xk / diagonal);
+                    let inverse = diagonal / r;
+                    top[k] = r;
+                    for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
+                        *li = (*li - s * *xi) * inverse;
+                        *xi = c * *xi - s * *li;
+                    }
+                }
             }
-        } else {
-            let square = (diagonal - xk) * (diagonal + xk);
-            if !(square > 0.0 && diagonal > 0.0) {
-                return Err(());
-            }
-            let r = square.sqrt();
-            let (c, s) = (r / diagonal, xk / diagonal);
-            let inverse = diagonal / r;
-            top[k] = r;
-            for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
-                *li = (*li - s * *xi) * inverse;
-                *xi = c * *xi - s * *li;
-            }
-        }
-    }
-    Ok(())
+            Ok(())
+        },
+    )
 }
 
 /// G with G·Gᵀ = Q_c, without its zero columns: for a diagonal Q_c the
@@ -1090,7 +1135,10 @@ mod tests {
         assert!(cholupdate(&mut l, x.as_mut_slice(), -1.0).is_err());
     }
 
-    /// S·Sᵀ from the columns' outer products is the product, symmetric.
+    /// S·Sᵀ is the product, symmetric; for a factor of the augmented
+    /// filters' size (22, blocks of 4 rows and a tail) with a zero below
+    /// the diagonal each element is Σ_k S_ik·S_jk summed from zero in order
+    /// of k, bit for bit.
     #[test]
     fn covariance_is_the_factors_product() {
         let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
@@ -1099,6 +1147,77 @@ mod tests {
         let expected = &l * l.transpose();
         assert!((&p - &expected).norm() < 1e-15 * expected.norm());
         assert_eq!(p, p.transpose());
+        let l = lower_factor(22);
+        covariance_into(&l, &mut p);
+        for j in 0..22 {
+            for i in j..22 {
+                let mut sum = 0.0;
+                for k in 0..=j {
+                    if l[(j, k)] != 0.0 {
+                        sum += l[(j, k)] * l[(i, k)];
+                    }
+                }
+                assert_eq!(p[(i, j)].to_bits(), sum.to_bits(), "({i}, {j})");
+                assert_eq!(p[(j, i)].to_bits(), sum.to_bits(), "({j}, {i})");
+            }
+        }
+    }
+
+    /// A lower-triangular n × n factor with a positive diagonal and one zero
+    /// below it.
+    fn lower_factor(n: usize) -> DMatrix<f64> {
+        let mut l = DMatrix::from_fn(n, n, |i, j| {
+            if i < j {
+                0.0
+            } else if i == j {
+                1.0 + 0.05 * i as f64
+            } else {
+                ((i * n + j) as f64 * 0.37).sin() * 0.3
+            }
+        });
+        l[(n - 1, 1)] = 0.0;
+        l
+    }
+
+    /// The kernels compiled for AVX2 where the CPU has it
+    /// ([`crate::simd::wide`]) give the build's own instruction set's
+    /// numbers bit for bit, at the augmented filters' sizes (22 states, the
+    /// time update's compound matrix of 26 rows, 5 outputs): S·Sᵀ, the
+    /// Householder triangularisation, the rank-one update and downdate,
+    /// L·B and the right triangular solve.
+    #[test]
+    fn wide_kernels_match_the_baseline() {
+        let n = 22;
+        let l = lower_factor(n);
+        let compound = DMatrix::from_fn(26, n, |i, j| ((i * 31 + j * 7) as f64 * 0.11).cos());
+        let b = DMatrix::from_fn(n, 5, |i, j| ((i + 3 * j) as f64 * 0.29).sin());
+        let x = DVector::from_fn(n, |i, _| 0.1 * ((i as f64) * 0.7).sin());
+        let run = || {
+            let mut p = DMatrix::zeros(0, 0);
+            covariance_into(&l, &mut p);
+            let mut a = compound.clone();
+            let mut factor = DMatrix::zeros(n, n);
+            triangularise(&mut a, 26, n, &mut factor);
+            let mut updated = l.clone();
+            let mut v = x.clone();
+            cholupdate(&mut updated, v.as_mut_slice(), 1.0).unwrap();
+            let mut v = x.clone();
+            cholupdate(&mut updated, v.as_mut_slice(), -1.0).unwrap();
+            let mut product = DMatrix::zeros(0, 0);
+            multiply_lower(&l, &b, &mut product);
+            let mut solved = b.transpose();
+            assert!(solve_right_lower(&l, &mut solved));
+            [p, factor, updated, product, solved]
+        };
+        let wide = run();
+        let baseline = crate::simd::baseline(run);
+        for (w, b) in wide.iter().zip(&baseline) {
+            assert!(
+                w.iter()
+                    .zip(b.iter())
+                    .all(|(w, b)| w.to_bits() == b.to_bits())
+            );
+        }
     }
 
     /// L·B over L's lower triangle is the dense product bit for bit.
