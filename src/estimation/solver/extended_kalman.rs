@@ -44,7 +44,9 @@ use crate::estimation::solver::kalman::{
     self, Exponential, Gaussian, ProcessNoise, SequentialWorkspace, SparseRows, UpdateWorkspace,
     resize,
 };
-use crate::estimation::solver::kept::{Gaussians, Matrices, ScalarUpdates, Updates};
+use crate::estimation::solver::kept::{
+    Gaussians, Matrices, ScalarUpdates, SparseMatrices, Updates,
+};
 use nalgebra::{DMatrix, DVector};
 
 /// The filter's noise: continuous process-noise spectral density over the
@@ -77,6 +79,7 @@ impl Discretisation {
         let mut time_update = TimeUpdate::default();
         let has_noise = noise.iter().any(|&v| v != 0.0);
         time_update.discretise(self, a, has_noise.then_some(noise), h);
+        time_update.transition();
         let n = a.nrows();
         let process = if has_noise {
             time_update.process_noise
@@ -93,15 +96,96 @@ impl Discretisation {
 /// [`SparseRows`]).
 #[derive(Debug, Clone, Default)]
 struct TimeUpdate {
+    /// Φ (for the second-order form written from `sparse` only when read:
+    /// [`TimeUpdate::transition`]).
     transition: DMatrix<f64>,
+    /// Whether `transition` is Φ's values in `sparse`.
+    dense: bool,
     process_noise: DMatrix<f64>,
     sparse: SparseRows,
     sparse_scaled: SparseRows,
     sparse_rates: SparseRows,
-    scaled: DMatrix<f64>,
+    square: SquarePlan,
     exponential: Exponential,
     work: [DMatrix<f64>; 2],
     noise: ProcessNoise,
+}
+
+/// Where the second-order Φ = I + B + ½·B² (B = A·h) takes its values
+/// from, on the pattern of I + B + B² built from B's: per entry of Φ's
+/// pattern, row by row in increasing column, B_ij's position among B's
+/// entries (None: off B's pattern), whether i = j, and the end of its
+/// products in `products`: the pairs (B_ik, B_kj) of (B²)_ij in increasing
+/// k, by their positions, where both are on B's pattern. The values are
+/// those of B² summed over the dense B's k (a term off the pattern is
+/// 0·x) bit for bit.
+#[derive(Debug, Clone, Default)]
+struct SquarePlan {
+    /// The id of B's pattern it was built for ([`SparseRows::pattern`]).
+    pattern: u64,
+    entries: Vec<(Option<usize>, bool, usize)>,
+    products: Vec<(usize, usize)>,
+}
+
+impl SquarePlan {
+    /// Builds the plan and Φ's pattern (into `phi`) for B's pattern.
+    fn build(&mut self, b: &SparseRows, phi: &mut SparseRows) {
+        let n = b.rows();
+        let entries = b.entries();
+        let starts: Vec<usize> = (0..=n)
+            .map(|i| (0..i).map(|r| b.row(r).len()).sum::<usize>())
+            .collect();
+        let position = |i: usize, j: usize| {
+            b.row(i)
+                .iter()
+                .position(|&(c, _)| c == j)
+                .map(|p| starts[i] + p)
+        };
+        debug_assert_eq!(starts[n], entries.len());
+        let mut rows = Vec::with_capacity(n);
+        self.entries.clear();
+        self.products.clear();
+        for i in 0..n {
+            let mut columns = vec![i];
+            for &(k, _) in b.row(i) {
+                columns.push(k);
+                columns.extend(b.row(k).iter().map(|&(j, _)| j));
+            }
+            columns.sort_unstable();
+            columns.dedup();
+            for &j in &columns {
+                for &(k, _) in b.row(i) {
+                    if let Some(kj) = position(k, j) {
+                        let ik = position(i, k).expect("k on row i");
+                        self.products.push((ik, kj));
+                    }
+                }
+                self.entries
+                    .push((position(i, j), i == j, self.products.len()));
+            }
+            rows.push(columns);
+        }
+        phi.set_pattern(b.columns(), rows);
+        self.pattern = b.pattern();
+    }
+
+    /// Φ's values on its pattern (`phi`, built by [`SquarePlan::build`]).
+    fn values(&self, b: &SparseRows, phi: &mut SparseRows) {
+        let b = b.entries();
+        let mut start = 0;
+        for (entry, &(on_b, diagonal, end)) in phi.entries_mut().iter_mut().zip(&self.entries) {
+            let mut squared = 0.0;
+            for &(ik, kj) in &self.products[start..end] {
+                squared += b[ik].1 * b[kj].1;
+            }
+            start = end;
+            let mut value = squared * 0.5 + on_b.map_or(0.0, |p| b[p].1);
+            if diagonal {
+                value += 1.0;
+            }
+            entry.1 = value;
+        }
+    }
 }
 
 impl TimeUpdate {
@@ -121,34 +205,23 @@ impl TimeUpdate {
                 // Φ's rows past the last non-zero row of A are the
                 // identity's (an augmented model's constant parameters).
                 let leading = self.exponential.of_scaled(a, h, &mut self.transition);
+                self.dense = true;
                 if let Some(noise) = noise {
                     self.noise.of(a, noise, h, &mut self.process_noise);
                 }
                 self.sparse.set_leading(&self.transition, leading);
             }
             Discretisation::SecondOrder => {
-                // A·h by A's non-zeros; Φ = I + A·h + ½·(A·h)²,
-                // (A·h)² = (Bᵀ·Bᵀ)ᵀ with B = A·h.
+                // A·h by A's non-zeros; Φ = I + A·h + ½·(A·h)² on the
+                // pattern of I + B + B², B = A·h ([`SquarePlan`]).
                 self.sparse_rates.set(a);
                 self.sparse_scaled.scaled_from(&self.sparse_rates, h);
-                self.scaled.clone_from(a);
-                self.scaled *= h;
-                let [product, transposed] = &mut self.work;
-                resize(transposed, n, n);
-                self.scaled.transpose_to(transposed);
-                self.sparse_scaled.times_transposed(transposed, product);
-                resize(&mut self.transition, n, n);
-                let (phi, squared, b) = (
-                    self.transition.as_mut_slice(),
-                    product.as_slice(),
-                    self.scaled.as_slice(),
-                );
-                for j in 0..n {
-                    for i in 0..n {
-                        phi[i + j * n] = squared[j + i * n] * 0.5 + b[i + j * n];
-                    }
-                    phi[j + j * n] += 1.0;
+                if self.square.pattern != self.sparse_scaled.pattern() || self.sparse.rows() != n {
+                    self.square.build(&self.sparse_scaled, &mut self.sparse);
                 }
+                self.square.values(&self.sparse_scaled, &mut self.sparse);
+                self.dense = false;
+                let [product, transposed] = &mut self.work;
                 if let Some(noise) = noise {
                     // A·Q_c = (Q_cᵀ·Aᵀ)ᵀ and A·Q_c·Aᵀ = (A·Q_c)·Aᵀ by A's
                     // non-zeros.
@@ -174,9 +247,24 @@ impl TimeUpdate {
                     }
                     kalman::symmetrise(&mut self.process_noise);
                 }
-                self.sparse.set(&self.transition);
             }
         }
+    }
+
+    /// Φ as a dense matrix.
+    fn transition(&mut self) -> &DMatrix<f64> {
+        if !self.dense {
+            let n = self.sparse.rows();
+            resize(&mut self.transition, n, n);
+            self.transition.fill(0.0);
+            for i in 0..n {
+                for &(j, value) in self.sparse.row(i) {
+                    self.transition[(i, j)] = value;
+                }
+            }
+            self.dense = true;
+        }
+        &self.transition
     }
 }
 
@@ -197,6 +285,10 @@ pub struct Keep {
     pub predicted: bool,
     /// The transitions (what a smoother and Mehra's tuning read).
     pub transitions: bool,
+    /// The transitions by their entries, in [`Pass::sparse_transitions`]
+    /// instead of [`Pass::transitions`] (what the smoothers read, a few
+    /// hundred values a step where the dense Φ has n²).
+    pub sparse_transitions: bool,
     /// The filtered covariance at every grid point (else at the last only).
     pub filtered_covariances: bool,
     /// The measurement update as a sequence of scalar updates, one per
@@ -213,6 +305,7 @@ impl Keep {
     pub const ALL: Keep = Keep {
         predicted: true,
         transitions: true,
+        sparse_transitions: false,
         filtered_covariances: true,
         sequential: false,
     };
@@ -220,13 +313,17 @@ impl Keep {
     pub const SMOOTHER: Keep = Keep {
         predicted: true,
         transitions: true,
+        sparse_transitions: false,
         filtered_covariances: false,
         sequential: false,
     };
     /// What a smoother reads, the measurement updates as sequences of
-    /// scalar updates ([`Keep::sequential`]).
+    /// scalar updates ([`Keep::sequential`]) and the transitions by their
+    /// entries ([`Keep::sparse_transitions`]).
     pub const SEQUENTIAL_SMOOTHER: Keep = Keep {
         sequential: true,
+        transitions: false,
+        sparse_transitions: true,
         ..Keep::SMOOTHER
     };
     /// Nothing beyond the filtered states, the updates, the innovations,
@@ -234,6 +331,7 @@ impl Keep {
     pub const UPDATES: Keep = Keep {
         predicted: false,
         transitions: false,
+        sparse_transitions: false,
         filtered_covariances: false,
         sequential: false,
     };
@@ -256,6 +354,8 @@ pub struct Pass {
     pub scalar_updates: ScalarUpdates,
     /// Φ from k to k + 1 (len − 1 of them; empty unless [`Keep::transitions`]).
     pub transitions: Matrices,
+    /// The same by their entries (empty unless [`Keep::sparse_transitions`]).
+    pub sparse_transitions: SparseMatrices,
     /// Per output, its innovations.
     pub innovations: Vec<Vec<Innovation>>,
     /// ½·Σ (νᵀS⁻¹ν + ln det S).
@@ -340,7 +440,10 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 &mut time_update.work,
             );
             if keep.transitions {
-                pass.transitions.push(&time_update.transition);
+                pass.transitions.push(time_update.transition());
+            }
+            if keep.sparse_transitions {
+                pass.sparse_transitions.push(&time_update.sparse);
             }
         }
         if keep.predicted {
@@ -395,7 +498,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                     });
                 }
                 pass.scalar_updates.push_sequence(
-                    &h,
+                    workspace.observation(),
                     &workspace.gains,
                     &workspace.innovations,
                     &workspace.variances,
@@ -459,6 +562,11 @@ impl Pass {
                 outputs,
             ),
             transitions: Matrices::with_capacity(if keep.transitions {
+                len.saturating_sub(1)
+            } else {
+                0
+            }),
+            sparse_transitions: SparseMatrices::with_capacity(if keep.sparse_transitions {
                 len.saturating_sub(1)
             } else {
                 0
@@ -566,5 +674,50 @@ mod tests {
             phi_coarse < 8.5e-5 && q_coarse < 1e-3,
             "{phi_coarse} {q_coarse}"
         );
+    }
+
+    /// The second-order Φ computed on the pattern of I + B + B²
+    /// (`SquarePlan`) is the dense series I + B + ½·B², B² summed over
+    /// every k in increasing order, bit for bit: for a first A, for one
+    /// with an entry gone to zero (the pattern held: that entry's terms
+    /// are 0·x) and for one with a new non-zero (the pattern rebuilt).
+    #[test]
+    fn second_order_transition_on_its_pattern_is_the_dense_series() {
+        let first = DMatrix::from_row_slice(
+            5,
+            5,
+            &[
+                0.0, 1.0, 0.0, 0.0, 0.3, //
+                -4.0, -0.6, 0.0, 0.0, 1.0, //
+                0.0, 0.0, 0.0, 1.0, 0.0, //
+                0.0, 0.0, 0.0, 0.0, 1.0, //
+                0.0, 0.0, 0.0, 0.0, 0.0,
+            ],
+        );
+        let mut zeroed = first.clone();
+        zeroed[(1, 0)] = 0.0;
+        let mut wider = first.clone();
+        wider[(4, 2)] = 0.7;
+        let h = 0.04;
+        let dense = |a: &DMatrix<f64>| {
+            let b = a * h;
+            DMatrix::from_fn(5, 5, |i, j| {
+                let mut squared = 0.0;
+                for k in 0..5 {
+                    squared += b[(i, k)] * b[(k, j)];
+                }
+                let value = squared * 0.5 + b[(i, j)];
+                if i == j { value + 1.0 } else { value }
+            })
+        };
+        let mut time_update = TimeUpdate::default();
+        let mut patterns = Vec::new();
+        for a in [&first, &zeroed, &wider] {
+            time_update.discretise(Discretisation::SecondOrder, a, None, h);
+            patterns.push(time_update.sparse.pattern());
+            assert_eq!(time_update.transition(), &dense(a));
+        }
+        assert_eq!(patterns[0], patterns[1], "the pattern held");
+        assert_ne!(patterns[1], patterns[2], "the pattern rebuilt");
     }
 }
