@@ -352,6 +352,7 @@ pub fn extended_pass<M: StateSpaceModel + ?Sized>(
     let keep = Keep {
         predicted: false,
         transitions: settings.correlation_lags > 0,
+        sparse_transitions: false,
         filtered_covariances: true,
         sequential: false,
     };

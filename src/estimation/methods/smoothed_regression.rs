@@ -983,10 +983,15 @@ fn smooth_with(
     )?;
     // The histories at the sample instants: every `parts`-th grid point.
     // The means and variances are all the histories read of the smoother.
-    let mut smoothed = if keep.sequential {
-        kalman::mbf_smooth_variances(&pass.predicted, &pass.scalar_updates, &pass.transitions)
+    let updates: &dyn kalman::SmootherUpdates = if keep.sequential {
+        &pass.scalar_updates
     } else {
-        kalman::mbf_smooth_variances(&pass.predicted, &pass.measured, &pass.transitions)
+        &pass.measured
+    };
+    let mut smoothed = if keep.sparse_transitions {
+        kalman::mbf_smooth_variances(&pass.predicted, updates, &pass.sparse_transitions)
+    } else {
+        kalman::mbf_smooth_variances(&pass.predicted, updates, &pass.transitions)
     };
     let mut times = times;
     if parts > 1 {

@@ -44,7 +44,9 @@ use crate::estimation::solver::kalman::{
     self, Exponential, Gaussian, ProcessNoise, SequentialWorkspace, SparseRows, UpdateWorkspace,
     resize,
 };
-use crate::estimation::solver::kept::{Gaussians, Matrices, ScalarUpdates, Updates};
+use crate::estimation::solver::kept::{
+    Gaussians, Matrices, ScalarUpdates, SparseMatrices, Updates,
+};
 use nalgebra::{DMatrix, DVector};
 
 /// The filter's noise: continuous process-noise spectral density over the
@@ -77,8 +79,10 @@ impl Discretisation {
         let mut time_update = TimeUpdate::default();
         let has_noise = noise.iter().any(|&v| v != 0.0);
         time_update.discretise(self, a, has_noise.then_some(noise), h);
+        time_update.transition();
         let n = a.nrows();
         let process = if has_noise {
+            time_update.process_noise();
             time_update.process_noise
         } else {
             DMatrix::zeros(n, n)
@@ -93,15 +97,249 @@ impl Discretisation {
 /// [`SparseRows`]).
 #[derive(Debug, Clone, Default)]
 struct TimeUpdate {
+    /// Φ (for the second-order form written from `sparse` only when read:
+    /// [`TimeUpdate::transition`]).
     transition: DMatrix<f64>,
+    /// Whether `transition` is Φ's values in `sparse`.
+    dense: bool,
     process_noise: DMatrix<f64>,
+    /// For the second-order form with a diagonal spectral density: Q_d on
+    /// its pattern ([`NoisePlan`]), `process_noise` written from it only
+    /// when read ([`TimeUpdate::process_noise`]).
+    noise_plan: NoisePlan,
+    /// Whether Q_d is `noise_plan`'s.
+    noise_on_plan: bool,
     sparse: SparseRows,
     sparse_scaled: SparseRows,
     sparse_rates: SparseRows,
-    scaled: DMatrix<f64>,
+    square: SquarePlan,
     exponential: Exponential,
     work: [DMatrix<f64>; 2],
     noise: ProcessNoise,
+}
+
+/// Where the second-order Φ = I + B + ½·B² (B = A·h) takes its values
+/// from, on the pattern of I + B + B² built from B's: per entry of Φ's
+/// pattern, row by row in increasing column, B_ij's position among B's
+/// entries (None: off B's pattern), whether i = j, and the end of its
+/// products in `products`: the pairs (B_ik, B_kj) of (B²)_ij in increasing
+/// k, by their positions, where both are on B's pattern. The values are
+/// those of B² summed over the dense B's k (a term off the pattern is
+/// 0·x) bit for bit.
+#[derive(Debug, Clone, Default)]
+struct SquarePlan {
+    /// The id of B's pattern it was built for ([`SparseRows::pattern`]).
+    pattern: u64,
+    entries: Vec<(Option<usize>, bool, usize)>,
+    products: Vec<(usize, usize)>,
+}
+
+impl SquarePlan {
+    /// Builds the plan and Φ's pattern (into `phi`) for B's pattern.
+    fn build(&mut self, b: &SparseRows, phi: &mut SparseRows) {
+        let n = b.rows();
+        let entries = b.entries();
+        let starts: Vec<usize> = (0..=n)
+            .map(|i| (0..i).map(|r| b.row(r).len()).sum::<usize>())
+            .collect();
+        let position = |i: usize, j: usize| {
+            b.row(i)
+                .iter()
+                .position(|&(c, _)| c == j)
+                .map(|p| starts[i] + p)
+        };
+        debug_assert_eq!(starts[n], entries.len());
+        let mut rows = Vec::with_capacity(n);
+        self.entries.clear();
+        self.products.clear();
+        for i in 0..n {
+            let mut columns = vec![i];
+            for &(k, _) in b.row(i) {
+                columns.push(k);
+                columns.extend(b.row(k).iter().map(|&(j, _)| j));
+            }
+            columns.sort_unstable();
+            columns.dedup();
+            for &j in &columns {
+                for &(k, _) in b.row(i) {
+                    if let Some(kj) = position(k, j) {
+                        let ik = position(i, k).expect("k on row i");
+                        self.products.push((ik, kj));
+                    }
+                }
+                self.entries
+                    .push((position(i, j), i == j, self.products.len()));
+            }
+            rows.push(columns);
+        }
+        phi.set_pattern(b.columns(), rows);
+        self.pattern = b.pattern();
+    }
+
+    /// Φ's values on its pattern (`phi`, built by [`SquarePlan::build`]).
+    fn values(&self, b: &SparseRows, phi: &mut SparseRows) {
+        let b = b.entries();
+        let mut start = 0;
+        for (entry, &(on_b, diagonal, end)) in phi.entries_mut().iter_mut().zip(&self.entries) {
+            let mut squared = 0.0;
+            for &(ik, kj) in &self.products[start..end] {
+                squared += b[ik].1 * b[kj].1;
+            }
+            start = end;
+            let mut value = squared * 0.5 + on_b.map_or(0.0, |p| b[p].1);
+            if diagonal {
+                value += 1.0;
+            }
+            entry.1 = value;
+        }
+    }
+}
+
+/// Where the second-order Q_d = Q_c·h + (A·Q_c + Q_c·Aᵀ)·h²/2 +
+/// A·Q_c·Aᵀ·h³/3, made symmetric, takes its values from when Q_c is
+/// diagonal (q on the diagonal, read once: a time update serves one pass),
+/// on the pattern of its non-zeros built from A's: per entry (i, j), i ≤ j,
+/// the makings of Q_ij and Q_ji before the symmetric mean
+/// ½·(Q_ij + Q_ji) — (A·Q_c)_ij = A_ij·q_j and (A·Q_c)_ji by their
+/// positions among A's entries, Q_c's q_i on the diagonal, and the terms
+/// of (A·Q_c·Aᵀ)_ij = Σ_k A_jk·(A_ik·q_k) over k in increasing order where
+/// both are on A's pattern and q_k ≠ 0 (`terms`). The values are the dense
+/// form's bit for bit (a term off the pattern is 0·x).
+#[derive(Debug, Clone, Default)]
+struct NoisePlan {
+    /// Whether the spectral density was read, and its diagonal if it is
+    /// diagonal (None: the dense form).
+    density: Option<Option<Vec<f64>>>,
+    /// The id of A's pattern the plan was built for.
+    pattern: u64,
+    /// Per entry (i, j, Q_ij's makings, Q_ji's makings).
+    entries: Vec<(usize, usize, Makings, Makings)>,
+    /// (A_jk, A_ik, k) by their positions among A's entries.
+    terms: Vec<(usize, usize, usize)>,
+    /// Q_d's values at `entries`, symmetric mean taken.
+    values: Vec<f64>,
+}
+
+/// What one entry of Q_d is made of before the symmetric mean: the range
+/// of its terms in [`NoisePlan::terms`], (A·Q_c)_ij's and (A·Q_c)_ji's
+/// positions among A's entries, and q_i on the diagonal.
+#[derive(Debug, Clone, Copy, Default)]
+struct Makings {
+    terms: (usize, usize),
+    forward: Option<usize>,
+    backward: Option<usize>,
+    diagonal: bool,
+}
+
+impl NoisePlan {
+    /// The diagonal of `noise`, if it has no other non-zero.
+    fn diagonal(noise: &DMatrix<f64>) -> Option<Vec<f64>> {
+        let n = noise.nrows();
+        let off = (0..n).any(|j| (0..n).any(|i| i != j && noise[(i, j)] != 0.0));
+        (noise.is_square() && !off).then(|| noise.diagonal().iter().copied().collect())
+    }
+
+    /// Builds the plan for A's pattern (`a`) and the diagonal q.
+    fn build(&mut self, a: &SparseRows) {
+        let Some(Some(q)) = &self.density else {
+            return;
+        };
+        let n = a.rows();
+        let mut starts = Vec::with_capacity(n + 1);
+        starts.push(0);
+        for i in 0..n {
+            starts.push(starts[i] + a.row(i).len());
+        }
+        let position = |i: usize, j: usize| {
+            a.row(i)
+                .iter()
+                .position(|&(c, _)| c == j)
+                .map(|p| starts[i] + p)
+        };
+        let (mut entries, mut terms) = (
+            std::mem::take(&mut self.entries),
+            std::mem::take(&mut self.terms),
+        );
+        entries.clear();
+        terms.clear();
+        let makings = |i: usize, j: usize, terms: &mut Vec<(usize, usize, usize)>| {
+            let from = terms.len();
+            for &(k, _) in a.row(j) {
+                if let (true, Some(ik)) = (q[k] != 0.0, position(i, k)) {
+                    terms.push((position(j, k).expect("k on row j"), ik, k));
+                }
+            }
+            Makings {
+                terms: (from, terms.len()),
+                forward: position(i, j).filter(|_| q[j] != 0.0),
+                backward: position(j, i).filter(|_| q[i] != 0.0),
+                diagonal: i == j && q[i] != 0.0,
+            }
+        };
+        for j in 0..n {
+            for i in 0..=j {
+                let (ij, ji) = (makings(i, j, &mut terms), makings(j, i, &mut terms));
+                let empty = |m: &Makings| {
+                    m.terms.0 == m.terms.1
+                        && m.forward.is_none()
+                        && m.backward.is_none()
+                        && !m.diagonal
+                };
+                if empty(&ij) && empty(&ji) {
+                    terms.truncate(ij.terms.0);
+                } else {
+                    entries.push((i, j, ij, ji));
+                }
+            }
+        }
+        (self.entries, self.terms) = (entries, terms);
+        self.values.clear();
+        self.values.resize(self.entries.len(), 0.0);
+        self.pattern = a.pattern();
+    }
+
+    /// Q_d's values on the plan's pattern for A's values `a` and step h.
+    fn evaluate(&mut self, a: &SparseRows, h: f64) {
+        let NoisePlan {
+            density: Some(Some(q)),
+            entries,
+            terms,
+            values,
+            ..
+        } = self
+        else {
+            return;
+        };
+        let a = a.entries();
+        let value = |m: &Makings, i: usize| {
+            let mut outer = 0.0;
+            for &(jk, ik, k) in &terms[m.terms.0..m.terms.1] {
+                outer += a[jk].1 * (a[ik].1 * q[k]);
+            }
+            let forward = m.forward.map_or(0.0, |p| a[p].1 * q[a[p].0]);
+            let backward = m.backward.map_or(0.0, |p| a[p].1 * q[a[p].0]);
+            let density = if m.diagonal { q[i] } else { 0.0 };
+            outer * (h * h * h / 3.0) + (forward + backward) * (h * h / 2.0) + density * h
+        };
+        for (into, (i, j, ij, ji)) in values.iter_mut().zip(entries.iter()) {
+            *into = if i == j {
+                value(ij, *i)
+            } else {
+                (value(ij, *i) + value(ji, *j)) * 0.5
+            };
+        }
+    }
+
+    /// Adds Q_d's values to `covariance` on the plan's pattern (both
+    /// triangles).
+    fn add_to(&self, covariance: &mut DMatrix<f64>) {
+        for (&value, &(i, j, ..)) in self.values.iter().zip(&self.entries) {
+            covariance[(i, j)] += value;
+            if i != j {
+                covariance[(j, i)] += value;
+            }
+        }
+    }
 }
 
 impl TimeUpdate {
@@ -121,35 +359,40 @@ impl TimeUpdate {
                 // Φ's rows past the last non-zero row of A are the
                 // identity's (an augmented model's constant parameters).
                 let leading = self.exponential.of_scaled(a, h, &mut self.transition);
+                self.dense = true;
+                self.noise_on_plan = false;
                 if let Some(noise) = noise {
                     self.noise.of(a, noise, h, &mut self.process_noise);
                 }
                 self.sparse.set_leading(&self.transition, leading);
             }
             Discretisation::SecondOrder => {
-                // A·h by A's non-zeros; Φ = I + A·h + ½·(A·h)²,
-                // (A·h)² = (Bᵀ·Bᵀ)ᵀ with B = A·h.
+                // A·h by A's non-zeros; Φ = I + A·h + ½·(A·h)² on the
+                // pattern of I + B + B², B = A·h ([`SquarePlan`]).
                 self.sparse_rates.set(a);
                 self.sparse_scaled.scaled_from(&self.sparse_rates, h);
-                self.scaled.clone_from(a);
-                self.scaled *= h;
-                let [product, transposed] = &mut self.work;
-                resize(transposed, n, n);
-                self.scaled.transpose_to(transposed);
-                self.sparse_scaled.times_transposed(transposed, product);
-                resize(&mut self.transition, n, n);
-                let (phi, squared, b) = (
-                    self.transition.as_mut_slice(),
-                    product.as_slice(),
-                    self.scaled.as_slice(),
-                );
-                for j in 0..n {
-                    for i in 0..n {
-                        phi[i + j * n] = squared[j + i * n] * 0.5 + b[i + j * n];
-                    }
-                    phi[j + j * n] += 1.0;
+                if self.square.pattern != self.sparse_scaled.pattern() || self.sparse.rows() != n {
+                    self.square.build(&self.sparse_scaled, &mut self.sparse);
                 }
-                if let Some(noise) = noise {
+                self.square.values(&self.sparse_scaled, &mut self.sparse);
+                self.dense = false;
+                let Some(noise) = noise else {
+                    return;
+                };
+                let density = self
+                    .noise_plan
+                    .density
+                    .get_or_insert_with(|| NoisePlan::diagonal(noise));
+                self.noise_on_plan = density.is_some();
+                if self.noise_on_plan {
+                    if self.noise_plan.pattern != self.sparse_rates.pattern() {
+                        self.noise_plan.build(&self.sparse_rates);
+                    }
+                    self.noise_plan.evaluate(&self.sparse_rates, h);
+                    return;
+                }
+                let [product, transposed] = &mut self.work;
+                {
                     // A·Q_c = (Q_cᵀ·Aᵀ)ᵀ and A·Q_c·Aᵀ = (A·Q_c)·Aᵀ by A's
                     // non-zeros.
                     resize(transposed, n, n);
@@ -174,9 +417,45 @@ impl TimeUpdate {
                     }
                     kalman::symmetrise(&mut self.process_noise);
                 }
-                self.sparse.set(&self.transition);
             }
         }
+    }
+
+    /// Q_d as a dense matrix (after a [`TimeUpdate::discretise`] with
+    /// process noise).
+    fn process_noise(&mut self) -> &DMatrix<f64> {
+        if self.noise_on_plan {
+            let n = self.sparse_rates.rows();
+            resize(&mut self.process_noise, n, n);
+            self.process_noise.fill(0.0);
+            self.noise_plan.add_to(&mut self.process_noise);
+            self.noise_on_plan = false;
+        }
+        &self.process_noise
+    }
+
+    /// Adds Q_d to `covariance` where it is kept on its pattern (else
+    /// nothing: the dense Q_d goes with the prediction).
+    fn add_process_noise_on_pattern(&self, covariance: &mut DMatrix<f64>) {
+        if self.noise_on_plan {
+            self.noise_plan.add_to(covariance);
+        }
+    }
+
+    /// Φ as a dense matrix.
+    fn transition(&mut self) -> &DMatrix<f64> {
+        if !self.dense {
+            let n = self.sparse.rows();
+            resize(&mut self.transition, n, n);
+            self.transition.fill(0.0);
+            for i in 0..n {
+                for &(j, value) in self.sparse.row(i) {
+                    self.transition[(i, j)] = value;
+                }
+            }
+            self.dense = true;
+        }
+        &self.transition
     }
 }
 
@@ -197,6 +476,10 @@ pub struct Keep {
     pub predicted: bool,
     /// The transitions (what a smoother and Mehra's tuning read).
     pub transitions: bool,
+    /// The transitions by their entries, in [`Pass::sparse_transitions`]
+    /// instead of [`Pass::transitions`] (what the smoothers read, a few
+    /// hundred values a step where the dense Φ has n²).
+    pub sparse_transitions: bool,
     /// The filtered covariance at every grid point (else at the last only).
     pub filtered_covariances: bool,
     /// The measurement update as a sequence of scalar updates, one per
@@ -213,6 +496,7 @@ impl Keep {
     pub const ALL: Keep = Keep {
         predicted: true,
         transitions: true,
+        sparse_transitions: false,
         filtered_covariances: true,
         sequential: false,
     };
@@ -220,13 +504,17 @@ impl Keep {
     pub const SMOOTHER: Keep = Keep {
         predicted: true,
         transitions: true,
+        sparse_transitions: false,
         filtered_covariances: false,
         sequential: false,
     };
     /// What a smoother reads, the measurement updates as sequences of
-    /// scalar updates ([`Keep::sequential`]).
+    /// scalar updates ([`Keep::sequential`]) and the transitions by their
+    /// entries ([`Keep::sparse_transitions`]).
     pub const SEQUENTIAL_SMOOTHER: Keep = Keep {
         sequential: true,
+        transitions: false,
+        sparse_transitions: true,
         ..Keep::SMOOTHER
     };
     /// Nothing beyond the filtered states, the updates, the innovations,
@@ -234,6 +522,7 @@ impl Keep {
     pub const UPDATES: Keep = Keep {
         predicted: false,
         transitions: false,
+        sparse_transitions: false,
         filtered_covariances: false,
         sequential: false,
     };
@@ -256,6 +545,8 @@ pub struct Pass {
     pub scalar_updates: ScalarUpdates,
     /// Φ from k to k + 1 (len − 1 of them; empty unless [`Keep::transitions`]).
     pub transitions: Matrices,
+    /// The same by their entries (empty unless [`Keep::sparse_transitions`]).
+    pub sparse_transitions: SparseMatrices,
     /// Per output, its innovations.
     pub innovations: Vec<Vec<Innovation>>,
     /// ½·Σ (νᵀS⁻¹ν + ln det S).
@@ -336,11 +627,17 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
             kalman::predict_covariance_in_place(
                 &mut covariance,
                 &time_update.sparse,
-                process_noise.map(|_| &time_update.process_noise),
+                process_noise
+                    .filter(|_| !time_update.noise_on_plan)
+                    .map(|_| &time_update.process_noise),
                 &mut time_update.work,
             );
+            time_update.add_process_noise_on_pattern(&mut covariance);
             if keep.transitions {
-                pass.transitions.push(&time_update.transition);
+                pass.transitions.push(time_update.transition());
+            }
+            if keep.sparse_transitions {
+                pass.sparse_transitions.push(&time_update.sparse);
             }
         }
         if keep.predicted {
@@ -395,7 +692,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                     });
                 }
                 pass.scalar_updates.push_sequence(
-                    &h,
+                    workspace.observation(),
                     &workspace.gains,
                     &workspace.innovations,
                     &workspace.variances,
@@ -459,6 +756,11 @@ impl Pass {
                 outputs,
             ),
             transitions: Matrices::with_capacity(if keep.transitions {
+                len.saturating_sub(1)
+            } else {
+                0
+            }),
+            sparse_transitions: SparseMatrices::with_capacity(if keep.sparse_transitions {
                 len.saturating_sub(1)
             } else {
                 0
@@ -566,5 +868,77 @@ mod tests {
             phi_coarse < 8.5e-5 && q_coarse < 1e-3,
             "{phi_coarse} {q_coarse}"
         );
+    }
+
+    /// The second-order Φ computed on the pattern of I + B + B²
+    /// (`SquarePlan`) is the dense series I + B + ½·B², B² summed over
+    /// every k in increasing order, bit for bit, and so is Q_d: on its
+    /// pattern for a diagonal spectral density (`NoisePlan`), by dense
+    /// products for another; for a first A, for one with an entry gone to
+    /// zero (the pattern held: that entry's terms are 0·x) and for one
+    /// with a new non-zero (the pattern rebuilt).
+    #[test]
+    fn second_order_transition_on_its_pattern_is_the_dense_series() {
+        let first = DMatrix::from_row_slice(
+            5,
+            5,
+            &[
+                0.0, 1.0, 0.0, 0.0, 0.3, //
+                -4.0, -0.6, 0.0, 0.0, 1.0, //
+                0.0, 0.0, 0.0, 1.0, 0.0, //
+                0.0, 0.0, 0.0, 0.0, 1.0, //
+                0.0, 0.0, 0.0, 0.0, 0.0,
+            ],
+        );
+        let mut zeroed = first.clone();
+        zeroed[(1, 0)] = 0.0;
+        let mut wider = first.clone();
+        wider[(4, 2)] = 0.7;
+        let h = 0.04;
+        let dense = |a: &DMatrix<f64>| {
+            let b = a * h;
+            DMatrix::from_fn(5, 5, |i, j| {
+                let mut squared = 0.0;
+                for k in 0..5 {
+                    squared += b[(i, k)] * b[(k, j)];
+                }
+                let value = squared * 0.5 + b[(i, j)];
+                if i == j { value + 1.0 } else { value }
+            })
+        };
+        // Q_d as the dense form sums it: A·Q_c, A·Q_c·Aᵀ over every k.
+        let dense_noise = |a: &DMatrix<f64>, noise: &DMatrix<f64>| {
+            let sum = |f: &dyn Fn(usize) -> f64| (0..5).fold(0.0, |sum, k| sum + f(k));
+            let aq = DMatrix::from_fn(5, 5, |i, r| sum(&|k| a[(i, k)] * noise[(k, r)]));
+            let outer = DMatrix::from_fn(5, 5, |r, i| sum(&|k| a[(i, k)] * aq[(r, k)]));
+            let q = DMatrix::from_fn(5, 5, |i, j| {
+                outer[(i, j)] * (h * h * h / 3.0)
+                    + (aq[(i, j)] + aq[(j, i)]) * (h * h / 2.0)
+                    + noise[(i, j)] * h
+            });
+            DMatrix::from_fn(5, 5, |i, j| {
+                if i == j {
+                    q[(i, j)]
+                } else {
+                    (q[(i, j)] + q[(j, i)]) * 0.5
+                }
+            })
+        };
+        let diagonal = DMatrix::from_diagonal(&DVector::from_vec(vec![0.1, 0.2, 0.0, 0.0, 3.0]));
+        let mut full = diagonal.clone();
+        (full[(0, 1)], full[(1, 0)]) = (0.05, 0.05);
+        for noise in [&diagonal, &full] {
+            let mut time_update = TimeUpdate::default();
+            let mut patterns = Vec::new();
+            for a in [&first, &zeroed, &wider] {
+                time_update.discretise(Discretisation::SecondOrder, a, Some(noise), h);
+                patterns.push(time_update.sparse.pattern());
+                assert_eq!(time_update.transition(), &dense(a));
+                assert_eq!(time_update.noise_on_plan, noise == &diagonal);
+                assert_eq!(time_update.process_noise(), &dense_noise(a, noise));
+            }
+            assert_eq!(patterns[0], patterns[1], "the pattern held");
+            assert_ne!(patterns[1], patterns[2], "the pattern rebuilt");
+        }
     }
 }

@@ -72,7 +72,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::solver::kept::{
-    GaussianView, Gaussians, Matrices, ScalarUpdates, UpdateView, Updates,
+    GaussianView, Gaussians, Matrices, ScalarUpdates, SparseMatrices, UpdateView, Updates,
 };
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
@@ -506,6 +506,14 @@ pub fn predict_covariance(
 /// pattern may then hold a zero, which a product adds as 0·x).
 #[derive(Debug, Clone, Default)]
 pub struct SparseRows {
+    /// The pattern's id: a number drawn once for each pattern built in the
+    /// process (kept by its copies; 0 for none), so that a pattern held
+    /// elsewhere is recognised without comparing it.
+    pattern: u64,
+    /// For a transpose read from another pattern
+    /// ([`SparseRows::set_transposed_rows`]): that pattern's id and, per
+    /// entry, the entry of it the value comes from.
+    source: (u64, Vec<usize>),
     /// Read as the transpose ([`SparseRows::set_transposed_values`]).
     transposed: bool,
     columns: usize,
@@ -568,8 +576,12 @@ impl SparseRows {
     /// The non-zeros of `other` times `factor`, on `other`'s pattern
     /// (those of a matrix and of its multiple: A and A·h).
     pub fn scaled_from(&mut self, other: &SparseRows, factor: f64) {
-        (self.transposed, self.columns, self.leading) =
-            (other.transposed, other.columns, other.leading);
+        (self.pattern, self.transposed, self.columns, self.leading) = (
+            other.pattern,
+            other.transposed,
+            other.columns,
+            other.leading,
+        );
         self.starts.clone_from(&other.starts);
         self.entries.clear();
         let used = &other.entries[..other.starts.last().copied().unwrap_or(0)];
@@ -669,9 +681,102 @@ impl SparseRows {
     }
 
     fn begin(&mut self, columns: usize) {
+        static PATTERNS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        self.pattern = PATTERNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.source.0 = 0;
         self.columns = columns;
         self.starts.clear();
         self.starts.push(0);
+    }
+
+    /// The number of columns.
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
+    /// The id of the pattern held (0: none built).
+    pub fn pattern(&self) -> u64 {
+        self.pattern
+    }
+
+    /// Holds the pattern whose row i has the entries at the columns
+    /// `rows[i]` (in the order given) over `columns` columns, their values
+    /// zero.
+    pub(crate) fn set_pattern<R, I>(&mut self, columns: usize, rows: R)
+    where
+        R: IntoIterator<Item = I>,
+        I: IntoIterator<Item = usize>,
+    {
+        self.transposed = false;
+        self.begin(columns);
+        self.entries.clear();
+        for row in rows {
+            self.entries.extend(row.into_iter().map(|j| (j, 0.0)));
+            self.starts.push(self.entries.len());
+        }
+        self.leading = self.rows();
+    }
+
+    /// The entries of every row, one row after another.
+    pub fn entries(&self) -> &[(usize, f64)] {
+        &self.entries[..self.starts.last().copied().unwrap_or(0)]
+    }
+
+    /// [`SparseRows::entries`] for writing their values.
+    pub(crate) fn entries_mut(&mut self) -> &mut [(usize, f64)] {
+        let used = self.starts.last().copied().unwrap_or(0);
+        &mut self.entries[..used]
+    }
+
+    /// The pattern of `pattern` (its copy, unless held already) with the
+    /// values `values`, one per entry in [`SparseRows::entries`]' order.
+    pub fn set_from(&mut self, pattern: &SparseRows, values: &[f64]) {
+        if self.pattern != pattern.pattern || self.pattern == 0 {
+            self.clone_from(pattern);
+        }
+        for (entry, &value) in self.entries_mut().iter_mut().zip(values) {
+            entry.1 = value;
+        }
+    }
+
+    /// Reads `matrix`ᵀ from its entries (the rows of the result are the
+    /// columns of `matrix`, each row's entries in increasing column, as
+    /// [`SparseRows::set_transposed_values`] reads them from a dense
+    /// matrix); the transposed pattern is built once for each pattern of
+    /// `matrix` and its values gathered on it.
+    pub fn set_transposed_rows(&mut self, matrix: &SparseRows) {
+        if self.source.0 != matrix.pattern || matrix.pattern == 0 || self.rows() != matrix.columns {
+            let mut counts = vec![0; matrix.columns + 1];
+            for &(j, _) in matrix.entries() {
+                counts[j + 1] += 1;
+            }
+            for j in 0..matrix.columns {
+                counts[j + 1] += counts[j];
+            }
+            let used = matrix.entries().len();
+            let mut from = vec![0; used];
+            let mut entries = vec![(0, 0.0); used];
+            let mut next = counts.clone();
+            for i in 0..matrix.rows() {
+                for position in matrix.starts[i]..matrix.starts[i + 1] {
+                    let j = matrix.entries[position].0;
+                    entries[next[j]] = (i, 0.0);
+                    from[next[j]] = position;
+                    next[j] += 1;
+                }
+            }
+            self.transposed = true;
+            self.begin(matrix.rows());
+            self.starts.clear();
+            self.starts.extend_from_slice(&counts);
+            self.entries = entries;
+            self.leading = matrix.columns;
+            self.source = (matrix.pattern, from);
+        }
+        let values = matrix.entries();
+        for (entry, &from) in self.entries.iter_mut().zip(&self.source.1) {
+            entry.1 = values[from].1;
+        }
     }
 
     /// The number of rows.
@@ -1204,6 +1309,12 @@ pub struct SequentialWorkspace {
 }
 
 impl SequentialWorkspace {
+    /// The last update's H by its rows' entries, in the order processed
+    /// (what [`ScalarUpdates::push_sequence`] keeps).
+    pub fn observation(&self) -> &SparseRows {
+        &self.observation
+    }
+
     /// Σ (νᵢ²/sᵢ + ln sᵢ) of the last update: νᵀ·S⁻¹·ν + ln det S, its
     /// term of −2·ln L (without 2π).
     pub fn log_likelihood_term(&self) -> f64 {
@@ -1555,10 +1666,10 @@ pub struct Measured {
 /// (I − K·H)ᵀ·Λ·(I − K·H) is expanded with G = Λ·K, C = Kᵀ·G and
 /// E = G − ½·Hᵀ·C as Λ − (E·H + Hᵀ·Eᵀ) (O(n²·m) for m outputs); only
 /// P·Λ·P is a product of two dense n × n matrices.
-pub fn mbf_smooth<U: SmootherUpdates + ?Sized>(
+pub fn mbf_smooth<U: SmootherUpdates + ?Sized, T: Transitions + ?Sized>(
     predicted: &Gaussians,
     measured: &U,
-    transitions: &Matrices,
+    transitions: &T,
 ) -> Vec<Gaussian> {
     let mut smoothed = predicted.to_vec();
     mbf_backward(
@@ -1592,14 +1703,18 @@ pub fn mbf_smooth<U: SmootherUpdates + ?Sized>(
 }
 
 /// [`mbf_smooth`]'s means x_{k|N} and variances, the diagonal of P_{k|N}
-/// (as a column): with P = P_{k|k−1} (symmetric) and W = P·Λ, the
-/// variance P_ii − Σ_a P_ia·W_ia, each sum taken along P's and W's columns
-/// a for all i at once; one dense n × n product where the covariance takes
-/// two.
-pub fn mbf_smooth_variances<U: SmootherUpdates + ?Sized>(
+/// (as a column): with P = P_{k|k−1} and Λ symmetric, Λ = U + Uᵀ with U
+/// Λ's upper triangle and half its diagonal, the diagonal of P·Λ·P is
+/// 2·Σ_a P_ia·W_ia with W = P·U (Σ_a Σ_b P_ia·P_ib·U_ba is the same sum for
+/// U and Uᵀ when P is symmetric), so the variance is
+/// P_ii − 2·Σ_a P_ia·W_ia: W's column j combines P's columns 0..=j in
+/// registers ([`combine_columns`]), half the multiply-adds of the dense
+/// product P·Λ, each sum taken along P's and W's columns a for all i at
+/// once.
+pub fn mbf_smooth_variances<U: SmootherUpdates + ?Sized, T: Transitions + ?Sized>(
     predicted: &Gaussians,
     measured: &U,
-    transitions: &Matrices,
+    transitions: &T,
 ) -> Vec<(DVector<f64>, DVector<f64>)> {
     let mut smoothed = vec![(DVector::zeros(0), DVector::zeros(0)); predicted.len()];
     mbf_backward(
@@ -1609,21 +1724,31 @@ pub fn mbf_smooth_variances<U: SmootherUpdates + ?Sized>(
         |k, prior, p, adjoint, information, work| {
             let n = adjoint.len();
             let [product, _] = work;
-            product.gemm(1.0, &prior.covariance, information, 0.0);
+            resize(product, n, n);
             let (mut mean, mut variances) = (DVector::zeros(n), DVector::zeros(n));
-            let (w, x, lambda) = (
-                product.as_slice(),
+            let (w, x, lambda, information) = (
+                product.as_mut_slice(),
                 prior.mean.as_slice(),
                 adjoint.as_slice(),
+                information.as_slice(),
             );
             let (mean_values, sums) = (mean.as_mut_slice(), variances.as_mut_slice());
             crate::simd::wide(
                 #[inline(always)]
                 || {
+                    for (j, column) in w.chunks_exact_mut(n).enumerate() {
+                        let upper = &information[j * n..j * n + j + 1];
+                        let terms = upper[..j]
+                            .iter()
+                            .copied()
+                            .enumerate()
+                            .chain(std::iter::once((j, 0.5 * upper[j])));
+                        combine_columns(column, p, terms);
+                    }
                     smoothed_mean(mean_values, x, p, lambda);
                     sum_of_products(sums, p, w);
                     for (i, sum) in sums.iter_mut().enumerate() {
-                        *sum = p[i + i * n] - *sum;
+                        *sum = p[i + i * n] - 2.0 * *sum;
                     }
                 },
             );
@@ -1669,8 +1794,8 @@ pub struct SmootherScratch {
     reduced: DVector<f64>,
     /// Λ·kᵢ, then e.
     vector: Vec<f64>,
-    /// The non-zeros of hᵢ.
-    support: Vec<(usize, f64)>,
+    /// hᵢ as a whole row.
+    row: Vec<f64>,
 }
 
 impl SmootherUpdates for Updates {
@@ -1716,38 +1841,36 @@ impl SmootherUpdates for ScalarUpdates {
         symmetrise(information);
         let lambda = information.as_mut_slice();
         let SmootherScratch {
-            vector: e, support, ..
+            vector: e, row: h, ..
         } = scratch;
         e.clear();
         e.resize(n, 0.0);
+        h.clear();
+        h.resize(n, 0.0);
         let adjoint = adjoint.as_mut_slice();
         crate::simd::wide(
             #[inline(always)]
             || {
                 for i in (0..count).rev() {
                     let update = self.get(k, i).expect("i < count");
-                    let (h, gain) = (update.observation, update.gain);
-                    // h's non-zeros, each entry written and only a
-                    // non-zero one kept (no branch).
-                    if support.len() < n {
-                        support.resize(n, (0, 0.0));
-                    }
-                    let mut count = 0;
-                    for (j, &value) in h.iter().enumerate() {
-                        support[count] = (j, value);
-                        count += usize::from(value != 0.0);
-                    }
-                    let support = &support[..count];
+                    let gain = update.gain;
+                    // h's non-zeros and h as a whole row.
+                    let support = update
+                        .columns
+                        .iter()
+                        .copied()
+                        .zip(update.observation.iter().copied());
+                    update.observation_into(h);
                     let weight = gain.iter().zip(&*adjoint).map(|(k, l)| k * l).sum::<f64>()
                         + update.innovation / update.variance;
-                    for &(j, value) in support.iter() {
+                    for (j, value) in support.clone() {
                         adjoint[j] -= value * weight;
                     }
                     // g = Λ·k, c = kᵀ·g, e = g − ½·(c + 1/s)·h.
                     combine_columns(e, lambda, gain.iter().copied().enumerate());
                     let c = gain.iter().zip(e.iter()).map(|(k, g)| k * g).sum::<f64>();
                     let half = 0.5 * (c + 1.0 / update.variance);
-                    for &(j, value) in support.iter() {
+                    for (j, value) in support.clone() {
                         e[j] -= half * value;
                     }
                     // Λ_ab −= e_a·h_b + h_a·e_b: whole columns b of h's
@@ -1756,11 +1879,12 @@ impl SmootherUpdates for ScalarUpdates {
                     for (b, column) in lambda.chunks_exact_mut(n).enumerate() {
                         let (hb, eb) = (h[b], e[b]);
                         if hb != 0.0 {
-                            for ((into, &ea), &ha) in column.iter_mut().zip(e.iter()).zip(h) {
+                            for ((into, &ea), &ha) in column.iter_mut().zip(e.iter()).zip(h.iter())
+                            {
                                 *into -= ea * hb + ha * eb;
                             }
                         } else {
-                            for &(a, ha) in support.iter() {
+                            for (a, ha) in support.clone() {
                                 column[a] -= ha * eb;
                             }
                         }
@@ -1771,13 +1895,36 @@ impl SmootherUpdates for ScalarUpdates {
     }
 }
 
+/// A pass's transitions as the smoothers read them: dense ([`Matrices`])
+/// or by their entries ([`SparseMatrices`]).
+pub trait Transitions {
+    /// Φ from grid point k to k + 1 (n × n) read as its transpose into
+    /// `into` (its rows Φ's columns, [`SparseRows::set_transposed_values`]);
+    /// `scratch` holds what a reading keeps from one call to the next.
+    fn transposed_into(&self, k: usize, n: usize, scratch: &mut SparseRows, into: &mut SparseRows);
+}
+
+impl Transitions for Matrices {
+    fn transposed_into(&self, k: usize, n: usize, _: &mut SparseRows, into: &mut SparseRows) {
+        into.set_transposed_values(self.values(k).expect("a transition between points"), n);
+    }
+}
+
+impl Transitions for SparseMatrices {
+    fn transposed_into(&self, k: usize, _: usize, scratch: &mut SparseRows, into: &mut SparseRows) {
+        let (pattern, values) = self.get(k).expect("a transition between points");
+        scratch.set_from(pattern, values);
+        into.set_transposed_rows(scratch);
+    }
+}
+
 /// The smoother's backward sweep (module header): at each grid point k,
 /// from the last down, `at`(k, (x, P)_{k|k−1}, P_{k|k−1}'s values, λ̃_k,
 /// Λ̃_k, two n × n work matrices).
-fn mbf_backward<U: SmootherUpdates + ?Sized>(
+fn mbf_backward<U: SmootherUpdates + ?Sized, T: Transitions + ?Sized>(
     predicted: &Gaussians,
     measured: &U,
-    transitions: &Matrices,
+    transitions: &T,
     mut at: impl FnMut(
         usize,
         GaussianView,
@@ -1794,7 +1941,7 @@ fn mbf_backward<U: SmootherUpdates + ?Sized>(
     let n = first.mean.len();
     let (mut adjoint, mut transposed_adjoint) = (DVector::zeros(n), DVector::zeros(n));
     let mut information = DMatrix::zeros(n, n);
-    let mut transition = SparseRows::default();
+    let (mut transition, mut rows) = (SparseRows::default(), SparseRows::default());
     let mut work = [DMatrix::zeros(n, n), DMatrix::zeros(n, n)];
     let mut scratch = SmootherScratch::default();
     for k in (0..len).rev() {
@@ -1805,12 +1952,7 @@ fn mbf_backward<U: SmootherUpdates + ?Sized>(
         if k > 0 {
             // λ ← Φᵀ·λ, Λ ← Φᵀ·Λ·Φ = (Zᵀ·Φ)ᵀ with Z = Λ·Φ, by Φ's columns.
             let [product, outer] = &mut work;
-            transition.set_transposed_values(
-                transitions
-                    .values(k - 1)
-                    .expect("a transition between points"),
-                n,
-            );
+            transitions.transposed_into(k - 1, n, &mut rows, &mut transition);
             for (i, into) in transposed_adjoint.iter_mut().enumerate() {
                 *into = transition
                     .row(i)
@@ -2337,6 +2479,42 @@ mod tests {
         }
     }
 
+    /// A transpose read from a matrix's entries
+    /// (`SparseRows::set_transposed_rows`) is the one read from the dense
+    /// matrix: the same rows, each in increasing column, on a pattern
+    /// built and on the same pattern with new values (a zero held).
+    #[test]
+    fn sparse_rows_transposed_from_rows_are_the_dense_transpose() {
+        let first = DMatrix::from_row_slice(
+            3,
+            4,
+            &[1.0, 0.0, 2.0, 0.0, 0.0, 3.0, 4.0, 0.0, 5.0, 0.0, 0.0, 6.0],
+        );
+        let mut second = first.clone() * -2.0;
+        second[(1, 2)] = 0.0;
+        let (mut rows, mut transposed) = (SparseRows::default(), SparseRows::default());
+        let mut pattern = 0;
+        for matrix in [&first, &second] {
+            rows.set(matrix);
+            transposed.set_transposed_rows(&rows);
+            let mut dense = SparseRows::default();
+            dense.set_transposed_values(matrix.as_slice(), matrix.nrows());
+            assert_eq!((transposed.rows(), transposed.columns()), (4, 3));
+            for i in 0..4 {
+                let nonzero = |s: &SparseRows| -> Vec<(usize, f64)> {
+                    s.row(i).iter().copied().filter(|e| e.1 != 0.0).collect()
+                };
+                assert_eq!(nonzero(&transposed), nonzero(&dense));
+                assert!(transposed.row(i).windows(2).all(|w| w[0].0 < w[1].0));
+            }
+            if pattern != 0 {
+                assert_eq!(pattern, transposed.pattern(), "the transposed pattern held");
+            }
+            pattern = transposed.pattern();
+        }
+        assert_eq!(transposed.row(2), &[(0, -4.0), (1, 0.0)]);
+    }
+
     /// The columns combined in registers are the loop that adds each
     /// term's column in turn, bit for bit, for row counts around the
     /// blocks of 16 and 4.
@@ -2564,6 +2742,7 @@ mod tests {
         let (mut x, mut xs) = (DVector::from_vec(vec![0.1, -0.2, 0.05]), DVector::zeros(3));
         xs.copy_from(&x);
         let (mut p, mut ps) = (DMatrix::identity(3, 3) * 0.5, DMatrix::identity(3, 3) * 0.5);
+        let mut sparse_transitions = SparseMatrices::with_capacity(80);
         let (mut predicted, mut predicted_s, mut measured, mut scalar, mut transitions) = (
             Gaussians::with_capacity(80, true),
             Gaussians::with_capacity(80, true),
@@ -2580,6 +2759,7 @@ mod tests {
                 p = predict_covariance(&p, &d.transition, &d.process_noise);
                 ps = predict_covariance(&ps, &d.transition, &d.process_noise);
                 transitions.push(d.transition.clone());
+                sparse_transitions.push(&SparseRows::of(&d.transition));
             }
             predicted.push(Gaussian {
                 mean: x.clone(),
@@ -2611,7 +2791,7 @@ mod tests {
                     "likelihood at {k}: {batch} against {sequential}"
                 );
                 scalar.push_sequence(
-                    &h,
+                    workspace.observation(),
                     &workspace.gains,
                     &workspace.innovations,
                     &workspace.variances,
@@ -2630,6 +2810,10 @@ mod tests {
         let vector = mbf_smooth(&predicted, &measured, &transitions);
         let sequential = mbf_smooth(&predicted_s, &scalar, &transitions);
         let variances = mbf_smooth_variances(&predicted_s, &scalar, &transitions);
+        assert!(
+            mbf_smooth_variances(&predicted_s, &scalar, &sparse_transitions) == variances,
+            "the transitions by their entries smooth as the dense ones, bit for bit"
+        );
         for (k, ((a, b), (mean, diagonal))) in
             vector.iter().zip(&sequential).zip(&variances).enumerate()
         {

@@ -13,7 +13,7 @@
 //! pass's buffers are kept instead for the next pass on the same thread
 //! (at most [`SPARE_BUFFERS`] of them).
 
-use crate::estimation::solver::kalman::{Gaussian, Measured};
+use crate::estimation::solver::kalman::{Gaussian, Measured, SparseRows};
 use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView};
 use std::borrow::Borrow;
 use std::cell::RefCell;
@@ -160,6 +160,101 @@ impl IntoIterator for Matrices {
 }
 
 impl Drop for Matrices {
+    fn drop(&mut self) {
+        recycle(&mut self.values);
+    }
+}
+
+/// Sparse matrices, one per grid point, by their entries
+/// ([`SparseRows`]): each matrix's values one after another in one buffer,
+/// its pattern kept once for all the matrices that share it (a filter's
+/// transitions hold one pattern from step to step: a few hundred values a
+/// step where the dense matrix has n²).
+#[derive(Debug, Clone, Default)]
+pub struct SparseMatrices {
+    /// How many the buffer is reserved for when the first gives its size.
+    capacity: usize,
+    /// Per matrix: its pattern in `patterns` and where its values start.
+    at: Vec<(usize, usize)>,
+    /// The patterns, their values those of the first matrix of each.
+    patterns: Vec<SparseRows>,
+    values: Vec<f64>,
+}
+
+impl SparseMatrices {
+    /// None yet; room for `capacity` of them once the first is pushed.
+    pub fn with_capacity(capacity: usize) -> SparseMatrices {
+        SparseMatrices {
+            capacity,
+            at: Vec::with_capacity(capacity),
+            patterns: Vec::new(),
+            values: Vec::new(),
+        }
+    }
+
+    /// How many are kept.
+    pub fn len(&self) -> usize {
+        self.at.len()
+    }
+
+    /// Whether none is kept.
+    pub fn is_empty(&self) -> bool {
+        self.at.is_empty()
+    }
+
+    /// Appends a copy of `matrix`'s values (and of its pattern, unless the
+    /// matrix before held the same: [`SparseRows::pattern`]).
+    pub fn push(&mut self, matrix: &SparseRows) {
+        let entries = matrix.entries();
+        if self.at.is_empty() {
+            recycle(&mut self.values);
+            self.values = buffer(self.capacity.max(1) * entries.len());
+        }
+        let same = self
+            .patterns
+            .last()
+            .is_some_and(|last| last.pattern() == matrix.pattern() && matrix.pattern() != 0);
+        if !same {
+            self.patterns.push(matrix.clone());
+        }
+        self.at.push((self.patterns.len() - 1, self.values.len()));
+        self.values.extend(entries.iter().map(|&(_, value)| value));
+    }
+
+    /// Matrix k's pattern and values (one per entry of the pattern, in
+    /// [`SparseRows::entries`]' order).
+    pub fn get(&self, k: usize) -> Option<(&SparseRows, &[f64])> {
+        let &(pattern, start) = self.at.get(k)?;
+        let pattern = &self.patterns[pattern];
+        Some((
+            pattern,
+            &self.values[start..start + pattern.entries().len()],
+        ))
+    }
+}
+
+impl PartialEq for SparseMatrices {
+    /// The same matrices: each on a pattern of the same entries with the
+    /// same values.
+    fn eq(&self, other: &SparseMatrices) -> bool {
+        let columns = |pattern: &SparseRows, i: usize| {
+            pattern.row(i).iter().map(|&(j, _)| j).collect::<Vec<_>>()
+        };
+        self.len() == other.len()
+            && (0..self.len()).all(|k| {
+                let ((a, x), (b, y)) = (
+                    self.get(k).expect("k < len"),
+                    other.get(k).expect("k < len"),
+                );
+                x == y
+                    && a.rows() == b.rows()
+                    && a.columns() == b.columns()
+                    && (0..a.rows()).all(|i| columns(a, i) == columns(b, i))
+            })
+    }
+}
+
+impl Drop for SparseMatrices {
     fn drop(&mut self) {
         recycle(&mut self.values);
     }
@@ -541,30 +636,49 @@ impl Updates {
 }
 
 /// One scalar measurement update of a sequence (Bierman 1977, ch. II):
-/// the output's row h of H (n), the gain k = P·h/s (n), the sequential
-/// innovation ν and its variance s = hᵀ·P·h + r.
+/// the output's row h of H by its non-zeros (their columns and values),
+/// the gain k = P·h/s (n), the sequential innovation ν and its variance
+/// s = hᵀ·P·h + r.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScalarUpdate<'a> {
+    /// The columns of h's non-zeros, in increasing order.
+    pub columns: &'a [usize],
+    /// h's non-zeros, at `columns`.
     pub observation: &'a [f64],
     pub gain: &'a [f64],
     pub innovation: f64,
     pub variance: f64,
 }
 
+impl ScalarUpdate<'_> {
+    /// h as a whole row of n values into `into` (zeros off its non-zeros).
+    pub fn observation_into(&self, into: &mut [f64]) {
+        into.fill(0.0);
+        for (&j, &value) in self.columns.iter().zip(self.observation) {
+            into[j] = value;
+        }
+    }
+}
+
 /// The measurement updates of a pass processed output by output
 /// ([`crate::estimation::solver::kalman::sequential_update_with`]), at
 /// most one sequence per grid point, one after another in one buffer: per
-/// output h, k, ν and s.
+/// output k, ν, s and h's non-zeros (an observation row has a few: an
+/// attitude's one, a load factor's five), their columns in another.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ScalarUpdates {
-    /// How many grid points and outputs the buffer is reserved for when
+    /// How many grid points and outputs the buffers are reserved for when
     /// the first update gives the number of states.
     capacity: (usize, usize),
-    /// Per grid point: where its sequence starts in `values` and its
+    /// Per grid point: where its sequence starts in `at_output` and its
     /// number of scalar updates (None: no update there).
     at: Vec<Option<(usize, usize)>>,
+    /// Per scalar update: where it starts in `values` and where its h's
+    /// columns start in `columns` (the next update's starts end them).
+    at_output: Vec<(usize, usize)>,
     states: usize,
     values: Vec<f64>,
+    columns: Vec<usize>,
 }
 
 impl Drop for ScalarUpdates {
@@ -580,8 +694,10 @@ impl ScalarUpdates {
         ScalarUpdates {
             capacity: (points, outputs),
             at: Vec::with_capacity(points),
+            at_output: Vec::new(),
             states: 0,
             values: Vec::new(),
+            columns: Vec::new(),
         }
     }
 
@@ -601,26 +717,32 @@ impl ScalarUpdates {
     }
 
     /// Appends a grid point's sequence of m scalar updates over n states:
-    /// H (m × n, its rows in the order they were processed), the gains
-    /// (n × m, column i the i-th update's), the sequential innovations
-    /// and their variances (m each).
+    /// H (m rows over n columns by their entries, [`SparseRows`], its rows
+    /// in the order they were processed; an entry that holds a zero is not
+    /// kept), the gains (n × m, column i the i-th update's), the
+    /// sequential innovations and their variances (m each).
     ///
     /// # Panics
     /// When the parts' shapes do not agree, or n differs from the first
     /// sequence's.
     pub fn push_sequence(
         &mut self,
-        observation: &DMatrix<f64>,
+        observation: &SparseRows,
         gains: &[f64],
         innovations: &[f64],
         variances: &[f64],
     ) {
-        let (m, n) = observation.shape();
+        let m = observation.rows();
+        let n = gains.len().checked_div(m).unwrap_or(self.states);
         if self.values.is_empty() {
             self.states = n;
             let (points, outputs) = self.capacity;
+            let outputs = points.max(1) * outputs.max(m);
             recycle(&mut self.values);
-            self.values = buffer(points.max(1) * outputs.max(m) * Self::size(n));
+            // Room for the gains, ν, s and about five non-zeros of h each.
+            self.values = buffer(outputs * (n + 2 + 5));
+            self.columns = Vec::with_capacity(outputs * 5);
+            self.at_output = Vec::with_capacity(outputs);
         }
         assert!(
             n == self.states
@@ -629,20 +751,19 @@ impl ScalarUpdates {
                 && variances.len() == m,
             "a sequence's parts agree in shape"
         );
-        self.at.push(Some((self.values.len(), m)));
-        let h = observation.as_slice();
+        self.at.push(Some((self.at_output.len(), m)));
         for i in 0..m {
-            self.values.extend((0..n).map(|j| h[i + j * m]));
+            self.at_output.push((self.values.len(), self.columns.len()));
             self.values.extend_from_slice(&gains[i * n..(i + 1) * n]);
             self.values.push(innovations[i]);
             self.values.push(variances[i]);
+            for &(j, value) in observation.row(i) {
+                if value != 0.0 {
+                    self.values.push(value);
+                    self.columns.push(j);
+                }
+            }
         }
-    }
-
-    /// The values a scalar update over n states takes.
-    #[inline]
-    fn size(n: usize) -> usize {
-        2 * n + 2
     }
 
     /// The number of scalar updates at grid point k (0: none there or k
@@ -653,17 +774,21 @@ impl ScalarUpdates {
 
     /// The i-th scalar update at grid point k, in the order processed.
     pub fn get(&self, k: usize, i: usize) -> Option<ScalarUpdate<'_>> {
-        let (start, m) = (*self.at.get(k)?)?;
+        let (first, m) = (*self.at.get(k)?)?;
         if i >= m {
             return None;
         }
+        let (start, from) = self.at_output[first + i];
+        let to = self
+            .at_output
+            .get(first + i + 1)
+            .map_or(self.columns.len(), |&(_, to)| to);
         let n = self.states;
-        let start = start + i * Self::size(n);
-        let values = &self.values[start..start + Self::size(n)];
-        let (observation, rest) = values.split_at(n);
-        let (gain, rest) = rest.split_at(n);
+        let values = &self.values[start..start + n + 2 + (to - from)];
+        let (gain, rest) = values.split_at(n);
         Some(ScalarUpdate {
-            observation,
+            columns: &self.columns[from..to],
+            observation: &rest[2..],
             gain,
             innovation: rest[0],
             variance: rest[1],
@@ -775,24 +900,31 @@ mod tests {
     }
 
     /// Sequences of scalar updates, and grid points without one, come
-    /// back output by output as pushed: H's rows, the gains' columns, ν, s.
+    /// back output by output as pushed: H's rows by their non-zeros (an
+    /// entry holding a zero dropped), the gains' columns, ν, s.
     #[test]
     fn scalar_updates_keep_each_output_of_each_sequence() {
         let n = 3;
         let mut kept = ScalarUpdates::with_capacity(3, 2);
-        let h = DMatrix::from_fn(2, n, |i, j| (i * n + j) as f64 + 0.5);
+        let h = DMatrix::from_row_slice(2, n, &[0.5, 0.0, 2.5, 0.0, 4.5, 0.0]);
         let gains: Vec<f64> = (0..2 * n).map(|v| -(v as f64)).collect();
         kept.push_none();
-        kept.push_sequence(&h, &gains, &[1.0, 2.0], &[3.0, 4.0]);
+        kept.push_sequence(&SparseRows::of(&h), &gains, &[1.0, 2.0], &[3.0, 4.0]);
         let one = DMatrix::from_row_slice(1, n, &[7.0, 8.0, 9.0]);
-        kept.push_sequence(&one, &[1.0, 1.5, 2.0], &[5.0], &[6.0]);
+        let mut held = SparseRows::of(&one);
+        // The held pattern keeps an entry that is zero at this step.
+        held.set(&DMatrix::from_row_slice(1, n, &[7.0, 0.0, 9.0]));
+        kept.push_sequence(&held, &[1.0, 1.5, 2.0], &[5.0], &[6.0]);
         assert_eq!(kept.len(), 3);
         assert_eq!((kept.count(0), kept.count(1), kept.count(2)), (0, 2, 1));
         assert!(kept.get(0, 0).is_none() && kept.get(1, 2).is_none());
-        for i in 0..2 {
+        let expected: [(&[usize], &[f64]); 2] = [(&[0, 2], &[0.5, 2.5]), (&[1], &[4.5])];
+        let mut row = vec![f64::NAN; n];
+        for (i, (columns, values)) in expected.into_iter().enumerate() {
             let got = kept.get(1, i).unwrap();
-            let row: Vec<f64> = h.row(i).iter().copied().collect();
-            assert_eq!(got.observation, row.as_slice());
+            assert_eq!((got.columns, got.observation), (columns, values));
+            got.observation_into(&mut row);
+            assert_eq!(row, h.row(i).iter().copied().collect::<Vec<_>>());
             assert_eq!(got.gain, &gains[i * n..(i + 1) * n]);
             assert_eq!(
                 (got.innovation, got.variance),
@@ -800,8 +932,45 @@ mod tests {
             );
         }
         let got = kept.get(2, 0).unwrap();
-        assert_eq!(got.observation, &[7.0, 8.0, 9.0]);
+        assert_eq!(
+            (got.columns, got.observation),
+            (&[0, 2][..], &[7.0, 9.0][..])
+        );
         assert_eq!(got.gain, &[1.0, 1.5, 2.0]);
         assert_eq!((got.innovation, got.variance), (5.0, 6.0));
+    }
+
+    /// Sparse matrices come back with their values on their patterns, a
+    /// pattern kept once for the matrices that hold it.
+    #[test]
+    fn sparse_matrices_keep_each_matrix_on_its_pattern() {
+        let first = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 2.0, 0.0, 3.0, 0.0]);
+        let mut held = SparseRows::of(&first);
+        let mut kept = SparseMatrices::with_capacity(3);
+        kept.push(&held);
+        held.set(&DMatrix::from_row_slice(
+            2,
+            3,
+            &[4.0, 0.0, 0.0, 0.0, 5.0, 0.0],
+        ));
+        kept.push(&held);
+        let other = SparseRows::of(&DMatrix::from_row_slice(
+            2,
+            3,
+            &[0.0, 6.0, 0.0, 7.0, 0.0, 0.0],
+        ));
+        kept.push(&other);
+        assert_eq!((kept.len(), kept.patterns.len()), (3, 2));
+        let values: Vec<&[f64]> = (0..3).map(|k| kept.get(k).unwrap().1).collect();
+        assert_eq!(
+            values,
+            [&[1.0, 2.0, 3.0][..], &[4.0, 0.0, 5.0], &[6.0, 7.0]]
+        );
+        let (pattern, _) = kept.get(2).unwrap();
+        assert_eq!(
+            (pattern.row(0), pattern.row(1)),
+            (&[(1, 6.0)][..], &[(0, 7.0)][..])
+        );
+        assert!(kept.get(3).is_none());
     }
 }
