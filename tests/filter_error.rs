@@ -1289,11 +1289,6 @@ fn the_default_innovation_covariance_is_full_from_the_diagonal_estimate() {
         .details
         .lines()
         .find_map(|line| line.trim().strip_prefix("ny · beta: "))
-        .or_else(|| {
-            full.details
-                .lines()
-                .find_map(|line| line.trim().strip_prefix("beta · ny: "))
-        })
         .unwrap_or_else(|| panic!("no β–n_y correlation in\n{}", full.details))
         .parse()
         .unwrap();
