@@ -523,7 +523,8 @@ impl CoefficientStates {
 /// the shape is already that.
 fn zeroed(matrix: &mut DMatrix<f64>, rows: usize, columns: usize) {
     if matrix.shape() == (rows, columns) {
-        matrix.fill(0.0);
+        // The slice's fill is a memset; the matrix's goes element by element.
+        matrix.as_mut_slice().fill(0.0);
     } else {
         *matrix = DMatrix::zeros(rows, columns);
     }
