@@ -391,8 +391,9 @@ fn time_varying_likelihood_is_the_linear_kalman_filters() {
         &pass.innovations,
         adskalman_pass(&case, &DMatrix::from_diagonal(&noise), &covariance),
     );
-    let first = &pass.updates[0].2;
-    let last = &pass.updates[pass.updates.len() - 1].2;
+    let updates: Vec<_> = pass.updates().collect();
+    let first = &updates[0].2;
+    let last = &updates[updates.len() - 1].2;
     assert!((first[(0, 0)] - 0.34).abs() < 1e-12, "{first}");
     assert!(first[(0, 0)] >= 2.0 * last[(0, 0)], "{first} {last}");
 }

@@ -519,3 +519,272 @@ fn with_augmented_lateral(
         (structure.outputs.len(), x0.len()),
     );
 }
+
+/// The ATTAS lateral multistep recorded by flight-test-25hz over its first
+/// `duration` seconds, with the `attas-lateral` structure.
+fn attas_lateral_record(
+    duration: f64,
+) -> (
+    aeroid::record::FlightRecord,
+    aeroid::estimation::structure::ModelStructure,
+) {
+    use aeroid::estimation::structure::ModelStructure;
+    use aeroid::record::recorder::{Profile, record_scenario};
+    let mut scenario = Scenario::load("attas-lateral-multistep").unwrap();
+    scenario.duration = duration;
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let (record, _) = record_scenario(&scenario, &profile).unwrap();
+    (record, ModelStructure::load("attas-lateral").unwrap())
+}
+
+/// The `ebm` pass (EKF + modified Bryson–Frazier smoother on the 28
+/// coefficient states, 13 outputs) allocates nothing per grid point in its
+/// forward pass: over the first 30 s of the ATTAS lateral record (751
+/// points) and over all 60 s (1501 points) the EKF makes the same number
+/// of allocations (each after a pass of its length), keeping the scalar
+/// updates (as `ebm` runs it) or the vector ones — the model's linearisation, step and outputs write into
+/// the filter's buffers ([`CoefficientStates`]' `jacobians_into`,
+/// `rate_jacobians_into`, `step_into`, `outputs_into`), what the pass keeps
+/// is reserved once. The backward smoother's only allocations per grid
+/// point are the two vectors of its result there (the smoothed mean and
+/// variances that `kalman::mbf_smooth_variances` returns): exactly
+/// 2 · 750 more over the longer record, none in its sweep back through
+/// the scalar updates (the vector updates' sweep, which `ebm` does not
+/// run, is not counted here).
+/// The buffered calls give the plain calls' numbers bit for bit.
+///
+/// [`CoefficientStates`]: aeroid::estimation::model::coefficient_states::CoefficientStates
+#[test]
+fn an_ebm_pass_allocates_nothing_per_grid_point() {
+    use aeroid::estimation::methods::smoothed_regression::SmootherSetup;
+    use aeroid::estimation::model::state_space::{Jacobians, StateSpaceModel};
+    use aeroid::estimation::solver::extended_kalman::Keep;
+    use nalgebra::{DMatrix, DVector};
+
+    let setups: Vec<SmootherSetup> = [30.0, 60.0]
+        .map(|duration| {
+            let (record, structure) = attas_lateral_record(duration);
+            SmootherSetup::new(&record, &structure, &Default::default()).unwrap()
+        })
+        .into_iter()
+        .collect();
+    let lengths: Vec<usize> = setups.iter().map(|s| s.model.len()).collect();
+    assert_eq!(lengths, [751, 1501]);
+    assert_eq!(setups[1].model.state_count(), 28);
+    assert_eq!(setups[1].model.output_count(), 13);
+    for keep in [Keep::SEQUENTIAL_SMOOTHER, Keep::SMOOTHER] {
+        let mut forward = Vec::new();
+        let mut backward = Vec::new();
+        for setup in &setups {
+            // A first pass at this length leaves its kept buffers in the
+            // thread's pool (`kept`), as a pass of a fit leaves them for
+            // the next: the counted pass reuses them.
+            drop(setup.filter(keep).unwrap());
+            let before = ALLOCATIONS.with(Cell::get);
+            let pass = setup.filter(keep).unwrap();
+            let filtered = ALLOCATIONS.with(Cell::get);
+            let smoothed = SmootherSetup::smooth(&pass, keep);
+            let after = ALLOCATIONS.with(Cell::get);
+            assert!(pass.negative_log_likelihood.is_finite());
+            assert_eq!(smoothed.len(), setup.model.len());
+            assert!(smoothed.iter().all(|(mean, variances)| {
+                mean.iter().all(|v| v.is_finite()) && variances.iter().all(|v| v.is_finite())
+            }));
+            forward.push(filtered - before);
+            backward.push(after - filtered);
+        }
+        println!(
+            "{keep:?}: forward {forward:?}, backward {backward:?} allocations over {lengths:?} points"
+        );
+        assert_eq!(
+            forward[0], forward[1],
+            "the EKF's allocations over {lengths:?} points keeping {keep:?}"
+        );
+        if keep.sequential {
+            assert_eq!(
+                backward[1] - backward[0],
+                2 * (lengths[1] - lengths[0]),
+                "the smoother's allocations over {lengths:?} points: its two result vectors a point, nothing else"
+            );
+        }
+    }
+
+    // The buffered calls are the plain ones, bit for bit, at a state the
+    // filter reached (every Jacobian term non-zero).
+    let setup = &setups[1];
+    let model = &setup.model;
+    let pass = setup.filter(Keep::UPDATES).unwrap();
+    let x = pass.filtered.get(700).unwrap().mean.clone_owned();
+    let same = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits())
+    };
+    let empty = || Jacobians {
+        rates_by_state: DMatrix::zeros(0, 0),
+        rates_by_parameter: DMatrix::zeros(0, 0),
+        outputs_by_state: DMatrix::zeros(0, 0),
+        outputs_by_parameter: DMatrix::zeros(0, 0),
+    };
+    let (mut rates, mut full) = (empty(), empty());
+    let (mut outputs, mut next) = (DVector::zeros(0), DVector::zeros(0));
+    let t = model.time(700) + 0.013;
+    model
+        .rate_jacobians_into(t, x.as_slice(), &[], &mut rates)
+        .unwrap();
+    model
+        .jacobians_into(t, x.as_slice(), &[], &mut full, Some(&mut outputs))
+        .unwrap();
+    model.step_into(700, x.as_slice(), &[], &mut next).unwrap();
+    // Again into the grown buffers: no allocation.
+    let before = ALLOCATIONS.with(Cell::get);
+    model
+        .rate_jacobians_into(t, x.as_slice(), &[], &mut rates)
+        .unwrap();
+    model
+        .jacobians_into(t, x.as_slice(), &[], &mut full, Some(&mut outputs))
+        .unwrap();
+    model
+        .outputs_into(t, x.as_slice(), &[], &mut outputs)
+        .unwrap();
+    model.step_into(700, x.as_slice(), &[], &mut next).unwrap();
+    assert_eq!(ALLOCATIONS.with(Cell::get), before);
+    let plain = model.jacobians(t, x.as_slice(), &[]).unwrap();
+    assert!(plain.rates_by_state.iter().filter(|&&v| v != 0.0).count() > 60);
+    assert!(same(
+        plain.rates_by_state.as_slice(),
+        rates.rates_by_state.as_slice()
+    ));
+    assert!(same(
+        plain.rates_by_state.as_slice(),
+        full.rates_by_state.as_slice()
+    ));
+    assert!(same(
+        plain.outputs_by_state.as_slice(),
+        full.outputs_by_state.as_slice()
+    ));
+    assert_eq!(full.rates_by_parameter.shape(), (28, 0));
+    assert_eq!(full.outputs_by_parameter.shape(), (13, 0));
+    let y = model.outputs(t, x.as_slice(), &[]).unwrap();
+    assert!(same(y.as_slice(), outputs.as_slice()));
+    let stepped = model.step(700, x.as_slice(), &[]).unwrap();
+    assert!(same(stepped.as_slice(), next.as_slice()));
+}
+
+/// The filter error method's passes at given θ, F and R allocate nothing
+/// per grid point: on the ATTAS lateral driven view (the model `fem`
+/// fits), F on the first three states, over the first 30 s of the record
+/// (751 points) and over all 60 s (1501 points), the steady-gain pass
+/// (diagonal R, and full R with its whitening) and the time-varying-gain
+/// pass (the EKF, then its innovations and S_k copied into buffers
+/// reserved once) each make the same number of allocations: their set-up
+/// (the gain's Riccati solution, the pass's buffers), which does not grow
+/// with the record. Each view's second pass is counted (its first grows
+/// the view's own buffers).
+#[test]
+fn filter_error_passes_allocate_nothing_per_grid_point() {
+    use aeroid::estimation::methods::filter_error::{
+        InnovationCovariance, steady_state_pass, time_varying_pass,
+    };
+    use aeroid::estimation::model::observations::Observations;
+    use aeroid::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
+    use aeroid::estimation::solver::kalman::Gaussian;
+    use nalgebra::{DMatrix, DVector};
+
+    let deg = std::f64::consts::PI / 180.0;
+    let variances = DVector::from_vec(
+        [0.1 * deg, 0.002, 0.002, 0.1 * deg, 0.02 / 9.80665]
+            .iter()
+            .map(|s| 4.0 * s * s)
+            .collect(),
+    );
+    let mut counts = Vec::new();
+    let mut lengths = Vec::new();
+    for duration in [30.0, 60.0] {
+        let (record, structure) = attas_lateral_record(duration);
+        let (view, x0) =
+            DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None)
+                .unwrap();
+        let theta = view.parameters();
+        let n = view.state_count();
+        let observations = Observations::from_record(
+            &record,
+            &structure.outputs,
+            view.time(0),
+            view.time(1) - view.time(0),
+            view.len(),
+        )
+        .unwrap();
+        let measurements: usize = observations.at.iter().map(Vec::len).sum();
+        let distribution = DVector::from_fn(n, |i, _| if i < 3 { 1e-3 } else { 0.0 });
+        let diagonal = InnovationCovariance::diagonal(&variances);
+        let full = InnovationCovariance::full(DMatrix::from_diagonal(&variances)).unwrap();
+        let steady = |innovation: &InnovationCovariance| {
+            let pass = || {
+                steady_state_pass(
+                    &view,
+                    theta.as_slice(),
+                    &x0,
+                    &distribution,
+                    innovation,
+                    &observations,
+                )
+                .unwrap()
+            };
+            pass();
+            let before = ALLOCATIONS.with(Cell::get);
+            let pass = pass();
+            let after = ALLOCATIONS.with(Cell::get);
+            assert_eq!(pass.innovations.len(), measurements);
+            assert!(pass.negative_log_likelihood.is_finite());
+            assert!(pass.steady.gain.amax() > 0.0, "process noise gives a gain");
+            after - before
+        };
+        let initial = Gaussian {
+            mean: x0.clone(),
+            covariance: DMatrix::from_diagonal_element(n, n, 1e-4),
+        };
+        let time_varying = || {
+            let pass = || {
+                time_varying_pass(
+                    &view,
+                    theta.as_slice(),
+                    &initial,
+                    &distribution,
+                    &variances,
+                    &observations,
+                )
+                .unwrap()
+            };
+            pass();
+            let before = ALLOCATIONS.with(Cell::get);
+            let pass = pass();
+            let after = ALLOCATIONS.with(Cell::get);
+            assert_eq!(pass.innovations.len(), measurements);
+            assert!(pass.negative_log_likelihood.is_finite());
+            // The updates read back the pass's innovations, in order, and
+            // each S_k is symmetric with R's variances as its floor.
+            let mut read = Vec::new();
+            for (outputs, innovation, covariance) in pass.updates() {
+                assert_eq!(outputs.len(), innovation.len());
+                assert_eq!(covariance.shape(), (outputs.len(), outputs.len()));
+                let asymmetry = (covariance - covariance.transpose()).amax();
+                assert!(asymmetry <= 1e-12 * covariance.amax(), "{covariance}");
+                for (i, &o) in outputs.iter().enumerate() {
+                    assert!(covariance[(i, i)] >= variances[o]);
+                }
+                read.extend(innovation.iter().copied());
+            }
+            assert_eq!(read, pass.innovations);
+            after - before
+        };
+        counts.push([steady(&diagonal), steady(&full), time_varying()]);
+        lengths.push(view.len());
+    }
+    println!(
+        "steady (diagonal R, full R), time-varying: {counts:?} allocations over {lengths:?} points"
+    );
+    assert_eq!(lengths, [751, 1501]);
+    assert_eq!(
+        counts[0], counts[1],
+        "allocations over {lengths:?} points: steady (diagonal R, full R), time-varying"
+    );
+}

@@ -218,7 +218,7 @@ use crate::estimation::solver::kalman::{self, Gaussian, SteadyState};
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::integrator::Interpolation;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -536,7 +536,7 @@ impl InnovationCovariance {
 
     /// A full R; an error when it is not positive definite.
     pub fn full(matrix: DMatrix<f64>) -> Result<InnovationCovariance> {
-        let (root, log_det) = lower_root(&matrix)?;
+        let (root, log_det) = lower_root(matrix.as_view())?;
         let n = root.nrows();
         let inverse = root
             .solve_lower_triangular(&DMatrix::identity(n, n))
@@ -731,30 +731,35 @@ fn filter_steadily<M: StateSpaceModel + ?Sized>(
         outputs_by_parameter: DMatrix::zeros(0, 0),
     };
     let mut predicted = DVector::zeros(outputs);
+    let mut whitened = DVector::zeros(outputs);
     let mut row = 0;
     let mut state = initial.clone();
+    let mut next = DVector::zeros(n);
     for (k, present) in observations.at.iter().enumerate() {
         if k > 0 {
-            let stepped = match tangent {
-                Some(ref tangent) => model
-                    .step_sensitivity(
-                        k - 1,
-                        state.as_slice(),
-                        theta,
-                        tangent.columns,
-                        &mut sensitivity,
-                    )
-                    .map_err(|e| at_time(e, model.time(k - 1)))?,
-                None => Some(
+            match tangent {
+                Some(ref tangent) => {
+                    let stepped = model
+                        .step_sensitivity(
+                            k - 1,
+                            state.as_slice(),
+                            theta,
+                            tangent.columns,
+                            &mut sensitivity,
+                        )
+                        .map_err(|e| at_time(e, model.time(k - 1)))?;
+                    let Some(stepped) = stepped else {
+                        return Ok(false);
+                    };
+                    state = stepped;
+                }
+                None => {
                     model
-                        .step(k - 1, state.as_slice(), theta)
-                        .map_err(|e| at_time(e, model.time(k - 1)))?,
-                ),
-            };
-            let Some(stepped) = stepped else {
-                return Ok(false);
-            };
-            state = stepped;
+                        .step_into(k - 1, state.as_slice(), theta, &mut next)
+                        .map_err(|e| at_time(e, model.time(k - 1)))?;
+                    std::mem::swap(&mut state, &mut next);
+                }
+            }
         }
         if present.is_empty() {
             continue;
@@ -782,7 +787,7 @@ fn filter_steadily<M: StateSpaceModel + ?Sized>(
                 }
                 correction.fill(0.0);
             }
-            None => predicted = model.outputs(t, state.as_slice(), theta)?,
+            None => model.outputs_into(t, state.as_slice(), theta, &mut predicted)?,
         }
         // ½·(νᵀR⁻¹ν + ln det R) over the outputs measured here: with R
         // full at a point that measures them all, else output by output.
@@ -815,7 +820,7 @@ fn filter_steadily<M: StateSpaceModel + ?Sized>(
             row += 1;
         }
         if let Some((inverse, log_det)) = joint {
-            let whitened = inverse * &innovations;
+            inverse.mul_to(&innovations, &mut whitened);
             pass.negative_log_likelihood += 0.5 * (whitened.norm_squared() + log_det);
         }
         if tangent.is_some() {
@@ -840,9 +845,31 @@ pub struct TimeVaryingPass {
     /// ½·Σ_k (ν_kᵀS_k⁻¹ν_k + ln det S_k) over the grid points with
     /// measurements (without 2π), S_k = C_k·P̃_k·C_kᵀ + G·Gᵀ.
     pub negative_log_likelihood: f64,
+    /// The output of each innovation, in the same order.
+    outputs: Vec<usize>,
+    /// At each grid point with measurements: where its innovations start,
+    /// their number m, where its S_k (m × m, column-major) starts in
+    /// `covariances`.
+    spans: Vec<(usize, usize, usize)>,
+    /// The S_k, grid point after grid point.
+    covariances: Vec<f64>,
+}
+
+impl TimeVaryingPass {
     /// At each grid point with measurements: the outputs measured, ν and
     /// S_k over them.
-    pub updates: Vec<(Vec<usize>, DVector<f64>, DMatrix<f64>)>,
+    pub fn updates(
+        &self,
+    ) -> impl ExactSizeIterator<Item = (&[usize], DVectorView<'_, f64>, DMatrixView<'_, f64>)> + '_
+    {
+        self.spans.iter().map(|&(start, m, at)| {
+            (
+                &self.outputs[start..start + m],
+                DVectorView::from_slice(&self.innovations[start..start + m], m),
+                DMatrixView::from_slice(&self.covariances[at..at + m * m], m, m),
+            )
+        })
+    }
 }
 
 /// One pass of the time-varying (extended) filter over `observations`:
@@ -885,32 +912,40 @@ pub fn time_varying_pass<M: StateSpaceModel + ?Sized>(
         Discretisation::Exact,
         Keep::UPDATES,
     )?;
+    // Every buffer reserved once: no allocation per grid point.
     let count: usize = observations.at.iter().map(Vec::len).sum();
+    let points = observations.at.iter().filter(|p| !p.is_empty()).count();
+    let squares: usize = observations.at.iter().map(|p| p.len() * p.len()).sum();
     let mut pass = TimeVaryingPass {
         innovations: Vec::with_capacity(count),
         predicted: Vec::with_capacity(count),
         negative_log_likelihood: filtered.negative_log_likelihood,
-        updates: Vec::new(),
+        outputs: Vec::with_capacity(count),
+        spans: Vec::with_capacity(points),
+        covariances: Vec::with_capacity(squares),
     };
     for (present, update) in observations.at.iter().zip(filtered.measured.iter()) {
         let Some(update) = update else { continue };
-        for (i, &(_, z)) in present.iter().enumerate() {
+        pass.spans.push((
+            pass.innovations.len(),
+            present.len(),
+            pass.covariances.len(),
+        ));
+        for (i, &(o, z)) in present.iter().enumerate() {
             pass.innovations.push(update.innovation[i]);
             pass.predicted.push(z - update.innovation[i]);
+            pass.outputs.push(o);
         }
-        pass.updates.push((
-            present.iter().map(|&(o, _)| o).collect(),
-            update.innovation.into_owned(),
-            update.innovation_covariance.into_owned(),
-        ));
+        pass.covariances
+            .extend(update.innovation_covariance.iter().copied());
     }
     Ok(pass)
 }
 
 /// L of S = L·Lᵀ and ln det S; an error when S is not positive definite.
-fn lower_root(covariance: &DMatrix<f64>) -> Result<(DMatrix<f64>, f64)> {
+fn lower_root(covariance: DMatrixView<'_, f64>) -> Result<(DMatrix<f64>, f64)> {
     let root = covariance
-        .clone()
+        .clone_owned()
         .cholesky()
         .ok_or_else(|| Error::Other("an innovation covariance is not positive definite".into()))?
         .unpack();
@@ -1388,8 +1423,8 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         let count = self.model.output_count();
         let mut gradient = DVector::<f64>::zeros(count);
         let mut information = DMatrix::<f64>::zeros(count, count);
-        for (rows, innovation, covariance) in &pass.updates {
-            let Some(inverse) = covariance.clone().cholesky().map(|c| c.inverse()) else {
+        for (rows, innovation, covariance) in pass.updates() {
+            let Some(inverse) = covariance.clone_owned().cholesky().map(|c| c.inverse()) else {
                 continue;
             };
             let weighted = &inverse * innovation;
@@ -1461,11 +1496,11 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// the negative log-likelihood less ½·Σ_k ln det D, a constant between
     /// re-weightings.
     fn time_varying_residuals(&self, pass: &TimeVaryingPass) -> Result<DVector<f64>> {
-        let mut residuals = Vec::with_capacity(pass.innovations.len() + pass.updates.len());
-        for (rows, innovation, covariance) in &pass.updates {
+        let mut residuals = Vec::with_capacity(pass.innovations.len() + pass.spans.len());
+        for (rows, innovation, covariance) in pass.updates() {
             let (root, log_det) = lower_root(covariance)?;
             let whitened = root
-                .solve_lower_triangular(innovation)
+                .solve_lower_triangular(&innovation)
                 .ok_or_else(|| Error::Other("a singular innovation covariance".into()))?;
             residuals.extend(whitened.iter());
             let noise: f64 = rows.iter().map(|&o| self.noise_floor[o].ln()).sum();
@@ -1493,13 +1528,12 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             ));
         };
         let roots = here
-            .updates
-            .iter()
+            .updates()
             .map(|(_, _, covariance)| lower_root(covariance).map(|(root, _)| root))
             .collect::<Result<Vec<_>>>()?;
         let mut pseudo = Vec::new();
-        for ((_, innovation, _), root) in here.updates.iter().zip(&roots) {
-            let w = root.solve_lower_triangular(innovation).unwrap_or_default();
+        for ((_, innovation, _), root) in here.updates().zip(&roots) {
+            let w = root.solve_lower_triangular(&innovation).unwrap_or_default();
             pseudo.extend(w.iter());
             let m = w.len();
             for b in 0..m {
@@ -1529,7 +1563,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             };
             let mut column = Vec::with_capacity(pseudo.len());
             for (((_, nu, s), (_, moved_nu, moved_s)), root) in
-                here.updates.iter().zip(&moved_pass.updates).zip(&roots)
+                here.updates().zip(moved_pass.updates()).zip(&roots)
             {
                 let d_innovation = (moved_nu - nu) / step;
                 let d_covariance = (moved_s - s) / step;

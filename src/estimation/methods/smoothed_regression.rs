@@ -888,9 +888,176 @@ pub fn smooth(
     )
 }
 
-/// [`smooth`] with the filter keeping what `keep` says: the smoother goes
-/// back through the scalar updates ([`Keep::sequential`]) or the vector
-/// updates.
+/// The `ebm` pass set up on a record, as [`smooth`] runs it: the
+/// coefficient-state model on its grid (the fastest observation's sample
+/// period, cut to `max_step`), the filter's initial estimate and noise,
+/// and the observations on the grid.
+pub struct SmootherSetup {
+    pub model: CoefficientStates,
+    pub initial: Gaussian,
+    pub noise: Noise,
+    pub observations: Observations,
+    /// The grid's times, first time and step.
+    times: Vec<f64>,
+    start: f64,
+    step: f64,
+    /// Grid points to a sample period.
+    parts: usize,
+    period: f64,
+    names: Vec<String>,
+    absent: Vec<String>,
+    derived: Vec<String>,
+    markov: GaussMarkov,
+    altitude_note: Option<String>,
+    thrust_measured: bool,
+}
+
+impl SmootherSetup {
+    /// The set-up of [`smooth`] on `record`.
+    pub fn new(
+        record: &FlightRecord,
+        structure: &ModelStructure,
+        settings: &SmoothedRegressionSettings,
+    ) -> Result<SmootherSetup> {
+        let plans = equation_error::plans(structure, METHOD).unwrap_or_default();
+        SmootherSetup::with_plans(record, structure, settings, &plans)
+    }
+
+    fn with_plans(
+        record: &FlightRecord,
+        structure: &ModelStructure,
+        settings: &SmoothedRegressionSettings,
+        plans: &[Plan],
+    ) -> Result<SmootherSetup> {
+        let (outputs, absent) = observations_and_inputs(record, structure, settings, plans)?;
+        let (record, altitude_note) = with_altitude(record);
+        let record = record.as_ref();
+        let names: Vec<String> = outputs.iter().map(|o| o.channel().to_string()).collect();
+        let (start, end) = fitting_window(record, &settings.observations, None)?;
+        let mut fastest: f64 = 0.0;
+        for name in &names {
+            fastest = fastest.max(record.channel(name)?.rate);
+        }
+        if !(fastest > 0.0 && fastest.is_finite()) {
+            return Err(Error::Other(
+                "ebm: the observations have no sample rate".into(),
+            ));
+        }
+        let period = 1.0 / fastest;
+        let parts = ((period / settings.max_step) - 1e-9).ceil().max(1.0) as usize;
+        let step = period / parts as f64;
+        let len = ((end - start) / step + 1e-9).floor() as usize + 1;
+        if len < 3 * parts {
+            return Err(Error::Refused(Refusal::TooFewData {
+                method: METHOD.to_string(),
+                data: len / parts,
+                unknowns: 3,
+            }));
+        }
+        let times: Vec<f64> = (0..len).map(|k| start + k as f64 * step).collect();
+        let (thrust, thrust_measured) = thrust_input(record, structure, &times)?;
+        let record = unwrapped_yaw(record);
+        let mut model = CoefficientStates::new(
+            structure.aircraft.clone(),
+            start,
+            step,
+            thrust,
+            outputs.clone(),
+        )?;
+        if thrust_measured {
+            model = model.with_measured_thrust();
+        }
+        let observations = Observations::from_record(&record, &names, start, step, len)?;
+        let defaults = SmoothedRegressionSettings::default().measurement_noise;
+        let mut derived = Vec::new();
+        let measurement = DVector::from_iterator(
+            names.len(),
+            names.iter().map(|name| {
+                let computed = record
+                    .channel(name)
+                    .is_ok_and(|c| crate::prep::derive::is_derived(&c.source))
+                    && settings.derived_measurement_noise.contains_key(name);
+                if computed {
+                    derived.push(name.clone());
+                }
+                let sigma = if computed {
+                    settings.derived_measurement_noise[name]
+                } else {
+                    settings
+                        .measurement_noise
+                        .get(name)
+                        .or_else(|| defaults.get(name))
+                        .copied()
+                        .unwrap_or(0.0)
+                };
+                let resolution = record
+                    .channel(name)
+                    .ok()
+                    .and_then(|c| c.resolution)
+                    .unwrap_or(0.0);
+                (sigma * sigma + resolution * resolution / 12.0).max(1e-16)
+            }),
+        );
+        let (initial, markov) = initial_estimate(&record, &model, settings, start, period);
+        let noise = Noise {
+            process: process_noise(settings, &markov),
+            measurement,
+        };
+        Ok(SmootherSetup {
+            model,
+            initial,
+            noise,
+            observations,
+            times,
+            start,
+            step,
+            parts,
+            period,
+            names,
+            absent,
+            derived,
+            markov,
+            altitude_note,
+            thrust_measured,
+        })
+    }
+
+    /// The forward EKF over the grid (its covariance's transition by the
+    /// second-order series, [`Discretisation::SecondOrder`]), keeping what
+    /// `keep` says.
+    pub fn filter(&self, keep: Keep) -> Result<extended_kalman::Pass> {
+        extended_kalman::filter_with(
+            &self.model,
+            &[],
+            self.initial.clone(),
+            &self.noise,
+            &self.observations,
+            Discretisation::SecondOrder,
+            keep,
+        )
+    }
+
+    /// The modified Bryson–Frazier smoother back through `pass` (a
+    /// [`SmootherSetup::filter`] that kept what `keep` says: the smoother
+    /// goes back through the scalar updates ([`Keep::sequential`]) or the
+    /// vector updates): the smoothed mean and variances at every grid
+    /// point, all the histories read of it.
+    pub fn smooth(pass: &extended_kalman::Pass, keep: Keep) -> Vec<(DVector<f64>, DVector<f64>)> {
+        let updates: &dyn kalman::SmootherUpdates = if keep.sequential {
+            &pass.scalar_updates
+        } else {
+            &pass.measured
+        };
+        if keep.sparse_transitions {
+            kalman::mbf_smooth_variances(&pass.predicted, updates, &pass.sparse_transitions)
+        } else {
+            kalman::mbf_smooth_variances(&pass.predicted, updates, &pass.transitions)
+        }
+    }
+}
+
+/// [`smooth`] with the filter keeping what `keep` says
+/// ([`SmootherSetup::smooth`]).
 fn smooth_with(
     record: &FlightRecord,
     structure: &ModelStructure,
@@ -898,101 +1065,28 @@ fn smooth_with(
     plans: &[Plan],
     keep: Keep,
 ) -> Result<Smoothed> {
-    let (outputs, absent) = observations_and_inputs(record, structure, settings, plans)?;
-    let (record, altitude_note) = with_altitude(record);
-    let record = record.as_ref();
-    let names: Vec<String> = outputs.iter().map(|o| o.channel().to_string()).collect();
-    let (start, end) = fitting_window(record, &settings.observations, None)?;
-    let mut fastest: f64 = 0.0;
-    for name in &names {
-        fastest = fastest.max(record.channel(name)?.rate);
-    }
-    if !(fastest > 0.0 && fastest.is_finite()) {
-        return Err(Error::Other(
-            "ebm: the observations have no sample rate".into(),
-        ));
-    }
-    let period = 1.0 / fastest;
-    let parts = ((period / settings.max_step) - 1e-9).ceil().max(1.0) as usize;
-    let step = period / parts as f64;
-    let len = ((end - start) / step + 1e-9).floor() as usize + 1;
-    if len < 3 * parts {
-        return Err(Error::Refused(Refusal::TooFewData {
-            method: METHOD.to_string(),
-            data: len / parts,
-            unknowns: 3,
-        }));
-    }
-    let times: Vec<f64> = (0..len).map(|k| start + k as f64 * step).collect();
-    let (thrust, thrust_measured) = thrust_input(record, structure, &times)?;
-    let record = unwrapped_yaw(record);
-    let mut model = CoefficientStates::new(
-        structure.aircraft.clone(),
+    let setup = SmootherSetup::with_plans(record, structure, settings, plans)?;
+    let pass = setup.filter(keep)?;
+    // The histories at the sample instants: every `parts`-th grid point.
+    let mut smoothed = SmootherSetup::smooth(&pass, keep);
+    drop(pass);
+    let SmootherSetup {
+        model,
+        observations,
+        times,
         start,
         step,
-        thrust,
-        outputs.clone(),
-    )?;
-    if thrust_measured {
-        model = model.with_measured_thrust();
-    }
-    let observations = Observations::from_record(&record, &names, start, step, len)?;
-    let defaults = SmoothedRegressionSettings::default().measurement_noise;
-    let mut derived = Vec::new();
-    let measurement = DVector::from_iterator(
-        names.len(),
-        names.iter().map(|name| {
-            let computed = record
-                .channel(name)
-                .is_ok_and(|c| crate::prep::derive::is_derived(&c.source))
-                && settings.derived_measurement_noise.contains_key(name);
-            if computed {
-                derived.push(name.clone());
-            }
-            let sigma = if computed {
-                settings.derived_measurement_noise[name]
-            } else {
-                settings
-                    .measurement_noise
-                    .get(name)
-                    .or_else(|| defaults.get(name))
-                    .copied()
-                    .unwrap_or(0.0)
-            };
-            let resolution = record
-                .channel(name)
-                .ok()
-                .and_then(|c| c.resolution)
-                .unwrap_or(0.0);
-            (sigma * sigma + resolution * resolution / 12.0).max(1e-16)
-        }),
-    );
-    let (initial, markov) = initial_estimate(&record, &model, settings, start, period);
-    let noise = Noise {
-        process: process_noise(settings, &markov),
-        measurement,
-    };
-    let pass = extended_kalman::filter_with(
-        &model,
-        &[],
-        initial,
-        &noise,
-        &observations,
-        Discretisation::SecondOrder,
-        keep,
-    )?;
-    // The histories at the sample instants: every `parts`-th grid point.
-    // The means and variances are all the histories read of the smoother.
-    let updates: &dyn kalman::SmootherUpdates = if keep.sequential {
-        &pass.scalar_updates
-    } else {
-        &pass.measured
-    };
-    let mut smoothed = if keep.sparse_transitions {
-        kalman::mbf_smooth_variances(&pass.predicted, updates, &pass.sparse_transitions)
-    } else {
-        kalman::mbf_smooth_variances(&pass.predicted, updates, &pass.transitions)
-    };
+        parts,
+        period,
+        names,
+        absent,
+        derived,
+        markov,
+        altitude_note,
+        thrust_measured,
+        ..
+    } = setup;
+    let len = model.len();
     let mut times = times;
     if parts > 1 {
         smoothed = smoothed.into_iter().step_by(parts).collect();
@@ -1043,11 +1137,14 @@ fn smooth_with(
             "thrust: the record's 'thrust' channel, along the aircraft's thrust line, not the throttle and engine model".into(),
         );
     }
-    let deviations: Vec<DVector<f64>> = smoothed
-        .iter()
-        .map(|(_, variances)| variances.map(|v| v.max(0.0).sqrt()))
-        .collect();
-    let states: Vec<DVector<f64>> = smoothed.into_iter().map(|(mean, _)| mean).collect();
+    // The standard deviations in the variances' own vectors.
+    let (states, deviations): (Vec<DVector<f64>>, Vec<DVector<f64>>) = smoothed
+        .into_iter()
+        .map(|(mean, mut variances)| {
+            variances.apply(|v| *v = v.max(0.0).sqrt());
+            (mean, variances)
+        })
+        .unzip();
     notes.push(determination_note(&states, &deviations));
     Ok(Smoothed {
         times,

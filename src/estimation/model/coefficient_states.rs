@@ -45,6 +45,7 @@
 
 use super::state_space::{Jacobians, StateSpaceModel};
 use crate::error::{Error, Result};
+use crate::estimation::solver::kalman::resize_vector;
 use crate::sim::aircraft::Aircraft;
 use crate::sim::atmosphere::{Air, Atmosphere, GAS_CONSTANT};
 use crate::units::STANDARD_GRAVITY;
@@ -336,45 +337,14 @@ impl CoefficientStates {
             (force * loads.scale + loads.thrust) / (self.aircraft.mass.mass * STANDARD_GRAVITY);
         Vector3::new(specific.x, specific.y, -specific.z)
     }
-}
 
-impl StateSpaceModel for CoefficientStates {
-    fn state_count(&self) -> usize {
-        STATE_COUNT
-    }
-
-    fn output_count(&self) -> usize {
-        self.outputs.len()
-    }
-
-    fn parameter_count(&self) -> usize {
-        0
-    }
-
-    fn len(&self) -> usize {
-        self.throttle.len()
-    }
-
-    fn time(&self, k: usize) -> f64 {
-        self.start + k as f64 * self.step
-    }
-
-    fn rates(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
-        self.check(x)?;
-        Ok(DVector::from_column_slice(
-            self.derivative(x, self.throttle_at(t)).as_slice(),
-        ))
-    }
-
-    fn outputs(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
-        self.check(x)?;
-        let loads = self.loads(x, self.throttle_at(t));
-        let n = self.load_factors(x, &loads);
+    /// y = h(x) of the observed outputs into `into` (one value per output).
+    fn write_outputs(&self, x: &[f64], loads: &Loads, into: &mut [f64]) {
+        let n = self.load_factors(x, loads);
         let (u, v, w) = (x[U], x[U + 1], x[U + 2]);
         let speed = (u * u + v * v + w * w).sqrt();
-        Ok(DVector::from_iterator(
-            self.outputs.len(),
-            self.outputs.iter().map(|output| match output {
+        for (into, output) in into.iter_mut().zip(&self.outputs) {
+            *into = match output {
                 Output::Nx => n.x,
                 Output::Ny => n.y,
                 Output::Nz => n.z,
@@ -388,18 +358,19 @@ impl StateSpaceModel for CoefficientStates {
                 Output::P => x[P],
                 Output::Q => x[P + 1],
                 Output::R => x[P + 2],
-            }),
-        ))
+            };
+        }
     }
 
-    /// ∂f/∂x and ∂h/∂x, analytic: the force and moment terms through
-    /// q̄S = ½ρ(h)·S·(u² + v² + w²) (∂q̄S/∂u = ρ·S·u, ∂q̄S/∂h = q̄S·d ln ρ/dh)
-    /// and the thrust lapse (∂T/∂h = n·T·d ln ρ/dh); the gyroscopic term
-    /// ∂(ω × I·ω)/∂ω = \[ω\]×·I − \[I·ω\]×; gravity, Euler kinematics and
-    /// ḣ differentiated term by term; the Gauss–Markov chains' ones.
-    fn jacobians(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<Jacobians> {
-        self.check(x)?;
-        let loads = self.loads(x, self.throttle_at(t));
+    /// ∂f/∂x at `x` into `a` and, when given, ∂h/∂x into `outputs`
+    /// ([`CoefficientStates::jacobians`]' equations), every entry written.
+    fn linearise(
+        &self,
+        x: &[f64],
+        loads: &Loads,
+        a: &mut DMatrix<f64>,
+        outputs: Option<&mut DMatrix<f64>>,
+    ) {
         let mass = &self.aircraft.mass;
         let (force, moment) = Self::coefficients(x);
         let velocity = Vector3::new(x[U], x[U + 1], x[U + 2]);
@@ -415,7 +386,7 @@ impl StateSpaceModel for CoefficientStates {
             self.aircraft.propulsion.density_exponent
         };
         let arms = self.arms();
-        let mut a = DMatrix::<f64>::zeros(STATE_COUNT, STATE_COUNT);
+        zeroed(a, STATE_COUNT, STATE_COUNT);
         // Translational: F/m, gravity, −ω × V.
         let thrust_by_h = loads.thrust * (lapse * slope);
         for j in 0..3 {
@@ -494,7 +465,10 @@ impl StateSpaceModel for CoefficientStates {
             a[(c + 1, c + 2)] = 1.0;
         }
         // Outputs.
-        let mut outputs = DMatrix::<f64>::zeros(self.outputs.len(), STATE_COUNT);
+        let Some(outputs) = outputs else {
+            return;
+        };
+        zeroed(outputs, self.outputs.len(), STATE_COUNT);
         let weight = mass.mass * g;
         let speed_squared = u * u + v * v + w * w;
         let speed = speed_squared.sqrt();
@@ -542,16 +516,143 @@ impl StateSpaceModel for CoefficientStates {
                 Output::R => set(P + 2, 1.0),
             }
         }
-        Ok(Jacobians {
-            rates_by_state: a,
+    }
+}
+
+/// `matrix` as a `rows` × `columns` matrix of zeros, its storage kept when
+/// the shape is already that.
+fn zeroed(matrix: &mut DMatrix<f64>, rows: usize, columns: usize) {
+    if matrix.shape() == (rows, columns) {
+        // The slice's fill is a memset; the matrix's goes element by element.
+        matrix.as_mut_slice().fill(0.0);
+    } else {
+        *matrix = DMatrix::zeros(rows, columns);
+    }
+}
+
+impl StateSpaceModel for CoefficientStates {
+    fn state_count(&self) -> usize {
+        STATE_COUNT
+    }
+
+    fn output_count(&self) -> usize {
+        self.outputs.len()
+    }
+
+    fn parameter_count(&self) -> usize {
+        0
+    }
+
+    fn len(&self) -> usize {
+        self.throttle.len()
+    }
+
+    fn time(&self, k: usize) -> f64 {
+        self.start + k as f64 * self.step
+    }
+
+    fn rates(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
+        self.check(x)?;
+        Ok(DVector::from_column_slice(
+            self.derivative(x, self.throttle_at(t)).as_slice(),
+        ))
+    }
+
+    fn outputs(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
+        let mut y = DVector::zeros(self.outputs.len());
+        self.outputs_into(t, x, &[], &mut y)?;
+        Ok(y)
+    }
+
+    /// ∂f/∂x and ∂h/∂x, analytic: the force and moment terms through
+    /// q̄S = ½ρ(h)·S·(u² + v² + w²) (∂q̄S/∂u = ρ·S·u, ∂q̄S/∂h = q̄S·d ln ρ/dh)
+    /// and the thrust lapse (∂T/∂h = n·T·d ln ρ/dh); the gyroscopic term
+    /// ∂(ω × I·ω)/∂ω = \[ω\]×·I − \[I·ω\]×; gravity, Euler kinematics and
+    /// ḣ differentiated term by term; the Gauss–Markov chains' ones.
+    fn jacobians(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<Jacobians> {
+        let mut jacobians = Jacobians {
+            rates_by_state: DMatrix::zeros(0, 0),
             rates_by_parameter: DMatrix::zeros(STATE_COUNT, 0),
-            outputs_by_state: outputs,
+            outputs_by_state: DMatrix::zeros(0, 0),
             outputs_by_parameter: DMatrix::zeros(self.outputs.len(), 0),
-        })
+        };
+        self.jacobians_into(t, x, &[], &mut jacobians, None)?;
+        Ok(jacobians)
+    }
+
+    /// [`CoefficientStates::jacobians`] into `into`'s buffers (grown on the
+    /// first call, then written in place: no allocation), with `outputs`
+    /// h(x) into it from the same loads: the same numbers bit for bit.
+    fn jacobians_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        _theta: &[f64],
+        into: &mut Jacobians,
+        outputs: Option<&mut DVector<f64>>,
+    ) -> Result<()> {
+        self.check(x)?;
+        let loads = self.loads(x, self.throttle_at(t));
+        if let Some(outputs) = outputs {
+            resize_vector(outputs, self.outputs.len());
+            self.write_outputs(x, &loads, outputs.as_mut_slice());
+        }
+        self.linearise(
+            x,
+            &loads,
+            &mut into.rates_by_state,
+            Some(&mut into.outputs_by_state),
+        );
+        zeroed(&mut into.rates_by_parameter, STATE_COUNT, 0);
+        zeroed(&mut into.outputs_by_parameter, self.outputs.len(), 0);
+        Ok(())
+    }
+
+    /// ∂f/∂x alone (no output Jacobian), into `into.rates_by_state`.
+    fn rate_jacobians_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        _theta: &[f64],
+        into: &mut Jacobians,
+    ) -> Result<()> {
+        self.check(x)?;
+        let loads = self.loads(x, self.throttle_at(t));
+        self.linearise(x, &loads, &mut into.rates_by_state, None);
+        zeroed(&mut into.rates_by_parameter, STATE_COUNT, 0);
+        Ok(())
+    }
+
+    fn outputs_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        _theta: &[f64],
+        into: &mut DVector<f64>,
+    ) -> Result<()> {
+        self.check(x)?;
+        let loads = self.loads(x, self.throttle_at(t));
+        resize_vector(into, self.outputs.len());
+        self.write_outputs(x, &loads, into.as_mut_slice());
+        Ok(())
     }
 
     /// One RK4 step from grid point k, the throttle linear inside it.
     fn step(&self, k: usize, x: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
+        let mut next = DVector::zeros(STATE_COUNT);
+        self.step_into(k, x, &[], &mut next)?;
+        Ok(next)
+    }
+
+    /// [`CoefficientStates::step`] into `into` (the step itself on the
+    /// stack; `into` grown on the first call only).
+    fn step_into(
+        &self,
+        k: usize,
+        x: &[f64],
+        _theta: &[f64],
+        into: &mut DVector<f64>,
+    ) -> Result<()> {
         self.check(x)?;
         if k + 1 >= self.len() {
             return Err(Error::Other(format!(
@@ -570,7 +671,9 @@ impl StateSpaceModel for CoefficientStates {
                 self.time(k)
             )));
         }
-        Ok(DVector::from_column_slice(next.as_slice()))
+        resize_vector(into, STATE_COUNT);
+        into.copy_from(&next);
+        Ok(())
     }
 }
 
