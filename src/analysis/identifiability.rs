@@ -69,7 +69,27 @@
 //! rates, load factors, altitude): inputs, engine and weight channels,
 //! inertial navigation (which integrates the unknown wind) and the
 //! recorder's wind estimate are left out, each with its reason.
+//!
+//! # The sampling rule
+//! Wang et al. 2012 (§2, item 3) advise sampling "at least 25 times" the
+//! frequency of the airplane's modes. Beside each bound the analysis names
+//! the fastest mode the parameter moves, from the aircraft linearised at the
+//! scenario's trim ([`crate::analysis::linearize`]): for every classified
+//! mode (short period, phugoid, Dutch roll, roll, spiral) the elasticity
+//! |λ(θ_j + h) − λ(θ_j − h)|/|λ| · s_j/(2h), s_j = max(|θ_j|, 10⁻²),
+//! h = 10⁻³·s_j, the relative move of the eigenvalue per relative move of
+//! the parameter, the aircraft trimmed again for each. The fastest mode
+//! whose elasticity is at least 0.1 (a 10 % change of the parameter moves
+//! it by 1 %) is the parameter's mode, and its rule rate is 25·|λ|/2π. A parameter whose mode's rule rate exceeds the
+//! fastest sample rate of the channels used is marked "below the rule".
+//! The mark is advice, not part of the verdict: the bound knows the
+//! wind and the information the slow samples carry, the rule knows
+//! neither, and the sample-rate studies place the rate an estimator needs
+//! between 7 and 49 times the mode's frequency (docs/findings.md, "The
+//! sampling rule"). Control derivatives, which move no eigenvalue, have no
+//! mode.
 
+use crate::analysis::linearize::{ModeKind, find, linearize};
 use crate::error::{Error, Result};
 use crate::estimation::solver::gauss_newton::{pseudo_inverse_or_infinite, unit_diagonal_scale};
 use crate::record::FlightRecord;
@@ -117,6 +137,31 @@ pub struct ChannelUse {
     pub samples: usize,
 }
 
+/// The factor of the sampling rule: a mode wants at least this many
+/// samples a period (module documentation, "The sampling rule").
+pub const RULE_FACTOR: f64 = 25.0;
+
+/// The least elasticity for a mode to count as a parameter's.
+pub const GOVERNING_ELASTICITY: f64 = 0.1;
+
+/// The fastest mode a parameter moves (module documentation, "The
+/// sampling rule").
+#[derive(Debug, Clone, PartialEq)]
+pub struct GoverningMode {
+    pub kind: ModeKind,
+    /// |λ|/2π at the trim (Hz).
+    pub frequency: f64,
+    /// |∂λ/∂θ|·|θ|/|λ|.
+    pub elasticity: f64,
+}
+
+impl GoverningMode {
+    /// The sample rate the rule asks for: 25 times the mode's frequency.
+    pub fn rule_rate(&self) -> f64 {
+        RULE_FACTOR * self.frequency
+    }
+}
+
 /// One parameter's bound.
 #[derive(Debug, Clone, PartialEq)]
 pub struct IdentifiabilityRow {
@@ -132,6 +177,9 @@ pub struct IdentifiabilityRow {
     /// a flight without them.
     pub calm: Option<(f64, f64)>,
     pub identifiable: bool,
+    /// The fastest mode the parameter moves by [`GOVERNING_ELASTICITY`] or
+    /// more; None when it moves none (control derivatives).
+    pub mode: Option<GoverningMode>,
 }
 
 impl IdentifiabilityRow {
@@ -152,6 +200,11 @@ impl IdentifiabilityRow {
                 .calm
                 .is_some_and(|(sigma, error)| !(sigma < limit && error.abs() < 2.0 * limit))
     }
+
+    /// Its mode wants a faster sample rate than `rate` by the rule.
+    pub fn below_rule(&self, rate: f64) -> bool {
+        self.mode.as_ref().is_some_and(|m| m.rule_rate() > rate)
+    }
 }
 
 /// The result of an analysis.
@@ -163,6 +216,8 @@ pub struct Identifiability {
     /// Segment length (s): each segment's initial state is an unknown.
     pub segment: f64,
     pub channels: Vec<ChannelUse>,
+    /// The fastest sample rate of the channels used (Hz).
+    pub rate: f64,
     /// Channels left out, with the reason.
     pub excluded: Vec<(String, String)>,
     pub rows: Vec<IdentifiabilityRow>,
@@ -175,9 +230,9 @@ impl Identifiability {
             "{} recorded by {}: Cramér–Rao bounds at the truth, {} s segments with unknown initial states; identifiable when σ/|truth| < {}\n",
             self.scenario, self.profile, self.segment, self.threshold
         );
-        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate and resolution, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict); calm σ: the bound of the flight without its gusts and turbulence (identifiable \"through the gusts\" when that flight fails the verdict: its bound or its inputs' error)\n";
+        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate and resolution, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict); calm σ: the bound of the flight without its gusts and turbulence (identifiable \"through the gusts\" when that flight fails the verdict: its bound or its inputs' error); mode: the fastest mode the parameter moves at the trim and the rate the sampling rule asks for (25 times its frequency; advice, not in the verdict)\n";
         text += &format!(
-            "{:<14} {:>12} {:>11} {:>10} {:>12} {:>12} {:>12}  {}\n",
+            "{:<14} {:>12} {:>11} {:>10} {:>12} {:>12} {:>12}  {:<24} {}\n",
             "parameter",
             "truth",
             "σ",
@@ -185,11 +240,12 @@ impl Identifiability {
             "inputs/|θ|",
             "wind/|θ|",
             "calm σ/|θ|",
+            "mode, 25×f",
             "verdict"
         );
         for row in &self.rows {
             text += &format!(
-                "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e} {:>12}  {}\n",
+                "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e} {:>12}  {:<24} {}{}\n",
                 row.parameter,
                 row.truth,
                 row.sigma,
@@ -200,7 +256,17 @@ impl Identifiability {
                     "{:.3e}",
                     s / row.truth.abs()
                 )),
-                verdict(row, self.threshold)
+                row.mode.as_ref().map_or("-".to_string(), |m| format!(
+                    "{}, {:.2} Hz",
+                    m.kind.name(),
+                    m.rule_rate()
+                )),
+                verdict(row, self.threshold),
+                if row.below_rule(self.rate) {
+                    ", below the rule"
+                } else {
+                    ""
+                }
             );
         }
         let count = self.rows.iter().filter(|r| r.identifiable).count();
@@ -212,6 +278,25 @@ impl Identifiability {
         text += &format!(
             "{count} of {} identifiable ({gusts} through the gusts)\n",
             self.rows.len()
+        );
+        let below: Vec<&str> = self
+            .rows
+            .iter()
+            .filter(|r| r.identifiable && r.below_rule(self.rate))
+            .map(|r| r.parameter.as_str())
+            .collect();
+        text += &format!(
+            "sampling rule (Wang et al. 2012: at least 25 times the mode's frequency): the channels used are sampled at up to {} Hz; {}\n",
+            crate::record::significant(self.rate, 3),
+            if below.is_empty() {
+                "every identifiable parameter's mode within it".to_string()
+            } else {
+                format!(
+                    "{} of the identifiable below it: {}",
+                    below.len(),
+                    below.join(", ")
+                )
+            }
         );
         text += &format!(
             "channels used: {}\n",
@@ -230,8 +315,12 @@ impl Identifiability {
     /// Rounded relative bounds and verdicts, one per line, for snapshots.
     pub fn snapshot(&self) -> String {
         let mut text = format!(
-            "{} / {}: {} s segments, threshold {}\n",
-            self.scenario, self.profile, self.segment, self.threshold
+            "{} / {}: {} s segments, threshold {}, channels at up to {} Hz\n",
+            self.scenario,
+            self.profile,
+            self.segment,
+            self.threshold,
+            crate::record::significant(self.rate, 3)
         );
         for row in &self.rows {
             let calm = row.calm.map_or(String::new(), |(s, error)| {
@@ -241,8 +330,20 @@ impl Identifiability {
                     crate::record::significant(error / row.truth.abs(), 2)
                 )
             });
+            let mode = row.mode.as_ref().map_or(String::new(), |m| {
+                format!(
+                    "  {} {} Hz{}",
+                    m.kind.name(),
+                    crate::record::significant(m.frequency, 2),
+                    if row.below_rule(self.rate) {
+                        " (below the rule)"
+                    } else {
+                        ""
+                    }
+                )
+            });
             text += &format!(
-                "{} σ/|truth| = {}  inputs {}  wind {}{calm}  {}\n",
+                "{} σ/|truth| = {}  inputs {}  wind {}{calm}{mode}  {}\n",
                 row.parameter,
                 crate::record::significant(row.relative_sigma(), 2),
                 crate::record::significant(row.input_error / row.truth.abs(), 2),
@@ -522,11 +623,16 @@ pub fn analyse(
         }
         false => None,
     };
+    let modes = governing_modes(scenario, &simulation, &names, &truths)?;
+    let rate = uses.iter().try_fold(0.0f64, |rate, channel| {
+        Ok::<_, Error>(rate.max(nominal.channel(&channel.name)?.rate))
+    })?;
     let rows = names
         .iter()
         .zip(&truths)
+        .zip(modes)
         .enumerate()
-        .map(|(j, (name, &truth))| {
+        .map(|(j, ((name, &truth), mode))| {
             let sigma = sigmas[j];
             IdentifiabilityRow {
                 parameter: name.clone(),
@@ -537,6 +643,7 @@ pub fn analyse(
                 wind_error: wind_error[j],
                 identifiable: sigma < options.threshold * truth.abs()
                     && input_error[j].abs() < 2.0 * options.threshold * truth.abs(),
+                mode,
             }
         })
         .collect();
@@ -546,9 +653,60 @@ pub fn analyse(
         threshold: options.threshold,
         segment,
         channels: uses,
+        rate,
         excluded,
         rows,
     })
+}
+
+/// The mode each parameter moves most at the scenario's trim (module
+/// documentation, "The sampling rule"), or None.
+fn governing_modes(
+    scenario: &Scenario,
+    simulation: &Simulation,
+    names: &[String],
+    truths: &[f64],
+) -> Result<Vec<Option<GoverningMode>>> {
+    const KINDS: [ModeKind; 5] = [
+        ModeKind::ShortPeriod,
+        ModeKind::Phugoid,
+        ModeKind::DutchRoll,
+        ModeKind::Roll,
+        ModeKind::Spiral,
+    ];
+    let modes = |simulation: &Simulation| {
+        let wind = simulation.winds.first().copied().unwrap_or_default();
+        linearize(&simulation.model, &simulation.trim, &wind).modes()
+    };
+    let nominal = modes(simulation);
+    names
+        .iter()
+        .zip(truths)
+        .map(|(name, &truth)| {
+            let scale = truth.abs().max(1e-2);
+            let h = 1e-3 * scale;
+            // The aircraft with the parameter moved, trimmed again.
+            let moved = |value: f64| {
+                let mut scenario = scenario.clone();
+                scenario.aircraft.aero.parameters.set(name, value)?;
+                Ok::<_, Error>(modes(&Simulation::prepare(&scenario)?))
+            };
+            let (plus, minus) = (moved(truth + h)?, moved(truth - h)?);
+            Ok(KINDS
+                .iter()
+                .filter_map(|&kind| {
+                    let size = find(&nominal, kind)?.eigenvalue.norm();
+                    let change = find(&plus, kind)?.eigenvalue - find(&minus, kind)?.eigenvalue;
+                    (size > 0.0).then(|| GoverningMode {
+                        kind,
+                        frequency: size / std::f64::consts::TAU,
+                        elasticity: change.norm() / size * scale / (2.0 * h),
+                    })
+                })
+                .filter(|m| m.elasticity >= GOVERNING_ELASTICITY)
+                .max_by(|a, b| a.frequency.total_cmp(&b.frequency)))
+        })
+        .collect()
 }
 
 /// δ = S⁺·r for a weighted output error r: the first-order move of every
