@@ -378,6 +378,16 @@ fn the_qar_approach_end_to_end() {
         .filter(|name| !reached.contains(*name))
         .collect();
     assert_eq!(unreached, ["CY_p", "Cn_beta"], "reached: {reached:?}");
+    // Each one the analysis warns of: CY_p identifiable only through the
+    // gusts, Cn_beta's Dutch roll sampled below the 25-times rule. Every
+    // parameter it calls identifiable without either warning is reached.
+    for name in unreached {
+        assert!(
+            common::APPROACH_THROUGH_GUSTS.contains(&name)
+                || common::APPROACH_BELOW_RULE.contains(&name),
+            "{name}"
+        );
+    }
 }
 
 /// The approach over 20 turbulence seeds on the derived QAR: the first

@@ -107,6 +107,15 @@ pub const APPROACH_IDENTIFIABLE: [&str; 20] = [
     "Cl_p", "Cl_r", "Cm_0", "Cm_alpha", "Cm_de", "Cm_df", "Cm_q", "Cn_beta", "Cn_r", "e",
 ];
 
+/// Of [`APPROACH_IDENTIFIABLE`], those the analysis calls identifiable
+/// only through the gusts (the calm flight does not identify them).
+pub const APPROACH_THROUGH_GUSTS: [&str; 5] = ["CY_p", "CY_r", "Cl_p", "Cl_r", "Cn_r"];
+
+/// Of [`APPROACH_IDENTIFIABLE`], those whose mode the QAR's 1 Hz samples
+/// below the sampling rule of Wang et al. 2012 (25 times the mode's
+/// frequency at the trim).
+pub const APPROACH_BELOW_RULE: [&str; 5] = ["CL_alpha", "Cl_p", "Cm_alpha", "Cm_q", "Cn_beta"];
+
 /// The bundled transport approach, optionally without gusts and turbulence
 /// (its steady 20 kt wind from 250° stays).
 pub fn approach(gusty: bool) -> aeroid::sim::scenario::Scenario {
