@@ -28,6 +28,72 @@ unsafe impl GlobalAlloc for CountingAllocator {
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
+/// Bit for bit.
+fn same(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits())
+}
+
+/// The buffered calls of `model` (`rate_jacobians_into`, `jacobians_into`,
+/// `outputs_into`, `step_into` from grid point `k`) at (t, x) give the
+/// plain calls' numbers bit for bit, and allocate nothing once their
+/// buffers have grown. Returns the plain Jacobians.
+fn buffered_calls_are_the_plain_ones(
+    model: &impl aeroid::estimation::model::state_space::StateSpaceModel,
+    k: usize,
+    t: f64,
+    x: &[f64],
+) -> aeroid::estimation::model::state_space::Jacobians {
+    use aeroid::estimation::model::state_space::Jacobians;
+    use nalgebra::{DMatrix, DVector};
+    let empty = || Jacobians {
+        rates_by_state: DMatrix::zeros(0, 0),
+        rates_by_parameter: DMatrix::zeros(0, 0),
+        outputs_by_state: DMatrix::zeros(0, 0),
+        outputs_by_parameter: DMatrix::zeros(0, 0),
+    };
+    let (mut rates, mut full) = (empty(), empty());
+    let (mut outputs, mut next) = (DVector::zeros(0), DVector::zeros(0));
+    let mut call = |rates: &mut Jacobians, full: &mut Jacobians| {
+        model.rate_jacobians_into(t, x, &[], rates).unwrap();
+        model
+            .jacobians_into(t, x, &[], full, Some(&mut outputs))
+            .unwrap();
+        model.step_into(k, x, &[], &mut next).unwrap();
+    };
+    call(&mut rates, &mut full);
+    // Again into the grown buffers: no allocation.
+    let before = ALLOCATIONS.with(Cell::get);
+    call(&mut rates, &mut full);
+    model.outputs_into(t, x, &[], &mut outputs).unwrap();
+    assert_eq!(
+        ALLOCATIONS.with(Cell::get),
+        before,
+        "the buffered calls allocate"
+    );
+    let plain = model.jacobians(t, x, &[]).unwrap();
+    assert!(same(
+        plain.rates_by_state.as_slice(),
+        rates.rates_by_state.as_slice()
+    ));
+    assert!(same(
+        plain.rates_by_state.as_slice(),
+        full.rates_by_state.as_slice()
+    ));
+    assert!(same(
+        plain.outputs_by_state.as_slice(),
+        full.outputs_by_state.as_slice()
+    ));
+    assert!(same(
+        model.outputs(t, x, &[]).unwrap().as_slice(),
+        outputs.as_slice()
+    ));
+    assert!(same(
+        model.step(k, x, &[]).unwrap().as_slice(),
+        next.as_slice()
+    ));
+    plain
+}
+
 #[test]
 fn rk4_step_does_not_allocate() {
     let mut scenario = Scenario::load("attas-trim").unwrap();
@@ -197,40 +263,15 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
     assert_eq!(after - before, 0, "heap allocations in 100 steps' work");
 
     // The buffered calls are the plain ones, bit for bit.
-    let same = |a: &[f64], b: &[f64]| {
-        a.len() == b.len() && a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits())
-    };
     let t = model.time(101);
-    let plain = model.jacobians(t, state.as_slice(), &[]).unwrap();
+    let plain = buffered_calls_are_the_plain_ones(&model, 101, t, state.as_slice());
     model
         .rate_jacobians_into(t, state.as_slice(), &[], &mut rates)
-        .unwrap();
-    model
-        .jacobians_into(t, state.as_slice(), &[], &mut full, Some(&mut outputs))
         .unwrap();
     assert!(same(
         plain.rates_by_state.as_slice(),
         rates.rates_by_state.as_slice()
     ));
-    assert!(same(
-        plain.rates_by_state.as_slice(),
-        full.rates_by_state.as_slice()
-    ));
-    assert!(same(
-        plain.outputs_by_state.as_slice(),
-        full.outputs_by_state.as_slice()
-    ));
-    let y = model.outputs(t, state.as_slice(), &[]).unwrap();
-    assert!(same(y.as_slice(), outputs.as_slice()));
-    model
-        .outputs_into(t, state.as_slice(), &[], &mut outputs)
-        .unwrap();
-    assert!(same(y.as_slice(), outputs.as_slice()));
-    let stepped = model.step(101, state.as_slice(), &[]).unwrap();
-    model
-        .step_into(101, state.as_slice(), &[], &mut next)
-        .unwrap();
-    assert!(same(stepped.as_slice(), next.as_slice()));
     // Φ from the scaled exponential is the exponential of A·h.
     let mut scaled = DMatrix::zeros(0, 0);
     let leading = exponential.of_scaled(&rates.rates_by_state, h, &mut transition);
@@ -557,9 +598,8 @@ fn attas_lateral_record(
 #[test]
 fn an_ebm_pass_allocates_nothing_per_grid_point() {
     use aeroid::estimation::methods::smoothed_regression::SmootherSetup;
-    use aeroid::estimation::model::state_space::{Jacobians, StateSpaceModel};
+    use aeroid::estimation::model::state_space::StateSpaceModel;
     use aeroid::estimation::solver::extended_kalman::Keep;
-    use nalgebra::{DMatrix, DVector};
 
     let setups: Vec<SmootherSetup> = [30.0, 60.0]
         .map(|duration| {
@@ -615,58 +655,11 @@ fn an_ebm_pass_allocates_nothing_per_grid_point() {
     let model = &setup.model;
     let pass = setup.filter(Keep::UPDATES).unwrap();
     let x = pass.filtered.get(700).unwrap().mean.clone_owned();
-    let same = |a: &[f64], b: &[f64]| {
-        a.len() == b.len() && a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits())
-    };
-    let empty = || Jacobians {
-        rates_by_state: DMatrix::zeros(0, 0),
-        rates_by_parameter: DMatrix::zeros(0, 0),
-        outputs_by_state: DMatrix::zeros(0, 0),
-        outputs_by_parameter: DMatrix::zeros(0, 0),
-    };
-    let (mut rates, mut full) = (empty(), empty());
-    let (mut outputs, mut next) = (DVector::zeros(0), DVector::zeros(0));
     let t = model.time(700) + 0.013;
-    model
-        .rate_jacobians_into(t, x.as_slice(), &[], &mut rates)
-        .unwrap();
-    model
-        .jacobians_into(t, x.as_slice(), &[], &mut full, Some(&mut outputs))
-        .unwrap();
-    model.step_into(700, x.as_slice(), &[], &mut next).unwrap();
-    // Again into the grown buffers: no allocation.
-    let before = ALLOCATIONS.with(Cell::get);
-    model
-        .rate_jacobians_into(t, x.as_slice(), &[], &mut rates)
-        .unwrap();
-    model
-        .jacobians_into(t, x.as_slice(), &[], &mut full, Some(&mut outputs))
-        .unwrap();
-    model
-        .outputs_into(t, x.as_slice(), &[], &mut outputs)
-        .unwrap();
-    model.step_into(700, x.as_slice(), &[], &mut next).unwrap();
-    assert_eq!(ALLOCATIONS.with(Cell::get), before);
-    let plain = model.jacobians(t, x.as_slice(), &[]).unwrap();
+    let plain = buffered_calls_are_the_plain_ones(model, 700, t, x.as_slice());
     assert!(plain.rates_by_state.iter().filter(|&&v| v != 0.0).count() > 60);
-    assert!(same(
-        plain.rates_by_state.as_slice(),
-        rates.rates_by_state.as_slice()
-    ));
-    assert!(same(
-        plain.rates_by_state.as_slice(),
-        full.rates_by_state.as_slice()
-    ));
-    assert!(same(
-        plain.outputs_by_state.as_slice(),
-        full.outputs_by_state.as_slice()
-    ));
-    assert_eq!(full.rates_by_parameter.shape(), (28, 0));
-    assert_eq!(full.outputs_by_parameter.shape(), (13, 0));
-    let y = model.outputs(t, x.as_slice(), &[]).unwrap();
-    assert!(same(y.as_slice(), outputs.as_slice()));
-    let stepped = model.step(700, x.as_slice(), &[]).unwrap();
-    assert!(same(stepped.as_slice(), next.as_slice()));
+    assert_eq!(plain.rates_by_parameter.shape(), (28, 0));
+    assert_eq!(plain.outputs_by_parameter.shape(), (13, 0));
 }
 
 /// The filter error method's passes at given θ, F and R allocate nothing
