@@ -53,14 +53,8 @@ fn buffered_calls_are_the_plain_ones(
     x: &[f64],
 ) -> aeroid::estimation::model::state_space::Jacobians {
     use aeroid::estimation::model::state_space::Jacobians;
-    use nalgebra::{DMatrix, DVector};
-    let empty = || Jacobians {
-        rates_by_state: DMatrix::zeros(0, 0),
-        rates_by_parameter: DMatrix::zeros(0, 0),
-        outputs_by_state: DMatrix::zeros(0, 0),
-        outputs_by_parameter: DMatrix::zeros(0, 0),
-    };
-    let (mut rates, mut full) = (empty(), empty());
+    use nalgebra::DVector;
+    let (mut rates, mut full) = (Jacobians::empty(), Jacobians::empty());
     let (mut outputs, mut next) = (DVector::zeros(0), DVector::zeros(0));
     let mut call = |rates: &mut Jacobians, full: &mut Jacobians| {
         model.rate_jacobians_into(t, x, &[], rates).unwrap();
@@ -227,13 +221,7 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
     let model = Augmented::new(&view, theta.as_slice(), free).unwrap();
     let n = model.state_count();
     assert_eq!((x0.len(), n), (4, 22));
-    let empty = || Jacobians {
-        rates_by_state: DMatrix::zeros(0, 0),
-        rates_by_parameter: DMatrix::zeros(0, 0),
-        outputs_by_state: DMatrix::zeros(0, 0),
-        outputs_by_parameter: DMatrix::zeros(0, 0),
-    };
-    let (mut rates, mut full) = (empty(), empty());
+    let (mut rates, mut full) = (Jacobians::empty(), Jacobians::empty());
     let (mut outputs, mut next) = (DVector::zeros(0), DVector::zeros(0));
     let mut exponential = Exponential::default();
     let (mut transition, mut sparse) = (DMatrix::zeros(0, 0), SparseRows::default());

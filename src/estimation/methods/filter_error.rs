@@ -724,12 +724,7 @@ fn filter_steadily<M: StateSpaceModel + ?Sized>(
     let mut sensitivity = DMatrix::<f64>::zeros(n, m);
     let mut output_sensitivity = DMatrix::<f64>::zeros(outputs, m);
     let mut correction = DMatrix::<f64>::zeros(n, m);
-    let mut linear = crate::estimation::model::state_space::Jacobians {
-        rates_by_state: DMatrix::zeros(0, 0),
-        rates_by_parameter: DMatrix::zeros(0, 0),
-        outputs_by_state: DMatrix::zeros(0, 0),
-        outputs_by_parameter: DMatrix::zeros(0, 0),
-    };
+    let mut linear = crate::estimation::model::state_space::Jacobians::empty();
     let mut predicted = DVector::zeros(outputs);
     let mut whitened = DVector::zeros(outputs);
     let mut row = 0;

@@ -33,15 +33,9 @@ struct Buffers {
 
 impl Buffers {
     fn new() -> Buffers {
-        let empty = || DMatrix::zeros(0, 0);
         Buffers {
             theta: Vec::new(),
-            base: Jacobians {
-                rates_by_state: empty(),
-                rates_by_parameter: empty(),
-                outputs_by_state: empty(),
-                outputs_by_parameter: empty(),
-            },
+            base: Jacobians::empty(),
             thetas: Vec::new(),
         }
     }

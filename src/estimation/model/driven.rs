@@ -1383,12 +1383,7 @@ pub(super) fn linearise(
         true,
         &mut buffers,
     );
-    let mut jacobians = Jacobians {
-        rates_by_state: DMatrix::zeros(0, 0),
-        rates_by_parameter: DMatrix::zeros(0, 0),
-        outputs_by_state: DMatrix::zeros(0, 0),
-        outputs_by_parameter: DMatrix::zeros(0, 0),
-    };
+    let mut jacobians = Jacobians::empty();
     buffers.copy_into(&mut jacobians, None);
     jacobians
 }

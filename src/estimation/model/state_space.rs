@@ -48,6 +48,19 @@ pub struct Jacobians {
     pub outputs_by_parameter: DMatrix<f64>,
 }
 
+impl Jacobians {
+    /// Four empty matrices: buffers for
+    /// [`StateSpaceModel::jacobians_into`] to grow.
+    pub fn empty() -> Jacobians {
+        Jacobians {
+            rates_by_state: DMatrix::zeros(0, 0),
+            rates_by_parameter: DMatrix::zeros(0, 0),
+            outputs_by_state: DMatrix::zeros(0, 0),
+            outputs_by_parameter: DMatrix::zeros(0, 0),
+        }
+    }
+}
+
 /// The window of a record where every channel in `outputs` has samples,
 /// inside `limit` if given.
 pub fn fitting_window(
