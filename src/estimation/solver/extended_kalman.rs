@@ -662,11 +662,13 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
         // `pass.predicted` (else `covariance`).
         let mut predicted_kept = false;
         if k > 0 {
-            // The room of what the step keeps goes into the cache while
-            // the model is linearised and stepped, one kept quantity at a
-            // time ahead of its writing (the transition's at the end of
-            // the step before).
-            pass.predicted.prefetch_next();
+            // The room of what the step computes in place goes into the
+            // cache while the model is linearised and stepped, one kept
+            // quantity at a time ahead of its writing (the transition's at
+            // the end of the step before).
+            if predict_in_kept {
+                pass.predicted.prefetch_next();
+            }
             let previous = model.time(k - 1);
             model.rate_jacobians_into(previous, state.as_slice(), theta, &mut linearised)?;
             let kept_transition = keep
@@ -718,8 +720,12 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
             if keep.sparse_transitions {
                 pass.sparse_transitions.push(&time_update.sparse);
             }
-            pass.filtered.prefetch_next();
-            pass.measured.prefetch_next();
+            if keep.filtered_covariances {
+                pass.filtered.prefetch_next();
+            }
+            if !keep.sequential {
+                pass.measured.prefetch_next();
+            }
         } else if keep.predicted {
             pass.predicted.push_parts(&state, Some(&covariance));
         }
