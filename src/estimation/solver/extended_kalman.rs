@@ -34,8 +34,11 @@
 //! per output with their variances, and the negative log-likelihood
 //! −ln L = ½·Σ_k (νᵀS⁻¹ν + ln det S) + const (Jategaonkar Eq. 5.16),
 //! each kept quantity in one buffer reserved once per pass
-//! ([`crate::estimation::solver::kept`]); a step allocates nothing once
-//! its buffers have grown.
+//! ([`crate::estimation::solver::kept`]); the predicted and filtered
+//! covariances and the transitions it keeps are computed in their place
+//! in those buffers ([`kalman::predict_covariance_from`],
+//! [`kalman::update_from`]), not copied there. A step allocates nothing
+//! once its buffers have grown.
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;

@@ -3,8 +3,11 @@
 //! transitions), Gaussian estimates ([`Gaussians`]: the predicted and the
 //! filtered ones) and the measurement updates ([`Updates`]; as sequences
 //! of scalar updates, [`ScalarUpdates`]), read back as views into the
-//! buffers. A pass over any number of grid points makes the
-//! same few allocations (tests/no_allocation.rs).
+//! buffers. A filter computes a kept matrix in its place in the buffer
+//! (`push_for_writing`) rather than copy it there, the room of the next
+//! one brought into the cache ahead of its writing (`prefetch_next`). A
+//! pass over any number of grid points makes the same few allocations
+//! (tests/no_allocation.rs).
 //!
 //! The buffers are megabytes (a pass over 1501 points of 22 states keeping
 //! everything: 17 MB), which the allocator hands back to the system when a
@@ -170,8 +173,8 @@ impl Matrices {
         &mut self.values[start..]
     }
 
-    /// Brings the room of the next matrix into the cache
-    /// ([`prefetch_room`]).
+    /// Brings the room of the next matrix (reserved, not yet written) into
+    /// the cache ahead of its writing.
     pub fn prefetch_next(&self) {
         prefetch_room(&self.values, self.rows * self.columns);
     }
@@ -452,8 +455,9 @@ impl Gaussians {
         (&mut self.means[mean..], &mut self.covariances[covariance..])
     }
 
-    /// Brings the room of the next estimate into the cache
-    /// ([`prefetch_room`]; with every covariance kept).
+    /// Brings the room of the next estimate (reserved, not yet written; its
+    /// covariance's with every covariance kept) into the cache ahead of its
+    /// writing.
     pub fn prefetch_next(&self) {
         let n = self.dimension;
         prefetch_room(&self.means, n);
@@ -697,9 +701,9 @@ impl Updates {
         }
     }
 
-    /// Brings the room of the next update into the cache
-    /// ([`prefetch_room`]; for as many outputs as the buffer is reserved
-    /// for).
+    /// Brings the room of the next update (reserved, not yet written; for
+    /// as many outputs as the buffer is reserved for) into the cache ahead
+    /// of its writing.
     pub fn prefetch_next(&self) {
         prefetch_room(&self.values, Self::size(self.states, self.capacity.1));
     }
