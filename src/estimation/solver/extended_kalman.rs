@@ -34,8 +34,11 @@
 //! per output with their variances, and the negative log-likelihood
 //! −ln L = ½·Σ_k (νᵀS⁻¹ν + ln det S) + const (Jategaonkar Eq. 5.16),
 //! each kept quantity in one buffer reserved once per pass
-//! ([`crate::estimation::solver::kept`]); a step allocates nothing once
-//! its buffers have grown.
+//! ([`crate::estimation::solver::kept`]); the predicted and filtered
+//! covariances and the transitions it keeps are computed in their place
+//! in those buffers ([`kalman::predict_covariance_from`],
+//! [`kalman::update_from`]), not copied there. A step allocates nothing
+//! once its buffers have grown.
 
 use crate::error::{Error, Result};
 use crate::estimation::model::observations::Observations;
@@ -330,13 +333,13 @@ impl NoisePlan {
         }
     }
 
-    /// Adds Q_d's values to `covariance` on the plan's pattern (both
-    /// triangles).
-    fn add_to(&self, covariance: &mut DMatrix<f64>) {
+    /// Adds Q_d's values to the n × n `covariance` (column-major) on the
+    /// plan's pattern (both triangles).
+    fn add_to(&self, covariance: &mut [f64], n: usize) {
         for (&value, &(i, j, ..)) in self.values.iter().zip(&self.entries) {
-            covariance[(i, j)] += value;
+            covariance[i + j * n] += value;
             if i != j {
-                covariance[(j, i)] += value;
+                covariance[j + i * n] += value;
             }
         }
     }
@@ -353,18 +356,44 @@ impl TimeUpdate {
         noise: Option<&DMatrix<f64>>,
         h: f64,
     ) {
+        self.discretise_into(discretisation, a, noise, h, None);
+    }
+
+    /// [`TimeUpdate::discretise`] with Φ also written into `kept` when
+    /// given (n × n, column-major: a pass's kept transition): the exact Φ
+    /// there instead of into `transition`, the second-order one from its
+    /// non-zeros.
+    fn discretise_into(
+        &mut self,
+        discretisation: Discretisation,
+        a: &DMatrix<f64>,
+        noise: Option<&DMatrix<f64>>,
+        h: f64,
+        kept: Option<&mut [f64]>,
+    ) {
         let n = a.nrows();
         match discretisation {
             Discretisation::Exact => {
                 // Φ's rows past the last non-zero row of A are the
                 // identity's (an augmented model's constant parameters).
-                let leading = self.exponential.of_scaled(a, h, &mut self.transition);
-                self.dense = true;
+                let into = match kept {
+                    Some(kept) => {
+                        // `transition` is not Φ: written from `sparse` if read.
+                        self.dense = false;
+                        kept
+                    }
+                    None => {
+                        self.dense = true;
+                        resize(&mut self.transition, n, n);
+                        self.transition.as_mut_slice()
+                    }
+                };
+                let leading = self.exponential.of_scaled_into(a, h, into);
                 self.noise_on_plan = false;
                 if let Some(noise) = noise {
                     self.noise.of(a, noise, h, &mut self.process_noise);
                 }
-                self.sparse.set_leading(&self.transition, leading);
+                self.sparse.set_leading_values(into, n, n, leading);
             }
             Discretisation::SecondOrder => {
                 // A·h by A's non-zeros; Φ = I + A·h + ½·(A·h)² on the
@@ -376,6 +405,9 @@ impl TimeUpdate {
                 }
                 self.square.values(&self.sparse_scaled, &mut self.sparse);
                 self.dense = false;
+                if let Some(kept) = kept {
+                    dense_from(&self.sparse, kept);
+                }
                 let Some(noise) = noise else {
                     return;
                 };
@@ -428,17 +460,18 @@ impl TimeUpdate {
             let n = self.sparse_rates.rows();
             resize(&mut self.process_noise, n, n);
             self.process_noise.fill(0.0);
-            self.noise_plan.add_to(&mut self.process_noise);
+            self.noise_plan.add_to(self.process_noise.as_mut_slice(), n);
             self.noise_on_plan = false;
         }
         &self.process_noise
     }
 
-    /// Adds Q_d to `covariance` where it is kept on its pattern (else
-    /// nothing: the dense Q_d goes with the prediction).
-    fn add_process_noise_on_pattern(&self, covariance: &mut DMatrix<f64>) {
+    /// Adds Q_d to the n × n `covariance` (column-major) where it is kept
+    /// on its pattern (else nothing: the dense Q_d goes with the
+    /// prediction).
+    fn add_process_noise_on_pattern(&self, covariance: &mut [f64], n: usize) {
         if self.noise_on_plan {
-            self.noise_plan.add_to(covariance);
+            self.noise_plan.add_to(covariance, n);
         }
     }
 
@@ -447,15 +480,21 @@ impl TimeUpdate {
         if !self.dense {
             let n = self.sparse.rows();
             resize(&mut self.transition, n, n);
-            self.transition.fill(0.0);
-            for i in 0..n {
-                for &(j, value) in self.sparse.row(i) {
-                    self.transition[(i, j)] = value;
-                }
-            }
+            dense_from(&self.sparse, self.transition.as_mut_slice());
             self.dense = true;
         }
         &self.transition
+    }
+}
+
+/// The n × n matrix of `sparse`'s non-zeros into `into` (column-major).
+fn dense_from(sparse: &SparseRows, into: &mut [f64]) {
+    let n = sparse.rows();
+    into.fill(0.0);
+    for i in 0..n {
+        for &(j, value) in sparse.row(i) {
+            into[i + j * n] = value;
+        }
     }
 }
 
@@ -588,8 +627,19 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     let len = model.len();
     check_sizes("filter", model, &initial, noise, observations)?;
     let mut pass = Pass::keeping(len, model.output_count(), keep);
+    let n = initial.mean.len();
     let mut state = initial.mean;
+    // The filter's own covariance: the initial one, and every predicted
+    // and filtered one that the pass does not keep. One the pass keeps is
+    // computed in its place in the pass's buffers, and read from there.
     let mut covariance = initial.covariance;
+    // Whether the last filtered covariance is the last one in
+    // `pass.filtered` (else `covariance`).
+    let mut filtered_kept = false;
+    // Whether the predicted covariance is computed in `pass.predicted`:
+    // where the vector update reads it (the sequential one updates
+    // `covariance` in place, and the predicted one is copied).
+    let predict_in_kept = keep.predicted && !keep.sequential;
     let process_noise = noise
         .process
         .iter()
@@ -611,44 +661,89 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     let (mut h, mut r) = (DMatrix::zeros(0, 0), DMatrix::zeros(0, 0));
     for k in 0..len {
         let t = model.time(k);
+        // Whether the predicted covariance is the last one in
+        // `pass.predicted` (else `covariance`).
+        let mut predicted_kept = false;
         if k > 0 {
+            // The room of what the step computes in place goes into the
+            // cache while the model is linearised and stepped, one kept
+            // quantity at a time ahead of its writing (the transition's at
+            // the end of the step before).
+            if predict_in_kept {
+                pass.predicted.prefetch_next();
+            }
             let previous = model.time(k - 1);
             model.rate_jacobians_into(previous, state.as_slice(), theta, &mut linearised)?;
-            time_update.discretise(
+            let kept_transition = keep
+                .transitions
+                .then(|| pass.transitions.push_for_writing(n, n));
+            time_update.discretise_into(
                 discretisation,
                 &linearised.rates_by_state,
                 process_noise,
                 t - previous,
+                kept_transition,
             );
             model
                 .step_into(k - 1, state.as_slice(), theta, &mut next)
                 .map_err(|e| at_time(e, previous))?;
             std::mem::swap(&mut state, &mut next);
-            kalman::predict_covariance_in_place(
-                &mut covariance,
+            // P⁻ from P⁺ of k − 1, where each is (None: in place).
+            let (from, into) = match (filtered_kept, predict_in_kept) {
+                (false, false) => (None, covariance.as_mut_slice()),
+                (true, false) => (
+                    Some(last_covariance(&pass.filtered)),
+                    covariance.as_mut_slice(),
+                ),
+                (_, true) => {
+                    let from = if filtered_kept {
+                        last_covariance(&pass.filtered)
+                    } else {
+                        covariance.as_slice()
+                    };
+                    let (mean, into) = pass.predicted.push_for_writing(n);
+                    mean.copy_from_slice(state.as_slice());
+                    predicted_kept = true;
+                    (Some(from), into)
+                }
+            };
+            kalman::predict_covariance_from(
+                from,
+                into,
                 &time_update.sparse,
                 process_noise
                     .filter(|_| !time_update.noise_on_plan)
                     .map(|_| &time_update.process_noise),
                 &mut time_update.work,
             );
-            time_update.add_process_noise_on_pattern(&mut covariance);
-            if keep.transitions {
-                pass.transitions.push(time_update.transition());
+            time_update.add_process_noise_on_pattern(into, n);
+            if keep.predicted && !predict_in_kept {
+                pass.predicted.push_parts(&state, Some(&covariance));
             }
             if keep.sparse_transitions {
                 pass.sparse_transitions.push(&time_update.sparse);
             }
-        }
-        if keep.predicted {
+            if keep.filtered_covariances {
+                pass.filtered.prefetch_next();
+            }
+            if !keep.sequential {
+                pass.measured.prefetch_next();
+            }
+        } else if keep.predicted {
             pass.predicted.push_parts(&state, Some(&covariance));
         }
+        // Whether the filtered estimate went into `pass.filtered` with the
+        // update.
+        let mut filtered_pushed = false;
         let present = &observations.at[k];
         if present.is_empty() {
             if keep.sequential {
                 pass.scalar_updates.push_none();
             } else {
                 pass.measured.push(None);
+            }
+            if predicted_kept {
+                covariance.copy_from_slice(last_covariance(&pass.predicted));
             }
         } else {
             model.jacobians_into(
@@ -659,7 +754,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 Some(&mut predicted),
             )?;
             // H's rows and R of the measured outputs, ν = z − ŷ.
-            let (m, n) = (present.len(), state.len());
+            let m = present.len();
             resize(&mut h, m, n);
             if innovation.len() != m {
                 innovation = DVector::zeros(m);
@@ -703,15 +798,39 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 for (i, &variance) in variances.iter().enumerate() {
                     r[(i, i)] = variance;
                 }
-                kalman::update_with(
+                // P⁺ from P⁻, where each is (None: in place).
+                let (from, mean, into) = match (predicted_kept, keep.filtered_covariances) {
+                    (false, false) => (None, None, covariance.as_mut_slice()),
+                    (true, false) => (
+                        Some(last_covariance(&pass.predicted)),
+                        None,
+                        covariance.as_mut_slice(),
+                    ),
+                    (_, true) => {
+                        let from = if predicted_kept {
+                            last_covariance(&pass.predicted)
+                        } else {
+                            covariance.as_slice()
+                        };
+                        let (mean, into) = pass.filtered.push_for_writing(n);
+                        (Some(from), Some(mean), into)
+                    }
+                };
+                kalman::update_from(
                     &mut state,
-                    &mut covariance,
+                    from,
+                    into,
                     &h,
                     &r,
                     &innovation,
                     &mut update_workspace,
                 )
                 .map_err(|e| at_time(e, t))?;
+                if let Some(mean) = mean {
+                    finite(t, &state)?;
+                    mean.copy_from_slice(state.as_slice());
+                    filtered_pushed = true;
+                }
                 let term = update_workspace.log_likelihood_term(&innovation);
                 pass.negative_log_likelihood += 0.5 * term;
                 let covariance = &update_workspace.innovation_covariance;
@@ -731,8 +850,12 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                 );
             }
         }
-        let kept = keep.filtered_covariances || k + 1 == len;
-        pass.filtered_at(t, &state, kept.then_some(&covariance))?;
+        filtered_kept = filtered_pushed;
+        if !filtered_pushed {
+            let kept = keep.filtered_covariances || k + 1 == len;
+            pass.filtered_at(t, &state, kept.then_some(&covariance))?;
+        }
+        pass.transitions.prefetch_next();
     }
     Ok(pass)
 }
@@ -778,14 +901,30 @@ impl Pass {
         state: &DVector<f64>,
         covariance: Option<&DMatrix<f64>>,
     ) -> Result<()> {
-        if !state.iter().all(|v| v.is_finite()) {
-            return Err(Error::Other(format!(
-                "the filter's state went non-finite at t = {t} s"
-            )));
-        }
+        finite(t, state)?;
         self.filtered.push_parts(state, covariance);
         Ok(())
     }
+}
+
+/// An error when the filter's state at time t went non-finite.
+fn finite(t: f64, state: &DVector<f64>) -> Result<()> {
+    if state.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::Other(format!(
+            "the filter's state went non-finite at t = {t} s"
+        )))
+    }
+}
+
+/// The values of the last covariance `kept` holds (column-major; empty
+/// where there is none).
+fn last_covariance(kept: &Gaussians) -> &[f64] {
+    kept.len()
+        .checked_sub(1)
+        .and_then(|k| kept.values(k))
+        .map_or(&[], |(_, covariance)| covariance)
 }
 
 /// Checks that a filter's model, initial estimate, noise and observations

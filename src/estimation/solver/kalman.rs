@@ -75,6 +75,7 @@ use crate::estimation::solver::kept::{
     GaussianView, Gaussians, Matrices, ScalarUpdates, SparseMatrices, UpdateView, Updates,
 };
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use std::cell::Cell;
 
 /// Taylor terms of the scaled exponential.
 const TAYLOR_TERMS: usize = 18;
@@ -120,6 +121,14 @@ impl Exponential {
     /// the matrix up to its last non-zero one: the rows of `into` from k on
     /// are the identity's.
     pub fn of_scaled(&mut self, matrix: &DMatrix<f64>, h: f64, into: &mut DMatrix<f64>) -> usize {
+        let n = matrix.nrows();
+        resize(into, n, n);
+        self.of_scaled_into(matrix, h, into.as_mut_slice())
+    }
+
+    /// [`Exponential::of_scaled`] into the values (column-major, n × n) of
+    /// a matrix held elsewhere (a filter's kept transition).
+    pub fn of_scaled_into(&mut self, matrix: &DMatrix<f64>, h: f64, into: &mut [f64]) -> usize {
         let n = matrix.nrows();
         let values = matrix.as_slice();
         // The rows below the last non-zero entry of any column are zero
@@ -167,7 +176,7 @@ impl Exponential {
         squarings: i32,
         values: &[f64],
         h: f64,
-        into: &mut DMatrix<f64>,
+        result: &mut [f64],
     ) {
         let scale = 2f64.powi(-squarings);
         resize(&mut self.x, k, k);
@@ -230,8 +239,7 @@ impl Exponential {
             square_product(k, top_left, top_left, product);
             std::mem::swap(&mut top_left, &mut product);
         }
-        resize(into, n, n);
-        let result = into.as_mut_slice();
+        let result = &mut result[..n * n];
         result.fill(0.0);
         for (c, column) in result.chunks_exact_mut(n.max(1)).enumerate() {
             if c < k {
@@ -357,13 +365,34 @@ fn squarings_for(norm: f64) -> i32 {
 /// Replaces a square matrix by its symmetric part, (M + Mᵀ)/2, in place.
 pub(crate) fn symmetrise(matrix: &mut DMatrix<f64>) {
     let n = matrix.nrows();
-    let m = matrix.as_mut_slice();
+    symmetrise_values(matrix.as_mut_slice(), n);
+}
+
+/// [`symmetrise`] of an n × n matrix's values (column-major).
+fn symmetrise_values(m: &mut [f64], n: usize) {
+    let m = Cell::from_mut(m).as_slice_of_cells();
+    symmetric_part(n, |i| m[i].get(), m);
+}
+
+/// The symmetric part of the n × n matrix `from` into `into` (both
+/// column-major): the numbers of [`symmetrise`] in place.
+fn symmetrised_into(from: &[f64], into: &mut [f64], n: usize) {
+    let into = Cell::from_mut(into).as_slice_of_cells();
+    symmetric_part(n, |i| from[i], into);
+}
+
+/// The symmetric part of the n × n matrix whose entries `from` reads
+/// (column-major positions) written into `into` (the same cells: in
+/// place): the mean of each off-diagonal pair, the diagonal as it is.
+#[inline(always)]
+fn symmetric_part(n: usize, from: impl Fn(usize) -> f64, into: &[Cell<f64>]) {
     for j in 0..n {
         for i in 0..j {
-            let mean = (m[i + j * n] + m[j + i * n]) * 0.5;
-            m[i + j * n] = mean;
-            m[j + i * n] = mean;
+            let mean = (from(i + j * n) + from(j + i * n)) * 0.5;
+            into[i + j * n].set(mean);
+            into[j + i * n].set(mean);
         }
+        into[j + j * n].set(from(j + j * n));
     }
 }
 
@@ -600,8 +629,20 @@ impl SparseRows {
     /// rows of constant states, [`Exponential::of_scaled`]).
     pub fn set_leading(&mut self, matrix: &DMatrix<f64>, leading: usize) {
         let (rows, columns) = matrix.shape();
+        self.set_leading_values(matrix.as_slice(), rows, columns, leading);
+    }
+
+    /// [`SparseRows::set_leading`] of the rows × columns matrix whose
+    /// values (column-major) are `values`.
+    pub fn set_leading_values(
+        &mut self,
+        values: &[f64],
+        rows: usize,
+        columns: usize,
+        leading: usize,
+    ) {
         let leading = leading.min(rows);
-        if self.values_on_pattern(false, matrix.as_slice(), rows, columns, leading) {
+        if self.values_on_pattern(false, values, rows, columns, leading) {
             return;
         }
         self.transposed = false;
@@ -609,10 +650,9 @@ impl SparseRows {
         self.leading = leading;
         // Every entry is written and only a non-zero one kept (no branch):
         // `entries` holds room for all of them.
-        if self.entries.len() < matrix.len() {
-            self.entries.resize(matrix.len(), (0, 0.0));
+        if self.entries.len() < values.len() {
+            self.entries.resize(values.len(), (0, 0.0));
         }
-        let values = matrix.as_slice();
         let entries = self.entries.as_mut_slice();
         let mut count = 0;
         for i in 0..leading.min(rows) {
@@ -850,12 +890,16 @@ impl SparseRows {
     /// row i's non-zeros only.
     pub fn times_transposed(&self, x: &DMatrix<f64>, into: &mut DMatrix<f64>) {
         debug_assert_eq!(x.ncols(), self.columns);
-        let rows = x.nrows();
+        self.times_transposed_values(x.as_slice(), x.nrows(), into);
+    }
+
+    /// [`SparseRows::times_transposed`] of the matrix x of `rows` rows
+    /// whose values (column-major) are `x`.
+    pub fn times_transposed_values(&self, x: &[f64], rows: usize, into: &mut DMatrix<f64>) {
         resize(into, rows, self.rows());
         if rows == 0 {
             return;
         }
-        let x = x.as_slice();
         let into = into.as_mut_slice();
         crate::simd::wide(
             #[inline(always)]
@@ -965,18 +1009,39 @@ pub fn predict_covariance_in_place(
     process_noise: Option<&DMatrix<f64>>,
     work: &mut [DMatrix<f64>; 2],
 ) {
-    let n = covariance.nrows();
-    if transition.leading < n && transition.rows() == n && covariance.ncols() == n {
-        predict_constant_rows(covariance, transition, &mut work[0]);
+    let n = transition.rows();
+    resize(covariance, n, n);
+    predict_covariance_from(
+        None,
+        covariance.as_mut_slice(),
+        transition,
+        process_noise,
+        work,
+    );
+}
+
+/// [`predict_covariance_in_place`] of the covariance `previous` (n × n,
+/// column-major; None: `into`'s own values) into `into` (n × n, held
+/// elsewhere: a filter's kept predicted covariance), n the rows of Φ: the
+/// same numbers, without a copy of the result.
+pub fn predict_covariance_from(
+    previous: Option<&[f64]>,
+    into: &mut [f64],
+    transition: &SparseRows,
+    process_noise: Option<&DMatrix<f64>>,
+    work: &mut [DMatrix<f64>; 2],
+) {
+    let n = transition.rows();
+    let into = &mut into[..n * n];
+    if transition.leading < n {
+        predict_constant_rows(previous, into, transition, &mut work[0]);
     } else {
         let [product, transposed] = work;
-        transition.times_transposed(covariance, product);
+        transition.times_transposed_values(previous.unwrap_or(into), n, product);
         resize(transposed, product.ncols(), product.nrows());
         product.transpose_to(transposed);
         transition.times_transposed(transposed, product);
-        let n = product.nrows();
-        resize(covariance, n, n);
-        let (p, f) = (covariance.as_mut_slice(), product.as_slice());
+        let (p, f) = (&mut *into, product.as_slice());
         for j in 0..n {
             for i in 0..=j {
                 let value = 0.5 * (f[i + j * n] + f[j + i * n]);
@@ -986,7 +1051,9 @@ pub fn predict_covariance_in_place(
         }
     }
     if let Some(noise) = process_noise {
-        *covariance += noise;
+        for (p, &q) in into.iter_mut().zip(noise.as_slice()) {
+            *p += q;
+        }
     }
 }
 
@@ -995,17 +1062,21 @@ pub fn predict_covariance_in_place(
 /// (column r: Σ_j Φ_rj·P_{·j} over row r's non-zeros, as the dense form's
 /// first product): (Φ·P·Φᵀ)_rc = Σ_j Φ_cj·W_jr for r, c < k, W_cr for
 /// c ≥ k, P_rc for both ≥ k; symmetrised as the dense form symmetrises
-/// (P is first made symmetric, which leaves a symmetric one as it is).
+/// (P is first made symmetric, which leaves a symmetric one as it is),
+/// from `previous` (None: `p`'s own values) into `p`.
 fn predict_constant_rows(
-    covariance: &mut DMatrix<f64>,
+    previous: Option<&[f64]>,
+    p: &mut [f64],
     transition: &SparseRows,
     w: &mut DMatrix<f64>,
 ) {
-    let n = covariance.nrows();
+    let n = transition.rows();
     let k = transition.leading;
-    symmetrise(covariance);
+    match previous {
+        Some(previous) => symmetrised_into(previous, p, n),
+        None => symmetrise_values(p, n),
+    }
     resize(w, n, k);
-    let p = covariance.as_mut_slice();
     {
         let w = w.as_mut_slice();
         let p = &*p;
@@ -1171,7 +1242,32 @@ pub fn update_with(
     innovation: &DVector<f64>,
     workspace: &mut UpdateWorkspace,
 ) -> Result<()> {
+    update_from(
+        state,
+        None,
+        covariance.as_mut_slice(),
+        observation,
+        noise,
+        innovation,
+        workspace,
+    )
+}
+
+/// [`update_with`] of the covariance `predicted` (n × n, column-major;
+/// None: `into`'s own values) into `into` (n × n, held elsewhere: a
+/// filter's kept filtered covariance): the same numbers, without a copy of
+/// the result.
+pub fn update_from(
+    state: &mut DVector<f64>,
+    predicted: Option<&[f64]>,
+    into: &mut [f64],
+    observation: &DMatrix<f64>,
+    noise: &DMatrix<f64>,
+    innovation: &DVector<f64>,
+    workspace: &mut UpdateWorkspace,
+) -> Result<()> {
     let n = state.len();
+    let into = &mut into[..n * n];
     let m = observation.nrows();
     let UpdateWorkspace {
         observation: sparse,
@@ -1185,7 +1281,7 @@ pub fn update_with(
         log_determinant: log_det,
     } = workspace;
     sparse.set(observation);
-    sparse.times_transposed(covariance, cross);
+    sparse.times_transposed_values(predicted.unwrap_or(into), n, cross);
     resize(s, m, m);
     s.copy_from(noise);
     for p in 0..m {
@@ -1265,7 +1361,7 @@ pub fn update_with(
             },
         );
     }
-    symmetric_difference(covariance, product);
+    symmetric_difference(predicted, into, product);
     Ok(())
 }
 
@@ -1331,16 +1427,25 @@ fn inverse_by_root(
     Some(2.0 * log_det)
 }
 
-/// P ← ½·(P + Pᵀ) − (F + Fᵀ), both n × n.
-fn symmetric_difference(covariance: &mut DMatrix<f64>, product: &DMatrix<f64>) {
-    let n = covariance.nrows();
-    let (p, f) = (covariance.as_mut_slice(), product.as_slice());
-    for j in 0..n {
-        for i in 0..=j {
-            let value = 0.5 * (p[i + j * n] + p[j + i * n]) - (f[i + j * n] + f[j + i * n]);
-            p[i + j * n] = value;
-            p[j + i * n] = value;
+/// P ← ½·(P + Pᵀ) − (F + Fᵀ), both n × n (F = `product`), P read from
+/// `previous` (None: `into`'s own values) and written into `into`.
+fn symmetric_difference(previous: Option<&[f64]>, into: &mut [f64], product: &DMatrix<f64>) {
+    let n = product.nrows();
+    let f = product.as_slice();
+    let into = Cell::from_mut(into).as_slice_of_cells();
+    #[inline(always)]
+    fn entries(n: usize, p: impl Fn(usize) -> f64, f: &[f64], into: &[Cell<f64>]) {
+        for j in 0..n {
+            for i in 0..=j {
+                let value = 0.5 * (p(i + j * n) + p(j + i * n)) - (f[i + j * n] + f[j + i * n]);
+                into[i + j * n].set(value);
+                into[j + i * n].set(value);
+            }
         }
+    }
+    match previous {
+        Some(p) => entries(n, |i| p[i], f, into),
+        None => entries(n, |i| into[i].get(), f, into),
     }
 }
 
@@ -2456,6 +2561,97 @@ mod tests {
                 );
             }
         }
+        // From another matrix into a third (a filter's kept covariances),
+        // on both paths, for a symmetric P and one that is not (made
+        // symmetric first): the numbers in place, bit for bit.
+        let mut skewed = covariance.clone();
+        skewed[(1, 5)] += 1e-9;
+        skewed[(7, 0)] -= 3e-10;
+        for start in [&covariance, &skewed] {
+            for transition in [&blocks, &dense] {
+                for process in [None, Some(&noise)] {
+                    let mut in_place = start.clone();
+                    let mut work = Default::default();
+                    predict_covariance_in_place(&mut in_place, transition, process, &mut work);
+                    let mut into = vec![f64::NAN; n * n];
+                    predict_covariance_from(
+                        Some(start.as_slice()),
+                        &mut into,
+                        transition,
+                        process,
+                        &mut work,
+                    );
+                    assert!(
+                        in_place
+                            .iter()
+                            .zip(&into)
+                            .all(|(a, b)| a.to_bits() == b.to_bits())
+                    );
+                }
+            }
+        }
+    }
+
+    /// The measurement update from a covariance held in one matrix into
+    /// another (a filter's kept predicted and filtered covariances) is the
+    /// update in place bit for bit: state, covariance, S, S⁻¹ and K.
+    #[test]
+    fn update_into_another_matrix_is_the_update_in_place_bit_for_bit() {
+        let n = 7;
+        let value = |i: usize, j: usize| ((i * 3 + j * 11) as f64 * 0.53).cos();
+        let root = DMatrix::from_fn(n, n, value);
+        let mut covariance = &root * root.transpose() + DMatrix::identity(n, n);
+        covariance[(2, 4)] += 1e-9;
+        let observation = DMatrix::from_fn(
+            2,
+            n,
+            |i, j| if (i + j) % 3 == 0 { value(i, j) } else { 0.0 },
+        );
+        let noise = DMatrix::from_diagonal(&DVector::from_vec(vec![0.3, 0.02]));
+        let innovation = DVector::from_vec(vec![0.4, -1.1]);
+        let state = DVector::from_fn(n, |i, _| value(i, 2));
+        let (mut in_place, mut state_in_place) = (covariance.clone(), state.clone());
+        let mut by_place = UpdateWorkspace::default();
+        update_with(
+            &mut state_in_place,
+            &mut in_place,
+            &observation,
+            &noise,
+            &innovation,
+            &mut by_place,
+        )
+        .unwrap();
+        let (mut into, mut state_into) = (vec![f64::NAN; n * n], state.clone());
+        let mut by_copy = UpdateWorkspace::default();
+        update_from(
+            &mut state_into,
+            Some(covariance.as_slice()),
+            &mut into,
+            &observation,
+            &noise,
+            &innovation,
+            &mut by_copy,
+        )
+        .unwrap();
+        let bits = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        assert!(bits(in_place.as_slice(), &into));
+        assert!(bits(state_in_place.as_slice(), state_into.as_slice()));
+        for (a, b) in [
+            (
+                &by_place.innovation_covariance,
+                &by_copy.innovation_covariance,
+            ),
+            (&by_place.innovation_inverse, &by_copy.innovation_inverse),
+            (&by_place.gain, &by_copy.gain),
+        ] {
+            assert!(bits(a.as_slice(), b.as_slice()));
+        }
+        assert_eq!(
+            by_place.log_determinant.to_bits(),
+            by_copy.log_determinant.to_bits()
+        );
     }
 
     /// The unrolled product of small square matrices is the general loop's,

@@ -3,8 +3,11 @@
 //! transitions), Gaussian estimates ([`Gaussians`]: the predicted and the
 //! filtered ones) and the measurement updates ([`Updates`]; as sequences
 //! of scalar updates, [`ScalarUpdates`]), read back as views into the
-//! buffers. A pass over any number of grid points makes the
-//! same few allocations (tests/no_allocation.rs).
+//! buffers. A filter computes a kept matrix in its place in the buffer
+//! (`push_for_writing`) rather than copy it there, the room of the next
+//! one brought into the cache ahead of its writing (`prefetch_next`). A
+//! pass over any number of grid points makes the same few allocations
+//! (tests/no_allocation.rs).
 //!
 //! The buffers are megabytes (a pass over 1501 points of 22 states keeping
 //! everything: 17 MB), which the allocator hands back to the system when a
@@ -69,6 +72,30 @@ fn recycle(buffer: &mut Vec<f64>) {
     });
 }
 
+/// Asks the CPU to bring the room for the next `count` values of `values`
+/// (reserved, past its end) into its cache, ahead of their being written:
+/// a pass's buffers lie beyond the caches, and the writes of one grid
+/// point's kept matrices would otherwise wait for each line of them.
+#[inline]
+fn prefetch_room(values: &Vec<f64>, count: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let count = count.min(values.capacity() - values.len());
+        if count == 0 {
+            return;
+        }
+        let start = values.as_ptr().wrapping_add(values.len());
+        for offset in (0..count).step_by(8).chain([count - 1]) {
+            // SAFETY: a prefetch reads nothing the program sees and does
+            // not fault; the address lies in the buffer's allocation.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add(offset).cast()) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (values, count);
+}
+
 /// Matrices of one shape, one per grid point, one after another in one
 /// buffer (column-major each).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -119,6 +146,37 @@ impl Matrices {
         );
         self.values.extend_from_slice(matrix.as_slice());
         self.len += 1;
+    }
+
+    /// Appends a rows × columns matrix of zeros (the shape of the first
+    /// one pushed) and returns its values (column-major) for writing in
+    /// place: what a filter computes goes straight into the buffer instead
+    /// of through a copy.
+    ///
+    /// # Panics
+    /// On a shape other than the first one's.
+    pub fn push_for_writing(&mut self, rows: usize, columns: usize) -> &mut [f64] {
+        let size = rows * columns;
+        if self.len == 0 {
+            (self.rows, self.columns) = (rows, columns);
+            self.values.clear();
+            self.values.reserve_exact(self.capacity.max(1) * size);
+        }
+        assert_eq!(
+            (rows, columns),
+            (self.rows, self.columns),
+            "kept matrices have one shape"
+        );
+        let start = self.values.len();
+        self.values.resize(start + size, 0.0);
+        self.len += 1;
+        &mut self.values[start..]
+    }
+
+    /// Brings the room of the next matrix (reserved, not yet written) into
+    /// the cache ahead of its writing.
+    pub fn prefetch_next(&self) {
+        prefetch_room(&self.values, self.rows * self.columns);
     }
 
     /// Matrix k's values (column-major).
@@ -330,22 +388,8 @@ impl Gaussians {
     /// On a mean of another dimension than the first one's, or a
     /// covariance of another shape than n × n or 0 × 0.
     pub fn push_parts(&mut self, mean: &DVector<f64>, covariance: Option<&DMatrix<f64>>) {
-        self.settle();
         let n = mean.len();
-        if self.len == 0 {
-            self.dimension = n;
-            recycle(&mut self.means);
-            self.means = buffer(self.capacity.max(1) * n);
-            let covariances = if self.every_covariance {
-                self.capacity.max(1)
-            } else {
-                1
-            };
-            recycle(&mut self.covariances);
-            self.covariances = buffer(covariances * n * n);
-            self.kept_covariance = None;
-        }
-        assert_eq!(n, self.dimension, "kept estimates have one dimension");
+        self.begin(n);
         self.means.extend_from_slice(mean.as_slice());
         let covariance = covariance.filter(|c| !c.is_empty());
         if let Some(c) = covariance {
@@ -362,6 +406,64 @@ impl Gaussians {
             (false, None) => {}
         }
         self.len += 1;
+    }
+
+    /// Before a push of an estimate of dimension n: puts a taken estimate
+    /// back, and at the first push reserves the buffers.
+    ///
+    /// # Panics
+    /// On a dimension other than the first estimate's.
+    fn begin(&mut self, n: usize) {
+        self.settle();
+        if self.len == 0 {
+            self.dimension = n;
+            recycle(&mut self.means);
+            self.means = buffer(self.capacity.max(1) * n);
+            let covariances = if self.every_covariance {
+                self.capacity.max(1)
+            } else {
+                1
+            };
+            recycle(&mut self.covariances);
+            self.covariances = buffer(covariances * n * n);
+            self.kept_covariance = None;
+        }
+        assert_eq!(n, self.dimension, "kept estimates have one dimension");
+    }
+
+    /// Appends an estimate of dimension n, its mean and covariance zeros,
+    /// and returns their values (the covariance column-major, n × n) for
+    /// writing in place: what a filter computes goes straight into the
+    /// buffers instead of through a copy. Without every covariance kept,
+    /// the covariance is the one kept (the last given).
+    ///
+    /// # Panics
+    /// On a dimension other than the first estimate's.
+    pub fn push_for_writing(&mut self, n: usize) -> (&mut [f64], &mut [f64]) {
+        self.begin(n);
+        let mean = self.means.len();
+        self.means.resize(mean + n, 0.0);
+        let covariance = if self.every_covariance {
+            self.covariances.len()
+        } else {
+            self.covariances.clear();
+            self.kept_covariance = Some(self.len);
+            0
+        };
+        self.covariances.resize(covariance + n * n, 0.0);
+        self.len += 1;
+        (&mut self.means[mean..], &mut self.covariances[covariance..])
+    }
+
+    /// Brings the room of the next estimate (reserved, not yet written; its
+    /// covariance's with every covariance kept) into the cache ahead of its
+    /// writing.
+    pub fn prefetch_next(&self) {
+        let n = self.dimension;
+        prefetch_room(&self.means, n);
+        if self.every_covariance {
+            prefetch_room(&self.covariances, n * n);
+        }
     }
 
     /// Estimate k's mean and covariance values (column-major; empty where
@@ -597,6 +699,13 @@ impl Updates {
         ] {
             self.values.extend_from_slice(part);
         }
+    }
+
+    /// Brings the room of the next update (reserved, not yet written; for
+    /// as many outputs as the buffer is reserved for) into the cache ahead
+    /// of its writing.
+    pub fn prefetch_next(&self) {
+        prefetch_room(&self.values, Self::size(self.states, self.capacity.1));
     }
 
     /// The values an update of m outputs over n states takes.
@@ -846,6 +955,35 @@ mod tests {
         assert_eq!(kept.get(2).unwrap().to_gaussian(), pushed[2]);
     }
 
+    /// An estimate written in place is kept as one pushed, between pushed
+    /// ones, with every covariance and with the last one given only.
+    #[test]
+    fn gaussians_written_in_place_are_kept_as_pushed() {
+        let pushed: Vec<Gaussian> = (0..4).map(|k| gaussian(k as f64, 3)).collect();
+        for every in [true, false] {
+            let mut kept = Gaussians::with_capacity(4, every);
+            kept.push(&pushed[0]);
+            for estimate in &pushed[1..3] {
+                let (mean, covariance) = kept.push_for_writing(3);
+                assert_eq!((&*mean, covariance.len()), (&[0.0; 3][..], 9));
+                mean.copy_from_slice(estimate.mean.as_slice());
+                covariance.copy_from_slice(estimate.covariance.as_slice());
+            }
+            assert_eq!(kept.get(2).unwrap().to_gaussian(), pushed[2]);
+            kept.push_parts(&pushed[3].mean, None);
+            assert_eq!(kept.len(), 4);
+            for (k, estimate) in pushed.iter().enumerate() {
+                let view = kept.get(k).unwrap();
+                assert_eq!(view.mean, estimate.mean);
+                match (every, k) {
+                    (true, 3) => assert_eq!(view.covariance, DMatrix::zeros(3, 3)),
+                    (true, _) | (false, 2) => assert_eq!(view.covariance, estimate.covariance),
+                    (false, _) => assert_eq!(view.covariance.shape(), (0, 0), "{k}"),
+                }
+            }
+        }
+    }
+
     /// Updates of different numbers of outputs, and grid points without
     /// one, come back part by part as pushed.
     #[test]
@@ -896,7 +1034,14 @@ mod tests {
         }
         assert_eq!(kept.get(1).unwrap(), pushed[1]);
         assert!(kept.get(3).is_none());
-        assert_eq!(kept.into_iter().collect::<Vec<_>>(), pushed);
+        assert_eq!(kept.clone().into_iter().collect::<Vec<_>>(), pushed);
+        // Written in place after pushed ones: the same.
+        let written = DMatrix::from_fn(2, 3, |i, j| (i * 10 + j) as f64);
+        let into = kept.push_for_writing(2, 3);
+        assert_eq!(into, &[0.0; 6]);
+        into.copy_from_slice(written.as_slice());
+        assert_eq!(kept.get(3).unwrap(), written);
+        assert_eq!(kept.len(), 4);
     }
 
     /// Sequences of scalar updates, and grid points without one, come
