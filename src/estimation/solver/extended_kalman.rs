@@ -649,12 +649,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
     let mut update_workspace = UpdateWorkspace::default();
     let mut sequential_workspace = SequentialWorkspace::default();
     let mut variances = Vec::new();
-    let mut linearised = Jacobians {
-        rates_by_state: DMatrix::zeros(0, 0),
-        rates_by_parameter: DMatrix::zeros(0, 0),
-        outputs_by_state: DMatrix::zeros(0, 0),
-        outputs_by_parameter: DMatrix::zeros(0, 0),
-    };
+    let mut linearised = Jacobians::empty();
     let mut predicted = DVector::zeros(0);
     let mut next = DVector::zeros(0);
     let mut innovation = DVector::zeros(0);

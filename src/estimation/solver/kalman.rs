@@ -1869,7 +1869,7 @@ pub fn mbf_smooth<U: SmootherUpdates + ?Sized, T: Transitions + ?Sized>(
 /// 2·Σ_a P_ia·W_ia with W = P·U (Σ_a Σ_b P_ia·P_ib·U_ba is the same sum for
 /// U and Uᵀ when P is symmetric), so the variance is
 /// P_ii − 2·Σ_a P_ia·W_ia: W's column j combines P's columns 0..=j in
-/// registers ([`combine_columns`]), half the multiply-adds of the dense
+/// registers (`combine_columns`), half the multiply-adds of the dense
 /// product P·Λ, each sum taken along P's and W's columns a for all i at
 /// once.
 pub fn mbf_smooth_variances<U: SmootherUpdates + ?Sized, T: Transitions + ?Sized>(
