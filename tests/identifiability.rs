@@ -287,3 +287,44 @@ fn inputs_as_recorded_bias_what_a_slow_control_channel_hides() {
     );
     std::fs::remove_dir_all(&folder).ok();
 }
+
+/// τ1 = 0 makes the stall model's χ algebraic: no central difference can
+/// move it both ways without changing the model (a negative τ1 is
+/// refused, a positive one makes χ a state of time constant τ1·c̄/V that
+/// the first step departs on). The whole-aircraft analysis of the stall
+/// flight leaves it out and says why, and analyses the rest; asked for it
+/// by name, the analysis refuses, naming it.
+#[test]
+fn a_parameter_that_cannot_move_both_ways_is_left_out_or_refused() {
+    let scenario = Scenario::load("attas-stall").unwrap();
+    let profile = Profile::load("flight-test-25hz", None).unwrap();
+    let result = analyse(&scenario, &profile, &IdentifiabilityOptions::default()).unwrap();
+    let table = result.table();
+    assert_eq!(result.parameters_left_out.len(), 1, "{table}");
+    let (name, reason) = &result.parameters_left_out[0];
+    assert_eq!(name, "tau1");
+    assert!(reason.contains("algebraic"), "{reason}");
+    assert!(table.contains("parameter left out: tau1"), "{table}");
+    assert!(result.rows.iter().all(|r| r.parameter != "tau1"));
+    // The other stall parameters are analysed (α*'s bound is infinite on
+    // this flight with every parameter of the aircraft free, as CL_0's).
+    for name in ["a1", "tau2"] {
+        let row = result.rows.iter().find(|r| r.parameter == name).unwrap();
+        assert!(row.sigma.is_finite() && row.sigma > 0.0, "{name}\n{table}");
+    }
+    assert!(result.rows.iter().any(|r| r.parameter == "alpha_star"));
+    let error = analyse(
+        &scenario,
+        &profile,
+        &IdentifiabilityOptions {
+            parameters: Some(vec!["tau1".into(), "a1".into()]),
+            ..Default::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        error.contains("tau1") && error.contains("algebraic"),
+        "{error}"
+    );
+}

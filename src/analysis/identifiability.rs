@@ -68,7 +68,10 @@
 //! responses an aerodynamic model predicts are used (air data, angles,
 //! rates, load factors, altitude): inputs, engine and weight channels,
 //! inertial navigation (which integrates the unknown wind) and the
-//! recorder's wind estimate are left out, each with its reason.
+//! recorder's wind estimate are left out, each with its reason. A
+//! parameter the differences cannot move both ways without changing the
+//! model (τ1 = 0, which makes χ algebraic) is left out with its reason, or
+//! refused when it is named.
 //!
 //! # The sampling rule
 //! Wang et al. 2012 (§2, item 3) advise sampling "at least 25 times" the
@@ -218,6 +221,10 @@ pub struct Identifiability {
     pub channels: Vec<ChannelUse>,
     /// The fastest sample rate of the channels used (Hz).
     pub rate: f64,
+    /// Parameters left out, with the reason: those the central differences
+    /// cannot move both ways without changing the model's structure
+    /// (τ1 = 0, χ algebraic).
+    pub parameters_left_out: Vec<(String, String)>,
     /// Channels left out, with the reason.
     pub excluded: Vec<(String, String)>,
     pub rows: Vec<IdentifiabilityRow>,
@@ -306,6 +313,9 @@ impl Identifiability {
                 .collect::<Vec<_>>()
                 .join(", ")
         );
+        for (name, reason) in &self.parameters_left_out {
+            text += &format!("parameter left out: {name}: {reason}\n");
+        }
         for (name, reason) in &self.excluded {
             text += &format!("left out: {name}: {reason}\n");
         }
@@ -430,18 +440,40 @@ pub fn analyse(
     }
     let simulation = Simulation::prepare(scenario)?;
     let aero = &scenario.aircraft.aero;
-    let names: Vec<String> = match &options.parameters {
+    let requested: Vec<String> = match &options.parameters {
         Some(names) => names.clone(),
         None => aero.parameters.names().to_vec(),
     };
-    let mut truths = Vec::with_capacity(names.len());
-    for name in &names {
-        let index = aero.parameters.index(name).ok_or_else(|| Error::Unknown {
+    let (mut names, mut truths) = (Vec::new(), Vec::new());
+    let mut parameters_left_out = Vec::new();
+    for name in requested {
+        let index = aero.parameters.index(&name).ok_or_else(|| Error::Unknown {
             kind: "parameter",
             name: name.clone(),
             known: aero.parameters.names().to_vec(),
         })?;
-        truths.push(aero.parameters.values()[index]);
+        let truth = aero.parameters.values()[index];
+        // A parameter the central differences cannot move both ways
+        // without changing the model (τ1 = 0 makes χ algebraic).
+        let h = options.relative_step * truth.abs().max(1e-2);
+        let fixed = [truth + h, truth - h]
+            .into_iter()
+            .find_map(|value| aero.check_replacement(&name, value).err());
+        match fixed {
+            None => {
+                names.push(name);
+                truths.push(truth);
+            }
+            Some(reason) if options.parameters.is_none() => {
+                parameters_left_out.push((name, reason));
+            }
+            Some(reason) => {
+                return Err(Error::Other(format!(
+                    "identifiability of '{}': parameter {name} = {truth} cannot be moved by ±{h:.1e} for its sensitivity: {reason}",
+                    scenario.name
+                )));
+            }
+        }
     }
     let (channels, excluded) = usable_channels(profile, options.channels.as_deref())?;
     let clean = profile.without_random_errors();
@@ -654,6 +686,7 @@ pub fn analyse(
         segment,
         channels: uses,
         rate,
+        parameters_left_out,
         excluded,
         rows,
     })
