@@ -76,14 +76,17 @@
 //! # The sampling rule
 //! Wang et al. 2012 (§2, item 3) advise sampling "at least 25 times" the
 //! frequency of the airplane's modes. Beside each bound the analysis names
-//! the fastest mode the parameter moves, from the aircraft linearised at the
+//! the mode the parameter moves furthest, from the aircraft linearised at the
 //! scenario's trim ([`crate::analysis::linearize`]): for every classified
 //! mode (short period, phugoid, Dutch roll, roll, spiral) the elasticity
 //! |λ(θ_j + h) − λ(θ_j − h)|/|λ| · s_j/(2h), s_j = max(|θ_j|, 10⁻²),
 //! h = 10⁻³·s_j, the relative move of the eigenvalue per relative move of
-//! the parameter, the aircraft trimmed again for each. The fastest mode
-//! whose elasticity is at least 0.1 (a 10 % change of the parameter moves
-//! it by 1 %) is the parameter's mode, and its rule rate is 25·|λ|/2π. A parameter whose mode's rule rate exceeds the
+//! the parameter, the aircraft trimmed again for each. The mode whose
+//! eigenvalue the parameter moves furthest, |∂λ/∂ln θ_j| (elasticity times
+//! |λ|: a slow mode's large relative move is a small one in the time a
+//! sample spans), is the parameter's mode when its elasticity is at least
+//! 0.1 (a 10 % change of the parameter moves it by 1 %); its rule rate is
+//! 25·|λ|/2π. A parameter whose mode's rule rate exceeds the
 //! fastest sample rate of the channels used is marked "below the rule".
 //! The mark is advice, not part of the verdict: the bound knows the
 //! wind and the information the slow samples carry, the rule knows
@@ -147,7 +150,7 @@ pub const RULE_FACTOR: f64 = 25.0;
 /// The least elasticity for a mode to count as a parameter's.
 pub const GOVERNING_ELASTICITY: f64 = 0.1;
 
-/// The fastest mode a parameter moves (module documentation, "The
+/// The mode a parameter moves furthest (module documentation, "The
 /// sampling rule").
 #[derive(Debug, Clone, PartialEq)]
 pub struct GoverningMode {
@@ -180,8 +183,9 @@ pub struct IdentifiabilityRow {
     /// a flight without them.
     pub calm: Option<(f64, f64)>,
     pub identifiable: bool,
-    /// The fastest mode the parameter moves by [`GOVERNING_ELASTICITY`] or
-    /// more; None when it moves none (control derivatives).
+    /// The mode the parameter moves furthest, when by
+    /// [`GOVERNING_ELASTICITY`] or more; None otherwise (control
+    /// derivatives).
     pub mode: Option<GoverningMode>,
 }
 
@@ -237,7 +241,7 @@ impl Identifiability {
             "{} recorded by {}: Cramér–Rao bounds at the truth, {} s segments with unknown initial states; identifiable when σ/|truth| < {}\n",
             self.scenario, self.profile, self.segment, self.threshold
         );
-        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate and resolution, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict); calm σ: the bound of the flight without its gusts and turbulence (identifiable \"through the gusts\" when that flight fails the verdict: its bound or its inputs' error); mode: the fastest mode the parameter moves at the trim and the rate the sampling rule asks for (25 times its frequency; advice, not in the verdict)\n";
+        text += "error from inputs: the first-order error of an estimator that takes the recorded inputs (at the record's rate and resolution, reconstructed by the scenario's interpolation) as exact; error from wind: of one that ignores the gusts and turbulence (not in the verdict); calm σ: the bound of the flight without its gusts and turbulence (identifiable \"through the gusts\" when that flight fails the verdict: its bound or its inputs' error); mode: the mode the parameter moves furthest at the trim and the rate the sampling rule asks for (25 times its frequency; advice, not in the verdict)\n";
         text += &format!(
             "{:<14} {:>12} {:>11} {:>10} {:>12} {:>12} {:>12}  {:<24} {}\n",
             "parameter",
@@ -692,7 +696,7 @@ pub fn analyse(
     })
 }
 
-/// The mode each parameter moves most at the scenario's trim (module
+/// The mode each parameter moves furthest at the scenario's trim (module
 /// documentation, "The sampling rule"), or None.
 fn governing_modes(
     scenario: &Scenario,
@@ -736,8 +740,10 @@ fn governing_modes(
                         elasticity: change.norm() / size * scale / (2.0 * h),
                     })
                 })
-                .filter(|m| m.elasticity >= GOVERNING_ELASTICITY)
-                .max_by(|a, b| a.frequency.total_cmp(&b.frequency)))
+                .max_by(|a, b| {
+                    (a.elasticity * a.frequency).total_cmp(&(b.elasticity * b.frequency))
+                })
+                .filter(|m| m.elasticity >= GOVERNING_ELASTICITY))
         })
         .collect()
 }
