@@ -103,6 +103,7 @@ use crate::record::recorder::Profile;
 use crate::sim::Simulation;
 use crate::sim::scenario::Scenario;
 use crate::sim::state::{self, CONTROL_COUNT, Control, StateVector};
+use crate::sim::wind::WindSample;
 use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
 
 /// Settings of an identifiability analysis.
@@ -711,11 +712,13 @@ fn governing_modes(
         ModeKind::Roll,
         ModeKind::Spiral,
     ];
-    let modes = |simulation: &Simulation| {
-        let wind = simulation.winds.first().copied().unwrap_or_default();
-        linearize(&simulation.model, &simulation.trim, &wind).modes()
+    let wind = simulation.winds.first().copied().unwrap_or_default();
+    // The steady wind the simulation trims in (`Simulation::prepare`).
+    let steady = WindSample {
+        ned: wind.ned,
+        body: Default::default(),
     };
-    let nominal = modes(simulation);
+    let nominal = linearize(&simulation.model, &simulation.trim, &wind).modes();
     names
         .iter()
         .zip(truths)
@@ -724,9 +727,10 @@ fn governing_modes(
             let h = 1e-3 * scale;
             // The aircraft with the parameter moved, trimmed again.
             let moved = |value: f64| {
-                let mut scenario = scenario.clone();
-                scenario.aircraft.aero.parameters.set(name, value)?;
-                Ok::<_, Error>(modes(&Simulation::prepare(&scenario)?))
+                let mut model = simulation.model.clone();
+                model.aircraft.aero.parameters.set(name, value)?;
+                let trim = crate::sim::trim::trim(&model, &scenario.trim, &steady)?;
+                Ok::<_, Error>(linearize(&model, &trim, &wind).modes())
             };
             let (plus, minus) = (moved(truth + h)?, moved(truth - h)?);
             Ok(KINDS
