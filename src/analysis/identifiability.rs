@@ -123,6 +123,14 @@ pub struct IdentifiabilityOptions {
     pub segment: Option<f64>,
 }
 
+impl IdentifiabilityOptions {
+    /// The central-difference step of a parameter whose value is `truth`:
+    /// h = relative_step·max(|θ|, 10⁻²).
+    fn parameter_step(&self, truth: f64) -> f64 {
+        self.relative_step * truth.abs().max(1e-2)
+    }
+}
+
 impl Default for IdentifiabilityOptions {
     fn default() -> Self {
         IdentifiabilityOptions {
@@ -460,7 +468,7 @@ pub fn analyse(
         let truth = aero.parameters.values()[index];
         // A parameter the central differences cannot move both ways
         // without changing the model (τ1 = 0 makes χ algebraic).
-        let h = options.relative_step * truth.abs().max(1e-2);
+        let h = options.parameter_step(truth);
         let fixed = [truth + h, truth - h]
             .into_iter()
             .find_map(|value| aero.check_replacement(&name, value).err());
@@ -567,7 +575,7 @@ pub fn analyse(
     let sensitivities_of = |simulation: &Simulation, states: &[StateVector]| {
         let mut sensitivities = DMatrix::zeros(rows_total, columns);
         for (j, (name, truth)) in names.iter().zip(&truths).enumerate() {
-            let h = options.relative_step * truth.abs().max(1e-2);
+            let h = options.parameter_step(*truth);
             let plus = fly(simulation, states, Some((name, truth + h)), None)?;
             let minus = fly(simulation, states, Some((name, truth - h)), None)?;
             for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
