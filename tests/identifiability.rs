@@ -51,6 +51,26 @@ fn qar_identifiability_table() {
         );
     }
     assert!(result.excluded.iter().any(|(name, _)| name == "alpha"));
+    // A gusty flight on a record without a sideslip channel: the note that
+    // the estimators' geometric sideslip misses the gusts, which these
+    // bounds know (docs/findings.md, "The geometric sideslip in
+    // turbulence"). With a vane added there is none.
+    assert_eq!(result.notes.len(), 1, "{}", result.table());
+    assert!(
+        result.notes[0].contains("geometric") && result.notes[0].contains("qar-seed000"),
+        "{}",
+        result.notes[0]
+    );
+    let vane = analyse(
+        &scenario,
+        &Profile::load("qar-seed000-vane", None).unwrap(),
+        &IdentifiabilityOptions {
+            parameters: Some(vec!["Cn_beta".into()]),
+            ..options.clone()
+        },
+    )
+    .unwrap();
+    assert!(vane.notes.is_empty(), "{}", vane.table());
     let identifiable: Vec<&str> = result
         .rows
         .iter()

@@ -73,6 +73,19 @@
 //! model (τ1 = 0, which makes χ algebraic) is left out with its reason, or
 //! refused when it is named.
 //!
+//! # The geometric sideslip
+//! A record without a usable sideslip channel (the QAR has none) gives the
+//! estimators the geometric sideslip of the derive step
+//! ([`crate::prep::flow_angles`]): the flight path against the recorded
+//! wind, whose slow channels miss the gusts. In turbulence that error is
+//! as large as the sideslip a manoeuvre makes: the regression estimators,
+//! which take it for the aerodynamic sideslip, find the lateral static and
+//! roll derivatives about half their size, at 1 Hz and at 16 Hz alike
+//! (docs/findings.md, "The geometric sideslip in turbulence"). The bounds here know the gusts and
+//! draw their sideslip information from n_y, so they cannot show it; for a
+//! flight with gusts or turbulence on such a record the analysis says so
+//! in a note.
+//!
 //! # The sampling rule
 //! Wang et al. 2012 (§2, item 3) advise sampling "at least 25 times" the
 //! frequency of the airplane's modes. Beside each bound the analysis names
@@ -240,6 +253,9 @@ pub struct Identifiability {
     pub parameters_left_out: Vec<(String, String)>,
     /// Channels left out, with the reason.
     pub excluded: Vec<(String, String)>,
+    /// What the bounds cannot show about this flight and record (module
+    /// documentation, "The geometric sideslip").
+    pub notes: Vec<String>,
     pub rows: Vec<IdentifiabilityRow>,
 }
 
@@ -326,6 +342,9 @@ impl Identifiability {
                 .collect::<Vec<_>>()
                 .join(", ")
         );
+        for note in &self.notes {
+            text += &format!("note: {note}\n");
+        }
         for (name, reason) in &self.parameters_left_out {
             text += &format!("parameter left out: {name}: {reason}\n");
         }
@@ -701,7 +720,32 @@ pub fn analyse(
         rate,
         parameters_left_out,
         excluded,
+        notes: gusty
+            .then(|| geometric_sideslip_note(profile))
+            .flatten()
+            .into_iter()
+            .collect(),
         rows,
+    })
+}
+
+/// The note for a gusty flight on a record without a usable sideslip
+/// channel (module documentation, "The geometric sideslip").
+fn geometric_sideslip_note(profile: &Profile) -> Option<String> {
+    let has = |name: &str| profile.channels.iter().any(|c| c.measurand.name == name);
+    let vane = profile
+        .channels
+        .iter()
+        .any(|c| c.measurand.name == "beta" && c.fault.is_none());
+    // The channels Eqs. 1–6 need without the wind correction.
+    let geometric = crate::prep::flow_angles::INPUT_CHANNELS[..6]
+        .iter()
+        .all(|name| has(name));
+    (!vane && geometric).then(|| {
+        format!(
+            "'{}' records no usable sideslip: an estimator takes the geometric one (aeroid derive), which misses the gusts the wind channels miss; these bounds know the gusts, and in turbulence that error alone can make the lateral static and roll derivatives of a regression about half their size (docs/findings.md, \"The geometric sideslip in turbulence\")",
+            profile.name
+        )
     })
 }
 

@@ -21,7 +21,7 @@
 //! noise_scale = [0.5, 1.0, 2.0]             # every channel's noise σ times this
 //! resolution_scale = [1.0, 4.0]             # every quantized channel's LSB times this
 //! missing = [[], ["alpha"]]                 # channels left out of the record
-//! channel_rate = [{ alpha = "2 Hz" }]       # channels at their own rate
+//! channel_rate = [{ alpha = "2 Hz" }]       # channels at their own rate (moot where `missing` leaves one out)
 //! settings = [{}, { oem = { max_iterations = 3 } }]  # method settings variants
 //! ```
 //!
@@ -418,6 +418,13 @@ impl Study {
                 for missing in &missing {
                     let kept = profile.without(missing).map_err(Error::Other)?;
                     for channel_rates in &channel_rates {
+                        // A rate for a channel this point leaves out is moot.
+                        let channel_rates: Vec<(String, f64)> = channel_rates
+                            .iter()
+                            .filter(|(name, _)| !missing.contains(name))
+                            .cloned()
+                            .collect();
+                        let channel_rates = &channel_rates;
                         for turbulence in &turbulence {
                             for &input_scale in &input_scales {
                                 for &sample_rate in &rates {
