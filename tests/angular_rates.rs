@@ -473,8 +473,9 @@ idle_fuel_flow = 0.02
 /// Cl_r, Cn_β and Cn_r held (|mean bias| ≤ 1.96 mean CRB, the rule of the
 /// study above; measured 0.2–1.4 CRB), Cl_β, Cl_δa and Cl_p within 1.5 %
 /// (measured 0.7–1.0 %, 2.2–4.0 CRB: their bounds are 0.25–0.33 % of the
-/// value, and the 1 % left is not traced, so they are held to what they
-/// give, not to the CRB rule). Without either, the statics and the roll
+/// value, and the 1 % left comes with the kinematic rates, which 16 Hz
+/// gyros remove, so they are held to what they give, not to the CRB
+/// rule). Without either, the statics and the roll
 /// damping are about half their size: |bias| over 40 % and 5 CRB
 /// (measured 46–84 %, 10.5–42 CRB), the geometric sideslip's error in
 /// the variables or the 1 Hz samples. Both sides are asserted.
