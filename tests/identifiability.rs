@@ -51,10 +51,10 @@ fn qar_identifiability_table() {
         );
     }
     assert!(result.excluded.iter().any(|(name, _)| name == "alpha"));
-    // A gusty flight on a record without a sideslip channel: the note that
-    // the estimators' geometric sideslip misses the gusts, which these
-    // bounds know (docs/findings.md, "The geometric sideslip in
-    // turbulence"). With a vane added there is none.
+    // A gusty flight on a record without a usable angle of attack or
+    // sideslip: the note that the estimators' geometric angles miss the
+    // gusts, which these bounds know (docs/findings.md, "The geometric flow
+    // angles in turbulence"). With working vanes there is none.
     assert_eq!(result.notes.len(), 1, "{}", result.table());
     assert!(
         result.notes[0].contains("geometric") && result.notes[0].contains("qar-seed000"),
@@ -63,7 +63,7 @@ fn qar_identifiability_table() {
     );
     let vane = analyse(
         &scenario,
-        &Profile::load("qar-seed000-vane", None).unwrap(),
+        &Profile::load("qar-seed000-vanes", None).unwrap(),
         &IdentifiabilityOptions {
             parameters: Some(vec!["Cn_beta".into()]),
             ..options.clone()

@@ -73,18 +73,20 @@
 //! model (τ1 = 0, which makes χ algebraic) is left out with its reason, or
 //! refused when it is named.
 //!
-//! # The geometric sideslip
-//! A record without a usable sideslip channel (the QAR has none) gives the
-//! estimators the geometric sideslip of the derive step
-//! ([`crate::prep::flow_angles`]): the flight path against the recorded
-//! wind, whose slow channels miss the gusts. In turbulence that error is
-//! as large as the sideslip a manoeuvre makes: the regression estimators,
-//! which take it for the aerodynamic sideslip, find the lateral static and
-//! roll derivatives about half their size, at 1 Hz and at 16 Hz alike
-//! (docs/findings.md, "The geometric sideslip in turbulence"). The bounds here know the gusts and
-//! draw their sideslip information from n_y, so they cannot show it; for a
-//! flight with gusts or turbulence on such a record the analysis says so
-//! in a note.
+//! # The geometric flow angles
+//! A record without a usable angle of attack or sideslip channel (the QAR
+//! has a stuck vane and no sideslip) gives the estimators the geometric
+//! angles of the derive step ([`crate::prep::flow_angles`]): the flight
+//! path against the recorded wind, whose slow channels miss the gusts. In
+//! turbulence that error is as large as the angles a manoeuvre makes: the
+//! regression estimators, which take them for the aerodynamic angles, find
+//! the lift and pitching-moment slopes and the lateral static and roll
+//! derivatives a third or more too small, at 1 Hz and at 16 Hz alike,
+//! and recover them with working vanes (docs/findings.md, "The geometric
+//! flow angles in turbulence"). The bounds here know the gusts and draw
+//! their information on the angles from the load factors, so they cannot
+//! show it; for a flight with gusts or turbulence on such a record the
+//! analysis says so in a note.
 //!
 //! # The sampling rule
 //! Wang et al. 2012 (§2, item 3) advise sampling "at least 25 times" the
@@ -254,7 +256,7 @@ pub struct Identifiability {
     /// Channels left out, with the reason.
     pub excluded: Vec<(String, String)>,
     /// What the bounds cannot show about this flight and record (module
-    /// documentation, "The geometric sideslip").
+    /// documentation, "The geometric flow angles").
     pub notes: Vec<String>,
     pub rows: Vec<IdentifiabilityRow>,
 }
@@ -721,7 +723,7 @@ pub fn analyse(
         parameters_left_out,
         excluded,
         notes: gusty
-            .then(|| geometric_sideslip_note(profile))
+            .then(|| geometric_flow_angles_note(profile))
             .flatten()
             .into_iter()
             .collect(),
@@ -729,22 +731,31 @@ pub fn analyse(
     })
 }
 
-/// The note for a gusty flight on a record without a usable sideslip
-/// channel (module documentation, "The geometric sideslip").
-fn geometric_sideslip_note(profile: &Profile) -> Option<String> {
+/// The note for a gusty flight on a record without a usable angle of
+/// attack or sideslip channel (module documentation, "The geometric flow
+/// angles").
+fn geometric_flow_angles_note(profile: &Profile) -> Option<String> {
     let has = |name: &str| profile.channels.iter().any(|c| c.measurand.name == name);
-    let vane = profile
-        .channels
-        .iter()
-        .any(|c| c.measurand.name == "beta" && c.fault.is_none());
+    let vane = |name: &str| {
+        profile
+            .channels
+            .iter()
+            .any(|c| c.measurand.name == name && c.fault.is_none())
+    };
     // The channels Eqs. 1–6 need without the wind correction.
     let geometric = crate::prep::flow_angles::INPUT_CHANNELS[..6]
         .iter()
         .all(|name| has(name));
-    (!vane && geometric).then(|| {
+    let lacking: Vec<&str> = [("alpha", "angle of attack"), ("beta", "sideslip")]
+        .into_iter()
+        .filter(|(name, _)| !vane(name))
+        .map(|(_, words)| words)
+        .collect();
+    (geometric && !lacking.is_empty()).then(|| {
         format!(
-            "'{}' records no usable sideslip: an estimator takes the geometric one (aeroid derive), which misses the gusts the wind channels miss; these bounds know the gusts, and in turbulence that error alone can make the lateral static and roll derivatives of a regression about half their size (docs/findings.md, \"The geometric sideslip in turbulence\")",
-            profile.name
+            "'{}' records no usable {}: an estimator takes the geometric angles (aeroid derive), which miss the gusts the wind channels miss; these bounds know the gusts, and in turbulence that error alone can make a regression's static and roll derivatives a third or more too small (docs/findings.md, \"The geometric flow angles in turbulence\")",
+            profile.name,
+            lacking.join(" or ")
         )
     })
 }
