@@ -505,3 +505,30 @@ fn import_rate_overflowing_from_the_time_scale_is_named() {
         "{error}"
     );
 }
+
+/// `qar-seed000-vanes` is `qar-seed000` with its angle of attack working
+/// and a sideslip vane added, nothing else (its file copies the QAR's
+/// channels, so this keeps the two from drifting apart): every other
+/// channel the same in every field, the angle of attack without the fault
+/// and with the attitude's resolution, one more channel, `beta`.
+#[test]
+fn the_vanes_profile_is_the_qar_with_working_vanes() {
+    let qar = Profile::load("qar-seed000", None).unwrap();
+    let vanes = Profile::load("qar-seed000-vanes", None).unwrap();
+    assert_eq!(vanes.channels.len(), qar.channels.len() + 1);
+    for (a, b) in qar.channels.iter().zip(&vanes.channels) {
+        assert_eq!(a.measurand.name, b.measurand.name);
+        if a.measurand.name == "alpha" {
+            assert!(a.fault.is_some() && b.fault.is_none());
+            assert_eq!(b.resolution, Some(0.1 * DEG));
+            assert_eq!((a.rate, a.offset), (b.rate, b.offset));
+        } else {
+            assert_eq!(format!("{a:?}"), format!("{b:?}"));
+        }
+    }
+    let beta = vanes.channels.last().unwrap();
+    assert_eq!(beta.measurand.name, "beta");
+    assert_eq!((beta.rate, beta.resolution), (1.0, Some(0.1 * DEG)));
+    assert_eq!(qar.absent, ["p", "q", "r", "beta", "airspeed"]);
+    assert_eq!(vanes.absent, ["p", "q", "r", "airspeed"]);
+}
