@@ -417,20 +417,19 @@ impl Study {
             for profile in &profiles {
                 for missing in &missing {
                     let kept = profile.without(missing).map_err(Error::Other)?;
-                    for channel_rates in &channel_rates {
+                    for rates_given in &channel_rates {
                         // A rate for a channel this point leaves out is moot.
-                        let channel_rates: Vec<(String, f64)> = channel_rates
+                        let channel_rates: Vec<(String, f64)> = rates_given
                             .iter()
                             .filter(|(name, _)| !missing.contains(name))
                             .cloned()
                             .collect();
-                        let channel_rates = &channel_rates;
                         for turbulence in &turbulence {
                             for &input_scale in &input_scales {
                                 for &sample_rate in &rates {
                                     let rated = sample_rate
                                         .map_or_else(|| kept.clone(), |r| kept.with_rate(r))
-                                        .with_channel_rates(channel_rates)
+                                        .with_channel_rates(&channel_rates)
                                         .map_err(Error::Other)?;
                                     for &noise_scale in &scales {
                                         let noisy = if noise_scale == 1.0 {
