@@ -121,12 +121,13 @@ fn lateral() -> (Scenario, ModelStructure) {
 /// truth's exactly: the pseudo-controls (V, α, q, θ) are interpolated
 /// linearly between the 25 Hz samples inside each 0.04 s step, an O(h²)
 /// error (output error on the 100 Hz record is within 2e-4); measured
-/// worst 5e-5 (CY_da). Its status is "unsettled", honestly: the
-/// innovations are that interpolation error, far below the noise floor
-/// R is held at, not white noise of variance R.
+/// worst 5e-5 (CY_da). It is converged (settled and identified), with
+/// its innovations diagnosed inconsistent with their covariance: they are
+/// that interpolation error, far below the noise floor R is held at, not
+/// white noise of variance R.
 ///
 /// The UKF (square-root form, default α = 0.5) is held to the same: every
-/// derivative within 1e-3 relative, unsettled for the same reason.
+/// derivative within 1e-3 relative, converged with the same diagnosis.
 /// Measured worst 5.2e-5 (CY_da; the EKF's 5.0e-5): the same
 /// interpolation error as the EKF's.
 #[test]
@@ -143,18 +144,16 @@ fn noise_free_record_gives_the_truth() {
     let (relative, _, text) = report(&run_ekf.estimate, truth);
     println!("{text}");
     assert!(relative < 1e-3, "{relative:e}\n{text}");
-    assert!(
-        matches!(run_ekf.estimate.status, Status::Unsettled(_)),
-        "{text}"
-    );
+    let settled = |e: &aeroid::estimation::estimate::Estimate| {
+        let inconsistent = aeroid::estimation::estimate::DiagnosisKind::InconsistentInnovations;
+        e.status == Status::Converged && e.diagnosis(inconsistent).is_some()
+    };
+    assert!(settled(&run_ekf.estimate), "{text}");
     let run_ukf = run(Filter::Unscented, &record, &structure, &settings);
     let (relative, _, text) = report(&run_ukf.estimate, truth);
     println!("{text}");
     assert!(relative < 1e-3, "{relative:e}\n{text}");
-    assert!(
-        matches!(run_ukf.estimate.status, Status::Unsettled(_)),
-        "{text}"
-    );
+    assert!(settled(&run_ukf.estimate), "{text}");
 }
 
 /// Sensor noise (flight-test profile, controls exact), five recorder seeds

@@ -245,3 +245,12 @@ pub fn derived_qar_approach() -> (aeroid::record::FlightRecord, aeroid::sim::tra
         .record;
     (record, trace)
 }
+
+/// The outputs an estimate's coloured-residuals diagnosis names; empty
+/// without one.
+pub fn coloured_outputs(estimate: &aeroid::estimation::estimate::Estimate) -> Vec<String> {
+    estimate
+        .diagnosis(aeroid::estimation::estimate::DiagnosisKind::ColouredResiduals)
+        .map(|d| d.about.clone())
+        .unwrap_or_default()
+}

@@ -15,7 +15,7 @@
 //! kind show what output error's residual judgement calls a poor fit.
 
 use aeroid::error::Error;
-use aeroid::estimation::estimate::{Estimate, OutputFit, ParameterEstimate, Status};
+use aeroid::estimation::estimate::{DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status};
 use aeroid::estimation::estimator::{Refusal, RefusalKind};
 use aeroid::estimation::methods;
 use aeroid::estimation::problem::EstimationProblem;
@@ -152,6 +152,7 @@ fn converged(variances: [f64; 2]) -> Estimate {
         model: "m".into(),
         record: "r".into(),
         status: Status::Converged,
+        diagnoses: Vec::new(),
         parameters: ["a", "b"]
             .iter()
             .zip(variances)
@@ -181,12 +182,14 @@ fn converged(variances: [f64; 2]) -> Estimate {
 /// correlated (√N·ρ₁ below 4), with at most 3 of the 20 lags outside the
 /// band; a slow sine error of amplitude 0.1 (50 samples a period) is
 /// correlated (ρ₁ = cos(2π/50) = 0.992) and structured 0.1·√ρ₁ ≈ 0.0996
-/// (error and output both sines: the ratio of their RMS), a poor fit; the
-/// same error at 1e-9 (a noise-free fit's rounding) is correlated but
-/// structured 1e-9: converged, with a note. A converged estimate with an
-/// infinite σ is unidentified whatever its residuals.
+/// (error and output both sines: the ratio of their RMS): the fit stays
+/// converged and carries a coloured-residuals diagnosis naming the output
+/// with its measure; the same error at 1e-9 (a noise-free fit's rounding)
+/// is correlated but structured 1e-9: converged, no diagnosis, a note. A
+/// converged estimate with an infinite σ is unidentified whatever its
+/// residuals, and its residuals are diagnosed all the same.
 #[test]
-fn residual_structure_makes_a_poor_fit() {
+fn residual_structure_is_diagnosed_beside_the_status() {
     use rand::RngExt;
     let n = 1500;
     let mut rng = aeroid::random::stream(7, aeroid::random::streams::RECORDER);
@@ -221,17 +224,17 @@ fn residual_structure_makes_a_poor_fit() {
     let mut judged = converged([1.0, 1.0]);
     judged.fits = vec![white.clone(), structured.clone()];
     let judged = judged.assess_residuals();
-    assert_eq!(judged.status, Status::PoorFit(vec!["alpha".into()]));
-    assert!(
-        judged
-            .notes
-            .iter()
-            .any(|n| n.contains("structured residual"))
-    );
+    assert_eq!(judged.status, Status::Converged);
+    assert_eq!(judged.diagnoses.len(), 1, "{:?}", judged.diagnoses);
+    let coloured = &judged.diagnoses[0];
+    assert_eq!(coloured.kind, DiagnosisKind::ColouredResiduals);
+    assert_eq!(coloured.about, vec!["alpha".to_string()]);
+    assert_eq!(coloured.measures, vec![structured.structured]);
     let mut fine = converged([1.0, 1.0]);
     fine.fits = vec![white, rounding];
     let fine = fine.assess_residuals();
     assert_eq!(fine.status, Status::Converged);
+    assert!(fine.diagnoses.is_empty(), "{:?}", fine.diagnoses);
     assert!(
         fine.notes
             .iter()
@@ -239,8 +242,11 @@ fn residual_structure_makes_a_poor_fit() {
     );
     let mut infinite = converged([1.0, f64::INFINITY]);
     infinite.fits = vec![structured];
-    assert_eq!(
-        infinite.assess_residuals().status,
-        Status::Unidentified(vec!["b".into()])
+    let infinite = infinite.assess_residuals();
+    assert_eq!(infinite.status, Status::Unidentified(vec!["b".into()]));
+    assert!(
+        infinite
+            .diagnosis(DiagnosisKind::ColouredResiduals)
+            .is_some()
     );
 }

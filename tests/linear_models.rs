@@ -258,9 +258,9 @@ const SHORT_PERIOD: &[(&str, &str)] = &[
 ];
 
 /// The `fits` (method, model) on the short-period flights `scenario(seed)`
-/// for seeds 1..=`seeds` (flight-test-25hz), each fit converged, except
-/// output error's, which are poor fits (the process noise leaves the
-/// noise-driven motion in its residuals, structured: methods.md, "Fit
+/// for seeds 1..=`seeds` (flight-test-25hz), each fit converged; output
+/// error's carry a coloured-residuals diagnosis (the process noise leaves
+/// the noise-driven motion in its residuals, structured: methods.md, "Fit
 /// quality") and are scored all the same, to show their bias: per method
 /// and parameter, the sum of the errors in σ units, how many lie inside
 /// the 95 % interval, and how many there are.
@@ -276,17 +276,13 @@ fn errors_in_sigma(
         let (record, truth) = record_flight(&scenario(seed), &profile, seed).unwrap();
         for &(method, model) in fits {
             let estimate = estimate(method, &record, model).unwrap();
-            let expected = match method {
-                "oem" => matches!(
-                    estimate.status,
-                    aeroid::estimation::estimate::Status::PoorFit(_)
-                ),
-                _ => estimate.status == aeroid::estimation::estimate::Status::Converged,
-            };
+            let coloured = !common::coloured_outputs(&estimate).is_empty();
             assert!(
-                expected,
-                "{method} on {model}, seed {seed}: {}",
-                estimate.status
+                estimate.status == aeroid::estimation::estimate::Status::Converged
+                    && coloured == (method == "oem"),
+                "{method} on {model}, seed {seed}: {} {:?}",
+                estimate.status,
+                estimate.diagnoses
             );
             for p in &estimate.parameters {
                 let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
@@ -370,11 +366,12 @@ fn started_off(name: &str, factor: f64) -> LinearStructure {
 /// from those values (`start = "model"`: equation error is within 1e-4
 /// of the truth here, so starting there would test little): the filter's
 /// model is the truth's exactly, so the estimates reach the truth to
-/// 1e-6 of max(|truth|, 1). The status is honestly not converged: the
-/// innovations are rounding, far below the floor R is held at
-/// (10⁻⁴ of each channel's spread), not white noise of variance R
-/// (measured: 3.5e-14). The UKF (square-root form) is held to the same
-/// 1e-6 and status: measured 8.4e-8, 0.03σ. It is not the EKF's rounding
+/// 1e-6 of max(|truth|, 1). The fit is converged (settled, identified),
+/// and its innovations are diagnosed inconsistent with their covariance:
+/// they are rounding, far below the floor R is held at (10⁻⁴ of each
+/// channel's spread), not white noise of variance R (measured: 3.5e-14).
+/// The UKF (square-root form) is held to the same 1e-6 and status:
+/// measured 8.4e-8, 0.03σ. It is not the EKF's rounding
 /// floor because the augmented model is bilinear (θ·x): the unscented
 /// mean of a step carries the second-order term the EKF drops (for
 /// E[θ·x] it is the cross-covariance P_θx), so on a noise-free record
@@ -425,13 +422,17 @@ fn augmented_filters_serve_a_linear_structure() {
                 assert!(worst_sigma < 4.0, "{method}: {worst_sigma:.2}σ");
             } else {
                 assert!(worst_error < 1e-6, "{method}: {worst_error:.3e}");
+                assert_eq!(
+                    estimate.status,
+                    aeroid::estimation::estimate::Status::Converged,
+                    "{method}"
+                );
+                let inconsistent =
+                    aeroid::estimation::estimate::DiagnosisKind::InconsistentInnovations;
                 assert!(
-                    matches!(
-                        estimate.status,
-                        aeroid::estimation::estimate::Status::Unsettled(_)
-                    ),
-                    "{method}: {}",
-                    estimate.status
+                    estimate.diagnosis(inconsistent).is_some(),
+                    "{method}: {:?}",
+                    estimate.diagnoses
                 );
             }
         }

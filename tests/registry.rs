@@ -84,6 +84,7 @@ impl Estimator for StartValues {
             model: structure.name.clone(),
             record: problem.record().scenario.clone(),
             status: Status::Converged,
+            diagnoses: Vec::new(),
             covariance: (0..n)
                 .map(|i| {
                     (0..n)

@@ -46,12 +46,15 @@ pub fn run(args: Args) -> Result<()> {
                     Some(refusal) => {
                         outln!("pass  {:<34} refused as expected: {refusal}", case.name)
                     }
-                    None => outln!(
-                        "pass  {:<34} {} parameters, worst at {:.0} % of its tolerance",
-                        case.name,
-                        result.rows.len(),
-                        100.0 * result.worst()
-                    ),
+                    None => {
+                        let (ok, unidentifiable, known) = result.counts();
+                        outln!(
+                            "pass  {:<34} {ok} of {} terms ok (worst at {:.0} % of its tolerance), {unidentifiable} not identifiable, {known} known failures",
+                            case.name,
+                            result.rows.len(),
+                            100.0 * result.worst()
+                        )
+                    }
                 }
                 if verbose && result.refusal.is_none() {
                     outln!("{}", result.table(false));

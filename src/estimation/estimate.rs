@@ -4,15 +4,25 @@
 //! residuals' whiteness), the iteration and
 //! cost history, wall time and a status. Serialises to JSON and CSV.
 //!
-//! The status is honest ([`Estimate::assess`]): an estimate is
-//! "converged" only when its method stopped at an optimum, every estimated
-//! parameter has a finite standard error (a singular information matrix
-//! leaves the parameters of its null space with infinite ones), the
-//! covariance is finite and every output is reproduced better than by its
-//! mean (R² ≥ 0). Otherwise it says what it is: unidentified parameters by
-//! name, a degenerate covariance, no progress short of a minimum, a poor fit.
-//! A method whose residuals should be white (output error) also asks that
-//! they hold no structured part ([`Estimate::assess_residuals`]).
+//! The status says how the fit ended, and nothing else
+//! ([`Estimate::assess`]): "converged" when its method stopped at an
+//! optimum, every estimated parameter has a finite standard error (a
+//! singular information matrix leaves the parameters of its null space
+//! with infinite ones) and the covariance is finite. Otherwise it says what
+//! it is: the iteration limit, no progress short of a minimum, a diverging
+//! model, unidentified parameters by name, a degenerate covariance, a
+//! recursive estimate still moving.
+//!
+//! Beside the status, an estimate carries its diagnoses ([`Diagnosis`]):
+//! what its residuals, its model or its starts show, each with its
+//! measure — an output reproduced worse than by its mean, residuals with a
+//! structured part (coloured residuals, [`Estimate::assess_residuals`]),
+//! process noise suspected, input timing suspected, an unstable model,
+//! innovations inconsistent with their covariance. A fit at the optimum of
+//! real flight data is converged with its diagnoses: a diagnosis never
+//! takes a fit out of a study's statistics or a gate's check, and both
+//! count every diagnosis, so that neither a label nor its absence hides a
+//! bias.
 
 use crate::error::{Error, Result};
 use crate::estimation::solver::gauss_newton::Solution;
@@ -39,13 +49,8 @@ pub enum Status {
     Unidentified(Vec<String>),
     /// The covariance is missing or not finite though every standard error is.
     Degenerate(String),
-    /// These outputs are reproduced worse than by their mean (R² < 0), not
-    /// at all, or below the method's own standard (output error: a
-    /// structured residual, [`Estimate::assess_residuals`]).
-    PoorFit(Vec<String>),
     /// A recursive estimator's parameter estimates had not settled by the
-    /// end of the record, or its innovations disagree with their predicted
-    /// covariance: the reason.
+    /// end of the record: the reason.
     Unsettled(String),
 }
 
@@ -67,9 +72,90 @@ impl std::fmt::Display for Status {
             }
             Status::Unidentified(names) => write!(f, "unidentified: {}", names.join(", ")),
             Status::Degenerate(reason) => write!(f, "degenerate: {reason}"),
-            Status::PoorFit(outputs) => write!(f, "poor fit: {}", outputs.join(", ")),
             Status::Unsettled(reason) => write!(f, "not settled: {reason}"),
         }
+    }
+}
+
+/// What a diagnosis is about. The names are those of a study's
+/// `diagnoses` column and of a gate case's `diagnoses` list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DiagnosisKind {
+    /// Outputs reproduced worse than by their mean (R² < 0) or not at all;
+    /// measure: R².
+    PoorFit,
+    /// Residuals with a structured part beyond [`STRUCTURED_LIMIT`] of the
+    /// output's variation (a structure lacking a term, a wrong minimum,
+    /// process noise, real flight data's small model errors); measure: the
+    /// structured residual ([`OutputFit::structured`]).
+    ColouredResiduals,
+    /// Residuals with the signature of state noise: structured, yet
+    /// unexplained by the model's own sensitivities; measure: the share of
+    /// the structured residual they leave unexplained.
+    ProcessNoise,
+    /// The recorded inputs' timing between samples is suspected; measure:
+    /// the share of an input's changes that are ramps.
+    InputTiming,
+    /// The fitted model is unstable; measure: the time to double (s) of
+    /// its fastest growing mode.
+    Unstable,
+    /// A recursive filter's innovations disagree with their predicted
+    /// covariance; measure: mean ν²/S per output.
+    InconsistentInnovations,
+    /// Estimates from several starts disagree beyond their bounds; measure:
+    /// the largest difference in σ.
+    StartsDisagree,
+}
+
+impl DiagnosisKind {
+    /// The name used in files and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            DiagnosisKind::PoorFit => "poor_fit",
+            DiagnosisKind::ColouredResiduals => "coloured_residuals",
+            DiagnosisKind::ProcessNoise => "process_noise",
+            DiagnosisKind::InputTiming => "input_timing",
+            DiagnosisKind::Unstable => "unstable",
+            DiagnosisKind::InconsistentInnovations => "inconsistent_innovations",
+            DiagnosisKind::StartsDisagree => "starts_disagree",
+        }
+    }
+}
+
+impl std::fmt::Display for DiagnosisKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One thing an estimate's residuals, model or starts show, beside its
+/// status: what it is about (outputs, parameters or modes), its measure
+/// for each, and what it means for the user.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Diagnosis {
+    pub kind: DiagnosisKind,
+    /// The outputs, parameters or modes concerned.
+    pub about: Vec<String>,
+    /// The measure for each of `about` (its meaning: [`DiagnosisKind`]).
+    pub measures: Vec<f64>,
+    /// What it means and which method is built for it.
+    pub advice: String,
+}
+
+impl std::fmt::Display for Diagnosis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let items: Vec<String> = self
+            .about
+            .iter()
+            .zip(&self.measures)
+            .map(|(name, measure)| format!("{name} {}", crate::record::significant(*measure, 3)))
+            .collect();
+        write!(f, "{}: {}", self.kind, items.join(", "))?;
+        if !self.advice.is_empty() {
+            write!(f, " ({})", self.advice)?;
+        }
+        Ok(())
     }
 }
 
@@ -247,6 +333,9 @@ pub struct Estimate {
     pub model: String,
     pub record: String,
     pub status: Status,
+    /// What the residuals, the model or the starts show, beside the status.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub diagnoses: Vec<Diagnosis>,
     pub parameters: Vec<ParameterEstimate>,
     /// Covariance of the estimates (rows/columns in `parameters` order).
     pub covariance: Vec<Vec<f64>>,
@@ -332,6 +421,7 @@ impl Estimate {
             method: method.to_string(),
             model,
             record,
+            diagnoses: Vec::new(),
             status: solution.status.clone(),
             parameters: (0..names.len())
                 .map(|j| ParameterEstimate {
@@ -356,9 +446,28 @@ impl Estimate {
         }
     }
 
-    /// The estimate with its status judged honestly (module
-    /// documentation); a status other than converged is kept as it is.
+    /// The estimate with its status judged honestly and its fits
+    /// diagnosed (module documentation): a converged status becomes
+    /// unidentified or degenerate where the bounds say so; an output
+    /// reproduced worse than by its mean is a [`DiagnosisKind::PoorFit`],
+    /// whatever the status.
     pub fn assess(mut self) -> Estimate {
+        let poor: Vec<&OutputFit> = self
+            .fits
+            .iter()
+            .filter(|fit| fit.r_squared.is_nan() || fit.r_squared < 0.0 || !fit.rms.is_finite())
+            .collect();
+        if !poor.is_empty() {
+            let diagnosis = Diagnosis {
+                kind: DiagnosisKind::PoorFit,
+                about: poor.iter().map(|f| f.channel.clone()).collect(),
+                measures: poor.iter().map(|f| f.r_squared).collect(),
+                advice: "reproduced worse than by the output's mean (R² < 0): the model \
+                         structure or the fit's minimum is wrong for these outputs"
+                    .into(),
+            };
+            self.diagnose(diagnosis);
+        }
         if self.status != Status::Converged {
             return self;
         }
@@ -368,18 +477,10 @@ impl Estimate {
             .filter(|p| !p.standard_error.is_finite())
             .map(|p| p.name.clone())
             .collect();
-        let poor: Vec<String> = self
-            .fits
-            .iter()
-            .filter(|fit| fit.r_squared.is_nan() || fit.r_squared < 0.0 || !fit.rms.is_finite())
-            .map(|fit| fit.channel.clone())
-            .collect();
         self.status = if !unidentified.is_empty() {
             Status::Unidentified(unidentified)
         } else if let Some(reason) = self.degenerate() {
             Status::Degenerate(reason)
-        } else if !poor.is_empty() {
-            Status::PoorFit(poor)
         } else {
             Status::Converged
         };
@@ -392,18 +493,15 @@ impl Estimate {
         self
     }
 
-    /// [`Self::assess`], then the residuals judged as a method whose
-    /// residuals should be white judges them (output error with sensor
-    /// noise: the model reproduces everything but the noise). A converged
-    /// estimate with an output whose residuals are structured
-    /// ([`OutputFit::is_structured`]) becomes a poor fit naming those
-    /// outputs; one whose residuals are correlated but structured below
-    /// [`STRUCTURED_LIMIT`] stays converged, with a note.
+    /// [`Self::assess`], then the residuals diagnosed as a method whose
+    /// residuals should be white diagnoses them (output error with sensor
+    /// noise: the model reproduces everything but the noise). Outputs
+    /// whose residuals are structured ([`OutputFit::is_structured`]) are
+    /// [`DiagnosisKind::ColouredResiduals`], measured by their structured
+    /// part; residuals correlated but structured below
+    /// [`STRUCTURED_LIMIT`] get a note. The status is left as it is.
     pub fn assess_residuals(self) -> Estimate {
         let mut estimate = self.assess();
-        if estimate.status != Status::Converged {
-            return estimate;
-        }
         let structured: Vec<&OutputFit> =
             estimate.fits.iter().filter(|f| f.is_structured()).collect();
         let correlated: Vec<&OutputFit> = estimate
@@ -411,29 +509,42 @@ impl Estimate {
             .iter()
             .filter(|f| f.correlated() && !f.is_structured())
             .collect();
-        let text = |fits: &[&OutputFit]| {
-            fits.iter()
+        if !correlated.is_empty() {
+            let text = correlated
+                .iter()
                 .map(|f| f.whiteness_text())
                 .collect::<Vec<_>>()
-                .join("; ")
-        };
-        let mut notes = Vec::new();
-        if !correlated.is_empty() {
-            notes.push(format!(
-                "residuals correlated but their structured part below {STRUCTURED_LIMIT} of the output's variation (a small model error, input timing or coloured noise): {}",
-                text(&correlated)
+                .join("; ");
+            estimate.notes.push(format!(
+                "residuals correlated but their structured part below {STRUCTURED_LIMIT} of the output's variation (a small model error, input timing or coloured noise): {text}"
             ));
         }
         if !structured.is_empty() {
-            notes.push(format!(
-                "not converged: the model leaves a structured residual beyond {STRUCTURED_LIMIT} of the output's variation (a structure lacking a term, a wrong minimum, or process noise the method does not model) in {}",
-                text(&structured)
-            ));
-            estimate.status =
-                Status::PoorFit(structured.iter().map(|f| f.channel.clone()).collect());
+            let diagnosis = Diagnosis {
+                kind: DiagnosisKind::ColouredResiduals,
+                about: structured.iter().map(|f| f.channel.clone()).collect(),
+                measures: structured.iter().map(|f| f.structured).collect(),
+                advice: format!(
+                    "structured residual beyond {STRUCTURED_LIMIT} of the output's variation: \
+                     a structure lacking a term, a wrong minimum, process noise the method \
+                     does not model, or the small model errors of real flight data; the \
+                     bounds assume white residuals"
+                ),
+            };
+            estimate.diagnose(diagnosis);
         }
-        estimate.notes.extend(notes);
         estimate
+    }
+
+    /// Adds a diagnosis (replacing one of the same kind).
+    pub fn diagnose(&mut self, diagnosis: Diagnosis) {
+        self.diagnoses.retain(|d| d.kind != diagnosis.kind);
+        self.diagnoses.push(diagnosis);
+    }
+
+    /// The diagnosis of this kind, if the estimate carries one.
+    pub fn diagnosis(&self, kind: DiagnosisKind) -> Option<&Diagnosis> {
+        self.diagnoses.iter().find(|d| d.kind == kind)
     }
 
     /// Why the covariance cannot be used, if it cannot: missing, or
@@ -540,6 +651,7 @@ mod tests {
             model: "m".into(),
             record: "r".into(),
             status: Status::Converged,
+            diagnoses: Vec::new(),
             parameters: ["a", "b"]
                 .iter()
                 .enumerate()
@@ -574,9 +686,10 @@ mod tests {
 
     /// Each way an estimate is not converged, built on purpose: an infinite
     /// σ names the parameter; finite σ with a NaN covariance entry is
-    /// degenerate; R² < 0 and a NaN R² are poor fits. A sound estimate
-    /// stays converged, and a status that is already not converged is
-    /// kept.
+    /// degenerate. R² < 0 and a NaN R² leave the status converged with a
+    /// poor-fit diagnosis naming the output. A sound estimate stays
+    /// converged without diagnoses, and a status that is already not
+    /// converged is kept (its poor fit diagnosed all the same).
     #[test]
     fn assessment_says_what_an_estimate_is() {
         let sound = estimate([[1.0, 0.5], [0.5, 1.0]], 0.9);
@@ -590,14 +703,22 @@ mod tests {
         let degenerate = estimate([[1.0, f64::NAN], [f64::NAN, 1.0]], 0.9);
         assert!(matches!(degenerate.assess().status, Status::Degenerate(_)));
 
+        let sound = estimate([[1.0, 0.5], [0.5, 1.0]], 0.9).assess();
+        assert!(sound.diagnoses.is_empty());
+
         for r_squared in [-0.3, f64::NAN] {
-            let poor = estimate([[1.0, 0.0], [0.0, 1.0]], r_squared);
-            assert_eq!(poor.assess().status, Status::PoorFit(vec!["nz".into()]));
+            let poor = estimate([[1.0, 0.0], [0.0, 1.0]], r_squared).assess();
+            assert_eq!(poor.status, Status::Converged);
+            let diagnosis = poor.diagnosis(DiagnosisKind::PoorFit).unwrap();
+            assert_eq!(diagnosis.about, vec!["nz".to_string()]);
+            assert_eq!(diagnosis.measures.len(), 1);
         }
 
-        let mut limited = estimate([[1.0, 0.0], [0.0, f64::INFINITY]], 0.9);
+        let mut limited = estimate([[1.0, 0.0], [0.0, f64::INFINITY]], -0.3);
         limited.status = Status::IterationLimit;
-        assert_eq!(limited.assess().status, Status::IterationLimit);
+        let limited = limited.assess();
+        assert_eq!(limited.status, Status::IterationLimit);
+        assert!(limited.diagnosis(DiagnosisKind::PoorFit).is_some());
         assert!(!Status::IterationLimit.is_success());
     }
 }

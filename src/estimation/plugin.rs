@@ -528,6 +528,7 @@ impl Plugin {
                 .map(|r| r.scenario.as_str())
                 .collect::<Vec<_>>()
                 .join(" + "),
+            diagnoses: Vec::new(),
             status,
             parameters,
             covariance,

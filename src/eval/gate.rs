@@ -1,19 +1,36 @@
 //! Accuracy gates (`golden/gates.toml`, `aeroid gate`): each case flies a
 //! scenario, records it with a profile, runs one estimator on one model and
-//! checks every estimated parameter against the truth. Noise-free cases gate
-//! the relative error (|estimate − truth| ≤ tol·|truth|, or an absolute
-//! floor for near-zero truths); noisy cases of estimators with valid
-//! Cramér–Rao bounds gate the error in σ units (|estimate − truth| ≤ k·σ).
-//! A case may set an identifiability threshold on σ/|truth| (the QAR case):
-//! parameters above it are listed as not identifiable instead of gated. A
-//! case may also require the estimator to refuse the record with a given
-//! error (an estimator that cannot run on a record must say so, not crash).
-//! A regression of any estimator's accuracy fails the gate with a table of
-//! what moved. Tolerances are set from the accuracy measured when a case was
-//! added, with the reason in the file.
+//! checks every estimated term against the truth. A tolerance comes from
+//! the truth or from the bound, never from today's error:
+//!
+//! - noise-free cases gate the relative error, |θ̂ − θ| ≤ tol·|θ| (an
+//!   absolute floor for near-zero truths);
+//! - noisy cases gate the error in σ units, |θ̂ − θ| ≤ k·σ, σ the
+//!   estimate's Cramér–Rao bound, or `sigma_scale`·CRB where a method's
+//!   bound is known to be off (the scale measured by a bundled Monte Carlo
+//!   study, cited in the file).
+//!
+//! Whatever the tolerance, a row is `ok` only when its error is below half
+//! its truth, so a wrong sign never passes. A parameter whose σ is too
+//! large for that (σ ≥ `identifiable_below`·|θ|, by default 0.5/k: k·σ
+//! would reach half the truth) is reported "not identifiable", never
+//! `ok`. A term the truth lacks (stepwise regression's extra terms) is
+//! gated against zero: |θ̂| ≤ `spurious_sigma`·σ (by default k). Initial
+//! states and output biases have no truth and are not gated.
+//!
+//! A case where a method is known to fail declares it: `[case.known]`
+//! gives, per parameter, the measured range of its relative error (σ units
+//! for a zero truth) and the reason. The gate prints the row as a known
+//! failure, fails when the error leaves the range away from the truth
+//! (worse), says when it improves, and fails when the row would pass its
+//! tolerance (the declaration is to be removed). A per-parameter override
+//! carries its reason and fails the gate when the parameter passes the
+//! default without it. The estimate's diagnoses must be exactly the case's
+//! `diagnoses`. A case may instead require the estimator to refuse the
+//! record with a given refusal.
 
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
-use crate::estimation::estimate::Estimate;
+use crate::estimation::estimate::{DiagnosisKind, Estimate};
 use crate::estimation::estimator::{
     MethodTables, Refusal, RefusalKind, check_method_tables, validate_method_tables,
 };
@@ -32,8 +49,30 @@ pub use crate::catalog::GATE_FILE;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GateFile {
-    #[serde(rename = "case")]
+    #[serde(rename = "case", default)]
     pub cases: Vec<GateCase>,
+}
+
+/// A tolerance of one parameter in place of the case's default, with why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Override {
+    /// In the case's unit (relative, or σ).
+    pub value: f64,
+    /// Why the default does not fit this parameter: a mechanism and its
+    /// measurement, or the study that measured it.
+    pub reason: String,
+}
+
+/// A failure of the method on this case, declared with its measured range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KnownFailure {
+    /// The measured range of the error: (θ̂ − θ)/|θ|, or θ̂/σ for a term
+    /// whose truth is zero.
+    pub error: [f64; 2],
+    /// Why the method fails here (the mechanism, the finding).
+    pub reason: String,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -48,25 +87,36 @@ pub struct GateCase {
     #[serde(default)]
     pub relative_tolerance: Option<f64>,
     /// σ gate: |estimate − truth| ≤ k·σ, σ the estimate's Cramér–Rao bound
-    /// (noisy data, for estimators whose bounds are valid).
+    /// (times `sigma_scale`).
     #[serde(default)]
     pub sigma_tolerance: Option<f64>,
+    /// The σ a σ gate uses, as a multiple of the Cramér–Rao bound: the
+    /// Monte Carlo σ_MC/CRB of a method whose bound is known to be off.
+    #[serde(default)]
+    pub sigma_scale: Option<Override>,
     /// Absolute tolerance used instead when the relative one is smaller (near-zero truths).
     #[serde(default)]
     pub absolute_floor: f64,
     /// Per-parameter tolerances overriding the default, in its unit (relative or σ).
     #[serde(default)]
-    pub tolerance: BTreeMap<String, f64>,
-    /// Identifiability threshold on the relative bound σ/|truth|: parameters
-    /// at or above it are reported as not identifiable and not gated.
+    pub tolerance: BTreeMap<String, Override>,
+    /// Identifiability threshold on the relative bound σ/|truth|:
+    /// parameters at or above it are reported as not identifiable and not
+    /// gated. Default for σ gates: 0.5/k.
     #[serde(default)]
     pub identifiable_below: Option<f64>,
-    /// For terms the estimator adds that the truth model lacks (|truth| < 1e-12, as
-    /// stepwise regression may select): |estimate| ≤ k·σ, i.e. the spurious
-    /// term must stay statistically indistinguishable from zero. Without it
-    /// such terms fall under the absolute floor.
+    /// Terms whose truth is zero or that the truth model lacks:
+    /// |estimate| ≤ k·σ (default: `sigma_tolerance`), never below the
+    /// absolute floor.
     #[serde(default)]
     pub spurious_sigma: Option<f64>,
+    /// Failures of the method on this case, by parameter.
+    #[serde(default)]
+    pub known: BTreeMap<String, KnownFailure>,
+    /// The diagnoses the estimate carries (`coloured_residuals`, …):
+    /// exactly these, or the case fails.
+    #[serde(default)]
+    pub diagnoses: Vec<DiagnosisKind>,
     /// The estimator must refuse this record with a refusal of this kind
     /// (`missing-channels`, `not-linear-in-parameters`, `nothing-to-estimate`).
     #[serde(default)]
@@ -84,14 +134,74 @@ pub struct GateCase {
     pub derive: Option<crate::prep::derive::DeriveTable>,
 }
 
+/// An error beyond this share of its truth never passes, whatever the
+/// tolerance: a wrong sign is an error beyond 100 %.
+pub const HALF_THE_TRUTH: f64 = 0.5;
+
+/// A truth below this magnitude is zero: the term is gated against zero.
+const ZERO_TRUTH: f64 = 1e-12;
+
 impl GateCase {
-    fn tolerance_for(&self, parameter: &str) -> f64 {
-        let default = self.sigma_tolerance.or(self.relative_tolerance);
-        self.tolerance
-            .get(parameter)
-            .copied()
-            .or(default)
+    /// The default tolerance, in the case's unit.
+    fn default_tolerance(&self) -> f64 {
+        self.sigma_tolerance
+            .or(self.relative_tolerance)
             .unwrap_or(f64::NAN)
+    }
+
+    /// The σ a σ gate counts in: the Cramér–Rao bound times `sigma_scale`.
+    fn gate_sigma(&self, crb: f64) -> f64 {
+        crb * self.sigma_scale.as_ref().map_or(1.0, |s| s.value)
+    }
+
+    /// The allowance of a tolerance `tolerance` for a non-zero truth.
+    fn allowance(&self, tolerance: f64, truth: f64, crb: f64) -> f64 {
+        if self.sigma_tolerance.is_some() {
+            tolerance * self.gate_sigma(crb)
+        } else {
+            (tolerance * truth.abs()).max(self.absolute_floor)
+        }
+    }
+
+    /// σ/|truth| at or above which a parameter is not identifiable.
+    fn identifiable_below(&self) -> Option<f64> {
+        self.identifiable_below
+            .or(self.sigma_tolerance.map(|k| HALF_THE_TRUTH / k))
+    }
+}
+
+/// How a row came out.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Check {
+    /// Within its tolerance and below half its truth.
+    Ok,
+    /// σ too large against the truth for a check (reported, not gated).
+    NotIdentifiable,
+    /// A declared failure within its declared range.
+    Known,
+    /// A declared failure closer to the truth than its range.
+    KnownImproved,
+    /// Failed, and why.
+    Fail(String),
+}
+
+impl Check {
+    pub fn passed(&self) -> bool {
+        !matches!(self, Check::Fail(_))
+    }
+}
+
+impl std::fmt::Display for Check {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Check::Ok => f.write_str("ok"),
+            Check::NotIdentifiable => f.write_str("not identifiable"),
+            Check::Known => f.write_str("known failure"),
+            Check::KnownImproved => {
+                f.write_str("known failure, better than declared: re-measure its range")
+            }
+            Check::Fail(why) => write!(f, "FAIL: {why}"),
+        }
     }
 }
 
@@ -102,18 +212,21 @@ pub struct GateRow {
     pub estimate: f64,
     /// Cramér–Rao standard error of the estimate.
     pub sigma: f64,
+    /// The truth; 0 for a term the truth model lacks.
     pub truth: f64,
     pub error: f64,
     pub allowed: f64,
-    /// Relative bound below the case's identifiability threshold (always true without one).
-    pub identifiable: bool,
+    pub check: Check,
 }
 
 impl GateRow {
-    /// A parameter that is not identifiable is reported, not gated; an
-    /// identifiable one passes when its error is within a finite allowance.
     pub fn passed(&self) -> bool {
-        !self.identifiable || (self.allowed.is_finite() && self.error.abs() <= self.allowed)
+        self.check.passed()
+    }
+
+    /// Whether the row is reported, not gated.
+    pub fn identifiable(&self) -> bool {
+        self.check != Check::NotIdentifiable
     }
 
     /// σ/|truth|.
@@ -130,6 +243,9 @@ pub struct GateResult {
     pub refusal: Option<Refusal>,
     pub estimate: Option<Estimate>,
     pub rows: Vec<GateRow>,
+    /// What fails the case as a whole: a status other than converged,
+    /// diagnoses other than the declared ones, no gated row.
+    pub problems: Vec<String>,
 }
 
 impl GateResult {
@@ -145,23 +261,28 @@ impl GateResult {
                         .all(|channel| named.contains(&channel.as_str()))
             }
             (Some(_), None) | (None, Some(_)) => false,
-            (None, None) => {
-                let converged = self
-                    .estimate
-                    .as_ref()
-                    .is_some_and(|e| e.status.is_success());
-                converged && !self.rows.is_empty() && self.rows.iter().all(GateRow::passed)
-            }
+            (None, None) => self.problems.is_empty() && self.rows.iter().all(GateRow::passed),
         }
     }
 
-    /// The largest |error|/allowed over the gated rows.
+    /// The largest |error|/allowed over the rows checked against their
+    /// tolerance.
     pub fn worst(&self) -> f64 {
         self.rows
             .iter()
-            .filter(|r| r.identifiable)
+            .filter(|r| r.check == Check::Ok)
             .map(|r| r.error.abs() / r.allowed)
             .fold(0.0, f64::max)
+    }
+
+    /// How many rows came out each way: (ok, not identifiable, known failures).
+    pub fn counts(&self) -> (usize, usize, usize) {
+        let count = |f: &dyn Fn(&Check) -> bool| self.rows.iter().filter(|r| f(&r.check)).count();
+        (
+            count(&|c| *c == Check::Ok),
+            count(&|c| *c == Check::NotIdentifiable),
+            count(&|c| matches!(c, Check::Known | Check::KnownImproved)),
+        )
     }
 
     /// Every row (or only the failed ones) as a readable table.
@@ -183,6 +304,12 @@ impl GateResult {
         let mut text = String::new();
         if let Some(estimate) = &self.estimate {
             text += &format!("status: {}\n", estimate.status);
+            for diagnosis in &estimate.diagnoses {
+                text += &format!("diagnosis: {diagnosis}\n");
+            }
+        }
+        for problem in &self.problems {
+            text += &format!("FAIL: {problem}\n");
         }
         text += &format!(
             "{:<14} {:>13} {:>10} {:>13} {:>11} {:>9} {:>8} {:>10}  {}\n",
@@ -197,13 +324,8 @@ impl GateResult {
             "check"
         );
         for row in self.rows.iter().filter(|r| !only_failures || !r.passed()) {
-            let check = match (row.identifiable, row.passed()) {
-                (false, _) => "not identifiable",
-                (true, true) => "ok",
-                (true, false) => "FAIL",
-            };
             text += &format!(
-                "{:<14} {:>13.6} {:>10.3e} {:>13.6} {:>11.3e} {:>9.2e} {:>8.2} {:>10.3e}  {check}\n",
+                "{:<14} {:>13.6} {:>10.3e} {:>13.6} {:>11.3e} {:>9.2e} {:>8.2} {:>10.3e}  {}\n",
                 row.parameter,
                 row.estimate,
                 row.sigma,
@@ -212,6 +334,7 @@ impl GateResult {
                 row.error.abs() / row.truth.abs(),
                 row.error / row.sigma,
                 row.allowed,
+                row.check,
             );
         }
         text
@@ -236,12 +359,19 @@ impl GateResult {
             return text;
         };
         text += &format!(": {:?}\n", estimate.status);
+        for diagnosis in &estimate.diagnoses {
+            text += &format!(
+                "diagnosis {}: {}\n",
+                diagnosis.kind,
+                diagnosis.about.join(", ")
+            );
+        }
         for p in &estimate.parameters {
             let identifiable = self
                 .rows
                 .iter()
                 .find(|r| r.parameter == p.name)
-                .is_none_or(|r| r.identifiable);
+                .is_none_or(GateRow::identifiable);
             text += &format!(
                 "{} = {} ± {}{}\n",
                 p.name,
@@ -306,27 +436,118 @@ pub fn load(path: &Path) -> Result<GateFile> {
                 "goes with expect_refusal = \"missing-channels\"",
             );
         }
-        if defaults
-            .iter()
-            .flatten()
-            .chain(case.tolerance.values())
-            .chain(case.identifiable_below.iter())
-            .chain(case.spurious_sigma.iter())
-            .any(|t| !(t.is_finite() && *t > 0.0))
-        {
-            problems.push(
-                field,
-                "tolerances and thresholds must be positive finite numbers",
-            );
-        }
+        check_tolerances(case, &field, &mut problems);
+    }
+    if file.cases.is_empty() {
+        problems.push(
+            "case",
+            "the file holds no [[case]]: a gate file gates at least one case",
+        );
     }
     problems.finish(path, file)
 }
 
-/// Runs one case. Errors are for a case that cannot be set up (unknown
-/// scenario, profile or model, a departing simulation) or an estimator
-/// that failed; an estimator's refusal is the case's `refusal`.
+/// The tolerances, overrides, thresholds and declarations of a case: finite
+/// and positive, each with its reason, none that would let an error of half
+/// the truth pass.
+fn check_tolerances(case: &GateCase, field: &str, problems: &mut Problems) {
+    let positive = |t: f64| t.is_finite() && t > 0.0;
+    let numbers = [
+        case.relative_tolerance,
+        case.sigma_tolerance,
+        case.identifiable_below,
+        case.spurious_sigma,
+        case.sigma_scale.as_ref().map(|s| s.value),
+    ];
+    if numbers.iter().flatten().any(|t| !positive(*t))
+        || case.tolerance.values().any(|o| !positive(o.value))
+    {
+        problems.push(
+            field,
+            "tolerances and thresholds must be positive finite numbers",
+        );
+    }
+    let relative = case.sigma_tolerance.is_none();
+    for (name, tolerance) in case
+        .relative_tolerance
+        .iter()
+        .map(|t| ("relative_tolerance".to_string(), *t))
+        .chain(
+            case.tolerance
+                .iter()
+                .filter(|_| relative)
+                .map(|(name, o)| (format!("tolerance.{name}"), o.value)),
+        )
+    {
+        if tolerance >= HALF_THE_TRUTH {
+            problems.push(
+                format!("{field}.{name}"),
+                format!("{tolerance} would pass an error of half the truth; a method that cannot do better is a known failure ([case.known])"),
+            );
+        }
+    }
+    for (name, o) in &case.tolerance {
+        if o.reason.trim().is_empty() {
+            problems.push(
+                format!("{field}.tolerance.{name}.reason"),
+                "an override says why the default does not fit this parameter",
+            );
+        }
+        if case.known.contains_key(name) {
+            problems.push(
+                format!("{field}.tolerance.{name}"),
+                "is also declared a known failure: give one of the two",
+            );
+        }
+    }
+    if let Some(scale) = &case.sigma_scale {
+        if relative {
+            problems.push(format!("{field}.sigma_scale"), "goes with sigma_tolerance");
+        }
+        if scale.reason.trim().is_empty() {
+            problems.push(
+                format!("{field}.sigma_scale.reason"),
+                "cite the study that measured σ_MC/CRB",
+            );
+        }
+    }
+    for (name, known) in &case.known {
+        let [low, high] = known.error;
+        if !(low.is_finite() && high.is_finite() && low <= high) {
+            problems.push(
+                format!("{field}.known.{name}.error"),
+                "a range [low, high] of finite numbers, low ≤ high",
+            );
+        }
+        if known.reason.trim().is_empty() {
+            problems.push(
+                format!("{field}.known.{name}.reason"),
+                "a known failure says why the method fails here",
+            );
+        }
+    }
+}
+
+/// What a case's flight and estimator gave: the estimate or the refusal,
+/// and the truth of each estimated parameter (None: no truth, a term the
+/// truth model lacks or a nuisance unknown).
+#[derive(Debug, Clone)]
+pub struct Flown {
+    pub refusal: Option<Refusal>,
+    pub estimate: Option<Estimate>,
+    pub truths: BTreeMap<String, f64>,
+}
+
+/// Runs one case: [`fly_case`], then [`judge`]. Errors are for a case
+/// that cannot be set up (unknown scenario, profile or model, a departing
+/// simulation) or an estimator that failed; an estimator's refusal is the
+/// case's `refusal`.
 pub fn run_case(case: &GateCase) -> Result<GateResult> {
+    Ok(judge(case, fly_case(case)?))
+}
+
+/// Flies, records and estimates a case.
+pub fn fly_case(case: &GateCase) -> Result<Flown> {
     let scenario = Scenario::load(&case.scenario)?;
     validate_method_tables(&scenario.methods, &scenario.path)?;
     let profile = Profile::load(&case.profile, None)?;
@@ -337,7 +558,7 @@ pub fn run_case(case: &GateCase) -> Result<GateResult> {
         Some(derive) => crate::prep::derive::derive(&record, &derive.options())?.record,
         None => record,
     };
-    let (estimate, _) = match run::estimate_scored(
+    match run::estimate_scored(
         &case.method,
         &record,
         &truth,
@@ -345,57 +566,387 @@ pub fn run_case(case: &GateCase) -> Result<GateResult> {
         &[&scenario.methods, &case.methods],
         None,
     ) {
-        Outcome::Estimated { estimate, scores } => (*estimate, scores),
-        Outcome::Refused(refusal) => {
-            return Ok(GateResult {
-                case: case.clone(),
-                refusal: Some(refusal),
-                estimate: None,
-                rows: Vec::new(),
-            });
-        }
-        Outcome::Failed(message) => {
-            return Err(Error::Other(format!("{}: {message}", case.method)));
-        }
-    };
-    let rows = estimate
-        .parameters
-        .iter()
-        .filter_map(|p| {
-            let (truth, _) = truth.value_for(&p.name, structure.score_kind())?;
-            let tolerance = case.tolerance_for(&p.name);
-            let spurious = truth.abs() < 1e-12;
-            let allowed = if let (true, Some(k)) = (spurious, case.spurious_sigma) {
-                k * p.standard_error
-            } else if case.sigma_tolerance.is_some() {
-                tolerance * p.standard_error
-            } else {
-                (tolerance * truth.abs()).max(case.absolute_floor)
-            };
-            let identifiable = case
-                .identifiable_below
-                .is_none_or(|limit| p.standard_error < limit * truth.abs());
-            Some(GateRow {
-                parameter: p.name.clone(),
-                estimate: p.value,
-                sigma: p.standard_error,
-                truth,
-                error: p.value - truth,
-                allowed,
-                identifiable,
+        Outcome::Estimated { estimate, .. } => {
+            let truths = estimate
+                .parameters
+                .iter()
+                .filter_map(|p| {
+                    let (value, _) = truth.value_for(&p.name, structure.score_kind())?;
+                    Some((p.name.clone(), value))
+                })
+                .collect();
+            Ok(Flown {
+                refusal: None,
+                estimate: Some(*estimate),
+                truths,
             })
-        })
-        .collect::<Vec<_>>();
-    if rows.is_empty() {
-        return Err(Error::Other(format!(
-            "gate '{}': no estimated parameter has a truth",
-            case.name
-        )));
+        }
+        Outcome::Refused(refusal) => Ok(Flown {
+            refusal: Some(refusal),
+            estimate: None,
+            truths: BTreeMap::new(),
+        }),
+        Outcome::Failed(message) => Err(Error::Other(format!("{}: {message}", case.method))),
     }
-    Ok(GateResult {
+}
+
+/// Whether an unknown is a nuisance of the fit (an initial state, an
+/// output bias): it has no truth and is not gated.
+fn is_nuisance(name: &str) -> bool {
+    name.starts_with("x0[") || name.starts_with("bias.")
+}
+
+/// Checks a flown case against its tolerances and declarations (module
+/// header).
+pub fn judge(case: &GateCase, flown: Flown) -> GateResult {
+    let Flown {
+        refusal,
+        estimate,
+        truths,
+    } = flown;
+    let mut problems = Vec::new();
+    let mut rows = Vec::new();
+    if let Some(estimate) = &estimate {
+        if !estimate.status.is_success() {
+            problems.push(format!(
+                "status {}: only a converged fit is gated",
+                estimate.status
+            ));
+        }
+        let mut found: Vec<DiagnosisKind> = estimate.diagnoses.iter().map(|d| d.kind).collect();
+        found.sort();
+        let mut declared = case.diagnoses.clone();
+        declared.sort();
+        if found != declared {
+            problems.push(format!(
+                "diagnoses [{}], the case declares [{}]",
+                kinds_text(&found),
+                kinds_text(&declared)
+            ));
+        }
+        rows = estimate
+            .parameters
+            .iter()
+            .filter(|p| truths.contains_key(&p.name) || !is_nuisance(&p.name))
+            .map(|p| judge_row(case, p, truths.get(&p.name).copied()))
+            .collect();
+        if rows.is_empty() {
+            problems.push("no estimated parameter has a truth".into());
+        }
+        for name in case.known.keys().chain(case.tolerance.keys()) {
+            if !rows.iter().any(|r| &r.parameter == name) {
+                problems.push(format!(
+                    "'{name}' is declared but not estimated: remove its declaration"
+                ));
+            }
+        }
+    }
+    GateResult {
         case: case.clone(),
-        refusal: None,
-        estimate: Some(estimate),
+        refusal,
+        estimate,
         rows,
-    })
+        problems,
+    }
+}
+
+fn kinds_text(kinds: &[DiagnosisKind]) -> String {
+    kinds
+        .iter()
+        .map(|k| k.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// One parameter's row (module header).
+fn judge_row(
+    case: &GateCase,
+    p: &crate::estimation::estimate::ParameterEstimate,
+    truth: Option<f64>,
+) -> GateRow {
+    let truth = truth.unwrap_or(0.0);
+    let error = p.value - truth;
+    let zero = truth.abs() < ZERO_TRUTH;
+    let sigma = case.gate_sigma(p.standard_error);
+    let default = case.default_tolerance();
+    let allowed = if zero {
+        let k = case.spurious_sigma.or(case.sigma_tolerance).unwrap_or(0.0);
+        (k * sigma).max(case.absolute_floor)
+    } else {
+        let tolerance = case.tolerance.get(&p.name).map_or(default, |o| o.value);
+        case.allowance(tolerance, truth, p.standard_error)
+    };
+    // The error in the unit of a known failure's range.
+    let measure = if zero {
+        p.value / p.standard_error
+    } else {
+        error / truth.abs()
+    };
+    let within = |allowed: f64| {
+        allowed.is_finite()
+            && error.abs() <= allowed
+            && (zero || error.abs() < HALF_THE_TRUTH * truth.abs())
+    };
+    let identifiable = zero
+        || case
+            .identifiable_below()
+            .is_none_or(|limit| sigma < limit * truth.abs());
+    let check = if !identifiable {
+        match case.known.contains_key(&p.name) {
+            true => Check::Fail(
+                "declared a known failure, but not identifiable here: remove the declaration"
+                    .into(),
+            ),
+            false => Check::NotIdentifiable,
+        }
+    } else if let Some(known) = case.known.get(&p.name) {
+        let default_allowed = if zero {
+            allowed
+        } else {
+            case.allowance(default, truth, p.standard_error)
+        };
+        let [low, high] = known.error;
+        if within(default_allowed) {
+            Check::Fail(
+                "declared a known failure, but within its tolerance now: remove the declaration"
+                    .into(),
+            )
+        } else if (low..=high).contains(&measure) {
+            Check::Known
+        } else if (measure > 0.0 && measure < low) || (measure < 0.0 && measure > high) {
+            Check::KnownImproved
+        } else {
+            Check::Fail(format!(
+                "error {} beyond its declared range [{low}, {high}]",
+                crate::record::significant(measure, 3)
+            ))
+        }
+    } else if within(allowed) {
+        let loosened = case.tolerance.get(&p.name).is_some_and(|o| {
+            o.value > default && within(case.allowance(default, truth, p.standard_error))
+        });
+        if loosened {
+            Check::Fail(
+                "its override loosens a parameter that passes the default: remove it".into(),
+            )
+        } else {
+            Check::Ok
+        }
+    } else if error.abs() <= allowed {
+        Check::Fail(format!(
+            "within its tolerance but beyond {} of its truth",
+            if error * truth < 0.0 && error.abs() > truth.abs() {
+                "the sign"
+            } else {
+                "half"
+            }
+        ))
+    } else if zero {
+        Check::Fail("a term whose truth is zero, beyond its bound".into())
+    } else {
+        Check::Fail("beyond its tolerance".into())
+    };
+    GateRow {
+        parameter: p.name.clone(),
+        estimate: p.value,
+        sigma: p.standard_error,
+        truth,
+        error,
+        allowed,
+        check,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimation::estimate::{Diagnosis, ParameterEstimate, Status};
+
+    /// A case over one parameter `a` (truth 1), σ gate k = 4 unless
+    /// `relative` is given.
+    fn case(relative: Option<f64>) -> GateCase {
+        let text = format!(
+            "name = \"t\"\nscenario = \"s\"\nprofile = \"p\"\nmodel = \"m\"\nmethod = \"oem\"\n{}",
+            match relative {
+                Some(tol) => format!("relative_tolerance = {tol}"),
+                None => "sigma_tolerance = 4.0".into(),
+            }
+        );
+        toml::from_str(&text).unwrap()
+    }
+
+    /// A converged estimate of `a` (truth 1) and of `extra` (no truth),
+    /// each `value ± sigma`.
+    fn flown(a: (f64, f64), extra: Option<(f64, f64)>) -> Flown {
+        let parameter = |name: &str, (value, sigma): (f64, f64)| ParameterEstimate {
+            name: name.into(),
+            value,
+            standard_error: sigma,
+            start: 0.0,
+        };
+        let mut parameters = vec![parameter("a", a)];
+        parameters.extend(extra.map(|e| parameter("CL_extra", e)));
+        parameters.push(parameter("x0[0].q", (5.0, 1.0)));
+        let estimate = Estimate {
+            method: "oem".into(),
+            model: "m".into(),
+            record: "r".into(),
+            status: Status::Converged,
+            diagnoses: Vec::new(),
+            covariance: Vec::new(),
+            parameters,
+            fits: Vec::new(),
+            iterations: 1,
+            cost_history: Vec::new(),
+            wall_time: 0.0,
+            notes: Vec::new(),
+            details: String::new(),
+            network: None,
+            distributions: Vec::new(),
+            histories: Vec::new(),
+        };
+        Flown {
+            refusal: None,
+            estimate: Some(estimate),
+            truths: [("a".to_string(), 1.0)].into(),
+        }
+    }
+
+    fn check(case: &GateCase, a: (f64, f64)) -> Check {
+        judge(case, flown(a, None)).rows[0].check.clone()
+    }
+
+    /// Within k·σ and below half the truth is ok; beyond k·σ fails; a σ
+    /// of 1/(2k) of the truth or more is not identifiable, whatever the
+    /// error; a relative gate passes within tol·|truth|. The nuisance
+    /// initial state is not a row.
+    #[test]
+    fn rows_are_checked_against_the_truth_and_the_bound() {
+        let sigma = case(None);
+        assert_eq!(check(&sigma, (1.03, 0.01)), Check::Ok);
+        assert!(matches!(check(&sigma, (1.05, 0.01)), Check::Fail(_)));
+        assert_eq!(check(&sigma, (-0.9, 0.2)), Check::NotIdentifiable);
+        assert_eq!(check(&sigma, (1.0, 0.125)), Check::NotIdentifiable);
+        let relative = case(Some(0.1));
+        assert_eq!(check(&relative, (1.09, 0.0)), Check::Ok);
+        assert!(matches!(check(&relative, (1.11, 0.0)), Check::Fail(_)));
+        assert_eq!(judge(&relative, flown((1.0, 0.0), None)).rows.len(), 1);
+    }
+
+    /// An override that lets half the truth pass is refused at load; one
+    /// with a cited reason applies, and fails the row when the parameter
+    /// passes the default without it. A wrong sign never passes, even
+    /// through a σ gate whose threshold was raised.
+    #[test]
+    fn overrides_carry_reasons_and_only_loosen_what_needs_it() {
+        let mut loose = case(None);
+        loose.identifiable_below = Some(10.0);
+        let wrong = check(&loose, (-0.5, 0.5));
+        assert!(
+            matches!(&wrong, Check::Fail(why) if why.contains("sign")),
+            "{wrong:?}"
+        );
+
+        let mut overridden = case(None);
+        overridden.tolerance.insert(
+            "a".into(),
+            Override {
+                value: 8.0,
+                reason: "measured".into(),
+            },
+        );
+        assert_eq!(check(&overridden, (1.06, 0.01)), Check::Ok);
+        let needless = check(&overridden, (1.02, 0.01));
+        assert!(
+            matches!(&needless, Check::Fail(why) if why.contains("override")),
+            "{needless:?}"
+        );
+
+        let mut problems = Problems::default();
+        let mut half = case(Some(0.5));
+        half.tolerance.insert(
+            "a".into(),
+            Override {
+                value: 0.2,
+                reason: " ".into(),
+            },
+        );
+        check_tolerances(&half, "case", &mut problems);
+        let text = format!("{:?}", problems.0);
+        assert!(
+            text.contains("relative_tolerance") && text.contains("reason"),
+            "{text}"
+        );
+    }
+
+    /// A known failure within its range is reported as known; further from
+    /// the truth it fails; closer, it is reported improved; within its
+    /// tolerance it fails until the declaration is removed.
+    #[test]
+    fn known_failures_are_declared_not_passed() {
+        let mut known = case(None);
+        known.known.insert(
+            "a".into(),
+            KnownFailure {
+                error: [0.45, 0.55],
+                reason: "biased".into(),
+            },
+        );
+        assert_eq!(check(&known, (1.5, 0.01)), Check::Known);
+        assert!(matches!(check(&known, (1.6, 0.01)), Check::Fail(_)));
+        assert!(matches!(check(&known, (0.5, 0.01)), Check::Fail(_)));
+        assert_eq!(check(&known, (1.3, 0.01)), Check::KnownImproved);
+        let fixed = check(&known, (1.01, 0.01));
+        assert!(
+            matches!(&fixed, Check::Fail(why) if why.contains("remove")),
+            "{fixed:?}"
+        );
+    }
+
+    /// A term the truth lacks is gated against zero at k·σ; diagnoses must
+    /// be the declared ones; a case that is not converged fails.
+    #[test]
+    fn extra_terms_diagnoses_and_status_are_gated() {
+        let sigma = case(None);
+        let rows = judge(&sigma, flown((1.0, 0.01), Some((0.03, 0.01)))).rows;
+        assert_eq!(rows[1].check, Check::Ok);
+        let rows = judge(&sigma, flown((1.0, 0.01), Some((0.05, 0.01)))).rows;
+        assert!(matches!(rows[1].check, Check::Fail(_)));
+
+        let mut diagnosed = flown((1.0, 0.01), None);
+        diagnosed
+            .estimate
+            .as_mut()
+            .unwrap()
+            .diagnoses
+            .push(Diagnosis {
+                kind: DiagnosisKind::ColouredResiduals,
+                about: vec!["q".into()],
+                measures: vec![0.2],
+                advice: String::new(),
+            });
+        assert!(!judge(&sigma, diagnosed.clone()).passed());
+        let mut declared = case(None);
+        declared.diagnoses = vec![DiagnosisKind::ColouredResiduals];
+        assert!(judge(&declared, diagnosed).passed());
+        assert!(!judge(&declared, flown((1.0, 0.01), None)).passed());
+
+        let mut limited = flown((1.0, 0.01), None);
+        limited.estimate.as_mut().unwrap().status = Status::IterationLimit;
+        assert!(!judge(&sigma, limited).passed());
+    }
+
+    /// An empty gate file is an error, not "all 0 gates pass".
+    #[test]
+    fn an_empty_gate_file_is_refused() {
+        let folder = std::env::temp_dir().join(format!("aeroid-gate-{}", std::process::id()));
+        std::fs::create_dir_all(&folder).unwrap();
+        for text in ["", "case = []\n"] {
+            let path = folder.join("gates.toml");
+            std::fs::write(&path, text).unwrap();
+            let error = load(&path).unwrap_err().to_string();
+            assert!(error.contains("no [[case]]"), "{error}");
+        }
+        std::fs::remove_dir_all(&folder).unwrap();
+    }
 }

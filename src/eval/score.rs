@@ -133,6 +133,7 @@ mod tests {
             method: "oem".into(),
             model: "m".into(),
             record: "r".into(),
+            diagnoses: Vec::new(),
             status: Status::Converged,
             parameters: vec![
                 ParameterEstimate {

@@ -48,7 +48,7 @@
 
 use crate::catalog;
 use crate::error::{Error, Problems, Result, parse_toml, read_text};
-use crate::estimation::estimate::Status;
+use crate::estimation::estimate::{Estimate, Status};
 use crate::estimation::estimator::{MethodTables, check_method_tables, validate_method_tables};
 use crate::estimation::methods;
 use crate::estimation::structure::Structure;
@@ -296,9 +296,14 @@ pub struct Row {
     pub model: String,
     pub method: String,
     /// `converged`, `iteration_limit`, `diverged`, `no_progress`,
-    /// `unidentified`, `degenerate`, `poor_fit`, `refused` or `failed`.
+    /// `unidentified`, `degenerate`, `unsettled`, `refused` or `failed`.
     pub status: String,
     pub reason: String,
+    /// The fit's diagnoses (poor_fit, coloured_residuals, process_noise,
+    /// …: [`crate::estimation::estimate::DiagnosisKind`]), space-separated;
+    /// empty when it has none.
+    #[serde(default)]
+    pub diagnoses: String,
     /// Empty when the fit failed.
     pub parameter: String,
     #[serde(with = "float_text")]
@@ -639,6 +644,7 @@ impl Study {
             method: String::new(),
             status: FAILED.into(),
             reason: String::new(),
+            diagnoses: String::new(),
             parameter: String::new(),
             estimate: f64::NAN,
             standard_error: f64::NAN,
@@ -687,6 +693,7 @@ impl Study {
                         let (status, reason) = status_text(&estimate.status);
                         let fit = Row {
                             condition_number: estimate.correlation_condition(),
+                            diagnoses: diagnoses_text(&estimate),
                             ..fit
                         };
                         rows.extend(scores.iter().map(|s| {
@@ -1257,9 +1264,18 @@ fn status_text(status: &Status) -> (&'static str, String) {
         Status::NoProgress => ("no_progress", String::new()),
         Status::Unidentified(names) => ("unidentified", names.join(" ")),
         Status::Degenerate(reason) => ("degenerate", reason.clone()),
-        Status::PoorFit(outputs) => ("poor_fit", outputs.join(" ")),
         Status::Unsettled(reason) => ("unsettled", reason.clone()),
     }
+}
+
+/// An estimate's diagnoses as a row's `diagnoses` column.
+fn diagnoses_text(estimate: &Estimate) -> String {
+    estimate
+        .diagnoses
+        .iter()
+        .map(|d| d.kind.name())
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn parameter_row(fit: &Row, status: &str, reason: &str, score: &ParameterScore) -> Row {
@@ -1412,6 +1428,7 @@ mod tests {
             method: "oem".into(),
             status: status.into(),
             reason: String::new(),
+            diagnoses: String::new(),
             parameter: "Cl_p".into(),
             estimate,
             standard_error,

@@ -46,10 +46,16 @@ pub struct SummaryRow {
     pub iteration_limit: usize,
     pub diverged: usize,
     /// Estimates that are not converged for another reason: no progress
-    /// from the start, unidentified parameters, a degenerate covariance, a
-    /// poor fit or a filter's parameters still moving (the status column
-    /// of `runs.csv` says which).
+    /// from the start, unidentified parameters, a degenerate covariance or
+    /// a filter's parameters still moving (the status column of `runs.csv`
+    /// says which).
     pub not_converged: usize,
+    /// How many fits carried each diagnosis, whatever their status:
+    /// `kind:count` space-separated (the diagnoses column of `runs.csv`
+    /// says which fits); empty when none did. Converged fits enter the
+    /// statistics below with their diagnoses.
+    #[serde(default)]
+    pub diagnosed: String,
     pub refused: usize,
     pub failed: usize,
     #[serde(with = "float_text")]
@@ -164,6 +170,8 @@ pub struct Summariser {
     groups: HashMap<(usize, String, String, String), Group>,
     /// Per (point, model, method): fits by status.
     fits: HashMap<FitKey, HashMap<String, usize>>,
+    /// Per (point, model, method): fits by diagnosis.
+    diagnosed: HashMap<FitKey, std::collections::BTreeMap<String, usize>>,
     endings: Vec<Ending>,
     /// The fit the last row belonged to: (point, run, model, method).
     last_fit: Option<(usize, usize, String, String)>,
@@ -182,9 +190,14 @@ impl Summariser {
         self.rows += 1;
         let fit = (row.point, row.run, row.model.clone(), row.method.clone());
         if self.last_fit.as_ref() != Some(&fit) {
+            let key = (row.point, row.model.clone(), row.method.clone());
+            let diagnosed = self.diagnosed.entry(key.clone()).or_default();
+            for kind in row.diagnoses.split_whitespace() {
+                *diagnosed.entry(kind.to_string()).or_default() += 1;
+            }
             *self
                 .fits
-                .entry((row.point, row.model.clone(), row.method.clone()))
+                .entry(key)
                 .or_default()
                 .entry(row.status.clone())
                 .or_default() += 1;
@@ -270,6 +283,17 @@ impl Summariser {
                     .get(&(key.0, key.1.clone(), key.2.clone()))
                     .unwrap_or(&empty);
                 let count = |status: &str| fits.get(status).copied().unwrap_or(0);
+                let diagnosed = self
+                    .diagnosed
+                    .get(&(key.0, key.1.clone(), key.2.clone()))
+                    .map(|counts| {
+                        counts
+                            .iter()
+                            .map(|(kind, n)| format!("{kind}:{n}"))
+                            .collect::<Vec<_>>()
+                            .join(" ")
+                    })
+                    .unwrap_or_default();
                 let n = group.n as f64;
                 let mean = group.sum / n;
                 let std = (group.m2 / (n - 1.0)).sqrt();
@@ -298,16 +322,11 @@ impl Summariser {
                     converged: count(CONVERGED),
                     iteration_limit: count("iteration_limit"),
                     diverged: count("diverged"),
-                    not_converged: [
-                        "no_progress",
-                        "unidentified",
-                        "degenerate",
-                        "poor_fit",
-                        "unsettled",
-                    ]
-                    .iter()
-                    .map(|status| count(status))
-                    .sum(),
+                    not_converged: ["no_progress", "unidentified", "degenerate", "unsettled"]
+                        .iter()
+                        .map(|status| count(status))
+                        .sum(),
+                    diagnosed,
                     refused: count(REFUSED),
                     failed: count(FAILED),
                     truth,

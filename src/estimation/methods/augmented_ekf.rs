@@ -76,17 +76,19 @@
 //! (the expected move of a settled constant-parameter estimate there is
 //! about σ/3); (b) the data identified it: σ below σ₀/√2, i.e. the data's
 //! information exceeds the prior's (the note's X-31 lateral-force
-//! parameters, whose σ "decreased little", fail this); (c) the innovations
-//! are consistent with their predicted covariance (every output's mean
-//! ν²/S within [`CONSISTENT`] of 1). Otherwise unidentified (b) or
-//! unsettled (a, c) with the reason.
+//! parameters, whose σ "decreased little", fail this). Otherwise
+//! unidentified (b) or unsettled (a) with the reason. Beside the status,
+//! innovations inconsistent with their predicted covariance (an output's
+//! mean ν²/S beyond [`CONSISTENT`] of 1) are a diagnosis with that ratio.
 //!
 //! **Histories**: θ_a and σ at every grid point of the last pass, written
 //! as CSV by [`History::write_csv`], and by the method when the setting
 //! `history` names a file (`aeroid estimate --set history='"h.csv"'`).
 
 use crate::error::{Error, Result};
-use crate::estimation::estimate::{Estimate, OutputFit, ParameterEstimate, Status};
+use crate::estimation::estimate::{
+    Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status,
+};
 use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
 };
@@ -1174,6 +1176,7 @@ fn diverged(
         method: method.to_string(),
         model: structure.name().to_string(),
         record: record.scenario.clone(),
+        diagnoses: Vec::new(),
         status: Status::Diverged(error.to_string()),
         parameters: (0..m)
             .map(|j| ParameterEstimate {
@@ -1239,7 +1242,7 @@ fn assemble(
             OutputFit::new(name, &measured, &predicted)
         })
         .collect();
-    let status = status(setup, history, ratios, outputs);
+    let (status, diagnoses) = status(setup, history, ratios, outputs);
     let mut notes = setup.notes.clone();
     notes.push(
         "estimate: the filtered parameter states and their covariance at the record's last grid point; fits: the one-step predictions".into(),
@@ -1248,6 +1251,7 @@ fn assemble(
         method: method.to_string(),
         model: structure.name().to_string(),
         record: record.scenario.clone(),
+        diagnoses,
         status,
         parameters,
         covariance: (0..m)
@@ -1265,8 +1269,14 @@ fn assemble(
     }
 }
 
-/// Settled, identified and consistent (module header, Status).
-fn status(setup: &Setup, history: &History, ratios: &[f64], outputs: &[String]) -> Status {
+/// Settled and identified (module header, Status), and the innovations'
+/// consistency as a diagnosis.
+fn status(
+    setup: &Setup,
+    history: &History,
+    ratios: &[f64],
+    outputs: &[String],
+) -> (Status, Vec<Diagnosis>) {
     status_of(
         &setup.prior,
         setup.x0.len(),
@@ -1286,7 +1296,31 @@ fn status_of(
     history: &History,
     ratios: &[f64],
     outputs: &[String],
-) -> Status {
+) -> (Status, Vec<Diagnosis>) {
+    let inconsistent: Vec<(&String, f64)> = outputs
+        .iter()
+        .zip(ratios)
+        .filter(|(_, r)| r.is_nan() || (**r - 1.0).abs() > CONSISTENT)
+        .map(|(o, r)| (o, *r))
+        .collect();
+    let diagnoses = if inconsistent.is_empty() {
+        Vec::new()
+    } else {
+        vec![Diagnosis {
+            kind: DiagnosisKind::InconsistentInnovations,
+            about: inconsistent.iter().map(|(o, _)| o.to_string()).collect(),
+            measures: inconsistent.iter().map(|(_, r)| *r).collect(),
+            advice: format!(
+                "mean ν²/S beyond 1 ± {CONSISTENT}: the noise covariances Q and R do not describe the record, so the bounds do not either"
+            ),
+        }]
+    };
+    (settled(prior, n, names, history), diagnoses)
+}
+
+/// Identified and settled: each parameter's σ below its prior's /√2, and
+/// its estimate within 2σ over the last [`SETTLING_FRACTION`] of the record.
+fn settled(prior: &DMatrix<f64>, n: usize, names: &[String], history: &History) -> Status {
     let len = history.times.len();
     let last = len - 1;
     let from = ((1.0 - SETTLING_FRACTION) * last as f64).floor() as usize;
@@ -1315,18 +1349,6 @@ fn status_of(
             "moved by more than 2σ over the last {:.0} % of the record: {}",
             100.0 * SETTLING_FRACTION,
             unsettled.join(", ")
-        ));
-    }
-    let inconsistent: Vec<String> = ratios
-        .iter()
-        .zip(outputs)
-        .filter(|(r, _)| r.is_nan() || (*r - 1.0).abs() > CONSISTENT)
-        .map(|(r, o)| format!("{o} (mean ν²/S {r:.2})"))
-        .collect();
-    if !inconsistent.is_empty() {
-        return Status::Unsettled(format!(
-            "innovations inconsistent with their predicted covariance: {}",
-            inconsistent.join(", ")
         ));
     }
     Status::Converged
@@ -1372,7 +1394,8 @@ mod tests {
     /// The settled/identified/consistent judgement on hand-made histories:
     /// a parameter still moving by 5σ in the last tenth is unsettled, one
     /// whose σ stayed at its prior unidentified, an output with mean
-    /// ν²/S 2 inconsistent, and everything sound converged.
+    /// ν²/S 2 converged with its innovations diagnosed inconsistent, and
+    /// everything sound converged without a diagnosis.
     #[test]
     fn status_names_what_is_not_settled() {
         let names = vec!["a".to_string()];
@@ -1386,18 +1409,25 @@ mod tests {
         let judge =
             |h: &History, ratio: f64| status_of(&prior, 1, &names, h, &[ratio], &["y".to_string()]);
         let steady = history(vec![1.0; 100], 0.01);
-        assert_eq!(judge(&steady, 1.0), Status::Converged);
+        assert_eq!(judge(&steady, 1.0), (Status::Converged, Vec::new()));
         let mut moving: Vec<f64> = vec![1.0; 100];
         for (k, v) in moving.iter_mut().enumerate().skip(90) {
             *v = 1.0 + 0.05 * (k - 90) as f64 / 9.0;
         }
         assert!(
-            matches!(judge(&history(moving, 0.01), 1.0), Status::Unsettled(r) if r.contains("a"))
+            matches!(judge(&history(moving, 0.01), 1.0).0, Status::Unsettled(r) if r.contains("a"))
         );
         assert_eq!(
-            judge(&history(vec![1.0; 100], 0.9), 1.0),
+            judge(&history(vec![1.0; 100], 0.9), 1.0).0,
             Status::Unidentified(names.clone())
         );
-        assert!(matches!(judge(&steady, 2.0), Status::Unsettled(r) if r.contains("y")));
+        let (status, diagnoses) = judge(&steady, 2.0);
+        assert_eq!(status, Status::Converged);
+        assert_eq!(diagnoses.len(), 1);
+        assert_eq!(diagnoses[0].kind, DiagnosisKind::InconsistentInnovations);
+        assert_eq!(
+            (diagnoses[0].about.clone(), diagnoses[0].measures.clone()),
+            (vec!["y".to_string()], vec![2.0])
+        );
     }
 }

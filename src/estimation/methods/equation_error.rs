@@ -737,6 +737,7 @@ pub(crate) fn assemble_named(
         method: method.to_string(),
         model: model.to_string(),
         record: record_name(record),
+        diagnoses: Vec::new(),
         status: if problems.is_empty() {
             Status::Converged
         } else {

@@ -1038,6 +1038,7 @@ pub fn linear_frequency_regression(
         method: METHOD.to_string(),
         model: structure.name.clone(),
         record: equation_error::record_name(record),
+        diagnoses: Vec::new(),
         status: if problems.is_empty() {
             Status::Converged
         } else {

@@ -60,7 +60,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::{
-    Estimate, OutputFit, ParameterDistribution, ParameterEstimate, Status,
+    Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterDistribution, ParameterEstimate, Status,
 };
 use crate::estimation::estimator::{
     Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
@@ -778,7 +778,7 @@ pub fn rbf_delta(
         settings.difference_step
     ));
     notes.push("standard errors: the standard deviation of the local values (the Delta method's spread), not a Cramér–Rao bound".into());
-    let status = judge(
+    let (status, diagnoses) = judge(
         &deltas,
         &distributions,
         &derivative_names,
@@ -800,6 +800,7 @@ pub fn rbf_delta(
         method: METHOD.to_string(),
         model: structure.name.clone(),
         record: record_name(record),
+        diagnoses,
         status,
         parameters,
         covariance,
@@ -840,27 +841,32 @@ fn search_note(name: &str, network: &RbfNetwork, settings: &RbfDeltaSettings) ->
     )
 }
 
-/// The status (module header, step 6).
+/// The status and the diagnoses (module header, step 6): a network whose
+/// R² on its coefficient is below `minimum_r_squared` is a poor fit.
 fn judge(
     deltas: &[Delta],
     distributions: &[ParameterDistribution],
     derivative_names: &[String],
     settings: &RbfDeltaSettings,
     notes: &mut Vec<String>,
-) -> Status {
-    let poor: Vec<String> = deltas
+) -> (Status, Vec<Diagnosis>) {
+    let poor: Vec<&Delta> = deltas
         .iter()
         .filter(|d| d.r_squared.is_nan() || d.r_squared < settings.minimum_r_squared)
-        .map(|d| d.data.name.to_string())
         .collect();
-    if !poor.is_empty() {
-        notes.push(format!(
-            "not converged: the networks of {} reproduce their coefficient with R² below {}",
-            poor.join(", "),
-            settings.minimum_r_squared
-        ));
-        return Status::PoorFit(poor);
-    }
+    let diagnoses: Vec<Diagnosis> = if poor.is_empty() {
+        Vec::new()
+    } else {
+        vec![Diagnosis {
+            kind: DiagnosisKind::PoorFit,
+            about: poor.iter().map(|d| d.data.name.to_string()).collect(),
+            measures: poor.iter().map(|d| d.r_squared).collect(),
+            advice: format!(
+                "the networks reproduce their coefficient with R² below {}: their derivatives are not to be trusted",
+                settings.minimum_r_squared
+            ),
+        }]
+    };
     let undetermined: Vec<String> = distributions
         .iter()
         .filter(|d| derivative_names.contains(&d.name) && d.p05 < 0.0 && d.p95 > 0.0)
@@ -871,9 +877,9 @@ fn judge(
             "not converged: the sign of {} is undetermined (the 5–95 % interval of the local values contains zero)",
             undetermined.join(", ")
         ));
-        return Status::Unidentified(undetermined);
+        return (Status::Unidentified(undetermined), diagnoses);
     }
-    Status::Converged
+    (Status::Converged, diagnoses)
 }
 
 /// The networks' report: kind, inputs (all networks'), outputs, centres in

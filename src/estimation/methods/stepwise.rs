@@ -817,6 +817,7 @@ impl StepwiseReport {
             method: METHOD.to_string(),
             model: self.model.clone(),
             record: self.record.clone(),
+            diagnoses: Vec::new(),
             status: Status::Converged,
             parameters: self
                 .selected
