@@ -12,7 +12,10 @@
 //! - an output name the model cannot produce fails when the model loads.
 //!
 //! The unchanged flight converges (the control case). Residuals of known
-//! kind show what output error's residual judgement calls a poor fit.
+//! kind, and flights whose residuals are structured for known reasons,
+//! show what output error's diagnoses say beside its status.
+
+mod common;
 
 use aeroid::error::Error;
 use aeroid::estimation::estimate::{DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status};
@@ -249,4 +252,72 @@ fn residual_structure_is_diagnosed_beside_the_status() {
             .diagnosis(DiagnosisKind::ColouredResiduals)
             .is_some()
     );
+}
+
+/// The diagnoses of output error on three flights whose residuals are
+/// structured for three different reasons (flight-test-25hz, the bundled
+/// seeds), each fit converged, its status saying only how it ended:
+/// - turbulence (attas-lateral-turbulence): coloured residuals and process
+///   noise, naming at least two outputs; filter error, built for it, fits
+///   the same record without a diagnosis and with every derivative within
+///   4σ (the gate file's k);
+/// - coloured sensor noise (attas-lateral-multistep, every channel's noise
+///   first-order Gauss–Markov with τ = 0.5 s): coloured residuals, not
+///   process noise (the sensors' noises are independent);
+/// - a model error (attas-stall fitted with the linear longitudinal
+///   model): coloured residuals, not process noise (the residual of α
+///   grows with the motion: quiet share below 0.25).
+#[test]
+fn residuals_tell_process_noise_from_coloured_noise_and_model_errors() {
+    let kinds = |e: &Estimate| e.diagnoses.iter().map(|d| d.kind).collect::<Vec<_>>();
+    let fit = |method: &str, record: &FlightRecord, model: &str| {
+        let structure = aeroid::estimation::structure::Structure::load(model).unwrap();
+        let problem = EstimationProblem::new(method, vec![record.clone()], structure, &[]).unwrap();
+        methods::estimate(&problem, None).unwrap()
+    };
+    let flown = |scenario: &str, profile: &Profile| {
+        let scenario = Scenario::load(scenario).unwrap();
+        record_scenario(&scenario, profile).unwrap()
+    };
+    let flight_test = Profile::load("flight-test-25hz", None).unwrap();
+
+    let (turbulent, truth) = flown("attas-lateral-turbulence", &flight_test);
+    let output_error = fit("oem", &turbulent, "attas-lateral");
+    assert_eq!(output_error.status, Status::Converged);
+    let process = output_error
+        .diagnosis(DiagnosisKind::ProcessNoise)
+        .unwrap_or_else(|| panic!("{:?}", output_error.diagnoses));
+    assert!(process.about.len() >= 2, "{process}");
+    assert!(process.advice.contains("fem"), "{process}");
+    assert!(kinds(&output_error).contains(&DiagnosisKind::ColouredResiduals));
+    let filter_error = fit("fem", &turbulent, "attas-lateral");
+    assert_eq!(filter_error.status, Status::Converged);
+    assert!(
+        filter_error.diagnoses.is_empty(),
+        "{:?}",
+        filter_error.diagnoses
+    );
+    for p in &filter_error.parameters {
+        let error = (p.value - truth.parameters[&p.name]) / p.standard_error;
+        assert!(error.abs() < 4.0, "fem {}: {error:+.2}σ", p.name);
+    }
+
+    let folder = common::temp_folder("honest-coloured-noise");
+    let coloured = common::profile_variant(&folder, "flight-test-25hz", "", |_, table| {
+        Some(match table.contains("noise") {
+            true => format!("{table}noise_time = \"0.5 s\"\n"),
+            false => table.to_string(),
+        })
+    });
+    let (record, _) = flown("attas-lateral-multistep", &coloured);
+    let estimate = fit("oem", &record, "attas-lateral");
+    assert_eq!(estimate.status, Status::Converged);
+    assert_eq!(kinds(&estimate), [DiagnosisKind::ColouredResiduals]);
+
+    let (stall, _) = flown("attas-stall", &flight_test);
+    let estimate = fit("oem", &stall, "attas-longitudinal");
+    assert_eq!(estimate.status, Status::Converged);
+    assert_eq!(kinds(&estimate), [DiagnosisKind::ColouredResiduals]);
+    let alpha = estimate.fits.iter().find(|f| f.channel == "alpha").unwrap();
+    assert!(alpha.quiet_share < 0.25, "{alpha:?}");
 }

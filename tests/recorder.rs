@@ -155,6 +155,49 @@ fn noise_standard_deviation_matches_sigma() {
     );
 }
 
+/// Coloured noise, σ = 2 m with a correlation time of 0.4 s at 25 Hz
+/// (a = exp(−0.04/0.4) = 0.905): over 10 001 samples the noise's lag-1
+/// autocorrelation is a within 4 standard errors of its estimate,
+/// √((1 − a²)/n) = 0.0043, and its variance σ² within 10 % (the
+/// effective number of independent samples is n·(1 − a)/(1 + a) ≈ 500,
+/// so the variance's relative standard error is √(2/500) = 6.3 %;
+/// measured within 1.6 standard errors). The white profile's draws are the
+/// same: noise_time 0 leaves a record bit for bit as it was.
+#[test]
+fn coloured_noise_has_its_correlation_time() {
+    let (trace, aircraft) = altitude_trace(400.0, 0.04, |t| 3000.0 + 0.5 * t);
+    let spec = |extra: &str| {
+        profile(&format!(
+            "name = \"noisy\"\n[[channels]]\nname = \"altitude\"\nrate = \"25 Hz\"\nnoise = \"2 m\"\n{extra}"
+        ))
+    };
+    let errors = |profile: &Profile| -> Vec<f64> {
+        let record = profile.record(&trace, &aircraft, 11).unwrap();
+        let channel = record.channel("altitude").unwrap();
+        channel
+            .times
+            .iter()
+            .zip(&channel.values)
+            .map(|(&t, &v)| v - (3000.0 + 0.5 * t))
+            .collect()
+    };
+    let coloured = errors(&spec("noise_time = \"0.4 s\""));
+    let n = coloured.len() as f64;
+    let a = (-0.04_f64 / 0.4).exp();
+    let variance = coloured.iter().map(|e| e * e).sum::<f64>() / n;
+    let lag_one = coloured.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / (n * variance);
+    let standard_error = ((1.0 - a * a) / n).sqrt();
+    assert!(
+        (lag_one - a).abs() < 4.0 * standard_error,
+        "lag-1 autocorrelation {lag_one} against {a}"
+    );
+    assert!(
+        (variance / 4.0 - 1.0).abs() < 0.1,
+        "variance {variance} against 4 m²"
+    );
+    assert_eq!(errors(&spec("noise_time = \"0 s\"")), errors(&spec("")));
+}
+
 /// Bias and scale factor: recorded = k·truth + b exactly (no noise).
 #[test]
 fn bias_and_scale_factor_are_applied() {

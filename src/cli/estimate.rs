@@ -137,17 +137,21 @@ pub fn run(args: Args) -> Result<()> {
         estimate.iterations,
         estimate.wall_time
     );
+    for diagnosis in &estimate.diagnoses {
+        outln!("diagnosis {diagnosis}");
+    }
     out!("{}", score::table(&scores));
     for fit in &estimate.fits {
         outln!(
-            "  fit {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}  ρ₁ {:.3}  outside band {:.0} %  structured {:.4}",
+            "  fit {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}  ρ₁ {:.3}  outside band {:.0} %  structured {:.4}  quiet share {:.2}",
             fit.channel,
             fit.rms,
             fit.r_squared,
             fit.theil,
             fit.lag_one,
             100.0 * fit.outside_band,
-            fit.structured
+            fit.structured,
+            fit.quiet_share
         );
     }
     for note in &estimate.notes {

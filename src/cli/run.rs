@@ -127,7 +127,7 @@ pub fn run(args: Args) -> Result<()> {
         outln!("the scenario names no model structures (`models = [...]`): nothing to estimate");
     } else {
         outln!(
-            "{:<model_width$} {:<method_width$} {:<status_width$} {:>6} {:>9} {:>13} {:>10}",
+            "{:<model_width$} {:<method_width$} {:<status_width$} {:>6} {:>9} {:>13} {:>10}  diagnoses",
             "model",
             "method",
             "status",
@@ -142,17 +142,27 @@ pub fn run(args: Args) -> Result<()> {
             Outcome::Estimated { estimate, scores } => {
                 let (inside, scored, worst) = run.coverage().unwrap_or((0, 0, f64::NAN));
                 let status = status_of(estimate.status.to_string());
-                outln!(
-                    "{:<model_width$} {:<method_width$} {:<status_width$} {:>6} {:>9.3} {:>13} {:>10.2}",
+                let diagnoses: Vec<String> = estimate
+                    .diagnoses
+                    .iter()
+                    .map(|d| format!("{} ({})", d.kind, d.about.join(", ")))
+                    .collect();
+                let line = format!(
+                    "{:<model_width$} {:<method_width$} {:<status_width$} {:>6} {:>9.3} {:>13} {:>10.2}  {}",
                     run.model,
                     run.method,
                     status,
                     estimate.iterations,
                     estimate.wall_time,
                     format!("{inside}/{scored}"),
-                    worst
+                    worst,
+                    diagnoses.join("; ")
                 );
+                outln!("{}", line.trim_end());
                 if verbose {
+                    for diagnosis in &estimate.diagnoses {
+                        outln!("  diagnosis {diagnosis}");
+                    }
                     out!("{}", aeroid::eval::score::table(scores));
                 }
             }

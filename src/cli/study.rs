@@ -223,6 +223,10 @@ fn report(
             first.reason
         );
     }
+    // Diagnosed fits are counted in the statistics above; what they carried.
+    for line in result.diagnosed() {
+        outln!("{line}");
+    }
     if let Some(out) = out {
         outln!(
             "written: {0}/runs.csv, {0}/summary.csv, {0}/study.json",

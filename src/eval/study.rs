@@ -1326,6 +1326,23 @@ impl StudyResult {
     }
 
     /// The summary as a fixed-width table for the terminal.
+    /// Per sweep point, model and method whose fits carried diagnoses, one
+    /// line each: how many fits carried which (`kind:count`).
+    pub fn diagnosed(&self) -> Vec<String> {
+        let mut seen = std::collections::BTreeSet::new();
+        self.summary
+            .iter()
+            .filter(|s| !s.diagnosed.is_empty())
+            .filter(|s| seen.insert((s.point, s.model.clone(), s.method.clone())))
+            .map(|s| {
+                format!(
+                    "point {} {} {}: {} of {} fits diagnosed: {}",
+                    s.point, s.model, s.method, s.diagnosed_fits, s.runs, s.diagnosed
+                )
+            })
+            .collect()
+    }
+
     pub fn table(&self) -> String {
         // The text columns are as wide as their longest entry, so that long
         // model names keep the numbers in line.
@@ -1484,9 +1501,10 @@ mod tests {
 
     /// Three converged estimates −0.41, −0.40, −0.36 (mean −0.39, bias
     /// +0.01, sample std √(0.0014/2) = 0.0264575), CRBs 0.01, 0.02, 0.03 (mean 0.02, so the
-    /// first run's interval misses the truth: coverage 2/3); a diverged fit
-    /// (wild value, left out of the statistics) and a failed one (no
-    /// parameter row) are counted.
+    /// first run's interval misses the truth: coverage 2/3), two of them
+    /// diagnosed and counted all the same; a diverged fit (wild value, left
+    /// out of the statistics) and a failed one (no parameter row) are
+    /// counted, the diverged one's diagnosis too.
     #[test]
     fn summary_statistics_use_converged_fits_and_count_the_rest() {
         let mut rows = vec![
@@ -1495,6 +1513,9 @@ mod tests {
             row(2, CONVERGED, -0.36, 0.03),
             row(3, "diverged", 99.0, 1.0),
         ];
+        rows[1].diagnoses = "coloured_residuals process_noise".into();
+        rows[2].diagnoses = "coloured_residuals".into();
+        rows[3].diagnoses = "poor_fit".into();
         rows[0].standard_error = 0.01;
         rows[0].inside_95 = Some(false);
         let mut failed = row(4, FAILED, f64::NAN, f64::NAN);
@@ -1503,6 +1524,10 @@ mod tests {
         let summary = summarise(&rows);
         assert_eq!(summary.len(), 1);
         let s = &summary[0];
+        assert_eq!(
+            (s.diagnosed.as_str(), s.diagnosed_fits),
+            ("coloured_residuals:2 poor_fit:1 process_noise:1", 3)
+        );
         assert_eq!(
             (s.runs, s.converged, s.diverged, s.failed, s.iteration_limit),
             (5, 3, 1, 1, 0)

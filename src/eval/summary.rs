@@ -56,6 +56,9 @@ pub struct SummaryRow {
     /// statistics below with their diagnoses.
     #[serde(default)]
     pub diagnosed: String,
+    /// How many fits carried any diagnosis.
+    #[serde(default)]
+    pub diagnosed_fits: usize,
     pub refused: usize,
     pub failed: usize,
     #[serde(with = "float_text")]
@@ -170,8 +173,8 @@ pub struct Summariser {
     groups: HashMap<(usize, String, String, String), Group>,
     /// Per (point, model, method): fits by status.
     fits: HashMap<FitKey, HashMap<String, usize>>,
-    /// Per (point, model, method): fits by diagnosis.
-    diagnosed: HashMap<FitKey, std::collections::BTreeMap<String, usize>>,
+    /// Per (point, model, method): fits by diagnosis, and fits with any.
+    diagnosed: HashMap<FitKey, (std::collections::BTreeMap<String, usize>, usize)>,
     endings: Vec<Ending>,
     /// The fit the last row belonged to: (point, run, model, method).
     last_fit: Option<(usize, usize, String, String)>,
@@ -191,10 +194,11 @@ impl Summariser {
         let fit = (row.point, row.run, row.model.clone(), row.method.clone());
         if self.last_fit.as_ref() != Some(&fit) {
             let key = (row.point, row.model.clone(), row.method.clone());
-            let diagnosed = self.diagnosed.entry(key.clone()).or_default();
+            let (kinds, any) = self.diagnosed.entry(key.clone()).or_default();
             for kind in row.diagnoses.split_whitespace() {
-                *diagnosed.entry(kind.to_string()).or_default() += 1;
+                *kinds.entry(kind.to_string()).or_default() += 1;
             }
+            *any += usize::from(!row.diagnoses.is_empty());
             *self
                 .fits
                 .entry(key)
@@ -283,15 +287,16 @@ impl Summariser {
                     .get(&(key.0, key.1.clone(), key.2.clone()))
                     .unwrap_or(&empty);
                 let count = |status: &str| fits.get(status).copied().unwrap_or(0);
-                let diagnosed = self
+                let (diagnosed, diagnosed_fits) = self
                     .diagnosed
                     .get(&(key.0, key.1.clone(), key.2.clone()))
-                    .map(|counts| {
-                        counts
+                    .map(|(counts, any)| {
+                        let text = counts
                             .iter()
                             .map(|(kind, n)| format!("{kind}:{n}"))
                             .collect::<Vec<_>>()
-                            .join(" ")
+                            .join(" ");
+                        (text, *any)
                     })
                     .unwrap_or_default();
                 let n = group.n as f64;
@@ -327,6 +332,7 @@ impl Summariser {
                         .map(|status| count(status))
                         .sum(),
                     diagnosed,
+                    diagnosed_fits,
                     refused: count(REFUSED),
                     failed: count(FAILED),
                     truth,

@@ -19,7 +19,8 @@
 //! | `slot` / `word` | position within the frame: a fraction in [0, 1), or a word index of `words_per_frame` |
 //! | `resolution` | LSB; values are rounded to the nearest multiple |
 //! | `saturation` | `[min, max]` the value is clamped to |
-//! | `noise` | standard deviation of white Gaussian noise |
+//! | `noise` | standard deviation of Gaussian noise, white unless `noise_time` is given |
+//! | `noise_time` | correlation time of the noise: first-order Gauss–Markov noise, n_k = a·n_(k−1) + √(1 − a²)·σ·w_k, a = exp(−Δt/τ) over the sample interval Δt (coloured sensor noise: vane buffet, a gyro's drift); 0 (default): white |
 //! | `bias`, `scale_factor` | `measured = scale_factor·x + bias` (default 0 and 1; finite) |
 //! | `delay` | pure time delay, at most [`crate::limits::MAX_SENSOR_TIME`] |
 //! | `lag` | time constant of a first-order sensor lag, at most [`crate::limits::MAX_SENSOR_TIME`] |
@@ -113,6 +114,8 @@ pub struct ChannelSpec {
     #[serde(default)]
     pub noise: Quantity,
     #[serde(default)]
+    pub noise_time: Quantity,
+    #[serde(default)]
     pub bias: Quantity,
     #[serde(default)]
     pub scale_factor: Option<f64>,
@@ -161,6 +164,8 @@ pub struct ChannelModel {
     pub resolution: Option<f64>,
     pub saturation: Option<(f64, f64)>,
     pub noise: f64,
+    /// Correlation time of the noise (0: white).
+    pub noise_time: f64,
     pub bias: f64,
     pub scale_factor: f64,
     pub delay: f64,
@@ -547,6 +552,7 @@ fn read_channel(
             .as_ref()
             .map(|limits| reader.saturation(limits, dimension)),
         noise: reader.non_negative("noise", &spec.noise, dimension),
+        noise_time: reader.sensor_time("noise_time", &spec.noise_time),
         bias: reader.value("bias", &spec.bias, dimension),
         scale_factor: reader.check(
             "scale_factor",
@@ -793,9 +799,11 @@ impl ChannelModel {
         let times = self.sample_times(grid[0], grid[grid.len() - 1]);
         let mut values = Vec::with_capacity(times.len());
         let mut last_good = f64::NAN;
+        // The previous sample's normalised noise, for coloured noise.
+        let mut noise = None;
         for &time in &times {
             let truth = interpolate(grid, &signal, time - self.delay);
-            let value = self.measure(truth, time, &mut last_good, rng);
+            let value = self.measure(truth, time, (&mut last_good, &mut noise), rng);
             values.push(value);
         }
         Ok(Channel {
@@ -832,11 +840,27 @@ impl ChannelModel {
         Ok(signal)
     }
 
-    /// One recorded sample from the sensed truth at its instant.
-    fn measure(&self, truth: f64, time: f64, last_good: &mut f64, rng: &mut ChaCha8Rng) -> f64 {
+    /// One recorded sample from the sensed truth at its instant; `noise`
+    /// carries the previous sample's normalised noise (coloured noise).
+    fn measure(
+        &self,
+        truth: f64,
+        time: f64,
+        (last_good, noise): (&mut f64, &mut Option<f64>),
+        rng: &mut ChaCha8Rng,
+    ) -> f64 {
         let mut value = self.scale_factor * truth + self.bias;
         if self.noise > 0.0 {
-            value += self.noise * rng.sample::<f64, _>(StandardNormal);
+            let draw = rng.sample::<f64, _>(StandardNormal);
+            let normalised = match (*noise, self.noise_time > 0.0) {
+                (Some(previous), true) => {
+                    let a = (-1.0 / (self.rate * self.noise_time)).exp();
+                    a * previous + (1.0 - a * a).sqrt() * draw
+                }
+                _ => draw,
+            };
+            *noise = Some(normalised);
+            value += self.noise * normalised;
         }
         if let Some((low, high)) = self.saturation {
             value = value.clamp(low, high);
