@@ -301,11 +301,10 @@ impl OutputFit {
 /// dynamics, while coloured sensor noise is independent from sensor to
 /// sensor.
 fn process_noise_signature(structured: &[&OutputFit]) -> Vec<(String, f64)> {
-    if structured.len() < 2
-        || structured
-            .iter()
-            .any(|f| !(f.quiet_share >= PROCESS_NOISE_SHARE))
-    {
+    let quiet = structured
+        .iter()
+        .all(|f| f.quiet_share >= PROCESS_NOISE_SHARE);
+    if structured.len() < 2 || !quiet {
         return Vec::new();
     }
     (0..structured.len())
