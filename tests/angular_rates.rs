@@ -297,8 +297,14 @@ fn the_qar_approach_end_to_end() {
                     Outcome::Estimated { estimate, scores } => {
                         if matches!(estimate.status, Status::Converged) {
                             converged.push(format!("{model} {method}"));
-                            // Reached: within 3σ with a bound smaller than
-                            // the value (a wider one does not fix the sign).
+                        }
+                        // Reached: by a converged fit whose residuals leave
+                        // its bounds valid (no diagnosis), within 3σ with a
+                        // bound smaller than the value (a wider one does
+                        // not fix the sign).
+                        if matches!(estimate.status, Status::Converged)
+                            && estimate.diagnoses.is_empty()
+                        {
                             for score in scores.iter() {
                                 let (Some(truth), Some(k)) = (score.truth, score.error_sigma)
                                 else {
@@ -313,6 +319,15 @@ fn the_qar_approach_end_to_end() {
                                     reached.insert(score.name.clone());
                                 }
                             }
+                        }
+                        if method == "oem" {
+                            let kinds: Vec<_> = estimate.diagnoses.iter().map(|d| d.kind).collect();
+                            assert!(
+                                kinds.contains(
+                                    &aeroid::estimation::estimate::DiagnosisKind::ColouredResiduals
+                                ),
+                                "{model} oem: {kinds:?}"
+                            );
                         }
                         if model == "transport-longitudinal" && method == "fdee" {
                             assert!(matches!(estimate.status, Status::Converged));
@@ -336,14 +351,16 @@ fn the_qar_approach_end_to_end() {
     // filter error leaves equation error's start but ends at its
     // iteration limit (every parameter within 2.7σ, its relaxation of R
     // moving the cost from one iteration to the next), and stepwise
-    // regression's lateral terms are 14–1500 % off. Output error judges
-    // its residuals, which hold the gust response: a poor fit of every
-    // output.
+    // regression's lateral terms are 14–1500 % off. Output error converges
+    // and diagnoses its residuals, which hold the gust response: coloured
+    // residuals (asserted above), so that its bounds, which assume white
+    // residuals, reach nothing.
     assert_eq!(
         converged,
         [
             "transport-longitudinal ee",
             "transport-longitudinal swr",
+            "transport-longitudinal oem",
             "transport-longitudinal ebm",
             "transport-longitudinal fdee",
             "transport-longitudinal elm-gn",
@@ -353,6 +370,7 @@ fn the_qar_approach_end_to_end() {
             "transport-lateral ebm",
             "transport-lateral fem",
             "transport-lateral fdee",
+            "transport-lateral fdoe",
         ],
         "converged on the QAR"
     );

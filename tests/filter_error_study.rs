@@ -21,12 +21,16 @@
 //!   counts that error twice. Asserted: never optimistic (σ_MC/CRB ≤ 1.3,
 //!   coverage ≥ 88 %), and the side force's conservatism pinned
 //!   (σ_MC/CRB below 0.7 for every CY derivative), so a change is seen;
-//! - output error on the same records says it cannot fit them: 94 of the
-//!   100 fits are poor fits (the gust response left in its residuals is
-//!   structured, docs/methods.md "Fit quality"), 3 stop at the iteration
-//!   limit and 3 without progress, so the study scores none of them (its
-//!   statistics are over converged fits). Asserted: none converged, at
-//!   least 95 not converged for a reason other than the iteration limit.
+//! - output error on the same records converges in 94 of the 100 fits (3
+//!   stop at the iteration limit, 3 without progress) and says what its
+//!   residuals show: every converged fit carries coloured residuals and
+//!   process noise (the gust response left in its residuals,
+//!   docs/methods.md "Fit quality"). The study keeps those fits in its
+//!   statistics, so their bias shows: σ_MC/CRB 2.5–20 and coverage 5–57 %
+//!   over the 18 derivatives. Asserted: at least 90 converged, every
+//!   converged fit diagnosed with coloured residuals and at least 90 % of
+//!   them with process noise; σ_MC/CRB above 2 and coverage below 60 % for
+//!   every derivative.
 
 use aeroid::eval::study::Study;
 
@@ -89,13 +93,28 @@ fn filter_error_is_unbiased_in_turbulence_where_output_error_is_not() {
         let oem = of("oem", full);
         assert_eq!(oem.len(), 18, "{table}");
         for s in &oem {
+            let count = |kind: &str| {
+                s.diagnosed
+                    .split_whitespace()
+                    .find_map(|item| item.strip_prefix(&format!("{kind}:")))
+                    .map_or(0, |n| n.parse::<usize>().unwrap())
+            };
             assert!(
-                s.converged == 0 && s.not_converged >= 95,
-                "oem {}: {} of {} converged, {} otherwise not: expected poor fits in turbulence\n{table}",
+                s.converged >= 90
+                    && count("coloured_residuals") >= s.converged
+                    && count("process_noise") as f64 >= 0.9 * s.converged as f64,
+                "oem {}: {} of {} converged, diagnosed {}\n{table}",
                 s.parameter,
                 s.converged,
                 s.runs,
-                s.not_converged
+                s.diagnosed
+            );
+            assert!(
+                s.std_over_crb > 2.0 && s.coverage < 0.6,
+                "oem {}: σ_MC/CRB {:.2}, coverage {:.2}: the gusts' bias no longer shows\n{table}",
+                s.parameter,
+                s.std_over_crb,
+                s.coverage
             );
         }
     }

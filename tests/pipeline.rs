@@ -21,16 +21,21 @@ fn run_scores_every_method_on_the_lateral_scenario() {
         let Outcome::Estimated { estimate, scores } = &run.outcome else {
             panic!("{} did not run: {:?}", run.method, run.outcome.reason());
         };
-        // Every method converges. The RBF + Delta method's Cl and Cn
-        // networks fit the moment coefficients reconstructed from the noisy
-        // 25 Hz rates with R² 0.899 and 0.771, below its 0.9
-        // (tests/rbf_delta.rs): a poor fit, diagnosed beside the status.
-        assert_eq!(
-            estimate.status,
-            aeroid::estimation::estimate::Status::Converged,
-            "{}",
-            run.method
-        );
+        // Every method converges but the RBF + Delta method: its Cl and Cn
+        // networks fit the moment coefficients reconstructed from the
+        // noisy 25 Hz rates with R² 0.899 and 0.771, below its 0.9
+        // (tests/rbf_delta.rs), a poor fit diagnosed beside the status, and
+        // the 5–95 % intervals of its local CY_da, Cn_da and Cn_r hold
+        // zero: unidentified.
+        let expected_status = match run.method.as_str() {
+            "rbf-delta" => aeroid::estimation::estimate::Status::Unidentified(vec![
+                "CY_da".into(),
+                "Cn_da".into(),
+                "Cn_r".into(),
+            ]),
+            _ => aeroid::estimation::estimate::Status::Converged,
+        };
+        assert_eq!(estimate.status, expected_status, "{}", run.method);
         let poor = estimate
             .diagnosis(aeroid::estimation::estimate::DiagnosisKind::PoorFit)
             .map(|d| d.about.clone())

@@ -160,8 +160,8 @@ fn noise_standard_deviation_matches_sigma() {
 /// autocorrelation is a within 4 standard errors of its estimate,
 /// √((1 − a²)/n) = 0.0043, and its variance σ² within 10 % (the
 /// effective number of independent samples is n·(1 − a)/(1 + a) ≈ 500,
-/// so the variance's relative standard error is √(2/500) = 6.3 %;
-/// measured within 1.6 standard errors). The white profile's draws are the
+/// so the variance's relative standard error is √(2/500) = 6.3 %). The
+/// white profile's draws are the
 /// same: noise_time 0 leaves a record bit for bit as it was.
 #[test]
 fn coloured_noise_has_its_correlation_time() {

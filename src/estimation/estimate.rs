@@ -18,7 +18,13 @@
 //! measure — an output reproduced worse than by its mean, residuals with a
 //! structured part (coloured residuals, [`Estimate::assess_residuals`]),
 //! process noise suspected, input timing suspected, an unstable model,
-//! innovations inconsistent with their covariance. A fit at the optimum of
+//! innovations inconsistent with their covariance. Process noise is told
+//! from coloured sensor noise and from a model error by two signatures of
+//! the structured residuals: they move together across outputs (the
+//! cross-correlation against Bartlett's bound for independent first-order
+//! processes: Box, Jenkins & Reinsel, "Time Series Analysis", Eq. 11.1.7),
+//! and they are as large where the predicted motion is quiet as where it
+//! is not ([`OutputFit::quiet_share`]). A fit at the optimum of
 //! real flight data is converged with its diagnoses: a diagnosis never
 //! takes a fit out of a study's statistics or a gate's check, and both
 //! count every diagnosis, so that neither a label nor its absence hides a
