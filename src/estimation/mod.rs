@@ -6,8 +6,10 @@
 //! coefficient reconstruction (`reconstruction`) and the least-squares
 //! solution with its error bounds (`solver::regression`).
 
+pub mod diagnosis;
 pub mod estimate;
 pub mod estimator;
+pub mod fit_quality;
 pub mod linear_structure;
 pub mod methods;
 pub mod model;
