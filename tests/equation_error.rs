@@ -407,3 +407,42 @@ fn stepwise_selects_the_true_terms() {
         }
     }
 }
+
+/// The ATTAS lateral multistep with every change a ramp over one sample
+/// interval (0.01 s at the ideal profile's 100 Hz): the angular
+/// accelerations turn at both of its corners, the last sample before the
+/// change and the first after it, and the samples cannot tell that ramp
+/// from a step. The differentiator breaks at both, so every window lies
+/// on one side of each corner, and equation error recovers every
+/// parameter within 1e-4 of its truth (relative; 1e-7 absolute for the
+/// near-zero constant terms Cl_0 and Cn_0), as on the gates' ramps
+/// through several samples (golden/gates.toml).
+#[test]
+fn ramps_over_one_sample_interval_break_at_both_corners() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/attas-lateral-multistep-ramped.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("transition = \"0.1 s\"", "transition = \"0.01 s\"");
+    assert_eq!(text.matches("transition = \"0.01 s\"").count(), 2);
+    let file: ScenarioFile = toml::from_str(&text).unwrap();
+    let scenario = Scenario::from_file(&file, &path).unwrap();
+    let profile = Profile::load("ideal", None).unwrap();
+    let record = record_scenario(&scenario, &profile).unwrap().0;
+    let structure = ModelStructure::load("attas-lateral").unwrap();
+    let estimate = equation_error(&record, &structure, &EquationErrorOptions::default()).unwrap();
+    assert_eq!(estimate.status, Status::Converged, "{:?}", estimate.notes);
+    let truth = &scenario.aircraft;
+    assert_eq!(estimate.parameters.len(), 18);
+    for parameter in &estimate.parameters {
+        let true_value = truth.aero.parameters.get(&parameter.name).unwrap();
+        let error = (parameter.value - true_value).abs();
+        assert!(
+            error <= (1e-4 * true_value.abs()).max(1e-7),
+            "{}: {} against {true_value}, relative error {:e}",
+            parameter.name,
+            parameter.value,
+            error / true_value.abs()
+        );
+    }
+}

@@ -44,6 +44,7 @@ use crate::estimation::methods::frequency_regression::{
     BAND_SETTINGS, BandOptions, model_controls,
 };
 use crate::estimation::methods::output_error;
+use crate::estimation::model::input_timing::{self, InputInterpolation};
 use crate::estimation::model::linear::Matrix;
 use crate::estimation::model::state_space::{DrivenStateSpace, recorded_initial_state};
 use crate::estimation::model::transfer::{LinearisedFlight, TransferModel};
@@ -54,7 +55,6 @@ use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::aero::Regressor;
-use crate::sim::integrator::Interpolation;
 use crate::units::Quantity;
 use nalgebra::{Complex, DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -403,8 +403,13 @@ pub fn frequency_output_error(
         return Err(Error::Refused(refusal));
     }
     output_error::unsuitable(METHOD, structure)?;
-    let (view, x0) =
-        DrivenStateSpace::for_record(record, structure, Interpolation::Linear, None, None)?;
+    let (view, x0) = DrivenStateSpace::for_record(
+        record,
+        structure,
+        &InputInterpolation::default(),
+        None,
+        None,
+    )?;
     let simulation = view.simulation();
     let count = simulation.len();
     let (start, step) = (simulation.start, simulation.step);
@@ -476,6 +481,7 @@ pub fn frequency_output_error(
             inputs_used.join(", ")
         ),
         transform_note(&transform, &breaks, &band_note),
+        input_timing::note(&simulation.input_timing),
     ];
     let mut estimate = fitted.fit(&linearised, &data, options, notes)?;
     estimate.wall_time = started.elapsed().as_secs_f64();
