@@ -10,7 +10,9 @@
 //! 1. **Model.** δẋ = A·δx + B·δu, δy = C·δx + D·δu
 //!    ([`crate::estimation::model::transfer`]): a nonlinear postulated
 //!    model is linearised about the first sample of its record-driven view
-//!    (integrated states δx; controls and measured pseudo-controls δu).
+//!    (integrated states δx; controls and measured pseudo-controls δu; the
+//!    controls sampled on the grid held or linear per channel as the
+//!    default `interpolation = "auto"` chooses, said in the notes).
 //! 2. **Transforms.** Transforming the state equation over [t₀, t_N]
 //!    (fourier Eq. 3) gives, at each ω,
 //!    `X̃ = (jωI − A)⁻¹·(B·Ũ − E)`, `E = δx(t_N)·e^{−jωt_N} − δx(t₀)·e^{−jωt₀}`,

@@ -89,7 +89,9 @@
 //! structure lacking a term, a wrong minimum, turbulence), and one below
 //! it is a note.
 //! Settings (`[methods.oem]`, [`OutputErrorOptions`]): integration step and
-//! input interpolation, start, iteration limit, initial states and output
+//! input interpolation (default "auto": each input held or linear from its
+//! own samples, [`crate::estimation::model::input_timing`]), start,
+//! iteration limit, initial states and output
 //! biases as unknowns. Several manoeuvres may be fitted at once (shared
 //! aerodynamic parameters, initial states per manoeuvre).
 //!
