@@ -722,6 +722,7 @@ fn input_noise_is_checked_and_reproducible() {
 /// - recorded by the 25 Hz flight-test profile (noise), output error, the
 ///   filter error method and both augmented filters converge within 3σ,
 ///   every parameter (measured worst 2.2σ).
+///
 /// The old default, an explicit `"zoh"` (each ramp held half a sample
 /// late), biases output error: on the noisy record Cl_p by 4.3 % (−25σ),
 /// on the noise-free one CY_da by 10 % and Cl_p by 1.0 % (measured).

@@ -22,6 +22,7 @@
 //!   sample makes consecutive jumps of opposite signs), a ramp with one
 //!   sample inside it (it lasts anywhere up to two sample intervals: linear
 //!   interpolation would spread it over both), or no motion.
+//!
 //! Why: a step on the grid is exact under a hold and is spread over the
 //! interval before it under linear interpolation (the input half a sample
 //! early); a ramp or a smooth signal is within O(h²) under linear
