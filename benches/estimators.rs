@@ -80,7 +80,7 @@ fn bench_filters(c: &mut Criterion) {
     let (record, _) = record_scenario(&scenario, &profile).expect("record");
     let structure = ModelStructure::load("attas-lateral").expect("bundled model");
     let (view, x0) =
-        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None)
+        DrivenStateSpace::for_record(&record, &structure, &Default::default(), None, None)
             .expect("view");
     let theta = view.parameters();
     let free: Vec<usize> = (0..theta.len()).filter(|&i| structure.free[i]).collect();

@@ -272,7 +272,7 @@ fn stall_model_ekf_and_ukf() {
     let profile = flight_test_variant("filters-stall", is_control);
     let (record, truth) = record_scenario(&scenario, &profile).unwrap();
     let settings = FilterSettings {
-        interpolation: Interpolation::Linear,
+        interpolation: Interpolation::Linear.into(),
         ..FilterSettings::default()
     };
     for filter in [Filter::Extended, Filter::Unscented] {
@@ -325,7 +325,7 @@ fn ekf_tracks_a_parameter_that_changes_in_flight() {
             .unwrap();
     }
     let settings = FilterSettings {
-        interpolation: Interpolation::Linear,
+        interpolation: Interpolation::Linear.into(),
         pseudonoise_for: [("Cm_alpha".to_string(), 0.02)].into(),
         ..FilterSettings::default()
     };

@@ -275,3 +275,37 @@ sigma_tolerance = inf
     );
     std::fs::remove_dir_all(&folder).unwrap();
 }
+
+/// A bad `interpolation` setting is refused before any fit, the error
+/// naming the method's table and the key: an unknown word, a table naming
+/// a channel that is not an input, and a number.
+#[test]
+fn a_bad_interpolation_names_the_key() {
+    use aeroid::estimation::estimator::MethodTables;
+    use aeroid::estimation::problem::EstimationProblem;
+    use aeroid::estimation::structure::Structure;
+    use aeroid::record::recorder::{Profile, record_scenario};
+    let mut scenario = Scenario::load("attas-elevator-3211").unwrap();
+    scenario.duration = 2.0;
+    let profile = Profile::load("ideal", None).unwrap();
+    let record = record_scenario(&scenario, &profile).unwrap().0;
+    for (method, value, expected) in [
+        ("oem", "\"cubic\"", "\"cubic\" is not"),
+        ("fem", "{ ailerons = \"zoh\" }", "no input named ailerons"),
+        ("ekf", "3", "expected interpolation"),
+    ] {
+        let tables: MethodTables =
+            toml::from_str(&format!("[{method}]\ninterpolation = {value}")).unwrap();
+        let structure = Structure::load("attas-longitudinal").unwrap();
+        let error = EstimationProblem::new(method, vec![record.clone()], structure, &[&tables])
+            .err()
+            .unwrap_or_else(|| panic!("{method}: interpolation = {value} accepted"))
+            .to_string();
+        assert!(
+            error.contains(&format!("[methods.{method}]"))
+                && error.contains("interpolation")
+                && error.contains(expected),
+            "{error}"
+        );
+    }
+}

@@ -21,7 +21,7 @@ use aeroid::estimation::estimate::Estimate;
 use aeroid::estimation::estimate::Status;
 use aeroid::estimation::methods::equation_error::{EquationErrorOptions, equation_error};
 use aeroid::estimation::methods::stepwise::{Action, StepwiseOptions, stepwise};
-use aeroid::estimation::reconstruction::{ReconstructionOptions, Request, reconstruct};
+use aeroid::estimation::reconstruction::{ReconstructionOptions, Request, StepBreaks, reconstruct};
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};
@@ -406,4 +406,58 @@ fn stepwise_selects_the_true_terms() {
             assert!(relative_error(&estimate, &truth, "Cm_alpha").abs() < 1e-3);
         }
     }
+}
+
+/// The ATTAS lateral multistep with every change a ramp over one sample
+/// interval (0.01 s at the ideal profile's 100 Hz): the angular
+/// accelerations turn at both of its corners, the last sample before the
+/// change and the first after it, and the samples cannot tell that ramp
+/// from a step. The differentiator breaks at both, so every window lies
+/// on one side of each corner, and equation error recovers every
+/// parameter within 1e-4 of its truth (relative; 1e-7 absolute for the
+/// near-zero constant terms Cl_0 and Cn_0), as on the gates' ramps
+/// through several samples (golden/gates.toml). Breaking only at the
+/// first sample with the new value (`StepBreaks::NewValue`, what the
+/// neural restricted model keeps), a window ending there reaches across
+/// the ramp's first corner and some term misses 1e-4.
+#[test]
+fn ramps_over_one_sample_interval_break_at_both_corners() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/attas-lateral-multistep-ramped.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("transition = \"0.1 s\"", "transition = \"0.01 s\"");
+    assert_eq!(text.matches("transition = \"0.01 s\"").count(), 2);
+    let file: ScenarioFile = toml::from_str(&text).unwrap();
+    let scenario = Scenario::from_file(&file, &path).unwrap();
+    let profile = Profile::load("ideal", None).unwrap();
+    let record = record_scenario(&scenario, &profile).unwrap().0;
+    let structure = ModelStructure::load("attas-lateral").unwrap();
+    let truth = &scenario.aircraft;
+    let misses = |options: &EquationErrorOptions| -> Vec<String> {
+        let estimate = equation_error(&record, &structure, options).unwrap();
+        assert_eq!(estimate.status, Status::Converged, "{:?}", estimate.notes);
+        assert_eq!(estimate.parameters.len(), 18);
+        estimate
+            .parameters
+            .iter()
+            .filter_map(|parameter| {
+                let true_value = truth.aero.parameters.get(&parameter.name).unwrap();
+                let error = (parameter.value - true_value).abs();
+                (error > (1e-4 * true_value.abs()).max(1e-7)).then(|| {
+                    format!(
+                        "{}: {} against {true_value}, relative error {:e}",
+                        parameter.name,
+                        parameter.value,
+                        error / true_value.abs()
+                    )
+                })
+            })
+            .collect()
+    };
+    let missed = misses(&EquationErrorOptions::default());
+    assert!(missed.is_empty(), "{missed:#?}");
+    let mut one_break = EquationErrorOptions::default();
+    one_break.reconstruction.step_breaks = StepBreaks::NewValue;
+    assert!(!misses(&one_break).is_empty(), "one break per ramp");
 }

@@ -1105,7 +1105,7 @@ fn sensitivity_jacobian_is_the_filters_derivative() {
     let (record, _) = record_scenario(&scenario, &profile).unwrap();
     let options = FilterErrorOptions::for_structure(&structure).unwrap();
     let (view, initial) =
-        DrivenStateSpace::for_record(&record, &structure, options.interpolation, None, None)
+        DrivenStateSpace::for_record(&record, &structure, &options.interpolation, None, None)
             .unwrap();
     let step = view.time(1) - view.time(0);
     let observations =
@@ -1180,7 +1180,7 @@ fn sensitivity_jacobian_is_the_filters_derivative() {
     let mut comparison = String::new();
     for (name, record) in [("turbulence", &record), ("no turbulence", &quiet)] {
         let (view, initial) =
-            DrivenStateSpace::for_record(record, &structure, options.interpolation, None, None)
+            DrivenStateSpace::for_record(record, &structure, &options.interpolation, None, None)
                 .unwrap();
         let observations = Observations::from_record(
             record,

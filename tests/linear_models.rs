@@ -63,6 +63,84 @@ fn output_error_recovers_a_noise_free_linear_flight() {
     }
 }
 
+/// The linear lateral flight with every change of its multisteps a 0.1 s
+/// ramp, recorded without error (ideal profile, 100 Hz): its truth is the
+/// model's own derivatives, flown with the ramps linear between the
+/// simulator's steps (the model file's default `interpolation = "auto"`).
+/// Every method that fits a linear model, with its default settings, finds
+/// the ramps and is not `converged` while beyond 3σ and 1e-3 of the truth
+/// (oem, fem, fdoe, ee and fdee converge, exact to rounding; the
+/// augmented filters end unsettled, no noise to weigh)
+/// (relative, with a floor of 1e-6: σ is at rounding level here). With the
+/// model file's `interpolation = "zoh"` the same fit holds each ramp half a
+/// sample late, and output error misses beyond both.
+#[test]
+fn linear_fits_follow_ramped_inputs_by_default() {
+    use aeroid::estimation::model::input_timing::InputInterpolation;
+    use aeroid::sim::integrator::Interpolation;
+    let name = "linear-lateral-attas";
+    let scenario = scenario_with(name, |text| {
+        text.replace("process_noise", "# process_noise").replace(
+            "\n[[inputs]]\nkind = \"multistep\"",
+            "\n[[inputs]]\ntransition = \"0.1 s\"\nkind = \"multistep\"",
+        )
+    });
+    let profile = Profile::load("ideal", None).unwrap();
+    let (record, truth) = record_flight(&scenario, &profile, scenario.seed).unwrap();
+    let misses = |estimate: &aeroid::estimation::estimate::Estimate| -> Vec<String> {
+        estimate
+            .parameters
+            .iter()
+            .filter_map(|p| {
+                let t = truth.parameters.get(&p.name)?;
+                let error = (p.value - t).abs();
+                (error > 3.0 * p.standard_error && error > 1e-3 * t.abs().max(1e-3))
+                    .then(|| format!("{} {:.6} against {t:.6}", p.name, p.value))
+            })
+            .collect()
+    };
+    for method in ["oem", "fem", "ekf", "ukf", "fdoe", "ee", "fdee"] {
+        let estimate = estimate(method, &record, name).unwrap_or_else(|e| panic!("{method}: {e}"));
+        assert!(
+            estimate
+                .parameters
+                .iter()
+                .any(|p| truth.parameters.contains_key(&p.name)),
+            "{method}"
+        );
+        // Noise-free, the augmented filters end unsettled (their
+        // innovations far below any noise they could weigh).
+        let converged = estimate.status == aeroid::estimation::estimate::Status::Converged;
+        assert!(
+            converged || ["ekf", "ukf"].contains(&method),
+            "{method}: {}",
+            estimate.status
+        );
+        if converged {
+            let missed = misses(&estimate);
+            assert!(missed.is_empty(), "{method}: {missed:#?}");
+        }
+        if ["oem", "fem", "ekf", "ukf"].contains(&method) {
+            assert!(
+                estimate
+                    .notes
+                    .iter()
+                    .any(|n| n.contains("aileron linear (ramps")
+                        && n.contains("rudder linear (ramps")),
+                "{method}: {:?}",
+                estimate.notes
+            );
+        }
+    }
+    let Structure::Linear(mut held) = Structure::load(name).unwrap() else {
+        panic!("{name} is a linear model")
+    };
+    held.interpolation = InputInterpolation::from(Interpolation::ZeroOrderHold);
+    let problem = EstimationProblem::new("oem", vec![record.clone()], *held, &[]).unwrap();
+    let estimate = methods::estimate(&problem, None).unwrap();
+    assert!(!misses(&estimate).is_empty(), "held ramps");
+}
+
 /// The methods tied to the 6-DOF equations refuse a linear structure with
 /// a typed refusal.
 #[test]

@@ -363,7 +363,7 @@ fn attas_lateral_view() -> (
     let (record, _) = record_scenario(&scenario, &profile).unwrap();
     let structure = ModelStructure::load("attas-lateral").unwrap();
     let (view, x0) =
-        DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None).unwrap();
+        DrivenStateSpace::for_record(&record, &structure, &Default::default(), None, None).unwrap();
     (record, structure, view, x0)
 }
 
@@ -691,7 +691,7 @@ fn filter_error_passes_allocate_nothing_per_grid_point() {
     for duration in [30.0, 60.0] {
         let (record, structure) = attas_lateral_record(duration);
         let (view, x0) =
-            DrivenStateSpace::for_record(&record, &structure, Default::default(), None, None)
+            DrivenStateSpace::for_record(&record, &structure, &Default::default(), None, None)
                 .unwrap();
         let theta = view.parameters();
         let n = view.state_count();

@@ -19,7 +19,7 @@
 
 use super::linearize::{H, Linearization, P, PHI, Q, R, THETA, U, V, W};
 use crate::estimation::linear_structure::{Cell, KIND, LinearFile, LinearParameter};
-use crate::sim::integrator::Interpolation;
+use crate::estimation::model::input_timing::InputInterpolation;
 use crate::sim::state::Control;
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
@@ -185,7 +185,7 @@ pub fn linear_model_file(
         inputs: control_names.iter().map(|s| s.to_string()).collect(),
         outputs: states.iter().map(|s| s.to_string()).collect(),
         rate_outputs: BTreeMap::new(),
-        interpolation: Interpolation::ZeroOrderHold,
+        interpolation: InputInterpolation::default(),
         a: a_cells,
         b: b_cells,
         c: (0..rows.len())

@@ -13,7 +13,7 @@
 //! inputs = ["aileron", "rudder"]
 //! outputs = ["beta", "p", "r", "ny"]        # rows of C and D, and of output_bias
 //! rate_outputs = { p_dot = "p", r_dot = "r" } # outputs that are state rates (after `outputs`)
-//! interpolation = "zoh"                     # inputs inside a step: "zoh" (held) or "linear" (first-order hold)
+//! interpolation = "auto"                    # inputs inside a step: "auto" (per input from its samples), "zoh" (held), "linear" (first-order hold) or { aileron = "linear" }
 //! A = [["Yb", 0.0, -1.0], ["Lb", "Lp", "Lr"], ["Nb", "Np", "Nr"]]
 //! B = [[0.0, "Ydr"], ["Lda", "Ldr"], ["Nda", "Ndr"]]
 //! C = [[1, 0, 0], [0, 1, 0], [0, 0, 1], ["Cyb", 0, 0]]
@@ -37,10 +37,10 @@
 use crate::catalog;
 use crate::error::{Problems, Result, parse_toml, read_text};
 use crate::estimation::estimator::{MethodTables, check_method_tables};
+use crate::estimation::model::input_timing::{Chosen, InputInterpolation};
 use crate::estimation::model::linear::{Entry, LinearStateSpace, Matrices, Matrix};
 use crate::estimation::model::state_space::{fitting_window, observation_step};
 use crate::record::FlightRecord;
-use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
@@ -87,7 +87,7 @@ pub struct LinearFile {
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub rate_outputs: BTreeMap<String, String>,
     #[serde(default)]
-    pub interpolation: Interpolation,
+    pub interpolation: InputInterpolation,
     #[serde(rename = "A")]
     pub a: Vec<Vec<Cell>>,
     #[serde(rename = "B", default)]
@@ -120,7 +120,7 @@ pub struct LinearStructure {
     pub matrices: Matrices,
     /// The states whose rates are outputs (after C's), in `outputs` order.
     pub rate_states: Vec<usize>,
-    pub interpolation: Interpolation,
+    pub interpolation: InputInterpolation,
     /// Parameter names, in file (alphabetical) order, with their entries.
     pub names: Vec<String>,
     pub entries: Vec<Entry>,
@@ -221,6 +221,14 @@ impl LinearStructure {
             bounds.push(range);
         }
         check_method_tables(&file.methods, &mut problems);
+        let inputs: Vec<&str> = file.inputs.iter().map(String::as_str).collect();
+        if let Err(error) = file.interpolation.check_channels(&inputs) {
+            let text = error.to_string();
+            problems.push(
+                "interpolation",
+                text.trim_start_matches("interpolation: ").to_string(),
+            );
+        }
         let mut matrices = Matrices {
             a,
             b,
@@ -241,7 +249,7 @@ impl LinearStructure {
             outputs,
             matrices,
             rate_states,
-            interpolation: file.interpolation,
+            interpolation: file.interpolation.clone(),
             names,
             entries,
             starts,
@@ -278,13 +286,39 @@ impl LinearStructure {
     /// [`LinearStructure::model`] with more inputs after the model's own,
     /// entering the states through `disturbance` (states × extra inputs,
     /// columns after B's) and no output directly: each u_k holds the
-    /// model's inputs, then the disturbances.
+    /// model's inputs, then the disturbances. Each input is taken inside a
+    /// step as the file's `interpolation` chooses for it, "auto" from its
+    /// values on the grid.
     pub fn model_disturbed(
         &self,
         start: f64,
         step: f64,
         inputs: Vec<DVector<f64>>,
         disturbance: Option<&DMatrix<f64>>,
+    ) -> Result<LinearStateSpace> {
+        let columns = inputs.first().map_or(0, |u| u.len());
+        let chosen = (0..columns)
+            .map(|j| {
+                let name = self
+                    .inputs
+                    .get(j)
+                    .cloned()
+                    .unwrap_or_else(|| format!("disturbance {}", j + 1 - self.inputs.len()));
+                let values: Vec<f64> = inputs.iter().map(|u| u[j]).collect();
+                self.interpolation.choose(&name, &values)
+            })
+            .collect();
+        self.build(start, step, inputs, disturbance, chosen)
+    }
+
+    /// The model with each input taken inside a step as `chosen` says.
+    fn build(
+        &self,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+        disturbance: Option<&DMatrix<f64>>,
+        chosen: Vec<Chosen>,
     ) -> Result<LinearStateSpace> {
         let m = &self.matrices;
         let (mut b, mut d) = (m.b.clone(), m.d.clone());
@@ -302,8 +336,8 @@ impl LinearStructure {
             inputs,
         )?
         .with_biases(m.state_bias.clone(), m.output_bias.clone())?
-        .with_rate_outputs(self.rate_states.clone())
-        .map(|model| model.with_hold(self.interpolation))
+        .with_rate_outputs(self.rate_states.clone())?
+        .with_input_timing(chosen)
     }
 
     /// The model driven by `record`: over the window where every output has
@@ -323,11 +357,15 @@ impl LinearStructure {
         let count = ((window.1 - window.0) / step + 1e-9).floor() as usize + 1;
         let times: Vec<f64> = (0..count).map(|k| window.0 + k as f64 * step).collect();
         let mut inputs = vec![DVector::zeros(self.inputs.len()); count];
+        let mut chosen = Vec::new();
         for (j, name) in self.inputs.iter().enumerate() {
-            let values = record.channel(name)?.values_at(&times)?;
+            let channel = record.channel(name)?;
+            let choice = self.interpolation.choose(name, &channel.values);
+            let values = channel.sampled_at(&times, choice.interpolation)?;
             for (u, value) in inputs.iter_mut().zip(values) {
                 u[j] = value;
             }
+            chosen.push(choice);
         }
         let initial = DVector::from_iterator(
             self.states.len(),
@@ -339,7 +377,7 @@ impl LinearStructure {
                     .unwrap_or(0.0)
             }),
         );
-        Ok((self.model(window.0, step, inputs)?, initial))
+        Ok((self.build(window.0, step, inputs, None, chosen)?, initial))
     }
 
     /// The channels `record` lacks that a fit needs: the inputs and the outputs.

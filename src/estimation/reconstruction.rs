@@ -44,7 +44,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimation::estimator::{MissingChannel, Refusal};
-use crate::prep::differentiation::{Differentiator, step_times};
+use crate::prep::differentiation::{Differentiator, corner_times, step_times};
 use crate::record::{Channel, FlightRecord};
 use crate::sim::aero::{AeroInput, Coefficient, ForceAxes, REGRESSOR_COUNT, RateSpeed, Regressor};
 use crate::sim::aircraft::Aircraft;
@@ -70,6 +70,26 @@ pub struct ReconstructionOptions {
     pub omit_angular_accelerations: bool,
     /// Where ṗ, q̇, ṙ come from.
     pub angular_accelerations: AngularAccelerations,
+    /// Where the differentiator breaks at a control step.
+    pub step_breaks: StepBreaks,
+}
+
+/// Where the differentiator breaks at a control transition of one sample
+/// interval (a ramp through several samples breaks at both corners either
+/// way).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StepBreaks {
+    /// At both samples around it ([`control_corners`]): a step at the later
+    /// sample or a ramp spanning the interval, whose first corner a window
+    /// must not cross either.
+    #[default]
+    Corners,
+    /// At the first sample with the new value only ([`control_steps`]):
+    /// one sample more per step for the neural restricted model's training
+    /// set, whose fits the gates pin with these breaks (with the corners
+    /// the CDRW longitudinal fit of the neural Gauss–Newton method ends at
+    /// its iteration limit).
+    NewValue,
 }
 
 /// Where the angular accelerations of the moment equations come from (the
@@ -289,16 +309,28 @@ fn regressor_needs(aircraft: &Aircraft, regressor: Regressor, needs: &mut Needs)
 }
 
 /// Where any control channel of the record steps (sorted, each instant
-/// once): the instants where angular accelerations and α̇ may jump.
+/// once): the instants where angular accelerations and α̇ may jump
+/// ([`step_times`]).
 pub fn control_steps(record: &FlightRecord) -> Vec<f64> {
-    let mut steps: Vec<f64> = Control::ALL
+    control_instants(record, step_times)
+}
+
+/// The corners of every control channel's steps and ramps (sorted, each
+/// instant once; [`corner_times`]): where equation error's differentiator
+/// breaks.
+pub fn control_corners(record: &FlightRecord) -> Vec<f64> {
+    control_instants(record, corner_times)
+}
+
+fn control_instants(record: &FlightRecord, each: fn(&Channel) -> Vec<f64>) -> Vec<f64> {
+    let mut instants: Vec<f64> = Control::ALL
         .iter()
         .filter_map(|control| record.channel(control.name()).ok())
-        .flat_map(step_times)
+        .flat_map(each)
         .collect();
-    steps.sort_by(f64::total_cmp);
-    steps.dedup();
-    steps
+    instants.sort_by(f64::total_cmp);
+    instants.dedup();
+    instants
 }
 
 /// The channels that are differentiated: the rates for moments (unless
@@ -381,12 +413,15 @@ pub fn reconstruct(
         .iter()
         .all(|name| needs.contains_key(name));
     let differentiated = differentiated_channels(request, options, measured_accelerations);
-    // The differentiator's windows stop at the control steps: only looked
-    // for when something is differentiated.
+    // The differentiator's windows stop at the corners of the control
+    // steps and ramps: only looked for when something is differentiated.
     let breaks = if differentiated.is_empty() {
         Vec::new()
     } else {
-        control_steps(record)
+        match options.step_breaks {
+            StepBreaks::Corners => control_corners(record),
+            StepBreaks::NewValue => control_steps(record),
+        }
     };
     let derivatives: BTreeMap<&str, Channel> = differentiated
         .into_iter()

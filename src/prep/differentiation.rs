@@ -267,49 +267,84 @@ impl Differentiator {
     }
 }
 
-/// Instants where `channel` steps or turns a fast ramp's corner: where the
-/// derivatives it drives may jump or kink.
-///
-/// A change is *large* when it exceeds both 10 robust standard deviations
-/// of the sample-to-sample changes (1.4826 × their median absolute value:
-/// sensor noise never reaches it, while a smooth input such as a multisine
-/// changes by comparable amounts at every sample and never does) and 5 % of
-/// the channel's range (quantization steps stay below it). A *transition*
-/// is a run of consecutive changes above half that threshold holding at
-/// least one large change. A transition of one change is a step, sampled:
-/// its instant is the first sample with the new value. A longer one is a
-/// surface moving through an actuator's ramp, which has two corners: its
-/// instants are the last sample before the motion and the first sample
-/// after it (a window across either corner smears the angular
-/// accelerations' turn, and none fits inside a fast ramp). A slow ramp,
-/// whose changes stay below the threshold, is motion the differentiator
-/// follows.
+/// Instants where `channel` steps or turns a fast ramp's corner
+/// ([`transitions`]): a transition of one change is a step, its instant
+/// the first sample with the new value; a longer one is a surface moving
+/// through an actuator's ramp, its instants the last sample before the
+/// motion and the first after it. A slow ramp, whose changes stay below
+/// the threshold, has none. Where the record's spectra are integrated in
+/// pieces (the frequency-domain methods), these are the pieces' ends.
 pub fn step_times(channel: &Channel) -> Vec<f64> {
-    let finite: Vec<(f64, f64)> = channel
+    let finite = finite_samples(channel);
+    let values: Vec<f64> = finite.iter().map(|(_, v)| *v).collect();
+    transitions(&values)
+        .into_iter()
+        .flat_map(|run| {
+            let before = (run.len() > 1).then(|| finite[run.start].0);
+            before.into_iter().chain([finite[run.end].0])
+        })
+        .collect()
+}
+
+/// Instants where the derivatives `channel` drives may jump or kink, the
+/// differentiator's breaks: both ends of every transition ([`transitions`]),
+/// the last sample before the change and the first after it. A ramp has
+/// two corners, and a window across either smears the angular
+/// accelerations' turn; none fits inside a fast ramp. A transition of one
+/// change is a step at the later sample or a ramp spanning that one
+/// sample interval, which the samples cannot tell apart: breaking at both
+/// of its samples costs one window more at a step and keeps the ramp's
+/// first corner out of every window.
+pub fn corner_times(channel: &Channel) -> Vec<f64> {
+    let finite = finite_samples(channel);
+    let values: Vec<f64> = finite.iter().map(|(_, v)| *v).collect();
+    transitions(&values)
+        .into_iter()
+        .flat_map(|run| [finite[run.start].0, finite[run.end].0])
+        .collect()
+}
+
+/// The (time, value) pairs of `channel` with a finite value.
+fn finite_samples(channel: &Channel) -> Vec<(f64, f64)> {
+    channel
         .times
         .iter()
         .zip(&channel.values)
         .filter(|(_, v)| v.is_finite())
         .map(|(t, v)| (*t, *v))
-        .collect();
-    if finite.len() < 3 {
+        .collect()
+}
+
+/// The fast transitions of a sampled signal (finite values, in order), as
+/// ranges of changes (change j from sample j to j + 1).
+///
+/// A change is *large* when it exceeds both 10 robust standard deviations
+/// of the sample-to-sample changes (1.4826 × their median absolute value:
+/// sensor noise never reaches it, while a smooth input such as a multisine
+/// changes by comparable amounts at every sample and never does) and 5 % of
+/// the signal's range (quantization steps stay below it). A *transition*
+/// is a run of consecutive changes above half that threshold holding at
+/// least one large change: one change, a step sampled (or a ramp within
+/// one sample interval); more, a ramp through samples.
+pub fn transitions(values: &[f64]) -> Vec<std::ops::Range<usize>> {
+    if values.len() < 3 {
         return Vec::new();
     }
-    let changes: Vec<f64> = finite.windows(2).map(|w| (w[1].1 - w[0].1).abs()).collect();
+    let changes: Vec<f64> = values.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
     let mut ranked = changes.clone();
     let middle = ranked.len() / 2;
     let (_, median, _) = ranked.select_nth_unstable_by(middle, f64::total_cmp);
     let noise = 1.4826 * *median;
-    let (low, high) = finite
+    let (low, high) = values
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, v)| {
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(*v), hi.max(*v))
         });
     let threshold = (10.0 * noise).max(0.05 * (high - low));
     if threshold <= 0.0 {
         return Vec::new();
     }
-    let mut instants = Vec::new();
+    let mut runs = Vec::new();
     let mut i = 0;
     while i < changes.len() {
         if changes[i] <= 0.5 * threshold {
@@ -321,14 +356,10 @@ pub fn step_times(channel: &Channel) -> Vec<f64> {
             i += 1;
         }
         if changes[first..i].iter().any(|&c| c > threshold) {
-            if i - first == 1 {
-                instants.push(finite[i].0);
-            } else {
-                instants.extend([finite[first].0, finite[i].0]);
-            }
+            runs.push(first..i);
         }
     }
-    instants
+    runs
 }
 
 /// The slope of the centred window on a uniform grid as fixed weights
@@ -544,8 +575,10 @@ mod tests {
     }
 
     /// Steps are found in a noisy step input (isolated jumps of 2° against
-    /// 0.01° noise), at the first sample with the new value; a fast ramp
-    /// gives its two corners; a multisine, a slow ramp and quantization
+    /// 0.01° noise), at the first sample with the new value, and their
+    /// corners at it and at the last sample with the old value (the
+    /// corners of a ramp within that interval); a fast ramp gives its two
+    /// corners; a multisine, a slow ramp and quantization
     /// steps give none.
     #[test]
     fn step_times_finds_steps_not_smooth_inputs() {
@@ -559,11 +592,18 @@ mod tests {
                 _ => 0.0,
             } + noise(k))
             .collect();
-        let mut found = step_times(&channel(times.clone(), steps));
-        found
-            .iter_mut()
-            .for_each(|t| *t = (*t * 100.0).round() / 100.0);
-        assert_eq!(found, vec![4.0, 5.6, 8.0]);
+        let rounded = |mut found: Vec<f64>| {
+            found
+                .iter_mut()
+                .for_each(|t| *t = (*t * 100.0).round() / 100.0);
+            found
+        };
+        let steps = channel(times.clone(), steps);
+        assert_eq!(rounded(step_times(&steps)), vec![4.0, 5.6, 8.0]);
+        assert_eq!(
+            rounded(corner_times(&steps)),
+            vec![3.96, 4.0, 5.56, 5.6, 7.96, 8.0]
+        );
         let multisine: Vec<f64> = times
             .iter()
             .map(|t| {

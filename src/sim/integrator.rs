@@ -7,6 +7,10 @@
 //! option: zero-order hold uses u(t_k) for all four stages (exact for
 //! piecewise-constant inputs that switch on the step grid, the default);
 //! linear uses u(t_k) + θ·(u(t_{k+1}) − u(t_k)) at the stage time t_k + θ·h.
+//! This is the simulator's (the scenario's) option for all its inputs; an
+//! estimator chooses one per recorded input
+//! (`crate::estimation::model::input_timing`) and blends each with its own
+//! [`Interpolation::weight`].
 
 use nalgebra::{DMatrix, SVector};
 use serde::{Deserialize, Serialize};

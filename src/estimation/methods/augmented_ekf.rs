@@ -98,6 +98,7 @@ use crate::estimation::methods::filter_error::{enough_data, free_parameters};
 use crate::estimation::methods::linear_equation_error::linear_equation_error;
 use crate::estimation::methods::output_error::{Start, missing_channels, unsuitable};
 use crate::estimation::model::augmented::Augmented;
+use crate::estimation::model::input_timing::{self, InputInterpolation};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel, fitting_window};
 use crate::estimation::problem::EstimationProblem;
@@ -108,7 +109,6 @@ use crate::estimation::solver::kalman::{self, Gaussian};
 use crate::estimation::solver::kept::UpdateView;
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::{Channel, FlightRecord};
-use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -171,8 +171,9 @@ pub struct FilterSettings {
         skip_serializing_if = "Option::is_none"
     )]
     pub step: Option<f64>,
-    /// Inputs inside a step: "zoh" or "linear".
-    pub interpolation: Interpolation,
+    /// Inputs inside a step ([`InputInterpolation`]; default: chosen per
+    /// input from its samples).
+    pub interpolation: InputInterpolation,
     /// A CSV file to write the parameter histories to.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub history: Option<PathBuf>,
@@ -190,7 +191,7 @@ impl Default for FilterSettings {
             tune_process_noise: true,
             correlation_lags: 0,
             step: None,
-            interpolation: Interpolation::default(),
+            interpolation: InputInterpolation::default(),
             history: None,
         }
     }
@@ -236,7 +237,7 @@ pub(crate) const FILTER_SETTINGS: [(&str, &str); 11] = [
     ),
     (
         "interpolation",
-        "inputs inside a step: \"zoh\" (hold) or \"linear\"",
+        "inputs inside a step: \"auto\" (each input held where its samples are piecewise constant, linear where it ramps or moves; said in the notes), \"zoh\" (hold), \"linear\", or a table by channel, e.g. { aileron = \"linear\" }",
     ),
     (
         "history",
@@ -258,6 +259,7 @@ impl FilterSettings {
                 format!("must be positive, is {}", parsed.initial_uncertainty),
             );
         }
+        parsed.interpolation.check_controls(method)?;
         if !non_negative(parsed.pseudonoise) {
             return bad(
                 "pseudonoise",
@@ -508,7 +510,7 @@ impl Filtered<'_> {
                 let (view, x0) = DrivenStateSpace::for_record(
                     record,
                     structure,
-                    settings.interpolation,
+                    &settings.interpolation,
                     settings.step,
                     None,
                 )?;
@@ -523,12 +525,9 @@ impl Filtered<'_> {
             Filtered::Linear(structure) => {
                 let (model, x0) = structure.for_record(record, settings.step, None)?;
                 let note = format!(
-                    "linear model '{}', exact discretisation, inputs {} between grid points (the model file's `interpolation`)",
+                    "linear model '{}', exact discretisation; {} (the model file's `interpolation`)",
                     structure.name,
-                    match structure.interpolation {
-                        Interpolation::ZeroOrderHold => "held",
-                        Interpolation::Linear => "linear",
-                    }
+                    input_timing::note(&model.input_timing)
                 );
                 Ok(View {
                     model: Box::new(model),

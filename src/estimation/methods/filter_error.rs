@@ -209,6 +209,7 @@ use crate::estimation::estimator::{
 use crate::estimation::linear_structure::LinearStructure;
 use crate::estimation::methods::equation_error;
 use crate::estimation::methods::output_error::{self, Start};
+use crate::estimation::model::input_timing::{self, InputInterpolation};
 use crate::estimation::model::observations::Observations;
 use crate::estimation::model::state_space::{DrivenStateSpace, Jacobians, StateSpaceModel};
 use crate::estimation::problem::EstimationProblem;
@@ -217,7 +218,6 @@ use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options
 use crate::estimation::solver::kalman::{self, Gaussian, SteadyState};
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::FlightRecord;
-use crate::sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
@@ -249,8 +249,9 @@ pub struct FilterErrorOptions {
         skip_serializing_if = "Option::is_none"
     )]
     pub step: Option<f64>,
-    /// How the inputs are interpolated inside an integration step.
-    pub interpolation: Interpolation,
+    /// How each input is interpolated inside an integration step
+    /// ([`InputInterpolation`]; default: chosen per input from its samples).
+    pub interpolation: InputInterpolation,
     /// The integrated states driven by process noise (one F entry each);
     /// None: every integrated state but roll, pitch, yaw, altitude and χ.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -304,7 +305,7 @@ impl Default for FilterErrorOptions {
             start: Start::default(),
             max_iterations: 30,
             step: None,
-            interpolation: Interpolation::default(),
+            interpolation: InputInterpolation::default(),
             process_noise: None,
             gain: Gain::default(),
             initial_variance: BTreeMap::new(),
@@ -332,6 +333,7 @@ impl FilterErrorOptions {
             )));
         }
         check_initial_variance(METHOD, options.gain, &options.initial_variance)?;
+        options.interpolation.check_controls(METHOD)?;
         if options.gain == Gain::TimeVarying
             && options.innovation_covariance == Some(InnovationForm::Full)
         {
@@ -429,7 +431,7 @@ impl Estimator for FilterError {
                     ),
                     (
                         "interpolation",
-                        "inputs inside an integration step: \"zoh\" (hold) or \"linear\"",
+                        "inputs inside an integration step: \"auto\" (each input held where its samples are piecewise constant, linear where it ramps or moves; said in the notes), \"zoh\" (hold), \"linear\", or a table by channel, e.g. { aileron = \"linear\" }",
                     ),
                     (
                         "process_noise",
@@ -2386,7 +2388,7 @@ pub fn filter_error_from(
     let (view, initial) = DrivenStateSpace::for_record(
         record,
         structure,
-        options.interpolation,
+        &options.interpolation,
         options.step,
         options.window,
     )?;
@@ -2516,12 +2518,10 @@ pub(crate) fn linear_fit(
         Observations::from_record(record, &structure.outputs, model.time(0), step, model.len())?;
     enough_data(method, &observations, free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
+    notes.push("linear model, started from the model file's values".to_string());
     notes.push(format!(
-        "linear model, inputs {} between grid points, started from the model file's values",
-        match structure.interpolation {
-            Interpolation::ZeroOrderHold => "held",
-            Interpolation::Linear => "linear",
-        }
+        "{} (the model file's `interpolation`)",
+        input_timing::note(&model.input_timing)
     ));
     let theta = structure.parameter_values();
     let names = Names {

@@ -10,7 +10,9 @@
 //! 1. **Model.** δẋ = A·δx + B·δu, δy = C·δx + D·δu
 //!    ([`crate::estimation::model::transfer`]): a nonlinear postulated
 //!    model is linearised about the first sample of its record-driven view
-//!    (integrated states δx; controls and measured pseudo-controls δu).
+//!    (integrated states δx; controls and measured pseudo-controls δu; the
+//!    controls sampled on the grid held or linear per channel as the
+//!    default `interpolation = "auto"` chooses, said in the notes).
 //! 2. **Transforms.** Transforming the state equation over [t₀, t_N]
 //!    (fourier Eq. 3) gives, at each ω,
 //!    `X̃ = (jωI − A)⁻¹·(B·Ũ − E)`, `E = δx(t_N)·e^{−jωt_N} − δx(t₀)·e^{−jωt₀}`,
@@ -44,6 +46,7 @@ use crate::estimation::methods::frequency_regression::{
     BAND_SETTINGS, BandOptions, model_controls,
 };
 use crate::estimation::methods::output_error;
+use crate::estimation::model::input_timing::{self, InputInterpolation};
 use crate::estimation::model::linear::Matrix;
 use crate::estimation::model::state_space::{DrivenStateSpace, recorded_initial_state};
 use crate::estimation::model::transfer::{LinearisedFlight, TransferModel};
@@ -54,7 +57,6 @@ use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::aero::Regressor;
-use crate::sim::integrator::Interpolation;
 use crate::units::Quantity;
 use nalgebra::{Complex, DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -403,8 +405,13 @@ pub fn frequency_output_error(
         return Err(Error::Refused(refusal));
     }
     output_error::unsuitable(METHOD, structure)?;
-    let (view, x0) =
-        DrivenStateSpace::for_record(record, structure, Interpolation::Linear, None, None)?;
+    let (view, x0) = DrivenStateSpace::for_record(
+        record,
+        structure,
+        &InputInterpolation::default(),
+        None,
+        None,
+    )?;
     let simulation = view.simulation();
     let count = simulation.len();
     let (start, step) = (simulation.start, simulation.step);
@@ -476,6 +483,7 @@ pub fn frequency_output_error(
             inputs_used.join(", ")
         ),
         transform_note(&transform, &breaks, &band_note),
+        input_timing::note(&simulation.input_timing),
     ];
     let mut estimate = fitted.fit(&linearised, &data, options, notes)?;
     estimate.wall_time = started.elapsed().as_secs_f64();

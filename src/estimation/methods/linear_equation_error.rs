@@ -14,7 +14,7 @@
 //!   differentiated by the local polynomial differentiator
 //!   ([`crate::prep::differentiation`], the `[methods.ee]` `differentiator`),
 //!   its windows not crossing a control step
-//!   ([`reconstruction::control_steps`]: ẋ jumps where a step input does),
+//!   ([`reconstruction::control_corners`]: ẋ jumps where a step input does),
 //!   the samples next to a step left out.
 //! - Solution and bounds by the shared least squares
 //!   ([`LeastSquares`]): θ̂ by SVD, the Cramér–Rao bound corrected for
@@ -151,7 +151,7 @@ pub fn linear_equation_error(
         .iter()
         .map(|u| values(u))
         .collect::<Result<_>>()?;
-    let steps = reconstruction::control_steps(record);
+    let steps = reconstruction::control_corners(record);
     let mut notes = vec![format!(
         "linear model: {} state and {} output equation(s) by least squares on {} grid points of {step} s; state rates not recorded as rate outputs by differentiation ({})",
         equations.iter().filter(|e| e.state).count(),
@@ -201,7 +201,7 @@ pub fn linear_equation_error(
 }
 
 /// ẋ_i on the grid: its rate output when recorded, else its channel
-/// differentiated with breaks at the control steps (NaN where no window fits).
+/// differentiated with breaks at the control steps' corners (NaN where no window fits).
 fn state_rate(
     record: &FlightRecord,
     structure: &LinearStructure,

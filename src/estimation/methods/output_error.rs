@@ -89,7 +89,9 @@
 //! structure lacking a term, a wrong minimum, turbulence), and one below
 //! it is a note.
 //! Settings (`[methods.oem]`, [`OutputErrorOptions`]): integration step and
-//! input interpolation, start, iteration limit, initial states and output
+//! input interpolation (default "auto": each input held or linear from its
+//! own samples, [`crate::estimation::model::input_timing`]), start,
+//! iteration limit, initial states and output
 //! biases as unknowns. Several manoeuvres may be fitted at once (shared
 //! aerodynamic parameters, initial states per manoeuvre).
 //!
@@ -139,6 +141,7 @@ use crate::estimation::methods::filter_error;
 use crate::estimation::model::driven::{
     ALTITUDE_SUBSTITUTES, Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
+use crate::estimation::model::input_timing::InputInterpolation;
 use crate::estimation::model::state_space::{
     RK4_STEP_LIMIT, driven_simulation, driving_channels, fastest_mode, fitting_window, observables,
     observation_step, recorded_initial_state, rk4_substeps, substep_note,
@@ -151,7 +154,6 @@ use crate::estimation::solver::regression;
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure, Structure};
 use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
-use crate::sim::integrator::Interpolation;
 use crate::units::Quantity;
 use nalgebra::{DMatrix, DMatrixView, DVector};
 use rand::rngs::ChaCha8Rng;
@@ -219,8 +221,9 @@ pub struct OutputErrorOptions {
         skip_serializing_if = "Option::is_none"
     )]
     pub step: Option<f64>,
-    /// How the inputs are interpolated inside an integration step.
-    pub interpolation: Interpolation,
+    /// How each input is interpolated inside an integration step
+    /// ([`InputInterpolation`]; default: chosen per input from its samples).
+    pub interpolation: InputInterpolation,
     /// Initial values of the integrated states as unknowns (per manoeuvre).
     pub estimate_initial_state: bool,
     /// Outputs with a constant bias as an unknown.
@@ -268,7 +271,7 @@ impl Default for OutputErrorOptions {
             start: Start::default(),
             max_iterations: 30,
             step: None,
-            interpolation: Interpolation::default(),
+            interpolation: InputInterpolation::default(),
             estimate_initial_state: false,
             output_biases: Vec::new(),
             window: None,
@@ -325,6 +328,7 @@ impl OutputErrorOptions {
             )));
         }
         options.input_sigmas()?;
+        options.interpolation.check_controls(METHOD)?;
         if !options.input_noise.is_empty() && options.input_noise_draws < 2 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: input_noise_draws must be at least 2"
@@ -392,7 +396,7 @@ impl Estimator for OutputError {
                     ),
                     (
                         "interpolation",
-                        "inputs inside an integration step: \"zoh\" (hold) or \"linear\"",
+                        "inputs inside an integration step: \"auto\" (each input held where its samples are piecewise constant, linear where it ramps or moves; said in the notes), \"zoh\" (hold), \"linear\", or a table by channel, e.g. { aileron = \"linear\" }",
                     ),
                     (
                         "estimate_initial_state",
@@ -823,7 +827,7 @@ struct Problem<'a> {
     /// How the segments are simulated: the integrated states, the inputs'
     /// interpolation, and whether χ takes the measured α̇.
     integrate: Vec<usize>,
-    interpolation: Interpolation,
+    interpolation: InputInterpolation,
     alpha_dot: bool,
     /// Whether χ is a state (τ1 > 0): a θ that changes it cannot be simulated.
     chi_is_state: bool,
@@ -1145,7 +1149,7 @@ pub fn match_histories(
         simulated: None,
         held: None,
         integrate: structure.integrate.clone(),
-        interpolation: options.interpolation,
+        interpolation: options.interpolation.clone(),
         alpha_dot: structure.aircraft.aero.takes_measured_alpha_dot(),
         chi_is_state: structure.aircraft.aero.chi_is_state(),
         regridded: false,
@@ -1227,7 +1231,7 @@ fn segment<'a>(
     let (mut simulation, notes) = driven_simulation(
         record,
         structure,
-        options.interpolation,
+        &options.interpolation,
         options.step,
         window,
     )?;
@@ -1331,7 +1335,7 @@ impl Segment<'_> {
         &mut self,
         model: &FlightModel,
         integrate: &[usize],
-        interpolation: Interpolation,
+        interpolation: &InputInterpolation,
         alpha_dot: bool,
     ) -> std::result::Result<bool, String> {
         let Some((period, current)) = self.substeps else {
@@ -1475,7 +1479,7 @@ impl<'a> Problem<'a> {
             simulated: None,
             held: None,
             integrate: structure.integrate.clone(),
-            interpolation: options.interpolation,
+            interpolation: options.interpolation.clone(),
             alpha_dot: structure.aircraft.aero.takes_measured_alpha_dot(),
             chi_is_state: structure.aircraft.aero.chi_is_state(),
             regridded: false,
@@ -1495,7 +1499,7 @@ impl<'a> Problem<'a> {
             changed |= segment.resolve(
                 &self.model,
                 &self.integrate,
-                self.interpolation,
+                &self.interpolation,
                 self.alpha_dot,
             )?;
         }
@@ -2217,7 +2221,9 @@ impl Problem<'_> {
                 let simulation = DrivenSimulation::from_record(
                     &records[r],
                     &self.integrate,
-                    self.interpolation,
+                    // The choice made on the recorded inputs, not remade
+                    // on each draw of their noise.
+                    &segment.simulation.fixed_interpolation(),
                     segment.simulation.step,
                     segment.window,
                     self.alpha_dot,

@@ -16,12 +16,15 @@
 //! channel (N, along the thrust line) when it has one, else the throttle
 //! and engine model ([`Ambient`]).
 //! Controls and pseudo-controls are sampled on the integration grid and
-//! taken inside a step with the model's [`Interpolation`] option, through
-//! the one RK4 integrator. Each step is a function of its start state
+//! taken inside a step through the one RK4 integrator: each control held
+//! or linear as the `interpolation` setting chooses for it
+//! ([`super::input_timing`]: by default from its samples), the measured
+//! pseudo-controls linear. Each step is a function of its start state
 //! alone (`DrivenSimulation::step_from`, the caches restarted at every
 //! grid point), the step of the state-space view
 //! ([`super::state_space::DrivenStateSpace`]) that filters propagate with.
 
+use super::input_timing::{self, Chosen, InputInterpolation};
 use super::state_space::Jacobians;
 use crate::dual::{Dual, LANES, Real};
 use crate::error::{Error, Result};
@@ -1506,7 +1509,10 @@ pub enum Linearise {
 pub struct DrivenSimulation {
     pub start: f64,
     pub step: f64,
-    pub interpolation: Interpolation,
+    /// How each control is taken inside a step (by [`Control::index`]).
+    pub holds: [Interpolation; CONTROL_COUNT],
+    /// The controls the record has, each with its interpolation and why.
+    pub input_timing: Vec<Chosen>,
     /// Which flight-path states are integrated (others are measured).
     pub integrate: [bool; FLIGHT_PATH_SIZE],
     pub controls: Vec<Controls>,
@@ -1629,9 +1635,10 @@ fn measured_alpha_dot(
 
 impl DrivenSimulation {
     /// Samples controls and pseudo-controls from the record on the grid
-    /// start, start + step, …, end. Control channels are reconstructed between
-    /// their samples with the model's interpolation (a hold keeps a recorded
-    /// step a step); measured pseudo-controls, continuous signals, linearly.
+    /// start, start + step, …, end. Each control channel is reconstructed
+    /// between its samples as `interpolation` chooses for it (a hold keeps
+    /// a recorded step a step; noted); measured pseudo-controls,
+    /// continuous signals, linearly.
     /// A missing control channel is held at 0 (noted); a missing
     /// pseudo-control that the model needs is an error. The record's
     /// `density` and `thrust` channels, when it has them, are sampled
@@ -1644,7 +1651,7 @@ impl DrivenSimulation {
     pub fn from_record(
         record: &FlightRecord,
         integrate: &[usize],
-        interpolation: Interpolation,
+        interpolation: &InputInterpolation,
         step: f64,
         (start, end): (f64, f64),
         alpha_dot: bool,
@@ -1658,15 +1665,20 @@ impl DrivenSimulation {
         let mut notes = measured_quantities.clone();
         let thrust_measured = ambient.first().is_some_and(|a| a.thrust.is_some());
         let mut controls = vec![Controls::zeros(); count];
+        let mut holds = [Interpolation::ZeroOrderHold; CONTROL_COUNT];
+        let mut input_timing = Vec::new();
         for control in Control::ALL {
             match record.channel(control.name()) {
                 Ok(channel) => {
+                    let chosen = interpolation.choose(control.name(), &channel.values);
+                    holds[control.index()] = chosen.interpolation;
                     for (sample, value) in controls
                         .iter_mut()
-                        .zip(channel.sampled_at(&times, interpolation)?)
+                        .zip(channel.sampled_at(&times, chosen.interpolation)?)
                     {
                         sample[control.index()] = value;
                     }
+                    input_timing.push(chosen);
                 }
                 // With the thrust measured the throttle is not read.
                 Err(_) if control == Control::Throttle && thrust_measured => {}
@@ -1710,10 +1722,14 @@ impl DrivenSimulation {
             }
         }
         debug_assert_eq!(CONTROL_COUNT, 5);
+        if !input_timing.is_empty() {
+            notes.push(input_timing::note(&input_timing));
+        }
         Ok(DrivenSimulation {
             start,
             step,
-            interpolation,
+            holds,
+            input_timing,
             integrate: mask,
             controls,
             frozen: Frozen::new(&measured, &ambient),
@@ -1734,7 +1750,8 @@ impl DrivenSimulation {
         DrivenSimulation {
             start: self.start,
             step: self.step,
-            interpolation: self.interpolation,
+            holds: self.holds,
+            input_timing: self.input_timing.clone(),
             integrate: self.integrate,
             controls: self.controls[..n].to_vec(),
             frozen: Frozen::new(&measured, &ambient),
@@ -1826,13 +1843,27 @@ impl DrivenSimulation {
         })
     }
 
+    /// The controls a fraction `fraction` ∈ [0, 1] into step k (k + 1 a
+    /// grid point): each blended by its own weight,
+    /// u_k + w(θ)∘(u_k+1 − u_k), w_i = 0 held, θ linear.
+    pub(super) fn controls_inside(&self, k: usize, fraction: f64) -> Controls {
+        let weights = Controls::from_fn(|i, _| self.holds[i].weight(fraction));
+        self.controls[k] + (self.controls[k + 1] - self.controls[k]).component_mul(&weights)
+    }
+
+    /// The setting that reproduces this simulation's choice per control on
+    /// any record (a record with the inputs' noise drawn again).
+    pub fn fixed_interpolation(&self) -> InputInterpolation {
+        InputInterpolation::fixed(&self.input_timing)
+    }
+
     /// The measured states, controls and pseudo-control rates a fraction
     /// `fraction` ∈ [0, 1] into step k (k the last grid point: its own,
     /// fraction 0): measured pseudo-controls are continuous states, always
     /// linear inside the step (consistent with their rates in
-    /// [`DrivenSimulation::pseudo_rates`]); controls follow the model's
-    /// [`Interpolation`] (under a hold the step's end sees the start's
-    /// value). At fraction 0 the grid point's samples themselves.
+    /// [`DrivenSimulation::pseudo_rates`]); each control held or linear
+    /// ([`DrivenSimulation::controls_inside`]; under a hold the step's end
+    /// sees the start's value). At fraction 0 the grid point's samples themselves.
     pub(super) fn inputs_at(
         &self,
         k: usize,
@@ -1866,8 +1897,7 @@ impl DrivenSimulation {
                 self.ambient[k].between(self.ambient[k + 1], fraction),
             )
         };
-        let w = self.interpolation.weight(fraction);
-        let controls = self.controls[k] + (self.controls[k + 1] - self.controls[k]) * w;
+        let controls = self.controls_inside(k, fraction);
         (measured, controls, start.blend(end, fraction), ambient)
     }
 
@@ -2153,12 +2183,10 @@ impl DrivenSimulation {
                 // regressors are taken with those (∂f/∂x keeps the grid
                 // point's controls: part of the O(h) approximation at a
                 // control step that `Linearise::GridPoints` accepts).
-                let end_b = if self.interpolation.weight(1.0) == 1.0 {
+                let end_b = if self.holds.iter().all(|h| h.weight(1.0) == 1.0) {
                     &next_point.b
                 } else {
-                    let controls = self.controls[k]
-                        + (self.controls[k + 1] - self.controls[k])
-                            * self.interpolation.weight(1.0);
+                    let controls = self.controls_inside(k, 1.0);
                     next_point.b_with_controls(model, &directions, &controls, &mut end_b);
                     &end_b
                 };

@@ -6,15 +6,18 @@
 //! the states R that are outputs themselves (ṗ, ṙ as measured angular
 //! accelerations). θ is a list of entries of A, B, C, D, b and c
 //! (dimensional derivatives such as Z_w, M_q, M_δe, and biases). The
-//! inputs u are given at the grid points and held over each step
+//! inputs u are given at the grid points, each held over a step
 //! (zero-order hold) or interpolated linearly between them (first-order
-//! hold). The step is exact under either: x_{k+1} = Φ·x_k + Γ₀·(u_k, 1)
-//! (+ Γ₁·(u_{k+1} − u_k) under the first-order hold), with Φ = e^{A·h} and
-//! Γ₀ = ∫₀ʰ e^{A·s} ds·[B b] (Van Loan, [`crate::estimation::solver::kalman`]),
+//! hold), as [`super::input_timing`] chooses per input: W the diagonal
+//! of their weights (1 linear, 0 held). The step is exact:
+//! x_{k+1} = Φ·x_k + Γ₀·(u_k, 1) + Γ₁·W·(u_{k+1} − u_k), with Φ = e^{A·h},
+//! Γ₀ = ∫₀ʰ e^{A·s} ds·[B b] and Γ₁ the first-order hold's ramp matrix
+//! (Van Loan, [`crate::estimation::solver::kalman`]),
 //! so a filter on it is a linear Kalman filter: the oracle the filters are
 //! checked against. The discrete matrices of the last θ are kept, so a
 //! pass over the grid computes them once.
 
+use super::input_timing::Chosen;
 use super::state_space::{Jacobians, StateSpaceModel};
 use crate::error::{Error, Result};
 use crate::estimation::solver::kalman::{discretise, discretise_first_order_hold};
@@ -72,8 +75,8 @@ impl Matrices {
     }
 }
 
-/// The discrete step of one θ: Φ, Γ₀ of [B b], and Γ₁ of B under the
-/// first-order hold.
+/// The discrete step of one θ: Φ, Γ₀ of [B b], and Γ₁·W of B for the
+/// inputs under the first-order hold (none when every input is held).
 #[derive(Debug, Clone, PartialEq)]
 struct Discrete {
     transition: DMatrix<f64>,
@@ -111,8 +114,11 @@ pub struct LinearStateSpace {
     pub output_bias: DVector<f64>,
     /// The states whose rates follow C·x + D·u + c among the outputs.
     pub rate_outputs: Vec<usize>,
-    /// How u is taken inside a step.
-    pub hold: Interpolation,
+    /// How each input of u is taken inside a step.
+    pub holds: Vec<Interpolation>,
+    /// The inputs' names, interpolations and why (empty unless set by
+    /// [`LinearStateSpace::with_input_timing`]).
+    pub input_timing: Vec<Chosen>,
     /// θ: the entries it sets (θ_j overrides entry j).
     pub parameters: Vec<Entry>,
     pub start: f64,
@@ -133,7 +139,7 @@ impl LinearStateSpace {
         step: f64,
         inputs: Vec<DVector<f64>>,
     ) -> Result<LinearStateSpace> {
-        let (n, l) = (a.nrows(), c.nrows());
+        let (n, l, m) = (a.nrows(), c.nrows(), b.ncols());
         LinearStateSpace {
             a,
             b,
@@ -142,7 +148,8 @@ impl LinearStateSpace {
             state_bias: DVector::zeros(n),
             output_bias: DVector::zeros(l),
             rate_outputs: Vec::new(),
-            hold: Interpolation::ZeroOrderHold,
+            holds: vec![Interpolation::ZeroOrderHold; m],
+            input_timing: Vec::new(),
             parameters,
             start,
             step,
@@ -169,10 +176,26 @@ impl LinearStateSpace {
         self.checked()
     }
 
-    /// The model with its inputs taken inside a step by `hold`.
+    /// The model with every input taken inside a step by `hold`.
     pub fn with_hold(mut self, hold: Interpolation) -> LinearStateSpace {
-        self.hold = hold;
+        self.holds = vec![hold; self.b.ncols()];
         self
+    }
+
+    /// The model with input j taken inside a step as `chosen[j]` says; an
+    /// error when there is not one per input.
+    pub fn with_input_timing(mut self, chosen: Vec<Chosen>) -> Result<LinearStateSpace> {
+        self.holds = chosen.iter().map(|c| c.interpolation).collect();
+        self.input_timing = chosen;
+        self.checked()
+    }
+
+    /// The inputs' weights inside a step at fraction θ (θ linear, 0 held).
+    fn weights(&self, fraction: f64) -> DVector<f64> {
+        DVector::from_iterator(
+            self.holds.len(),
+            self.holds.iter().map(|h| h.weight(fraction)),
+        )
     }
 
     fn checked(self) -> Result<LinearStateSpace> {
@@ -186,6 +209,7 @@ impl LinearStateSpace {
             && self.state_bias.len() == n
             && self.output_bias.len() == l
             && self.rate_outputs.iter().all(|&i| i < n)
+            && self.holds.len() == m
             && self.inputs.iter().all(|u| u.len() == m);
         if !shapes_agree {
             return Err(Error::Other(format!(
@@ -272,8 +296,8 @@ impl LinearStateSpace {
         Ok(matrices)
     }
 
-    /// u at t: the held grid sample, or the linear interpolation between
-    /// the two grid points around t.
+    /// u at t: each input its held grid sample or the linear interpolation
+    /// between the two grid points around t.
     fn input_at(&self, t: f64) -> Result<DVector<f64>> {
         let position = (t - self.start) / self.step;
         let last = self.inputs.len() - 1;
@@ -284,11 +308,11 @@ impl LinearStateSpace {
         }
         let k = ((position + 1e-9).floor().max(0.0) as usize).min(last);
         let fraction = (position - k as f64).clamp(0.0, 1.0);
-        Ok(match (self.hold, k < last) {
-            (Interpolation::Linear, true) if fraction > 1e-9 => {
-                &self.inputs[k] + (&self.inputs[k + 1] - &self.inputs[k]) * fraction
-            }
-            _ => self.inputs[k].clone(),
+        Ok(if k < last && fraction > 1e-9 {
+            &self.inputs[k]
+                + (&self.inputs[k + 1] - &self.inputs[k]).component_mul(&self.weights(fraction))
+        } else {
+            self.inputs[k].clone()
         })
     }
 
@@ -317,12 +341,10 @@ impl LinearStateSpace {
         driven.view_mut((0, 0), (n, m)).copy_from(&matrices.b);
         driven.set_column(m, &matrices.state_bias);
         let held = discretise(&matrices.a, &driven, None, self.step);
-        let ramp = match self.hold {
-            Interpolation::ZeroOrderHold => None,
-            Interpolation::Linear => {
-                Some(discretise_first_order_hold(&matrices.a, &matrices.b, self.step).2)
-            }
-        };
+        let ramp = self.holds.contains(&Interpolation::Linear).then(|| {
+            discretise_first_order_hold(&matrices.a, &matrices.b, self.step).2
+                * DMatrix::from_diagonal(&self.weights(1.0))
+        });
         let discrete = Arc::new(Discrete {
             transition: held.transition,
             input: held.input,
@@ -420,8 +442,8 @@ impl StateSpaceModel for LinearStateSpace {
         })
     }
 
-    /// The exact step: x_{k+1} = Φ·x_k + Γ₀·(u_k, 1), plus Γ₁·(u_{k+1} − u_k)
-    /// under the first-order hold.
+    /// The exact step: x_{k+1} = Φ·x_k + Γ₀·(u_k, 1) + Γ₁·W·(u_{k+1} − u_k),
+    /// the last term for the inputs taken linearly.
     fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
         self.check_state(x)?;
         if k + 1 >= self.inputs.len() {

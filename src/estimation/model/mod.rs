@@ -3,11 +3,13 @@
 //! simulation with sensitivities to its parameters), and as a state-space
 //! system ẋ = f(t, x, u, θ), y = h(t, x, u, θ) with its Jacobians and one
 //! integration step from any state ([`state_space`]), the view every method
-//! that simulates or filters shares.
+//! that simulates or filters shares; how each recorded input is taken
+//! between its samples ([`input_timing`]).
 
 pub mod augmented;
 pub mod coefficient_states;
 pub mod driven;
+pub mod input_timing;
 pub mod linear;
 pub mod observations;
 pub mod state_space;

@@ -25,12 +25,13 @@ use super::driven::{
     self, Ambient, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, LinearisationBuffers,
     Observable, PointMemo, PseudoRates,
 };
+use super::input_timing::InputInterpolation;
 use crate::error::{Error, Result};
 use crate::estimation::structure::FLIGHT_PATH_STATES;
 use crate::estimation::structure::ModelStructure;
 use crate::record::FlightRecord;
 use crate::sim::dynamics::FlightModel;
-use crate::sim::integrator::{Interpolation, rk4_linear_step};
+use crate::sim::integrator::rk4_linear_step;
 use crate::sim::state::{Control, Controls};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
@@ -211,7 +212,7 @@ pub const RK4_STEP_LIMIT: f64 = 0.5;
 pub fn driven_simulation(
     record: &FlightRecord,
     structure: &ModelStructure,
-    interpolation: Interpolation,
+    interpolation: &InputInterpolation,
     step: Option<f64>,
     window: (f64, f64),
 ) -> Result<(DrivenSimulation, Vec<String>)> {
@@ -628,10 +629,10 @@ struct ModelScratch {
 /// in the order of [`FLIGHT_PATH_STATES`] (with χ wherever the aerodynamic
 /// model makes it a state); the others are the record's measured
 /// pseudo-controls. θ holds every aerodynamic parameter of the model, in
-/// the order of its parameter set. The inputs at t: controls with the
-/// model's interpolation (a hold takes the value of the step t starts,
-/// so at a grid time the new sample), measured pseudo-controls and their
-/// rates linear between grid points.
+/// the order of its parameter set. The inputs at t: each control held or
+/// linear as the `interpolation` setting chooses for it (a hold takes the
+/// value of the step t starts, so at a grid time the new sample),
+/// measured pseudo-controls and their rates linear between grid points.
 #[derive(Debug, Clone)]
 pub struct DrivenStateSpace {
     simulation: DrivenSimulation,
@@ -684,7 +685,7 @@ impl DrivenStateSpace {
     pub fn for_record(
         record: &FlightRecord,
         structure: &ModelStructure,
-        interpolation: Interpolation,
+        interpolation: &InputInterpolation,
         step: Option<f64>,
         limit: Option<(f64, f64)>,
     ) -> Result<(DrivenStateSpace, DVector<f64>)> {
@@ -1173,6 +1174,7 @@ mod tests {
     use crate::record::recorder::{Profile, record_scenario};
     use crate::sim::integrator::Interpolation;
     use crate::sim::scenario::Scenario;
+    use InputInterpolation as Setting;
 
     /// A bundled scenario recorded by the 25 Hz flight-test profile (noisy
     /// measured pseudo-controls, as output error sees them).
@@ -1196,7 +1198,7 @@ mod tests {
     fn view(
         record: &crate::record::FlightRecord,
         structure: &ModelStructure,
-        interpolation: Interpolation,
+        interpolation: Setting,
     ) -> (DrivenStateSpace, FlightPathState) {
         let mut window = (f64::NEG_INFINITY, f64::INFINITY);
         for name in &structure.outputs {
@@ -1207,7 +1209,7 @@ mod tests {
         let simulation = DrivenSimulation::from_record(
             record,
             &structure.integrate,
-            interpolation,
+            &interpolation,
             step,
             window,
             structure.aircraft.aero.takes_measured_alpha_dot(),
@@ -1320,7 +1322,7 @@ mod tests {
     #[test]
     fn step_from_an_unvisited_state_is_rk4_of_the_rates() {
         for (record, structure) in cases() {
-            let (view, initial) = view(&record, &structure, Interpolation::Linear);
+            let (view, initial) = view(&record, &structure, Interpolation::Linear.into());
             let theta = view.parameters() * 1.03;
             let states = trajectory(&view, &initial, None);
             let h = view.simulation.step;

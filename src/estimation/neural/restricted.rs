@@ -70,7 +70,8 @@ use crate::estimation::methods::equation_error::record_name;
 use crate::estimation::neural::{NetworkReport, Scaling};
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::reconstruction::{
-    Reconstruction, ReconstructionOptions, Request, check_channels, control_steps, reconstruct,
+    Reconstruction, ReconstructionOptions, Request, StepBreaks, check_channels, control_steps,
+    reconstruct,
 };
 use crate::estimation::solver::gauss_newton::{self, LeastSquaresProblem, Options};
 use crate::estimation::structure::{FLIGHT_PATH_STATES, ModelStructure};
@@ -369,6 +370,7 @@ fn prepare(
         &request,
         &ReconstructionOptions {
             differentiator: Some(options.differentiator),
+            step_breaks: StepBreaks::NewValue,
             ..Default::default()
         },
         method,
