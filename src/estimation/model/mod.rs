@@ -9,6 +9,7 @@ pub mod augmented;
 pub mod coefficient_states;
 pub mod driven;
 pub mod linear;
+pub mod modes;
 pub mod observations;
 pub mod state_space;
 pub mod transfer;
