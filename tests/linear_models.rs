@@ -1136,3 +1136,31 @@ fn stabilised_output_error_recovers_an_unstable_aircraft() {
         }
     }
 }
+
+/// A feedback table whose control is not a model input, whose gain names
+/// no state, or whose frame is not a multiple of the step is an error
+/// naming the key.
+#[test]
+fn bad_feedback_tables_name_the_key() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/linear-short-period-unstable.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let load = |from: &str, to: &str| {
+        let edited = text.replace(from, to);
+        assert_ne!(edited, text);
+        Scenario::from_file(&toml::from_str(&edited).unwrap(), &path)
+    };
+    let fly = |scenario: Scenario| {
+        aeroid::eval::linear_flight::fly(&scenario, scenario.linear.as_ref().unwrap())
+            .unwrap_err()
+            .to_string()
+    };
+    let error = fly(load("control = \"elevator\"", "control = \"aileron\"").unwrap());
+    assert!(error.contains("linear.feedback.control"), "{error}");
+    let error = fly(load("alpha = 2.5", "beta = 2.5").unwrap());
+    assert!(error.contains("linear.feedback.gains.beta"), "{error}");
+    let error = load("frame = \"0.04 s\"", "frame = \"0.015 s\"")
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("linear.feedback.frame"), "{error}");
+}
