@@ -301,3 +301,49 @@ fn the_qar_aileron_samples_bound_the_roll_derivatives() {
     }
     let _ = std::fs::remove_dir_all(folder);
 }
+
+/// A 6-DOF model held unstable (`attas-longitudinal` with C_mα fixed at
+/// +0.2, statically unstable, the other derivatives free) on the ideal
+/// elevator 3-2-1-1 (60 s): its simulation from the record's start
+/// departs, the fit keeps the status `diverged`, and the modes of ∂f/∂x
+/// at the record's start (integrated airspeed, α, q, pitch) name the
+/// divergence `unstable`, with a time to double of ln 2/Re λ under the
+/// record's length and the advice of `segment` (measured: a pair
+/// λ = +0.204 ± 0.181i /s, doubling in 3.40 s); the same model with its
+/// own start (C_mα −0.3) converges without that diagnosis.
+#[test]
+fn a_diverging_six_dof_fit_is_diagnosed_unstable() {
+    use aeroid::estimation::estimate::DiagnosisKind;
+    let profile = Profile::load("ideal", None).unwrap();
+    let scenario = Scenario::load("attas-elevator-3211").unwrap();
+    let (record, _) =
+        aeroid::eval::linear_flight::record_flight(&scenario, &profile, scenario.seed).unwrap();
+    let stable = ModelStructure::load("attas-longitudinal").unwrap();
+    let options = OutputErrorOptions::for_structure(&stable).unwrap();
+    let fitted = fit(&record, &stable, &options);
+    assert_eq!(fitted.status, Status::Converged, "{:?}", fitted.notes);
+    assert!(fitted.diagnosis(DiagnosisKind::Unstable).is_none());
+    let mut unstable = stable.clone();
+    let i = unstable.aircraft.aero.parameters.index("Cm_alpha").unwrap();
+    unstable.aircraft.aero.parameters.values_mut()[i] = 0.2;
+    unstable.free[i] = false;
+    let options = OutputErrorOptions {
+        start: aeroid::estimation::methods::output_error::Start::Model,
+        ..options
+    };
+    let fitted = fit(&record, &unstable, &options);
+    let diagnosis = fitted
+        .diagnosis(DiagnosisKind::Unstable)
+        .unwrap_or_else(|| panic!("{}: {:?}", fitted.status, fitted.diagnoses));
+    assert!(
+        matches!(fitted.status, Status::Diverged(_)),
+        "{}",
+        fitted.status
+    );
+    assert!(diagnosis.about[0].starts_with("mode λ = +"), "{diagnosis}");
+    assert!(
+        diagnosis.measures[0] > 0.0 && diagnosis.measures[0] < 60.0,
+        "{diagnosis}"
+    );
+    assert!(diagnosis.advice.contains("segment = \""), "{diagnosis}");
+}

@@ -99,6 +99,34 @@ pub fn one_record(method: &str, problem: &EstimationProblem) -> Result<()> {
     }
 }
 
+/// An error naming every key of `settings` among `unsupported` (key,
+/// why) that a linear structure `model` does not take, so that a setting
+/// is refused, never silently unused; Ok when there is none. `start =
+/// "model"` is what a linear fit does, and is accepted.
+pub fn refuse_for_linear(
+    method: &str,
+    settings: &Settings,
+    model: &str,
+    unsupported: &[(&str, &str)],
+) -> Result<()> {
+    let refused: Vec<String> = unsupported
+        .iter()
+        .filter(|(key, _)| {
+            settings
+                .get(*key)
+                .is_some_and(|value| !(*key == "start" && value.as_str() == Some("model")))
+        })
+        .map(|(key, why)| format!("{key} ({why})"))
+        .collect();
+    if refused.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Other(format!(
+        "[methods.{method}]: not for the linear model '{model}': {}",
+        refused.join("; ")
+    )))
+}
+
 /// Parses a settings table into a method's settings type, naming the
 /// method and the offending key in the error.
 pub fn parse_settings<T: DeserializeOwned>(method: &str, settings: &Settings) -> Result<T> {

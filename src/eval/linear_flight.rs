@@ -21,6 +21,13 @@
 //!   inputs through G: ẋ = A·x + B·u + b + G·(u_g, v_g, w_g), held or
 //!   interpolated over each step as the model's inputs are, so the step
 //!   stays exact and the truth the model's parameters.
+//! - Feedback (`feedback`): a stability augmentation moving one model
+//!   input by K·x on top of the pilot's signal, x read at the start of
+//!   each frame and the command held over the frame (a flight-control
+//!   computer; the model's inputs must then be held, `interpolation =
+//!   "zoh"`); the recorded input is the total. The flight then starts at
+//!   the closed loop's equilibrium, (A + B_c·K)·x₀ = −(B·u₀ + b), B_c the
+//!   moved input's column.
 //! - Record: the profile's channels whose quantity is a state, input or
 //!   output of the model, named as in the file ([`Profile::record_signals`]).
 
@@ -33,7 +40,7 @@ use crate::random::{self, streams};
 use crate::record::FlightRecord;
 use crate::record::recorder::Profile;
 use crate::sim::aero::ModelKind;
-use crate::sim::scenario::{LinearFlight, LinearGusts, Scenario};
+use crate::sim::scenario::{LinearFeedback, LinearFlight, LinearGusts, Scenario};
 use crate::sim::state::Control;
 use crate::sim::trace::TruthTrace;
 use crate::sim::truth::RunTruth;
@@ -120,8 +127,14 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
             )
         })
         .collect();
-    let model =
+    let mut inputs = inputs;
+    let mut model =
         structure.model_disturbed(0.0, scenario.step, inputs.clone(), distribution.as_ref())?;
+    let augmentation = linear
+        .feedback
+        .as_ref()
+        .map(|feedback| augmentation(scenario, feedback, &structure))
+        .transpose()?;
     let theta = structure.parameter_values();
     let distribution = process_noise(&structure, linear, scenario)?;
     let noise = noise_factor(&model, &distribution)?;
@@ -129,10 +142,15 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
     // The equilibrium of the control inputs alone: the gusts start from
     // their stationary distribution, the motion from trim.
     let controls_at_start = inputs[0].rows(0, structure.inputs.len());
+    let mut closed = matrices.a.clone();
+    if let Some((column, gains, _)) = &augmentation {
+        closed += matrices.b.column(*column) * gains.transpose();
+    }
     let mut x = equilibrium(
-        &matrices.a,
+        &closed,
         &(matrices.b.columns(0, structure.inputs.len()) * controls_at_start + &matrices.state_bias),
     );
+    let mut command = 0.0;
     let mut rng = random::stream(scenario.seed, streams::PROCESS_NOISE);
     let n = structure.states.len();
     let mut states = vec![Vec::with_capacity(count); n];
@@ -150,6 +168,13 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
                     reason: format!("the linear model '{}' diverged", structure.name),
                 });
             }
+        }
+        if let Some((column, gains, frame)) = &augmentation {
+            if k % frame == 0 {
+                command = gains.dot(&x);
+            }
+            inputs[k][*column] += command;
+            model.inputs[k][*column] = inputs[k][*column];
         }
         let y = model.outputs(t, x.as_slice(), theta.as_slice())?;
         for i in 0..n {
@@ -171,6 +196,55 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
         gusts,
         truth: truth(scenario, &structure),
     })
+}
+
+/// The moved input's index, the gains over the model's states and the
+/// frame in steps of a `[linear.feedback]` table, checked against the
+/// model: a named input and states, held inputs.
+fn augmentation(
+    scenario: &Scenario,
+    feedback: &LinearFeedback,
+    structure: &LinearStructure,
+) -> Result<(usize, DVector<f64>, usize)> {
+    let invalid = |field: String, message: String| Error::Invalid {
+        path: scenario.path.clone(),
+        problems: vec![crate::error::Problem { field, message }],
+    };
+    let Some(column) = structure.inputs.iter().position(|i| *i == feedback.control) else {
+        return Err(invalid(
+            "linear.feedback.control".into(),
+            format!(
+                "'{}' is not an input of '{}' ({})",
+                feedback.control,
+                structure.name,
+                structure.inputs.join(", ")
+            ),
+        ));
+    };
+    if structure.interpolation != crate::sim::integrator::Interpolation::ZeroOrderHold.into() {
+        return Err(invalid(
+            "linear.feedback".into(),
+            format!(
+                "the augmentation holds its command over a frame: the model '{}' must hold its inputs (interpolation = \"zoh\")",
+                structure.name
+            ),
+        ));
+    }
+    let mut gains = DVector::zeros(structure.states.len());
+    for (state, &gain) in &feedback.gains {
+        let Some(i) = structure.states.iter().position(|s| s == state) else {
+            return Err(invalid(
+                format!("linear.feedback.gains.{state}"),
+                format!(
+                    "not a state of '{}' ({})",
+                    structure.name,
+                    structure.states.join(", ")
+                ),
+            ));
+        };
+        gains[i] = gain;
+    }
+    Ok((column, gains, feedback.frame_steps))
 }
 
 /// G of `[linear] gusts` (its rows checked against the model's states) and

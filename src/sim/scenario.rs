@@ -117,6 +117,35 @@ pub struct LinearFlightSpec {
     /// `matrix` and the keys of a `[wind.turbulence]` table ([`LinearGusts`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gusts: Option<toml::Table>,
+    /// A stability augmentation moving one control with the states
+    /// ([`LinearFeedbackSpec`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feedback: Option<LinearFeedbackSpec>,
+}
+
+/// `[linear.feedback]`: a stability augmentation (a flight-control
+/// computer) that moves the model input `control` by Σ gain·state on top
+/// of the scenario's `[[inputs]]`, the states read at the start of each
+/// `frame` and the command held over it: u = u_pilot + K·x(t_frame).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearFeedbackSpec {
+    /// The model input the augmentation moves (e.g. `elevator`).
+    pub control: String,
+    /// The gain on each named state (input units per state unit).
+    pub gains: BTreeMap<String, f64>,
+    /// The computer's frame: a multiple of the scenario's step (default the step).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<Quantity>,
+}
+
+/// A validated `[linear.feedback]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearFeedback {
+    pub control: String,
+    pub gains: BTreeMap<String, f64>,
+    /// The frame in scenario steps (at least 1).
+    pub frame_steps: usize,
 }
 
 /// `[linear] gusts`: the Dryden turbulence of `[wind.turbulence]` (an
@@ -175,6 +204,7 @@ pub struct LinearFlight {
     pub model_path: PathBuf,
     pub process_noise: BTreeMap<String, f64>,
     pub gusts: Option<LinearGusts>,
+    pub feedback: Option<LinearFeedback>,
 }
 
 /// One `[[parameter_changes]]` table of a scenario file.
@@ -387,6 +417,10 @@ impl Scenario {
                     .gusts
                     .as_ref()
                     .and_then(|table| LinearGusts::read(table, &mut problems));
+                let feedback = spec
+                    .feedback
+                    .as_ref()
+                    .and_then(|spec| read_feedback(spec, step, &mut problems));
                 match catalog::resolve_named(
                     &spec.model,
                     catalog::MODEL_FOLDER,
@@ -397,6 +431,7 @@ impl Scenario {
                         model_path,
                         process_noise: spec.process_noise.clone(),
                         gusts,
+                        feedback,
                     }),
                     Err(error) => {
                         problems.push("linear.model", error.to_string());
@@ -674,6 +709,48 @@ fn read_departure(
             0.0,
         ),
     }
+}
+
+/// Checks a `[linear.feedback]` table: finite gains, a frame that is a
+/// whole number of steps `step`.
+fn read_feedback(
+    spec: &LinearFeedbackSpec,
+    step: f64,
+    problems: &mut Problems,
+) -> Option<LinearFeedback> {
+    let mut valid = true;
+    for (state, gain) in &spec.gains {
+        if !gain.is_finite() {
+            problems.push(format!("linear.feedback.gains.{state}"), "must be finite");
+            valid = false;
+        }
+    }
+    let frame_steps = match &spec.frame {
+        None => 1,
+        Some(frame) => match frame.si(Dimension::Time) {
+            Ok(frame) => {
+                let steps = (frame / step).round();
+                if !(steps >= 1.0 && (frame - steps * step).abs() <= 1e-9 * frame.abs().max(1.0)) {
+                    problems.push(
+                        "linear.feedback.frame",
+                        format!("must be a positive multiple of the step ({step} s)"),
+                    );
+                    valid = false;
+                }
+                steps.max(1.0) as usize
+            }
+            Err(message) => {
+                problems.push("linear.feedback.frame", message);
+                valid = false;
+                1
+            }
+        },
+    };
+    valid.then(|| LinearFeedback {
+        control: spec.control.clone(),
+        gains: spec.gains.clone(),
+        frame_steps,
+    })
 }
 
 fn check_ranges(trim: &TrimCondition, duration: f64, step: f64, problems: &mut Problems) {

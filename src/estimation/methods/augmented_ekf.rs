@@ -325,6 +325,7 @@ impl Estimator for AugmentedEkf {
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let settings = FilterSettings::read(METHOD, &problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;
+        refuse_for_linear(METHOD, problem)?;
         let run = augmented_estimate(
             METHOD,
             problem.record(),
@@ -339,6 +340,24 @@ impl Estimator for AugmentedEkf {
             run.history.write_csv(path)?;
         }
         Ok(run.estimate)
+    }
+}
+
+/// On a linear structure, an error naming the settings of `method` it
+/// does not take (the augmented filters' `interpolation`: a linear model
+/// states it in its file).
+pub fn refuse_for_linear(method: &str, problem: &EstimationProblem) -> Result<()> {
+    match &problem.structure {
+        Structure::Linear(structure) => crate::estimation::estimator::refuse_for_linear(
+            method,
+            &problem.settings,
+            &structure.name,
+            &[(
+                "interpolation",
+                "a linear model states its inputs' interpolation in its file",
+            )],
+        ),
+        Structure::SixDof(_) => Ok(()),
     }
 }
 

@@ -473,25 +473,42 @@ impl Estimator for FilterError {
             Structure::SixDof(structure) => {
                 filter_error_from(problem.record(), structure, &options, start)
             }
-            Structure::Linear(structure) => linear_fit(
-                METHOD,
-                problem.record(),
-                structure,
-                &LinearFitOptions {
-                    max_iterations: options.max_iterations,
-                    step: options.step,
-                    window: options.window,
-                    gain: options.gain,
-                    initial_variance: options.initial_variance.clone(),
-                    innovation_covariance: options.innovation_form(),
-                    process_noise: Some(
-                        options
-                            .process_noise
-                            .clone()
-                            .unwrap_or_else(|| structure.states.clone()),
-                    ),
-                },
-            ),
+            Structure::Linear(structure) => {
+                crate::estimation::estimator::refuse_for_linear(
+                    METHOD,
+                    &problem.settings,
+                    &structure.name,
+                    &[
+                        (
+                            "start",
+                            "a linear model's fit starts from its file's values: only \"model\"",
+                        ),
+                        (
+                            "interpolation",
+                            "a linear model states its inputs' interpolation in its file",
+                        ),
+                    ],
+                )?;
+                linear_fit(
+                    METHOD,
+                    problem.record(),
+                    structure,
+                    &LinearFitOptions {
+                        max_iterations: options.max_iterations,
+                        step: options.step,
+                        window: options.window,
+                        gain: options.gain,
+                        initial_variance: options.initial_variance.clone(),
+                        innovation_covariance: options.innovation_form(),
+                        process_noise: Some(
+                            options
+                                .process_noise
+                                .clone()
+                                .unwrap_or_else(|| structure.states.clone()),
+                        ),
+                    },
+                )
+            }
         }
     }
 }

@@ -127,6 +127,13 @@
 //! fit is judged as a single fit is ([`Estimate::assess_residuals`]): a
 //! start that ends with an infinite σ or a structured residual is not
 //! counted as converged.
+//!
+//! Unstable models ([`modes`]): after the fit, a mode of the fitted model
+//! that doubles within one simulation (the record, or a piece with
+//! `segment`) is diagnosed `unstable` with its time to double, and the
+//! advice is stabilised output error, multiple shooting over shorter
+//! pieces (Jategaonkar ch. 9); on a linear model `segment` is
+//! [`linear_shooting`]'s multiple shooting.
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Status;
@@ -142,9 +149,11 @@ use crate::estimation::model::driven::{
     ALTITUDE_SUBSTITUTES, Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
 use crate::estimation::model::input_timing::InputInterpolation;
+use crate::estimation::model::modes;
 use crate::estimation::model::state_space::{
-    RK4_STEP_LIMIT, driven_simulation, driving_channels, fastest_mode, fitting_window, observables,
-    observation_step, recorded_initial_state, rk4_substeps, substep_note,
+    RK4_STEP_LIMIT, driven_simulation, driving_channels, fastest_mode, fitting_window,
+    mode_eigenvalues, observables, observation_step, recorded_initial_state, rk4_substeps,
+    substep_note,
 };
 use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::gauss_newton::{
@@ -417,7 +426,7 @@ impl Estimator for OutputError {
                     ("start_seed", "seed of the extra starts"),
                     (
                         "segment",
-                        "split each record into pieces of about this length, e.g. \"20 s\", each simulated from its own initial state (multiple shooting; with estimate_initial_state, per piece); none: one piece per record",
+                        "split each record into pieces of about this length, e.g. \"20 s\", each simulated from its own initial state (multiple shooting; with estimate_initial_state, per piece; on a linear model always estimated): stabilised output error for an unstable model, pieces shorter than its time to double; none: one piece per record",
                     ),
                     (
                         "correlation_lag",
@@ -650,46 +659,103 @@ pub fn multi_start(
 /// Method name in estimates.
 pub const METHOD: &str = "oem";
 
+mod linear_shooting;
+
 /// Output error on a linear structure: the filter-error fit with no
 /// process noise, whose filter is the model's exact simulation
-/// ([`filter_error::linear_fit`]). Initial states and output biases are
-/// the model file's business there (states start from the record, biases
-/// are `output_bias` parameters), so those settings are refused.
+/// ([`filter_error::linear_fit`]), or with `segment` multiple shooting
+/// ([`linear_shooting`]); then the fitted model's modes
+/// ([`modes::diagnose`]). The settings a linear model does not take are
+/// refused by name ([`LINEAR_UNSUPPORTED`]).
 fn linear_output_error(
     problem: &EstimationProblem,
     structure: &LinearStructure,
     options: &OutputErrorOptions,
 ) -> Result<Estimate> {
     crate::estimation::estimator::one_record(METHOD, problem)?;
-    if options.estimate_initial_state || !options.output_biases.is_empty() {
-        return Err(Error::Other(format!(
-            "[methods.{METHOD}]: estimate_initial_state and output_biases are for 6-DOF structures; \
-             a linear model ('{}') states its biases as `state_bias` and `output_bias` parameters",
-            structure.name
-        )));
-    }
-    if options.segment.is_some() || options.correlation_lag > 0.0 || !options.input_noise.is_empty()
-    {
-        return Err(Error::Other(format!(
-            "[methods.{METHOD}]: segment, correlation_lag and input_noise are for 6-DOF structures, not the linear model '{}'",
-            structure.name
-        )));
-    }
-    filter_error::linear_fit(
+    crate::estimation::estimator::refuse_for_linear(
         METHOD,
-        problem.record(),
-        structure,
-        &filter_error::LinearFitOptions {
-            max_iterations: options.max_iterations,
-            step: options.step,
-            window: options.window,
-            process_noise: None,
-            gain: filter_error::Gain::Steady,
-            initial_variance: Default::default(),
-            innovation_covariance: filter_error::InnovationForm::Diagonal,
-        },
-    )
+        &problem.settings,
+        &structure.name,
+        LINEAR_UNSUPPORTED,
+    )?;
+    let record = problem.record();
+    let mut estimate = match options.segment {
+        Some(segment) => linear_shooting::fit(
+            METHOD,
+            record,
+            structure,
+            &linear_shooting::ShootingOptions {
+                max_iterations: options.max_iterations,
+                step: options.step,
+                window: options.window,
+                segment,
+                decrease: CONVERGED_DECREASE,
+            },
+        )?,
+        None => filter_error::linear_fit(
+            METHOD,
+            record,
+            structure,
+            &filter_error::LinearFitOptions {
+                max_iterations: options.max_iterations,
+                step: options.step,
+                window: options.window,
+                process_noise: None,
+                gain: filter_error::Gain::Steady,
+                initial_variance: Default::default(),
+                innovation_covariance: filter_error::InnovationForm::Diagonal,
+            },
+        )?,
+    };
+    let (from, to) = fitting_window(record, &structure.outputs, options.window)?;
+    let horizon = options.segment.map_or(to - from, |s| s.min(to - from));
+    let eigenvalues = modes::linear_eigenvalues(structure, &estimate);
+    modes::diagnose(
+        &mut estimate,
+        &eigenvalues,
+        &structure.states,
+        horizon,
+        options.segment.is_some(),
+    );
+    Ok(estimate)
 }
+
+/// The `[methods.oem]` keys a linear structure does not take, and why.
+const LINEAR_UNSUPPORTED: &[(&str, &str)] = &[
+    (
+        "start",
+        "a linear model's fit starts from its file's values: only \"model\"",
+    ),
+    (
+        "interpolation",
+        "a linear model states its inputs' interpolation in its file",
+    ),
+    (
+        "estimate_initial_state",
+        "a linear model's states start from the record; with `segment` each piece's initial state is estimated",
+    ),
+    (
+        "output_biases",
+        "a linear model states its biases as `state_bias` and `output_bias` parameters",
+    ),
+    ("starts", "several starts are for 6-DOF structures"),
+    ("start_spread", "several starts are for 6-DOF structures"),
+    ("start_seed", "several starts are for 6-DOF structures"),
+    (
+        "correlation_lag",
+        "coloured-residual bounds are for 6-DOF structures",
+    ),
+    ("input_noise", "input-noise bounds are for 6-DOF structures"),
+    (
+        "input_noise_draws",
+        "input-noise bounds are for 6-DOF structures",
+    ),
+    (
+        "input_noise_seed",
+        "input-noise bounds are for 6-DOF structures",
+    ),
+];
 
 /// Refuses a structure output error (or another method that simulates or
 /// filters it, `method`) cannot fit as stated: no output to compare, or an
@@ -1037,6 +1103,18 @@ pub fn output_error_from(
         started.elapsed().as_secs_f64(),
     );
     estimate.notes.extend(notes);
+    if let Some(eigenvalues) = problem.modes(&solution.theta) {
+        let states: Vec<String> = structure
+            .integrate
+            .iter()
+            .map(|&i| FLIGHT_PATH_STATES[i].to_string())
+            .collect();
+        let horizon = (problem.segments.iter())
+            .map(|s| s.window.1 - s.window.0)
+            .fold(0.0, f64::max);
+        let segmented = options.segment.is_some();
+        modes::diagnose(&mut estimate, &eigenvalues, &states, horizon, segmented);
+    }
     if options.segment.is_some() {
         estimate.notes.push(format!(
             "multiple shooting: {} pieces of about {} s, each simulated from {}",
@@ -1620,6 +1698,14 @@ impl<'a> Problem<'a> {
             }
             Unknown::Bias { output } => format!("bias.{}", self.outputs[output]),
         }
+    }
+
+    /// The modes at θ: the eigenvalues of ∂f/∂x at the first segment's
+    /// start ([`mode_eigenvalues`]); None where they cannot be computed.
+    fn modes(&mut self, theta: &DVector<f64>) -> Option<Vec<nalgebra::Complex<f64>>> {
+        self.apply(theta);
+        let segment = self.segments.first()?;
+        mode_eigenvalues(&segment.simulation, &self.model, &segment.initial).ok()
     }
 
     /// Sets θ, returning the output biases.

@@ -24,7 +24,7 @@ use crate::estimation::estimator::{
     Estimator, MethodInfo, SettingInfo, Settings, parse_settings, setting_infos,
 };
 use crate::estimation::methods::augmented_ekf::{
-    FILTER_SETTINGS, FilterSettings, augmented_estimate,
+    self, FILTER_SETTINGS, FilterSettings, augmented_estimate,
 };
 use crate::estimation::methods::equation_error;
 use crate::estimation::problem::EstimationProblem;
@@ -146,6 +146,7 @@ impl Estimator for UnscentedFilter {
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
         let (settings, unscented) = read(&problem.settings)?;
         crate::estimation::estimator::one_record(METHOD, problem)?;
+        augmented_ekf::refuse_for_linear(METHOD, problem)?;
         let run = augmented_estimate(
             METHOD,
             problem.record(),

@@ -11,6 +11,7 @@ pub mod coefficient_states;
 pub mod driven;
 pub mod input_timing;
 pub mod linear;
+pub mod modes;
 pub mod observations;
 pub mod state_space;
 pub mod transfer;

@@ -262,16 +262,27 @@ pub fn fastest_mode(
     model: &FlightModel,
     initial: &FlightPathState,
 ) -> Result<f64> {
+    Ok(mode_eigenvalues(simulation, model, initial)?
+        .iter()
+        .map(|lambda| lambda.norm())
+        .fold(0.0, f64::max))
+}
+
+/// The eigenvalues of ∂f/∂x of `model` driven as `simulation` drives it,
+/// at its start and the flight-path state `initial` (as [`fastest_mode`]):
+/// the modes of the model linearised there, over its integrated states.
+pub fn mode_eigenvalues(
+    simulation: &DrivenSimulation,
+    model: &FlightModel,
+    initial: &FlightPathState,
+) -> Result<Vec<nalgebra::Complex<f64>>> {
     let view = DrivenStateSpace::new(simulation.head(3), model.clone(), Vec::new())?;
     let x0 = view.state_of(initial);
     let theta = view.parameters();
     let a = view
         .jacobians(simulation.start, x0.as_slice(), theta.as_slice())?
         .rates_by_state;
-    Ok(a.complex_eigenvalues()
-        .iter()
-        .map(|lambda| lambda.norm())
-        .fold(0.0, f64::max))
+    Ok(a.complex_eigenvalues().iter().copied().collect())
 }
 
 /// The fewest equal RK4 steps of a grid interval `period` that keep
