@@ -263,7 +263,8 @@ fn residual_structure_is_diagnosed_beside_the_status() {
 ///   4σ (the gate file's k);
 /// - coloured sensor noise (attas-lateral-multistep, every channel's noise
 ///   first-order Gauss–Markov with τ = 0.5 s): coloured residuals, not
-///   process noise (the sensors' noises are independent);
+///   process noise (the sensors' noises are independent; the ATTAS
+///   spiral's instability is diagnosed beside it);
 /// - a model error (attas-stall fitted with the linear longitudinal
 ///   model): coloured residuals, not process noise (the residual of α
 ///   grows with the motion: quiet share below 0.25).
@@ -309,15 +310,20 @@ fn residuals_tell_process_noise_from_coloured_noise_and_model_errors() {
             false => table.to_string(),
         })
     });
+    let coloured_only = |e: &Estimate| {
+        let kinds = kinds(e);
+        kinds.contains(&DiagnosisKind::ColouredResiduals)
+            && !kinds.contains(&DiagnosisKind::ProcessNoise)
+    };
     let (record, _) = flown("attas-lateral-multistep", &coloured);
     let estimate = fit("oem", &record, "attas-lateral");
     assert_eq!(estimate.status, Status::Converged);
-    assert_eq!(kinds(&estimate), [DiagnosisKind::ColouredResiduals]);
+    assert!(coloured_only(&estimate), "{:?}", estimate.diagnoses);
 
     let (stall, _) = flown("attas-stall", &flight_test);
     let estimate = fit("oem", &stall, "attas-longitudinal");
     assert_eq!(estimate.status, Status::Converged);
-    assert_eq!(kinds(&estimate), [DiagnosisKind::ColouredResiduals]);
+    assert!(coloured_only(&estimate), "{:?}", estimate.diagnoses);
     let alpha = estimate.fits.iter().find(|f| f.channel == "alpha").unwrap();
     assert!(alpha.quiet_share < 0.25, "{alpha:?}");
 }

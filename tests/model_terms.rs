@@ -1326,11 +1326,13 @@ fn stall_fits_with_a_mismatched_structure_report_a_poor_fit() {
                 f.whiteness_text()
             );
         }
+        let coloured = aeroid::estimation::estimate::DiagnosisKind::ColouredResiduals;
         assert!(
             estimate
-                .notes
-                .iter()
-                .any(|n| n.contains("structured residual"))
+                .diagnosis(coloured)
+                .is_some_and(|d| d.advice.contains("structured residual")),
+            "{label}: {:?}",
+            estimate.diagnoses
         );
     }
     let (_, seconds) = stall_case("stall-seconds-model", &variants[1].1, base_start);

@@ -25,12 +25,13 @@ fn run_scores_every_method_on_the_lateral_scenario() {
         // networks fit the moment coefficients reconstructed from the
         // noisy 25 Hz rates with R² 0.899 and 0.771, below its 0.9
         // (tests/rbf_delta.rs), a poor fit diagnosed beside the status, and
-        // the 5–95 % intervals of its local CY_da, Cn_da and Cn_r hold
-        // zero: unidentified.
+        // the 5–95 % intervals of its local CY_da, Cn_da, Cn_p and Cn_r
+        // hold zero: unidentified.
         let expected_status = match run.method.as_str() {
             "rbf-delta" => aeroid::estimation::estimate::Status::Unidentified(vec![
                 "CY_da".into(),
                 "Cn_da".into(),
+                "Cn_p".into(),
                 "Cn_r".into(),
             ]),
             _ => aeroid::estimation::estimate::Status::Converged,

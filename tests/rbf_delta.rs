@@ -181,8 +181,8 @@ fn ideal_longitudinal_flight_gives_the_pitching_moment_and_lift_slope() {
 /// differentiated noisy rates, and the Cl and Cn networks reproduce them
 /// with R² below 0.9 (measured 0.899 and 0.771): a poor-fit diagnosis
 /// names them with their R²; the status is unidentified, naming CY_da,
-/// Cn_da and Cn_r, whose local values' 5–95 % intervals hold zero. The side-force network (R² 0.994) gives CY_β within
-/// 2 spreads (measured +4.1 %, 0.98 spread); Cl_β from the poor network
+/// Cn_da, Cn_p and Cn_r, whose local values' 5–95 % intervals hold zero.
+/// The side-force network (R² 0.994) gives CY_β within 2 spreads (measured +4.1 %, 0.98 spread); Cl_β from the poor network
 /// too (+4.8 %, 0.77 spread).
 #[test]
 fn flight_test_lateral_moments_are_a_poor_fit() {
@@ -191,7 +191,12 @@ fn flight_test_lateral_moments_are_a_poor_fit() {
     let rows = against_truth(&estimate, &scenario);
     assert_eq!(
         estimate.status,
-        Status::Unidentified(vec!["CY_da".into(), "Cn_da".into(), "Cn_r".into()])
+        Status::Unidentified(vec![
+            "CY_da".into(),
+            "Cn_da".into(),
+            "Cn_p".into(),
+            "Cn_r".into()
+        ])
     );
     let poor = estimate
         .diagnosis(aeroid::estimation::estimate::DiagnosisKind::PoorFit)
