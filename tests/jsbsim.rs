@@ -846,13 +846,23 @@ fn estimators_recover_the_737_derivatives_from_flight_test_data() {
         let (noisy, clean, truth) = fly_737(scenario_name);
         let structure = ModelStructure::load(model).unwrap();
         let kinds = Structure::from(structure.clone());
+        // The pilot's commands are piecewise constant; JSBSim's yaw damper
+        // moves the rudder between samples, so the default input timing
+        // takes the recorded rudder linearly and the aileron held. Against
+        // JSBSim's local derivatives at trim (a linear postulate of
+        // nonlinear tables) that moves output error's Cn_r from −1.4 % to
+        // −3.6 % and Cl_p from +0.5 % to −0.3 % on the noisy record
+        // (docs/jsbsim.md). The tolerances of [`SCORED`] are those of
+        // every input held, which this test sets.
+        let held: aeroid::estimation::estimator::MethodTables =
+            toml::from_str("[oem]\ninterpolation = \"zoh\"\n").unwrap();
         for (method, record, label) in [
             ("oem", &clean, "oem no noise"),
             ("oem", &noisy, "oem"),
             ("ee", &noisy, "ee"),
         ] {
             let aeroid::eval::run::Outcome::Estimated { estimate, scores } =
-                aeroid::eval::run::estimate_scored(method, record, &truth, &kinds, &[], None)
+                aeroid::eval::run::estimate_scored(method, record, &truth, &kinds, &[&held], None)
             else {
                 panic!("{label} on {scenario_name}: no estimate");
             };

@@ -658,6 +658,26 @@ fn kinds_text(kinds: &[DiagnosisKind]) -> String {
         .join(", ")
 }
 
+/// A declared failure's row: `measure` its error in the declaration's
+/// unit, `passes` whether it meets the case's default tolerance.
+fn judge_known(known: &KnownFailure, measure: f64, passes: bool) -> Check {
+    let [low, high] = known.error;
+    if passes {
+        Check::Fail(
+            "declared a known failure, but within its tolerance now: remove the declaration".into(),
+        )
+    } else if (low..=high).contains(&measure) {
+        Check::Known
+    } else if (measure > 0.0 && measure < low) || (measure < 0.0 && measure > high) {
+        Check::KnownImproved
+    } else {
+        Check::Fail(format!(
+            "error {} beyond its declared range [{low}, {high}]",
+            crate::record::significant(measure, 3)
+        ))
+    }
+}
+
 /// One parameter's row (module header).
 fn judge_row(
     case: &GateCase,
@@ -705,22 +725,7 @@ fn judge_row(
         } else {
             case.allowance(default, truth, p.standard_error)
         };
-        let [low, high] = known.error;
-        if within(default_allowed) {
-            Check::Fail(
-                "declared a known failure, but within its tolerance now: remove the declaration"
-                    .into(),
-            )
-        } else if (low..=high).contains(&measure) {
-            Check::Known
-        } else if (measure > 0.0 && measure < low) || (measure < 0.0 && measure > high) {
-            Check::KnownImproved
-        } else {
-            Check::Fail(format!(
-                "error {} beyond its declared range [{low}, {high}]",
-                crate::record::significant(measure, 3)
-            ))
-        }
+        judge_known(known, measure, within(default_allowed))
     } else if within(allowed) {
         let loosened = case.tolerance.get(&p.name).is_some_and(|o| {
             o.value > default && within(case.allowance(default, truth, p.standard_error))
