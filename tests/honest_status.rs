@@ -151,11 +151,6 @@ fn degenerate_problems_are_refused() {
 /// fits.
 fn converged(variances: [f64; 2]) -> Estimate {
     Estimate {
-        method: "test".into(),
-        model: "m".into(),
-        record: "r".into(),
-        status: Status::Converged,
-        diagnoses: Vec::new(),
         parameters: ["a", "b"]
             .iter()
             .zip(variances)
@@ -167,15 +162,9 @@ fn converged(variances: [f64; 2]) -> Estimate {
             })
             .collect(),
         covariance: vec![vec![variances[0], 0.0], vec![0.0, variances[1]]],
-        fits: Vec::new(),
         iterations: 3,
         cost_history: vec![3.0, 2.0, 1.0],
-        wall_time: 0.0,
-        notes: Vec::new(),
-        details: String::new(),
-        network: None,
-        distributions: Vec::new(),
-        histories: Vec::new(),
+        ..Estimate::empty("test", "m", "r", Status::Converged)
     }
 }
 

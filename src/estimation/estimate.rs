@@ -177,6 +177,30 @@ pub fn diagonal_covariance(standard_errors: &[f64]) -> Vec<Vec<f64>> {
 }
 
 impl Estimate {
+    /// An estimate of `method` with this status and nothing else: no
+    /// parameters, fits, history or notes (the fields the caller fills
+    /// follow with `..`).
+    pub fn empty(method: &str, model: &str, record: &str, status: Status) -> Estimate {
+        Estimate {
+            method: method.to_string(),
+            model: model.to_string(),
+            record: record.to_string(),
+            status,
+            diagnoses: Vec::new(),
+            parameters: Vec::new(),
+            covariance: Vec::new(),
+            fits: Vec::new(),
+            iterations: 0,
+            cost_history: Vec::new(),
+            wall_time: 0.0,
+            notes: Vec::new(),
+            details: String::new(),
+            network: None,
+            distributions: Vec::new(),
+            histories: Vec::new(),
+        }
+    }
+
     /// The estimate of a Gauss–Newton solution: values with Cramér–Rao
     /// standard errors (√ of the covariance diagonal), the covariance, the
     /// iterations and cost history. Fits, wall time and notes are the caller's.
@@ -188,11 +212,6 @@ impl Estimate {
     ) -> Estimate {
         let covariance = solution.covariance();
         Estimate {
-            method: method.to_string(),
-            model,
-            record,
-            diagnoses: Vec::new(),
-            status: solution.status.clone(),
             parameters: (0..names.len())
                 .map(|j| ParameterEstimate {
                     name: names[j].clone(),
@@ -204,15 +223,9 @@ impl Estimate {
             covariance: (0..covariance.nrows())
                 .map(|i| covariance.row(i).iter().copied().collect())
                 .collect(),
-            fits: Vec::new(),
             iterations: solution.history.len(),
             cost_history: solution.history.iter().map(|i| i.cost).collect(),
-            wall_time: 0.0,
-            notes: Vec::new(),
-            details: String::new(),
-            network: None,
-            distributions: Vec::new(),
-            histories: Vec::new(),
+            ..Estimate::empty(method, &model, &record, solution.status.clone())
         }
     }
 
@@ -431,11 +444,6 @@ mod tests {
     /// one output fit of R² `r_squared`.
     fn estimate(covariance: [[f64; 2]; 2], r_squared: f64) -> Estimate {
         Estimate {
-            method: "test".into(),
-            model: "m".into(),
-            record: "r".into(),
-            status: Status::Converged,
-            diagnoses: Vec::new(),
             parameters: ["a", "b"]
                 .iter()
                 .enumerate()
@@ -461,12 +469,7 @@ mod tests {
             }],
             iterations: 3,
             cost_history: vec![3.0, 2.0, 1.0],
-            wall_time: 0.0,
-            notes: Vec::new(),
-            details: String::new(),
-            network: None,
-            distributions: Vec::new(),
-            histories: Vec::new(),
+            ..Estimate::empty("test", "m", "r", Status::Converged)
         }
     }
 

@@ -793,22 +793,8 @@ mod tests {
         parameters.extend(extra.map(|e| parameter("CL_extra", e)));
         parameters.push(parameter("x0[0].q", (5.0, 1.0)));
         let estimate = Estimate {
-            method: "oem".into(),
-            model: "m".into(),
-            record: "r".into(),
-            status: Status::Converged,
-            diagnoses: Vec::new(),
-            covariance: Vec::new(),
             parameters,
-            fits: Vec::new(),
-            iterations: 1,
-            cost_history: Vec::new(),
-            wall_time: 0.0,
-            notes: Vec::new(),
-            details: String::new(),
-            network: None,
-            distributions: Vec::new(),
-            histories: Vec::new(),
+            ..Estimate::empty("oem", "m", "r", Status::Converged)
         };
         Flown {
             refusal: None,
