@@ -1,0 +1,202 @@
+//! Every number in docs/findings.md is held by a test. A finding is a
+//! bullet, a paragraph or a table of the document's sections; one that
+//! states a number (any digit) names, in backticks, the test that asserts
+//! it: a `#[test]` function of tests/ or src/, by its name or by a filter
+//! `cargo test` matches it with (a part of its name). A bullet may also
+//! lean on its section's lead paragraph, and a table on the paragraph
+//! before it. The test reads the document and the test sources only.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn rust_files(folder: &Path, into: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            rust_files(&path, into);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            into.push(path);
+        }
+    }
+}
+
+/// The names of every test function of tests/ and src/: a `fn` within
+/// three lines after `#[test]` (other attributes may stand between).
+fn test_names() -> BTreeSet<String> {
+    let mut files = Vec::new();
+    rust_files(&root().join("tests"), &mut files);
+    rust_files(&root().join("src"), &mut files);
+    let mut names = BTreeSet::new();
+    for file in files {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            if line.trim() != "#[test]" {
+                continue;
+            }
+            for next in lines.iter().skip(i + 1).take(3) {
+                let t = next.trim();
+                if let Some(rest) = t
+                    .strip_prefix("fn ")
+                    .or_else(|| t.strip_prefix("async fn "))
+                {
+                    let name: String = rest
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
+                    names.insert(name);
+                    break;
+                }
+            }
+        }
+    }
+    names
+}
+
+/// The words inside backticks that could name a test or a test filter.
+fn cited_words(text: &str) -> Vec<String> {
+    text.split('`')
+        .skip(1)
+        .step_by(2)
+        .flat_map(|span| span.split(|c: char| c.is_whitespace() || c == ','))
+        .map(|w| w.trim_matches(|c: char| !(c.is_alphanumeric() || c == '_')))
+        .filter(|w| w.contains('_') && w.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+        .map(str::to_string)
+        .collect()
+}
+
+fn names_a_test(text: &str, tests: &BTreeSet<String>) -> bool {
+    cited_words(text)
+        .iter()
+        .any(|w| w.len() >= 6 && tests.iter().any(|t| t.contains(w.as_str())))
+}
+
+#[derive(Debug)]
+struct Block {
+    line: usize,
+    text: String,
+    bullet: bool,
+    table: bool,
+    lead: bool,
+}
+
+/// The document's findings, section by section (text before the first
+/// `## ` is the preamble and is skipped).
+fn blocks(doc: &str) -> Vec<Vec<Block>> {
+    let mut sections: Vec<Vec<Block>> = Vec::new();
+    let mut current: Option<Block> = None;
+    let flush = |current: &mut Option<Block>, sections: &mut Vec<Vec<Block>>| {
+        if let (Some(block), Some(section)) = (current.take(), sections.last_mut()) {
+            section.push(block);
+        }
+    };
+    for (i, line) in doc.lines().enumerate() {
+        if line.starts_with("## ") || line.starts_with("### ") {
+            flush(&mut current, &mut sections);
+            sections.push(Vec::new());
+            continue;
+        }
+        if sections.is_empty() {
+            continue;
+        }
+        let table = line.starts_with('|');
+        let starts_bullet = line.starts_with("- ");
+        let blank = line.trim().is_empty();
+        let continues = current
+            .as_ref()
+            .is_some_and(|b| !blank && !starts_bullet && b.table == table && (!b.bullet || !table));
+        if blank {
+            flush(&mut current, &mut sections);
+        } else if continues {
+            let block = current.as_mut().unwrap();
+            block.text.push('\n');
+            block.text.push_str(line);
+        } else {
+            flush(&mut current, &mut sections);
+            let lead = sections.last().is_some_and(|s| s.is_empty());
+            current = Some(Block {
+                line: i + 1,
+                text: line.to_string(),
+                bullet: starts_bullet,
+                table,
+                lead: lead && !starts_bullet && !table,
+            });
+        }
+    }
+    flush(&mut current, &mut sections);
+    sections
+}
+
+/// The findings that state a number and name no test that holds it.
+fn unheld(doc: &str, tests: &BTreeSet<String>) -> Vec<(usize, String)> {
+    let mut missing = Vec::new();
+    for section in blocks(doc) {
+        let lead_holds = section
+            .first()
+            .is_some_and(|b| b.lead && names_a_test(&b.text, tests));
+        let mut previous_holds = false;
+        for block in &section {
+            let holds = names_a_test(&block.text, tests);
+            let numbered = block.text.chars().any(|c| c.is_ascii_digit());
+            let held = holds
+                || (block.bullet && lead_holds)
+                || (block.table && previous_holds)
+                || !numbered;
+            if !held {
+                let first: String = block
+                    .text
+                    .lines()
+                    .next()
+                    .unwrap_or("")
+                    .chars()
+                    .take(90)
+                    .collect();
+                missing.push((block.line, first));
+            }
+            if !block.table {
+                previous_holds = holds || (block.bullet && lead_holds);
+            }
+        }
+    }
+    missing
+}
+
+#[test]
+fn every_number_in_the_findings_names_the_test_that_holds_it() {
+    let tests = test_names();
+    assert!(
+        tests.len() > 300,
+        "found only {} test functions",
+        tests.len()
+    );
+    let doc = std::fs::read_to_string(root().join("docs/findings.md")).unwrap();
+    let missing = unheld(&doc, &tests);
+    let listing: Vec<String> = missing
+        .iter()
+        .map(|(line, text)| format!("docs/findings.md:{line}: {text}"))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "{} findings state a number without naming the test that holds it:\n{}",
+        missing.len(),
+        listing.join("\n")
+    );
+}
+
+#[test]
+fn the_check_refuses_a_number_without_a_test_and_takes_one_with() {
+    let tests: BTreeSet<String> = ["bounds_hold_over_seeds".to_string()].into();
+    let doc = "# F\n\nintro 12\n\n## S\n\nLead without a test.\n\n- **A** 3.5σ off.\n- **B** 1.2σ (`bounds_hold`).\n\nParagraph 7 without a test.\n\n| a | 1 |\n";
+    let missing = unheld(doc, &tests);
+    let lines: Vec<usize> = missing.iter().map(|m| m.0).collect();
+    assert_eq!(lines, vec![9, 12, 14], "{missing:?}");
+    let held = "## S\n\nMeasured by `bounds_hold_over_seeds`.\n\n- 3.5σ off.\n\n| a | 1 |\n";
+    assert!(unheld(held, &tests).is_empty());
+}
