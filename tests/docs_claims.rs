@@ -60,22 +60,24 @@ fn test_names() -> BTreeSet<String> {
     names
 }
 
-/// The words inside backticks that could name a test or a test filter.
-fn cited_words(text: &str) -> Vec<String> {
-    text.split('`')
-        .skip(1)
-        .step_by(2)
-        .flat_map(|span| span.split(|c: char| c.is_whitespace() || c == ','))
-        .map(|w| w.trim_matches(|c: char| !(c.is_alphanumeric() || c == '_')))
-        .filter(|w| w.contains('_') && w.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
-        .map(str::to_string)
-        .collect()
-}
-
+/// Whether a text names a test in backticks: a test function's full
+/// name, or a `cargo test …` command whose filter (its last word that is
+/// not a flag or `--nocapture`) is part of a test's name.
 fn names_a_test(text: &str, tests: &BTreeSet<String>) -> bool {
-    cited_words(text)
-        .iter()
-        .any(|w| w.len() >= 6 && tests.iter().any(|t| t.contains(w.as_str())))
+    text.split('`').skip(1).step_by(2).any(|span| {
+        let span = span.trim();
+        if span.starts_with("cargo test") {
+            let filter = span
+                .split_whitespace()
+                .rev()
+                .find(|w| !w.starts_with('-'))
+                .unwrap_or("");
+            filter.len() >= 6 && tests.iter().any(|t| t.contains(filter))
+        } else {
+            span.split(|c: char| c.is_whitespace() || c == ',')
+                .any(|w| tests.contains(w.trim_matches(|c: char| !(c.is_alphanumeric() || c == '_'))))
+        }
+    })
 }
 
 #[derive(Debug)]
@@ -88,7 +90,7 @@ struct Block {
 }
 
 /// The document's findings, section by section (text before the first
-/// `## ` is the preamble and is skipped).
+/// `## ` is the preamble and is skipped, and so are fenced examples).
 fn blocks(doc: &str) -> Vec<Vec<Block>> {
     let mut sections: Vec<Vec<Block>> = Vec::new();
     let mut current: Option<Block> = None;
@@ -97,7 +99,16 @@ fn blocks(doc: &str) -> Vec<Vec<Block>> {
             section.push(block);
         }
     };
+    let mut fenced = false;
     for (i, line) in doc.lines().enumerate() {
+        if line.starts_with("```") {
+            fenced = !fenced;
+            flush(&mut current, &mut sections);
+            continue;
+        }
+        if fenced {
+            continue;
+        }
         if line.starts_with("## ") || line.starts_with("### ") {
             flush(&mut current, &mut sections);
             sections.push(Vec::new());
@@ -168,6 +179,47 @@ fn unheld(doc: &str, tests: &BTreeSet<String>) -> Vec<(usize, String)> {
     missing
 }
 
+/// Whether a reference page's text states a measurement: it says it
+/// measured (`Measured:`, `**Measured**`, `measured on`) or names a worst case
+/// (`worst`), and gives a number.
+fn states_a_measurement(text: &str) -> bool {
+    let marked = ["Measured:", "**Measured**", "Measured on ", "measured on ", "measured:", "worst "]
+        .iter()
+        .any(|m| text.contains(m));
+    marked && text.chars().any(|c| c.is_ascii_digit())
+}
+
+/// The reference pages' measured statements that neither name a test nor
+/// point to findings.md, where the measurement and its test are.
+fn unreferenced_measurements(doc: &str, tests: &BTreeSet<String>) -> Vec<(usize, String)> {
+    blocks(doc)
+        .into_iter()
+        .flatten()
+        .filter(|b| states_a_measurement(&b.text))
+        .filter(|b| !names_a_test(&b.text, tests) && !b.text.contains("findings.md"))
+        .map(|b| (b.line, b.text.lines().next().unwrap_or("").chars().take(90).collect()))
+        .collect()
+}
+
+#[test]
+fn measurements_in_the_reference_point_to_their_test() {
+    let tests = test_names();
+    let mut listing = Vec::new();
+    for page in ["docs/methods.md", "docs/conventions.md", "docs/files.md", "docs/cli.md", "README.md"] {
+        let doc = std::fs::read_to_string(root().join(page)).unwrap();
+        let doc = format!("## {page}\n\n{doc}");
+        for (line, text) in unreferenced_measurements(&doc, &tests) {
+            listing.push(format!("{page}:{}: {text}", line - 2));
+        }
+    }
+    assert!(
+        listing.is_empty(),
+        "{} measured statements name no test and no finding:\n{}",
+        listing.len(),
+        listing.join("\n")
+    );
+}
+
 #[test]
 fn every_number_in_the_findings_names_the_test_that_holds_it() {
     let tests = test_names();
@@ -193,7 +245,7 @@ fn every_number_in_the_findings_names_the_test_that_holds_it() {
 #[test]
 fn the_check_refuses_a_number_without_a_test_and_takes_one_with() {
     let tests: BTreeSet<String> = ["bounds_hold_over_seeds".to_string()].into();
-    let doc = "# F\n\nintro 12\n\n## S\n\nLead without a test.\n\n- **A** 3.5σ off.\n- **B** 1.2σ (`bounds_hold`).\n\nParagraph 7 without a test.\n\n| a | 1 |\n";
+    let doc = "# F\n\nintro 12\n\n## S\n\nLead without a test.\n\n- **A** 3.5σ off.\n- **B** 1.2σ (`cargo test bounds_hold`).\n\nParagraph 7 without a test.\n\n| a | 1 |\n";
     let missing = unheld(doc, &tests);
     let lines: Vec<usize> = missing.iter().map(|m| m.0).collect();
     assert_eq!(lines, vec![9, 12, 14], "{missing:?}");
