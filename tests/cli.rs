@@ -72,6 +72,33 @@ fn help_names_model_structures_and_the_data_folder_variable() {
     assert!(top.contains("AEROID_DATA"), "{top}");
 }
 
+/// `aeroid --help` lists each subcommand in one line; its paragraph stays
+/// in `aeroid help CMD` (and `CMD --help`).
+#[test]
+fn top_level_help_gives_each_subcommand_one_line() {
+    let top = stdout_of(aeroid().arg("--help"));
+    let commands: Vec<&str> = top
+        .split("Commands:")
+        .nth(1)
+        .and_then(|rest| rest.split("\n\n").next())
+        .unwrap_or_else(|| panic!("{top}"))
+        .lines()
+        .collect();
+    assert!(commands.len() >= 19, "{top}");
+    for line in &commands {
+        assert!(
+            line.starts_with("  ") && line.trim().split_whitespace().count() > 1,
+            "a subcommand's help runs over one line: {line:?}\n{top}"
+        );
+        assert!(line.chars().count() <= 100, "{line}");
+    }
+    let study = stdout_of(aeroid().args(["help", "study"]));
+    assert!(
+        study.contains("--resume continues an interrupted study"),
+        "{study}"
+    );
+}
+
 /// The gate file is found through the data folder, like scenarios: from a
 /// folder that is not the repository (the data folder is then the source
 /// tree), and from the folder `AEROID_DATA` names (there a file without

@@ -75,7 +75,9 @@ fn names_a_test(text: &str, tests: &BTreeSet<String>) -> bool {
             filter.len() >= 6 && tests.iter().any(|t| t.contains(filter))
         } else {
             span.split(|c: char| c.is_whitespace() || c == ',')
-                .any(|w| tests.contains(w.trim_matches(|c: char| !(c.is_alphanumeric() || c == '_'))))
+                .any(|w| {
+                    tests.contains(w.trim_matches(|c: char| !(c.is_alphanumeric() || c == '_')))
+                })
         }
     })
 }
@@ -183,9 +185,16 @@ fn unheld(doc: &str, tests: &BTreeSet<String>) -> Vec<(usize, String)> {
 /// measured (`Measured:`, `**Measured**`, `measured on`) or names a worst case
 /// (`worst`), and gives a number.
 fn states_a_measurement(text: &str) -> bool {
-    let marked = ["Measured:", "**Measured**", "Measured on ", "measured on ", "measured:", "worst "]
-        .iter()
-        .any(|m| text.contains(m));
+    let marked = [
+        "Measured:",
+        "**Measured**",
+        "Measured on ",
+        "measured on ",
+        "measured:",
+        "worst ",
+    ]
+    .iter()
+    .any(|m| text.contains(m));
     marked && text.chars().any(|c| c.is_ascii_digit())
 }
 
@@ -197,7 +206,18 @@ fn unreferenced_measurements(doc: &str, tests: &BTreeSet<String>) -> Vec<(usize,
         .flatten()
         .filter(|b| states_a_measurement(&b.text))
         .filter(|b| !names_a_test(&b.text, tests) && !b.text.contains("findings.md"))
-        .map(|b| (b.line, b.text.lines().next().unwrap_or("").chars().take(90).collect()))
+        .map(|b| {
+            (
+                b.line,
+                b.text
+                    .lines()
+                    .next()
+                    .unwrap_or("")
+                    .chars()
+                    .take(90)
+                    .collect(),
+            )
+        })
         .collect()
 }
 
@@ -205,7 +225,13 @@ fn unreferenced_measurements(doc: &str, tests: &BTreeSet<String>) -> Vec<(usize,
 fn measurements_in_the_reference_point_to_their_test() {
     let tests = test_names();
     let mut listing = Vec::new();
-    for page in ["docs/methods.md", "docs/conventions.md", "docs/files.md", "docs/cli.md", "README.md"] {
+    for page in [
+        "docs/methods.md",
+        "docs/conventions.md",
+        "docs/files.md",
+        "docs/cli.md",
+        "README.md",
+    ] {
         let doc = std::fs::read_to_string(root().join(page)).unwrap();
         let doc = format!("## {page}\n\n{doc}");
         for (line, text) in unreferenced_measurements(&doc, &tests) {

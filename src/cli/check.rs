@@ -3,6 +3,8 @@
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Validate a data file and explain every problem.
+///
 /// Validate an aircraft, scenario, recorder-profile, model-structure or study
 /// file and explain every problem; a scenario is also trimmed.
 #[derive(clap::Args)]

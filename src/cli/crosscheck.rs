@@ -3,6 +3,8 @@
 use aeroid::sim::scenario::Scenario;
 use anyhow::Result;
 
+/// Fly a scenario in aeroid's simulator and in JSBSim and compare them.
+///
 /// Fly a scenario in aeroid's simulator and in JSBSim (the exported
 /// aircraft, same trim, same inputs, no wind) and print the largest
 /// difference per state and both simulators' steps per second (needs the

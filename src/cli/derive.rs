@@ -10,6 +10,8 @@ use aeroid::units::DEG;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
+/// Add the channels a recorder lacks (flow angles, rates, combined surfaces, thrust).
+///
 /// Add the channels a recorder lacks and write the record with them:
 /// combined aileron, elevator and flap from split left/right channels; the
 /// geometric angle of attack and sideslip (Wang et al. 2012, Eqs. 1–6)

@@ -5,6 +5,8 @@ use aeroid::estimation::estimator::MethodTables;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
+/// Estimate a model's parameters from one or several records.
+///
 /// Estimate a postulated model's parameters from a record, or from several
 /// manoeuvres fitted jointly (output error: shared aerodynamic parameters,
 /// each manoeuvre its own initial state); print the estimates with

@@ -4,6 +4,8 @@ use aeroid::catalog;
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Write an aircraft as a JSBSim aircraft.
+///
 /// Write an aircraft as a JSBSim aircraft (DIR/NAME/NAME.xml): the same
 /// mass, inertia, geometry, thrust and linear aerodynamics, the
 /// aerodynamics as JSBSim functions (needs the `jsbsim` feature).

@@ -3,6 +3,8 @@
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Run the accuracy gates and fail on any regression.
+///
 /// Run the accuracy gates (golden/gates.toml in the data folder): fly,
 /// record and estimate every case, check each parameter against the truth
 /// within its tolerance, print what failed, and exit non-zero on any failure.

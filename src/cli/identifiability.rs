@@ -2,6 +2,8 @@
 
 use anyhow::Result;
 
+/// A-priori identifiability: each parameter's Cramér–Rao bound.
+///
 /// A-priori identifiability: the Cramér–Rao bound of every aerodynamic
 /// parameter of the scenario's aircraft that the profile's channels allow
 /// (sensitivities by central differences through the simulator and the

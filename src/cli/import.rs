@@ -3,6 +3,8 @@
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Bring real flight data in as a record folder.
+///
 /// Bring real flight data in: a data file and a column map (TOML) become a record folder.
 ///
 /// The data file is a CSV with a header row, or headerless ASCII

@@ -3,6 +3,8 @@
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Print a record's channels, or its data-quality report.
+///
 /// Print a record's channels with rates, units, ranges, dropouts and gaps;
 /// with --quality, the data-quality report instead.
 #[derive(clap::Args)]

@@ -5,6 +5,8 @@ use aeroid::analysis::linear_model::{Axes, linearise_scenario, to_toml};
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Write a scenario's linearisation as a linear model file.
+///
 /// Trim a scenario's aircraft and write its linearisation as a linear model
 /// file (`kind = "linear"`): states V, α, β, p, q, r, φ, θ as record
 /// channels, dimensional derivatives as named parameters whose values are

@@ -3,6 +3,8 @@
 use aeroid::catalog;
 use anyhow::Result;
 
+/// List the data folder's aircraft, scenarios, profiles, models and studies.
+///
 /// List the data folder's aircraft, scenarios, recorder profiles, model
 /// structures and studies (the names every other subcommand accepts).
 #[derive(clap::Args)]

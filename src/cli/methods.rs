@@ -3,6 +3,8 @@
 use aeroid::estimation::methods;
 use anyhow::Result;
 
+/// List the estimators with their papers and settings.
+///
 /// List every estimator with its paper, the equations it implements, what
 /// it needs and its settings (`[methods.NAME]` keys with their defaults);
 /// with a name, show that one.

@@ -2,6 +2,8 @@
 
 use anyhow::Result;
 
+/// Print the JSON Schema of what a plug-in writes back.
+///
 /// Print the JSON Schema of what a plug-in writes back: `estimate.json`
 /// or `refusal.json` (docs/plugins.md describes the whole protocol).
 #[derive(clap::Args)]

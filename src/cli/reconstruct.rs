@@ -3,6 +3,8 @@
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Flight-path reconstruction: sensor biases and vane calibration.
+///
 /// Flight path reconstruction / data compatibility check: estimate
 /// accelerometer and gyro biases and the flow-vane scale factors and
 /// offsets from the kinematics; with --out, write the corrected record.

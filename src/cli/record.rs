@@ -4,6 +4,8 @@ use aeroid::sim::scenario::Scenario;
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Fly a scenario and record it with a recorder profile.
+///
 /// Fly a scenario and record it with a recorder profile: write the flight
 /// record (record.toml + CSV per time base) and the run's truth.toml.
 #[derive(clap::Args)]

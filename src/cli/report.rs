@@ -3,6 +3,8 @@
 use anyhow::Result;
 use std::path::PathBuf;
 
+/// Write a study's HTML report.
+///
 /// Write one self-contained HTML page for a study's output folder (the
 /// --out of `aeroid study` or `aeroid study merge`): the summary and how
 /// the fits ended as tables, SVG plots (each derivative's error against

@@ -8,6 +8,8 @@ use std::path::PathBuf;
 /// The widest status the summary table shows in full.
 const STATUS_WIDTH: usize = 40;
 
+/// The whole harness on one scenario: fly, record, estimate, score.
+///
 /// The whole harness on one scenario: simulate, record (the scenario's
 /// recorder profile unless --profile), run every registered estimator
 /// (`aeroid methods`) on every model structure the scenario names, and

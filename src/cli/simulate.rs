@@ -4,6 +4,8 @@ use aeroid::sim::scenario::Scenario;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
+/// Fly a scenario and write its truth trace.
+///
 /// Trim and fly a scenario; write the truth trace (every state, air data,
 /// control and aerodynamic coefficient at every integration step) as CSV.
 /// A flight that departs writes the trace up to its departure and fails.

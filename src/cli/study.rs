@@ -3,6 +3,8 @@
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
+/// Run a Monte Carlo study, on one machine or in shards.
+///
 /// Run a Monte Carlo study (studies/*.toml): many seeded runs of
 /// simulate, record, estimate and score over the study's sweep points;
 /// print per point, model, method and parameter the bias, the spread

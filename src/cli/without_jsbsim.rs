@@ -9,6 +9,8 @@ fn needs_jsbsim() -> anyhow::Error {
 }
 
 pub mod export_jsbsim {
+    /// Write an aircraft as a JSBSim aircraft (needs the `jsbsim` feature).
+    ///
     /// Write an aircraft as a JSBSim aircraft (needs the `jsbsim` feature,
     /// which this build lacks: build with `cargo build --release --features jsbsim`).
     #[derive(clap::Args)]
@@ -23,6 +25,8 @@ pub mod export_jsbsim {
 }
 
 pub mod crosscheck {
+    /// Fly a scenario in aeroid's simulator and in JSBSim (needs the `jsbsim` feature).
+    ///
     /// Fly a scenario in aeroid's simulator and in JSBSim and compare them
     /// (needs the `jsbsim` feature, which this build lacks: build with
     /// `cargo build --release --features jsbsim`).
