@@ -1,114 +1,42 @@
 //! A-priori identifiability of an aircraft's aerodynamic parameters from a
 //! recorder: the Cramér–Rao bounds that the recorded channels allow, before
-//! any estimator runs (`aeroid identifiability`).
+//! any estimator runs (`aeroid identifiability`; the user's reference is
+//! docs/methods.md, "A-priori identifiability").
 //!
-//! For a scenario and a recorder profile, the output sensitivities
-//! S_c(t_i) = ∂y_c(t_i)/∂θ_j of every recorded channel c at its own sample
-//! instants t_i are computed by central differences: the scenario is flown
-//! again with θ_j ± h_j (h_j = 10⁻⁴·max(|θ_j|, 10⁻²)), from the same trim
-//! state with the same control positions and the same wind (the inputs of
-//! the experiment are fixed; only the aircraft changes), and recorded by the
-//! profile with its deterministic parts (rates, word-slot skew, delay, lag,
-//! anti-alias filter, bias, scale factor, saturation) but without noise,
-//! quantization, dropouts or faults, which would make the differences
-//! meaningless. The measurement-error variance of a channel is
-//! R_c = σ_noise² + LSB²/12 (white noise plus uniform quantization error).
-//! The flight may be split into segments (multiple shooting), each flown
-//! from the nominal state at its start; every segment's initial state (u, v,
-//! w, p, q, r, attitude, altitude) is then a nuisance unknown, as it is for
-//! an output-error analyst who fits a long record in pieces. Its
-//! sensitivities enter the same matrix and are marginalised by the
-//! inversion. The information matrix is M = Σ_c Σ_i S_c(t_i)ᵀ S_c(t_i) / R_c and the
-//! bounds are σ_j = √(M⁻¹)_jj (Verma & Peyada 2020, Eq. 10; reflex-wing UAV paper, Eq. 15: the same
-//! information matrix output error uses, evaluated at the truth with the
-//! true R). Parameters in the null space of M get σ = ∞.
+//! **Bounds.** The output sensitivities S_c(t_i) = ∂y_c(t_i)/∂θ_j of every
+//! recorded channel at its own instants come from central differences: the
+//! scenario flown again with θ_j ± h_j (h_j = 10⁻⁴·max(|θ_j|, 10⁻²)), the
+//! same trim, controls and wind, recorded by the profile's deterministic
+//! parts (rates, skew, delay, lag, filter, bias, scale, saturation) without
+//! noise or quantization. With R_c = σ_noise² + LSB²/12 the information is
+//! M = Σ_c Σ_i S_cᵀ S_c / R_c and σ_j = √(M⁻¹)_jj (Verma & Peyada 2020,
+//! Eq. 10; the reflex-wing UAV paper, Eq. 15); the null space of M gets
+//! σ = ∞. Segments (multiple shooting) add each segment's initial state as
+//! nuisance unknowns, marginalised by the inversion.
 //!
-//! Model errors the bound does not know (Jategaonkar, "Flight Vehicle
-//! System Identification", 2nd ed., §4.17 on the bias of a maximum
-//! likelihood estimate under a model error: to first order the estimate
-//! moves by δθ = M⁻¹·Σ Sᵀ·R⁻¹·r, r the output error at the truth):
-//! - the *inputs as recorded*: an estimator knows the controls only from
-//!   the record's samples (at the channel's rate, word slot, delay and lag,
-//!   quantized to its resolution; split surfaces combined), reconstructed
-//!   linearly between them
-//!   (the scenario's interpolation). The flight flown with those inputs
-//!   instead of the true ones, from the same segment states, gives r, and
-//!   δθ_inputs the first-order error of every estimator that takes the
-//!   recorded inputs as exact. A record that lacks a control (the QAR has
-//!   no throttle) leaves it as flown.
-//! - the *unknown wind*: the flight flown in the scenario's steady wind
-//!   without its gusts and turbulence gives δθ_wind, the error of a fit
-//!   that ignores them (output error, the regressions) on this seed's
-//!   turbulence; the filters model it as process noise and avoid it.
+//! **Model errors the bound does not know** (Jategaonkar, "Flight Vehicle
+//! System Identification", 2nd ed., §4.17: to first order a maximum
+//! likelihood estimate moves by δθ = M⁻¹·Σ Sᵀ·R⁻¹·r, r the output error at
+//! the truth): δθ_inputs, the flight flown with the inputs as recorded
+//! (sampled, quantized, interpolated), and δθ_wind, the flight without its
+//! gusts and turbulence.
 //!
-//! A parameter is *identifiable* when σ_j/|θ_j| is below a threshold,
-//! 10 % by default: its 95 % interval (±2σ) is then within ±20 % of the
-//! value, the accuracy of the wind-tunnel and handbook values an analyst
-//! already has before flight (DATCOM-type estimates of damping and control
-//! derivatives are commonly quoted at ±20–30 %); an estimate less certain
-//! than that adds nothing to the a-priori value. With the inputs as
-//! recorded it must also have |δθ_inputs| < 2·threshold·|θ_j|: an error
-//! larger than the ±20 % interval the threshold stands for makes the
-//! estimate no better than the a-priori value either. δθ_wind is reported
-//! beside it and not part of the verdict (a filter does not suffer it).
+//! **Verdict.** Identifiable when σ_j/|θ_j| < threshold (10 %: the ±20 %
+//! of a 95 % interval, the accuracy of a-priori handbook values) and
+//! |δθ_inputs| < 2·threshold·|θ_j|; δθ_wind is reported beside it. For a
+//! gusty flight the calm flight's bound is computed too: a parameter
+//! identifiable only in the gusty one is identifiable *through the gusts*.
+//! The bounds know the wind, so "identifiable" is necessary, not
+//! sufficient; a record without usable flow angles, whose estimators take
+//! the geometric ones, gets a note ([`crate::prep::flow_angles`]).
 //!
-//! For a flight with gusts or turbulence the same bound and input error
-//! are computed for the flight without them (the controls as flown, the
-//! steady wind). A parameter identifiable in the gusty flight but not in
-//! the calm one is identifiable *through the gusts*: its information is in
-//! the turbulent motion, which an estimator reaches only by knowing the
-//! wind or by drawing on that motion as a filter with process noise does.
-//!
-//! These are lower bounds for estimators that know the wind: with
-//! turbulence in the flight, an output-error fit that ignores it does worse,
-//! so "not identifiable" here is definitive, while "identifiable" is
-//! necessary, not sufficient. Faulty channels (a `fault` in the profile) are
-//! left out, as are channels with neither noise nor quantization (their
-//! information would be infinite). Unless channels are named, only the
-//! responses an aerodynamic model predicts are used (air data, angles,
-//! rates, load factors, altitude): inputs, engine and weight channels,
-//! inertial navigation (which integrates the unknown wind) and the
-//! recorder's wind estimate are left out, each with its reason. A
-//! parameter the differences cannot move both ways without changing the
-//! model (τ1 = 0, which makes χ algebraic) is left out with its reason, or
-//! refused when it is named.
-//!
-//! # The geometric flow angles
-//! A record without a usable angle of attack or sideslip channel (the QAR
-//! has a stuck vane and no sideslip) gives the estimators the geometric
-//! angles of the derive step ([`crate::prep::flow_angles`]): the flight
-//! path against the recorded wind, whose slow channels miss the gusts. In
-//! turbulence that error is as large as the angles a manoeuvre makes: the
-//! regression estimators, which take them for the aerodynamic angles, find
-//! the lift and pitching-moment slopes and the lateral static and roll
-//! derivatives a third or more too small, at 1 Hz and at 16 Hz alike,
-//! and recover them with working vanes (docs/findings.md, "The geometric
-//! flow angles in turbulence"). The bounds here know the gusts and draw
-//! their information on the angles from the load factors, so they cannot
-//! show it; for a flight with gusts or turbulence on such a record the
-//! analysis says so in a note.
-//!
-//! # The sampling rule
-//! Wang et al. 2012 (§2, item 3) advise sampling "at least 25 times" the
-//! frequency of the airplane's modes. Beside each bound the analysis names
-//! the mode the parameter moves furthest, from the aircraft linearised at the
-//! scenario's trim ([`crate::analysis::linearize`]): for every classified
-//! mode (short period, phugoid, Dutch roll, roll, spiral) the elasticity
-//! |λ(θ_j + h) − λ(θ_j − h)|/|λ| · s_j/(2h), s_j = max(|θ_j|, 10⁻²),
-//! h = 10⁻³·s_j, the relative move of the eigenvalue per relative move of
-//! the parameter, the aircraft trimmed again for each. The mode whose
-//! eigenvalue the parameter moves furthest, |∂λ/∂ln θ_j| (elasticity times
-//! |λ|: a slow mode's large relative move is a small one in the time a
-//! sample spans), is the parameter's mode when its elasticity is at least
-//! 0.1 (a 10 % change of the parameter moves it by 1 %); its rule rate is
-//! 25·|λ|/2π. A parameter whose mode's rule rate exceeds the
-//! fastest sample rate of the channels used is marked "below the rule".
-//! The mark is advice, not part of the verdict: the bound knows the
-//! wind and the information the slow samples carry, the rule knows
-//! neither, and the sample-rate studies place the rate an estimator needs
-//! between 7 and 49 times the mode's frequency (docs/findings.md, "The
-//! sampling rule"). Control derivatives, which move no eigenvalue, have no
-//! mode.
+//! **The sampling rule** (Wang et al. 2012, §2, item 3: sample "at least 25
+//! times" the frequency of the modes): each parameter's mode is the one
+//! whose eigenvalue it moves furthest, |∂λ/∂ln θ_j| from central
+//! differences of the trimmed linearisation ([`crate::analysis::linearize`]),
+//! when its elasticity is at least 0.1; a parameter whose mode's 25·|λ|/2π
+//! exceeds the channels' fastest rate is marked "below the rule" (advice,
+//! not part of the verdict).
 
 use crate::analysis::linearize::{ModeKind, find, linearize};
 use crate::error::{Error, Result};

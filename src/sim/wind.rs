@@ -2,33 +2,10 @@
 //! turbulence, produced as one [`WindSample`] per integration step (the
 //! simulator interpolates between samples within a step).
 //!
-//! # File syntax
-//!
-//! ```toml
-//! [wind]
-//! speed = "15 kt"              # steady wind (Speed), default 0
-//! from_direction = "270 deg"   # blows FROM the west, i.e. towards the east
-//!
-//! [[wind.gusts]]
-//! start = "5 s"
-//! duration = "2 s"
-//! amplitude = "4 m/s"
-//! direction = "up"             # up, down, north, east, south, west (towards)
-//!
-//! [wind.turbulence]
-//! intensity = "moderate"       # light, moderate, severe; or instead:
-//! # sigma_u = "1.5 m/s"
-//! # sigma_v = "1.5 m/s"
-//! # sigma_w = "1.0 m/s"
-//! # length_u = "200 m"         # optional, default by the altitude rules
-//! # length_v = "200 m"
-//! # length_w = "100 m"
-//! ```
-//!
-//! # Steady wind
-//! `speed` and `from_direction` (meteorological: the direction the wind blows
-//! FROM, clockwise from north) give the NED velocity of the air mass
-//! `−speed·(cos ψ, sin ψ, 0)`; wind from 270° blows towards the east.
+//! The file syntax (`[wind]`, `[[wind.gusts]]`, `[wind.turbulence]`) is in
+//! docs/files.md. Steady wind: `speed` and `from_direction` (where it blows
+//! FROM, clockwise from north) give the air mass's NED velocity
+//! `−speed·(cos ψ, sin ψ, 0)`.
 //!
 //! # Discrete gusts
 //! The 1−cosine gust of MIL-F-8785C §3.7.3, written in time:

@@ -1,139 +1,42 @@
-//! Output error, maximum likelihood (Verma & Peyada 2020, Eqs. 5–10; the ELM + Gauss–Newton and reflex-wing UAV papers; Maine &
-//! Iliff; Jategaonkar, "Flight Vehicle System Identification", ch. 4).
+//! Output error, maximum likelihood (Maine & Iliff 1985; Jategaonkar,
+//! "Flight Vehicle System Identification", 2nd ed., ch. 4; Verma & Peyada
+//! 2020, Eqs. 5–10). The user's reference is docs/methods.md, "Output
+//! error".
 //!
-//! The postulated model is simulated with the recorded inputs (and, for
-//! decoupled models, the recorded pseudo-controls; see
-//! [`crate::estimation::model::driven`]); its outputs y(θ) are compared with the
-//! recorded outputs z at each channel's own sample instants, the prediction
-//! on the integration grid being interpolated linearly to them. The negative
-//! log-likelihood with unknown residual covariance R reduces to the cost
-//! det(R) (Verma & Peyada 2020, Eq. 7), which is minimised by relaxation: at every
-//! iteration R is re-estimated from the residuals at the current θ, R =
-//! (1/N)·Σ e·eᵀ (Eq. 8), and a Gauss–Newton step is taken on ½·Σ eᵀR⁻¹e with
-//! R fixed (Eqs. 9–10), by the shared core [`gauss_newton`]. R is diagonal:
-//! channels may have different time bases, so cross-covariances are
-//! undefined, and with independent sensor noise the diagonal R is the
-//! maximum-likelihood one.
+//! **Model and cost.** The postulated model ẋ = f(x, u, θ), y = g(x, u, θ)
+//! is simulated with the recorded inputs (and, for decoupled models, the
+//! recorded pseudo-controls, [`crate::estimation::model::driven`]); y(θ) is
+//! compared with the record z at each channel's own instants. With the
+//! residual covariance R unknown the likelihood reduces to det(R)
+//! (Verma & Peyada Eq. 7), minimised by relaxation: R = (1/N)·Σ e·eᵀ at
+//! the current θ (Eq. 8, diagonal: channels may have their own time
+//! bases), then a Gauss–Newton step on ½·Σ eᵀR⁻¹e with R fixed
+//! (Eqs. 9–10; the shared core [`gauss_newton`]).
 //!
-//! Sensitivities ∂y/∂θ come from the sensitivity equations (Jategaonkar
-//! §4.6; Maine & Iliff): with ẋ = f(x, u, θ) and y = g(x, u, θ), the state
-//! sensitivity S = ∂x/∂θ obeys `Ṡ = (∂f/∂x)·S + ∂f/∂θ`, S(0) = ∂x(0)/∂θ
-//! (a unit column for an initial-state unknown, 0 otherwise, except
-//! χ(0) = χ∞(α(0))), and `∂y/∂θ = (∂g/∂x)·S + ∂g/∂θ` (∂y/∂bias = 1).
-//! They are integrated with x in one simulation. Far from the optimum the
-//! iterations linearise the model at the grid points only
-//! ([`Linearise::GridPoints`]: one linearisation per step, the sensitivity
-//! step taking the mean of the two ends at the middle stages, within O(h²)
-//! of the exact derivative, 5e-4 on the ATTAS lateral benchmark, a few % at
-//! a held control's step or through the stall). Such a Jacobian steers
-//! well, but the point where its Gauss–Newton step vanishes is not always
-//! the optimum: iterated to convergence with a fresh Jacobian at every
-//! step it stops at the exact optimum on the ATTAS benchmarks, but 0.02σ
-//! away on HANSA 3 and 0.26σ on CDRW (at a held control's step the step's
-//! end is linearised with the new controls; relinearised with the held
-//! ones, CDRW is still 0.07σ away), and held stale from the start it stops
-//! 0.29σ away on the ATTAS lateral benchmark. So once
-//! a step is predicted to lower the cost by less than 20 (a step under
-//! 6.3σ, after which the fit is within about 1σ), the iterations switch
-//! to the linearisation at every RK4 stage
-//! ([`crate::sim::integrator::rk4_linear_step`] with the stage linearisations;
-//! [`LeastSquaresProblem::refine`]), the exact derivative of the discrete
-//! simulation the residuals come from: the fit stops only where that exact
-//! Gauss–Newton step is below 0.014σ, and the information matrix is the
-//! exact one.
-//! A simulation with sensitivities costs about 3 plain ones (grid points)
-//! or 6 (stages), so a Jacobian is held while it steers (simplified
-//! Gauss–Newton, [`LeastSquaresProblem::hold`]): the steps after it are
-//! taken on it with plain simulations, as long as each predicted decrease
-//! is at most half the one before. The exact Jacobian is held only where
-//! its step is predicted to lower the cost by less than 1, so the
-//! information matrix of a fit that stops on it is that of a point within
-//! 1.4σ of the estimate. Measured on the ATTAS (lateral, longitudinal,
-//! stall, ideal and flight-test), HANSA 3 and CDRW benchmarks against fits
-//! that compute the Jacobian afresh at every step and stop on an exact one
-//! at the estimate: Cramér–Rao bounds within 1.3e-3 of theirs, estimates
-//! within 0.009σ. On the lateral benchmark from equation error's start the
-//! fit is one grid-point simulation, one plain one, one exact and a last
-//! plain one that confirms convergence (predicted decreases 1743, 18.8,
-//! 0.37, 2.4e-6).
-//! A parameter `C_term` enters f only through its coefficient
-//! C, linearly: ∂f/∂θ = (∂f/∂C)·regressor, with ∂f/∂C exact from the
-//! evaluation (f is affine in C: [`crate::sim::aero::AeroModel::offset_response`]
-//! through [`crate::sim::dynamics::FlightModel::acceleration_response`]), or,
-//! where the forces depend on α̇, the difference quotient of an offset on
-//! C; ∂f/∂x and ∂g/∂x are exact, by forward-mode automatic
-//! differentiation (dual numbers, [`crate::dual`]), except along the
-//! altitude and where the forces depend on α̇; those and ∂f/∂θ of the
-//! nonlinear parameters (e, the stall parameters) are forward differences
-//! (step 10⁻⁷·max(|·|, scale)) ([`crate::estimation::model::driven`]).
-//! A test checks the exact Jacobian against central differences of whole
-//! simulations to 10⁻⁵, another the grid-point one against it. Each θ is
-//! simulated once, with sensitivities: the solver's re-weighting, residuals
-//! and Jacobian at an accepted step reuse the step's simulation.
-//! A simulation's ∂y/∂θ at the samples is assembled once, with the Gram
-//! matrix of each output's rows; the solver gets the normal equations
-//! from them with no weighted copy of the Jacobian
-//! ([`LeastSquaresProblem::normal_equations`]): the information matrix is
-//! Σ_o G_o/σ_o², the gradient −Σ_o ∂y_oᵀ·r_o/σ_o, so a held Jacobian is
-//! re-weighted for free.
-//! Convergence: the Gauss–Newton step's predicted decrease of the whitened
-//! cost below 1e-4 (a step under 0.014σ). Cramér–Rao
-//! bounds are the square roots of the diagonal of M⁻¹, M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ).
-//! Fit quality ([`Estimate::assess_residuals`]): output error models
-//! sensor noise only, so a model that matches the aircraft leaves white
-//! residuals. Per output the estimate reports R², Theil's coefficient,
-//! the residuals' lag-1 autocorrelation ρ₁, the fraction of lags 1–20
-//! outside ±1.96/√N and the structured residual √(ρ₁·(1 − R²)); an output
-//! whose residuals are correlated (√N·ρ₁ > 4) with a structured residual
-//! beyond 0.05 of its variation makes a converged fit a poor fit (a
-//! structure lacking a term, a wrong minimum, turbulence), and one below
-//! it is a note.
-//! Settings (`[methods.oem]`, [`OutputErrorOptions`]): integration step and
-//! input interpolation (default "auto": each input held or linear from its
-//! own samples, [`crate::estimation::model::input_timing`]), start,
-//! iteration limit, initial states and output
-//! biases as unknowns. Several manoeuvres may be fitted at once (shared
-//! aerodynamic parameters, initial states per manoeuvre).
+//! **Sensitivities** (Jategaonkar §4.6): S = ∂x/∂θ obeys
+//! Ṡ = (∂f/∂x)·S + ∂f/∂θ, and ∂y/∂θ = (∂g/∂x)·S + ∂g/∂θ, integrated with
+//! x. Far from the optimum the model is linearised at the grid points
+//! ([`Linearise::GridPoints`]), near it at every RK4 stage (the exact
+//! derivative of the discrete simulation,
+//! [`LeastSquaresProblem::refine`]); a Jacobian is held while its steps'
+//! predicted decreases halve (simplified Gauss–Newton,
+//! [`LeastSquaresProblem::hold`]). ∂f/∂x and ∂g/∂x come from dual numbers
+//! ([`crate::dual`]); ∂f/∂θ of a coefficient term is exact because f is
+//! affine in the coefficients.
 //!
-//! Start values ([`Start`]): by default the iterations start from equation
-//! error's estimates on the first record (the usual practice: Jategaonkar
-//! §4.17, Klein & Morelli §6.5; regression is cheap and lands near the
-//! optimum, biased only by the noise on its regressors), when the
-//! structure allows equation error (linear in its parameters, with the
-//! channels it needs) and those estimates fit the record better than the
-//! model file's values: the maximum-likelihood cost with R estimated,
-//! ½·Σ N_o·ln R_oo, from one plain simulation of each. On the ATTAS lateral
-//! benchmark this halves the fit's time (30 against 63 ms). Otherwise the
-//! fit starts from the model file's values, and with initial states among
-//! the unknowns it runs in two stages: first with them held at the first
-//! recorded samples, then released, from the first stage's solution (freed
-//! at once from a-priori start values, the stall model's fit fell into a
-//! wrong minimum). Every simulation carries the sensitivities to all
-//! unknowns, so the second stage starts from the first stage's last
-//! simulation.
+//! **Convergence and bounds**: a predicted decrease of the whitened cost
+//! below 1e-4 (a step under 0.014σ); Cramér–Rao bounds from
+//! M = Σ (∂y/∂θ)ᵀR⁻¹(∂y/∂θ). Fit quality and the
+//! diagnoses (coloured residuals, process noise, instability) are judged
+//! by [`Estimate::assess_residuals`] and [`modes`].
 //!
-//! Several starts (`starts = N`, [`multi_start`]): the fit above, then
-//! N − 1 fits from the model file's values each moved by a seeded random
-//! fraction: θ_i + spread·max(|θ_i|, 0.01)·u, u uniform on [−1, 1], within
-//! the parameter's bounds (`start_spread`, `start_seed`; the stream
-//! [`crate::random::streams::MULTI_START`]). The estimate is the converged
-//! fit of least cost ½·Σ N_o·ln R_oo; a converged fit whose cost is within
-//! [`EQUAL_COST`] of it but whose parameters differ from it by more than
-//! one standard error is another minimum the data cannot tell from the
-//! best, and the estimate is then `unidentified` naming those parameters.
-//! The notes say whether the converged starts agree (each within 1σ of
-//! the least-cost fit) or how many end in a worse minimum, and list every
-//! start's outcome, cost and distance; `details` tables them. Each start's
-//! fit is judged as a single fit is ([`Estimate::assess_residuals`]): a
-//! start that ends with an infinite σ or a structured residual is not
-//! counted as converged.
-//!
-//! Unstable models ([`modes`]): after the fit, a mode of the fitted model
-//! that doubles within one simulation (the record, or a piece with
-//! `segment`) is diagnosed `unstable` with its time to double, and the
-//! advice is stabilised output error, multiple shooting over shorter
-//! pieces (Jategaonkar ch. 9); on a linear model `segment` is
-//! [`linear_shooting`]'s multiple shooting.
+//! **Starts** ([`Start`]): equation error's estimates when they fit the
+//! record better than the model file's values (Jategaonkar §4.17; Klein
+//! & Morelli §6.5), else the file's values in two stages (initial states
+//! held, then released); several seeded starts with [`multi_start`].
+//! Multiple shooting over pieces (`segment`, Jategaonkar ch. 9) is
+//! [`linear_shooting`] for linear models and the piecewise fit here for
+//! 6-DOF ones. Settings: [`OutputErrorOptions`].
 
 use crate::error::{Error, Result};
 use crate::estimation::estimate::Status;
@@ -186,11 +89,9 @@ const STAGE_DECREASE: f64 = 10.0;
 /// linearisation: a step under 6.3σ. Gauss–Newton is then inside its
 /// quadratic range, so the step lands within about 1σ of the optimum,
 /// where the exact Jacobian is computed and, its step predicted under
-/// [`HOLD_DECREASE`], held for the last plain simulation. Measured on the
-/// 12 benchmark fits (module documentation): switching at 1 instead takes
-/// one more plain simulation on every noisy benchmark (the lateral one:
-/// 19.7 against 18.1 ms best of 150); at 50 the noise-free case, and at
-/// 200 CDRW, take extra exact simulations.
+/// [`HOLD_DECREASE`], held for the last plain simulation. Switching at 1
+/// instead takes one more plain simulation on every noisy benchmark; at 50
+/// the noise-free case, and at 200 CDRW, take extra exact simulations.
 const REFINE_DECREASE: f64 = 20.0;
 
 /// The predicted decrease on the exact Jacobian below which it is held for

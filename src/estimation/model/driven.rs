@@ -1499,8 +1499,7 @@ pub enum Linearise {
     /// stall model's τ1 through the break. Good enough to steer
     /// Gauss–Newton (an approximate Jacobian changes the path, not the
     /// optimum it stops at to within the noise; see `output_error`), at
-    /// about half the cost (the lateral benchmark's simulation: 2.9 ms against
-    /// 6.5 ms).
+    /// about half the cost of the stage linearisation (docs/performance.md).
     GridPoints,
 }
 
