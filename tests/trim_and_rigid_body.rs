@@ -138,6 +138,7 @@ fn torque_free_body_conserves_momentum_and_energy() {
         },
         exogenous: vec![Exogenous::pack(&Default::default(), &WindSample::default()); steps + 1],
         winds: vec![WindSample::default(); steps + 1],
+        feedback: None,
     };
     let mut worst_norm = 0.0f64;
     for k in 0..steps {

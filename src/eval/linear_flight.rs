@@ -40,7 +40,8 @@ use crate::random::{self, streams};
 use crate::record::FlightRecord;
 use crate::record::recorder::Profile;
 use crate::sim::aero::ModelKind;
-use crate::sim::scenario::{LinearFeedback, LinearFlight, LinearGusts, Scenario};
+use crate::sim::feedback::Feedback;
+use crate::sim::scenario::{LinearFlight, LinearGusts, Scenario};
 use crate::sim::state::Control;
 use crate::sim::trace::TruthTrace;
 use crate::sim::truth::RunTruth;
@@ -203,7 +204,7 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
 /// model: a named input and states, held inputs.
 fn augmentation(
     scenario: &Scenario,
-    feedback: &LinearFeedback,
+    feedback: &Feedback,
     structure: &LinearStructure,
 ) -> Result<(usize, DVector<f64>, usize)> {
     let invalid = |field: String, message: String| Error::Invalid {

@@ -316,6 +316,8 @@ pub fn crosscheck(scenario: &Scenario, options: &CrossCheckOptions) -> Result<Cr
     let mut scenario = scenario.clone();
     scenario.wind = WindSpec::default();
     scenario.parameter_changes.clear();
+    // Both simulators fly the same control history: open loop.
+    scenario.feedback = None;
     if let Some(duration) = options.duration {
         scenario.duration = duration;
     }

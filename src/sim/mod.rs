@@ -15,6 +15,7 @@ pub mod aircraft;
 pub mod atmosphere;
 pub mod dynamics;
 pub mod engine;
+pub mod feedback;
 pub mod inputs;
 pub mod integrator;
 pub mod params;
@@ -28,6 +29,7 @@ pub mod wind;
 
 use crate::error::{Error, Result};
 use crate::sim::dynamics::{Exogenous, ExogenousVector, FlightModel};
+use crate::sim::feedback::Augmentation;
 use crate::sim::integrator::{Interpolation, rk4_step};
 use crate::sim::scenario::{DepartureLimits, Scenario};
 pub use crate::sim::source::{Departure, Flight, FlightSource};
@@ -53,6 +55,9 @@ pub struct Simulation {
     /// Controls and wind at t_k = k·step, k = 0..=steps.
     pub exogenous: Vec<ExogenousVector>,
     pub winds: Vec<WindSample>,
+    /// The stability augmentation (`[feedback]`) with its variables' trim
+    /// values: its command is added to the control at every step.
+    pub feedback: Option<(Augmentation, Vec<f64>)>,
 }
 
 impl Simulation {
@@ -89,7 +94,7 @@ impl Simulation {
             body: Default::default(),
         };
         let trim = trim(&model, &scenario.trim, &steady)?;
-        let exogenous = winds
+        let exogenous: Vec<ExogenousVector> = winds
             .iter()
             .enumerate()
             .map(|(k, wind)| {
@@ -99,6 +104,17 @@ impl Simulation {
             })
             .collect();
         let changed_models = changed_models(scenario, &model)?;
+        let feedback = scenario.feedback.clone().map(|augmentation| {
+            let start = Exogenous::at_stage(
+                &exogenous[0],
+                &exogenous[0],
+                0.0,
+                scenario.interpolation,
+                scenario.step,
+            );
+            let reference = augmentation.values(&trim.state, &model.evaluate(&trim.state, &start));
+            (augmentation, reference)
+        });
         Ok(Simulation {
             name: scenario.name.clone(),
             model,
@@ -109,6 +125,7 @@ impl Simulation {
             departure: scenario.departure,
             exogenous,
             winds,
+            feedback,
         })
     }
 
@@ -149,13 +166,23 @@ impl Simulation {
             samples: Vec::with_capacity(steps + 1),
         };
         let mut x = self.trim.state;
+        let mut command = 0.0;
         for k in 0..=steps {
             if let Some(state) = restart(k) {
                 x = state;
             }
             let time = k as f64 * self.step;
-            let exogenous = self.exogenous_at(k, 0.0);
-            let evaluation = self.model_at(k).evaluate(&x, &exogenous);
+            let mut evaluation = self
+                .model_at(k)
+                .evaluate(&x, &self.exogenous_at(k, 0.0, command));
+            if let Some((augmentation, reference)) = &self.feedback
+                && k % augmentation.frame_steps == 0
+            {
+                command = augmentation.command(&x, &evaluation, reference);
+                evaluation = self
+                    .model_at(k)
+                    .evaluate(&x, &self.exogenous_at(k, 0.0, command));
+            }
             if let Some(reason) = departure_reason(&self.departure, &x, &evaluation) {
                 return (trace, Some(Departure { time, reason }));
             }
@@ -163,7 +190,7 @@ impl Simulation {
                 .samples
                 .push(TruthSample::new(time, x, evaluation, self.winds[k]));
             if k < steps {
-                x = self.advance(&x, k);
+                x = self.step_commanded(&x, k, command);
             }
         }
         (trace, None)
@@ -179,26 +206,39 @@ impl Simulation {
             .map_or(&self.model, |(_, model)| model)
     }
 
-    /// One RK4 step from t_k, with the quaternion renormalised afterwards.
+    /// One RK4 step from t_k, with the quaternion renormalised afterwards
+    /// (the stability augmentation's command, if any, held at zero).
     pub fn advance(&self, x: &StateVector, k: usize) -> StateVector {
+        self.step_commanded(x, k, 0.0)
+    }
+
+    /// One RK4 step from t_k with the augmentation's `command` added to its
+    /// control over the step.
+    fn step_commanded(&self, x: &StateVector, k: usize, command: f64) -> StateVector {
         let model = self.model_at(k);
         let mut next = rk4_step(x, self.step, |x, theta| {
-            model.derivative(x, &self.exogenous_at(k, theta))
+            model.derivative(x, &self.exogenous_at(k, theta, command))
         });
         let norm = next.fixed_rows::<4>(Q0).norm();
         next.fixed_rows_mut::<4>(Q0).unscale_mut(norm);
         next
     }
 
-    fn exogenous_at(&self, k: usize, theta: f64) -> Exogenous {
+    /// The controls and wind at t_k + θ·step, the augmentation's `command`
+    /// added to its control.
+    fn exogenous_at(&self, k: usize, theta: f64, command: f64) -> Exogenous {
         let end = self.exogenous.get(k + 1).unwrap_or(&self.exogenous[k]);
-        Exogenous::at_stage(
+        let mut exogenous = Exogenous::at_stage(
             &self.exogenous[k],
             end,
             theta,
             self.interpolation,
             self.step,
-        )
+        );
+        if let Some((augmentation, _)) = &self.feedback {
+            exogenous.controls[augmentation.control.index()] += command;
+        }
+        exogenous
     }
 }
 

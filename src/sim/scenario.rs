@@ -40,6 +40,7 @@ use crate::error::{Error, Problems, Result, parse_toml, read_text};
 use crate::limits;
 use crate::sim::aircraft::Aircraft;
 use crate::sim::dynamics::Environment;
+use crate::sim::feedback::{Augmentation, Feedback, FeedbackSpec};
 use crate::sim::inputs::{InputSchedule, InputSpec};
 use crate::sim::integrator::Interpolation;
 use crate::sim::trim::TrimCondition;
@@ -97,6 +98,9 @@ pub struct ScenarioFile {
     /// Fly a linear model file instead of the aircraft's 6-DOF equations.
     #[serde(default)]
     pub linear: Option<LinearFlightSpec>,
+    /// A stability augmentation of the 6-DOF flight ([`crate::sim::feedback`]).
+    #[serde(default)]
+    pub feedback: Option<FeedbackSpec>,
 }
 
 /// The `[linear]` table of a scenario: the flight is that of a linear
@@ -117,35 +121,10 @@ pub struct LinearFlightSpec {
     /// `matrix` and the keys of a `[wind.turbulence]` table ([`LinearGusts`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gusts: Option<toml::Table>,
-    /// A stability augmentation moving one control with the states
-    /// ([`LinearFeedbackSpec`]).
+    /// A stability augmentation moving one model input with the states
+    /// ([`crate::sim::feedback`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub feedback: Option<LinearFeedbackSpec>,
-}
-
-/// `[linear.feedback]`: a stability augmentation (a flight-control
-/// computer) that moves the model input `control` by Σ gain·state on top
-/// of the scenario's `[[inputs]]`, the states read at the start of each
-/// `frame` and the command held over it: u = u_pilot + K·x(t_frame).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LinearFeedbackSpec {
-    /// The model input the augmentation moves (e.g. `elevator`).
-    pub control: String,
-    /// The gain on each named state (input units per state unit).
-    pub gains: BTreeMap<String, f64>,
-    /// The computer's frame: a multiple of the scenario's step (default the step).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub frame: Option<Quantity>,
-}
-
-/// A validated `[linear.feedback]` table.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LinearFeedback {
-    pub control: String,
-    pub gains: BTreeMap<String, f64>,
-    /// The frame in scenario steps (at least 1).
-    pub frame_steps: usize,
+    pub feedback: Option<FeedbackSpec>,
 }
 
 /// `[linear] gusts`: the Dryden turbulence of `[wind.turbulence]` (an
@@ -204,7 +183,7 @@ pub struct LinearFlight {
     pub model_path: PathBuf,
     pub process_noise: BTreeMap<String, f64>,
     pub gusts: Option<LinearGusts>,
-    pub feedback: Option<LinearFeedback>,
+    pub feedback: Option<Feedback>,
 }
 
 /// One `[[parameter_changes]]` table of a scenario file.
@@ -335,6 +314,8 @@ pub struct Scenario {
     pub parameter_changes: Vec<ParameterChange>,
     /// Set when the flight is a linear model's (`[linear]`).
     pub linear: Option<LinearFlight>,
+    /// The 6-DOF flight's stability augmentation (`[feedback]`).
+    pub feedback: Option<Augmentation>,
 }
 
 impl Scenario {
@@ -420,7 +401,7 @@ impl Scenario {
                 let feedback = spec
                     .feedback
                     .as_ref()
-                    .and_then(|spec| read_feedback(spec, step, &mut problems));
+                    .and_then(|spec| Feedback::read(spec, step, "linear.feedback", &mut problems));
                 match catalog::resolve_named(
                     &spec.model,
                     catalog::MODEL_FOLDER,
@@ -440,6 +421,16 @@ impl Scenario {
                 }
             }
         };
+        let feedback = file.feedback.as_ref().and_then(|spec| {
+            if file.linear.is_some() || jsbsim.is_some() {
+                problems.push(
+                    "feedback",
+                    "is for aeroid's 6-DOF simulator: a linear flight takes [linear.feedback], and JSBSim's aircraft fly their own flight-control system",
+                );
+                return None;
+            }
+            Feedback::read(spec, step, "feedback", &mut problems)?.for_six_dof(&mut problems)
+        });
         let inputs = InputSchedule::build(&file.inputs, base, path);
         let inputs = match (problems.is_empty(), inputs) {
             (_, Ok(inputs)) => inputs,
@@ -474,6 +465,7 @@ impl Scenario {
             jsbsim,
             parameter_changes,
             linear,
+            feedback,
         };
         problems.finish(path, scenario)
     }
@@ -709,48 +701,6 @@ fn read_departure(
             0.0,
         ),
     }
-}
-
-/// Checks a `[linear.feedback]` table: finite gains, a frame that is a
-/// whole number of steps `step`.
-fn read_feedback(
-    spec: &LinearFeedbackSpec,
-    step: f64,
-    problems: &mut Problems,
-) -> Option<LinearFeedback> {
-    let mut valid = true;
-    for (state, gain) in &spec.gains {
-        if !gain.is_finite() {
-            problems.push(format!("linear.feedback.gains.{state}"), "must be finite");
-            valid = false;
-        }
-    }
-    let frame_steps = match &spec.frame {
-        None => 1,
-        Some(frame) => match frame.si(Dimension::Time) {
-            Ok(frame) => {
-                let steps = (frame / step).round();
-                if !(steps >= 1.0 && (frame - steps * step).abs() <= 1e-9 * frame.abs().max(1.0)) {
-                    problems.push(
-                        "linear.feedback.frame",
-                        format!("must be a positive multiple of the step ({step} s)"),
-                    );
-                    valid = false;
-                }
-                steps.max(1.0) as usize
-            }
-            Err(message) => {
-                problems.push("linear.feedback.frame", message);
-                valid = false;
-                1
-            }
-        },
-    };
-    valid.then(|| LinearFeedback {
-        control: spec.control.clone(),
-        gains: spec.gains.clone(),
-        frame_steps,
-    })
 }
 
 fn check_ranges(trim: &TrimCondition, duration: f64, step: f64, problems: &mut Problems) {
