@@ -434,7 +434,10 @@ fn attas_linear_modes_match_the_simulated_response() {
     }
     let spiral = linearize::find(&modes, ModeKind::Spiral).unwrap();
     let doubling = std::f64::consts::LN_2 / spiral.eigenvalue.re;
-    assert!((doubling - 18.0).abs() < 0.5, "spiral doubles in {doubling:.2} s");
+    assert!(
+        (doubling - 18.0).abs() < 0.5,
+        "spiral doubles in {doubling:.2} s"
+    );
 }
 
 #[test]
