@@ -127,6 +127,9 @@ fn recovers_planted_sensor_errors() {
 /// biases are gated on an engineering tolerance, 10 % of their size
 /// (measured ≤ 4.7 %), while the flow-angle scale factors and offsets, which
 /// sit in the output equations, are gated on 4 Cramér–Rao σ (measured ≤ 2.7).
+/// That the input biases' bounds are optimistic is asserted too: at least
+/// one of the six lies beyond 4 of its σ, which honest bounds would give
+/// with a probability of about 4e-4 (6 × 6.3e-5).
 #[test]
 fn noisy_record_input_biases_and_flow_angle_calibration() {
     let scenario = Scenario::load("attas-multisine").unwrap();
@@ -134,6 +137,7 @@ fn noisy_record_input_biases_and_flow_angle_calibration() {
         record_scenario(&scenario, &biased_profile("fpr-noisy", "25 Hz", true)).unwrap();
     let result = flight_path_reconstruction(&record, 30).unwrap();
     assert_eq!(result.estimate.status, Status::Converged);
+    let mut input_sigmas: f64 = 0.0;
     for (name, truth) in planted() {
         let p = result.estimate.parameter(name).unwrap();
         let sigmas = (p.value - truth) / p.standard_error;
@@ -149,7 +153,14 @@ fn noisy_record_input_biases_and_flow_angle_calibration() {
             p.value,
             p.standard_error
         );
+        if !output_side {
+            input_sigmas = input_sigmas.max(sigmas.abs());
+        }
     }
+    assert!(
+        input_sigmas > 4.0,
+        "the input biases' bounds are now honest: worst {input_sigmas:.2} σ"
+    );
 }
 
 /// One sample per channel is fewer data than the reconstruction's

@@ -384,9 +384,60 @@ fn check(case: &Case) {
     }
 }
 
+/// The ATTAS modes as docs/findings.md ("ATTAS modes") tabulates them,
+/// from the linearisation at the RFD03 condition, written as the table
+/// writes them: ωn (rad/s) and ζ of an oscillatory mode, λ (1/s) of a real
+/// one. Each is held within half a unit of its last written digit (the
+/// computation is noise-free and deterministic, so the figures are the
+/// linearisation's, rounded); the spiral's doubling time ln 2/λ within
+/// 0.5 s of the 18 s stated.
+const ATTAS_TABLE: [(ModeKind, &str, &str); 5] = [
+    (ModeKind::ShortPeriod, "0.914", "0.59"),
+    (ModeKind::Phugoid, "0.154", "0.016"),
+    (ModeKind::DutchRoll, "1.50", "0.117"),
+    (ModeKind::Roll, "-1.60", ""),
+    (ModeKind::Spiral, "0.038", ""),
+];
+
+/// A figure as written and half a unit of its last digit.
+fn written(text: &str) -> (f64, f64) {
+    let decimals = text.split('.').nth(1).map_or(0, str::len);
+    (text.parse().unwrap(), 0.5 * 10f64.powi(-(decimals as i32)))
+}
+
 #[test]
 fn attas_linear_modes_match_the_simulated_response() {
     check(&ATTAS);
+    let modes = linearization(&ATTAS, &load(&ATTAS)).modes();
+    for (kind, first, damping) in ATTAS_TABLE {
+        let mode = linearize::find(&modes, kind).unwrap();
+        let (first, first_margin) = written(first);
+        if mode.oscillatory {
+            let (damping, damping_margin) = written(damping);
+            assert!(
+                (mode.natural_frequency - first).abs() <= first_margin
+                    && (mode.damping_ratio - damping).abs() <= damping_margin,
+                "{}: ωn {:.5}, ζ {:.5}; the table has {first}, {damping}",
+                kind.name(),
+                mode.natural_frequency,
+                mode.damping_ratio
+            );
+        } else {
+            assert!(
+                mode.eigenvalue.im.abs() < 1e-12
+                    && (mode.eigenvalue.re - first).abs() <= first_margin,
+                "{}: λ {:.5}; the table has {first}",
+                kind.name(),
+                mode.eigenvalue
+            );
+        }
+    }
+    let spiral = linearize::find(&modes, ModeKind::Spiral).unwrap();
+    let doubling = std::f64::consts::LN_2 / spiral.eigenvalue.re;
+    assert!(
+        (doubling - 18.0).abs() < 0.5,
+        "spiral doubles in {doubling:.2} s"
+    );
 }
 
 #[test]

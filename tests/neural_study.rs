@@ -1,9 +1,9 @@
 //! The bundled study `neural-estimators`: the neural estimators beside
 //! output error on the ATTAS lateral multistep through the ideal, the
-//! flight-test and the QAR recorder (its records derived). docs/findings.md ("Neural estimators
-//! beside output error") gives its 20-run table; this test runs its first
-//! two runs per recorder and checks how every fit ends, which is the
-//! table's first column, and the noise-free accuracy it states.
+//! flight-test and the QAR recorder (its records derived). This test runs
+//! its first two runs per recorder and checks how every fit ends and the
+//! noise-free accuracy: the table of docs/findings.md ("Neural estimators
+//! beside output error") states exactly these.
 
 use aeroid::eval::study::Study;
 use std::collections::BTreeMap;
