@@ -119,7 +119,7 @@ pub enum Error {
     /// An estimator cannot run on this record or model; the refusal says
     /// what is missing, as data.
     #[error("{0}")]
-    Refused(crate::estimation::estimator::Refusal),
+    Refused(crate::refusal::Refusal),
 
     /// A square-root filter's Cholesky downdate that would leave its
     /// covariance factor without a positive diagonal: the covariance it

@@ -23,6 +23,7 @@ pub mod paths;
 pub mod prep;
 pub mod random;
 pub mod record;
+pub mod refusal;
 pub mod sim;
 #[macro_use]
 mod simd;

@@ -42,6 +42,8 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    #[cfg(feature = "jsbsim")]
+    aeroid::jsbsim::register();
     let result = match Cli::parse().command {
         Command::Simulate(args) => cli::simulate::run(args),
         Command::List(args) => cli::list::run(args),

@@ -37,7 +37,7 @@ pub fn import_case(
     let folder = temp_folder(test);
     let data = write(&folder, "flight.csv", csv);
     let map = write(&folder, "map.toml", map);
-    aeroid::record::import::import(&data, &map)
+    aeroid::record::import::import(&data, &map, aeroid::estimation::CHANNELS_READ)
 }
 
 /// Flies `scenario` and records it with `profile` (its recorder draws from

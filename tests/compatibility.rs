@@ -2,8 +2,8 @@
 //! 31–32): sensor biases and scale factors planted by the recorder are found
 //! again, and the corrected record is consistent.
 
+use aeroid::estimation::compatibility::flight_path_reconstruction;
 use aeroid::estimation::estimate::Status;
-use aeroid::prep::compatibility::flight_path_reconstruction;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
 

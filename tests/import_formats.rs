@@ -164,7 +164,7 @@ fn import_files(test: &str, data: &str, map: &str, extension: &str) -> ImportOut
     let folder = common::temp_folder(test);
     let data = common::write(&folder, &format!("flight.{extension}"), data);
     let map = common::write(&folder, "map.toml", map);
-    import(&data, &map).unwrap()
+    import(&data, &map, aeroid::estimation::CHANNELS_READ).unwrap()
 }
 
 /// The two files give the same record: the same channels, units and
@@ -371,7 +371,9 @@ fn import_error(test: &str, data: &str, map: &str) -> String {
     let folder = common::temp_folder(test);
     let data = common::write(&folder, "flight.asc", data);
     let map = common::write(&folder, "map.toml", map);
-    import(&data, &map).unwrap_err().to_string()
+    import(&data, &map, aeroid::estimation::CHANNELS_READ)
+        .unwrap_err()
+        .to_string()
 }
 
 const BAD_MAP_HEAD: &str = "[file]\nheader = false\n[time]\ncolumn = 1\n";

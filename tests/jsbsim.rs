@@ -62,6 +62,7 @@ fn b737_cruise() -> InitialConditions {
 
 #[test]
 fn loads_the_737_and_steps_at_the_set_rate() {
+    aeroid::jsbsim::register();
     let mut exec = Exec::new().unwrap();
     exec.load_model("737").unwrap();
     exec.set_dt(1.0 / 120.0).unwrap();
@@ -82,6 +83,7 @@ fn loads_the_737_and_steps_at_the_set_rate() {
 /// XMLLogException for a malformed function) becomes an Err, never an abort.
 #[test]
 fn cpp_exceptions_become_errors() {
+    aeroid::jsbsim::register();
     let mut exec = Exec::new().unwrap();
     exec.load_model("737").unwrap();
     let mut stalled = b737_cruise();
@@ -110,6 +112,7 @@ fn cpp_exceptions_become_errors() {
 
 #[test]
 fn a_missing_aircraft_is_an_error_naming_the_file() {
+    aeroid::jsbsim::register();
     let mut exec = Exec::new().unwrap();
     let error = exec.load_model("no-such-aircraft").unwrap_err();
     assert!(message(&error).contains("no-such-aircraft.xml"), "{error}");
@@ -121,6 +124,7 @@ fn a_missing_aircraft_is_an_error_naming_the_file() {
 /// makes reading, writing and caching one an error that names it.
 #[test]
 fn unknown_properties_are_errors() {
+    aeroid::jsbsim::register();
     let mut exec = Exec::new().unwrap();
     exec.load_model("737").unwrap();
     assert!(exec.has_property("fcs/elevator-cmd-norm").unwrap());
@@ -138,6 +142,7 @@ fn unknown_properties_are_errors() {
 
 #[test]
 fn cached_handles_read_and_write_the_named_property() {
+    aeroid::jsbsim::register();
     let mut exec = Exec::new().unwrap();
     exec.load_model("737").unwrap();
     let elevator = exec.property("fcs/elevator-cmd-norm").unwrap();
@@ -160,6 +165,7 @@ fn cached_handles_read_and_write_the_named_property() {
 /// shows that the test can see them.
 #[test]
 fn loading_opens_no_socket_and_writes_no_file() {
+    aeroid::jsbsim::register();
     let folder = common::temp_folder("jsbsim-io");
     let csv = folder.join("written-by-jsbsim.csv");
     let port = {
@@ -200,6 +206,7 @@ fn loading_opens_no_socket_and_writes_no_file() {
 /// default altitude (sea level) and the altitude after gives another speed.
 #[test]
 fn initial_conditions_set_position_before_speed() {
+    aeroid::jsbsim::register();
     let wanted = 280.0;
     let mut exec = Exec::new().unwrap();
     exec.load_model("737").unwrap();
@@ -235,6 +242,7 @@ fn initial_conditions_set_position_before_speed() {
 /// own executive (`Exec` is not `Send`) and all must agree.
 #[test]
 fn threads_load_models_at_once_and_agree() {
+    aeroid::jsbsim::register();
     let barrier = std::sync::Arc::new(std::sync::Barrier::new(4));
     let handles: Vec<_> = (0..4)
         .map(|_| {
@@ -268,6 +276,7 @@ fn threads_load_models_at_once_and_agree() {
 /// blanket impl for `Send` types does not apply.)
 #[test]
 fn an_executive_is_not_send() {
+    aeroid::jsbsim::register();
     trait AmbiguousIfSend<A> {
         fn check() -> bool {
             true
@@ -286,6 +295,7 @@ fn an_executive_is_not_send() {
 /// factors; JSBSim's own kg·m² factor would be 9e-5 off).
 #[test]
 fn export_carries_mass_inertia_and_geometry() {
+    aeroid::jsbsim::register();
     let aircraft = attas();
     let folder = common::temp_folder("jsbsim-export");
     let file = export(&aircraft, &ExportOptions::default(), &folder).unwrap();
@@ -323,6 +333,7 @@ fn export_carries_mass_inertia_and_geometry() {
 
 #[test]
 fn export_refuses_the_stall_model() {
+    aeroid::jsbsim::register();
     let aircraft = Aircraft::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/aircraft/attas-stall.toml"
@@ -377,6 +388,7 @@ fn cross_check_agrees(scenario: &str, excited: &[&str]) {
 
 #[test]
 fn cross_check_attas_elevator_3211() {
+    aeroid::jsbsim::register();
     cross_check_agrees(
         "attas-elevator-3211",
         &["u", "w", "q", "theta", "airspeed", "alpha", "altitude"],
@@ -390,6 +402,7 @@ fn cross_check_attas_elevator_3211() {
 /// 0.71 %, v and β by 0.52 %, so the 0.5 % bound tells the two apart.
 #[test]
 fn cross_check_attas_multisine_with_linear_inputs() {
+    aeroid::jsbsim::register();
     cross_check_agrees(
         "attas-multisine",
         &[
@@ -400,6 +413,7 @@ fn cross_check_attas_multisine_with_linear_inputs() {
 
 #[test]
 fn cross_check_attas_lateral_multistep() {
+    aeroid::jsbsim::register();
     cross_check_agrees(
         "attas-lateral-multistep",
         &[
@@ -410,6 +424,7 @@ fn cross_check_attas_lateral_multistep() {
 
 #[test]
 fn cross_check_cdrw_longitudinal() {
+    aeroid::jsbsim::register();
     cross_check_agrees(
         "cdrw-longitudinal",
         &["u", "w", "q", "theta", "airspeed", "alpha", "altitude"],
@@ -418,6 +433,7 @@ fn cross_check_cdrw_longitudinal() {
 
 #[test]
 fn cross_check_cdrw_lateral() {
+    aeroid::jsbsim::register();
     cross_check_agrees("cdrw-lateral", &["v", "p", "r", "phi", "psi", "beta"]);
 }
 
@@ -427,6 +443,7 @@ fn cross_check_cdrw_lateral() {
 /// difference docs/jsbsim.md documents.
 #[test]
 fn jsbsim_atmosphere_is_a_measurable_convention_difference() {
+    aeroid::jsbsim::register();
     use aeroid::jsbsim::crosscheck::{CrossCheckOptions, crosscheck};
     let scenario = aeroid::sim::scenario::Scenario::load("attas-elevator-3211").unwrap();
     let ours = crosscheck(
@@ -459,6 +476,7 @@ fn jsbsim_atmosphere_is_a_measurable_convention_difference() {
 /// `load_model` looks in the executive's own root, not the default one.
 #[test]
 fn load_model_uses_the_executives_root() {
+    aeroid::jsbsim::register();
     let root = common::temp_folder("jsbsim-root");
     export(&attas(), &ExportOptions::default(), &root.join("aircraft")).unwrap();
     for folder in ["engine", "systems"] {
@@ -480,6 +498,7 @@ fn load_model_uses_the_executives_root() {
 /// 1e-6 + 1e-5 relative. The machinery that gives a JSBSim aircraft's truth.
 #[test]
 fn central_differences_through_jsbsim_recover_the_exported_derivatives() {
+    aeroid::jsbsim::register();
     use aeroid::jsbsim::derivatives::{SurfaceBinding, local_derivatives};
     use aeroid::jsbsim::export::{CONTROL_PROPERTIES, THROTTLE_PROPERTY};
     use aeroid::sim::state::Control;
@@ -566,6 +585,7 @@ const B737_LATERAL: &str = "b737-lateral-multistep";
 /// 737 has no lift from q); Cl_da = −(0.1 − 0.0335·M) in aeroid's sign.
 #[test]
 fn the_737_truth_file_holds_jsbsims_local_derivatives_at_trim() {
+    aeroid::jsbsim::register();
     let scenario = Scenario::load(B737_3211).unwrap();
     let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
     let (record, truth) = aeroid::record::recorder::record_scenario(&scenario, &profile).unwrap();
@@ -648,6 +668,7 @@ fn the_737_truth_file_holds_jsbsims_local_derivatives_at_trim() {
 /// Clδa < 0 with aileron = −left aileron, Cnδr < 0).
 #[test]
 fn the_737_fcs_moves_every_surface_only_through_its_command() {
+    aeroid::jsbsim::register();
     use aeroid::jsbsim::derivatives::{SurfaceBinding, coefficients, local_derivatives};
     let scenario = Scenario::load(B737_3211).unwrap();
     let mut trimmed = own::trim(&scenario).unwrap();
@@ -716,6 +737,7 @@ fn the_737_fcs_moves_every_surface_only_through_its_command() {
 /// clear error naming the file and the field.
 #[test]
 fn bad_jsbsim_scenarios_are_clear_errors() {
+    aeroid::jsbsim::register();
     let folder = common::temp_folder("b737-bad-input");
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -833,6 +855,7 @@ fn fly_737(
 /// [`SCORED`]. Prints the table docs/jsbsim.md quotes (`-- --nocapture`).
 #[test]
 fn estimators_recover_the_737_derivatives_from_flight_test_data() {
+    aeroid::jsbsim::register();
     use aeroid::estimation::structure::{ModelStructure, Structure};
     println!(
         "{:<9} {:<12} {:>10} {:>10} {:>9} {:>9} {:>7}",
@@ -951,6 +974,7 @@ fn estimators_recover_the_737_derivatives_from_flight_test_data() {
 /// Required: within 1.5 %. Output error cannot be asked to beat this.
 #[test]
 fn the_linear_postulate_fits_jsbsims_own_coefficients() {
+    aeroid::jsbsim::register();
     use nalgebra::{DMatrix, DVector};
     for (scenario_name, coefficient, terms) in [
         (B737_3211, "Cm", &["alpha", "q", "de"][..]),

@@ -349,7 +349,9 @@ fn geometric_and_geopotential_altitude_give_the_same_estimate() {
         let (csv, map) = csv_twin(&record, altitude, convention);
         let data = common::write(&folder, &format!("{name}.csv"), &csv);
         let map = common::write(&folder, &format!("{name}.toml"), &map);
-        aeroid::record::import::import(&data, &map).unwrap().record
+        aeroid::record::import::import(&data, &map, aeroid::estimation::CHANNELS_READ)
+            .unwrap()
+            .record
     };
     let from_geopotential = imported("geopotential", &|h| h, "geopotential");
     let from_geometric = imported("geometric", &geometric, "geometric");

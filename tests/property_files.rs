@@ -954,7 +954,7 @@ fn mutated_imports_read_or_fail_cleanly() {
             let data_path = folder.0.join("flight.csv");
             std::fs::write(&map_path, &map).unwrap();
             std::fs::write(&data_path, &data).unwrap();
-            match import::import(&data_path, &map_path) {
+            match import::import(&data_path, &map_path, aeroid::estimation::CHANNELS_READ) {
                 Ok(outcome) => round_trip(&outcome.record, &folder.0),
                 Err(_) => Ok(Outcome::Refused),
             }
@@ -989,17 +989,18 @@ fn imported_values_are_their_cells_in_si() {
                     .collect()
             };
             // A channel with no sample at all is refused, naming it.
-            let record = match import::import(&data_path, &map_path) {
-                Ok(outcome) => outcome.record,
-                Err(error) if rows.is_empty() || column(2, 1.0, 0.0).is_empty() => {
-                    let text = error.to_string();
-                    return match rows.is_empty() || text.contains("alpha") {
-                        true => Ok(Outcome::Refused),
-                        false => Err(format!("refused without naming alpha: {text}")),
-                    };
-                }
-                Err(error) => return Err(format!("refused {} rows: {error}", rows.len())),
-            };
+            let record =
+                match import::import(&data_path, &map_path, aeroid::estimation::CHANNELS_READ) {
+                    Ok(outcome) => outcome.record,
+                    Err(error) if rows.is_empty() || column(2, 1.0, 0.0).is_empty() => {
+                        let text = error.to_string();
+                        return match rows.is_empty() || text.contains("alpha") {
+                            true => Ok(Outcome::Refused),
+                            false => Err(format!("refused without naming alpha: {text}")),
+                        };
+                    }
+                    Err(error) => return Err(format!("refused {} rows: {error}", rows.len())),
+                };
             for (channel, expected) in [
                 ("airspeed", column(1, 1852.0 / 3600.0, 0.0)),
                 ("alpha", column(2, std::f64::consts::PI / 180.0, 0.0)),
@@ -1131,7 +1132,7 @@ fn mutated_headerless_imports_read_or_fail_cleanly() {
                 let data_path = folder.0.join("flight.asc");
                 std::fs::write(&map_path, &map).unwrap();
                 std::fs::write(&data_path, &data).unwrap();
-                match import::import(&data_path, &map_path) {
+                match import::import(&data_path, &map_path, aeroid::estimation::CHANNELS_READ) {
                     Ok(outcome) => round_trip(&outcome.record, &folder.0),
                     Err(_) => Ok(Outcome::Refused),
                 }

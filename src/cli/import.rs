@@ -30,7 +30,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let Args { data, map, out } = args;
     aeroid::paths::check_output_folder(&out)?;
-    let outcome = aeroid::record::import::import(&data, &map)?;
+    let outcome = aeroid::record::import::import(&data, &map, aeroid::estimation::CHANNELS_READ)?;
     outcome.record.write(&out)?;
     outln!(
         "{}: {} channels imported into {}",

@@ -22,7 +22,7 @@ pub fn run(args: Args) -> Result<()> {
         aeroid::paths::check_output_folder(out)?;
     }
     let record = aeroid::record::FlightRecord::read(&args.record)?;
-    let result = aeroid::prep::compatibility::flight_path_reconstruction(&record, 30)?;
+    let result = aeroid::estimation::compatibility::flight_path_reconstruction(&record, 30)?;
     let estimate = &result.estimate;
     outln!(
         "flight path reconstruction of {}: {:?} after {} iterations, {:.3} s",

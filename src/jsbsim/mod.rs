@@ -26,6 +26,26 @@ pub mod export;
 pub mod flight;
 pub mod own;
 
+/// JSBSim as the simulator of the scenarios that name its own aircraft.
+struct Jsbsim;
+
+impl crate::sim::source::ForeignSimulator for Jsbsim {
+    fn fly(&self, scenario: &crate::sim::scenario::Scenario) -> Result<crate::sim::Flight> {
+        own::fly(scenario)
+    }
+
+    fn check_model(&self, model: &str) -> std::result::Result<(), String> {
+        own::check_model(model)
+    }
+}
+
+/// Registers JSBSim as the simulator of `"jsbsim:NAME"` scenarios
+/// ([`crate::sim::source::register_jsbsim`]); call it once before loading
+/// or flying one.
+pub fn register() {
+    crate::sim::source::register_jsbsim(&Jsbsim);
+}
+
 use crate::error::{Error, Result};
 use jsbsim_sys as sys;
 use std::ffi::{CStr, CString, c_int, c_void};

@@ -1,13 +1,10 @@
 //! Preparing a record for estimation: smoothing numerical differentiation
-//! of recorded channels, and flight-path reconstruction (the data
-//! compatibility check that estimates sensor biases and scale factors),
-//! geometric angle of attack and sideslip, angular rates from the attitude
+//! of recorded channels, geometric angle of attack and sideslip, angular rates from the attitude
 //! kinematics, combined control surfaces from split ones, air density
 //! from pressure altitude and temperature, and thrust from fuel flow.
 
 pub mod air_data;
 pub mod angular_rates;
-pub mod compatibility;
 pub mod derive;
 pub mod differentiation;
 pub mod flow_angles;

@@ -227,8 +227,10 @@ pub struct ImportOutcome {
     pub warnings: Vec<ImportWarning>,
 }
 
-/// Reads `data` with the column map at `map_path` into a flight record.
-pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
+/// Reads `data` with the column map at `map_path` into a flight record;
+/// a mapped channel not among `read` (the channels the estimators read,
+/// `crate::estimation::CHANNELS_READ` for aeroid's) is kept with a warning.
+pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutcome> {
     let file: ColumnMapFile = parse_toml(map_path, &read_text(map_path)?)?;
     let (time, channels) = validate_map(&file, map_path)?;
     let layout = Layout {
@@ -285,7 +287,7 @@ pub fn import(data: &Path, map_path: &Path) -> Result<ImportOutcome> {
     Ok(ImportOutcome {
         record,
         unmapped,
-        warnings: warnings(&channels),
+        warnings: warnings(&channels, read),
     })
 }
 
@@ -297,11 +299,11 @@ fn column_index(table: &CsvTable, column: &ColumnRef) -> Result<usize> {
     }
 }
 
-/// Channels no estimator reads, and altitudes whose density is the standard day's.
-fn warnings(channels: &[MappedChannel]) -> Vec<ImportWarning> {
+/// Channels not among `read`, and altitudes whose density is the standard day's.
+fn warnings(channels: &[MappedChannel], read: &[&str]) -> Vec<ImportWarning> {
     let mut warnings = Vec::new();
     for mapped in channels {
-        if !crate::estimation::CHANNELS_READ.contains(&mapped.name.as_str()) {
+        if !read.contains(&mapped.name.as_str()) {
             warnings.push(ImportWarning {
                 channel: mapped.name.clone(),
                 message: "no estimator reads this channel; it is kept in the record".into(),

@@ -6,7 +6,7 @@
 //! The aircraft is an aeroid aircraft file, or one of JSBSim's own aircraft
 //! named `"jsbsim:NAME"` (`aircraft/NAME/NAME.xml` under JSBSim's root), which
 //! `aeroid record` and `aeroid run` fly in JSBSim (feature `jsbsim`,
-//! `crate::jsbsim::own`). Such a scenario also has a `[jsbsim]` table:
+//! registered as [`crate::sim::source::ForeignSimulator`]). Such a scenario also has a `[jsbsim]` table:
 //!
 //! ```toml
 //! aircraft = "jsbsim:737"
@@ -516,15 +516,15 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
             "a JSBSim aircraft flies JSBSim's own aerodynamic tables: aeroid cannot change its parameters during the flight".into(),
         ));
     }
-    if !cfg!(feature = "jsbsim") {
+    let Some(simulator) = crate::sim::source::jsbsim() else {
         return Err(invalid(
             "aircraft",
             format!(
-                "'{}' is one of JSBSim's own aircraft; this aeroid was built without JSBSim: build it with `--features jsbsim` (cargo run --release --features jsbsim -- ...)",
+                "'{}' is one of JSBSim's own aircraft, and this aeroid has no JSBSim: build it with `--features jsbsim` (cargo run --release --features jsbsim -- ...); a library user also calls aeroid::jsbsim::register()",
                 file.aircraft
             ),
         ));
-    }
+    };
     let Some(spec) = &file.jsbsim else {
         return Err(invalid(
             "jsbsim",
@@ -533,8 +533,9 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
             ),
         ));
     };
-    #[cfg(feature = "jsbsim")]
-    crate::jsbsim::own::check_model(model).map_err(|message| invalid("aircraft", message))?;
+    simulator
+        .check_model(model)
+        .map_err(|message| invalid("aircraft", message))?;
     let calm = file.wind.gusts.is_empty()
         && file.wind.turbulence.is_none()
         && file.wind.speed.si(Dimension::Speed) == Ok(0.0);

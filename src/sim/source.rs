@@ -2,12 +2,41 @@
 //! aeroid aircraft, or JSBSim for one of JSBSim's own aircraft (feature
 //! `jsbsim`). [`Scenario::source`] is the one place that tells them apart;
 //! everything that flies a scenario goes through [`FlightSource::fly`].
+//!
+//! The simulator layer does not depend on JSBSim: JSBSim is a
+//! [`ForeignSimulator`] that the `jsbsim` module implements and a program
+//! registers once ([`register_jsbsim`]; the `aeroid` binary built with the
+//! feature does, through `aeroid::jsbsim::register`).
 
 use crate::error::{Error, Result};
 use crate::sim::Simulation;
 use crate::sim::scenario::{JsbsimAircraft, Scenario};
 use crate::sim::trace::TruthTrace;
 use crate::sim::truth::RunTruth;
+use std::sync::OnceLock;
+
+/// A simulator other than aeroid's that flies the scenarios whose aircraft
+/// is one of its own.
+pub trait ForeignSimulator: Send + Sync {
+    /// Trims and flies `scenario` to its end or its departure.
+    fn fly(&self, scenario: &Scenario) -> Result<Flight>;
+    /// `Ok` when the simulator has the aircraft `model`; else a message
+    /// naming what was looked for.
+    fn check_model(&self, model: &str) -> std::result::Result<(), String>;
+}
+
+static JSBSIM: OnceLock<&'static dyn ForeignSimulator> = OnceLock::new();
+
+/// Makes `simulator` the one that flies JSBSim's aircraft (the first
+/// registration holds).
+pub fn register_jsbsim(simulator: &'static dyn ForeignSimulator) {
+    let _ = JSBSIM.set(simulator);
+}
+
+/// The registered JSBSim, if any.
+pub fn jsbsim() -> Option<&'static dyn ForeignSimulator> {
+    JSBSIM.get().copied()
+}
 
 /// The simulator that flies a scenario.
 #[derive(Debug, Clone, Copy)]
@@ -93,16 +122,16 @@ impl FlightSource<'_> {
                     departure,
                 })
             }
-            #[cfg(feature = "jsbsim")]
-            FlightSource::Jsbsim(_) => crate::jsbsim::own::fly(scenario),
-            #[cfg(not(feature = "jsbsim"))]
-            FlightSource::Jsbsim(_) => Err(Error::Invalid {
-                path: scenario.path.clone(),
-                problems: vec![crate::error::Problem {
-                    field: "aircraft".into(),
-                    message: "is one of JSBSim's own aircraft; this aeroid was built without JSBSim: build it with `--features jsbsim`".into(),
-                }],
-            }),
+            FlightSource::Jsbsim(_) => match jsbsim() {
+                Some(simulator) => simulator.fly(scenario),
+                None => Err(Error::Invalid {
+                    path: scenario.path.clone(),
+                    problems: vec![crate::error::Problem {
+                        field: "aircraft".into(),
+                        message: "is one of JSBSim's own aircraft, and no JSBSim is registered: the aeroid program built with `--features jsbsim` flies it (a library user calls aeroid::jsbsim::register())".into(),
+                    }],
+                }),
+            },
         }
     }
 }

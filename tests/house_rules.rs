@@ -1,4 +1,10 @@
-//! Every number in docs/findings.md is held by a test. A finding is a
+//! The house rules a reviewer would otherwise check by hand.
+//!
+//! **The layers.** The top-level modules of src/ import each other without
+//! a cycle: every `crate::MODULE` in code (not in comments) is an edge, and
+//! the graph has no strongly connected component of two or more modules.
+//!
+//! **Every number in docs/findings.md is held by a test.** A finding is a
 //! bullet, a paragraph or a table of the document's sections; one that
 //! states a number (any digit) names, in backticks, the test that asserts
 //! it: a `#[test]` function of tests/ or src/, by its name or by a filter
@@ -6,7 +12,7 @@
 //! lean on its section's lead paragraph, and a table on the paragraph
 //! before it. The test reads the document and the test sources only.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 fn root() -> &'static Path {
@@ -277,4 +283,155 @@ fn the_check_refuses_a_number_without_a_test_and_takes_one_with() {
     assert_eq!(lines, vec![9, 12, 14], "{missing:?}");
     let held = "## S\n\nMeasured by `bounds_hold_over_seeds`.\n\n- 3.5σ off.\n\n| a | 1 |\n";
     assert!(unheld(held, &tests).is_empty());
+}
+
+/// The top-level modules of src/ (a file `X.rs` or a folder `X/`, not the
+/// crate roots) and, per module, the modules its code names as
+/// `crate::OTHER` (comments left out), with one place of each edge.
+fn module_graph() -> BTreeMap<String, BTreeMap<String, String>> {
+    let src = root().join("src");
+    let mut modules = BTreeSet::new();
+    for entry in std::fs::read_dir(&src).unwrap().flatten() {
+        let name = entry.file_name().to_string_lossy().to_string();
+        if let Some(stem) = name.strip_suffix(".rs") {
+            if stem != "lib" && stem != "main" {
+                modules.insert(stem.to_string());
+            }
+        } else if entry.path().is_dir() {
+            modules.insert(name);
+        }
+    }
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let mut graph: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
+    for file in files {
+        let relative = file
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .to_string();
+        let top = relative
+            .split('/')
+            .next()
+            .unwrap()
+            .trim_end_matches(".rs")
+            .to_string();
+        if !modules.contains(&top) {
+            continue;
+        }
+        let text = std::fs::read_to_string(&file).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            for (i, _) in code.match_indices("crate::") {
+                let other: String = code[i + 7..]
+                    .chars()
+                    .take_while(|c| c.is_ascii_lowercase() || *c == '_')
+                    .collect();
+                if other != top && modules.contains(&other) {
+                    graph
+                        .entry(top.clone())
+                        .or_default()
+                        .entry(other)
+                        .or_insert_with(|| format!("src/{relative}:{}", n + 1));
+                }
+            }
+        }
+    }
+    graph
+}
+
+/// The cycles of a graph: its strongly connected components of two or
+/// more nodes (Tarjan's algorithm).
+fn cycles(graph: &BTreeMap<String, BTreeMap<String, String>>) -> Vec<Vec<String>> {
+    struct Search<'a> {
+        graph: &'a BTreeMap<String, BTreeMap<String, String>>,
+        index: BTreeMap<String, usize>,
+        low: BTreeMap<String, usize>,
+        stack: Vec<String>,
+        components: Vec<Vec<String>>,
+    }
+    fn visit(search: &mut Search, v: &str) {
+        let n = search.index.len();
+        search.index.insert(v.to_string(), n);
+        search.low.insert(v.to_string(), n);
+        search.stack.push(v.to_string());
+        let next: Vec<String> = search
+            .graph
+            .get(v)
+            .map(|edges| edges.keys().cloned().collect())
+            .unwrap_or_default();
+        for w in next {
+            if !search.index.contains_key(&w) {
+                visit(search, &w);
+                let low = search.low[v].min(search.low[&w]);
+                search.low.insert(v.to_string(), low);
+            } else if search.stack.contains(&w) {
+                let low = search.low[v].min(search.index[&w]);
+                search.low.insert(v.to_string(), low);
+            }
+        }
+        if search.low[v] == search.index[v] {
+            let mut component = Vec::new();
+            while let Some(w) = search.stack.pop() {
+                let done = w == v;
+                component.push(w);
+                if done {
+                    break;
+                }
+            }
+            if component.len() > 1 {
+                component.sort();
+                search.components.push(component);
+            }
+        }
+    }
+    let mut search = Search {
+        graph,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        components: Vec::new(),
+    };
+    for v in graph.keys() {
+        if !search.index.contains_key(v) {
+            visit(&mut search, v);
+        }
+    }
+    search.components
+}
+
+#[test]
+fn the_top_level_modules_import_each_other_without_a_cycle() {
+    let graph = module_graph();
+    assert!(graph.len() >= 10, "{graph:?}");
+    let found = cycles(&graph);
+    let listing: Vec<String> = found
+        .iter()
+        .map(|component| {
+            let edges: Vec<String> = component
+                .iter()
+                .flat_map(|a| {
+                    graph[a]
+                        .iter()
+                        .filter(|(b, _)| component.contains(b))
+                        .map(move |(b, place)| format!("{a} -> {b} ({place})"))
+                })
+                .collect();
+            format!("{}: {}", component.join(", "), edges.join("; "))
+        })
+        .collect();
+    assert!(found.is_empty(), "module cycles:\n{}", listing.join("\n"));
+}
+
+#[test]
+fn the_cycle_check_finds_a_cycle() {
+    let edge = |to: &str| (to.to_string(), "here".to_string());
+    let graph: BTreeMap<String, BTreeMap<String, String>> = [
+        ("a".to_string(), [edge("b")].into()),
+        ("b".to_string(), [edge("c")].into()),
+        ("c".to_string(), [edge("a")].into()),
+        ("d".to_string(), [edge("a")].into()),
+    ]
+    .into();
+    assert_eq!(cycles(&graph), vec![vec!["a", "b", "c"]]);
 }
