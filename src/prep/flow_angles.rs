@@ -26,16 +26,9 @@
 //! Without the wind correction Eq. 2 is left out (wind 0): what the paper's
 //! dashed lines in its Fig. 3 show.
 //!
-//! # Channels at different rates
-//! The angles are computed at the sample instants of the fastest needed
-//! channel (on a tie, the first of `pitch`, `roll`, `yaw`,
-//! `flight_path_angle`, `track`, `ground_speed`, `wind_speed`,
-//! `wind_direction`: attitude moves fastest), within the span that every
-//! needed channel covers (nothing is extrapolated). Every other channel is
-//! interpolated linearly to those instants (heading, track and wind
-//! direction after unwrapping, so that 359° → 1° passes through 0°). A
-//! derived sample is a dropout where a needed channel's sample at or around
-//! its instant is one: dropouts are not bridged.
+//! The angles are computed at the instants of the fastest needed channel,
+//! within the span every needed channel covers, the others interpolated
+//! linearly (angles after unwrapping); a dropout is not bridged.
 //!
 //! # Error from the channels' resolution
 //! To first order, an error δx_i in input i moves the angles by
@@ -54,19 +47,8 @@
 //! 0.5°) that is σ_α ≈ √(0.029² + 0.101²) ≈ 0.105° and
 //! σ_β ≈ √(0.087² + 0.289²) ≈ 0.30°: the 1° track resolution dominates β.
 //!
-//! # Measured on the transport approach (QAR, seed 5)
-//! Checked in `tests/flow_angles.rs`, tabled in docs/cli.md (`derive`).
-//! - Steady 20 kt wind only: RMS error 0.103° in α and 0.268° in β against
-//!   the formula's 0.105° and 0.282°; every sample within the first-order
-//!   worst case (at most 0.95 of it).
-//! - Without the wind correction β is off by 4.69° on average (the
-//!   crosswind over the airspeed), the wind's first-order effect.
-//! - Gusts and moderate turbulence: 1.16° RMS in α (4.05° largest), of
-//!   which the unknown vertical wind's first-order effect leaves 0.15° RMS
-//!   unexplained (0.10° with unquantized channels); 0.94° RMS in β, mostly
-//!   the horizontal turbulence the 1/4 Hz wind channels miss (0.52° with
-//!   the wind at 1 Hz). The wind channels' resolution (0.1 kt, 0.5°)
-//!   contributes 0.001° (α) and 0.007° (β) RMS, as the formula predicts.
+//! What the formula predicts and what the gusts add is measured in
+//! `tests/flow_angles.rs` (docs/cli.md, `derive`).
 
 use crate::error::{Error, Result};
 use crate::record::{Channel, FlightRecord, derived};

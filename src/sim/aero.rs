@@ -1,74 +1,38 @@
 //! Aerodynamic models: linear stability and control derivatives, and the
-//! quasi-steady stall model with Kirchhoff flow separation.
+//! quasi-steady stall model with Kirchhoff flow separation. One
+//! [`AeroModel`] evaluates both an aircraft file's truth and every
+//! estimator's postulated model. The file vocabulary (regressors, products
+//! such as `alpha^2`, ties, the `[stall]` variants, the moment reference
+//! point) is in docs/files.md, "Aircraft (`aircraft/*.toml`)".
 //!
-//! One [`AeroModel`] evaluates both the truth model of an aircraft file and
-//! any postulated model of an estimator. Each coefficient is a sum of named
-//! terms `C_term · regressor`; parameters are named `{coefficient}_{term}`
-//! (`CL_alpha`, `Cm_q`, `CD_0`), plus `e` (Oswald factor) and the stall
-//! parameters `a1`, `alpha_star`, `tau1`, `tau2`.
+//! **Coefficients**: each a sum of named terms `C_term · regressor`, the
+//! parameter `{coefficient}_{term}` (`CL_alpha`, `Cm_q`, `CD_0`), rates
+//! normalised p·b/(kV), q·c̄/(kV), r·b/(kV) (k = 2 or 1); products of
+//! regressors ([`Monomial`]) and tied parameters ([`Tie`], θ = c·θ_master +
+//! d) are evaluated by the same sum, so the simulator, the regressions'
+//! columns and the state-space Jacobians all see them.
 //!
-//! Regressors (the keys of a coefficient table):
-//! `0` (constant), `alpha`, `beta` (rad), `p`, `q`, `r` (normalised rates
-//! p·b/(kV), q·c̄/(kV), r·b/(kV) with k = 2 or 1 and V the airspeed or the
-//! reference airspeed V0, as the file says), `alpha_dot` (α̇·c̄/(kV)), `de`, `da`,
-//! `dr`, `df` (rad), `dV` = V/V0 − 1, `dMach` = M − M0, `chi` = 1 − χ
-//! (stall model), and `CL2` = CL² (drag only, wind axes).
-//!
-//! Products ([`Monomial`]): a key may be a product of regressors with
-//! integer powers, `alpha^2`, `alpha^3`, `alpha*dMach`, `alpha^2*de`
-//! (factors in the order of the list above, a repeated factor once with
-//! its power, total degree ≤ 4; quoted in TOML: `"alpha^2" = 0.6`), its
-//! parameter `{coefficient}_{key}` (`CD_alpha^2`). It is evaluated by the
-//! same sum as every term, so the simulator, equation error's regression
-//! columns and the state-space methods' model and Jacobians all see it.
-//! The stall model's Kirchhoff factor multiplies the plain `alpha` term of
-//! the lift-type coefficient only; `CL2` is never a factor of a product.
-//!
-//! Tied parameters ([`Tie`], a model file's `[parameters.NAME] tie`): a
-//! term's coefficient θ = c·θ_master + d, taken from the master's current
-//! value wherever the model is evaluated.
-//!
-//! Moment reference point (`[aero.moment_reference]`): the moment
-//! coefficients of the file are taken about a point at r (body axes, from
-//! the CG); the forces act there, so about the CG
-//! `M_cg = M_ref + r × F` (rigid-body transfer of a force system, as
-//! flight-test analyses refer moments measured about a reference point to
-//! the CG: Jategaonkar, Flight Vehicle System Identification, 2nd ed.,
-//! AIAA 2015, ch. 3; Klein & Morelli, Aircraft System Identification,
-//! AIAA 2006, ch. 3), non-dimensional
-//! `Cl += (r_y·CZ − r_z·CY)/b`, `Cm += (r_z·CX − r_x·CZ)/c̄`,
-//! `Cn += (r_x·CY − r_y·CX)/b` with body-axis CX, CY, CZ. For the pitching
-//! moment this is the textbook `Cm_α,cg = Cm_α,ref + CL_α·(x̄_cg − x̄_ref)`
-//! (x̄ in c̄ aft of the MAC leading edge; Etkin & Reid, Dynamics of Flight,
-//! 3rd ed., §2.3) when CX, r_z are small. The coefficients this model
-//! returns are about the CG.
-//!
-//! Quasi-steady stall (Verma & Peyada 2020, Eqs. 2–4, after
+//! **Quasi-steady stall** (Verma & Peyada 2020, Eqs. 2–4, after
 //! Fischenberg):
-//! `τ1·dχ/dt + χ = ½·(1 − tanh(a1·(α − τ2·α̇ − α*)))`            (Eq. 2; Eq. 3 when τ1 = 0)
+//! `τ1·dχ/dt + χ = ½·(1 − tanh(a1·(α − τ2·α̇ − α*)))`   (Eq. 2; Eq. 3 when τ1 = 0)
 //! `CL = CL0 + CLα·((1 + √χ)/2)²·α`,
 //! `CD = CD0 + CL²/(e·π·Λ) + CDχ·(1 − χ)`,
-//! `Cm = Cm0 + Cmα·α + Cmq·q̂ + Cmδe·δe + Cmχ·(1 − χ)`            (Eq. 4).
-//! Here the Kirchhoff factor multiplies the `alpha` term of CL; any other
-//! term may be added to any coefficient. χ is a simulator state when τ1 > 0
-//! and algebraic (Eq. 3) when τ1 = 0. Variants the `[stall]` table states:
-//! τ1 and τ2 in seconds or in units of c̄/V (`time_unit = "chord/V"`, τ in
-//! seconds = τ·c̄/V, V the airspeed or V0 as `rate_speed` says); τ2 acting
-//! only while α̇ < 0 (`tau2_only_while_decreasing`: α̇ replaced by
-//! min(α̇, 0) in Eq. 2, or with `tau2_switch_band = b` by the smooth step
-//! α̇·½(1 − tanh(α̇/b))); the induced drag from the attached-flow lift
-//! (`induced_drag_lift = "attached"`: CL with the Kirchhoff factor 1 in
-//! CL²/(e·π·Λ), the lift the wing would make without separation); the α̇
-//! of Eq. 2 from the state derivative (`alpha_dot = "state"`) or from the
-//! smoothed derivative of the measured α (`alpha_dot = "measured"`,
-//! [`AeroInput::measured_alpha_dot`]: an input of a model driven by a
-//! record; the simulator, which has none, takes the state derivative).
+//! `Cm = Cm0 + Cmα·α + Cmq·q̂ + Cmδe·δe + Cmχ·(1 − χ)`   (Eq. 4).
+//! χ is a state when τ1 > 0 and algebraic when τ1 = 0. Variants: τ in c̄/V,
+//! τ2 only while α̇ < 0 (sharp or smoothed switch), the induced drag of the
+//! attached lift, α̇ from the state or from the measured α
+//! ([`AeroInput::measured_alpha_dot`]).
 //!
-//! Force axes: "wind" gives CL and CD in stability axes (rotated by α only)
-//! and CY along the body y axis, the usual flight-test convention:
-//! `CX = −CD·cos α + CL·sin α`, `CZ = −CD·sin α − CL·cos α`.
-//! "body" gives CX, CY, CZ directly. Moments are body-axis, about the centre
-//! of gravity (after the transfer from the moment reference point, if any).
+//! **Moment reference point**: moments given about r (body axes, from the
+//! CG) are moved to the CG by `M_cg = M_ref + r × F` (Jategaonkar, "Flight
+//! Vehicle System Identification", 2nd ed., ch. 3; Klein & Morelli 2006,
+//! ch. 3): `Cl += (r_y·CZ − r_z·CY)/b`, `Cm += (r_z·CX − r_x·CZ)/c̄`,
+//! `Cn += (r_x·CY − r_y·CX)/b` (for the pitching moment the textbook
+//! `Cm_α,cg = Cm_α,ref + CL_α·(x̄_cg − x̄_ref)`, Etkin & Reid §2.3).
+//!
+//! **Force axes**: "wind" gives CL, CD in stability axes and CY along body
+//! y: `CX = −CD·cos α + CL·sin α`, `CZ = −CD·sin α − CL·cos α`; "body"
+//! gives CX, CY, CZ. Moments are body-axis, about the centre of gravity.
 
 use crate::dual::Real;
 use crate::error::Problems;
