@@ -3,6 +3,31 @@
 //! `#[ignore]`d in the default run and run with
 //! `cargo test --release --test study_tier -- --ignored`.
 
+/// The bundled study `name` with its `methods` line replaced by
+/// `methods = METHODS` (a TOML list), written to a scratch folder and loaded.
+fn with_methods(name: &str, methods: &str) -> aeroid::eval::study::Study {
+    let bundled = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("studies/{name}.toml")),
+    )
+    .unwrap();
+    let text: String = bundled
+        .lines()
+        .map(|line| {
+            if line.starts_with("methods = ") {
+                format!("methods = {methods}")
+            } else {
+                line.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let folder = std::env::temp_dir().join(format!("aeroid-study-tier-{name}"));
+    std::fs::create_dir_all(&folder).unwrap();
+    let path = folder.join(format!("{name}.toml"));
+    std::fs::write(&path, text).unwrap();
+    aeroid::eval::study::Study::load(path.to_str().unwrap()).unwrap()
+}
+
 mod sample_rate {
     //! The sample-rate sweeps of docs/findings.md ("Sample rate, every
     //! estimator" and "The sampling rule"): output error and the filters on
@@ -25,29 +50,10 @@ mod sample_rate {
 
     use aeroid::eval::study::{Study, StudyResult};
 
-    /// The bundled study `name` with its methods replaced by output error and
-    /// the filters (same seed, runs and rates, so the same flights).
+    /// The bundled study `name` with output error and the filters alone
+    /// (same seed, runs and rates, so the same flights).
     fn filters_of(name: &str) -> Study {
-        let bundled = std::fs::read_to_string(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("studies/{name}.toml")),
-        )
-        .unwrap();
-        let text: String = bundled
-            .lines()
-            .map(|line| {
-                if line.starts_with("methods = ") {
-                    r#"methods = ["oem", "fem", "ekf", "ukf"]"#.to_string()
-                } else {
-                    line.to_string()
-                }
-            })
-            .collect::<Vec<_>>()
-            .join("\n");
-        let folder = std::env::temp_dir().join(format!("aeroid-sample-rate-{name}"));
-        std::fs::create_dir_all(&folder).unwrap();
-        let path = folder.join(format!("{name}.toml"));
-        std::fs::write(&path, text).unwrap();
-        Study::load(path.to_str().unwrap()).unwrap()
+        super::with_methods(name, r#"["oem", "fem", "ekf", "ukf"]"#)
     }
 
     fn rate_text(rate: f64) -> String {
@@ -262,29 +268,10 @@ mod qar_resolution {
 
     use aeroid::eval::study::Study;
 
-    /// The bundled study `name` with its methods replaced by `fdee` alone
-    /// (same seed, runs and sweep, so the same flights).
+    /// The bundled study `name` with `fdee` alone (same seed, runs and
+    /// sweep, so the same flights).
     fn fdee_of(name: &str) -> Study {
-        let bundled = std::fs::read_to_string(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("studies/{name}.toml")),
-        )
-        .unwrap();
-        let text: String = bundled
-            .lines()
-            .map(|line| {
-                if line.starts_with("methods = ") {
-                    r#"methods = ["fdee"]"#
-                } else {
-                    line
-                }
-            })
-            .collect::<Vec<_>>()
-            .join("\n");
-        let folder = std::env::temp_dir().join(format!("aeroid-fdee-{name}"));
-        std::fs::create_dir_all(&folder).unwrap();
-        let path = folder.join(format!("{name}.toml"));
-        std::fs::write(&path, text).unwrap();
-        Study::load(path.to_str().unwrap()).unwrap()
+        super::with_methods(name, r#"["fdee"]"#)
     }
 
     #[test]
