@@ -32,7 +32,7 @@ pub enum DiagnosisKind {
     /// Outputs reproduced worse than by their mean (R² < 0) or not at all;
     /// measure: R².
     PoorFit,
-    /// Residuals with a structured part beyond [`STRUCTURED_LIMIT`] of the
+    /// Residuals with a structured part beyond [`STRUCTURED_LIMIT`](crate::estimation::fit_quality::STRUCTURED_LIMIT) of the
     /// output's variation (a structure lacking a term, a wrong minimum,
     /// process noise, real flight data's small model errors); measure: the
     /// structured residual ([`OutputFit::structured`]).

@@ -35,7 +35,7 @@
 //! & Morelli §6.5), else the file's values in two stages (initial states
 //! held, then released); several seeded starts with [`multi_start`].
 //! Multiple shooting over pieces (`segment`, Jategaonkar ch. 9) is
-//! [`linear_shooting`] for linear models and the piecewise fit here for
+//! `linear_shooting` for linear models and the piecewise fit here for
 //! 6-DOF ones. Settings: [`OutputErrorOptions`].
 
 use crate::error::{Error, Result};
