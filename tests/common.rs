@@ -100,7 +100,7 @@ pub fn truth_table(rows: &[(String, f64, f64, f64)]) -> String {
 /// The parameters the a-priori identifiability analysis calls identifiable
 /// on the bundled transport approach recorded by qar-seed000, in 20-s
 /// segments with the controls as recorded (`qar_identifiability_table` in
-/// tests/identifiability.rs checks the analysis against this list; the
+/// tests/estimators/identifiability.rs checks the analysis against this list; the
 /// QAR end-to-end test checks which of them an estimator reaches).
 pub const APPROACH_IDENTIFIABLE: [&str; 20] = [
     "CD_0", "CD_df", "CL_0", "CL_alpha", "CL_df", "CY_beta", "CY_p", "CY_r", "Cl_beta", "Cl_da",

@@ -280,7 +280,7 @@ fn linearisation_reproduces_a_small_doublet() {
 }
 
 /// The eigenvalues of the written lateral and longitudinal models are the
-/// simulator's modes (tests/linear_modes.rs checks those against simulated
+/// simulator's modes (tests/simulation/linear_modes.rs checks those against simulated
 /// responses): the change of variables to V, α, β is a similarity and the
 /// axes decouple at a symmetric trim, so they agree to 2e-6 rad/s (entries
 /// below 1e-12 written as exact zeros; the lateral-longitudinal coupling

@@ -339,7 +339,7 @@ mod qar_resolution {
     /// regression alone: it converges in every run and holds every one of the
     /// 20 parameters the a-priori analysis calls identifiable on the QAR
     /// (|mean bias| ≤ 1.96 mean CRB), where on the derived QAR it holds 10
-    /// (`the_qar_approach_over_turbulence_seeds` in tests/angular_rates.rs).
+    /// (`the_qar_approach_over_turbulence_seeds` in tests/simulation/angular_rates.rs).
     #[test]
     #[ignore = "study tier: cargo test --release -- --ignored"]
     fn the_approach_at_25_hz_is_held_by_fourier_transform_regression() {

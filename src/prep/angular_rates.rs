@@ -38,7 +38,7 @@
 //! ([`Differentiator::bandwidth`]): at 1 Hz with ±3 samples (the least a
 //! quartic fit takes) the derivative is accurate to 1 % only below
 //! ≈ 0.08 Hz and half as large at ≈ 0.23 Hz, so the Dutch roll (≈ 0.24 Hz)
-//! and turbulence are lost; measured in `tests/angular_rates.rs`.
+//! and turbulence are lost; measured in `tests/simulation/angular_rates.rs`.
 
 use crate::error::{Error, Result};
 use crate::prep::differentiation::Differentiator;

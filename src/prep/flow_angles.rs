@@ -48,7 +48,7 @@
 //! σ_β ≈ √(0.087² + 0.289²) ≈ 0.30°: the 1° track resolution dominates β.
 //!
 //! What the formula predicts and what the gusts add is measured in
-//! `tests/flow_angles.rs` (docs/cli.md, `derive`).
+//! `tests/simulation/flow_angles.rs` (docs/cli.md, `derive`).
 
 use crate::error::{Error, Result};
 use crate::record::{Channel, FlightRecord, derived};

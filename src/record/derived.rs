@@ -7,7 +7,7 @@
 //! body angular accelerations). Names follow `trace::COLUMNS` where the quantity
 //! is the same; every value is SI with angles in radians.
 //!
-//! Conventions (pinned here, tested in `tests/recorder.rs`):
+//! Conventions (pinned here, tested in `tests/simulation/recorder.rs`):
 //! - load factors are specific force at the sensor over standard gravity,
 //!   `n = (f + ω̇×r + ω×(ω×r))/g0`, with nz positive UP (1 in level flight):
 //!   `nx = a_x/g0`, `ny = a_y/g0`, `nz = −a_z/g0`;

@@ -41,7 +41,7 @@
 //! Diverged with the reason when a regressor matrix is rank-deficient or
 //! there are too few samples. A missing channel is an error naming it.
 //!
-//! Limitations, measured in `tests/equation_error.rs` (ATTAS multisine):
+//! Limitations, measured in `tests/estimators/equation_error.rs` (ATTAS multisine):
 //! - the reflex-wing UAV paper's finding: least squares assumes noise-free regressors;
 //!   measured α, β, rates and controls carry noise, so the estimates are
 //!   attenuated towards zero (errors in variables). On the 25 Hz

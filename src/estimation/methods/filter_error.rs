@@ -36,7 +36,7 @@
 //!   A·P + P·Aᵀ − P·Cᵀ·R⁻¹·C·P/Δt + F·Fᵀ = 0 instead, its first-order
 //!   approximation in Δt; the exact discrete form makes the filter, on a
 //!   linear model, the linear Kalman filter of that system exactly, which
-//!   `tests/filter_error.rs` checks against an independent filter.
+//!   `tests/estimators/filter_error.rs` checks against an independent filter.
 //!   On a multi-rate record a grid point with only some outputs corrects
 //!   with those outputs' columns of K.
 //!
@@ -83,7 +83,7 @@
 //! by its overshoot at the step's end (halve it where no filter exists
 //! there) and solve again. The solver halves the step as any other and
 //! judges convergence by its predicted decrease. Measured in
-//! `tests/filter_error.rs`
+//! `tests/estimators/filter_error.rs`
 //! (`filter_error_converges_with_the_gain_constraint_active`, a channel
 //! recorded without noise): where the constraint binds, the fits stop
 //! where the KKT conditions hold (multiplier positive, the step along the
@@ -139,7 +139,7 @@
 //! G's entries among the unknowns (their values and bounds in the notes).
 //! Measured: noise-free ATTAS lateral within 3.1e-6 (steady 3.1e-6); on a
 //! linear model its likelihood and innovations are adskalman's to 1e-9
-//! (`tests/filter_error.rs`); with the gust filter's states started
+//! (`tests/estimators/filter_error.rs`); with the gust filter's states started
 //! unknown (`tests/linear_models.rs`) the RMS error/σ of the α column of
 //! A is 1.29 against the steady form's 1.78; each fit costs about 25
 //! times the steady form's (a covariance propagated at every point in
@@ -160,7 +160,7 @@
 //! the ATTAS lateral flight in turbulence recorded without measurement
 //! noise: converged in 19 iterations, the CY derivatives within
 //! 3·10⁻⁶–4.4·10⁻⁴ relative and 1.5σ, every derivative within 2.03σ
-//! (`tests/filter_error.rs`); with the steady gain's floor (10⁻²⁴ of the
+//! (`tests/estimators/filter_error.rs`); with the steady gain's floor (10⁻²⁴ of the
 //! mean square) the fit ended `diverged`, S_k not positive definite.
 //!
 //! Sensitivities (steady gain): the filter's own sensitivity equations,
@@ -190,7 +190,7 @@
 //! 3·10⁻⁷ of each column's norm of central differences of whole passes,
 //! closer than forward differences of whole passes (within 9·10⁻⁷;
 //! `sensitivity_jacobian_is_the_filters_derivative` in
-//! `tests/filter_error.rs`). A model that does not propagate sensitivities
+//! `tests/estimators/filter_error.rs`). A model that does not propagate sensitivities
 //! (the linear structures' exact discretisation, a test's own model) gets
 //! forward differences of whole filter passes instead, one pass per
 //! unknown, each perturbed u with its own linearisation, Riccati solution

@@ -53,7 +53,7 @@
 //!    estimate (tests: to 1e-9). The band must then be known in advance
 //!    (a real-time user gives it; the automatic band reads the whole record).
 //!
-//! Limitations (measured in `tests/frequency_domain.rs`):
+//! Limitations (measured in `tests/estimators/frequency_domain.rs`):
 //! - the regressors are measured, so noise in α, β, rates and controls
 //!   biases the estimates towards zero as in the time domain (errors in
 //!   variables); restricting the band to where the signals dominate the

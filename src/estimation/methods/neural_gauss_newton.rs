@@ -37,12 +37,12 @@
 //! report. Ten neurons fit the noise-free one-step map of the
 //! longitudinal ATTAS and HANSA-3 records to R² 0.9999999 and still steer
 //! Gauss–Newton wrong; the held-out error chooses 20 there, and those
-//! records converge (`tests/neural_gauss_newton.rs`). Larger networks are
+//! records converge (`tests/estimators/neural_gauss_newton.rs`). Larger networks are
 //! not candidates by default: 30 neurons fit the noise-free records
 //! better still (held-out MSE 3e-14) but the Gauss–Newton fit through
 //! them stops at its iteration limit on HANSA-3 (CL_de 72 % off).
 //!
-//! What the method cannot do is measured in `tests/neural_gauss_newton.rs`
+//! What the method cannot do is measured in `tests/estimators/neural_gauss_newton.rs`
 //! and `docs/findings.md`: the network approximates the one-step map, so
 //! the estimate carries the network's approximation error even on
 //! noise-free data, and Θ whose coefficients leave the range the network

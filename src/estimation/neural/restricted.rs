@@ -59,7 +59,7 @@
 //! map, not exactly, so even on noise-free data the residual at the true Θ
 //! is not zero and the estimate differs from the truth by what the
 //! network's approximation error does to the fit (measured in
-//! `tests/elm_gauss_newton.rs`). Coefficients computed from Θ that leave the
+//! `tests/estimators/elm_gauss_newton.rs`). Coefficients computed from Θ that leave the
 //! range the network was trained on are extrapolated; the estimate's notes
 //! count such samples.
 

@@ -67,7 +67,7 @@
 //! algorithm's to rounding.
 //!
 //! On a linear model the transform is exact and the pass is the linear
-//! Kalman filter's with the trapezoidal Q_d (tests/kalman_oracle.rs).
+//! Kalman filter's with the trapezoidal Q_d (tests/estimators/kalman_oracle.rs).
 //! No step allocates. A step's sigma points, propagated points, outputs,
 //! compound matrices and every product of its measurement update (ŷ, S_y,
 //! H, P_xy, K, K·S_y, S, S⁻¹, ν), Φ, Φ·G and S·Sᵀ live in buffers

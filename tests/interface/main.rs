@@ -1,0 +1,11 @@
+//! The command line and the plug-in protocol.
+//!
+//! One test binary for the area (each file a module), so that a fresh
+//! `cargo test` links a few binaries rather than one per file.
+
+#[path = "../common.rs"]
+mod common;
+
+mod cli;
+mod cli_contracts;
+mod plugins;
