@@ -934,8 +934,9 @@ fn bad_gust_tables_name_the_key() {
 /// white process noise (F = diag(0.004, 0.01) on α and q: intensities
 /// 1.6e-5 and 1e-4 per s), flight-test-25hz, seeds 1–10, default passes
 /// (4): the process-noise intensity the passes end with, by zero-lag
-/// covariance matching (`correlation_lags = 0`, the default) and by
-/// Mehra's method with lags 1 … 5 (`correlation_lags = 5`).
+/// covariance matching (`correlation_lags = 0`) and by Mehra's method
+/// with lags 1 … 5 (`correlation_lags = 5`; the default is lags 1 … n, n
+/// the integrated states).
 ///
 /// Measured: Mehra's mean over the seeds 1.77e-5 on α (+10 %) and 8.5e-5
 /// on q (−15 %), single seeds 6.8e-6 … 6.8e-5 and 6.3e-5 … 1.2e-4; the

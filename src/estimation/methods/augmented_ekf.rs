@@ -34,30 +34,29 @@
 //!    transformed ([`fourier_noise_variance`]).
 //! 2. The residual-correlation method (the note's ref. 6, Mehra, "On the
 //!    identification of variances and adaptive Kalman filtering", IEEE TAC
-//!    15(2), 1970) in its zero-lag form: after a pass, over the second half
-//!    of the record (past the parameters' transient), the innovations'
-//!    sample covariance C₀ is matched with its prediction: R = C₀ − H·P⁻·Hᵀ
-//!    (Mehra's R equation with the filter's P⁻ for the error covariance),
-//!    per output, and the states' process noise raised by
-//!    Q_d += K·(C₀ − S)·Kᵀ (diagonal, the kinematic states only, not below
-//!    zero; the covariance-matching form of Mehra's Q step). The next pass
-//!    starts from the parameters the last one ended with. The passes stop
-//!    when every output's mean normalised squared innovation ν²/S is within
-//!    [`TUNED`] of 1, or after `passes`.
-//!    With `correlation_lags = k ≥ 1` the update is Mehra's method itself
-//!    (his §IV, [`kalman::residual_correlation`]): the autocorrelations of
-//!    the innovations at lags 0 … k over the second half, at the points
-//!    where every output is measured, give M·Hᵀ by least squares, R =
-//!    C₀ − H·M·Hᵀ and the states' discrete process noise diagonal by least
-//!    squares over the lags' equations (Q_c = Q_d/h), replacing the
-//!    previous values. His method assumes a time-invariant system and
-//!    gain: the kinematic block of the transition and of H at the window's
-//!    middle and of the gain at its end stand for them (the parameter
-//!    states, nearly settled there, are left out), exact for a linear
-//!    model with settled parameters. Measured on the linear short period
-//!    with known process noise (`tests/linear_models.rs`): Mehra's mean
-//!    over 10 seeds within 15 % of both intensities, where the zero-lag
-//!    matching ends three to four orders of magnitude low.
+//!    15(2), 1970; [`tuning`]): after a pass, the innovations over the
+//!    second half of the record (past the parameters' transient) give R
+//!    and the integrated states' process noise for the next. By default
+//!    Mehra's method itself (his §IV, Eqs. 13, 29, 30, 33): the
+//!    innovations' autocorrelations at lags 0 … k, k the number of
+//!    integrated states (`correlation_lags`), give M·Hᵀ, R = C₀ − H·M·Hᵀ
+//!    and the diagonal of the discrete process noise, Q_c = Q_d/h. The
+//!    first pass runs with no process noise; Mehra's method holds for any
+//!    constant gain, so that pass's innovations already measure the noise
+//!    the model lacks (a gust on β, p and r, for one). A pass run with
+//!    Mehra's noise must make the record more likely than the pass it
+//!    came from (the innovations' −ln L = ½·Σ(νᵀS⁻¹ν + ln det 2πS), lower:
+//!    the noise that makes the record more likely is the better one, the
+//!    maximum-likelihood criterion for it): where it does not (on the
+//!    stall model the first pass's innovations are the linearisation's
+//!    error, not noise) it is discarded, not counted among the passes, and
+//!    the passes go on from the pass before with zero-lag covariance
+//!    matching: R = C₀ − H·P⁻·Hᵀ and Q_d += K·(C₀ − S)·Kᵀ, the update of
+//!    `correlation_lags = 0`, which raises Q in steps proportional to the
+//!    gain it had and ends orders of magnitude low where the model lacks
+//!    process noise. The next pass starts from the parameters the last one
+//!    ended with. The passes stop when every output's mean normalised
+//!    squared innovation ν²/S is within [`TUNED`] of 1, or after `passes`.
 //!
 //! **Estimate**: the final filtered augmented state and covariance (the
 //! filter's estimate given the whole record: with constant parameters the
@@ -105,14 +104,16 @@ use crate::estimation::problem::EstimationProblem;
 use crate::estimation::solver::extended_kalman::{
     self, Discretisation, Innovation, Keep, Noise, Pass,
 };
-use crate::estimation::solver::kalman::{self, Gaussian};
-use crate::estimation::solver::kept::UpdateView;
+use crate::estimation::solver::kalman::Gaussian;
 use crate::estimation::structure::{ModelStructure, Structure};
 use crate::record::{Channel, FlightRecord};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+mod tuning;
+use tuning::normalised_innovations;
 
 /// Method name in estimates.
 pub const METHOD: &str = "ekf";
@@ -163,8 +164,10 @@ pub struct FilterSettings {
     /// Whether the residual-correlation passes also tune the states' process noise.
     pub tune_process_noise: bool,
     /// The lags of the residual-correlation method: 0, the zero-lag
-    /// covariance matching; k ≥ 1, Mehra's method with lags 1 … k.
-    pub correlation_lags: usize,
+    /// covariance matching; k ≥ 1, Mehra's method with lags 1 … k; none,
+    /// Mehra's method with as many lags as the model integrates states.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub correlation_lags: Option<usize>,
     /// Grid step (s); none: the fastest output's period.
     #[serde(
         deserialize_with = "crate::units::optional_seconds",
@@ -189,7 +192,7 @@ impl Default for FilterSettings {
             motion_bandwidth: 2.0,
             passes: 4,
             tune_process_noise: true,
-            correlation_lags: 0,
+            correlation_lags: None,
             step: None,
             interpolation: InputInterpolation::default(),
             history: None,
@@ -229,7 +232,7 @@ pub(crate) const FILTER_SETTINGS: [(&str, &str); 11] = [
     ),
     (
         "correlation_lags",
-        "0: R and Q by zero-lag covariance matching; k ≥ 1: Mehra's residual-correlation method with the innovations' autocorrelations at lags 1 … k",
+        "none: Mehra's residual-correlation method with as many lags as the model integrates states; k ≥ 1: with the innovations' autocorrelations at lags 1 … k; 0: R and Q by zero-lag covariance matching",
     ),
     (
         "step",
@@ -304,7 +307,7 @@ impl Estimator for AugmentedEkf {
         MethodInfo {
             title: "extended Kalman filter with the parameters as augmented states, pseudonoise, Fourier R and residual-correlation tuning",
             paper: "EKF parameter estimation for the X-31 drop model and the F-18 HARV (J. Guidance, Engineering Note); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 7; Mehra, IEEE TAC 15(2), 1970",
-            equations: "state and output models with process noise and parameter pseudonoise (note Eqs. 1–3); augmented state (Jategaonkar Eq. 7.8); continuous–discrete EKF (Jategaonkar Eqs. 7.11–7.19); R from the spectrum above the motion's bandwidth; R = C₀ − H·P·Hᵀ, Q += K(C₀ − S)Kᵀ (Mehra 1970, zero lag)",
+            equations: "state and output models with process noise and parameter pseudonoise (note Eqs. 1–3); augmented state (Jategaonkar Eq. 7.8); continuous–discrete EKF (Jategaonkar Eqs. 7.11–7.19); R from the spectrum above the motion's bandwidth; R and the states' process noise from the innovations' autocorrelations (Mehra 1970, Eqs. 13, 29, 30, 33)",
             needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls); on a linear structure, its input and output channels",
             settings: setting_infos(&FilterSettings::default(), &FILTER_SETTINGS),
         }
@@ -364,7 +367,7 @@ pub fn refuse_for_linear(method: &str, problem: &EstimationProblem) -> Result<()
 /// The `ekf` method's filter pass ([`extended_kalman::filter_with`], exact
 /// discretisation), keeping what the method reads: the filtered
 /// covariances (the parameter histories' σ) and, for Mehra's method
-/// (`correlation_lags` ≥ 1), the transitions; not the predicted estimates.
+/// (`correlation_lags` not 0), the transitions; not the predicted estimates.
 pub fn extended_pass<M: StateSpaceModel + ?Sized>(
     settings: &FilterSettings,
     model: &M,
@@ -374,7 +377,7 @@ pub fn extended_pass<M: StateSpaceModel + ?Sized>(
 ) -> Result<Pass> {
     let keep = Keep {
         predicted: false,
-        transitions: settings.correlation_lags > 0,
+        transitions: settings.correlation_lags != Some(0),
         sparse_transitions: false,
         filtered_covariances: true,
         sequential: false,
@@ -900,126 +903,6 @@ impl Setup {
     }
 }
 
-/// Per output: the mean normalised squared innovation ν²/S over the second
-/// half of the record.
-fn normalised_innovations(pass: &Pass, len: usize) -> Vec<f64> {
-    pass.innovations
-        .iter()
-        .map(|innovations| {
-            let late: Vec<f64> = innovations
-                .iter()
-                .filter(|i| i.k >= len / 2)
-                .map(|i| i.value * i.value / i.variance)
-                .collect();
-            late.iter().sum::<f64>() / late.len().max(1) as f64
-        })
-        .collect()
-}
-
-/// The residual-correlation update of R (per output) and the states'
-/// process noise (module header, Noise 2), from a pass's innovations over
-/// the second half of the record.
-fn correlation_update(
-    pass: &Pass,
-    len: usize,
-    step: f64,
-    states: usize,
-    measurement: &mut [f64],
-    floors: &[f64],
-    process: Option<&mut [f64]>,
-) {
-    for (o, innovations) in pass.innovations.iter().enumerate() {
-        let late: Vec<_> = innovations.iter().filter(|i| i.k >= len / 2).collect();
-        if late.is_empty() {
-            continue;
-        }
-        let count = late.len() as f64;
-        let square = late.iter().map(|i| i.value * i.value).sum::<f64>() / count;
-        let predicted = late.iter().map(|i| i.variance).sum::<f64>() / count - measurement[o];
-        measurement[o] = (square - predicted).max(floors[o]);
-    }
-    let Some(process) = process else {
-        return;
-    };
-    let mut change = vec![0.0; states];
-    let mut count = 0usize;
-    for update in pass.measured.iter().skip(len / 2).flatten() {
-        let gain = update.gain.rows(0, states);
-        let excess =
-            update.innovation * update.innovation.transpose() - update.innovation_covariance;
-        let delta = gain * excess * gain.transpose();
-        for (i, c) in change.iter_mut().enumerate() {
-            *c += delta[(i, i)];
-        }
-        count += 1;
-    }
-    if count == 0 {
-        return;
-    }
-    for (q, c) in process.iter_mut().zip(change) {
-        // Q_d per step as a continuous intensity: Q_c ≈ Q_d/h.
-        *q = (*q + c / count as f64 / step).max(0.0);
-    }
-}
-
-/// Mehra's residual-correlation update (module header, Noise 2, k ≥ 1
-/// lags; [`kalman::residual_correlation`]) of R (per output) and the
-/// states' process noise from a pass's innovations over the second half of
-/// the record, at the grid points where every output is measured: the
-/// kinematic block of the transition at the window's middle, of H there,
-/// and of the gain at its end stand for the time-invariant system Mehra's
-/// method assumes (the parameter states, nearly settled there, are left
-/// out). Q_c = Q_d/h. None, with nothing changed, where the pass does not
-/// serve (too few such points, no transitions kept, a singular step).
-#[allow(clippy::too_many_arguments)]
-fn mehra_update(
-    pass: &Pass,
-    len: usize,
-    step: f64,
-    states: usize,
-    lags: usize,
-    measurement: &mut [f64],
-    floors: &[f64],
-    process: Option<&mut [f64]>,
-) -> Option<()> {
-    let outputs = measurement.len();
-    let window: Vec<(usize, UpdateView)> = pass
-        .measured
-        .iter()
-        .enumerate()
-        .skip(len / 2)
-        .filter_map(|(k, m)| m.map(|m| (k, m)))
-        // A grid point's measurements are in the outputs' order.
-        .filter(|(_, m)| m.innovation.len() == outputs)
-        .collect();
-    let &(middle, at_middle) = window.get(window.len() / 2)?;
-    let (_, last) = window.last()?;
-    let transition = pass
-        .transitions
-        .get(middle)?
-        .view((0, 0), (states, states))
-        .into_owned();
-    let observation = at_middle.observation.columns(0, states).into_owned();
-    let gain = last.gain.rows(0, states).into_owned();
-    let innovations: Vec<DVector<f64>> = window
-        .iter()
-        .map(|(_, m)| m.innovation.into_owned())
-        .collect();
-    let noisy: Vec<usize> = (0..states).collect();
-    let tuned =
-        kalman::residual_correlation(&transition, &observation, &gain, &innovations, lags, &noisy)
-            .ok()?;
-    for (o, value) in measurement.iter_mut().enumerate() {
-        *value = tuned.measurement[(o, o)].max(floors[o]);
-    }
-    if let Some(process) = process {
-        for (q, d) in process.iter_mut().zip(tuned.process.iter()) {
-            *q = d / step;
-        }
-    }
-    Some(())
-}
-
 /// Runs the augmented filter `run` with the residual-correlation passes and
 /// assembles the estimate and the last pass's parameter histories (module
 /// header). Shared by the EKF and the UKF.
@@ -1039,12 +922,19 @@ pub fn augmented_estimate<'a>(
     let step = setup.view.time(1) - setup.view.time(0);
     let start_values: Vec<f64> = setup.free.iter().map(|&i| setup.theta[i]).collect();
     let mut process_states = vec![0.0; n];
-    let mut theta = setup.theta.clone();
     let mut costs = Vec::new();
     let mut report = String::from("pass  −ln L  mean ν²/S per output\n");
     let mut last = None;
     let mut mehra_failed = false;
-    for pass_number in 1..=settings.passes {
+    let mut theta = setup.theta.clone();
+    let mut lags = settings.correlation_lags.unwrap_or(n);
+    // What the best pass so far ran with and ended with, for a pass whose
+    // noise makes the record less likely (module header, Noise 2).
+    let mut best: Option<Best> = None;
+    let mut rejected = None;
+    let mut pass_number = 0;
+    while pass_number < settings.passes {
+        pass_number += 1;
         let augmented = Augmented::new(setup.view.as_ref(), &theta, setup.free.clone())?;
         let initial = Gaussian {
             mean: augmented.state(setup.x0.as_slice()),
@@ -1057,7 +947,50 @@ pub fn augmented_estimate<'a>(
             )),
             measurement: DVector::from_column_slice(&setup.measurement),
         };
-        let pass = match run(&augmented, initial, &noise, &setup.observations) {
+        let outcome = run(&augmented, initial, &noise, &setup.observations);
+        let worse = match (&outcome, &best) {
+            (Ok(pass), Some(best)) => !matches!(
+                pass.negative_log_likelihood
+                    .partial_cmp(&best.pass.negative_log_likelihood),
+                Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+            ),
+            (Err(_), Some(_)) => true,
+            (_, None) => false,
+        };
+        if worse && lags > 0 && rejected.is_none() {
+            // Mehra's noise made the record less likely than the noise it
+            // replaced: back to the best pass, the zero-lag update from it.
+            let best = best.take().expect("a best pass");
+            costs.push(match &outcome {
+                Ok(pass) => pass.negative_log_likelihood,
+                Err(_) => f64::INFINITY,
+            });
+            report += &format!(
+                "{pass_number:>4}  rejected: the record less likely than after pass {}\n",
+                best.number
+            );
+            rejected = Some(pass_number);
+            setup.measurement = best.measurement.clone();
+            process_states = best.process.clone();
+            theta = best.theta.clone();
+            lags = 0;
+            pass_number -= 1;
+            tuning::update(
+                &best.pass,
+                len,
+                step,
+                n,
+                0,
+                &mut setup.measurement,
+                &setup.floors,
+                settings
+                    .tune_process_noise
+                    .then_some(&mut process_states[..]),
+            );
+            advance(&mut theta, &best.pass, &setup.free, n, len);
+            continue;
+        }
+        let pass = match outcome {
             Ok(pass) => pass,
             Err(error) => {
                 return Ok(FilterRun {
@@ -1087,55 +1020,39 @@ pub fn augmented_estimate<'a>(
         let consistent = ratios.iter().all(|r| (r - 1.0).abs() <= TUNED);
         let done = consistent || pass_number == settings.passes;
         if !done {
-            let mehra = (settings.correlation_lags > 0)
-                .then(|| {
-                    mehra_update(
-                        &pass,
-                        len,
-                        step,
-                        n,
-                        settings.correlation_lags,
-                        &mut setup.measurement,
-                        &setup.floors,
-                        settings
-                            .tune_process_noise
-                            .then_some(&mut process_states[..]),
-                    )
-                })
-                .flatten();
-            if settings.correlation_lags > 0 && mehra.is_none() {
+            let ran_with = Best {
+                number: pass_number,
+                pass: pass.clone(),
+                measurement: setup.measurement.clone(),
+                process: process_states.clone(),
+                theta: theta.clone(),
+            };
+            let update = tuning::update(
+                &pass,
+                len,
+                step,
+                n,
+                lags,
+                &mut setup.measurement,
+                &setup.floors,
+                settings
+                    .tune_process_noise
+                    .then_some(&mut process_states[..]),
+            );
+            if update == tuning::Update::ZeroLagFallback {
                 mehra_failed = true;
             }
-            if mehra.is_none() {
-                correlation_update(
-                    &pass,
-                    len,
-                    step,
-                    n,
-                    &mut setup.measurement,
-                    &setup.floors,
-                    settings
-                        .tune_process_noise
-                        .then_some(&mut process_states[..]),
-                );
-            }
-            let end = pass
-                .filtered
-                .get(len - 1)
-                .expect("a pass keeps every point")
-                .mean;
-            for (j, &i) in setup.free.iter().enumerate() {
-                if end[n + j].is_finite() {
-                    theta[i] = end[n + j];
-                }
+            advance(&mut theta, &pass, &setup.free, n, len);
+            if lags > 0 {
+                best = Some(ran_with);
             }
         }
-        last = Some((pass, ratios, theta.clone(), noise));
+        last = Some((pass, ratios, noise));
         if done {
             break;
         }
     }
-    let (pass, ratios, _, noise) = last.expect("at least one pass");
+    let (pass, ratios, noise) = last.expect("at least one pass");
     let times: Vec<f64> = (0..len).map(|k| setup.view.time(k)).collect();
     let history = History::of(&pass, &setup.names, times, n);
     let mut estimate = assemble(
@@ -1166,10 +1083,14 @@ pub fn augmented_estimate<'a>(
             .collect::<Vec<_>>()
             .join(", ")
     ));
+    if let Some(number) = rejected {
+        estimate.notes.push(format!(
+            "residual correlation: the noise Mehra's method gave made the record less likely (pass {number}, rejected); the passes from there used the zero-lag update"
+        ));
+    }
     if mehra_failed {
         estimate.notes.push(format!(
-            "residual correlation: Mehra's method with {} lags did not serve a pass (too few points with every output measured, or no transitions kept); that pass used the zero-lag update",
-            settings.correlation_lags
+            "residual correlation: Mehra's method with {lags} lags did not serve a pass (too few points with every output measured, or no transitions kept); that pass used the zero-lag update"
         ));
     }
     estimate.details = report;
@@ -1178,6 +1099,30 @@ pub fn augmented_estimate<'a>(
         history,
         innovations: pass.innovations,
     })
+}
+
+/// A pass the residual-correlation passes may return to, with the noise
+/// and θ it ran with.
+struct Best {
+    number: usize,
+    pass: Pass,
+    measurement: Vec<f64>,
+    process: Vec<f64>,
+    theta: Vec<f64>,
+}
+
+/// θ for the next pass: the free parameters where `pass` ended.
+fn advance(theta: &mut [f64], pass: &Pass, free: &[usize], states: usize, len: usize) {
+    let end = pass
+        .filtered
+        .get(len - 1)
+        .expect("a pass keeps every point")
+        .mean;
+    for (j, &i) in free.iter().enumerate() {
+        if end[states + j].is_finite() {
+            theta[i] = end[states + j];
+        }
+    }
 }
 
 /// A diverged filter's estimate: the start values with unknown σ.
