@@ -374,3 +374,114 @@ mod qar_resolution {
         }
     }
 }
+
+mod turbulence {
+    //! The turbulence sweep (docs/findings.md, "Turbulence: output error,
+    //! filter error and the augmented filters"): `studies/turbulence-sweep.toml`
+    //! as bundled, the ATTAS lateral multistep on flight-test-25hz in still
+    //! air and in light, moderate and severe Dryden turbulence, 20 runs
+    //! each, output error, filter error, the EKF and the UKF.
+    //!
+    //! Per intensity and method over the 18 derivatives: the converged
+    //! fits, the median of |bias|/|truth| and the range of σ_MC/CRB and of
+    //! the 95 % coverage. With 20 runs σ_MC itself scatters by about
+    //! 1/√38 ≈ 16 %, so bounds that are honest or conservative give
+    //! σ_MC/CRB below 1.5 on every one of 18 derivatives (three of its
+    //! standard deviations above 1), and a coverage of 95 % ± 5 % per
+    //! derivative, at least 75 % on all 18.
+
+    use aeroid::eval::summary::SummaryRow;
+
+    fn rows<'a>(summary: &'a [SummaryRow], turbulence: &str, method: &str) -> Vec<&'a SummaryRow> {
+        let rows: Vec<_> = summary
+            .iter()
+            .filter(|s| s.turbulence == turbulence && s.method == method)
+            .collect();
+        assert_eq!(rows.len(), 18, "{turbulence} {method}");
+        rows
+    }
+
+    fn median_relative_bias(rows: &[&SummaryRow]) -> f64 {
+        let mut values: Vec<f64> = rows.iter().map(|s| s.relative_bias.abs()).collect();
+        values.sort_by(f64::total_cmp);
+        (values[8] + values[9]) / 2.0
+    }
+
+    fn largest(rows: &[&SummaryRow], f: impl Fn(&SummaryRow) -> f64) -> f64 {
+        rows.iter().map(|s| f(s)).fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    fn smallest(rows: &[&SummaryRow], f: impl Fn(&SummaryRow) -> f64) -> f64 {
+        rows.iter().map(|s| f(s)).fold(f64::INFINITY, f64::min)
+    }
+
+    fn count(row: &SummaryRow, kind: &str) -> usize {
+        row.diagnosed
+            .split_whitespace()
+            .find_map(|item| item.strip_prefix(&format!("{kind}:")))
+            .map_or(0, |n| n.trim_end_matches(',').parse().unwrap())
+    }
+
+    /// Filter error, the EKF and the UKF hold up to moderate turbulence:
+    /// every fit converged, the median bias below 0.5 % of the truth,
+    /// σ_MC/CRB below 1.5 (never optimistic) and coverage at least 75 % on
+    /// every derivative. Filter error holds in severe turbulence too (every fit
+    /// converged, median bias below 1 %); the augmented filters do not: in
+    /// severe turbulence fewer than 20 of their fits converge (a known
+    /// failure: this test says when it is mended). Output error in still
+    /// air is unbiased (median below 0.5 %); in every turbulence each
+    /// converged fit is diagnosed with coloured residuals and process
+    /// noise, its median bias above 1 % and σ_MC/CRB above 10 on some
+    /// derivative: the gusts' bias shows in the statistics.
+    #[test]
+    #[ignore = "study tier: cargo test --release -- --ignored"]
+    fn filters_hold_through_moderate_turbulence_where_output_error_does_not() {
+        let study = aeroid::eval::study::Study::load("turbulence-sweep").unwrap();
+        let result = study.run(0, &|_| {}).unwrap();
+        let table = result.table();
+        let summary = &result.summary;
+        for turbulence in ["none", "light", "moderate", "severe"] {
+            for method in ["fem", "ekf", "ukf"] {
+                let rows = rows(summary, turbulence, method);
+                let converged = smallest(&rows, |s| s.converged as f64);
+                let bias = median_relative_bias(&rows);
+                if turbulence == "severe" {
+                    if method == "fem" {
+                        assert!(converged == 20.0 && bias < 0.01, "{method} severe\n{table}");
+                    } else {
+                        assert!(
+                            converged < 20.0,
+                            "{method} now holds in severe turbulence\n{table}"
+                        );
+                    }
+                    continue;
+                }
+                let scatter = largest(&rows, |s| s.std_over_crb);
+                let coverage = smallest(&rows, |s| s.coverage);
+                assert!(
+                    converged == 20.0 && bias < 0.005 && scatter < 1.5 && coverage >= 0.75,
+                    "{turbulence} {method}: converged {converged}, bias {bias:.4}, σ_MC/CRB up to {scatter:.2}, coverage {coverage}\n{table}"
+                );
+            }
+            let rows = rows(summary, turbulence, "oem");
+            let bias = median_relative_bias(&rows);
+            if turbulence == "none" {
+                assert!(bias < 0.005, "oem none: {bias}\n{table}");
+                continue;
+            }
+            for row in &rows {
+                assert!(
+                    count(row, "coloured_residuals") >= row.converged
+                        && count(row, "process_noise") >= row.converged,
+                    "oem {turbulence} {}: {}\n{table}",
+                    row.parameter,
+                    row.diagnosed
+                );
+            }
+            assert!(
+                bias > 0.01 && largest(&rows, |s| s.std_over_crb) > 10.0,
+                "oem {turbulence}: bias {bias}\n{table}"
+            );
+        }
+    }
+}

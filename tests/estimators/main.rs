@@ -6,6 +6,7 @@
 #[path = "../common.rs"]
 mod common;
 
+mod augmented_filters;
 mod compatibility;
 mod elm_gauss_newton;
 mod equation_error;
@@ -16,6 +17,7 @@ mod honest_status;
 mod identifiability;
 mod joint_fit;
 mod kalman_oracle;
+mod linear_models;
 mod measured_quantities;
 mod model_channels;
 mod model_terms;

@@ -731,7 +731,7 @@ fn input_noise_is_checked_and_reproducible() {
 /// on the noise-free one CY_da by 10 % and Cl_p by 1.0 % (measured).
 /// Frequency-domain output error fits a model linearised about the first
 /// sample, biased on this 4° flight whatever the inputs (gates.toml): its
-/// ramped case is the linear flight of tests/linear_models.rs.
+/// ramped case is the linear flight of tests/estimators/linear_models.rs.
 #[test]
 fn every_integrating_method_follows_ramped_inputs_by_default() {
     use aeroid::estimation::estimate::Estimate;

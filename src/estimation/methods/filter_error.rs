@@ -140,7 +140,7 @@
 //! Measured: noise-free ATTAS lateral within 3.1e-6 (steady 3.1e-6); on a
 //! linear model its likelihood and innovations are adskalman's to 1e-9
 //! (`tests/estimators/filter_error.rs`); with the gust filter's states started
-//! unknown (`tests/linear_models.rs`) the RMS error/σ of the α column of
+//! unknown (`tests/estimators/linear_models.rs`) the RMS error/σ of the α column of
 //! A is 1.29 against the steady form's 1.78; each fit costs about 25
 //! times the steady form's (a covariance propagated at every point in
 //! every pass, and a pass per unknown for the Jacobian: the steady

@@ -24,7 +24,7 @@
 //!
 //! The regressors are measured states: their noise biases the estimates
 //! towards zero (errors in variables), as on the 6-DOF structures; the
-//! bias is not in the Cramér–Rao bound (tests/linear_models.rs measures
+//! bias is not in the Cramér–Rao bound (tests/estimators/linear_models.rs measures
 //! it on the linear lateral flight).
 
 use crate::error::{Error, Result};

@@ -26,7 +26,7 @@
 //! the kinematic states, not below zero). Its Q step scales with the gain
 //! the last pass had: with no process noise the gain on the states is
 //! small, so a few passes raise Q far too little (on the linear short
-//! period with known process noise, `tests/linear_models.rs`: three to
+//! period with known process noise, `tests/estimators/linear_models.rs`: three to
 //! four orders of magnitude low, where Mehra's mean over 10 seeds is
 //! within 15 %; on the ATTAS lateral flight in turbulence it leaves the
 //! gust on β, p and r to the parameter states, docs/findings.md).

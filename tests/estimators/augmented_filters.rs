@@ -3,8 +3,7 @@
 //! stall manoeuvre, a parameter that changes in flight, their innovations'
 //! whiteness and their settings.
 
-mod common;
-
+use crate::common;
 use aeroid::estimation::estimate::{Estimate, Status};
 use aeroid::estimation::estimator::Settings;
 use aeroid::estimation::methods;

@@ -17,8 +17,7 @@ use aeroid::sim::scenario::{Scenario, ScenarioFile};
 use nalgebra::Complex;
 use std::path::Path;
 
-mod common;
-
+use crate::common;
 /// A bundled scenario with its text edited.
 fn scenario_with(name: &str, edit: impl Fn(String) -> String) -> Scenario {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/{name}.toml"));
