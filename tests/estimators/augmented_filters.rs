@@ -155,6 +155,41 @@ fn noise_free_record_gives_the_truth() {
     assert!(settled(&run_ukf.estimate), "{text}");
 }
 
+/// A single pass is judged by the same settling test as several: on the
+/// noise-free lateral multistep and on its flight-test record, with
+/// `passes = 1` (and the default start from equation error), both
+/// filters' parameters settle and are identified, so
+/// the estimate is `converged` (with the diagnosis of its innovations
+/// where ν²/S is off 1), never `unsettled`, every parameter within 4σ of
+/// the truth (this file's bound for one noisy run).
+#[test]
+fn a_single_pass_that_settles_is_converged() {
+    let (scenario, structure) = lateral();
+    let settings = FilterSettings {
+        passes: 1,
+        ..FilterSettings::default()
+    };
+    let truth = |n: &str| scenario.aircraft.aero.parameters.get(n).unwrap();
+    for (name, profile) in [
+        (
+            "noise-free",
+            flight_test_variant("filters-one-pass", |_| true),
+        ),
+        (
+            "flight-test",
+            Profile::load("flight-test-25hz", None).unwrap(),
+        ),
+    ] {
+        let (record, _) = record_scenario(&scenario, &profile).unwrap();
+        for filter in [Filter::Extended, Filter::Unscented] {
+            let estimate = run(filter, &record, &structure, &settings).estimate;
+            let (_, sigmas, text) = report(&estimate, truth);
+            assert_eq!(estimate.status, Status::Converged, "{name}\n{text}");
+            assert!(sigmas < 4.0, "{name}: {sigmas:.2}σ\n{text}");
+        }
+    }
+}
+
 /// Sensor noise (flight-test profile, controls exact), five recorder seeds
 /// for the EKF, one for the UKF (1.8 s a run): every parameter within 4σ
 /// of the truth, every run converged, and the σ checked against the
