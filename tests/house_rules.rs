@@ -236,6 +236,10 @@ fn measurements_in_the_reference_point_to_their_test() {
         "docs/conventions.md",
         "docs/files.md",
         "docs/cli.md",
+        "docs/import.md",
+        "docs/jsbsim.md",
+        "docs/plugins.md",
+        "docs/testing.md",
         "README.md",
     ] {
         let doc = std::fs::read_to_string(root().join(page)).unwrap();
