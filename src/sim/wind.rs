@@ -834,16 +834,13 @@ mod tests {
 
     #[test]
     fn documented_example_is_valid() {
-        let documentation = include_str!("wind.rs");
+        let documentation = include_str!("../../docs/files.md");
         let example: String = documentation
             .split("```toml\n")
-            .nth(1)
-            .and_then(|rest| rest.split("//! ```").next())
-            .expect("module doc holds a TOML example")
-            .lines()
-            .map(|line| line.strip_prefix("//!").unwrap_or(line).trim_start())
-            .collect::<Vec<_>>()
-            .join("\n");
+            .find(|block| block.starts_with("[wind]"))
+            .and_then(|rest| rest.split("```").next())
+            .expect("docs/files.md holds a [wind] example")
+            .to_string();
         let spec = parse(&example);
         let mut problems = Problems::default();
         spec.validate(&mut problems);
