@@ -3,7 +3,7 @@
 //! One test binary for the area (each file a module), so that a fresh
 //! `cargo test` links a few binaries rather than one per file.
 
-#[path = "../common.rs"]
+#[path = "../common/mod.rs"]
 mod common;
 
 mod augmented_filters;
