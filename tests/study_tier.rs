@@ -146,7 +146,7 @@ mod sample_rate {
             &[
                 "oem: CD_0 5, CL_0 5, CL_alpha 5, CL_de 1, CL_q 5, Cm_0 0.5, Cm_alpha 0.5, Cm_de 5, Cm_q 1, e 5",
                 "fem: CD_0 2, CL_0 2, CL_alpha 2, CL_de 2, CL_q 2, Cm_0 2, Cm_alpha 2, Cm_de 2, Cm_q 2, e 2",
-                "ekf: CD_0 2, CL_0 5, CL_alpha 5, CL_de 5, CL_q 5, Cm_0 5, Cm_alpha 5, Cm_de 5, Cm_q 5, e 2",
+                "ekf: CD_0 5, CL_0 5, CL_alpha 5, CL_de 5, CL_q 5, Cm_0 5, Cm_alpha 5, Cm_de 5, Cm_q 5, e 5",
                 "ukf: CD_0 never, CL_0 never, CL_alpha never, CL_de 5, CL_q never, Cm_0 never, Cm_alpha never, Cm_de 5, Cm_q 5, e never",
             ],
         );
@@ -162,8 +162,8 @@ mod sample_rate {
             &[
                 "oem: CY_0 1, CY_beta 1, CY_da 1, CY_dr 1, CY_p 2, CY_r 5, Cl_0 1, Cl_beta 1, Cl_da 1, Cl_dr 1, Cl_p 1, Cl_r 5, Cn_0 1, Cn_beta 5, Cn_da 5, Cn_dr 5, Cn_p 5, Cn_r 5",
                 "fem: CY_0 2, CY_beta 2, CY_da 2, CY_dr 2, CY_p 2, CY_r 2, Cl_0 2, Cl_beta 2, Cl_da 2, Cl_dr 2, Cl_p 2, Cl_r 2, Cn_0 2, Cn_beta 5, Cn_da 2, Cn_dr 2, Cn_p 2, Cn_r 2",
-                "ekf: CY_0 5, CY_beta 5, CY_da 5, CY_dr 5, CY_p 5, CY_r 5, Cl_0 5, Cl_beta 5, Cl_da 5, Cl_dr 5, Cl_p 5, Cl_r 5, Cn_0 5, Cn_beta 5, Cn_da 5, Cn_dr 5, Cn_p 5, Cn_r 5",
-                "ukf: CY_0 2, CY_beta 2, CY_da 2, CY_dr 2, CY_p 2, CY_r 5, Cl_0 2, Cl_beta 2, Cl_da 2, Cl_dr 2, Cl_p 2, Cl_r 5, Cn_0 2, Cn_beta 5, Cn_da 5, Cn_dr 5, Cn_p 5, Cn_r 2",
+                "ekf: CY_0 2, CY_beta 2, CY_da 2, CY_dr 2, CY_p 2, CY_r 5, Cl_0 2, Cl_beta 2, Cl_da 2, Cl_dr 5, Cl_p 2, Cl_r 2, Cn_0 2, Cn_beta 5, Cn_da 5, Cn_dr 2, Cn_p 5, Cn_r 2",
+                "ukf: CY_0 2, CY_beta 2, CY_da 2, CY_dr 2, CY_p 2, CY_r 5, Cl_0 2, Cl_beta 2, Cl_da 2, Cl_dr 2, Cl_p 2, Cl_r 2, Cn_0 2, Cn_beta 5, Cn_da 2, Cn_dr 2, Cn_p 5, Cn_r 2",
             ],
         );
     }
@@ -202,7 +202,7 @@ mod sample_rate {
     fn cdrw_lateral_rates_against_the_sampling_rule() {
         assert_every_derivative(
             "cdrw-lateral-rates",
-            &["oem 25", "fem 25", "ekf never", "ukf never"],
+            &["oem 25", "fem 25", "ekf 50", "ukf 25"],
         );
     }
 
