@@ -34,7 +34,7 @@
 //!    transformed ([`fourier_noise_variance`]).
 //! 2. The residual-correlation method (the note's ref. 6, Mehra, "On the
 //!    identification of variances and adaptive Kalman filtering", IEEE TAC
-//!    15(2), 1970; [`tuning`]): after a pass, the innovations over the
+//!    15(2), 1970; `tuning`): after a pass, the innovations over the
 //!    second half of the record (past the parameters' transient) give R
 //!    and the integrated states' process noise for the next. By default
 //!    Mehra's method itself (his §IV, Eqs. 13, 29, 30, 33): the
@@ -114,6 +114,13 @@ use std::path::{Path, PathBuf};
 
 mod tuning;
 use tuning::normalised_innovations;
+
+mod fourier_noise;
+mod history;
+mod status;
+pub use fourier_noise::*;
+pub use history::*;
+use status::*;
 
 /// Method name in estimates.
 pub const METHOD: &str = "ekf";
@@ -560,168 +567,6 @@ impl Filtered<'_> {
             }
         }
     }
-}
-
-/// The parameter states at every grid point of a pass.
-#[derive(Debug, Clone, PartialEq)]
-pub struct History {
-    pub names: Vec<String>,
-    pub times: Vec<f64>,
-    /// \[k\]\[j\]: θ_j at grid point k (filtered).
-    pub values: Vec<Vec<f64>>,
-    /// \[k\]\[j\]: its σ.
-    pub sigmas: Vec<Vec<f64>>,
-}
-
-impl History {
-    /// The history of the parameter states (after the `states` kinematic
-    /// ones) of a pass.
-    fn of(pass: &Pass, names: &[String], times: Vec<f64>, states: usize) -> History {
-        let m = names.len();
-        let values = pass
-            .filtered
-            .views()
-            .map(|g| (0..m).map(|j| g.mean[states + j]).collect())
-            .collect();
-        let sigmas = pass
-            .filtered
-            .views()
-            .map(|g| {
-                (0..m)
-                    .map(|j| g.covariance[(states + j, states + j)].max(0.0).sqrt())
-                    .collect()
-            })
-            .collect();
-        History {
-            names: names.to_vec(),
-            times,
-            values,
-            sigmas,
-        }
-    }
-
-    /// θ_j and σ_j at the grid point nearest t.
-    pub fn at(&self, name: &str, t: f64) -> Option<(f64, f64)> {
-        let j = self.names.iter().position(|n| n == name)?;
-        let k = self
-            .times
-            .iter()
-            .enumerate()
-            .min_by(|a, b| (a.1 - t).abs().total_cmp(&(b.1 - t).abs()))?
-            .0;
-        Some((self.values[k][j], self.sigmas[k][j]))
-    }
-
-    /// The history as CSV: `time`, then `NAME` and `sigma_NAME` per parameter.
-    pub fn to_csv(&self) -> String {
-        let mut text = String::from("time");
-        for name in &self.names {
-            text += &format!(",{name},sigma_{name}");
-        }
-        text.push('\n');
-        for (k, t) in self.times.iter().enumerate() {
-            text += &format!("{t}");
-            for (value, sigma) in self.values[k].iter().zip(&self.sigmas[k]) {
-                text += &format!(",{value:e},{sigma:e}");
-            }
-            text.push('\n');
-        }
-        text
-    }
-
-    pub fn write_csv(&self, path: &Path) -> Result<()> {
-        std::fs::write(path, self.to_csv()).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })
-    }
-}
-
-/// The measurement-noise variance of a channel's samples by Fourier
-/// decomposition (module header, Noise 1): the mean power of the spectrum
-/// above `bandwidth` (Hz), at least the upper quarter of the band. Dropouts
-/// are bridged linearly. NaN for fewer than 16 samples.
-pub fn fourier_noise_variance(values: &[f64], rate: f64, bandwidth: f64) -> f64 {
-    let x = bridged(values);
-    let n = x.len();
-    if n < 16 {
-        return f64::NAN;
-    }
-    // Detrend by the line through the end points.
-    let (first, last) = (x[0], x[n - 1]);
-    let x: Vec<f64> = (0..n)
-        .map(|i| x[i] - first - (last - first) * i as f64 / (n - 1) as f64)
-        .collect();
-    let total: f64 = n as f64 * x.iter().map(|v| v * v).sum::<f64>();
-    let half = n / 2;
-    let highest = (bandwidth * n as f64 / rate).floor() as usize;
-    let motion = highest.min(3 * half / 4);
-    // |X_0|² + 2·Σ_{k=1..K} |X_k|²: the bins at ±f_k below the bandwidth.
-    let mut low = 0.0;
-    for k in 0..=motion {
-        let angle = -2.0 * std::f64::consts::PI * k as f64 / n as f64;
-        let (sin, cos) = angle.sin_cos();
-        let (mut re, mut im) = (0.0, 0.0);
-        let (mut wr, mut wi) = (1.0, 0.0);
-        for &v in &x {
-            re += v * wr;
-            im += v * wi;
-            (wr, wi) = (wr * cos - wi * sin, wr * sin + wi * cos);
-        }
-        low += if k == 0 { 1.0 } else { 2.0 } * (re * re + im * im);
-    }
-    let bins = n - (2 * motion + 1);
-    ((total - low) / (n as f64 * bins as f64)).max(0.0)
-}
-
-/// The values with NaN (dropouts) replaced by linear interpolation between
-/// the finite neighbours (the nearest one at the ends); leading and
-/// trailing NaN are dropped.
-fn bridged(values: &[f64]) -> Vec<f64> {
-    let finite: Vec<usize> = (0..values.len())
-        .filter(|&i| values[i].is_finite())
-        .collect();
-    let (Some(&first), Some(&last)) = (finite.first(), finite.last()) else {
-        return Vec::new();
-    };
-    let mut out = values[first..=last].to_vec();
-    for pair in finite.windows(2) {
-        let (a, b) = (pair[0], pair[1]);
-        for i in a + 1..b {
-            let w = (i - a) as f64 / (b - a) as f64;
-            out[i - first] = values[a] * (1.0 - w) + values[b] * w;
-        }
-    }
-    out
-}
-
-/// A channel's measurement-noise variance: the Fourier estimate over the
-/// window, at least LSB²/12 of a quantised channel and (10⁻⁶·its standard
-/// deviation)². Returns (variance, the Fourier estimate, the floor).
-fn channel_noise(channel: &Channel, window: (f64, f64), bandwidth: f64) -> (f64, f64, f64) {
-    let values: Vec<f64> = channel
-        .times
-        .iter()
-        .zip(&channel.values)
-        .filter(|(t, _)| **t >= window.0 - 1e-9 && **t <= window.1 + 1e-9)
-        .map(|(_, v)| *v)
-        .collect();
-    let fourier = fourier_noise_variance(&values, channel.rate, bandwidth);
-    let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    let mean = finite.iter().sum::<f64>() / finite.len().max(1) as f64;
-    let spread = (finite.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
-        / finite.len().max(1) as f64)
-        .sqrt();
-    let quantisation = channel.resolution.map_or(0.0, |lsb| lsb * lsb / 12.0);
-    let floor = quantisation
-        .max((NOISE_FLOOR * spread).powi(2))
-        .max(f64::MIN_POSITIVE);
-    let variance = if fourier.is_finite() {
-        fourier.max(floor)
-    } else {
-        floor
-    };
-    (variance, fourier, floor)
 }
 
 /// What every pass shares: the model view, the start, the prior, the
@@ -1230,91 +1075,6 @@ fn assemble(
         distributions: Vec::new(),
         histories: Vec::new(),
     }
-}
-
-/// Settled and identified (module header, Status), and the innovations'
-/// consistency as a diagnosis.
-fn status(
-    setup: &Setup,
-    history: &History,
-    ratios: &[f64],
-    outputs: &[String],
-) -> (Status, Vec<Diagnosis>) {
-    status_of(
-        &setup.prior,
-        setup.x0.len(),
-        &setup.names,
-        history,
-        ratios,
-        outputs,
-    )
-}
-
-/// [`status`] from the prior covariance (n kinematic states, then the
-/// parameters `names`).
-fn status_of(
-    prior: &DMatrix<f64>,
-    n: usize,
-    names: &[String],
-    history: &History,
-    ratios: &[f64],
-    outputs: &[String],
-) -> (Status, Vec<Diagnosis>) {
-    let inconsistent: Vec<(&String, f64)> = outputs
-        .iter()
-        .zip(ratios)
-        .filter(|(_, r)| r.is_nan() || (**r - 1.0).abs() > CONSISTENT)
-        .map(|(o, r)| (o, *r))
-        .collect();
-    let diagnoses = if inconsistent.is_empty() {
-        Vec::new()
-    } else {
-        vec![Diagnosis {
-            kind: DiagnosisKind::InconsistentInnovations,
-            about: inconsistent.iter().map(|(o, _)| o.to_string()).collect(),
-            measures: inconsistent.iter().map(|(_, r)| *r).collect(),
-            advice: format!(
-                "mean ν²/S beyond 1 ± {CONSISTENT}: the noise covariances Q and R do not describe the record, so the bounds do not either"
-            ),
-        }]
-    };
-    (settled(prior, n, names, history), diagnoses)
-}
-
-/// Identified and settled: each parameter's σ below its prior's /√2, and
-/// its estimate within 2σ over the last [`SETTLING_FRACTION`] of the record.
-fn settled(prior: &DMatrix<f64>, n: usize, names: &[String], history: &History) -> Status {
-    let len = history.times.len();
-    let last = len - 1;
-    let from = ((1.0 - SETTLING_FRACTION) * last as f64).floor() as usize;
-    let unidentified: Vec<String> = (0..names.len())
-        .filter(|&j| {
-            let prior = prior[(n + j, n + j)].sqrt();
-            history.sigmas[last][j].is_nan()
-                || history.sigmas[last][j] >= prior / std::f64::consts::SQRT_2
-        })
-        .map(|j| names[j].clone())
-        .collect();
-    if !unidentified.is_empty() {
-        return Status::Unidentified(unidentified);
-    }
-    let unsettled: Vec<String> = (0..names.len())
-        .filter(|&j| {
-            let moved = (from..=last)
-                .map(|k| (history.values[k][j] - history.values[last][j]).abs())
-                .fold(0.0, f64::max);
-            moved.is_nan() || moved > 2.0 * history.sigmas[from][j]
-        })
-        .map(|j| names[j].clone())
-        .collect();
-    if !unsettled.is_empty() {
-        return Status::Unsettled(format!(
-            "moved by more than 2σ over the last {:.0} % of the record: {}",
-            100.0 * SETTLING_FRACTION,
-            unsettled.join(", ")
-        ));
-    }
-    Status::Converged
 }
 
 #[cfg(test)]

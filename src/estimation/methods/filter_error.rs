@@ -151,8 +151,8 @@
 //! likelihood (Eq. 5.16) wants G·Gᵀ at zero, and where the states tie
 //! outputs exactly (β and n_y through CY) S_k has an eigenvalue of order
 //! G², whose ln det falls without end. Each G² is held at a rounding
-//! floor, [`NOISE_ROUNDING`] of its output's variance about its mean
-//! ([`FilterErrorFit::floors`]): where it reaches the floor with the
+//! floor, `NOISE_ROUNDING` of its output's variance about its mean
+//! (`FilterErrorFit::floors`): where it reaches the floor with the
 //! likelihood's gradient asking for less, its row and column of the
 //! normal equations are zero, so the step and the convergence test are
 //! the other unknowns' (`FilterErrorFit::held_at_rounding`), its bound
