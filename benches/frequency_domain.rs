@@ -16,8 +16,8 @@ use aeroid::estimation::methods::frequency_output_error::frequency_output_error;
 use aeroid::estimation::methods::frequency_regression::{
     BandOptions, FrequencyRegressionOptions, frequency_regression,
 };
-use aeroid::estimation::solver::fourier::FourierTransform;
 use aeroid::estimation::structure::ModelStructure;
+use aeroid::numerics::fourier::FourierTransform;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
 use criterion::{Criterion, criterion_group, criterion_main};

@@ -2,13 +2,13 @@
 //! reporting every problem at once; a valid scenario is also trimmed, so that
 //! a flight condition with no trim is found before a long run.
 
-use crate::error::{Error, Result, parse_toml, read_text};
-use crate::estimation::structure::ModelStructure;
-use crate::eval::study::{Study, StudyFile};
-use crate::record::recorder::{Profile, ProfileFile};
-use crate::sim::Simulation;
-use crate::sim::aircraft::Aircraft;
-use crate::sim::scenario::{Scenario, ScenarioFile};
+use aeroid_core::error::{Error, Result, parse_toml, read_text};
+use aeroid_estimation::structure::ModelStructure;
+use aeroid_eval::study::{Study, StudyFile};
+use aeroid_record::recorder::{Profile, ProfileFile};
+use aeroid_sim::Simulation;
+use aeroid_sim::aircraft::Aircraft;
+use aeroid_sim::scenario::{Scenario, ScenarioFile};
 use std::path::Path;
 
 /// What a valid file holds, in a few lines for the user.
@@ -26,16 +26,16 @@ pub fn check_file(path: &Path) -> Result<CheckReport> {
     let table: toml::Table = parse_toml(path, &text)?;
     if table.contains_key("trim") {
         let file: ScenarioFile = parse_toml(path, &text)?;
-        crate::estimation::estimator::validate_method_tables(&file.methods, path)?;
+        aeroid_estimation::estimator::validate_method_tables(&file.methods, path)?;
         check_scenario(&Scenario::from_file(&file, path)?)
     } else if table.contains_key("runs") && table.contains_key("methods") {
         let file: StudyFile = parse_toml(path, &text)?;
         Ok(describe_study(&Study::from_file(&file, path)?))
     } else if table.get("kind").and_then(|k| k.as_str())
-        == Some(crate::estimation::linear_structure::KIND)
+        == Some(aeroid_estimation::linear_structure::KIND)
     {
         let structure =
-            crate::estimation::linear_structure::LinearStructure::load(&path.to_string_lossy())?;
+            aeroid_estimation::linear_structure::LinearStructure::load(&path.to_string_lossy())?;
         Ok(CheckReport {
             kind: "model structure",
             lines: vec![
@@ -75,7 +75,7 @@ pub fn check_file(path: &Path) -> Result<CheckReport> {
     } else {
         Err(Error::Invalid {
             path: path.to_path_buf(),
-            problems: vec![crate::error::Problem {
+            problems: vec![aeroid_core::error::Problem {
                 field: "(file)".into(),
                 message: "neither a scenario (no [trim] table), an aircraft or model structure (no [aero] table), \
                           a recorder profile (no [[channels]]) nor a study (no runs and methods)"
@@ -132,7 +132,7 @@ fn describe_profile(profile: &Profile) -> CheckReport {
             format!(
                 "{} {} Hz",
                 c.measurand.name,
-                crate::record::rate_text(c.rate)
+                aeroid_record::rate_text(c.rate)
             )
         })
         .collect();
@@ -151,7 +151,7 @@ fn describe_profile(profile: &Profile) -> CheckReport {
 }
 
 fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
-    if let crate::sim::FlightSource::Jsbsim(jsbsim) = scenario.source() {
+    if let aeroid_sim::FlightSource::Jsbsim(jsbsim) = scenario.source() {
         return check_jsbsim_scenario(scenario, jsbsim);
     }
     let simulation = Simulation::prepare(scenario)?;
@@ -199,7 +199,7 @@ fn check_scenario(scenario: &Scenario) -> Result<CheckReport> {
 /// rigid-body file checked against JSBSim's mass, inertia and geometry.
 fn check_jsbsim_scenario(
     scenario: &Scenario,
-    jsbsim: &crate::sim::scenario::JsbsimAircraft,
+    jsbsim: &aeroid_sim::scenario::JsbsimAircraft,
 ) -> Result<CheckReport> {
     let mut lines = vec![format!(
         "{}: JSBSim aircraft {} (rigid body {}), {} s at {} s steps, seed {}",
@@ -220,8 +220,8 @@ fn check_jsbsim_scenario(
 /// JSBSim's trim of the scenario and the rigid-body check, as a report line.
 #[cfg(feature = "jsbsim")]
 fn jsbsim_trim_line(scenario: &Scenario) -> Result<Option<String>> {
-    let trimmed = crate::jsbsim::own::trim(scenario)?;
-    crate::jsbsim::own::check_rigid_body(scenario, &trimmed.exec)?;
+    let trimmed = aeroid_jsbsim::own::trim(scenario)?;
+    aeroid_jsbsim::own::check_rigid_body(scenario, &trimmed.exec)?;
     let [elevator, aileron, rudder] = trimmed.deflections()?;
     Ok(Some(format!(
         "JSBSim trim: α {:.3}°, θ {:.3}°, elevator {:.3}°, aileron {:.3}°, rudder {:.3}°, throttle command {:.4}, thrust {:.1} kN; rigid body matches JSBSim",

@@ -1,8 +1,10 @@
 //! The house rules a reviewer would otherwise check by hand.
 //!
-//! **The layers.** The top-level modules of src/ import each other without
-//! a cycle: every `crate::MODULE` in code (not in comments) is an edge, and
-//! the graph has no strongly connected component of two or more modules.
+//! **The layers.** Cargo keeps the crates of crates/ acyclic. Inside each
+//! crate (and the root package's src/) the top-level modules import each
+//! other without a cycle: every `crate::MODULE` in code (not in comments)
+//! is an edge, and the graph has no strongly connected component of two or
+//! more modules.
 //!
 //! **Every number in docs/findings.md is held by a test.** A finding is a
 //! bullet, a paragraph or a table of the document's sections; one that
@@ -33,12 +35,28 @@ fn rust_files(folder: &Path, into: &mut Vec<PathBuf>) {
     }
 }
 
-/// The names of every test function of tests/ and src/: a `fn` within
-/// three lines after `#[test]` (other attributes may stand between).
+/// The source folders: the root package's src/ and each crate's.
+fn source_folders() -> Vec<PathBuf> {
+    let mut folders = vec![root().join("src")];
+    let mut crates: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path().join("src"))
+        .filter(|p| p.is_dir())
+        .collect();
+    crates.sort();
+    folders.extend(crates);
+    folders
+}
+
+/// The names of every test function of tests/ and the sources: a `fn`
+/// within three lines after `#[test]` (other attributes may stand between).
 fn test_names() -> BTreeSet<String> {
     let mut files = Vec::new();
     rust_files(&root().join("tests"), &mut files);
-    rust_files(&root().join("src"), &mut files);
+    for folder in source_folders() {
+        rust_files(&folder, &mut files);
+    }
     let mut names = BTreeSet::new();
     for file in files {
         let text = std::fs::read_to_string(&file).unwrap();
@@ -289,13 +307,13 @@ fn the_check_refuses_a_number_without_a_test_and_takes_one_with() {
     assert!(unheld(held, &tests).is_empty());
 }
 
-/// The top-level modules of src/ (a file `X.rs` or a folder `X/`, not the
-/// crate roots) and, per module, the modules its code names as
-/// `crate::OTHER` (comments left out), with one place of each edge.
-fn module_graph() -> BTreeMap<String, BTreeMap<String, String>> {
-    let src = root().join("src");
+/// The top-level modules of a crate's source folder (a file `X.rs` or a
+/// folder `X/`, not the crate roots) and, per module, the modules its code
+/// names as `crate::OTHER` (comments left out), with one place of each edge.
+fn module_graph(src: &Path) -> BTreeMap<String, BTreeMap<String, String>> {
+    let shown = src.strip_prefix(root()).unwrap_or(src).to_path_buf();
     let mut modules = BTreeSet::new();
-    for entry in std::fs::read_dir(&src).unwrap().flatten() {
+    for entry in std::fs::read_dir(src).unwrap().flatten() {
         let name = entry.file_name().to_string_lossy().to_string();
         if let Some(stem) = name.strip_suffix(".rs") {
             if stem != "lib" && stem != "main" {
@@ -306,11 +324,11 @@ fn module_graph() -> BTreeMap<String, BTreeMap<String, String>> {
         }
     }
     let mut files = Vec::new();
-    rust_files(&src, &mut files);
+    rust_files(src, &mut files);
     let mut graph: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
     for file in files {
         let relative = file
-            .strip_prefix(&src)
+            .strip_prefix(src)
             .unwrap()
             .to_string_lossy()
             .to_string();
@@ -336,7 +354,7 @@ fn module_graph() -> BTreeMap<String, BTreeMap<String, String>> {
                         .entry(top.clone())
                         .or_default()
                         .entry(other)
-                        .or_insert_with(|| format!("src/{relative}:{}", n + 1));
+                        .or_insert_with(|| format!("{}/{relative}:{}", shown.display(), n + 1));
                 }
             }
         }
@@ -404,12 +422,10 @@ fn cycles(graph: &BTreeMap<String, BTreeMap<String, String>>) -> Vec<Vec<String>
     search.components
 }
 
-#[test]
-fn the_top_level_modules_import_each_other_without_a_cycle() {
-    let graph = module_graph();
-    assert!(graph.len() >= 10, "{graph:?}");
-    let found = cycles(&graph);
-    let listing: Vec<String> = found
+/// The cycles of one crate, each with the edges that close it.
+fn listed_cycles(src: &Path) -> Vec<String> {
+    let graph = module_graph(src);
+    cycles(&graph)
         .iter()
         .map(|component| {
             let edges: Vec<String> = component
@@ -423,8 +439,18 @@ fn the_top_level_modules_import_each_other_without_a_cycle() {
                 .collect();
             format!("{}: {}", component.join(", "), edges.join("; "))
         })
-        .collect();
-    assert!(found.is_empty(), "module cycles:\n{}", listing.join("\n"));
+        .collect()
+}
+
+#[test]
+fn the_top_level_modules_of_each_crate_import_each_other_without_a_cycle() {
+    let folders = source_folders();
+    assert!(folders.len() >= 9, "{folders:?}");
+    let mut found = Vec::new();
+    for src in &folders {
+        found.extend(listed_cycles(src));
+    }
+    assert!(found.is_empty(), "module cycles:\n{}", found.join("\n"));
 }
 
 #[test]

@@ -212,7 +212,7 @@ fn rbf_per_sample_evaluations_do_not_allocate() {
 fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
     use aeroid::estimation::model::augmented::Augmented;
     use aeroid::estimation::model::state_space::{Jacobians, StateSpaceModel};
-    use aeroid::estimation::solver::kalman::{self, Exponential, SparseRows};
+    use aeroid::numerics::kalman::{self, Exponential, SparseRows};
     use nalgebra::{DMatrix, DVector};
 
     let (_, structure, view, x0) = attas_lateral_view();
@@ -293,7 +293,7 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
 /// A whole EKF pass over the augmented ATTAS lateral record (1501 grid
 /// points, 22 states) allocates nothing per grid point, whatever it keeps:
 /// what it keeps goes into buffers reserved once per pass
-/// (`aeroid::estimation::solver::kept`), the update's S, S⁻¹ and K into
+/// (`aeroid::numerics::kept`), the update's S, S⁻¹ and K into
 /// the update's own buffers (no packing buffer of a matrix product), so a
 /// pass makes a fixed set-up's allocations (the pass's buffers, the
 /// step's buffers' first growth): under a hundred over 1501 points, where
@@ -463,8 +463,8 @@ fn a_ukf_steps_sigma_point_evaluations_do_not_allocate() {
 fn a_ukf_pass_allocates_nothing_per_grid_point() {
     use aeroid::estimation::model::state_space::StateSpaceModel;
     use aeroid::estimation::solver::extended_kalman::Noise;
-    use aeroid::estimation::solver::kalman::Unscented;
     use aeroid::estimation::solver::unscented_kalman;
+    use aeroid::numerics::kalman::Unscented;
     use nalgebra::{DMatrix, DVector};
 
     with_augmented_lateral(|model, initial, observations, (outputs, kinematic)| {
@@ -518,7 +518,7 @@ fn with_augmented_lateral(
             '_,
             aeroid::estimation::model::state_space::DrivenStateSpace,
         >,
-        &aeroid::estimation::solver::kalman::Gaussian,
+        &aeroid::numerics::kalman::Gaussian,
         &aeroid::estimation::model::observations::Observations,
         (usize, usize),
     ),
@@ -526,7 +526,7 @@ fn with_augmented_lateral(
     use aeroid::estimation::model::augmented::Augmented;
     use aeroid::estimation::model::observations::Observations;
     use aeroid::estimation::model::state_space::StateSpaceModel;
-    use aeroid::estimation::solver::kalman::Gaussian;
+    use aeroid::numerics::kalman::Gaussian;
     use nalgebra::DMatrix;
 
     let (record, structure, view, x0) = attas_lateral_view();
@@ -676,7 +676,7 @@ fn filter_error_passes_allocate_nothing_per_grid_point() {
     };
     use aeroid::estimation::model::observations::Observations;
     use aeroid::estimation::model::state_space::{DrivenStateSpace, StateSpaceModel};
-    use aeroid::estimation::solver::kalman::Gaussian;
+    use aeroid::numerics::kalman::Gaussian;
     use nalgebra::{DMatrix, DVector};
 
     let deg = std::f64::consts::PI / 180.0;

@@ -14,9 +14,9 @@ use aeroid::estimation::methods::output_error::Start;
 use aeroid::estimation::model::linear::{Entry, LinearStateSpace, Matrix};
 use aeroid::estimation::model::observations::Observations;
 use aeroid::estimation::model::state_space::{DrivenStateSpace, Jacobians, StateSpaceModel};
-use aeroid::estimation::solver::gauss_newton::{self, Options};
-use aeroid::estimation::solver::kalman;
 use aeroid::estimation::structure::ModelStructure;
+use aeroid::numerics::gauss_newton::{self, Options};
+use aeroid::numerics::kalman;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::Simulation;
 use aeroid::sim::scenario::Scenario;
@@ -971,7 +971,7 @@ fn time_varying_gain_on_dryden_turbulence() {
 /// within 3σ for both forms, the forms within 0.25σ of each other.
 #[test]
 fn filter_error_converges_with_the_gain_constraint_active() {
-    use aeroid::estimation::solver::gauss_newton::LeastSquaresProblem;
+    use aeroid::numerics::gauss_newton::LeastSquaresProblem;
     let (model, a, truth, distribution) = lateral_with_process_noise();
     let measurement = DVector::from_vec(vec![0.01, 0.0, 1e-6, 1e-5]);
     let initial = DVector::zeros(4);

@@ -26,10 +26,10 @@ use aeroid::estimation::methods::frequency_regression::{
     FrequencyRegressionOptions, frequency_regression, linear_frequency_regression,
 };
 use aeroid::estimation::model::linear::{Entry, LinearStateSpace, Matrix};
-use aeroid::estimation::solver::fourier::FourierTransform;
-use aeroid::estimation::solver::gauss_newton::Options;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::eval::linear_flight::record_flight;
+use aeroid::numerics::fourier::FourierTransform;
+use aeroid::numerics::gauss_newton::Options;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::integrator::rk4_step;

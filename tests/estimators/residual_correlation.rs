@@ -1,6 +1,6 @@
 //! Mehra's residual-correlation method on simulated data with known noise.
 
-use aeroid::estimation::solver::kalman::{self, residual_correlation};
+use aeroid::numerics::kalman::{self, residual_correlation};
 use nalgebra::{DMatrix, DVector};
 use rand::rngs::ChaCha8Rng;
 use rand::{RngExt, SeedableRng};

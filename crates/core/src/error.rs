@@ -1,0 +1,193 @@
+//! Error types of the library. Every failure a user can cause (a bad file, an
+//! unknown name, a trim that does not exist, a departing simulation) is an
+//! [`Error`] that names the file, field, line or time; the library never panics
+//! on user input and only the CLI prints and exits.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// One problem found while validating a file: the dotted field path and what is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Problem {
+    pub field: String,
+    pub message: String,
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.field, self.message)
+    }
+}
+
+/// Collects every problem of a file so that a user sees all of them at once.
+#[derive(Debug, Default, Clone)]
+pub struct Problems(pub Vec<Problem>);
+
+impl Problems {
+    pub fn push(&mut self, field: impl Into<String>, message: impl Into<String>) {
+        self.0.push(Problem {
+            field: field.into(),
+            message: message.into(),
+        });
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// `Ok(value)` when nothing was found, else an [`Error::Invalid`] naming the file.
+    pub fn finish<T>(self, path: &std::path::Path, value: T) -> Result<T, Error> {
+        if self.0.is_empty() {
+            Ok(value)
+        } else {
+            Err(Error::Invalid {
+                path: path.to_path_buf(),
+                problems: self.0,
+            })
+        }
+    }
+}
+
+fn list_problems(problems: &[Problem]) -> String {
+    problems
+        .iter()
+        .map(|p| format!("\n  - {p}"))
+        .collect::<String>()
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+
+    /// A file or folder aeroid writes could not be written. The reason is
+    /// part of the message, not a separate cause, so that it is said once.
+    #[error("cannot write {path}: {reason}")]
+    Write { path: PathBuf, reason: String },
+
+    /// A file named inside another file (a record's `record.toml`, a
+    /// scenario, a study) that would leave the folder of the file naming it.
+    #[error("{path}: {field}: '{reference}' {reason}")]
+    Escape {
+        path: PathBuf,
+        field: String,
+        reference: String,
+        reason: String,
+    },
+
+    #[error("{path}: malformed TOML: {message}")]
+    Toml { path: PathBuf, message: String },
+
+    #[error("{path}: {} problem(s):{}", problems.len(), list_problems(problems))]
+    Invalid {
+        path: PathBuf,
+        problems: Vec<Problem>,
+    },
+
+    #[error("unknown {kind} '{name}'; known: {}", known.join(", "))]
+    Unknown {
+        kind: &'static str,
+        name: String,
+        known: Vec<String>,
+    },
+
+    #[error("{path}: line {line}, column '{column}': {message}")]
+    Csv {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        message: String,
+    },
+
+    #[error("no trim: {0}")]
+    Trim(String),
+
+    /// The flight left its limits; whoever flew it keeps the trace up to
+    /// the departure (`aeroid_sim::Flight`).
+    #[error("simulation departed at t = {time:.3} s: {reason}")]
+    Departed { time: f64, reason: String },
+
+    /// A JSBSim call failed (a C++ exception or a failure status, turned into
+    /// an error at the FFI boundary). `context` names the aircraft, property
+    /// or operation.
+    #[error("JSBSim: {context}: {message}")]
+    Jsbsim { context: String, message: String },
+
+    /// An estimator cannot run on this record or model; the refusal says
+    /// what is missing, as data.
+    #[error("{0}")]
+    Refused(crate::refusal::Refusal),
+
+    /// A square-root filter's Cholesky downdate that would leave its
+    /// covariance factor without a positive diagonal: the covariance it
+    /// stands for would no longer be positive definite. `step` names the
+    /// filter step.
+    #[error(
+        "at t = {time} s: the {step} would leave the covariance not positive definite (a Cholesky downdate)"
+    )]
+    Downdate { time: f64, step: &'static str },
+
+    #[error("{0}")]
+    Other(String),
+}
+
+impl Error {
+    /// The error of a write: a failure of the file system reported as a
+    /// read ([`Error::Io`]) becomes a [`Error::Write`].
+    pub fn as_write(self) -> Error {
+        match self {
+            Error::Io { path, source } => Error::Write {
+                path,
+                reason: source.to_string(),
+            },
+            other => other,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Reads a text file, naming it in the error.
+pub fn read_text(path: &std::path::Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// A write error naming the path, with the reason said once.
+pub fn write_error(path: &std::path::Path, error: impl fmt::Display) -> Error {
+    Error::Write {
+        path: path.to_path_buf(),
+        reason: error.to_string(),
+    }
+}
+
+/// Writes a text file, naming it in the error.
+pub fn write_text(path: &std::path::Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| write_error(path, e))
+}
+
+/// Parses TOML into `T`, reporting the file, line and column of a syntax or type error.
+pub fn parse_toml<T: serde::de::DeserializeOwned>(path: &std::path::Path, text: &str) -> Result<T> {
+    toml::from_str(text).map_err(|e| Error::Toml {
+        path: path.to_path_buf(),
+        message: describe_toml_error(text, &e),
+    })
+}
+
+fn describe_toml_error(text: &str, error: &toml::de::Error) -> String {
+    let message = error.message().trim().to_string();
+    match error.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {column}: {message}")
+        }
+        None => message,
+    }
+}

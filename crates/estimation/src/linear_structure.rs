@@ -1,0 +1,635 @@
+//! Linear state-space model structures (`kind = "linear"` model files):
+//! small models in dimensional derivatives, ẋ = A·x + B·u + b,
+//! y = C·x + D·u + c, with named states, inputs and outputs, whose entries
+//! are fixed numbers or named parameters. The inputs and outputs are record
+//! channels (SI units, as every record channel: rad, rad/s, rad/s², load
+//! factors); a state named like a record channel starts, in a fit, from
+//! that channel's value at the first grid point, any other from 0.
+//!
+//! ```toml
+//! kind = "linear"
+//! name = "linear-lateral"
+//! states = ["beta", "p", "r"]
+//! inputs = ["aileron", "rudder"]
+//! outputs = ["beta", "p", "r", "ny"]        # rows of C and D, and of output_bias
+//! rate_outputs = { p_dot = "p", r_dot = "r" } # outputs that are state rates (after `outputs`)
+//! interpolation = "auto"                    # inputs inside a step: "auto" (per input from its samples), "zoh" (held), "linear" (first-order hold) or { aileron = "linear" }
+//! A = [["Yb", 0.0, -1.0], ["Lb", "Lp", "Lr"], ["Nb", "Np", "Nr"]]
+//! B = [[0.0, "Ydr"], ["Lda", "Ldr"], ["Nda", "Ndr"]]
+//! C = [[1, 0, 0], [0, 1, 0], [0, 0, 1], ["Cyb", 0, 0]]
+//! D = [[0, 0], [0, 0], [0, 0], [0, "Cydr"]]   # default zeros
+//! state_bias = [0, 0, 0]                    # b, default zeros
+//! output_bias = [0, 0, 0, "ny0"]            # c, default zeros
+//! [parameters.Lp]
+//! start = -2.0
+//! lower = -10.0                             # optional bounds
+//! upper = 0.0
+//! [parameters.ny0]
+//! start = 0.0
+//! fixed = true                              # a parameter held at its start value
+//! ```
+//!
+//! A parameter appears in exactly one entry. The model is continuous in
+//! time and discretised exactly ([`LinearStateSpace`]). The parameters'
+//! start values are the model's own values: a linear flight
+//! ([`aeroid_eval::linear_flight`]) flies them as its truth.
+
+use crate::estimator::{MethodTables, check_method_tables};
+use crate::model::input_timing::{Chosen, InputInterpolation};
+use crate::model::linear::{Entry, LinearStateSpace, Matrices, Matrix};
+use crate::model::state_space::{fitting_window, observation_step};
+use aeroid_core::catalog;
+use aeroid_core::error::{Problems, Result, parse_toml, read_text};
+use aeroid_record::FlightRecord;
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// The `kind` of a linear model file.
+pub const KIND: &str = "linear";
+
+/// One entry of a matrix as a file writes it: a fixed number or a parameter's name.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Cell {
+    Number(f64),
+    Parameter(String),
+}
+
+/// A `[parameters.NAME]` table of a linear model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearParameter {
+    pub start: f64,
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fixed: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lower: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub upper: Option<f64>,
+}
+
+/// A linear model file as written.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearFile {
+    pub kind: String,
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    pub states: Vec<String>,
+    #[serde(default)]
+    pub inputs: Vec<String>,
+    #[serde(default)]
+    pub outputs: Vec<String>,
+    /// Output channel → the state whose rate it is.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub rate_outputs: BTreeMap<String, String>,
+    #[serde(default)]
+    pub interpolation: InputInterpolation,
+    #[serde(rename = "A")]
+    pub a: Vec<Vec<Cell>>,
+    #[serde(rename = "B", default)]
+    pub b: Vec<Vec<Cell>>,
+    #[serde(rename = "C", default)]
+    pub c: Vec<Vec<Cell>>,
+    #[serde(rename = "D", default, skip_serializing_if = "Vec::is_empty")]
+    pub d: Vec<Vec<Cell>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub state_bias: Vec<Cell>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub output_bias: Vec<Cell>,
+    #[serde(default)]
+    pub parameters: BTreeMap<String, LinearParameter>,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub methods: MethodTables,
+}
+
+/// A validated linear model structure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearStructure {
+    pub name: String,
+    pub path: PathBuf,
+    pub file: LinearFile,
+    pub states: Vec<String>,
+    pub inputs: Vec<String>,
+    /// Every output: those of C and D, then the rate outputs.
+    pub outputs: Vec<String>,
+    /// The matrices with every parameter at its start value.
+    pub matrices: Matrices,
+    /// The states whose rates are outputs (after C's), in `outputs` order.
+    pub rate_states: Vec<usize>,
+    pub interpolation: InputInterpolation,
+    /// Parameter names, in file (alphabetical) order, with their entries.
+    pub names: Vec<String>,
+    pub entries: Vec<Entry>,
+    pub starts: Vec<f64>,
+    pub free: Vec<bool>,
+    pub bounds: Vec<(f64, f64)>,
+    pub methods: MethodTables,
+}
+
+impl LinearStructure {
+    /// Loads a linear structure by bundled name (`models/NAME.toml`) or path.
+    pub fn load(reference: &str) -> Result<LinearStructure> {
+        let path = catalog::resolve(reference, catalog::MODEL_FOLDER, None)?;
+        let file: LinearFile = parse_toml(&path, &read_text(&path)?)?;
+        LinearStructure::from_file(&file, &path)
+    }
+
+    /// Validates a parsed file; every problem is reported at once, named
+    /// by its key (`A[1][2]`, `parameters.Lp`, `rate_outputs.p_dot`).
+    pub fn from_file(file: &LinearFile, path: &Path) -> Result<LinearStructure> {
+        let mut problems = Problems::default();
+        if file.kind != KIND {
+            problems.push(
+                "kind",
+                format!("is '{}'; a linear model is \"{KIND}\"", file.kind),
+            );
+        }
+        if file.states.is_empty() {
+            problems.push("states", "a linear model needs at least one state");
+        }
+        for (field, names) in [
+            ("states", &file.states),
+            ("inputs", &file.inputs),
+            ("outputs", &file.outputs),
+        ] {
+            check_names(field, names, &mut problems);
+        }
+        let (n, m, l) = (file.states.len(), file.inputs.len(), file.outputs.len());
+        let mut reader = Reader {
+            parameters: &file.parameters,
+            used: BTreeMap::new(),
+            problems: &mut problems,
+        };
+        let a = reader.matrix("A", &file.a, n, n, true);
+        let b = reader.matrix("B", &file.b, n, m, m > 0);
+        let c = reader.matrix("C", &file.c, l, n, l > 0);
+        let d = reader.matrix("D", &file.d, l, m, false);
+        let state_bias = reader.vector("state_bias", &file.state_bias, n);
+        let output_bias = reader.vector("output_bias", &file.output_bias, l);
+        let used = std::mem::take(&mut reader.used);
+        let mut outputs = file.outputs.clone();
+        let mut rate_states = Vec::new();
+        for (output, state) in &file.rate_outputs {
+            let field = format!("rate_outputs.{output}");
+            match file.states.iter().position(|s| s == state) {
+                Some(i) => rate_states.push(i),
+                None => problems.push(
+                    field.clone(),
+                    format!(
+                        "unknown state '{state}'; states: {}",
+                        file.states.join(", ")
+                    ),
+                ),
+            }
+            if outputs.contains(output) || file.inputs.contains(output) {
+                problems.push(field, format!("'{output}' is named twice"));
+            }
+            outputs.push(output.clone());
+        }
+        if outputs.is_empty() {
+            problems.push("outputs", "a linear model needs at least one output");
+        }
+        let mut names = Vec::new();
+        let (mut entries, mut starts, mut free, mut bounds) = (vec![], vec![], vec![], vec![]);
+        for (name, spec) in &file.parameters {
+            let field = format!("parameters.{name}");
+            let Some(&entry) = used.get(name) else {
+                problems.push(field, "is not used in any matrix entry");
+                continue;
+            };
+            let range = (
+                spec.lower.unwrap_or(f64::NEG_INFINITY),
+                spec.upper.unwrap_or(f64::INFINITY),
+            );
+            if !spec.start.is_finite()
+                || range.0 >= range.1
+                || !(range.0..=range.1).contains(&spec.start)
+            {
+                problems.push(
+                    field,
+                    "the start value must be finite and the bounds ordered around it",
+                );
+            }
+            names.push(name.clone());
+            entries.push(entry);
+            starts.push(spec.start);
+            free.push(!spec.fixed);
+            bounds.push(range);
+        }
+        check_method_tables(&file.methods, &mut problems);
+        let inputs: Vec<&str> = file.inputs.iter().map(String::as_str).collect();
+        if let Err(error) = file.interpolation.check_channels(&inputs) {
+            let text = error.to_string();
+            problems.push(
+                "interpolation",
+                text.trim_start_matches("interpolation: ").to_string(),
+            );
+        }
+        let mut matrices = Matrices {
+            a,
+            b,
+            c,
+            d,
+            state_bias,
+            output_bias,
+        };
+        for (entry, &start) in entries.iter().zip(&starts) {
+            *entry_of(&mut matrices, entry) = start;
+        }
+        let structure = LinearStructure {
+            name: file.name.clone(),
+            path: path.to_path_buf(),
+            file: file.clone(),
+            states: file.states.clone(),
+            inputs: file.inputs.clone(),
+            outputs,
+            matrices,
+            rate_states,
+            interpolation: file.interpolation.clone(),
+            names,
+            entries,
+            starts,
+            free,
+            bounds,
+            methods: file.methods.clone(),
+        };
+        problems.finish(path, structure)
+    }
+
+    /// The parameters' start values: the model's own, a linear flight's truth.
+    pub fn parameter_values(&self) -> DVector<f64> {
+        DVector::from_column_slice(&self.starts)
+    }
+
+    /// The names of the free parameters.
+    pub fn free_names(&self) -> Vec<String> {
+        (0..self.names.len())
+            .filter(|&i| self.free[i])
+            .map(|i| self.names[i].clone())
+            .collect()
+    }
+
+    /// The model on the grid start + k·step with inputs u_k.
+    pub fn model(
+        &self,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+    ) -> Result<LinearStateSpace> {
+        self.model_disturbed(start, step, inputs, None)
+    }
+
+    /// [`LinearStructure::model`] with more inputs after the model's own,
+    /// entering the states through `disturbance` (states × extra inputs,
+    /// columns after B's) and no output directly: each u_k holds the
+    /// model's inputs, then the disturbances. Each input is taken inside a
+    /// step as the file's `interpolation` chooses for it, "auto" from its
+    /// values on the grid.
+    pub fn model_disturbed(
+        &self,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+        disturbance: Option<&DMatrix<f64>>,
+    ) -> Result<LinearStateSpace> {
+        let columns = inputs.first().map_or(0, |u| u.len());
+        let chosen = (0..columns)
+            .map(|j| {
+                let name = self
+                    .inputs
+                    .get(j)
+                    .cloned()
+                    .unwrap_or_else(|| format!("disturbance {}", j + 1 - self.inputs.len()));
+                let values: Vec<f64> = inputs.iter().map(|u| u[j]).collect();
+                self.interpolation.choose(&name, &values)
+            })
+            .collect();
+        self.build(start, step, inputs, disturbance, chosen)
+    }
+
+    /// The model with each input taken inside a step as `chosen` says.
+    fn build(
+        &self,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+        disturbance: Option<&DMatrix<f64>>,
+        chosen: Vec<Chosen>,
+    ) -> Result<LinearStateSpace> {
+        let m = &self.matrices;
+        let (mut b, mut d) = (m.b.clone(), m.d.clone());
+        if let Some(g) = disturbance {
+            let columns = b.ncols();
+            b = b.insert_columns(columns, g.ncols(), 0.0);
+            b.columns_mut(columns, g.ncols()).copy_from(g);
+            d = d.insert_columns(columns, g.ncols(), 0.0);
+        }
+        LinearStateSpace::new(
+            [m.a.clone(), b, m.c.clone(), d],
+            self.entries.clone(),
+            start,
+            step,
+            inputs,
+        )?
+        .with_biases(m.state_bias.clone(), m.output_bias.clone())?
+        .with_rate_outputs(self.rate_states.clone())?
+        .with_input_timing(chosen)
+    }
+
+    /// The model driven by `record`: over the window where every output has
+    /// samples (inside `limit`), on a grid of `step` (else
+    /// [`observation_step`]'s), its inputs the input channels at the grid points
+    /// (linear between samples), x₀ the record's value of each state named
+    /// like a channel at the window's start, else 0.
+    pub fn for_record(
+        &self,
+        record: &FlightRecord,
+        step: Option<f64>,
+        limit: Option<(f64, f64)>,
+    ) -> Result<(LinearStateSpace, DVector<f64>)> {
+        let window = fitting_window(record, &self.outputs, limit)?;
+        let inputs: Vec<&str> = self.inputs.iter().map(String::as_str).collect();
+        let step = observation_step(record, &self.outputs, &inputs, step, window.0)?;
+        let count = ((window.1 - window.0) / step + 1e-9).floor() as usize + 1;
+        let times: Vec<f64> = (0..count).map(|k| window.0 + k as f64 * step).collect();
+        let mut inputs = vec![DVector::zeros(self.inputs.len()); count];
+        let mut chosen = Vec::new();
+        for (j, name) in self.inputs.iter().enumerate() {
+            let channel = record.channel(name)?;
+            let choice = self.interpolation.choose(name, &channel.values);
+            let values = channel.sampled_at(&times, choice.interpolation)?;
+            for (u, value) in inputs.iter_mut().zip(values) {
+                u[j] = value;
+            }
+            chosen.push(choice);
+        }
+        let initial = DVector::from_iterator(
+            self.states.len(),
+            self.states.iter().map(|name| {
+                record
+                    .channel(name)
+                    .ok()
+                    .and_then(|c| c.value_at(window.0))
+                    .unwrap_or(0.0)
+            }),
+        );
+        Ok((self.build(window.0, step, inputs, None, chosen)?, initial))
+    }
+
+    /// The channels `record` lacks that a fit needs: the inputs and the outputs.
+    pub fn missing_channels(&self, record: &FlightRecord) -> Vec<crate::estimator::MissingChannel> {
+        let inputs = self
+            .inputs
+            .iter()
+            .map(|n| (n, "an input of the linear model"));
+        let outputs = self.outputs.iter().map(|n| (n, "a compared output"));
+        inputs
+            .chain(outputs)
+            .filter(|(name, _)| record.channel(name).is_err())
+            .map(|(name, purpose)| crate::estimator::MissingChannel {
+                name: name.clone(),
+                purpose: purpose.into(),
+            })
+            .collect()
+    }
+}
+
+fn entry_of<'a>(matrices: &'a mut Matrices, entry: &Entry) -> &'a mut f64 {
+    match entry.matrix {
+        Matrix::A => &mut matrices.a[(entry.row, entry.column)],
+        Matrix::B => &mut matrices.b[(entry.row, entry.column)],
+        Matrix::C => &mut matrices.c[(entry.row, entry.column)],
+        Matrix::D => &mut matrices.d[(entry.row, entry.column)],
+        Matrix::StateBias => &mut matrices.state_bias[entry.row],
+        Matrix::OutputBias => &mut matrices.output_bias[entry.row],
+    }
+}
+
+/// Names must be present and distinct.
+fn check_names(field: &str, names: &[String], problems: &mut Problems) {
+    let mut seen = BTreeSet::new();
+    for (i, name) in names.iter().enumerate() {
+        if name.trim().is_empty() {
+            problems.push(format!("{field}[{i}]"), "is empty");
+        } else if !seen.insert(name) {
+            problems.push(format!("{field}[{i}]"), format!("'{name}' is named twice"));
+        }
+    }
+}
+
+/// Reads matrices, recording which entry each parameter sets.
+struct Reader<'a> {
+    parameters: &'a BTreeMap<String, LinearParameter>,
+    used: BTreeMap<String, Entry>,
+    problems: &'a mut Problems,
+}
+
+impl Reader<'_> {
+    /// A rows × columns matrix; an absent optional one is zero.
+    fn matrix(
+        &mut self,
+        field: &str,
+        cells: &[Vec<Cell>],
+        rows: usize,
+        columns: usize,
+        required: bool,
+    ) -> DMatrix<f64> {
+        let mut matrix = DMatrix::zeros(rows, columns);
+        if cells.is_empty() && (!required || rows == 0 || columns == 0) {
+            return matrix;
+        }
+        let which = match field {
+            "A" => Matrix::A,
+            "B" => Matrix::B,
+            "C" => Matrix::C,
+            _ => Matrix::D,
+        };
+        if cells.len() != rows || cells.iter().any(|row| row.len() != columns) {
+            let shape: Vec<String> = cells.iter().map(|r| r.len().to_string()).collect();
+            self.problems.push(
+                field,
+                format!(
+                    "must be {rows}×{columns} (rows × columns); it has {} rows of [{}] entries",
+                    cells.len(),
+                    shape.join(", ")
+                ),
+            );
+            return matrix;
+        }
+        for (i, row) in cells.iter().enumerate() {
+            for (j, cell) in row.iter().enumerate() {
+                let entry = Entry {
+                    matrix: which,
+                    row: i,
+                    column: j,
+                };
+                matrix[(i, j)] = self.cell(&format!("{field}[{i}][{j}]"), cell, entry);
+            }
+        }
+        matrix
+    }
+
+    /// A vector of `len` entries; an absent one is zero.
+    fn vector(&mut self, field: &str, cells: &[Cell], len: usize) -> DVector<f64> {
+        let mut vector = DVector::zeros(len);
+        if cells.is_empty() {
+            return vector;
+        }
+        if cells.len() != len {
+            self.problems.push(
+                field,
+                format!("must have {len} entries; it has {}", cells.len()),
+            );
+            return vector;
+        }
+        let which = match field {
+            "state_bias" => Matrix::StateBias,
+            _ => Matrix::OutputBias,
+        };
+        for (i, cell) in cells.iter().enumerate() {
+            let entry = Entry {
+                matrix: which,
+                row: i,
+                column: 0,
+            };
+            vector[i] = self.cell(&format!("{field}[{i}]"), cell, entry);
+        }
+        vector
+    }
+
+    fn cell(&mut self, field: &str, cell: &Cell, entry: Entry) -> f64 {
+        match cell {
+            Cell::Number(value) if value.is_finite() => *value,
+            Cell::Number(_) => {
+                self.problems.push(field, "must be finite");
+                0.0
+            }
+            Cell::Parameter(name) => {
+                if !self.parameters.contains_key(name) {
+                    self.problems.push(
+                        field,
+                        format!("'{name}' is not a declared parameter ([parameters.{name}] with its start value)"),
+                    );
+                } else if self.used.insert(name.clone(), entry).is_some() {
+                    self.problems.push(
+                        field,
+                        format!("parameter '{name}' is used twice; a parameter sets one entry"),
+                    );
+                }
+                0.0
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+kind = "linear"
+name = "test"
+states = ["alpha", "q"]
+inputs = ["elevator"]
+outputs = ["alpha", "q"]
+rate_outputs = { q_dot = "q" }
+A = [["Za", 1.0], ["Ma", "Mq"]]
+B = [[0.0], ["Mde"]]
+C = [[1, 0], [0, 1]]
+output_bias = [0.0, "q0"]
+[parameters.Za]
+start = -1.0
+[parameters.Ma]
+start = -5.0
+[parameters.Mq]
+start = -2.0
+lower = -10.0
+upper = 0.0
+[parameters.Mde]
+start = -8.0
+[parameters.q0]
+start = 0.0
+fixed = true
+"#;
+
+    fn parse(text: &str) -> Result<LinearStructure> {
+        let path = Path::new("models/test.toml");
+        let file: LinearFile = parse_toml(path, text)?;
+        LinearStructure::from_file(&file, path)
+    }
+
+    #[test]
+    fn a_good_file_gives_its_matrices_and_parameters() {
+        let s = parse(GOOD).unwrap();
+        assert_eq!(s.names, ["Ma", "Mde", "Mq", "Za", "q0"]);
+        assert_eq!(s.outputs, ["alpha", "q", "q_dot"]);
+        assert_eq!(s.matrices.a[(1, 1)], -2.0);
+        assert_eq!(s.matrices.b[(1, 0)], -8.0);
+        assert_eq!(s.free, [true, true, true, true, false]);
+        assert_eq!(s.bounds[2], (-10.0, 0.0));
+        assert_eq!(s.rate_states, [1]);
+    }
+
+    /// Every kind of mistake is reported, named by its key, all at once.
+    #[test]
+    fn bad_files_name_the_key() {
+        let cases = [
+            (GOOD.replace(r#"["Za", 1.0], "#, ""), "A: must be 2×2"),
+            (
+                GOOD.replace(r#"q_dot = "q""#, r#"q_dot = "w""#),
+                "rate_outputs.q_dot: unknown state 'w'",
+            ),
+            (
+                GOOD.replace(r#"["Ma", "Mq"]"#, r#"["Ma", "Ma"]"#),
+                "A[1][1]: parameter 'Ma' is used twice",
+            ),
+            (
+                GOOD.replace(r#"["Mde"]"#, r#"["Mdx"]"#),
+                "B[1][0]: 'Mdx' is not a declared parameter",
+            ),
+            (
+                GOOD.replace(r#"["Mde"]"#, "[1.0]"),
+                "parameters.Mde: is not used",
+            ),
+            (
+                GOOD.replace("lower = -10.0", "lower = 1.0"),
+                "parameters.Mq: the start value",
+            ),
+            (
+                GOOD.replace(
+                    r#"outputs = ["alpha", "q"]"#,
+                    r#"outputs = ["alpha", "alpha"]"#,
+                ),
+                "outputs[1]: 'alpha' is named twice",
+            ),
+            (
+                GOOD.replace(r#"output_bias = [0.0, "q0"]"#, r#"output_bias = ["q0"]"#),
+                "output_bias: must have 2 entries",
+            ),
+            (
+                GOOD.replace(r#"kind = "linear""#, r#"kind = "lineal""#),
+                "kind: is 'lineal'",
+            ),
+        ];
+        for (text, expected) in cases {
+            let error = parse(&text).unwrap_err().to_string();
+            assert!(error.contains("models/test.toml"), "{error}");
+            assert!(
+                error.contains(expected),
+                "expected '{expected}' in: {error}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_misspelt_key_is_a_toml_error_with_its_line() {
+        let error = parse(&GOOD.replace("states =", "stats ="))
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("line") && error.contains("stats"), "{error}");
+    }
+}

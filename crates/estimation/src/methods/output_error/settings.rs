@@ -1,0 +1,179 @@
+//! What output error is asked to do: its start, stages, integration and bounds (`[methods.oem]`).
+
+use super::*;
+
+/// Where the iterations start (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Start {
+    /// The model file's values; initial states first held (two stages).
+    #[serde(rename = "model")]
+    Model,
+    /// Equation error's estimates where the structure allows it and they
+    /// fit the record better than the model file's values; otherwise as
+    /// the model file's.
+    #[default]
+    #[serde(rename = "ee")]
+    EquationError,
+}
+
+/// Settings of an output-error run: the `[methods.oem]` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputErrorOptions {
+    pub start: Start,
+    pub max_iterations: usize,
+    /// Integration step (s); None: the fastest compared channel's period,
+    /// in equal sub-steps where the model's fastest mode needs them
+    /// ([`crate::model::state_space::driven_simulation`]),
+    /// re-chosen at every iteration for the parameters there.
+    #[serde(
+        deserialize_with = "aeroid_core::units::optional_seconds",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub step: Option<f64>,
+    /// How each input is interpolated inside an integration step
+    /// ([`InputInterpolation`]; default: chosen per input from its samples).
+    pub interpolation: InputInterpolation,
+    /// Initial values of the integrated states as unknowns (per manoeuvre).
+    pub estimate_initial_state: bool,
+    /// Outputs with a constant bias as an unknown.
+    pub output_biases: Vec<String>,
+    /// Fit only this time window (s) of every record; default the whole record.
+    #[serde(skip)]
+    pub window: Option<(f64, f64)>,
+    /// Fits from this many starts ([`multi_start`]); 1: one fit.
+    pub starts: usize,
+    /// The extra starts move each free parameter by up to this fraction of
+    /// its magnitude (at least 0.01).
+    pub start_spread: f64,
+    /// Seed of the extra starts' random stream.
+    pub start_seed: u64,
+    /// Split each record's fitting window into pieces of about this length
+    /// (s), each simulated from its own initial state (multiple shooting);
+    /// none: one piece per record.
+    #[serde(
+        deserialize_with = "aeroid_core::units::optional_seconds",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub segment: Option<f64>,
+    /// Lag (s) to which the residuals' autocorrelation is summed in the
+    /// Cramér–Rao bounds (Morelli & Klein 1997); 0: the bounds assume
+    /// white residuals.
+    #[serde(deserialize_with = "aeroid_core::units::seconds")]
+    pub correlation_lag: f64,
+    /// The standard deviation of each recorded input's noise, by channel
+    /// (e.g. `elevator = "0.01 deg"`): the Cramér–Rao bounds then include
+    /// what that noise does to the estimates (`Problem::input_noise_bounds`);
+    /// empty: the inputs are taken as exact, as output error's likelihood
+    /// takes them.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub input_noise: BTreeMap<String, Quantity>,
+    /// Simulated draws of the inputs' noise that measure its share of the
+    /// bounds (the share's standard deviations within about 1/√(2·draws)).
+    pub input_noise_draws: usize,
+    /// Seed of those draws' random stream.
+    pub input_noise_seed: u64,
+}
+
+impl Default for OutputErrorOptions {
+    fn default() -> Self {
+        OutputErrorOptions {
+            start: Start::default(),
+            max_iterations: 30,
+            step: None,
+            interpolation: InputInterpolation::default(),
+            estimate_initial_state: false,
+            output_biases: Vec::new(),
+            window: None,
+            starts: 1,
+            start_spread: 0.5,
+            start_seed: 1,
+            segment: None,
+            correlation_lag: 0.0,
+            input_noise: BTreeMap::new(),
+            input_noise_draws: 200,
+            input_noise_seed: 1,
+        }
+    }
+}
+
+impl OutputErrorOptions {
+    /// The options a model file's `[methods.oem]` table sets.
+    pub fn for_structure(structure: &ModelStructure) -> Result<OutputErrorOptions> {
+        OutputErrorOptions::read(&merge_settings(METHOD, &[&structure.methods]))
+    }
+
+    /// Reads and checks a `[methods.oem]` table.
+    pub fn read(settings: &Settings) -> Result<OutputErrorOptions> {
+        let options: OutputErrorOptions = parse_settings(METHOD, settings)?;
+        if options
+            .step
+            .is_some_and(|step| !(step > 0.0 && step.is_finite()))
+        {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: step must be positive"
+            )));
+        }
+        if options.max_iterations == 0 {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: max_iterations must be at least 1"
+            )));
+        }
+        if options.starts == 0 {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: starts must be at least 1"
+            )));
+        }
+        if options
+            .segment
+            .is_some_and(|length| !(length > 0.0 && length.is_finite()))
+        {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: segment must be a positive duration"
+            )));
+        }
+        if !(options.correlation_lag >= 0.0 && options.correlation_lag.is_finite()) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: correlation_lag must be a duration of 0 s or more"
+            )));
+        }
+        options.input_sigmas()?;
+        options.interpolation.check_controls(METHOD)?;
+        if !options.input_noise.is_empty() && options.input_noise_draws < 2 {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: input_noise_draws must be at least 2"
+            )));
+        }
+        if !(options.start_spread > 0.0 && options.start_spread.is_finite()) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: start_spread must be a positive fraction, is {}",
+                options.start_spread
+            )));
+        }
+        Ok(options)
+    }
+
+    /// `input_noise` in SI units (each channel's own), checked: a known
+    /// quantity, a finite standard deviation of 0 or more.
+    pub fn input_sigmas(&self) -> Result<Vec<(String, f64)>> {
+        self.input_noise
+            .iter()
+            .map(|(name, noise)| {
+                let measurand = aeroid_record::derived::measurand(name).ok_or_else(|| {
+                    Error::Other(format!(
+                        "[methods.{METHOD}] input_noise: unknown channel '{name}'"
+                    ))
+                })?;
+                let sigma = noise.si(measurand.dimension).map_err(|e| {
+                    Error::Other(format!("[methods.{METHOD}] input_noise.{name}: {e}"))
+                })?;
+                if sigma < 0.0 {
+                    return Err(Error::Other(format!(
+                        "[methods.{METHOD}] input_noise.{name}: a standard deviation must not be negative"
+                    )));
+                }
+                Ok((name.clone(), sigma))
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,542 @@
+//! A linear time-invariant model as a state-space model:
+//!
+//!   ẋ = A·x + B·u + b,   y = [C·x + D·u + c; (ẋ)_R],
+//!
+//! b a constant term per state, c one per output, and (ẋ)_R the rates of
+//! the states R that are outputs themselves (ṗ, ṙ as measured angular
+//! accelerations). θ is a list of entries of A, B, C, D, b and c
+//! (dimensional derivatives such as Z_w, M_q, M_δe, and biases). The
+//! inputs u are given at the grid points, each held over a step
+//! (zero-order hold) or interpolated linearly between them (first-order
+//! hold), as [`super::input_timing`] chooses per input: W the diagonal
+//! of their weights (1 linear, 0 held). The step is exact:
+//! x_{k+1} = Φ·x_k + Γ₀·(u_k, 1) + Γ₁·W·(u_{k+1} − u_k), with Φ = e^{A·h},
+//! Γ₀ = ∫₀ʰ e^{A·s} ds·[B b] and Γ₁ the first-order hold's ramp matrix
+//! (Van Loan, [`aeroid_numerics::kalman`]),
+//! so a filter on it is a linear Kalman filter: the oracle the filters are
+//! checked against. The discrete matrices of the last θ are kept, so a
+//! pass over the grid computes them once.
+
+use super::input_timing::Chosen;
+use super::state_space::{Jacobians, StateSpaceModel};
+use aeroid_core::error::{Error, Result};
+use aeroid_numerics::kalman::{discretise, discretise_first_order_hold};
+use aeroid_sim::integrator::Interpolation;
+use nalgebra::{DMatrix, DVector};
+use std::sync::{Arc, Mutex};
+
+/// Which matrix a parameter is an entry of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Matrix {
+    A,
+    B,
+    C,
+    D,
+    /// b, the constant term of the state equations (column 0).
+    StateBias,
+    /// c, the constant term of the outputs C·x + D·u + c (column 0).
+    OutputBias,
+}
+
+/// A parameter: entry (row, column) of one of the matrices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Entry {
+    pub matrix: Matrix,
+    pub row: usize,
+    pub column: usize,
+}
+
+/// A, B, C, D, b, c with θ written in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Matrices {
+    pub a: DMatrix<f64>,
+    pub b: DMatrix<f64>,
+    pub c: DMatrix<f64>,
+    pub d: DMatrix<f64>,
+    pub state_bias: DVector<f64>,
+    pub output_bias: DVector<f64>,
+}
+
+impl Matrices {
+    fn entry_mut(&mut self, entry: &Entry) -> &mut f64 {
+        match entry.matrix {
+            Matrix::A => &mut self.a[(entry.row, entry.column)],
+            Matrix::B => &mut self.b[(entry.row, entry.column)],
+            Matrix::C => &mut self.c[(entry.row, entry.column)],
+            Matrix::D => &mut self.d[(entry.row, entry.column)],
+            Matrix::StateBias => &mut self.state_bias[entry.row],
+            Matrix::OutputBias => &mut self.output_bias[entry.row],
+        }
+    }
+
+    /// ẋ = A·x + B·u + b.
+    pub fn rates(&self, x: &DVector<f64>, u: &DVector<f64>) -> DVector<f64> {
+        &self.a * x + &self.b * u + &self.state_bias
+    }
+}
+
+/// The discrete step of one θ: Φ, Γ₀ of [B b], and Γ₁·W of B for the
+/// inputs under the first-order hold (none when every input is held).
+#[derive(Debug, Clone, PartialEq)]
+struct Discrete {
+    transition: DMatrix<f64>,
+    input: DMatrix<f64>,
+    ramp: Option<DMatrix<f64>>,
+}
+
+/// The discrete matrices of the last θ a step was taken with.
+#[derive(Debug, Default)]
+struct Cache(Mutex<Option<(Vec<f64>, Arc<Discrete>)>>);
+
+impl Clone for Cache {
+    fn clone(&self) -> Self {
+        Cache::default()
+    }
+}
+
+impl PartialEq for Cache {
+    /// A cache says nothing about the model.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+/// ẋ = A·x + B·u + b, y = [C·x + D·u + c; (ẋ)_R] on the grid start + k·step, u_k given.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearStateSpace {
+    pub a: DMatrix<f64>,
+    pub b: DMatrix<f64>,
+    pub c: DMatrix<f64>,
+    pub d: DMatrix<f64>,
+    /// b (zero unless set by [`LinearStateSpace::with_biases`]).
+    pub state_bias: DVector<f64>,
+    /// c (zero unless set by [`LinearStateSpace::with_biases`]).
+    pub output_bias: DVector<f64>,
+    /// The states whose rates follow C·x + D·u + c among the outputs.
+    pub rate_outputs: Vec<usize>,
+    /// How each input of u is taken inside a step.
+    pub holds: Vec<Interpolation>,
+    /// The inputs' names, interpolations and why (empty unless set by
+    /// [`LinearStateSpace::with_input_timing`]).
+    pub input_timing: Vec<Chosen>,
+    /// θ: the entries it sets (θ_j overrides entry j).
+    pub parameters: Vec<Entry>,
+    pub start: f64,
+    pub step: f64,
+    /// u at each grid point.
+    pub inputs: Vec<DVector<f64>>,
+    cache: Cache,
+}
+
+impl LinearStateSpace {
+    /// A model with no biases, no rate outputs and held inputs; an error
+    /// when the shapes do not agree, an entry lies outside its matrix, or
+    /// the grid has fewer than two points.
+    pub fn new(
+        [a, b, c, d]: [DMatrix<f64>; 4],
+        parameters: Vec<Entry>,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+    ) -> Result<LinearStateSpace> {
+        let (n, l, m) = (a.nrows(), c.nrows(), b.ncols());
+        LinearStateSpace {
+            a,
+            b,
+            c,
+            d,
+            state_bias: DVector::zeros(n),
+            output_bias: DVector::zeros(l),
+            rate_outputs: Vec::new(),
+            holds: vec![Interpolation::ZeroOrderHold; m],
+            input_timing: Vec::new(),
+            parameters,
+            start,
+            step,
+            inputs,
+            cache: Cache::default(),
+        }
+        .checked()
+    }
+
+    /// The model with constant terms b (per state) and c (per output of C).
+    pub fn with_biases(
+        mut self,
+        state_bias: DVector<f64>,
+        output_bias: DVector<f64>,
+    ) -> Result<LinearStateSpace> {
+        self.state_bias = state_bias;
+        self.output_bias = output_bias;
+        self.checked()
+    }
+
+    /// The model with the rates of `states` appended to its outputs.
+    pub fn with_rate_outputs(mut self, states: Vec<usize>) -> Result<LinearStateSpace> {
+        self.rate_outputs = states;
+        self.checked()
+    }
+
+    /// The model with every input taken inside a step by `hold`.
+    pub fn with_hold(mut self, hold: Interpolation) -> LinearStateSpace {
+        self.holds = vec![hold; self.b.ncols()];
+        self
+    }
+
+    /// The model with input j taken inside a step as `chosen[j]` says; an
+    /// error when there is not one per input.
+    pub fn with_input_timing(mut self, chosen: Vec<Chosen>) -> Result<LinearStateSpace> {
+        self.holds = chosen.iter().map(|c| c.interpolation).collect();
+        self.input_timing = chosen;
+        self.checked()
+    }
+
+    /// The inputs' weights inside a step at fraction θ (θ linear, 0 held).
+    fn weights(&self, fraction: f64) -> DVector<f64> {
+        DVector::from_iterator(
+            self.holds.len(),
+            self.holds.iter().map(|h| h.weight(fraction)),
+        )
+    }
+
+    fn checked(self) -> Result<LinearStateSpace> {
+        let (a, b, c, d) = (&self.a, &self.b, &self.c, &self.d);
+        let (n, m, l) = (a.nrows(), b.ncols(), c.nrows());
+        let shapes_agree = a.ncols() == n
+            && b.nrows() == n
+            && c.ncols() == n
+            && d.nrows() == l
+            && d.ncols() == m
+            && self.state_bias.len() == n
+            && self.output_bias.len() == l
+            && self.rate_outputs.iter().all(|&i| i < n)
+            && self.holds.len() == m
+            && self.inputs.iter().all(|u| u.len() == m);
+        if !shapes_agree {
+            return Err(Error::Other(format!(
+                "a linear model's matrices do not agree: A {}×{}, B {}×{}, C {}×{}, D {}×{}, b of {}, c of {}, inputs of {m}",
+                a.nrows(),
+                a.ncols(),
+                b.nrows(),
+                b.ncols(),
+                c.nrows(),
+                c.ncols(),
+                d.nrows(),
+                d.ncols(),
+                self.state_bias.len(),
+                self.output_bias.len(),
+            )));
+        }
+        if self.inputs.len() < 2 || !(self.step > 0.0 && self.step.is_finite()) {
+            return Err(Error::Other(
+                "a linear model needs at least two grid points and a positive step".into(),
+            ));
+        }
+        for entry in &self.parameters {
+            let (rows, columns) = self.shape(entry.matrix);
+            if entry.row >= rows || entry.column >= columns {
+                return Err(Error::Other(format!(
+                    "parameter entry ({}, {}) lies outside {:?} ({rows}×{columns})",
+                    entry.row, entry.column, entry.matrix,
+                )));
+            }
+        }
+        Ok(self)
+    }
+
+    fn shape(&self, which: Matrix) -> (usize, usize) {
+        match which {
+            Matrix::A => self.a.shape(),
+            Matrix::B => self.b.shape(),
+            Matrix::C => self.c.shape(),
+            Matrix::D => self.d.shape(),
+            Matrix::StateBias => (self.state_bias.len(), 1),
+            Matrix::OutputBias => (self.output_bias.len(), 1),
+        }
+    }
+
+    fn value(&self, entry: &Entry) -> f64 {
+        match entry.matrix {
+            Matrix::A => self.a[(entry.row, entry.column)],
+            Matrix::B => self.b[(entry.row, entry.column)],
+            Matrix::C => self.c[(entry.row, entry.column)],
+            Matrix::D => self.d[(entry.row, entry.column)],
+            Matrix::StateBias => self.state_bias[entry.row],
+            Matrix::OutputBias => self.output_bias[entry.row],
+        }
+    }
+
+    /// θ as the matrices hold it.
+    pub fn parameter_values(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.parameters.len(),
+            self.parameters.iter().map(|e| self.value(e)),
+        )
+    }
+
+    /// The matrices with θ written in.
+    pub fn at(&self, theta: &[f64]) -> Result<Matrices> {
+        if theta.len() != self.parameters.len() {
+            return Err(Error::Other(format!(
+                "θ has {} values; the linear model has {} parameters",
+                theta.len(),
+                self.parameters.len()
+            )));
+        }
+        let mut matrices = Matrices {
+            a: self.a.clone(),
+            b: self.b.clone(),
+            c: self.c.clone(),
+            d: self.d.clone(),
+            state_bias: self.state_bias.clone(),
+            output_bias: self.output_bias.clone(),
+        };
+        for (entry, &value) in self.parameters.iter().zip(theta) {
+            *matrices.entry_mut(entry) = value;
+        }
+        Ok(matrices)
+    }
+
+    /// u at t: each input its held grid sample or the linear interpolation
+    /// between the two grid points around t.
+    fn input_at(&self, t: f64) -> Result<DVector<f64>> {
+        let position = (t - self.start) / self.step;
+        let last = self.inputs.len() - 1;
+        if !position.is_finite() || position < -1e-9 || position > last as f64 + 1e-9 {
+            return Err(Error::Other(format!(
+                "t = {t} s is outside the linear model's grid"
+            )));
+        }
+        let k = ((position + 1e-9).floor().max(0.0) as usize).min(last);
+        let fraction = (position - k as f64).clamp(0.0, 1.0);
+        Ok(if k < last && fraction > 1e-9 {
+            &self.inputs[k]
+                + (&self.inputs[k + 1] - &self.inputs[k]).component_mul(&self.weights(fraction))
+        } else {
+            self.inputs[k].clone()
+        })
+    }
+
+    fn check_state(&self, x: &[f64]) -> Result<()> {
+        if x.len() != self.a.nrows() {
+            return Err(Error::Other(format!(
+                "x has {} values; the linear model has {} states",
+                x.len(),
+                self.a.nrows()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The discrete step of θ, from the cache when θ is the last one's.
+    fn discrete(&self, theta: &[f64]) -> Result<Arc<Discrete>> {
+        let mut cache = self.cache.0.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some((last, discrete)) = cache.as_ref()
+            && last.as_slice() == theta
+        {
+            return Ok(discrete.clone());
+        }
+        let matrices = self.at(theta)?;
+        let (n, m) = matrices.b.shape();
+        let mut driven = DMatrix::zeros(n, m + 1);
+        driven.view_mut((0, 0), (n, m)).copy_from(&matrices.b);
+        driven.set_column(m, &matrices.state_bias);
+        let held = discretise(&matrices.a, &driven, None, self.step);
+        let ramp = self.holds.contains(&Interpolation::Linear).then(|| {
+            discretise_first_order_hold(&matrices.a, &matrices.b, self.step).2
+                * DMatrix::from_diagonal(&self.weights(1.0))
+        });
+        let discrete = Arc::new(Discrete {
+            transition: held.transition,
+            input: held.input,
+            ramp,
+        });
+        *cache = Some((theta.to_vec(), discrete.clone()));
+        Ok(discrete)
+    }
+}
+
+impl StateSpaceModel for LinearStateSpace {
+    fn state_count(&self) -> usize {
+        self.a.nrows()
+    }
+
+    fn output_count(&self) -> usize {
+        self.c.nrows() + self.rate_outputs.len()
+    }
+
+    fn parameter_count(&self) -> usize {
+        self.parameters.len()
+    }
+
+    fn len(&self) -> usize {
+        self.inputs.len()
+    }
+
+    fn time(&self, k: usize) -> f64 {
+        self.start + k as f64 * self.step
+    }
+
+    fn rates(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        self.check_state(x)?;
+        let matrices = self.at(theta)?;
+        Ok(matrices.rates(&DVector::from_column_slice(x), &self.input_at(t)?))
+    }
+
+    fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        self.check_state(x)?;
+        let matrices = self.at(theta)?;
+        let (x, u) = (DVector::from_column_slice(x), self.input_at(t)?);
+        let direct = &matrices.c * &x + &matrices.d * &u + &matrices.output_bias;
+        let rates = matrices.rates(&x, &u);
+        Ok(DVector::from_iterator(
+            self.output_count(),
+            direct
+                .iter()
+                .copied()
+                .chain(self.rate_outputs.iter().map(|&i| rates[i])),
+        ))
+    }
+
+    fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
+        self.check_state(x)?;
+        let matrices = self.at(theta)?;
+        let u = self.input_at(t)?;
+        let (n, l, p) = (matrices.a.nrows(), self.output_count(), theta.len());
+        let direct = matrices.c.nrows();
+        let mut rates_by_parameter = DMatrix::zeros(n, p);
+        let mut outputs_by_parameter = DMatrix::zeros(l, p);
+        for (j, entry) in self.parameters.iter().enumerate() {
+            let factor = match entry.matrix {
+                Matrix::A | Matrix::C => x[entry.column],
+                Matrix::B | Matrix::D => u[entry.column],
+                Matrix::StateBias | Matrix::OutputBias => 1.0,
+            };
+            match entry.matrix {
+                Matrix::A | Matrix::B | Matrix::StateBias => {
+                    rates_by_parameter[(entry.row, j)] += factor;
+                    for (o, &state) in self.rate_outputs.iter().enumerate() {
+                        if state == entry.row {
+                            outputs_by_parameter[(direct + o, j)] += factor;
+                        }
+                    }
+                }
+                Matrix::C | Matrix::D | Matrix::OutputBias => {
+                    outputs_by_parameter[(entry.row, j)] += factor
+                }
+            }
+        }
+        let mut outputs_by_state = DMatrix::zeros(l, n);
+        outputs_by_state
+            .view_mut((0, 0), (direct, n))
+            .copy_from(&matrices.c);
+        for (o, &state) in self.rate_outputs.iter().enumerate() {
+            outputs_by_state
+                .row_mut(direct + o)
+                .copy_from(&matrices.a.row(state));
+        }
+        Ok(Jacobians {
+            rates_by_state: matrices.a,
+            rates_by_parameter,
+            outputs_by_state,
+            outputs_by_parameter,
+        })
+    }
+
+    /// The exact step: x_{k+1} = Φ·x_k + Γ₀·(u_k, 1) + Γ₁·W·(u_{k+1} − u_k),
+    /// the last term for the inputs taken linearly.
+    fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        self.check_state(x)?;
+        if k + 1 >= self.inputs.len() {
+            return Err(Error::Other(format!(
+                "no step from grid point {k}: the grid has {} points",
+                self.inputs.len()
+            )));
+        }
+        let discrete = self.discrete(theta)?;
+        let u = &self.inputs[k];
+        let driven = DVector::from_iterator(u.len() + 1, u.iter().copied().chain([1.0]));
+        let mut next =
+            &discrete.transition * DVector::from_column_slice(x) + &discrete.input * driven;
+        if let Some(ramp) = &discrete.ramp {
+            next += ramp * (&self.inputs[k + 1] - u);
+        }
+        Ok(next)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A short-period-like pair with one input.
+    fn model() -> LinearStateSpace {
+        let a = DMatrix::from_row_slice(2, 2, &[-1.2, 1.0, -8.0, -2.1]);
+        let b = DMatrix::from_row_slice(2, 1, &[-0.1, -9.0]);
+        let c = DMatrix::identity(2, 2);
+        let d = DMatrix::zeros(2, 1);
+        let inputs = (0..50)
+            .map(|k| DVector::from_element(1, if (10..20).contains(&k) { 0.05 } else { 0.0 }))
+            .collect();
+        let parameters = vec![
+            Entry {
+                matrix: Matrix::A,
+                row: 1,
+                column: 1,
+            },
+            Entry {
+                matrix: Matrix::B,
+                row: 1,
+                column: 0,
+            },
+        ];
+        LinearStateSpace::new([a, b, c, d], parameters, 0.0, 0.04, inputs).unwrap()
+    }
+
+    #[test]
+    fn step_is_the_exact_solution_under_a_held_input() {
+        // Against RK4 with 400 sub-steps (error ~h⁴ = 1e-16·‖A‖⁴).
+        let model = model();
+        let theta = model.parameter_values();
+        let x = [0.02, -0.1];
+        let next = model.step(12, &x, theta.as_slice()).unwrap();
+        let mut state = DVector::from_column_slice(&x);
+        let h = model.step / 400.0;
+        let t = model.time(12);
+        let f = |s: &DVector<f64>| model.rates(t, s.as_slice(), theta.as_slice()).unwrap();
+        for _ in 0..400 {
+            let k1 = f(&state);
+            let k2 = f(&(&state + &k1 * (h / 2.0)));
+            let k3 = f(&(&state + &k2 * (h / 2.0)));
+            let k4 = f(&(&state + &k3 * h));
+            state += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0);
+        }
+        assert!((next - state).norm() < 1e-13);
+    }
+
+    #[test]
+    fn parameter_jacobian_is_the_entrys_factor() {
+        let model = model();
+        let theta = model.parameter_values();
+        let x = [0.02, -0.1];
+        let t = model.time(15);
+        let j = model.jacobians(t, &x, theta.as_slice()).unwrap();
+        assert_eq!(j.rates_by_parameter[(1, 0)], -0.1);
+        assert_eq!(j.rates_by_parameter[(1, 1)], 0.05);
+        assert_eq!(j.rates_by_parameter[(0, 0)], 0.0);
+    }
+
+    #[test]
+    fn bad_shapes_and_entries_are_refused() {
+        let m = model();
+        let mut parameters = m.parameters.clone();
+        parameters.push(Entry {
+            matrix: Matrix::D,
+            row: 5,
+            column: 0,
+        });
+        let matrices = [m.a.clone(), m.b.clone(), m.c.clone(), m.d.clone()];
+        assert!(LinearStateSpace::new(matrices, parameters, 0.0, 0.04, m.inputs.clone()).is_err());
+        let matrices = [m.a.clone(), m.b.clone(), m.c.clone(), DMatrix::zeros(1, 1)];
+        assert!(LinearStateSpace::new(matrices, vec![], 0.0, 0.04, m.inputs.clone()).is_err());
+    }
+}

@@ -1,0 +1,1017 @@
+//! The restricted flight-dynamic neural model and the Gauss–Newton fit of a
+//! postulated aerodynamic model through it: what ELM + Gauss–Newton,
+//! recurrent ELM + Gauss–Newton and neural Gauss–Newton share.
+//!
+//! Papers: "Parameter estimation of aircraft using extreme learning machine
+//! and Gauss-Newton algorithm" (the ELM paper), Eqs. 1–3 and 11–22;
+//! Verma & Peyada, "Estimation of aerodynamic parameters near stall using
+//! maximum likelihood and extreme learning machine-based methods",
+//! Aeronautical J. 2020, Eqs. 11–26 (the recurrent form, Eqs. 17 and 23);
+//! the reflex-wing UAV paper, Eqs. 29–30 (coefficients also as outputs).
+//!
+//! 1. The network (ELM paper, Eqs. 1–2, Fig. 1): input X(i) = the motion
+//!    variables at sample i and the aerodynamic coefficients at i; target
+//!    Z(i+1) = the motion variables at i+1 (with
+//!    [`RestrictedOptions::coefficient_outputs`] also the coefficients at
+//!    i+1, Eq. 30 of the reflex-wing UAV paper). The motion variables are
+//!    the structure's integrated states (χ left out: it is not measured) —
+//!    longitudinal α, θ, q, V or lateral β, φ, p, r, as in the papers — and
+//!    the coefficients those with a free parameter among the structure's
+//!    terms (CL, CD, Cm or CY, Cl, Cn). The controls enter only through the coefficients. For
+//!    training the coefficients come from the measured accelerations and
+//!    angular accelerations ([`crate::reconstruction`], Verma &
+//!    Peyada Eqs. 12–15), on the reconstruction's time base; a pair (i, i+1)
+//!    is used only where both instants were kept and are one sample apart.
+//!    Inputs and targets are scaled column by column to a range (Eq. 3/16,
+//!    [`super::Scaling`]); the network is trained by the given [`Trainer`].
+//! 2. The estimation (ELM paper, Eqs. 11–22): the coefficients of the
+//!    postulated model, evaluated with Θ at the measured flight condition
+//!    of each sample by the model's own aerodynamics
+//!    ([`aeroid_sim::aero::AeroModel::coefficients`]; for the stall model χ
+//!    from the model's separation equations: Eq. 3 with α̇ from the
+//!    differentiated α channel when τ1 = 0, else Eq. 2 integrated along the
+//!    record from χ∞ at the start of each contiguous stretch with the
+//!    project's RK4, α interpolated linearly inside a step), replace the
+//!    measured ones and are propagated through the trained network,
+//!    Y(i+1) = f(X(i), V̄, W̄, Θ) (Eq. 11). The motion variables fed in are
+//!    the measured ones (Eq. 11; the recurrent network's Eq. 23, where they
+//!    are the fed-back training observations), or with
+//!    [`Feedback::Predicted`] the network's own previous prediction, a
+//!    free-running simulation from the measured first sample of each
+//!    contiguous stretch. The cost det(R) (Eqs. 12–15) is minimised by
+//!    relaxation in the shared Gauss–Newton core
+//!    ([`aeroid_numerics::gauss_newton`]): at every iteration
+//!    R = (1/N)·Σ E·Eᵀ (Eq. 13, the full matrix: all outputs share one time
+//!    base) and a Gauss–Newton step (Eqs. 16–20) on ½·Σ EᵀR⁻¹E, the
+//!    residuals whitened by the Cholesky factor of R. The response
+//!    gradients are forward differences (Eq. 19), step
+//!    10⁻⁶·max(|Θ_j|, 10⁻³); with measured feedback Θ reaches the network
+//!    only through the coefficients of the same sample, so they are taken
+//!    through the chain rule, ∂Y/∂Θ_j = Σ_c ∂f/∂C_c·∂C_c/∂Θ_j, each factor
+//!    a forward difference (the network differenced once per coefficient,
+//!    not once per parameter). The Cramér–Rao bounds are the square roots
+//!    of the diagonal of P = [Σ (∂Y/∂Θ)ᵀR⁻¹(∂Y/∂Θ)]⁻¹ (Eqs. 21–22).
+//!    Residuals are in the network's scaled units (det(R) differs from the
+//!    physical one by a constant factor, so the minimum is the same); the
+//!    fits are reported in physical units.
+//!
+//! The method's own floor: the network approximates the motion's one-step
+//! map, not exactly, so even on noise-free data the residual at the true Θ
+//! is not zero and the estimate differs from the truth by what the
+//! network's approximation error does to the fit (measured in
+//! `tests/estimators/elm_gauss_newton.rs`). Coefficients computed from Θ that leave the
+//! range the network was trained on are extrapolated; the estimate's notes
+//! count such samples.
+
+use crate::estimate::{Estimate, OutputFit};
+use crate::estimator::{MissingChannel, Refusal};
+use crate::methods::equation_error::record_name;
+use crate::neural::{NetworkReport, Scaling};
+use crate::problem::EstimationProblem;
+use crate::reconstruction::{
+    Reconstruction, ReconstructionOptions, Request, StepBreaks, check_channels, control_steps,
+    reconstruct,
+};
+use crate::structure::{FLIGHT_PATH_STATES, ModelStructure};
+use aeroid_core::error::{Error, Result};
+use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
+use aeroid_record::FlightRecord;
+use aeroid_record::prep::differentiation::Differentiator;
+use aeroid_sim::aero::{AeroInput, AeroModel, Coefficient, ModelKind, Regressor};
+use aeroid_sim::state::{Control, Controls};
+use nalgebra::{DMatrix, DVector, SVector, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// A trained network on scaled data: predicts its outputs from its inputs without allocating.
+pub trait Network: Send + Sync {
+    fn inputs(&self) -> usize;
+    fn outputs(&self) -> usize;
+    fn predict(&self, input: &[f64], output: &mut [f64]);
+    /// The length of the state [`Network::partial`] leaves (0: the network
+    /// keeps none and [`Network::predict_from`] evaluates from the start).
+    fn partial_size(&self) -> usize {
+        0
+    }
+    /// The state of an evaluation after the leading inputs `head` (the
+    /// hidden neurons' sums over them).
+    fn partial(&self, _head: &[f64], _state: &mut [f64]) {}
+    /// The output for `input` whose first `from` inputs left `state` in
+    /// [`Network::partial`]: the same as [`Network::predict`], bit for bit.
+    fn predict_from(&self, _state: &[f64], _from: usize, input: &[f64], output: &mut [f64]) {
+        self.predict(input, output);
+    }
+}
+
+/// Scaled training pairs (row i: input at sample k, target at k+1) with channel names.
+pub struct TrainingSet {
+    pub inputs: Vec<Vec<f64>>,
+    pub targets: Vec<Vec<f64>>,
+    pub input_names: Vec<String>,
+    pub output_names: Vec<String>,
+}
+
+/// Builds a network from a training set (ELM: pseudo-inverse; feed-forward: LM back-propagation).
+pub trait Trainer: Sync {
+    fn train(&self, set: &TrainingSet) -> Result<(Box<dyn Network>, NetworkReport)>;
+}
+
+/// Which motion variables the network is given at sample i during the
+/// estimation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Feedback {
+    /// The measured ones (ELM paper Eq. 11; Verma & Peyada Eq. 23, the
+    /// training observations fed back).
+    #[default]
+    Measured,
+    /// The network's own prediction of the sample before: a free-running
+    /// simulation from the measured first sample of each contiguous stretch.
+    Predicted,
+}
+
+/// What the restricted model contains and the Gauss–Newton settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RestrictedOptions {
+    /// The motion variables (record channel names); empty: the structure's
+    /// integrated states, χ left out.
+    pub motion: Vec<String>,
+    /// The coefficients at i+1 are network outputs too (Eq. 30 of the
+    /// reflex-wing UAV paper), compared with the measured ones.
+    pub coefficient_outputs: bool,
+    pub feedback: Feedback,
+    /// The range the inputs and targets are scaled to (Eq. 3).
+    pub scaling: (f64, f64),
+    /// The differentiator of the angular rates (moment coefficients) and of
+    /// α (α̇ of the stall model).
+    pub differentiator: Differentiator,
+    /// Gauss–Newton iterations at most.
+    pub max_iterations: usize,
+    /// Converged when a Gauss–Newton step's predicted decrease of the
+    /// whitened cost is below this (1e-4: a step under 0.014σ).
+    pub decrease_tolerance: f64,
+}
+
+impl Default for RestrictedOptions {
+    fn default() -> Self {
+        RestrictedOptions {
+            motion: Vec::new(),
+            coefficient_outputs: false,
+            feedback: Feedback::Measured,
+            scaling: (-1.0, 1.0),
+            differentiator: Differentiator::default(),
+            max_iterations: 30,
+            decrease_tolerance: 1e-4,
+        }
+    }
+}
+
+/// The record on the restricted model's time base: measured flight
+/// conditions, motion variables and coefficients at each kept instant, the
+/// training pairs and the scalings.
+struct Data {
+    motion_names: Vec<String>,
+    coefficients: Vec<Coefficient>,
+    coefficient_names: Vec<String>,
+    times: Vec<f64>,
+    /// The measured flight condition at each instant (χ set per Θ).
+    conditions: Vec<AeroInput>,
+    /// Motion variables, instant by instant (`motion_names.len()` each).
+    motion: Vec<f64>,
+    /// Measured coefficients, instant by instant.
+    measured: Vec<f64>,
+    /// Instants k whose next instant k+1 is one sample later: the pairs.
+    pairs: Vec<usize>,
+    /// The sample period (s).
+    period: f64,
+    input_scaling: Scaling,
+    output_scaling: Scaling,
+    coefficient_outputs: bool,
+    notes: Vec<String>,
+}
+
+impl Data {
+    fn motion_count(&self) -> usize {
+        self.motion_names.len()
+    }
+
+    fn coefficient_count(&self) -> usize {
+        self.coefficients.len()
+    }
+
+    fn output_count(&self) -> usize {
+        self.motion_count() + usize::from(self.coefficient_outputs) * self.coefficient_count()
+    }
+
+    fn input_names(&self) -> Vec<String> {
+        let mut names = self.motion_names.clone();
+        names.extend(self.coefficient_names.iter().cloned());
+        names
+    }
+
+    fn output_names(&self) -> Vec<String> {
+        let mut names = self.motion_names.clone();
+        if self.coefficient_outputs {
+            names.extend(self.coefficient_names.iter().cloned());
+        }
+        names
+    }
+
+    /// Unscaled network input at instant k with coefficients `coefficients`.
+    fn raw_input(&self, k: usize, coefficients: &[f64], row: &mut [f64]) {
+        let (m, c) = (self.motion_count(), self.coefficient_count());
+        row[..m].copy_from_slice(&self.motion[k * m..(k + 1) * m]);
+        row[m..m + c].copy_from_slice(&coefficients[k * c..(k + 1) * c]);
+    }
+
+    /// Unscaled target at instant k (motion, then measured coefficients).
+    fn raw_target(&self, k: usize, row: &mut [f64]) {
+        let (m, c) = (self.motion_count(), self.coefficient_count());
+        row[..m].copy_from_slice(&self.motion[k * m..(k + 1) * m]);
+        if self.coefficient_outputs {
+            row[m..m + c].copy_from_slice(&self.measured[k * c..(k + 1) * c]);
+        }
+    }
+
+    /// The scaled training set: pairs (input at k, target at k+1).
+    fn training_set(&self) -> TrainingSet {
+        let inputs_count = self.motion_count() + self.coefficient_count();
+        let (inputs, targets) = self
+            .pairs
+            .iter()
+            .map(|&k| {
+                let mut x = vec![0.0; inputs_count];
+                self.raw_input(k, &self.measured, &mut x);
+                self.input_scaling.apply(&mut x);
+                let mut z = vec![0.0; self.output_count()];
+                self.raw_target(k + 1, &mut z);
+                self.output_scaling.apply(&mut z);
+                (x, z)
+            })
+            .unzip();
+        TrainingSet {
+            inputs,
+            targets,
+            input_names: self.input_names(),
+            output_names: self.output_names(),
+        }
+    }
+}
+
+/// The coefficients with a free parameter among their terms (in
+/// evaluation order). A coefficient whose terms are all fixed carries no Θ
+/// and may not be computable from the structure alone (CDRW lateral: CD
+/// with a CL² term while CL has no terms is a constant the flight never
+/// had, outside every training sample).
+fn model_coefficients(structure: &ModelStructure) -> Vec<Coefficient> {
+    let aero = &structure.aircraft.aero;
+    Coefficient::ALL
+        .into_iter()
+        .filter(|&c| {
+            aero.terms(c)
+                .any(|(_, parameter)| structure.free[parameter])
+        })
+        .collect()
+}
+
+/// Whether the coefficients need α̇ (the stall model's χ, or α̇ terms).
+fn needs_alpha_dot(aero: &AeroModel) -> bool {
+    aero.kind == ModelKind::Stall
+        || Coefficient::ALL
+            .into_iter()
+            .any(|c| aero.terms(c).any(|(r, _)| r.contains(Regressor::AlphaDot)))
+}
+
+/// The motion variables: the option's, else the structure's integrated
+/// states without χ.
+fn motion_names(structure: &ModelStructure, options: &RestrictedOptions) -> Vec<String> {
+    if !options.motion.is_empty() {
+        return options.motion.clone();
+    }
+    structure
+        .integrate
+        .iter()
+        .map(|&i| FLIGHT_PATH_STATES[i])
+        .filter(|&name| name != "chi")
+        .map(str::to_string)
+        .collect()
+}
+
+/// A channel sampled at the instants (None when the record lacks it).
+fn sampled(record: &FlightRecord, name: &str, times: &[f64]) -> Result<Option<Vec<f64>>> {
+    match record.channel(name) {
+        Ok(channel) => channel.values_at(times).map(Some),
+        Err(_) => Ok(None),
+    }
+}
+
+/// Checks that the record has the motion variables and every channel the
+/// coefficients need: one refusal naming all that are missing.
+fn check_motion_and_channels(
+    method: &str,
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    request: &Request,
+    motion_names: &[String],
+) -> Result<()> {
+    let mut missing: Vec<MissingChannel> =
+        match check_channels(record, &structure.aircraft, request, method) {
+            Ok(()) => Vec::new(),
+            Err(Error::Refused(Refusal::MissingChannels { channels, .. })) => channels,
+            Err(error) => return Err(error),
+        };
+    for name in motion_names {
+        if record.channel(name).is_err() && !missing.iter().any(|c| &c.name == name) {
+            missing.push(MissingChannel {
+                name: name.clone(),
+                purpose: "motion variable of the restricted neural model".into(),
+            });
+        }
+    }
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    match Refusal::missing(method, missing, present) {
+        Some(refusal) => Err(Error::Refused(refusal)),
+        None => Ok(()),
+    }
+}
+
+/// Reads the record onto the restricted model's time base.
+fn prepare(
+    method: &str,
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &RestrictedOptions,
+) -> Result<Data> {
+    let aero = &structure.aircraft.aero;
+    let coefficients = model_coefficients(structure);
+    let motion_names = motion_names(structure, options);
+    if coefficients.is_empty() || motion_names.is_empty() {
+        return Err(Error::Refused(Refusal::UnsuitableModel {
+            method: method.to_string(),
+            model: structure.name.clone(),
+            reason: "the restricted neural model needs coefficients with terms and integrated motion variables".into(),
+        }));
+    }
+    let mut request = Request {
+        coefficients: coefficients.clone(),
+        regressors: Vec::new(),
+    };
+    for &c in &coefficients {
+        request
+            .regressors
+            .extend(aero.terms(c).flat_map(|(r, _)| r.factors().to_vec()));
+    }
+    if aero.kind == ModelKind::Stall {
+        request.regressors.push(Regressor::Alpha);
+    }
+    check_motion_and_channels(method, record, structure, &request, &motion_names)?;
+    let reconstruction = reconstruct(
+        record,
+        &structure.aircraft,
+        &request,
+        &ReconstructionOptions {
+            differentiator: Some(options.differentiator),
+            step_breaks: StepBreaks::NewValue,
+            ..Default::default()
+        },
+        method,
+    )?;
+    assemble(
+        method,
+        record,
+        structure,
+        options,
+        (motion_names, coefficients),
+        reconstruction,
+    )
+}
+
+/// The flight conditions, motion and coefficients at the reconstruction's
+/// instants where everything is finite, the pairs and the scalings.
+fn assemble(
+    method: &str,
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &RestrictedOptions,
+    (motion_names, coefficients): (Vec<String>, Vec<Coefficient>),
+    reconstruction: Reconstruction,
+) -> Result<Data> {
+    let aero = &structure.aircraft.aero;
+    let times = &reconstruction.times;
+    let channel = |name: &str| sampled(record, name, times);
+    let alpha_dot = if needs_alpha_dot(aero) {
+        let alpha = record.channel("alpha")?;
+        let derivative = options
+            .differentiator
+            .differentiate_with_breaks(alpha, &control_steps(record));
+        Some(derivative.values_at_unbridged(times))
+    } else {
+        None
+    };
+    let motion_series = motion_names
+        .iter()
+        .map(|name| record.channel(name)?.values_at(times))
+        .collect::<Result<Vec<_>>>()?;
+    let [alpha, beta, airspeed, mach, p, q, r] =
+        ["alpha", "beta", "airspeed", "mach", "p", "q", "r"].map(channel);
+    let (alpha, beta, airspeed, mach) = (alpha?, beta?, airspeed?, mach?);
+    let (p, q, r) = (p?, q?, r?);
+    let controls = Control::ALL
+        .iter()
+        .map(|c| channel(c.name()))
+        .collect::<Result<Vec<_>>>()?;
+    let value = |series: &Option<Vec<f64>>, k: usize| series.as_ref().map_or(f64::NAN, |s| s[k]);
+    let axes = aero.force_axes;
+    let mut data = Data {
+        coefficient_names: coefficients
+            .iter()
+            .map(|c| c.name(axes).to_string())
+            .collect(),
+        motion_names,
+        coefficients,
+        times: Vec::new(),
+        conditions: Vec::new(),
+        motion: Vec::new(),
+        measured: Vec::new(),
+        pairs: Vec::new(),
+        period: 1.0 / reconstruction.rate,
+        input_scaling: Scaling {
+            range: Vec::new(),
+            low: 0.0,
+            high: 1.0,
+        },
+        output_scaling: Scaling {
+            range: Vec::new(),
+            low: 0.0,
+            high: 1.0,
+        },
+        coefficient_outputs: options.coefficient_outputs,
+        notes: reconstruction.notes.clone(),
+    };
+    let mut left_out = 0;
+    for (k, &time) in times.iter().enumerate() {
+        let condition = AeroInput {
+            alpha: value(&alpha, k),
+            beta: value(&beta, k),
+            airspeed: value(&airspeed, k),
+            mach: value(&mach, k),
+            rates: Vector3::new(value(&p, k), value(&q, k), value(&r, k)),
+            alpha_dot: alpha_dot.as_ref().map_or(0.0, |s| s[k]),
+            measured_alpha_dot: None,
+            controls: Controls::from_fn(|i, _| controls[i].as_ref().map_or(0.0, |s| s[k])),
+            chi: 1.0,
+        };
+        let motion = motion_series.iter().map(|s| s[k]);
+        let measured = data
+            .coefficients
+            .iter()
+            .map(|&c| reconstruction.coefficient(c)[k]);
+        let finite = motion.clone().chain(measured.clone()).all(f64::is_finite)
+            && condition.alpha_dot.is_finite();
+        if !finite {
+            left_out += 1;
+            continue;
+        }
+        data.times.push(time);
+        data.conditions.push(condition);
+        data.motion.extend(motion);
+        data.measured.extend(measured);
+    }
+    let tolerance = 0.5 * data.period;
+    data.pairs = (0..data.times.len().saturating_sub(1))
+        .filter(|&k| (data.times[k + 1] - data.times[k] - data.period).abs() < tolerance)
+        .collect();
+    if left_out > 0 {
+        data.notes.push(format!(
+            "{left_out} instants left out where a motion variable or α̇ is not finite"
+        ));
+    }
+    let parameters = structure.free.iter().filter(|&&f| f).count();
+    if data.pairs.len() <= parameters.max(10) {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: method.to_string(),
+            data: data.pairs.len(),
+            unknowns: parameters,
+        }));
+    }
+    fit_scalings(&mut data, options.scaling)?;
+    Ok(data)
+}
+
+/// The input and output scalings from the training pairs (Eq. 3).
+fn fit_scalings(data: &mut Data, (low, high): (f64, f64)) -> Result<()> {
+    let width = data.motion_count() + data.coefficient_count();
+    let (inputs, targets): (Vec<Vec<f64>>, Vec<Vec<f64>>) = data
+        .pairs
+        .iter()
+        .map(|&k| {
+            let mut x = vec![0.0; width];
+            data.raw_input(k, &data.measured, &mut x);
+            let mut z = vec![0.0; data.output_count()];
+            data.raw_target(k + 1, &mut z);
+            (x, z)
+        })
+        .unzip();
+    data.input_scaling = Scaling::fit(&inputs, &data.input_names(), low, high)?;
+    data.output_scaling = Scaling::fit(&targets, &data.output_names(), low, high)?;
+    Ok(())
+}
+
+/// The Gauss–Newton problem: Θ → coefficients → network → whitened residuals.
+struct Fit<'a> {
+    data: &'a Data,
+    network: &'a dyn Network,
+    model: AeroModel,
+    /// Structure indices of the estimated parameters.
+    free: Vec<usize>,
+    feedback: Feedback,
+    /// R^{-1/2}: the inverse of the Cholesky factor of R (Eq. 13).
+    whitening: DMatrix<f64>,
+    /// The model's coefficients at each instant for the current Θ.
+    coefficients: Vec<f64>,
+    /// Scaled predictions, pair by pair.
+    predictions: Vec<f64>,
+    /// Scaled targets, pair by pair.
+    targets: Vec<f64>,
+    /// The Θ `predictions` and `coefficients` are of.
+    predicted_at: Option<DVector<f64>>,
+    input: Vec<f64>,
+    /// With measured feedback the motion inputs of a pair do not depend on
+    /// Θ: the network's state after them ([`Network::partial`]), pair by
+    /// pair, so that an evaluation at Θ starts from it (empty otherwise).
+    partials: Vec<f64>,
+}
+
+impl<'a> Fit<'a> {
+    fn new(
+        data: &'a Data,
+        network: &'a dyn Network,
+        structure: &ModelStructure,
+        feedback: Feedback,
+    ) -> Fit<'a> {
+        let outputs = data.output_count();
+        let mut targets = vec![0.0; data.pairs.len() * outputs];
+        for (row, &k) in targets.chunks_mut(outputs).zip(&data.pairs) {
+            data.raw_target(k + 1, row);
+            data.output_scaling.apply(row);
+        }
+        Fit {
+            data,
+            network,
+            model: structure.aircraft.aero.clone(),
+            free: (0..structure.free.len())
+                .filter(|&i| structure.free[i])
+                .collect(),
+            feedback,
+            whitening: DMatrix::identity(outputs, outputs),
+            coefficients: vec![0.0; data.times.len() * data.coefficient_count()],
+            predictions: vec![0.0; data.pairs.len() * outputs],
+            targets,
+            predicted_at: None,
+            input: vec![0.0; data.motion_count() + data.coefficient_count()],
+            partials: match (feedback, network.partial_size()) {
+                (Feedback::Measured, size) if size > 0 => {
+                    let m = data.motion_count();
+                    let mut input = vec![0.0; m + data.coefficient_count()];
+                    let mut partials = vec![0.0; data.pairs.len() * size];
+                    for (state, &k) in partials.chunks_mut(size).zip(&data.pairs) {
+                        data.raw_input(k, &data.measured, &mut input);
+                        data.input_scaling.apply(&mut input);
+                        network.partial(&input[..m], state);
+                    }
+                    partials
+                }
+                _ => Vec::new(),
+            },
+        }
+    }
+
+    /// The network's output for pair `pair` whose input is `self.input`:
+    /// from the pair's partial state when there is one.
+    fn evaluate(&self, pair: usize, output: &mut [f64]) {
+        let size = self.network.partial_size();
+        if self.partials.is_empty() {
+            self.network.predict(&self.input, output);
+        } else {
+            let state = &self.partials[pair * size..(pair + 1) * size];
+            self.network
+                .predict_from(state, self.data.motion_count(), &self.input, output);
+        }
+    }
+
+    /// The model's coefficients at every instant with Θ (χ from the
+    /// separation equations, module documentation).
+    fn evaluate_coefficients(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
+        self.predicted_at = None;
+        for (j, &i) in self.free.iter().enumerate() {
+            self.model.parameters.values_mut()[i] = theta[j];
+        }
+        let c = self.data.coefficient_count();
+        let chi_is_state = self.model.chi_is_state();
+        let mut chi = 1.0;
+        for k in 0..self.data.times.len() {
+            let mut condition = self.data.conditions[k];
+            if chi_is_state {
+                chi = self.separation(k, chi);
+                condition.chi = chi;
+            }
+            let all = self
+                .model
+                .coefficient_values(&self.model.coefficients(&condition));
+            for (slot, coefficient) in self.coefficients[k * c..(k + 1) * c]
+                .iter_mut()
+                .zip(&self.data.coefficients)
+            {
+                *slot = all[*coefficient as usize];
+            }
+        }
+        match self.coefficients.iter().all(|v| v.is_finite()) {
+            true => Ok(()),
+            false => Err("the model's coefficients are not finite at this Θ".into()),
+        }
+    }
+
+    /// χ at instant k for a χ state: χ∞ at the start of a contiguous
+    /// stretch, else one RK4 step of Eq. 2 from χ at k−1 with α and α̇
+    /// interpolated linearly inside the step.
+    fn separation(&self, k: usize, previous: f64) -> f64 {
+        let conditions = &self.data.conditions;
+        let contiguous = k > 0
+            && (self.data.times[k] - self.data.times[k - 1] - self.data.period).abs()
+                < 0.5 * self.data.period;
+        if !contiguous {
+            return self.model.separation_target(
+                conditions[k].alpha,
+                conditions[k].alpha_dot,
+                conditions[k].airspeed,
+            );
+        }
+        let (start, end) = (&conditions[k - 1], &conditions[k]);
+        let step = self.data.times[k] - self.data.times[k - 1];
+        let x = SVector::<f64, 1>::new(previous);
+        let next = aeroid_sim::integrator::rk4_step(&x, step, |x, fraction| {
+            let alpha = start.alpha + fraction * (end.alpha - start.alpha);
+            let alpha_dot = start.alpha_dot + fraction * (end.alpha_dot - start.alpha_dot);
+            let airspeed = start.airspeed + fraction * (end.airspeed - start.airspeed);
+            SVector::<f64, 1>::new(self.model.separation_rate(alpha, alpha_dot, x[0], airspeed))
+        });
+        next[0]
+    }
+
+    /// The scaled predictions of every pair at Θ (Eq. 11 or 23).
+    fn predict(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
+        if self.predicted_at.as_ref() == Some(theta) {
+            return Ok(());
+        }
+        self.predicted_at = None;
+        self.evaluate_coefficients(theta)?;
+        let data = self.data;
+        let (m, outputs) = (data.motion_count(), data.output_count());
+        let mut previous: Option<usize> = None;
+        for (pair, &k) in data.pairs.iter().enumerate() {
+            data.raw_input(k, &self.coefficients, &mut self.input);
+            data.input_scaling.apply(&mut self.input);
+            let chained = self.feedback == Feedback::Predicted && k > 0 && previous == Some(k - 1);
+            if chained {
+                // The previous prediction of the motion, rescaled from the
+                // output scaling to the input scaling (motion columns first
+                // in both).
+                let last = (pair - 1) * outputs;
+                self.input[..m].copy_from_slice(&self.predictions[last..last + m]);
+                data.output_scaling.invert(&mut self.input[..m]);
+                data.input_scaling.apply(&mut self.input[..m]);
+            }
+            let mut output = std::mem::take(&mut self.predictions);
+            self.evaluate(pair, &mut output[pair * outputs..(pair + 1) * outputs]);
+            self.predictions = output;
+            previous = Some(k);
+        }
+        if !self.predictions.iter().all(|v| v.is_finite()) {
+            return Err("the network's predictions are not finite at this Θ".into());
+        }
+        self.predicted_at = Some(theta.clone());
+        Ok(())
+    }
+
+    /// Z − Y, pair by pair (scaled).
+    fn errors(&mut self, theta: &DVector<f64>) -> std::result::Result<Vec<f64>, String> {
+        self.predict(theta)?;
+        Ok(self
+            .targets
+            .iter()
+            .zip(&self.predictions)
+            .map(|(z, y)| z - y)
+            .collect())
+    }
+}
+
+impl LeastSquaresProblem for Fit<'_> {
+    fn residuals(&mut self, theta: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
+        let errors = self.errors(theta)?;
+        let n = self.data.output_count();
+        let mut residuals = DVector::zeros(errors.len());
+        for (pair, e) in errors.chunks(n).enumerate() {
+            for i in 0..n {
+                residuals[pair * n + i] = (0..=i).map(|j| self.whitening[(i, j)] * e[j]).sum();
+            }
+        }
+        Ok(residuals)
+    }
+
+    /// R = (1/N)·Σ E·Eᵀ at Θ (Eq. 13), its diagonal floored at 10⁻¹² of
+    /// its mean so that a near-perfect fit stays finite.
+    fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
+        let errors = self.errors(theta)?;
+        let n = self.data.output_count();
+        let count = self.data.pairs.len() as f64;
+        let mut r = DMatrix::zeros(n, n);
+        for e in errors.chunks(n) {
+            let e = DVector::from_column_slice(e);
+            r += &e * e.transpose();
+        }
+        r /= count;
+        let floor = 1e-12 * r.trace() / n as f64;
+        for i in 0..n {
+            r[(i, i)] += floor.max(f64::MIN_POSITIVE);
+        }
+        let cholesky = r
+            .cholesky()
+            .ok_or_else(|| "the residual covariance R is not positive definite".to_string())?;
+        let factor = cholesky.l();
+        self.whitening = factor
+            .solve_lower_triangular(&DMatrix::identity(n, n))
+            .ok_or_else(|| "the residual covariance R cannot be inverted".to_string())?;
+        Ok(true)
+    }
+
+    /// Forward differences (Eq. 19), step 10⁻⁶·max(|Θ_j|, typical). With
+    /// measured feedback Θ reaches the network only through the
+    /// coefficients at the same sample, so the difference is taken through
+    /// the chain rule, ∂Y(i+1)/∂Θ_j = Σ_c ∂f/∂C_c·∂C_c(i)/∂Θ_j, each factor
+    /// a forward difference: the model once per parameter, the network
+    /// once per coefficient (3 instead of n_Θ network passes). With
+    /// predicted feedback Θ also reaches Y(i+1) through Y(i): the whole
+    /// free-running prediction is differenced per parameter.
+    fn jacobian(
+        &mut self,
+        theta: &DVector<f64>,
+        options: &Options,
+    ) -> std::result::Result<DMatrix<f64>, String> {
+        let step = |j: usize| {
+            options.relative_step
+                * theta[j]
+                    .abs()
+                    .max(options.typical.get(j).copied().unwrap_or(1e-3))
+        };
+        if self.feedback == Feedback::Predicted {
+            let base = self.residuals(theta)?;
+            let mut jacobian = DMatrix::zeros(base.len(), theta.len());
+            let mut perturbed = theta.clone();
+            for j in 0..theta.len() {
+                perturbed[j] = theta[j] + step(j);
+                let column = (self.residuals(&perturbed)? - &base) / step(j);
+                jacobian.set_column(j, &column);
+                perturbed[j] = theta[j];
+            }
+            return Ok(jacobian);
+        }
+        let slopes = self.coefficient_slopes(theta, step)?;
+        let network = self.network_slopes(theta)?;
+        let (n, c, parameters) = (
+            self.data.output_count(),
+            self.data.coefficient_count(),
+            theta.len(),
+        );
+        let mut jacobian = DMatrix::zeros(self.data.pairs.len() * n, parameters);
+        let mut response = vec![0.0; n];
+        for (pair, &k) in self.data.pairs.iter().enumerate() {
+            let network = &network[pair * n * c..(pair + 1) * n * c];
+            for j in 0..parameters {
+                let slope = &slopes[(j * self.data.times.len() + k) * c..][..c];
+                for (o, value) in response.iter_mut().enumerate() {
+                    *value = (0..c).map(|i| network[o * c + i] * slope[i]).sum();
+                }
+                for o in 0..n {
+                    jacobian[(pair * n + o, j)] = -(0..=o)
+                        .map(|i| self.whitening[(o, i)] * response[i])
+                        .sum::<f64>();
+                }
+            }
+        }
+        Ok(jacobian)
+    }
+}
+
+impl Fit<'_> {
+    /// ∂C/∂Θ_j of each instant's coefficients, in the network's scaled
+    /// input units: parameter by parameter, instant by instant, coefficient
+    /// by coefficient. The coefficients at Θ are restored, and with them
+    /// the predictions at Θ when they were computed.
+    fn coefficient_slopes(
+        &mut self,
+        theta: &DVector<f64>,
+        step: impl Fn(usize) -> f64,
+    ) -> std::result::Result<Vec<f64>, String> {
+        let data = self.data;
+        let (m, c) = (data.motion_count(), data.coefficient_count());
+        let scale: Vec<f64> = (0..c)
+            .map(|i| match data.input_scaling.unscale_factor(m + i) {
+                f if f > 0.0 => 1.0 / f,
+                _ => 0.0,
+            })
+            .collect();
+        let predicted_at = self.predicted_at.take();
+        self.evaluate_coefficients(theta)?;
+        let base = self.coefficients.clone();
+        let mut slopes = Vec::with_capacity(theta.len() * base.len());
+        let mut perturbed = theta.clone();
+        for j in 0..theta.len() {
+            let h = step(j);
+            perturbed[j] = theta[j] + h;
+            self.evaluate_coefficients(&perturbed)?;
+            perturbed[j] = theta[j];
+            slopes.extend(
+                self.coefficients
+                    .iter()
+                    .zip(&base)
+                    .enumerate()
+                    .map(|(index, (up, at))| (up - at) / h * scale[index % c]),
+            );
+        }
+        self.coefficients = base;
+        // The predictions at Θ, if they were, still are: only the
+        // coefficients were changed, and they are Θ's again.
+        self.predicted_at = predicted_at.filter(|at| at == theta);
+        Ok(slopes)
+    }
+
+    /// ∂f/∂x_c of the network at each pair's input at Θ with respect to
+    /// each scaled coefficient input, by forward differences of 10⁻⁶ of the
+    /// scaled range: pair by pair, output by output, coefficient by
+    /// coefficient. Expects the coefficients at Θ (see
+    /// [`Fit::coefficient_slopes`]); the predictions at Θ are kept.
+    fn network_slopes(&mut self, theta: &DVector<f64>) -> std::result::Result<Vec<f64>, String> {
+        self.predict(theta)?;
+        let data = self.data;
+        let (m, c, n) = (
+            data.motion_count(),
+            data.coefficient_count(),
+            data.output_count(),
+        );
+        let delta = 1e-6 * (data.input_scaling.high - data.input_scaling.low);
+        let mut slopes = vec![0.0; data.pairs.len() * n * c];
+        let mut shifted = vec![0.0; n];
+        for (pair, &k) in data.pairs.iter().enumerate() {
+            data.raw_input(k, &self.coefficients, &mut self.input);
+            data.input_scaling.apply(&mut self.input);
+            for i in 0..c {
+                self.input[m + i] += delta;
+                self.evaluate(pair, &mut shifted);
+                self.input[m + i] -= delta;
+                let base = &self.predictions[pair * n..(pair + 1) * n];
+                for o in 0..n {
+                    slopes[(pair * n + o) * c + i] = (shifted[o] - base[o]) / delta;
+                }
+            }
+        }
+        Ok(slopes)
+    }
+}
+
+/// Counts of model coefficients outside the range the network was trained
+/// on, per coefficient (name, samples outside, samples).
+fn extrapolated(data: &Data, coefficients: &[f64]) -> Vec<(String, usize)> {
+    let (m, c) = (data.motion_count(), data.coefficient_count());
+    (0..c)
+        .map(|j| {
+            let (min, max) = data.input_scaling.range[m + j];
+            let margin = 1e-9 * (max - min).abs();
+            let outside = data
+                .pairs
+                .iter()
+                .filter(|&&k| {
+                    let v = coefficients[k * c + j];
+                    v < min - margin || v > max + margin
+                })
+                .count();
+            (data.coefficient_names[j].clone(), outside)
+        })
+        .filter(|(_, outside)| *outside > 0)
+        .collect()
+}
+
+/// Trains the network on the record (coefficients from measured accelerations) and estimates the structure's free parameters by Gauss–Newton on det(R) through it.
+pub fn estimate(
+    method: &str,
+    problem: &EstimationProblem,
+    start: Option<&Estimate>,
+    trainer: &dyn Trainer,
+    options: &RestrictedOptions,
+) -> Result<Estimate> {
+    let started = std::time::Instant::now();
+    crate::estimator::one_record(method, problem)?;
+    let structure = problem.structure.six_dof(method)?;
+    let record = problem.record();
+    if !structure.free.iter().any(|&f| f) {
+        return Err(Error::Refused(Refusal::NothingToEstimate {
+            method: method.to_string(),
+            model: structure.name.clone(),
+        }));
+    }
+    let data = prepare(method, record, structure, options)?;
+    let (network, report) = trainer.train(&data.training_set())?;
+    if network.inputs() != data.motion_count() + data.coefficient_count()
+        || network.outputs() != data.output_count()
+    {
+        return Err(Error::Other(format!(
+            "{method}: the trained network has {} inputs and {} outputs, the restricted model {} and {}",
+            network.inputs(),
+            network.outputs(),
+            data.motion_count() + data.coefficient_count(),
+            data.output_count()
+        )));
+    }
+    let mut fit = Fit::new(&data, network.as_ref(), structure, options.feedback);
+    let names = structure.free_names();
+    let values = structure.aircraft.aero.parameters.values();
+    let theta0 = DVector::from_iterator(
+        fit.free.len(),
+        fit.free.iter().zip(&names).map(|(&i, name)| {
+            start
+                .and_then(|s| s.parameter(name))
+                .map(|p| p.value)
+                .filter(|v| v.is_finite())
+                .unwrap_or(values[i])
+        }),
+    );
+    let solver = Options::maximum_likelihood(
+        &fit.free,
+        &structure.bounds,
+        options.max_iterations,
+        options.decrease_tolerance,
+    );
+    let solution = gauss_newton::solve(&mut fit, &theta0, &solver);
+    let mut estimate = Estimate::from_solution(
+        (method, structure.name.clone(), record_name(record)),
+        &names,
+        &theta0,
+        &solution,
+    );
+    estimate.fits = output_fits(&mut fit, &solution.theta);
+    estimate.notes = data.notes.clone();
+    estimate.notes.push(format!(
+        "restricted neural model: inputs {} at sample i, outputs {} at i+1; {} training pairs; motion fed back: {}",
+        data.input_names().join(", "),
+        data.output_names().join(", "),
+        data.pairs.len(),
+        match options.feedback {
+            Feedback::Measured => "measured (Eq. 11 / 23)",
+            Feedback::Predicted => "predicted (free-running)",
+        }
+    ));
+    if let Some(start) = start {
+        estimate.notes.push(format!(
+            "Gauss–Newton started from the {} estimate's values",
+            start.method
+        ));
+    }
+    let outside = extrapolated(&data, &fit.coefficients);
+    if !outside.is_empty() {
+        estimate.notes.push(format!(
+            "model coefficients outside the network's training range (extrapolated), samples: {}",
+            outside
+                .iter()
+                .map(|(name, count)| format!("{name} {count}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    estimate.network = Some(report);
+    estimate.wall_time = started.elapsed().as_secs_f64();
+    Ok(estimate)
+}
+
+/// Fits of each output in physical units at Θ (empty when Θ cannot be evaluated).
+fn output_fits(fit: &mut Fit, theta: &DVector<f64>) -> Vec<OutputFit> {
+    if fit.predict(theta).is_err() {
+        return Vec::new();
+    }
+    let data = fit.data;
+    let n = data.output_count();
+    let mut measured = fit.targets.clone();
+    let mut predicted = fit.predictions.clone();
+    for row in measured.chunks_mut(n) {
+        data.output_scaling.invert(row);
+    }
+    for row in predicted.chunks_mut(n) {
+        data.output_scaling.invert(row);
+    }
+    data.output_names()
+        .iter()
+        .enumerate()
+        .map(|(o, name)| {
+            let z: Vec<f64> = measured.iter().skip(o).step_by(n).copied().collect();
+            let y: Vec<f64> = predicted.iter().skip(o).step_by(n).copied().collect();
+            OutputFit::new(name, &z, &y)
+        })
+        .collect()
+}

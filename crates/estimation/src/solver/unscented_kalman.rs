@@ -1,0 +1,1303 @@
+//! One pass of the square-root unscented Kalman filter with additive noise
+//! over any state-space model ([`StateSpaceModel`]) and a record's
+//! observations on its grid (R. van der Merwe & E. A. Wan, "The
+//! square-root unscented Kalman filter for state and parameter
+//! estimation", ICASSP 2001, Algorithm 3.1; the unscented transform of
+//! Wan & van der Merwe, "The unscented Kalman filter for nonlinear
+//! estimation", IEEE AS-SPCC 2000, Eq. 15, and Julier & Uhlmann, SPIE
+//! 3068, 1997). The same [`Pass`] as the extended filter's
+//! ([`super::extended_kalman`]), so that methods, smoothers and
+//! likelihoods take either.
+//!
+//! The filter carries the mean x and a lower-triangular Cholesky factor S
+//! of the covariance, P = S·Sᵀ, never P itself: every covariance it forms
+//! is a product S·Sᵀ, positive semi-definite by construction, where the
+//! covariance form (P⁻ − K·S_y·Kᵀ, or Joseph's form with a statistical H)
+//! loses definiteness to rounding on a noise-free record. Weights and the
+//! scale c = √(n + λ) are the scaled transform's ([`Unscented::points`]):
+//! χ₀ = x, χ_i = x + c·s_i, χ_{n+i} = x − c·s_i (s_i the columns of S),
+//! W_i = 1/(2c²) for i ≥ 1, W₀ᵐ = λ/c², W₀ᶜ = W₀ᵐ + 1 − α² + β.
+//!
+//! Algorithm 3.1, step by step. Initialisation: S₀ = chol(P₀).
+//! Time update from grid point k − 1 to k: sigma points of (x⁺, S⁺), each
+//! propagated by the model's own integration step, χ'_i = step(χ_i);
+//! x⁻ = Σ Wᵐ_i·χ'_i; S⁻ = qr([√W₁·(χ'_{1…2n} − x⁻), √Q_d])ᵀ, the
+//! triangular factor of the QR decomposition of the compound matrix's
+//! transpose; then S⁻ = cholupdate(S⁻, χ'₀ − x⁻, W₀ᶜ), an update when
+//! W₀ᶜ ≥ 0 and a downdate when W₀ᶜ < 0 (with κ = 0,
+//! W₀ᶜ = 2 + β − α² − 1/α²: at β = 2 negative for α below 0.52, −0.25 at
+//! the method's default α = 0.5). The process noise
+//! Q_d = ∫₀ʰ e^{A·s}·Q_c·e^{Aᵀ·s} ds is taken by the trapezoidal rule
+//! (Q_c + Φ·Q_c·Φᵀ)·h/2 (the UKF has no Jacobian), within O(h³) of the
+//! extended filter's Van Loan Q_d; its square root enters the compound
+//! matrix as the columns √(h/2)·[G, Φ·G] with G·Gᵀ = Q_c. Φ is the
+//! statistical linearisation P_{x'x}·P⁺⁻¹ with
+//! P_{x'x} = Σ Wᶜ_i·(χ'_i − x⁻)(χ_i − x⁺)ᵀ; with the sigma points above
+//! it is the central difference Φ·S⁺ = (χ'_{1…n} − χ'_{n+1…2n})/(2c),
+//! one triangular solve, and it is the pass's transition (with it the RTS
+//! smoother's gain is the unscented RTS smoother's, P_{xx'}·P⁻⁻¹).
+//!
+//! Measurement update at k with the outputs measured there: sigma points
+//! of (x⁻, S⁻) (redrawn: the additive-noise form), Y_i = h(t_k, χ_i) (rows
+//! of the measured outputs), ŷ = Σ Wᵐ_i·Y_i,
+//! S_y = qr([√W₁·(Y_{1…2n} − ŷ), √R])ᵀ and
+//! S_y = cholupdate(S_y, Y₀ − ŷ, W₀ᶜ); P_xy = Σ Wᶜ_i·(χ_i − x⁻)(Y_i − ŷ)ᵀ
+//! = S⁻·(Y_{1…n} − Y_{n+1…2n})ᵀ/(2c); the gain by two triangular solves,
+//! K = (P_xy/S_yᵀ)/S_y; x⁺ = x⁻ + K·(z − ŷ); U = K·S_y and
+//! S⁺ = cholupdate(S⁻, U, −1), one downdate per column of U. A downdate
+//! that would leave a factor without a positive diagonal (the matrix it
+//! stands for no longer positive definite) is an [`Error::Downdate`]
+//! naming the step and time, never a loaded or repaired factor. The
+//! pass's observation matrix is the statistical H = P_xyᵀ·P⁻⁻¹, again a
+//! central difference, H·S⁻ = (Y_{1…n} − Y_{n+1…2n})/(2c); the innovation
+//! covariance the pass keeps is S_y·S_yᵀ.
+//!
+//! The time update's compound matrix is taken in an equivalent form with
+//! fewer rows. Its rows for χ'_{1+i} and χ'_{1+n+i}, rotated together by
+//! 45° (an orthogonal change, so the same S⁻), are the central difference
+//! d_i = (χ'_{1+i} − χ'_{1+n+i})/(2c), column i of Φ·S⁺, and the second
+//! difference e_i = (χ'_{1+i} + χ'_{1+n+i} − 2x⁻)/(2c). States the step
+//! leaves unchanged in every sigma point (the constant parameters of an
+//! augmented model, the states p… of n; `Work::moving`) have d_i = s_i
+//! (their rows of S⁺ itself, not a difference of propagated points),
+//! e_i = 0 and rows of Φ the identity's: Φ's other p rows are one
+//! triangular solve, and the n second differences, non-zero in p columns
+//! only, enter as the p rows of their own triangular factor, so the QR
+//! works on n + p (+ noise) rows instead of 2n. The result is the
+//! algorithm's to rounding.
+//!
+//! On a linear model the transform is exact and the pass is the linear
+//! Kalman filter's with the trapezoidal Q_d (tests/estimators/kalman_oracle.rs).
+//! No step allocates. A step's sigma points, propagated points, outputs,
+//! compound matrices and every product of its measurement update (ŷ, S_y,
+//! H, P_xy, K, K·S_y, S, S⁻¹, ν), Φ, Φ·G and S·Sᵀ live in buffers
+//! allocated once per pass (`Work`; a buffer whose shape follows the
+//! number of measured outputs keeps its storage when it changes); what
+//! the pass keeps goes from them into buffers reserved once per pass
+//! ([`super::kept`]); tests/no_allocation.rs counts a whole pass's
+//! allocations. The model steps the sigma points and evaluates their
+//! outputs in one call each ([`StateSpaceModel::step_points_into`],
+//! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
+//! share once; the QR is a Householder triangularisation in place
+//! (`triangularise`), the products and triangular solves are written
+//! for the shapes at hand (S lower triangular, a few rows), and these
+//! kernels and the rank-one updates are compiled for AVX2 where the CPU
+//! has it (`simd::wide`: the same numbers bit for bit).
+
+use crate::model::observations::Observations;
+use crate::model::state_space::{Points, StateSpaceModel};
+use crate::solver::extended_kalman::Innovation;
+use crate::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
+use aeroid_core::error::{Error, Result};
+use aeroid_numerics::kalman::{
+    Gaussian, Unscented, UpdateWorkspace, multiply, resize, resize_vector,
+};
+use nalgebra::{Cholesky, DMatrix, DVector};
+
+/// Runs the unscented filter from `initial` at grid point 0 with the
+/// parameters `theta` (a model's own; none for an augmented model) and the
+/// sigma-point scaling `unscented`. An error names the time where the
+/// model departs or a covariance factor breaks down.
+pub fn filter<M: StateSpaceModel + ?Sized>(
+    model: &M,
+    theta: &[f64],
+    initial: Gaussian,
+    noise: &Noise,
+    observations: &Observations,
+    unscented: &Unscented,
+) -> Result<Pass> {
+    let n = model.state_count();
+    let len = model.len();
+    check_sizes("unscented filter", model, &initial, noise, observations)?;
+    let weights = Weights::of(unscented, n)?;
+    let process = process_root(&noise.process)?;
+    let mut work = Work::new(n, process.ncols(), model.output_count());
+    let mut pass = Pass::with_capacity(len, model.output_count());
+    let mut state = initial.mean;
+    let mut factor = Cholesky::new(initial.covariance)
+        .ok_or_else(|| {
+            Error::Other("the UKF's initial covariance is not positive definite".into())
+        })?
+        .unpack();
+    for k in 0..len {
+        let t = model.time(k);
+        if k > 0 {
+            let previous = model.time(k - 1);
+            time_update(
+                model,
+                theta,
+                (k, previous, t - previous),
+                &weights,
+                &process,
+                &mut state,
+                &mut factor,
+                &mut work,
+            )?;
+            pass.transitions.push(&work.transition);
+        }
+        covariance_into(&factor, &mut work.covariance);
+        pass.predicted.push_parts(&state, Some(&work.covariance));
+        let present = &observations.at[k];
+        if present.is_empty() {
+            pass.measured.push(None);
+        } else {
+            measurement_update(
+                model,
+                theta,
+                &weights,
+                (t, present),
+                noise,
+                &mut state,
+                &mut factor,
+                &mut work,
+            )?;
+            keep_update(&mut pass, k, present, &work);
+            covariance_into(&factor, &mut work.covariance);
+        }
+        pass.filtered_at(t, &state, Some(&work.covariance))?;
+    }
+    Ok(pass)
+}
+
+/// Keeps the measurement update at grid point k of the outputs `present`
+/// (in its rows' order) from the buffers it was made in: its likelihood
+/// term, each output's innovation and H, ν, S, S⁻¹ and K.
+fn keep_update(pass: &mut Pass, k: usize, present: &[(usize, f64)], work: &Work) {
+    let update = &work.update;
+    let innovation = &work.innovation;
+    pass.negative_log_likelihood += 0.5 * update.log_likelihood_term(innovation);
+    for (i, &(o, _)) in present.iter().enumerate() {
+        pass.innovations[o].push(Innovation {
+            k,
+            value: innovation[i],
+            variance: update.innovation_covariance[(i, i)],
+        });
+    }
+    pass.measured.push_update(
+        &work.observation,
+        innovation,
+        &update.innovation_covariance,
+        &update.innovation_inverse,
+        &update.gain,
+    );
+}
+
+/// The sigma points' scale and weights (module header).
+struct Weights {
+    /// c = √(n + λ).
+    scale: f64,
+    /// W₀ᵐ.
+    mean_zero: f64,
+    /// W₀ᶜ.
+    covariance_zero: f64,
+    /// W_i, i ≥ 1 (mean and covariance alike).
+    other: f64,
+}
+
+impl Weights {
+    /// The weights of `unscented`'s sigma points in n dimensions, read from
+    /// its points of (0, I): χ₁ = c·e₁.
+    fn of(unscented: &Unscented, n: usize) -> Result<Weights> {
+        if n == 0 {
+            return Err(Error::Other("the UKF's model has no states".into()));
+        }
+        let unit = unscented.points(&DVector::zeros(n), &DMatrix::identity(n, n))?;
+        Ok(Weights {
+            scale: unit.points[1][0],
+            mean_zero: unit.mean_weights[0],
+            covariance_zero: unit.covariance_weights[0],
+            other: unit.mean_weights[1],
+        })
+    }
+}
+
+/// A pass's buffers, allocated once: sigma points, propagated points and
+/// outputs as columns (2n + 1 of each), the time update's compound matrix
+/// (its transpose, at most 2n + 2r rows of n), its second differences (n
+/// rows of the p changing states), the leading rows of the central
+/// difference Φ is solved from, Φ and Φ·G, the covariance S·Sᵀ, and the
+/// measurement update's compound matrix (2n + m rows of at most m
+/// columns) and its products. Matrices whose shape depends on p or m
+/// keep their storage when it changes (`kalman::resize`): a pass
+/// allocates nothing per grid point (tests/no_allocation.rs).
+struct Work {
+    points: DMatrix<f64>,
+    moved: DMatrix<f64>,
+    outputs: DMatrix<f64>,
+    compound: DMatrix<f64>,
+    curvature: DMatrix<f64>,
+    curvature_factor: DMatrix<f64>,
+    leading: DMatrix<f64>,
+    measured: DMatrix<f64>,
+    vector: DVector<f64>,
+    /// Every output of each sigma point (`outputs` holds the measured ones).
+    all_outputs: DMatrix<f64>,
+    /// Φ of the last time update (n × n).
+    transition: DMatrix<f64>,
+    /// Φ·G (n × r).
+    moved_noise: DMatrix<f64>,
+    /// S·Sᵀ of the last factor (n × n).
+    covariance: DMatrix<f64>,
+    /// ŷ (m).
+    predicted: DVector<f64>,
+    /// ν = z − ŷ (m).
+    innovation: DVector<f64>,
+    /// S_y (m × m, lower).
+    innovation_factor: DMatrix<f64>,
+    /// E = H·S⁻, then H (m × n).
+    observation: DMatrix<f64>,
+    /// Eᵀ (n × m).
+    difference: DMatrix<f64>,
+    /// P_xy = S⁻·Eᵀ (n × m).
+    cross: DMatrix<f64>,
+    /// P_xyᵀ solved for Kᵀ (m × n).
+    solved: DMatrix<f64>,
+    /// K·S_y (n × m).
+    spread: DMatrix<f64>,
+    /// S_y⁻¹ (m × m).
+    inverse_factor: DMatrix<f64>,
+    /// The transpose of S_y or of S_y⁻¹ (m × m).
+    transposed: DMatrix<f64>,
+    /// S = S_y·S_yᵀ, S⁻¹, K and ln det S of the last measurement update.
+    update: UpdateWorkspace,
+}
+
+impl Work {
+    fn new(n: usize, noise_columns: usize, outputs: usize) -> Work {
+        let count = 2 * n + 1;
+        let m = outputs;
+        Work {
+            points: DMatrix::zeros(n, count),
+            moved: DMatrix::zeros(n, count),
+            outputs: DMatrix::zeros(outputs, count),
+            compound: DMatrix::zeros(2 * n + 2 * noise_columns, n),
+            curvature: DMatrix::zeros(n, n),
+            curvature_factor: DMatrix::zeros(n, n),
+            leading: DMatrix::zeros(n, n),
+            measured: DMatrix::zeros(2 * n + outputs, outputs),
+            vector: DVector::zeros(n.max(outputs)),
+            all_outputs: DMatrix::zeros(outputs, count),
+            transition: DMatrix::zeros(n, n),
+            moved_noise: DMatrix::zeros(n, noise_columns),
+            covariance: DMatrix::zeros(n, n),
+            predicted: DVector::zeros(m),
+            innovation: DVector::zeros(m),
+            innovation_factor: DMatrix::zeros(m, m),
+            observation: DMatrix::zeros(m, n),
+            difference: DMatrix::zeros(n, m),
+            cross: DMatrix::zeros(n, m),
+            solved: DMatrix::zeros(m, n),
+            spread: DMatrix::zeros(n, m),
+            inverse_factor: DMatrix::zeros(m, m),
+            transposed: DMatrix::zeros(m, m),
+            update: UpdateWorkspace::default(),
+        }
+    }
+
+    /// Gives the measurement update's buffers the shape of m measured
+    /// outputs over n states.
+    fn measuring(&mut self, n: usize, m: usize) {
+        resize_vector(&mut self.predicted, m);
+        resize_vector(&mut self.innovation, m);
+        for matrix in [
+            &mut self.innovation_factor,
+            &mut self.inverse_factor,
+            &mut self.transposed,
+            &mut self.update.innovation_covariance,
+            &mut self.update.innovation_inverse,
+        ] {
+            resize(matrix, m, m);
+        }
+        for matrix in [&mut self.observation, &mut self.solved] {
+            resize(matrix, m, n);
+        }
+        for matrix in [
+            &mut self.difference,
+            &mut self.cross,
+            &mut self.spread,
+            &mut self.update.gain,
+        ] {
+            resize(matrix, n, m);
+        }
+    }
+
+    /// The sigma points of (x, S) into `points`.
+    fn draw(&mut self, weights: &Weights, mean: &DVector<f64>, factor: &DMatrix<f64>) {
+        let n = mean.len();
+        self.points.column_mut(0).copy_from(mean);
+        for i in 0..n {
+            for r in 0..n {
+                let d = weights.scale * factor[(r, i)];
+                self.points[(r, 1 + i)] = mean[r] + d;
+                self.points[(r, 1 + n + i)] = mean[r] - d;
+            }
+        }
+    }
+
+    /// The number p of leading states the step moved: every sigma point's
+    /// states p… came through it unchanged (the constant parameters of an
+    /// augmented model), so that Φ's rows p… are the identity's and the
+    /// propagated spread's columns p… are S⁺'s own (module header).
+    fn moving(&self) -> usize {
+        let n = self.points.nrows();
+        let mut p = 0;
+        for (before, after) in self
+            .points
+            .as_slice()
+            .chunks_exact(n)
+            .zip(self.moved.as_slice().chunks_exact(n))
+        {
+            // The last state this point moved, looked for above p only.
+            if let Some(r) = (p..n).rev().find(|&r| before[r] != after[r]) {
+                p = r + 1;
+            }
+        }
+        p
+    }
+}
+
+/// The time update from grid point k − 1 (at `previous`, a step h before
+/// k) to k, in place; the statistical transition Φ into `work.transition`
+/// (module header).
+#[allow(clippy::too_many_arguments)]
+fn time_update<M: StateSpaceModel + ?Sized>(
+    model: &M,
+    theta: &[f64],
+    (k, previous, h): (usize, f64, f64),
+    weights: &Weights,
+    process: &DMatrix<f64>,
+    state: &mut DVector<f64>,
+    factor: &mut DMatrix<f64>,
+    work: &mut Work,
+) -> Result<()> {
+    let n = state.len();
+    work.draw(weights, state, factor);
+    model
+        .step_points_into(
+            k - 1,
+            Points::shared(&work.points, theta),
+            work.moved.as_mut_slice(),
+            n,
+        )
+        .map_err(|e| at_time(e, previous))?;
+    weighted_mean(weights, &work.moved, state);
+    let p = work.moving();
+    // The compound matrix's rows i and n + i (the points χ_{1+i} and
+    // χ_{1+n+i}) rotated by 45°, an orthogonal change that leaves its Gram
+    // matrix alone: √W₁·(χ'_{1+i} − χ'_{1+n+i})/√2, the central difference
+    // D = (χ'_{1+i} − χ'_{1+n+i})/(2c), and √W₁·(χ'_{1+i} + χ'_{1+n+i} −
+    // 2x⁻)/√2, the second difference. In the unchanged states p… D is
+    // S⁺'s own row (2c·s_i/(2c)) and the second difference nothing.
+    let root = weights.other.sqrt() * std::f64::consts::FRAC_1_SQRT_2;
+    let compound = &mut work.compound;
+    let ld = compound.nrows();
+    resize(&mut work.curvature, n, p);
+    // Column by column of the compound matrix (contiguous), the sigma
+    // points' states i of their columns 1 + j and 1 + n + j.
+    let moved = work.moved.as_slice();
+    for i in 0..p {
+        let column = &mut compound.as_mut_slice()[i * ld..i * ld + n];
+        let curvature = &mut work.curvature.as_mut_slice()[i * n..(i + 1) * n];
+        let mean = state[i];
+        for (j, (c, e)) in column.iter_mut().zip(curvature).enumerate() {
+            let (plus, minus) = (moved[(1 + j) * n + i], moved[(1 + n + j) * n + i]);
+            *c = root * (plus - minus);
+            *e = root * ((plus - mean) + (minus - mean));
+        }
+    }
+    let s = factor.as_slice();
+    for i in p..n {
+        let column = &mut compound.as_mut_slice()[i * ld..i * ld + n];
+        for (j, c) in column.iter_mut().enumerate() {
+            *c = s[j * n + i];
+        }
+    }
+    // Φ·S⁺ = D, Sᵀ·Φᵀ = Dᵀ, for the rows 0…p; the rows p… are the identity's.
+    resize(&mut work.leading, p, n);
+    let half = 0.5 / weights.scale;
+    for j in 0..n {
+        for i in 0..p {
+            work.leading[(i, j)] = half * (work.moved[(i, 1 + j)] - work.moved[(i, 1 + n + j)]);
+        }
+    }
+    let transition = &mut work.transition;
+    transition.fill_with_identity();
+    if solve_right_lower(factor, &mut work.leading) && work.leading.iter().all(|v| v.is_finite()) {
+        transition.rows_mut(0, p).copy_from(&work.leading);
+    } else {
+        transition.fill(f64::NAN);
+    }
+    // The second differences' n rows of p non-zero columns as the p rows
+    // of their triangular factor (the same Gram matrix).
+    let mut rows = n;
+    if p < n {
+        resize(&mut work.curvature_factor, p, p);
+        triangularise(&mut work.curvature, n, p, &mut work.curvature_factor);
+        for i in 0..n {
+            let column = &mut compound.as_mut_slice()[i * ld + rows..i * ld + rows + p];
+            for (r, c) in column.iter_mut().enumerate() {
+                *c = if i < p {
+                    work.curvature_factor[(i, r)]
+                } else {
+                    0.0
+                };
+            }
+        }
+        rows += p;
+    } else {
+        for j in 0..n {
+            for i in 0..n {
+                compound[(rows + j, i)] = work.curvature[(j, i)];
+            }
+        }
+        rows += n;
+    }
+    let r = process.ncols();
+    if r > 0 {
+        if transition[(0, 0)].is_finite() {
+            let half = (0.5 * h).sqrt();
+            let moved = &mut work.moved_noise;
+            transition_times(transition, p, process, moved);
+            for j in 0..r {
+                for i in 0..n {
+                    compound[(rows + j, i)] = half * process[(i, j)];
+                    compound[(rows + r + j, i)] = half * moved[(i, j)];
+                }
+            }
+            rows += 2 * r;
+        } else {
+            let whole = h.sqrt();
+            for j in 0..r {
+                for i in 0..n {
+                    compound[(rows + j, i)] = whole * process[(i, j)];
+                }
+            }
+            rows += r;
+        }
+    }
+    triangularise(compound, rows, n, factor);
+    let zero = &mut work.vector;
+    for i in 0..n {
+        zero[i] = work.moved[(i, 0)] - state[i];
+    }
+    zeroth_point(
+        factor,
+        &mut zero.as_mut_slice()[..n],
+        weights.covariance_zero,
+    )
+    .map_err(|()| Error::Downdate {
+        time: previous,
+        step: "time update's zeroth sigma point (W₀ᶜ < 0)",
+    })
+}
+
+/// Φ·G into `into` (n × r) for a Φ whose rows p… are the identity's:
+/// column j is Σ_k G_kj·Φ_{·k} over G's non-zeros, its rows p… G's own.
+/// For a diagonal Q_c (one non-zero per column of G) every element is a
+/// single product, the same as any order of summation gives.
+fn transition_times(
+    transition: &DMatrix<f64>,
+    p: usize,
+    process: &DMatrix<f64>,
+    into: &mut DMatrix<f64>,
+) {
+    let n = transition.nrows();
+    into.copy_from(process);
+    for j in 0..process.ncols() {
+        let column = &mut into.as_mut_slice()[j * n..j * n + p];
+        column.fill(0.0);
+        for k in 0..n {
+            let g = process[(k, j)];
+            if g != 0.0 {
+                let source = &transition.as_slice()[k * n..k * n + p];
+                for (c, &f) in column.iter_mut().zip(source) {
+                    *c += f * g;
+                }
+            }
+        }
+    }
+}
+
+/// The measurement update of (x, S) with the outputs `present` measured at
+/// t, in place (module header); H, ν, S, S⁻¹ and K into `work`.
+#[allow(clippy::too_many_arguments)]
+fn measurement_update<M: StateSpaceModel + ?Sized>(
+    model: &M,
+    theta: &[f64],
+    weights: &Weights,
+    (t, present): (f64, &[(usize, f64)]),
+    noise: &Noise,
+    state: &mut DVector<f64>,
+    factor: &mut DMatrix<f64>,
+    work: &mut Work,
+) -> Result<()> {
+    let n = state.len();
+    let m = present.len();
+    work.measuring(n, m);
+    work.draw(weights, state, factor);
+    let all = work.all_outputs.nrows();
+    model
+        .outputs_points_into(
+            t,
+            Points::shared(&work.points, theta),
+            work.all_outputs.as_mut_slice(),
+            all,
+        )
+        .map_err(|e| at_time(e, t))?;
+    for j in 0..2 * n + 1 {
+        for (row, &(o, _)) in present.iter().enumerate() {
+            work.outputs[(row, j)] = work.all_outputs[(o, j)];
+        }
+    }
+    let outputs = work.outputs.rows(0, m);
+    let predicted = &mut work.predicted;
+    predicted.fill(0.0);
+    for j in 0..2 * n + 1 {
+        let w = if j == 0 {
+            weights.mean_zero
+        } else {
+            weights.other
+        };
+        predicted.axpy(w, &outputs.column(j), 1.0);
+    }
+    let root = weights.other.sqrt();
+    let compound = &mut work.measured;
+    for j in 0..2 * n {
+        for i in 0..m {
+            compound[(j, i)] = root * (outputs[(i, 1 + j)] - predicted[i]);
+        }
+    }
+    for (row, &(o, _)) in present.iter().enumerate() {
+        for i in 0..m {
+            compound[(2 * n + row, i)] = 0.0;
+        }
+        compound[(2 * n + row, row)] = noise.measurement[o].max(0.0).sqrt();
+    }
+    let innovation_factor = &mut work.innovation_factor;
+    triangularise(compound, 2 * n + m, m, innovation_factor);
+    let zero = &mut work.vector.as_mut_slice()[..m];
+    for (i, z) in zero.iter_mut().enumerate() {
+        *z = outputs[(i, 0)] - predicted[i];
+    }
+    zeroth_point(innovation_factor, zero, weights.covariance_zero).map_err(|()| {
+        Error::Downdate {
+            time: t,
+            step: "innovation covariance's zeroth sigma point (W₀ᶜ < 0)",
+        }
+    })?;
+    // E = (Y_{1…n} − Y_{n+1…2n})/(2c): P_xy = S⁻·Eᵀ and H·S⁻ = E.
+    central_difference_into(&outputs, n, weights.scale, &mut work.observation);
+    work.observation.transpose_to(&mut work.difference);
+    multiply_lower(factor, &work.difference, &mut work.cross);
+    let singular = || {
+        Error::Other(
+            "the innovation covariance is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
+        )
+    };
+    if !(0..m).all(|i| {
+        let d = innovation_factor[(i, i)];
+        d > 0.0 && d.is_finite()
+    }) {
+        return Err(at_time(singular(), t));
+    }
+    // K·S_y·S_yᵀ = P_xy: S_y·Z = P_xyᵀ, then S_yᵀ·Kᵀ = Z.
+    let solved = &mut work.solved;
+    work.cross.transpose_to(solved);
+    if !(innovation_factor.solve_lower_triangular_mut(solved)
+        && innovation_factor.tr_solve_lower_triangular_mut(solved))
+    {
+        return Err(at_time(singular(), t));
+    }
+    let update = &mut work.update;
+    solved.transpose_to(&mut update.gain);
+    if !solve_right_lower(factor, &mut work.observation) {
+        work.observation.fill(f64::NAN);
+    }
+    let innovation = &mut work.innovation;
+    for (i, &(_, z)) in present.iter().enumerate() {
+        innovation[i] = z - predicted[i];
+    }
+    state.gemv(1.0, &update.gain, innovation, 1.0);
+    multiply(&update.gain, innovation_factor, &mut work.spread);
+    let column = &mut work.vector;
+    for j in 0..m {
+        column.rows_mut(0, n).copy_from(&work.spread.column(j));
+        cholupdate(factor, &mut column.as_mut_slice()[..n], -1.0).map_err(|()| {
+            Error::Downdate {
+                time: t,
+                step: "measurement update (S⁺ = cholupdate(S⁻, K·S_y, −1))",
+            }
+        })?;
+    }
+    let inverse_factor = &mut work.inverse_factor;
+    inverse_factor.fill_with_identity();
+    if !innovation_factor.solve_lower_triangular_mut(inverse_factor) {
+        return Err(at_time(singular(), t));
+    }
+    let transposed = &mut work.transposed;
+    innovation_factor.transpose_to(transposed);
+    multiply(
+        innovation_factor,
+        transposed,
+        &mut update.innovation_covariance,
+    );
+    inverse_factor.transpose_to(transposed);
+    multiply(transposed, inverse_factor, &mut update.innovation_inverse);
+    // ln det S = 2·Σ ln of S_y's diagonal.
+    update.log_determinant = 2.0 * (0..m).map(|i| innovation_factor[(i, i)].ln()).sum::<f64>();
+    Ok(())
+}
+
+/// P = S·Sᵀ of a lower-triangular S into `p`, formed in its lower
+/// triangle and mirrored: column j of the lower triangle (rows j…) is
+/// Σ_{k ≤ j} S_jk·(rows j… of S's column k), summed in order of k from
+/// zero (the zero factors skipped) in registers, by blocks of 4 and 1 rows
+/// (n³/6 multiply-adds, compiled for AVX2 where the CPU has it:
+/// [`aeroid_numerics::simd::wide`]). Exactly symmetric, each element of the upper
+/// triangle its mirror's.
+fn covariance_into(factor: &DMatrix<f64>, p: &mut DMatrix<f64>) {
+    let n = factor.nrows();
+    resize(p, n, n);
+    let s = factor.as_slice();
+    let data = p.as_mut_slice();
+    aeroid_numerics::simd::wide(
+        #[inline(always)]
+        || {
+            for j in 0..n {
+                let mut start = j;
+                while start + 4 <= n {
+                    lower_block::<4>(s, n, j, start, data);
+                    start += 4;
+                }
+                while start < n {
+                    lower_block::<1>(s, n, j, start, data);
+                    start += 1;
+                }
+            }
+            for j in 0..n {
+                for i in j + 1..n {
+                    data[i * n + j] = data[j * n + i];
+                }
+            }
+        },
+    )
+}
+
+/// Rows `start`…`start` + B of column j of S·Sᵀ (S lower triangular, n × n,
+/// column-major) into `into` ([`covariance_into`]).
+#[inline(always)]
+fn lower_block<const B: usize>(s: &[f64], n: usize, j: usize, start: usize, into: &mut [f64]) {
+    let mut sum = [0.0; B];
+    for k in 0..=j {
+        let f = s[k * n + j];
+        if f != 0.0 {
+            let column: &[f64; B] = s[k * n + start..k * n + start + B]
+                .try_into()
+                .expect("a block of B rows");
+            for (sum, &value) in sum.iter_mut().zip(column) {
+                *sum += f * value;
+            }
+        }
+    }
+    into[j * n + start..j * n + start + B].copy_from_slice(&sum);
+}
+
+/// `into` = L·B for L lower triangular (n × n), B n × m: column j the
+/// sum over k of B_kj·L_{·k} in order of k, each over L's rows k… only
+/// (the rows above add zeros: the same numbers as the dense product).
+fn multiply_lower(l: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+    aeroid_numerics::simd::wide(
+        #[inline(always)]
+        || {
+            let n = l.nrows();
+            resize(into, n, b.ncols());
+            let l = l.as_slice();
+            for (column, b) in into
+                .as_mut_slice()
+                .chunks_exact_mut(n.max(1))
+                .zip(b.as_slice().chunks_exact(n.max(1)))
+            {
+                column.fill(0.0);
+                for (k, &factor) in b.iter().enumerate() {
+                    for (into, &l) in column[k..].iter_mut().zip(&l[k * n + k..(k + 1) * n]) {
+                        *into += factor * l;
+                    }
+                }
+            }
+        },
+    )
+}
+
+/// x = Σ Wᵐ_i·χ'_i of the columns of `moved`.
+fn weighted_mean(weights: &Weights, moved: &DMatrix<f64>, mean: &mut DVector<f64>) {
+    mean.copy_from(&moved.column(0));
+    *mean *= weights.mean_zero;
+    for j in 1..moved.ncols() {
+        mean.axpy(weights.other, &moved.column(j), 1.0);
+    }
+}
+
+/// (Z_{1…n} − Z_{n+1…2n})/(2c) of the columns of `images` (the sigma
+/// points' images Z_i) into `into` (its rows × n): the central difference
+/// that is P_{z x}·P⁻¹·S for the covariance P = S·Sᵀ the points were drawn
+/// from (module header).
+fn central_difference_into<S>(
+    images: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>,
+    n: usize,
+    scale: f64,
+    into: &mut DMatrix<f64>,
+) where
+    S: nalgebra::Storage<f64, nalgebra::Dyn, nalgebra::Dyn>,
+{
+    let half = 0.5 / scale;
+    for i in 0..n {
+        for r in 0..images.nrows() {
+            into[(r, i)] = half * (images[(r, 1 + i)] - images[(r, 1 + n + i)]);
+        }
+    }
+}
+
+/// X·L = B for X in place of B (column-major), L lower triangular:
+/// X_{·j} = (B_{·j} − Σ_{k>j} X_{·k}·L_{kj})/L_{jj} from the last column
+/// back, each step an operation on whole contiguous columns (of a length
+/// known at compile time for B of up to 8 rows, so that the loops
+/// unroll: the same operations in the same order). False when a diagonal
+/// element of L is zero.
+fn solve_right_lower(l: &DMatrix<f64>, b: &mut DMatrix<f64>) -> bool {
+    let (l, n) = (l.as_slice(), l.nrows());
+    let rows = b.nrows();
+    let data = b.as_mut_slice();
+    aeroid_numerics::simd::wide(
+        #[inline(always)]
+        || match rows {
+            1 => solve_right_lower_rows::<1>(l, n, data),
+            2 => solve_right_lower_rows::<2>(l, n, data),
+            3 => solve_right_lower_rows::<3>(l, n, data),
+            4 => solve_right_lower_rows::<4>(l, n, data),
+            5 => solve_right_lower_rows::<5>(l, n, data),
+            6 => solve_right_lower_rows::<6>(l, n, data),
+            7 => solve_right_lower_rows::<7>(l, n, data),
+            8 => solve_right_lower_rows::<8>(l, n, data),
+            _ => solve_right_lower_any(l, n, rows, data),
+        },
+    )
+}
+
+/// [`solve_right_lower`] for B of any number of rows.
+fn solve_right_lower_any(l: &[f64], n: usize, rows: usize, data: &mut [f64]) -> bool {
+    for j in (0..n).rev() {
+        let diagonal = l[j * n + j];
+        if diagonal == 0.0 {
+            return false;
+        }
+        let (head, tail) = data.split_at_mut((j + 1) * rows);
+        let column = &mut head[j * rows..];
+        for k in j + 1..n {
+            let f = l[j * n + k];
+            if f != 0.0 {
+                let known = &tail[(k - j - 1) * rows..(k - j) * rows];
+                for (c, x) in column.iter_mut().zip(known) {
+                    *c -= f * x;
+                }
+            }
+        }
+        let inverse = 1.0 / diagonal;
+        for c in column.iter_mut() {
+            *c *= inverse;
+        }
+    }
+    true
+}
+
+/// [`solve_right_lower`] for B of R rows (L n × n, both column-major).
+#[inline(always)]
+fn solve_right_lower_rows<const R: usize>(l: &[f64], n: usize, data: &mut [f64]) -> bool {
+    for j in (0..n).rev() {
+        let diagonal = l[j * n + j];
+        if diagonal == 0.0 {
+            return false;
+        }
+        let mut column = [0.0; R];
+        column.copy_from_slice(&data[j * R..(j + 1) * R]);
+        for k in j + 1..n {
+            let f = l[j * n + k];
+            if f != 0.0 {
+                let known = &data[k * R..(k + 1) * R];
+                for (c, x) in column.iter_mut().zip(known) {
+                    *c -= f * x;
+                }
+            }
+        }
+        let inverse = 1.0 / diagonal;
+        for c in column.iter_mut() {
+            *c *= inverse;
+        }
+        data[j * R..(j + 1) * R].copy_from_slice(&column);
+    }
+    true
+}
+
+/// The Cholesky factor S (`cols` × `cols`, lower) with S·Sᵀ = Aᵀ·A for A
+/// the leading `rows` × `cols` block of `a`, by Householder reflections in
+/// place (A is overwritten): the transpose of QR's R with each column's
+/// sign chosen so that S's diagonal is non-negative. Column-major, each
+/// reflection works on contiguous column slices.
+fn triangularise(a: &mut DMatrix<f64>, rows: usize, cols: usize, factor: &mut DMatrix<f64>) {
+    aeroid_numerics::simd::wide(
+        #[inline(always)]
+        || {
+            let ld = a.nrows();
+            let data = a.as_mut_slice();
+            factor.fill(0.0);
+            for j in 0..cols.min(rows) {
+                let (left, right) = data.split_at_mut((j + 1) * ld);
+                let v = &mut left[j * ld + j..j * ld + rows];
+                let norm = dot(v, v).sqrt();
+                if norm == 0.0 {
+                    continue;
+                }
+                let head = v[0];
+                let alpha = if head > 0.0 { -norm } else { norm };
+                // v = x − α·e₁ in place; vᵀv = 2α(α − x₀).
+                v[0] = head - alpha;
+                let scale = 1.0 / (alpha * (alpha - head));
+                for c in 0..cols - j - 1 {
+                    let column = &mut right[c * ld + j..c * ld + rows];
+                    let f = dot(v, column) * scale;
+                    for (y, x) in column.iter_mut().zip(v.iter()) {
+                        *y -= f * x;
+                    }
+                }
+                v[0] = alpha;
+            }
+            for j in 0..cols.min(rows) {
+                let sign = if data[j * ld + j] < 0.0 { -1.0 } else { 1.0 };
+                for c in j..cols {
+                    factor[(c, j)] = sign * data[c * ld + j];
+                }
+            }
+        },
+    )
+}
+
+/// a·b with four running sums (a sum the compiler can keep in vector
+/// registers, where one running sum fixes the order of the additions).
+#[inline(always)]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut sums = [0.0; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = a4
+        .remainder()
+        .iter()
+        .zip(b4.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in a4.zip(b4) {
+        for i in 0..4 {
+            sums[i] += x[i] * y[i];
+        }
+    }
+    sums[0] + sums[1] + sums[2] + sums[3] + tail
+}
+
+/// S·Sᵀ + w·v·vᵀ for the zeroth sigma point's weight w: an update by
+/// √w·v when w ≥ 0, a downdate by √(−w)·v when w < 0. `v` is overwritten.
+fn zeroth_point(factor: &mut DMatrix<f64>, v: &mut [f64], w: f64) -> Result<(), ()> {
+    let root = w.abs().sqrt();
+    for x in v.iter_mut() {
+        *x *= root;
+    }
+    cholupdate(factor, v, w.signum())
+}
+
+/// The rank-one update (`sign` = 1) or downdate (`sign` = −1) of the
+/// lower Cholesky factor L in place: L·Lᵀ ± x·xᵀ (`x` is overwritten).
+/// An update by Givens rotations; a downdate by hyperbolic rotations in
+/// the mixed form (LINPACK's `dchdd`; Golub & Van Loan, "Matrix
+/// Computations", 4th ed., §6.5.4), refused (Err) when a new diagonal
+/// element would not be positive: the downdated matrix is not positive
+/// definite.
+fn cholupdate(l: &mut DMatrix<f64>, x: &mut [f64], sign: f64) -> Result<(), ()> {
+    aeroid_numerics::simd::wide(
+        #[inline(always)]
+        || {
+            let n = x.len();
+            for k in 0..n {
+                let xk = x[k];
+                if xk == 0.0 {
+                    continue;
+                }
+                let column = &mut l.as_mut_slice()[k * n..(k + 1) * n];
+                let diagonal = column[k];
+                let (top, below) = column.split_at_mut(k + 1);
+                let rest = &mut x[k + 1..];
+                if sign > 0.0 {
+                    let r = diagonal.hypot(xk);
+                    let (c, s) = (diagonal / r, xk / r);
+                    top[k] = r;
+                    for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
+                        let (l0, x0) = (*li, *xi);
+                        *li = c * l0 + s * x0;
+                        *xi = c * x0 - s * l0;
+                    }
+                } else {
+                    let square = (diagonal - xk) * (diagonal + xk);
+                    if !(square > 0.0 && diagonal > 0.0) {
+                        return Err(());
+                    }
+                    let r = square.sqrt();
+                    let (c, s) = (r / diagonal, xk / diagonal);
+                    let inverse = diagonal / r;
+                    top[k] = r;
+                    for (li, xi) in below.iter_mut().zip(rest.iter_mut()) {
+                        *li = (*li - s * *xi) * inverse;
+                        *xi = c * *xi - s * *li;
+                    }
+                }
+            }
+            Ok(())
+        },
+    )
+}
+
+/// G with G·Gᵀ = Q_c, without its zero columns: for a diagonal Q_c the
+/// square roots of its non-zero diagonal, else from its symmetric
+/// eigendecomposition. An error when Q_c has a negative eigenvalue (past
+/// rounding).
+fn process_root(process: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+    let n = process.nrows();
+    let negative = || Error::Other("the process noise is not positive semi-definite".into());
+    let diagonal = (0..n).all(|i| (0..n).all(|j| i == j || process[(i, j)] == 0.0));
+    if diagonal {
+        if process.diagonal().iter().any(|&q| q.is_nan() || q < 0.0) {
+            return Err(negative());
+        }
+        let kept: Vec<usize> = (0..n).filter(|&i| process[(i, i)] > 0.0).collect();
+        let mut root = DMatrix::zeros(n, kept.len());
+        for (j, &i) in kept.iter().enumerate() {
+            root[(i, j)] = process[(i, i)].sqrt();
+        }
+        return Ok(root);
+    }
+    let symmetric = (process + process.transpose()) * 0.5;
+    let eigen = symmetric.symmetric_eigen();
+    let largest = eigen.eigenvalues.amax();
+    if eigen.eigenvalues.iter().any(|&e| e < -1e-12 * largest) {
+        return Err(negative());
+    }
+    let kept: Vec<usize> = (0..n)
+        .filter(|&i| eigen.eigenvalues[i] > 1e-15 * largest)
+        .collect();
+    let mut root = DMatrix::zeros(n, kept.len());
+    for (j, &i) in kept.iter().enumerate() {
+        root.column_mut(j)
+            .copy_from(&(eigen.eigenvectors.column(i) * eigen.eigenvalues[i].sqrt()));
+    }
+    Ok(root)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::linear::LinearStateSpace;
+    use crate::solver::extended_kalman;
+
+    /// On a linear model the unscented transform is exact: the unscented
+    /// pass is the (extended = linear) Kalman filter's, to rounding without
+    /// process noise (a damped oscillator and a slow mode, two of three
+    /// states measured, a dropout every fifth point). With process noise
+    /// the unscented pass takes Q_d by the trapezoidal rule and the
+    /// extended one exactly (Van Loan): the rule's relative error is about
+    /// h²·‖2A‖²/12 ≈ 2e-3 at h = 0.01 (‖A‖ ≈ 8), the tolerance 5e-3. Both
+    /// for α = 1 (W₀ᶜ = 2: the zeroth point an update) and α = 0.5
+    /// (W₀ᶜ = −0.25: a downdate).
+    #[test]
+    fn on_a_linear_model_it_is_the_kalman_filter() {
+        let a = DMatrix::from_row_slice(3, 3, &[-1.2, 1.0, 0.0, -8.0, -2.1, 0.3, 0.0, 0.5, -0.05]);
+        against_the_kalman_filter(&a, &[0.05, -0.1, 0.02]);
+    }
+
+    /// The same with a fourth state that no step moves (A's last row zero,
+    /// so e^{A·h} leaves it exactly), driving the second: the time update
+    /// takes the form for unchanged states (module header), Φ's last row
+    /// exactly the identity's, and the pass is still the Kalman filter's.
+    #[test]
+    fn with_a_constant_state_it_is_the_kalman_filter() {
+        let a = DMatrix::from_row_slice(
+            4,
+            4,
+            &[
+                -1.2, 1.0, 0.0, 0.0, -8.0, -2.1, 0.3, 0.5, 0.0, 0.5, -0.05, 0.0, 0.0, 0.0, 0.0, 0.0,
+            ],
+        );
+        let transitions = against_the_kalman_filter(&a, &[0.05, -0.1, 0.02, 0.4]);
+        for transition in &transitions {
+            let last = transition.row(3).clone_owned();
+            assert_eq!(last.as_slice(), &[0.0, 0.0, 0.0, 1.0]);
+        }
+    }
+
+    /// The unscented and the extended pass over a model ẋ = A·x with the
+    /// first and last of the first three states measured (module test
+    /// above), for both α and with and without process noise; returns the
+    /// unscented passes' transitions.
+    fn against_the_kalman_filter(a: &DMatrix<f64>, mean: &[f64]) -> Vec<DMatrix<f64>> {
+        let n = a.nrows();
+        let mut transitions = Vec::new();
+        for alpha in [1.0, 0.5] {
+            for (process, step, tolerance) in [(0.0, 0.05, 1e-10), (0.2, 0.01, 5e-3)] {
+                let len = (10.0 / step) as usize;
+                let mut c = DMatrix::zeros(2, n);
+                c[(0, 0)] = 1.0;
+                c[(1, 2)] = 1.0;
+                let model = LinearStateSpace::new(
+                    [a.clone(), DMatrix::zeros(n, 1), c, DMatrix::zeros(2, 1)],
+                    Vec::new(),
+                    0.0,
+                    step,
+                    vec![DVector::zeros(1); len],
+                )
+                .unwrap();
+                let at = (0..len)
+                    .map(|k| {
+                        let t = k as f64 * step;
+                        let mut here = vec![(0, (3.0 * t).sin() * 0.1)];
+                        if k % 5 != 4 {
+                            here.push((1, (0.7 * t).cos() * 0.05));
+                        }
+                        here
+                    })
+                    .collect();
+                let observations = Observations {
+                    names: vec!["a".into(), "b".into()],
+                    at,
+                    moved: 0,
+                };
+                let initial = Gaussian {
+                    mean: DVector::from_column_slice(mean),
+                    covariance: DMatrix::identity(n, n) * 0.3,
+                };
+                let noise = Noise {
+                    process: DMatrix::identity(n, n) * process,
+                    measurement: DVector::from_vec(vec![1e-3, 4e-4]),
+                };
+                let unscented = filter(
+                    &model,
+                    &[],
+                    initial.clone(),
+                    &noise,
+                    &observations,
+                    &Unscented {
+                        alpha,
+                        ..Unscented::default()
+                    },
+                )
+                .unwrap();
+                let extended =
+                    extended_kalman::filter(&model, &[], initial.clone(), &noise, &observations)
+                        .unwrap();
+                for (u, e) in unscented.filtered.iter().zip(&extended.filtered) {
+                    let error = (&u.mean - &e.mean).norm() / e.mean.norm().max(1e-3);
+                    assert!(error < tolerance, "α {alpha}, Q {process}: mean {error:e}");
+                    let error = (&u.covariance - &e.covariance).norm() / e.covariance.norm();
+                    assert!(
+                        error < tolerance,
+                        "α {alpha}, Q {process}: covariance {error:e}"
+                    );
+                }
+                let error = (unscented.negative_log_likelihood - extended.negative_log_likelihood)
+                    .abs()
+                    / extended.negative_log_likelihood.abs();
+                assert!(error < tolerance, "α {alpha}: −ln L {error:e}");
+                transitions.extend(unscented.transitions);
+            }
+        }
+        transitions
+    }
+
+    /// The rank-one update and downdate against the factor of the updated
+    /// matrix, and a downdate past definiteness refused.
+    #[test]
+    fn cholupdate_updates_and_refuses_a_downdate_past_definiteness() {
+        let p = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, -0.2, 0.5, -0.2, 2.0]);
+        let v = DVector::from_vec(vec![0.7, -0.3, 0.9]);
+        for sign in [1.0, -1.0] {
+            let mut l = Cholesky::new(p.clone()).unwrap().unpack();
+            let mut x = v.clone();
+            cholupdate(&mut l, x.as_mut_slice(), sign).unwrap();
+            let expected = &p + &v * v.transpose() * sign;
+            let error = (&l * l.transpose() - &expected).norm() / expected.norm();
+            assert!(error < 1e-15, "sign {sign}: {error:e}");
+            assert!(l.diagonal().iter().all(|&d| d > 0.0));
+        }
+        let mut l = Cholesky::new(p.clone()).unwrap().unpack();
+        let mut x = DVector::from_vec(vec![2.5, 0.0, 0.0]);
+        assert!(cholupdate(&mut l, x.as_mut_slice(), -1.0).is_err());
+    }
+
+    /// S·Sᵀ is the product, symmetric; for a factor of the augmented
+    /// filters' size (22, blocks of 4 rows and a tail) with a zero below
+    /// the diagonal each element is Σ_k S_ik·S_jk summed from zero in order
+    /// of k, bit for bit.
+    #[test]
+    fn covariance_is_the_factors_product() {
+        let l = DMatrix::from_row_slice(3, 3, &[2.0, 0.0, 0.0, 0.5, 1.5, 0.0, -0.3, 0.7, 0.9]);
+        let mut p = DMatrix::zeros(0, 0);
+        covariance_into(&l, &mut p);
+        let expected = &l * l.transpose();
+        assert!((&p - &expected).norm() < 1e-15 * expected.norm());
+        assert_eq!(p, p.transpose());
+        let l = lower_factor(22);
+        covariance_into(&l, &mut p);
+        for j in 0..22 {
+            for i in j..22 {
+                let mut sum = 0.0;
+                for k in 0..=j {
+                    if l[(j, k)] != 0.0 {
+                        sum += l[(j, k)] * l[(i, k)];
+                    }
+                }
+                assert_eq!(p[(i, j)].to_bits(), sum.to_bits(), "({i}, {j})");
+                assert_eq!(p[(j, i)].to_bits(), sum.to_bits(), "({j}, {i})");
+            }
+        }
+    }
+
+    /// A lower-triangular n × n factor with a positive diagonal and one zero
+    /// below it.
+    fn lower_factor(n: usize) -> DMatrix<f64> {
+        let mut l = DMatrix::from_fn(n, n, |i, j| {
+            if i < j {
+                0.0
+            } else if i == j {
+                1.0 + 0.05 * i as f64
+            } else {
+                ((i * n + j) as f64 * 0.37).sin() * 0.3
+            }
+        });
+        l[(n - 1, 1)] = 0.0;
+        l
+    }
+
+    /// The kernels compiled for AVX2 where the CPU has it
+    /// ([`aeroid_numerics::simd::wide`]) give the build's own instruction set's
+    /// numbers bit for bit, at the augmented filters' sizes (22 states, the
+    /// time update's compound matrix of 26 rows, 5 outputs): S·Sᵀ, the
+    /// Householder triangularisation, the rank-one update and downdate,
+    /// L·B and the right triangular solve.
+    #[test]
+    fn wide_kernels_match_the_baseline() {
+        let n = 22;
+        let l = lower_factor(n);
+        let compound = DMatrix::from_fn(26, n, |i, j| ((i * 31 + j * 7) as f64 * 0.11).cos());
+        let b = DMatrix::from_fn(n, 5, |i, j| ((i + 3 * j) as f64 * 0.29).sin());
+        let x = DVector::from_fn(n, |i, _| 0.1 * ((i as f64) * 0.7).sin());
+        let run = || {
+            let mut p = DMatrix::zeros(0, 0);
+            covariance_into(&l, &mut p);
+            let mut a = compound.clone();
+            let mut factor = DMatrix::zeros(n, n);
+            triangularise(&mut a, 26, n, &mut factor);
+            let mut updated = l.clone();
+            let mut v = x.clone();
+            cholupdate(&mut updated, v.as_mut_slice(), 1.0).unwrap();
+            let mut v = x.clone();
+            cholupdate(&mut updated, v.as_mut_slice(), -1.0).unwrap();
+            let mut product = DMatrix::zeros(0, 0);
+            multiply_lower(&l, &b, &mut product);
+            let mut solved = b.transpose();
+            assert!(solve_right_lower(&l, &mut solved));
+            [p, factor, updated, product, solved]
+        };
+        let wide = run();
+        let baseline = aeroid_numerics::simd::baseline(run);
+        for (w, b) in wide.iter().zip(&baseline) {
+            assert!(
+                w.iter()
+                    .zip(b.iter())
+                    .all(|(w, b)| w.to_bits() == b.to_bits())
+            );
+        }
+    }
+
+    /// L·B over L's lower triangle is the dense product bit for bit.
+    #[test]
+    fn multiply_lower_is_the_dense_product() {
+        let l = DMatrix::from_fn(6, 6, |i, j| {
+            if i < j {
+                0.0
+            } else {
+                ((i * 6 + j) as f64 * 0.61).cos() + 0.3
+            }
+        });
+        let b = DMatrix::from_fn(6, 3, |i, j| ((i + 5 * j) as f64 * 0.23).sin());
+        let mut lower = DMatrix::zeros(0, 0);
+        multiply_lower(&l, &b, &mut lower);
+        let mut dense = DMatrix::zeros(0, 0);
+        multiply(&l, &b, &mut dense);
+        assert!(
+            lower
+                .iter()
+                .zip(dense.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+        assert!((&lower - &l * &b).norm() < 1e-15 * lower.norm());
+    }
+
+    /// X·L = B solved from the right against B·L⁻¹ by nalgebra's inverse,
+    /// for B of 1 to 10 rows; the forms unrolled for up to 8 rows give the
+    /// general form's numbers bit for bit.
+    #[test]
+    fn solve_right_lower_solves_from_the_right() {
+        let l = DMatrix::from_fn(9, 9, |i, j| {
+            if i < j {
+                0.0
+            } else if i == j {
+                1.5 + 0.1 * i as f64
+            } else {
+                ((i * 9 + j) as f64 * 0.37).sin()
+            }
+        });
+        for rows in 1..=10 {
+            let b = DMatrix::from_fn(rows, 9, |i, j| (i as f64 - 1.3 * j as f64).cos());
+            let mut x = b.clone();
+            assert!(solve_right_lower(&l, &mut x));
+            let expected = &b * l.clone().try_inverse().unwrap();
+            assert!(
+                (&x - &expected).norm() < 1e-13 * expected.norm(),
+                "{rows} rows"
+            );
+            let mut general = b.clone();
+            assert!(solve_right_lower_any(
+                l.as_slice(),
+                9,
+                rows,
+                general.as_mut_slice()
+            ));
+            assert!(
+                x.iter()
+                    .zip(general.iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{rows} rows"
+            );
+        }
+        let mut singular = l.clone();
+        singular[(1, 1)] = 0.0;
+        let b = DMatrix::from_fn(4, 9, |i, j| (i + j) as f64);
+        assert!(!solve_right_lower(&singular, &mut b.clone()));
+    }
+
+    /// The Householder triangularisation: S·Sᵀ = Aᵀ·A with a lower S of
+    /// non-negative diagonal, for a tall A.
+    #[test]
+    fn triangularise_gives_the_factor_of_the_gram_matrix() {
+        let mut a = DMatrix::from_fn(7, 3, |i, j| ((i * 3 + j) as f64 * 0.7).sin() - 0.2);
+        let gram = a.transpose() * &a;
+        let mut factor = DMatrix::zeros(3, 3);
+        triangularise(&mut a, 7, 3, &mut factor);
+        let error = (&factor * factor.transpose() - &gram).norm() / gram.norm();
+        assert!(error < 1e-15, "{error:e}");
+        assert!(factor.diagonal().iter().all(|&d| d >= 0.0));
+        assert!(factor.upper_triangle().norm() == factor.diagonal().norm());
+    }
+}

@@ -1,0 +1,479 @@
+//! A study's journal, `cases.jsonl` in its output folder: every finished
+//! case's rows, streamed to disk as the case finishes, so that an
+//! interrupted study resumes without losing or repeating a case, and the
+//! shards of a study run on several machines merge into the result one
+//! machine would have written.
+//!
+//! The first line is a [`Header`]: the study, a fingerprint of everything
+//! that decides its numbers (seed, runs, sweep points, scenarios, profile,
+//! models, methods, settings), the number of cases and the shard. Each
+//! further line is one case, `{"case": i, "rows": [...]}`, written whole
+//! and flushed before the next; lines are in the order cases finished.
+//! Non-finite numbers are written as the strings `"NaN"`, `"inf"` and
+//! `"-inf"` (JSON has no such numbers), every other number exactly
+//! (shortest round-trip form). A last line cut short by an interruption is
+//! dropped when the journal is resumed or read; a malformed line anywhere
+//! else is an error naming the file and line.
+//!
+//! Shard K of N holds the cases whose index i (point·runs + run) has
+//! i mod N = K − 1.
+
+use crate::study::Row;
+use aeroid_core::error::{Error, Result, write_error};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fs::{File, OpenOptions};
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The journal's file name inside a study's output folder.
+pub const JOURNAL_FILE: &str = "cases.jsonl";
+/// The format tag of a journal's header.
+pub const FORMAT: &str = "aeroid-study-journal-1";
+
+/// Which share of a study's cases a run takes: shard `index` (1-based)
+/// of `count`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl Default for Shard {
+    fn default() -> Self {
+        Shard { index: 1, count: 1 }
+    }
+}
+
+impl Shard {
+    /// Parses `K/N` (1 ≤ K ≤ N).
+    pub fn parse(text: &str) -> Result<Shard> {
+        let invalid = || {
+            Error::Other(format!(
+                "--shard '{text}': expected K/N with 1 ≤ K ≤ N, e.g. 2/8"
+            ))
+        };
+        let (index, count) = text.split_once('/').ok_or_else(invalid)?;
+        let index: usize = index.trim().parse().map_err(|_| invalid())?;
+        let count: usize = count.trim().parse().map_err(|_| invalid())?;
+        if index == 0 || index > count {
+            return Err(invalid());
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// Whether case `case` belongs to this shard.
+    pub fn holds(self, case: usize) -> bool {
+        case % self.count == self.index - 1
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// The first line of a journal.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Header {
+    pub format: String,
+    pub study: String,
+    pub seed: u64,
+    /// Runs per sweep point.
+    pub runs: usize,
+    /// A hash of everything that decides the study's numbers.
+    pub fingerprint: String,
+    /// Cases in the whole study (every shard).
+    pub cases: usize,
+    pub shard: Shard,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Entry {
+    case: usize,
+    rows: Vec<Row>,
+}
+
+/// The cases a journal holds.
+pub type Finished = std::collections::BTreeSet<usize>;
+
+/// An open journal, appended to by the threads of a study.
+#[derive(Debug)]
+pub struct Journal {
+    path: PathBuf,
+    file: Mutex<File>,
+}
+
+impl Journal {
+    /// Starts a journal in `folder` (created if needed). An error when one
+    /// is there already: resume it, or choose another folder.
+    pub fn create(folder: &Path, header: &Header) -> Result<Journal> {
+        std::fs::create_dir_all(folder).map_err(|e| write_error(folder, e))?;
+        let path = folder.join(JOURNAL_FILE);
+        let mut file = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&path)
+            .map_err(|e| match e.kind() {
+                std::io::ErrorKind::AlreadyExists => Error::Other(format!(
+                    "{} holds a study already: resume it with --resume, or write to another folder",
+                    path.display()
+                )),
+                _ => write_error(&path, e),
+            })?;
+        let line = serde_json::to_string(header).map_err(|e| write_error(&path, e))?;
+        writeln!(file, "{line}")
+            .and_then(|_| file.flush())
+            .map_err(|e| write_error(&path, e))?;
+        Ok(Journal {
+            path,
+            file: Mutex::new(file),
+        })
+    }
+
+    /// Reopens the journal in `folder` to continue it: checks that it is
+    /// the journal of the same study and shard as `header`, drops a last
+    /// line cut short, and returns the journal with the cases it holds.
+    pub fn resume(folder: &Path, header: &Header) -> Result<(Journal, Finished)> {
+        let path = folder.join(JOURNAL_FILE);
+        let index = index_journal(&path)?;
+        let found = &index.header;
+        if *found != *header {
+            return Err(Error::Other(format!(
+                "{}: the journal is of another study or shard (study '{}', shard {}, fingerprint {}; this run: study '{}', shard {}, fingerprint {}); a study resumes only with the files, seed, runs and shard it started with",
+                path.display(),
+                found.study,
+                found.shard,
+                found.fingerprint,
+                header.study,
+                header.shard,
+                header.fingerprint
+            )));
+        }
+        let file = OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .map_err(|e| write_error(&path, e))?;
+        file.set_len(index.complete_length)
+            .map_err(|e| write_error(&path, e))?;
+        let mut file = file;
+        use std::io::Seek;
+        file.seek(std::io::SeekFrom::End(0))
+            .map_err(|e| write_error(&path, e))?;
+        Ok((
+            Journal {
+                path,
+                file: Mutex::new(file),
+            },
+            index.entries.keys().copied().collect(),
+        ))
+    }
+
+    /// Appends one finished case, whole, and flushes it.
+    pub fn append(&self, case: usize, rows: &[Row]) -> Result<()> {
+        let entry = EntryRef { case, rows };
+        let mut line = serde_json::to_string(&entry).map_err(|e| write_error(&self.path, e))?;
+        line.push('\n');
+        let mut file = self
+            .file
+            .lock()
+            .map_err(|_| Error::Other(format!("{}: a writer panicked", self.path.display())))?;
+        file.write_all(line.as_bytes())
+            .and_then(|_| file.flush())
+            .map_err(|e| write_error(&self.path, e))
+    }
+
+    /// The journal's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+#[derive(Serialize)]
+struct EntryRef<'a> {
+    case: usize,
+    rows: &'a [Row],
+}
+
+/// Reads the journal in `folder`: its header and finished cases.
+pub fn read(folder: &Path) -> Result<(Header, Finished)> {
+    let index = index_journal(&folder.join(JOURNAL_FILE))?;
+    Ok((index.header, index.entries.keys().copied().collect()))
+}
+
+/// Where each case of a journal is: its header, the byte range of each
+/// case's line, and the length of the file up to its last complete line.
+#[derive(Debug)]
+struct Index {
+    header: Header,
+    entries: BTreeMap<usize, (u64, usize)>,
+    complete_length: u64,
+}
+
+/// Indexes a journal, checking every line (each is parsed, then only its
+/// place kept).
+fn index_journal(path: &Path) -> Result<Index> {
+    let file = File::open(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let size = file
+        .metadata()
+        .map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .len();
+    let mut reader = BufReader::new(file);
+    let malformed = |number: usize, reason: String| {
+        Error::Other(format!("{}:{number}: {reason}", path.display()))
+    };
+    let mut line = String::new();
+    let mut read_line = |line: &mut String| {
+        line.clear();
+        reader.read_line(line).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    if read_line(&mut line)? == 0 {
+        return Err(malformed(1, "an empty journal (no header)".into()));
+    }
+    let header: Header =
+        serde_json::from_str(line.trim_end()).map_err(|e| malformed(1, format!("header: {e}")))?;
+    if header.format != FORMAT {
+        return Err(malformed(
+            1,
+            format!("format '{}', expected '{FORMAT}'", header.format),
+        ));
+    }
+    let mut entries = BTreeMap::new();
+    let mut offset = line.len() as u64;
+    let mut number = 1;
+    loop {
+        let read = read_line(&mut line)?;
+        if read == 0 {
+            break;
+        }
+        number += 1;
+        let complete = line.ends_with('\n');
+        let last = offset + read as u64 == size;
+        match serde_json::from_str::<Entry>(line.trim_end()) {
+            Ok(entry) if complete => {
+                if entry.case >= header.cases || !header.shard.holds(entry.case) {
+                    return Err(malformed(
+                        number,
+                        format!(
+                            "case {} is not a case of shard {}",
+                            entry.case, header.shard
+                        ),
+                    ));
+                }
+                if entries.insert(entry.case, (offset, read)).is_some() {
+                    return Err(malformed(
+                        number,
+                        format!("case {} appears twice", entry.case),
+                    ));
+                }
+            }
+            // The last line, cut short by an interruption: dropped.
+            _ if last && !complete => break,
+            Ok(_) => return Err(malformed(number, "a line without its end".into())),
+            Err(e) => return Err(malformed(number, e.to_string())),
+        }
+        offset += read as u64;
+    }
+    Ok(Index {
+        header,
+        entries,
+        complete_length: offset,
+    })
+}
+
+/// The journals of a study's shards (or of a whole study), read case by
+/// case in case order.
+#[derive(Debug)]
+pub struct Cases {
+    header: Header,
+    files: Vec<(PathBuf, File)>,
+    /// Case → (file, offset, length).
+    places: BTreeMap<usize, (usize, u64, usize)>,
+}
+
+impl Cases {
+    /// The header of the whole study (shard 1/1).
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// Calls `each` with every case's index and rows, in case order.
+    pub fn for_each(&mut self, mut each: impl FnMut(usize, Vec<Row>) -> Result<()>) -> Result<()> {
+        use std::io::{Read, Seek, SeekFrom};
+        let mut buffer = Vec::new();
+        for (&case, &(file, offset, length)) in &self.places {
+            let (path, handle) = &mut self.files[file];
+            buffer.resize(length, 0);
+            handle
+                .seek(SeekFrom::Start(offset))
+                .and_then(|_| handle.read_exact(&mut buffer))
+                .map_err(|source| Error::Io {
+                    path: path.clone(),
+                    source,
+                })?;
+            let entry: Entry = serde_json::from_slice(&buffer)
+                .map_err(|e| Error::Other(format!("{}: case {case}: {e}", path.display())))?;
+            each(case, entry.rows)?;
+        }
+        Ok(())
+    }
+}
+
+/// Opens the journals of a study's shards for reading in case order:
+/// every shard of one study, each once, each complete; or the one
+/// journal of a whole study, complete.
+pub fn open(folders: &[PathBuf]) -> Result<Cases> {
+    let mut merged: Option<Header> = None;
+    let mut seen: BTreeMap<usize, PathBuf> = BTreeMap::new();
+    let mut files = Vec::new();
+    let mut places = BTreeMap::new();
+    for folder in folders {
+        let path = folder.join(JOURNAL_FILE);
+        let index = index_journal(&path)?;
+        let header = index.header;
+        let whole = Header {
+            shard: Shard::default(),
+            ..header.clone()
+        };
+        match &merged {
+            None => merged = Some(whole),
+            Some(first) if *first != whole => {
+                return Err(Error::Other(format!(
+                    "{}: a shard of another study (study '{}', fingerprint {}; the first folder's: '{}', {})",
+                    path.display(),
+                    header.study,
+                    header.fingerprint,
+                    first.study,
+                    first.fingerprint
+                )));
+            }
+            Some(_) => {}
+        }
+        if let Some(other) = seen.insert(header.shard.index, path.clone()) {
+            return Err(Error::Other(format!(
+                "shard {} is both in {} and in {}",
+                header.shard,
+                other.display(),
+                path.display()
+            )));
+        }
+        let expected = (0..header.cases).filter(|&c| header.shard.holds(c)).count();
+        if index.entries.len() != expected {
+            return Err(Error::Other(format!(
+                "{}: shard {} has {} of its {expected} cases: finish it with --resume first",
+                path.display(),
+                header.shard,
+                index.entries.len()
+            )));
+        }
+        let file = File::open(&path).map_err(|source| Error::Io {
+            path: path.clone(),
+            source,
+        })?;
+        for (case, (offset, length)) in index.entries {
+            places.insert(case, (files.len(), offset, length));
+        }
+        files.push((path, file));
+    }
+    let Some(header) = merged else {
+        return Err(Error::Other("no shard folders given to merge".into()));
+    };
+    if places.len() != header.cases {
+        let missing: Vec<usize> = (0..header.cases)
+            .filter(|c| !places.contains_key(c))
+            .take(5)
+            .collect();
+        return Err(Error::Other(format!(
+            "the shards hold {} of the study's {} cases; missing shards hold cases such as {missing:?}",
+            places.len(),
+            header.cases
+        )));
+    }
+    Ok(Cases {
+        header,
+        files,
+        places,
+    })
+}
+
+/// Serde for numbers that may be non-finite: finite ones as JSON numbers,
+/// NaN and ±∞ as the strings "NaN", "inf", "-inf" (CSV writes the same
+/// text either way).
+pub mod float_text {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Text {
+        Number(f64),
+        Text(String),
+    }
+
+    fn to_f64<E: serde::de::Error>(text: Text) -> Result<f64, E> {
+        match text {
+            Text::Number(value) => Ok(value),
+            Text::Text(text) => match text.as_str() {
+                "NaN" => Ok(f64::NAN),
+                "inf" => Ok(f64::INFINITY),
+                "-inf" => Ok(f64::NEG_INFINITY),
+                other => Err(E::custom(format!("'{other}' is not a number"))),
+            },
+        }
+    }
+
+    fn write<S: Serializer>(value: f64, serializer: S) -> Result<S::Ok, S::Error> {
+        if value.is_finite() {
+            serializer.serialize_f64(value)
+        } else if value.is_nan() {
+            serializer.serialize_str("NaN")
+        } else if value > 0.0 {
+            serializer.serialize_str("inf")
+        } else {
+            serializer.serialize_str("-inf")
+        }
+    }
+
+    pub fn serialize<S: Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+        write(*value, serializer)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
+        to_f64(Text::deserialize(deserializer)?)
+    }
+
+    /// The same for an optional number (None: null, or empty in CSV).
+    pub mod option {
+        use super::*;
+
+        pub fn serialize<S: Serializer>(
+            value: &Option<f64>,
+            serializer: S,
+        ) -> Result<S::Ok, S::Error> {
+            match value {
+                Some(value) => write(*value, serializer),
+                None => serializer.serialize_none(),
+            }
+        }
+
+        pub fn deserialize<'de, D: Deserializer<'de>>(
+            deserializer: D,
+        ) -> Result<Option<f64>, D::Error> {
+            Option::<Text>::deserialize(deserializer)?
+                .map(to_f64)
+                .transpose()
+        }
+    }
+}

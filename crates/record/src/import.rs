@@ -1,0 +1,685 @@
+//! Bringing real flight data in: a data file (headed CSV, or headerless
+//! whitespace- or comma-separated ASCII with columns known by number) and a
+//! column-map file (TOML) that says which column is which channel, in which
+//! unit, with which scale and offset, and how several columns form one
+//! channel. Values are converted to SI with angles in radians on load:
+//! `SI = (raw·scale + offset)·unit factor`, and a temperature in `degC` also
+//! gets +273.15 K (records hold absolute temperatures). The result is a
+//! [`FlightRecord`] like any simulated one. The format is documented for
+//! users in `docs/import.md`.
+//!
+//! Nothing is silently dropped: a mapped column missing from the file, a
+//! cell that is not a number, a time column that does not increase strictly
+//! or a channel named twice is an error naming the file, line and column; an
+//! empty cell becomes a dropout unless the map says `empty = "skip"` for that
+//! channel; a cell that reads as NaN or an infinity is an error unless the
+//! map says `non_finite = "dropout"`; a file without data rows is an error.
+//! Columns the map does not mention, and channels no estimator reads, are
+//! listed in the outcome.
+
+use crate::derived;
+use crate::{Channel, FlightRecord, check_name};
+use aeroid_core::csv_table::{CsvTable, Delimiter, Layout, first_disorder};
+use aeroid_core::error::{Problems, Result, parse_toml, read_text};
+use aeroid_core::units::{Dimension, Quantity, unit_factor};
+use aeroid_sim::atmosphere::Atmosphere;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::Path;
+
+/// Kelvin at 0 °C.
+const CELSIUS_ZERO: f64 = 273.15;
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColumnMapFile {
+    #[serde(default)]
+    pub name: Option<String>,
+    /// How the data file is laid out; a headed CSV when absent.
+    #[serde(default)]
+    pub file: FileLayout,
+    pub time: ColumnSpec,
+    pub channels: Vec<ChannelColumnSpec>,
+}
+
+/// The `[file]` table of a column map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FileLayout {
+    /// Whether the first line that is not a comment names the columns.
+    #[serde(default = "with_header")]
+    pub header: bool,
+    #[serde(default)]
+    pub delimiter: Delimiter,
+}
+
+fn with_header() -> bool {
+    true
+}
+
+impl Default for FileLayout {
+    fn default() -> Self {
+        FileLayout {
+            header: true,
+            delimiter: Delimiter::Auto,
+        }
+    }
+}
+
+/// A column of the data file: its header, or its number (1 is the first).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ColumnRef {
+    Number(i64),
+    Name(String),
+}
+
+impl fmt::Display for ColumnRef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ColumnRef::Number(n) => write!(f, "{n}"),
+            ColumnRef::Name(name) => write!(f, "'{name}'"),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColumnSpec {
+    pub column: ColumnRef,
+    #[serde(default)]
+    pub unit: Option<String>,
+    #[serde(default)]
+    pub scale: Option<f64>,
+    #[serde(default)]
+    pub offset: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelColumnSpec {
+    pub name: String,
+    /// The one column of the channel ...
+    #[serde(default)]
+    pub column: Option<ColumnRef>,
+    /// ... or several, combined as `combine` says.
+    #[serde(default)]
+    pub columns: Option<Vec<ColumnRef>>,
+    #[serde(default)]
+    pub combine: Option<Combine>,
+    #[serde(default)]
+    pub unit: Option<String>,
+    #[serde(default)]
+    pub scale: Option<f64>,
+    #[serde(default)]
+    pub offset: Option<f64>,
+    #[serde(default)]
+    pub rate: Option<Quantity>,
+    #[serde(default)]
+    pub resolution: Option<Quantity>,
+    #[serde(default)]
+    pub empty: EmptyCell,
+    #[serde(default)]
+    pub non_finite: NonFiniteCell,
+    /// The altitude convention of the column (channel `altitude` only).
+    #[serde(default)]
+    pub convention: Option<AltitudeConvention>,
+}
+
+/// How several columns form one channel (each converted to SI first).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Combine {
+    /// a + b + …: two engines' thrust.
+    Sum,
+    /// (a + b + …)/n: two vanes.
+    Mean,
+    /// (a − b)/2: left and right ailerons to the aileron.
+    HalfDifference,
+}
+
+/// What an altitude column measures. Records hold geopotential altitude,
+/// the altitude the ISA is evaluated at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AltitudeConvention {
+    /// Kept as it is.
+    #[default]
+    Geopotential,
+    /// z, converted to H = r0·z/(r0 + z), r0 = 6 356 766 m.
+    Geometric,
+    /// Pressure altitude Hp: the ISA altitude whose standard pressure is
+    /// the measured static pressure, kept as it is (H = Hp).
+    Pressure,
+}
+
+/// What a cell that reads as NaN or an infinity means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NonFiniteCell {
+    /// The import fails, naming the file, line and column.
+    #[default]
+    Error,
+    /// The sample was lost: kept as NaN.
+    Dropout,
+}
+
+/// What an empty cell of a channel column means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EmptyCell {
+    /// A sample was due but lost: kept as NaN.
+    #[default]
+    Dropout,
+    /// The channel has no sample at this row (multi-rate exports).
+    Skip,
+}
+
+/// A raw-to-SI conversion: `(raw·scale + offset)·factor + shift`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Conversion {
+    pub scale: f64,
+    pub offset: f64,
+    pub factor: f64,
+    pub shift: f64,
+}
+
+impl Conversion {
+    pub fn apply(&self, raw: f64) -> f64 {
+        (raw * self.scale + self.offset) * self.factor + self.shift
+    }
+}
+
+/// One validated channel mapping.
+#[derive(Debug, Clone)]
+struct MappedChannel {
+    name: String,
+    columns: Vec<ColumnRef>,
+    combine: Option<Combine>,
+    unit: String,
+    conversion: Conversion,
+    rate: Option<f64>,
+    resolution: Option<f64>,
+    empty: EmptyCell,
+    non_finite: NonFiniteCell,
+    convention: Option<AltitudeConvention>,
+}
+
+/// Something about an imported channel the user should know.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ImportWarning {
+    pub channel: String,
+    pub message: String,
+}
+
+impl fmt::Display for ImportWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "channel '{}': {}", self.channel, self.message)
+    }
+}
+
+/// The imported record, the data file's columns the map did not use, and
+/// warnings (channels no estimator reads, the altitude convention's limits).
+#[derive(Debug, Clone)]
+pub struct ImportOutcome {
+    pub record: FlightRecord,
+    pub unmapped: Vec<String>,
+    pub warnings: Vec<ImportWarning>,
+}
+
+/// Reads `data` with the column map at `map_path` into a flight record;
+/// a mapped channel not among `read` (the channels the estimators read,
+/// `aeroid_estimation::CHANNELS_READ` for aeroid's) is kept with a warning.
+pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutcome> {
+    let file: ColumnMapFile = parse_toml(map_path, &read_text(map_path)?)?;
+    let (time, channels) = validate_map(&file, map_path)?;
+    let layout = Layout {
+        header: file.file.header,
+        delimiter: file.file.delimiter,
+    };
+    let table = CsvTable::read_layout(data, layout)?;
+    table.require_rows()?;
+    let time_index = column_index(&table, &file.time.column)?;
+    let times: Vec<f64> = table
+        .time_column(time_index)?
+        .into_iter()
+        .map(|t| time.apply(t))
+        .collect();
+    check_converted_times(&times, &file.time.column, map_path)?;
+    let mut used = vec![time_index];
+    let mut record_channels = Vec::with_capacity(channels.len());
+    for (i, mapped) in channels.iter().enumerate() {
+        let mut columns = Vec::with_capacity(mapped.columns.len());
+        for column in &mapped.columns {
+            let index = column_index(&table, column)?;
+            used.push(index);
+            columns.push(table.measurements(
+                index,
+                mapped.non_finite == NonFiniteCell::Dropout,
+                &format!(
+                    "to record such cells as dropouts, set non_finite = \"dropout\" for channel '{}' in {}",
+                    mapped.name,
+                    map_path.display()
+                ),
+            )?);
+        }
+        let channel = build_channel(mapped, &times, &columns, &table.headers, data);
+        check_rate(&channel, i, map_path)?;
+        record_channels.push(channel);
+    }
+    let unmapped = (0..table.headers.len())
+        .filter(|i| !used.contains(i))
+        .map(|i| table.headers[i].clone())
+        .collect();
+    let stem = data
+        .file_stem()
+        .map_or(String::new(), |s| s.to_string_lossy().into_owned());
+    let record = FlightRecord {
+        scenario: file.name.clone().unwrap_or(stem),
+        seed: None,
+        profile: format!("import:{}", map_path.display()),
+        absent: Vec::new(),
+        channels: record_channels,
+    };
+    // What the record format relies on (a channel whose cells are all
+    // skipped has no samples), said of the data file before anything is written.
+    record.validate(data)?;
+    Ok(ImportOutcome {
+        record,
+        unmapped,
+        warnings: warnings(&channels, read),
+    })
+}
+
+/// The index of a mapped column in the data file.
+fn column_index(table: &CsvTable, column: &ColumnRef) -> Result<usize> {
+    match column {
+        ColumnRef::Number(n) => table.column_by_number(u64::try_from(*n).unwrap_or(0)),
+        ColumnRef::Name(name) => table.column_index(name),
+    }
+}
+
+/// Channels not among `read`, and altitudes whose density is the standard day's.
+fn warnings(channels: &[MappedChannel], read: &[&str]) -> Vec<ImportWarning> {
+    let mut warnings = Vec::new();
+    for mapped in channels {
+        if !read.contains(&mapped.name.as_str()) {
+            warnings.push(ImportWarning {
+                channel: mapped.name.clone(),
+                message: "no estimator reads this channel; it is kept in the record".into(),
+            });
+        }
+        if mapped.convention == Some(AltitudeConvention::Pressure) {
+            warnings.push(ImportWarning {
+                channel: mapped.name.clone(),
+                message: "pressure altitude is kept as the ISA altitude of the measured static \
+                          pressure: density and temperature taken from the ISA at it are the \
+                          standard day's"
+                    .into(),
+            });
+        }
+    }
+    warnings
+}
+
+/// A channel from its columns' cells (`None`: empty), combined when
+/// several, in SI and the record's altitude convention.
+fn build_channel(
+    mapped: &MappedChannel,
+    times: &[f64],
+    columns: &[Vec<Option<f64>>],
+    headers: &[String],
+    data: &Path,
+) -> Channel {
+    let value = |row: usize| -> Option<f64> {
+        let values: Option<Vec<f64>> = columns
+            .iter()
+            .map(|column| column[row].map(|raw| mapped.conversion.apply(raw)))
+            .collect();
+        let values = values?;
+        let combined = match mapped.combine {
+            None => values[0],
+            Some(Combine::Sum) => values.iter().sum(),
+            Some(Combine::Mean) => values.iter().sum::<f64>() / values.len() as f64,
+            Some(Combine::HalfDifference) => (values[0] - values[1]) / 2.0,
+        };
+        Some(match mapped.convention {
+            Some(AltitudeConvention::Geometric) => Atmosphere::geopotential_altitude(combined),
+            _ => combined,
+        })
+    };
+    let (times, values): (Vec<f64>, Vec<f64>) = times
+        .iter()
+        .enumerate()
+        .map(|(row, &t)| (t, value(row)))
+        .filter(|(_, v)| v.is_some() || mapped.empty == EmptyCell::Dropout)
+        .map(|(t, v)| (t, v.unwrap_or(f64::NAN)))
+        .unzip();
+    let described: Vec<String> = mapped
+        .columns
+        .iter()
+        .map(|c| match c {
+            ColumnRef::Name(name) => format!("'{name}'"),
+            ColumnRef::Number(n) => usize::try_from(*n - 1)
+                .ok()
+                .and_then(|i| headers.get(i))
+                .map_or_else(|| n.to_string(), |h| h.clone()),
+        })
+        .collect();
+    let source = match mapped.combine {
+        None => format!("import: column {} of {}", described[0], data.display()),
+        Some(combine) => format!(
+            "import: {} of columns {} of {}",
+            serde_json::to_value(combine)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default(),
+            described.join(", "),
+            data.display()
+        ),
+    };
+    Channel {
+        name: mapped.name.clone(),
+        unit: mapped.unit.clone(),
+        rate: mapped.rate.unwrap_or_else(|| median_rate(&times)),
+        resolution: mapped.resolution,
+        source,
+        times,
+        values,
+    }
+}
+
+/// The time column after its scale, offset and unit: still finite and
+/// strictly increasing (a huge scale or offset can make times overflow or
+/// collapse onto each other).
+fn check_converted_times(times: &[f64], column: &ColumnRef, map_path: &Path) -> Result<()> {
+    match first_disorder(times) {
+        None => Ok(()),
+        Some(k) => Err(aeroid_core::error::Error::Invalid {
+            path: map_path.to_path_buf(),
+            problems: vec![aeroid_core::error::Problem {
+                field: "time".into(),
+                message: format!(
+                    "column {column} converted to seconds is {} at data row {}{}: \
+                     the time scale and offset must keep times finite and increasing",
+                    times[k],
+                    k + 1,
+                    match k {
+                        0 => String::new(),
+                        _ => format!(", not after {}", times[k - 1]),
+                    }
+                ),
+            }],
+        }),
+    }
+}
+
+/// A channel's nominal rate, given or from the median sample interval, is
+/// finite and positive (a time scale can make intervals so short that the
+/// rate overflows).
+fn check_rate(channel: &Channel, index: usize, map_path: &Path) -> Result<()> {
+    if channel.rate.is_finite() && channel.rate > 0.0 {
+        return Ok(());
+    }
+    Err(aeroid_core::error::Error::Invalid {
+        path: map_path.to_path_buf(),
+        problems: vec![aeroid_core::error::Problem {
+            field: format!("channels[{index}].rate"),
+            message: format!(
+                "channel '{}': its median sample interval gives a rate of {} Hz; \
+                 check the time scale and unit, or give the rate",
+                channel.name,
+                crate::rate_text(channel.rate)
+            ),
+        }],
+    })
+}
+
+/// The rate implied by the median sample interval (1 Hz with fewer than two samples).
+fn median_rate(times: &[f64]) -> f64 {
+    let mut intervals: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    if intervals.is_empty() {
+        return 1.0;
+    }
+    intervals.sort_by(f64::total_cmp);
+    1.0 / intervals[intervals.len() / 2]
+}
+
+/// Validates the whole map, reporting every problem at once.
+fn validate_map(file: &ColumnMapFile, path: &Path) -> Result<(Conversion, Vec<MappedChannel>)> {
+    let mut problems = Problems::default();
+    let (time, _) = conversion(
+        "time",
+        &format!("column {}", file.time.column),
+        file.time.unit.as_deref(),
+        file.time.scale,
+        file.time.offset,
+        Some(Dimension::Time),
+        &mut problems,
+    );
+    check_column(
+        &file.time.column,
+        file.file.header,
+        "time.column",
+        &mut problems,
+    );
+    if time.scale <= 0.0 {
+        problems.push(
+            "time.scale",
+            "must be positive so that time keeps increasing",
+        );
+    }
+    if file.channels.is_empty() {
+        problems.push(
+            "channels",
+            "must map at least one column to a channel ([[channels]] tables)",
+        );
+    }
+    let mut channels: Vec<MappedChannel> = Vec::with_capacity(file.channels.len());
+    for (i, spec) in file.channels.iter().enumerate() {
+        let field = format!("channels[{i}]");
+        if let Some(first) = channels.iter().position(|c| c.name == spec.name) {
+            problems.push(
+                format!("{field}.name"),
+                format!(
+                    "duplicate channel name '{}' (also channels[{first}])",
+                    spec.name
+                ),
+            );
+        }
+        if let Err(message) = check_name(&spec.name) {
+            problems.push(format!("{field}.name"), message);
+        }
+        let columns = channel_columns(spec, &field, &mut problems);
+        for (k, column) in columns.iter().enumerate() {
+            let at = match spec.columns {
+                Some(_) => format!("{field}.columns[{k}]"),
+                None => format!("{field}.column"),
+            };
+            check_column(column, file.file.header, &at, &mut problems);
+        }
+        channels.push(map_channel(spec, columns, &field, &mut problems));
+    }
+    problems.finish(path, (time, channels))
+}
+
+/// A column number is at least 1; a file without a header has only numbers.
+fn check_column(column: &ColumnRef, header: bool, field: &str, problems: &mut Problems) {
+    match column {
+        ColumnRef::Number(n) if *n < 1 => {
+            problems.push(field, format!("column numbers start at 1, not {n}"))
+        }
+        ColumnRef::Name(name) if !header => problems.push(
+            field,
+            format!(
+                "'{name}' is a column name, but the file has no header (file.header = false): \
+                 give the column's number (1 is the first)"
+            ),
+        ),
+        _ => {}
+    }
+}
+
+/// The columns of a channel: `column`, or `columns` with `combine`.
+fn channel_columns(
+    spec: &ChannelColumnSpec,
+    field: &str,
+    problems: &mut Problems,
+) -> Vec<ColumnRef> {
+    match (&spec.column, &spec.columns, spec.combine) {
+        (Some(column), None, None) => vec![column.clone()],
+        (Some(_), Some(_), _) => {
+            problems.push(field, "give `column` or `columns`, not both");
+            Vec::new()
+        }
+        (None, None, _) => {
+            problems.push(
+                field,
+                "no column: give `column` (or `columns` with `combine`)",
+            );
+            Vec::new()
+        }
+        (Some(_), None, Some(_)) => {
+            problems.push(
+                format!("{field}.combine"),
+                "combines several `columns`; this channel has one `column`",
+            );
+            Vec::new()
+        }
+        (None, Some(_), None) => {
+            problems.push(
+                format!("{field}.combine"),
+                "several columns need `combine` (\"sum\", \"mean\" or \"half_difference\")",
+            );
+            Vec::new()
+        }
+        (None, Some(columns), Some(combine)) => {
+            let count = columns.len();
+            match combine {
+                Combine::HalfDifference if count != 2 => problems.push(
+                    format!("{field}.columns"),
+                    format!("half_difference takes two columns (left, right), not {count}"),
+                ),
+                _ if count < 2 => problems.push(
+                    format!("{field}.columns"),
+                    format!("{combine:?} takes at least two columns, not {count}").to_lowercase(),
+                ),
+                _ => {}
+            }
+            columns.clone()
+        }
+    }
+}
+
+fn map_channel(
+    spec: &ChannelColumnSpec,
+    columns: Vec<ColumnRef>,
+    field: &str,
+    problems: &mut Problems,
+) -> MappedChannel {
+    let known = derived::measurand(&spec.name).map(|m| m.dimension);
+    let described: Vec<String> = columns.iter().map(ToString::to_string).collect();
+    let (conversion, dimension) = conversion(
+        field,
+        &format!(
+            "channel '{}', column{} {}",
+            spec.name,
+            if described.len() > 1 { "s" } else { "" },
+            described.join(", ")
+        ),
+        spec.unit.as_deref(),
+        spec.scale,
+        spec.offset,
+        known,
+        problems,
+    );
+    if spec.convention.is_some() && spec.name != "altitude" {
+        problems.push(
+            format!("{field}.convention"),
+            format!(
+                "an altitude convention is for channel 'altitude', not '{}'",
+                spec.name
+            ),
+        );
+    }
+    let unit = derived::measurand(&spec.name).map_or_else(
+        || match dimension.si_unit() {
+            "" => "-".to_string(),
+            unit => unit.to_string(),
+        },
+        |m| m.unit.to_string(),
+    );
+    let mut positive = |name: &str, q: &Option<Quantity>, dimension: Dimension| {
+        q.as_ref().and_then(|q| match q.si(dimension) {
+            Ok(v) if v > 0.0 => Some(v),
+            Ok(v) => {
+                problems.push(
+                    format!("{field}.{name}"),
+                    format!("must be positive, is {v}"),
+                );
+                None
+            }
+            Err(message) => {
+                problems.push(format!("{field}.{name}"), message);
+                None
+            }
+        })
+    };
+    MappedChannel {
+        name: spec.name.clone(),
+        columns,
+        combine: spec.combine,
+        unit,
+        conversion,
+        rate: positive("rate", &spec.rate, Dimension::Frequency),
+        resolution: positive("resolution", &spec.resolution, dimension),
+        empty: spec.empty,
+        non_finite: spec.non_finite,
+        convention: spec.convention,
+    }
+}
+
+/// The conversion of a column in `unit` with scale and offset; the dimension
+/// is the known channel's, else the first one the unit belongs to.
+fn conversion(
+    field: &str,
+    what: &str,
+    unit: Option<&str>,
+    scale: Option<f64>,
+    offset: Option<f64>,
+    known: Option<Dimension>,
+    problems: &mut Problems,
+) -> (Conversion, Dimension) {
+    let unit = unit.unwrap_or("").trim();
+    let dimension = known.unwrap_or_else(|| {
+        Dimension::ALL
+            .into_iter()
+            .find(|d| unit_factor(unit, *d).is_ok())
+            .unwrap_or(Dimension::Dimensionless)
+    });
+    let factor = match (unit, known) {
+        ("", Some(_)) => 1.0,
+        _ => unit_factor(unit, dimension).unwrap_or_else(|message| {
+            problems.push(format!("{field}.unit"), format!("{what}: {message}"));
+            f64::NAN
+        }),
+    };
+    let scale = scale.unwrap_or(1.0);
+    if !scale.is_finite() || scale == 0.0 {
+        problems.push(format!("{field}.scale"), "must be a non-zero number");
+    }
+    if offset.is_some_and(|offset| !offset.is_finite()) {
+        problems.push(format!("{field}.offset"), "must be a finite number");
+    }
+    let shift = match (dimension, unit) {
+        (Dimension::TemperatureDifference, "degC" | "°C") => CELSIUS_ZERO,
+        _ => 0.0,
+    };
+    let conversion = Conversion {
+        scale,
+        offset: offset.unwrap_or(0.0),
+        factor,
+        shift,
+    };
+    (conversion, dimension)
+}

@@ -1,0 +1,1005 @@
+//! Recorder (sensor) profiles and the recorder model that turns a truth trace
+//! into a [`FlightRecord`]: what a real flight-test system or Quick Access
+//! Recorder would have stored, and nothing more.
+//!
+//! Profiles are TOML files in `recorders/` (bundled: `qar-seed000`, Wang et al. 2012
+//! Table 1 exactly; `flight-test-25hz`; `ideal`, every channel without error).
+//! Top level: `name`, `description`, `frame` (recorder frame length, default
+//! 1 s), `words_per_frame` (optional), `origin = { latitude, longitude }`
+//! (where the flat earth lies on the globe, default 0, 0), `absent` (the
+//! quantities the recorder lacks, recorded in the record's metadata), and one
+//! `[[channels]]` table per channel:
+//!
+//! | key | meaning (units as in any aeroid file: plain number SI, or `"0.1 deg"`) |
+//! |---|---|
+//! | `name` | a quantity of [`crate::derived::MEASURANDS`] (`pitch`, `nz`, `calibrated_airspeed`, …) |
+//! | `label` | the recorder's own parameter title, kept as the channel's source |
+//! | `rate` | samples per second: `"25 Hz"`, `"1/64 Hz"`, `0.5`; at most [`aeroid_core::limits::MAX_RATE`] |
+//! | `phase` | time of the first sample within the rate's period (default 0) |
+//! | `slot` / `word` | position within the frame: a fraction in [0, 1), or a word index of `words_per_frame` |
+//! | `resolution` | LSB; values are rounded to the nearest multiple |
+//! | `saturation` | `[min, max]` the value is clamped to |
+//! | `noise` | standard deviation of Gaussian noise, white unless `noise_time` is given |
+//! | `noise_time` | correlation time of the noise: first-order Gauss–Markov noise, n_k = a·n_(k−1) + √(1 − a²)·σ·w_k, a = exp(−Δt/τ) over the sample interval Δt (coloured sensor noise: vane buffet, a gyro's drift); 0 (default): white |
+//! | `bias`, `scale_factor` | `measured = scale_factor·x + bias` (default 0 and 1; finite) |
+//! | `delay` | pure time delay, at most [`aeroid_core::limits::MAX_SENSOR_TIME`] |
+//! | `lag` | time constant of a first-order sensor lag, at most [`aeroid_core::limits::MAX_SENSOR_TIME`] |
+//! | `anti_alias` | cut-off of a 2nd-order Butterworth filter applied before sampling |
+//! | `dropout` | probability that a sample is lost (recorded as NaN) |
+//! | `fault` | `{ kind = "stuck", from = "20 s", value = … }` (holds `value`, or the last good sample) or `{ kind = "levels", values = [...] }` (every sample reads one of the values at random, as Wang et al. 2012's AoA) |
+//! | `position` | accelerometer position relative to the CG, body axes (load factors only) |
+//!
+//! Sample instants: `t_k = t_0 + phase + slot·frame + k/rate` for every
+//! `t_k` within the trace, so that channels of "the same second" are taken
+//! at their word's instant in the frame. The signal chain of a channel, in
+//! order: the true quantity on the simulator's step (angles that wrap are
+//! unwrapped), first-order lag, anti-alias filter, sampling at `t_k − delay`
+//! by linear interpolation of the truth (the first value is held before the
+//! trace starts), scale factor and bias, noise, saturation, wrapping to
+//! [0, 2π) for headings and directions, quantization, fault, dropout.
+//!
+//! Random draws: one ChaCha stream, `random::stream(seed, RECORDER)`,
+//! consumed channel by channel in profile order and, within a channel,
+//! sample by sample in the order noise, fault level, dropout (only the draws
+//! a channel's configuration needs), so that a seed gives the same record bit
+//! for bit.
+
+use crate::derived::{self, Context, GeographicOrigin, Measurand};
+use crate::{Channel, FlightRecord};
+use aeroid_core::catalog;
+use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::limits;
+use aeroid_core::random::{self, streams};
+use aeroid_core::units::{Dimension, Quantity, unit_factor};
+use aeroid_sim::aircraft::Aircraft;
+use aeroid_sim::scenario::Scenario;
+use aeroid_sim::trace::TruthTrace;
+use aeroid_sim::truth::RunTruth;
+use nalgebra::Vector3;
+use rand::RngExt;
+use rand::rngs::ChaCha8Rng;
+use rand_distr::StandardNormal;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use std::f64::consts::TAU;
+use std::path::{Path, PathBuf};
+
+/// The profile used when neither the command line nor the scenario names one.
+pub const DEFAULT_PROFILE: &str = "ideal";
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProfileFile {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// Recorder frame length (default 1 s); a channel's slot is a fraction of it.
+    #[serde(default)]
+    pub frame: Option<Quantity>,
+    /// Words per frame, so that channels may give a `word` index instead of a `slot`.
+    #[serde(default)]
+    pub words_per_frame: Option<u32>,
+    #[serde(default)]
+    pub origin: Option<OriginSpec>,
+    /// Quantities this recorder does not have.
+    #[serde(default)]
+    pub absent: Vec<String>,
+    pub channels: Vec<ChannelSpec>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OriginSpec {
+    pub latitude: Quantity,
+    pub longitude: Quantity,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelSpec {
+    pub name: String,
+    #[serde(default)]
+    pub label: String,
+    pub rate: Quantity,
+    #[serde(default)]
+    pub phase: Quantity,
+    #[serde(default)]
+    pub slot: Option<f64>,
+    #[serde(default)]
+    pub word: Option<u32>,
+    #[serde(default)]
+    pub resolution: Option<Quantity>,
+    #[serde(default)]
+    pub saturation: Option<[Quantity; 2]>,
+    #[serde(default)]
+    pub noise: Quantity,
+    #[serde(default)]
+    pub noise_time: Quantity,
+    #[serde(default)]
+    pub bias: Quantity,
+    #[serde(default)]
+    pub scale_factor: Option<f64>,
+    #[serde(default)]
+    pub delay: Quantity,
+    #[serde(default)]
+    pub lag: Quantity,
+    #[serde(default)]
+    pub anti_alias: Option<Quantity>,
+    #[serde(default)]
+    pub dropout: f64,
+    #[serde(default)]
+    pub fault: Option<FaultSpec>,
+    #[serde(default)]
+    pub position: Option<[Quantity; 3]>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FaultSpec {
+    /// From `from` on the channel reads `value`, or holds its last sample before `from`.
+    Stuck {
+        from: Quantity,
+        #[serde(default)]
+        value: Option<Quantity>,
+    },
+    /// Every sample reads one of `values`, drawn at random (Wang et al. 2012's AoA read 109.70 or 108.30).
+    Levels { values: Vec<Quantity> },
+}
+
+/// A validated fault, values in SI.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Fault {
+    Stuck { from: f64, value: Option<f64> },
+    Levels(Vec<f64>),
+}
+
+/// One validated channel of a profile, quantities in SI.
+#[derive(Debug, Clone)]
+pub struct ChannelModel {
+    pub measurand: &'static Measurand,
+    pub label: String,
+    pub rate: f64,
+    /// `phase + slot·frame`: the first sample's time after the trace start.
+    pub offset: f64,
+    pub resolution: Option<f64>,
+    pub saturation: Option<(f64, f64)>,
+    pub noise: f64,
+    /// Correlation time of the noise (0: white).
+    pub noise_time: f64,
+    pub bias: f64,
+    pub scale_factor: f64,
+    pub delay: f64,
+    pub lag: f64,
+    pub anti_alias: Option<f64>,
+    pub dropout: f64,
+    pub fault: Option<Fault>,
+    pub position: Vector3<f64>,
+}
+
+/// A validated recorder profile.
+#[derive(Debug, Clone)]
+pub struct Profile {
+    pub name: String,
+    pub description: String,
+    pub path: PathBuf,
+    pub origin: GeographicOrigin,
+    pub absent: Vec<String>,
+    pub channels: Vec<ChannelModel>,
+}
+
+impl Profile {
+    /// Loads a profile by bundled name (`recorders/NAME.toml`) or path.
+    pub fn load(reference: &str, base: Option<&Path>) -> Result<Profile> {
+        let path = catalog::resolve(reference, catalog::RECORDER_FOLDER, base)?;
+        let file: ProfileFile = parse_toml(&path, &read_text(&path)?)?;
+        Profile::from_file(&file, &path)
+    }
+
+    /// Validates a parsed profile, reporting every problem at once.
+    pub fn from_file(file: &ProfileFile, path: &Path) -> Result<Profile> {
+        let mut problems = Problems::default();
+        if file.name.trim().is_empty() {
+            problems.push("name", "must not be empty");
+        }
+        let frame = file.frame.as_ref().map_or(1.0, |q| {
+            positive(q.si(Dimension::Time), "frame", &mut problems)
+        });
+        if file.words_per_frame == Some(0) {
+            problems.push("words_per_frame", "must be at least 1");
+        }
+        let origin = read_origin(file.origin.as_ref(), &mut problems);
+        let layout = FrameLayout {
+            frame,
+            words: file.words_per_frame.filter(|&w| w > 0),
+        };
+        let mut seen = BTreeSet::new();
+        let channels = file
+            .channels
+            .iter()
+            .filter_map(|spec| {
+                if !seen.insert(spec.name.as_str()) {
+                    problems.push(
+                        format!("channels.{}", spec.name),
+                        "the channel appears twice",
+                    );
+                }
+                read_channel(spec, &layout, &mut problems)
+            })
+            .collect();
+        if file.channels.is_empty() {
+            problems.push(
+                "channels",
+                "must list at least one channel (a [[channels]] table): a recorder without channels records nothing",
+            );
+        }
+        check_absent(&file.absent, &seen, &mut problems);
+        let profile = Profile {
+            name: file.name.clone(),
+            description: file.description.clone(),
+            path: path.to_path_buf(),
+            origin,
+            absent: file.absent.clone(),
+            channels,
+        };
+        problems.finish(path, profile)
+    }
+
+    /// The same profile without its random and discontinuous errors (noise,
+    /// quantization, dropouts, faults): what it records is a smooth function
+    /// of the flight, for sensitivities. Rates, skew, delay, lag, filters,
+    /// bias, scale factor and saturation stay.
+    pub fn without_random_errors(&self) -> Profile {
+        let mut clean = self.clone();
+        for channel in &mut clean.channels {
+            channel.noise = 0.0;
+            channel.resolution = None;
+            channel.dropout = 0.0;
+            channel.fault = None;
+        }
+        clean
+    }
+
+    /// The profile without its random errors but with its resolution: the
+    /// record a noise-free recorder of this resolution writes
+    /// (quantization is deterministic given the flight).
+    pub fn without_noise(&self) -> Profile {
+        let mut quantized = self.without_random_errors();
+        for (channel, original) in quantized.channels.iter_mut().zip(&self.channels) {
+            channel.resolution = original.resolution;
+        }
+        quantized
+    }
+
+    /// Records a truth trace of `aircraft` with this profile; random draws come from `seed`.
+    pub fn record(
+        &self,
+        trace: &TruthTrace,
+        aircraft: &Aircraft,
+        seed: u64,
+    ) -> Result<FlightRecord> {
+        if trace.samples.len() < 2 {
+            return Err(Error::Other(
+                "a truth trace needs at least two samples to be recorded".into(),
+            ));
+        }
+        let context = Context {
+            mass: aircraft.mass.mass,
+            propulsion: aircraft.propulsion,
+            origin: self.origin,
+            sensor_position: Vector3::zeros(),
+        };
+        let start = trace.samples[0].time;
+        let span = trace.samples[trace.samples.len() - 1].time - start;
+        let samples: f64 = self
+            .channels
+            .iter()
+            .map(|c| (span * c.rate).max(0.0) + 1.0)
+            .sum();
+        limits::check_memory(
+            &format!(
+                "the record of profile {} (channel rate × duration samples)",
+                self.name
+            ),
+            samples,
+            2 * std::mem::size_of::<f64>(),
+        )
+        .map_err(|message| Error::Invalid {
+            path: self.path.clone(),
+            problems: vec![aeroid_core::error::Problem {
+                field: "channels.rate".into(),
+                message,
+            }],
+        })?;
+        let mut rng = random::stream(seed, streams::RECORDER);
+        let channels = self
+            .channels
+            .iter()
+            .map(|model| model.record(trace, &context, &self.name, &mut rng))
+            .collect::<Result<_>>()?;
+        self.record_of(&trace.scenario, seed, channels)
+    }
+
+    /// The record of `scenario` this profile made with `seed`, checked.
+    fn record_of(&self, scenario: &str, seed: u64, channels: Vec<Channel>) -> Result<FlightRecord> {
+        let record = FlightRecord {
+            scenario: scenario.to_string(),
+            seed: Some(seed),
+            profile: self.name.clone(),
+            absent: self.absent.clone(),
+            channels,
+        };
+        // Settings within their bounds can still overflow together (a huge
+        // scale factor on a huge bias): the profile is named, with the
+        // channel and the sample.
+        record.validate(&self.path)?;
+        Ok(record)
+    }
+}
+
+impl Profile {
+    /// Records named true signals on `grid` (a step of `step`), such as a
+    /// linear model's states, inputs and outputs: each channel of the
+    /// profile whose quantity is one of `signals` is recorded from it as
+    /// from a truth trace; the profile's other channels are left out.
+    /// Random draws come from `seed`, channel by channel in profile order.
+    pub fn record_signals(
+        &self,
+        scenario: &str,
+        grid: &[f64],
+        step: f64,
+        signals: &[(String, Vec<f64>)],
+        seed: u64,
+    ) -> Result<FlightRecord> {
+        if grid.len() < 2 || signals.iter().any(|(_, s)| s.len() != grid.len()) {
+            return Err(Error::Other(
+                "signals to record need at least two samples, one per grid point".into(),
+            ));
+        }
+        let mut rng = random::stream(seed, streams::RECORDER);
+        let mut channels = Vec::new();
+        for model in &self.channels {
+            if let Some((_, signal)) = signals.iter().find(|(n, _)| n == model.measurand.name) {
+                channels.push(model.record_signal(
+                    grid,
+                    signal.clone(),
+                    step,
+                    &self.name,
+                    &mut rng,
+                )?);
+            }
+        }
+        self.record_of(scenario, seed, channels)
+    }
+
+    /// The same profile with every channel's white-noise standard deviation
+    /// multiplied by `factor` (bias, quantization, faults unchanged), named
+    /// `NAME×noiseFACTOR`. Monte Carlo studies sweep noise with it.
+    pub fn with_noise_scaled(&self, factor: f64) -> Profile {
+        let mut profile = self.clone();
+        profile.name = format!("{}×noise{factor}", self.name);
+        for channel in &mut profile.channels {
+            channel.noise *= factor;
+        }
+        profile
+    }
+
+    /// The same profile with every quantized channel's resolution (LSB)
+    /// times `factor` (0: unquantized), named `NAME×lsbFACTOR`. Monte Carlo
+    /// studies sweep resolution with it.
+    pub fn with_resolution_scaled(&self, factor: f64) -> Profile {
+        let mut profile = self.clone();
+        profile.name = format!("{}×lsb{factor}", self.name);
+        for channel in &mut profile.channels {
+            channel.resolution = channel.resolution.map(|r| r * factor).filter(|&r| r > 0.0);
+        }
+        profile
+    }
+
+    /// The same profile with every channel sampled at `rate` (Hz), each
+    /// keeping its place in the frame, named `NAME@RATEHz`. Monte Carlo
+    /// studies sweep sample rate with it.
+    pub fn with_rate(&self, rate: f64) -> Profile {
+        let mut profile = self.clone();
+        profile.name = format!("{}@{rate}Hz", self.name);
+        for channel in &mut profile.channels {
+            channel.rate = rate;
+        }
+        profile
+    }
+
+    /// The same profile with the channels in `rates` sampled at their
+    /// given rate (Hz), named `NAME@CHANNEL:RATEHz,…`; an error names a
+    /// channel the profile does not record.
+    pub fn with_channel_rates(
+        &self,
+        rates: &[(String, f64)],
+    ) -> std::result::Result<Profile, String> {
+        let mut profile = self.clone();
+        for (name, rate) in rates {
+            let channel = profile
+                .channels
+                .iter_mut()
+                .find(|c| c.measurand.name == name)
+                .ok_or_else(|| {
+                    format!("the profile '{}' records no channel '{name}'", self.name)
+                })?;
+            channel.rate = *rate;
+            profile.name += &format!("@{name}:{rate}Hz");
+        }
+        Ok(profile)
+    }
+
+    /// The same profile without the channels `missing`, which the record
+    /// then states as absent, named `NAME−CHANNEL,…`; an error names a
+    /// channel the profile does not record.
+    pub fn without(&self, missing: &[String]) -> std::result::Result<Profile, String> {
+        let mut profile = self.clone();
+        for name in missing {
+            let before = profile.channels.len();
+            profile.channels.retain(|c| c.measurand.name != name);
+            if profile.channels.len() == before {
+                return Err(format!(
+                    "the profile '{}' records no channel '{name}'",
+                    self.name
+                ));
+            }
+            profile.absent.push(name.clone());
+        }
+        if !missing.is_empty() {
+            profile.name = format!("{}−{}", self.name, missing.join(","));
+        }
+        Ok(profile)
+    }
+}
+
+/// Frame length and words per frame, for placing channels in the frame.
+struct FrameLayout {
+    frame: f64,
+    words: Option<u32>,
+}
+
+fn positive(value: Result<f64, String>, field: &str, problems: &mut Problems) -> f64 {
+    match value {
+        Ok(v) if v > 0.0 => v,
+        Ok(v) => {
+            problems.push(field, format!("must be positive, is {v}"));
+            f64::NAN
+        }
+        Err(message) => {
+            problems.push(field, message);
+            f64::NAN
+        }
+    }
+}
+
+fn read_origin(spec: Option<&OriginSpec>, problems: &mut Problems) -> GeographicOrigin {
+    let Some(spec) = spec else {
+        return GeographicOrigin::default();
+    };
+    let mut angle = |field: &str, q: &Quantity, limit: f64| match q.si(Dimension::Angle) {
+        Ok(v) if v.abs() <= limit => v,
+        Ok(_) => {
+            problems.push(field, format!("must be within ±{} deg", limit.to_degrees()));
+            0.0
+        }
+        Err(message) => {
+            problems.push(field, message);
+            0.0
+        }
+    };
+    GeographicOrigin {
+        latitude: angle("origin.latitude", &spec.latitude, 89.0_f64.to_radians()),
+        longitude: angle("origin.longitude", &spec.longitude, std::f64::consts::PI),
+    }
+}
+
+fn check_absent(absent: &[String], recorded: &BTreeSet<&str>, problems: &mut Problems) {
+    for name in absent {
+        if derived::measurand(name).is_none() {
+            problems.push(
+                "absent",
+                format!(
+                    "unknown quantity '{name}'; known: {}",
+                    derived::measurand_names().join(", ")
+                ),
+            );
+        } else if recorded.contains(name.as_str()) {
+            problems.push("absent", format!("'{name}' is also recorded as a channel"));
+        }
+    }
+}
+
+/// Validates one channel; `None` when its name is unknown (the problem is recorded).
+fn read_channel(
+    spec: &ChannelSpec,
+    layout: &FrameLayout,
+    problems: &mut Problems,
+) -> Option<ChannelModel> {
+    let prefix = format!("channels.{}", spec.name);
+    let Some(measurand) = derived::measurand(&spec.name) else {
+        problems.push(
+            format!("{prefix}.name"),
+            format!(
+                "unknown quantity; known: {}",
+                derived::measurand_names().join(", ")
+            ),
+        );
+        return None;
+    };
+    let dimension = measurand.dimension;
+    let mut reader = FieldReader {
+        prefix: &prefix,
+        problems,
+    };
+    let rate = reader.rate(&spec.rate);
+    let phase = reader.non_negative("phase", &spec.phase, Dimension::Time);
+    let slot = reader.slot(spec, layout);
+    let model = ChannelModel {
+        measurand,
+        label: spec.label.clone(),
+        rate,
+        offset: phase + slot * layout.frame,
+        resolution: spec.resolution.as_ref().map(|q| {
+            reader.check(
+                "resolution",
+                q.si(dimension),
+                |v| v > 0.0,
+                "must be positive",
+            )
+        }),
+        saturation: spec
+            .saturation
+            .as_ref()
+            .map(|limits| reader.saturation(limits, dimension)),
+        noise: reader.non_negative("noise", &spec.noise, dimension),
+        noise_time: reader.sensor_time("noise_time", &spec.noise_time),
+        bias: reader.value("bias", &spec.bias, dimension),
+        scale_factor: reader.check(
+            "scale_factor",
+            Ok(spec.scale_factor.unwrap_or(1.0)),
+            f64::is_finite,
+            "must be a finite number",
+        ),
+        delay: reader.sensor_time("delay", &spec.delay),
+        lag: reader.sensor_time("lag", &spec.lag),
+        anti_alias: spec.anti_alias.as_ref().map(|q| {
+            reader.check(
+                "anti_alias",
+                q.si(Dimension::Frequency),
+                |v| v > 0.0,
+                "must be positive",
+            )
+        }),
+        dropout: reader.check(
+            "dropout",
+            Ok(spec.dropout),
+            |p| (0.0..=1.0).contains(&p),
+            "must be a probability within [0, 1]",
+        ),
+        fault: spec.fault.as_ref().map(|f| reader.fault(f, dimension)),
+        position: reader.position(spec),
+    };
+    Some(model)
+}
+
+/// Reads the fields of one channel, recording problems under `channels.NAME.`.
+struct FieldReader<'a> {
+    prefix: &'a str,
+    problems: &'a mut Problems,
+}
+
+impl FieldReader<'_> {
+    fn push(&mut self, field: &str, message: impl Into<String>) {
+        self.problems
+            .push(format!("{}.{field}", self.prefix), message);
+    }
+
+    fn check(
+        &mut self,
+        field: &str,
+        value: Result<f64, String>,
+        valid: impl Fn(f64) -> bool,
+        requirement: &str,
+    ) -> f64 {
+        match value {
+            Ok(v) if valid(v) => v,
+            Ok(v) => {
+                self.push(field, format!("{requirement}, is {v}"));
+                f64::NAN
+            }
+            Err(message) => {
+                self.push(field, message);
+                f64::NAN
+            }
+        }
+    }
+
+    fn value(&mut self, field: &str, q: &Quantity, dimension: Dimension) -> f64 {
+        self.check(field, q.si(dimension), |_| true, "")
+    }
+
+    fn non_negative(&mut self, field: &str, q: &Quantity, dimension: Dimension) -> f64 {
+        self.check(field, q.si(dimension), |v| v >= 0.0, "must not be negative")
+    }
+
+    /// A sample rate within (0, [`limits::MAX_RATE`]].
+    fn rate(&mut self, q: &Quantity) -> f64 {
+        let rate = self.check("rate", parse_rate(q), |v| v > 0.0, "must be positive");
+        if rate > limits::MAX_RATE {
+            self.push("rate", rate_limit_message(rate));
+            return f64::NAN;
+        }
+        rate
+    }
+
+    /// A delay or lag time constant within [0, [`limits::MAX_SENSOR_TIME`]].
+    fn sensor_time(&mut self, field: &str, q: &Quantity) -> f64 {
+        let value = self.non_negative(field, q, Dimension::Time);
+        if value > limits::MAX_SENSOR_TIME {
+            self.push(
+                field,
+                format!(
+                    "{} s is above the longest {} s (longer than the slowest aircraft mode's period: such a sensor records no motion)",
+                    limits::number(value),
+                    limits::number(limits::MAX_SENSOR_TIME)
+                ),
+            );
+            return f64::NAN;
+        }
+        value
+    }
+
+    /// The channel's place in the frame as a fraction, from `slot` or `word`.
+    fn slot(&mut self, spec: &ChannelSpec, layout: &FrameLayout) -> f64 {
+        match (spec.slot, spec.word, layout.words) {
+            (Some(_), Some(_), _) => {
+                self.push("slot", "give either slot or word, not both");
+                0.0
+            }
+            (Some(slot), None, _) => self.check(
+                "slot",
+                Ok(slot),
+                |s| (0.0..1.0).contains(&s),
+                "must be a fraction of the frame within [0, 1)",
+            ),
+            (None, Some(word), Some(words)) if word < words => f64::from(word) / f64::from(words),
+            (None, Some(word), Some(words)) => {
+                self.push(
+                    "word",
+                    format!("{word} is not below words_per_frame = {words}"),
+                );
+                0.0
+            }
+            (None, Some(_), None) => {
+                self.push("word", "needs words_per_frame at the top of the profile");
+                0.0
+            }
+            (None, None, _) => 0.0,
+        }
+    }
+
+    fn saturation(&mut self, limits: &[Quantity; 2], dimension: Dimension) -> (f64, f64) {
+        let low = self.value("saturation", &limits[0], dimension);
+        let high = self.value("saturation", &limits[1], dimension);
+        if low >= high {
+            self.push(
+                "saturation",
+                "the lower limit must be below the upper limit",
+            );
+        }
+        (low, high)
+    }
+
+    fn fault(&mut self, spec: &FaultSpec, dimension: Dimension) -> Fault {
+        match spec {
+            FaultSpec::Stuck { from, value } => Fault::Stuck {
+                from: self.non_negative("fault.from", from, Dimension::Time),
+                value: value
+                    .as_ref()
+                    .map(|v| self.value("fault.value", v, dimension)),
+            },
+            FaultSpec::Levels { values } => {
+                if values.is_empty() {
+                    self.push("fault.values", "needs at least one value");
+                }
+                Fault::Levels(
+                    values
+                        .iter()
+                        .map(|v| self.value("fault.values", v, dimension))
+                        .collect(),
+                )
+            }
+        }
+    }
+
+    fn position(&mut self, spec: &ChannelSpec) -> Vector3<f64> {
+        let Some(position) = &spec.position else {
+            return Vector3::zeros();
+        };
+        if !matches!(spec.name.as_str(), "nx" | "ny" | "nz") {
+            self.push(
+                "position",
+                "only load-factor channels (nx, ny, nz) have a sensor position",
+            );
+        }
+        Vector3::from_fn(|i, _| self.value("position", &position[i], Dimension::Length))
+    }
+}
+
+/// Why a sample rate above [`limits::MAX_RATE`] is refused.
+pub fn rate_limit_message(rate: f64) -> String {
+    format!(
+        "{} Hz is above the highest rate {} Hz (far above any flight-test system's sampling of aircraft motion)",
+        limits::number(rate),
+        limits::number(limits::MAX_RATE)
+    )
+}
+
+/// A rate as written in a profile: a number (Hz), `"25 Hz"`, `"0.5"`, or a fraction `"1/64 Hz"`.
+pub fn parse_rate(q: &Quantity) -> Result<f64, String> {
+    let Quantity::Text(text) = q else {
+        return q.si(Dimension::Frequency);
+    };
+    let text = text.trim();
+    let (number, unit) = text.split_once(char::is_whitespace).unwrap_or((text, "Hz"));
+    let parse = |s: &str| s.trim().parse::<f64>().ok();
+    let value = match number.split_once('/') {
+        Some((numerator, denominator)) => {
+            parse(numerator).zip(parse(denominator)).map(|(n, d)| n / d)
+        }
+        None => parse(number),
+    };
+    match value {
+        Some(value) => Ok(value * unit_factor(unit, Dimension::Frequency)?),
+        None => q.si(Dimension::Frequency),
+    }
+}
+
+impl ChannelModel {
+    /// Sample instants within the trace: `t0 + offset + k/rate`.
+    pub fn sample_times(&self, start: f64, end: f64) -> Vec<f64> {
+        let first = start + self.offset;
+        (0..)
+            .map(|k| first + k as f64 / self.rate)
+            .take_while(|&t| t <= end)
+            .collect()
+    }
+
+    fn record(
+        &self,
+        trace: &TruthTrace,
+        context: &Context,
+        profile: &str,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Channel> {
+        let context = Context {
+            sensor_position: self.position,
+            ..*context
+        };
+        let grid: Vec<f64> = trace.samples.iter().map(|s| s.time).collect();
+        let signal: Vec<f64> = trace
+            .samples
+            .iter()
+            .map(|s| (self.measurand.value)(s, &context))
+            .collect();
+        self.record_signal(&grid, signal, trace.step, profile, rng)
+    }
+
+    /// Records the true quantity `signal` given on `grid` (of step `step`):
+    /// the sensor's own dynamics, sampling and measurement errors.
+    fn record_signal(
+        &self,
+        grid: &[f64],
+        signal: Vec<f64>,
+        step: f64,
+        profile: &str,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Channel> {
+        let signal = self.sensed_signal(signal, grid, step)?;
+        let times = self.sample_times(grid[0], grid[grid.len() - 1]);
+        let mut values = Vec::with_capacity(times.len());
+        let mut last_good = f64::NAN;
+        // The previous sample's normalised noise, for coloured noise.
+        let mut noise = None;
+        for &time in &times {
+            let truth = interpolate(grid, &signal, time - self.delay);
+            let value = self.measure(truth, time, (&mut last_good, &mut noise), rng);
+            values.push(value);
+        }
+        Ok(Channel {
+            name: self.measurand.name.to_string(),
+            unit: self.measurand.unit.to_string(),
+            rate: self.rate,
+            resolution: self.resolution,
+            source: self.source(profile),
+            times,
+            values,
+        })
+    }
+
+    fn source(&self, profile: &str) -> String {
+        match self.label.is_empty() {
+            true => format!("recorder {profile}"),
+            false => format!("recorder {profile}: {}", self.label),
+        }
+    }
+
+    /// The true quantity on the simulator's grid after the sensor's own dynamics.
+    fn sensed_signal(&self, mut signal: Vec<f64>, grid: &[f64], step: f64) -> Result<Vec<f64>> {
+        if self.measurand.wraps {
+            crate::unwrap_angles(&mut signal);
+        }
+        if self.lag > 0.0 {
+            first_order_lag(grid, &mut signal, self.lag);
+        }
+        if let Some(cutoff) = self.anti_alias {
+            butterworth(&mut signal, cutoff, step).map_err(|message| {
+                Error::Other(format!("channel {}: {message}", self.measurand.name))
+            })?;
+        }
+        Ok(signal)
+    }
+
+    /// One recorded sample from the sensed truth at its instant; `noise`
+    /// carries the previous sample's normalised noise (coloured noise).
+    fn measure(
+        &self,
+        truth: f64,
+        time: f64,
+        (last_good, noise): (&mut f64, &mut Option<f64>),
+        rng: &mut ChaCha8Rng,
+    ) -> f64 {
+        let mut value = self.scale_factor * truth + self.bias;
+        if self.noise > 0.0 {
+            let draw = rng.sample::<f64, _>(StandardNormal);
+            let normalised = match (*noise, self.noise_time > 0.0) {
+                (Some(previous), true) => {
+                    let a = (-1.0 / (self.rate * self.noise_time)).exp();
+                    a * previous + (1.0 - a * a).sqrt() * draw
+                }
+                _ => draw,
+            };
+            *noise = Some(normalised);
+            value += self.noise * normalised;
+        }
+        if let Some((low, high)) = self.saturation {
+            value = value.clamp(low, high);
+        }
+        value = match (self.measurand.wraps, self.resolution) {
+            (true, lsb) => wrap_and_quantize(value, lsb),
+            (false, Some(lsb)) => quantize(value, lsb),
+            (false, None) => value,
+        };
+        value = match &self.fault {
+            Some(Fault::Levels(levels)) => levels[rng.random_range(0..levels.len())],
+            Some(Fault::Stuck { from, value: stuck }) if time >= *from => {
+                stuck.unwrap_or(*last_good)
+            }
+            _ => {
+                *last_good = value;
+                value
+            }
+        };
+        if self.dropout > 0.0 && rng.random::<f64>() < self.dropout {
+            f64::NAN
+        } else {
+            value
+        }
+    }
+}
+
+/// Rounds to the nearest multiple of the least significant bit.
+pub fn quantize(value: f64, lsb: f64) -> f64 {
+    (value / lsb).round() * lsb
+}
+
+/// Wraps an angle to [0, 2π) and quantizes it so that the result stays in
+/// [0, 2π): a value that rounds up to a full turn reads 0 (when 2π is a whole
+/// number of LSBs, as for 0.3°, 0.5° and 1° headings).
+pub fn wrap_and_quantize(angle: f64, lsb: Option<f64>) -> f64 {
+    let wrapped = angle.rem_euclid(TAU);
+    let Some(lsb) = lsb else {
+        return wrapped;
+    };
+    let steps = (wrapped / lsb).round();
+    let full_turn = (TAU / lsb).round();
+    if steps >= full_turn && (TAU / lsb - full_turn).abs() < 1e-6 {
+        (steps - full_turn) * lsb
+    } else {
+        steps * lsb
+    }
+}
+
+/// Linear interpolation of `values` on strictly increasing `grid`, holding the ends.
+pub fn interpolate(grid: &[f64], values: &[f64], time: f64) -> f64 {
+    let after = grid.partition_point(|&t| t <= time);
+    if after == 0 {
+        return values[0];
+    }
+    if after == grid.len() {
+        return values[grid.len() - 1];
+    }
+    let k = after - 1;
+    let fraction = (time - grid[k]) / (grid[k + 1] - grid[k]);
+    values[k] + (values[k + 1] - values[k]) * fraction
+}
+
+/// First-order lag `τ·ẏ + y = u`, exact for an input linear between grid points,
+/// starting in equilibrium.
+fn first_order_lag(grid: &[f64], signal: &mut [f64], time_constant: f64) {
+    let mut output = signal[0];
+    let mut previous_input = signal[0];
+    for k in 1..signal.len() {
+        let step = grid[k] - grid[k - 1];
+        let decay = (-step / time_constant).exp();
+        let input = signal[k];
+        output = decay * output
+            + (1.0 - decay) * previous_input
+            + (input - previous_input) * (1.0 - time_constant * (1.0 - decay) / step);
+        previous_input = input;
+        signal[k] = output;
+    }
+}
+
+/// Second-order Butterworth low-pass (bilinear transform with pre-warping) on
+/// a uniform grid of `step`, starting in equilibrium.
+fn butterworth(signal: &mut [f64], cutoff: f64, step: f64) -> Result<(), String> {
+    if cutoff >= 0.5 / step {
+        return Err(format!(
+            "the anti-alias cut-off {cutoff} Hz is not below the simulator's Nyquist frequency {} Hz",
+            0.5 / step
+        ));
+    }
+    let k = (std::f64::consts::PI * cutoff * step).tan();
+    let root2 = std::f64::consts::SQRT_2;
+    let norm = 1.0 / (1.0 + root2 * k + k * k);
+    let b0 = k * k * norm;
+    let (b1, b2) = (2.0 * b0, b0);
+    let a1 = 2.0 * (k * k - 1.0) * norm;
+    let a2 = (1.0 - root2 * k + k * k) * norm;
+    let (mut x1, mut x2, mut y1, mut y2) = (signal[0], signal[0], signal[0], signal[0]);
+    for value in signal.iter_mut() {
+        let x0 = *value;
+        let y0 = b0 * x0 + b1 * x1 + b2 * x2 - a1 * y1 - a2 * y2;
+        (x2, x1, y2, y1) = (x1, x0, y1, y0);
+        *value = y0;
+    }
+    Ok(())
+}
+
+/// The profile to record a scenario with: `reference` if given, else the
+/// scenario's `recorder`, else [`DEFAULT_PROFILE`].
+pub fn profile_for(scenario: &Scenario, reference: Option<&str>) -> Result<Profile> {
+    match (reference, &scenario.recorder) {
+        (Some(reference), _) => Profile::load(reference, None),
+        (None, Some(reference)) => {
+            let path = catalog::resolve_named(
+                reference,
+                catalog::RECORDER_FOLDER,
+                &scenario.path,
+                "recorder",
+            )?;
+            Profile::load(&path.to_string_lossy(), None)
+        }
+        (None, None) => Profile::load(DEFAULT_PROFILE, None),
+    }
+}
+
+/// Simulates a scenario and records it: the flight record and the truth of the
+/// run. The scenario's seed drives both the turbulence and the recorder.
+pub fn record_scenario(scenario: &Scenario, profile: &Profile) -> Result<(FlightRecord, RunTruth)> {
+    record_scenario_seeded(scenario, profile, scenario.seed)
+}
+
+/// [`record_scenario`] with the recorder's random draws from `recorder_seed`
+/// (the turbulence still from `scenario.seed`), so that a Monte Carlo case
+/// can draw the two independently.
+pub fn record_scenario_seeded(
+    scenario: &Scenario,
+    profile: &Profile,
+    recorder_seed: u64,
+) -> Result<(FlightRecord, RunTruth)> {
+    let (trace, truth) = aeroid_sim::fly(scenario)?;
+    let record = profile.record(&trace, &scenario.aircraft, recorder_seed)?;
+    Ok((record, truth))
+}
