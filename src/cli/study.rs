@@ -1,5 +1,6 @@
 //! `aeroid study`: a Monte Carlo study.
 
+use aeroid::eval::row::RowStatus;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
@@ -211,7 +212,7 @@ fn report(
     for ending in result
         .endings
         .iter()
-        .filter(|e| e.status != aeroid::eval::study::CONVERGED)
+        .filter(|e| e.status != RowStatus::Converged)
     {
         let first = &ending.first;
         outln!(
@@ -280,10 +281,9 @@ impl Progress {
     }
 
     fn case(&self, rows: &[aeroid::eval::study::Row]) {
-        use aeroid::eval::study::{FAILED, REFUSED};
         let failed = rows
             .iter()
-            .any(|r| r.status == FAILED || r.status == REFUSED);
+            .any(|r| matches!(r.status, RowStatus::Failed | RowStatus::Refused));
         let Ok(mut state) = self.state.lock() else {
             return;
         };

@@ -14,7 +14,7 @@
 //! inputs (a 3211, doublets) are covered by the golden gates: the simulator
 //! has no actuator dynamics, so the angular accelerations jump at a step,
 //! and the differentiator leaves out the samples whose window would cross
-//! one (src/estimation/differentiation.rs); without that the jumps were
+//! one (crates/estimation/src/differentiation.rs); without that the jumps were
 //! smeared into 1–7 % errors.
 
 use aeroid::estimation::estimate::Estimate;

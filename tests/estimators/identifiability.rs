@@ -1,4 +1,4 @@
-//! A-priori identifiability (src/analysis/identifiability.rs): the QAR
+//! A-priori identifiability (crates/analysis/src/identifiability.rs): the QAR
 //! identifiability table, and the properties that make the bounds trustworthy.
 
 use crate::common;

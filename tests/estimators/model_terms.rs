@@ -1198,7 +1198,7 @@ fn stall_variants_from_a_priori_starts_reach_the_truth() {
 }
 
 /// Fits of the stall flight (flight-test-25hz, seed 6) with a structure
-/// that lacks what the truth has. The criterion (src/estimation/estimate.rs,
+/// that lacks what the truth has. The criterion (crates/estimation/src/estimate.rs,
 /// `assess_residuals`): a poor fit when an output's residuals are
 /// correlated (√N·ρ₁ > 4, which white residuals exceed with probability
 /// 3e-5) and their structured part √(ρ₁·(1 − R²)) exceeds 0.05 of the

@@ -217,7 +217,10 @@ scale = 1.0
     assert_eq!(study.methods, ["toy-start"]);
     let rows = study.run_case(study.cases()[0]);
     assert!(rows.iter().all(|r| r.method == "toy-start"));
-    assert!(rows.iter().any(|r| r.status == study::CONVERGED));
+    assert!(
+        rows.iter()
+            .any(|r| r.status == aeroid::eval::row::RowStatus::Converged)
+    );
     std::fs::remove_dir_all(&folder).unwrap();
 }
 

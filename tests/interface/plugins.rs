@@ -254,7 +254,7 @@ fn every_fault_is_an_error_with_its_reason_and_a_counted_failure() {
     let path = common::write(&folder, "faults.toml", study_text);
     let study = aeroid::eval::study::Study::load(path.to_str().unwrap()).unwrap();
     let result = study.run(2, &|_| {}).unwrap();
-    let count = |status: &str| {
+    let count = |status: aeroid::eval::row::RowStatus| {
         result
             .endings
             .iter()
@@ -262,7 +262,10 @@ fn every_fault_is_an_error_with_its_reason_and_a_counted_failure() {
             .map_or(0, |e| e.count)
     };
     assert_eq!(
-        (count("failed"), count("converged")),
+        (
+            count(aeroid::eval::row::RowStatus::Failed),
+            count(aeroid::eval::row::RowStatus::Converged)
+        ),
         (2, 2),
         "{:?}",
         result.endings

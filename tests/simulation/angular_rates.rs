@@ -1,4 +1,4 @@
-//! Body rates from the attitude kinematics (src/prep/angular_rates.rs)
+//! Body rates from the attitude kinematics (crates/record/src/prep/angular_rates.rs)
 //! against the simulator's true p, q, r, and what an estimator loses when
 //! it reads them instead of rate gyros.
 

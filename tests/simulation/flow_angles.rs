@@ -1,4 +1,4 @@
-//! Geometric angle of attack and sideslip (src/prep/flow_angles.rs, Wang et
+//! Geometric angle of attack and sideslip (crates/record/src/prep/flow_angles.rs, Wang et
 //! al. 2012 Eqs. 1–6) against the simulator's true α and β.
 
 use crate::common;
@@ -95,7 +95,7 @@ fn changes(record: &FlightRecord, name: &str) -> usize {
 /// The transport approach in its steady 20 kt wind from 250° (no gusts, no
 /// turbulence), recorded by the QAR of Wang et al. 2012: the geometric α
 /// and β differ from the simulator's by what the channels' resolution
-/// predicts (src/prep/flow_angles.rs, first-order formula).
+/// predicts (crates/record/src/prep/flow_angles.rs, first-order formula).
 /// - At every instant the error is within the first-order worst case
 ///   Σ|∂/∂x_i|·r_i/2 (measured: at most 0.95 of it for α, 0.86 for β;
 ///   the second-order terms, ~(r_i)², are below 1e-4 of it).

@@ -1,4 +1,4 @@
-//! The data-quality report (src/record/quality.rs) on simulated records.
+//! The data-quality report (crates/record/src/quality.rs) on simulated records.
 
 use aeroid::record::quality::{Stuck, assess};
 use aeroid::record::recorder::{Profile, record_scenario};

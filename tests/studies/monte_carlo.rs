@@ -3,6 +3,7 @@
 
 use crate::common;
 use aeroid::Error;
+use aeroid::eval::row::RowStatus;
 use aeroid::eval::study::{Row, Study, StudyResult};
 use std::path::PathBuf;
 
@@ -364,7 +365,7 @@ fn turbulence_input_and_resolution_axes() {
             .find(|r| r.parameter == parameter)
             .unwrap()
             .clone();
-        assert_eq!(row.status, "converged", "{row:?}");
+        assert_eq!(row.status, RowStatus::Converged, "{row:?}");
         (row.estimate, row.standard_error)
     };
     let (calm, calm_sigma) = crb(0, "Cl_da");
@@ -518,7 +519,11 @@ fn missing_channel_rate_and_settings_axes() {
     assert_eq!(b.settings, "ee.correlation_lag=6.0");
     assert_eq!(row(&rows(2)).channel_rates, "ny:5 Hz");
     let without_beta = rows(4);
-    assert_eq!(without_beta[0].status, "refused", "{without_beta:?}");
+    assert_eq!(
+        without_beta[0].status,
+        RowStatus::Refused,
+        "{without_beta:?}"
+    );
     assert!(
         without_beta[0].reason.contains("beta"),
         "{}",

@@ -26,7 +26,7 @@ fn every_method_ends_as_the_table_says() {
             endings
                 .entry((row.profile.clone(), row.method.clone()))
                 .or_default()
-                .push(row.status.clone());
+                .push(row.status.to_string());
         }
     }
     let expect = |profile: &str, method: &str, status: &str| {

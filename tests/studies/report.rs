@@ -173,7 +173,7 @@ fn the_first_run_keeps_the_proof_of_match_and_smoothed_histories() {
     assert!(oem.note.is_empty(), "{}", oem.note);
     assert!(
         rows.iter()
-            .any(|r| r.method == "oem" && r.status == "converged")
+            .any(|r| r.method == "oem" && r.status == aeroid::eval::row::RowStatus::Converged)
     );
     let rms = |a: &[f64], b: &[f64]| {
         (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()

@@ -18,7 +18,7 @@
 //! Shard K of N holds the cases whose index i (point·runs + run) has
 //! i mod N = K − 1.
 
-use crate::study::Row;
+use crate::row::Row;
 use aeroid_core::error::{Error, Result, write_error};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -407,73 +407,4 @@ pub fn open(folders: &[PathBuf]) -> Result<Cases> {
         files,
         places,
     })
-}
-
-/// Serde for numbers that may be non-finite: finite ones as JSON numbers,
-/// NaN and ±∞ as the strings "NaN", "inf", "-inf" (CSV writes the same
-/// text either way).
-pub mod float_text {
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    #[derive(Deserialize)]
-    #[serde(untagged)]
-    enum Text {
-        Number(f64),
-        Text(String),
-    }
-
-    fn to_f64<E: serde::de::Error>(text: Text) -> Result<f64, E> {
-        match text {
-            Text::Number(value) => Ok(value),
-            Text::Text(text) => match text.as_str() {
-                "NaN" => Ok(f64::NAN),
-                "inf" => Ok(f64::INFINITY),
-                "-inf" => Ok(f64::NEG_INFINITY),
-                other => Err(E::custom(format!("'{other}' is not a number"))),
-            },
-        }
-    }
-
-    fn write<S: Serializer>(value: f64, serializer: S) -> Result<S::Ok, S::Error> {
-        if value.is_finite() {
-            serializer.serialize_f64(value)
-        } else if value.is_nan() {
-            serializer.serialize_str("NaN")
-        } else if value > 0.0 {
-            serializer.serialize_str("inf")
-        } else {
-            serializer.serialize_str("-inf")
-        }
-    }
-
-    pub fn serialize<S: Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
-        write(*value, serializer)
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
-        to_f64(Text::deserialize(deserializer)?)
-    }
-
-    /// The same for an optional number (None: null, or empty in CSV).
-    pub mod option {
-        use super::*;
-
-        pub fn serialize<S: Serializer>(
-            value: &Option<f64>,
-            serializer: S,
-        ) -> Result<S::Ok, S::Error> {
-            match value {
-                Some(value) => write(*value, serializer),
-                None => serializer.serialize_none(),
-            }
-        }
-
-        pub fn deserialize<'de, D: Deserializer<'de>>(
-            deserializer: D,
-        ) -> Result<Option<f64>, D::Error> {
-            Option::<Text>::deserialize(deserializer)?
-                .map(to_f64)
-                .transpose()
-        }
-    }
 }

@@ -7,6 +7,7 @@ pub mod histories;
 pub mod journal;
 pub mod linear_flight;
 pub mod report;
+pub mod row;
 pub mod run;
 pub mod score;
 pub mod study;

@@ -32,7 +32,8 @@
 
 use crate::histories::CaseHistories;
 use crate::journal::{self, JOURNAL_FILE};
-use crate::study::{CONVERGED, Row, StudyResult};
+use crate::row::{Row, RowStatus};
+use crate::study::StudyResult;
 use crate::summary::SummaryRow;
 use aeroid_core::error::{Error, Result, read_text, write_error};
 use aeroid_estimation::estimate::History;
@@ -221,7 +222,7 @@ pub fn estimates_plot(model: &str, parameter: &str, rows: &[&Row], runs: usize) 
     let case = |r: &Row| (r.point * runs + r.run) as f64;
     let used: Vec<&&Row> = rows
         .iter()
-        .filter(|r| r.status == CONVERGED && r.estimate.is_finite())
+        .filter(|r| r.status == RowStatus::Converged && r.estimate.is_finite())
         .collect();
     let truth = rows.iter().find_map(|r| r.truth);
     let (x_min, x_max) = range(used.iter().map(|r| case(r)));
@@ -683,7 +684,7 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
         let _ = writeln!(
             page,
             "<tr><td class=\"text\">{}</td><td>{}</td><td class=\"text\">{}, {}, {}, {}: {}</td></tr>",
-            escape(&ending.status),
+            escape(ending.status.name()),
             ending.count,
             first.point,
             first.run,

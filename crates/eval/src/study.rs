@@ -47,7 +47,8 @@
 //! statistics use the converged fits only.
 
 use crate::histories::CaseHistories;
-use crate::journal::{self, Finished, Header, Journal, Shard, float_text};
+use crate::journal::{self, Finished, Header, Journal, Shard};
+pub use crate::row::{Row, RowStatus};
 use crate::run::{self, Outcome};
 use crate::score::ParameterScore;
 pub use crate::summary::{Ending, Summariser, SummaryRow, summarise};
@@ -56,7 +57,7 @@ use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
 use aeroid_core::limits;
 use aeroid_core::random;
 use aeroid_core::units::Quantity;
-use aeroid_estimation::estimate::{Estimate, Status};
+use aeroid_estimation::estimate::Estimate;
 use aeroid_estimation::estimator::{MethodTables, check_method_tables, validate_method_tables};
 use aeroid_estimation::methods;
 use aeroid_estimation::structure::Structure;
@@ -67,13 +68,6 @@ use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-
-/// Status of a row whose fit converged; only these enter the statistics.
-pub const CONVERGED: &str = "converged";
-/// Status of a row whose recording or estimate could not be made at all.
-pub const FAILED: &str = "failed";
-/// Status of a row whose estimator refused the record (a missing channel, …).
-pub const REFUSED: &str = "refused";
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -264,67 +258,6 @@ impl Case {
     pub fn stream(self) -> u64 {
         ((self.point as u64) << 32) | self.run as u64
     }
-}
-
-/// One parameter of one fit of one case (or the fit's failure): a plain row.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Row {
-    pub point: usize,
-    pub scenario: String,
-    /// The recorder profile (before the sweep's rate, noise and resolution).
-    #[serde(default)]
-    pub profile: String,
-    /// The turbulence intensity; empty for the scenario's own wind.
-    pub turbulence: String,
-    pub input_scale: f64,
-    /// Every channel's rate (Hz); empty for the profile's own.
-    pub sample_rate: Option<f64>,
-    pub noise_scale: f64,
-    pub resolution_scale: f64,
-    /// Channels left out of the record, comma-separated.
-    #[serde(default)]
-    pub missing: String,
-    /// Channels at their own rate, `channel:rate Hz` comma-separated.
-    #[serde(default)]
-    pub channel_rates: String,
-    /// The settings variant, `method.key=value` comma-separated.
-    #[serde(default)]
-    pub settings: String,
-    pub run: usize,
-    pub turbulence_seed: u64,
-    pub recorder_seed: u64,
-    pub model: String,
-    pub method: String,
-    /// `converged`, `iteration_limit`, `diverged`, `no_progress`,
-    /// `unidentified`, `degenerate`, `unsettled`, `refused` or `failed`.
-    pub status: String,
-    pub reason: String,
-    /// The fit's diagnoses (poor_fit, coloured_residuals, process_noise,
-    /// …: [`aeroid_estimation::estimate::DiagnosisKind`]), space-separated;
-    /// empty when it has none.
-    #[serde(default)]
-    pub diagnoses: String,
-    /// Empty when the fit failed.
-    pub parameter: String,
-    #[serde(with = "float_text")]
-    pub estimate: f64,
-    /// Cramér–Rao standard error of the estimate.
-    #[serde(with = "float_text")]
-    pub standard_error: f64,
-    /// None for unknowns without a truth (initial states, output biases).
-    #[serde(with = "float_text::option")]
-    pub truth: Option<f64>,
-    #[serde(with = "float_text::option")]
-    pub error: Option<f64>,
-    pub inside_95: Option<bool>,
-    /// The estimated parameter most correlated with this one, and
-    /// |correlation|.
-    pub correlated_with: String,
-    #[serde(with = "float_text::option")]
-    pub max_correlation: Option<f64>,
-    /// The fit's correlation-matrix condition number.
-    #[serde(with = "float_text::option")]
-    pub condition_number: Option<f64>,
 }
 
 /// What a study produced: its summary and how its fits ended.
@@ -639,7 +572,7 @@ impl Study {
             recorder_seed,
             model: String::new(),
             method: String::new(),
-            status: FAILED.into(),
+            status: RowStatus::Failed,
             reason: String::new(),
             diagnoses: String::new(),
             parameter: String::new(),
@@ -687,7 +620,7 @@ impl Study {
                 };
                 match outcome {
                     Outcome::Estimated { estimate, scores } => {
-                        let (status, reason) = status_text(&estimate.status);
+                        let (status, reason) = RowStatus::of(&estimate.status);
                         let fit = Row {
                             condition_number: estimate.correlation_condition(),
                             diagnoses: diagnoses_text(&estimate),
@@ -705,7 +638,7 @@ impl Study {
                         }));
                     }
                     Outcome::Refused(refusal) => rows.push(Row {
-                        status: REFUSED.into(),
+                        status: RowStatus::Refused,
                         reason: refusal.to_string(),
                         ..fit
                     }),
@@ -1253,18 +1186,6 @@ fn turbulence_axis(spec: &[String], problems: &mut Problems) -> Vec<Option<Strin
 /// The turbulence axis' values.
 const TURBULENCE: [&str; 4] = ["none", "light", "moderate", "severe"];
 
-fn status_text(status: &Status) -> (&'static str, String) {
-    match status {
-        Status::Converged => (CONVERGED, String::new()),
-        Status::IterationLimit => ("iteration_limit", String::new()),
-        Status::Diverged(reason) => ("diverged", reason.clone()),
-        Status::NoProgress => ("no_progress", String::new()),
-        Status::Unidentified(names) => ("unidentified", names.join(" ")),
-        Status::Degenerate(reason) => ("degenerate", reason.clone()),
-        Status::Unsettled(reason) => ("unsettled", reason.clone()),
-    }
-}
-
 /// An estimate's diagnoses as a row's `diagnoses` column.
 fn diagnoses_text(estimate: &Estimate) -> String {
     estimate
@@ -1275,9 +1196,9 @@ fn diagnoses_text(estimate: &Estimate) -> String {
         .join(" ")
 }
 
-fn parameter_row(fit: &Row, status: &str, reason: &str, score: &ParameterScore) -> Row {
+fn parameter_row(fit: &Row, status: RowStatus, reason: &str, score: &ParameterScore) -> Row {
     Row {
-        status: status.to_string(),
+        status,
         reason: reason.to_string(),
         parameter: score.name.clone(),
         estimate: score.estimate,
@@ -1422,7 +1343,7 @@ fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
 mod tests {
     use super::*;
 
-    fn row(run: usize, status: &str, estimate: f64, standard_error: f64) -> Row {
+    fn row(run: usize, status: RowStatus, estimate: f64, standard_error: f64) -> Row {
         Row {
             point: 0,
             scenario: "s".into(),
@@ -1440,7 +1361,7 @@ mod tests {
             recorder_seed: 0,
             model: "m".into(),
             method: "oem".into(),
-            status: status.into(),
+            status,
             reason: String::new(),
             diagnoses: String::new(),
             parameter: "Cl_p".into(),
@@ -1462,36 +1383,36 @@ mod tests {
     fn endings_count_fits_by_status() {
         let mut rows = Vec::new();
         for run in 0..2 {
-            rows.push(row(run, CONVERGED, -0.4, 0.01));
+            rows.push(row(run, RowStatus::Converged, -0.4, 0.01));
             rows.push(Row {
                 parameter: "Cl_r".into(),
-                ..row(run, CONVERGED, 0.1, 0.01)
+                ..row(run, RowStatus::Converged, 0.1, 0.01)
             });
         }
         rows.push(Row {
             reason: "Cl_r".into(),
-            ..row(2, "unidentified", -0.4, f64::INFINITY)
+            ..row(2, RowStatus::Unidentified, -0.4, f64::INFINITY)
         });
         rows.push(Row {
             reason: "oem needs channels 'p'".into(),
             parameter: String::new(),
-            ..row(3, REFUSED, f64::NAN, f64::NAN)
+            ..row(3, RowStatus::Refused, f64::NAN, f64::NAN)
         });
         let mut summariser = Summariser::default();
         summariser.add(&rows);
         let result = StudyResult::of("s", 1, 4, 4, &summariser);
         assert_eq!(result.rows, rows.len());
-        let endings: Vec<(String, usize, usize)> = result
+        let endings: Vec<(RowStatus, usize, usize)> = result
             .endings
             .iter()
-            .map(|e| (e.status.clone(), e.count, e.first.run))
+            .map(|e| (e.status, e.count, e.first.run))
             .collect();
         assert_eq!(
             endings,
             [
-                (CONVERGED.to_string(), 2, 0),
-                ("unidentified".to_string(), 1, 2),
-                (REFUSED.to_string(), 1, 3)
+                (RowStatus::Converged, 2, 0),
+                (RowStatus::Unidentified, 1, 2),
+                (RowStatus::Refused, 1, 3)
             ]
         );
     }
@@ -1505,17 +1426,17 @@ mod tests {
     #[test]
     fn summary_statistics_use_converged_fits_and_count_the_rest() {
         let mut rows = vec![
-            row(0, CONVERGED, -0.41, 0.001),
-            row(1, CONVERGED, -0.40, 0.02),
-            row(2, CONVERGED, -0.36, 0.03),
-            row(3, "diverged", 99.0, 1.0),
+            row(0, RowStatus::Converged, -0.41, 0.001),
+            row(1, RowStatus::Converged, -0.40, 0.02),
+            row(2, RowStatus::Converged, -0.36, 0.03),
+            row(3, RowStatus::Diverged, 99.0, 1.0),
         ];
         rows[1].diagnoses = "coloured_residuals process_noise".into();
         rows[2].diagnoses = "coloured_residuals".into();
         rows[3].diagnoses = "poor_fit".into();
         rows[0].standard_error = 0.01;
         rows[0].inside_95 = Some(false);
-        let mut failed = row(4, FAILED, f64::NAN, f64::NAN);
+        let mut failed = row(4, RowStatus::Failed, f64::NAN, f64::NAN);
         (failed.parameter, failed.truth) = (String::new(), None);
         rows.push(failed);
         let summary = summarise(&rows);
@@ -1563,9 +1484,9 @@ mod tests {
     /// header and every row have the same width.
     #[test]
     fn table_columns_fit_long_model_names() {
-        let mut long = row(0, CONVERGED, -0.41, 0.01);
+        let mut long = row(0, RowStatus::Converged, -0.41, 0.01);
         long.model = "models/attas-lateral-with-long-name.toml".into();
-        let rows = vec![long, row(0, CONVERGED, -0.40, 0.01)];
+        let rows = vec![long, row(0, RowStatus::Converged, -0.40, 0.01)];
         let mut summariser = Summariser::default();
         summariser.add(&rows);
         let result = StudyResult::of("s", 0, 1, 1, &summariser);

@@ -8,8 +8,7 @@
 //! every fit ended, each fit counted once whatever its number of
 //! parameter rows.
 
-use crate::journal::float_text;
-use crate::study::{CONVERGED, FAILED, REFUSED, Row};
+use crate::row::{Row, RowStatus, float_text};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
@@ -140,7 +139,7 @@ pub fn verdict(converged: usize, relative_crb: f64, correlated_share: f64) -> &'
 /// How many fits ended one way, with the first of them.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Ending {
-    pub status: String,
+    pub status: RowStatus,
     pub count: usize,
     /// The first row of the first such fit.
     pub first: Row,
@@ -172,7 +171,7 @@ pub struct Summariser {
     order: Vec<(usize, String, String, String)>,
     groups: HashMap<(usize, String, String, String), Group>,
     /// Per (point, model, method): fits by status.
-    fits: HashMap<FitKey, HashMap<String, usize>>,
+    fits: HashMap<FitKey, HashMap<RowStatus, usize>>,
     /// Per (point, model, method): fits by diagnosis, and fits with any.
     diagnosed: HashMap<FitKey, (std::collections::BTreeMap<String, usize>, usize)>,
     endings: Vec<Ending>,
@@ -203,12 +202,12 @@ impl Summariser {
                 .fits
                 .entry(key)
                 .or_default()
-                .entry(row.status.clone())
+                .entry(row.status)
                 .or_default() += 1;
             match self.endings.iter_mut().find(|e| e.status == row.status) {
                 Some(ending) => ending.count += 1,
                 None => self.endings.push(Ending {
-                    status: row.status.clone(),
+                    status: row.status,
                     count: 1,
                     first: row.clone(),
                 }),
@@ -241,7 +240,7 @@ impl Summariser {
                 conditions: 0,
             }
         });
-        if row.status == CONVERGED {
+        if row.status == RowStatus::Converged {
             group.n += 1;
             group.sum += row.estimate;
             let delta = row.estimate - group.running_mean;
@@ -286,7 +285,7 @@ impl Summariser {
                     .fits
                     .get(&(key.0, key.1.clone(), key.2.clone()))
                     .unwrap_or(&empty);
-                let count = |status: &str| fits.get(status).copied().unwrap_or(0);
+                let count = |status: RowStatus| fits.get(&status).copied().unwrap_or(0);
                 let (diagnosed, diagnosed_fits) = self
                     .diagnosed
                     .get(&(key.0, key.1.clone(), key.2.clone()))
@@ -324,17 +323,18 @@ impl Summariser {
                     method: key.2.clone(),
                     parameter: key.3.clone(),
                     runs,
-                    converged: count(CONVERGED),
-                    iteration_limit: count("iteration_limit"),
-                    diverged: count("diverged"),
-                    not_converged: ["no_progress", "unidentified", "degenerate", "unsettled"]
+                    converged: count(RowStatus::Converged),
+                    iteration_limit: count(RowStatus::IterationLimit),
+                    diverged: count(RowStatus::Diverged),
+                    not_converged: fits
                         .iter()
-                        .map(|status| count(status))
+                        .filter(|(status, _)| status.is_not_converged())
+                        .map(|(_, n)| n)
                         .sum(),
                     diagnosed,
                     diagnosed_fits,
-                    refused: count(REFUSED),
-                    failed: count(FAILED),
+                    refused: count(RowStatus::Refused),
+                    failed: count(RowStatus::Failed),
                     truth,
                     mean,
                     bias,
@@ -347,8 +347,10 @@ impl Summariser {
                     std_over_crb: std / mean_crb,
                     coverage: group.inside as f64 / n,
                     rmse: (group.squared_error / n).sqrt(),
-                    failure_rate: (runs - count(CONVERGED) - count(REFUSED)) as f64 / runs as f64,
-                    refusal_rate: count(REFUSED) as f64 / runs as f64,
+                    failure_rate: (runs - count(RowStatus::Converged) - count(RowStatus::Refused))
+                        as f64
+                        / runs as f64,
+                    refusal_rate: count(RowStatus::Refused) as f64 / runs as f64,
                     relative_crb,
                     correlated_share,
                     correlated_with: group.correlated_with.clone().unwrap_or_default(),

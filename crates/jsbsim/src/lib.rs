@@ -33,7 +33,9 @@ impl aeroid_sim::source::ForeignSimulator for Jsbsim {
     fn fly(&self, scenario: &aeroid_sim::scenario::Scenario) -> Result<aeroid_sim::Flight> {
         own::fly(scenario)
     }
+}
 
+impl aeroid_sim::foreign::AircraftCatalog for Jsbsim {
     fn check_model(&self, model: &str) -> std::result::Result<(), String> {
         own::check_model(model)
     }

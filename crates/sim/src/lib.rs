@@ -16,6 +16,7 @@ pub mod atmosphere;
 pub mod dynamics;
 pub mod engine;
 pub mod feedback;
+pub mod foreign;
 pub mod inputs;
 pub mod integrator;
 pub mod params;

@@ -6,7 +6,8 @@
 //! The aircraft is an aeroid aircraft file, or one of JSBSim's own aircraft
 //! named `"jsbsim:NAME"` (`aircraft/NAME/NAME.xml` under JSBSim's root), which
 //! `aeroid record` and `aeroid run` fly in JSBSim (feature `jsbsim`,
-//! registered as [`crate::source::ForeignSimulator`]). Such a scenario also has a `[jsbsim]` table:
+//! registered as [`crate::source::ForeignSimulator`], its aircraft checked
+//! against [`crate::foreign::AircraftCatalog`]). Such a scenario also has a `[jsbsim]` table:
 //!
 //! ```toml
 //! aircraft = "jsbsim:737"
@@ -516,7 +517,7 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
             "a JSBSim aircraft flies JSBSim's own aerodynamic tables: aeroid cannot change its parameters during the flight".into(),
         ));
     }
-    let Some(simulator) = crate::source::jsbsim() else {
+    let Some(simulator) = crate::foreign::jsbsim() else {
         return Err(invalid(
             "aircraft",
             format!(

@@ -9,6 +9,7 @@
 //! feature does, through `aeroid::jsbsim::register`).
 
 use crate::Simulation;
+pub use crate::foreign::AircraftCatalog;
 use crate::scenario::{JsbsimAircraft, Scenario};
 use crate::trace::TruthTrace;
 use crate::truth::RunTruth;
@@ -16,21 +17,20 @@ use aeroid_core::error::{Error, Result};
 use std::sync::OnceLock;
 
 /// A simulator other than aeroid's that flies the scenarios whose aircraft
-/// is one of its own.
-pub trait ForeignSimulator: Send + Sync {
+/// is one of its own ([`AircraftCatalog`]: which they are).
+pub trait ForeignSimulator: AircraftCatalog {
     /// Trims and flies `scenario` to its end or its departure.
     fn fly(&self, scenario: &Scenario) -> Result<Flight>;
-    /// `Ok` when the simulator has the aircraft `model`; else a message
-    /// naming what was looked for.
-    fn check_model(&self, model: &str) -> std::result::Result<(), String>;
 }
 
 static JSBSIM: OnceLock<&'static dyn ForeignSimulator> = OnceLock::new();
 
-/// Makes `simulator` the one that flies JSBSim's aircraft (the first
-/// registration holds).
+/// Makes `simulator` the one that flies JSBSim's aircraft, and its
+/// catalogue the one a scenario is checked against (the first registration
+/// holds).
 pub fn register_jsbsim(simulator: &'static dyn ForeignSimulator) {
     let _ = JSBSIM.set(simulator);
+    crate::foreign::register_jsbsim(simulator);
 }
 
 /// The registered JSBSim, if any.

@@ -10,7 +10,7 @@
 //! coefficient, its first and its second time derivative. Equations (Eq. 7;
 //! the transcript's Eq. 7 is damaged, so the textbook form is written here,
 //! the simulator's equations of motion over a flat earth in still air,
-//! `src/sim/dynamics.rs`, with Euler angles for the quaternion):
+//! `crates/sim/src/dynamics.rs`, with Euler angles for the quaternion):
 //!
 //! ```text
 //! u̇ = r·v − q·w − g·sin θ           + (q̄S·CX + T_x)/m
