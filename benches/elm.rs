@@ -11,7 +11,6 @@
 //! `relm-gn` estimate on the ATTAS stall flight (model attas-stall, 13
 //! parameters). Run: `cargo bench --bench elm`.
 
-use aeroid::estimation::methods;
 use aeroid::estimation::neural::elm::ElmTrainer;
 use aeroid::estimation::neural::restricted::{Trainer, TrainingSet};
 use aeroid::estimation::problem::EstimationProblem;
@@ -26,7 +25,9 @@ fn problem(method: &str, scenario: &str, model: &str) -> EstimationProblem {
     let profile = Profile::load("flight-test-25hz", None).expect("bundled profile");
     let (record, _) = record_scenario(&scenario, &profile).expect("record");
     let structure = ModelStructure::load(model).expect("bundled model");
-    EstimationProblem::new(method, vec![record], structure, &[]).expect("problem")
+    aeroid::estimation::registry::Registry::built_in()
+        .problem(method, vec![record], structure, &[])
+        .expect("problem")
 }
 
 /// A training set of the lateral case's shape: smooth functions of the inputs.
@@ -58,13 +59,21 @@ fn bench_elm(c: &mut Criterion) {
     let mut group = c.benchmark_group("attas_elm");
     group.sample_size(20);
     group.bench_function("elm_gn", |b| {
-        b.iter(|| methods::estimate(black_box(&lateral), None).unwrap())
+        b.iter(|| {
+            aeroid::estimation::registry::Registry::built_in()
+                .estimate(black_box(&lateral), None)
+                .unwrap()
+        })
     });
     group.bench_function("elm_training", |b| {
         b.iter(|| trainer.train(black_box(&set)).unwrap())
     });
     group.bench_function("relm_gn_stall", |b| {
-        b.iter(|| methods::estimate(black_box(&stall), None).unwrap())
+        b.iter(|| {
+            aeroid::estimation::registry::Registry::built_in()
+                .estimate(black_box(&stall), None)
+                .unwrap()
+        })
     });
     group.finish();
 }

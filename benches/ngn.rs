@@ -13,13 +13,11 @@
 //! (`training_200_epochs_ideal`, 10 neurons). Run: `cargo bench --bench ngn`.
 
 use aeroid::estimation::estimator::MethodTables;
-use aeroid::estimation::methods;
 use aeroid::estimation::neural::NetworkReport;
 use aeroid::estimation::neural::feedforward::LevenbergMarquardt;
 use aeroid::estimation::neural::restricted::{
     self, Network, RestrictedOptions, Trainer, TrainingSet,
 };
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
@@ -49,7 +47,9 @@ fn training_set(profile: &str) -> Pairs {
     let profile = Profile::load(profile, None).expect("bundled profile");
     let (record, _) = record_scenario(&scenario, &profile).expect("record");
     let structure = ModelStructure::load("attas-lateral").expect("bundled model");
-    let problem = EstimationProblem::new("ngn", vec![record], structure, &[]).expect("problem");
+    let problem = aeroid::estimation::registry::Registry::built_in()
+        .problem("ngn", vec![record], structure, &[])
+        .expect("problem");
     let capture = Capture(Mutex::new(None));
     let options = RestrictedOptions {
         coefficient_outputs: true,
@@ -64,19 +64,22 @@ fn bench_ngn(c: &mut Criterion) {
     let profile = Profile::load("flight-test-25hz", None).expect("bundled profile");
     let (record, _) = record_scenario(&scenario, &profile).expect("record");
     let structure = ModelStructure::load("attas-lateral").expect("bundled model");
-    let problem = EstimationProblem::new("ngn", vec![record], structure, &[]).expect("problem");
+    let problem = aeroid::estimation::registry::Registry::built_in()
+        .problem("ngn", vec![record], structure, &[])
+        .expect("problem");
     let mut tables = MethodTables::new();
     tables.insert(
         "ngn".into(),
         toml::from_str("hidden = 20").expect("settings"),
     );
-    let fixed = EstimationProblem::new(
-        "ngn",
-        problem.records.clone(),
-        ModelStructure::load("attas-lateral").expect("bundled model"),
-        &[&tables],
-    )
-    .expect("problem");
+    let fixed = aeroid::estimation::registry::Registry::built_in()
+        .problem(
+            "ngn",
+            problem.records.clone(),
+            ModelStructure::load("attas-lateral").expect("bundled model"),
+            &[&tables],
+        )
+        .expect("problem");
     let (inputs, targets) = training_set("flight-test-25hz");
     let mut group = c.benchmark_group("attas_lateral_ngn");
     group.sample_size(20);
@@ -94,10 +97,18 @@ fn bench_ngn(c: &mut Criterion) {
         });
     }
     group.bench_function("train_and_estimate", |b| {
-        b.iter(|| methods::estimate(black_box(&problem), None).expect("estimate"))
+        b.iter(|| {
+            aeroid::estimation::registry::Registry::built_in()
+                .estimate(black_box(&problem), None)
+                .expect("estimate")
+        })
     });
     group.bench_function("train_and_estimate_20", |b| {
-        b.iter(|| methods::estimate(black_box(&fixed), None).expect("estimate"))
+        b.iter(|| {
+            aeroid::estimation::registry::Registry::built_in()
+                .estimate(black_box(&fixed), None)
+                .expect("estimate")
+        })
     });
     group.finish();
     let (inputs, targets) = training_set("ideal");

@@ -5,7 +5,6 @@
 
 use aeroid::estimation::estimator::Estimator;
 use aeroid::estimation::plugin::Plugin;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
@@ -45,7 +44,9 @@ fn round_trip(c: &mut Criterion) {
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
     let profile = Profile::load("flight-test-25hz", None).unwrap();
     let (record, _) = record_scenario(&scenario, &profile).unwrap();
-    let problem = EstimationProblem::new("ee", vec![record], structure, &[]).unwrap();
+    let problem = aeroid::estimation::registry::Registry::built_in()
+        .problem("ee", vec![record], structure, &[])
+        .unwrap();
     c.bench_function("plugin round trip (no-op, ATTAS lateral record)", |b| {
         b.iter(|| plugin.estimate(&problem, None).unwrap())
     });

@@ -3,6 +3,7 @@
 //! a flight condition with no trim is found before a long run.
 
 use aeroid_core::error::{Error, Result, parse_toml, read_text};
+use aeroid_estimation::registry::Registry;
 use aeroid_estimation::structure::ModelStructure;
 use aeroid_eval::study::{Study, StudyFile};
 use aeroid_record::recorder::{Profile, ProfileFile};
@@ -21,21 +22,22 @@ pub struct CheckReport {
 /// Validates the file at `path`, telling an aircraft, a scenario, a
 /// recorder profile and a study apart by their tables (`[aero]`, `[trim]`,
 /// `[[channels]]`, `runs` with `methods`).
-pub fn check_file(path: &Path) -> Result<CheckReport> {
+pub fn check_file(registry: &Registry, path: &Path) -> Result<CheckReport> {
     let text = read_text(path)?;
     let table: toml::Table = parse_toml(path, &text)?;
     if table.contains_key("trim") {
         let file: ScenarioFile = parse_toml(path, &text)?;
-        aeroid_estimation::estimator::validate_method_tables(&file.methods, path)?;
+        registry.validate_tables(&file.methods, path)?;
         check_scenario(&Scenario::from_file(&file, path)?)
     } else if table.contains_key("runs") && table.contains_key("methods") {
         let file: StudyFile = parse_toml(path, &text)?;
-        Ok(describe_study(&Study::from_file(&file, path)?))
+        Ok(describe_study(&Study::from_file(registry, &file, path)?))
     } else if table.get("kind").and_then(|k| k.as_str())
         == Some(aeroid_estimation::linear_structure::KIND)
     {
         let structure =
             aeroid_estimation::linear_structure::LinearStructure::load(&path.to_string_lossy())?;
+        registry.validate_tables(&structure.methods, path)?;
         Ok(CheckReport {
             kind: "model structure",
             lines: vec![
@@ -53,6 +55,7 @@ pub fn check_file(path: &Path) -> Result<CheckReport> {
         })
     } else if table.contains_key("aero") && table.contains_key("aircraft") {
         let structure = ModelStructure::load(&path.to_string_lossy())?;
+        registry.validate_tables(&structure.methods, path)?;
         Ok(CheckReport {
             kind: "model structure",
             lines: vec![

@@ -44,24 +44,28 @@ enum Command {
 fn main() -> ExitCode {
     #[cfg(feature = "jsbsim")]
     aeroid::jsbsim::register();
-    let result = match Cli::parse().command {
+    let command = Cli::parse().command;
+    // The estimators: the built-in ones, then the plug-ins of the plug-in
+    // folders, found once for whichever command runs a method.
+    let registry = || aeroid::estimation::registry::Registry::with_plugins();
+    let result = match command {
         Command::Simulate(args) => cli::simulate::run(args),
         Command::List(args) => cli::list::run(args),
-        Command::Methods(args) => cli::methods::run(args),
-        Command::Check(args) => cli::check::run(args),
+        Command::Methods(args) => cli::methods::run(args, &registry()),
+        Command::Check(args) => cli::check::run(args, &registry()),
         Command::Record(args) => cli::record::run(args),
         Command::Import(args) => cli::import::run(args),
         Command::Inspect(args) => cli::inspect::run(args),
         Command::Derive(args) => cli::derive::run(args),
-        Command::Run(args) => cli::run::run(args),
+        Command::Run(args) => cli::run::run(args, &registry()),
         Command::Reconstruct(args) => cli::reconstruct::run(args),
         Command::Identifiability(args) => cli::identifiability::run(args),
         Command::Linearise(args) => cli::linearise::run(args),
-        Command::Gate(args) => cli::gate::run(args),
-        Command::Study(args) => cli::study::run(args),
+        Command::Gate(args) => cli::gate::run(args, &registry()),
+        Command::Study(args) => cli::study::run(args, &registry()),
         Command::Report(args) => cli::report::run(args),
         Command::Plugin(args) => cli::plugin::run(args),
-        Command::Estimate(args) => cli::estimate::run(args),
+        Command::Estimate(args) => cli::estimate::run(args, &registry()),
         Command::ExportJsbsim(args) => cli::export_jsbsim::run(args),
         Command::Crosscheck(args) => cli::crosscheck::run(args),
     };

@@ -66,12 +66,17 @@ fn caught_biases(case: &GateCase, flown: &Flown) -> Option<(Vec<String>, Vec<Str
 
 #[test]
 fn every_gate_passes_and_matches_its_snapshot() {
-    let gates = gate::load(&gate_file()).unwrap();
+    let gates = gate::load(
+        &aeroid::estimation::registry::Registry::built_in(),
+        &gate_file(),
+    )
+    .unwrap();
     assert!(!gates.cases.is_empty());
     let mut failures = String::new();
     let mut blind = Vec::new();
     for case in &gates.cases {
-        let flown = gate::fly_case(case).unwrap_or_else(|e| panic!("{}: {e}", case.name));
+        let flown = gate::fly_case(&aeroid::estimation::registry::Registry::built_in(), case)
+            .unwrap_or_else(|e| panic!("{}: {e}", case.name));
         let result: GateResult = gate::judge(case, flown.clone());
         if !result.passed() {
             failures += &format!("{}\n{}", case.name, result.failures());
@@ -116,7 +121,12 @@ fn every_gate_passes_and_matches_its_snapshot() {
 /// that does run.
 #[test]
 fn a_tight_gate_fails_with_a_readable_table() {
-    let cases = gate::load(&gate_file()).unwrap().cases;
+    let cases = gate::load(
+        &aeroid::estimation::registry::Registry::built_in(),
+        &gate_file(),
+    )
+    .unwrap()
+    .cases;
     let find = |name: &str| cases.iter().find(|c| c.name == name).unwrap().clone();
 
     let mut relative = find("attas-lateral-ft-ee");
@@ -125,7 +135,11 @@ fn a_tight_gate_fails_with_a_readable_table() {
     relative.tolerance.clear();
     relative.known.clear();
     relative.absolute_floor = 0.0;
-    let result = gate::run_case(&relative).unwrap();
+    let result = gate::run_case(
+        &aeroid::estimation::registry::Registry::built_in(),
+        &relative,
+    )
+    .unwrap();
     assert!(!result.passed());
     let table = result.failures();
     assert!(
@@ -136,9 +150,20 @@ fn a_tight_gate_fails_with_a_readable_table() {
     let mut sigma = find("attas-lateral-ideal-oem");
     sigma.relative_tolerance = None;
     sigma.sigma_tolerance = Some(1e-3);
-    assert!(!gate::run_case(&sigma).unwrap().passed());
+    assert!(
+        !gate::run_case(&aeroid::estimation::registry::Registry::built_in(), &sigma)
+            .unwrap()
+            .passed()
+    );
 
     let mut refusal = find("attas-lateral-ideal-oem");
     refusal.expect_refusal = Some(aeroid::estimation::estimator::RefusalKind::MissingChannels);
-    assert!(!gate::run_case(&refusal).unwrap().passed());
+    assert!(
+        !gate::run_case(
+            &aeroid::estimation::registry::Registry::built_in(),
+            &refusal
+        )
+        .unwrap()
+        .passed()
+    );
 }

@@ -885,7 +885,15 @@ fn estimators_recover_the_737_derivatives_from_flight_test_data() {
             ("ee", &noisy, "ee"),
         ] {
             let aeroid::eval::run::Outcome::Estimated { estimate, scores } =
-                aeroid::eval::run::estimate_scored(method, record, &truth, &kinds, &[&held], None)
+                aeroid::eval::run::estimate_scored(
+                    crate::common::registry(),
+                    method,
+                    record,
+                    &truth,
+                    &kinds,
+                    &[&held],
+                    None,
+                )
             else {
                 panic!("{label} on {scenario_name}: no estimate");
             };

@@ -501,8 +501,14 @@ impl Kind {
             Kind::Scenario => Scenario::load(reference).map(drop),
             Kind::Model => Structure::load(reference).map(drop),
             Kind::Profile => Profile::load(reference, None).map(drop),
-            Kind::Study => Study::load(reference).map(drop),
-            Kind::Gates => gate::load(path).map(drop),
+            Kind::Study => Study::load(
+                &aeroid::estimation::registry::Registry::built_in(),
+                reference,
+            )
+            .map(drop),
+            Kind::Gates => {
+                gate::load(&aeroid::estimation::registry::Registry::built_in(), path).map(drop)
+            }
         };
         outcome.map_err(|e| e.to_string())
     }
@@ -528,7 +534,7 @@ fn bundled_file_property(
         std::fs::write(&path, &bytes).unwrap();
         let loaded = kind.load(&path);
         if kind != Kind::Gates {
-            let checked = check_file(&path);
+            let checked = check_file(&aeroid::estimation::registry::Registry::built_in(), &path);
             if let (Err(error), Ok(report)) = (&loaded, &checked) {
                 return Err(format!(
                     "check accepts ({}: {:?}) a file the {kind:?} loader rejects: {error}",
@@ -1203,7 +1209,10 @@ fn mutated_replayed_inputs_load_or_fail_cleanly() {
                 std::fs::write(&path, &scenario).unwrap();
                 std::fs::write(folder.0.join("elevator.csv"), &data).unwrap();
                 let loaded = Kind::Scenario.load(&path);
-                if let (Err(error), Ok(report)) = (&loaded, check_file(&path)) {
+                if let (Err(error), Ok(report)) = (
+                    &loaded,
+                    check_file(&aeroid::estimation::registry::Registry::built_in(), &path),
+                ) {
                     return Err(format!(
                         "check accepts ({}: {:?}) a scenario the loader rejects: {error}",
                         report.kind, report.lines

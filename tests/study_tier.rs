@@ -25,7 +25,11 @@ fn with_methods(name: &str, methods: &str) -> aeroid::eval::study::Study {
     std::fs::create_dir_all(&folder).unwrap();
     let path = folder.join(format!("{name}.toml"));
     std::fs::write(&path, text).unwrap();
-    aeroid::eval::study::Study::load(path.to_str().unwrap()).unwrap()
+    aeroid::eval::study::Study::load(
+        &aeroid::estimation::registry::Registry::built_in(),
+        path.to_str().unwrap(),
+    )
+    .unwrap()
 }
 
 mod sample_rate {
@@ -171,7 +175,10 @@ mod sample_rate {
     /// The sampling rule's table: per method, the lowest rate from which
     /// every derivative is held.
     fn assert_every_derivative(name: &str, expected: &[&str]) {
-        let result = Study::load(name).unwrap().run(0, &|_| {}).unwrap();
+        let result = Study::load(&aeroid::estimation::registry::Registry::built_in(), name)
+            .unwrap()
+            .run(0, &|_| {})
+            .unwrap();
         println!("{name}\n{}", lowest_held_rates(&result).join("\n"));
         assert_eq!(
             every_derivative_held(&result),
@@ -436,7 +443,11 @@ mod turbulence {
     #[test]
     #[ignore = "study tier: cargo test --release -- --ignored"]
     fn filters_hold_through_moderate_turbulence_where_output_error_does_not() {
-        let study = aeroid::eval::study::Study::load("turbulence-sweep").unwrap();
+        let study = aeroid::eval::study::Study::load(
+            &aeroid::estimation::registry::Registry::built_in(),
+            "turbulence-sweep",
+        )
+        .unwrap();
         let result = study.run(0, &|_| {}).unwrap();
         let table = result.table();
         let summary = &result.summary;

@@ -1,5 +1,6 @@
 //! `aeroid check`: validate one file and explain every problem.
 
+use aeroid::estimation::registry::Registry;
 use anyhow::Result;
 use std::path::PathBuf;
 
@@ -13,8 +14,8 @@ pub struct Args {
     file: PathBuf,
 }
 
-pub fn run(args: Args) -> Result<()> {
-    let report = aeroid::check::check_file(&args.file)?;
+pub fn run(args: Args, registry: &Registry) -> Result<()> {
+    let report = aeroid::check::check_file(registry, &args.file)?;
     outln!("{}: valid {}", args.file.display(), report.kind);
     for line in report.lines {
         outln!("  {line}");

@@ -2,6 +2,7 @@
 //! fitted jointly, and a model structure.
 
 use aeroid::estimation::estimator::MethodTables;
+use aeroid::estimation::registry::Registry;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
@@ -67,10 +68,9 @@ fn settings_table(method: &str, settings: &[String]) -> Result<MethodTables> {
     Ok([(method.to_string(), table)].into())
 }
 
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, registry: &Registry) -> Result<()> {
     use aeroid::estimation::{
         methods::{self, output_error},
-        problem::EstimationProblem,
         structure::Structure,
     };
     use aeroid::eval::score;
@@ -103,12 +103,12 @@ pub fn run(args: Args) -> Result<()> {
         .transpose()?;
     let structure = Structure::load(&model)?;
     let overrides = settings_table(&method, &settings)?;
-    let problem = EstimationProblem::new(&method, records, structure, &[&overrides])?;
+    let problem = registry.problem(&method, records, structure, &[&overrides])?;
     if let Some(path) = &write_problem {
         problem.write_json(path)?;
         outln!("estimation problem written to {}", path.display());
     }
-    let estimate = methods::estimate(&problem, None)?;
+    let estimate = registry.estimate(&problem, None)?;
     if let Some(path) = &write_smoothed {
         use methods::smoothed_regression::{SmoothedRegressionSettings, smooth};
         let settings = SmoothedRegressionSettings::read(&problem.settings)?;

@@ -1,5 +1,6 @@
 //! `aeroid gate`: the accuracy gates.
 
+use aeroid::estimation::registry::Registry;
 use anyhow::Result;
 use std::path::PathBuf;
 
@@ -21,14 +22,14 @@ pub struct Args {
     only: Option<String>,
 }
 
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, registry: &Registry) -> Result<()> {
     let Args {
         file,
         verbose,
         only,
     } = args;
     let file = file.unwrap_or_else(aeroid::catalog::gate_file);
-    let mut gates = aeroid::eval::gate::load(&file)?;
+    let mut gates = aeroid::eval::gate::load(registry, &file)?;
     if let Some(text) = &only {
         let names: Vec<String> = gates.cases.iter().map(|case| case.name.clone()).collect();
         gates.cases.retain(|case| case.name.contains(text.as_str()));
@@ -42,7 +43,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut failed = Vec::new();
     for case in &gates.cases {
-        match aeroid::eval::gate::run_case(case) {
+        match aeroid::eval::gate::run_case(registry, case) {
             Ok(result) if result.passed() => {
                 match &result.refusal {
                     Some(refusal) => {

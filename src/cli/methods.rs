@@ -1,6 +1,6 @@
 //! `aeroid methods`: the registered estimators.
 
-use aeroid::estimation::methods;
+use aeroid::estimation::registry::Registry;
 use anyhow::Result;
 
 /// List the estimators with their papers and settings.
@@ -14,13 +14,13 @@ pub struct Args {
     name: Option<String>,
 }
 
-pub fn run(args: Args) -> Result<()> {
-    for problem in methods::plugin_problems() {
+pub fn run(args: Args, registry: &Registry) -> Result<()> {
+    for problem in registry.plugin_problems() {
         eprintln!("warning: {problem}");
     }
     let estimators = match &args.name {
-        Some(name) => vec![methods::find(name)?],
-        None => methods::all(),
+        Some(name) => vec![registry.find(name)?],
+        None => registry.all().iter().collect(),
     };
     for estimator in estimators {
         let (name, info) = (estimator.name(), estimator.info());

@@ -1,5 +1,6 @@
 //! `aeroid run`: the whole harness on one scenario.
 
+use aeroid::estimation::registry::Registry;
 use aeroid::eval::run::Outcome;
 use aeroid::sim::scenario::Scenario;
 use anyhow::Result;
@@ -36,7 +37,7 @@ pub struct Args {
     derive_flags: crate::cli::derive::DeriveFlags,
 }
 
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, registry: &Registry) -> Result<()> {
     let Args {
         scenario,
         profile,
@@ -54,7 +55,12 @@ pub fn run(args: Args) -> Result<()> {
     }
     let scenario = Scenario::load(&scenario)?;
     let profile = aeroid::record::recorder::profile_for(&scenario, profile.as_deref())?;
-    let report = aeroid::eval::run::run(&scenario, &profile, derive.then_some(&derive_options))?;
+    let report = aeroid::eval::run::run(
+        registry,
+        &scenario,
+        &profile,
+        derive.then_some(&derive_options),
+    )?;
     let truth = match report.truth.kind {
         aeroid::sim::truth::TruthKind::Exact => format!(
             "exact, the parameters {} flew ({})",

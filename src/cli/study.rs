@@ -1,5 +1,6 @@
 //! `aeroid study`: a Monte Carlo study.
 
+use aeroid::estimation::registry::Registry;
 use aeroid::eval::row::RowStatus;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
@@ -46,7 +47,7 @@ pub struct Args {
     report: bool,
 }
 
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, registry: &Registry) -> Result<()> {
     if args.study == "merge" {
         return merge(args);
     }
@@ -78,7 +79,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &out {
         aeroid::paths::check_output_folder(out)?;
     }
-    let mut study = aeroid::eval::study::Study::load(&reference)?;
+    let mut study = aeroid::eval::study::Study::load(registry, &reference)?;
     if let Some(runs) = runs {
         study.set_runs(runs, "--runs")?;
     }

@@ -254,3 +254,12 @@ pub fn coloured_outputs(estimate: &aeroid::estimation::estimate::Estimate) -> Ve
         .map(|d| d.about.clone())
         .unwrap_or_default()
 }
+
+/// The built-in estimators, as every test that runs a method by name uses
+/// them (plug-in folders are not scanned: a test that needs a plug-in
+/// builds its own registry).
+pub fn registry() -> &'static aeroid::estimation::registry::Registry {
+    static REGISTRY: std::sync::OnceLock<aeroid::estimation::registry::Registry> =
+        std::sync::OnceLock::new();
+    REGISTRY.get_or_init(aeroid::estimation::registry::Registry::built_in)
+}

@@ -6,10 +6,8 @@
 use crate::common;
 use aeroid::estimation::estimate::{Estimate, Status};
 use aeroid::estimation::estimator::Settings;
-use aeroid::estimation::methods;
 use aeroid::estimation::methods::augmented_ekf::{self, FilterRun, FilterSettings};
 use aeroid::estimation::methods::output_error::Start;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::solver::{extended_kalman, unscented_kalman};
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::numerics::kalman;
@@ -435,7 +433,8 @@ fn bad_settings_are_refused_by_name() {
     let refused = |method: &str, key: &str, value: serde_json::Value| {
         let mut settings = Settings::new();
         settings.insert(key.to_string(), value);
-        let error = methods::find(method)
+        let error = crate::common::registry()
+            .find(method)
             .unwrap()
             .check_settings(&settings)
             .unwrap_err()
@@ -468,8 +467,13 @@ fn bad_settings_are_refused_by_name() {
         toml::Value::Table(toml::from_str("Cm_alpha = 0.1").unwrap()),
     );
     let layers = [("ekf".to_string(), table)].into();
-    let problem = EstimationProblem::new("ekf", vec![record], structure, &[&layers]).unwrap();
-    let error = methods::estimate(&problem, None).unwrap_err().to_string();
+    let problem = crate::common::registry()
+        .problem("ekf", vec![record], structure, &[&layers])
+        .unwrap();
+    let error = crate::common::registry()
+        .estimate(&problem, None)
+        .unwrap_err()
+        .to_string();
     assert!(
         error.contains("pseudonoise_for") && error.contains("Cm_alpha"),
         "{error}"
@@ -507,10 +511,10 @@ fn coarse_records_are_filtered_in_sub_steps() {
             }
             let mut layer = aeroid::estimation::estimator::MethodTables::default();
             layer.insert(method.to_string(), table);
-            let problem =
-                EstimationProblem::new(method, vec![record.clone()], structure.clone(), &[&layer])
-                    .unwrap();
-            methods::estimate(&problem, None).unwrap()
+            let problem = crate::common::registry()
+                .problem(method, vec![record.clone()], structure.clone(), &[&layer])
+                .unwrap();
+            crate::common::registry().estimate(&problem, None).unwrap()
         };
         let auto = fit(None);
         let (note, step) = common::integration_step_note(&auto);

@@ -36,7 +36,9 @@ fn problem(
     let structure = ModelStructure::load(model).unwrap();
     let mut tables = MethodTables::new();
     tables.insert(method.to_string(), toml::from_str(settings).unwrap());
-    let problem = EstimationProblem::new(method, vec![record], structure, &[&tables]).unwrap();
+    let problem = crate::common::registry()
+        .problem(method, vec![record], structure, &[&tables])
+        .unwrap();
     (problem, scenario)
 }
 
@@ -49,7 +51,7 @@ fn run(
     model: &str,
 ) -> (Estimate, Vec<f64>) {
     let (problem, scenario) = problem(method, scenario, profile, model, "");
-    let estimate = aeroid::estimation::methods::estimate(&problem, None).unwrap();
+    let estimate = crate::common::registry().estimate(&problem, None).unwrap();
     let truth = truths(&estimate, &scenario);
     (estimate, truth)
 }
@@ -115,7 +117,7 @@ fn lateral_ideal_within_the_restricted_model_floor() {
         "attas-lateral",
         "",
     );
-    let estimate = aeroid::estimation::methods::estimate(&problem, None).unwrap();
+    let estimate = crate::common::registry().estimate(&problem, None).unwrap();
     let truth = truths(&estimate, &scenario);
     print(&estimate, &truth);
     assert!(estimate.status.is_success(), "{}", estimate.status);
@@ -434,8 +436,7 @@ fn same_seed_same_estimate_whatever_the_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap();
-        let estimate =
-            pool.install(|| aeroid::estimation::methods::estimate(&problem, None).unwrap());
+        let estimate = pool.install(|| crate::common::registry().estimate(&problem, None).unwrap());
         let values: Vec<(f64, f64)> = estimate
             .parameters
             .iter()
@@ -467,7 +468,7 @@ fn predicted_feedback_is_worse_than_measured() {
         "hansa3-longitudinal",
         "feedback = \"predicted\"",
     );
-    let predicted = aeroid::estimation::methods::estimate(&problem, None).unwrap();
+    let predicted = crate::common::registry().estimate(&problem, None).unwrap();
     let truth = truths(&predicted, &scenario);
     print(&predicted, &truth);
     let (measured, _) = run(
@@ -501,8 +502,10 @@ fn stall_with_a_separation_lag_ideal() {
     let mut structure = ModelStructure::load("attas-stall").unwrap();
     structure.aircraft.aero.parameters.set("tau1", 0.1).unwrap();
     assert!(structure.aircraft.aero.chi_is_state());
-    let problem = EstimationProblem::new("relm-gn", vec![record], structure, &[]).unwrap();
-    let estimate = aeroid::estimation::methods::estimate(&problem, None).unwrap();
+    let problem = crate::common::registry()
+        .problem("relm-gn", vec![record], structure, &[])
+        .unwrap();
+    let estimate = crate::common::registry().estimate(&problem, None).unwrap();
     let truth = truths(&estimate, &scenario);
     print(&estimate, &truth);
     assert!(estimate.status.is_success(), "{}", estimate.status);
@@ -569,7 +572,7 @@ fn lateral_ideal_with_a_larger_network() {
         "attas-lateral",
         "hidden_sizes = [120]",
     );
-    let estimate = aeroid::estimation::methods::estimate(&problem, None).unwrap();
+    let estimate = crate::common::registry().estimate(&problem, None).unwrap();
     let truth = truths(&estimate, &scenario);
     print(&estimate, &truth);
     assert!(estimate.status.is_success(), "{}", estimate.status);

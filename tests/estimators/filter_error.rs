@@ -1298,7 +1298,8 @@ fn innovation_covariance_settings_are_checked() {
         for (key, value) in pairs {
             settings.insert(key.to_string(), serde_json::Value::from(*value));
         }
-        aeroid::estimation::methods::find("fem")
+        crate::common::registry()
+            .find("fem")
             .unwrap()
             .check_settings(&settings)
             .map_err(|e| e.to_string())

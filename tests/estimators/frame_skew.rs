@@ -11,8 +11,6 @@
 use crate::common;
 use aeroid::estimation::estimate::Estimate;
 use aeroid::estimation::estimator::MethodTables;
-use aeroid::estimation::methods;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::Structure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};
@@ -65,8 +63,10 @@ fn skew_ignored(record: &FlightRecord) -> FlightRecord {
 
 fn fit(method: &str, record: &FlightRecord, model: &str, layers: &[&MethodTables]) -> Estimate {
     let structure = Structure::load(model).unwrap();
-    let problem = EstimationProblem::new(method, vec![record.clone()], structure, layers).unwrap();
-    methods::estimate(&problem, None).unwrap()
+    let problem = crate::common::registry()
+        .problem(method, vec![record.clone()], structure, layers)
+        .unwrap();
+    crate::common::registry().estimate(&problem, None).unwrap()
 }
 
 fn worst(estimate: &Estimate, truth: &RunTruth) -> (f64, String) {

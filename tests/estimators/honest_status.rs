@@ -19,8 +19,6 @@ use crate::common;
 use aeroid::error::Error;
 use aeroid::estimation::estimate::{DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status};
 use aeroid::estimation::estimator::{Refusal, RefusalKind};
-use aeroid::estimation::methods;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::eval::score;
 use aeroid::record::FlightRecord;
@@ -28,8 +26,8 @@ use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
 
 fn oem(record: FlightRecord, structure: &ModelStructure) -> aeroid::Result<Estimate> {
-    let problem = EstimationProblem::new("oem", vec![record], structure.clone(), &[])?;
-    methods::estimate(&problem, None)
+    let problem = crate::common::registry().problem("oem", vec![record], structure.clone(), &[])?;
+    crate::common::registry().estimate(&problem, None)
 }
 
 fn refusal(result: aeroid::Result<Estimate>) -> Refusal {
@@ -261,8 +259,10 @@ fn residuals_tell_process_noise_from_coloured_noise_and_model_errors() {
     let kinds = |e: &Estimate| e.diagnoses.iter().map(|d| d.kind).collect::<Vec<_>>();
     let fit = |method: &str, record: &FlightRecord, model: &str| {
         let structure = aeroid::estimation::structure::Structure::load(model).unwrap();
-        let problem = EstimationProblem::new(method, vec![record.clone()], structure, &[]).unwrap();
-        methods::estimate(&problem, None).unwrap()
+        let problem = crate::common::registry()
+            .problem(method, vec![record.clone()], structure, &[])
+            .unwrap();
+        crate::common::registry().estimate(&problem, None).unwrap()
     };
     let flown = |scenario: &str, profile: &Profile| {
         let scenario = Scenario::load(scenario).unwrap();

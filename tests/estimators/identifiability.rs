@@ -262,6 +262,7 @@ fn inputs_as_recorded_bias_what_a_slow_control_channel_hides() {
     let (record, truth) =
         aeroid::eval::linear_flight::record_flight(&scenario, &clean, scenario.seed).unwrap();
     let outcome = aeroid::eval::run::estimate_scored(
+        crate::common::registry(),
         "oem",
         &record,
         &truth,

@@ -10,8 +10,6 @@
 use crate::common;
 use aeroid::estimation::estimate::Estimate;
 use aeroid::estimation::estimator::{Refusal, RefusalKind};
-use aeroid::estimation::methods;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario_seeded};
@@ -31,8 +29,8 @@ fn repeats() -> &'static [FlightRecord; 2] {
 
 fn fit(method: &str, records: Vec<FlightRecord>) -> aeroid::Result<Estimate> {
     let structure = ModelStructure::load("attas-longitudinal").unwrap();
-    let problem = EstimationProblem::new(method, records, structure, &[])?;
-    methods::estimate(&problem, None)
+    let problem = crate::common::registry().problem(method, records, structure, &[])?;
+    crate::common::registry().estimate(&problem, None)
 }
 
 /// Two repeats fitted jointly: every aerodynamic parameter's Cramér–Rao σ

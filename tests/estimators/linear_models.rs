@@ -7,9 +7,7 @@ use aeroid::analysis::linear_model::{Axes, linearise_scenario};
 use aeroid::analysis::linearize::{self, ModeKind};
 use aeroid::estimation::estimator::RefusalKind;
 use aeroid::estimation::linear_structure::LinearStructure;
-use aeroid::estimation::methods;
 use aeroid::estimation::model::state_space::StateSpaceModel;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::Structure;
 use aeroid::eval::linear_flight::record_flight;
 use aeroid::record::recorder::{Profile, record_scenario};
@@ -32,8 +30,9 @@ fn estimate(
     model: &str,
 ) -> aeroid::Result<aeroid::estimation::estimate::Estimate> {
     let structure = Structure::load(model)?;
-    let problem = EstimationProblem::new(method, vec![record.clone()], structure, &[])?;
-    methods::estimate(&problem, None)
+    let problem =
+        crate::common::registry().problem(method, vec![record.clone()], structure, &[])?;
+    crate::common::registry().estimate(&problem, None)
 }
 
 /// Output error on a noise-free flight of each bundled linear model
@@ -135,8 +134,10 @@ fn linear_fits_follow_ramped_inputs_by_default() {
         panic!("{name} is a linear model")
     };
     held.interpolation = InputInterpolation::from(Interpolation::ZeroOrderHold);
-    let problem = EstimationProblem::new("oem", vec![record.clone()], *held, &[]).unwrap();
-    let estimate = methods::estimate(&problem, None).unwrap();
+    let problem = crate::common::registry()
+        .problem("oem", vec![record.clone()], *held, &[])
+        .unwrap();
+    let estimate = crate::common::registry().estimate(&problem, None).unwrap();
     assert!(!misses(&estimate).is_empty(), "held ramps");
 }
 
@@ -474,10 +475,10 @@ fn augmented_filters_serve_a_linear_structure() {
         for method in ["ekf", "ukf"] {
             let layers: Vec<&aeroid::estimation::estimator::MethodTables> =
                 if noisy { vec![] } else { vec![&from_model] };
-            let problem =
-                EstimationProblem::new(method, vec![record.clone()], structure.clone(), &layers)
-                    .unwrap();
-            let estimate = methods::estimate(&problem, None).unwrap();
+            let problem = crate::common::registry()
+                .problem(method, vec![record.clone()], structure.clone(), &layers)
+                .unwrap();
+            let estimate = crate::common::registry().estimate(&problem, None).unwrap();
             assert_eq!(estimate.parameters.len(), 16);
             let (mut worst_error, mut worst_sigma) = (0.0_f64, 0.0_f64);
             for p in &estimate.parameters {
@@ -554,8 +555,10 @@ fn equation_error_recovers_a_noise_free_linear_flight() {
     for (structure, scenario, recorded) in [(plain, scenario, 1e-3), (rated, rated_scenario, 1e-9)]
     {
         let (record, truth) = record_flight(&scenario, &profile, scenario.seed).unwrap();
-        let problem = EstimationProblem::new("ee", vec![record], structure.clone(), &[]).unwrap();
-        let estimate = methods::estimate(&problem, None).unwrap();
+        let problem = crate::common::registry()
+            .problem("ee", vec![record], structure.clone(), &[])
+            .unwrap();
+        let estimate = crate::common::registry().estimate(&problem, None).unwrap();
         assert_eq!(
             estimate.status,
             aeroid::estimation::estimate::Status::Converged
@@ -829,9 +832,10 @@ fn time_varying_filter_error_starts_the_gust_states_unknown() {
             let structure = Structure::load(model).unwrap();
             let chosen: Vec<&aeroid::estimation::estimator::MethodTables> =
                 if varying { vec![&layers] } else { vec![] };
-            let problem =
-                EstimationProblem::new("fem", vec![record.clone()], structure, &chosen).unwrap();
-            let estimate = methods::estimate(&problem, None).unwrap();
+            let problem = crate::common::registry()
+                .problem("fem", vec![record.clone()], structure, &chosen)
+                .unwrap();
+            let estimate = crate::common::registry().estimate(&problem, None).unwrap();
             assert_eq!(
                 estimate.status,
                 aeroid::estimation::estimate::Status::Converged,
@@ -962,9 +966,10 @@ fn ekf_residual_correlation_tunes_the_process_noise() {
             let layer: aeroid::estimation::estimator::MethodTables =
                 toml::from_str(&format!("[ekf]\ncorrelation_lags = {lags}\n")).unwrap();
             let structure = Structure::load("linear-short-period-attas").unwrap();
-            let problem =
-                EstimationProblem::new("ekf", vec![record.clone()], structure, &[&layer]).unwrap();
-            let estimate = methods::estimate(&problem, None).unwrap();
+            let problem = crate::common::registry()
+                .problem("ekf", vec![record.clone()], structure, &[&layer])
+                .unwrap();
+            let estimate = crate::common::registry().estimate(&problem, None).unwrap();
             let note = estimate
                 .notes
                 .iter()
@@ -1034,15 +1039,16 @@ fn linear_models_refuse_the_settings_they_do_not_take() {
     ] {
         let layer: aeroid::estimation::estimator::MethodTables =
             toml::from_str(&format!("[{method}]\n{table}\n")).unwrap();
-        let error = EstimationProblem::new(
-            method,
-            vec![record.clone()],
-            Structure::load(name).unwrap(),
-            &[&layer],
-        )
-        .and_then(|problem| methods::estimate(&problem, None))
-        .unwrap_err()
-        .to_string();
+        let error = crate::common::registry()
+            .problem(
+                method,
+                vec![record.clone()],
+                Structure::load(name).unwrap(),
+                &[&layer],
+            )
+            .and_then(|problem| crate::common::registry().estimate(&problem, None))
+            .unwrap_err()
+            .to_string();
         assert!(
             error.contains(&format!("not for the linear model '{name}': {key} (")),
             "{method} {table}: {error}"
@@ -1081,14 +1087,15 @@ fn oem_with(
 ) -> aeroid::estimation::estimate::Estimate {
     let layer: aeroid::estimation::estimator::MethodTables =
         toml::from_str(&format!("[oem]\n{table}\n")).unwrap();
-    let problem = EstimationProblem::new(
-        "oem",
-        vec![record.clone()],
-        Structure::load("linear-short-period-unstable").unwrap(),
-        &[&layer],
-    )
-    .unwrap();
-    methods::estimate(&problem, None).unwrap()
+    let problem = crate::common::registry()
+        .problem(
+            "oem",
+            vec![record.clone()],
+            Structure::load("linear-short-period-unstable").unwrap(),
+            &[&layer],
+        )
+        .unwrap();
+    crate::common::registry().estimate(&problem, None).unwrap()
 }
 
 /// The flight is closed loop: on the ideal record the elevator at each

@@ -12,8 +12,6 @@
 use crate::common;
 use aeroid::estimation::estimate::Estimate;
 use aeroid::estimation::estimator::MethodTables;
-use aeroid::estimation::methods;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::Structure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};
@@ -31,8 +29,9 @@ fn ideal_without(folder: &Path, without: &[&str]) -> Profile {
 
 fn fit(method: &str, record: &FlightRecord, layers: &[&MethodTables]) -> aeroid::Result<Estimate> {
     let structure = Structure::load("attas-longitudinal").unwrap();
-    let problem = EstimationProblem::new(method, vec![record.clone()], structure, layers)?;
-    methods::estimate(&problem, None)
+    let problem =
+        crate::common::registry().problem(method, vec![record.clone()], structure, layers)?;
+    crate::common::registry().estimate(&problem, None)
 }
 
 fn worst(estimate: &Estimate, truth: &RunTruth) -> (f64, String) {

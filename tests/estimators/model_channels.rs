@@ -13,8 +13,6 @@
 use crate::common;
 use aeroid::estimation::estimate::Estimate;
 use aeroid::estimation::estimator::RefusalKind;
-use aeroid::estimation::methods;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};
@@ -79,8 +77,8 @@ fn model_with(test: &str, line: &str) -> PathBuf {
 
 fn fit(method: &str, record: FlightRecord, model: &std::path::Path) -> aeroid::Result<Estimate> {
     let structure = ModelStructure::load(model.to_str().unwrap()).unwrap();
-    let problem = EstimationProblem::new(method, vec![record], structure, &[])?;
-    methods::estimate(&problem, None)
+    let problem = crate::common::registry().problem(method, vec![record], structure, &[])?;
+    crate::common::registry().estimate(&problem, None)
 }
 
 /// Output error, equation error and the augmented EKF on the record

@@ -496,14 +496,14 @@ fn tied_parameters_are_flown_and_recovered() {
 /// refuses the model and says why.
 #[test]
 fn tied_parameters_are_reported_and_refused_where_unsupported() {
-    use aeroid::estimation::problem::EstimationProblem;
     let tables = tied_tables();
     let case = Case::new("tied-notes", &aircraft_text(&tables, ""));
     let structure = case.model("tied", "", &tables, &ties());
     let (record, scenario) = case.record("ideal", 4);
-    let problem =
-        EstimationProblem::new("oem", vec![record.clone()], structure.clone(), &[]).unwrap();
-    let estimate = aeroid::estimation::methods::estimate(&problem, None).unwrap();
+    let problem = crate::common::registry()
+        .problem("oem", vec![record.clone()], structure.clone(), &[])
+        .unwrap();
+    let estimate = crate::common::registry().estimate(&problem, None).unwrap();
     assert!(estimate.parameter("CL_de").is_none());
     let master = estimate.parameter("Cm_de").unwrap();
     let note = estimate
@@ -519,9 +519,11 @@ fn tied_parameters_are_reported_and_refused_where_unsupported() {
     );
     let truth = scenario.aircraft.aero.parameters.get("CL_de").unwrap();
     assert!(((value - truth) / truth).abs() < 1e-4, "{value} vs {truth}");
-    let problem =
-        EstimationProblem::new("rbf-delta", vec![record.clone()], structure, &[]).unwrap();
-    let error = aeroid::estimation::methods::estimate(&problem, None)
+    let problem = crate::common::registry()
+        .problem("rbf-delta", vec![record.clone()], structure, &[])
+        .unwrap();
+    let error = crate::common::registry()
+        .estimate(&problem, None)
         .unwrap_err()
         .to_string();
     assert!(error.contains("tied parameters"), "{error}");
@@ -532,8 +534,11 @@ fn tied_parameters_are_reported_and_refused_where_unsupported() {
         ties()
     );
     let structure = case.model("both-ways", "", &tables, &both_ways);
-    let problem = EstimationProblem::new("ee", vec![record], structure, &[]).unwrap();
-    let error = aeroid::estimation::methods::estimate(&problem, None)
+    let problem = crate::common::registry()
+        .problem("ee", vec![record], structure, &[])
+        .unwrap();
+    let error = crate::common::registry()
+        .estimate(&problem, None)
         .unwrap_err()
         .to_string();
     assert!(
@@ -605,7 +610,6 @@ fn bad_ties_name_the_file_and_the_key() {
 /// the surfaces). Measured: 2e-7, 2e-7, 8e-7; 2.0σ, 2.9σ, 2.9σ.
 #[test]
 fn state_space_methods_fit_every_new_structure() {
-    use aeroid::estimation::problem::EstimationProblem;
     let tables = tied_tables();
     let case = Case::new("filters", &aircraft_text(&tables, MOMENT_REFERENCE));
     let structure = case.model("all", MOMENT_REFERENCE, &tables, &ties());
@@ -615,10 +619,10 @@ fn state_space_methods_fit_every_new_structure() {
     ] {
         let (record, scenario) = case.record(profile, 4);
         for method in ["fem", "ekf", "ukf"] {
-            let problem =
-                EstimationProblem::new(method, vec![record.clone()], structure.clone(), &[])
-                    .unwrap();
-            let estimate = aeroid::estimation::methods::estimate(&problem, None).unwrap();
+            let problem = crate::common::registry()
+                .problem(method, vec![record.clone()], structure.clone(), &[])
+                .unwrap();
+            let estimate = crate::common::registry().estimate(&problem, None).unwrap();
             let rows = rows(&estimate, &scenario);
             assert_eq!(rows.len(), structure.free_names().len());
             let (relative, name) = worst_relative(&rows, |_| true);

@@ -7,7 +7,6 @@ use crate::common;
 use aeroid::analysis::identifiability::{IdentifiabilityOptions, analyse};
 use aeroid::estimation::estimate::{Estimate, Status};
 use aeroid::estimation::methods::output_error::{OutputErrorOptions, output_error};
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::{ModelStructure, Structure};
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::Profile;
@@ -243,8 +242,9 @@ fn the_qar_aileron_samples_bound_the_roll_derivatives() {
             .record;
         // Through the estimation problem, which unwraps the heading: it
         // crosses north on this approach.
-        let estimate = EstimationProblem::new("oem", vec![record], structure.clone(), &[])
-            .and_then(|problem| aeroid::estimation::methods::estimate(&problem, None))
+        let estimate = crate::common::registry()
+            .problem("oem", vec![record], structure.clone(), &[])
+            .and_then(|problem| crate::common::registry().estimate(&problem, None))
             .unwrap();
         assert_eq!(estimate.status, Status::Converged, "{:?}", estimate.notes);
         results.push((estimate, truth));
@@ -361,14 +361,15 @@ fn unstable_attas(profile: &str, seed: u64) -> (FlightRecord, RunTruth) {
 fn oem_on_longitudinal(record: &FlightRecord, table: &str) -> Estimate {
     let layer: aeroid::estimation::estimator::MethodTables =
         toml::from_str(&format!("[oem]\n{table}\n")).unwrap();
-    let problem = EstimationProblem::new(
-        "oem",
-        vec![record.clone()],
-        Structure::load("attas-longitudinal").unwrap(),
-        &[&layer],
-    )
-    .unwrap();
-    aeroid::estimation::methods::estimate(&problem, None).unwrap()
+    let problem = crate::common::registry()
+        .problem(
+            "oem",
+            vec![record.clone()],
+            Structure::load("attas-longitudinal").unwrap(),
+            &[&layer],
+        )
+        .unwrap();
+    crate::common::registry().estimate(&problem, None).unwrap()
 }
 
 /// The unstable ATTAS is flown closed loop by its pitch augmentation

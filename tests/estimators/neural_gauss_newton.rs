@@ -9,7 +9,6 @@ use crate::common;
 use aeroid::estimation::estimate::{Estimate, Status};
 use aeroid::estimation::estimator::MethodTables;
 use aeroid::estimation::estimator::RefusalKind;
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::{ModelStructure, Structure};
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::Profile;
@@ -28,9 +27,10 @@ fn run(method: &str, record: &FlightRecord, model: &str, settings: &str) -> Esti
     let structure = ModelStructure::load(model).unwrap();
     let mut tables = MethodTables::new();
     tables.insert(method.to_string(), toml::from_str(settings).unwrap());
-    let problem =
-        EstimationProblem::new(method, vec![record.clone()], structure, &[&tables]).unwrap();
-    aeroid::estimation::methods::estimate(&problem, None).unwrap()
+    let problem = crate::common::registry()
+        .problem(method, vec![record.clone()], structure, &[&tables])
+        .unwrap();
+    crate::common::registry().estimate(&problem, None).unwrap()
 }
 
 /// Relative errors of the rows, and the largest |error|/σ.
@@ -203,8 +203,12 @@ fn same_seed_same_estimate_whatever_the_thread_count() {
 fn refusals_name_what_is_missing() {
     let (record, _) = fly("attas-lateral-multistep", "flight-test-25hz");
     let structure = Structure::load("linear-lateral-attas").unwrap();
-    let problem = EstimationProblem::new("ngn", vec![record.clone()], structure, &[]).unwrap();
-    let error = aeroid::estimation::methods::estimate(&problem, None).unwrap_err();
+    let problem = crate::common::registry()
+        .problem("ngn", vec![record.clone()], structure, &[])
+        .unwrap();
+    let error = crate::common::registry()
+        .estimate(&problem, None)
+        .unwrap_err();
     let aeroid::Error::Refused(refusal) = error else {
         panic!("{error}")
     };
@@ -214,8 +218,12 @@ fn refusals_name_what_is_missing() {
         .channels
         .retain(|c| !["p", "r"].contains(&c.name.as_str()));
     let structure = ModelStructure::load("attas-lateral").unwrap();
-    let problem = EstimationProblem::new("ngn", vec![without_rates], structure, &[]).unwrap();
-    let error = aeroid::estimation::methods::estimate(&problem, None).unwrap_err();
+    let problem = crate::common::registry()
+        .problem("ngn", vec![without_rates], structure, &[])
+        .unwrap();
+    let error = crate::common::registry()
+        .estimate(&problem, None)
+        .unwrap_err();
     let aeroid::Error::Refused(refusal) = error else {
         panic!("{error}")
     };
@@ -225,7 +233,9 @@ fn refusals_name_what_is_missing() {
     let structure = ModelStructure::load("attas-lateral").unwrap();
     let mut tables = MethodTables::new();
     tables.insert("ngn".into(), toml::from_str("held_out_every = 1").unwrap());
-    let error = EstimationProblem::new("ngn", vec![record], structure, &[&tables]).unwrap_err();
+    let error = crate::common::registry()
+        .problem("ngn", vec![record], structure, &[&tables])
+        .unwrap_err();
     assert!(error.to_string().contains("[methods.ngn]"), "{error}");
 }
 

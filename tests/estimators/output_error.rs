@@ -736,16 +736,18 @@ fn input_noise_is_checked_and_reproducible() {
 fn every_integrating_method_follows_ramped_inputs_by_default() {
     use aeroid::estimation::estimate::Estimate;
     use aeroid::estimation::estimator::MethodTables;
-    use aeroid::estimation::methods;
-    use aeroid::estimation::problem::EstimationProblem;
+
     use aeroid::estimation::structure::Structure;
     let scenario = Scenario::load("attas-lateral-multistep-ramped").unwrap();
     let truth = &scenario.aircraft.aero.parameters;
     let fit = |record: &FlightRecord, method: &str, layers: &[&MethodTables]| -> Estimate {
         let structure = Structure::load("attas-lateral").unwrap();
-        let problem = EstimationProblem::new(method, vec![record.clone()], structure, layers)
+        let problem = crate::common::registry()
+            .problem(method, vec![record.clone()], structure, layers)
             .unwrap_or_else(|e| panic!("{method}: {e}"));
-        methods::estimate(&problem, None).unwrap_or_else(|e| panic!("{method}: {e}"))
+        crate::common::registry()
+            .estimate(&problem, None)
+            .unwrap_or_else(|e| panic!("{method}: {e}"))
     };
     // The parameters beyond both k·σ and `relative` of the truth.
     let misses = |estimate: &Estimate, k: f64, relative: f64| -> Vec<String> {

@@ -1,5 +1,5 @@
 //! The estimator interface from a newcomer's side: a toy estimator added
-//! through the registry alone (this file's type and one `register` call)
+//! through the registry alone (this file's type and one `Registry::add` call)
 //! is found by `estimate` (the problem's method), `run`, `gate` and
 //! `study`, with its settings table read from a gate file, checked and
 //! refused when wrong; and the estimation problem's JSON reads back
@@ -10,8 +10,8 @@ use aeroid::estimation::estimate::{Estimate, ParameterEstimate, Status};
 use aeroid::estimation::estimator::{
     Estimator, MethodInfo, Settings, parse_settings, setting_infos,
 };
-use aeroid::estimation::methods;
 use aeroid::estimation::problem::EstimationProblem;
+use aeroid::estimation::registry::Registry;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::eval::{gate, run, study};
 use aeroid::record::recorder::{Profile, record_scenario};
@@ -115,17 +115,21 @@ fn tables(text: &str) -> aeroid::estimation::estimator::MethodTables {
         .collect()
 }
 
-fn register_toy() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| methods::register(Arc::new(StartValues)).unwrap());
+/// The built-in estimators and the toy, added as a program adds its own.
+fn toy_registry() -> &'static Registry {
+    static REGISTRY: std::sync::OnceLock<Registry> = std::sync::OnceLock::new();
+    REGISTRY.get_or_init(|| {
+        let mut registry = Registry::built_in();
+        registry.add(Arc::new(StartValues)).unwrap();
+        registry
+    })
 }
 
 #[test]
 fn a_registered_estimator_runs_everywhere() {
-    register_toy();
-    assert!(methods::names().contains(&"toy-start".to_string()));
+    assert!(toy_registry().names().contains(&"toy-start".to_string()));
     assert!(
-        methods::register(Arc::new(StartValues)).is_err(),
+        toy_registry().clone().add(Arc::new(StartValues)).is_err(),
         "a name twice"
     );
 
@@ -136,32 +140,34 @@ fn a_registered_estimator_runs_everywhere() {
     let (record, truth) = record_scenario(&scenario, &profile).unwrap();
     let structure = ModelStructure::load("attas-lateral").unwrap();
     let overrides = tables("[toy-start]\nscale = 2.0");
-    let problem = EstimationProblem::new(
-        "toy-start",
-        vec![record.clone()],
-        structure.clone(),
-        &[&overrides],
-    )
-    .unwrap();
-    let estimate = methods::estimate(&problem, None).unwrap();
+    let problem = toy_registry()
+        .problem(
+            "toy-start",
+            vec![record.clone()],
+            structure.clone(),
+            &[&overrides],
+        )
+        .unwrap();
+    let estimate = toy_registry().estimate(&problem, None).unwrap();
     let first = &estimate.parameters[0];
     assert_eq!(first.value, 2.0 * first.start);
     assert_eq!(estimate.status, Status::Converged);
 
     // A setting it does not know is refused before it runs.
     let wrong = tables("[toy-start]\nscael = 2.0");
-    let error = EstimationProblem::new(
-        "toy-start",
-        vec![record.clone()],
-        structure.clone(),
-        &[&wrong],
-    )
-    .unwrap_err()
-    .to_string();
+    let error = toy_registry()
+        .problem(
+            "toy-start",
+            vec![record.clone()],
+            structure.clone(),
+            &[&wrong],
+        )
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("scael"), "{error}");
 
     // run: every registered method, the toy among them, scored.
-    let report = run::run(&scenario, &profile, None).unwrap();
+    let report = run::run(toy_registry(), &scenario, &profile, None).unwrap();
     let toy = report
         .runs
         .iter()
@@ -190,8 +196,8 @@ sigma = 0.5
 "#,
     )
     .unwrap();
-    let gates = gate::load(&gate_file).unwrap();
-    let result = gate::run_case(&gates.cases[0]).unwrap();
+    let gates = gate::load(toy_registry(), &gate_file).unwrap();
+    let result = gate::run_case(toy_registry(), &gates.cases[0]).unwrap();
     let estimate = result.estimate.as_ref().unwrap();
     assert!(estimate.parameters.iter().all(|p| p.standard_error == 0.5));
     // The toy returns the model file's start values: the gate judges each
@@ -213,7 +219,7 @@ scale = 1.0
 "#,
     )
     .unwrap();
-    let study = study::Study::load(study_file.to_str().unwrap()).unwrap();
+    let study = study::Study::load(toy_registry(), study_file.to_str().unwrap()).unwrap();
     assert_eq!(study.methods, ["toy-start"]);
     let rows = study.run_case(study.cases()[0]);
     assert!(rows.iter().all(|r| r.method == "toy-start"));
@@ -245,13 +251,14 @@ fn estimation_problem_json_round_trip_is_exact() {
         for model in &models {
             let structure = aeroid::estimation::structure::Structure::load(model).unwrap();
             for method in ["ee", "swr", "oem"] {
-                let problem = EstimationProblem::new(
-                    method,
-                    vec![record.clone()],
-                    structure.clone(),
-                    &[&scenario.methods],
-                )
-                .unwrap();
+                let problem = toy_registry()
+                    .problem(
+                        method,
+                        vec![record.clone()],
+                        structure.clone(),
+                        &[&scenario.methods],
+                    )
+                    .unwrap();
                 let text = problem.to_json().unwrap();
                 let back =
                     EstimationProblem::from_json(&text, std::path::Path::new("problem.json"))
@@ -305,7 +312,9 @@ fn a_broken_problem_file_is_refused() {
     let profile = Profile::load("ideal", None).unwrap();
     let (record, _) = record_scenario(&scenario, &profile).unwrap();
     let structure = ModelStructure::load("attas-lateral").unwrap();
-    let problem = EstimationProblem::new("oem", vec![record], structure, &[]).unwrap();
+    let problem = toy_registry()
+        .problem("oem", vec![record], structure, &[])
+        .unwrap();
     let origin = std::path::Path::new("broken.json");
     let error = EstimationProblem::from_json("{\"format\": 1}", origin)
         .unwrap_err()

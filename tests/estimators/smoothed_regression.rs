@@ -7,7 +7,6 @@ use aeroid::estimation::estimate::Status;
 use aeroid::estimation::methods::smoothed_regression::{
     Smoothed, SmoothedRegressionSettings, smooth_and_regress,
 };
-use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::Profile;
@@ -251,8 +250,10 @@ fn record_without_angular_rates_says_what_it_could_estimate() {
         .channels
         .retain(|c| !["p", "q", "r"].contains(&c.name.as_str()));
     let structure = ModelStructure::load("attas-longitudinal").unwrap();
-    let problem = EstimationProblem::new("ebm", vec![record], structure, &[]).unwrap();
-    let estimate = aeroid::estimation::methods::estimate(&problem, None).unwrap();
+    let problem = crate::common::registry()
+        .problem("ebm", vec![record], structure, &[])
+        .unwrap();
+    let estimate = crate::common::registry().estimate(&problem, None).unwrap();
     let rows = common::against_truth(&estimate, &scenario);
     let text = common::truth_table(&rows);
     eprintln!("{text}{:#?}", estimate.notes);
@@ -322,7 +323,7 @@ fn smoothed_histories_are_written_as_csv() {
 /// key named.
 #[test]
 fn bad_settings_are_refused_naming_the_key() {
-    let method = aeroid::estimation::methods::find("ebm").unwrap();
+    let method = crate::common::registry().find("ebm").unwrap();
     for (key, value, expected) in [
         (
             "observations",
@@ -356,9 +357,10 @@ fn missing_channels_and_nonlinear_models_are_refused() {
         .channels
         .retain(|c| !["nz", "elevator"].contains(&c.name.as_str()));
     let structure = ModelStructure::load("attas-longitudinal").unwrap();
-    let problem = EstimationProblem::new("ebm", vec![record.clone()], structure, &[]).unwrap();
-    let Err(aeroid::Error::Refused(refusal)) =
-        aeroid::estimation::methods::estimate(&problem, None)
+    let problem = crate::common::registry()
+        .problem("ebm", vec![record.clone()], structure, &[])
+        .unwrap();
+    let Err(aeroid::Error::Refused(refusal)) = crate::common::registry().estimate(&problem, None)
     else {
         panic!("not refused");
     };
@@ -370,9 +372,10 @@ fn missing_channels_and_nonlinear_models_are_refused() {
         "{text}"
     );
     let stall = ModelStructure::load("attas-stall").unwrap();
-    let problem = EstimationProblem::new("ebm", vec![record], stall, &[]).unwrap();
-    let Err(aeroid::Error::Refused(refusal)) =
-        aeroid::estimation::methods::estimate(&problem, None)
+    let problem = crate::common::registry()
+        .problem("ebm", vec![record], stall, &[])
+        .unwrap();
+    let Err(aeroid::Error::Refused(refusal)) = crate::common::registry().estimate(&problem, None)
     else {
         panic!("not refused");
     };

@@ -8,9 +8,8 @@
 
 use crate::common;
 use aeroid::estimation::estimate::Estimate;
-use aeroid::estimation::methods;
 use aeroid::estimation::plugin::Plugin;
-use aeroid::estimation::problem::EstimationProblem;
+use aeroid::estimation::registry::Registry;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};
@@ -29,12 +28,24 @@ fn record() -> FlightRecord {
     record_scenario(&scenario, &profile).unwrap().0
 }
 
-/// Registers a plug-in file once per test process (the registry is global).
+/// The built-in estimators and the plug-ins this file's tests added.
+fn plugins() -> &'static std::sync::Mutex<Registry> {
+    static REGISTRY: std::sync::OnceLock<std::sync::Mutex<Registry>> = std::sync::OnceLock::new();
+    REGISTRY.get_or_init(|| std::sync::Mutex::new(Registry::built_in()))
+}
+
+/// The registry as it stands, the plug-ins added so far among its methods.
+fn registry() -> Registry {
+    plugins().lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// Adds a plug-in file to this file's registry (once) and names it.
 fn registered(path: &Path) -> String {
     let plugin = Plugin::load(path).unwrap();
     let name = aeroid::estimation::estimator::Estimator::name(&plugin).to_string();
-    if methods::find(&name).is_err() {
-        let _ = methods::register(Arc::new(plugin));
+    let mut registry = plugins().lock().unwrap_or_else(|e| e.into_inner());
+    if registry.find(&name).is_err() {
+        registry.add(Arc::new(plugin)).unwrap();
     }
     name
 }
@@ -44,8 +55,9 @@ fn estimate(
     record: &FlightRecord,
     structure: &ModelStructure,
 ) -> aeroid::Result<Estimate> {
-    let problem = EstimationProblem::new(method, vec![record.clone()], structure.clone(), &[])?;
-    methods::estimate(&problem, None)
+    let registry = registry();
+    let problem = registry.problem(method, vec![record.clone()], structure.clone(), &[])?;
+    registry.estimate(&problem, None)
 }
 
 fn relative(a: f64, b: f64) -> f64 {
@@ -252,7 +264,7 @@ fn every_fault_is_an_error_with_its_reason_and_a_counted_failure() {
     // In a study each is a counted failure, the study goes on.
     let study_text = "name = \"faults\"\nscenarios = [\"attas-lateral-multistep\"]\nprofile = \"flight-test-25hz\"\nmodels = [\"attas-cy-beta.toml\"]\nmethods = [\"fault-exit\", \"fault-truth\"]\nruns = 2\nseed = 3\n";
     let path = common::write(&folder, "faults.toml", study_text);
-    let study = aeroid::eval::study::Study::load(path.to_str().unwrap()).unwrap();
+    let study = aeroid::eval::study::Study::load(&registry(), path.to_str().unwrap()).unwrap();
     let result = study.run(2, &|_| {}).unwrap();
     let count = |status: aeroid::eval::row::RowStatus| {
         result
@@ -344,7 +356,7 @@ fn a_study_with_a_plugin_is_deterministic_and_resumable() {
         "name = \"with-plugin\"\nscenarios = [\"attas-lateral-multistep\"]\nprofile = \"flight-test-25hz\"\nmodels = [\"attas-cy-beta.toml\"]\nmethods = [\"ee\", \"{name}\"]\nruns = 3\nseed = 8\n"
     );
     let path = common::write(&folder, "with-plugin.toml", &text);
-    let study = Study::load(path.to_str().unwrap()).unwrap();
+    let study = Study::load(&registry(), path.to_str().unwrap()).unwrap();
     let written = |out: &Path| {
         ["runs.csv", "summary.csv", "study.json"].map(|file| std::fs::read(out.join(file)).unwrap())
     };

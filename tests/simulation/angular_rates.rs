@@ -170,6 +170,7 @@ fn kinematic_rates_cost_equation_error_more_than_output_error() {
         let structure = Structure::load(model).unwrap();
         let fit = |method: &str, record: &FlightRecord| {
             let outcome = estimate_scored(
+                crate::common::registry(),
                 method,
                 record,
                 &truth,
@@ -235,7 +236,7 @@ fn table_row(outcome: &Outcome) -> String {
 #[test]
 fn the_qar_approach_end_to_end() {
     let scenario = approach(true);
-    let names = aeroid::estimation::methods::names();
+    let names = crate::common::registry().names();
     let mut converged = Vec::new();
     let mut reached = std::collections::BTreeSet::new();
     for profile in ["qar-seed000", "flight-test-25hz"] {
@@ -254,6 +255,7 @@ fn the_qar_approach_end_to_end() {
             let structure = Structure::load(model).unwrap();
             for method in &names {
                 let outcome = estimate_scored(
+                    crate::common::registry(),
                     method,
                     &record,
                     &truth,
@@ -446,7 +448,8 @@ thrust_from_fuel_flow = 2.0e-5
 idle_fuel_flow = 0.02
 "#,
     );
-    let study = aeroid::eval::study::Study::load(path.to_str().unwrap()).unwrap();
+    let study = aeroid::eval::study::Study::load(crate::common::registry(), path.to_str().unwrap())
+        .unwrap();
     let result = study.run(0, &|_| {}).unwrap();
     let table = result.table();
     let row = |name: &str| {
@@ -506,7 +509,8 @@ idle_fuel_flow = 0.02
 /// Both sides are asserted.
 #[test]
 fn the_qar_needs_flow_angle_vanes_and_a_faster_frame() {
-    let study = aeroid::eval::study::Study::load("qar-flow-angles").unwrap();
+    let study =
+        aeroid::eval::study::Study::load(crate::common::registry(), "qar-flow-angles").unwrap();
     let result = study.run(0, &|_| {}).unwrap();
     let table = result.table();
     let row = |point: usize, name: &str| {

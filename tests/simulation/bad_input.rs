@@ -267,7 +267,9 @@ method = "oem"
 sigma_tolerance = inf
 "#,
     );
-    let error = aeroid::eval::gate::load(&path).unwrap_err().to_string();
+    let error = aeroid::eval::gate::load(crate::common::registry(), &path)
+        .unwrap_err()
+        .to_string();
     assert!(
         error.contains("never-fails") && error.contains("positive finite"),
         "{error}"
@@ -281,7 +283,7 @@ sigma_tolerance = inf
 #[test]
 fn a_bad_interpolation_names_the_key() {
     use aeroid::estimation::estimator::MethodTables;
-    use aeroid::estimation::problem::EstimationProblem;
+
     use aeroid::estimation::structure::Structure;
     use aeroid::record::recorder::{Profile, record_scenario};
     let mut scenario = Scenario::load("attas-elevator-3211").unwrap();
@@ -296,7 +298,8 @@ fn a_bad_interpolation_names_the_key() {
         let tables: MethodTables =
             toml::from_str(&format!("[{method}]\ninterpolation = {value}")).unwrap();
         let structure = Structure::load("attas-longitudinal").unwrap();
-        let error = EstimationProblem::new(method, vec![record.clone()], structure, &[&tables])
+        let error = crate::common::registry()
+            .problem(method, vec![record.clone()], structure, &[&tables])
             .err()
             .unwrap_or_else(|| panic!("{method}: interpolation = {value} accepted"))
             .to_string();

@@ -343,12 +343,15 @@ fn a_study_with_billions_of_runs_is_refused() {
         &bundled("studies/attas-lateral-acceptance.toml")
             .replace("runs = 100", "runs = 4000000000"),
     );
-    let error = aeroid::eval::study::Study::load(path.to_str().unwrap()).unwrap_err();
+    let error = aeroid::eval::study::Study::load(crate::common::registry(), path.to_str().unwrap())
+        .unwrap_err();
     assert_eq!(
         only_problem(&error, &path),
         "runs: 4000000000 is above the most runs per sweep point, 1000000 (statistics of a thousand runs are within a few percent; a million runs of a one-second fit take eleven days of one core)"
     );
-    let mut study = aeroid::eval::study::Study::load("attas-lateral-acceptance").unwrap();
+    let mut study =
+        aeroid::eval::study::Study::load(crate::common::registry(), "attas-lateral-acceptance")
+            .unwrap();
     let error = study.set_runs(0, "--runs").unwrap_err();
     assert_eq!(problems(&error), ["--runs: must be at least 1"]);
     study.set_runs(3, "--runs").unwrap();

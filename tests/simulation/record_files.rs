@@ -349,7 +349,7 @@ fn scenario_names_its_default_profile() {
 #[test]
 fn check_accepts_a_profile() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/recorders/qar-seed000.toml");
-    let report = aeroid::check::check_file(Path::new(path)).unwrap();
+    let report = aeroid::check::check_file(crate::common::registry(), Path::new(path)).unwrap();
     assert_eq!(report.kind, "recorder profile");
     assert!(report.lines[0].contains("35 channels"));
     let folder = common::temp_folder("check-profile");
@@ -358,7 +358,9 @@ fn check_accepts_a_profile() {
         "bad.toml",
         "name = \"x\"\n[[channels]]\nname = \"pitch\"\nrate = -1\n",
     );
-    let error = aeroid::check::check_file(&bad).unwrap_err().to_string();
+    let error = aeroid::check::check_file(crate::common::registry(), &bad)
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("channels.pitch.rate"), "{error}");
 }
 

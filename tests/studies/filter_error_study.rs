@@ -36,7 +36,11 @@ use aeroid::eval::study::Study;
 
 #[test]
 fn filter_error_is_unbiased_in_turbulence_where_output_error_is_not() {
-    let study = Study::load("attas-lateral-turbulence-acceptance").unwrap();
+    let study = Study::load(
+        crate::common::registry(),
+        "attas-lateral-turbulence-acceptance",
+    )
+    .unwrap();
     assert!(study.runs >= 100);
     let result = study.run(0, &|_| {}).unwrap();
     let table = result.table();

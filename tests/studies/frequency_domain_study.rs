@@ -24,7 +24,7 @@ use aeroid::eval::summary::SummaryRow;
 
 #[test]
 fn fourier_regression_beside_equation_and_output_error() {
-    let study = Study::load("frequency-domain-noise").unwrap();
+    let study = Study::load(crate::common::registry(), "frequency-domain-noise").unwrap();
     assert!(study.runs >= 100);
     let result = study.run(0, &|_| {}).unwrap();
     let table = result.table();

@@ -58,7 +58,7 @@ fn csv_text(rows: &[Row]) -> String {
 #[test]
 fn same_rows_whatever_the_thread_count_and_run_count() {
     let path = study_file("mc-threads", SMALL);
-    let mut study = Study::load(path.to_str().unwrap()).unwrap();
+    let mut study = Study::load(crate::common::registry(), path.to_str().unwrap()).unwrap();
     let ((one, one_rows), (two, two_rows)) = (
         journaled(&study, 1, "mc-threads-1"),
         journaled(&study, 2, "mc-threads-2"),
@@ -94,7 +94,11 @@ fn sweep_points_modify_the_profile() {
         "noise_scale = [0.5, 2.0]",
         "noise_scale = [0.5, 2.0]\nsample_rate = [\"10 Hz\", 50]",
     );
-    let study = Study::load(study_file("mc-sweep", &text).to_str().unwrap()).unwrap();
+    let study = Study::load(
+        crate::common::registry(),
+        study_file("mc-sweep", &text).to_str().unwrap(),
+    )
+    .unwrap();
     let grid: Vec<(Option<f64>, f64)> = study
         .points
         .iter()
@@ -140,7 +144,7 @@ noise_scale = [1.0, -2.0]
 sample_rate = ["fast", "0 Hz"]
 "#;
     let path = study_file("mc-bad", text);
-    let error = Study::load(path.to_str().unwrap()).unwrap_err();
+    let error = Study::load(crate::common::registry(), path.to_str().unwrap()).unwrap_err();
     let message = error.to_string();
     let Error::Invalid {
         path: named,
@@ -173,12 +177,16 @@ sample_rate = ["fast", "0 Hz"]
     assert!(message.contains("unknown method 'magic'; known: ee, swr, oem"));
 
     let typo = study_file("mc-typo", &SMALL.replace("runs = 4", "runs = 4\nrun = 5"));
-    let message = Study::load(typo.to_str().unwrap()).unwrap_err().to_string();
+    let message = Study::load(crate::common::registry(), typo.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
     assert!(
         message.contains("study.toml") && message.contains("unknown field `run`"),
         "{message}"
     );
-    let unknown = Study::load("no-such-study").unwrap_err().to_string();
+    let unknown = Study::load(crate::common::registry(), "no-such-study")
+        .unwrap_err()
+        .to_string();
     assert!(
         unknown.contains("unknown study 'no-such-study'")
             && unknown.contains("attas-lateral-acceptance"),
@@ -243,7 +251,7 @@ const MARGINAL_MISSES_ALLOWED: usize = 2;
 /// 13 s for the study in a release build on 2 busy cores.
 #[test]
 fn acceptance_attas_lateral_100_runs() {
-    let mut study = Study::load("attas-lateral-acceptance").unwrap();
+    let mut study = Study::load(crate::common::registry(), "attas-lateral-acceptance").unwrap();
     let folder = "mc-acceptance";
     assert_eq!(study.runs, 100, "issue 4 asks for at least 100 runs");
     let (result, rows) = journaled(&study, 0, folder);
@@ -337,7 +345,11 @@ fn turbulence_input_and_resolution_axes() {
         "noise_scale = [0.5, 2.0]",
         "turbulence = [\"none\", \"moderate\"]\ninput_scale = [1.0, 0.5]\nresolution_scale = [1.0, 4.0]",
     );
-    let study = Study::load(study_file("mc-axes", &text).to_str().unwrap()).unwrap();
+    let study = Study::load(
+        crate::common::registry(),
+        study_file("mc-axes", &text).to_str().unwrap(),
+    )
+    .unwrap();
     let grid: Vec<(Option<&str>, f64, f64)> = study
         .points
         .iter()
@@ -382,9 +394,12 @@ fn turbulence_input_and_resolution_axes() {
         "noise_scale = [0.5, 2.0]",
         "turbulence = [\"stormy\"]\ninput_scale = [0.0]\nresolution_scale = [-1.0]",
     );
-    let message = Study::load(study_file("mc-axes-bad", &bad).to_str().unwrap())
-        .unwrap_err()
-        .to_string();
+    let message = Study::load(
+        crate::common::registry(),
+        study_file("mc-axes-bad", &bad).to_str().unwrap(),
+    )
+    .unwrap_err()
+    .to_string();
     for field in [
         "sweep.turbulence[0]",
         "sweep.input_scale[0]",
@@ -409,7 +424,11 @@ fn profile_axis() {
             "noise_scale = [0.5, 2.0]",
             "profile = [\"ideal\", \"flight-test-25hz\"]\nnoise_scale = [1.0, 2.0]",
         );
-    let study = Study::load(study_file("mc-profiles", &text).to_str().unwrap()).unwrap();
+    let study = Study::load(
+        crate::common::registry(),
+        study_file("mc-profiles", &text).to_str().unwrap(),
+    )
+    .unwrap();
     let grid: Vec<(&str, f64)> = study
         .points
         .iter()
@@ -460,9 +479,12 @@ fn profile_axis() {
         ("mc-profiles-neither", neither, "profile:"),
         ("mc-profiles-missing", missing, "sweep.profile[1]"),
     ] {
-        let message = Study::load(study_file(name, &text).to_str().unwrap())
-            .unwrap_err()
-            .to_string();
+        let message = Study::load(
+            crate::common::registry(),
+            study_file(name, &text).to_str().unwrap(),
+        )
+        .unwrap_err()
+        .to_string();
         assert!(message.contains(field), "{name}: {message}");
     }
 }
@@ -479,7 +501,11 @@ fn profile_axis() {
 fn missing_channel_rate_and_settings_axes() {
     let axes = "missing = [[], [\"beta\"]]\nchannel_rate = [{}, { ny = \"5 Hz\" }]\nsettings = [{}, { ee = { correlation_lag = 6.0 } }]";
     let text = SMALL.replace("noise_scale = [0.5, 2.0]", axes);
-    let study = Study::load(study_file("mc-axes-more", &text).to_str().unwrap()).unwrap();
+    let study = Study::load(
+        crate::common::registry(),
+        study_file("mc-axes-more", &text).to_str().unwrap(),
+    )
+    .unwrap();
     assert_eq!(study.points.len(), 8);
     let ny_rate = |point: usize| {
         let profile = &study.points[point].profile;
@@ -535,9 +561,12 @@ fn missing_channel_rate_and_settings_axes() {
         "noise_scale = [0.5, 2.0]",
         "missing = [[\"no_such_channel\"]]\nchannel_rate = [{ alpha = \"0 Hz\" }]\nsettings = [{ ee = { no_such_setting = 1 } }]",
     );
-    let message = Study::load(study_file("mc-axes-more-bad", &bad).to_str().unwrap())
-        .unwrap_err()
-        .to_string();
+    let message = Study::load(
+        crate::common::registry(),
+        study_file("mc-axes-more-bad", &bad).to_str().unwrap(),
+    )
+    .unwrap_err()
+    .to_string();
     for field in [
         "sweep.missing[0]",
         "sweep.channel_rate[0].alpha",
@@ -556,7 +585,7 @@ fn derive_names_the_studys_profiles() {
         "derive = { profiles = [\"qar-seed000\"] }\nseed = ",
     );
     let path = study_file("mc-derive", &text);
-    let error = Study::load(path.to_str().unwrap()).unwrap_err();
+    let error = Study::load(crate::common::registry(), path.to_str().unwrap()).unwrap_err();
     let message = error.to_string();
     let Error::Invalid { problems, .. } = &error else {
         panic!("expected a validation error, got {message}");

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 
 #[test]
 fn every_method_ends_as_the_table_says() {
-    let mut study = Study::load("neural-estimators").unwrap();
+    let mut study = Study::load(crate::common::registry(), "neural-estimators").unwrap();
     assert_eq!(study.points.len(), 3);
     study.set_runs(2, "runs").unwrap();
     let rows = std::sync::Mutex::new(Vec::new());

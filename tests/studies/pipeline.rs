@@ -14,9 +14,9 @@ use aeroid::sim::scenario::Scenario;
 fn run_scores_every_method_on_the_lateral_scenario() {
     let scenario = Scenario::load("attas-lateral-multistep").unwrap();
     let profile = aeroid::record::recorder::profile_for(&scenario, None).unwrap();
-    let report = run::run(&scenario, &profile, None).unwrap();
+    let report = run::run(crate::common::registry(), &scenario, &profile, None).unwrap();
     let methods: Vec<String> = report.runs.iter().map(|r| r.method.clone()).collect();
-    assert_eq!(methods, aeroid::estimation::methods::names());
+    assert_eq!(methods, crate::common::registry().names());
     for run in &report.runs {
         let Outcome::Estimated { estimate, scores } = &run.outcome else {
             panic!("{} did not run: {:?}", run.method, run.outcome.reason());
@@ -94,7 +94,7 @@ fn qar_record_is_refused_with_what_each_method_lacks() {
     let mut scenario = Scenario::load("transport-approach").unwrap();
     scenario.duration = 20.0;
     let profile = Profile::load("qar-seed000", None).unwrap();
-    let report = run::run(&scenario, &profile, None).unwrap();
+    let report = run::run(crate::common::registry(), &scenario, &profile, None).unwrap();
     let expected: [(&str, &[&str]); 13] = [
         ("ee", &["airspeed", "p", "r"]),
         ("fdee", &["airspeed", "p", "r"]),
@@ -159,7 +159,9 @@ fn a_scenario_with_wrong_method_settings_is_refused() {
         std::fs::write(&path, format!("{text}\n{table}")).unwrap();
         let scenario = Scenario::load(path.to_str().unwrap()).unwrap();
         let profile = Profile::load("ideal", None).unwrap();
-        let error = run::run(&scenario, &profile, None).unwrap_err().to_string();
+        let error = run::run(crate::common::registry(), &scenario, &profile, None)
+            .unwrap_err()
+            .to_string();
         assert!(
             error.contains("scenario.toml") && error.contains(expected),
             "{error}"

@@ -157,7 +157,7 @@ fn the_first_run_keeps_the_proof_of_match_and_smoothed_histories() {
     use aeroid::eval::study::{Case, Study};
     let folder = common::temp_folder("report_histories");
     let path = common::write(&folder, "history-test.toml", HISTORY_STUDY);
-    let study = Study::load(path.to_str().unwrap()).unwrap();
+    let study = Study::load(crate::common::registry(), path.to_str().unwrap()).unwrap();
     assert!(
         study
             .run_case_with_histories(Case { point: 0, run: 1 }, false)
@@ -270,7 +270,7 @@ fn the_report_plots_a_bounded_share_of_the_runs() {
     use aeroid::eval::report::{SHOWN_RUNS, StudyFolder};
     use aeroid::eval::study::{self, Study};
     let folder = common::temp_folder("report_bounded");
-    let mut study = Study::load("attas-lateral-acceptance").unwrap();
+    let mut study = Study::load(crate::common::registry(), "attas-lateral-acceptance").unwrap();
     study.methods = vec!["ee".into()];
     study.set_runs(SHOWN_RUNS + 1, "runs").unwrap();
     study

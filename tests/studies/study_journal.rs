@@ -12,7 +12,7 @@ use std::process::Command;
 /// A small study: the bundled acceptance study with 6 runs per point,
 /// equation error only (cheap; the journal does not care which method).
 fn study() -> Study {
-    let mut study = Study::load("attas-lateral-acceptance").unwrap();
+    let mut study = Study::load(crate::common::registry(), "attas-lateral-acceptance").unwrap();
     study.methods = vec!["ee".into()];
     study.set_runs(6, "runs").unwrap();
     study

@@ -74,7 +74,7 @@ pub struct Estimate {
     pub details: String,
     /// The network a neural method trained: its size, seed, MSE and R².
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub network: Option<crate::neural::NetworkReport>,
+    pub network: Option<NetworkReport>,
     /// Per parameter, the distribution of its local values over the
     /// record, for methods that estimate a derivative at every sample
     /// (the Delta method); empty otherwise.
@@ -387,6 +387,29 @@ impl Estimate {
         let text = aeroid_core::error::read_text(path)?;
         serde_json::from_str(&text).map_err(|e| Error::Other(format!("{}: {e}", path.display())))
     }
+}
+
+/// What an estimate records of the network a neural method trained
+/// (issue: MSE, R², hidden-layer size and seed in every estimate).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NetworkReport {
+    /// The kind of network: "elm", "recurrent-elm", "feed-forward", "rbf".
+    pub kind: String,
+    /// Its input and output channels, in order.
+    pub inputs: Vec<String>,
+    pub outputs: Vec<String>,
+    /// Neurons in the hidden layer (RBF: the number of centres).
+    pub hidden: usize,
+    /// The seed of its random weights (0 for a network without any).
+    pub seed: u64,
+    pub training_samples: usize,
+    /// MSE and R² of the trained network on its training data (Eqs. 21–22),
+    /// in scaled units.
+    pub mse: f64,
+    pub r_squared: f64,
+    /// Anything else worth knowing (RBF: the cluster radius and width factor).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub settings: Vec<(String, f64)>,
 }
 
 #[cfg(test)]

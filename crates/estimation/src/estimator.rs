@@ -1,7 +1,7 @@
 //! The estimator interface. Every method is one type implementing
-//! [`Estimator`] in its own file under `methods/`, registered by one line
-//! in [`crate::methods`]; the command line, `run`, `gate`,
-//! `study` and the reports find methods only through that registry.
+//! [`Estimator`] in its own file under `methods/`, listed by one line in
+//! [`crate::methods::built_in`]; the command line, `run`, `gate`, `study`
+//! and the reports find methods only through a [`crate::registry::Registry`].
 //!
 //! A method reads one [`EstimationProblem`] (the record or records, the
 //! model structure with its free parameters, start values and bounds, and
@@ -13,18 +13,13 @@
 
 use crate::estimate::Estimate;
 use crate::problem::EstimationProblem;
-use aeroid_core::error::{Error, Problems, Result};
-use serde::Serialize;
-use serde::de::DeserializeOwned;
-use std::collections::BTreeMap;
+use aeroid_core::error::{Error, Result};
+
+pub use crate::settings::{
+    MethodTables, SettingInfo, Settings, merge_settings, parse_settings, setting_infos,
+};
 
 pub use aeroid_core::refusal::{MissingChannel, Refusal, RefusalKind};
-
-/// A method's settings: the merged `[methods.NAME]` table, as JSON values.
-pub type Settings = serde_json::Map<String, serde_json::Value>;
-
-/// `[methods.NAME]` tables as a file carries them, keyed by method name.
-pub type MethodTables = BTreeMap<String, toml::Table>;
 
 /// What `aeroid methods` shows of an estimator.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,15 +34,6 @@ pub struct MethodInfo {
     pub needs: &'static str,
     /// Every setting of its `[methods.NAME]` table.
     pub settings: Vec<SettingInfo>,
-}
-
-/// One key of a method's settings table.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SettingInfo {
-    pub name: &'static str,
-    /// The default, as it would be written in a TOML file.
-    pub default: String,
-    pub meaning: &'static str,
 }
 
 /// An estimation method.
@@ -126,84 +112,4 @@ pub fn refuse_for_linear(
         "[methods.{method}]: not for the linear model '{model}': {}",
         refused.join("; ")
     )))
-}
-
-/// Parses a settings table into a method's settings type, naming the
-/// method and the offending key in the error.
-pub fn parse_settings<T: DeserializeOwned>(method: &str, settings: &Settings) -> Result<T> {
-    serde_json::from_value(serde_json::Value::Object(settings.clone()))
-        .map_err(|error| Error::Other(format!("[methods.{method}]: {error}")))
-}
-
-/// The settings list of [`MethodInfo`]: each key named in `meanings` with
-/// its default from `defaults` (a method's default settings, serialised;
-/// "(none)" where the default is no value). The registry's tests check
-/// that every described key, at its default, is accepted.
-pub fn setting_infos<T: Serialize>(
-    defaults: &T,
-    meanings: &[(&'static str, &'static str)],
-) -> Vec<SettingInfo> {
-    let values = serde_json::to_value(defaults).unwrap_or_default();
-    meanings
-        .iter()
-        .map(|&(name, meaning)| SettingInfo {
-            name,
-            default: values
-                .get(name)
-                .map_or_else(|| "(none)".to_string(), toml_text),
-            meaning,
-        })
-        .collect()
-}
-
-/// A JSON value written the way a TOML file would write it.
-fn toml_text(value: &serde_json::Value) -> String {
-    toml::Value::try_from(value).map_or_else(|_| "(none)".to_string(), |v| v.to_string())
-}
-
-/// Adds a table's keys to `settings`, replacing those it has.
-fn overlay(settings: &mut Settings, table: &toml::Table) {
-    for (key, value) in table {
-        let value = serde_json::to_value(value).unwrap_or(serde_json::Value::Null);
-        settings.insert(key.clone(), value);
-    }
-}
-
-/// Merges `[methods.NAME]` tables key by key: later layers override
-/// earlier ones (model file, then scenario, then study or gate case).
-pub fn merge_settings(method: &str, layers: &[&MethodTables]) -> Settings {
-    let mut merged = Settings::new();
-    for table in layers.iter().filter_map(|layer| layer.get(method)) {
-        overlay(&mut merged, table);
-    }
-    merged
-}
-
-/// Checks a file's `[methods.NAME]` tables: each names a registered method
-/// and holds settings that method accepts. Problems are named
-/// `methods.NAME`.
-pub fn check_method_tables(tables: &MethodTables, problems: &mut Problems) {
-    for (name, table) in tables {
-        let field = format!("methods.{name}");
-        match crate::methods::find(name) {
-            Ok(estimator) => {
-                let mut settings = Settings::new();
-                overlay(&mut settings, table);
-                if let Err(error) = estimator.check_settings(&settings) {
-                    let message = error.to_string();
-                    let prefix = format!("[{field}]: ");
-                    problems.push(field, message.trim_start_matches(&prefix).to_string());
-                }
-            }
-            Err(error) => problems.push(field, error.to_string()),
-        }
-    }
-}
-
-/// [`check_method_tables`] for a file read elsewhere (a scenario): an
-/// error naming `path` and each table's problem.
-pub fn validate_method_tables(tables: &MethodTables, path: &std::path::Path) -> Result<()> {
-    let mut problems = Problems::default();
-    check_method_tables(tables, &mut problems);
-    problems.finish(path, ())
 }

@@ -18,7 +18,9 @@ pub mod neural;
 pub mod plugin;
 pub mod problem;
 pub mod reconstruction;
+pub mod registry;
 pub mod sandbox;
+pub mod settings;
 pub mod solver;
 pub mod structure;
 

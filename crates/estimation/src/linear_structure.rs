@@ -34,10 +34,10 @@
 //! start values are the model's own values: a linear flight
 //! ([`aeroid_eval::linear_flight`]) flies them as its truth.
 
-use crate::estimator::{MethodTables, check_method_tables};
 use crate::model::input_timing::{Chosen, InputInterpolation};
 use crate::model::linear::{Entry, LinearStateSpace, Matrices, Matrix};
 use crate::model::state_space::{fitting_window, observation_step};
+use crate::settings::MethodTables;
 use aeroid_core::catalog;
 use aeroid_core::error::{Problems, Result, parse_toml, read_text};
 use aeroid_record::FlightRecord;
@@ -220,7 +220,6 @@ impl LinearStructure {
             free.push(!spec.fixed);
             bounds.push(range);
         }
-        check_method_tables(&file.methods, &mut problems);
         let inputs: Vec<&str> = file.inputs.iter().map(String::as_str).collect();
         if let Err(error) = file.interpolation.check_channels(&inputs) {
             let text = error.to_string();
@@ -381,7 +380,10 @@ impl LinearStructure {
     }
 
     /// The channels `record` lacks that a fit needs: the inputs and the outputs.
-    pub fn missing_channels(&self, record: &FlightRecord) -> Vec<crate::estimator::MissingChannel> {
+    pub fn missing_channels(
+        &self,
+        record: &FlightRecord,
+    ) -> Vec<aeroid_core::refusal::MissingChannel> {
         let inputs = self
             .inputs
             .iter()
@@ -390,7 +392,7 @@ impl LinearStructure {
         inputs
             .chain(outputs)
             .filter(|(name, _)| record.channel(name).is_err())
-            .map(|(name, purpose)| crate::estimator::MissingChannel {
+            .map(|(name, purpose)| aeroid_core::refusal::MissingChannel {
                 name: name.clone(),
                 purpose: purpose.into(),
             })

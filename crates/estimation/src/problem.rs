@@ -25,9 +25,9 @@
 //!                  "rate": 25.0, "times": [ … ], "values": [ … ] } ] } ] }
 //! ```
 
-use crate::estimator::{MethodTables, Settings, merge_settings};
+use crate::estimator::Estimator;
 use crate::linear_structure::{LinearFile, LinearStructure};
-use crate::methods;
+use crate::settings::{MethodTables, Settings, merge_settings};
 use crate::structure::{ModelStructure, Structure, StructureFile, ZERO_SOURCE};
 use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
@@ -78,18 +78,19 @@ pub struct EstimationProblem {
 }
 
 impl EstimationProblem {
-    /// The problem of `method` on `records`, its settings the structure's
-    /// `[methods.NAME]` table overridden key by key by each of `layers`
-    /// (scenario, then study or gate case). Fails on an unknown method or
-    /// settings it does not accept.
+    /// The problem of `estimator` on `records`, its settings the
+    /// structure's `[methods.NAME]` table overridden key by key by each of
+    /// `layers` (scenario, then study or gate case). Fails on settings the
+    /// method does not accept. A program finds the estimator by name with
+    /// [`crate::registry::Registry::problem`].
     pub fn new(
-        method: &str,
+        estimator: &dyn Estimator,
         records: Vec<FlightRecord>,
         structure: impl Into<Structure>,
         layers: &[&MethodTables],
     ) -> Result<EstimationProblem> {
         let structure = structure.into();
-        let estimator = methods::find(method)?;
+        let method = estimator.name();
         let mut all = vec![structure.methods()];
         all.extend_from_slice(layers);
         let settings = merge_settings(method, &all);
@@ -210,7 +211,6 @@ impl EstimationProblem {
                 origin.display()
             )));
         }
-        methods::find(&document.method)?.check_settings(&document.settings)?;
         if document.records.is_empty() {
             return Err(Error::Other(format!("{}: no record", origin.display())));
         }
@@ -747,6 +747,37 @@ fn write_records(records: &[FlightRecord], depth: usize, out: &mut Vec<u8>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An estimator that is never run: a problem needs one to be built.
+    struct Unused;
+
+    impl Estimator for Unused {
+        fn name(&self) -> &'static str {
+            "unused"
+        }
+
+        fn info(&self) -> crate::estimator::MethodInfo {
+            crate::estimator::MethodInfo {
+                title: "unused",
+                paper: "",
+                equations: "",
+                needs: "",
+                settings: Vec::new(),
+            }
+        }
+
+        fn check_settings(&self, _settings: &Settings) -> Result<()> {
+            Ok(())
+        }
+
+        fn estimate(
+            &self,
+            _problem: &EstimationProblem,
+            _start: Option<&crate::estimate::Estimate>,
+        ) -> Result<crate::estimate::Estimate> {
+            unreachable!("the test only builds the problem")
+        }
+    }
     use aeroid_record::Channel;
 
     /// A heading that the recorder wraps at 360° reaches the estimators
@@ -793,7 +824,7 @@ mod tests {
         );
         assert!(!records[0].channels[2].source.ends_with(UNWRAPPED_SOURCE));
         let problem = EstimationProblem::new(
-            "oem",
+            &Unused,
             records,
             crate::structure::Structure::load("attas-lateral").unwrap(),
             &[],

@@ -42,8 +42,8 @@
 //! dropouts bridged), inside the span where every channel and derivative
 //! exists. Samples where anything needed is not finite, or q̄ ≤ 0, are left out.
 
-use crate::estimator::{MissingChannel, Refusal};
 use aeroid_core::error::{Error, Result};
+use aeroid_core::refusal::{MissingChannel, Refusal};
 use aeroid_core::units::STANDARD_GRAVITY;
 use aeroid_record::prep::differentiation::{Differentiator, corner_times, step_times};
 use aeroid_record::{Channel, FlightRecord};

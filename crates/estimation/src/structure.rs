@@ -32,11 +32,12 @@
 //! output_biases = ["ny"]
 //! ```
 
-use crate::estimator::{MethodTables, Refusal, check_method_tables};
 use crate::linear_structure::{self, LinearStructure};
 use crate::model::driven::Observable;
+use crate::settings::MethodTables;
 use aeroid_core::catalog;
 use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::refusal::Refusal;
 use aeroid_record::{Channel, FlightRecord};
 use aeroid_sim::aero::{AeroModel, AeroSpec};
 use aeroid_sim::aircraft::{Aircraft, AircraftFile};
@@ -194,7 +195,6 @@ impl ModelStructure {
         }
         tie_parameters(&mut aircraft.aero, &file.parameters, &mut problems);
         let (free, bounds) = parameter_settings(&aircraft.aero, &file.parameters, &mut problems);
-        check_method_tables(&file.methods, &mut problems);
         let structure = ModelStructure {
             name: file.name.clone(),
             path: path.to_path_buf(),
@@ -319,7 +319,16 @@ impl Structure {
         }
     }
 
-    /// The file's `[methods.NAME]` tables.
+    /// The file it was read from.
+    pub fn path(&self) -> &std::path::Path {
+        match self {
+            Structure::SixDof(s) => &s.path,
+            Structure::Linear(s) => &s.path,
+        }
+    }
+
+    /// The file's `[methods.NAME]` tables (checked against the methods by
+    /// [`crate::registry::Registry::validate_tables`] before a fit).
     pub fn methods(&self) -> &MethodTables {
         match self {
             Structure::SixDof(s) => &s.methods,

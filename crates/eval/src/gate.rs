@@ -32,10 +32,8 @@
 use crate::run::{self, Outcome};
 use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
 use aeroid_estimation::estimate::{DiagnosisKind, Estimate};
-use aeroid_estimation::estimator::{
-    MethodTables, Refusal, RefusalKind, check_method_tables, validate_method_tables,
-};
-use aeroid_estimation::methods;
+use aeroid_estimation::estimator::{MethodTables, Refusal, RefusalKind};
+use aeroid_estimation::registry::Registry;
 use aeroid_estimation::structure::Structure;
 use aeroid_record::recorder::Profile;
 use aeroid_sim::scenario::Scenario;
@@ -389,12 +387,12 @@ impl GateResult {
 }
 
 /// Loads and validates a gate file.
-pub fn load(path: &Path) -> Result<GateFile> {
+pub fn load(registry: &Registry, path: &Path) -> Result<GateFile> {
     let file: GateFile = parse_toml(path, &read_text(path)?)?;
     let mut problems = Problems::default();
     for (i, case) in file.cases.iter().enumerate() {
         let field = format!("case[{i}] ({})", case.name);
-        if let Err(error) = methods::find(&case.method) {
+        if let Err(error) = registry.find(&case.method) {
             problems.push(format!("{field}.method"), error.to_string());
         }
         for (key, reference) in [
@@ -410,7 +408,7 @@ pub fn load(path: &Path) -> Result<GateFile> {
             }
         }
         let mut tables = Problems::default();
-        check_method_tables(&case.methods, &mut tables);
+        registry.check_tables(&case.methods, &mut tables);
         for problem in tables.0 {
             problems.push(format!("{field}.{}", problem.field), problem.message);
         }
@@ -542,14 +540,14 @@ pub struct Flown {
 /// that cannot be set up (unknown scenario, profile or model, a departing
 /// simulation) or an estimator that failed; an estimator's refusal is the
 /// case's `refusal`.
-pub fn run_case(case: &GateCase) -> Result<GateResult> {
-    Ok(judge(case, fly_case(case)?))
+pub fn run_case(registry: &Registry, case: &GateCase) -> Result<GateResult> {
+    Ok(judge(case, fly_case(registry, case)?))
 }
 
 /// Flies, records and estimates a case.
-pub fn fly_case(case: &GateCase) -> Result<Flown> {
+pub fn fly_case(registry: &Registry, case: &GateCase) -> Result<Flown> {
     let scenario = Scenario::load(&case.scenario)?;
-    validate_method_tables(&scenario.methods, &scenario.path)?;
+    registry.validate_tables(&scenario.methods, &scenario.path)?;
     let profile = Profile::load(&case.profile, None)?;
     let structure = Structure::load(&case.model)?;
     let (record, truth) = crate::linear_flight::record_flight(&scenario, &profile, scenario.seed)?;
@@ -558,6 +556,7 @@ pub fn fly_case(case: &GateCase) -> Result<Flown> {
         None => record,
     };
     match run::estimate_scored(
+        registry,
         &case.method,
         &record,
         &truth,
@@ -934,7 +933,7 @@ mod tests {
         for text in ["", "case = []\n"] {
             let path = folder.join("gates.toml");
             std::fs::write(&path, text).unwrap();
-            let error = load(&path).unwrap_err().to_string();
+            let error = load(&Registry::built_in(), &path).unwrap_err().to_string();
             assert!(error.contains("no [[case]]"), "{error}");
         }
         std::fs::remove_dir_all(&folder).unwrap();

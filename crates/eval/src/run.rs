@@ -10,9 +10,8 @@
 use crate::score::{self, ParameterScore};
 use aeroid_core::error::{Error, Result};
 use aeroid_estimation::estimate::Estimate;
-use aeroid_estimation::estimator::{MethodTables, Refusal, validate_method_tables};
-use aeroid_estimation::methods;
-use aeroid_estimation::problem::EstimationProblem;
+use aeroid_estimation::estimator::{MethodTables, Refusal};
+use aeroid_estimation::registry::Registry;
 use aeroid_estimation::structure::Structure;
 use aeroid_record::FlightRecord;
 use aeroid_record::recorder::Profile;
@@ -107,11 +106,12 @@ pub struct RunReport {
 /// record the estimators read is then the derived one) and estimates;
 /// fails only when the flight itself cannot be made or derived.
 pub fn run(
+    registry: &Registry,
     scenario: &Scenario,
     profile: &Profile,
     derive: Option<&aeroid_record::prep::derive::Options>,
 ) -> Result<RunReport> {
-    validate_method_tables(&scenario.methods, &scenario.path)?;
+    registry.validate_tables(&scenario.methods, &scenario.path)?;
     let (recorded, truth) = crate::linear_flight::record_flight(scenario, profile, scenario.seed)?;
     let mut derived = derive
         .map(|options| aeroid_record::prep::derive::derive(&recorded, options))
@@ -120,7 +120,7 @@ pub fn run(
         Some(derived) => std::mem::take(&mut derived.record),
         None => recorded,
     };
-    let names = methods::names();
+    let names = registry.names();
     let mut runs = Vec::new();
     for (index, reference) in scenario.models.iter().enumerate() {
         let field = format!("models[{index}]");
@@ -132,9 +132,14 @@ pub fn run(
         )
         .and_then(|path| Structure::load(&path.to_string_lossy()));
         let outcomes = match &structure {
-            Ok(structure) => {
-                estimate_each(&names, &record, &truth, structure, &[&scenario.methods])
-            }
+            Ok(structure) => estimate_each(
+                registry,
+                &names,
+                &record,
+                &truth,
+                structure,
+                &[&scenario.methods],
+            ),
             Err(error) => names
                 .iter()
                 .map(|name| (name.clone(), Outcome::Failed(error.to_string())))
@@ -161,6 +166,7 @@ pub fn run(
 /// ([`aeroid_estimation::estimator::Estimator::starts_from`]) gets it when
 /// that method ran before it here.
 pub fn estimate_each(
+    registry: &Registry,
     methods: &[String],
     record: &FlightRecord,
     truth: &RunTruth,
@@ -169,12 +175,13 @@ pub fn estimate_each(
 ) -> Vec<(String, Outcome)> {
     let mut outcomes: Vec<(String, Outcome)> = Vec::with_capacity(methods.len());
     for method in methods {
-        let start = methods::find(method)
+        let start = registry
+            .find(method)
             .ok()
             .and_then(|estimator| estimator.starts_from())
             .and_then(|from| outcomes.iter().find(|(name, _)| name == from))
             .and_then(|(_, outcome)| outcome.estimate());
-        let outcome = estimate_scored(method, record, truth, structure, layers, start);
+        let outcome = estimate_scored(registry, method, record, truth, structure, layers, start);
         outcomes.push((method.clone(), outcome));
     }
     outcomes
@@ -184,6 +191,7 @@ pub fn estimate_each(
 /// the run's truth; its settings are the model's `[methods.NAME]` table
 /// overridden by `layers` (scenario, study or gate case).
 pub fn estimate_scored(
+    registry: &Registry,
     method: &str,
     record: &FlightRecord,
     truth: &RunTruth,
@@ -192,8 +200,9 @@ pub fn estimate_scored(
     start: Option<&Estimate>,
 ) -> Outcome {
     Outcome::of(
-        EstimationProblem::new(method, vec![record.clone()], structure.clone(), layers)
-            .and_then(|problem| methods::estimate(&problem, start))
+        registry
+            .problem(method, vec![record.clone()], structure.clone(), layers)
+            .and_then(|problem| registry.estimate(&problem, start))
             .map(|estimate| {
                 let scores = score::score(&estimate, Some(truth), structure.score_kind());
                 (estimate, scores)

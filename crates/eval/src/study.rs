@@ -58,8 +58,8 @@ use aeroid_core::limits;
 use aeroid_core::random;
 use aeroid_core::units::Quantity;
 use aeroid_estimation::estimate::Estimate;
-use aeroid_estimation::estimator::{MethodTables, check_method_tables, validate_method_tables};
-use aeroid_estimation::methods;
+use aeroid_estimation::estimator::MethodTables;
+use aeroid_estimation::registry::Registry;
 use aeroid_estimation::structure::Structure;
 use aeroid_record::recorder::{Profile, parse_rate};
 use aeroid_sim::scenario::Scenario;
@@ -135,17 +135,19 @@ impl<'de> Deserialize<'de> for StudyMethods {
 }
 
 impl StudyMethods {
-    /// The method names, in the order they run.
-    pub fn names(&self) -> Vec<String> {
+    /// The method names, in the order they run (for tables, the
+    /// registry's order, then the names it does not know).
+    pub fn names(&self, registry: &Registry) -> Vec<String> {
         match self {
             StudyMethods::Names(names) => names.clone(),
-            StudyMethods::Tables(tables) => methods::names()
+            StudyMethods::Tables(tables) => registry
+                .names()
                 .into_iter()
                 .filter(|name| tables.contains_key(name))
                 .chain(
                     tables
                         .keys()
-                        .filter(|name| methods::find(name).is_err())
+                        .filter(|name| registry.find(name).is_err())
                         .cloned(),
                 )
                 .collect(),
@@ -243,6 +245,8 @@ pub struct Study {
     pub points: Vec<SweepPoint>,
     /// The derive step, on the records of the profiles it names.
     pub derive: Option<aeroid_record::prep::derive::DeriveTable>,
+    /// The estimators the study runs its methods from.
+    pub registry: Registry,
 }
 
 /// One run at one sweep point.
@@ -276,15 +280,15 @@ pub struct StudyResult {
 
 impl Study {
     /// Loads a study by bundled name (`studies/NAME.toml`) or path.
-    pub fn load(reference: &str) -> Result<Study> {
+    pub fn load(registry: &Registry, reference: &str) -> Result<Study> {
         let path = catalog::resolve(reference, catalog::STUDY_FOLDER, None)?;
         let file: StudyFile = parse_toml(&path, &read_text(&path)?)?;
-        Study::from_file(&file, &path)
+        Study::from_file(registry, &file, &path)
     }
 
     /// Validates a parsed study and loads the files it names, reporting every
     /// problem at once under its field.
-    pub fn from_file(file: &StudyFile, path: &Path) -> Result<Study> {
+    pub fn from_file(registry: &Registry, file: &StudyFile, path: &Path) -> Result<Study> {
         let base = path.parent().unwrap_or(Path::new("."));
         let mut problems = Problems::default();
         if file.name.trim().is_empty() {
@@ -296,15 +300,15 @@ impl Study {
         };
         let scenarios = load_each("scenarios", &file.scenarios, &mut problems, |r| {
             let scenario = Scenario::load(&resolved(r, catalog::SCENARIO_FOLDER)?)?;
-            validate_method_tables(&scenario.methods, &scenario.path)?;
+            registry.validate_tables(&scenario.methods, &scenario.path)?;
             Ok(scenario)
         });
         let models = load_each("models", &file.models, &mut problems, |r| {
             Structure::load(&resolved(r, catalog::MODEL_FOLDER)?)
         });
         let profiles = study_profiles(file, base, &mut problems);
-        check_methods(&file.methods, &mut problems);
-        check_method_tables(&file.methods.tables(), &mut problems);
+        check_methods(&file.methods, registry, &mut problems);
+        registry.check_tables(&file.methods.tables(), &mut problems);
         if let Err(message) = check_runs(file.runs) {
             problems.push("runs", message);
         }
@@ -342,7 +346,7 @@ impl Study {
         }
         let missing = missing_axis(&sweep.missing, &profiles, &mut problems);
         let channel_rates = channel_rate_axis(&sweep.channel_rate, &profiles, &mut problems);
-        let variants = settings_axis(&sweep.settings, &mut problems);
+        let variants = settings_axis(&sweep.settings, registry, &mut problems);
         if !problems.is_empty() {
             return Err(Error::Invalid {
                 path: path.to_path_buf(),
@@ -414,13 +418,14 @@ impl Study {
             scenarios,
             profiles,
             models,
-            methods: file.methods.names(),
+            methods: file.methods.names(registry),
             settings: file.methods.tables(),
             setting_variants: variants,
             runs: file.runs,
             seed: file.seed,
             points,
             derive: file.derive.clone(),
+            registry: registry.clone(),
         };
         study.check_size("runs")?;
         Ok(study)
@@ -589,6 +594,7 @@ impl Study {
         for model in &self.models {
             let outcomes = match &recorded {
                 Ok((record, truth, _)) => run::estimate_each(
+                    &self.registry,
                     &self.methods,
                     record,
                     truth,
@@ -1016,13 +1022,17 @@ fn channel_rate_axis(
 /// The settings axis: `[{}]` when empty; each variant's tables checked as
 /// the study's `[methods.NAME]` tables are, problems named
 /// `sweep.settings[i].methods.NAME`.
-fn settings_axis(spec: &[MethodTables], problems: &mut Problems) -> Vec<MethodTables> {
+fn settings_axis(
+    spec: &[MethodTables],
+    registry: &Registry,
+    problems: &mut Problems,
+) -> Vec<MethodTables> {
     if spec.is_empty() {
         return vec![MethodTables::new()];
     }
     for (i, variant) in spec.iter().enumerate() {
         let mut found = Problems::default();
-        check_method_tables(variant, &mut found);
+        registry.check_tables(variant, &mut found);
         for problem in found.0 {
             problems.push(
                 format!("sweep.settings[{i}].{}", problem.field),
@@ -1084,14 +1094,14 @@ fn load_each<T>(
         .collect()
 }
 
-fn check_methods(methods: &StudyMethods, problems: &mut Problems) {
-    let names = methods.names();
+fn check_methods(methods: &StudyMethods, registry: &Registry, problems: &mut Problems) {
+    let names = methods.names(registry);
     if names.is_empty() {
         problems.push("methods", "must name at least one");
     }
     if let StudyMethods::Names(names) = methods {
         for (i, method) in names.iter().enumerate() {
-            if let Err(error) = methods::find(method) {
+            if let Err(error) = registry.find(method) {
                 problems.push(format!("methods[{i}]"), error.to_string());
             }
         }

@@ -277,6 +277,16 @@ struct TimeBase {
 }
 
 impl FlightRecord {
+    /// The record's name in messages and reports: its scenario, or for an
+    /// imported record without one its profile.
+    pub fn name(&self) -> &str {
+        if self.scenario.is_empty() {
+            &self.profile
+        } else {
+            &self.scenario
+        }
+    }
+
     /// The channel with this name, or an error listing the channels present.
     pub fn channel(&self, name: &str) -> Result<&Channel> {
         self.channels

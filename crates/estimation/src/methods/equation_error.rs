@@ -787,11 +787,7 @@ pub(crate) fn block_covariance<'a>(
 
 /// A record's name for estimates: its scenario, else its profile.
 pub(crate) fn record_name(record: &FlightRecord) -> String {
-    if record.scenario.is_empty() {
-        record.profile.clone()
-    } else {
-        record.scenario.clone()
-    }
+    record.name().to_string()
 }
 
 /// A note for each estimate outside its bounds in the structure file (least

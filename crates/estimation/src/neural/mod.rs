@@ -137,28 +137,7 @@ pub fn fit_metrics<R: AsRef<[f64]>>(targets: &[R], predictions: &[R]) -> (f64, f
     (square / count as f64, r_squared / outputs as f64)
 }
 
-/// What an estimate records of the network a neural method trained
-/// (issue: MSE, R², hidden-layer size and seed in every estimate).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct NetworkReport {
-    /// The kind of network: "elm", "recurrent-elm", "feed-forward", "rbf".
-    pub kind: String,
-    /// Its input and output channels, in order.
-    pub inputs: Vec<String>,
-    pub outputs: Vec<String>,
-    /// Neurons in the hidden layer (RBF: the number of centres).
-    pub hidden: usize,
-    /// The seed of its random weights (0 for a network without any).
-    pub seed: u64,
-    pub training_samples: usize,
-    /// MSE and R² of the trained network on its training data (Eqs. 21–22),
-    /// in scaled units.
-    pub mse: f64,
-    pub r_squared: f64,
-    /// Anything else worth knowing (RBF: the cluster radius and width factor).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub settings: Vec<(String, f64)>,
-}
+pub use crate::estimate::NetworkReport;
 
 #[cfg(test)]
 mod tests {

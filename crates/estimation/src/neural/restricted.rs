@@ -65,7 +65,6 @@
 
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{MissingChannel, Refusal};
-use crate::methods::equation_error::record_name;
 use crate::neural::{NetworkReport, Scaling};
 use crate::problem::EstimationProblem;
 use crate::reconstruction::{
@@ -951,7 +950,7 @@ pub fn estimate(
     );
     let solution = gauss_newton::solve(&mut fit, &theta0, &solver);
     let mut estimate = Estimate::from_solution(
-        (method, structure.name.clone(), record_name(record)),
+        (method, structure.name.clone(), record.name().to_string()),
         &names,
         &theta0,
         &solution,

@@ -1,0 +1,271 @@
+//! The registry of estimators: a value built once — the built-in methods
+//! ([`crate::methods::built_in`]), then the plug-ins of the plug-in folders
+//! ([`crate::plugin::discover`]), then those a program adds — and passed to
+//! whatever runs a method (the command line, `run`, `gate`, `study`).
+//!
+//! It turns a method name into an [`Estimator`], builds the
+//! [`EstimationProblem`] of a method (its settings merged and checked once)
+//! and runs it, judging every estimate the same way ([`Estimate::assess`]):
+//! an estimate with unidentified parameters, a degenerate covariance, no
+//! progress or a fit worse than the mean is not "converged", whichever
+//! method made it.
+
+use crate::estimate::Estimate;
+use crate::estimator::{Estimator, Refusal};
+use crate::problem::EstimationProblem;
+use crate::settings::{MethodTables, Settings, overlay};
+use crate::structure::{ModelStructure, Structure};
+use aeroid_core::error::{Error, Problems, Result};
+use aeroid_record::FlightRecord;
+use std::sync::Arc;
+
+/// The estimators a program can run, in the order `aeroid run` runs them.
+#[derive(Clone)]
+pub struct Registry {
+    estimators: Vec<Arc<dyn Estimator>>,
+    /// Plug-in files that could not be loaded or were left out, each with
+    /// its reason.
+    plugin_problems: Vec<String>,
+}
+
+impl std::fmt::Debug for Registry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Registry")
+            .field("methods", &self.names())
+            .field("plugin_problems", &self.plugin_problems)
+            .finish()
+    }
+}
+
+impl Registry {
+    /// The built-in estimators alone.
+    pub fn built_in() -> Registry {
+        Registry {
+            estimators: crate::methods::built_in(),
+            plugin_problems: Vec::new(),
+        }
+    }
+
+    /// The built-in estimators, then the plug-ins of the plug-in folders
+    /// (the data folder's `plugins/` and those of `AEROID_PLUGINS`); a
+    /// plug-in named like an earlier method is left out, with a problem.
+    pub fn with_plugins() -> Registry {
+        let mut registry = Registry::built_in();
+        let (plugins, problems) = crate::plugin::discover();
+        registry.plugin_problems = problems.iter().map(ToString::to_string).collect();
+        for plugin in plugins {
+            let path = plugin.path().to_path_buf();
+            if let Err(error) = registry.add(Arc::new(plugin)) {
+                registry.plugin_problems.push(format!(
+                    "{}: {error}; the plug-in is left out",
+                    path.display()
+                ));
+            }
+        }
+        registry
+    }
+
+    /// Adds an estimator; its name must be new.
+    pub fn add(&mut self, estimator: Arc<dyn Estimator>) -> Result<()> {
+        let name = estimator.name();
+        if self.estimators.iter().any(|e| e.name() == name) {
+            return Err(Error::Other(format!(
+                "a method named '{name}' exists already"
+            )));
+        }
+        self.estimators.push(estimator);
+        Ok(())
+    }
+
+    /// Every estimator, in registry order.
+    pub fn all(&self) -> &[Arc<dyn Estimator>] {
+        &self.estimators
+    }
+
+    /// Every estimator's name, in registry order.
+    pub fn names(&self) -> Vec<String> {
+        self.estimators
+            .iter()
+            .map(|e| e.name().to_string())
+            .collect()
+    }
+
+    /// The plug-in files left out of the registry, and why.
+    pub fn plugin_problems(&self) -> &[String] {
+        &self.plugin_problems
+    }
+
+    /// The estimator named `name`.
+    pub fn find(&self, name: &str) -> Result<&Arc<dyn Estimator>> {
+        self.estimators
+            .iter()
+            .find(|e| e.name() == name)
+            .ok_or_else(|| Error::Unknown {
+                kind: "method",
+                name: name.to_string(),
+                known: self.names(),
+            })
+    }
+
+    /// Checks a file's `[methods.NAME]` tables: each names a registered
+    /// method and holds settings that method accepts. Problems are named
+    /// `methods.NAME`.
+    pub fn check_tables(&self, tables: &MethodTables, problems: &mut Problems) {
+        for (name, table) in tables {
+            let field = format!("methods.{name}");
+            match self.find(name) {
+                Ok(estimator) => {
+                    let mut settings = Settings::new();
+                    overlay(&mut settings, table);
+                    if let Err(error) = estimator.check_settings(&settings) {
+                        let message = error.to_string();
+                        let prefix = format!("[{field}]: ");
+                        problems.push(field, message.trim_start_matches(&prefix).to_string());
+                    }
+                }
+                Err(error) => problems.push(field, error.to_string()),
+            }
+        }
+    }
+
+    /// [`Registry::check_tables`] for a file read elsewhere (a scenario, a
+    /// model): an error naming `path` and each table's problem.
+    pub fn validate_tables(&self, tables: &MethodTables, path: &std::path::Path) -> Result<()> {
+        let mut problems = Problems::default();
+        self.check_tables(tables, &mut problems);
+        problems.finish(path, ())
+    }
+
+    /// The problem of `method` on `records` ([`EstimationProblem::new`]).
+    pub fn problem(
+        &self,
+        method: &str,
+        records: Vec<FlightRecord>,
+        structure: impl Into<Structure>,
+        layers: &[&MethodTables],
+    ) -> Result<EstimationProblem> {
+        let structure = structure.into();
+        self.validate_tables(structure.methods(), structure.path())?;
+        EstimationProblem::new(self.find(method)?.as_ref(), records, structure, layers)
+    }
+
+    /// Runs the problem's method and judges its result.
+    pub fn estimate(
+        &self,
+        problem: &EstimationProblem,
+        start: Option<&Estimate>,
+    ) -> Result<Estimate> {
+        let estimator = self.find(&problem.method)?;
+        estimator.check_settings(&problem.settings)?;
+        if let Structure::SixDof(structure) = &problem.structure {
+            check_model_features(estimator.as_ref(), structure)?;
+        }
+        let mut estimate = estimator.estimate(problem, start)?;
+        if let Structure::SixDof(structure) = &problem.structure {
+            estimate.notes.extend(tied_notes(structure, &estimate));
+        }
+        for note in problem.notes() {
+            if !estimate.notes.contains(&note) {
+                estimate.notes.push(note);
+            }
+        }
+        Ok(estimate.assess())
+    }
+}
+
+/// Refuses a model that uses a feature the method does not fit (tied
+/// parameters, a moment reference point off the CG).
+fn check_model_features(estimator: &dyn Estimator, structure: &ModelStructure) -> Result<()> {
+    let aero = &structure.aircraft.aero;
+    let reason = if aero.has_ties() && !estimator.fits_tied_parameters() {
+        "it has tied parameters ([parameters.NAME] tie), which this method does not fit"
+    } else if aero.moment_reference != nalgebra::Vector3::zeros()
+        && !estimator.fits_moment_reference()
+    {
+        "its moments are taken about a point other than the CG ([aero.moment_reference]), which this method does not fit"
+    } else {
+        return Ok(());
+    };
+    Err(Error::Refused(Refusal::UnsuitableModel {
+        method: estimator.name().to_string(),
+        model: structure.name.clone(),
+        reason: reason.into(),
+    }))
+}
+
+/// A note per tied parameter: its relation, and its value and standard
+/// error from its master's estimate (σ = |c|·σ_master). A tied parameter
+/// is not in the estimate's parameters, so it is not scored as if it had
+/// been estimated independently (as a fixed one is not).
+pub fn tied_notes(structure: &ModelStructure, estimate: &Estimate) -> Vec<String> {
+    let aero = &structure.aircraft.aero;
+    let names = aero.parameters.names();
+    (0..names.len())
+        .filter_map(|i| aero.tie_of(i).map(|tie| (i, tie)))
+        .map(|(i, tie)| {
+            let master = &names[tie.master];
+            let relation = format!(
+                "{} is tied: {} = {}·{master} + {}",
+                names[i], names[i], tie.factor, tie.offset
+            );
+            match estimate.parameter(master) {
+                Some(p) => format!(
+                    "{relation} = {:.6e} ± {:.3e} (from {master}'s estimate; not estimated independently)",
+                    tie.factor * p.value + tie.offset,
+                    tie.factor.abs() * p.standard_error
+                ),
+                None => format!(
+                    "{relation} = {:.6e} ({master} not estimated)",
+                    aero.parameters.values()[i]
+                ),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimator::Settings;
+
+    /// Every registered method is described (paper, equations, needs),
+    /// every setting it describes is accepted at its stated default, and a
+    /// key it does not have is refused with the key named.
+    #[test]
+    fn every_method_describes_its_settings_truthfully() {
+        let registry = Registry::built_in();
+        let names = registry.names();
+        for estimator in registry.all() {
+            let (name, info) = (estimator.name(), estimator.info());
+            assert_eq!(names.iter().filter(|n| **n == name).count(), 1);
+            assert!(!info.paper.is_empty() && !info.equations.is_empty() && !info.needs.is_empty());
+            let mut defaults = Settings::new();
+            for setting in info.settings.iter().filter(|s| s.default != "(none)") {
+                let table: toml::Table = toml::from_str(&format!("value = {}", setting.default))
+                    .unwrap_or_else(|e| panic!("{name} {}: {e}", setting.name));
+                defaults.insert(
+                    setting.name.to_string(),
+                    serde_json::to_value(&table["value"]).unwrap(),
+                );
+            }
+            estimator
+                .check_settings(&defaults)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let mut unknown = Settings::new();
+            unknown.insert("no_such_setting".into(), serde_json::Value::from(1));
+            let error = estimator.check_settings(&unknown).unwrap_err().to_string();
+            assert!(error.contains("no_such_setting"), "{name}: {error}");
+        }
+    }
+
+    /// The registry resolves names and refuses an unknown one with the list.
+    #[test]
+    fn unknown_method_names_the_known_ones() {
+        let error = Registry::built_in()
+            .find("no-such-method")
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(error.contains("ee") && error.contains("oem"), "{error}");
+    }
+}
