@@ -8,9 +8,9 @@ pub mod dual;
 pub mod fourier;
 pub mod gauss_newton;
 pub mod kalman;
-pub mod kept;
 pub mod regression;
 pub mod simd;
 pub mod status;
 
+pub use kalman::kept;
 pub use status::Status;
