@@ -1,4 +1,8 @@
-//! TODO
+//! The gain constraint diag(K·C) ≤ 1 (Jategaonkar §5.3, FVSysID's `kcle1`):
+//! the Gauss–Newton step as the quadratic program min gᵀΔ + ½·ΔᵀMΔ subject
+//! to the constraint linearised, by the active-set method (Nocedal &
+//! Wright, "Numerical Optimization", §16.5) with second-order corrections
+//! (§18.3).
 
 use super::*;
 

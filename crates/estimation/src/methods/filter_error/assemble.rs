@@ -1,6 +1,8 @@
-//! TODO
+//! The estimate of a fit: the aerodynamic parameters with their block of
+//! the Cramér–Rao covariance; F, G and R in the notes and details.
 
 use super::*;
+use crate::estimate::ParameterEstimate;
 
 /// The names of the noise unknowns: F's entries of the `noisy` states and,
 /// with the time-varying gain, G's of the `outputs`.
@@ -61,16 +63,42 @@ pub(super) fn assemble<M: StateSpaceModel + ?Sized>(
         &result.solution,
     );
     let aero = names.parameters.len();
+    let noise = &full.parameters[aero..];
+    let details = details(fit.gain, result, noise, outputs);
+    noise_notes(fit, result, names, noise, outputs, &mut notes);
+    let fits = output_fits(fit, result, outputs);
+    Estimate {
+        parameters: full.parameters[..aero].to_vec(),
+        covariance: full.covariance[..aero]
+            .iter()
+            .map(|row| row[..aero].to_vec())
+            .collect(),
+        fits,
+        wall_time,
+        notes,
+        details,
+        ..full
+    }
+}
+
+/// The estimate's details: F (and G) with their Cramér–Rao σ, R or G·Gᵀ's
+/// diagonal, and a full R's correlations.
+fn details(
+    gain: Gain,
+    result: &FitResult,
+    noise: &[ParameterEstimate],
+    outputs: &[String],
+) -> String {
     let mut details = String::new();
-    if !names.noise.is_empty() {
-        details.push_str(match fit.gain {
+    if !noise.is_empty() {
+        details.push_str(match gain {
             Gain::Steady => "process-noise distribution F (diagonal), Cramér–Rao σ:\n",
             Gain::TimeVarying => {
                 "process-noise distribution F and measurement-noise G (diagonal), Cramér–Rao σ:\n"
             }
         });
     }
-    for p in &full.parameters[aero..] {
+    for p in noise {
         details.push_str(&format!(
             "  {} = {:.6e} ± {:.3e} (start {:.3e})\n",
             p.name,
@@ -79,7 +107,7 @@ pub(super) fn assemble<M: StateSpaceModel + ?Sized>(
             p.start
         ));
     }
-    details.push_str(match (fit.gain, &result.full) {
+    details.push_str(match (gain, &result.full) {
         (Gain::Steady, None) => "innovation covariance R (diagonal):\n",
         (Gain::Steady, Some(_)) => {
             "innovation covariance R (full, one time base): variances, then correlations:\n"
@@ -100,14 +128,28 @@ pub(super) fn assemble<M: StateSpaceModel + ?Sized>(
             }
         }
     }
-    if !names.noise.is_empty() {
+    details
+}
+
+/// The notes on the noise: F (and G) estimated, the gain constraint where
+/// it is active, the form of R and its determinant, the outputs fitted to
+/// rounding.
+fn noise_notes<M: StateSpaceModel + ?Sized>(
+    fit: &FilterErrorFit<'_, M>,
+    result: &FitResult,
+    names: &Names,
+    noise: &[ParameterEstimate],
+    outputs: &[String],
+    notes: &mut Vec<String>,
+) {
+    if !noise.is_empty() {
         notes.push(format!(
             "{} {}; F started at {} × F_ref",
             match fit.gain {
                 Gain::Steady => "process noise",
                 Gain::TimeVarying => "process and measurement noise",
             },
-            full.parameters[aero..]
+            noise
                 .iter()
                 .map(|p| format!(
                     "{} = {:.4e} ± {:.2e}",
@@ -169,7 +211,15 @@ pub(super) fn assemble<M: StateSpaceModel + ?Sized>(
                 .join(", ")
         ));
     }
-    let fits = result
+}
+
+/// Each output's measured and predicted values at the solution's pass.
+fn output_fits<M: StateSpaceModel + ?Sized>(
+    fit: &FilterErrorFit<'_, M>,
+    result: &FitResult,
+    outputs: &[String],
+) -> Vec<OutputFit> {
+    result
         .pass
         .as_ref()
         .map(|pass| {
@@ -186,17 +236,5 @@ pub(super) fn assemble<M: StateSpaceModel + ?Sized>(
                 })
                 .collect()
         })
-        .unwrap_or_default();
-    Estimate {
-        parameters: full.parameters[..aero].to_vec(),
-        covariance: full.covariance[..aero]
-            .iter()
-            .map(|row| row[..aero].to_vec())
-            .collect(),
-        fits,
-        wall_time,
-        notes,
-        details,
-        ..full
-    }
+        .unwrap_or_default()
 }

@@ -1,4 +1,5 @@
-//! TODO
+//! The registered method and the fit of a 6-DOF structure: the states
+//! driven by process noise, the start, the fit and the estimate.
 
 use super::*;
 
@@ -217,21 +218,7 @@ pub fn filter_error_from(
         Start::EquationError => regression_start(record, structure, regression, &file, &mut notes),
         Start::Model => None,
     };
-    let result = match regression {
-        Some(theta) => match fit.fit(&theta, solver.clone()) {
-            Ok(result) => {
-                notes.push("started from equation error's estimates".into());
-                Ok(result)
-            }
-            Err(error) => {
-                notes.push(format!(
-                    "started from the model file's values: no filter from equation error's estimates ({error})"
-                ));
-                fit.fit(&file, solver)
-            }
-        },
-        None => fit.fit(&file, solver),
-    }?;
+    let result = fit_from_start(&mut fit, regression, &file, solver, &mut notes)?;
     Ok(assemble(
         (METHOD, &structure.name, &structure.outputs),
         record,
@@ -241,4 +228,31 @@ pub fn filter_error_from(
         notes,
         started.elapsed().as_secs_f64(),
     ))
+}
+
+/// The fit from equation error's estimate `regression` where there is one
+/// and a filter exists there, else from the model file's values `file`;
+/// a note says which.
+fn fit_from_start<M: StateSpaceModel + ?Sized>(
+    fit: &mut FilterErrorFit<'_, M>,
+    regression: Option<DVector<f64>>,
+    file: &DVector<f64>,
+    solver: Options,
+    notes: &mut Vec<String>,
+) -> Result<FitResult> {
+    match regression {
+        Some(theta) => match fit.fit(&theta, solver.clone()) {
+            Ok(result) => {
+                notes.push("started from equation error's estimates".into());
+                Ok(result)
+            }
+            Err(error) => {
+                notes.push(format!(
+                    "started from the model file's values: no filter from equation error's estimates ({error})"
+                ));
+                fit.fit(file, solver)
+            }
+        },
+        None => fit.fit(file, solver),
+    }
 }

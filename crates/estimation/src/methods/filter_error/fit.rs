@@ -1,4 +1,6 @@
-//! TODO
+//! [`FilterErrorFit`]: the fit's state, its builders, the layout of its
+//! unknowns (free θ, F, and in the joint fit G) and the filter pass at
+//! them; [`FitResult`].
 
 use super::*;
 
@@ -27,9 +29,6 @@ pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
     pub(super) one_time_base: bool,
     /// Whether R is to be full where it can ([`InnovationForm::Full`]).
     pub(super) full_wanted: bool,
-    /// R (diagonal and full) before the last update and the C of that
-    /// update's pass, for the compensation of F.
-    pub(super) previous: Option<(Relaxed, DMatrix<f64>)>,
     /// F_ref of each F entry at the start: an entry below [`COLLAPSED`] of
     /// it is zero (see [`FilterErrorFit::split`]).
     pub(super) scale: Vec<f64>,
@@ -38,17 +37,13 @@ pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
     pub(super) gain: Gain,
     /// P0, the initial state's error covariance (time-varying gain only).
     pub(super) initial_covariance: DMatrix<f64>,
-    /// Time-varying gain, once started: G (one entry per output, G·Gᵀ =
-    /// diag(G²)) is among the unknowns, after F.
-    pub(super) joint: bool,
+    /// How the noise is estimated: relaxed between the steps, or, with the
+    /// time-varying gain once started, jointly with θ and F.
+    pub(super) relaxation: Relaxation,
     /// The lower bound of each entry of G·Gᵀ in the joint fit, a hundredth
     /// of its value at the last re-weighting (see
     /// [`FilterErrorFit::time_varying_residuals`]).
     pub(super) noise_floor: DVector<f64>,
-    /// In the joint fit: the relaxed G·Gᵀ proposed at the last
-    /// re-weighting, taken by [`LeastSquaresProblem::compensate`] where it
-    /// lowers the cost.
-    pub(super) proposed: Option<DVector<f64>>,
     /// Steady gain: the Jacobian by whole passes differenced even where
     /// the model propagates sensitivities.
     pub(super) differences: bool,
@@ -61,6 +56,26 @@ pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
     pub(super) constrained: bool,
     /// The unknowns' names ([`FilterErrorFit::with_names`]); empty: by position.
     pub(super) names: Vec<String>,
+}
+
+/// How a fit estimates the noise it gives the filter, R (steady gain) or
+/// G·Gᵀ (time-varying gain): the one state of [`FilterErrorFit`] that
+/// changes how the solver's re-weighting and compensation act.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum Relaxation {
+    /// Relaxed in closed form between the Gauss–Newton steps (R = (1/N)·Σ
+    /// ν·νᵀ, or a scoring step of G·Gᵀ), F compensated after each update
+    /// (Jategaonkar Eq. 5.41). `previous`: R (diagonal and full) before
+    /// the last update and the C of that update's pass, taken by
+    /// [`LeastSquaresProblem::compensate`].
+    Between {
+        previous: Option<(Relaxed, DMatrix<f64>)>,
+    },
+    /// Time-varying gain, once started: G (one entry per output, G·Gᵀ =
+    /// diag(G²)) is among the unknowns, after F. `proposed`: the relaxed
+    /// G·Gᵀ proposed at the last re-weighting, taken by
+    /// [`LeastSquaresProblem::compensate`] where it lowers the cost.
+    Joint { proposed: Option<DVector<f64>> },
 }
 
 /// A pass kept with the θ, F and noise it was run with.
@@ -154,13 +169,11 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
                 .iter()
                 .all(|present| present.is_empty() || present.len() == model.output_count()),
             full_wanted: false,
-            previous: None,
             scale: Vec::new(),
             gain: Gain::Steady,
             initial_covariance: DMatrix::zeros(n, n),
-            joint: false,
+            relaxation: Relaxation::Between { previous: None },
             noise_floor: DVector::zeros(model.output_count()),
-            proposed: None,
             differences: false,
             last_pass: RefCell::new(None),
             constrained: false,
@@ -233,9 +246,14 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
         self.free.len() + self.noisy.len() + self.joint_count()
     }
 
+    /// Whether G is among the unknowns ([`Relaxation::Joint`]).
+    pub(super) fn joint(&self) -> bool {
+        matches!(self.relaxation, Relaxation::Joint { .. })
+    }
+
     /// The G entries among the unknowns.
     pub(super) fn joint_count(&self) -> usize {
-        if self.joint {
+        if self.joint() {
             self.model.output_count()
         } else {
             0
@@ -246,7 +264,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// unknowns u: G² (each at least its [`FilterErrorFit::noise_floor`])
     /// in the joint fit, else the current R or G·Gᵀ.
     pub(super) fn noise_of(&self, unknowns: &DVector<f64>) -> DVector<f64> {
-        if !self.joint {
+        if !self.joint() {
             return self.variances.clone();
         }
         let first = self.free.len() + self.noisy.len();

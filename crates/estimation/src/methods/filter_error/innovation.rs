@@ -1,4 +1,6 @@
-//! TODO
+//! The steady filter's innovation covariance R (Jategaonkar Eq. 5.37,
+//! R = (1/N)·Σ ν·νᵀ), full or diagonal, and the whitening of the
+//! innovations by it (L⁻¹·ν, R = L·Lᵀ).
 
 use super::*;
 

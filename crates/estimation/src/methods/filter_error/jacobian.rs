@@ -1,4 +1,7 @@
-//! TODO
+//! The Jacobian of the innovations: the steady filter's sensitivity
+//! equations (Jategaonkar §5.5, ∂K by central differences of the gain),
+//! forward differences of whole passes, and, with the time-varying gain,
+//! Fisher scoring's M = Σ_k (∂νᵀS⁻¹∂ν + ½·tr(S⁻¹∂S·S⁻¹∂S)).
 
 use super::*;
 

@@ -1,4 +1,7 @@
-//! TODO
+//! [`FilterErrorFit`] as the shared Gauss–Newton core's problem: whitened
+//! residuals, the Jacobian, the relaxation of R (Jategaonkar Eq. 5.37), the
+//! compensation of F (Eq. 5.41, FVSysID's `fcompn`) and the constrained
+//! step.
 
 use super::*;
 
@@ -51,7 +54,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
     /// the compensation of F ([`LeastSquaresProblem::compensate`]) with C
     /// at the first grid point.
     fn reweight(&mut self, unknowns: &DVector<f64>) -> std::result::Result<bool, String> {
-        if self.joint {
+        if self.joint() {
             // G is estimated with θ and F; its floors move, and the
             // relaxation step of G·Gᵀ is proposed to `compensate`.
             let noise = self.noise_of(unknowns);
@@ -61,7 +64,9 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
                 return Ok(false);
             };
             self.variances = noise;
-            self.proposed = Some(self.measurement_noise_of(&pass));
+            self.relaxation = Relaxation::Joint {
+                proposed: Some(self.measurement_noise_of(&pass)),
+            };
             return Ok(true);
         }
         let pass = self.pass(unknowns).map_err(|e| e.to_string())?;
@@ -85,7 +90,9 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
                     .outputs_by_state
             }
         };
-        self.previous = Some((previous, output_matrix));
+        self.relaxation = Relaxation::Between {
+            previous: Some((previous, output_matrix)),
+        };
         Ok(changed)
     }
 
@@ -125,10 +132,11 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
     /// gain that R's measurement-noise share cannot carry), the R update
     /// is undone: the iteration goes on with the R before it.
     fn compensate(&mut self, unknowns: &DVector<f64>) -> Option<DVector<f64>> {
-        if self.joint {
-            return self.relax_jointly(unknowns);
-        }
-        let ((old, old_full), c) = self.previous.take()?;
+        let previous = match &mut self.relaxation {
+            Relaxation::Joint { .. } => return self.relax_jointly(unknowns),
+            Relaxation::Between { previous } => previous.take(),
+        };
+        let ((old, old_full), c) = previous?;
         if self.noisy.is_empty() {
             return None;
         }

@@ -1,4 +1,6 @@
-//! TODO
+//! Output error and filter error on a linear structure ([`linear_fit`]),
+//! and the refusals other methods share: [`free_parameters`],
+//! [`enough_data`].
 
 use super::*;
 
@@ -39,19 +41,7 @@ pub(crate) fn linear_fit(
         &structure.name,
         &structure.free,
     )?;
-    let noisy: Vec<usize> = options
-        .process_noise
-        .iter()
-        .flatten()
-        .map(|name| {
-            structure.states.iter().position(|s| s == name).ok_or_else(|| {
-                Error::Other(format!(
-                    "[methods.{method}] process_noise: '{name}' is not a state of the model ({})",
-                    structure.states.join(", ")
-                ))
-            })
-        })
-        .collect::<Result<_>>()?;
+    let noisy = noisy_states_named(method, structure, options.process_noise.as_deref())?;
     let (model, initial) = structure.for_record(record, options.step, options.window)?;
     let step = model.time(1) - model.time(0);
     let observations =
@@ -107,6 +97,28 @@ pub(crate) fn linear_fit(
         notes,
         started.elapsed().as_secs_f64(),
     ))
+}
+
+/// The states of a linear structure named in `process_noise` (indices
+/// into x); an error naming one that is not a state.
+fn noisy_states_named(
+    method: &str,
+    structure: &LinearStructure,
+    process_noise: Option<&[String]>,
+) -> Result<Vec<usize>> {
+    process_noise
+        .iter()
+        .copied()
+        .flatten()
+        .map(|name| {
+            structure.states.iter().position(|s| s == name).ok_or_else(|| {
+                Error::Other(format!(
+                    "[methods.{method}] process_noise: '{name}' is not a state of the model ({})",
+                    structure.states.join(", ")
+                ))
+            })
+        })
+        .collect()
 }
 
 /// The free parameters' indices (`free` per parameter of model `model`),

@@ -1,4 +1,8 @@
-//! TODO
+//! The noise the filter is given between steps: R relaxed from the
+//! innovations (Jategaonkar Eq. 5.37) and its floors; with the time-varying
+//! gain, G·Gᵀ by a Fisher-scoring step of the likelihood (Eq. 5.16), its
+//! rounding floors on noise-free data, and the whitened residuals
+//! L⁻¹·ν, √(ln det S_k − ln det D) the solver sees.
 
 use super::*;
 
@@ -148,7 +152,10 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// where the Gauss–Newton step, linear in G, would take many on
     /// noise-free data.
     pub(super) fn relax_jointly(&mut self, unknowns: &DVector<f64>) -> Option<DVector<f64>> {
-        let proposed = self.proposed.take()?;
+        let Relaxation::Joint { proposed } = &mut self.relaxation else {
+            return None;
+        };
+        let proposed = proposed.take()?;
         let first = self.free.len() + self.noisy.len();
         let mut relaxed = unknowns.clone();
         for (o, v) in proposed.iter().enumerate() {
@@ -172,7 +179,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
         unknowns: &DVector<f64>,
         gradient: &DVector<f64>,
     ) -> Vec<usize> {
-        if !self.joint {
+        if !self.joint() {
             return Vec::new();
         }
         let first = self.free.len() + self.noisy.len();
@@ -189,7 +196,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// The outputs whose G² is at its rounding floor at the unknowns u
     /// (time-varying gain; none otherwise).
     pub fn noise_at_rounding(&self, unknowns: &DVector<f64>) -> Vec<usize> {
-        if !self.joint {
+        if !self.joint() {
             return Vec::new();
         }
         let first = self.free.len() + self.noisy.len();

@@ -1,4 +1,8 @@
-//! TODO
+//! One pass of the filter in the loop: the steady-state filter (Jategaonkar
+//! §5.5, K = P·Cᵀ·R⁻¹, Eq. 5.48, P from the discrete Riccati equation of
+//! the model linearised at the first point, Eqs. 5.50–5.51) with its
+//! sensitivity equations, and the time-varying extended filter (§7.2,
+//! Eqs. 7.11–7.19).
 
 use super::*;
 
@@ -138,6 +142,10 @@ pub(super) struct Tangent<'a> {
 /// `tangent`, the sensitivities S = ∂x/∂u through it (module
 /// documentation): returns false when the model does not propagate them
 /// ([`StateSpaceModel::step_sensitivity`]).
+// Not split: one loop over the grid (prediction, outputs, correction,
+// each with or without the sensitivities) whose eleven buffers are
+// allocated once before it, so that a pass allocates nothing per grid
+// point (tests/no_allocation.rs); its phases would each take most of them.
 pub(super) fn filter_steadily<M: StateSpaceModel + ?Sized>(
     model: &M,
     theta: &[f64],

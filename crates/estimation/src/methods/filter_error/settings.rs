@@ -1,4 +1,5 @@
-//! TODO
+//! Settings of a filter-error run (the `[methods.fem]` table): the gain,
+//! the form of R, the states driven by process noise, P0.
 
 use super::*;
 

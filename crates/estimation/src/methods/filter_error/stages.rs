@@ -1,4 +1,6 @@
-//! TODO
+//! The fit in stages: with a diagonal R to convergence, then with the full
+//! R from that estimate; each stage from its start, F's and G's typical
+//! values set.
 
 use super::*;
 
@@ -37,7 +39,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
         let refused = match full {
             Ok(Some(full)) => 'full: {
                 self.full = Some(full);
-                self.previous = None;
+                self.relaxation = Relaxation::Between { previous: None };
                 self.constrained = false;
                 // With the full R the filter at the diagonal R's F need not
                 // exist (R − C·P·Cᵀ no longer positive definite): F is
@@ -126,7 +128,9 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
         let mut start = start;
         if self.gain == Gain::TimeVarying {
             // The joint fit of θ, F and G (module documentation).
-            self.joint = true;
+            if !self.joint() {
+                self.relaxation = Relaxation::Joint { proposed: None };
+            }
             self.noise_floor = self.noise_floors(&self.variances);
             let (theta, distribution) = self.split(&start);
             start = self.join(&theta, &distribution);

@@ -1,4 +1,6 @@
-//! TODO
+//! Starts: R from the simulation without the filter, F = F_ref times the
+//! factor with the lowest ½·Σ N_o·ln R_oo, F_ref,i = (Σ_j C_ji²/R_jj)^{−½}/√Δt;
+//! θ from equation error's estimate.
 
 use super::*;
 
