@@ -16,6 +16,7 @@
 //! equation P = Φ·(P − P·Cᵀ·R⁻¹·C·P)·Φᵀ + Q_d of the model linearised at
 //! the first point (Eqs. 5.50–5.51; Jategaonkar solves its continuous
 //! first-order form, Eqs. 5.15–5.17) (`passes`).
+//!
 //! **Cost and relaxation** (§5.3): ½·Σ_k (ν_kᵀR⁻¹ν_k + ln det R); R =
 //! (1/N)·Σ ν·νᵀ (Eq. 5.37; full where the outputs share one time base,
 //! fitted from the diagonal R's estimate, `stages`), then F compensated

@@ -18,7 +18,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     }
 
     /// The Gauss–Newton step subject to diag(K·C) ≤ 1 (Jategaonkar §5.3,
-    /// FVSysID's `kcle1`; module documentation): None when the
+    /// FVSysID's `kcle1`; docs/methods.md, Filter error): None when the
     /// unconstrained step keeps to it, at its end and, where an entry is
     /// near 1 ([`NEAR_ACTIVE`]), linearised (or there is no gain), else the
     /// solution of the quadratic program min gᵀΔ + ½·ΔᵀMΔ subject to

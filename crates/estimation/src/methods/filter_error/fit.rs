@@ -87,7 +87,7 @@ type KeptPass = (
     FilterPass,
 );
 
-/// The fraction of F_ref (module documentation) below which an F entry is
+/// The fraction of F_ref (docs/methods.md, Filter error) below which an F entry is
 /// taken as zero. F enters only through F² (Q = F·Fᵀ), so F = 0 is where
 /// the likelihood's derivative in F vanishes, and where the data want no
 /// process noise on a state the Gauss–Newton step, linear in F, keeps
@@ -111,7 +111,7 @@ pub struct FitResult {
     pub full: Option<InnovationCovariance>,
     /// The pass at the solution (None when it cannot be evaluated).
     pub pass: Option<FilterPass>,
-    /// The start factor of F_ref chosen (module documentation).
+    /// The start factor of F_ref chosen (docs/methods.md, Filter error).
     pub start_factor: f64,
     /// Whether the last Gauss–Newton step was the one constrained by
     /// diag(K·C) ≤ 1: the constraint active at the solution.

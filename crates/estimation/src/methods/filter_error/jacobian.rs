@@ -7,7 +7,7 @@ use super::*;
 
 impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// The normal equations of the time-varying pass at the unknowns u by
-    /// Fisher scoring (module documentation): J holds at each grid point
+    /// Fisher scoring (docs/methods.md, Filter error): J holds at each grid point
     /// L⁻¹·∂ν/∂u_j and vec(L⁻¹·∂S/∂u_j·L⁻ᵀ)/√2 (L from S = L·Lᵀ at u), the
     /// pseudo-residual ρ = (w, vec(I − w·wᵀ)/√2) with w = L⁻¹·ν, so that
     /// Jᵀρ is the gradient of the negative log-likelihood and JᵀJ its
@@ -114,7 +114,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     }
 
     /// ∂r/∂u of the steady-state filter by its sensitivity equations
-    /// (module documentation) in one pass for every unknown; None when the
+    /// (docs/methods.md, Filter error) in one pass for every unknown; None when the
     /// model does not propagate sensitivities. ∂K/∂u_j by central
     /// differences of the gain (one-sided where the filter does not exist
     /// on one side), with the steps of [`Options::difference_step`].

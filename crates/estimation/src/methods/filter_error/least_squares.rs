@@ -29,7 +29,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         Ok(residuals.column(0).into_owned())
     }
 
-    /// Forward differences of whole filter passes (module documentation);
+    /// Forward differences of whole filter passes (docs/methods.md, Filter error);
     /// where the forward pass is infeasible (an iterate on the constraint
     /// diag(K·C) ≤ 1 or at the edge of the filters that exist with this
     /// R), the backward difference.

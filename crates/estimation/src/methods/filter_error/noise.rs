@@ -8,7 +8,7 @@ use super::*;
 
 /// The rounding floor of each entry of G·Gᵀ with the time-varying gain,
 /// as a fraction of its output's variance about its mean: G at 10⁻⁴ of
-/// the output's spread (module documentation, "Exact fits"). Where the
+/// the output's spread (docs/methods.md, Filter error, "Exact fits"). Where the
 /// states tie outputs exactly (β and n_y through CY), the innovation
 /// covariance S_k = C·P̃·Cᵀ + G·Gᵀ has an eigenvalue of order G²; the
 /// scoring's ∂S/∂u, forward differences of whole passes at a relative step
@@ -87,7 +87,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// Each output's floor of its variance. Steady gain: 10⁻²⁴ of its
     /// measurements' mean square, so that a noise-free fit stays finite.
     /// Time-varying gain: the rounding floor of G·Gᵀ, [`NOISE_ROUNDING`] of
-    /// the output's variance about its mean (module documentation, "Exact
+    /// the output's variance about its mean (docs/methods.md, Filter error, "Exact
     /// fits").
     pub(super) fn floors(&self) -> DVector<f64> {
         if self.gain == Gain::TimeVarying {
@@ -107,7 +107,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     }
 
     /// The relaxation step of G·Gᵀ = diag(V) for the time-varying gain
-    /// (module documentation): one Fisher-scoring step of the likelihood in
+    /// (docs/methods.md, Filter error): one Fisher-scoring step of the likelihood in
     /// V with the predicted covariances P̃_k held, ΔV = M⁻¹·g,
     /// g_o = ½·Σ_k ((S⁻¹νν ᵀS⁻¹)_oo − (S⁻¹)_oo), M_op = ½·Σ_k ((S⁻¹)_op)²
     /// over the grid points where o (and p) are measured; a step is cut to

@@ -24,7 +24,7 @@ pub struct SteadyPass {
     pub output_matrix: DMatrix<f64>,
 }
 
-/// One pass of the steady-state filter (module documentation) over
+/// One pass of the steady-state filter (docs/methods.md, Filter error) over
 /// `observations` on the model's grid, from `initial` at grid point 0,
 /// with parameters `theta`, process-noise distribution F = diag(`distribution`)
 /// (one entry per state, zero for a state without noise) and innovation
@@ -139,8 +139,8 @@ pub(super) struct Tangent<'a> {
 
 /// The steady-state filter's pass over `observations` with `pass`'s gain,
 /// writing its innovations, predictions and likelihood into `pass`; with a
-/// `tangent`, the sensitivities S = ∂x/∂u through it (module
-/// documentation): returns false when the model does not propagate them
+/// `tangent`, the sensitivities S = ∂x/∂u through it (docs/methods.md,
+/// Filter error): returns false when the model does not propagate them
 /// ([`StateSpaceModel::step_sensitivity`]).
 // Not split: one loop over the grid (prediction, outputs, correction,
 // each with or without the sensitivities) whose eleven buffers are

@@ -51,7 +51,7 @@ pub enum InnovationForm {
     Full,
 }
 
-/// The filter in the filter error method's loop (module documentation).
+/// The filter in the filter error method's loop (docs/methods.md, Filter error).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Gain {

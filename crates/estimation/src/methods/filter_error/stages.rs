@@ -111,8 +111,8 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
         options
     }
 
-    /// One fit from `theta` with R as `full_wanted` says (module
-    /// documentation).
+    /// One fit from `theta` with R as `full_wanted` says (docs/methods.md,
+    /// Filter error).
     pub(super) fn fit_once(&mut self, theta: &DVector<f64>, options: Options) -> Result<FitResult> {
         let (start, start_factor) = self.start(theta)?;
         let aero = self.free.len();
@@ -127,7 +127,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
         let mut options = self.prepared(&start, options);
         let mut start = start;
         if self.gain == Gain::TimeVarying {
-            // The joint fit of θ, F and G (module documentation).
+            // The joint fit of θ, F and G (docs/methods.md, Filter error).
             if !self.joint() {
                 self.relaxation = Relaxation::Joint { proposed: None };
             }

@@ -4,11 +4,11 @@
 
 use super::*;
 
-/// The factors of F_ref tried for the start of F (module documentation).
+/// The factors of F_ref tried for the start of F (docs/methods.md, Filter error).
 pub(super) const START_FACTORS: [f64; 5] = [1.0, 0.3, 0.1, 0.03, 0.01];
 
 impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
-    /// F_ref (module documentation): the process noise whose one-step
+    /// F_ref (docs/methods.md, Filter error): the process noise whose one-step
     /// spread equals the residual level seen through C = ∂h/∂x at the
     /// first point.
     pub(super) fn reference_distribution(&self, c: &DMatrix<f64>) -> DVector<f64> {
@@ -28,7 +28,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     }
 
     /// Sets R from the innovations with no process noise at θ and chooses
-    /// the start of F (module documentation); returns the start unknowns
+    /// the start of F (docs/methods.md, Filter error); returns the start unknowns
     /// and the factor chosen.
     pub(super) fn start(&mut self, theta: &DVector<f64>) -> Result<(DVector<f64>, f64)> {
         let zero = DVector::zeros(self.model.state_count());
