@@ -1,0 +1,170 @@
+//! Settings of a filter-error run (the `[methods.fem]` table): the gain,
+//! the form of R, the states driven by process noise, P0.
+
+use super::*;
+
+/// Settings of a filter-error run: the `[methods.fem]` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FilterErrorOptions {
+    pub start: Start,
+    pub max_iterations: usize,
+    /// Integration step (s); None: the fastest compared channel's period.
+    #[serde(
+        deserialize_with = "aeroid_core::units::optional_seconds",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub step: Option<f64>,
+    /// How each input is interpolated inside an integration step
+    /// ([`InputInterpolation`]; default: chosen per input from its samples).
+    pub interpolation: InputInterpolation,
+    /// The integrated states driven by process noise (one F entry each);
+    /// None: every integrated state but roll, pitch, yaw, altitude and χ.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub process_noise: Option<Vec<String>>,
+    /// The filter in the loop: the steady-state gain of the system
+    /// linearised at the first point, or the time-varying extended filter.
+    pub gain: Gain,
+    /// With the time-varying gain: the variance of the initial state's
+    /// error, per integrated state (P0 diagonal; a state not named starts
+    /// known, variance 0).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub initial_variance: BTreeMap<String, f64>,
+    /// The steady gain's innovation covariance R: diagonal, or full where
+    /// every output shares one time base ([`InnovationCovariance`]); not
+    /// set: full with the steady gain ([`FilterErrorOptions::innovation_form`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub innovation_covariance: Option<InnovationForm>,
+    /// Fit only this time window (s) of the record; default the whole record.
+    #[serde(skip)]
+    pub window: Option<(f64, f64)>,
+}
+
+/// The steady gain's innovation covariance R (`innovation_covariance`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InnovationForm {
+    /// One variance per output.
+    Diagonal,
+    /// R = (1/N)·Σ ν·νᵀ whole, where every grid point with a measurement
+    /// measures every output (else diagonal, with a note).
+    Full,
+}
+
+/// The filter in the filter error method's loop (docs/methods.md, Filter error).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gain {
+    /// The steady-state gain of the model linearised at the first grid
+    /// point, the innovation covariance R estimated by relaxation.
+    #[default]
+    Steady,
+    /// The extended Kalman filter, its covariance propagated with the model
+    /// linearised at each point, the measurement noise G·Gᵀ estimated by
+    /// relaxation.
+    TimeVarying,
+}
+
+impl Default for FilterErrorOptions {
+    fn default() -> Self {
+        FilterErrorOptions {
+            start: Start::default(),
+            max_iterations: 30,
+            step: None,
+            interpolation: InputInterpolation::default(),
+            process_noise: None,
+            gain: Gain::default(),
+            initial_variance: BTreeMap::new(),
+            innovation_covariance: None,
+            window: None,
+        }
+    }
+}
+
+impl FilterErrorOptions {
+    /// Reads and checks a `[methods.fem]` table.
+    pub fn read(settings: &Settings) -> Result<FilterErrorOptions> {
+        let options: FilterErrorOptions = parse_settings(METHOD, settings)?;
+        if options
+            .step
+            .is_some_and(|step| !(step > 0.0 && step.is_finite()))
+        {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: step must be positive"
+            )));
+        }
+        if options.max_iterations == 0 {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}]: max_iterations must be at least 1"
+            )));
+        }
+        check_initial_variance(METHOD, options.gain, &options.initial_variance)?;
+        options.interpolation.check_controls(METHOD)?;
+        if options.gain == Gain::TimeVarying
+            && options.innovation_covariance == Some(InnovationForm::Full)
+        {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}] innovation_covariance = \"full\" needs gain = \"steady\": the time-varying filter's innovation covariance C·P̃·Cᵀ + G·Gᵀ is full already"
+            )));
+        }
+        Ok(options)
+    }
+
+    /// The form of R: as set, else full with the steady gain (the
+    /// time-varying gain's innovation covariance is full already).
+    pub fn innovation_form(&self) -> InnovationForm {
+        self.innovation_covariance.unwrap_or(match self.gain {
+            Gain::Steady => InnovationForm::Full,
+            Gain::TimeVarying => InnovationForm::Diagonal,
+        })
+    }
+
+    /// The options a model file's `[methods.fem]` table sets.
+    pub fn for_structure(structure: &ModelStructure) -> Result<FilterErrorOptions> {
+        FilterErrorOptions::read(&merge_settings(METHOD, &[&structure.methods]))
+    }
+}
+
+/// Checks an `initial_variance` table: finite variances not below zero,
+/// and only with the time-varying gain (the steady-state filter has no
+/// initial covariance).
+pub(super) fn check_initial_variance(
+    method: &str,
+    gain: Gain,
+    initial_variance: &BTreeMap<String, f64>,
+) -> Result<()> {
+    if gain == Gain::Steady && !initial_variance.is_empty() {
+        return Err(Error::Other(format!(
+            "[methods.{method}] initial_variance needs gain = \"time_varying\": the steady-state filter has no initial covariance"
+        )));
+    }
+    match initial_variance
+        .iter()
+        .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+    {
+        Some((name, v)) => Err(Error::Other(format!(
+            "[methods.{method}] initial_variance.{name} = {v}: a variance must be finite and not below zero"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// P0 = diag of `initial_variance` over the states `names`; an error
+/// naming a key that is not a state.
+pub(super) fn initial_covariance(
+    method: &str,
+    names: &[&str],
+    initial_variance: &BTreeMap<String, f64>,
+) -> Result<DMatrix<f64>> {
+    let mut covariance = DMatrix::zeros(names.len(), names.len());
+    for (name, &variance) in initial_variance {
+        let i = names.iter().position(|n| n == name).ok_or_else(|| {
+            Error::Other(format!(
+                "[methods.{method}] initial_variance: '{name}' is not an integrated state of the model ({})",
+                names.join(", ")
+            ))
+        })?;
+        covariance[(i, i)] = variance;
+    }
+    Ok(covariance)
+}
