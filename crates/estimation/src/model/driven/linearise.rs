@@ -8,10 +8,10 @@
 
 use super::directions::{Directions, Filled, Response, state_step};
 use super::kinematics::{
-    Motion, PseudoRates, derivative, derivative_at, dual_derivative, motion_rates,
+    Angles, Motion, PseudoRates, derivative, derivative_at, dual_derivative, motion_rates,
     offset_evaluation, offset_response,
 };
-use super::measured::Ambient;
+use super::measured::{Ambient, Surroundings};
 use super::memo::{FrozenPoints, Memo, PointMemo};
 use super::observables::{Column, Observable};
 use super::{ALTITUDE, FLIGHT_PATH_SIZE, FlightPathState};
@@ -41,6 +41,17 @@ pub(super) struct Linearization {
     /// Scratch: ∂ẋ of the active states and ∂y, a column per response.
     pub(super) model_rates: DMatrix<f64>,
     pub(super) model_outputs: DMatrix<f64>,
+}
+
+/// The point a [`Linearization`] is at: x, its angles' sines and cosines
+/// and its air, and the inputs there.
+#[derive(Clone, Copy)]
+struct At<'p> {
+    x: &'p FlightPathState,
+    angles: Angles,
+    air: Surroundings,
+    controls: &'p Controls,
+    pseudo: PseudoRates,
 }
 
 impl Linearization {
@@ -74,145 +85,207 @@ impl Linearization {
         memo: &mut Memo,
     ) {
         // The whole linearisation, the dual-number pass included, compiled
-        // for AVX2 too.
+        // for AVX2 too: the passes below are `#[inline(always)]` so that they
+        // are compiled inside this closure.
         aeroid_numerics::simd::wide(
             #[inline(always)]
             || {
                 let atmosphere = &model.environment.atmosphere;
                 let (angles, air) = memo.of(x, atmosphere);
-                // With dual lanes the first one's values are the evaluation at x
-                // (the same numbers); without, it is evaluated plainly.
-                if directions.dual_lanes.is_empty() {
-                    (self.rates, self.evaluation) =
-                        derivative(model, x, &angles, &air, controls, pseudo);
-                    for (o, output) in outputs.iter().enumerate() {
-                        self.outputs[o] = output.value(x, &self.evaluation);
-                    }
-                }
-                let states = &directions.states;
-                for (chunk, lanes) in directions.dual_lanes.iter().enumerate() {
-                    let (dual_x, rates, evaluation) = dual_derivative(
-                        model,
-                        x,
-                        angles,
-                        lanes.iter().map(|&(_, i)| i),
-                        &air,
-                        controls,
-                        pseudo,
-                    );
-                    if chunk == 0 {
-                        self.rates = rates.map(Dual::value);
-                        self.evaluation = evaluation.values();
-                    }
-                    for (lane, &(b, _)) in lanes.iter().enumerate() {
-                        for (a, &r) in states.iter().enumerate() {
-                            self.a[(a, b)] = rates[r].tangent[lane];
-                        }
-                    }
-                    for (o, output) in outputs.iter().enumerate() {
-                        let value = output.value(&dual_x, &evaluation);
-                        if chunk == 0 {
-                            self.outputs[o] = value.value;
-                        }
-                        for (lane, &(b, _)) in lanes.iter().enumerate() {
-                            self.gx[(o, b)] = value.tangent[lane];
-                        }
-                    }
-                }
+                let point = At {
+                    x,
+                    angles,
+                    air,
+                    controls,
+                    pseudo,
+                };
+                self.values_and_dual_lanes(model, directions, &point, outputs);
                 if directions.differenced.is_empty() && directions.responses.is_empty() {
                     return;
                 }
-                for &(b, i) in &directions.differenced {
-                    let step = state_step(x[i]);
-                    let mut moved = *x;
-                    moved[i] += step;
-                    let moved_air = if i == ALTITUDE {
-                        memo.ambient.surroundings(atmosphere, moved[i])
-                    } else {
-                        air
-                    };
-                    let moved_angles = angles.nudged(i, moved[i] - x[i]);
-                    let (rates, evaluation) =
-                        derivative(model, &moved, &moved_angles, &moved_air, controls, pseudo);
-                    for (a, &r) in states.iter().enumerate() {
-                        self.a[(a, b)] = (rates[r] - self.rates[r]) / step;
-                    }
-                    for (o, output) in outputs.iter().enumerate() {
-                        self.gx[(o, b)] =
-                            (output.value(&moved, &evaluation) - self.outputs[o]) / step;
-                    }
-                }
-                let motion = Motion::of(&self.evaluation);
-                for (d, response) in directions.responses.iter().enumerate() {
-                    match *response {
-                        Response::Model(m) => {
-                            let (perturbed, step, minus) = &directions.models[m];
-                            let (rates, evaluation) =
-                                derivative(perturbed, x, &angles, &air, controls, pseudo);
-                            // The base of the quotient: this point (forward)
-                            // or the model moved by −step (central).
-                            let minus_outputs: Vec<f64>;
-                            let (base_rates, base_outputs, span) = match minus {
-                                None => (self.rates, self.outputs.as_slice(), *step),
-                                Some(minus) => {
-                                    let (rates, evaluation) =
-                                        derivative(minus, x, &angles, &air, controls, pseudo);
-                                    minus_outputs =
-                                        outputs.iter().map(|o| o.value(x, &evaluation)).collect();
-                                    (rates, minus_outputs.as_slice(), 2.0 * step)
-                                }
-                            };
-                            for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states)
-                            {
-                                *into = (rates[r] - base_rates[r]) / span;
-                            }
-                            for (o, output) in outputs.iter().enumerate() {
-                                self.model_outputs[(o, d)] =
-                                    (output.value(x, &evaluation) - base_outputs[o]) / span;
-                            }
-                        }
-                        Response::Offset(coefficient) => {
-                            let offset = offset_response(model, &self.evaluation, coefficient);
-                            let response = motion.response(&offset.1, offset.2);
-                            let rates = motion_rates(x, &angles, &response, pseudo.linear());
-                            for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states)
-                            {
-                                *into = rates[r];
-                            }
-                            if !outputs.is_empty() {
-                                let evaluation = offset_evaluation(&self.evaluation, &offset);
-                                for (o, output) in outputs.iter().enumerate() {
-                                    self.model_outputs[(o, d)] =
-                                        output.value(x, &evaluation) - self.outputs[o];
-                                }
-                            }
-                        }
-                    }
-                }
-                let regressors = if directions.terms > 0 {
-                    model
-                        .aircraft
-                        .aero
-                        .term_regressors(&self.evaluation.aero_input)
-                } else {
-                    TermRegressors::default()
-                };
-                // Column j of ∂f/∂θ and ∂g/∂θ: its response times its factor (the
-                // columns of unknowns with no source stay 0 from `new`).
-                fill(
-                    &self.model_rates,
-                    &directions.filled,
-                    &regressors,
-                    &mut self.b,
-                );
-                fill(
-                    &self.model_outputs,
-                    &directions.filled,
-                    &regressors,
-                    &mut self.gtheta,
-                );
+                let ambient = memo.ambient;
+                self.differenced(model, directions, &point, outputs, |altitude| {
+                    ambient.surroundings(atmosphere, altitude)
+                });
+                self.responses(model, directions, &point, outputs);
+                self.parameter_columns(model, directions);
             },
         )
+    }
+
+    /// The rates, evaluation and outputs at the point, and ∂f/∂x and ∂g/∂x
+    /// along the states differentiated by dual numbers. With dual lanes the
+    /// first one's values are the evaluation at x (the same numbers);
+    /// without, it is evaluated plainly.
+    #[inline(always)]
+    fn values_and_dual_lanes(
+        &mut self,
+        model: &FlightModel,
+        directions: &Directions,
+        at: &At,
+        outputs: &[Observable],
+    ) {
+        let (x, angles, air) = (at.x, at.angles, &at.air);
+        let (controls, pseudo) = (at.controls, at.pseudo);
+        if directions.dual_lanes.is_empty() {
+            (self.rates, self.evaluation) = derivative(model, x, &angles, air, controls, pseudo);
+            for (o, output) in outputs.iter().enumerate() {
+                self.outputs[o] = output.value(x, &self.evaluation);
+            }
+        }
+        let states = &directions.states;
+        for (chunk, lanes) in directions.dual_lanes.iter().enumerate() {
+            let (dual_x, rates, evaluation) = dual_derivative(
+                model,
+                x,
+                angles,
+                lanes.iter().map(|&(_, i)| i),
+                air,
+                controls,
+                pseudo,
+            );
+            if chunk == 0 {
+                self.rates = rates.map(Dual::value);
+                self.evaluation = evaluation.values();
+            }
+            for (lane, &(b, _)) in lanes.iter().enumerate() {
+                for (a, &r) in states.iter().enumerate() {
+                    self.a[(a, b)] = rates[r].tangent[lane];
+                }
+            }
+            for (o, output) in outputs.iter().enumerate() {
+                let value = output.value(&dual_x, &evaluation);
+                if chunk == 0 {
+                    self.outputs[o] = value.value;
+                }
+                for (lane, &(b, _)) in lanes.iter().enumerate() {
+                    self.gx[(o, b)] = value.tangent[lane];
+                }
+            }
+        }
+    }
+
+    /// ∂f/∂x and ∂g/∂x along the states differenced forward; `air_at`
+    /// gives the air at a moved altitude.
+    #[inline(always)]
+    fn differenced(
+        &mut self,
+        model: &FlightModel,
+        directions: &Directions,
+        at: &At,
+        outputs: &[Observable],
+        air_at: impl Fn(f64) -> Surroundings,
+    ) {
+        let (x, angles, air) = (at.x, at.angles, at.air);
+        let states = &directions.states;
+        for &(b, i) in &directions.differenced {
+            let step = state_step(x[i]);
+            let mut moved = *x;
+            moved[i] += step;
+            let moved_air = if i == ALTITUDE { air_at(moved[i]) } else { air };
+            let moved_angles = angles.nudged(i, moved[i] - x[i]);
+            let (rates, evaluation) = derivative(
+                model,
+                &moved,
+                &moved_angles,
+                &moved_air,
+                at.controls,
+                at.pseudo,
+            );
+            for (a, &r) in states.iter().enumerate() {
+                self.a[(a, b)] = (rates[r] - self.rates[r]) / step;
+            }
+            for (o, output) in outputs.iter().enumerate() {
+                self.gx[(o, b)] = (output.value(&moved, &evaluation) - self.outputs[o]) / step;
+            }
+        }
+    }
+
+    /// The responses of ẋ and y to the model changes, a column each of
+    /// `model_rates` and `model_outputs`: difference quotients of the
+    /// perturbed models, or a coefficient's exact response.
+    #[inline(always)]
+    fn responses(
+        &mut self,
+        model: &FlightModel,
+        directions: &Directions,
+        at: &At,
+        outputs: &[Observable],
+    ) {
+        let (x, angles, air) = (at.x, at.angles, &at.air);
+        let (controls, pseudo) = (at.controls, at.pseudo);
+        let states = &directions.states;
+        let motion = Motion::of(&self.evaluation);
+        for (d, response) in directions.responses.iter().enumerate() {
+            match *response {
+                Response::Model(m) => {
+                    let (perturbed, step, minus) = &directions.models[m];
+                    let (rates, evaluation) =
+                        derivative(perturbed, x, &angles, air, controls, pseudo);
+                    // The base of the quotient: this point (forward)
+                    // or the model moved by −step (central).
+                    let minus_outputs: Vec<f64>;
+                    let (base_rates, base_outputs, span) = match minus {
+                        None => (self.rates, self.outputs.as_slice(), *step),
+                        Some(minus) => {
+                            let (rates, evaluation) =
+                                derivative(minus, x, &angles, air, controls, pseudo);
+                            minus_outputs =
+                                outputs.iter().map(|o| o.value(x, &evaluation)).collect();
+                            (rates, minus_outputs.as_slice(), 2.0 * step)
+                        }
+                    };
+                    for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states) {
+                        *into = (rates[r] - base_rates[r]) / span;
+                    }
+                    for (o, output) in outputs.iter().enumerate() {
+                        self.model_outputs[(o, d)] =
+                            (output.value(x, &evaluation) - base_outputs[o]) / span;
+                    }
+                }
+                Response::Offset(coefficient) => {
+                    let offset = offset_response(model, &self.evaluation, coefficient);
+                    let response = motion.response(&offset.1, offset.2);
+                    let rates = motion_rates(x, &angles, &response, pseudo.linear());
+                    for (into, &r) in self.model_rates.column_mut(d).iter_mut().zip(states) {
+                        *into = rates[r];
+                    }
+                    if !outputs.is_empty() {
+                        let evaluation = offset_evaluation(&self.evaluation, &offset);
+                        for (o, output) in outputs.iter().enumerate() {
+                            self.model_outputs[(o, d)] =
+                                output.value(x, &evaluation) - self.outputs[o];
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Column j of ∂f/∂θ and ∂g/∂θ: its response times its factor (the
+    /// columns of unknowns with no source stay 0 from `new`).
+    #[inline(always)]
+    fn parameter_columns(&mut self, model: &FlightModel, directions: &Directions) {
+        let regressors = if directions.terms > 0 {
+            model
+                .aircraft
+                .aero
+                .term_regressors(&self.evaluation.aero_input)
+        } else {
+            TermRegressors::default()
+        };
+        fill(
+            &self.model_rates,
+            &directions.filled,
+            &regressors,
+            &mut self.b,
+        );
+        fill(
+            &self.model_outputs,
+            &directions.filled,
+            &regressors,
+            &mut self.gtheta,
+        );
     }
 
     /// ∂f/∂θ at this point with the controls replaced by `controls` (the

@@ -5,11 +5,11 @@
 //! or the ISA density altitude of the measured density
 //! ([`ALTITUDE_SUBSTITUTES`]).
 
-use super::measured::{ALTITUDE_SUBSTITUTES, measured_alpha_dot, measured_ambient};
+use super::measured::{ALTITUDE_SUBSTITUTES, Ambient, measured_alpha_dot, measured_ambient};
 use super::memo::Frozen;
 use super::simulation::DrivenSimulation;
 use super::{FLIGHT_PATH_SIZE, FlightPathState};
-use crate::model::input_timing::{self, InputInterpolation};
+use crate::model::input_timing::{self, Chosen, InputInterpolation};
 use crate::structure::FLIGHT_PATH_STATES;
 use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
@@ -48,62 +48,14 @@ impl DrivenSimulation {
         }
         let mut notes = measured_quantities.clone();
         let thrust_measured = ambient.first().is_some_and(|a| a.thrust.is_some());
-        let mut controls = vec![Controls::zeros(); count];
-        let mut holds = [Interpolation::ZeroOrderHold; CONTROL_COUNT];
-        let mut input_timing = Vec::new();
-        for control in Control::ALL {
-            match record.channel(control.name()) {
-                Ok(channel) => {
-                    let chosen = interpolation.choose(control.name(), &channel.values);
-                    holds[control.index()] = chosen.interpolation;
-                    for (sample, value) in controls
-                        .iter_mut()
-                        .zip(channel.sampled_at(&times, chosen.interpolation)?)
-                    {
-                        sample[control.index()] = value;
-                    }
-                    input_timing.push(chosen);
-                }
-                // With the thrust measured the throttle is not read.
-                Err(_) if control == Control::Throttle && thrust_measured => {}
-                Err(_) => notes.push(format!("no '{}' channel: held at 0", control.name())),
-            }
-        }
+        let (controls, holds, input_timing) =
+            sampled_controls(record, interpolation, &times, thrust_measured, &mut notes)?;
         let mut mask = [false; FLIGHT_PATH_SIZE];
         integrate.iter().for_each(|&i| mask[i] = true);
-        let mut measured = vec![FlightPathState::zeros(); count];
-        for (i, name) in FLIGHT_PATH_STATES
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| !mask[*i])
-        {
-            match record.channel(name) {
-                Ok(channel) => {
-                    for (sample, value) in measured.iter_mut().zip(channel.values_at(&times)?) {
-                        sample[i] = value;
-                    }
-                }
-                Err(_) if matches!(*name, "yaw" | "chi") => {}
-                Err(_) if *name == "altitude" => {
-                    if let Ok(altitude) = record.channel(ALTITUDE_SUBSTITUTES[0]) {
-                        for (sample, value) in measured.iter_mut().zip(altitude.values_at(&times)?)
-                        {
-                            sample[i] = value;
-                        }
-                    } else if ambient.first().is_some_and(|a| a.density.is_some()) {
-                        for (sample, ambient) in measured.iter_mut().zip(&ambient) {
-                            sample[i] =
-                                Atmosphere::density_altitude(ambient.density.unwrap_or(f64::NAN));
-                        }
-                        let note = "no altitude channel: the altitude is the ISA density altitude of the measured density (the air's temperature and speed of sound the ISA's there)";
-                        notes.push(note.into());
-                        measured_quantities.push(note.into());
-                    } else {
-                        return Err(missing_altitude());
-                    }
-                }
-                Err(_) => return Err(missing(name)),
-            }
+        let (measured, altitude_note) = sampled_states(record, &mask, &times, &ambient)?;
+        if let Some(note) = altitude_note {
+            notes.push(note.into());
+            measured_quantities.push(note.into());
         }
         debug_assert_eq!(CONTROL_COUNT, 5);
         if !input_timing.is_empty() {
@@ -145,6 +97,88 @@ impl DrivenSimulation {
             measured_quantities: Vec::new(),
         }
     }
+}
+
+/// The record's controls on the grid `times`, each reconstructed between
+/// its samples as `interpolation` chooses for it, with how each is taken
+/// inside a step and the choices; a missing control channel held at 0
+/// (noted in `notes`), the throttle not read when the thrust is measured.
+fn sampled_controls(
+    record: &FlightRecord,
+    interpolation: &InputInterpolation,
+    times: &[f64],
+    thrust_measured: bool,
+    notes: &mut Vec<String>,
+) -> Result<(Vec<Controls>, [Interpolation; CONTROL_COUNT], Vec<Chosen>)> {
+    let mut controls = vec![Controls::zeros(); times.len()];
+    let mut holds = [Interpolation::ZeroOrderHold; CONTROL_COUNT];
+    let mut input_timing = Vec::new();
+    for control in Control::ALL {
+        match record.channel(control.name()) {
+            Ok(channel) => {
+                let chosen = interpolation.choose(control.name(), &channel.values);
+                holds[control.index()] = chosen.interpolation;
+                for (sample, value) in controls
+                    .iter_mut()
+                    .zip(channel.sampled_at(times, chosen.interpolation)?)
+                {
+                    sample[control.index()] = value;
+                }
+                input_timing.push(chosen);
+            }
+            // With the thrust measured the throttle is not read.
+            Err(_) if control == Control::Throttle && thrust_measured => {}
+            Err(_) => notes.push(format!("no '{}' channel: held at 0", control.name())),
+        }
+    }
+    Ok((controls, holds, input_timing))
+}
+
+/// The measured flight-path states (those `integrate` leaves out) on the
+/// grid `times`, linear between samples; a missing altitude the pressure
+/// altitude, else the ISA density altitude of the measured density (with
+/// the note saying so); ψ and χ 0 when absent.
+fn sampled_states(
+    record: &FlightRecord,
+    integrate: &[bool; FLIGHT_PATH_SIZE],
+    times: &[f64],
+    ambient: &[Ambient],
+) -> Result<(Vec<FlightPathState>, Option<&'static str>)> {
+    let mut measured = vec![FlightPathState::zeros(); times.len()];
+    let mut note = None;
+    for (i, name) in FLIGHT_PATH_STATES
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !integrate[*i])
+    {
+        match record.channel(name) {
+            Ok(channel) => {
+                for (sample, value) in measured.iter_mut().zip(channel.values_at(times)?) {
+                    sample[i] = value;
+                }
+            }
+            Err(_) if matches!(*name, "yaw" | "chi") => {}
+            Err(_) if *name == "altitude" => {
+                if let Ok(altitude) = record.channel(ALTITUDE_SUBSTITUTES[0]) {
+                    for (sample, value) in measured.iter_mut().zip(altitude.values_at(times)?) {
+                        sample[i] = value;
+                    }
+                } else if ambient.first().is_some_and(|a| a.density.is_some()) {
+                    for (sample, ambient) in measured.iter_mut().zip(ambient) {
+                        sample[i] =
+                            Atmosphere::density_altitude(ambient.density.unwrap_or(f64::NAN));
+                    }
+                    note = Some(
+                        "no altitude channel: the altitude is the ISA density altitude of the measured density (the air's temperature and speed of sound the ISA's there)",
+                    );
+                } else {
+                    return Err(missing_altitude());
+                }
+            }
+            Err(_) => return Err(missing(name)),
+        }
+    }
+    Ok((measured, note))
 }
 
 pub(super) fn missing_altitude() -> Error {

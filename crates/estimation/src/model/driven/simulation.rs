@@ -329,6 +329,10 @@ impl DrivenSimulation {
         linearise: Linearise,
         mut sink: impl FnMut(usize, &[f64], &DMatrix<f64>),
     ) -> std::result::Result<(), String> {
+        // One pass over the grid: the state, S and the two grid points'
+        // linearisations advance together, and the stage closure borrows
+        // the stage linearisations; the setup of S and the outputs, and the
+        // grid-point sensitivity step, are split out.
         let aero = &model.aircraft.aero;
         let mut x = self.merge(initial, &self.measured[0]);
         let chi_from_alpha = aero.chi_is_state() && !self.integrate[CHI];
@@ -339,64 +343,15 @@ impl DrivenSimulation {
         let active: Vec<usize> = (0..FLIGHT_PATH_SIZE).filter(|&i| mask[i] == 1.0).collect();
         let linearised: &[usize] = if columns.is_empty() { &[] } else { &active };
         let directions = Directions::new(model, columns, linearised, false);
-        let states = &directions.states;
-        let row = |state: usize| states.iter().position(|&i| i == state);
-        // S over the active states: the others are measured, independent of θ.
-        let mut sensitivity = DMatrix::zeros(states.len(), columns.len());
-        for (j, column) in columns.iter().enumerate() {
-            if let Column::Initial(i) = *column {
-                sensitivity[(row(i).expect("an integrated state"), j)] = 1.0;
-            }
-            if let (true, Some(chi)) = (chi_from_alpha, row(CHI)) {
-                // χ(0) = χ∞(α(0)) moves with α(0) and the stall parameters.
-                let target =
-                    |model: &FlightModel, alpha: f64| model.aircraft.aero.steady_separation(alpha);
-                sensitivity[(chi, j)] = match (*column, directions.sources[j]) {
-                    (Column::Initial(ALPHA), _) => {
-                        let step = state_step(x[ALPHA]);
-                        (target(model, x[ALPHA] + step) - x[CHI]) / step
-                    }
-                    (_, Source::Direction(d)) => match directions.responses[d] {
-                        Response::Model(m) => {
-                            let (perturbed, step, _) = &directions.models[m];
-                            (target(perturbed, x[ALPHA]) - x[CHI]) / step
-                        }
-                        Response::Offset(_) => 0.0,
-                    },
-                    _ => 0.0,
-                };
-            }
-        }
-        let shape = || DMatrix::zeros(states.len(), columns.len());
-        let mut work = [(); 3].map(|_| shape());
-        let (mut middle_a, mut middle_b, mut end_b) =
-            (DMatrix::zeros(states.len(), states.len()), shape(), shape());
-        // Outputs that are states are x's entries, their sensitivities S's
-        // rows (none for a measured state); the others are linearised.
-        let mut computed = Vec::new();
-        let sources: Vec<OutputSource> = outputs
-            .iter()
-            .map(|output| match *output {
-                Observable::State(index) => OutputSource::State {
-                    index,
-                    row: row(index),
-                },
-                other => {
-                    computed.push(other);
-                    OutputSource::Linearised(computed.len() - 1)
-                }
-            })
-            .collect();
-        let mut values = vec![0.0; outputs.len()];
-        // (∂y/∂θ)ᵀ: each output's sensitivities contiguous.
-        let mut output_sensitivity = DMatrix::zeros(columns.len(), outputs.len());
-        let mut computed_sensitivity = DMatrix::zeros(computed.len(), columns.len());
-        let mut point = Linearization::new(&directions, computed.len());
-        let mut next_point = Linearization::new(&directions, computed.len());
+        let mut sensitivity = initial_sensitivity(model, &directions, columns, &x, chi_from_alpha);
+        let mut table = OutputTable::new(outputs, &directions.states, columns.len());
+        let mut point = Linearization::new(&directions, table.computed.len());
+        let mut next_point = Linearization::new(&directions, table.computed.len());
         let exact = linearise == Linearise::Stages && !columns.is_empty();
         let mut stages: Vec<Linearization> = (0..if exact { 3 } else { 0 })
             .map(|_| Linearization::new(&directions, 0))
             .collect();
+        let mut scratch = SensitivityScratch::new(directions.states.len(), columns.len());
         let atmosphere = &model.environment.atmosphere;
         let measured_states = std::array::from_fn(|i| mask[i] == 0.0);
         let frozen = self.frozen.for_memo(&self.measured, atmosphere);
@@ -407,40 +362,13 @@ impl DrivenSimulation {
             &x,
             &self.controls[0],
             self.pseudo_rates(0),
-            &computed,
+            &table.computed,
             &mut memo,
         );
         for k in 0..self.len() {
             check_departure(&x, self.time(k))?;
-            if !columns.is_empty() {
-                // ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ
-                affine(
-                    &point.gx,
-                    &sensitivity,
-                    &point.gtheta,
-                    &mut computed_sensitivity,
-                );
-            }
-            let sensitivities = !columns.is_empty();
-            for (o, source) in sources.iter().enumerate() {
-                let mut into = output_sensitivity.column_mut(o);
-                match *source {
-                    OutputSource::State { index, row } => {
-                        values[o] = x[index];
-                        match row {
-                            Some(r) if sensitivities => into.tr_copy_from(&sensitivity.row(r)),
-                            _ => into.fill(0.0),
-                        }
-                    }
-                    OutputSource::Linearised(c) => {
-                        values[o] = point.outputs[c];
-                        if sensitivities {
-                            into.tr_copy_from(&computed_sensitivity.row(c));
-                        }
-                    }
-                }
-            }
-            sink(k, &values, &output_sensitivity);
+            let (values, output_sensitivity) = table.at(&x, &point, &sensitivity);
+            sink(k, values, output_sensitivity);
             if k + 1 == self.len() {
                 break;
             }
@@ -472,7 +400,7 @@ impl DrivenSimulation {
                 &x,
                 &self.controls[k + 1],
                 end_pseudo,
-                &computed,
+                &table.computed,
                 &mut memo,
             );
             if exact {
@@ -482,33 +410,201 @@ impl DrivenSimulation {
                     (&stages[1].a, &stages[1].b),
                     (&stages[2].a, &stages[2].b),
                 ];
-                rk4_linear_step(&mut sensitivity, self.step, stages, &mut work);
+                rk4_linear_step(&mut sensitivity, self.step, stages, &mut scratch.work);
             } else if !columns.is_empty() {
-                // The step's last stage sees the controls at θ = 1, which
-                // under a hold are the step's start values: the terms'
-                // regressors are taken with those (∂f/∂x keeps the grid
-                // point's controls: part of the O(h) approximation at a
-                // control step that `Linearise::GridPoints` accepts).
-                let end_b = if self.holds.iter().all(|h| h.weight(1.0) == 1.0) {
-                    &next_point.b
-                } else {
-                    let controls = self.controls_inside(k, 1.0);
-                    next_point.b_with_controls(model, &directions, &controls, &mut end_b);
-                    &end_b
-                };
-                mean(&point.a, &next_point.a, &mut middle_a);
-                mean(&point.b, end_b, &mut middle_b);
-                let stages = [
-                    (&point.a, &point.b),
-                    (&middle_a, &middle_b),
-                    (&middle_a, &middle_b),
-                    (&next_point.a, end_b),
-                ];
-                rk4_linear_step(&mut sensitivity, self.step, stages, &mut work);
+                let ends = (&point, &mut next_point);
+                self.grid_point_step(k, model, &directions, ends, &mut sensitivity, &mut scratch);
             }
             std::mem::swap(&mut point, &mut next_point);
         }
         Ok(())
+    }
+
+    /// The sensitivities' RK4 step over step k with the model linearised at
+    /// its two grid points only (`Linearise::GridPoints`): the middle
+    /// stages take the mean of the two linearisations.
+    fn grid_point_step(
+        &self,
+        k: usize,
+        model: &FlightModel,
+        directions: &Directions,
+        (point, next_point): (&Linearization, &mut Linearization),
+        sensitivity: &mut DMatrix<f64>,
+        scratch: &mut SensitivityScratch,
+    ) {
+        let SensitivityScratch {
+            work,
+            middle_a,
+            middle_b,
+            end_b,
+        } = scratch;
+        // The step's last stage sees the controls at θ = 1, which
+        // under a hold are the step's start values: the terms'
+        // regressors are taken with those (∂f/∂x keeps the grid
+        // point's controls: part of the O(h) approximation at a
+        // control step that `Linearise::GridPoints` accepts).
+        let end_b = if self.holds.iter().all(|h| h.weight(1.0) == 1.0) {
+            &next_point.b
+        } else {
+            let controls = self.controls_inside(k, 1.0);
+            next_point.b_with_controls(model, directions, &controls, end_b);
+            &*end_b
+        };
+        mean(&point.a, &next_point.a, middle_a);
+        mean(&point.b, end_b, middle_b);
+        let stages = [
+            (&point.a, &point.b),
+            (&*middle_a, &*middle_b),
+            (&*middle_a, &*middle_b),
+            (&next_point.a, end_b),
+        ];
+        rk4_linear_step(sensitivity, self.step, stages, work);
+    }
+}
+
+/// S(0) over the active states (the others are measured, independent of
+/// θ): a unit column for an integrated state's initial value, and where χ
+/// is fed back from α, χ(0) = χ∞(α(0)) moving with α(0) and the stall
+/// parameters (forward differences).
+fn initial_sensitivity(
+    model: &FlightModel,
+    directions: &Directions,
+    columns: &[Column],
+    x: &FlightPathState,
+    chi_from_alpha: bool,
+) -> DMatrix<f64> {
+    let states = &directions.states;
+    let row = |state: usize| states.iter().position(|&i| i == state);
+    let mut sensitivity = DMatrix::zeros(states.len(), columns.len());
+    for (j, column) in columns.iter().enumerate() {
+        if let Column::Initial(i) = *column {
+            sensitivity[(row(i).expect("an integrated state"), j)] = 1.0;
+        }
+        if let (true, Some(chi)) = (chi_from_alpha, row(CHI)) {
+            // χ(0) = χ∞(α(0)) moves with α(0) and the stall parameters.
+            let target =
+                |model: &FlightModel, alpha: f64| model.aircraft.aero.steady_separation(alpha);
+            sensitivity[(chi, j)] = match (*column, directions.sources[j]) {
+                (Column::Initial(ALPHA), _) => {
+                    let step = state_step(x[ALPHA]);
+                    (target(model, x[ALPHA] + step) - x[CHI]) / step
+                }
+                (_, Source::Direction(d)) => match directions.responses[d] {
+                    Response::Model(m) => {
+                        let (perturbed, step, _) = &directions.models[m];
+                        (target(perturbed, x[ALPHA]) - x[CHI]) / step
+                    }
+                    Response::Offset(_) => 0.0,
+                },
+                _ => 0.0,
+            };
+        }
+    }
+    sensitivity
+}
+
+/// The scratch of the sensitivities' RK4 step: its work matrices, and the
+/// grid-point linearisation's middle-stage ∂f/∂x and ∂f/∂θ and its end
+/// ∂f/∂θ under held controls.
+struct SensitivityScratch {
+    work: [DMatrix<f64>; 3],
+    middle_a: DMatrix<f64>,
+    middle_b: DMatrix<f64>,
+    end_b: DMatrix<f64>,
+}
+
+impl SensitivityScratch {
+    fn new(states: usize, columns: usize) -> SensitivityScratch {
+        let shape = || DMatrix::zeros(states, columns);
+        SensitivityScratch {
+            work: [(); 3].map(|_| shape()),
+            middle_a: DMatrix::zeros(states, states),
+            middle_b: shape(),
+            end_b: shape(),
+        }
+    }
+}
+
+/// A simulation's outputs at a grid point and their sensitivities:
+/// outputs that are states are x's entries, their sensitivities S's rows
+/// (none for a measured state); the others are linearised, ∂y/∂θ =
+/// ∂g/∂x·S + ∂g/∂θ.
+struct OutputTable {
+    sources: Vec<OutputSource>,
+    /// The linearised outputs.
+    computed: Vec<Observable>,
+    values: Vec<f64>,
+    /// (∂y/∂θ)ᵀ: each output's sensitivities contiguous.
+    output_sensitivity: DMatrix<f64>,
+    computed_sensitivity: DMatrix<f64>,
+    /// Whether there are unknowns (else no sensitivities).
+    sensitivities: bool,
+}
+
+impl OutputTable {
+    fn new(outputs: &[Observable], states: &[usize], columns: usize) -> OutputTable {
+        let row = |state: usize| states.iter().position(|&i| i == state);
+        let mut computed = Vec::new();
+        let sources: Vec<OutputSource> = outputs
+            .iter()
+            .map(|output| match *output {
+                Observable::State(index) => OutputSource::State {
+                    index,
+                    row: row(index),
+                },
+                other => {
+                    computed.push(other);
+                    OutputSource::Linearised(computed.len() - 1)
+                }
+            })
+            .collect();
+        OutputTable {
+            sources,
+            values: vec![0.0; outputs.len()],
+            output_sensitivity: DMatrix::zeros(columns, outputs.len()),
+            computed_sensitivity: DMatrix::zeros(computed.len(), columns),
+            computed,
+            sensitivities: columns > 0,
+        }
+    }
+
+    /// The outputs y and (∂y/∂θ)ᵀ at a grid point: x, its linearisation
+    /// `point` and the sensitivities S there.
+    fn at(
+        &mut self,
+        x: &FlightPathState,
+        point: &Linearization,
+        sensitivity: &DMatrix<f64>,
+    ) -> (&[f64], &DMatrix<f64>) {
+        let sensitivities = self.sensitivities;
+        if sensitivities {
+            // ∂y/∂θ = ∂g/∂x·S + ∂g/∂θ
+            affine(
+                &point.gx,
+                sensitivity,
+                &point.gtheta,
+                &mut self.computed_sensitivity,
+            );
+        }
+        for (o, source) in self.sources.iter().enumerate() {
+            let mut into = self.output_sensitivity.column_mut(o);
+            match *source {
+                OutputSource::State { index, row } => {
+                    self.values[o] = x[index];
+                    match row {
+                        Some(r) if sensitivities => into.tr_copy_from(&sensitivity.row(r)),
+                        _ => into.fill(0.0),
+                    }
+                }
+                OutputSource::Linearised(c) => {
+                    self.values[o] = point.outputs[c];
+                    if sensitivities {
+                        into.tr_copy_from(&self.computed_sensitivity.row(c));
+                    }
+                }
+            }
+        }
+        (&self.values, &self.output_sensitivity)
     }
 }
 
