@@ -14,7 +14,7 @@ use crate::estimate::Estimate;
 use crate::methods::equation_error::{self, Plan};
 use crate::model::coefficient_states::{self, CoefficientStates, H, P, U};
 use crate::model::state_space::StateSpaceModel;
-use crate::reconstruction::Reconstruction;
+use crate::reconstruction::{Reconstruction, Request};
 use crate::solver::extended_kalman::Keep;
 use crate::structure::ModelStructure;
 use aeroid_core::error::Result;
@@ -39,7 +39,6 @@ pub(crate) fn regression_data(
         let i = steps.partition_point(|&s| s < t - step_margin);
         steps.get(i).is_some_and(|&s| s <= t + step_margin)
     };
-    let aero = &structure.aircraft.aero;
     let request = equation_error::request(plans);
     let mut controls: Vec<Vec<f64>> = vec![vec![0.0; smoothed.times.len()]; Control::ALL.len()];
     for control in Control::ALL {
@@ -77,51 +76,13 @@ pub(crate) fn regression_data(
             at_steps += 1;
             continue;
         }
-        let x = x.as_slice();
-        let airspeed = speed(x);
-        let (u, w) = (x[U], x[U + 2]);
-        let rates = model.rates(t, x, &[])?;
-        let alpha_dot = (u * rates[U + 2] - w * rates[U]) / (u * u + w * w);
-        let input = AeroInput {
-            alpha: w.atan2(u),
-            beta: (x[U + 1] / airspeed).clamp(-1.0, 1.0).asin(),
-            airspeed,
-            mach: airspeed / atmosphere.at(x[H]).speed_of_sound,
-            rates: Vector3::new(x[P], x[P + 1], x[P + 2]),
-            alpha_dot,
-            measured_alpha_dot: None,
-            controls: Controls::from_fn(|i, _| controls[i][k]),
-            chi: 1.0,
-        };
-        let (lift, drag) = match aero.force_axes {
-            ForceAxes::Wind => wind_axes(x),
-            ForceAxes::Body => (
-                x[coefficient_states::coefficient(2)],
-                x[coefficient_states::coefficient(0)],
-            ),
-        };
-        let all = [
-            lift,
-            x[coefficient_states::coefficient(1)],
-            drag,
-            x[coefficient_states::coefficient(3)],
-            x[coefficient_states::coefficient(4)],
-            x[coefficient_states::coefficient(5)],
-        ];
-        let mut regressors: [f64; REGRESSOR_COUNT] = aero.regressors(&input, 1.0);
-        regressors[Regressor::LiftSquared as usize] = lift * lift;
-        let finite = request
-            .regressors
-            .iter()
-            .all(|&r| regressors[r as usize].is_finite())
-            && request
-                .coefficients
-                .iter()
-                .all(|&c| all[c as usize].is_finite());
-        if !finite {
+        let controls = Controls::from_fn(|i, _| controls[i][k]);
+        let at = (t, x.as_slice(), controls);
+        let Some((regressors, all)) = point_data(structure, &model, &request, &atmosphere, at)?
+        else {
             dropped += 1;
             continue;
-        }
+        };
         data.times.push(t);
         data.regressors.push(regressors);
         for (series, value) in data.coefficients.iter_mut().zip(all) {
@@ -142,7 +103,63 @@ pub(crate) fn regression_data(
     Ok(data)
 }
 
-/// Steps 1–5 of `smoothed_regression`'s header: the smoothed histories and the estimate.
+/// The regressors and the six coefficients (lift or CZ, CY, drag or CX,
+/// Cl, Cm, Cn) at one smoothed state x at time t with the recorded
+/// `controls`: α, β, V, the rates and Mach from x, α̇ from its rates
+/// (α̇ = (u·ẇ − w·u̇)/(u² + w²)); None where a requested one is not finite.
+fn point_data(
+    structure: &ModelStructure,
+    model: &CoefficientStates,
+    request: &Request,
+    atmosphere: &Atmosphere,
+    (t, x, controls): (f64, &[f64], Controls),
+) -> Result<Option<([f64; REGRESSOR_COUNT], [f64; 6])>> {
+    let aero = &structure.aircraft.aero;
+    let airspeed = speed(x);
+    let (u, w) = (x[U], x[U + 2]);
+    let rates = model.rates(t, x, &[])?;
+    let alpha_dot = (u * rates[U + 2] - w * rates[U]) / (u * u + w * w);
+    let input = AeroInput {
+        alpha: w.atan2(u),
+        beta: (x[U + 1] / airspeed).clamp(-1.0, 1.0).asin(),
+        airspeed,
+        mach: airspeed / atmosphere.at(x[H]).speed_of_sound,
+        rates: Vector3::new(x[P], x[P + 1], x[P + 2]),
+        alpha_dot,
+        measured_alpha_dot: None,
+        controls,
+        chi: 1.0,
+    };
+    let (lift, drag) = match aero.force_axes {
+        ForceAxes::Wind => wind_axes(x),
+        ForceAxes::Body => (
+            x[coefficient_states::coefficient(2)],
+            x[coefficient_states::coefficient(0)],
+        ),
+    };
+    let all = [
+        lift,
+        x[coefficient_states::coefficient(1)],
+        drag,
+        x[coefficient_states::coefficient(3)],
+        x[coefficient_states::coefficient(4)],
+        x[coefficient_states::coefficient(5)],
+    ];
+    let mut regressors: [f64; REGRESSOR_COUNT] = aero.regressors(&input, 1.0);
+    regressors[Regressor::LiftSquared as usize] = lift * lift;
+    let finite = request
+        .regressors
+        .iter()
+        .all(|&r| regressors[r as usize].is_finite())
+        && request
+            .coefficients
+            .iter()
+            .all(|&c| all[c as usize].is_finite());
+    Ok(finite.then_some((regressors, all)))
+}
+
+/// Steps 1–5 of `smoothed_regression`'s header: the smoothed histories
+/// and the estimate.
 pub fn smooth_and_regress(
     record: &FlightRecord,
     structure: &ModelStructure,

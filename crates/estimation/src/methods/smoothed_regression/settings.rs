@@ -190,12 +190,15 @@ impl SmoothedRegressionSettings {
         Ok(parsed)
     }
 
+    /// Refuses a bad value, naming its key.
     pub(super) fn check(&self) -> Result<()> {
-        let refuse = |key: &str, message: String| {
-            Err(Error::Other(format!(
-                "[methods.{METHOD}]: {key}: {message}"
-            )))
-        };
+        self.check_observations()?;
+        self.check_noise()?;
+        self.check_times()
+    }
+
+    /// The observations: each a model output, at least one needed.
+    fn check_observations(&self) -> Result<()> {
         for (key, names) in [
             ("observations", &self.observations),
             ("optional_observations", &self.optional_observations),
@@ -215,6 +218,12 @@ impl SmoothedRegressionSettings {
         if self.observations.is_empty() {
             return refuse("observations", "at least one channel is needed".into());
         }
+        Ok(())
+    }
+
+    /// The noise densities, change bounds, initial and measurement
+    /// deviations: finite and ≥ 0 (the initial ones > 0).
+    fn check_noise(&self) -> Result<()> {
         for (key, value) in [
             ("force_noise", self.force_noise),
             ("moment_noise", self.moment_noise),
@@ -256,6 +265,12 @@ impl SmoothedRegressionSettings {
                 );
             }
         }
+        Ok(())
+    }
+
+    /// The grid's largest step, the control-step margin and the
+    /// correlation lag.
+    fn check_times(&self) -> Result<()> {
         if !(self.max_step > 0.0 && self.max_step.is_finite()) {
             return refuse(
                 "max_step",
@@ -276,4 +291,11 @@ impl SmoothedRegressionSettings {
         }
         Ok(())
     }
+}
+
+/// The refusal of the `[methods.ebm]` table's value under `key`.
+fn refuse(key: &str, message: String) -> Result<()> {
+    Err(Error::Other(format!(
+        "[methods.{METHOD}]: {key}: {message}"
+    )))
 }

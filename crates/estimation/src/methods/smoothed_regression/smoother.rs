@@ -315,27 +315,13 @@ impl SmootherSetup {
         let (record, altitude_note) = with_altitude(record);
         let record = record.as_ref();
         let names: Vec<String> = outputs.iter().map(|o| o.channel().to_string()).collect();
-        let (start, end) = fitting_window(record, &settings.observations, None)?;
-        let mut fastest: f64 = 0.0;
-        for name in &names {
-            fastest = fastest.max(record.channel(name)?.rate);
-        }
-        if !(fastest > 0.0 && fastest.is_finite()) {
-            return Err(Error::Other(
-                "ebm: the observations have no sample rate".into(),
-            ));
-        }
-        let period = 1.0 / fastest;
-        let parts = ((period / settings.max_step) - 1e-9).ceil().max(1.0) as usize;
-        let step = period / parts as f64;
-        let len = ((end - start) / step + 1e-9).floor() as usize + 1;
-        if len < 3 * parts {
-            return Err(Error::Refused(Refusal::TooFewData {
-                method: METHOD.to_string(),
-                data: len / parts,
-                unknowns: 3,
-            }));
-        }
+        let Grid {
+            start,
+            step,
+            len,
+            parts,
+            period,
+        } = Grid::of(record, &names, settings)?;
         let times: Vec<f64> = (0..len).map(|k| start + k as f64 * step).collect();
         let (thrust, thrust_measured) = thrust_input(record, structure, &times)?;
         let record = unwrapped_yaw(record);
@@ -350,36 +336,7 @@ impl SmootherSetup {
             model = model.with_measured_thrust();
         }
         let observations = Observations::from_record(&record, &names, start, step, len)?;
-        let defaults = SmoothedRegressionSettings::default().measurement_noise;
-        let mut derived = Vec::new();
-        let measurement = DVector::from_iterator(
-            names.len(),
-            names.iter().map(|name| {
-                let computed = record
-                    .channel(name)
-                    .is_ok_and(|c| aeroid_record::prep::derive::is_derived(&c.source))
-                    && settings.derived_measurement_noise.contains_key(name);
-                if computed {
-                    derived.push(name.clone());
-                }
-                let sigma = if computed {
-                    settings.derived_measurement_noise[name]
-                } else {
-                    settings
-                        .measurement_noise
-                        .get(name)
-                        .or_else(|| defaults.get(name))
-                        .copied()
-                        .unwrap_or(0.0)
-                };
-                let resolution = record
-                    .channel(name)
-                    .ok()
-                    .and_then(|c| c.resolution)
-                    .unwrap_or(0.0);
-                (sigma * sigma + resolution * resolution / 12.0).max(1e-16)
-            }),
-        );
+        let (measurement, derived) = measurement_noise(&record, &names, settings);
         let (initial, markov) = initial_estimate(&record, &model, settings, start, period);
         let noise = Noise {
             process: process_noise(settings, &markov),
@@ -438,6 +395,99 @@ impl SmootherSetup {
     }
 }
 
+/// The filter's grid: the fastest observation's sample period cut into
+/// `parts` equal steps no longer than `max_step`, over the window where
+/// every needed observation has samples.
+struct Grid {
+    start: f64,
+    step: f64,
+    len: usize,
+    /// Grid points to a sample period, and the period.
+    parts: usize,
+    period: f64,
+}
+
+impl Grid {
+    /// The grid of the observations `names` of `record`; refused with
+    /// fewer than three sample periods.
+    fn of(
+        record: &FlightRecord,
+        names: &[String],
+        settings: &SmoothedRegressionSettings,
+    ) -> Result<Grid> {
+        let (start, end) = fitting_window(record, &settings.observations, None)?;
+        let mut fastest: f64 = 0.0;
+        for name in names {
+            fastest = fastest.max(record.channel(name)?.rate);
+        }
+        if !(fastest > 0.0 && fastest.is_finite()) {
+            return Err(Error::Other(
+                "ebm: the observations have no sample rate".into(),
+            ));
+        }
+        let period = 1.0 / fastest;
+        let parts = ((period / settings.max_step) - 1e-9).ceil().max(1.0) as usize;
+        let step = period / parts as f64;
+        let len = ((end - start) / step + 1e-9).floor() as usize + 1;
+        if len < 3 * parts {
+            return Err(Error::Refused(Refusal::TooFewData {
+                method: METHOD.to_string(),
+                data: len / parts,
+                unknowns: 3,
+            }));
+        }
+        Ok(Grid {
+            start,
+            step,
+            len,
+            parts,
+            period,
+        })
+    }
+}
+
+/// The measurement noise variance of each observation `names`: its
+/// setting's σ² (a derived channel's from `derived_measurement_noise`)
+/// plus its quantization, LSB²/12 (at least 10⁻¹⁶); and the derived
+/// channels so weighted.
+fn measurement_noise(
+    record: &FlightRecord,
+    names: &[String],
+    settings: &SmoothedRegressionSettings,
+) -> (DVector<f64>, Vec<String>) {
+    let defaults = SmoothedRegressionSettings::default().measurement_noise;
+    let mut derived = Vec::new();
+    let measurement = DVector::from_iterator(
+        names.len(),
+        names.iter().map(|name| {
+            let computed = record
+                .channel(name)
+                .is_ok_and(|c| aeroid_record::prep::derive::is_derived(&c.source))
+                && settings.derived_measurement_noise.contains_key(name);
+            if computed {
+                derived.push(name.clone());
+            }
+            let sigma = if computed {
+                settings.derived_measurement_noise[name]
+            } else {
+                settings
+                    .measurement_noise
+                    .get(name)
+                    .or_else(|| defaults.get(name))
+                    .copied()
+                    .unwrap_or(0.0)
+            };
+            let resolution = record
+                .channel(name)
+                .ok()
+                .and_then(|c| c.resolution)
+                .unwrap_or(0.0);
+            (sigma * sigma + resolution * resolution / 12.0).max(1e-16)
+        }),
+    );
+    (measurement, derived)
+}
+
 /// [`smooth`] with the filter keeping what `keep` says
 /// ([`SmootherSetup::smooth`]).
 pub(super) fn smooth_with(
@@ -452,72 +502,17 @@ pub(super) fn smooth_with(
     // The histories at the sample instants: every `parts`-th grid point.
     let mut smoothed = SmootherSetup::smooth(&pass, keep);
     drop(pass);
+    let mut notes = setup.notes();
     let SmootherSetup {
-        model,
-        observations,
         times,
-        start,
-        step,
         parts,
-        period,
         names,
-        absent,
-        derived,
-        markov,
-        altitude_note,
-        thrust_measured,
         ..
     } = setup;
-    let len = model.len();
     let mut times = times;
     if parts > 1 {
         smoothed = smoothed.into_iter().step_by(parts).collect();
         times = times.into_iter().step_by(parts).collect();
-    }
-    let mut notes = vec![format!(
-        "EKF + modified Bryson–Frazier smoother over {len} points of {} s from {start:.3} s{}, observing {}{}",
-        aeroid_record::rounded(step),
-        if parts > 1 {
-            format!(
-                " ({parts} to the sample period; the histories at the {} s samples)",
-                aeroid_record::rounded(period)
-            )
-        } else {
-            String::new()
-        },
-        names.join(", "),
-        if absent.is_empty() {
-            String::new()
-        } else {
-            format!("; not in the record: {}", absent.join(", "))
-        }
-    )];
-    notes.extend(observations.note(step));
-    if !derived.is_empty() {
-        notes.push(format!(
-            "derived channels weighted by derived_measurement_noise: {}",
-            derived.join(", ")
-        ));
-    }
-    if !markov.bounded.is_empty() {
-        notes.push(format!(
-            "the Gauss–Markov models of {} lowered to the change bounds over the {} s sample period (third-derivative densities {})",
-            markov.bounded.join(", "),
-            aeroid_record::rounded(period),
-            markov
-                .density
-                .iter()
-                .zip(COEFFICIENT_NAMES)
-                .map(|(q, name)| format!("{name} {q:.2e}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-    }
-    notes.extend(altitude_note);
-    if thrust_measured {
-        notes.push(
-            "thrust: the record's 'thrust' channel, along the aircraft's thrust line, not the throttle and engine model".into(),
-        );
     }
     // The standard deviations in the variances' own vectors.
     let (states, deviations): (Vec<DVector<f64>>, Vec<DVector<f64>>) = smoothed
@@ -535,6 +530,77 @@ pub(super) fn smooth_with(
         observations: names,
         notes,
     })
+}
+
+impl SmootherSetup {
+    /// What the pass notes before its histories: the grid and the
+    /// observations, how they are sampled, the derived channels' noise,
+    /// the lowered Gauss–Markov models, the altitude and the thrust.
+    fn notes(&self) -> Vec<String> {
+        let SmootherSetup {
+            model,
+            observations,
+            start,
+            step,
+            parts,
+            period,
+            names,
+            absent,
+            derived,
+            markov,
+            altitude_note,
+            thrust_measured,
+            ..
+        } = self;
+        let (start, step, parts, period) = (*start, *step, *parts, *period);
+        let len = model.len();
+        let mut notes = vec![format!(
+            "EKF + modified Bryson–Frazier smoother over {len} points of {} s from {start:.3} s{}, observing {}{}",
+            aeroid_record::rounded(step),
+            if parts > 1 {
+                format!(
+                    " ({parts} to the sample period; the histories at the {} s samples)",
+                    aeroid_record::rounded(period)
+                )
+            } else {
+                String::new()
+            },
+            names.join(", "),
+            if absent.is_empty() {
+                String::new()
+            } else {
+                format!("; not in the record: {}", absent.join(", "))
+            }
+        )];
+        notes.extend(observations.note(step));
+        if !derived.is_empty() {
+            notes.push(format!(
+                "derived channels weighted by derived_measurement_noise: {}",
+                derived.join(", ")
+            ));
+        }
+        if !markov.bounded.is_empty() {
+            notes.push(format!(
+                "the Gauss–Markov models of {} lowered to the change bounds over the {} s sample period (third-derivative densities {})",
+                markov.bounded.join(", "),
+                aeroid_record::rounded(period),
+                markov
+                    .density
+                    .iter()
+                    .zip(COEFFICIENT_NAMES)
+                    .map(|(q, name)| format!("{name} {q:.2e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        notes.extend(altitude_note.iter().cloned());
+        if *thrust_measured {
+            notes.push(
+                "thrust: the record's 'thrust' channel, along the aircraft's thrust line, not the throttle and engine model".into(),
+            );
+        }
+        notes
+    }
 }
 
 /// How well each coefficient history is determined: its smoothed standard
