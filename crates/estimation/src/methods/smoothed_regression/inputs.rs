@@ -17,10 +17,7 @@ use aeroid_sim::aero::Regressor;
 use aeroid_sim::state::Control;
 
 /// What a record and structure need of channels: (name, purpose).
-pub(super) fn needed_inputs(
-    structure: &ModelStructure,
-    plans: &[Plan],
-) -> Vec<(&'static str, String)> {
+fn needed_inputs(structure: &ModelStructure, plans: &[Plan]) -> Vec<(&'static str, String)> {
     let mut needs: Vec<(&'static str, String)> = Vec::new();
     for plan in plans {
         for regressor in plan.terms.iter().flat_map(|(term, _)| term.factors()) {

@@ -191,7 +191,7 @@ impl SmoothedRegressionSettings {
     }
 
     /// Refuses a bad value, naming its key.
-    pub(super) fn check(&self) -> Result<()> {
+    fn check(&self) -> Result<()> {
         self.check_observations()?;
         self.check_noise()?;
         self.check_times()

@@ -27,9 +27,9 @@ pub struct Smoothed {
 }
 
 /// The history columns of [`Smoothed::write_csv`]: name, unit, value of a state.
-pub(super) type Column = (&'static str, &'static str, fn(&[f64]) -> f64);
+type Column = (&'static str, &'static str, fn(&[f64]) -> f64);
 
-pub(super) const HISTORY_COLUMNS: &[Column] = &[
+const HISTORY_COLUMNS: &[Column] = &[
     ("CX", "-", |x| x[coefficient_states::coefficient(0)]),
     ("CY", "-", |x| x[coefficient_states::coefficient(1)]),
     ("CZ", "-", |x| x[coefficient_states::coefficient(2)]),

@@ -62,7 +62,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 /// recorded; rates 0), the force coefficients from the load factors (Eq. 8
 /// inverted), the moment coefficients those of no angular acceleration
 /// (M_aero = ω × I·ω − r_T × T), derivatives 0.
-pub(super) fn initial_estimate(
+fn initial_estimate(
     record: &FlightRecord,
     model: &CoefficientStates,
     settings: &SmoothedRegressionSettings,
@@ -281,16 +281,16 @@ pub struct SmootherSetup {
     pub observations: Observations,
     /// The grid's times, first time and step.
     pub(super) times: Vec<f64>,
-    pub(super) start: f64,
+    start: f64,
     pub(super) step: f64,
     /// Grid points to a sample period.
     pub(super) parts: usize,
     pub(super) period: f64,
     pub(super) names: Vec<String>,
     pub(super) absent: Vec<String>,
-    pub(super) derived: Vec<String>,
+    derived: Vec<String>,
     pub(super) markov: GaussMarkov,
-    pub(super) altitude_note: Option<String>,
+    altitude_note: Option<String>,
     pub(super) thrust_measured: bool,
 }
 
@@ -305,7 +305,7 @@ impl SmootherSetup {
         SmootherSetup::with_plans(record, structure, settings, &plans)
     }
 
-    pub(super) fn with_plans(
+    fn with_plans(
         record: &FlightRecord,
         structure: &ModelStructure,
         settings: &SmoothedRegressionSettings,
@@ -606,7 +606,7 @@ impl SmootherSetup {
 /// How well each coefficient history is determined: its smoothed standard
 /// deviation (RMS over the record) against its variation (standard
 /// deviation about its mean).
-pub(super) fn determination_note(smoothed: &[DVector<f64>], deviations: &[DVector<f64>]) -> String {
+fn determination_note(smoothed: &[DVector<f64>], deviations: &[DVector<f64>]) -> String {
     let items: Vec<String> = COEFFICIENT_NAMES
         .iter()
         .enumerate()

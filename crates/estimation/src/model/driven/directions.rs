@@ -21,17 +21,17 @@ pub(super) fn state_step(value: f64) -> f64 {
 
 /// Step of a coefficient offset, where ∂f/∂C is a difference quotient (the
 /// forces depend on α̇; f is then not affine in C).
-pub(super) const OFFSET_STEP: f64 = 1e-6;
+const OFFSET_STEP: f64 = 1e-6;
 
 /// Forward-difference step of a nonlinear parameter: 10⁻⁷·max(|θ|, 10⁻²).
-pub(super) fn parameter_step(value: f64) -> f64 {
+fn parameter_step(value: f64) -> f64 {
     1e-7 * value.abs().max(1e-2)
 }
 
 /// Central-difference step of a nonlinear parameter: 10⁻⁵·max(|θ|, 10⁻²),
 /// about ε^⅓ relative (truncation error ~step²·f‴/6 and rounding error
 /// ~ε·|f|/step then both ~10⁻¹⁰ relative, 10⁻⁸ through a stall break).
-pub(super) fn central_parameter_step(value: f64) -> f64 {
+fn central_parameter_step(value: f64) -> f64 {
     1e-5 * value.abs().max(1e-2)
 }
 
@@ -184,7 +184,7 @@ impl Directions {
 
     /// A response by the difference quotient of `model` moved by
     /// `step` (and by −step when central).
-    pub(super) fn push_model(
+    fn push_model(
         &mut self,
         model: &FlightModel,
         step: f64,
@@ -200,7 +200,7 @@ impl Directions {
         self.push_response(Response::Model(self.models.len() - 1))
     }
 
-    pub(super) fn push_response(&mut self, response: Response) -> usize {
+    fn push_response(&mut self, response: Response) -> usize {
         self.responses.push(response);
         self.responses.len() - 1
     }

@@ -46,8 +46,8 @@ pub(super) fn rotated((sin, cos): SinCos, h: f64) -> SinCos {
 pub(super) struct Angles<T: Real = f64> {
     pub(super) alpha: (T, T),
     pub(super) beta: (T, T),
-    pub(super) roll: (T, T),
-    pub(super) pitch: (T, T),
+    roll: (T, T),
+    pitch: (T, T),
 }
 
 impl<T: Real> Angles<T> {
@@ -127,7 +127,7 @@ impl Angles {
     /// The angles as dual numbers differentiating along the states of
     /// `lanes` (lane l: state lanes[l]): d sin = cos, d cos = −sin on an
     /// angle's own lane.
-    pub(super) fn seeded(self, lanes: impl Iterator<Item = usize>) -> Angles<Dual> {
+    fn seeded(self, lanes: impl Iterator<Item = usize>) -> Angles<Dual> {
         let lift = |(sin, cos): SinCos| (Dual::constant(sin), Dual::constant(cos));
         let mut angles = Angles {
             alpha: lift(self.alpha),
@@ -269,15 +269,15 @@ pub(super) fn dual_derivative(
 /// air-relative velocity, the accelerations, ḋ and χ̇.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Motion<T: Real = f64> {
-    pub(super) velocity: Vector3<T>,
+    velocity: Vector3<T>,
     pub(super) airspeed: T,
     /// u̇, v̇, ẇ.
-    pub(super) velocity_rate: Vector3<T>,
+    velocity_rate: Vector3<T>,
     pub(super) alpha_dot: T,
-    pub(super) beta_dot: T,
+    beta_dot: T,
     pub(super) angular_acceleration: Vector3<T>,
-    pub(super) down_rate: T,
-    pub(super) chi_rate: T,
+    down_rate: T,
+    chi_rate: T,
 }
 
 impl<T: Real> Motion<T> {

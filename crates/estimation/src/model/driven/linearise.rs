@@ -39,8 +39,8 @@ pub(super) struct Linearization {
     /// ∂g/∂θ (outputs × unknowns).
     pub(super) gtheta: DMatrix<f64>,
     /// Scratch: ∂ẋ of the active states and ∂y, a column per response.
-    pub(super) model_rates: DMatrix<f64>,
-    pub(super) model_outputs: DMatrix<f64>,
+    model_rates: DMatrix<f64>,
+    model_outputs: DMatrix<f64>,
 }
 
 /// The point a [`Linearization`] is at: x, its angles' sines and cosines
@@ -350,7 +350,7 @@ pub(super) fn fill(
 
 /// [`fill`] with R rows.
 #[inline(always)]
-pub(super) fn fill_fixed<const R: usize>(
+fn fill_fixed<const R: usize>(
     responses: &[f64],
     filled: &[Filled],
     factors: &[f64],

@@ -77,7 +77,7 @@ pub(super) struct FrozenPoints<'a> {
 
 /// The measured quantities at the grid points and the steps' midpoints,
 /// interpolated as [`frozen_points`].
-pub(super) fn frozen_ambient(ambient: &[Ambient]) -> impl Iterator<Item = Ambient> + '_ {
+fn frozen_ambient(ambient: &[Ambient]) -> impl Iterator<Item = Ambient> + '_ {
     ambient.iter().enumerate().flat_map(move |(k, &point)| {
         let midpoint = ambient.get(k + 1).map(|next| point.between(*next, 0.5));
         std::iter::once(point).chain(midpoint)
@@ -96,9 +96,7 @@ pub(super) fn between(
 
 /// The measured states at the grid points and the steps' midpoints,
 /// interpolated as [`DrivenSimulation::simulate`] does.
-pub(super) fn frozen_points(
-    measured: &[FlightPathState],
-) -> impl Iterator<Item = FlightPathState> + '_ {
+fn frozen_points(measured: &[FlightPathState]) -> impl Iterator<Item = FlightPathState> + '_ {
     measured.iter().enumerate().flat_map(move |(k, &point)| {
         let midpoint = measured.get(k + 1).map(|next| between(&point, next, 0.5));
         std::iter::once(point).chain(midpoint)
@@ -123,7 +121,7 @@ pub(super) struct Memo<'a> {
     /// The record's measured quantities at the point, and those `air` was
     /// computed with.
     pub(super) ambient: Ambient,
-    pub(super) air_ambient: Ambient,
+    air_ambient: Ambient,
     /// Which states are measured, the frozen points, and the point.
     pub(super) measured: [bool; FLIGHT_PATH_SIZE],
     pub(super) frozen: FrozenPoints<'a>,
@@ -214,12 +212,12 @@ impl<'a> Memo<'a> {
 /// parameters) at one state, and they share them.
 #[derive(Debug, Clone, Default)]
 pub(in crate::model) struct PointMemo {
-    pub(super) last: Option<PointKey>,
+    last: Option<PointKey>,
 }
 
 /// What a [`PointMemo`] keeps: the point, and what was computed there.
 #[derive(Debug, Clone)]
-pub(super) struct PointKey {
+struct PointKey {
     pub(super) x: FlightPathState,
     pub(super) controls: Controls,
     pub(super) ambient: Ambient,

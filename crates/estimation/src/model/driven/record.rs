@@ -181,7 +181,7 @@ fn sampled_states(
     Ok((measured, note))
 }
 
-pub(super) fn missing_altitude() -> Error {
+fn missing_altitude() -> Error {
     Error::Other(format!(
         "the model needs the measured channel 'altitude' (it is not integrated), or '{}', '{}' or '{}' instead, but the record has none",
         ALTITUDE_SUBSTITUTES[0], ALTITUDE_SUBSTITUTES[1], ALTITUDE_SUBSTITUTES[2]

@@ -122,7 +122,7 @@ impl DrivenSimulation {
     }
 
     /// The state at grid point k: integrated entries from `x`, the rest measured.
-    pub(super) fn merge(&self, x: &FlightPathState, measured: &FlightPathState) -> FlightPathState {
+    fn merge(&self, x: &FlightPathState, measured: &FlightPathState) -> FlightPathState {
         FlightPathState::from_fn(|i, _| if self.integrate[i] { x[i] } else { measured[i] })
     }
 
@@ -677,7 +677,7 @@ impl PlainSteps<'_> {
 
 /// Where a simulation's output comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) enum OutputSource {
+enum OutputSource {
     /// A state (index into x): its value, and its sensitivities the row of
     /// S (None: a measured state, independent of θ).
     State { index: usize, row: Option<usize> },
@@ -686,7 +686,7 @@ pub(super) enum OutputSource {
 }
 
 /// into = (a + b)/2.
-pub(super) fn mean(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
+fn mean(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
     into.as_mut_slice()
         .iter_mut()
         .zip(a.as_slice().iter().zip(b.as_slice()))
