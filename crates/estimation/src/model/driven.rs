@@ -5,9 +5,10 @@
 //! decoupled longitudinal and lateral-directional models of the reflex-wing UAV paper
 //! (Eqs. 1–8) are the subsets {V, α, q, θ} and {β, p, r, φ}; the full
 //! 6-DOF integrates them all. The equations are the simulator's own
-//! ([`FlightModel::evaluate_kinematics`], no wind: estimation models the
-//! air-relative motion, so air data are V, α, β themselves and the attitude
-//! is the Euler angles' rotation), converted to flight-path rates:
+//! ([`FlightModel::evaluate_kinematics`](aeroid_sim::dynamics::FlightModel::evaluate_kinematics),
+//! no wind: estimation models the air-relative motion, so air data are
+//! V, α, β themselves and the attitude is the Euler angles' rotation),
+//! converted to flight-path rates:
 //! `V̇ = V·V̇_b/V`, α̇ and β̇ from the state derivative,
 //! `φ̇ = p + tan θ·(q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`,
 //! `ψ̇ = (q sin φ + r cos φ)/cos θ`, `ḣ = −ḋ`.

@@ -25,7 +25,7 @@ pub struct SmoothedRegressionSettings {
     /// The most a force coefficient's Gauss–Markov model may spread the
     /// specific force over one sample period of the observations (m/s²):
     /// a larger `force_noise` or initial derivative deviation is lowered
-    /// to it (the rate-aware bound of [`GaussMarkov::for_period`]).
+    /// to it (the rate-aware bound of [`super::GaussMarkov::for_period`]).
     pub force_change_bound: f64,
     /// The same for a moment coefficient and the angular acceleration
     /// (rad/s²).

@@ -205,7 +205,9 @@ impl PseudoRates {
 /// enters an integrated state's equation the measured rate is used: with the
 /// airspeed measured, β̇ = (v̇ − V̇_m·sin β)/(V·cos β); with the sideslip
 /// measured, V̇ = [(u·u̇ + w·ẇ)/V + V·sin β·cos β·β̇_m]/cos²β.
-/// `angles` and `air` are x's (computed once per evaluation; [`Linearization::at`] reuses them for every perturbed model).
+/// `angles` and `air` are x's (computed once per evaluation;
+/// [`Linearization::at`](super::linearise::Linearization::at) reuses them
+/// for every perturbed model).
 #[inline(always)]
 pub(super) fn derivative<T: Real>(
     model: &FlightModel,

@@ -23,7 +23,7 @@ use aeroid_sim::state::Controls;
 use nalgebra::{DMatrix, DVector};
 
 /// A model linearised at one point (a grid point, or an RK4 stage state
-/// with [`Linearise::Stages`]): ẋ, the evaluation, and derivatives over the
+/// with [`Linearise::Stages`](super::Linearise::Stages)): ẋ, the evaluation, and derivatives over the
 /// active states (dual numbers or difference quotients: [`Directions`]):
 /// ∂f/∂x, ∂f/∂θ, and at grid points the outputs' ∂g/∂x and ∂g/∂θ.
 pub(super) struct Linearization {
@@ -414,7 +414,7 @@ pub(in crate::model) fn evaluate_into(
 
 /// The Jacobians of f (rows: `states`) and of the `outputs` at the full
 /// flight-path state x, along `states` and every aerodynamic parameter of
-/// `model`, by the machinery of [`DrivenSimulation::simulate`]'s
+/// `model`, by the machinery of [`DrivenSimulation::simulate`](super::DrivenSimulation::simulate)'s
 /// sensitivity equations ([`Linearization::at`]): dual numbers along the
 /// states (forward differences along the altitude, and wherever the
 /// forces depend on α̇), a term's ∂f/∂θ exact from the coefficient's

@@ -28,7 +28,7 @@ pub struct Ambient {
 
 impl Ambient {
     /// The values a fraction θ into a step from `self` to `end`: linear,
-    /// as the measured pseudo-controls ([`between`]).
+    /// as the measured pseudo-controls ([`between`](super::memo::between)).
     pub(super) fn between(self, end: Ambient, theta: f64) -> Ambient {
         let mix = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| a + (b - a) * theta);
         Ambient {
@@ -87,7 +87,7 @@ pub const MEASURED_QUANTITIES: [&str; 2] = ["density", "thrust"];
 /// The channels that stand in for a missing `altitude` pseudo-control, in
 /// order: pressure altitude, else the density altitude of the measured
 /// density, else of the density 2·q̄/V² from the dynamic pressure and the
-/// airspeed ([`DrivenSimulation::from_record`]).
+/// airspeed ([`DrivenSimulation::from_record`](super::DrivenSimulation::from_record)).
 pub const ALTITUDE_SUBSTITUTES: [&str; 3] = ["pressure_altitude", "density", "dynamic_pressure"];
 
 /// The record's measured density and thrust on the grid (linear between

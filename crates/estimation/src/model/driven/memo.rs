@@ -95,7 +95,7 @@ pub(super) fn between(
 }
 
 /// The measured states at the grid points and the steps' midpoints,
-/// interpolated as [`DrivenSimulation::simulate`] does.
+/// interpolated as [`DrivenSimulation::simulate`](super::DrivenSimulation::simulate) does.
 fn frozen_points(measured: &[FlightPathState]) -> impl Iterator<Item = FlightPathState> + '_ {
     measured.iter().enumerate().flat_map(move |(k, &point)| {
         let midpoint = measured.get(k + 1).map(|next| between(&point, next, 0.5));

@@ -47,7 +47,7 @@ pub enum Linearise {
 pub struct DrivenSimulation {
     pub start: f64,
     pub step: f64,
-    /// How each control is taken inside a step (by [`Control::index`]).
+    /// How each control is taken inside a step (by [`Control::index`](aeroid_sim::state::Control::index)).
     pub holds: [Interpolation; CONTROL_COUNT],
     /// The controls the record has, each with its interpolation and why.
     pub input_timing: Vec<Chosen>,
@@ -243,7 +243,7 @@ impl DrivenSimulation {
     /// memo)` evaluates ẋ at the three later stages, given the stage's
     /// merged state and inputs with `memo` at its frozen point.
     /// Both [`DrivenSimulation::simulate`] and the state-space view's step
-    /// ([`super::state_space`], through [`PlainSteps`]) take their steps
+    /// ([`crate::model::state_space`], through [`PlainSteps`]) take their steps
     /// here.
     pub(super) fn step_from(
         &self,
