@@ -74,7 +74,7 @@ fn output_error_recovers_a_noise_free_linear_flight() {
 /// sample late, and output error misses beyond both.
 #[test]
 fn linear_fits_follow_ramped_inputs_by_default() {
-    use aeroid::estimation::model::input_timing::InputInterpolation;
+    use aeroid::estimation::input_timing::InputInterpolation;
     use aeroid::sim::integrator::Interpolation;
     let name = "linear-lateral-attas";
     let scenario = scenario_with(name, |text| {

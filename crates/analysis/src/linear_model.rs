@@ -18,8 +18,8 @@
 //! numbers. Assumes no steady wind (u, v, w are then the air-relative velocities).
 
 use super::linearize::{H, Linearization, P, PHI, Q, R, THETA, U, V, W};
+use aeroid_estimation::input_timing::InputInterpolation;
 use aeroid_estimation::linear_structure::{Cell, KIND, LinearFile, LinearParameter};
-use aeroid_estimation::model::input_timing::InputInterpolation;
 use aeroid_sim::state::Control;
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;

@@ -11,6 +11,7 @@ pub mod diagnosis;
 pub mod estimate;
 pub mod estimator;
 pub mod fit_quality;
+pub mod input_timing;
 pub mod linear_structure;
 pub mod methods;
 pub mod model;

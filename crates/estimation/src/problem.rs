@@ -25,7 +25,6 @@
 //!                  "rate": 25.0, "times": [ … ], "values": [ … ] } ] } ] }
 //! ```
 
-use crate::estimator::Estimator;
 use crate::linear_structure::{LinearFile, LinearStructure};
 use crate::settings::{MethodTables, Settings, merge_settings};
 use crate::structure::{ModelStructure, Structure, StructureFile, ZERO_SOURCE};
@@ -78,23 +77,21 @@ pub struct EstimationProblem {
 }
 
 impl EstimationProblem {
-    /// The problem of `estimator` on `records`, its settings the
-    /// structure's `[methods.NAME]` table overridden key by key by each of
-    /// `layers` (scenario, then study or gate case). Fails on settings the
-    /// method does not accept. A program finds the estimator by name with
-    /// [`crate::registry::Registry::problem`].
+    /// The problem of `method` on `records`, its settings the structure's
+    /// `[methods.NAME]` table overridden key by key by each of `layers`
+    /// (scenario, then study or gate case). The settings are checked
+    /// against the method where it is found: a program builds a problem
+    /// with [`crate::registry::Registry::problem`].
     pub fn new(
-        estimator: &dyn Estimator,
+        method: &str,
         records: Vec<FlightRecord>,
         structure: impl Into<Structure>,
         layers: &[&MethodTables],
     ) -> Result<EstimationProblem> {
         let structure = structure.into();
-        let method = estimator.name();
         let mut all = vec![structure.methods()];
         all.extend_from_slice(layers);
         let settings = merge_settings(method, &all);
-        estimator.check_settings(&settings)?;
         if records.is_empty() {
             return Err(Error::Other(format!(
                 "{method} on model '{}': no record given",
@@ -747,37 +744,6 @@ fn write_records(records: &[FlightRecord], depth: usize, out: &mut Vec<u8>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// An estimator that is never run: a problem needs one to be built.
-    struct Unused;
-
-    impl Estimator for Unused {
-        fn name(&self) -> &'static str {
-            "unused"
-        }
-
-        fn info(&self) -> crate::estimator::MethodInfo {
-            crate::estimator::MethodInfo {
-                title: "unused",
-                paper: "",
-                equations: "",
-                needs: "",
-                settings: Vec::new(),
-            }
-        }
-
-        fn check_settings(&self, _settings: &Settings) -> Result<()> {
-            Ok(())
-        }
-
-        fn estimate(
-            &self,
-            _problem: &EstimationProblem,
-            _start: Option<&crate::estimate::Estimate>,
-        ) -> Result<crate::estimate::Estimate> {
-            unreachable!("the test only builds the problem")
-        }
-    }
     use aeroid_record::Channel;
 
     /// A heading that the recorder wraps at 360° reaches the estimators
@@ -824,7 +790,7 @@ mod tests {
         );
         assert!(!records[0].channels[2].source.ends_with(UNWRAPPED_SOURCE));
         let problem = EstimationProblem::new(
-            &Unused,
+            "oem",
             records,
             crate::structure::Structure::load("attas-lateral").unwrap(),
             &[],

@@ -146,7 +146,10 @@ impl Registry {
     ) -> Result<EstimationProblem> {
         let structure = structure.into();
         self.validate_tables(structure.methods(), structure.path())?;
-        EstimationProblem::new(self.find(method)?.as_ref(), records, structure, layers)
+        let estimator = self.find(method)?;
+        let problem = EstimationProblem::new(method, records, structure, layers)?;
+        estimator.check_settings(&problem.settings)?;
+        Ok(problem)
     }
 
     /// Runs the problem's method and judges its result.

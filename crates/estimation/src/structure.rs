@@ -33,7 +33,6 @@
 //! ```
 
 use crate::linear_structure::{self, LinearStructure};
-use crate::model::driven::Observable;
 use crate::settings::MethodTables;
 use aeroid_core::catalog;
 use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
@@ -507,6 +506,66 @@ fn parameter_settings(
 /// linear terms, the Oswald e, a CD_CL2 term, and the stall parameters with
 /// τ1 as given (fixed when 0, which makes χ algebraic and the forces
 /// depend on α̇).
+/// A model output, resolved once from its record channel name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Observable {
+    /// A flight-path state (index into x).
+    State(usize),
+    /// Load factors nx, ny, nz (specific force / g; nz positive up).
+    LoadFactor(usize),
+    /// ṗ, q̇, ṙ.
+    AngularAcceleration(usize),
+    Mach,
+    DynamicPressure,
+    /// CX, CY, CZ.
+    Force(usize),
+    Lift,
+    Drag,
+    /// Cl, Cm, Cn.
+    Moment(usize),
+}
+
+impl Observable {
+    /// The outputs other than the flight-path states, by record channel name.
+    const NAMED: [(&'static str, Observable); 16] = [
+        ("nx", Observable::LoadFactor(0)),
+        ("ny", Observable::LoadFactor(1)),
+        ("nz", Observable::LoadFactor(2)),
+        ("p_dot", Observable::AngularAcceleration(0)),
+        ("q_dot", Observable::AngularAcceleration(1)),
+        ("r_dot", Observable::AngularAcceleration(2)),
+        ("mach", Observable::Mach),
+        ("dynamic_pressure", Observable::DynamicPressure),
+        ("CX", Observable::Force(0)),
+        ("CY", Observable::Force(1)),
+        ("CZ", Observable::Force(2)),
+        ("CL", Observable::Lift),
+        ("CD", Observable::Drag),
+        ("Cl", Observable::Moment(0)),
+        ("Cm", Observable::Moment(1)),
+        ("Cn", Observable::Moment(2)),
+    ];
+
+    /// The output a record channel name stands for; None when the model has no such output.
+    pub fn parse(name: &str) -> Option<Observable> {
+        if let Some(i) = FLIGHT_PATH_STATES.iter().position(|s| *s == name) {
+            return Some(Observable::State(i));
+        }
+        Observable::NAMED
+            .iter()
+            .find(|(named, _)| *named == name)
+            .map(|(_, observable)| *observable)
+    }
+
+    /// Every output name a model structure may compare.
+    pub fn names() -> impl Iterator<Item = &'static str> {
+        FLIGHT_PATH_STATES
+            .iter()
+            .copied()
+            .chain(Observable::NAMED.iter().map(|(name, _)| *name))
+    }
+}
+
 #[cfg(test)]
 pub(crate) fn stall_test_structure(tau1: f64) -> ModelStructure {
     let text = format!(

@@ -88,13 +88,13 @@ use crate::estimate::{Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterEs
 use crate::estimator::{
     Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
 };
+use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
 use crate::methods::equation_error::{self, EquationErrorSettings, start_estimate};
 use crate::methods::filter_error::{enough_data, free_parameters};
 use crate::methods::linear_equation_error::linear_equation_error;
 use crate::methods::output_error::{Start, missing_channels, unsuitable};
 use crate::model::augmented::Augmented;
-use crate::model::input_timing::{self, InputInterpolation};
 use crate::model::observations::Observations;
 use crate::model::state_space::{DrivenStateSpace, StateSpaceModel, fitting_window};
 use crate::problem::EstimationProblem;

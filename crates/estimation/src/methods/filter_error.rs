@@ -44,10 +44,10 @@ use crate::estimator::{
     Estimator, MethodInfo, MissingChannel, Refusal, Settings, merge_settings, parse_settings,
     setting_infos,
 };
+use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
 use crate::methods::equation_error;
 use crate::methods::output_error::{self, Start};
-use crate::model::input_timing::{self, InputInterpolation};
 use crate::model::observations::Observations;
 use crate::model::state_space::{DrivenStateSpace, Jacobians, StateSpaceModel};
 use crate::problem::EstimationProblem;

@@ -37,11 +37,11 @@
 
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
 use crate::methods::equation_error::record_name;
 use crate::methods::frequency_regression::{BAND_SETTINGS, BandOptions, model_controls};
 use crate::methods::output_error;
-use crate::model::input_timing::{self, InputInterpolation};
 use crate::model::linear::Matrix;
 use crate::model::state_space::{DrivenStateSpace, recorded_initial_state};
 use crate::model::transfer::{LinearisedFlight, TransferModel};

@@ -44,13 +44,13 @@ use crate::estimator::{
     Estimator, MethodInfo, MissingChannel, Refusal, Settings, merge_settings, parse_settings,
     setting_infos,
 };
+use crate::input_timing::InputInterpolation;
 use crate::linear_structure::LinearStructure;
 use crate::methods::equation_error;
 use crate::methods::filter_error;
 use crate::model::driven::{
     ALTITUDE_SUBSTITUTES, Column, DrivenSimulation, FlightPathState, Linearise, Observable,
 };
-use crate::model::input_timing::InputInterpolation;
 use crate::model::modes;
 use crate::model::state_space::{
     RK4_STEP_LIMIT, driven_simulation, driving_channels, fastest_mode, fitting_window,

@@ -19,7 +19,7 @@
 //! Controls and pseudo-controls are sampled on the integration grid and
 //! taken inside a step through the one RK4 integrator: each control held
 //! or linear as the `interpolation` setting chooses for it
-//! ([`super::input_timing`]: by default from its samples), the measured
+//! ([`crate::input_timing`]: by default from its samples), the measured
 //! pseudo-controls linear. Each step is a function of its start state
 //! alone (`DrivenSimulation::step_from`, the caches restarted at every
 //! grid point), the step of the state-space view
@@ -44,13 +44,14 @@ mod simulation;
 #[cfg(test)]
 mod tests;
 
+pub use crate::structure::Observable;
 pub use kinematics::PseudoRates;
 pub(super) use linearise::{
     LinearisationBuffers, evaluate, evaluate_into, linearise, linearise_with,
 };
 pub use measured::{ALTITUDE_SUBSTITUTES, Ambient, MEASURED_QUANTITIES};
 pub(super) use memo::PointMemo;
-pub use observables::{Column, Observable};
+pub use observables::Column;
 pub(super) use simulation::check_departure;
 pub use simulation::{DrivenSimulation, Linearise};
 

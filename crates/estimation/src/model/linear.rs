@@ -8,7 +8,7 @@
 //! (dimensional derivatives such as Z_w, M_q, M_δe, and biases). The
 //! inputs u are given at the grid points, each held over a step
 //! (zero-order hold) or interpolated linearly between them (first-order
-//! hold), as [`super::input_timing`] chooses per input: W the diagonal
+//! hold), as [`crate::input_timing`] chooses per input: W the diagonal
 //! of their weights (1 linear, 0 held). The step is exact:
 //! x_{k+1} = Φ·x_k + Γ₀·(u_k, 1) + Γ₁·W·(u_{k+1} − u_k), with Φ = e^{A·h},
 //! Γ₀ = ∫₀ʰ e^{A·s} ds·[B b] and Γ₁ the first-order hold's ramp matrix
@@ -17,63 +17,17 @@
 //! checked against. The discrete matrices of the last θ are kept, so a
 //! pass over the grid computes them once.
 
-use super::input_timing::Chosen;
 use super::state_space::{Jacobians, StateSpaceModel};
+use super::state_space::{fitting_window, observation_step};
+use crate::input_timing::Chosen;
+use crate::linear_structure::LinearStructure;
+pub use crate::linear_structure::{Entry, Matrices, Matrix};
 use aeroid_core::error::{Error, Result};
 use aeroid_numerics::kalman::{discretise, discretise_first_order_hold};
+use aeroid_record::FlightRecord;
 use aeroid_sim::integrator::Interpolation;
 use nalgebra::{DMatrix, DVector};
 use std::sync::{Arc, Mutex};
-
-/// Which matrix a parameter is an entry of.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Matrix {
-    A,
-    B,
-    C,
-    D,
-    /// b, the constant term of the state equations (column 0).
-    StateBias,
-    /// c, the constant term of the outputs C·x + D·u + c (column 0).
-    OutputBias,
-}
-
-/// A parameter: entry (row, column) of one of the matrices.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Entry {
-    pub matrix: Matrix,
-    pub row: usize,
-    pub column: usize,
-}
-
-/// A, B, C, D, b, c with θ written in.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Matrices {
-    pub a: DMatrix<f64>,
-    pub b: DMatrix<f64>,
-    pub c: DMatrix<f64>,
-    pub d: DMatrix<f64>,
-    pub state_bias: DVector<f64>,
-    pub output_bias: DVector<f64>,
-}
-
-impl Matrices {
-    fn entry_mut(&mut self, entry: &Entry) -> &mut f64 {
-        match entry.matrix {
-            Matrix::A => &mut self.a[(entry.row, entry.column)],
-            Matrix::B => &mut self.b[(entry.row, entry.column)],
-            Matrix::C => &mut self.c[(entry.row, entry.column)],
-            Matrix::D => &mut self.d[(entry.row, entry.column)],
-            Matrix::StateBias => &mut self.state_bias[entry.row],
-            Matrix::OutputBias => &mut self.output_bias[entry.row],
-        }
-    }
-
-    /// ẋ = A·x + B·u + b.
-    pub fn rates(&self, x: &DVector<f64>, u: &DVector<f64>) -> DVector<f64> {
-        &self.a * x + &self.b * u + &self.state_bias
-    }
-}
 
 /// The discrete step of one θ: Φ, Γ₀ of [B b], and Γ₁·W of B for the
 /// inputs under the first-order hold (none when every input is held).
@@ -461,6 +415,116 @@ impl StateSpaceModel for LinearStateSpace {
             next += ramp * (&self.inputs[k + 1] - u);
         }
         Ok(next)
+    }
+}
+
+/// The linear model a structure describes, on a time grid.
+impl LinearStructure {
+    /// The model on the grid start + k·step with inputs u_k.
+    pub fn model(
+        &self,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+    ) -> Result<LinearStateSpace> {
+        self.model_disturbed(start, step, inputs, None)
+    }
+
+    /// [`LinearStructure::model`] with more inputs after the model's own,
+    /// entering the states through `disturbance` (states × extra inputs,
+    /// columns after B's) and no output directly: each u_k holds the
+    /// model's inputs, then the disturbances. Each input is taken inside a
+    /// step as the file's `interpolation` chooses for it, "auto" from its
+    /// values on the grid.
+    pub fn model_disturbed(
+        &self,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+        disturbance: Option<&DMatrix<f64>>,
+    ) -> Result<LinearStateSpace> {
+        let columns = inputs.first().map_or(0, |u| u.len());
+        let chosen = (0..columns)
+            .map(|j| {
+                let name = self
+                    .inputs
+                    .get(j)
+                    .cloned()
+                    .unwrap_or_else(|| format!("disturbance {}", j + 1 - self.inputs.len()));
+                let values: Vec<f64> = inputs.iter().map(|u| u[j]).collect();
+                self.interpolation.choose(&name, &values)
+            })
+            .collect();
+        self.build(start, step, inputs, disturbance, chosen)
+    }
+
+    /// The model with each input taken inside a step as `chosen` says.
+    fn build(
+        &self,
+        start: f64,
+        step: f64,
+        inputs: Vec<DVector<f64>>,
+        disturbance: Option<&DMatrix<f64>>,
+        chosen: Vec<Chosen>,
+    ) -> Result<LinearStateSpace> {
+        let m = &self.matrices;
+        let (mut b, mut d) = (m.b.clone(), m.d.clone());
+        if let Some(g) = disturbance {
+            let columns = b.ncols();
+            b = b.insert_columns(columns, g.ncols(), 0.0);
+            b.columns_mut(columns, g.ncols()).copy_from(g);
+            d = d.insert_columns(columns, g.ncols(), 0.0);
+        }
+        LinearStateSpace::new(
+            [m.a.clone(), b, m.c.clone(), d],
+            self.entries.clone(),
+            start,
+            step,
+            inputs,
+        )?
+        .with_biases(m.state_bias.clone(), m.output_bias.clone())?
+        .with_rate_outputs(self.rate_states.clone())?
+        .with_input_timing(chosen)
+    }
+
+    /// The model driven by `record`: over the window where every output has
+    /// samples (inside `limit`), on a grid of `step` (else
+    /// [`observation_step`]'s), its inputs the input channels at the grid points
+    /// (linear between samples), x₀ the record's value of each state named
+    /// like a channel at the window's start, else 0.
+    pub fn for_record(
+        &self,
+        record: &FlightRecord,
+        step: Option<f64>,
+        limit: Option<(f64, f64)>,
+    ) -> Result<(LinearStateSpace, DVector<f64>)> {
+        let window = fitting_window(record, &self.outputs, limit)?;
+        let inputs: Vec<&str> = self.inputs.iter().map(String::as_str).collect();
+        let step = observation_step(record, &self.outputs, &inputs, step, window.0)?;
+        let count = ((window.1 - window.0) / step + 1e-9).floor() as usize + 1;
+        let times: Vec<f64> = (0..count).map(|k| window.0 + k as f64 * step).collect();
+        let mut inputs = vec![DVector::zeros(self.inputs.len()); count];
+        let mut chosen = Vec::new();
+        for (j, name) in self.inputs.iter().enumerate() {
+            let channel = record.channel(name)?;
+            let choice = self.interpolation.choose(name, &channel.values);
+            let values = channel.sampled_at(&times, choice.interpolation)?;
+            for (u, value) in inputs.iter_mut().zip(values) {
+                u[j] = value;
+            }
+            chosen.push(choice);
+        }
+        let initial = DVector::from_iterator(
+            self.states.len(),
+            self.states.iter().map(|name| {
+                record
+                    .channel(name)
+                    .ok()
+                    .and_then(|c| c.value_at(window.0))
+                    .unwrap_or(0.0)
+            }),
+        );
+        Ok((self.build(window.0, step, inputs, None, chosen)?, initial))
     }
 }
 

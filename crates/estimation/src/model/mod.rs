@@ -9,7 +9,6 @@
 pub mod augmented;
 pub mod coefficient_states;
 pub mod driven;
-pub mod input_timing;
 pub mod linear;
 pub mod modes;
 pub mod observations;

@@ -25,7 +25,7 @@ use super::driven::{
     self, Ambient, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, LinearisationBuffers,
     Observable, PointMemo, PseudoRates,
 };
-use super::input_timing::InputInterpolation;
+use crate::input_timing::InputInterpolation;
 use crate::structure::FLIGHT_PATH_STATES;
 use crate::structure::ModelStructure;
 use aeroid_core::error::{Error, Result};
@@ -1195,11 +1195,19 @@ mod tests {
         record_scenario(&scenario, &profile).unwrap().0
     }
 
-    /// The model file's `[methods.oem]` settings (step, interpolation).
-    fn model_options(
-        structure: &ModelStructure,
-    ) -> crate::methods::output_error::OutputErrorOptions {
-        crate::methods::output_error::OutputErrorOptions::for_structure(structure).unwrap()
+    /// The model file's `[methods.oem]` step and input interpolation, read
+    /// as output error reads them.
+    #[derive(serde::Deserialize)]
+    struct OemTable {
+        #[serde(default, deserialize_with = "aeroid_core::units::optional_seconds")]
+        step: Option<f64>,
+        #[serde(default)]
+        interpolation: InputInterpolation,
+    }
+
+    fn model_options(structure: &ModelStructure) -> OemTable {
+        let settings = crate::settings::merge_settings("oem", &[&structure.methods]);
+        serde_json::from_value(serde_json::Value::Object(settings)).unwrap()
     }
 
     /// The view of `structure` on `record` as output error builds its

@@ -123,7 +123,7 @@ pub(crate) fn fit(
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
     notes.push(format!(
         "linear model, {}, started from the model file's values",
-        crate::model::input_timing::note(&model.input_timing)
+        crate::input_timing::note(&model.input_timing)
     ));
     notes.push(format!(
         "multiple shooting: {} pieces of about {} s, each simulated from its own estimated initial state",

@@ -9,7 +9,7 @@ use super::measured::{ALTITUDE_SUBSTITUTES, Ambient, measured_alpha_dot, measure
 use super::memo::Frozen;
 use super::simulation::DrivenSimulation;
 use super::{FLIGHT_PATH_SIZE, FlightPathState};
-use crate::model::input_timing::{self, Chosen, InputInterpolation};
+use crate::input_timing::{self, Chosen, InputInterpolation};
 use crate::structure::FLIGHT_PATH_STATES;
 use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;

@@ -13,9 +13,10 @@ use super::kinematics::{Angles, PseudoRates, derivative, derivative_at, kinemati
 use super::linearise::Linearization;
 use super::measured::Ambient;
 use super::memo::{Frozen, Memo, between};
-use super::observables::{Column, Observable};
+use super::observables::Column;
 use super::{AIRSPEED, ALPHA, BETA, CHI, FLIGHT_PATH_SIZE, FlightPathState};
-use crate::model::input_timing::{Chosen, InputInterpolation};
+use crate::input_timing::{Chosen, InputInterpolation};
+use crate::structure::Observable;
 use aeroid_sim::atmosphere::Atmosphere;
 use aeroid_sim::dynamics::{FlightModel, Forcing, Kinematics};
 use aeroid_sim::integrator::{Interpolation, affine, rk4_linear_step, rk4_step};

@@ -6,8 +6,8 @@ use super::kinematics::{
 };
 use super::linearise::evaluate;
 use super::measured::{Ambient, Surroundings};
-use super::observables::Observable;
 use super::{ALTITUDE, FLIGHT_PATH_SIZE, FlightPathState};
+use crate::structure::Observable;
 use crate::structure::{ModelStructure, stall_test_structure};
 use aeroid_core::units::STANDARD_GRAVITY;
 use aeroid_numerics::dual::{Dual, LANES, Real};
