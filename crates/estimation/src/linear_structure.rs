@@ -30,9 +30,9 @@
 //! ```
 //!
 //! A parameter appears in exactly one entry. The model is continuous in
-//! time and discretised exactly ([`LinearStateSpace`]). The parameters'
+//! time and discretised exactly ([`crate::model::linear::LinearStateSpace`]). The parameters'
 //! start values are the model's own values: a linear flight
-//! ([`aeroid_eval::linear_flight`]) flies them as its truth.
+//! (`aeroid_eval::linear_flight`) flies them as its truth.
 
 use crate::input_timing::InputInterpolation;
 use crate::settings::MethodTables;

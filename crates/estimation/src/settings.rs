@@ -31,7 +31,7 @@ pub fn parse_settings<T: DeserializeOwned>(method: &str, settings: &Settings) ->
         .map_err(|error| Error::Other(format!("[methods.{method}]: {error}")))
 }
 
-/// The settings list of [`MethodInfo`]: each key named in `meanings` with
+/// The settings list of [`crate::estimator::MethodInfo`]: each key named in `meanings` with
 /// its default from `defaults` (a method's default settings, serialised;
 /// "(none)" where the default is no value). The registry's tests check
 /// that every described key, at its default, is accepted.

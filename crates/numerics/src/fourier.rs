@@ -38,7 +38,7 @@
 //! smears it over a sample interval: a first-order error that puts several
 //! per cent into the moment derivatives of a 3211 record. The transform
 //! therefore takes breaks: sample indices where the signals may jump
-//! (the control steps, [`aeroid_estimation::reconstruction::control_steps`]).
+//! (the control steps, `aeroid_estimation::reconstruction::control_steps`).
 //! The record is integrated piecewise between them; at a break b the left
 //! piece ends on the left limit, extrapolated from its last samples
 //! (quadratic, 3x_{b−1} − 3x_{b−2} + x_{b−3}; fewer samples: linear or

@@ -4,7 +4,7 @@
 //! system ẋ = f(t, x, u, θ), y = h(t, x, u, θ) with its Jacobians and one
 //! integration step from any state ([`state_space`]), the view every method
 //! that simulates or filters shares; how each recorded input is taken
-//! between its samples ([`input_timing`]).
+//! between its samples ([`crate::input_timing`]).
 
 pub mod augmented;
 pub mod coefficient_states;

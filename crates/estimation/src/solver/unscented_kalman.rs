@@ -74,7 +74,7 @@
 //! allocated once per pass (`Work`; a buffer whose shape follows the
 //! number of measured outputs keeps its storage when it changes); what
 //! the pass keeps goes from them into buffers reserved once per pass
-//! ([`super::kept`]); tests/no_allocation.rs counts a whole pass's
+//! ([`aeroid_numerics::kalman::kept`]); tests/no_allocation.rs counts a whole pass's
 //! allocations. The model steps the sigma points and evaluates their
 //! outputs in one call each ([`StateSpaceModel::step_points_into`],
 //! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
