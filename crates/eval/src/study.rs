@@ -32,9 +32,9 @@
 //! A case is one run at one point; it is keyed by the stream
 //! `recording·2³² + run` of the study seed, the recording being the point
 //! without its settings variant, so that settings are compared on the
-//! same flights (without a settings axis it is the point) (one
-//! ChaCha8 generator per case, [`random::stream`]), from which it draws two
-//! seeds: the turbulence seed (replacing the scenario's `seed`) and the
+//! same flights (without a settings axis it is the point) (one ChaCha8
+//! generator per case, [`aeroid_core::random::stream`]), from which it
+//! draws two seeds: the turbulence seed (replacing the scenario's `seed`) and the
 //! recorder-noise seed. A case's numbers therefore depend on nothing but the
 //! study seed, its point and its run index: not on the thread count, the
 //! order the cases finish in, or the number of runs (raising `runs` from 100

@@ -177,9 +177,14 @@ fn csv_header<T: serde::Serialize>(rows: &[T]) -> Vec<String> {
 }
 
 /// `runs.csv` and `summary.csv` write the axes' columns right after
-/// `point`, in [`Axis::COLUMNS`] order, under their [`Axis::column`] names.
+/// `point`, in [`Axis::COLUMNS`] order, under their [`Axis::column`] names;
+/// both orders hold every axis, [`Axis::index`] its place in the product.
 #[test]
 fn axis_columns_follow_the_axis_order() {
+    for (i, axis) in Axis::PRODUCT.iter().enumerate() {
+        assert_eq!(axis.index(), i);
+        assert!(Axis::COLUMNS.contains(axis));
+    }
     let columns: Vec<&str> = Axis::COLUMNS.iter().map(|a| a.column()).collect();
     let rows = vec![row(0, RowStatus::Converged, -0.41, 0.01)];
     for header in [csv_header(&rows), csv_header(&summarise(&rows))] {
