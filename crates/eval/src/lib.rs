@@ -2,6 +2,7 @@
 //! harness on one scenario (`run`), the accuracy gates and Monte Carlo
 //! studies.
 
+pub mod axis;
 pub mod gate;
 pub mod histories;
 pub mod journal;

@@ -3,6 +3,7 @@
 //! ([`RowStatus`]). Numbers are written so that NaN and infinities survive
 //! CSV and JSON ([`float_text`]).
 
+use crate::axis::AxisValues;
 use aeroid_numerics::Status;
 use serde::{Deserialize, Serialize};
 
@@ -129,6 +130,77 @@ pub struct Row {
     /// The fit's correlation-matrix condition number.
     #[serde(with = "float_text::option")]
     pub condition_number: Option<f64>,
+}
+
+impl Row {
+    /// A fit's row at sweep point `point` with its axis values, run and
+    /// seeds: failed, no model, method or parameter yet.
+    pub fn template(
+        point: usize,
+        axes: AxisValues,
+        run: usize,
+        turbulence_seed: u64,
+        recorder_seed: u64,
+    ) -> Row {
+        let AxisValues {
+            scenario,
+            profile,
+            turbulence,
+            input_scale,
+            sample_rate,
+            noise_scale,
+            resolution_scale,
+            missing,
+            channel_rates,
+            settings,
+        } = axes;
+        Row {
+            point,
+            scenario,
+            profile,
+            turbulence,
+            input_scale,
+            sample_rate,
+            noise_scale,
+            resolution_scale,
+            missing,
+            channel_rates,
+            settings,
+            run,
+            turbulence_seed,
+            recorder_seed,
+            model: String::new(),
+            method: String::new(),
+            status: RowStatus::Failed,
+            reason: String::new(),
+            diagnoses: String::new(),
+            parameter: String::new(),
+            estimate: f64::NAN,
+            standard_error: f64::NAN,
+            truth: None,
+            error: None,
+            inside_95: None,
+            correlated_with: String::new(),
+            max_correlation: None,
+            condition_number: None,
+        }
+    }
+
+    /// The row's sweep-point values.
+    pub fn axes(&self) -> AxisValues {
+        AxisValues {
+            scenario: self.scenario.clone(),
+            profile: self.profile.clone(),
+            turbulence: self.turbulence.clone(),
+            input_scale: self.input_scale,
+            sample_rate: self.sample_rate,
+            noise_scale: self.noise_scale,
+            resolution_scale: self.resolution_scale,
+            missing: self.missing.clone(),
+            channel_rates: self.channel_rates.clone(),
+            settings: self.settings.clone(),
+        }
+    }
 }
 
 /// Serde for numbers that may be non-finite: finite ones as JSON numbers,

@@ -8,6 +8,7 @@
 //! every fit ended, each fit counted once whatever its number of
 //! parameter rows.
 
+use crate::axis::AxisValues;
 use crate::row::{Row, RowStatus, float_text};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -276,89 +277,126 @@ impl Summariser {
 
     /// The summary rows, groups in the order they first appeared.
     pub fn summary(&self) -> Vec<SummaryRow> {
-        self.order
-            .iter()
-            .map(|key| {
-                let group = &self.groups[key];
-                let empty = HashMap::new();
-                let fits = self
-                    .fits
-                    .get(&(key.0, key.1.clone(), key.2.clone()))
-                    .unwrap_or(&empty);
-                let count = |status: RowStatus| fits.get(&status).copied().unwrap_or(0);
-                let (diagnosed, diagnosed_fits) = self
-                    .diagnosed
-                    .get(&(key.0, key.1.clone(), key.2.clone()))
-                    .map(|(counts, any)| {
-                        let text = counts
-                            .iter()
-                            .map(|(kind, n)| format!("{kind}:{n}"))
-                            .collect::<Vec<_>>()
-                            .join(" ");
-                        (text, *any)
-                    })
-                    .unwrap_or_default();
-                let n = group.n as f64;
-                let mean = group.sum / n;
-                let std = (group.m2 / (n - 1.0)).sqrt();
-                let mean_crb = group.crb_sum / n;
-                let truth = group.first.truth.unwrap_or(f64::NAN);
-                let bias = mean - truth;
-                let runs: usize = fits.values().sum();
-                let relative_crb = mean_crb / truth.abs();
-                let correlated_share = group.correlated as f64 / n;
-                SummaryRow {
-                    point: key.0,
-                    scenario: group.first.scenario.clone(),
-                    profile: group.first.profile.clone(),
-                    turbulence: group.first.turbulence.clone(),
-                    input_scale: group.first.input_scale,
-                    sample_rate: group.first.sample_rate,
-                    noise_scale: group.first.noise_scale,
-                    resolution_scale: group.first.resolution_scale,
-                    missing: group.first.missing.clone(),
-                    channel_rates: group.first.channel_rates.clone(),
-                    settings: group.first.settings.clone(),
-                    model: key.1.clone(),
-                    method: key.2.clone(),
-                    parameter: key.3.clone(),
-                    runs,
-                    converged: count(RowStatus::Converged),
-                    iteration_limit: count(RowStatus::IterationLimit),
-                    diverged: count(RowStatus::Diverged),
-                    not_converged: fits
-                        .iter()
-                        .filter(|(status, _)| status.is_not_converged())
-                        .map(|(_, n)| n)
-                        .sum(),
-                    diagnosed,
-                    diagnosed_fits,
-                    refused: count(RowStatus::Refused),
-                    failed: count(RowStatus::Failed),
-                    truth,
-                    mean,
-                    bias,
-                    relative_bias: bias / truth.abs(),
-                    std,
-                    bias_over_std: bias / std,
-                    bias_standard_error: std / n.sqrt(),
-                    mean_crb,
-                    bias_over_crb: bias / mean_crb,
-                    std_over_crb: std / mean_crb,
-                    coverage: group.inside as f64 / n,
-                    rmse: (group.squared_error / n).sqrt(),
-                    failure_rate: (runs - count(RowStatus::Converged) - count(RowStatus::Refused))
-                        as f64
-                        / runs as f64,
-                    refusal_rate: count(RowStatus::Refused) as f64 / runs as f64,
-                    relative_crb,
-                    correlated_share,
-                    correlated_with: group.correlated_with.clone().unwrap_or_default(),
-                    condition_log10: group.condition_log_sum / group.conditions as f64,
-                    identifiability: verdict(group.n, relative_crb, correlated_share).into(),
-                }
+        self.order.iter().map(|key| self.summary_row(key)).collect()
+    }
+
+    /// The fits of (point, model, method) by status.
+    fn fit_counts(&self, key: &FitKey) -> HashMap<RowStatus, usize> {
+        self.fits.get(key).cloned().unwrap_or_default()
+    }
+
+    /// How many fits of (point, model, method) carried each diagnosis
+    /// (`kind:count` space-separated) and any.
+    fn diagnosed_text(&self, key: &FitKey) -> (String, usize) {
+        self.diagnosed
+            .get(key)
+            .map(|(counts, any)| {
+                let text = counts
+                    .iter()
+                    .map(|(kind, n)| format!("{kind}:{n}"))
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                (text, *any)
             })
-            .collect()
+            .unwrap_or_default()
+    }
+
+    /// The statistics of one (point, model, method, parameter) group, its
+    /// axis columns from the group's first row.
+    fn summary_row(&self, key: &(usize, String, String, String)) -> SummaryRow {
+        let group = &self.groups[key];
+        let fit_key = (key.0, key.1.clone(), key.2.clone());
+        let fits = self.fit_counts(&fit_key);
+        let count = |status: RowStatus| fits.get(&status).copied().unwrap_or(0);
+        let (diagnosed, diagnosed_fits) = self.diagnosed_text(&fit_key);
+        let n = group.n as f64;
+        let mean = group.sum / n;
+        let std = (group.m2 / (n - 1.0)).sqrt();
+        let mean_crb = group.crb_sum / n;
+        let truth = group.first.truth.unwrap_or(f64::NAN);
+        let bias = mean - truth;
+        let runs: usize = fits.values().sum();
+        let relative_crb = mean_crb / truth.abs();
+        let correlated_share = group.correlated as f64 / n;
+        let AxisValues {
+            scenario,
+            profile,
+            turbulence,
+            input_scale,
+            sample_rate,
+            noise_scale,
+            resolution_scale,
+            missing,
+            channel_rates,
+            settings,
+        } = group.first.axes();
+        SummaryRow {
+            point: key.0,
+            scenario,
+            profile,
+            turbulence,
+            input_scale,
+            sample_rate,
+            noise_scale,
+            resolution_scale,
+            missing,
+            channel_rates,
+            settings,
+            model: key.1.clone(),
+            method: key.2.clone(),
+            parameter: key.3.clone(),
+            runs,
+            converged: count(RowStatus::Converged),
+            iteration_limit: count(RowStatus::IterationLimit),
+            diverged: count(RowStatus::Diverged),
+            not_converged: fits
+                .iter()
+                .filter(|(status, _)| status.is_not_converged())
+                .map(|(_, n)| n)
+                .sum(),
+            diagnosed,
+            diagnosed_fits,
+            refused: count(RowStatus::Refused),
+            failed: count(RowStatus::Failed),
+            truth,
+            mean,
+            bias,
+            relative_bias: bias / truth.abs(),
+            std,
+            bias_over_std: bias / std,
+            bias_standard_error: std / n.sqrt(),
+            mean_crb,
+            bias_over_crb: bias / mean_crb,
+            std_over_crb: std / mean_crb,
+            coverage: group.inside as f64 / n,
+            rmse: (group.squared_error / n).sqrt(),
+            failure_rate: (runs - count(RowStatus::Converged) - count(RowStatus::Refused)) as f64
+                / runs as f64,
+            refusal_rate: count(RowStatus::Refused) as f64 / runs as f64,
+            relative_crb,
+            correlated_share,
+            correlated_with: group.correlated_with.clone().unwrap_or_default(),
+            condition_log10: group.condition_log_sum / group.conditions as f64,
+            identifiability: verdict(group.n, relative_crb, correlated_share).into(),
+        }
+    }
+}
+
+impl SummaryRow {
+    /// The row's sweep-point values.
+    pub fn axes(&self) -> AxisValues {
+        AxisValues {
+            scenario: self.scenario.clone(),
+            profile: self.profile.clone(),
+            turbulence: self.turbulence.clone(),
+            input_scale: self.input_scale,
+            sample_rate: self.sample_rate,
+            noise_scale: self.noise_scale,
+            resolution_scale: self.resolution_scale,
+            missing: self.missing.clone(),
+            channel_rates: self.channel_rates.clone(),
+            settings: self.settings.clone(),
+        }
     }
 }
 
