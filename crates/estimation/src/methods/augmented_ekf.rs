@@ -86,7 +86,8 @@
 
 use crate::estimate::{Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status};
 use crate::estimator::{
-    Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
+    Capabilities, Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings,
+    setting_infos,
 };
 use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
@@ -320,12 +321,15 @@ impl Estimator for AugmentedEkf {
         FilterSettings::read(METHOD, settings).map(|_| ())
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
-    }
-
-    fn fits_tied_parameters(&self) -> bool {
-        true
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: true,
+            several_records: false,
+            tied_parameters: true,
+            moment_reference: true,
+            starts_from: Some(equation_error::METHOD),
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {

@@ -24,7 +24,9 @@
 //!   (`aeroid run` passes equation error's) is used first.
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, MethodInfo, Settings, parse_settings, setting_infos};
+use crate::estimator::{
+    Capabilities, Estimator, MethodInfo, Settings, parse_settings, setting_infos,
+};
 use crate::methods::equation_error::{self, EquationErrorOptions, equation_error};
 use crate::neural::elm::ElmTrainer;
 use crate::neural::restricted::{self, Feedback, RestrictedOptions};
@@ -206,8 +208,15 @@ impl Estimator for ElmGaussNewton {
         ElmSettings::read(METHOD, settings).map(|_| ())
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: false,
+            several_records: false,
+            tied_parameters: false,
+            moment_reference: true,
+            starts_from: Some(equation_error::METHOD),
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {

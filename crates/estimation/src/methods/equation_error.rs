@@ -60,7 +60,8 @@
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimator::{
-    Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
+    Capabilities, Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings,
+    setting_infos,
 };
 use crate::methods::linear_equation_error::linear_equation_error;
 use crate::problem::EstimationProblem;
@@ -195,8 +196,15 @@ impl Estimator for EquationError {
         EquationErrorSettings::read(settings).map(|_| ())
     }
 
-    fn fits_tied_parameters(&self) -> bool {
-        true
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: true,
+            several_records: false,
+            tied_parameters: true,
+            moment_reference: true,
+            starts_from: None,
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {

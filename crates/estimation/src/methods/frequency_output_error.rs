@@ -36,7 +36,9 @@
 //! without their noise being modelled (output error's assumption).
 
 use crate::estimate::{Estimate, OutputFit};
-use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::estimator::{
+    Capabilities, Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
+};
 use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
 use crate::methods::equation_error::record_name;
@@ -150,6 +152,17 @@ impl Estimator for FrequencyOutputError {
 
     fn check_settings(&self, settings: &Settings) -> Result<()> {
         FrequencyOutputErrorSettings::read(settings).map(|_| ())
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: true,
+            several_records: false,
+            tied_parameters: false,
+            moment_reference: true,
+            starts_from: None,
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {

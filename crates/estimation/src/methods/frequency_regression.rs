@@ -63,7 +63,9 @@
 //! - α̇ terms need α differentiated in the time domain (q̄·c̄/2V multiplies it).
 
 use crate::estimate::{Estimate, OutputFit, Status};
-use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::estimator::{
+    Capabilities, Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
+};
 use crate::linear_structure::LinearStructure;
 use crate::methods::equation_error::{
     self, Bound, CoefficientResult, Plan, assemble, failed_coefficient, fit_regression,
@@ -379,9 +381,15 @@ impl Estimator for FrequencyRegression {
         FrequencyRegressionSettings::read(settings).map(|_| ())
     }
 
-    /// Its moment equations are about the CG, in its own form.
-    fn fits_moment_reference(&self) -> bool {
-        false
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: true,
+            several_records: false,
+            tied_parameters: false,
+            moment_reference: false,
+            starts_from: None,
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {

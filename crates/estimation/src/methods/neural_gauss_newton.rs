@@ -49,7 +49,9 @@
 //! was trained on is judged by an extrapolating network.
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, MethodInfo, Settings, parse_settings, setting_infos};
+use crate::estimator::{
+    Capabilities, Estimator, MethodInfo, Settings, parse_settings, setting_infos,
+};
 use crate::methods::equation_error::DIFFERENTIATOR_SETTING;
 use crate::neural::feedforward::{LevenbergMarquardt, SizeSearch};
 use crate::neural::restricted::{self, RestrictedOptions, Trainer};
@@ -213,6 +215,17 @@ impl Estimator for NeuralGaussNewton {
 
     fn check_settings(&self, settings: &Settings) -> Result<()> {
         NeuralGaussNewtonSettings::read(settings).map(|_| ())
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: false,
+            several_records: false,
+            tied_parameters: false,
+            moment_reference: true,
+            starts_from: None,
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {

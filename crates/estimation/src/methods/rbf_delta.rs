@@ -61,7 +61,9 @@
 use crate::estimate::{
     Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterDistribution, ParameterEstimate, Status,
 };
-use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::estimator::{
+    Capabilities, Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
+};
 use crate::methods::equation_error::{self, Plan, record_name};
 use crate::methods::smoothed_regression::{self, SmoothedRegressionSettings};
 use crate::neural::rbf::{RbfNetwork, RbfOptions, WidthSearch};
@@ -280,6 +282,17 @@ impl Estimator for RbfDelta {
 
     fn check_settings(&self, settings: &Settings) -> Result<()> {
         RbfDeltaSettings::read(settings).map(|_| ())
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: false,
+            several_records: false,
+            tied_parameters: false,
+            moment_reference: true,
+            starts_from: None,
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {

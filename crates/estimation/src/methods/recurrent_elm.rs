@@ -37,7 +37,7 @@
 //! report's kind and the stall model they are applied to here.
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, MethodInfo, Settings, setting_infos};
+use crate::estimator::{Capabilities, Estimator, MethodInfo, Settings, setting_infos};
 use crate::methods::elm_gauss_newton::{ElmSettings, SHARED_SETTINGS, estimate_with};
 use crate::methods::equation_error;
 use crate::problem::EstimationProblem;
@@ -68,8 +68,15 @@ impl Estimator for RecurrentElm {
         ElmSettings::read(METHOD, settings).map(|_| ())
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: false,
+            several_records: false,
+            tied_parameters: false,
+            moment_reference: true,
+            starts_from: Some(equation_error::METHOD),
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {

@@ -55,7 +55,7 @@ pub use smoothed::Smoothed;
 pub use smoother::{GaussMarkov, SmootherSetup, smooth};
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, MethodInfo, Settings, setting_infos};
+use crate::estimator::{Capabilities, Estimator, MethodInfo, Settings, setting_infos};
 use crate::problem::EstimationProblem;
 use aeroid_core::error::Result;
 use settings::SETTINGS;
@@ -85,9 +85,15 @@ impl Estimator for SmoothedRegression {
         SmoothedRegressionSettings::read(settings).map(|_| ())
     }
 
-    /// Its moment equations are about the CG, in its own form.
-    fn fits_moment_reference(&self) -> bool {
-        false
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: false,
+            several_records: false,
+            tied_parameters: false,
+            moment_reference: false,
+            starts_from: None,
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {

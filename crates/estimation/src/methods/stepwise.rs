@@ -50,7 +50,9 @@
 
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
-use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::estimator::{
+    Capabilities, Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos,
+};
 use crate::methods::equation_error::{
     ANGULAR_ACCELERATIONS_SETTING, DIFFERENTIATOR_SETTING, check_settings, record_name,
 };
@@ -208,6 +210,17 @@ impl Estimator for StepwiseRegression {
 
     fn check_settings(&self, settings: &Settings) -> Result<()> {
         StepwiseSettings::read(settings).map(|_| ())
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: false,
+            several_records: false,
+            tied_parameters: false,
+            moment_reference: true,
+            starts_from: None,
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {

@@ -20,7 +20,7 @@
 
 use crate::estimate::Estimate;
 use crate::estimator::{
-    Estimator, MethodInfo, SettingInfo, Settings, parse_settings, setting_infos,
+    Capabilities, Estimator, MethodInfo, SettingInfo, Settings, parse_settings, setting_infos,
 };
 use crate::methods::augmented_ekf::{self, FILTER_SETTINGS, FilterSettings, augmented_estimate};
 use crate::methods::equation_error;
@@ -133,12 +133,15 @@ impl Estimator for UnscentedFilter {
         read(settings).map(|_| ())
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
-    }
-
-    fn fits_tied_parameters(&self) -> bool {
-        true
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: true,
+            several_records: false,
+            tied_parameters: true,
+            moment_reference: true,
+            starts_from: Some(equation_error::METHOD),
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {

@@ -62,12 +62,15 @@ impl Estimator for FilterError {
         FilterErrorOptions::read(settings).map(|_| ())
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
-    }
-
-    fn fits_tied_parameters(&self) -> bool {
-        true
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: true,
+            several_records: false,
+            tied_parameters: true,
+            moment_reference: true,
+            starts_from: Some(equation_error::METHOD),
+        }
     }
 
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
