@@ -1,15 +1,21 @@
-//! The estimator interface. Every method is one type implementing
-//! [`Estimator`] in its own file under `methods/`, listed by one line in
-//! [`crate::methods::built_in`]; the command line, `run`, `gate`, `study`
-//! and the reports find methods only through a [`crate::registry::Registry`].
+//! The estimator interface. Every method is one type implementing the
+//! typed [`Method`] in its own file under `methods/`, listed by one line in
+//! [`crate::methods::built_in`]; one generic implementation makes every
+//! `Method` an object-safe [`Estimator`] (plug-ins implement that
+//! directly); the command line, `run`, `gate`, `study` and the reports find
+//! methods only through a [`crate::registry::Registry`].
 //!
 //! A method reads one [`EstimationProblem`] (the record or records, the
 //! model structure with its free parameters, start values and bounds, and
 //! its own settings, the resolved `[methods.NAME]` table) and returns an
 //! [`Estimate`], or refuses with a [`Refusal`] that says, as data, what the
 //! record or the model lacks. Settings are plain tables: a method declares
-//! each key with its default and meaning ([`MethodInfo::settings`]) and
-//! parses the table into its own settings type ([`parse_settings`]).
+//! each key with its default and meaning ([`MethodInfo::settings`]); the
+//! table is parsed once into the method's own settings type
+//! ([`Method::Settings`], [`parse_settings`]) and checked
+//! ([`Method::validate`]). What a method fits is data ([`Capabilities`]):
+//! a problem outside it is refused before the method runs
+//! ([`check_capabilities`]).
 
 use crate::estimate::Estimate;
 use crate::problem::EstimationProblem;
