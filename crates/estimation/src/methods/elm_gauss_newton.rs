@@ -223,8 +223,8 @@ impl Method for ElmGaussNewton {
     }
 }
 
-/// ELM-GN or RELM-GN (`method`, its network reported as `kind`): the
-/// settings read, the start chosen (module documentation), the restricted
+/// ELM-GN or RELM-GN (`method`, its network reported as `kind`) with its
+/// settings: the start chosen (module documentation), the restricted
 /// model fitted.
 pub(crate) fn estimate_with(
     method: &str,
