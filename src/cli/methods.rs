@@ -28,7 +28,7 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
         outln!("  paper:     {}", info.paper);
         outln!("  equations: {}", info.equations);
         outln!("  needs:     {}", info.needs);
-        if let Some(from) = estimator.starts_from() {
+        if let Some(from) = estimator.capabilities().starts_from {
             outln!("  starts from {from}'s estimate where it has one");
         }
         outln!("  settings ([methods.{name}]):");

@@ -10,6 +10,7 @@
 use crate::common;
 use aeroid::estimation::estimate::Estimate;
 use aeroid::estimation::estimator::{Refusal, RefusalKind};
+use aeroid::estimation::registry::Registry;
 use aeroid::estimation::structure::ModelStructure;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario_seeded};
@@ -80,20 +81,18 @@ fn two_repeats_fitted_jointly_halve_the_variance() {
 /// than use the first.
 #[test]
 fn one_record_methods_refuse_several() {
-    for method in [
-        "ee",
-        "swr",
-        "fem",
-        "ekf",
-        "ukf",
-        "ebm",
-        "fdee",
-        "fdoe",
-        "elm-gn",
-        "relm-gn",
-        "ngn",
-        "rbf-delta",
-    ] {
+    let registry = Registry::built_in();
+    let one_record: Vec<&str> = registry
+        .all()
+        .iter()
+        .filter(|estimator| !estimator.capabilities().several_records)
+        .map(|estimator| estimator.name())
+        .collect();
+    assert!(
+        one_record.contains(&"ee") && !one_record.contains(&"oem"),
+        "{one_record:?}"
+    );
+    for method in one_record {
         let error = fit(method, repeats().to_vec()).unwrap_err();
         let aeroid::Error::Refused(refusal) = &error else {
             panic!("{method}: not a refusal: {error}");

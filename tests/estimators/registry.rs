@@ -7,9 +7,7 @@
 
 use aeroid::error::Result;
 use aeroid::estimation::estimate::{Estimate, ParameterEstimate, Status};
-use aeroid::estimation::estimator::{
-    Estimator, MethodInfo, Settings, parse_settings, setting_infos,
-};
+use aeroid::estimation::estimator::{Capabilities, Description, Method};
 use aeroid::estimation::problem::EstimationProblem;
 use aeroid::estimation::registry::Registry;
 use aeroid::estimation::structure::ModelStructure;
@@ -39,30 +37,31 @@ impl Default for StartSettings {
     }
 }
 
-impl Estimator for StartValues {
-    fn name(&self) -> &'static str {
-        "toy-start"
-    }
+impl Method for StartValues {
+    const NAME: &'static str = "toy-start";
+    type Settings = StartSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "the model file's start values",
             paper: "none",
             equations: "θ = scale·θ₀",
             needs: "nothing",
-            settings: setting_infos(
-                &StartSettings::default(),
-                &[("scale", "factor on the start values"), ("sigma", "σ")],
-            ),
+            settings: vec![("scale", "factor on the start values"), ("sigma", "σ")],
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        parse_settings::<StartSettings>("toy-start", settings).map(|_| ())
+    /// A 6-DOF structure, one record.
+    fn capabilities() -> Capabilities {
+        Capabilities::default()
     }
 
-    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
-        let settings: StartSettings = parse_settings("toy-start", &problem.settings)?;
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &StartSettings,
+        _start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         let structure = problem.structure.six_dof("toy-start")?;
         let parameters = &structure.aircraft.aero.parameters;
         let free: Vec<ParameterEstimate> = parameters

@@ -32,7 +32,7 @@
 //! folder is removed afterwards.
 
 use crate::estimate::{Estimate, ParameterEstimate, Status};
-use crate::estimator::{Estimator, MethodInfo, Refusal, SettingInfo, Settings};
+use crate::estimator::{Capabilities, Estimator, MethodInfo, Refusal, SettingInfo, Settings};
 use crate::problem::EstimationProblem;
 use crate::sandbox::Sandbox;
 use aeroid_core::error::{Error, Result, read_text, write_error};
@@ -659,6 +659,19 @@ impl Estimator for Plugin {
                 known.join(", ")
             ))),
             None => Ok(()),
+        }
+    }
+
+    /// Any structure (the plug-in refuses what it does not fit itself),
+    /// several records unless its file says `records = "one"`, no ties.
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            six_dof: true,
+            linear: true,
+            several_records: self.records != Records::One,
+            tied_parameters: false,
+            moment_reference: true,
+            starts_from: None,
         }
     }
 

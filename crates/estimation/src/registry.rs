@@ -11,7 +11,7 @@
 //! method made it.
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, Refusal};
+use crate::estimator::{Estimator, check_model_features};
 use crate::problem::EstimationProblem;
 use crate::settings::{MethodTables, Settings, overlay};
 use crate::structure::{ModelStructure, Structure};
@@ -161,7 +161,7 @@ impl Registry {
         let estimator = self.find(&problem.method)?;
         estimator.check_settings(&problem.settings)?;
         if let Structure::SixDof(structure) = &problem.structure {
-            check_model_features(estimator.as_ref(), structure)?;
+            check_model_features(estimator.name(), &estimator.capabilities(), structure)?;
         }
         let mut estimate = estimator.estimate(problem, start)?;
         if let Structure::SixDof(structure) = &problem.structure {
@@ -174,26 +174,6 @@ impl Registry {
         }
         Ok(estimate.assess())
     }
-}
-
-/// Refuses a model that uses a feature the method does not fit (tied
-/// parameters, a moment reference point off the CG).
-fn check_model_features(estimator: &dyn Estimator, structure: &ModelStructure) -> Result<()> {
-    let aero = &structure.aircraft.aero;
-    let reason = if aero.has_ties() && !estimator.fits_tied_parameters() {
-        "it has tied parameters ([parameters.NAME] tie), which this method does not fit"
-    } else if aero.moment_reference != nalgebra::Vector3::zeros()
-        && !estimator.fits_moment_reference()
-    {
-        "its moments are taken about a point other than the CG ([aero.moment_reference]), which this method does not fit"
-    } else {
-        return Ok(());
-    };
-    Err(Error::Refused(Refusal::UnsuitableModel {
-        method: estimator.name().to_string(),
-        model: structure.name.clone(),
-        reason: reason.into(),
-    }))
 }
 
 /// A note per tied parameter: its relation, and its value and standard

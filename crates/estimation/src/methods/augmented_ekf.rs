@@ -86,7 +86,7 @@
 
 use crate::estimate::{Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status};
 use crate::estimator::{
-    Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
+    Capabilities, Description, Method, Refusal, Settings, merge_settings, parse_settings,
 };
 use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
@@ -255,24 +255,30 @@ impl FilterSettings {
     /// Reads and checks a settings table of `method`, naming a bad key.
     pub fn read(method: &str, settings: &Settings) -> Result<FilterSettings> {
         let parsed: FilterSettings = parse_settings(method, settings)?;
+        parsed.check(method)?;
+        Ok(parsed)
+    }
+
+    /// Checks the values of a settings table of `method`, naming a bad key.
+    pub fn check(&self, method: &str) -> Result<()> {
         let bad = |key: &str, message: String| {
             Err(Error::Other(format!("[methods.{method}] {key}: {message}")))
         };
         let non_negative = |v: f64| v >= 0.0 && v.is_finite();
-        if !(parsed.initial_uncertainty > 0.0 && parsed.initial_uncertainty.is_finite()) {
+        if !(self.initial_uncertainty > 0.0 && self.initial_uncertainty.is_finite()) {
             return bad(
                 "initial_uncertainty",
-                format!("must be positive, is {}", parsed.initial_uncertainty),
+                format!("must be positive, is {}", self.initial_uncertainty),
             );
         }
-        parsed.interpolation.check_controls(method)?;
-        if !non_negative(parsed.pseudonoise) {
+        self.interpolation.check_controls(method)?;
+        if !non_negative(self.pseudonoise) {
             return bad(
                 "pseudonoise",
-                format!("must be at least 0, is {}", parsed.pseudonoise),
+                format!("must be at least 0, is {}", self.pseudonoise),
             );
         }
-        if let Some((name, value)) = parsed
+        if let Some((name, value)) = self
             .pseudonoise_for
             .iter()
             .find(|(_, v)| !non_negative(**v))
@@ -282,64 +288,67 @@ impl FilterSettings {
                 format!("{name} must be at least 0, is {value}"),
             );
         }
-        if !(parsed.motion_bandwidth > 0.0 && parsed.motion_bandwidth.is_finite()) {
+        if !(self.motion_bandwidth > 0.0 && self.motion_bandwidth.is_finite()) {
             return bad(
                 "motion_bandwidth",
-                format!("must be positive (Hz), is {}", parsed.motion_bandwidth),
+                format!("must be positive (Hz), is {}", self.motion_bandwidth),
             );
         }
-        if parsed.passes == 0 {
+        if self.passes == 0 {
             return bad("passes", "must be at least 1".into());
         }
-        if parsed.step.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
+        if self.step.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
             return bad("step", "must be positive".into());
         }
-        Ok(parsed)
+        Ok(())
     }
 }
 
 /// The augmented-state EKF as a registered method.
 pub struct AugmentedEkf;
 
-impl Estimator for AugmentedEkf {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for AugmentedEkf {
+    const NAME: &'static str = METHOD;
+    type Settings = FilterSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "extended Kalman filter with the parameters as augmented states, pseudonoise, Fourier R and residual-correlation tuning",
             paper: "EKF parameter estimation for the X-31 drop model and the F-18 HARV (J. Guidance, Engineering Note); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 7; Mehra, IEEE TAC 15(2), 1970",
             equations: "state and output models with process noise and parameter pseudonoise (note Eqs. 1–3); augmented state (Jategaonkar Eq. 7.8); continuous–discrete EKF (Jategaonkar Eqs. 7.11–7.19); R from the spectrum above the motion's bandwidth; R and the states' process noise from the innovations' autocorrelations (Mehra 1970, Eqs. 13, 29, 30, 33)",
             needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls); on a linear structure, its input and output channels",
-            settings: setting_infos(&FilterSettings::default(), &FILTER_SETTINGS),
+            settings: FILTER_SETTINGS.to_vec(),
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        FilterSettings::read(METHOD, settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            linear: true,
+            tied_parameters: true,
+            starts_from: Some(equation_error::METHOD),
+            ..Capabilities::default()
+        }
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
+    fn validate(settings: &FilterSettings) -> Result<()> {
+        settings.check(METHOD)
     }
 
-    fn fits_tied_parameters(&self) -> bool {
-        true
-    }
-
-    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
-        let settings = FilterSettings::read(METHOD, &problem.settings)?;
-        crate::estimator::one_record(METHOD, problem)?;
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &FilterSettings,
+        start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         refuse_for_linear(METHOD, problem)?;
         let run = augmented_estimate(
             METHOD,
             problem.record(),
             &problem.structure,
-            &settings,
+            settings,
             start,
             &|model, initial, noise, observations| {
-                extended_pass(&settings, model, initial, noise, observations)
+                extended_pass(settings, model, initial, noise, observations)
             },
         )?;
         if let Some(path) = &settings.history {

@@ -24,7 +24,7 @@
 //!   (`aeroid run` passes equation error's) is used first.
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, MethodInfo, Settings, parse_settings, setting_infos};
+use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
 use crate::methods::equation_error::{self, EquationErrorOptions, equation_error};
 use crate::neural::elm::ElmTrainer;
 use crate::neural::restricted::{self, Feedback, RestrictedOptions};
@@ -118,7 +118,8 @@ impl ElmSettings {
         Ok(parsed)
     }
 
-    fn check(&self, method: &str) -> Result<()> {
+    /// Checks the values of a settings table of `method`.
+    pub(crate) fn check(&self, method: &str) -> Result<()> {
         let [low, high] = self.scaling;
         let problem = if self.hidden_sizes.is_empty() || self.hidden_sizes.contains(&0) {
             Some("hidden_sizes must list at least one positive size".to_string())
@@ -187,48 +188,54 @@ pub(crate) fn equation_error_start(
 /// ELM-GN as a registered method.
 pub struct ElmGaussNewton;
 
-impl Estimator for ElmGaussNewton {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for ElmGaussNewton {
+    const NAME: &'static str = METHOD;
+    type Settings = ElmSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "ELM + Gauss–Newton: an extreme learning machine trained on the record as the restricted flight-dynamic model, Gauss–Newton on det(R) through it",
             paper: "\"Parameter estimation of aircraft using extreme learning machine and Gauss-Newton algorithm\" (the ELM paper); Huang, Zhu & Siew, \"Extreme learning machine: theory and applications\", Neurocomputing 70 (2006)",
             equations: "X(i) → Z(i+1) (Eqs. 1–2), scaling (Eq. 3), log-sigmoid hidden layer (Eq. 4), W = H⁺Z by SVD (Eqs. 7–8), hidden size by held-out residual (Eq. 6), MSE and R² (Eqs. 9–10), Y(i+1) = f(X(i), Θ) (Eq. 11), det(R) Gauss–Newton with forward-difference gradients (Eqs. 12–20), Cramér–Rao bounds (Eqs. 21–22)",
             needs: "the structure's integrated motion variables, load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude (the coefficients from accelerations); a 6-DOF structure",
-            settings: setting_infos(&ElmSettings::default(), &SHARED_SETTINGS),
+            settings: SHARED_SETTINGS.to_vec(),
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        ElmSettings::read(METHOD, settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            starts_from: Some(equation_error::METHOD),
+            ..Capabilities::default()
+        }
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
+    fn validate(settings: &ElmSettings) -> Result<()> {
+        settings.check(METHOD)
     }
 
-    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
-        estimate_with(METHOD, "elm", problem, start)
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &ElmSettings,
+        start: Option<&Estimate>,
+    ) -> Result<Estimate> {
+        estimate_with(METHOD, "elm", problem, settings, start)
     }
 }
 
-/// ELM-GN or RELM-GN (`method`, its network reported as `kind`): the
-/// settings read, the start chosen (module documentation), the restricted
+/// ELM-GN or RELM-GN (`method`, its network reported as `kind`) with its
+/// settings: the start chosen (module documentation), the restricted
 /// model fitted.
 pub(crate) fn estimate_with(
     method: &str,
     kind: &'static str,
     problem: &EstimationProblem,
+    settings: &ElmSettings,
     start: Option<&Estimate>,
 ) -> Result<Estimate> {
-    let settings = ElmSettings::read(method, &problem.settings)?;
-    problem.structure.six_dof(method)?;
     let own = match start {
         Some(_) => None,
-        None => equation_error_start(problem, &settings),
+        None => equation_error_start(problem, settings),
     };
     let start = start
         .filter(|_| settings.start == Start::EquationError)

@@ -60,7 +60,7 @@
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimator::{
-    Estimator, MethodInfo, Refusal, Settings, merge_settings, parse_settings, setting_infos,
+    Capabilities, Description, Method, Refusal, Settings, merge_settings, parse_settings,
 };
 use crate::methods::linear_equation_error::linear_equation_error;
 use crate::problem::EstimationProblem;
@@ -134,7 +134,7 @@ impl EquationErrorSettings {
     /// Reads and checks a `[methods.ee]` table.
     pub fn read(settings: &Settings) -> Result<EquationErrorSettings> {
         let parsed: EquationErrorSettings = parse_settings(METHOD, settings)?;
-        check_settings(METHOD, &parsed.differentiator, parsed.correlation_lag)?;
+        EquationError::validate(&parsed)?;
         Ok(parsed)
     }
 
@@ -169,39 +169,42 @@ pub(crate) fn check_settings(
 /// Equation error as a registered method.
 pub struct EquationError;
 
-impl Estimator for EquationError {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for EquationError {
+    const NAME: &'static str = METHOD;
+    type Settings = EquationErrorSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "equation error: least squares on coefficients reconstructed from accelerations and angular accelerations",
             paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), ch. 5; \"Longitudinal and lateral aerodynamic characterisation of reflex wing UAV from flight tests using ML, LS and neural Gauss Newton methods\"",
             equations: "coefficients from accelerations (reflex-wing UAV paper, Eqs. 17–24); z = Xθ + ε, θ = (XᵀX)⁻¹Xᵀz (Eqs. 25–27); coloured-residual bounds (Morelli & Klein 1997)",
             needs: "load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude, throttle when the aircraft has thrust; a model linear in its parameters; on a linear structure, a channel of every state and input",
-            settings: setting_infos(
-                &EquationErrorSettings::default(),
-                &[
-                    DIFFERENTIATOR_SETTING,
-                    CORRELATION_LAG_SETTING,
-                    ANGULAR_ACCELERATIONS_SETTING,
-                ],
-            ),
+            settings: vec![
+                DIFFERENTIATOR_SETTING,
+                CORRELATION_LAG_SETTING,
+                ANGULAR_ACCELERATIONS_SETTING,
+            ],
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        EquationErrorSettings::read(settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            linear: true,
+            tied_parameters: true,
+            ..Capabilities::default()
+        }
     }
 
-    fn fits_tied_parameters(&self) -> bool {
-        true
+    fn validate(settings: &EquationErrorSettings) -> Result<()> {
+        check_settings(METHOD, &settings.differentiator, settings.correlation_lag)
     }
 
-    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
-        crate::estimator::one_record(METHOD, problem)?;
-        let settings = EquationErrorSettings::read(&problem.settings)?;
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &EquationErrorSettings,
+        _start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         match &problem.structure {
             Structure::SixDof(structure) => {
                 equation_error(problem.record(), structure, &settings.options())

@@ -36,7 +36,7 @@
 //! without their noise being modelled (output error's assumption).
 
 use crate::estimate::{Estimate, OutputFit};
-use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
 use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
 use crate::methods::equation_error::record_name;
@@ -104,8 +104,12 @@ impl Default for FrequencyOutputErrorOptions {
 impl FrequencyOutputErrorSettings {
     /// Reads and checks a `[methods.fdoe]` table.
     pub fn read(settings: &Settings) -> Result<FrequencyOutputErrorOptions> {
-        let parsed: FrequencyOutputErrorSettings = parse_settings(METHOD, settings)?;
-        if parsed.max_iterations == 0 {
+        parse_settings::<FrequencyOutputErrorSettings>(METHOD, settings)?.options()
+    }
+
+    /// The settings in SI, checked.
+    pub fn options(&self) -> Result<FrequencyOutputErrorOptions> {
+        if self.max_iterations == 0 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: max_iterations must be at least 1"
             )));
@@ -113,11 +117,11 @@ impl FrequencyOutputErrorSettings {
         Ok(FrequencyOutputErrorOptions {
             band: BandOptions::read(
                 METHOD,
-                parsed.band.as_ref(),
-                parsed.resolution.as_ref(),
-                parsed.input_threshold,
+                self.band.as_ref(),
+                self.resolution.as_ref(),
+                self.input_threshold,
             )?,
-            max_iterations: parsed.max_iterations,
+            max_iterations: self.max_iterations,
         })
     }
 }
@@ -125,36 +129,43 @@ impl FrequencyOutputErrorSettings {
 /// Frequency-domain output error as a registered method.
 pub struct FrequencyOutputError;
 
-impl Estimator for FrequencyOutputError {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for FrequencyOutputError {
+    const NAME: &'static str = METHOD;
+    type Settings = FrequencyOutputErrorSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "frequency-domain output error: the linearised model's transfer functions fitted to the outputs' Fourier transforms",
             paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), §7.4",
             equations: "Ỹ = C(jωI − A)⁻¹(BŨ − E) + DŨ at the Fourier frequencies; J = ½Σ ṽ*S⁻¹ṽ, S diagonal re-estimated; Gauss–Newton, Cramér–Rao bounds from Re Σ (∂Ỹ/∂θ)*S⁻¹(∂Ỹ/∂θ)",
             needs: "the compared outputs, the controls and the pseudo-controls the model does not integrate, uniformly sampled; a manoeuvre small enough for the linearisation",
-            settings: setting_infos(
-                &FrequencyOutputErrorSettings::default(),
-                &[
-                    BAND_SETTINGS[0],
-                    BAND_SETTINGS[1],
-                    BAND_SETTINGS[2],
-                    ("max_iterations", "Gauss–Newton iterations at most"),
-                ],
-            ),
+            settings: vec![
+                BAND_SETTINGS[0],
+                BAND_SETTINGS[1],
+                BAND_SETTINGS[2],
+                ("max_iterations", "Gauss–Newton iterations at most"),
+            ],
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        FrequencyOutputErrorSettings::read(settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            linear: true,
+            ..Capabilities::default()
+        }
     }
 
-    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
-        crate::estimator::one_record(METHOD, problem)?;
-        let options = FrequencyOutputErrorSettings::read(&problem.settings)?;
+    fn validate(settings: &FrequencyOutputErrorSettings) -> Result<()> {
+        settings.options().map(|_| ())
+    }
+
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &FrequencyOutputErrorSettings,
+        _start: Option<&Estimate>,
+    ) -> Result<Estimate> {
+        let options = settings.options()?;
         match &problem.structure {
             Structure::SixDof(structure) => {
                 frequency_output_error(problem.record(), structure, &options)

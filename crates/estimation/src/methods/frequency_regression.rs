@@ -63,7 +63,7 @@
 //! - α̇ terms need α differentiated in the time domain (q̄·c̄/2V multiplies it).
 
 use crate::estimate::{Estimate, OutputFit, Status};
-use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
 use crate::linear_structure::LinearStructure;
 use crate::methods::equation_error::{
     self, Bound, CoefficientResult, Plan, assemble, failed_coefficient, fit_regression,
@@ -328,16 +328,20 @@ pub(crate) fn model_controls(structure: &ModelStructure) -> Vec<Regressor> {
 impl FrequencyRegressionSettings {
     /// Reads and checks a `[methods.fdee]` table.
     pub fn read(settings: &Settings) -> Result<FrequencyRegressionOptions> {
-        let parsed: FrequencyRegressionSettings = parse_settings(METHOD, settings)?;
+        parse_settings::<FrequencyRegressionSettings>(METHOD, settings)?.options()
+    }
+
+    /// The settings in SI, checked.
+    pub fn options(&self) -> Result<FrequencyRegressionOptions> {
         Ok(FrequencyRegressionOptions {
             band: BandOptions::read(
                 METHOD,
-                parsed.band.as_ref(),
-                parsed.resolution.as_ref(),
-                parsed.input_threshold,
+                self.band.as_ref(),
+                self.resolution.as_ref(),
+                self.input_threshold,
             )?,
-            zero_frequency: parsed.zero_frequency,
-            recursive: parsed.recursive,
+            zero_frequency: self.zero_frequency,
+            recursive: self.recursive,
         })
     }
 }
@@ -345,48 +349,52 @@ impl FrequencyRegressionSettings {
 /// Fourier-transform regression as a registered method.
 pub struct FrequencyRegression;
 
-impl Estimator for FrequencyRegression {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for FrequencyRegression {
+    const NAME: &'static str = METHOD;
+    type Settings = FrequencyRegressionSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "Fourier-transform regression: equation error on the finite Fourier transforms of the force and moment equations over the excited band",
             paper: "Klein & Morelli, \"Aircraft System Identification\" (AIAA 2006), §7.2–7.3; Morelli, \"Real-time parameter estimation in the frequency domain\", J. Guidance 23(5), 2000",
             equations: "x̃(ω) = ∫x·e^{−jωt}dt by Filon–Simpson quadrature; (ω̇)~ = jω·ω̃ + end terms; θ = [Re(X̃*X̃)]⁻¹Re(X̃*z̃), Cov = [Re(X̃*X̃)]⁻¹Re(X̃*VX̃)[Re(X̃*X̃)]⁻¹ with V the local residual power",
             needs: "as equation error (load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude), uniformly sampled; a model linear in its parameters; a linear structure: every state measured",
-            settings: setting_infos(
-                &FrequencyRegressionSettings::default(),
-                &[
-                    BAND_SETTINGS[0],
-                    BAND_SETTINGS[1],
-                    BAND_SETTINGS[2],
-                    (
-                        "zero_frequency",
-                        "include ω = 0 (the means; estimates bias terms); none: when a free term has the constant regressor",
-                    ),
-                    (
-                        "recursive",
-                        "build the transforms sample by sample (Morelli's real-time form); same estimate at the end of the record",
-                    ),
-                ],
-            ),
+            settings: vec![
+                BAND_SETTINGS[0],
+                BAND_SETTINGS[1],
+                BAND_SETTINGS[2],
+                (
+                    "zero_frequency",
+                    "include ω = 0 (the means; estimates bias terms); none: when a free term has the constant regressor",
+                ),
+                (
+                    "recursive",
+                    "build the transforms sample by sample (Morelli's real-time form); same estimate at the end of the record",
+                ),
+            ],
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        FrequencyRegressionSettings::read(settings).map(|_| ())
-    }
-
     /// Its moment equations are about the CG, in its own form.
-    fn fits_moment_reference(&self) -> bool {
-        false
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            linear: true,
+            moment_reference: false,
+            ..Capabilities::default()
+        }
     }
 
-    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
-        crate::estimator::one_record(METHOD, problem)?;
-        let options = FrequencyRegressionSettings::read(&problem.settings)?;
+    fn validate(settings: &FrequencyRegressionSettings) -> Result<()> {
+        settings.options().map(|_| ())
+    }
+
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &FrequencyRegressionSettings,
+        _start: Option<&Estimate>,
+    ) -> Result<Estimate> {
+        let options = settings.options()?;
         match &problem.structure {
             Structure::SixDof(structure) => {
                 frequency_regression(problem.record(), structure, &options)

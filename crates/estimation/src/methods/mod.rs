@@ -1,5 +1,6 @@
 //! The estimators, one file each. Adding a method is one file implementing
-//! [`crate::estimator::Estimator`] and one line in [`built_in`]; the command
+//! the typed [`crate::estimator::Method`] (every `Method` is an
+//! [`crate::estimator::Estimator`]) and one line in [`built_in`]; the command
 //! line, `run`, `gate` and `study` find methods through a
 //! [`crate::registry::Registry`], to which a program embedding aeroid (or a
 //! test) adds its own.

@@ -49,7 +49,7 @@
 //! was trained on is judged by an extrapolating network.
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, MethodInfo, Settings, parse_settings, setting_infos};
+use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
 use crate::methods::equation_error::DIFFERENTIATOR_SETTING;
 use crate::neural::feedforward::{LevenbergMarquardt, SizeSearch};
 use crate::neural::restricted::{self, RestrictedOptions, Trainer};
@@ -111,37 +111,43 @@ impl Default for NeuralGaussNewtonSettings {
 impl NeuralGaussNewtonSettings {
     /// The settings of a `[methods.ngn]` table, checked.
     pub fn read(settings: &Settings) -> Result<NeuralGaussNewtonSettings> {
-        let read: NeuralGaussNewtonSettings = parse_settings(METHOD, settings)?;
+        let parsed: NeuralGaussNewtonSettings = parse_settings(METHOD, settings)?;
+        parsed.check()?;
+        Ok(parsed)
+    }
+
+    /// Checks the values' ranges, naming the offending key.
+    pub fn check(&self) -> Result<()> {
         let bad = |message: &str| Err(Error::Other(format!("[methods.{METHOD}]: {message}")));
-        if read.hidden == Some(0) {
+        if self.hidden == Some(0) {
             return bad("hidden must be at least 1");
         }
-        if read.hidden.is_none() {
-            if read.hidden_sizes.is_empty() || read.hidden_sizes.contains(&0) {
+        if self.hidden.is_none() {
+            if self.hidden_sizes.is_empty() || self.hidden_sizes.contains(&0) {
                 return bad("hidden_sizes must list at least one positive size");
             }
-            if read.held_out_every < 2 {
+            if self.held_out_every < 2 {
                 return bad(
                     "choosing the hidden-layer size needs held-out pairs: held_out_every of 2 or more, or a fixed hidden",
                 );
             }
         }
-        if read.max_epochs == 0 {
+        if self.max_epochs == 0 {
             return bad("max_epochs must be at least 1");
         }
-        if read.held_out_every == 1 {
+        if self.held_out_every == 1 {
             return bad("held_out_every must be 0 (none held out) or at least 2");
         }
-        if read.held_out_every > 1 && read.patience == 0 {
+        if self.held_out_every > 1 && self.patience == 0 {
             return bad("patience must be at least 1");
         }
-        if read.max_iterations == 0 {
+        if self.max_iterations == 0 {
             return bad("max_iterations must be at least 1");
         }
-        if let Some(problem) = read.differentiator.problems() {
+        if let Some(problem) = self.differentiator.problems() {
             return bad(&problem);
         }
-        Ok(read)
+        Ok(())
     }
 
     fn training(&self) -> LevenbergMarquardt {
@@ -168,55 +174,59 @@ impl NeuralGaussNewtonSettings {
 /// The neural Gauss–Newton estimator.
 pub struct NeuralGaussNewton;
 
-impl Estimator for NeuralGaussNewton {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for NeuralGaussNewton {
+    const NAME: &'static str = METHOD;
+    type Settings = NeuralGaussNewtonSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "neural Gauss–Newton: a feed-forward network trained by back-propagation with Levenberg–Marquardt as the restricted flight-dynamic model, then Gauss–Newton on det(R) through it",
             paper: "\"Longitudinal and lateral aerodynamic characterisation of reflex wing UAV from flight tests using ML, LS and neural Gauss Newton methods\" (the reflex-wing UAV paper), §3.3; Peyada & Ghosh's NGN as stated in \"Parameter estimation of aircraft using extreme learning machine and Gauss-Newton algorithm\"; Hagan & Menhaj, IEEE Trans. Neural Networks 5(6), 1994",
             equations: "U(k) = [motion, coefficients](k) → Z(k+1) = [motion, coefficients](k+1) (Eqs. 29–30); LM Δw = −(JᵀJ + μI)⁻¹Jᵀe with back-propagated J (Hagan & Menhaj); min det(R), Gauss–Newton through the network (ELM paper Eqs. 11–22)",
             needs: "a 6-DOF structure; its integrated motion variables; load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude (coefficients from accelerations)",
-            settings: setting_infos(
-                &NeuralGaussNewtonSettings::default(),
-                &[
-                    (
-                        "hidden",
-                        "neurons in the hidden layer (tanh); not given: chosen from hidden_sizes",
-                    ),
-                    (
-                        "hidden_sizes",
-                        "candidate numbers of hidden neurons: each is trained and the one of least held-out error kept (the ELM paper's residual criterion, Eq. 6)",
-                    ),
-                    ("seed", "seed of the network's initial weights"),
-                    ("max_epochs", "Levenberg–Marquardt epochs at most"),
-                    (
-                        "held_out_every",
-                        "every this-many-th training pair is held out for early stopping (0: none)",
-                    ),
-                    (
-                        "patience",
-                        "epochs the held-out error may stay above its best before training stops",
-                    ),
-                    (
-                        "coefficient_outputs",
-                        "the coefficients at k+1 are network outputs and enter det(R) (Eq. 30)",
-                    ),
-                    ("max_iterations", "Gauss–Newton iterations at most"),
-                    DIFFERENTIATOR_SETTING,
-                ],
-            ),
+            settings: vec![
+                (
+                    "hidden",
+                    "neurons in the hidden layer (tanh); not given: chosen from hidden_sizes",
+                ),
+                (
+                    "hidden_sizes",
+                    "candidate numbers of hidden neurons: each is trained and the one of least held-out error kept (the ELM paper's residual criterion, Eq. 6)",
+                ),
+                ("seed", "seed of the network's initial weights"),
+                ("max_epochs", "Levenberg–Marquardt epochs at most"),
+                (
+                    "held_out_every",
+                    "every this-many-th training pair is held out for early stopping (0: none)",
+                ),
+                (
+                    "patience",
+                    "epochs the held-out error may stay above its best before training stops",
+                ),
+                (
+                    "coefficient_outputs",
+                    "the coefficients at k+1 are network outputs and enter det(R) (Eq. 30)",
+                ),
+                ("max_iterations", "Gauss–Newton iterations at most"),
+                DIFFERENTIATOR_SETTING,
+            ],
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        NeuralGaussNewtonSettings::read(settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities::default()
     }
 
-    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
-        let settings = NeuralGaussNewtonSettings::read(&problem.settings)?;
+    fn validate(settings: &NeuralGaussNewtonSettings) -> Result<()> {
+        settings.check()
+    }
+
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &NeuralGaussNewtonSettings,
+        start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         let trainer: Box<dyn Trainer> = match settings.hidden {
             Some(_) => Box::new(settings.training()),
             None => Box::new(SizeSearch {

@@ -41,8 +41,8 @@
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{
-    Estimator, MethodInfo, MissingChannel, Refusal, Settings, merge_settings, parse_settings,
-    setting_infos,
+    Capabilities, Description, Method, MissingChannel, Refusal, Settings, merge_settings,
+    parse_settings,
 };
 use crate::input_timing::InputInterpolation;
 use crate::linear_structure::LinearStructure;

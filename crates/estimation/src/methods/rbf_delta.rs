@@ -61,7 +61,7 @@
 use crate::estimate::{
     Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterDistribution, ParameterEstimate, Status,
 };
-use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
 use crate::methods::equation_error::{self, Plan, record_name};
 use crate::methods::smoothed_regression::{self, SmoothedRegressionSettings};
 use crate::neural::rbf::{RbfNetwork, RbfOptions, WidthSearch};
@@ -203,51 +203,57 @@ impl RbfDeltaSettings {
     /// Reads and checks a `[methods.rbf-delta]` table.
     pub fn read(settings: &Settings) -> Result<RbfDeltaSettings> {
         let parsed: RbfDeltaSettings = parse_settings(METHOD, settings)?;
+        parsed.check()?;
+        Ok(parsed)
+    }
+
+    /// Checks the values' ranges, naming the offending key.
+    pub fn check(&self) -> Result<()> {
         let refuse = |key: &str, message: String| {
             Err(Error::Other(format!(
                 "[methods.{METHOD}]: {key}: {message}"
             )))
         };
         let positive = |v: f64| v > 0.0 && v.is_finite();
-        if !positive(parsed.radius) {
-            return refuse("radius", format!("must be positive, is {}", parsed.radius));
+        if !positive(self.radius) {
+            return refuse("radius", format!("must be positive, is {}", self.radius));
         }
-        let [low, high] = parsed.width_factor_range;
+        let [low, high] = self.width_factor_range;
         if !(positive(low) && positive(high) && low < high) {
             return refuse(
                 "width_factor_range",
                 format!("must be two positive values, the first smaller: {low}, {high}"),
             );
         }
-        let [low, high] = parsed.scaling_range;
+        let [low, high] = self.scaling_range;
         if !(low.is_finite() && high.is_finite() && low < high) {
             return refuse(
                 "scaling_range",
                 format!("must be two finite values, the first smaller: {low}, {high}"),
             );
         }
-        if !positive(parsed.difference_step) {
+        if !positive(self.difference_step) {
             return refuse(
                 "difference_step",
-                format!("must be positive, is {}", parsed.difference_step),
+                format!("must be positive, is {}", self.difference_step),
             );
         }
-        if !(0.0..1.0).contains(&parsed.minimum_r_squared) {
+        if !(0.0..1.0).contains(&self.minimum_r_squared) {
             return refuse(
                 "minimum_r_squared",
-                format!("must be in [0, 1), is {}", parsed.minimum_r_squared),
+                format!("must be in [0, 1), is {}", self.minimum_r_squared),
             );
         }
-        if let Some(trim) = parsed.trim.filter(|t| !t.is_finite()) {
+        if let Some(trim) = self.trim.filter(|t| !t.is_finite()) {
             return refuse("trim", format!("must be a finite time, is {trim}"));
         }
-        let smoother = serde_json::to_value(&parsed.smoother)
+        let smoother = serde_json::to_value(&self.smoother)
             .ok()
             .and_then(|v| v.as_object().cloned())
             .unwrap_or_default();
         SmoothedRegressionSettings::read(&smoother)
             .map_err(|e| Error::Other(format!("[methods.{METHOD}]: smoother: {e}")))?;
-        Ok(parsed)
+        Ok(())
     }
 
     fn network(&self) -> RbfOptions {
@@ -263,33 +269,39 @@ impl RbfDeltaSettings {
 /// The RBF network + Delta method as a registered method.
 pub struct RbfDelta;
 
-impl Estimator for RbfDelta {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for RbfDelta {
+    const NAME: &'static str = METHOD;
+    type Settings = RbfDeltaSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "RBF network per aerodynamic coefficient (clustering, width search, least-squares weights), derivatives by the Delta method at every sample",
             paper: "Wang et al., \"Aerodynamic modeling and parameter estimation from QAR data of an airplane approaching a high-altitude airport\", Chinese J. Aeronautics 25 (2012); Raisinghani, Ghosh & Kalra, \"Two new techniques for parameter estimation using neural networks\", Aeronautical J. 102 (1998)",
             equations: "RBF network (Eqs. 25–27), clustering (Eqs. 28–29), width search (Eq. 30), least-squares weights (Eqs. 31–32), Delta method (Eq. 33); coefficients from the EKF + MBF smoother (Eqs. 7–24) or reconstructed from accelerations",
             needs: "reconstructed: load factors, α, β, angular rates, airspeed, altitude or dynamic pressure, controls, throttle when the aircraft has thrust; smoothed: what ebm needs; a structure linear in its parameters (its derivatives are the networks' input derivatives)",
-            settings: setting_infos(&RbfDeltaSettings::default(), SETTINGS),
+            settings: SETTINGS.to_vec(),
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        RbfDeltaSettings::read(settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities::default()
     }
 
-    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
-        crate::estimator::one_record(METHOD, problem)?;
-        let settings = RbfDeltaSettings::read(&problem.settings)?;
+    fn validate(settings: &RbfDeltaSettings) -> Result<()> {
+        settings.check()
+    }
+
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &RbfDeltaSettings,
+        _start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         let started = std::time::Instant::now();
         let mut estimate = rbf_delta(
             problem.record(),
             problem.structure.six_dof(METHOD)?,
-            &settings,
+            settings,
         )?;
         estimate.wall_time = started.elapsed().as_secs_f64();
         Ok(estimate)

@@ -37,7 +37,7 @@
 //! report's kind and the stall model they are applied to here.
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, MethodInfo, Settings, setting_infos};
+use crate::estimator::{Capabilities, Description, Method};
 use crate::methods::elm_gauss_newton::{ElmSettings, SHARED_SETTINGS, estimate_with};
 use crate::methods::equation_error;
 use crate::problem::EstimationProblem;
@@ -49,30 +49,37 @@ pub const METHOD: &str = "relm-gn";
 /// RELM-GN as a registered method.
 pub struct RecurrentElm;
 
-impl Estimator for RecurrentElm {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for RecurrentElm {
+    const NAME: &'static str = METHOD;
+    type Settings = ElmSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "recurrent ELM + Gauss–Newton: a Jordan-type recurrent extreme learning machine as the restricted flight-dynamic model, Gauss–Newton on det(R) through it",
             paper: "Verma & Peyada, \"Estimation of aerodynamic parameters near stall using maximum likelihood and extreme learning machine-based methods\", Aeronautical J. 2020",
             equations: "coefficients from accelerations (Eqs. 12–15), scaling (Eq. 16), Jordan ELM with output feedback (Eqs. 17–20), MSE and R² (Eqs. 21–22), Y(i+1) = f(X(i), Y(i), Θ) (Eq. 23), forward-difference gradients (Eq. 24), det(R) Gauss–Newton (Eqs. 5–10), Cramér–Rao bounds (Eqs. 25–26); stall model χ (Eqs. 2–4)",
             needs: "the structure's integrated motion variables, load factors, angular rates, airspeed, α, β, controls, dynamic pressure or altitude; α for χ of a stall model; a 6-DOF structure",
-            settings: setting_infos(&ElmSettings::default(), &SHARED_SETTINGS),
+            settings: SHARED_SETTINGS.to_vec(),
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        ElmSettings::read(METHOD, settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            starts_from: Some(equation_error::METHOD),
+            ..Capabilities::default()
+        }
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
+    fn validate(settings: &ElmSettings) -> Result<()> {
+        settings.check(METHOD)
     }
 
-    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
-        estimate_with(METHOD, "recurrent-elm", problem, start)
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &ElmSettings,
+        start: Option<&Estimate>,
+    ) -> Result<Estimate> {
+        estimate_with(METHOD, "recurrent-elm", problem, settings, start)
     }
 }

@@ -55,7 +55,7 @@ pub use smoothed::Smoothed;
 pub use smoother::{GaussMarkov, SmootherSetup, smooth};
 
 use crate::estimate::Estimate;
-use crate::estimator::{Estimator, MethodInfo, Settings, setting_infos};
+use crate::estimator::{Capabilities, Description, Method};
 use crate::problem::EstimationProblem;
 use aeroid_core::error::Result;
 use settings::SETTINGS;
@@ -66,38 +66,43 @@ pub const METHOD: &str = "ebm";
 /// Estimation before modelling as a registered method.
 pub struct SmoothedRegression;
 
-impl Estimator for SmoothedRegression {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for SmoothedRegression {
+    const NAME: &'static str = METHOD;
+    type Settings = SmoothedRegressionSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "estimation before modelling: coefficients as Gauss–Markov states of an EKF, smoothed by the modified Bryson–Frazier smoother, regressed on the model's terms",
             paper: "Wang et al., \"Aerodynamic modeling and parameter estimation from QAR data of an airplane approaching a high-altitude airport\", Chinese J. Aeronautics 25 (2012); Bierman, \"Fixed interval smoothing with discrete measurements\" (1973); Klein & Morelli (2006), ch. 5",
             equations: "6-DOF kinematics with third-order Gauss–Markov coefficients (Eq. 7), observations (Eq. 8), coefficients (Eq. 9), EKF (Eqs. 10–16), modified Bryson–Frazier smoother (Eqs. 17–24); least squares on the smoothed coefficients (Eqs. 25–27 of the reflex-wing UAV paper)",
             needs: "load factors, attitude angles, airspeed, altitude or pressure altitude (α, β, p, q, r used when present), the controls of the model's terms, thrust or throttle when the aircraft has thrust; a model linear in its parameters",
-            settings: setting_infos(&SmoothedRegressionSettings::default(), SETTINGS),
+            settings: SETTINGS.to_vec(),
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        SmoothedRegressionSettings::read(settings).map(|_| ())
-    }
-
     /// Its moment equations are about the CG, in its own form.
-    fn fits_moment_reference(&self) -> bool {
-        false
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            moment_reference: false,
+            ..Capabilities::default()
+        }
     }
 
-    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
-        let settings = SmoothedRegressionSettings::read(&problem.settings)?;
-        crate::estimator::one_record(METHOD, problem)?;
+    fn validate(settings: &SmoothedRegressionSettings) -> Result<()> {
+        settings.check()
+    }
+
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &SmoothedRegressionSettings,
+        _start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         let started = std::time::Instant::now();
         let (smoothed, mut estimate) = smooth_and_regress(
             problem.record(),
             problem.structure.six_dof(METHOD)?,
-            &settings,
+            settings,
         )?;
         estimate.notes.extend(smoothed.notes.iter().cloned());
         estimate.notes.push(determined_note(&estimate));

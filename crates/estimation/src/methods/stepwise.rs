@@ -50,7 +50,7 @@
 
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
-use crate::estimator::{Estimator, MethodInfo, Refusal, Settings, parse_settings, setting_infos};
+use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
 use crate::methods::equation_error::{
     ANGULAR_ACCELERATIONS_SETTING, DIFFERENTIATOR_SETTING, check_settings, record_name,
 };
@@ -127,22 +127,7 @@ impl StepwiseSettings {
     /// Reads and checks a `[methods.swr]` table.
     pub fn read(settings: &Settings) -> Result<StepwiseSettings> {
         let parsed: StepwiseSettings = parse_settings(METHOD, settings)?;
-        check_settings(METHOD, &parsed.differentiator, parsed.correlation_lag)?;
-        let invalid = |message: String| Err(Error::Other(format!("[methods.{METHOD}]: {message}")));
-        if !(parsed.f_to_enter > 0.0 && parsed.f_to_remove > 0.0)
-            || parsed.f_to_remove > parsed.f_to_enter
-        {
-            return invalid(format!(
-                "f_to_enter ({}) and f_to_remove ({}) must be positive, f_to_remove at most f_to_enter",
-                parsed.f_to_enter, parsed.f_to_remove
-            ));
-        }
-        if parsed.min_r_squared_gain.is_nan() || parsed.min_r_squared_gain < 0.0 {
-            return invalid("min_r_squared_gain must be at least 0".into());
-        }
-        for candidate in parsed.candidates.iter().flatten() {
-            Candidate::parse(candidate)?;
-        }
+        StepwiseRegression::validate(&parsed)?;
         Ok(parsed)
     }
 
@@ -167,56 +152,75 @@ impl StepwiseSettings {
 /// model has terms in, the selected terms estimated together.
 pub struct StepwiseRegression;
 
-impl Estimator for StepwiseRegression {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for StepwiseRegression {
+    const NAME: &'static str = METHOD;
+    type Settings = StepwiseSettings;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "stepwise regression: model-structure determination by F-to-enter/F-to-remove on reconstructed coefficients",
             paper: "Efroymson (1960), in Ralston & Wilf, \"Mathematical Methods for Digital Computers\"; Draper & Smith, \"Applied Regression Analysis\"; Klein & Morelli, \"Aircraft System Identification\", §5.4",
             equations: "partial F statistics to enter and remove terms, PRESS (Klein & Morelli Eqs. 5.83–5.92); coefficients from accelerations as equation error",
             needs: "as equation error: load factors, angular rates, air data, controls",
-            settings: setting_infos(
-                &StepwiseSettings::default(),
-                &[
-                    DIFFERENTIATOR_SETTING,
-                    ANGULAR_ACCELERATIONS_SETTING,
-                    (
-                        "correlation_lag",
-                        "lag (s) of the coloured-residual bound of the final estimates",
-                    ),
-                    ("f_to_enter", "partial F a term needs to enter"),
-                    (
-                        "f_to_remove",
-                        "partial F below which a term leaves (at most f_to_enter)",
-                    ),
-                    (
-                        "min_r_squared_gain",
-                        "a term enters only if it raises R² by at least this fraction",
-                    ),
-                    (
-                        "candidates",
-                        "candidate terms (regressor keys, products a*b, squares a^2); none: every regressor the record supplies and the default products",
-                    ),
-                    ("max_steps", "most entries and removals per coefficient"),
-                ],
-            ),
+            settings: vec![
+                DIFFERENTIATOR_SETTING,
+                ANGULAR_ACCELERATIONS_SETTING,
+                (
+                    "correlation_lag",
+                    "lag (s) of the coloured-residual bound of the final estimates",
+                ),
+                ("f_to_enter", "partial F a term needs to enter"),
+                (
+                    "f_to_remove",
+                    "partial F below which a term leaves (at most f_to_enter)",
+                ),
+                (
+                    "min_r_squared_gain",
+                    "a term enters only if it raises R² by at least this fraction",
+                ),
+                (
+                    "candidates",
+                    "candidate terms (regressor keys, products a*b, squares a^2); none: every regressor the record supplies and the default products",
+                ),
+                ("max_steps", "most entries and removals per coefficient"),
+            ],
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        StepwiseSettings::read(settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities::default()
     }
 
-    fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
-        crate::estimator::one_record(METHOD, problem)?;
-        let options = StepwiseSettings::read(&problem.settings)?.options();
+    fn validate(parsed: &StepwiseSettings) -> Result<()> {
+        check_settings(METHOD, &parsed.differentiator, parsed.correlation_lag)?;
+        let invalid = |message: String| Err(Error::Other(format!("[methods.{METHOD}]: {message}")));
+        if !(parsed.f_to_enter > 0.0 && parsed.f_to_remove > 0.0)
+            || parsed.f_to_remove > parsed.f_to_enter
+        {
+            return invalid(format!(
+                "f_to_enter ({}) and f_to_remove ({}) must be positive, f_to_remove at most f_to_enter",
+                parsed.f_to_enter, parsed.f_to_remove
+            ));
+        }
+        if parsed.min_r_squared_gain.is_nan() || parsed.min_r_squared_gain < 0.0 {
+            return invalid("min_r_squared_gain must be at least 0".into());
+        }
+        for candidate in parsed.candidates.iter().flatten() {
+            Candidate::parse(candidate)?;
+        }
+        Ok(())
+    }
+
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &StepwiseSettings,
+        _start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         let (reports, mut estimate) = stepwise_all(
             problem.record(),
             problem.structure.six_dof(METHOD)?,
-            &options,
+            &settings.options(),
         )?;
         estimate.details = reports.iter().map(|r| format!("{r}\n")).collect();
         Ok(estimate)

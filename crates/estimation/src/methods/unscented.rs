@@ -19,9 +19,7 @@
 //! the EKF's are to first.
 
 use crate::estimate::Estimate;
-use crate::estimator::{
-    Estimator, MethodInfo, SettingInfo, Settings, parse_settings, setting_infos,
-};
+use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
 use crate::methods::augmented_ekf::{self, FILTER_SETTINGS, FilterSettings, augmented_estimate};
 use crate::methods::equation_error;
 use crate::problem::EstimationProblem;
@@ -68,94 +66,145 @@ const SIGMA_KEYS: [(&str, &str); 3] = [
     ("kappa", "secondary scaling, ≥ 0"),
 ];
 
-/// Reads a `[methods.ukf]` table: the sigma-point keys, then the rest as
-/// the EKF's settings (a key neither knows is refused by name).
-pub fn read(settings: &Settings) -> Result<(FilterSettings, Unscented)> {
-    let mut filter = settings.clone();
-    let mut sigma = Settings::new();
-    for (key, _) in SIGMA_KEYS {
-        if let Some(value) = filter.remove(key) {
-            sigma.insert(key.to_string(), value);
+/// The `[methods.ukf]` table: the sigma-point keys (`alpha`, `beta`, `kappa`), the
+/// rest the EKF's settings (a key neither knows is refused by name).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct UnscentedSettings {
+    pub filter: FilterSettings,
+    pub sigma: SigmaSettings,
+}
+
+impl Serialize for UnscentedSettings {
+    /// One table: the EKF's keys and the sigma points'.
+    fn serialize<S: serde::Serializer>(
+        &self,
+        serializer: S,
+    ) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::Error as _;
+        let mut table = Settings::new();
+        for part in [
+            serde_json::to_value(&self.filter).map_err(S::Error::custom)?,
+            serde_json::to_value(self.sigma).map_err(S::Error::custom)?,
+        ] {
+            if let serde_json::Value::Object(keys) = part {
+                table.extend(keys);
+            }
+        }
+        table.serialize(serializer)
+    }
+}
+
+impl<'de> Deserialize<'de> for UnscentedSettings {
+    /// The sigma-point keys, then the rest as the EKF's settings.
+    fn deserialize<D: serde::Deserializer<'de>>(
+        deserializer: D,
+    ) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let mut filter = Settings::deserialize(deserializer)?;
+        let mut sigma = Settings::new();
+        for (key, _) in SIGMA_KEYS {
+            if let Some(value) = filter.remove(key) {
+                sigma.insert(key.to_string(), value);
+            }
+        }
+        let sigma =
+            serde_json::from_value(serde_json::Value::Object(sigma)).map_err(D::Error::custom)?;
+        let filter =
+            serde_json::from_value(serde_json::Value::Object(filter)).map_err(D::Error::custom)?;
+        Ok(UnscentedSettings { filter, sigma })
+    }
+}
+
+impl UnscentedSettings {
+    /// The sigma points' parameters.
+    pub fn unscented(&self) -> Unscented {
+        Unscented {
+            alpha: self.sigma.alpha,
+            beta: self.sigma.beta,
+            kappa: self.sigma.kappa,
         }
     }
-    let sigma: SigmaSettings = parse_settings(METHOD, &sigma)?;
-    let filter = FilterSettings::read(METHOD, &filter)?;
-    if !(sigma.alpha > 0.0 && sigma.alpha <= 1.0) {
-        return Err(Error::Other(format!(
-            "[methods.{METHOD}] alpha: must be in (0, 1], is {}",
-            sigma.alpha
-        )));
-    }
-    if !(sigma.beta >= 0.0 && sigma.beta.is_finite()) {
-        return Err(Error::Other(format!(
-            "[methods.{METHOD}] beta: must be at least 0, is {}",
-            sigma.beta
-        )));
-    }
-    if !(sigma.kappa >= 0.0 && sigma.kappa.is_finite()) {
-        return Err(Error::Other(format!(
-            "[methods.{METHOD}] kappa: must be at least 0, is {}",
-            sigma.kappa
-        )));
-    }
-    Ok((
-        filter,
-        Unscented {
-            alpha: sigma.alpha,
-            beta: sigma.beta,
-            kappa: sigma.kappa,
-        },
-    ))
+}
+
+/// Reads and checks a `[methods.ukf]` table: the EKF's settings and the
+/// sigma points.
+pub fn read(settings: &Settings) -> Result<(FilterSettings, Unscented)> {
+    let parsed: UnscentedSettings = parse_settings(METHOD, settings)?;
+    UnscentedFilter::validate(&parsed)?;
+    let unscented = parsed.unscented();
+    Ok((parsed.filter, unscented))
 }
 
 /// The augmented-state UKF as a registered method.
 pub struct UnscentedFilter;
 
-impl Estimator for UnscentedFilter {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for UnscentedFilter {
+    const NAME: &'static str = METHOD;
+    type Settings = UnscentedSettings;
 
-    fn info(&self) -> MethodInfo {
-        let mut settings: Vec<SettingInfo> =
-            setting_infos(&FilterSettings::default(), &FILTER_SETTINGS);
-        settings.extend(setting_infos(&SigmaSettings::default(), &SIGMA_KEYS));
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "square-root unscented Kalman filter with the parameters as augmented states, pseudonoise, Fourier R and residual-correlation tuning",
             paper: "van der Merwe & Wan, \"The square-root unscented Kalman filter for state and parameter estimation\", ICASSP 2001; Wan & van der Merwe, \"The unscented Kalman filter for nonlinear estimation\", IEEE AS-SPCC 2000; Julier & Uhlmann, SPIE 3068, 1997; the X-31/F-18 HARV EKF note",
             equations: "scaled sigma points (Wan & van der Merwe 2000, Eq. 15), the square-root UKF with additive noise (van der Merwe & Wan 2001, Algorithm 3.1: QR of the compound matrix, Cholesky update/downdate); augmented state and noise tuning as the EKF's (note Eqs. 1–3, Mehra 1970)",
             needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls); on a linear structure, its input and output channels",
-            settings,
+            settings: FILTER_SETTINGS.into_iter().chain(SIGMA_KEYS).collect(),
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        read(settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            linear: true,
+            tied_parameters: true,
+            starts_from: Some(equation_error::METHOD),
+            ..Capabilities::default()
+        }
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
+    fn validate(settings: &UnscentedSettings) -> Result<()> {
+        settings.filter.check(METHOD)?;
+        let sigma = &settings.sigma;
+        if !(sigma.alpha > 0.0 && sigma.alpha <= 1.0) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}] alpha: must be in (0, 1], is {}",
+                sigma.alpha
+            )));
+        }
+        if !(sigma.beta >= 0.0 && sigma.beta.is_finite()) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}] beta: must be at least 0, is {}",
+                sigma.beta
+            )));
+        }
+        if !(sigma.kappa >= 0.0 && sigma.kappa.is_finite()) {
+            return Err(Error::Other(format!(
+                "[methods.{METHOD}] kappa: must be at least 0, is {}",
+                sigma.kappa
+            )));
+        }
+        Ok(())
     }
 
-    fn fits_tied_parameters(&self) -> bool {
-        true
-    }
-
-    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
-        let (settings, unscented) = read(&problem.settings)?;
-        crate::estimator::one_record(METHOD, problem)?;
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        settings: &UnscentedSettings,
+        start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         augmented_ekf::refuse_for_linear(METHOD, problem)?;
+        let unscented = settings.unscented();
+        let filter = &settings.filter;
         let run = augmented_estimate(
             METHOD,
             problem.record(),
             &problem.structure,
-            &settings,
+            filter,
             start,
             &|model, initial, noise, observations| {
                 unscented_kalman::filter(model, &[], initial, noise, observations, &unscented)
             },
         )?;
-        if let Some(path) = &settings.history {
+        if let Some(path) = &filter.history {
             run.history.write_csv(path)?;
         }
         Ok(run.estimate)

@@ -10,72 +10,72 @@ pub(super) const NOISELESS_STATES: [&str; 5] = ["roll", "pitch", "yaw", "altitud
 /// Filter error as a registered method.
 pub struct FilterError;
 
-impl Estimator for FilterError {
-    fn name(&self) -> &'static str {
-        METHOD
-    }
+impl Method for FilterError {
+    const NAME: &'static str = METHOD;
+    type Settings = FilterErrorOptions;
 
-    fn info(&self) -> MethodInfo {
-        MethodInfo {
+    fn describe() -> Description {
+        Description {
             title: "filter error: maximum likelihood with a steady-state extended Kalman filter in the loop, for flights with turbulence",
             paper: "Maine & Iliff, \"Identification of dynamic systems\" (NASA RP-1138, 1985); Jategaonkar, \"Flight Vehicle System Identification\", 2nd ed., ch. 5",
             equations: "innovations ν = z − ỹ of x̃_k = step(x̂_{k−1}), x̂ = x̃ + K·ν, K = P·Cᵀ·R⁻¹ (Jategaonkar §5.5, Eq. 5.48), P from the discrete Riccati equation of the model linearised at the first point; cost ½·Σ(νᵀR⁻¹ν + ln det R), R = (1/N)·Σ ν·νᵀ (whole where the outputs share one time base, fitted from the diagonal R's estimate; diagonal with innovation_covariance = \"diagonal\" or on a multi-rate record), Gauss–Newton on θ and F with R fixed, F compensated after each R update (Eq. 5.41), diag(K·C) ≤ 1 (§5.3); Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ). gain = \"time_varying\": the EKF in the loop (Jategaonkar §7.2, Eqs. 7.11–7.19), P̃_k = Φ_k·P̂_{k−1}·Φ_kᵀ + Q_d, K_k = P̃_k·C_kᵀ·(C_k·P̃_k·C_kᵀ + G·Gᵀ)⁻¹, cost ½·Σ(νᵀS_k⁻¹ν + ln det S_k), θ, F and G by Fisher scoring",
             needs: "the compared outputs, the controls, and every flight-path state the model does not integrate (pseudo-controls)",
-            settings: setting_infos(
-                &FilterErrorOptions::default(),
-                &[
-                    (
-                        "start",
-                        "\"ee\": equation error's estimates where they converge; \"model\": the model file's values",
-                    ),
-                    ("max_iterations", "Gauss–Newton iterations at most"),
-                    (
-                        "step",
-                        "integration step, e.g. \"0.04 s\"; none: the fastest compared channel's period",
-                    ),
-                    (
-                        "interpolation",
-                        "inputs inside an integration step: \"auto\" (each input held where its samples are piecewise constant, linear where it ramps or moves; said in the notes), \"zoh\" (hold), \"linear\", or a table by channel, e.g. { aileron = \"linear\" }",
-                    ),
-                    (
-                        "process_noise",
-                        "the integrated states driven by process noise, one F entry each; none: all but roll, pitch, yaw, altitude and chi",
-                    ),
-                    (
-                        "gain",
-                        "\"steady\": the steady-state gain of the model linearised at the first point, R by relaxation; \"time_varying\": the extended Kalman filter, covariance propagated at every point, G·Gᵀ by relaxation",
-                    ),
-                    (
-                        "initial_variance",
-                        "with gain = \"time_varying\": the initial state's error variance per state, e.g. { z1 = 5.8 }; states not named start known",
-                    ),
-                    (
-                        "innovation_covariance",
-                        "with gain = \"steady\": \"full\" (the default; R = (1/N)·Σ ν·νᵀ whole where every output shares one time base, fitted from the diagonal R's estimate: honest bounds where outputs share a state's prediction error, e.g. β and n_y) or \"diagonal\" (one variance per output)",
-                    ),
-                ],
-            ),
+            settings: vec![
+                (
+                    "start",
+                    "\"ee\": equation error's estimates where they converge; \"model\": the model file's values",
+                ),
+                ("max_iterations", "Gauss–Newton iterations at most"),
+                (
+                    "step",
+                    "integration step, e.g. \"0.04 s\"; none: the fastest compared channel's period",
+                ),
+                (
+                    "interpolation",
+                    "inputs inside an integration step: \"auto\" (each input held where its samples are piecewise constant, linear where it ramps or moves; said in the notes), \"zoh\" (hold), \"linear\", or a table by channel, e.g. { aileron = \"linear\" }",
+                ),
+                (
+                    "process_noise",
+                    "the integrated states driven by process noise, one F entry each; none: all but roll, pitch, yaw, altitude and chi",
+                ),
+                (
+                    "gain",
+                    "\"steady\": the steady-state gain of the model linearised at the first point, R by relaxation; \"time_varying\": the extended Kalman filter, covariance propagated at every point, G·Gᵀ by relaxation",
+                ),
+                (
+                    "initial_variance",
+                    "with gain = \"time_varying\": the initial state's error variance per state, e.g. { z1 = 5.8 }; states not named start known",
+                ),
+                (
+                    "innovation_covariance",
+                    "with gain = \"steady\": \"full\" (the default; R = (1/N)·Σ ν·νᵀ whole where every output shares one time base, fitted from the diagonal R's estimate: honest bounds where outputs share a state's prediction error, e.g. β and n_y) or \"diagonal\" (one variance per output)",
+                ),
+            ],
         }
     }
 
-    fn check_settings(&self, settings: &Settings) -> Result<()> {
-        FilterErrorOptions::read(settings).map(|_| ())
+    fn capabilities() -> Capabilities {
+        Capabilities {
+            linear: true,
+            tied_parameters: true,
+            starts_from: Some(equation_error::METHOD),
+            ..Capabilities::default()
+        }
     }
 
-    fn starts_from(&self) -> Option<&'static str> {
-        Some(equation_error::METHOD)
+    fn validate(settings: &FilterErrorOptions) -> Result<()> {
+        settings.check()
     }
 
-    fn fits_tied_parameters(&self) -> bool {
-        true
-    }
-
-    fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate> {
-        let options = FilterErrorOptions::read(&problem.settings)?;
-        crate::estimator::one_record(METHOD, problem)?;
+    fn fit(
+        &self,
+        problem: &EstimationProblem,
+        options: &FilterErrorOptions,
+        start: Option<&Estimate>,
+    ) -> Result<Estimate> {
         match &problem.structure {
             Structure::SixDof(structure) => {
-                filter_error_from(problem.record(), structure, &options, start)
+                filter_error_from(problem.record(), structure, options, start)
             }
             Structure::Linear(structure) => {
                 crate::estimator::refuse_for_linear(

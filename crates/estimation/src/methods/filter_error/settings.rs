@@ -85,7 +85,13 @@ impl FilterErrorOptions {
     /// Reads and checks a `[methods.fem]` table.
     pub fn read(settings: &Settings) -> Result<FilterErrorOptions> {
         let options: FilterErrorOptions = parse_settings(METHOD, settings)?;
-        if options
+        options.check()?;
+        Ok(options)
+    }
+
+    /// Checks the values' ranges and combinations.
+    pub fn check(&self) -> Result<()> {
+        if self
             .step
             .is_some_and(|step| !(step > 0.0 && step.is_finite()))
         {
@@ -93,21 +99,21 @@ impl FilterErrorOptions {
                 "[methods.{METHOD}]: step must be positive"
             )));
         }
-        if options.max_iterations == 0 {
+        if self.max_iterations == 0 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: max_iterations must be at least 1"
             )));
         }
-        check_initial_variance(METHOD, options.gain, &options.initial_variance)?;
-        options.interpolation.check_controls(METHOD)?;
-        if options.gain == Gain::TimeVarying
-            && options.innovation_covariance == Some(InnovationForm::Full)
+        check_initial_variance(METHOD, self.gain, &self.initial_variance)?;
+        self.interpolation.check_controls(METHOD)?;
+        if self.gain == Gain::TimeVarying
+            && self.innovation_covariance == Some(InnovationForm::Full)
         {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}] innovation_covariance = \"full\" needs gain = \"steady\": the time-varying filter's innovation covariance C·P̃·Cᵀ + G·Gᵀ is full already"
             )));
         }
-        Ok(options)
+        Ok(())
     }
 
     /// The form of R: as set, else full with the steady gain (the

@@ -106,7 +106,13 @@ impl OutputErrorOptions {
     /// Reads and checks a `[methods.oem]` table.
     pub fn read(settings: &Settings) -> Result<OutputErrorOptions> {
         let options: OutputErrorOptions = parse_settings(METHOD, settings)?;
-        if options
+        options.check()?;
+        Ok(options)
+    }
+
+    /// Checks the values' ranges and combinations.
+    pub fn check(&self) -> Result<()> {
+        if self
             .step
             .is_some_and(|step| !(step > 0.0 && step.is_finite()))
         {
@@ -114,17 +120,17 @@ impl OutputErrorOptions {
                 "[methods.{METHOD}]: step must be positive"
             )));
         }
-        if options.max_iterations == 0 {
+        if self.max_iterations == 0 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: max_iterations must be at least 1"
             )));
         }
-        if options.starts == 0 {
+        if self.starts == 0 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: starts must be at least 1"
             )));
         }
-        if options
+        if self
             .segment
             .is_some_and(|length| !(length > 0.0 && length.is_finite()))
         {
@@ -132,25 +138,25 @@ impl OutputErrorOptions {
                 "[methods.{METHOD}]: segment must be a positive duration"
             )));
         }
-        if !(options.correlation_lag >= 0.0 && options.correlation_lag.is_finite()) {
+        if !(self.correlation_lag >= 0.0 && self.correlation_lag.is_finite()) {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: correlation_lag must be a duration of 0 s or more"
             )));
         }
-        options.input_sigmas()?;
-        options.interpolation.check_controls(METHOD)?;
-        if !options.input_noise.is_empty() && options.input_noise_draws < 2 {
+        self.input_sigmas()?;
+        self.interpolation.check_controls(METHOD)?;
+        if !self.input_noise.is_empty() && self.input_noise_draws < 2 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: input_noise_draws must be at least 2"
             )));
         }
-        if !(options.start_spread > 0.0 && options.start_spread.is_finite()) {
+        if !(self.start_spread > 0.0 && self.start_spread.is_finite()) {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: start_spread must be a positive fraction, is {}",
-                options.start_spread
+                self.start_spread
             )));
         }
-        Ok(options)
+        Ok(())
     }
 
     /// `input_noise` in SI units (each channel's own), checked: a known

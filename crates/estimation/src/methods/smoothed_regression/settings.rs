@@ -191,7 +191,7 @@ impl SmoothedRegressionSettings {
     }
 
     /// Refuses a bad value, naming its key.
-    fn check(&self) -> Result<()> {
+    pub(crate) fn check(&self) -> Result<()> {
         self.check_observations()?;
         self.check_noise()?;
         self.check_times()
