@@ -107,14 +107,6 @@ pub trait Estimator: Send + Sync {
     fn estimate(&self, problem: &EstimationProblem, start: Option<&Estimate>) -> Result<Estimate>;
 }
 
-impl dyn Estimator {
-    /// The method whose estimate this one can take as its start
-    /// ([`Capabilities::starts_from`]).
-    pub fn starts_from(&self) -> Option<&'static str> {
-        self.capabilities().starts_from
-    }
-}
-
 /// What `aeroid methods` shows of a [`Method`], but its settings' defaults,
 /// which come from [`Method::Settings`]' default.
 #[derive(Debug, Clone, PartialEq)]

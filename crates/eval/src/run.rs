@@ -163,7 +163,7 @@ pub fn run(
 
 /// Runs each of `methods` in turn on a record with one model and scores
 /// every estimate; a method that starts from another's estimate
-/// ([`aeroid_estimation::estimator::Estimator::starts_from`]) gets it when
+/// ([`aeroid_estimation::estimator::Capabilities::starts_from`]) gets it when
 /// that method ran before it here.
 pub fn estimate_each(
     registry: &Registry,
@@ -178,7 +178,7 @@ pub fn estimate_each(
         let start = registry
             .find(method)
             .ok()
-            .and_then(|estimator| estimator.starts_from())
+            .and_then(|estimator| estimator.capabilities().starts_from)
             .and_then(|from| outcomes.iter().find(|(name, _)| name == from))
             .and_then(|(_, outcome)| outcome.estimate());
         let outcome = estimate_scored(registry, method, record, truth, structure, layers, start);
