@@ -51,9 +51,10 @@
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
-use crate::methods::equation_error::{
-    ANGULAR_ACCELERATIONS_SETTING, DIFFERENTIATOR_SETTING, check_settings, record_name,
+use crate::methods::common::coefficient_fit::{
+    ANGULAR_ACCELERATIONS_SETTING, DIFFERENTIATOR_SETTING, check_settings,
 };
+use crate::methods::common::regression::record_name;
 use crate::problem::EstimationProblem;
 use crate::reconstruction::{
     AngularAccelerations, Reconstruction, ReconstructionOptions, Request, missing_channels,

@@ -33,7 +33,7 @@
 
 use crate::estimate::{Estimate, OutputFit};
 use crate::linear_structure::LinearStructure;
-use crate::methods::filter_error::{enough_data, free_parameters};
+use crate::methods::common::refusals::{enough_data, free_parameters};
 use crate::model::linear::LinearStateSpace;
 use crate::model::observations::Observations;
 use crate::model::state_space::StateSpaceModel;

@@ -1,6 +1,4 @@
-//! Output error and filter error on a linear structure ([`linear_fit`]),
-//! and the refusals other methods share: [`free_parameters`],
-//! [`enough_data`].
+//! Output error and filter error on a linear structure ([`linear_fit`]).
 
 use super::*;
 
@@ -119,45 +117,4 @@ fn noisy_states_named(
             })
         })
         .collect()
-}
-
-/// The free parameters' indices (`free` per parameter of model `model`),
-/// or the refusal of `method`: channels `missing` from the record, or
-/// nothing to estimate.
-pub(crate) fn free_parameters(
-    method: &str,
-    record: &FlightRecord,
-    missing: Vec<MissingChannel>,
-    model: &str,
-    free: &[bool],
-) -> Result<Vec<usize>> {
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(method, missing, present) {
-        return Err(Error::Refused(refusal));
-    }
-    let free: Vec<usize> = (0..free.len()).filter(|&i| free[i]).collect();
-    if free.is_empty() {
-        return Err(Error::Refused(Refusal::NothingToEstimate {
-            method: method.to_string(),
-            model: model.to_string(),
-        }));
-    }
-    Ok(free)
-}
-
-/// The refusal of `method` when `observations` hold fewer data than `unknowns`.
-pub(crate) fn enough_data(
-    method: &str,
-    observations: &Observations,
-    unknowns: usize,
-) -> Result<()> {
-    let data: usize = observations.counts().iter().sum();
-    if data < unknowns {
-        return Err(Error::Refused(Refusal::TooFewData {
-            method: method.to_string(),
-            data,
-            unknowns,
-        }));
-    }
-    Ok(())
 }
