@@ -46,7 +46,7 @@ use crate::estimate::{Estimate, OutputFit};
 use crate::input_timing::{self};
 use crate::linear_structure::LinearStructure;
 use crate::methods::common::coefficient_fit::start_estimate;
-use crate::methods::common::refusals::{enough_data, free_parameters};
+use crate::methods::common::refusals::enough_data;
 use crate::model::observations::Observations;
 use crate::model::state_space::{Jacobians, StateSpaceModel};
 use crate::solver::extended_kalman::{self, Discretisation, Keep, Noise};

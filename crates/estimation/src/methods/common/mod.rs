@@ -8,6 +8,7 @@ pub mod elm_fit;
 pub mod filter_fit;
 pub mod frequency_band;
 pub mod iterations;
+pub mod linear_data;
 pub mod linear_regression;
 pub mod refusals;
 pub mod regression;

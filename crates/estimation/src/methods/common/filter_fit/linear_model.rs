@@ -1,6 +1,7 @@
 //! Output error and filter error on a linear structure ([`linear_fit`]).
 
 use super::*;
+use crate::methods::common::linear_data::{LinearData, linear_data};
 
 /// How [`linear_fit`] fits a linear structure.
 #[derive(Debug, Clone, PartialEq)]
@@ -32,18 +33,14 @@ pub(crate) fn linear_fit(
     options: &LinearFitOptions,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
-    let free = free_parameters(
-        method,
-        record,
-        structure.missing_channels(record),
-        &structure.name,
-        &structure.free,
-    )?;
+    let LinearData {
+        free,
+        model,
+        initial,
+        step,
+        observations,
+    } = linear_data(method, record, structure, options.step, options.window)?;
     let noisy = noisy_states_named(method, structure, options.process_noise.as_deref())?;
-    let (model, initial) = structure.for_record(record, options.step, options.window)?;
-    let step = model.time(1) - model.time(0);
-    let observations =
-        Observations::from_record(record, &structure.outputs, model.time(0), step, model.len())?;
     enough_data(method, &observations, free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
     notes.push("linear model, started from the model file's values".to_string());
