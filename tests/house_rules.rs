@@ -8,6 +8,14 @@
 //! is an edge, and the graph has no strongly connected component of two
 //! or more modules.
 //!
+//! **A method imports nothing from a sibling method.** Every file under
+//! crates/estimation/src/methods belongs to a method (`X.rs` and `X/`) or
+//! to the common modules (`common/`); its code (not its comments) names no
+//! other method's module, as `crate::methods::NAME`, inside a
+//! `crate::methods::{...}` group or as `super::NAME` from a method's root.
+//! What several methods share lives in a common module; a common module
+//! names no method.
+//!
 //! **Every number in docs/findings.md is held by a test.** A finding is a
 //! bullet, a paragraph or a table of the document's sections; one that
 //! states a number (any digit) names, in backticks, the test that asserts
@@ -526,4 +534,118 @@ fn module_paths_resolve_against_the_file() {
         vec![vec!["e", "f"], vec!["a", "c", "d"]]
     );
     assert_eq!(named_modules("super::super::g", &at), vec![vec!["g"]]);
+}
+
+/// The modules of crates/estimation/src/methods: its files `X.rs` and
+/// folders `X/`, not `mod.rs`.
+fn method_modules(methods: &Path) -> BTreeSet<String> {
+    std::fs::read_dir(methods)
+        .unwrap()
+        .flatten()
+        .filter_map(|entry| {
+            let name = entry.file_name().to_string_lossy().to_string();
+            match name.strip_suffix(".rs") {
+                Some("mod") => None,
+                Some(stem) => Some(stem.to_string()),
+                None => entry.path().is_dir().then_some(name),
+            }
+        })
+        .collect()
+}
+
+/// The modules of `modules` other than `own` and `common` that `text`, a
+/// file of module `own` (`root`: the module's own `X.rs`, where `super::`
+/// is the methods folder), names in code: `crate::methods::NAME`, the names
+/// of a `crate::methods::{...}` group, `super::NAME` from a root and
+/// `super::super::NAME` from a child. Each with its line.
+fn sibling_imports(
+    own: &str,
+    root: bool,
+    text: &str,
+    modules: &BTreeSet<String>,
+) -> Vec<(usize, String)> {
+    let code: Vec<&str> = text
+        .lines()
+        .map(|line| line.split("//").next().unwrap_or(""))
+        .collect();
+    let joined = code.join("\n");
+    let line_of = |offset: usize| joined[..offset].matches('\n').count() + 1;
+    let word = |from: &str| -> String {
+        from.chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut found: Vec<(usize, String)> = Vec::new();
+    let mut prefixes = vec!["crate::methods::"];
+    prefixes.push(if root { "super::" } else { "super::super::" });
+    for prefix in prefixes {
+        for (i, _) in joined.match_indices(prefix) {
+            if prefix == "super::" && joined[..i].ends_with("super::") {
+                continue;
+            }
+            let rest = &joined[i + prefix.len()..];
+            let names: Vec<String> = match rest.strip_prefix('{') {
+                Some(group) => {
+                    let group = &group[..group.find('}').unwrap_or(group.len())];
+                    group.split(',').map(|item| word(item.trim())).collect()
+                }
+                None => vec![word(rest)],
+            };
+            for name in names {
+                if name != own && name != "common" && modules.contains(&name) {
+                    found.push((line_of(i), name));
+                }
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn a_method_imports_nothing_from_a_sibling_method() {
+    let methods = root().join("crates/estimation/src/methods");
+    let modules = method_modules(&methods);
+    assert!(modules.contains("common") && modules.contains("output_error"));
+    let mut files = Vec::new();
+    rust_files(&methods, &mut files);
+    let mut found = Vec::new();
+    for file in files {
+        let relative = file.strip_prefix(&methods).unwrap().to_string_lossy();
+        if relative == "mod.rs" {
+            continue;
+        }
+        let own = relative.split('/').next().unwrap().trim_end_matches(".rs");
+        let root_file = !relative.contains('/');
+        let text = std::fs::read_to_string(&file).unwrap();
+        // A common module names no method at all.
+        let own = if own == "common" { "" } else { own };
+        for (line, name) in sibling_imports(own, root_file, &text, &modules) {
+            found.push(format!("methods/{relative}:{line} imports method {name}"));
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "imports of a sibling method (move what is shared into methods/common):\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn the_sibling_check_finds_a_sibling_import() {
+    let modules: BTreeSet<String> = ["common", "output_error", "filter_error", "stepwise"]
+        .map(String::from)
+        .into();
+    let text = "//! See [`crate::methods::stepwise`].\nuse crate::methods::common::regression;\nuse crate::methods::output_error::{self, Start};\nuse crate::methods::{common::refusals, stepwise};\nuse super::filter_error; // and crate::methods::stepwise in a comment\nfn f() { crate::methods::filter_error::METHOD; }\n";
+    let found = sibling_imports("filter_error", true, text, &modules);
+    assert_eq!(
+        found,
+        vec![(3, "output_error".to_string()), (4, "stepwise".to_string())]
+    );
+    let child = "use super::*;\nuse super::super::output_error::Start;\n";
+    let found = sibling_imports("filter_error", false, child, &modules);
+    assert_eq!(found, vec![(2, "output_error".to_string())]);
+    assert_eq!(
+        sibling_imports("", false, "use crate::methods::stepwise;\n", &modules),
+        vec![(1, "stepwise".to_string())]
+    );
 }
