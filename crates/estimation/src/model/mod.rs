@@ -9,6 +9,7 @@
 pub mod augmented;
 pub mod coefficient_states;
 pub mod driven;
+pub mod jacobians;
 pub mod linear;
 pub mod modes;
 pub mod observations;

@@ -36,31 +36,7 @@ use aeroid_sim::state::{Control, Controls};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
 
-/// The Jacobians of a state-space model at one point (t, x, θ).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Jacobians {
-    /// ∂f/∂x (states × states).
-    pub rates_by_state: DMatrix<f64>,
-    /// ∂f/∂θ (states × parameters).
-    pub rates_by_parameter: DMatrix<f64>,
-    /// ∂h/∂x (outputs × states).
-    pub outputs_by_state: DMatrix<f64>,
-    /// ∂h/∂θ (outputs × parameters).
-    pub outputs_by_parameter: DMatrix<f64>,
-}
-
-impl Jacobians {
-    /// Four empty matrices: buffers for
-    /// [`StateSpaceModel::jacobians_into`] to grow.
-    pub fn empty() -> Jacobians {
-        Jacobians {
-            rates_by_state: DMatrix::zeros(0, 0),
-            rates_by_parameter: DMatrix::zeros(0, 0),
-            outputs_by_state: DMatrix::zeros(0, 0),
-            outputs_by_parameter: DMatrix::zeros(0, 0),
-        }
-    }
-}
+pub use super::jacobians::Jacobians;
 
 /// The window of a record where every channel in `outputs` has samples,
 /// inside `limit` if given.

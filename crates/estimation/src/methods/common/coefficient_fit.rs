@@ -20,10 +20,10 @@ use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 use aeroid_record::prep::differentiation::Differentiator;
 
-pub const METHOD: &str = "ee";
+pub use super::EQUATION_ERROR;
 
-/// The method iterative methods start from ([`start_estimate`]).
-pub const EQUATION_ERROR: &str = METHOD;
+/// Equation error's name ([`EQUATION_ERROR`]).
+pub const METHOD: &str = EQUATION_ERROR;
 
 /// Settings of the equation-error estimator.
 #[derive(Debug, Clone, PartialEq)]

@@ -27,7 +27,7 @@
 //! bias is not in the Cramér–Rao bound (tests/estimators/linear_models.rs measures
 //! it on the linear lateral flight).
 
-use super::coefficient_fit::METHOD;
+use super::EQUATION_ERROR as METHOD;
 use super::regression::{CoefficientResult, assemble_named, white_bound_notes_named};
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{MissingChannel, Refusal};

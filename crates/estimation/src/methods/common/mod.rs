@@ -2,6 +2,12 @@
 //! file imports from here and from the rest of the crate, never from a
 //! sibling method (tests/house_rules.rs checks).
 
+/// Equation error's name: the method the iterative methods start from
+/// ([`coefficient_fit::start_estimate`]), by regression of the
+/// coefficients (six-degree-of-freedom models) or of the state equations
+/// (linear models, [`linear_regression`]).
+pub const EQUATION_ERROR: &str = "ee";
+
 pub mod augmented_filter;
 pub mod coefficient_fit;
 pub mod elm_fit;

@@ -15,7 +15,7 @@ use super::measured::{Ambient, Surroundings};
 use super::memo::{FrozenPoints, Memo, PointMemo};
 use super::observables::Column;
 use super::{ALTITUDE, FLIGHT_PATH_SIZE, FlightPathState};
-use crate::model::state_space::Jacobians;
+use crate::model::jacobians::Jacobians;
 use crate::structure::Observable;
 use aeroid_numerics::dual::{Dual, Real};
 use aeroid_sim::aero::TermRegressors;
