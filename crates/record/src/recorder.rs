@@ -67,6 +67,8 @@ use std::path::{Path, PathBuf};
 /// The profile used when neither the command line nor the scenario names one.
 pub const DEFAULT_PROFILE: &str = "ideal";
 
+/// A recorder profile file (`recorders/*.toml`) as written (the keys are in
+/// the module docs), before it is checked ([`Profile::from_file`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProfileFile {
@@ -87,6 +89,8 @@ pub struct ProfileFile {
     pub channels: Vec<ChannelSpec>,
 }
 
+/// Where a profile's flat earth lies on the globe (`origin = { latitude,
+/// longitude }`).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OriginSpec {
@@ -94,6 +98,8 @@ pub struct OriginSpec {
     pub longitude: Quantity,
 }
 
+/// One `[[channels]]` table of a recorder profile: the quantity it records
+/// and its sampling and error chain (the keys are in the module docs).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ChannelSpec {
@@ -133,6 +139,7 @@ pub struct ChannelSpec {
     pub position: Option<[Quantity; 3]>,
 }
 
+/// A channel's `fault`: what a broken sensor reads in place of the signal.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum FaultSpec {
