@@ -184,6 +184,37 @@ pub struct ChannelModel {
 }
 
 /// A validated recorder profile.
+///
+/// # Example
+///
+/// Record a flight with the bundled flight-test profile (every channel at
+/// 25 Hz with white noise) and keep the record as a folder:
+///
+/// ```
+/// use aeroid_record::{FlightRecord, recorder::Profile};
+/// use aeroid_sim::scenario::Scenario;
+///
+/// let scenario = Scenario::load("attas-elevator-3211")?;
+/// let (trace, _truth) = aeroid_sim::fly(&scenario)?;
+/// let profile = Profile::load("flight-test-25hz", None)?;
+/// let record = profile.record(&trace, &scenario.aircraft, scenario.seed)?;
+///
+/// // The pitch attitude at 25 Hz over 60 s, every 4th simulator step, off
+/// // the truth by the profile's 0.1° of noise.
+/// let pitch = record.channel("pitch")?;
+/// assert_eq!((pitch.rate, pitch.times.len()), (25.0, 1501));
+/// let truth = trace.values("pitch")?;
+/// let errors = pitch.values.iter().enumerate().map(|(k, v)| v - truth[4 * k]);
+/// let rms = (errors.map(|e| e * e).sum::<f64>() / 1501.0).sqrt().to_degrees();
+/// assert!((rms - 0.1).abs() < 0.01, "{rms}°");
+///
+/// // A record folder reads back bit for bit.
+/// let folder = std::env::temp_dir().join(format!("aeroid-record-doc-{}", std::process::id()));
+/// record.write(&folder)?;
+/// assert_eq!(FlightRecord::read(&folder)?, record);
+/// # std::fs::remove_dir_all(&folder).unwrap();
+/// # Ok::<(), aeroid_core::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Profile {
     pub name: String,
