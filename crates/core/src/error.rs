@@ -55,6 +55,8 @@ fn list_problems(problems: &[Problem]) -> String {
         .collect::<String>()
 }
 
+/// Every error the aeroid library returns; its message names the file and
+/// field at fault where there is one, and says what is wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error("cannot read {path}: {source}")]
@@ -148,6 +150,7 @@ impl Error {
     }
 }
 
+/// A result whose error is an aeroid [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// Reads a text file, naming it in the error.

@@ -41,6 +41,8 @@ use std::path::Path;
 
 pub use aeroid_numerics::Status;
 
+/// One estimated parameter: its value, standard error and the start the
+/// estimator began from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ParameterEstimate {
     pub name: String,
@@ -50,6 +52,9 @@ pub struct ParameterEstimate {
     pub start: f64,
 }
 
+/// What an estimator returns for one model on its records: the parameters
+/// with their standard errors and covariance, the fit per output, the
+/// status and diagnoses (see the module docs).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
     pub method: String,

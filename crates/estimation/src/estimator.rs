@@ -126,6 +126,106 @@ pub struct Description {
 /// An estimation method, typed: its settings are its own type, parsed and
 /// checked once, and what it fits is data ([`Capabilities`]), checked
 /// before [`Method::fit`] runs. Every `Method` is an [`Estimator`].
+///
+/// # Example
+///
+/// A program adds its own method to its registry with
+/// [`Registry::add`](crate::registry::Registry::add); everything that runs
+/// methods by name (`estimate`, `run`, gates, studies) then finds it. This
+/// one returns the model file's start values with a standard error
+/// of its `sigma` setting (the `[methods.start-values]` table of a model,
+/// scenario, study or gate case):
+///
+/// ```
+/// use aeroid_core::Result;
+/// use aeroid_estimation::estimate::{Estimate, ParameterEstimate, Status};
+/// use aeroid_estimation::estimator::{Capabilities, Description, Method, MethodTables};
+/// use aeroid_estimation::{problem::EstimationProblem, registry::Registry, structure::Structure};
+/// use aeroid_record::recorder::{Profile, record_scenario};
+/// use aeroid_sim::scenario::Scenario;
+/// use std::sync::Arc;
+///
+/// struct StartValues;
+///
+/// #[derive(serde::Serialize, serde::Deserialize)]
+/// #[serde(deny_unknown_fields, default)]
+/// struct StartSettings {
+///     sigma: f64,
+/// }
+///
+/// impl Default for StartSettings {
+///     fn default() -> Self {
+///         StartSettings { sigma: 1.0 }
+///     }
+/// }
+///
+/// impl Method for StartValues {
+///     const NAME: &'static str = "start-values";
+///     type Settings = StartSettings;
+///
+///     fn describe() -> Description {
+///         Description {
+///             title: "the model file's start values",
+///             paper: "none",
+///             equations: "θ = θ₀",
+///             needs: "a 6-DOF model structure",
+///             settings: vec![("sigma", "the standard error reported")],
+///         }
+///     }
+///
+///     fn capabilities() -> Capabilities {
+///         Capabilities::default() // 6-DOF structures, one record
+///     }
+///
+///     fn fit(
+///         &self,
+///         problem: &EstimationProblem,
+///         settings: &StartSettings,
+///         _start: Option<&Estimate>,
+///     ) -> Result<Estimate> {
+///         let structure = problem.structure.six_dof(Self::NAME)?;
+///         let parameters = &structure.aircraft.aero.parameters;
+///         let free: Vec<ParameterEstimate> = parameters
+///             .names()
+///             .iter()
+///             .zip(parameters.values())
+///             .zip(&structure.free)
+///             .filter(|(_, free)| **free)
+///             .map(|((name, &start), _)| ParameterEstimate {
+///                 name: name.clone(),
+///                 value: start,
+///                 standard_error: settings.sigma,
+///                 start,
+///             })
+///             .collect();
+///         let n = free.len();
+///         let variance = settings.sigma.powi(2);
+///         let covariance = (0..n)
+///             .map(|i| (0..n).map(|j| if i == j { variance } else { 0.0 }).collect())
+///             .collect();
+///         let record = problem.record().name();
+///         Ok(Estimate {
+///             parameters: free,
+///             covariance,
+///             ..Estimate::empty(Self::NAME, &structure.name, record, Status::Converged)
+///         })
+///     }
+/// }
+///
+/// let mut registry = Registry::built_in();
+/// registry.add(Arc::new(StartValues))?;
+///
+/// let scenario = Scenario::load("attas-elevator-3211")?;
+/// let (record, _truth) = record_scenario(&scenario, &Profile::load("ideal", None)?)?;
+/// let settings: MethodTables = toml::from_str("[start-values]\nsigma = 0.5")?;
+/// let structure = Structure::load("attas-longitudinal")?;
+/// let problem = registry.problem("start-values", vec![record], structure, &[&settings])?;
+/// let estimate = registry.estimate(&problem, None)?;
+///
+/// assert_eq!(estimate.status, Status::Converged);
+/// assert!(estimate.parameters.iter().all(|p| p.value == p.start && p.standard_error == 0.5));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub trait Method: Send + Sync + 'static {
     /// The name used on the command line and in files (`ee`, `oem`, …).
     const NAME: &'static str;

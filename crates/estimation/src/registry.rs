@@ -20,6 +20,34 @@ use aeroid_record::FlightRecord;
 use std::sync::Arc;
 
 /// The estimators a program can run, in the order `aeroid run` runs them.
+///
+/// # Example
+///
+/// A program runs a method through the registry: it builds the method's
+/// problem (a record, a model structure from `models/` and the method's
+/// settings) and judges the estimate. Equation error on a noise-free record
+/// (the `ideal` recorder profile) recovers the truth:
+///
+/// ```
+/// use aeroid_estimation::{estimate::Status, registry::Registry, structure::Structure};
+/// use aeroid_record::recorder::{Profile, record_scenario};
+/// use aeroid_sim::scenario::Scenario;
+///
+/// let scenario = Scenario::load("attas-elevator-3211")?;
+/// let (record, truth) = record_scenario(&scenario, &Profile::load("ideal", None)?)?;
+///
+/// let registry = Registry::built_in();
+/// let structure = Structure::load("attas-longitudinal")?;
+/// let problem = registry.problem("ee", vec![record], structure, &[])?;
+/// let estimate = registry.estimate(&problem, None)?;
+///
+/// assert_eq!(estimate.status, Status::Converged);
+/// for parameter in &estimate.parameters {
+///     let truth = truth.parameters[&parameter.name];
+///     assert!((parameter.value - truth).abs() <= 1e-3 * truth.abs(), "{}", parameter.name);
+/// }
+/// # Ok::<(), aeroid_core::Error>(())
+/// ```
 #[derive(Clone)]
 pub struct Registry {
     estimators: Vec<Arc<dyn Estimator>>,

@@ -57,6 +57,8 @@ pub const ZERO_SOURCE: &str = "zero_when_absent of";
 /// (`zero_when_absent`): the angles and rates of the other axis.
 const ZERO_CAPABLE: [&str; 8] = ["alpha", "beta", "p", "q", "r", "roll", "pitch", "yaw"];
 
+/// A model structure file (`models/*.toml`) as written (the schema is in
+/// the module docs), before its aircraft is read and it is checked.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StructureFile {
@@ -81,6 +83,8 @@ pub struct StructureFile {
     pub methods: MethodTables,
 }
 
+/// A `[parameters.NAME]` table of a model structure file: whether the
+/// parameter is fixed at its start value, its bounds, or its tie to another.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ParameterSpec {

@@ -44,6 +44,8 @@ use std::path::Path;
 /// The gate file bundled with aeroid, relative to the data folder.
 pub use aeroid_core::catalog::GATE_FILE;
 
+/// A gate file as written (`golden/gates.toml`): its `[[case]]` tables,
+/// read by [`load`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GateFile {
@@ -73,6 +75,8 @@ pub struct KnownFailure {
     pub reason: String,
 }
 
+/// One `[[case]]` of a gate file: the scenario, recorder profile, model and
+/// method it runs, and the tolerances its estimate is checked against.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GateCase {

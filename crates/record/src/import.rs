@@ -30,6 +30,8 @@ use std::path::Path;
 /// Kelvin at 0 °C.
 const CELSIUS_ZERO: f64 = 273.15;
 
+/// A column-map file (TOML) as written: the layout of the data file, its
+/// time column and one entry per channel (`docs/import.md`).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ColumnMapFile {
@@ -83,6 +85,8 @@ impl fmt::Display for ColumnRef {
     }
 }
 
+/// One column of the data file with its unit, scale and offset: the time
+/// column of a column map.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ColumnSpec {
@@ -95,6 +99,8 @@ pub struct ColumnSpec {
     pub offset: Option<f64>,
 }
 
+/// One `[[channels]]` entry of a column map: the channel it makes, from
+/// which column or columns, and how its raw values become SI.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ChannelColumnSpec {

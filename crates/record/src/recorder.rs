@@ -67,6 +67,8 @@ use std::path::{Path, PathBuf};
 /// The profile used when neither the command line nor the scenario names one.
 pub const DEFAULT_PROFILE: &str = "ideal";
 
+/// A recorder profile file (`recorders/*.toml`) as written (the keys are in
+/// the module docs), before it is checked ([`Profile::from_file`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProfileFile {
@@ -87,6 +89,8 @@ pub struct ProfileFile {
     pub channels: Vec<ChannelSpec>,
 }
 
+/// Where a profile's flat earth lies on the globe (`origin = { latitude,
+/// longitude }`).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OriginSpec {
@@ -94,6 +98,8 @@ pub struct OriginSpec {
     pub longitude: Quantity,
 }
 
+/// One `[[channels]]` table of a recorder profile: the quantity it records
+/// and its sampling and error chain (the keys are in the module docs).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ChannelSpec {
@@ -133,6 +139,7 @@ pub struct ChannelSpec {
     pub position: Option<[Quantity; 3]>,
 }
 
+/// A channel's `fault`: what a broken sensor reads in place of the signal.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum FaultSpec {
@@ -177,6 +184,37 @@ pub struct ChannelModel {
 }
 
 /// A validated recorder profile.
+///
+/// # Example
+///
+/// Record a flight with the bundled flight-test profile (every channel at
+/// 25 Hz with white noise) and keep the record as a folder:
+///
+/// ```
+/// use aeroid_record::{FlightRecord, recorder::Profile};
+/// use aeroid_sim::scenario::Scenario;
+///
+/// let scenario = Scenario::load("attas-elevator-3211")?;
+/// let (trace, _truth) = aeroid_sim::fly(&scenario)?;
+/// let profile = Profile::load("flight-test-25hz", None)?;
+/// let record = profile.record(&trace, &scenario.aircraft, scenario.seed)?;
+///
+/// // The pitch attitude at 25 Hz over 60 s, every 4th simulator step, off
+/// // the truth by the profile's 0.1° of noise.
+/// let pitch = record.channel("pitch")?;
+/// assert_eq!((pitch.rate, pitch.times.len()), (25.0, 1501));
+/// let truth = trace.values("pitch")?;
+/// let errors = pitch.values.iter().enumerate().map(|(k, v)| v - truth[4 * k]);
+/// let rms = (errors.map(|e| e * e).sum::<f64>() / 1501.0).sqrt().to_degrees();
+/// assert!((rms - 0.1).abs() < 0.01, "{rms}°");
+///
+/// // A record folder reads back bit for bit.
+/// let folder = std::env::temp_dir().join(format!("aeroid-record-doc-{}", std::process::id()));
+/// record.write(&folder)?;
+/// assert_eq!(FlightRecord::read(&folder)?, record);
+/// # std::fs::remove_dir_all(&folder).unwrap();
+/// # Ok::<(), aeroid_core::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Profile {
     pub name: String,

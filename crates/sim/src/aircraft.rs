@@ -12,6 +12,8 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// An aircraft file (`aircraft/*.toml`) as written, before its units are
+/// converted and it is checked ([`Aircraft::from_file`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AircraftFile {
@@ -28,6 +30,8 @@ pub struct AircraftFile {
     pub aero: AeroSpec,
 }
 
+/// The `[geometry]` table of an aircraft file: the reference wing area,
+/// span and chord.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GeometrySpec {
@@ -36,6 +40,8 @@ pub struct GeometrySpec {
     pub chord: Quantity,
 }
 
+/// The `[mass]` table of an aircraft file: mass and moments of inertia in
+/// body axes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MassSpec {
@@ -52,6 +58,8 @@ pub struct MassSpec {
     pub impossible_inertia: Option<String>,
 }
 
+/// The `[propulsion]` table of an aircraft file: the thrust at full throttle
+/// and where and how it acts.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PropulsionSpec {

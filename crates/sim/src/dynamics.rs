@@ -55,6 +55,7 @@ pub struct Exogenous {
 
 /// Exogenous signals packed as one vector for interpolation: controls, wind NED, turbulence body.
 pub const EXOGENOUS_SIZE: usize = CONTROL_COUNT + 6;
+/// An [`Exogenous`] packed as one vector (see [`EXOGENOUS_SIZE`]).
 pub type ExogenousVector = SVector<f64, EXOGENOUS_SIZE>;
 
 impl Exogenous {

@@ -15,6 +15,8 @@
 use nalgebra::{DMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+/// How a signal known at the step instants is taken inside an RK4 step:
+/// held or interpolated linearly (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Interpolation {
     /// Hold the value at the start of the step (default).

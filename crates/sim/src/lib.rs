@@ -9,6 +9,29 @@
 //! the state at t_K are those of the flight without the change; the
 //! coefficients of the sample at t_K and every step from t_K on use the new
 //! value.
+//!
+//! # Example
+//!
+//! Fly a bundled scenario ([`scenario::Scenario::load`] finds it by name in
+//! the data folder's `scenarios/`) and read its truth:
+//!
+//! ```
+//! use aeroid_sim::scenario::Scenario;
+//!
+//! let scenario = Scenario::load("attas-elevator-3211")?;
+//! let (trace, truth) = aeroid_sim::fly(&scenario)?;
+//!
+//! // One sample per 0.01 s integration step over the 60 s flight.
+//! assert_eq!(trace.samples.len(), 6001);
+//! // Trimmed: no pitch rate until the elevator 3-2-1-1 starts at 3 s, then
+//! // the short period answers.
+//! let q = trace.values("q")?;
+//! assert!(q[..300].iter().all(|q| q.abs() < 1e-6));
+//! assert!(q.iter().any(|q| q.abs() > 0.02));
+//! // The truth an estimate is scored against: the aircraft file's values.
+//! assert_eq!(truth.parameters["Cm_alpha"], -0.176);
+//! # Ok::<(), aeroid_core::Error>(())
+//! ```
 
 pub mod aero;
 pub mod aircraft;

@@ -4,6 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+/// A model's parameters by name and index: estimators set and read them by
+/// index in their inner loop and report them by name.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct ParameterSet {
     names: Vec<String>,

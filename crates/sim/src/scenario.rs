@@ -54,6 +54,8 @@ use std::path::{Path, PathBuf};
 /// How a scenario names one of JSBSim's own aircraft: `"jsbsim:737"`.
 pub const JSBSIM_PREFIX: &str = "jsbsim:";
 
+/// A scenario file (`scenarios/*.toml`) as written, before its aircraft is
+/// read and it is checked ([`Scenario::from_file`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioFile {
@@ -235,6 +237,8 @@ pub struct JsbsimAircraft {
     pub properties: BTreeMap<String, f64>,
 }
 
+/// The `[trim]` table of a scenario: the flight condition the aircraft is
+/// trimmed at (airspeed, altitude, flight-path angle, heading, flap).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrimSpec {
@@ -248,6 +252,8 @@ pub struct TrimSpec {
     pub flap: Quantity,
 }
 
+/// The `[environment]` table of a scenario: the ISA temperature offset and
+/// gravity.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentSpec {

@@ -10,6 +10,7 @@ use aeroid_numerics::dual::Real;
 use nalgebra::{Matrix3, SVector, UnitQuaternion, Vector3};
 
 pub const STATE_SIZE: usize = 14;
+/// The simulator's state (the layout in the module docs, indices [`U`] …).
 pub type StateVector = SVector<f64, STATE_SIZE>;
 
 pub const U: usize = 0;
@@ -54,6 +55,7 @@ pub enum Control {
 }
 
 pub const CONTROL_COUNT: usize = 5;
+/// Control deflections and throttle, indexed as [`Control::ALL`].
 pub type Controls = SVector<f64, CONTROL_COUNT>;
 
 impl Control {

@@ -7,6 +7,8 @@ use aeroid_estimation::registry::Registry;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// A study file (`studies/*.toml`) as written, before its names are resolved
+/// and its axes checked ([`super::Study::from_file`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StudyFile {
