@@ -57,7 +57,7 @@ fn buffered_calls_are_the_plain_ones(
     let (mut rates, mut full) = (Jacobians::empty(), Jacobians::empty());
     let (mut outputs, mut next) = (DVector::zeros(0), DVector::zeros(0));
     let mut call = |rates: &mut Jacobians, full: &mut Jacobians| {
-        model.rate_jacobians_into(t, x, &[], rates).unwrap();
+        model.jacobians_into(t, x, &[], rates, None).unwrap();
         model
             .jacobians_into(t, x, &[], full, Some(&mut outputs))
             .unwrap();
@@ -231,7 +231,7 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
     let h = model.time(1) - model.time(0);
     let mut step = |k: usize, state: &mut DVector<f64>, covariance: &mut DMatrix<f64>| {
         model
-            .rate_jacobians_into(model.time(k), state.as_slice(), &[], &mut rates)
+            .jacobians_into(model.time(k), state.as_slice(), &[], &mut rates, None)
             .unwrap();
         let leading = exponential.of_scaled(&rates.rates_by_state, h, &mut transition);
         sparse.set_leading(&transition, leading);
@@ -263,7 +263,7 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
     let t = model.time(101);
     let plain = buffered_calls_are_the_plain_ones(&model, 101, t, state.as_slice());
     model
-        .rate_jacobians_into(t, state.as_slice(), &[], &mut rates)
+        .jacobians_into(t, state.as_slice(), &[], &mut rates, None)
         .unwrap();
     assert!(same(
         plain.rates_by_state.as_slice(),

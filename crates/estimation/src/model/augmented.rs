@@ -243,24 +243,6 @@ impl<M: StateSpaceModel + ?Sized> StateSpaceModel for Augmented<'_, M> {
         })
     }
 
-    /// [[∂f/∂x, ∂f/∂θ_a], [0, 0]] from the base's
-    /// [`StateSpaceModel::rate_jacobians_into`].
-    fn rate_jacobians_into(
-        &self,
-        t: f64,
-        z: &[f64],
-        _theta: &[f64],
-        into: &mut Jacobians,
-    ) -> Result<()> {
-        self.scratch.with(Buffers::new, |buffers| {
-            let x = self.split_into(z, &mut buffers.theta)?;
-            self.base
-                .rate_jacobians_into(t, x, &buffers.theta, &mut buffers.base)?;
-            self.rates_into(&buffers.base, into);
-            Ok(())
-        })
-    }
-
     fn outputs_into(
         &self,
         t: f64,

@@ -591,21 +591,6 @@ impl StateSpaceModel for CoefficientStates {
         Ok(())
     }
 
-    /// ∂f/∂x alone (no output Jacobian), into `into.rates_by_state`.
-    fn rate_jacobians_into(
-        &self,
-        t: f64,
-        x: &[f64],
-        _theta: &[f64],
-        into: &mut Jacobians,
-    ) -> Result<()> {
-        self.check(x)?;
-        let loads = self.loads(x, self.throttle_at(t));
-        self.linearise(x, &loads, &mut into.rates_by_state, None);
-        zeroed(&mut into.rates_by_parameter, STATE_COUNT, 0);
-        Ok(())
-    }
-
     fn outputs_into(
         &self,
         t: f64,

@@ -314,10 +314,9 @@ pub fn recorded_initial_state(
 /// result written into a buffer the caller keeps: `outputs_into`,
 /// `jacobians_into`, `step_into`); the allocating forms (`outputs`,
 /// `jacobians`, `step`) are provided from them. The batched forms
-/// (`step_points_into`, `outputs_points_into`) and
-/// `rate_jacobians_into` have defaults from the single forms, for a
-/// model that can share work between points or skip the outputs'
-/// derivatives to override.
+/// (`step_points_into`, `outputs_points_into`) have defaults from the
+/// single forms, for a model that can share work between points to
+/// override (the UKF's sigma points).
 pub trait StateSpaceModel {
     /// The number of states n (the length of x).
     fn state_count(&self) -> usize;
@@ -371,19 +370,6 @@ pub trait StateSpaceModel {
         let mut next = DVector::zeros(self.state_count());
         self.step_into(k, x, theta, &mut next)?;
         Ok(next)
-    }
-    /// ∂f/∂x and ∂f/∂θ of [`StateSpaceModel::jacobians_into`] only (what a
-    /// filter's time update reads), into `into`'s `rates_by_state` and
-    /// `rates_by_parameter`; its output Jacobians are left unspecified. The
-    /// default calls [`StateSpaceModel::jacobians_into`].
-    fn rate_jacobians_into(
-        &self,
-        t: f64,
-        x: &[f64],
-        theta: &[f64],
-        into: &mut Jacobians,
-    ) -> Result<()> {
-        self.jacobians_into(t, x, theta, into, None)
     }
     /// [`StateSpaceModel::step_into`] from grid point k for many points
     /// (x_j, θ_j) at once, x_{j+1} written into column j of `into` (columns
@@ -982,18 +968,6 @@ impl StateSpaceModel for DrivenStateSpace {
         self.linearised(t, x, theta, true, |buffers| {
             buffers.copy_into(into, outputs)
         })
-    }
-
-    /// The linearisation of [`StateSpaceModel::jacobians_into`] without
-    /// the outputs' (their values and derivatives are not evaluated).
-    fn rate_jacobians_into(
-        &self,
-        t: f64,
-        x: &[f64],
-        theta: &[f64],
-        into: &mut Jacobians,
-    ) -> Result<()> {
-        self.linearised(t, x, theta, false, |buffers| buffers.copy_rates_into(into))
     }
 
     /// The step's exact derivative: the sensitivity equations

@@ -658,15 +658,8 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
         // `pass.predicted` (else `covariance`).
         let mut predicted_kept = false;
         if k > 0 {
-            // The room of what the step computes in place goes into the
-            // cache while the model is linearised and stepped, one kept
-            // quantity at a time ahead of its writing (the transition's at
-            // the end of the step before).
-            if predict_in_kept {
-                pass.predicted.prefetch_next();
-            }
             let previous = model.time(k - 1);
-            model.rate_jacobians_into(previous, state.as_slice(), theta, &mut linearised)?;
+            model.jacobians_into(previous, state.as_slice(), theta, &mut linearised, None)?;
             let kept_transition = keep
                 .transitions
                 .then(|| pass.transitions.push_for_writing(n, n));
@@ -715,12 +708,6 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
             }
             if keep.sparse_transitions {
                 pass.sparse_transitions.push(&time_update.sparse);
-            }
-            if keep.filtered_covariances {
-                pass.filtered.prefetch_next();
-            }
-            if !keep.sequential {
-                pass.measured.prefetch_next();
             }
         } else if keep.predicted {
             pass.predicted.push_parts(&state, Some(&covariance));
@@ -848,7 +835,6 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
             let kept = keep.filtered_covariances || k + 1 == len;
             pass.filtered_at(t, &state, kept.then_some(&covariance))?;
         }
-        pass.transitions.prefetch_next();
     }
     Ok(pass)
 }

@@ -4,8 +4,7 @@
 //! filtered ones) and the measurement updates ([`Updates`]; as sequences
 //! of scalar updates, [`ScalarUpdates`]), read back as views into the
 //! buffers. A filter computes a kept matrix in its place in the buffer
-//! (`push_for_writing`) rather than copy it there, the room of the next
-//! one brought into the cache ahead of its writing (`prefetch_next`). A
+//! (`push_for_writing`) rather than copy it there. A
 //! pass over any number of grid points makes the same few allocations
 //! (tests/no_allocation.rs).
 //!
@@ -71,30 +70,6 @@ fn recycle(buffer: &mut Vec<f64>) {
             *smallest = buffer;
         }
     });
-}
-
-/// Asks the CPU to bring the room for the next `count` values of `values`
-/// (reserved, past its end) into its cache, ahead of their being written:
-/// a pass's buffers lie beyond the caches, and the writes of one grid
-/// point's kept matrices would otherwise wait for each line of them.
-#[inline]
-fn prefetch_room(values: &Vec<f64>, count: usize) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let count = count.min(values.capacity() - values.len());
-        if count == 0 {
-            return;
-        }
-        let start = values.as_ptr().wrapping_add(values.len());
-        for offset in (0..count).step_by(8).chain([count - 1]) {
-            // SAFETY: a prefetch reads nothing the program sees and does
-            // not fault; the address lies in the buffer's allocation.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add(offset).cast()) };
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (values, count);
 }
 
 /// Matrices of one shape, one per grid point, one after another in one
@@ -172,12 +147,6 @@ impl Matrices {
         self.values.resize(start + size, 0.0);
         self.len += 1;
         &mut self.values[start..]
-    }
-
-    /// Brings the room of the next matrix (reserved, not yet written) into
-    /// the cache ahead of its writing.
-    pub fn prefetch_next(&self) {
-        prefetch_room(&self.values, self.rows * self.columns);
     }
 
     /// Matrix k's values (column-major).
@@ -456,17 +425,6 @@ impl Gaussians {
         (&mut self.means[mean..], &mut self.covariances[covariance..])
     }
 
-    /// Brings the room of the next estimate (reserved, not yet written; its
-    /// covariance's with every covariance kept) into the cache ahead of its
-    /// writing.
-    pub fn prefetch_next(&self) {
-        let n = self.dimension;
-        prefetch_room(&self.means, n);
-        if self.every_covariance {
-            prefetch_room(&self.covariances, n * n);
-        }
-    }
-
     /// Estimate k's mean and covariance values (column-major; empty where
     /// its covariance is not kept).
     pub fn values(&self, k: usize) -> Option<(&[f64], &[f64])> {
@@ -700,13 +658,6 @@ impl Updates {
         ] {
             self.values.extend_from_slice(part);
         }
-    }
-
-    /// Brings the room of the next update (reserved, not yet written; for
-    /// as many outputs as the buffer is reserved for) into the cache ahead
-    /// of its writing.
-    pub fn prefetch_next(&self) {
-        prefetch_room(&self.values, Self::size(self.states, self.capacity.1));
     }
 
     /// The values an update of m outputs over n states takes.
