@@ -1,22 +1,15 @@
 //! aeroid: a simulation-based validation harness for aircraft aerodynamic
-//! parameter estimators.
-//!
-//! The crates follow the data flow, each importing only those before it:
-//! `aeroid-core` (errors, refusals, data folders, units), `aeroid-numerics`
-//! (dual numbers, solvers, Kalman kernels), `aeroid-sim` flies a scenario
-//! and gives its truth, `aeroid-record` turns the truth into what a recorder
-//! stores (or imports real data) and prepares recorded channels,
-//! `aeroid-estimation` fits postulated models to a record, `aeroid-eval`
-//! scores estimates against the truth (runs, gates, studies, reports),
-//! `aeroid-analysis` linearises and finds what is identifiable, and
-//! `aeroid-jsbsim` (feature `jsbsim`) flies JSBSim's aircraft. This crate
-//! re-exports them under one name and holds the `aeroid` command line.
+//! parameter estimators. The crates follow the data flow, each importing
+//! only those before it: core (errors, units), numerics, sim (flies a
+//! scenario and gives its truth), record (what a recorder stores, and
+//! preparation), estimation, eval (scores, gates, studies), analysis
+//! (linearisation, identifiability) and, with feature `jsbsim`, jsbsim.
+//! This crate re-exports them and holds the `aeroid` command line.
 //!
 //! # Example
 //!
-//! Fly the bundled ATTAS elevator 3-2-1-1, record it with the flight-test
-//! recorder (25 Hz, with sensor noise), fit the longitudinal model by
-//! output error and score the estimate against the truth of the flight:
+//! Fly the bundled ATTAS elevator 3-2-1-1, record it at 25 Hz with sensor
+//! noise, fit the longitudinal model by output error and score it:
 //!
 //! ```
 //! use aeroid::estimation::{estimate::Status, registry::Registry, structure::Structure};

@@ -14,56 +14,29 @@
 //! # Method
 //!
 //! `ẋ_e = f_e(x_e, δ)` is the simulator's own right-hand side,
-//! [`FlightModel::derivative`], wrapped in two exact maps:
-//! 1. `x_e → x`: the reference state with u…r, χ replaced, the quaternion set
-//!    from (φ, θ, ψ) (3-2-1 sequence) and `down = −h`;
-//! 2. `ẋ → ẋ_e`: u̇…ṙ and χ̇ unchanged, `ḣ = −(d/dt) down`, and the Euler-angle
-//!    rates from the body rates (Stevens, Lewis & Johnson, *Aircraft Control
-//!    and Simulation*, 3rd ed., Eq. 1.4-4):
-//!    `φ̇ = p + tan θ·(q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`,
-//!    `ψ̇ = (q sin φ + r cos φ)/cos θ`.
-//!
+//! [`FlightModel::derivative`], wrapped in two exact maps: `x_e → x` (the
+//! quaternion from (φ, θ, ψ), 3-2-1 sequence; `down = −h`) and `ẋ → ẋ_e`,
+//! with `ḣ = −(d/dt) down` and the Euler-angle rates from the body rates
+//! (Stevens, Lewis & Johnson, *Aircraft Control and Simulation*, 3rd ed.,
+//! Eq. 1.4-4): `φ̇ = p + tan θ·(q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`,
+//! `ψ̇ = (q sin φ + r cos φ)/cos θ`.
 //! Column j of `A = ∂f_e/∂x_e` (and of `B = ∂f_e/∂δ`) is the central difference
-//! `(f_e(x + δ_j e_j) − f_e(x − δ_j e_j)) / (2 δ_j)`, with the relative step
-//! `δ_j = ε·max(|x_j|, s_j)`, `ε = 10⁻⁵` (near the optimum `(3·ε_mach)^{1/3}` of a
-//! central difference, so truncation, O(δ²), and round-off, O(ε_mach/δ),
-//! errors are both about 10⁻¹⁰ relative) and `s_j` a typical size of the
-//! entry: the airspeed for u, v, w; 1 rad/s, 1 rad, 100 m, 1 for rates,
-//! angles, height and χ; 1 rad (or full throttle) for controls. The control
-//! limits are lifted while differencing, so that a control sitting on its
-//! stop (flap at 0°) gets its two-sided derivative rather than half of it.
+//! `(f_e(x + δ_j e_j) − f_e(x − δ_j e_j)) / (2 δ_j)` ([`RELATIVE_STEP`]).
 //! Exogenous wind is held at the given steady sample, with zero rate.
 //!
 //! # Modes
 //!
 //! Eigenvalues come from the real Schur form of `A` after Parlett–Reinsch
-//! balancing (a diagonal similarity, which leaves the eigenvalues unchanged
-//! and makes the small ones of badly scaled matrices accurate). Complex pairs
-//! are reported once, with Im λ > 0: natural frequency `ωn = |λ|`, damping
-//! ratio `ζ = −Re λ/|λ|`, time constant `τ = −1/Re λ` (negative for a
-//! diverging mode: then `|τ|` is its e-folding time).
-//!
-//! Modes are told apart by *participation factors* (Pérez-Arriaga, Verghese &
-//! Schweppe 1982): `p_k = |w_k·v_k| / Σ_i |w_i·v_i|` with `v` and `w` the right
-//! and left eigenvectors. Unlike raw eigenvector entries they do not depend on
-//! the units of the states, so a mode in which h moves by metres while α
-//! moves by milliradians is still judged fairly. The mode belongs to the
-//! group of states with the largest participation: longitudinal (u, w, q, θ),
-//! lateral-directional (v, p, r, φ), height h, heading ψ, or χ. Then, following
-//! the classical description of the modes (Etkin & Reid, *Dynamics of
-//! Flight*, 3rd ed., §§6.2, 6.4–6.6; Stevens, Lewis & Johnson §4.4):
-//! - longitudinal oscillatory modes are ordered by frequency: the fastest is
-//!   the short period, the slowest the phugoid; when there is only one (or a
-//!   mode is real, as when the short period splits into two real roots) it is
-//!   the short period when w and q participate more than u and θ (an
-//!   angle-of-attack and pitch-rate motion at almost constant speed), else
-//!   the phugoid (a speed and pitch-attitude exchange at almost constant α);
-//! - a lateral oscillatory mode is the Dutch roll;
-//! - lateral real modes are ordered by |λ|: the fastest is the roll
-//!   subsidence, the slowest the spiral; a single one is the roll mode when p
-//!   participates more than φ and r, else the spiral;
-//! - a mode of h is the height mode (the density gradient's slow root); a mode
-//!   of ψ (the heading integrator, λ = 0 without wind) or χ is "other".
+//! balancing. Complex pairs are reported once, with Im λ > 0: natural
+//! frequency `ωn = |λ|`, damping ratio `ζ = −Re λ/|λ|`, time constant
+//! `τ = −1/Re λ` (negative for a diverging mode: then `|τ|` is its
+//! e-folding time). Modes are told apart by *participation factors*
+//! (Pérez-Arriaga, Verghese & Schweppe 1982):
+//! `p_k = |w_k·v_k| / Σ_i |w_i·v_i|` with `v` and `w` the right and left
+//! eigenvectors, and named following the classical description of the
+//! modes (Etkin & Reid, *Dynamics of Flight*, 3rd ed., §§6.2, 6.4–6.6;
+//! Stevens, Lewis & Johnson §4.4): short period, phugoid, Dutch roll,
+//! roll subsidence, spiral, height mode ([`ModeKind`]).
 
 use aeroid_sim::dynamics::{Exogenous, FlightModel};
 use aeroid_sim::state::{
@@ -92,7 +65,14 @@ pub const LONGITUDINAL: [usize; 4] = [U, W, Q, THETA];
 /// The lateral-directional entries of the Euler-angle state.
 pub const LATERAL: [usize; 4] = [V, P, R, PHI];
 
-/// Relative central-difference step ε (see the module documentation).
+/// Relative central-difference step ε: the step of entry j is
+/// `δ_j = ε·max(|x_j|, s_j)`, near the optimum `(3·ε_mach)^{1/3}` of a
+/// central difference, so truncation, O(δ²), and round-off, O(ε_mach/δ),
+/// errors are both about 10⁻¹⁰ relative; `s_j` is a typical size of the
+/// entry: the airspeed for u, v, w; 1 rad/s, 1 rad, 100 m, 1 for rates,
+/// angles, height and χ; 1 rad (or full throttle) for controls. The control
+/// limits are lifted while differencing, so that a control sitting on its
+/// stop (flap at 0°) gets its two-sided derivative rather than half of it.
 pub const RELATIVE_STEP: f64 = 1e-5;
 
 /// A linear model `ẋ_e = A·x_e + B·δ` about an operating point.
@@ -109,6 +89,24 @@ pub struct Linearization {
 }
 
 /// Which of the classical modes an eigenvalue is.
+///
+/// A mode belongs to the group of states with the largest participation:
+/// longitudinal (u, w, q, θ), lateral-directional (v, p, r, φ), height h,
+/// heading ψ, or χ. Participation factors, unlike raw eigenvector entries,
+/// do not depend on the units of the states, so a mode in which h moves by
+/// metres while α moves by milliradians is still judged fairly. Then:
+/// - longitudinal oscillatory modes are ordered by frequency: the fastest is
+///   the short period, the slowest the phugoid; when there is only one (or a
+///   mode is real, as when the short period splits into two real roots) it is
+///   the short period when w and q participate more than u and θ (an
+///   angle-of-attack and pitch-rate motion at almost constant speed), else
+///   the phugoid (a speed and pitch-attitude exchange at almost constant α);
+/// - a lateral oscillatory mode is the Dutch roll;
+/// - lateral real modes are ordered by |λ|: the fastest is the roll
+///   subsidence, the slowest the spiral; a single one is the roll mode when p
+///   participates more than φ and r, else the spiral;
+/// - a mode of h is the height mode (the density gradient's slow root); a mode
+///   of ψ (the heading integrator, λ = 0 without wind) or χ is "other".
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum ModeKind {
     ShortPeriod,
@@ -224,7 +222,7 @@ pub fn linearize_at(
     }
 }
 
-/// The typical size s_j of Euler-angle state entry j (see the module documentation).
+/// The typical size s_j of Euler-angle state entry j ([`RELATIVE_STEP`]).
 fn typical_size(j: usize, airspeed: f64) -> f64 {
     match j {
         U | V | W => airspeed,
@@ -297,7 +295,7 @@ impl Linearization {
         balanced.complex_eigenvalues().iter().copied().collect()
     }
 
-    /// The modes of A, classified (see the module documentation), ordered by
+    /// The modes of A, classified ([`ModeKind`]), ordered by
     /// kind and then by natural frequency, fastest first.
     pub fn modes(&self) -> Vec<Mode> {
         let (balanced, scaling) = balance(&self.a);
@@ -479,7 +477,8 @@ fn null_vector(m: DMatrix<Complex<f64>>) -> DVector<Complex<f64>> {
 }
 
 /// Parlett–Reinsch balancing (powers of two, so exact): returns `D⁻¹·A·D`
-/// and the diagonal of D.
+/// and the diagonal of D. A diagonal similarity leaves the eigenvalues
+/// unchanged and makes the small ones of badly scaled matrices accurate.
 pub(crate) fn balance(a: &DMatrix<f64>) -> (DMatrix<f64>, DVector<f64>) {
     let n = a.nrows();
     let mut b = a.clone();

@@ -2,7 +2,7 @@
 //! of the whole harness (simulate, record, estimate, score) over a grid of
 //! sweep points, and per point, model, method and parameter the statistics
 //! that say whether an estimator is unbiased and its Cramér–Rao bounds are
-//! honest.
+//! honest. The file's keys are in docs/files.md ([`StudyFile`]).
 //!
 //! ```toml
 //! name = "attas-lateral-acceptance"
@@ -25,27 +25,16 @@
 //! settings = [{}, { oem = { max_iterations = 3 } }]  # method settings variants
 //! ```
 //!
-//! Sweep points are the product scenario × profile × missing channels ×
-//! channel rates × turbulence × input scale × sample rate × noise scale ×
-//! resolution scale × settings, in that order (the last varies fastest;
-//! [`Axis::PRODUCT`]).
-//! A case is one run at one point; it is keyed by the stream
-//! `recording·2³² + run` of the study seed, the recording being the point
-//! without its settings variant, so that settings are compared on the
-//! same flights (without a settings axis it is the point) (one ChaCha8
-//! generator per case, [`aeroid_core::random::stream`]), from which it
-//! draws two seeds: the turbulence seed (replacing the scenario's `seed`) and the
-//! recorder-noise seed. A case's numbers therefore depend on nothing but the
-//! study seed, its point and its run index: not on the thread count, the
-//! order the cases finish in, or the number of runs (raising `runs` from 100
-//! to 200 keeps the first 100 rows), which is what a resumed or sharded
-//! study needs.
-//!
-//! Every case gives plain rows ([`Row`]: one per model, method and
-//! parameter, or one per model and method when the fit failed). A failed
-//! recording or estimate and a diverged fit are rows with their status and
-//! reason, counted in the summary, never fatal. The [`summarise`]d
-//! statistics use the converged fits only.
+//! Sweep points are the product of the axes in [`Axis::PRODUCT`] order (the
+//! last varies fastest). A case is one run at one point, seeded from the
+//! study seed by [`Case::stream`]: its numbers depend on nothing but the
+//! study seed, its point and its run index, so settings variants are
+//! compared on the same flights and a resumed or sharded study gives the
+//! same rows. Every case gives plain rows ([`Row`]: one per model, method
+//! and parameter, or one per model and method when the fit failed); a
+//! failed recording or estimate and a diverged fit are rows with their
+//! status and reason, counted in the summary, never fatal. The
+//! [`summarise`]d statistics use the converged fits only.
 
 mod case;
 mod check;
@@ -156,7 +145,16 @@ pub struct Case {
 
 impl Case {
     /// The case's stream of the study seed: `point·2³² + run`, with the
-    /// point's recording index as `point` ([`SweepPoint::recording`]).
+    /// point's recording index as `point` ([`SweepPoint::recording`]): the
+    /// point without its settings variant, so that settings are compared on
+    /// the same flights (without a settings axis it is the point). One
+    /// ChaCha8 generator per case ([`aeroid_core::random::stream`]) draws
+    /// two seeds: the turbulence seed (replacing the scenario's `seed`) and
+    /// the recorder-noise seed. A case's numbers therefore depend on nothing
+    /// but the study seed, its point and its run index: not on the thread
+    /// count, the order the cases finish in, or the number of runs (raising
+    /// `runs` from 100 to 200 keeps the first 100 rows), which is what a
+    /// resumed or sharded study needs.
     pub fn stream(self) -> u64 {
         ((self.point as u64) << 32) | self.run as u64
     }

@@ -16,45 +16,28 @@
 //!
 //!   w₋ = (J₂ − h·J₁)/(2h²),  w₀ = (h²·J₀ − J₂)/h²,  w₊ = (J₂ + h·J₁)/(2h²),   (2)
 //!
-//! each multiplied by e^{−jωt_c}: over a whole panel (a, b) = (−h, h); an
-//! odd number of intervals ends with the last interval alone, (0, h) about
-//! its left sample with the quadratic through the last three samples; a
-//! single interval is integrated linearly (w_a = J₀ − J₁/h, w_b = J₁/h on
-//! (0, h)). The J_n come from their power series where ω·h < 1 and from
-//! J₀ = (e^{−jωb} − e^{−jωa})/(−jω), J_n = [sⁿe^{−jωs}/(−jω)]_a^b − n/(−jω)·J_{n−1}
-//! otherwise. The rule is exact for a piecewise quadratic and its error
-//! is O(h⁴) for a smooth x, so the transform of a derivative, which the
-//! estimators take from
+//! each multiplied by e^{−jωt_c}; an odd number of intervals ends with the
+//! last interval alone, a single interval is integrated linearly. The rule
+//! is exact for a piecewise quadratic and its error is O(h⁴) for a smooth
+//! x, so the transform of a derivative, which the estimators take from
 //!
 //!   (ẋ)~(ω) = jω·x̃(ω) + x(t_N)·e^{−jωt_N} − x(t₀)·e^{−jωt₀}             (3)
 //!
 //! (integration by parts; K&M §7.2), agrees with the transform of the
-//! sampled derivative to O(h⁴): 1e-4 of the value at ω·h = 0.4 (1.6 Hz at
-//! 25 Hz), where the rectangle sum of Morelli's real-time form is off by
-//! half a sample of phase (first order in ω·h) and the trapezoid by (ωh)²/12.
+//! sampled derivative to O(h⁴): 1e-4 of the value at ω·h = 0.4.
 //!
-//! **Steps.** A control that steps makes the integrand of (1) jump (the
-//! control itself, and the accelerations), and a quadratic through a jump
-//! smears it over a sample interval: a first-order error that puts several
-//! per cent into the moment derivatives of a 3211 record. The transform
-//! therefore takes breaks: sample indices where the signals may jump
-//! (the control steps, `aeroid_estimation::reconstruction::control_steps`).
-//! The record is integrated piecewise between them; at a break b the left
-//! piece ends on the left limit, extrapolated from its last samples
-//! (quadratic, 3x_{b−1} − 3x_{b−2} + x_{b−3}; fewer samples: linear or
-//! constant), the right piece starts at x_b. A held control is then exact,
-//! a continuous signal with a kink (the rates) keeps an O(h³) error at the
-//! break, and (3) still holds for a continuous x.
+//! **Steps.** A control that steps makes the integrand of (1) jump, which a
+//! quadratic would smear over a sample interval. The transform therefore
+//! takes breaks, sample indices where the signals may jump ([`breaks_at`]),
+//! and integrates the record piecewise between them, each piece ending on
+//! its left limit (`left_limit`): a held control is then exact, and (3)
+//! still holds for a continuous x.
 //!
-//! **Recursive form** ([`RunningTransform`]): each panel's contribution is
-//! added when its last sample arrives, with the phasor e^{−jωt_k} advanced
-//! by the rotation e^{−jωh} (E. A. Morelli, "Real-time parameter estimation
-//! in the frequency domain", J. Guidance, Control, and Dynamics 23(5), 2000:
-//! the recursive Fourier transform X_k(ω) = X_{k−1}(ω) + x_k·e^{−jωkh}, here
-//! with Simpson's weights); the open end (a last single interval) is added
-//! when the transform is read, so it can be read after any sample. The batch
-//! transform ([`FourierTransform`]) collects the same weights into a matrix
-//! and evaluates every signal at once.
+//! **Recursive form** ([`RunningTransform`]; E. A. Morelli, "Real-time
+//! parameter estimation in the frequency domain", J. Guidance, Control, and
+//! Dynamics 23(5), 2000: X_k(ω) = X_{k−1}(ω) + x_k·e^{−jωkh}, here with
+//! Simpson's weights). The batch transform ([`FourierTransform`]) collects
+//! the same weights into a matrix and evaluates every signal at once.
 
 use aeroid_core::error::{Error, Result};
 use nalgebra::{Complex, DMatrix};
@@ -65,7 +48,9 @@ const ANCHOR_INTERVAL: usize = 256;
 
 type C64 = Complex<f64>;
 
-/// J_n(a, b) = ∫_a^b sⁿ·e^{−jωs} ds for n = 0, 1, 2.
+/// J_n(a, b) = ∫_a^b sⁿ·e^{−jωs} ds for n = 0, 1, 2: from their power
+/// series where ω·h < 1, otherwise from J₀ = (e^{−jωb} − e^{−jωa})/(−jω),
+/// J_n = [sⁿe^{−jωs}/(−jω)]_a^b − n/(−jω)·J_{n−1}.
 fn moments(omega: f64, a: f64, b: f64) -> [C64; 3] {
     let reach = a.abs().max(b.abs());
     if omega * reach < 1.0 {
@@ -99,7 +84,10 @@ fn moments(omega: f64, a: f64, b: f64) -> [C64; 3] {
     }
 }
 
-/// The weights (2) of the samples at s = −h, 0, h over s ∈ (a, b).
+/// The weights (2) of the samples at s = −h, 0, h over s ∈ (a, b): a whole
+/// panel is (−h, h); an odd number of intervals ends with the last interval
+/// alone, (0, h) about its left sample with the quadratic through the last
+/// three samples.
 fn quadratic_weights(omega: f64, h: f64, (a, b): (f64, f64)) -> [C64; 3] {
     let [j0, j1, j2] = moments(omega, a, b);
     [
@@ -109,7 +97,8 @@ fn quadratic_weights(omega: f64, h: f64, (a, b): (f64, f64)) -> [C64; 3] {
     ]
 }
 
-/// The weights of one interval's linear interpolant, samples at s = 0, h.
+/// The weights of one interval's linear interpolant, samples at s = 0, h:
+/// w_a = J₀ − J₁/h, w_b = J₁/h on (0, h).
 fn linear_weights(omega: f64, h: f64) -> [C64; 2] {
     let [j0, j1, _] = moments(omega, 0.0, h);
     [j0 - j1 / h, j1 / h]
@@ -163,7 +152,13 @@ enum Point {
     Limit(Vec<(usize, f64)>),
 }
 
-/// The left limit at break b of a piece that starts at s < b.
+/// The left limit at break b of a piece that starts at s < b, extrapolated
+/// from its last samples (quadratic, 3x_{b−1} − 3x_{b−2} + x_{b−3}; fewer
+/// samples: linear or constant); the right piece starts at x_b. A quadratic
+/// through a jump would smear it over a sample interval: a first-order
+/// error that puts several per cent into the moment derivatives of a 3211
+/// record. With the breaks a held control is exact, and a continuous signal
+/// with a kink (the rates) keeps an O(h³) error at the break.
 fn left_limit(s: usize, b: usize) -> Point {
     Point::Limit(match b - s {
         1 => vec![(b - 1, 1.0)],
@@ -448,7 +443,13 @@ pub fn derivative_transform(
 
 /// The recursive form for several signals: one sample of every signal at
 /// a time (after a break, if the signals may jump there), readable after
-/// any sample.
+/// any sample. Each panel's contribution is added when its last sample
+/// arrives, with the phasor e^{−jωt_k} advanced by the rotation e^{−jωh};
+/// the open end (a last single interval) is added when the transform is
+/// read. Simpson's weights agree with the sampled derivative's transform to
+/// O(h⁴), where the rectangle sum of Morelli's real-time form is off by
+/// half a sample of phase (first order in ω·h) and the trapezoid by
+/// (ωh)²/12.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunningTransform {
     pub frequencies: Vec<f64>,

@@ -3,6 +3,7 @@
 //! Klein & Morelli, "Aircraft System Identification", AIAA 2006, ch. 5).
 //! Method `ee`; settings `[methods.ee]`: the differentiator of the angular
 //! rates and the lag of the coloured-residual bound ([`EquationErrorSettings`]).
+//! The user reference is docs/methods.md, "Equation error".
 //!
 //! Inputs: a flight record with load factors, angular rates, air data,
 //! controls and (when the aircraft has thrust) throttle and altitude; a
@@ -11,56 +12,32 @@
 //!
 //! 1. The coefficients are reconstructed from the measured accelerations and
 //!    angular accelerations (reflex-wing UAV paper, Eqs. 17–24; see
-//!    [`crate::reconstruction`] for the equations, the thrust,
-//!    q̄, the differentiator and the common time base).
+//!    [`crate::reconstruction`]).
 //! 2. For each coefficient with a free parameter, one ordinary least-squares
 //!    problem `z = X·θ + ε` (Eq. 25): z is the measured coefficient minus the
 //!    terms whose parameters are fixed, X holds the regressors of the free
-//!    terms from the measured channels ([`aeroid_sim::aero::AeroModel::regressors`]:
-//!    α, β, normalised rates, controls, …). Drag in wind axes with an Oswald
-//!    factor e: the induced drag `CL²/(e·π·Λ)` uses the measured CL; with e
-//!    free the regressor `CL²/(π·Λ)` is fitted with parameter 1/e and e is
-//!    reported with the delta-method variance `σ_e = σ_{1/e}·e²`.
-//!    A product term's regressor is the product of its measured factors
-//!    (`alpha^2` → α²). A term tied to a parameter (θ = c·θ_master + d)
-//!    adds c times its regressor to the master's column when the master is
-//!    in the same regression, and is a known term otherwise, the master's
-//!    coefficient fitted first (ties in a cycle between coefficients are
-//!    refused). Moments taken about a point other than the CG are moved
-//!    there from the measured moments about the CG with the measured
-//!    forces, M_ref = M_cg − r × F ([`aeroid_sim::aero::AeroModel::moment_transfer`]).
+//!    terms from the measured channels ([`aeroid_sim::aero::AeroModel::regressors`]).
+//!    With a free Oswald factor e the regressor `CL²/(π·Λ)` is fitted with
+//!    parameter 1/e, and σ_e = σ_{1/e}·e². Tied terms, product terms and
+//!    moments about a point other than the CG
+//!    ([`aeroid_sim::aero::AeroModel::moment_transfer`]) as docs/methods.md says.
 //! 3. The cost `½·εᵀε` (Eq. 26) is minimised by `θ̂ = (XᵀX)⁻¹·Xᵀz` (Eq. 27),
 //!    computed by SVD ([`aeroid_numerics::regression`]), with the
 //!    Cramér–Rao bound `s²·(XᵀX)⁻¹` and the bound corrected for coloured
-//!    residuals (Morelli & Klein 1997). The CORRECTED bound is reported as
-//!    each parameter's standard error; both appear in the notes.
+//!    residuals (Morelli & Klein 1997), which is reported as each
+//!    parameter's standard error; both appear in the notes.
 //!
-//! Outputs: an [`Estimate`] with method "ee", one fit per coefficient
-//! (measured against modelled coefficient), a block-diagonal covariance
-//! (the coefficients are fitted separately), and status Converged, or
-//! Diverged with the reason when a regressor matrix is rank-deficient or
-//! there are too few samples. A missing channel is an error naming it.
+//! Outputs: an [`Estimate`] with one fit per coefficient, a block-diagonal
+//! covariance (the coefficients are fitted separately), and status
+//! Converged, or Diverged with the reason when a regressor matrix is
+//! rank-deficient or there are too few samples.
 //!
-//! Limitations, measured in `tests/estimators/equation_error.rs` (ATTAS multisine):
-//! - the reflex-wing UAV paper's finding: least squares assumes noise-free regressors;
-//!   measured α, β, rates and controls carry noise, so the estimates are
-//!   attenuated towards zero (errors in variables). On the 25 Hz
-//!   flight-test profile: CLα −5.6 %, Cmq −12.6 %, Clp −1.5 %, each as the
-//!   errors-in-variables limit (M_xx + M_nn)⁻¹·M_xx·θ predicts, and several
-//!   times larger than the reported standard errors;
-//! - the moments need differentiated rates. A simulated step input makes
-//!   the angular accelerations jump; the differentiator leaves out the
-//!   samples whose window would cross a step found in a control channel
-//!   ([`aeroid_record::prep::differentiation`]), so on noise-free data the
-//!   moment derivatives are within 1e-3 on step inputs too, and within the
-//!   differentiator's gain error (1.2e-3 on a 1.5 Hz multisine) otherwise.
-//!   Forces and moments are reconstructed separately, so the force
-//!   regressions keep the samples next to the steps.
-//!
-//! The fit lives in the common modules [`super::common::coefficient_fit`]
-//! (6-DOF), [`super::common::linear_regression`] (linear structures) and
-//! [`super::common::regression`] (the least-squares step), which the other
-//! regression methods and the starts of the iterative methods share.
+//! Limitations (`tests/estimators/equation_error.rs`): measured regressors
+//! attenuate the estimates towards zero (errors in variables, the
+//! reflex-wing UAV paper's finding), and the moments need differentiated
+//! rates ([`aeroid_record::prep::differentiation`]). The fit lives in
+//! [`super::common::coefficient_fit`], [`super::common::linear_regression`]
+//! and [`super::common::regression`], shared with the other regression methods.
 
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};

@@ -7,60 +7,37 @@
 //! domain); E. A. Morelli, "Real-time parameter estimation in the frequency
 //! domain", J. Guidance, Control, and Dynamics 23(5):812–818, 2000 (the
 //! recursive transform and the complex least-squares estimate). The
-//! equations are written out here; the transform is
-//! [`aeroid_numerics::fourier`] (Filon–Simpson quadrature,
+//! transform is [`aeroid_numerics::fourier`] (Filon–Simpson quadrature,
 //! its Eqs. 1–3). Method `fdee`, settings `[methods.fdee]`
-//! ([`FrequencyRegressionSettings`]).
+//! ([`FrequencyRegressionSettings`]); the user reference, with the band,
+//! the settings and what is measured, is docs/methods.md,
+//! "Fourier-transform regression".
 //!
-//! 1. **The equations, dimensional.** For each coefficient with a free
-//!    parameter, the measured side and the regressors are multiplied by
-//!    q̄(t)·S·l (l = 1 for forces, b or c̄ for moments) so that a varying q̄
-//!    stays inside the time signals:
-//!    force: `q̄S·C_meas(t) = Σ θ_i·q̄S·x_i(t)` with C_meas from the load
-//!    factors (equation error's reconstruction, Eqs. 17–22 of the
-//!    reflex-wing UAV paper);
-//!    moment: `(I·ω̇)_row + (ω×Iω − M_T)_row = Σ θ_i·q̄Sl·x_i(t)`.
-//!    Fixed terms move to the measured side, as in equation error.
-//! 2. **Transforms.** Every signal is transformed at the chosen
-//!    frequencies ω_m; the angular accelerations are NOT differentiated:
+//! 1. **The equations, dimensional**, so that a varying q̄ stays inside the
+//!    time signals: force `q̄S·C_meas(t) = Σ θ_i·q̄S·x_i(t)` with C_meas
+//!    from the load factors (reflex-wing UAV paper, Eqs. 17–22); moment
+//!    `(I·ω̇)_row + (ω×Iω − M_T)_row = Σ θ_i·q̄Sl·x_i(t)`. Fixed terms move
+//!    to the measured side, as in equation error.
+//! 2. **Transforms** at the band's frequencies ω_m; the angular
+//!    accelerations are NOT differentiated:
 //!    `(ω̇)~ = jω·ω̃ + ω(t_N)e^{−jωt_N} − ω(t₀)e^{−jωt₀}` (fourier Eq. 3,
-//!    jω replacing d/dt, K&M §7.2). This gives, per coefficient,
-//!    `z̃ = X̃·θ + ṽ` at M frequencies.
+//!    K&M §7.2), giving per coefficient `z̃ = X̃·θ + ṽ`.
 //! 3. **Complex least squares** (K&M §7.3; Morelli 2000): the cost
 //!    `J = ½·Σ_m |z̃_m − X̃_m·θ|²` is minimised by
-//!    `θ̂ = [Re(X̃*X̃)]⁻¹·Re(X̃*z̃)`, computed as real least squares on the
-//!    stacked real and imaginary parts (the shared SVD solver, which names
-//!    parameters the band does not determine). Bounds: the transforms of
-//!    white equation error at the Fourier frequencies k/T are uncorrelated,
-//!    with half their power in each part, but the power is not the same
-//!    at every frequency (the rates' noise enters the moment equations as
-//!    jω·ñ, growing with ω), so the bound is the sandwich
-//!    `[Re(X̃*X̃)]⁻¹·Re(X̃*·V·X̃)·[Re(X̃*X̃)]⁻¹` (White 1980) with V the
-//!    residual power averaged over the ±8 neighbouring frequencies. The
-//!    plain `s²·[Re(X̃*X̃)]⁻¹` (K&M §7.3) is in the notes: it overstates
-//!    the moment derivatives' scatter 2–3.5 times on 25 Hz flight-test data.
-//! 4. **Frequencies.** A grid of spacing Δf (default 1/T, the record's
-//!    Fourier resolution) over a band: given, or from the inputs' spectra:
-//!    from Δf to the highest grid frequency where any control regressor's
-//!    amplitude spectrum (mean removed) reaches `input_threshold` of its
-//!    peak, at most a quarter of the sample rate. Bias terms (the constant
-//!    regressor) have almost no content in the band; ω = 0 is added when a
-//!    free term has the constant regressor (`zero_frequency`, default
-//!    automatic), so the intercepts are estimated from the record's means.
-//! 5. **Recursive form** (`recursive = true`, Morelli 2000): the transforms
-//!    grow sample by sample ([`RunningTransform`]) and the estimate is
-//!    formed from them; at the end of the record it equals the batch
-//!    estimate (tests: to 1e-9). The band must then be known in advance
-//!    (a real-time user gives it; the automatic band reads the whole record).
+//!    `θ̂ = [Re(X̃*X̃)]⁻¹·Re(X̃*z̃)`, real least squares on the stacked real
+//!    and imaginary parts. The bound is the sandwich
+//!    `[Re(X̃*X̃)]⁻¹·Re(X̃*·V·X̃)·[Re(X̃*X̃)]⁻¹` (White 1980), V the residual
+//!    power averaged over the ±8 neighbouring frequencies (the rates' noise
+//!    enters the moment equations as jω·ñ, growing with ω); the plain
+//!    `s²·[Re(X̃*X̃)]⁻¹` (K&M §7.3) is in the notes.
+//! 4. **Recursive form** (`recursive = true`, Morelli 2000): the transforms
+//!    grow sample by sample ([`RunningTransform`]); at the end of the record
+//!    the estimate equals the batch one.
 //!
-//! Limitations (measured in `tests/estimators/frequency_domain.rs`):
-//! - the regressors are measured, so noise in α, β, rates and controls
-//!   biases the estimates towards zero as in the time domain (errors in
-//!   variables); restricting the band to where the signals dominate the
-//!   noise reduces it, it does not remove it;
-//! - the samples must be uniformly spaced (a record with dropouts in the
-//!   used channels is refused with the gap named);
-//! - α̇ terms need α differentiated in the time domain (q̄·c̄/2V multiplies it).
+//! Limitations (`tests/estimators/frequency_domain.rs`): measured regressors
+//! bias the estimates towards zero (errors in variables), which a band where
+//! the signals dominate the noise reduces but does not remove; the samples
+//! must be uniformly spaced; α̇ terms need α differentiated in the time domain.
 
 use crate::estimate::{Estimate, OutputFit, Status};
 use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};

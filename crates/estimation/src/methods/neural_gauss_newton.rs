@@ -28,25 +28,16 @@
 //! k+1 are network outputs too and enter det(R).
 //!
 //! The hidden layer's size is chosen from the data unless `hidden` fixes
-//! it: each of `hidden_sizes` (default 10 and 20) is trained, and the one
-//! whose held-out error (the pairs held out for early stopping, at the
-//! epoch whose weights it keeps) is least is kept — the residual criterion
-//! of the ELM paper's Eq. 6, the routine `elm-gn` chooses its size with
-//! ([`crate::neural::elm::choose_by_held_out`]). The chosen
-//! size and every candidate's held-out error are in the estimate's network
-//! report. Ten neurons fit the noise-free one-step map of the
-//! longitudinal ATTAS and HANSA-3 records to R² 0.9999999 and still steer
-//! Gauss–Newton wrong; the held-out error chooses 20 there, and those
-//! records converge (`tests/estimators/neural_gauss_newton.rs`). Larger networks are
-//! not candidates by default: 30 neurons fit the noise-free records
-//! better still (held-out MSE 3e-14) but the Gauss–Newton fit through
-//! them stops at its iteration limit on HANSA-3 (CL_de 72 % off).
+//! it: of `hidden_sizes` (default 10 and 20), the one with the least
+//! held-out error is kept — the residual criterion of the ELM paper's
+//! Eq. 6 ([`crate::neural::elm::choose_by_held_out`]); why these
+//! candidates is in docs/methods.md, "Neural Gauss–Newton".
 //!
-//! What the method cannot do is measured in `tests/estimators/neural_gauss_newton.rs`
-//! and `docs/findings.md`: the network approximates the one-step map, so
-//! the estimate carries the network's approximation error even on
-//! noise-free data, and Θ whose coefficients leave the range the network
-//! was trained on is judged by an extrapolating network.
+//! The network approximates the one-step map, so the estimate carries its
+//! approximation error even on noise-free data, and Θ whose coefficients
+//! leave the range the network was trained on is judged by an
+//! extrapolating network (`tests/estimators/neural_gauss_newton.rs`,
+//! docs/findings.md).
 
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
@@ -73,6 +64,16 @@ pub struct NeuralGaussNewtonSettings {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hidden: Option<usize>,
     /// Candidate numbers of hidden neurons when `hidden` is not given.
+    /// Each is trained, and the one whose held-out error (the pairs held out
+    /// for early stopping, at the epoch whose weights it keeps) is least is
+    /// kept; the chosen size and every candidate's held-out error are in the
+    /// estimate's network report. Ten neurons fit the noise-free one-step
+    /// map of the longitudinal ATTAS and HANSA-3 records to R² 0.9999999 and
+    /// still steer Gauss–Newton wrong; the held-out error chooses 20 there,
+    /// and those records converge. Larger networks are not candidates by
+    /// default: 30 neurons fit the noise-free records better still
+    /// (held-out MSE 3e-14) but the Gauss–Newton fit through them stops at
+    /// its iteration limit on HANSA-3 (CL_de 72 % off).
     pub hidden_sizes: Vec<usize>,
     /// Seed of the network's initial weights.
     pub seed: u64,

@@ -2,57 +2,39 @@
 //! modeling and parameter estimation from QAR data of an airplane
 //! approaching a high-altitude airport", Chinese J. Aeronautics 25 (2012),
 //! §3.3–3.4, Eqs. 25–33, with the Delta method of Raisinghani, Ghosh &
-//! Kalra (1998) that they cite.
+//! Kalra (1998) that they cite. The user reference is docs/methods.md,
+//! "RBF network + Delta method".
 //!
 //! 1. **Coefficient data** (setting `coefficients`): the EKF + modified
 //!    Bryson–Frazier smoothed coefficients of Wang et al.'s pipeline
 //!    (Eqs. 7–24, the smoother of method `ebm`,
 //!    [`super::smoothed_regression`]), or the coefficients reconstructed from
 //!    measured accelerations and angular accelerations
-//!    ([`crate::reconstruction`]). `auto`: reconstructed when the
-//!    record has the load factors, α, β and measured angular rates that
-//!    needs, else smoothed (a QAR records no angular rates; rates the derive
-//!    step took from the attitude would be differentiated a second time).
+//!    ([`crate::reconstruction`]); `auto`: reconstructed when the record has
+//!    the channels that needs (a QAR records no angular rates).
 //! 2. **Networks** (Eqs. 25–32, [`crate::neural::rbf`]): one
 //!    multi-input single-output network per coefficient with a free
 //!    parameter; inputs (Eq. 27) (Mach, α, β, q̂, δe, δf) for CL, CD, Cm and
 //!    (Mach, α, β, p̂, r̂, δa, δr) for CY, Cl, Cn, each as the structure
-//!    defines its regressor (rates nondimensional p̂ = p·b/2V …, Mach as
-//!    Mach − the reference Mach, or the Mach number for a structure without
-//!    a Mach term), so that a derivative of the network is
+//!    defines its regressor, so that a derivative of the network is
 //!    directly the structure's parameter. An input constant on the record
-//!    (or without a channel) carries no information and is left out, with
-//!    a note.
+//!    (or without a channel) is left out, with a note.
 //! 3. **Delta method** (Eq. 33): at every sample, ∂C/∂xⱼ by central
-//!    differences through the trained network with step δ in scaled units
-//!    (`difference_step`), unscaled by the inputs' and output's scaling.
-//!    Each derivative's values over the record form a
-//!    [`ParameterDistribution`]: mean, standard deviation, 5 %, 50 % and
-//!    95 % points and the value at the trim point (the record's first
-//!    sample, or the sample nearest `trim` seconds).
+//!    differences through the trained network (`difference_step`, scaled
+//!    units). Each derivative's values over the record form a
+//!    [`ParameterDistribution`] (mean, standard deviation, 5 %, 50 % and
+//!    95 % points and the value at the trim point).
 //! 4. **Parameters.** A derivative's value is the median of its local
-//!    values: on a linear truth every local value estimates the same
-//!    number, and the median uses the whole record while being robust to
-//!    the samples where the network is poorly supported (record edges,
-//!    sparse corners of the input space); the value at trim is one
-//!    evaluation and carries that sample's interpolation error unaveraged
-//!    (both are reported). A bias term C₀ is the network's linearisation
-//!    about each sample extrapolated to zero regressors,
-//!    C₀(k) = C(xₖ) − Σⱼ ∂C/∂xⱼ(xₖ)·xⱼ,ₖ over the inputs that are terms of
-//!    the structure's coefficient (the others held where they are), taken
-//!    with its median likewise
-//!    (the network's output at zero inputs itself would be an
-//!    extrapolation outside the training data). Terms whose regressor is
-//!    not a network input (α̇, V/V₀, CL², the Oswald factor) are not
-//!    estimated: the Delta method gives derivatives with respect to the
-//!    inputs only (a note names them).
-//! 5. **Standard errors.** The Delta method has no Cramér–Rao bound; the
-//!    standard error is the standard deviation of the local values (their
-//!    spread), the covariance diagonal. The notes say so.
-//! 6. **Status.** Not converged when a network reproduces its coefficient
-//!    with R² below `minimum_r_squared` (poor fit, naming the
-//!    coefficients), or when a derivative's 5–95 % interval contains zero
-//!    and so does not fix its sign (unidentified, naming the parameters).
+//!    values (the whole record, robust to where the network is poorly
+//!    supported); a bias term is the median of
+//!    C₀(k) = C(xₖ) − Σⱼ ∂C/∂xⱼ(xₖ)·xⱼ,ₖ over the structure's terms. Terms
+//!    whose regressor is not a network input (α̇, V/V₀, CL², the Oswald
+//!    factor) are not estimated (a note names them).
+//! 5. **Standard errors**: the standard deviation of the local values (the
+//!    Delta method has no Cramér–Rao bound; the notes say so).
+//! 6. **Status.** Not converged when a network's R² is below
+//!    `minimum_r_squared` (poor fit), or when a derivative's 5–95 % interval
+//!    contains zero (unidentified, naming the parameters).
 //!
 //! Every estimate carries the networks' report (`network`: centres, width
 //! factors, MSE and R², Verma & Peyada 2020 Eqs. 21–22) and the
@@ -562,7 +544,11 @@ struct Delta {
     predictions: Vec<f64>,
     /// Per input, ∂C/∂xⱼ at every sample (unscaled).
     derivatives: Vec<Vec<f64>>,
-    /// C₀ at every sample (module header, step 4).
+    /// C₀ at every sample (module header, step 4): the network's
+    /// linearisation about each sample extrapolated to zero regressors, the
+    /// inputs that are not terms of the coefficient held where they are (the
+    /// network's output at zero inputs itself would be an extrapolation
+    /// outside the training data).
     bias: Vec<f64>,
     mse: f64,
     r_squared: f64,

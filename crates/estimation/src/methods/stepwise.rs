@@ -7,18 +7,15 @@
 //! Inputs: a flight record, a model structure (for the aircraft's mass,
 //! inertia, geometry, propulsion and rate normalisation — its terms are not
 //! used), one coefficient, and a pool of candidate terms: regressor keys
-//! (`alpha`, `q`, `de`, …) and their products, spelt as a model file's
-//! product terms (`alpha*beta`, `alpha^2`, `alpha^2*de`; [`Monomial`]).
-//! Products are searched as MEAN-REMOVED regressors,
-//! `alpha^2` = (α − ᾱ)², so that around a trim point α² is not a near copy
-//! of α (α² = ᾱ² + 2ᾱ·(α − ᾱ) + (α − ᾱ)²); the means are given in the
-//! notes. The selected model is reported in the plain basis of the model's
-//! parameters: (a − ā)(b − b̄) = a·b − b̄·a − ā·b + ā·b̄, so the product's
-//! estimate is kept and b̄·θ_ab, ā·θ_ab and ā·b̄·θ_ab move to the linear
-//! terms of a and b (added when not selected) and to the constant; the
-//! covariance is transformed with the same matrix, C' = T·C·Tᵀ. The dependent variable is the coefficient reconstructed from
-//! the measured accelerations (reflex-wing UAV paper, Eqs. 17–24, see
-//! [`crate::reconstruction`]); the constant term is always in.
+//! (`alpha`, `q`, `de`, …) and their products (`alpha*beta`, `alpha^2`;
+//! [`Monomial`]). The dependent variable is the coefficient reconstructed
+//! from the measured accelerations (reflex-wing UAV paper, Eqs. 17–24, see
+//! [`crate::reconstruction`]); the constant term is always in. Products are
+//! searched as MEAN-REMOVED regressors, `alpha^2` = (α − ᾱ)², so that
+//! around a trim point α² is not a near copy of α; the selected model is
+//! reported in the plain basis of the model's parameters,
+//! (a − ā)(b − b̄) = a·b − b̄·a − ā·b + ā·b̄, the covariance transformed
+//! with the same matrix, C' = T·C·Tᵀ (the means are in the notes).
 //!
 //! Each step (K&M §5.4.2):
 //! 1. every candidate not in the model is tried; its partial F statistic is
@@ -31,22 +28,16 @@
 //!    repeated until nothing leaves;
 //! 3. the procedure stops when no candidate may enter (or after `max_steps`).
 //!
-//! After each step the report gives R² = 1 − SSE/SST (K&M Eq. 5.70), the fit
-//! error variance s², the overall F = (SSR/p)/s² (K&M Eq. 5.73),
-//! PRESS = Σ (eᵢ/(1 − h_ii))² (K&M Eq. 5.81), the prediction error of a
-//! leave-one-out fit, and the predicted square error
+//! After each step the report gives R² = 1 − SSE/SST (K&M Eq. 5.70), s²,
+//! the overall F = (SSR/p)/s² (K&M Eq. 5.73), PRESS = Σ (eᵢ/(1 − h_ii))²
+//! (K&M Eq. 5.81) and the predicted square error
 //! PSE = SSE/N + 2·σ²_max·n/N with σ²_max = SST/(2·(N − 1)) (K&M Eq. 5.89,
 //! as in SIDPAC's swr.m), which has a minimum at an adequate model.
 //!
-//! The R² gain guard (`min_r_squared_gain`, default 1e-6) is this
-//! implementation's, not Klein & Morelli's: when a coefficient is
-//! reconstructed exactly (ideal data; forces need no differentiation) the
-//! residual of the right model is rounding error, s² ≈ 1e-30, and every
-//! candidate that correlates with the rounding pattern gets F ≫ 4. The guard
-//! only stops such meaningless entries. On flight data with coloured
-//! residuals the F test admits too much at F = 4; SIDPAC's swr.m uses
-//! F = 20 (4 with a safety factor of 5) — raise `f_to_enter` or
-//! `min_r_squared_gain` there.
+//! The R² gain guard is this implementation's, not Klein & Morelli's: on
+//! exactly reconstructed coefficients it stops entries that only fit
+//! rounding error. On flight data with coloured residuals F = 4 admits too
+//! much (SIDPAC's swr.m uses F = 20): raise `f_to_enter` there.
 
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
@@ -84,7 +75,13 @@ pub struct StepwiseOptions {
     pub f_to_enter: f64,
     pub f_to_remove: f64,
     /// A term enters only if it raises R² (a fraction) by at least this much
-    /// (default 1e-6; see the module documentation).
+    /// (default 1e-6). When a coefficient is reconstructed exactly (ideal
+    /// data; forces need no differentiation) the residual of the right
+    /// model is rounding error, s² ≈ 1e-30, and every candidate that
+    /// correlates with the rounding pattern gets F ≫ 4; the guard only stops
+    /// such meaningless entries. On flight data with coloured residuals
+    /// SIDPAC's swr.m uses F = 20 (4 with a safety factor of 5): raise
+    /// `f_to_enter` or this there.
     pub min_r_squared_gain: f64,
     /// Candidate terms; None: every regressor key the record can supply
     /// (except the constant, which is always in, and `chi`), plus [`DEFAULT_PRODUCTS`].

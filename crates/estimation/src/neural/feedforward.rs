@@ -28,30 +28,12 @@
 //! the log-sigmoid of the ELM paper's Eq. 4), which keeps the columns of
 //! JᵀJ for the hidden and output weights of similar size and the LM
 //! system well conditioned; the linear output layer lets the outputs take
-//! any value of the scaled range. Initial hidden weights follow Nguyen &
-//! Widrow ("Improving the learning speed of 2-layer neural networks by
-//! choosing initial values of the adaptive weights", IJCNN 1990): each
-//! neuron's input-weight vector has a random direction (normalised
-//! standard-normal draws) and the length β = 0.7·H^(1/n), its bias is
-//! uniform in [−β, β]; output weights are normal with standard deviation
-//! 1/√H, output biases zero. All draws come from
-//! `random::stream(seed, NETWORK_WEIGHTS)`, so a seed gives the same
-//! network, bit for bit.
-//!
-//! JᵀJ is never formed from a stored Jacobian. With z = d ⊗ x̃ (d_j = 1 −
-//! h_j², x̃ = [x, 1]) and h̃ = [h, 1] for one sample, the Jacobian row of
-//! output o is [v_o ⊙ d ⊗ x̃ | 0 … h̃ … 0], so JᵀJ has the blocks
-//! hidden–hidden G_jj'·Σ z zᵀ (G = VᵀV, fixed within an epoch),
-//! hidden–output v_oj·Σ z h̃ᵀ and output–output Σ h̃ h̃ᵀ (equal for every
-//! output). Σ z zᵀ has the Kronecker structure Σ (d_j·d_j')(x̃_i·x̃_i'):
-//! only its H(H+1)/2 × (n+1)(n+2)/2 distinct sums are accumulated, with
-//! Σ h̃ [z, h̃]ᵀ, sample by sample into buffers of a block of samples and
-//! added by two matrix products per block (about a third of the products
-//! of the full Σ w wᵀ, w = [z, h̃]); the training loop allocates nothing
-//! per sample. The damped system is solved with the output weights
-//! eliminated first (`damped_step`): one Cholesky factor of the
-//! hidden weights' H(n+1)-square Schur complement and one of the
-//! (H+1)-square output block, not one of all the weights'.
+//! any value of the scaled range. Initial weights: Nguyen & Widrow
+//! ("Improving the learning speed of 2-layer neural networks by choosing
+//! initial values of the adaptive weights", IJCNN 1990;
+//! [`FeedForward::new`]). JᵀJ is accumulated from its blocks without a
+//! stored Jacobian (`accumulate`) and the damped system solved with the
+//! output weights eliminated first (`damped_step`).
 
 use crate::neural::elm::{SizeScores, choose_by_held_out};
 use crate::neural::restricted::{Network, Trainer, TrainingSet};
@@ -76,7 +58,12 @@ pub struct FeedForward {
 
 impl FeedForward {
     /// A network of the given sizes with Nguyen–Widrow initial weights
-    /// drawn from the seed's network stream.
+    /// drawn from the seed's network stream: each neuron's input-weight
+    /// vector has a random direction (normalised standard-normal draws) and
+    /// the length β = 0.7·H^(1/n), its bias is uniform in [−β, β]; output
+    /// weights are normal with standard deviation 1/√H, output biases zero.
+    /// All draws come from `random::stream(seed, NETWORK_WEIGHTS)`, so a
+    /// seed gives the same network, bit for bit.
     pub fn new(inputs: usize, hidden: usize, outputs: usize, seed: u64) -> Result<FeedForward> {
         if inputs == 0 || hidden == 0 || outputs == 0 {
             return Err(Error::Other(format!(
@@ -718,9 +705,21 @@ fn training_sum_of_squares(network: &FeedForward, samples: &Samples, kept: &mut 
 
 /// Jᵀe of the training samples, e = y − t, and the sums JᵀJ is made of,
 /// accumulated sample by sample from the activations and outputs the last
-/// pass kept for the network's weights (module documentation): G = VᵀV in
+/// pass kept for the network's weights: G = VᵀV in
 /// `work.gram`, the distinct entries of Σ z zᵀ in `work.kronecker` and
 /// Σ h̃ [z, h̃]ᵀ in `work.products`.
+///
+/// JᵀJ is never formed from a stored Jacobian. With z = d ⊗ x̃ (d_j = 1 −
+/// h_j², x̃ = [x, 1]) and h̃ = [h, 1] for one sample, the Jacobian row of
+/// output o is [v_o ⊙ d ⊗ x̃ | 0 … h̃ … 0], so JᵀJ has the blocks
+/// hidden–hidden G_jj'·Σ z zᵀ (G = VᵀV, fixed within an epoch),
+/// hidden–output v_oj·Σ z h̃ᵀ and output–output Σ h̃ h̃ᵀ (equal for every
+/// output). Σ z zᵀ has the Kronecker structure Σ (d_j·d_j')(x̃_i·x̃_i'):
+/// only its H(H+1)/2 × (n+1)(n+2)/2 distinct sums are accumulated, with
+/// Σ h̃ [z, h̃]ᵀ, sample by sample into buffers of a block of samples and
+/// added by two matrix products per block (about a third of the products
+/// of the full Σ w wᵀ, w = [z, h̃]); the training loop allocates nothing
+/// per sample.
 fn accumulate(network: &FeedForward, samples: &Samples, work: &mut Workspace) -> DVector<f64> {
     let (n, h, outputs) = (network.inputs, network.hidden, network.outputs);
     let hidden_weights = network.hidden_weights();

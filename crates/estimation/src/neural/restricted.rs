@@ -10,58 +10,34 @@
 //! the reflex-wing UAV paper, Eqs. 29–30 (coefficients also as outputs).
 //!
 //! 1. The network (ELM paper, Eqs. 1–2, Fig. 1): input X(i) = the motion
-//!    variables at sample i and the aerodynamic coefficients at i; target
-//!    Z(i+1) = the motion variables at i+1 (with
-//!    [`RestrictedOptions::coefficient_outputs`] also the coefficients at
-//!    i+1, Eq. 30 of the reflex-wing UAV paper). The motion variables are
-//!    the structure's integrated states (χ left out: it is not measured) —
-//!    longitudinal α, θ, q, V or lateral β, φ, p, r, as in the papers — and
-//!    the coefficients those with a free parameter among the structure's
-//!    terms (CL, CD, Cm or CY, Cl, Cn). The controls enter only through the coefficients. For
-//!    training the coefficients come from the measured accelerations and
-//!    angular accelerations ([`crate::reconstruction`], Verma &
-//!    Peyada Eqs. 12–15), on the reconstruction's time base; a pair (i, i+1)
-//!    is used only where both instants were kept and are one sample apart.
-//!    Inputs and targets are scaled column by column to a range (Eq. 3/16,
-//!    [`super::Scaling`]); the network is trained by the given [`Trainer`].
-//! 2. The estimation (ELM paper, Eqs. 11–22): the coefficients of the
-//!    postulated model, evaluated with Θ at the measured flight condition
-//!    of each sample by the model's own aerodynamics
-//!    ([`aeroid_sim::aero::AeroModel::coefficients`]; for the stall model χ
-//!    from the model's separation equations: Eq. 3 with α̇ from the
-//!    differentiated α channel when τ1 = 0, else Eq. 2 integrated along the
-//!    record from χ∞ at the start of each contiguous stretch with the
-//!    project's RK4, α interpolated linearly inside a step), replace the
-//!    measured ones and are propagated through the trained network,
-//!    Y(i+1) = f(X(i), V̄, W̄, Θ) (Eq. 11). The motion variables fed in are
-//!    the measured ones (Eq. 11; the recurrent network's Eq. 23, where they
-//!    are the fed-back training observations), or with
-//!    [`Feedback::Predicted`] the network's own previous prediction, a
-//!    free-running simulation from the measured first sample of each
-//!    contiguous stretch. The cost det(R) (Eqs. 12–15) is minimised by
-//!    relaxation in the shared Gauss–Newton core
-//!    ([`aeroid_numerics::gauss_newton`]): at every iteration
-//!    R = (1/N)·Σ E·Eᵀ (Eq. 13, the full matrix: all outputs share one time
-//!    base) and a Gauss–Newton step (Eqs. 16–20) on ½·Σ EᵀR⁻¹E, the
-//!    residuals whitened by the Cholesky factor of R. The response
-//!    gradients are forward differences (Eq. 19), step
-//!    10⁻⁶·max(|Θ_j|, 10⁻³); with measured feedback Θ reaches the network
-//!    only through the coefficients of the same sample, so they are taken
-//!    through the chain rule, ∂Y/∂Θ_j = Σ_c ∂f/∂C_c·∂C_c/∂Θ_j, each factor
-//!    a forward difference (the network differenced once per coefficient,
-//!    not once per parameter). The Cramér–Rao bounds are the square roots
-//!    of the diagonal of P = [Σ (∂Y/∂Θ)ᵀR⁻¹(∂Y/∂Θ)]⁻¹ (Eqs. 21–22).
-//!    Residuals are in the network's scaled units (det(R) differs from the
-//!    physical one by a constant factor, so the minimum is the same); the
-//!    fits are reported in physical units.
+//!    variables (the structure's integrated states without χ) and the
+//!    aerodynamic coefficients at sample i; target Z(i+1) = the motion
+//!    variables at i+1 (with [`RestrictedOptions::coefficient_outputs`]
+//!    also the coefficients, Eq. 30 of the reflex-wing UAV paper). For
+//!    training the coefficients come from the measured accelerations
+//!    ([`crate::reconstruction`], Verma & Peyada Eqs. 12–15). Inputs and
+//!    targets are scaled column by column (Eq. 3/16, [`super::Scaling`]);
+//!    the network is trained by the given [`Trainer`].
+//! 2. The estimation (ELM paper, Eqs. 11–22): the postulated model's
+//!    coefficients, evaluated with Θ at the measured flight condition of
+//!    each sample ([`aeroid_sim::aero::AeroModel::coefficients`]), replace
+//!    the measured ones and are propagated through the trained network,
+//!    Y(i+1) = f(X(i), V̄, W̄, Θ) (Eq. 11), with the measured motion
+//!    variables fed in (Eq. 11; the recurrent network's Eq. 23) or with
+//!    [`Feedback::Predicted`] the network's own previous prediction. The
+//!    cost det(R) (Eqs. 12–15) is minimised by relaxation in the shared
+//!    Gauss–Newton core ([`aeroid_numerics::gauss_newton`]):
+//!    R = (1/N)·Σ E·Eᵀ (Eq. 13) and a Gauss–Newton step (Eqs. 16–20) on
+//!    ½·Σ EᵀR⁻¹E, the response gradients by forward differences (Eq. 19).
+//!    The Cramér–Rao bounds are the square roots of the diagonal of
+//!    P = [Σ (∂Y/∂Θ)ᵀR⁻¹(∂Y/∂Θ)]⁻¹ (Eqs. 21–22). Residuals are in the
+//!    network's scaled units (the same minimum); fits are in physical units.
 //!
-//! The method's own floor: the network approximates the motion's one-step
-//! map, not exactly, so even on noise-free data the residual at the true Θ
-//! is not zero and the estimate differs from the truth by what the
-//! network's approximation error does to the fit (measured in
-//! `tests/estimators/elm_gauss_newton.rs`). Coefficients computed from Θ that leave the
-//! range the network was trained on are extrapolated; the estimate's notes
-//! count such samples.
+//! The network approximates the motion's one-step map, not exactly, so
+//! even on noise-free data the estimate carries its approximation error
+//! (`tests/estimators/elm_gauss_newton.rs`). Coefficients computed from Θ
+//! outside the range the network was trained on are extrapolated; the
+//! estimate's notes count such samples. User reference: docs/methods.md.
 
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{MissingChannel, Refusal};
@@ -249,8 +225,11 @@ impl<'a> Fit<'a> {
         }
     }
 
-    /// The model's coefficients at every instant with Θ (χ from the
-    /// separation equations, module documentation).
+    /// The model's coefficients at every instant with Θ, by the model's own
+    /// aerodynamics. For the stall model χ comes from its separation
+    /// equations: Eq. 3 with α̇ from the differentiated α channel when
+    /// τ1 = 0, else Eq. 2 integrated along the record from χ∞ at the start
+    /// of each contiguous stretch by the project's RK4 (`separation`).
     fn evaluate_coefficients(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
         self.predicted_at = None;
         for (j, &i) in self.free.iter().enumerate() {

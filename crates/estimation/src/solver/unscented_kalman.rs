@@ -11,78 +11,29 @@
 //!
 //! The filter carries the mean x and a lower-triangular Cholesky factor S
 //! of the covariance, P = S·Sᵀ, never P itself: every covariance it forms
-//! is a product S·Sᵀ, positive semi-definite by construction, where the
-//! covariance form (P⁻ − K·S_y·Kᵀ, or Joseph's form with a statistical H)
-//! loses definiteness to rounding on a noise-free record. Weights and the
-//! scale c = √(n + λ) are the scaled transform's ([`Unscented::points`]):
+//! is a product S·Sᵀ, positive semi-definite by construction. Weights and
+//! the scale c = √(n + λ) are the scaled transform's ([`Unscented::points`]):
 //! χ₀ = x, χ_i = x + c·s_i, χ_{n+i} = x − c·s_i (s_i the columns of S),
 //! W_i = 1/(2c²) for i ≥ 1, W₀ᵐ = λ/c², W₀ᶜ = W₀ᵐ + 1 − α² + β.
 //!
-//! Algorithm 3.1, step by step. Initialisation: S₀ = chol(P₀).
-//! Time update from grid point k − 1 to k: sigma points of (x⁺, S⁺), each
-//! propagated by the model's own integration step, χ'_i = step(χ_i);
-//! x⁻ = Σ Wᵐ_i·χ'_i; S⁻ = qr([√W₁·(χ'_{1…2n} − x⁻), √Q_d])ᵀ, the
-//! triangular factor of the QR decomposition of the compound matrix's
-//! transpose; then S⁻ = cholupdate(S⁻, χ'₀ − x⁻, W₀ᶜ), an update when
-//! W₀ᶜ ≥ 0 and a downdate when W₀ᶜ < 0 (with κ = 0,
-//! W₀ᶜ = 2 + β − α² − 1/α²: at β = 2 negative for α below 0.52, −0.25 at
-//! the method's default α = 0.5). The process noise
-//! Q_d = ∫₀ʰ e^{A·s}·Q_c·e^{Aᵀ·s} ds is taken by the trapezoidal rule
-//! (Q_c + Φ·Q_c·Φᵀ)·h/2 (the UKF has no Jacobian), within O(h³) of the
-//! extended filter's Van Loan Q_d; its square root enters the compound
-//! matrix as the columns √(h/2)·[G, Φ·G] with G·Gᵀ = Q_c. Φ is the
-//! statistical linearisation P_{x'x}·P⁺⁻¹ with
-//! P_{x'x} = Σ Wᶜ_i·(χ'_i − x⁻)(χ_i − x⁺)ᵀ; with the sigma points above
-//! it is the central difference Φ·S⁺ = (χ'_{1…n} − χ'_{n+1…2n})/(2c),
-//! one triangular solve, and it is the pass's transition (with it the RTS
-//! smoother's gain is the unscented RTS smoother's, P_{xx'}·P⁻⁻¹).
-//!
-//! Measurement update at k with the outputs measured there: sigma points
-//! of (x⁻, S⁻) (redrawn: the additive-noise form), Y_i = h(t_k, χ_i) (rows
-//! of the measured outputs), ŷ = Σ Wᵐ_i·Y_i,
-//! S_y = qr([√W₁·(Y_{1…2n} − ŷ), √R])ᵀ and
-//! S_y = cholupdate(S_y, Y₀ − ŷ, W₀ᶜ); P_xy = Σ Wᶜ_i·(χ_i − x⁻)(Y_i − ŷ)ᵀ
-//! = S⁻·(Y_{1…n} − Y_{n+1…2n})ᵀ/(2c); the gain by two triangular solves,
-//! K = (P_xy/S_yᵀ)/S_y; x⁺ = x⁻ + K·(z − ŷ); U = K·S_y and
-//! S⁺ = cholupdate(S⁻, U, −1), one downdate per column of U. A downdate
-//! that would leave a factor without a positive diagonal (the matrix it
-//! stands for no longer positive definite) is an [`Error::Downdate`]
-//! naming the step and time, never a loaded or repaired factor. The
-//! pass's observation matrix is the statistical H = P_xyᵀ·P⁻⁻¹, again a
-//! central difference, H·S⁻ = (Y_{1…n} − Y_{n+1…2n})/(2c); the innovation
-//! covariance the pass keeps is S_y·S_yᵀ.
-//!
-//! The time update's compound matrix is taken in an equivalent form with
-//! fewer rows. Its rows for χ'_{1+i} and χ'_{1+n+i}, rotated together by
-//! 45° (an orthogonal change, so the same S⁻), are the central difference
-//! d_i = (χ'_{1+i} − χ'_{1+n+i})/(2c), column i of Φ·S⁺, and the second
-//! difference e_i = (χ'_{1+i} + χ'_{1+n+i} − 2x⁻)/(2c). States the step
-//! leaves unchanged in every sigma point (the constant parameters of an
-//! augmented model, the states p… of n; `Work::moving`) have d_i = s_i
-//! (their rows of S⁺ itself, not a difference of propagated points),
-//! e_i = 0 and rows of Φ the identity's: Φ's other p rows are one
-//! triangular solve, and the n second differences, non-zero in p columns
-//! only, enter as the p rows of their own triangular factor, so the QR
-//! works on n + p (+ noise) rows instead of 2n. The result is the
-//! algorithm's to rounding.
+//! Algorithm 3.1: S₀ = chol(P₀). Time update (`time_update`): the sigma
+//! points through the model's step, x⁻ = Σ Wᵐ_i·χ'_i,
+//! S⁻ = qr([√W₁·(χ'_{1…2n} − x⁻), √Q_d])ᵀ, then
+//! S⁻ = cholupdate(S⁻, χ'₀ − x⁻, W₀ᶜ); Q_d = (Q_c + Φ·Q_c·Φᵀ)·h/2 by the
+//! trapezoidal rule, Φ the statistical linearisation P_{x'x}·P⁺⁻¹, a
+//! central difference of the sigma points. Measurement update
+//! (`measurement_update`): Y_i = h(t_k, χ_i), ŷ = Σ Wᵐ_i·Y_i,
+//! S_y = qr([√W₁·(Y_{1…2n} − ŷ), √R])ᵀ updated by Y₀ − ŷ,
+//! K = (P_xy/S_yᵀ)/S_y, x⁺ = x⁻ + K·(z − ŷ), S⁺ = cholupdate(S⁻, K·S_y, −1).
+//! A downdate that would leave a factor not positive definite is an
+//! [`Error::Downdate`] naming the step and time, never a repaired factor.
+//! The pass keeps the statistical H = P_xyᵀ·P⁻⁻¹ and the innovation
+//! covariance S_y·S_yᵀ.
 //!
 //! On a linear model the transform is exact and the pass is the linear
 //! Kalman filter's with the trapezoidal Q_d (tests/estimators/kalman_oracle.rs).
-//! No step allocates. A step's sigma points, propagated points, outputs,
-//! compound matrices and every product of its measurement update (ŷ, S_y,
-//! H, P_xy, K, K·S_y, S, S⁻¹, ν), Φ, Φ·G and S·Sᵀ live in buffers
-//! allocated once per pass (`Work`; a buffer whose shape follows the
-//! number of measured outputs keeps its storage when it changes); what
-//! the pass keeps goes from them into buffers reserved once per pass
-//! ([`aeroid_numerics::kalman::kept`]); tests/no_allocation.rs counts a whole pass's
-//! allocations. The model steps the sigma points and evaluates their
-//! outputs in one call each ([`StateSpaceModel::step_points_into`],
-//! [`StateSpaceModel::outputs_points_into`]), so that it takes what they
-//! share once; the QR is a Householder triangularisation in place
-//! (`triangularise`), the products and triangular solves are written
-//! for the shapes at hand (S lower triangular, a few rows), and these
-//! kernels and the rank-one updates are compiled for AVX2 where the CPU
-//! has it (`simd::wide`: the same numbers bit for bit).
+//! No step allocates (`Work`; tests/no_allocation.rs). The user reference
+//! is docs/methods.md, "Augmented-state unscented Kalman filter".
 
 use crate::model::observations::Observations;
 use crate::model::state_space::{Points, StateSpaceModel};
@@ -220,6 +171,14 @@ impl Weights {
 /// columns) and its products. Matrices whose shape depends on p or m
 /// keep their storage when it changes (`kalman::resize`): a pass
 /// allocates nothing per grid point (tests/no_allocation.rs).
+///
+/// Every product of the measurement update (ŷ, S_y, H, P_xy, K, K·S_y, S,
+/// S⁻¹, ν), Φ, Φ·G and S·Sᵀ lives here; what the pass keeps goes from
+/// these into buffers reserved once per pass
+/// ([`aeroid_numerics::kalman::kept`]). The products and triangular solves
+/// are written for the shapes at hand (S lower triangular, a few rows), and
+/// these kernels and the rank-one updates are compiled for AVX2 where the
+/// CPU has it (`simd::wide`: the same numbers bit for bit).
 struct Work {
     points: DMatrix<f64>,
     moved: DMatrix<f64>,
@@ -337,7 +296,7 @@ impl Work {
     /// The number p of leading states the step moved: every sigma point's
     /// states p… came through it unchanged (the constant parameters of an
     /// augmented model), so that Φ's rows p… are the identity's and the
-    /// propagated spread's columns p… are S⁺'s own (module header).
+    /// propagated spread's columns p… are S⁺'s own (`time_update`).
     fn moving(&self) -> usize {
         let n = self.points.nrows();
         let mut p = 0;
@@ -357,8 +316,40 @@ impl Work {
 }
 
 /// The time update from grid point k − 1 (at `previous`, a step h before
-/// k) to k, in place; the statistical transition Φ into `work.transition`
-/// (module header).
+/// k) to k, in place; the statistical transition Φ into `work.transition`.
+///
+/// Sigma points of (x⁺, S⁺), each propagated by the model's own
+/// integration step, χ'_i = step(χ_i) (all in one call,
+/// [`StateSpaceModel::step_points_into`]); x⁻ = Σ Wᵐ_i·χ'_i;
+/// S⁻ = qr([√W₁·(χ'_{1…2n} − x⁻), √Q_d])ᵀ, the triangular factor of the QR
+/// decomposition of the compound matrix's transpose (a Householder
+/// triangularisation in place, `triangularise`); then
+/// S⁻ = cholupdate(S⁻, χ'₀ − x⁻, W₀ᶜ), an update when W₀ᶜ ≥ 0 and a
+/// downdate when W₀ᶜ < 0 (with κ = 0, W₀ᶜ = 2 + β − α² − 1/α²: at β = 2
+/// negative for α below 0.52, −0.25 at the method's default α = 0.5).
+///
+/// The process noise Q_d = ∫₀ʰ e^{A·s}·Q_c·e^{Aᵀ·s} ds is taken by the
+/// trapezoidal rule (Q_c + Φ·Q_c·Φᵀ)·h/2 (the UKF has no Jacobian), within
+/// O(h³) of the extended filter's Van Loan Q_d; its square root enters the
+/// compound matrix as the columns √(h/2)·[G, Φ·G] with G·Gᵀ = Q_c. Φ is the
+/// statistical linearisation P_{x'x}·P⁺⁻¹ with
+/// P_{x'x} = Σ Wᶜ_i·(χ'_i − x⁻)(χ_i − x⁺)ᵀ; with these sigma points it is
+/// the central difference Φ·S⁺ = (χ'_{1…n} − χ'_{n+1…2n})/(2c), one
+/// triangular solve, and it is the pass's transition (with it the RTS
+/// smoother's gain is the unscented RTS smoother's, P_{xx'}·P⁻⁻¹).
+///
+/// The compound matrix is taken in an equivalent form with fewer rows. Its
+/// rows for χ'_{1+i} and χ'_{1+n+i}, rotated together by 45° (an
+/// orthogonal change, so the same S⁻), are the central difference
+/// d_i = (χ'_{1+i} − χ'_{1+n+i})/(2c), column i of Φ·S⁺, and the second
+/// difference e_i = (χ'_{1+i} + χ'_{1+n+i} − 2x⁻)/(2c). States the step
+/// leaves unchanged in every sigma point (the constant parameters of an
+/// augmented model, the states p… of n; `Work::moving`) have d_i = s_i
+/// (their rows of S⁺ itself), e_i = 0 and rows of Φ the identity's: Φ's
+/// other p rows are one triangular solve, and the n second differences,
+/// non-zero in p columns only, enter as the p rows of their own triangular
+/// factor, so the QR works on n + p (+ noise) rows instead of 2n. The
+/// result is the algorithm's to rounding.
 #[allow(clippy::too_many_arguments)]
 fn time_update<M: StateSpaceModel + ?Sized>(
     model: &M,
@@ -519,7 +510,19 @@ fn transition_times(
 }
 
 /// The measurement update of (x, S) with the outputs `present` measured at
-/// t, in place (module header); H, ν, S, S⁻¹ and K into `work`.
+/// t, in place; H, ν, S, S⁻¹ and K into `work`.
+///
+/// Sigma points of (x⁻, S⁻) (redrawn: the additive-noise form),
+/// Y_i = h(t_k, χ_i) (rows of the measured outputs, all in one call,
+/// [`StateSpaceModel::outputs_points_into`]), ŷ = Σ Wᵐ_i·Y_i,
+/// S_y = qr([√W₁·(Y_{1…2n} − ŷ), √R])ᵀ and
+/// S_y = cholupdate(S_y, Y₀ − ŷ, W₀ᶜ); P_xy = Σ Wᶜ_i·(χ_i − x⁻)(Y_i − ŷ)ᵀ
+/// = S⁻·(Y_{1…n} − Y_{n+1…2n})ᵀ/(2c); the gain by two triangular solves,
+/// K = (P_xy/S_yᵀ)/S_y; x⁺ = x⁻ + K·(z − ŷ); U = K·S_y and
+/// S⁺ = cholupdate(S⁻, U, −1), one downdate per column of U. A downdate
+/// that would leave a factor without a positive diagonal is an
+/// [`Error::Downdate`]. The statistical H = P_xyᵀ·P⁻⁻¹ is again a central
+/// difference, H·S⁻ = (Y_{1…n} − Y_{n+1…2n})/(2c).
 #[allow(clippy::too_many_arguments)]
 fn measurement_update<M: StateSpaceModel + ?Sized>(
     model: &M,
@@ -740,7 +743,7 @@ fn weighted_mean(weights: &Weights, moved: &DMatrix<f64>, mean: &mut DVector<f64
 /// (Z_{1…n} − Z_{n+1…2n})/(2c) of the columns of `images` (the sigma
 /// points' images Z_i) into `into` (its rows × n): the central difference
 /// that is P_{z x}·P⁻¹·S for the covariance P = S·Sᵀ the points were drawn
-/// from (module header).
+/// from (`time_update`).
 fn central_difference_into<S>(
     images: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>,
     n: usize,

@@ -16,49 +16,36 @@
 //!   with a real gain G — no phase shift at any frequency;
 //! - the gain is exact for polynomials up to degree d; for a sinusoid its
 //!   error grows like (ω·T)^(d+1) (d odd) or (ω·T)^d (d even), T = m/rate the
-//!   half-width. Degrees 2p−1 and 2p give the same centred derivative
-//!   (the even term has no slope at the centre), so the default degree 4 is
-//!   the quartic/cubic filter with an (ω·T)⁴ error;
+//!   half-width. Degrees 2p−1 and 2p give the same centred derivative, so
+//!   the default degree 4 is the quartic/cubic filter with an (ω·T)⁴ error;
 //! - [`Differentiator::bandwidth`] gives, for a rate, the frequency up to
-//!   which |G − 1| < 1 % and the frequency where G falls to ½ (the smoothing
-//!   cut-off). Default (d = 4, T = 0.1 s): at 100 Hz (10 samples each
-//!   side) the gain error is 2e-5 at 0.5 Hz and 4e-4 at 1 Hz, within 1 % up
-//!   to ≈ 2.3 Hz, ½ at ≈ 7.3 Hz; at 25 Hz (3 each side, T = 0.12 s) within
-//!   1 % up to ≈ 1.9 Hz, ½ at ≈ 5.8 Hz. Rigid-body motion of a transport
-//!   aircraft lies below ~1 Hz, so the default passes it nearly unchanged
-//!   (accuracy first: the ideal-data gate of 1e-3 relative needs it) and
-//!   attenuates sensor noise only above a few Hz; for noisy data a wider
-//!   window (e.g. T = 0.2 s: 1 % to ≈ 1.2 Hz, ½ at ≈ 3.6 Hz) or degree 2
-//!   smooths more at the price of a gain error.
+//!   which |G − 1| < 1 % and the frequency where G falls to ½ (the
+//!   smoothing cut-off); the default's figures are on [`Differentiator`].
 //!
 //! The first and last m samples have no centred window and get no
 //! derivative: the derivative channel is shorter than its source.
 //!
-//! Steps. A step in a control surface makes the angular accelerations jump
-//! (a simulated step input has no actuator dynamics), and a window across
-//! the jump smears it into the neighbouring samples: 1–7 % errors in the
-//! moment derivatives on noise-free step-input data, and on the 25 Hz
-//! flight-test profile a bias towards zero (Cl_p −9.5 %, 22 σ over 100
-//! runs) easily taken for the errors in variables the reflex-wing UAV paper
-//! reports. Given the
-//! instants where the derivative may jump
+//! Steps. A step in a control surface makes the angular accelerations jump,
+//! and a window across the jump smears it into the neighbouring samples.
+//! Given the instants where the derivative may jump
 //! ([`Differentiator::differentiate_with_breaks`]; [`step_times`] finds
-//! them in a control channel: each step, and both corners of a fast ramp,
-//! as surfaces moved by actuators make), a sample whose window would reach across one
-//! gets no derivative (a dropout, which the estimators leave out): a window
-//! may end at a break but not pass it (the continuous signal's sample at a
-//! break ends the piece before it and starts the next). This costs 2m − 1
-//! samples per step. The alternative, windows shifted off-centre to stay
-//! inside a piece, keeps those samples but multiplies their noise (an
-//! end-point slope of a 7-sample quartic fit), right where the control
-//! regressors have their leverage: over the same 100 runs it tripled the
-//! spread of Cl_p and left the Cramér–Rao bounds 1.5–2.8× optimistic,
-//! while the dropouts give σ_MC/CRB 0.76–1.19.
+//! them in a control channel), a sample whose window would reach across one
+//! gets no derivative (a dropout, which the estimators leave out).
 
 use crate::Channel;
 
 /// Settings of the local polynomial differentiator (a settings table
 /// writes them as `differentiator = { half_width = "0.1 s", degree = 4 }`).
+///
+/// The default (d = 4, T = 0.1 s): at 100 Hz (10 samples each side) the
+/// gain error is 2e-5 at 0.5 Hz and 4e-4 at 1 Hz, within 1 % up to
+/// ≈ 2.3 Hz, ½ at ≈ 7.3 Hz; at 25 Hz (3 each side, T = 0.12 s) within 1 %
+/// up to ≈ 1.9 Hz, ½ at ≈ 5.8 Hz. Rigid-body motion of a transport
+/// aircraft lies below ~1 Hz, so the default passes it nearly unchanged
+/// (accuracy first: the ideal-data gate of 1e-3 relative needs it) and
+/// attenuates sensor noise only above a few Hz; for noisy data a wider
+/// window (e.g. T = 0.2 s: 1 % to ≈ 1.2 Hz, ½ at ≈ 3.6 Hz) or degree 2
+/// smooths more at the price of a gain error.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Differentiator {
@@ -121,8 +108,22 @@ impl Differentiator {
     }
 
     /// As [`Differentiator::differentiate`], with no window crossing any of
-    /// `breaks` (sorted instants, s, where the derivative may jump; see the
-    /// module documentation).
+    /// `breaks` (sorted instants, s, where the derivative may jump).
+    ///
+    /// A window may end at a break but not pass it (the continuous signal's
+    /// sample at a break ends the piece before it and starts the next); a
+    /// sample whose window would cross one gets no derivative (a dropout).
+    /// Without the breaks a step input's jump in the angular accelerations
+    /// gives 1–7 % errors in the moment derivatives on noise-free data, and
+    /// on the 25 Hz flight-test profile a bias towards zero (Cl_p −9.5 %,
+    /// 22 σ over 100 runs) easily taken for the errors in variables the
+    /// reflex-wing UAV paper reports. The dropouts cost 2m − 1 samples per
+    /// step. Windows shifted off-centre to stay inside a piece would keep
+    /// those samples but multiply their noise (an end-point slope of a
+    /// 7-sample quartic fit) right where the control regressors have their
+    /// leverage: over the same 100 runs that tripled the spread of Cl_p and
+    /// left the Cramér–Rao bounds 1.5–2.8× optimistic, while the dropouts
+    /// give σ_MC/CRB 0.76–1.19.
     pub fn differentiate_with_breaks(&self, channel: &Channel, breaks: &[f64]) -> Channel {
         let m = self.half_window(channel.rate);
         let count = channel.times.len();
@@ -513,7 +514,7 @@ mod tests {
         assert!(derivative.times.is_empty() && derivative.values.is_empty());
     }
 
-    /// The documented bandwidths of the default filter (module doc), to 0.1 Hz,
+    /// The documented bandwidths of the default filter ([`Differentiator`]), to 0.1 Hz,
     /// and its gain errors at 0.5 and 1 Hz at 100 Hz (what the ideal-data
     /// equation-error gate of 1e-3 relative needs: well below it).
     #[test]

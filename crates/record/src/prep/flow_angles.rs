@@ -31,24 +31,11 @@
 //! linearly (angles after unwrapping); a dropout is not bridged.
 //!
 //! # Error from the channels' resolution
-//! To first order, an error δx_i in input i moves the angles by
-//! `δα = Σ_i ∂α/∂x_i·δx_i` (likewise β). A channel quantized to a
-//! resolution r_i has an error within ±r_i/2, uniform with standard
-//! deviation `σ_i = r_i/√12` when the signal crosses many steps, so
-//! `σ_α² = Σ_i (∂α/∂x_i)²·r_i²/12` and `|δα| ≤ Σ_i |∂α/∂x_i|·r_i/2`
-//! ([`resolution_error`]; the partials by central differences of the exact
-//! Eqs. 1–6). An input interpolated at weight w between two samples
-//! averages two independent errors: its σ is √(w² + (1 − w)²)·r_i/√12
-//! (the bound stays r_i/2). Wings level with small γ and β the dominant terms are
-//! `∂α/∂θ = 1`, `∂α/∂γ ≈ −V_g/V_h` and `∂β/∂ψ = −1`, `∂β/∂χ ≈ V_g/V_h`
-//! (V_h the horizontal airspeed); the wind enters through the cross-track
-//! component, `∂β/∂ψ_w ≈ V_w·cos(ψ_w − ψ)/V`. With the QAR of Wang et al.
-//! Table 1 (θ, φ 0.1°, ψ 0.3°, γ 0.35°, χ 1°, V_g 0.5 kt, V_w 0.1 kt, ψ_w
-//! 0.5°) that is σ_α ≈ √(0.029² + 0.101²) ≈ 0.105° and
-//! σ_β ≈ √(0.087² + 0.289²) ≈ 0.30°: the 1° track resolution dominates β.
-//!
-//! What the formula predicts and what the gusts add is measured in
-//! `tests/simulation/flow_angles.rs` (docs/cli.md, `derive`).
+//! A channel quantized to a resolution r_i has an error within ±r_i/2,
+//! σ_i = r_i/√12, so to first order `σ_α² = Σ_i (∂α/∂x_i)²·r_i²/12` and
+//! `|δα| ≤ Σ_i |∂α/∂x_i|·r_i/2`, likewise β ([`resolution_error`]). With
+//! the QAR of Wang et al. Table 1, σ_α ≈ 0.105° and σ_β ≈ 0.30°: the 1°
+//! track resolution dominates β (`tests/simulation/flow_angles.rs`).
 
 use crate::{Channel, FlightRecord, derived};
 use aeroid_core::error::{Error, Result};
@@ -191,6 +178,23 @@ pub struct ResolutionError {
 }
 
 /// The error of (α, β) that quantization to `resolutions` predicts at `x`.
+///
+/// To first order, an error δx_i in input i moves the angles by
+/// `δα = Σ_i ∂α/∂x_i·δx_i` (likewise β). A channel quantized to a
+/// resolution r_i has an error within ±r_i/2, uniform with standard
+/// deviation `σ_i = r_i/√12` when the signal crosses many steps; the
+/// partials are central differences of the exact Eqs. 1–6. An input
+/// interpolated at weight w between two samples averages two independent
+/// errors: its σ is √(w² + (1 − w)²)·r_i/√12 (the bound stays r_i/2).
+/// Wings level with small γ and β the dominant terms are `∂α/∂θ = 1`,
+/// `∂α/∂γ ≈ −V_g/V_h` and `∂β/∂ψ = −1`, `∂β/∂χ ≈ V_g/V_h` (V_h the
+/// horizontal airspeed); the wind enters through the cross-track
+/// component, `∂β/∂ψ_w ≈ V_w·cos(ψ_w − ψ)/V`. With the QAR of Wang et al.
+/// Table 1 (θ, φ 0.1°, ψ 0.3°, γ 0.35°, χ 1°, V_g 0.5 kt, V_w 0.1 kt, ψ_w
+/// 0.5°) that is σ_α ≈ √(0.029² + 0.101²) ≈ 0.105° and
+/// σ_β ≈ √(0.087² + 0.289²) ≈ 0.30°. What the formula predicts and what
+/// the gusts add is measured in `tests/simulation/flow_angles.rs`
+/// (docs/cli.md, `derive`).
 pub fn resolution_error(x: &Inputs, wind: Wind, resolutions: &[f64; 8]) -> ResolutionError {
     let partials = sensitivities(x, wind);
     let mut variance = (0.0, 0.0);

@@ -3,87 +3,42 @@
 //! System Identification", 2nd ed., ch. 7) that the extended (`ekf`) and
 //! the unscented (`ukf`) filters share: everything but the filter pass,
 //! which each method gives [`augmented_estimate`]. Settings
-//! `[methods.ekf]` and `[methods.ukf]` ([`FilterSettings`]).
+//! `[methods.ekf]` and `[methods.ukf]` ([`FilterSettings`]); the user
+//! reference is docs/methods.md, "Augmented-state extended Kalman filter".
 //!
 //! **Model** (the note's Eqs. 1–3): ẋ = f(x, u, θ) + w (Eq. 1),
 //! z_k = h(x(t_k), u, θ) + v_k (Eq. 2), the free parameters θ_a made states
 //! with θ̇_a = w_PN (Eq. 3): constant when the pseudonoise intensity Q_PN is
-//! zero, a random walk otherwise. The postulated model is the record-driven
-//! state-space view output error simulates
-//! ([`DrivenStateSpace::for_record`]: integrated states from the record's
-//! first samples, the other flight-path states fed in as pseudo-controls);
-//! [`Augmented`] makes θ_a states (Jategaonkar Eq. 7.8). On a linear
-//! structure the postulated model is its linear state-space model driven by the
-//! record's input channels ([`LinearStructure::for_record`]: its exact
-//! discretisation, the model file's `interpolation`), the free entries of
+//! zero, a random walk otherwise. f and h are output error's record-driven
+//! model ([`DrivenStateSpace::for_record`]); [`Augmented`] makes θ_a states
+//! (Jategaonkar Eq. 7.8). On a linear structure the model is its linear
+//! state-space model ([`LinearStructure::for_record`]), the free entries of
 //! A, B, C, D and the biases the parameter states ([`Filtered`]).
 //!
 //! **Filter**: the continuous–discrete EKF of
-//! [`extended_kalman::filter`] (Jategaonkar §7.2, Eqs. 7.11–7.19: the
-//! transcript of the note does not print the filter; it refers to Gelb,
-//! whose Table 6.1-1 is the same filter).
+//! [`extended_kalman::filter`](crate::solver::extended_kalman::filter)
+//! (Jategaonkar §7.2, Eqs. 7.11–7.19; the note refers to Gelb, whose
+//! Table 6.1-1 is the same filter), or the unscented one.
 //!
 //! **Noise** (the note's "EKF for parameter estimation" section):
-//! 1. R from the measurements by Fourier decomposition (the note's ref. 7;
-//!    the form of Klein & Morelli 2006, §11.2, optimal Fourier smoothing):
-//!    each output's samples, detrended by the line through their end points
-//!    so that the periodic extension has no jump, have the spectrum
-//!    X_k = Σ x_i·e^{−2πi·ik/N}; the motion lies below the bandwidth f_c,
-//!    white noise of variance σ² spreads evenly with E|X_k|² = N·σ², so
-//!    σ² = (Σ_{f_k > f_c} |X_k|²)/(N·M) over the M bins above f_c. By
-//!    Parseval, Σ_all |X_k|² = N·Σ x_i², so only the bins below f_c are
-//!    transformed ([`fourier_noise_variance`]).
+//! 1. R by Fourier decomposition (the note's ref. 7; Klein & Morelli 2006,
+//!    §11.2): σ² = (Σ_{f_k > f_c} |X_k|²)/(N·M) over the M bins above the
+//!    motion's bandwidth f_c ([`fourier_noise_variance`]).
 //! 2. The residual-correlation method (the note's ref. 6, Mehra, "On the
 //!    identification of variances and adaptive Kalman filtering", IEEE TAC
-//!    15(2), 1970; `tuning`): after a pass, the innovations over the
-//!    second half of the record (past the parameters' transient) give R
-//!    and the integrated states' process noise for the next. By default
-//!    Mehra's method itself (his §IV, Eqs. 13, 29, 30, 33): the
-//!    innovations' autocorrelations at lags 0 … k, k the number of
-//!    integrated states (`correlation_lags`), give M·Hᵀ, R = C₀ − H·M·Hᵀ
-//!    and the diagonal of the discrete process noise, Q_c = Q_d/h. The
-//!    first pass runs with no process noise; Mehra's method holds for any
-//!    constant gain, so that pass's innovations already measure the noise
-//!    the model lacks (a gust on β, p and r, for one). A pass run with
-//!    Mehra's noise must make the record more likely than the pass it
-//!    came from (the innovations' −ln L = ½·Σ(νᵀS⁻¹ν + ln det 2πS), lower:
-//!    the noise that makes the record more likely is the better one, the
-//!    maximum-likelihood criterion for it): where it does not (on the
-//!    stall model the first pass's innovations are the linearisation's
-//!    error, not noise) it is discarded, not counted among the passes, and
-//!    the passes go on from the pass before with zero-lag covariance
-//!    matching: R = C₀ − H·P⁻·Hᵀ and Q_d += K·(C₀ − S)·Kᵀ, the update of
-//!    `correlation_lags = 0`, which raises Q in steps proportional to the
-//!    gain it had and ends orders of magnitude low where the model lacks
-//!    process noise. The next pass starts from the parameters the last one
-//!    ended with. The passes stop when every output's mean normalised
-//!    squared innovation ν²/S is within [`TUNED`] of 1, or after `passes`.
+//!    15(2), 1970, §IV, Eqs. 13, 29, 30, 33; `tuning`): after each pass the
+//!    innovations' autocorrelations give R and the integrated states'
+//!    process noise for the next; a pass that makes the record less likely
+//!    (−ln L = ½·Σ(νᵀS⁻¹ν + ln det 2πS)) is discarded for zero-lag
+//!    covariance matching. The passes stop when every output's mean ν²/S
+//!    is within [`TUNED`] of 1, or after `passes`.
 //!
-//! **Estimate**: the final filtered augmented state and covariance (the
-//! filter's estimate given the whole record: with constant parameters the
-//! last point holds all the information; the note averages the last
-//! segment of the histories instead, which lags a tracked parameter and
-//! whose σ it does not define). θ starts from equation error's estimate
-//! (`start = "ee"`) when that method serves the structure: the EKF is
-//! linearised about its running estimate, and a start near the optimum
-//! keeps the early transient, where a wide prior makes large gains act on
-//! a poor linearisation, short; regression costs a fraction of a pass.
-//! The prior σ of each parameter state is `initial_uncertainty` times
-//! max(|θ₀|, 0.1), wide enough that the data, not the start, decide.
-//!
-//! **Status**: converged only when (a) every parameter has settled: over
-//! the last [`SETTLING_FRACTION`] of the record it moves by less than 2σ
-//! (the expected move of a settled constant-parameter estimate there is
-//! about σ/3); (b) the data identified it: σ below σ₀/√2, i.e. the data's
-//! information exceeds the prior's (the note's X-31 lateral-force
-//! parameters, whose σ "decreased little", fail this). Otherwise
-//! unidentified (b) or unsettled (a) with the reason. Beside the status,
-//! innovations inconsistent with their predicted covariance (an output's
-//! mean ν²/S beyond [`CONSISTENT`] of 1) are a diagnosis with that ratio.
-//!
-//! **Histories**: θ_a and σ at every grid point of the last pass, written
-//! as CSV by [`History::write_csv`], and by the method when the setting
-//! `history` names a file (`aeroid estimate --set history='"h.csv"'`).
+//! **Estimate**: the final filtered augmented state and covariance, θ
+//! started from equation error (`start = "ee"`) where it serves. **Status**:
+//! converged when every parameter has settled over the last
+//! [`SETTLING_FRACTION`] of the record and the data identified it (σ below
+//! σ₀/√2); innovations beyond [`CONSISTENT`] are a diagnosis. **Histories**:
+//! θ_a and σ at every grid point of the last pass ([`History::write_csv`]).
 
 use crate::estimate::{Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status};
 use crate::estimator::{Refusal, Settings, parse_settings};
@@ -508,7 +463,13 @@ fn check(method: &str, record: &FlightRecord, structure: Filtered) -> Result<()>
     Ok(())
 }
 
-/// The start θ (module header) and a note saying which.
+/// The start θ and a note saying which: equation error's estimate
+/// (`start = "ee"`) when that method serves the structure. The EKF is
+/// linearised about its running estimate, and a start near the optimum
+/// keeps the early transient, where a wide prior makes large gains act on
+/// a poor linearisation, short; regression costs a fraction of a pass. The
+/// prior σ of each parameter state is `initial_uncertainty` times
+/// max(|θ₀|, 0.1), wide enough that the data, not the start, decide.
 fn start_values(
     record: &FlightRecord,
     structure: Filtered,
