@@ -2,7 +2,7 @@
 //! a panic — and a departing simulation keeps the trace computed so far.
 
 use crate::common;
-use aeroid::Error;
+use aeroid::sim::Error;
 use aeroid::sim::aircraft::Aircraft;
 use aeroid::sim::scenario::Scenario;
 use std::path::Path;

@@ -6,9 +6,9 @@
 //! channels, infinite cells, an empty record) is refused, not flown.
 
 use crate::common;
-use aeroid::Error;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::Profile;
+use aeroid::sim::Error;
 use aeroid::sim::aircraft::Aircraft;
 use aeroid::sim::scenario::Scenario;
 use aeroid::units::DEG;
@@ -214,7 +214,10 @@ fn cli_simulate_with_a_tiny_step_fails_cleanly() {
 
 // --- Recorder profiles -------------------------------------------------------
 
-fn profile_with(test: &str, edit: impl Fn(String) -> String) -> (PathBuf, aeroid::Result<Profile>) {
+fn profile_with(
+    test: &str,
+    edit: impl Fn(String) -> String,
+) -> (PathBuf, aeroid::record::Result<Profile>) {
     let folder = common::temp_folder(test);
     let path = common::write(
         &folder,
@@ -345,15 +348,33 @@ fn a_study_with_billions_of_runs_is_refused() {
     );
     let error = aeroid::eval::study::Study::load(crate::common::registry(), path.to_str().unwrap())
         .unwrap_err();
+    let message = error.to_string();
+    assert!(
+        message.starts_with(&path.display().to_string()),
+        "{message}"
+    );
+    let problems_of_study: Vec<String> = error
+        .problems()
+        .expect("a validation error")
+        .iter()
+        .map(|p| p.to_string())
+        .collect();
+    assert_eq!(problems_of_study.len(), 1, "{problems_of_study:?}");
     assert_eq!(
-        only_problem(&error, &path),
+        problems_of_study[0],
         "runs: 4000000000 is above the most runs per sweep point, 1000000 (statistics of a thousand runs are within a few percent; a million runs of a one-second fit take eleven days of one core)"
     );
     let mut study =
         aeroid::eval::study::Study::load(crate::common::registry(), "attas-lateral-acceptance")
             .unwrap();
     let error = study.set_runs(0, "--runs").unwrap_err();
-    assert_eq!(problems(&error), ["--runs: must be at least 1"]);
+    let problems_of_runs: Vec<String> = error
+        .problems()
+        .expect("a validation error")
+        .iter()
+        .map(|p| p.to_string())
+        .collect();
+    assert_eq!(problems_of_runs, ["--runs: must be at least 1"]);
     study.set_runs(3, "--runs").unwrap();
     assert_eq!(study.runs, 3);
 }

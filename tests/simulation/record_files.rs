@@ -4,9 +4,9 @@
 //! scenario's default profile, and `check` on a profile.
 
 use crate::common;
-use aeroid::Error;
 use aeroid::record::recorder::{Profile, profile_for};
 use aeroid::record::{Channel, FlightRecord};
+use aeroid::sim::Error;
 use aeroid::sim::scenario::Scenario;
 use aeroid::sim::truth::{RunTruth, TruthKind};
 use aeroid::units::{DEG, FOOT, KNOT};
@@ -197,7 +197,7 @@ fn import_converts_units_to_si() {
 }
 
 fn csv_error(
-    result: aeroid::Result<aeroid::record::import::ImportOutcome>,
+    result: aeroid::record::Result<aeroid::record::import::ImportOutcome>,
 ) -> (u64, String, String) {
     match result {
         Err(Error::Csv {

@@ -24,10 +24,10 @@ impl fmt::Display for Problem {
 pub struct Problems(pub Vec<Problem>);
 
 impl Problems {
-    pub fn push(&mut self, field: impl Into<String>, message: impl Into<String>) {
+    pub fn push(&mut self, field: impl Into<String>, message: impl fmt::Display) {
         self.0.push(Problem {
             field: field.into(),
-            message: message.into(),
+            message: message.to_string(),
         });
     }
 
@@ -102,6 +102,45 @@ pub enum Error {
         message: String,
     },
 
+    /// A unit that is not one of a dimension's (`dimension` as its label).
+    #[error("unit '{unit}' is not a unit of {dimension}; accepted: {accepted}")]
+    Unit {
+        unit: String,
+        dimension: &'static str,
+        accepted: String,
+    },
+
+    /// A quantity's text that does not start with a number.
+    #[error("'{text}' does not start with a number")]
+    NotANumber { text: String },
+
+    /// A value that is not a finite number (`value` as written).
+    #[error("{value} is not a finite number")]
+    NotFinite { value: String },
+
+    /// A memory budget variable that does not hold a size.
+    #[error(
+        "{variable}='{text}' is not a memory size; give bytes or a number with kB, MB, GB, TB, KiB, MiB, GiB or TiB"
+    )]
+    MemoryBudget {
+        variable: &'static str,
+        text: String,
+    },
+
+    /// `count` items of `item_bytes` each that do not fit the memory budget.
+    #[error(
+        "{what} would need {} × {item_bytes} bytes = {}, more than the memory budget of {budget}",
+        crate::limits::count_text(*count),
+        crate::limits::bytes_text(*bytes)
+    )]
+    Memory {
+        what: String,
+        count: f64,
+        item_bytes: usize,
+        bytes: f64,
+        budget: crate::limits::Budget,
+    },
+
     #[error("no trim: {0}")]
     Trim(String),
 
@@ -135,6 +174,22 @@ pub enum Error {
 }
 
 impl Error {
+    /// The refusal of an estimator, when this is one.
+    pub fn refusal(&self) -> Option<&crate::refusal::Refusal> {
+        match self {
+            Error::Refused(refusal) => Some(refusal),
+            _ => None,
+        }
+    }
+
+    /// The problems found in a file that does not validate.
+    pub fn problems(&self) -> Option<&[Problem]> {
+        match self {
+            Error::Invalid { problems, .. } => Some(problems),
+            _ => None,
+        }
+    }
+
     /// The error of a write: a failure of the file system reported as a
     /// read ([`Error::Io`]) becomes a [`Error::Write`].
     pub fn as_write(self) -> Error {

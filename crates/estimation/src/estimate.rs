@@ -377,10 +377,7 @@ impl Estimate {
     pub fn write_json(&self, path: &Path) -> Result<()> {
         let text = serde_json::to_string_pretty(self)
             .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
-        std::fs::write(path, text).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        aeroid_core::error::write_text(path, &text)
     }
 
     pub fn read_json(path: &Path) -> Result<Estimate> {

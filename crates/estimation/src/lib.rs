@@ -55,3 +55,5 @@ pub const CHANNELS_READ: &[&str] = &[
     "density",
     "chi",
 ];
+
+pub use aeroid_core::error::{Error, Result};

@@ -3,6 +3,7 @@
 //! studies.
 
 pub mod axis;
+pub mod error;
 pub mod gate;
 pub mod histories;
 pub mod journal;
@@ -13,3 +14,5 @@ pub mod run;
 pub mod score;
 pub mod study;
 pub mod summary;
+
+pub use error::{Error, Result};

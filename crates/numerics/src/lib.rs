@@ -14,3 +14,5 @@ pub mod status;
 
 pub use kalman::kept;
 pub use status::Status;
+
+pub use aeroid_core::error::{Error, Result};

@@ -21,6 +21,7 @@
 //! never omitted, so a channel's time base shows where a sample was due).
 
 pub mod derived;
+pub mod error;
 pub mod import;
 pub mod prep;
 pub mod quality;
@@ -28,7 +29,8 @@ pub mod recorder;
 
 use aeroid_core::csv_table::CsvTable;
 use aeroid_core::csv_table::first_disorder;
-use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+pub use aeroid_core::error::{Error, Result};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::paths;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
@@ -689,12 +691,10 @@ pub(crate) fn shortest(digits: &mut zmij::Buffer, value: f64) -> &str {
 }
 
 /// A channel name must be usable as a CSV header and file name.
-pub(crate) fn check_name(name: &str) -> Result<(), String> {
+pub(crate) fn check_name(name: &str) -> std::result::Result<(), error::Error> {
     let allowed = |c: char| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.');
     if name.is_empty() || !name.chars().all(allowed) {
-        Err(format!(
-            "channel name '{name}' must be non-empty and use only letters, digits, '_', '-' and '.'"
-        ))
+        Err(error::Error::ChannelName { name: name.into() })
     } else {
         Ok(())
     }

@@ -307,7 +307,7 @@ impl Profile {
             path: self.path.clone(),
             problems: vec![aeroid_core::error::Problem {
                 field: "channels.rate".into(),
-                message,
+                message: message.to_string(),
             }],
         })?;
         let mut rng = random::stream(seed, streams::RECORDER);
@@ -413,15 +413,16 @@ impl Profile {
     pub fn with_channel_rates(
         &self,
         rates: &[(String, f64)],
-    ) -> std::result::Result<Profile, String> {
+    ) -> std::result::Result<Profile, crate::error::Error> {
         let mut profile = self.clone();
         for (name, rate) in rates {
             let channel = profile
                 .channels
                 .iter_mut()
                 .find(|c| c.measurand.name == name)
-                .ok_or_else(|| {
-                    format!("the profile '{}' records no channel '{name}'", self.name)
+                .ok_or_else(|| crate::error::Error::NoChannel {
+                    profile: self.name.clone(),
+                    channel: name.clone(),
                 })?;
             channel.rate = *rate;
             profile.name += &format!("@{name}:{rate}Hz");
@@ -432,16 +433,16 @@ impl Profile {
     /// The same profile without the channels `missing`, which the record
     /// then states as absent, named `NAME−CHANNEL,…`; an error names a
     /// channel the profile does not record.
-    pub fn without(&self, missing: &[String]) -> std::result::Result<Profile, String> {
+    pub fn without(&self, missing: &[String]) -> std::result::Result<Profile, crate::error::Error> {
         let mut profile = self.clone();
         for name in missing {
             let before = profile.channels.len();
             profile.channels.retain(|c| c.measurand.name != name);
             if profile.channels.len() == before {
-                return Err(format!(
-                    "the profile '{}' records no channel '{name}'",
-                    self.name
-                ));
+                return Err(crate::error::Error::NoChannel {
+                    profile: self.name.clone(),
+                    channel: name.clone(),
+                });
             }
             profile.absent.push(name.clone());
         }
@@ -458,7 +459,7 @@ struct FrameLayout {
     words: Option<u32>,
 }
 
-fn positive(value: Result<f64, String>, field: &str, problems: &mut Problems) -> f64 {
+fn positive(value: Result<f64>, field: &str, problems: &mut Problems) -> f64 {
     match value {
         Ok(v) if v > 0.0 => v,
         Ok(v) => {
@@ -589,7 +590,7 @@ struct FieldReader<'a> {
 }
 
 impl FieldReader<'_> {
-    fn push(&mut self, field: &str, message: impl Into<String>) {
+    fn push(&mut self, field: &str, message: impl std::fmt::Display) {
         self.problems
             .push(format!("{}.{field}", self.prefix), message);
     }
@@ -597,7 +598,7 @@ impl FieldReader<'_> {
     fn check(
         &mut self,
         field: &str,
-        value: Result<f64, String>,
+        value: Result<f64>,
         valid: impl Fn(f64) -> bool,
         requirement: &str,
     ) -> f64 {
@@ -736,7 +737,7 @@ pub fn rate_limit_message(rate: f64) -> String {
 }
 
 /// A rate as written in a profile: a number (Hz), `"25 Hz"`, `"0.5"`, or a fraction `"1/64 Hz"`.
-pub fn parse_rate(q: &Quantity) -> Result<f64, String> {
+pub fn parse_rate(q: &Quantity) -> Result<f64> {
     let Quantity::Text(text) = q else {
         return q.si(Dimension::Frequency);
     };
@@ -943,12 +944,16 @@ fn first_order_lag(grid: &[f64], signal: &mut [f64], time_constant: f64) {
 
 /// Second-order Butterworth low-pass (bilinear transform with pre-warping) on
 /// a uniform grid of `step`, starting in equilibrium.
-fn butterworth(signal: &mut [f64], cutoff: f64, step: f64) -> Result<(), String> {
+fn butterworth(
+    signal: &mut [f64],
+    cutoff: f64,
+    step: f64,
+) -> std::result::Result<(), crate::error::Error> {
     if cutoff >= 0.5 / step {
-        return Err(format!(
-            "the anti-alias cut-off {cutoff} Hz is not below the simulator's Nyquist frequency {} Hz",
-            0.5 / step
-        ));
+        return Err(crate::error::Error::AntiAlias {
+            cutoff,
+            nyquist: 0.5 / step,
+        });
     }
     let k = (std::f64::consts::PI * cutoff * step).tan();
     let root2 = std::f64::consts::SQRT_2;

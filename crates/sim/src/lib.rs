@@ -15,6 +15,7 @@ pub mod aircraft;
 pub mod atmosphere;
 pub mod dynamics;
 pub mod engine;
+pub mod error;
 pub mod feedback;
 pub mod foreign;
 pub mod inputs;
@@ -38,7 +39,7 @@ use crate::trace::{TruthSample, TruthTrace};
 use crate::trim::{Trim, trim};
 use crate::truth::RunTruth;
 use crate::wind::{FlightConditions, WindSample};
-use aeroid_core::error::{Error, Result};
+pub use aeroid_core::error::{Error, Result};
 
 /// A scenario made ready to fly: trimmed, with its signals sampled at every step.
 #[derive(Debug, Clone)]
@@ -87,7 +88,7 @@ impl Simulation {
                 path: scenario.path.clone(),
                 problems: vec![aeroid_core::error::Problem {
                     field: "wind".into(),
-                    message,
+                    message: message.to_string(),
                 }],
             })?;
         let steady = WindSample {

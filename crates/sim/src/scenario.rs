@@ -539,7 +539,7 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
         .map_err(|message| invalid("aircraft", message))?;
     let calm = file.wind.gusts.is_empty()
         && file.wind.turbulence.is_none()
-        && file.wind.speed.si(Dimension::Speed) == Ok(0.0);
+        && file.wind.speed.si(Dimension::Speed).ok() == Some(0.0);
     if !calm {
         return Err(invalid(
             "wind",
@@ -644,21 +644,17 @@ fn same_step(a: f64, b: f64, step: f64) -> bool {
 
 /// A change time inside the run (0 < time < duration) on the step grid (a
 /// duration or step that is itself invalid is reported on its own).
-fn check_change_time(time: f64, duration: f64, step: f64) -> Result<f64, String> {
+fn check_change_time(
+    time: f64,
+    duration: f64,
+    step: f64,
+) -> std::result::Result<f64, crate::error::Error> {
     if !(time > 0.0 && time.is_finite()) || time >= duration {
-        return Err(format!(
-            "{} s is outside the run: a change happens after 0 s and before the duration, {} s",
-            limits::number(time),
-            limits::number(duration)
-        ));
+        return Err(crate::error::Error::ChangeOutsideRun { time, duration });
     }
     let steps = time / step;
     if step > 0.0 && step.is_finite() && (steps - steps.round()).abs() > 1e-6 {
-        return Err(format!(
-            "{} s is not a multiple of the step {} s: a change happens at an integration step",
-            limits::number(time),
-            limits::number(step)
-        ));
+        return Err(crate::error::Error::ChangeOffStep { time, step });
     }
     Ok(time)
 }
@@ -764,7 +760,7 @@ pub const BYTES_PER_STEP: usize = std::mem::size_of::<crate::dynamics::Exogenous
     + std::mem::size_of::<crate::trace::TruthSample>();
 
 /// Checks that a simulation of `steps` steps fits the memory budget.
-pub fn check_simulation_size(steps: f64) -> Result<(), String> {
+pub fn check_simulation_size(steps: f64) -> Result<()> {
     limits::check_memory(
         "the simulation (duration / step + 1 samples)",
         steps.round() + 1.0,

@@ -1,0 +1,75 @@
+//! The errors of the simulator that are its own: a wind that cannot be
+//! generated, a parameter that cannot be tied, changed or defined. A unit or number that does not read is `aeroid_core`'s,
+//! wrapped whole so that its message reads the same.
+
+use aeroid_core::error::Problem;
+use aeroid_core::limits;
+
+fn joined(problems: &[Problem]) -> String {
+    problems
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A unit or number that does not read (`aeroid_core`).
+    #[error(transparent)]
+    Core(#[from] aeroid_core::Error),
+
+    /// The problems of a wind table, said on one line.
+    #[error("{}", joined(problems))]
+    WindProblems { problems: Vec<Problem> },
+
+    /// A wind generated on a step that is not a positive number.
+    #[error("wind: step {step} s is not a positive number")]
+    WindStep { step: f64 },
+
+    /// A name of the wind table that is not one of its kind's (a gust
+    /// direction, a turbulence intensity).
+    #[error("unknown {kind} '{name}'")]
+    WindName { kind: &'static str, name: String },
+
+    /// A turbulence scale or intensity given neither explicitly nor by a rule.
+    #[error("wind.turbulence.{name} is missing")]
+    TurbulenceMissing { name: &'static str },
+
+    /// Flight conditions turbulence cannot be started in.
+    #[error("wind.turbulence: {reason}")]
+    TurbulenceConditions { reason: String },
+
+    /// A parameter change outside the run (0 < time < duration).
+    #[error(
+        "{} s is outside the run: a change happens after 0 s and before the duration, {} s",
+        limits::number(*time),
+        limits::number(*duration)
+    )]
+    ChangeOutsideRun { time: f64, duration: f64 },
+
+    /// A parameter change between integration steps.
+    #[error(
+        "{} s is not a multiple of the step {} s: a change happens at an integration step",
+        limits::number(*time),
+        limits::number(*step)
+    )]
+    ChangeOffStep { time: f64, step: f64 },
+
+    /// A value that may not replace a parameter in flight.
+    #[error("{reason}, got {value}")]
+    Replacement { reason: &'static str, value: f64 },
+
+    /// A tie between parameters that cannot be made.
+    #[error("{reason}")]
+    Tie { reason: String },
+
+    /// A moment reference table that does not give one offset.
+    #[error("{reason}")]
+    MomentReference { reason: &'static str },
+
+    /// A parameter name given twice.
+    #[error("parameter '{name}' is defined twice")]
+    DefinedTwice { name: String },
+}
