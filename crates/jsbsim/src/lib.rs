@@ -40,8 +40,8 @@ impl aeroid_sim::source::ForeignSimulator for Jsbsim {
 }
 
 impl aeroid_sim::foreign::AircraftCatalog for Jsbsim {
-    fn check_model(&self, model: &str) -> std::result::Result<(), String> {
-        own::check_model(model).map_err(|error| error.to_string())
+    fn check_model(&self, model: &str) -> std::result::Result<(), aeroid_sim::error::Error> {
+        own::check_model(model).map_err(|error| aeroid_sim::error::Error::Foreign(Box::new(error)))
     }
 }
 

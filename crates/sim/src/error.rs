@@ -69,6 +69,11 @@ pub enum Error {
     #[error("{reason}")]
     MomentReference { reason: &'static str },
 
+    /// A failure of a simulator other than aeroid's (JSBSim), as that
+    /// simulator's own error.
+    #[error(transparent)]
+    Foreign(Box<dyn std::error::Error + Send + Sync>),
+
     /// A parameter name given twice.
     #[error("parameter '{name}' is defined twice")]
     DefinedTwice { name: String },

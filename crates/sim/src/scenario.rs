@@ -536,7 +536,7 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
     };
     simulator
         .check_model(model)
-        .map_err(|message| invalid("aircraft", message))?;
+        .map_err(|error| invalid("aircraft", error.to_string()))?;
     let calm = file.wind.gusts.is_empty()
         && file.wind.turbulence.is_none()
         && file.wind.speed.si(Dimension::Speed).ok() == Some(0.0);
