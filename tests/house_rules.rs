@@ -1,10 +1,20 @@
 //! The house rules a reviewer would otherwise check by hand.
 //!
 //! **The layers.** Cargo keeps the crates of crates/ acyclic. Inside each
-//! crate (and the root package's src/) the top-level modules import each
-//! other without a cycle: every `crate::MODULE` in code (not in comments)
-//! is an edge, and the graph has no strongly connected component of two or
-//! more modules.
+//! crate (and the root package's src/) the child modules of every module
+//! (the crate root's top-level modules, and each module folder's files)
+//! import each other without a cycle: every `crate::`, `super::` or
+//! `self::` path in code (not in comments) from inside child a to child b
+//! is an edge, and the graph has no strongly connected component of two
+//! or more modules.
+//!
+//! **A method imports nothing from a sibling method.** Every file under
+//! crates/estimation/src/methods belongs to a method (`X.rs` and `X/`) or
+//! to the common modules (`common/`); its code (not its comments) names no
+//! other method's module, as `crate::methods::NAME`, inside a
+//! `crate::methods::{...}` group or as `super::NAME` from a method's root.
+//! What several methods share lives in a common module; a common module
+//! names no method.
 //!
 //! **Every number in docs/findings.md is held by a test.** A finding is a
 //! bullet, a paragraph or a table of the document's sections; one that
@@ -307,61 +317,6 @@ fn the_check_refuses_a_number_without_a_test_and_takes_one_with() {
     assert!(unheld(held, &tests).is_empty());
 }
 
-/// The top-level modules of a crate's source folder (a file `X.rs` or a
-/// folder `X/`, not the crate roots) and, per module, the modules its code
-/// names as `crate::OTHER` (comments left out), with one place of each edge.
-fn module_graph(src: &Path) -> BTreeMap<String, BTreeMap<String, String>> {
-    let shown = src.strip_prefix(root()).unwrap_or(src).to_path_buf();
-    let mut modules = BTreeSet::new();
-    for entry in std::fs::read_dir(src).unwrap().flatten() {
-        let name = entry.file_name().to_string_lossy().to_string();
-        if let Some(stem) = name.strip_suffix(".rs") {
-            if stem != "lib" && stem != "main" {
-                modules.insert(stem.to_string());
-            }
-        } else if entry.path().is_dir() {
-            modules.insert(name);
-        }
-    }
-    let mut files = Vec::new();
-    rust_files(src, &mut files);
-    let mut graph: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
-    for file in files {
-        let relative = file
-            .strip_prefix(src)
-            .unwrap()
-            .to_string_lossy()
-            .to_string();
-        let top = relative
-            .split('/')
-            .next()
-            .unwrap()
-            .trim_end_matches(".rs")
-            .to_string();
-        if !modules.contains(&top) {
-            continue;
-        }
-        let text = std::fs::read_to_string(&file).unwrap();
-        for (n, line) in text.lines().enumerate() {
-            let code = line.split("//").next().unwrap_or("");
-            for (i, _) in code.match_indices("crate::") {
-                let other: String = code[i + 7..]
-                    .chars()
-                    .take_while(|c| c.is_ascii_lowercase() || *c == '_')
-                    .collect();
-                if other != top && modules.contains(&other) {
-                    graph
-                        .entry(top.clone())
-                        .or_default()
-                        .entry(other)
-                        .or_insert_with(|| format!("{}/{relative}:{}", shown.display(), n + 1));
-                }
-            }
-        }
-    }
-    graph
-}
-
 /// The cycles of a graph: its strongly connected components of two or
 /// more nodes (Tarjan's algorithm).
 fn cycles(graph: &BTreeMap<String, BTreeMap<String, String>>) -> Vec<Vec<String>> {
@@ -422,37 +377,6 @@ fn cycles(graph: &BTreeMap<String, BTreeMap<String, String>>) -> Vec<Vec<String>
     search.components
 }
 
-/// The cycles of one crate, each with the edges that close it.
-fn listed_cycles(src: &Path) -> Vec<String> {
-    let graph = module_graph(src);
-    cycles(&graph)
-        .iter()
-        .map(|component| {
-            let edges: Vec<String> = component
-                .iter()
-                .flat_map(|a| {
-                    graph[a]
-                        .iter()
-                        .filter(|(b, _)| component.contains(b))
-                        .map(move |(b, place)| format!("{a} -> {b} ({place})"))
-                })
-                .collect();
-            format!("{}: {}", component.join(", "), edges.join("; "))
-        })
-        .collect()
-}
-
-#[test]
-fn the_top_level_modules_of_each_crate_import_each_other_without_a_cycle() {
-    let folders = source_folders();
-    assert!(folders.len() >= 9, "{folders:?}");
-    let mut found = Vec::new();
-    for src in &folders {
-        found.extend(listed_cycles(src));
-    }
-    assert!(found.is_empty(), "module cycles:\n{}", found.join("\n"));
-}
-
 #[test]
 fn the_cycle_check_finds_a_cycle() {
     let edge = |to: &str| (to.to_string(), "here".to_string());
@@ -464,4 +388,264 @@ fn the_cycle_check_finds_a_cycle() {
     ]
     .into();
     assert_eq!(cycles(&graph), vec![vec!["a", "b", "c"]]);
+}
+
+/// The module path of a source file below `src` (`a/b.rs` and
+/// `a/b/mod.rs`: `[a, b]`; the crate root: `[]`).
+fn module_path(src: &Path, file: &Path) -> Vec<String> {
+    let relative = file
+        .strip_prefix(src)
+        .unwrap()
+        .to_string_lossy()
+        .to_string();
+    let mut path: Vec<String> = relative.split('/').map(str::to_string).collect();
+    let last = path.pop().unwrap_or_default();
+    let stem = last.trim_end_matches(".rs");
+    if !matches!(stem, "mod" | "lib" | "main") {
+        path.push(stem.to_string());
+    }
+    path
+}
+
+/// The module paths a line of code names (`crate::a::b`, `super::c`,
+/// `self::d`), resolved against the module `at`, each as far as its
+/// lower-case segments go.
+fn named_modules(code: &str, at: &[String]) -> Vec<Vec<String>> {
+    let mut found = Vec::new();
+    let bytes = code.as_bytes();
+    for start in ["crate::", "super::", "self::"] {
+        for (i, _) in code.match_indices(start) {
+            if i > 0
+                && (bytes[i - 1].is_ascii_alphanumeric()
+                    || bytes[i - 1] == b'_'
+                    || bytes[i - 1] == b':')
+            {
+                continue;
+            }
+            let rest: String = code[i..]
+                .chars()
+                .take_while(|c| {
+                    c.is_ascii_lowercase() || c.is_ascii_digit() || *c == '_' || *c == ':'
+                })
+                .collect();
+            let mut path: Vec<String> = match start {
+                "crate::" => Vec::new(),
+                _ => at.to_vec(),
+            };
+            for segment in rest.split("::").filter(|s| !s.is_empty()) {
+                match segment {
+                    "crate" | "self" => {}
+                    "super" => {
+                        path.pop();
+                    }
+                    other => path.push(other.to_string()),
+                }
+            }
+            found.push(path);
+        }
+    }
+    found
+}
+
+/// For every module folder of a crate (the crate root included), the
+/// graph of its child modules: child a → child b where code inside a
+/// names b (by `crate::`, `super::` or `self::` paths).
+fn child_module_graphs(
+    src: &Path,
+) -> BTreeMap<Vec<String>, BTreeMap<String, BTreeMap<String, String>>> {
+    let shown = src.strip_prefix(root()).unwrap_or(src).to_path_buf();
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|f| module_path(src, f)).collect();
+    let mut graphs: BTreeMap<Vec<String>, BTreeMap<String, BTreeMap<String, String>>> =
+        BTreeMap::new();
+    for file in &files {
+        let at = module_path(src, file);
+        let text = std::fs::read_to_string(file).unwrap();
+        let relative = file
+            .strip_prefix(src)
+            .unwrap()
+            .to_string_lossy()
+            .to_string();
+        for (n, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            for target in named_modules(code, &at) {
+                // The deepest common parent, and the children of it that
+                // hold each end.
+                let common = at.iter().zip(&target).take_while(|(a, b)| a == b).count();
+                if common >= at.len() || common >= target.len() {
+                    continue;
+                }
+                let parent = at[..common].to_vec();
+                let (from, to) = (at[common].clone(), target[common].clone());
+                let mut child = parent.clone();
+                child.push(to.clone());
+                if !modules.contains(&child) {
+                    continue;
+                }
+                graphs
+                    .entry(parent)
+                    .or_default()
+                    .entry(from)
+                    .or_default()
+                    .entry(to)
+                    .or_insert_with(|| format!("{}/{relative}:{}", shown.display(), n + 1));
+            }
+        }
+    }
+    graphs
+}
+
+#[test]
+fn the_modules_of_each_crate_and_module_folder_import_each_other_without_a_cycle() {
+    let folders = source_folders();
+    assert!(folders.len() >= 9, "{folders:?}");
+    let mut found = Vec::new();
+    for src in folders {
+        for (parent, graph) in child_module_graphs(&src) {
+            for component in cycles(&graph) {
+                let edges: Vec<String> = component
+                    .iter()
+                    .flat_map(|a| {
+                        graph[a]
+                            .iter()
+                            .filter(|(b, _)| component.contains(b))
+                            .map(move |(b, place)| format!("{a} -> {b} ({place})"))
+                    })
+                    .collect();
+                found.push(format!(
+                    "{} in {}::{}: {}",
+                    component.join(", "),
+                    src.display(),
+                    parent.join("::"),
+                    edges.join("; ")
+                ));
+            }
+        }
+    }
+    assert!(found.is_empty(), "module cycles:\n{}", found.join("\n"));
+}
+
+#[test]
+fn module_paths_resolve_against_the_file() {
+    let at = vec!["a".to_string(), "b".to_string()];
+    assert_eq!(
+        named_modules("use super::c::d; x(crate::e::f)", &at),
+        vec![vec!["e", "f"], vec!["a", "c", "d"]]
+    );
+    assert_eq!(named_modules("super::super::g", &at), vec![vec!["g"]]);
+}
+
+/// The modules of crates/estimation/src/methods: its files `X.rs` and
+/// folders `X/`, not `mod.rs`.
+fn method_modules(methods: &Path) -> BTreeSet<String> {
+    std::fs::read_dir(methods)
+        .unwrap()
+        .flatten()
+        .filter_map(|entry| {
+            let name = entry.file_name().to_string_lossy().to_string();
+            match name.strip_suffix(".rs") {
+                Some("mod") => None,
+                Some(stem) => Some(stem.to_string()),
+                None => entry.path().is_dir().then_some(name),
+            }
+        })
+        .collect()
+}
+
+/// The modules of `modules` other than `own` and `common` that `text`, a
+/// file of module `own` (`root`: the module's own `X.rs`, where `super::`
+/// is the methods folder), names in code: `crate::methods::NAME`, the names
+/// of a `crate::methods::{...}` group, `super::NAME` from a root and
+/// `super::super::NAME` from a child. Each with its line.
+fn sibling_imports(
+    own: &str,
+    root: bool,
+    text: &str,
+    modules: &BTreeSet<String>,
+) -> Vec<(usize, String)> {
+    let code: Vec<&str> = text
+        .lines()
+        .map(|line| line.split("//").next().unwrap_or(""))
+        .collect();
+    let joined = code.join("\n");
+    let line_of = |offset: usize| joined[..offset].matches('\n').count() + 1;
+    let word = |from: &str| -> String {
+        from.chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut found: Vec<(usize, String)> = Vec::new();
+    let mut prefixes = vec!["crate::methods::"];
+    prefixes.push(if root { "super::" } else { "super::super::" });
+    for prefix in prefixes {
+        for (i, _) in joined.match_indices(prefix) {
+            if prefix == "super::" && joined[..i].ends_with("super::") {
+                continue;
+            }
+            let rest = &joined[i + prefix.len()..];
+            let names: Vec<String> = match rest.strip_prefix('{') {
+                Some(group) => {
+                    let group = &group[..group.find('}').unwrap_or(group.len())];
+                    group.split(',').map(|item| word(item.trim())).collect()
+                }
+                None => vec![word(rest)],
+            };
+            for name in names {
+                if name != own && name != "common" && modules.contains(&name) {
+                    found.push((line_of(i), name));
+                }
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn a_method_imports_nothing_from_a_sibling_method() {
+    let methods = root().join("crates/estimation/src/methods");
+    let modules = method_modules(&methods);
+    assert!(modules.contains("common") && modules.contains("output_error"));
+    let mut files = Vec::new();
+    rust_files(&methods, &mut files);
+    let mut found = Vec::new();
+    for file in files {
+        let relative = file.strip_prefix(&methods).unwrap().to_string_lossy();
+        if relative == "mod.rs" {
+            continue;
+        }
+        let own = relative.split('/').next().unwrap().trim_end_matches(".rs");
+        let root_file = !relative.contains('/');
+        let text = std::fs::read_to_string(&file).unwrap();
+        // A common module names no method at all.
+        let own = if own == "common" { "" } else { own };
+        for (line, name) in sibling_imports(own, root_file, &text, &modules) {
+            found.push(format!("methods/{relative}:{line} imports method {name}"));
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "imports of a sibling method (move what is shared into methods/common):\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn the_sibling_check_finds_a_sibling_import() {
+    let modules: BTreeSet<String> = ["common", "output_error", "filter_error", "stepwise"]
+        .map(String::from)
+        .into();
+    let text = "//! See [`crate::methods::stepwise`].\nuse crate::methods::common::regression;\nuse crate::methods::output_error::{self, Start};\nuse crate::methods::{common::refusals, stepwise};\nuse super::filter_error; // and crate::methods::stepwise in a comment\nfn f() { crate::methods::filter_error::METHOD; }\n";
+    let found = sibling_imports("filter_error", true, text, &modules);
+    assert_eq!(
+        found,
+        vec![(3, "output_error".to_string()), (4, "stepwise".to_string())]
+    );
+    let child = "use super::*;\nuse super::super::output_error::Start;\n";
+    let found = sibling_imports("filter_error", false, child, &modules);
+    assert_eq!(found, vec![(2, "output_error".to_string())]);
+    assert_eq!(
+        sibling_imports("", false, "use crate::methods::stepwise;\n", &modules),
+        vec![(1, "stepwise".to_string())]
+    );
 }

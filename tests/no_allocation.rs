@@ -239,7 +239,7 @@ fn an_ekf_steps_work_on_the_augmented_model_does_not_allocate() {
             .step_into(k, state.as_slice(), &[], &mut next)
             .unwrap();
         std::mem::swap(state, &mut next);
-        kalman::predict_covariance_in_place(covariance, &sparse, None, &mut work);
+        kalman::predict_covariance_from(None, covariance.as_mut_slice(), &sparse, None, &mut work);
         model
             .jacobians_into(
                 model.time(k + 1),

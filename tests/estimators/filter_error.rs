@@ -459,24 +459,36 @@ impl StateSpaceModel for Lateral {
         let k = ((t / STEP + 1e-9).floor() as usize).min(self.inputs.len() - 1);
         Ok(a * DVector::from_column_slice(x) + b * &self.inputs[k])
     }
-    fn outputs(&self, _: f64, x: &[f64], _: &[f64]) -> Result<DVector<f64>> {
-        Ok(DVector::from_column_slice(x))
+    fn outputs_into(&self, _: f64, x: &[f64], _: &[f64], into: &mut DVector<f64>) -> Result<()> {
+        *into = DVector::from_column_slice(x);
+        Ok(())
     }
-    fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
+    fn jacobians_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut Jacobians,
+        outputs: Option<&mut DVector<f64>>,
+    ) -> Result<()> {
+        if let Some(outputs) = outputs {
+            *outputs = DVector::from_column_slice(x);
+        }
         let (a, _) = self.at(theta);
         let u = &self.inputs[((t / STEP + 1e-9).floor() as usize).min(self.inputs.len() - 1)];
         let mut rates_by_parameter = DMatrix::zeros(4, LATERAL_PARAMETERS.len());
         for (j, &(row, column, in_a)) in LATERAL_PARAMETERS.iter().enumerate() {
             rates_by_parameter[(row, j)] = if in_a { x[column] } else { u[column] };
         }
-        Ok(Jacobians {
+        *into = Jacobians {
             rates_by_state: a,
             rates_by_parameter,
             outputs_by_state: DMatrix::identity(4, 4),
             outputs_by_parameter: DMatrix::zeros(4, LATERAL_PARAMETERS.len()),
-        })
+        };
+        Ok(())
     }
-    fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+    fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
         let (a, b) = self.at(theta);
         let u = &b * &self.inputs[k];
         let f = |s: &DVector<f64>| &a * s + &u;
@@ -485,7 +497,8 @@ impl StateSpaceModel for Lateral {
         let k2 = f(&(&x + &k1 * (STEP / 2.0)));
         let k3 = f(&(&x + &k2 * (STEP / 2.0)));
         let k4 = f(&(&x + &k3 * STEP));
-        Ok(x + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (STEP / 6.0))
+        *into = x + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (STEP / 6.0);
+        Ok(())
     }
 }
 

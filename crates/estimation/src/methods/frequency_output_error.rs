@@ -39,9 +39,9 @@ use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
 use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
-use crate::methods::equation_error::record_name;
-use crate::methods::frequency_regression::{BAND_SETTINGS, BandOptions, model_controls};
-use crate::methods::output_error;
+use crate::methods::common::frequency_band::{BAND_SETTINGS, BandOptions, model_controls};
+use crate::methods::common::refusals::{missing_channels, unsuitable};
+use crate::methods::common::regression::record_name;
 use crate::model::linear::Matrix;
 use crate::model::state_space::{DrivenStateSpace, recorded_initial_state};
 use crate::model::transfer::{LinearisedFlight, TransferModel};
@@ -404,14 +404,10 @@ pub fn frequency_output_error(
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
     let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(
-        METHOD,
-        output_error::missing_channels(record, structure),
-        present,
-    ) {
+    if let Some(refusal) = Refusal::missing(METHOD, missing_channels(record, structure), present) {
         return Err(Error::Refused(refusal));
     }
-    output_error::unsuitable(METHOD, structure)?;
+    unsuitable(METHOD, structure)?;
     let (view, x0) = DrivenStateSpace::for_record(
         record,
         structure,

@@ -6,12 +6,12 @@
 //! test) adds its own.
 
 pub mod augmented_ekf;
+pub mod common;
 pub mod elm_gauss_newton;
 pub mod equation_error;
 pub mod filter_error;
 pub mod frequency_output_error;
 pub mod frequency_regression;
-pub mod linear_equation_error;
 pub mod neural_gauss_newton;
 pub mod output_error;
 pub mod rbf_delta;

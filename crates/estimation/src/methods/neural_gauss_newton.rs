@@ -50,7 +50,7 @@
 
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
-use crate::methods::equation_error::DIFFERENTIATOR_SETTING;
+use crate::methods::common::coefficient_fit::DIFFERENTIATOR_SETTING;
 use crate::neural::feedforward::{LevenbergMarquardt, SizeSearch};
 use crate::neural::restricted::{self, RestrictedOptions, Trainer};
 use crate::problem::EstimationProblem;

@@ -41,16 +41,16 @@
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{
-    Capabilities, Description, Method, MissingChannel, Refusal, Settings, merge_settings,
-    parse_settings,
+    Capabilities, Description, Method, Refusal, Settings, merge_settings, parse_settings,
 };
 use crate::input_timing::InputInterpolation;
 use crate::linear_structure::LinearStructure;
-use crate::methods::equation_error;
-use crate::methods::filter_error;
-use crate::model::driven::{
-    ALTITUDE_SUBSTITUTES, Column, DrivenSimulation, FlightPathState, Linearise, Observable,
-};
+pub use crate::methods::common::coefficient_fit::Start;
+use crate::methods::common::coefficient_fit::{EQUATION_ERROR, start_estimate};
+use crate::methods::common::filter_fit;
+use crate::methods::common::iterations::check_iterations;
+pub(crate) use crate::methods::common::refusals::{missing_channels, unsuitable};
+use crate::model::driven::{Column, DrivenSimulation, FlightPathState, Linearise, Observable};
 use crate::model::modes;
 use crate::model::state_space::{
     RK4_STEP_LIMIT, driven_simulation, driving_channels, fastest_mode, fitting_window,
@@ -105,7 +105,6 @@ pub const METHOD: &str = "oem";
 
 mod linear_shooting;
 
-mod checks;
 mod estimator;
 mod fit;
 mod least_squares;
@@ -117,7 +116,6 @@ mod segments;
 mod settings;
 mod starts;
 
-pub(crate) use checks::*;
 pub use estimator::*;
 pub use fit::*;
 use linear::*;

@@ -62,8 +62,8 @@ use crate::estimate::{
     Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterDistribution, ParameterEstimate, Status,
 };
 use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
-use crate::methods::equation_error::{self, Plan, record_name};
-use crate::methods::smoothed_regression::{self, SmoothedRegressionSettings};
+use crate::methods::common::regression::{self, Plan, record_name};
+use crate::methods::common::smoothing::{self, SmoothedRegressionSettings};
 use crate::neural::rbf::{RbfNetwork, RbfOptions, WidthSearch};
 use crate::neural::{NetworkReport, fit_metrics};
 use crate::problem::EstimationProblem;
@@ -441,9 +441,8 @@ fn coefficient_data(
         }
     } else {
         notes.push("coefficients from the EKF + modified Bryson–Frazier smoother (Wang et al. 2012, Eqs. 7–24)".into());
-        let smoothed =
-            smoothed_regression::smooth(record, structure, &settings.smoother).map_err(as_own)?;
-        let reconstruction = smoothed_regression::regression_data(
+        let smoothed = smoothing::smooth(record, structure, &settings.smoother).map_err(as_own)?;
+        let reconstruction = smoothing::regression_data(
             record,
             structure,
             &smoothed,
@@ -672,7 +671,7 @@ pub fn rbf_delta(
     structure: &ModelStructure,
     settings: &RbfDeltaSettings,
 ) -> Result<Estimate> {
-    let plans = equation_error::plans(structure, METHOD)?;
+    let plans = regression::plans(structure, METHOD)?;
     let mut notes = Vec::new();
     // The Mach input is Mach − the structure's reference Mach; a structure
     // without a Mach term has none, and the input is the Mach number.

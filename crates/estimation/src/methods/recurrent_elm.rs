@@ -3,7 +3,7 @@
 //! the postulated model's parameters propagated through it — the method of
 //! the quasi-steady stall model's estimation. Method `relm-gn`; settings
 //! `[methods.relm-gn]` (those of `elm-gn`,
-//! [`crate::methods::elm_gauss_newton::ElmSettings`]).
+//! [`crate::methods::common::elm_fit::ElmSettings`]).
 //!
 //! Paper: Verma & Peyada, "Estimation of aerodynamic parameters near stall
 //! using maximum likelihood and extreme learning machine-based methods",
@@ -38,8 +38,8 @@
 
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};
-use crate::methods::elm_gauss_newton::{ElmSettings, SHARED_SETTINGS, estimate_with};
-use crate::methods::equation_error;
+use crate::methods::common::coefficient_fit::EQUATION_ERROR;
+use crate::methods::common::elm_fit::{ElmSettings, SHARED_SETTINGS, estimate_with};
 use crate::problem::EstimationProblem;
 use aeroid_core::error::Result;
 
@@ -65,7 +65,7 @@ impl Method for RecurrentElm {
 
     fn capabilities() -> Capabilities {
         Capabilities {
-            starts_from: Some(equation_error::METHOD),
+            starts_from: Some(EQUATION_ERROR),
             ..Capabilities::default()
         }
     }

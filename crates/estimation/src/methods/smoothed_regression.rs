@@ -25,7 +25,7 @@
 //!    of the smoothed coefficient on the structure's terms, the regressors
 //!    from the smoothed states (α, β, V, p̂, q̂, r̂, α̇, Mach) and the recorded
 //!    controls — the regression equation error runs
-//!    (`equation_error::regress`), with its coloured-residual
+//!    ([`crate::methods::common::regression::regress`]), with its coloured-residual
 //!    Cramér–Rao bounds.
 //!
 //! Outputs: an [`Estimate`] of the structure's free parameters, and on
@@ -37,31 +37,18 @@
 //! a ramp; the moments are observed through the second derivative of the
 //! attitude when the record has no rates.
 //!
-//! By concern: `settings`, `inputs` (the record's channels), `smoothed`
-//! (the histories), `smoother` (steps 1–3), `regression` (steps 4–5).
-
-mod inputs;
-mod regression;
-mod settings;
-mod smoothed;
-mod smoother;
-#[cfg(test)]
-mod tests;
-
-pub(crate) use regression::regression_data;
-pub use regression::smooth_and_regress;
-pub use settings::SmoothedRegressionSettings;
-pub use smoothed::Smoothed;
-pub use smoother::{GaussMarkov, SmootherSetup, smooth};
+//! The smoother and the regression of its histories are the common module
+//! [`crate::methods::common::smoothing`], which the RBF Δ-method shares.
 
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};
+use crate::methods::common::smoothing::SETTINGS;
+pub use crate::methods::common::smoothing::{
+    GaussMarkov, METHOD, Smoothed, SmoothedRegressionSettings, SmootherSetup, smooth,
+    smooth_and_regress,
+};
 use crate::problem::EstimationProblem;
 use aeroid_core::error::Result;
-use settings::SETTINGS;
-
-/// Method name in estimates.
-pub const METHOD: &str = "ebm";
 
 /// Estimation before modelling as a registered method.
 pub struct SmoothedRegression;

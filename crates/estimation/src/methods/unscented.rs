@@ -20,8 +20,10 @@
 
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
-use crate::methods::augmented_ekf::{self, FILTER_SETTINGS, FilterSettings, augmented_estimate};
-use crate::methods::equation_error;
+use crate::methods::common::augmented_filter::{
+    self, FILTER_SETTINGS, FilterSettings, augmented_estimate,
+};
+use crate::methods::common::coefficient_fit::EQUATION_ERROR;
 use crate::problem::EstimationProblem;
 use crate::solver::unscented_kalman;
 use aeroid_core::error::{Error, Result};
@@ -156,7 +158,7 @@ impl Method for UnscentedFilter {
         Capabilities {
             linear: true,
             tied_parameters: true,
-            starts_from: Some(equation_error::METHOD),
+            starts_from: Some(EQUATION_ERROR),
             ..Capabilities::default()
         }
     }
@@ -191,7 +193,7 @@ impl Method for UnscentedFilter {
         settings: &UnscentedSettings,
         start: Option<&Estimate>,
     ) -> Result<Estimate> {
-        augmented_ekf::refuse_for_linear(METHOD, problem)?;
+        augmented_filter::refuse_for_linear(METHOD, problem)?;
         let unscented = settings.unscented();
         let filter = &settings.filter;
         let run = augmented_estimate(

@@ -137,11 +137,6 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
         points.with_parameters(n, thetas, p)
     }
 
-    /// The columns of a base Jacobian for the augmented parameters.
-    fn augmented_columns(&self, by_parameter: &DMatrix<f64>) -> DMatrix<f64> {
-        by_parameter.select_columns(&self.augmented)
-    }
-
     /// [[∂f/∂x, ∂f/∂θ_a], [0, 0]] of the base's Jacobians into `into`
     /// (`rates_by_parameter` of no columns).
     fn rates_into(&self, base: &Jacobians, into: &mut Jacobians) {
@@ -217,40 +212,7 @@ impl<M: StateSpaceModel + ?Sized> StateSpaceModel for Augmented<'_, M> {
         Ok(rates.resize_vertically(z.len(), 0.0))
     }
 
-    fn outputs(&self, t: f64, z: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
-        let (x, theta) = self.split(z)?;
-        self.base.outputs(t, x, &theta)
-    }
-
-    /// [[∂f/∂x, ∂f/∂θ_a], [0, 0]] and [∂h/∂x, ∂h/∂θ_a].
-    fn jacobians(&self, t: f64, z: &[f64], _theta: &[f64]) -> Result<Jacobians> {
-        let (x, theta) = self.split(z)?;
-        let base = self.base.jacobians(t, x, &theta)?;
-        let (n, size) = (x.len(), z.len());
-        let mut rates_by_state = DMatrix::zeros(size, size);
-        rates_by_state
-            .view_mut((0, 0), (n, n))
-            .copy_from(&base.rates_by_state);
-        rates_by_state
-            .view_mut((0, n), (n, size - n))
-            .copy_from(&self.augmented_columns(&base.rates_by_parameter));
-        let outputs = base.outputs_by_state.nrows();
-        let mut outputs_by_state = DMatrix::zeros(outputs, size);
-        outputs_by_state
-            .view_mut((0, 0), (outputs, n))
-            .copy_from(&base.outputs_by_state);
-        outputs_by_state
-            .view_mut((0, n), (outputs, size - n))
-            .copy_from(&self.augmented_columns(&base.outputs_by_parameter));
-        Ok(Jacobians {
-            rates_by_state,
-            rates_by_parameter: DMatrix::zeros(size, 0),
-            outputs_by_state,
-            outputs_by_parameter: DMatrix::zeros(outputs, 0),
-        })
-    }
-
-    /// [`StateSpaceModel::jacobians`] from the base's
+    /// [[∂f/∂x, ∂f/∂θ_a], [0, 0]] and [∂h/∂x, ∂h/∂θ_a] from the base's
     /// [`StateSpaceModel::jacobians_into`], in kept buffers.
     fn jacobians_into(
         &self,
@@ -360,13 +322,5 @@ impl<M: StateSpaceModel + ?Sized> StateSpaceModel for Augmented<'_, M> {
             into[j * stride + n..j * stride + z.len()].copy_from_slice(&z[n..]);
         }
         Ok(())
-    }
-
-    fn step(&self, k: usize, z: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
-        let (x, theta) = self.split(z)?;
-        let next = self.base.step(k, x, &theta)?;
-        let mut result = DVector::from_column_slice(z);
-        result.rows_mut(0, x.len()).copy_from(&next);
-        Ok(result)
     }
 }

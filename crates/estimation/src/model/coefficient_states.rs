@@ -558,31 +558,14 @@ impl StateSpaceModel for CoefficientStates {
         ))
     }
 
-    fn outputs(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
-        let mut y = DVector::zeros(self.outputs.len());
-        self.outputs_into(t, x, &[], &mut y)?;
-        Ok(y)
-    }
-
     /// ∂f/∂x and ∂h/∂x, analytic: the force and moment terms through
     /// q̄S = ½ρ(h)·S·(u² + v² + w²) (∂q̄S/∂u = ρ·S·u, ∂q̄S/∂h = q̄S·d ln ρ/dh)
     /// and the thrust lapse (∂T/∂h = n·T·d ln ρ/dh); the gyroscopic term
     /// ∂(ω × I·ω)/∂ω = \[ω\]×·I − \[I·ω\]×; gravity, Euler kinematics and
     /// ḣ differentiated term by term; the Gauss–Markov chains' ones.
-    fn jacobians(&self, t: f64, x: &[f64], _theta: &[f64]) -> Result<Jacobians> {
-        let mut jacobians = Jacobians {
-            rates_by_state: DMatrix::zeros(0, 0),
-            rates_by_parameter: DMatrix::zeros(STATE_COUNT, 0),
-            outputs_by_state: DMatrix::zeros(0, 0),
-            outputs_by_parameter: DMatrix::zeros(self.outputs.len(), 0),
-        };
-        self.jacobians_into(t, x, &[], &mut jacobians, None)?;
-        Ok(jacobians)
-    }
-
-    /// [`CoefficientStates::jacobians`] into `into`'s buffers (grown on the
-    /// first call, then written in place: no allocation), with `outputs`
-    /// h(x) into it from the same loads: the same numbers bit for bit.
+    /// Into `into`'s buffers (grown on the first call, then written in
+    /// place: no allocation), with `outputs` h(x) into it from the same
+    /// loads: the same numbers bit for bit.
     fn jacobians_into(
         &self,
         t: f64,
@@ -637,15 +620,9 @@ impl StateSpaceModel for CoefficientStates {
         Ok(())
     }
 
-    /// One RK4 step from grid point k, the throttle linear inside it.
-    fn step(&self, k: usize, x: &[f64], _theta: &[f64]) -> Result<DVector<f64>> {
-        let mut next = DVector::zeros(STATE_COUNT);
-        self.step_into(k, x, &[], &mut next)?;
-        Ok(next)
-    }
-
-    /// [`CoefficientStates::step`] into `into` (the step itself on the
-    /// stack; `into` grown on the first call only).
+    /// One RK4 step from grid point k, the throttle linear inside it, into
+    /// `into` (the step itself on the stack; `into` grown on the first call
+    /// only).
     fn step_into(
         &self,
         k: usize,

@@ -46,9 +46,7 @@ mod tests;
 
 pub use crate::structure::Observable;
 pub use kinematics::PseudoRates;
-pub(super) use linearise::{
-    LinearisationBuffers, evaluate, evaluate_into, linearise, linearise_with,
-};
+pub(super) use linearise::{LinearisationBuffers, evaluate, evaluate_into, linearise_with};
 pub use measured::{ALTITUDE_SUBSTITUTES, Ambient, MEASURED_QUANTITIES};
 pub(super) use memo::PointMemo;
 pub use observables::Column;

@@ -336,22 +336,39 @@ impl StateSpaceModel for LinearStateSpace {
         Ok(matrices.rates(&DVector::from_column_slice(x), &self.input_at(t)?))
     }
 
-    fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+    fn outputs_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut DVector<f64>,
+    ) -> Result<()> {
         self.check_state(x)?;
         let matrices = self.at(theta)?;
         let (x, u) = (DVector::from_column_slice(x), self.input_at(t)?);
         let direct = &matrices.c * &x + &matrices.d * &u + &matrices.output_bias;
         let rates = matrices.rates(&x, &u);
-        Ok(DVector::from_iterator(
+        *into = DVector::from_iterator(
             self.output_count(),
             direct
                 .iter()
                 .copied()
                 .chain(self.rate_outputs.iter().map(|&i| rates[i])),
-        ))
+        );
+        Ok(())
     }
 
-    fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
+    fn jacobians_into(
+        &self,
+        t: f64,
+        x: &[f64],
+        theta: &[f64],
+        into: &mut Jacobians,
+        outputs: Option<&mut DVector<f64>>,
+    ) -> Result<()> {
+        if let Some(outputs) = outputs {
+            self.outputs_into(t, x, theta, outputs)?;
+        }
         self.check_state(x)?;
         let matrices = self.at(theta)?;
         let u = self.input_at(t)?;
@@ -388,17 +405,18 @@ impl StateSpaceModel for LinearStateSpace {
                 .row_mut(direct + o)
                 .copy_from(&matrices.a.row(state));
         }
-        Ok(Jacobians {
+        *into = Jacobians {
             rates_by_state: matrices.a,
             rates_by_parameter,
             outputs_by_state,
             outputs_by_parameter,
-        })
+        };
+        Ok(())
     }
 
     /// The exact step: x_{k+1} = Φ·x_k + Γ₀·(u_k, 1) + Γ₁·W·(u_{k+1} − u_k),
     /// the last term for the inputs taken linearly.
-    fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+    fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
         self.check_state(x)?;
         if k + 1 >= self.inputs.len() {
             return Err(Error::Other(format!(
@@ -414,7 +432,8 @@ impl StateSpaceModel for LinearStateSpace {
         if let Some(ramp) = &discrete.ramp {
             next += ramp * (&self.inputs[k + 1] - u);
         }
-        Ok(next)
+        *into = next;
+        Ok(())
     }
 }
 

@@ -333,6 +333,15 @@ pub fn recorded_initial_state(
 /// A postulated model as ẋ = f(t, x, u, θ), y = h(t, x, u, θ) on an
 /// integration grid t_k = start + k·step, k = 0 … len − 1, its inputs u
 /// its own (read from the record it is driven by). Every call takes θ.
+///
+/// A model implements each operation once, in its workspace form (the
+/// result written into a buffer the caller keeps: `outputs_into`,
+/// `jacobians_into`, `step_into`); the allocating forms (`outputs`,
+/// `jacobians`, `step`) are provided from them. The batched forms
+/// (`step_points_into`, `outputs_points_into`) and
+/// `rate_jacobians_into` have defaults from the single forms, for a
+/// model that can share work between points or skip the outputs'
+/// derivatives to override.
 pub trait StateSpaceModel {
     /// The number of states n (the length of x).
     fn state_count(&self) -> usize;
@@ -350,18 +359,13 @@ pub trait StateSpaceModel {
     fn time(&self, k: usize) -> f64;
     /// ẋ = f(t, x, u(t), θ).
     fn rates(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>>;
-    /// y = h(t, x, u(t), θ).
-    fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>>;
-    /// ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ at (t, x, θ).
-    fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians>;
-    /// The state at grid point k + 1 after one integration step from x at
-    /// grid point k.
-    fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>>;
-    /// [`StateSpaceModel::jacobians`] written into `into`, and with
-    /// `outputs` [`StateSpaceModel::outputs`] into it, the same numbers: a
-    /// filter's step keeps the buffers, so that a model that can (the
-    /// driven view, the augmented model) neither allocates nor evaluates h
-    /// apart from its linearisation. The default calls the two.
+    /// y = h(t, x, u(t), θ), written into `into` (resized to the output
+    /// count).
+    fn outputs_into(&self, t: f64, x: &[f64], theta: &[f64], into: &mut DVector<f64>)
+    -> Result<()>;
+    /// ∂f/∂x, ∂f/∂θ, ∂h/∂x, ∂h/∂θ at (t, x, θ), written into `into`'s
+    /// matrices (resized as needed), and with `outputs` y = h(t, x, u, θ)
+    /// into it, the same numbers as [`StateSpaceModel::outputs_into`]'s.
     fn jacobians_into(
         &self,
         t: f64,
@@ -369,12 +373,28 @@ pub trait StateSpaceModel {
         theta: &[f64],
         into: &mut Jacobians,
         outputs: Option<&mut DVector<f64>>,
-    ) -> Result<()> {
-        if let Some(outputs) = outputs {
-            *outputs = self.outputs(t, x, theta)?;
-        }
-        *into = self.jacobians(t, x, theta)?;
-        Ok(())
+    ) -> Result<()>;
+    /// The state at grid point k + 1 after one integration step from x at
+    /// grid point k, written into `into` (resized to the state count).
+    fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()>;
+
+    /// [`StateSpaceModel::outputs_into`] into a new vector.
+    fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        let mut outputs = DVector::zeros(self.output_count());
+        self.outputs_into(t, x, theta, &mut outputs)?;
+        Ok(outputs)
+    }
+    /// [`StateSpaceModel::jacobians_into`] into new matrices.
+    fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
+        let mut jacobians = Jacobians::empty();
+        self.jacobians_into(t, x, theta, &mut jacobians, None)?;
+        Ok(jacobians)
+    }
+    /// [`StateSpaceModel::step_into`] into a new vector.
+    fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
+        let mut next = DVector::zeros(self.state_count());
+        self.step_into(k, x, theta, &mut next)?;
+        Ok(next)
     }
     /// ∂f/∂x and ∂f/∂θ of [`StateSpaceModel::jacobians_into`] only (what a
     /// filter's time update reads), into `into`'s `rates_by_state` and
@@ -388,23 +408,6 @@ pub trait StateSpaceModel {
         into: &mut Jacobians,
     ) -> Result<()> {
         self.jacobians_into(t, x, theta, into, None)
-    }
-    /// [`StateSpaceModel::step`] written into `into`. The default calls it.
-    fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
-        *into = self.step(k, x, theta)?;
-        Ok(())
-    }
-    /// [`StateSpaceModel::outputs`] written into `into`. The default calls
-    /// it.
-    fn outputs_into(
-        &self,
-        t: f64,
-        x: &[f64],
-        theta: &[f64],
-        into: &mut DVector<f64>,
-    ) -> Result<()> {
-        *into = self.outputs(t, x, theta)?;
-        Ok(())
     }
     /// [`StateSpaceModel::step_into`] from grid point k for many points
     /// (x_j, θ_j) at once, x_{j+1} written into column j of `into` (columns
@@ -938,12 +941,6 @@ impl StateSpaceModel for DrivenStateSpace {
         Ok(self.state_of(&rates))
     }
 
-    fn outputs(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
-        let mut outputs = DVector::zeros(0);
-        self.outputs_into(t, x, theta, &mut outputs)?;
-        Ok(outputs)
-    }
-
     fn outputs_into(
         &self,
         t: f64,
@@ -995,23 +992,9 @@ impl StateSpaceModel for DrivenStateSpace {
     /// on α̇), a term's ∂f/∂θ and ∂h/∂θ exact (f is affine in each
     /// coefficient: its response times the term's regressor), a nonlinear
     /// parameter's (e, the stall parameters) a central difference of step
-    /// 10⁻⁵·max(|θ|, 10⁻²).
-    fn jacobians(&self, t: f64, x: &[f64], theta: &[f64]) -> Result<Jacobians> {
-        let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
-        self.with_model(theta, |model, _, _| {
-            driven::linearise(
-                model,
-                &full,
-                (&controls, pseudo, ambient),
-                &self.states,
-                &self.outputs,
-            )
-        })
-    }
-
-    /// The linearisation of [`StateSpaceModel::jacobians`] in the view's
-    /// kept buffers, its outputs the linearisation's values (the
-    /// evaluation's: the dual numbers' values are the f64 ones).
+    /// 10⁻⁵·max(|θ|, 10⁻²). Computed in the view's kept buffers, its outputs the
+    /// linearisation's values (the evaluation's: the dual numbers' values
+    /// are the f64 ones).
     fn jacobians_into(
         &self,
         t: f64,
@@ -1124,12 +1107,6 @@ impl StateSpaceModel for DrivenStateSpace {
     /// [`DrivenSimulation::simulate`]'s, so the same state bit for bit.
     /// An error when k is not a step of the grid, or when the model departs
     /// (a non-finite state, |α| or |β| beyond 90°, airspeed not positive).
-    fn step(&self, k: usize, x: &[f64], theta: &[f64]) -> Result<DVector<f64>> {
-        let mut next = DVector::zeros(0);
-        self.step_into(k, x, theta, &mut next)?;
-        Ok(next)
-    }
-
     fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
         let n = self.states.len();
         if into.len() != n {

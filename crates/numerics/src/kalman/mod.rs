@@ -37,7 +37,7 @@ mod update;
 pub use dense::{multiply, resize, resize_vector, symmetrise};
 pub use discretise::{Discrete, ProcessNoise, discretise, discretise_first_order_hold};
 pub use exp::{Exponential, exponential};
-pub use predict::{predict_covariance, predict_covariance_from, predict_covariance_in_place};
+pub use predict::{predict_covariance, predict_covariance_from};
 pub use residual::{ResidualCorrelation, residual_correlation, whiteness};
 pub use riccati::{SteadyState, steady_state, steady_state_for_innovation};
 pub use sigma::{SigmaPoints, Unscented};
@@ -47,5 +47,5 @@ pub use smoother::{
 pub use sparse::SparseRows;
 pub use update::{
     Gaussian, Measured, SequentialWorkspace, Update, UpdateWorkspace, sequential_update_with,
-    update, update_from, update_with,
+    update, update_from,
 };

@@ -19,16 +19,20 @@ pub fn predict_covariance(
         .iter()
         .any(|&v| v != 0.0)
         .then_some(process_noise);
-    predict_covariance_in_place(
-        &mut predicted,
-        &SparseRows::of(transition),
+    let transition = SparseRows::of(transition);
+    let n = transition.rows();
+    resize(&mut predicted, n, n);
+    predict_covariance_from(
+        None,
+        predicted.as_mut_slice(),
+        &transition,
         noise,
         &mut Default::default(),
     );
     predicted
 }
 
-/// P ← Φ·P·Φᵀ + Q_d (`process_noise`; None: zero) in place, Φ by its
+/// P ← Φ·P·Φᵀ + Q_d (`process_noise`; None: zero) into `into`, Φ by its
 /// non-zeros: U = P·Φᵀ and Φ·U = (Uᵀ·Φᵀ)ᵀ, each O(nnz(Φ)·n) instead of
 /// O(n³), symmetrised; `work` holds U and Uᵀ. Where Φ's rows from k on are
 /// the identity's ([`SparseRows::set_leading`]: an augmented model's
@@ -37,27 +41,10 @@ pub fn predict_covariance(
 /// W = P·Φ₁ᵀ, n × k, past k, transposed), P₂₂ unchanged: the same numbers
 /// as the dense form's for a symmetric P, without its products over the
 /// identity's rows.
-pub fn predict_covariance_in_place(
-    covariance: &mut DMatrix<f64>,
-    transition: &SparseRows,
-    process_noise: Option<&DMatrix<f64>>,
-    work: &mut [DMatrix<f64>; 2],
-) {
-    let n = transition.rows();
-    resize(covariance, n, n);
-    predict_covariance_from(
-        None,
-        covariance.as_mut_slice(),
-        transition,
-        process_noise,
-        work,
-    );
-}
-
-/// [`predict_covariance_in_place`] of the covariance `previous` (n × n,
-/// column-major; None: `into`'s own values) into `into` (n × n, held
-/// elsewhere: a filter's kept predicted covariance), n the rows of Φ: the
-/// same numbers, without a copy of the result.
+///
+/// P is the covariance `previous` (n × n, column-major; None: `into`'s own
+/// values, the prediction in place), n the rows of Φ; `into` holds at
+/// least n × n values (a filter's kept predicted covariance).
 pub fn predict_covariance_from(
     previous: Option<&[f64]>,
     into: &mut [f64],
@@ -92,7 +79,7 @@ pub fn predict_covariance_from(
 }
 
 /// Φ·P·Φᵀ in place for a Φ whose rows from k = `transition.leading` on
-/// are the identity's ([`predict_covariance_in_place`]). With W = P·Φ₁ᵀ
+/// are the identity's ([`predict_covariance_from`]). With W = P·Φ₁ᵀ
 /// (column r: Σ_j Φ_rj·P_{·j} over row r's non-zeros, as the dense form's
 /// first product): (Φ·P·Φᵀ)_rc = Σ_j Φ_cj·W_jr for r, c < k, W_cr for
 /// c ≥ k, P_rc for both ≥ k; symmetrised as the dense form symmetrises
@@ -181,8 +168,8 @@ mod tests {
         for process in [None, Some(&noise)] {
             let (mut by_blocks, mut by_dense) = (covariance.clone(), covariance.clone());
             let mut work = Default::default();
-            predict_covariance_in_place(&mut by_blocks, &blocks, process, &mut work);
-            predict_covariance_in_place(&mut by_dense, &dense, process, &mut work);
+            predict_covariance_from(None, by_blocks.as_mut_slice(), &blocks, process, &mut work);
+            predict_covariance_from(None, by_dense.as_mut_slice(), &dense, process, &mut work);
             assert!(
                 by_blocks
                     .iter()
@@ -208,7 +195,13 @@ mod tests {
                 for process in [None, Some(&noise)] {
                     let mut in_place = start.clone();
                     let mut work = Default::default();
-                    predict_covariance_in_place(&mut in_place, transition, process, &mut work);
+                    predict_covariance_from(
+                        None,
+                        in_place.as_mut_slice(),
+                        transition,
+                        process,
+                        &mut work,
+                    );
                     let mut into = vec![f64::NAN; n * n];
                     predict_covariance_from(
                         Some(start.as_slice()),

@@ -78,9 +78,10 @@ pub fn update(
     innovation: DVector<f64>,
 ) -> Result<Update> {
     let mut workspace = UpdateWorkspace::default();
-    update_with(
+    update_from(
         state,
-        covariance,
+        None,
+        covariance.as_mut_slice(),
         observation,
         noise,
         &innovation,
@@ -100,7 +101,7 @@ pub fn update(
     })
 }
 
-/// The buffers of a measurement update ([`update_with`]) and what it
+/// The buffers of a measurement update ([`update_from`]) and what it
 /// produced: S, S⁻¹, K, ln det S.
 #[derive(Debug, Clone, Default)]
 pub struct UpdateWorkspace {
@@ -144,29 +145,10 @@ impl UpdateWorkspace {
 /// non-zeros: O(n²·m) for m outputs instead of O(n³), the same matrix to
 /// rounding for any gain. S⁻¹ = L⁻ᵀ·L⁻¹ from S = L·Lᵀ with L⁻¹ formed
 /// once (m divisions). Allocates nothing once the buffers have grown.
-pub fn update_with(
-    state: &mut DVector<f64>,
-    covariance: &mut DMatrix<f64>,
-    observation: &DMatrix<f64>,
-    noise: &DMatrix<f64>,
-    innovation: &DVector<f64>,
-    workspace: &mut UpdateWorkspace,
-) -> Result<()> {
-    update_from(
-        state,
-        None,
-        covariance.as_mut_slice(),
-        observation,
-        noise,
-        innovation,
-        workspace,
-    )
-}
-
-/// [`update_with`] of the covariance `predicted` (n × n, column-major;
-/// None: `into`'s own values) into `into` (n × n, held elsewhere: a
-/// filter's kept filtered covariance): the same numbers, without a copy of
-/// the result.
+///
+/// P is the covariance `predicted` (n × n, column-major; None: `into`'s
+/// own values, the update in place), P⁺ written into `into` (n × n, held
+/// elsewhere: a filter's kept filtered covariance).
 pub fn update_from(
     state: &mut DVector<f64>,
     predicted: Option<&[f64]>,
@@ -556,9 +538,10 @@ mod tests {
         let state = DVector::from_fn(n, |i, _| value(i, 2));
         let (mut in_place, mut state_in_place) = (covariance.clone(), state.clone());
         let mut by_place = UpdateWorkspace::default();
-        update_with(
+        update_from(
             &mut state_in_place,
-            &mut in_place,
+            None,
+            in_place.as_mut_slice(),
             &observation,
             &noise,
             &innovation,

@@ -58,7 +58,7 @@ impl Method for FilterError {
         Capabilities {
             linear: true,
             tied_parameters: true,
-            starts_from: Some(equation_error::METHOD),
+            starts_from: Some(EQUATION_ERROR),
             ..Capabilities::default()
         }
     }
@@ -162,11 +162,11 @@ pub fn filter_error_from(
     let free = free_parameters(
         METHOD,
         record,
-        output_error::missing_channels(record, structure),
+        missing_channels(record, structure),
         &structure.name,
         &structure.free,
     )?;
-    output_error::unsuitable(METHOD, structure)?;
+    unsuitable(METHOD, structure)?;
     let (view, initial) = DrivenStateSpace::for_record(
         record,
         structure,

@@ -1,5 +1,5 @@
-//! Settings of a filter-error run (the `[methods.fem]` table): the gain,
-//! the form of R, the states driven by process noise, P0.
+//! Settings of a filter-error run (the `[methods.fem]` table): the start,
+//! the gain, the form of R, the states driven by process noise, P0.
 
 use super::*;
 
@@ -40,31 +40,6 @@ pub struct FilterErrorOptions {
     pub window: Option<(f64, f64)>,
 }
 
-/// The steady gain's innovation covariance R (`innovation_covariance`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum InnovationForm {
-    /// One variance per output.
-    Diagonal,
-    /// R = (1/N)·Σ ν·νᵀ whole, where every grid point with a measurement
-    /// measures every output (else diagonal, with a note).
-    Full,
-}
-
-/// The filter in the filter error method's loop (docs/methods.md, Filter error).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Gain {
-    /// The steady-state gain of the model linearised at the first grid
-    /// point, the innovation covariance R estimated by relaxation.
-    #[default]
-    Steady,
-    /// The extended Kalman filter, its covariance propagated with the model
-    /// linearised at each point, the measurement noise G·Gᵀ estimated by
-    /// relaxation.
-    TimeVarying,
-}
-
 impl Default for FilterErrorOptions {
     fn default() -> Self {
         FilterErrorOptions {
@@ -91,19 +66,7 @@ impl FilterErrorOptions {
 
     /// Checks the values' ranges and combinations.
     pub fn check(&self) -> Result<()> {
-        if self
-            .step
-            .is_some_and(|step| !(step > 0.0 && step.is_finite()))
-        {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: step must be positive"
-            )));
-        }
-        if self.max_iterations == 0 {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: max_iterations must be at least 1"
-            )));
-        }
+        check_iterations(METHOD, self.step, self.max_iterations)?;
         check_initial_variance(METHOD, self.gain, &self.initial_variance)?;
         self.interpolation.check_controls(METHOD)?;
         if self.gain == Gain::TimeVarying
@@ -129,48 +92,4 @@ impl FilterErrorOptions {
     pub fn for_structure(structure: &ModelStructure) -> Result<FilterErrorOptions> {
         FilterErrorOptions::read(&merge_settings(METHOD, &[&structure.methods]))
     }
-}
-
-/// Checks an `initial_variance` table: finite variances not below zero,
-/// and only with the time-varying gain (the steady-state filter has no
-/// initial covariance).
-pub(super) fn check_initial_variance(
-    method: &str,
-    gain: Gain,
-    initial_variance: &BTreeMap<String, f64>,
-) -> Result<()> {
-    if gain == Gain::Steady && !initial_variance.is_empty() {
-        return Err(Error::Other(format!(
-            "[methods.{method}] initial_variance needs gain = \"time_varying\": the steady-state filter has no initial covariance"
-        )));
-    }
-    match initial_variance
-        .iter()
-        .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
-    {
-        Some((name, v)) => Err(Error::Other(format!(
-            "[methods.{method}] initial_variance.{name} = {v}: a variance must be finite and not below zero"
-        ))),
-        None => Ok(()),
-    }
-}
-
-/// P0 = diag of `initial_variance` over the states `names`; an error
-/// naming a key that is not a state.
-pub(super) fn initial_covariance(
-    method: &str,
-    names: &[&str],
-    initial_variance: &BTreeMap<String, f64>,
-) -> Result<DMatrix<f64>> {
-    let mut covariance = DMatrix::zeros(names.len(), names.len());
-    for (name, &variance) in initial_variance {
-        let i = names.iter().position(|n| n == name).ok_or_else(|| {
-            Error::Other(format!(
-                "[methods.{method}] initial_variance: '{name}' is not an integrated state of the model ({})",
-                names.join(", ")
-            ))
-        })?;
-        covariance[(i, i)] = variance;
-    }
-    Ok(covariance)
 }

@@ -72,7 +72,7 @@ impl Method for OutputError {
             linear: true,
             several_records: true,
             tied_parameters: true,
-            starts_from: Some(equation_error::METHOD),
+            starts_from: Some(EQUATION_ERROR),
             ..Capabilities::default()
         }
     }

@@ -4,7 +4,7 @@ use super::*;
 
 /// Output error on a linear structure: the filter-error fit with no
 /// process noise, whose filter is the model's exact simulation
-/// ([`filter_error::linear_fit`]), or with `segment` multiple shooting
+/// ([`filter_fit::linear_fit`]), or with `segment` multiple shooting
 /// ([`linear_shooting`]); then the fitted model's modes
 /// ([`modes::diagnose`]). The settings a linear model does not take are
 /// refused by name ([`LINEAR_UNSUPPORTED`]).
@@ -34,18 +34,18 @@ pub(super) fn linear_output_error(
                 decrease: CONVERGED_DECREASE,
             },
         )?,
-        None => filter_error::linear_fit(
+        None => filter_fit::linear_fit(
             METHOD,
             record,
             structure,
-            &filter_error::LinearFitOptions {
+            &filter_fit::LinearFitOptions {
                 max_iterations: options.max_iterations,
                 step: options.step,
                 window: options.window,
                 process_noise: None,
-                gain: filter_error::Gain::Steady,
+                gain: filter_fit::Gain::Steady,
                 initial_variance: Default::default(),
-                innovation_covariance: filter_error::InnovationForm::Diagonal,
+                innovation_covariance: filter_fit::InnovationForm::Diagonal,
             },
         )?,
     };

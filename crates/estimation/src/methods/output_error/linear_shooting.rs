@@ -33,7 +33,8 @@
 
 use crate::estimate::{Estimate, OutputFit};
 use crate::linear_structure::LinearStructure;
-use crate::methods::filter_error::{enough_data, free_parameters};
+use crate::methods::common::linear_data::{LinearData, linear_data};
+use crate::methods::common::refusals::enough_data;
 use crate::model::linear::LinearStateSpace;
 use crate::model::observations::Observations;
 use crate::model::state_space::StateSpaceModel;
@@ -61,17 +62,13 @@ pub(crate) fn fit(
     options: &ShootingOptions,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
-    let free = free_parameters(
-        method,
-        record,
-        structure.missing_channels(record),
-        &structure.name,
-        &structure.free,
-    )?;
-    let (model, _) = structure.for_record(record, options.step, options.window)?;
-    let step = model.time(1) - model.time(0);
-    let observations =
-        Observations::from_record(record, &structure.outputs, model.time(0), step, model.len())?;
+    let LinearData {
+        free,
+        model,
+        step,
+        observations,
+        ..
+    } = linear_data(method, record, structure, options.step, options.window)?;
     let pieces = pieces(method, record, &observations, step, options.segment)?;
     let n = structure.states.len();
     enough_data(method, &observations, free.len() + n * pieces.len())?;

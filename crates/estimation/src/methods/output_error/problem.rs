@@ -240,7 +240,7 @@ impl<'a> Problem<'a> {
         given: Option<&Estimate>,
         notes: &mut Vec<String>,
     ) -> bool {
-        let estimate = match equation_error::start_estimate(record, structure, given) {
+        let estimate = match start_estimate(record, structure, given) {
             Ok(estimate) => estimate,
             Err(reason) => {
                 notes.push(format!("started from the model file's values: {reason}"));

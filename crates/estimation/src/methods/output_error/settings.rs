@@ -2,20 +2,6 @@
 
 use super::*;
 
-/// Where the iterations start (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum Start {
-    /// The model file's values; initial states first held (two stages).
-    #[serde(rename = "model")]
-    Model,
-    /// Equation error's estimates where the structure allows it and they
-    /// fit the record better than the model file's values; otherwise as
-    /// the model file's.
-    #[default]
-    #[serde(rename = "ee")]
-    EquationError,
-}
-
 /// Settings of an output-error run: the `[methods.oem]` table.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -112,19 +98,7 @@ impl OutputErrorOptions {
 
     /// Checks the values' ranges and combinations.
     pub fn check(&self) -> Result<()> {
-        if self
-            .step
-            .is_some_and(|step| !(step > 0.0 && step.is_finite()))
-        {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: step must be positive"
-            )));
-        }
-        if self.max_iterations == 0 {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: max_iterations must be at least 1"
-            )));
-        }
+        check_iterations(METHOD, self.step, self.max_iterations)?;
         if self.starts == 0 {
             return Err(Error::Other(format!(
                 "[methods.{METHOD}]: starts must be at least 1"

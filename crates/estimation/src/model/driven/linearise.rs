@@ -4,7 +4,7 @@
 //! responses times the terms' regressors), the whole pass compiled for
 //! AVX2 too ([`aeroid_numerics::simd::wide`]); and the one-point
 //! evaluations and Jacobians the state-space view takes ([`evaluate`],
-//! [`linearise`], with its buffers kept between calls).
+//! [`linearise_with`], with its buffers kept between calls).
 
 use super::directions::{Directions, Filled, Response, state_step};
 use super::kinematics::{
@@ -413,6 +413,15 @@ pub(in crate::model) fn evaluate_into(
     rates
 }
 
+/// The buffers of [`linearise_with`] kept between calls: the directions while
+/// they do not depend on θ (no perturbed models: every parameter a term's,
+/// the forces affine in the coefficients), with the flag they were made
+/// for, and the linearisation's matrices.
+#[derive(Default)]
+pub(in crate::model) struct LinearisationBuffers {
+    pub(super) made: Option<(bool, Directions, Linearization)>,
+}
+
 /// The Jacobians of f (rows: `states`) and of the `outputs` at the full
 /// flight-path state x, along `states` and every aerodynamic parameter of
 /// `model`, by the machinery of [`DrivenSimulation::simulate`](super::DrivenSimulation::simulate)'s
@@ -423,38 +432,8 @@ pub(in crate::model) fn evaluate_into(
 /// difference (the simulation's forward difference is within ~10⁻⁶ of it
 /// through a stall break; a filter linearises once per step, so the
 /// second evaluation is cheap there).
-pub(in crate::model) fn linearise(
-    model: &FlightModel,
-    x: &FlightPathState,
-    (controls, pseudo, ambient): (&Controls, PseudoRates, Ambient),
-    states: &[usize],
-    outputs: &[Observable],
-) -> Jacobians {
-    let mut buffers = LinearisationBuffers::default();
-    linearise_with(
-        model,
-        x,
-        (controls, pseudo, ambient),
-        states,
-        outputs,
-        true,
-        &mut buffers,
-    );
-    let mut jacobians = Jacobians::empty();
-    buffers.copy_into(&mut jacobians, None);
-    jacobians
-}
-
-/// The buffers of [`linearise`] kept between calls: the directions while
-/// they do not depend on θ (no perturbed models: every parameter a term's,
-/// the forces affine in the coefficients), with the flag they were made
-/// for, and the linearisation's matrices.
-#[derive(Default)]
-pub(in crate::model) struct LinearisationBuffers {
-    pub(super) made: Option<(bool, Directions, Linearization)>,
-}
-
-/// [`linearise`] into `buffers` (the same numbers): the Jacobians are the
+///
+/// Into `buffers`: the Jacobians are the
 /// linearisation's `a`, `b`, `gx`, `gtheta` ([`LinearisationBuffers::copy_into`]),
 /// the outputs its values. Without `with_outputs` the outputs and their
 /// derivatives are not evaluated (`a` and `b` only:

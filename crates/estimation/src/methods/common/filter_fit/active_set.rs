@@ -9,7 +9,7 @@ use super::*;
 impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// diag(K·C) of the steady-state filter at the unknowns u (K and C at
     /// the first grid point, with the current R).
-    pub(super) fn gain_products(&self, unknowns: &DVector<f64>) -> Result<DVector<f64>> {
+    pub(crate) fn gain_products(&self, unknowns: &DVector<f64>) -> Result<DVector<f64>> {
         let (theta, distribution) = self.split(unknowns);
         let (interval, jacobians) = self.first_point(&theta)?;
         let innovation = self.innovation_covariance(&self.variances);
@@ -26,7 +26,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// differences of the gain, by the active-set method over the states
     /// with a gain; None (the step is then cut as any infeasible one) when
     /// it fails.
-    pub(super) fn gain_constrained_step(
+    pub(crate) fn gain_constrained_step(
         &self,
         unknowns: &DVector<f64>,
         gradient: &DVector<f64>,
@@ -107,17 +107,17 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
 /// Where the constrained step puts diag(K·C) on an active constraint: just
 /// inside 1, where R − C·P·Cᵀ, the channel's measurement noise, is still
 /// positive (at 1 it vanishes and the steady-state filter is singular).
-pub(super) const GAIN_LIMIT: f64 = 1.0 - 1e-6;
+pub(crate) const GAIN_LIMIT: f64 = 1.0 - 1e-6;
 
 /// The second-order corrections of a constrained step at most
 /// ([`FilterErrorFit::gain_constrained_step`]).
-pub(super) const CORRECTIONS: usize = 4;
+pub(crate) const CORRECTIONS: usize = 4;
 
 /// Where diag(K·C) has an entry at least this, the Gauss–Newton step is
 /// checked against the constraint linearised, not only at its end: the
 /// feasible set need not be convex, and a step whose end keeps to the
 /// constraint can cross it on the way.
-pub(super) const NEAR_ACTIVE: f64 = 0.9;
+pub(crate) const NEAR_ACTIVE: f64 = 0.9;
 
 /// The minimiser of gᵀΔ + ½·ΔᵀMΔ subject to A_i·Δ ≤ b_i for the rows i in
 /// `rows`, by the active-set method (Nocedal & Wright, "Numerical
@@ -127,7 +127,7 @@ pub(super) const NEAR_ACTIVE: f64 = 0.9;
 /// effect drop out); a constraint with a negative multiplier is released,
 /// the most violated one added, until the step keeps to every constraint
 /// with multipliers not below zero. None when that does not settle.
-pub(super) fn active_set_step(
+pub(crate) fn active_set_step(
     gradient: &DVector<f64>,
     information: &DMatrix<f64>,
     slopes: &DMatrix<f64>,

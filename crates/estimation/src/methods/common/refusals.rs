@@ -1,6 +1,14 @@
-//! What a model structure and a record must give output error, refused by name otherwise.
+//! The refusals the methods that simulate or filter a model share: a
+//! structure they cannot fit as stated ([`unsuitable`]), the channels a
+//! record lacks ([`missing_channels`]), nothing free to estimate
+//! ([`free_parameters`]) and fewer data than unknowns ([`enough_data`]).
 
-use super::*;
+use crate::estimator::{MissingChannel, Refusal};
+use crate::model::driven::ALTITUDE_SUBSTITUTES;
+use crate::model::observations::Observations;
+use crate::structure::ModelStructure;
+use aeroid_core::error::{Error, Result};
+use aeroid_record::FlightRecord;
 
 /// Refuses a structure output error (or another method that simulates or
 /// filters it, `method`) cannot fit as stated: no output to compare, or an
@@ -68,4 +76,45 @@ pub(crate) fn missing_channels(
         }
     }
     missing
+}
+
+/// The free parameters' indices (`free` per parameter of model `model`),
+/// or the refusal of `method`: channels `missing` from the record, or
+/// nothing to estimate.
+pub(crate) fn free_parameters(
+    method: &str,
+    record: &FlightRecord,
+    missing: Vec<MissingChannel>,
+    model: &str,
+    free: &[bool],
+) -> Result<Vec<usize>> {
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    if let Some(refusal) = Refusal::missing(method, missing, present) {
+        return Err(Error::Refused(refusal));
+    }
+    let free: Vec<usize> = (0..free.len()).filter(|&i| free[i]).collect();
+    if free.is_empty() {
+        return Err(Error::Refused(Refusal::NothingToEstimate {
+            method: method.to_string(),
+            model: model.to_string(),
+        }));
+    }
+    Ok(free)
+}
+
+/// The refusal of `method` when `observations` hold fewer data than `unknowns`.
+pub(crate) fn enough_data(
+    method: &str,
+    observations: &Observations,
+    unknowns: usize,
+) -> Result<()> {
+    let data: usize = observations.counts().iter().sum();
+    if data < unknowns {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: method.to_string(),
+            data,
+            unknowns,
+        }));
+    }
+    Ok(())
 }

@@ -7,62 +7,62 @@ use super::*;
 /// A filter-error fit of any state-space model: its unknowns are the free
 /// entries of θ followed by the F entries of the noisy states.
 pub struct FilterErrorFit<'a, M: StateSpaceModel + ?Sized> {
-    pub(super) model: &'a M,
-    pub(super) observations: &'a Observations,
-    pub(super) initial: DVector<f64>,
+    pub(crate) model: &'a M,
+    pub(crate) observations: &'a Observations,
+    pub(crate) initial: DVector<f64>,
     /// Every parameter of the model (the fixed ones at their values).
-    pub(super) theta: DVector<f64>,
+    pub(crate) theta: DVector<f64>,
     /// The indices of the estimated parameters in θ.
-    pub(super) free: Vec<usize>,
+    pub(crate) free: Vec<usize>,
     /// The states driven by process noise (indices into x).
-    pub(super) noisy: Vec<usize>,
+    pub(crate) noisy: Vec<usize>,
     /// The output of each measurement, in the observations' order.
-    pub(super) outputs: Vec<usize>,
+    pub(crate) outputs: Vec<usize>,
     /// The measured values, in the same order.
-    pub(super) measured: Vec<f64>,
+    pub(crate) measured: Vec<f64>,
     /// R's diagonal, the current innovation variances.
-    pub(super) variances: DVector<f64>,
+    pub(crate) variances: DVector<f64>,
     /// The full R (steady gain, one time base: [`InnovationCovariance`]),
     /// its diagonal `variances`; None where R is diagonal.
-    pub(super) full: Option<InnovationCovariance>,
+    pub(crate) full: Option<InnovationCovariance>,
     /// Whether every grid point with a measurement measures every output.
-    pub(super) one_time_base: bool,
+    pub(crate) one_time_base: bool,
     /// Whether R is to be full where it can ([`InnovationForm::Full`]).
-    pub(super) full_wanted: bool,
+    pub(crate) full_wanted: bool,
     /// F_ref of each F entry at the start: an entry below [`COLLAPSED`] of
     /// it is zero (see [`FilterErrorFit::split`]).
-    pub(super) scale: Vec<f64>,
+    pub(crate) scale: Vec<f64>,
     /// The filter in the loop; with [`Gain::TimeVarying`], `variances`
     /// holds G·Gᵀ (diagonal) instead of R.
-    pub(super) gain: Gain,
+    pub(crate) gain: Gain,
     /// P0, the initial state's error covariance (time-varying gain only).
-    pub(super) initial_covariance: DMatrix<f64>,
+    pub(crate) initial_covariance: DMatrix<f64>,
     /// How the noise is estimated: relaxed between the steps, or, with the
     /// time-varying gain once started, jointly with θ and F.
-    pub(super) relaxation: Relaxation,
+    pub(crate) relaxation: Relaxation,
     /// The lower bound of each entry of G·Gᵀ in the joint fit, a hundredth
     /// of its value at the last re-weighting (see
     /// [`FilterErrorFit::time_varying_residuals`]).
-    pub(super) noise_floor: DVector<f64>,
+    pub(crate) noise_floor: DVector<f64>,
     /// Steady gain: the Jacobian by whole passes differenced even where
     /// the model propagates sensitivities.
-    pub(super) differences: bool,
+    pub(crate) differences: bool,
     /// The last pass, with the θ, F and noise it was run with: the solver
     /// asks for the same pass more than once an iteration (the step's
     /// residuals, then the re-weighting at that point; the compensated F's
     /// check, then its residuals).
-    pub(super) last_pass: RefCell<Option<KeptPass>>,
+    pub(crate) last_pass: RefCell<Option<KeptPass>>,
     /// Whether the last Gauss–Newton step was constrained by diag(K·C) ≤ 1.
-    pub(super) constrained: bool,
+    pub(crate) constrained: bool,
     /// The unknowns' names ([`FilterErrorFit::with_names`]); empty: by position.
-    pub(super) names: Vec<String>,
+    pub(crate) names: Vec<String>,
 }
 
 /// How a fit estimates the noise it gives the filter, R (steady gain) or
 /// G·Gᵀ (time-varying gain): the one state of [`FilterErrorFit`] that
 /// changes how the solver's re-weighting and compensation act.
 #[derive(Debug, Clone, PartialEq)]
-pub(super) enum Relaxation {
+pub(crate) enum Relaxation {
     /// Relaxed in closed form between the Gauss–Newton steps (R = (1/N)·Σ
     /// ν·νᵀ, or a scoring step of G·Gᵀ), F compensated after each update
     /// (Jategaonkar Eq. 5.41). `previous`: R (diagonal and full) before
@@ -242,17 +242,17 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
 
     /// The unknowns' count: free parameters, F entries and, in the joint
     /// fit of the time-varying gain, G entries.
-    pub(super) fn unknown_count(&self) -> usize {
+    pub(crate) fn unknown_count(&self) -> usize {
         self.free.len() + self.noisy.len() + self.joint_count()
     }
 
     /// Whether G is among the unknowns ([`Relaxation::Joint`]).
-    pub(super) fn joint(&self) -> bool {
+    pub(crate) fn joint(&self) -> bool {
         matches!(self.relaxation, Relaxation::Joint { .. })
     }
 
     /// The G entries among the unknowns.
-    pub(super) fn joint_count(&self) -> usize {
+    pub(crate) fn joint_count(&self) -> usize {
         if self.joint() {
             self.model.output_count()
         } else {
@@ -263,7 +263,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     /// The measurement-noise variances the filter is given at the
     /// unknowns u: G² (each at least its [`FilterErrorFit::noise_floor`])
     /// in the joint fit, else the current R or G·Gᵀ.
-    pub(super) fn noise_of(&self, unknowns: &DVector<f64>) -> DVector<f64> {
+    pub(crate) fn noise_of(&self, unknowns: &DVector<f64>) -> DVector<f64> {
         if !self.joint() {
             return self.variances.clone();
         }
@@ -274,7 +274,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     }
 
     /// θ and the F diagonal of the unknowns u.
-    pub(super) fn split(&self, unknowns: &DVector<f64>) -> (DVector<f64>, DVector<f64>) {
+    pub(crate) fn split(&self, unknowns: &DVector<f64>) -> (DVector<f64>, DVector<f64>) {
         let mut theta = self.theta.clone();
         for (j, &i) in self.free.iter().enumerate() {
             theta[i] = unknowns[j];
@@ -294,7 +294,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
 
     /// The unknowns of θ and F (and, in the joint fit, G = √(G·Gᵀ) of the
     /// current variances).
-    pub(super) fn join(&self, theta: &DVector<f64>, distribution: &DVector<f64>) -> DVector<f64> {
+    pub(crate) fn join(&self, theta: &DVector<f64>, distribution: &DVector<f64>) -> DVector<f64> {
         DVector::from_iterator(
             self.unknown_count(),
             self.free
@@ -331,7 +331,7 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
 
     /// The filter pass at (θ, F = diag(`distribution`)) with `noise` the
     /// R (steady gain) or G·Gᵀ (time-varying gain) it is given.
-    pub(super) fn pass_at(
+    pub(crate) fn pass_at(
         &self,
         theta: &DVector<f64>,
         distribution: &DVector<f64>,

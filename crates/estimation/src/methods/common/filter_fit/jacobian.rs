@@ -14,7 +14,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// Fisher information Σ_k (∂νᵀS⁻¹∂ν + ½·tr(S⁻¹∂S·S⁻¹∂S)). The
     /// derivatives by forward differences of whole passes (backward where
     /// the forward pass fails), steps as [`LeastSquaresProblem::jacobian`].
-    pub(super) fn fisher_scoring(
+    pub(crate) fn fisher_scoring(
         &self,
         unknowns: &DVector<f64>,
         options: &Options,
@@ -198,7 +198,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
 
     /// The sample period the steady gain spans and the model's Jacobians
     /// at the first grid point with θ, where the steady gain is taken.
-    pub(super) fn first_point(&self, theta: &DVector<f64>) -> Result<(f64, Jacobians)> {
+    pub(crate) fn first_point(&self, theta: &DVector<f64>) -> Result<(f64, Jacobians)> {
         let start = self.model.time(0);
         let interval = (self.model.time(1) - start) * self.observations.stride() as f64;
         let jacobians = self

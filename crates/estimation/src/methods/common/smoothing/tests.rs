@@ -4,7 +4,7 @@ use super::inputs::unwrapped_yaw;
 use super::regression::regress_smoothed;
 use super::smoother::{process_noise, smooth_with};
 use super::{GaussMarkov, METHOD, Smoothed, SmoothedRegressionSettings};
-use crate::methods::equation_error;
+use crate::methods::common::regression;
 use crate::model::coefficient_states::{
     self, COEFFICIENT_NAMES, H, P, PHI, PSI, STATE_COUNT, THETA, U,
 };
@@ -36,7 +36,7 @@ fn scalar_and_vector_updates_smooth_alike() {
     let structure = ModelStructure::load("attas-lateral").unwrap();
     let settings = SmoothedRegressionSettings::default();
     let run = |keep: Keep| {
-        let plans = equation_error::plans(&structure, METHOD).unwrap();
+        let plans = regression::plans(&structure, METHOD).unwrap();
         let smoothed = smooth_with(&record, &structure, &settings, &plans, keep).unwrap();
         let estimate = regress_smoothed(&record, &structure, &settings, plans, &smoothed).unwrap();
         (smoothed, estimate)

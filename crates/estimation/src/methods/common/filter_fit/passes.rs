@@ -104,7 +104,7 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
 /// F·Fᵀ, F = diag(`distribution`), discretised over `interval` (the
 /// interval between an output's corrections), and G·Gᵀ = R − C·P·Cᵀ. With
 /// no process noise the gain is zero.
-pub(super) fn steady_gain(
+pub(crate) fn steady_gain(
     jacobians: &crate::model::state_space::Jacobians,
     distribution: &DVector<f64>,
     innovation: &InnovationCovariance,
@@ -131,10 +131,10 @@ pub(super) fn steady_gain(
 /// the filter's own sensitivity equations): the unknowns' `columns` (the
 /// parameter each is, None for an F entry), ∂K/∂u_j for each, and the
 /// rows ∂ν/∂u written, one per measurement.
-pub(super) struct Tangent<'a> {
-    pub(super) columns: &'a [Option<usize>],
-    pub(super) gains: &'a [DMatrix<f64>],
-    pub(super) rows: DMatrix<f64>,
+pub(crate) struct Tangent<'a> {
+    pub(crate) columns: &'a [Option<usize>],
+    pub(crate) gains: &'a [DMatrix<f64>],
+    pub(crate) rows: DMatrix<f64>,
 }
 
 /// The steady-state filter's pass over `observations` with `pass`'s gain,
@@ -146,7 +146,7 @@ pub(super) struct Tangent<'a> {
 // each with or without the sensitivities) whose eleven buffers are
 // allocated once before it, so that a pass allocates nothing per grid
 // point (tests/no_allocation.rs); its phases would each take most of them.
-pub(super) fn filter_steadily<M: StateSpaceModel + ?Sized>(
+pub(crate) fn filter_steadily<M: StateSpaceModel + ?Sized>(
     model: &M,
     theta: &[f64],
     initial: &DVector<f64>,
@@ -280,13 +280,13 @@ pub struct TimeVaryingPass {
     /// measurements (without 2π), S_k = C_k·P̃_k·C_kᵀ + G·Gᵀ.
     pub negative_log_likelihood: f64,
     /// The output of each innovation, in the same order.
-    pub(super) outputs: Vec<usize>,
+    pub(crate) outputs: Vec<usize>,
     /// At each grid point with measurements: where its innovations start,
     /// their number m, where its S_k (m × m, column-major) starts in
     /// `covariances`.
-    pub(super) spans: Vec<(usize, usize, usize)>,
+    pub(crate) spans: Vec<(usize, usize, usize)>,
     /// The S_k, grid point after grid point.
-    pub(super) covariances: Vec<f64>,
+    pub(crate) covariances: Vec<f64>,
 }
 
 impl TimeVaryingPass {
@@ -376,7 +376,7 @@ pub fn time_varying_pass<M: StateSpaceModel + ?Sized>(
     Ok(pass)
 }
 
-pub(super) fn at_time(error: Error, t: f64) -> Error {
+pub(crate) fn at_time(error: Error, t: f64) -> Error {
     Error::Other(format!("at t = {t} s: {error}"))
 }
 

@@ -11,7 +11,7 @@ use super::settings::SmoothedRegressionSettings;
 use super::smoothed::{Smoothed, speed, wind_axes};
 use super::smoother::smooth_with;
 use crate::estimate::Estimate;
-use crate::methods::equation_error::{self, Plan};
+use crate::methods::common::regression::{self, Plan};
 use crate::model::coefficient_states::{self, CoefficientStates, H, P, U};
 use crate::model::state_space::StateSpaceModel;
 use crate::reconstruction::{Reconstruction, Request};
@@ -39,7 +39,7 @@ pub(crate) fn regression_data(
         let i = steps.partition_point(|&s| s < t - step_margin);
         steps.get(i).is_some_and(|&s| s <= t + step_margin)
     };
-    let request = equation_error::request(plans);
+    let request = regression::request(plans);
     let mut controls: Vec<Vec<f64>> = vec![vec![0.0; smoothed.times.len()]; Control::ALL.len()];
     for control in Control::ALL {
         if let Ok(channel) = record.channel(control.name()) {
@@ -165,7 +165,7 @@ pub fn smooth_and_regress(
     structure: &ModelStructure,
     settings: &SmoothedRegressionSettings,
 ) -> Result<(Smoothed, Estimate)> {
-    let plans = equation_error::plans(structure, METHOD)?;
+    let plans = regression::plans(structure, METHOD)?;
     let smoothed = smooth_with(
         record,
         structure,
@@ -186,7 +186,7 @@ pub(super) fn regress_smoothed(
     smoothed: &Smoothed,
 ) -> Result<Estimate> {
     let data = regression_data(record, structure, smoothed, &plans, settings.step_margin)?;
-    Ok(equation_error::regress(
+    Ok(regression::regress(
         record,
         structure,
         METHOD,

@@ -85,7 +85,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
 
     /// `unknowns` with F halved until a filter exists with the current R
     /// (at most 40 times); None when none does.
-    pub(super) fn feasible(&self, mut unknowns: DVector<f64>) -> Option<DVector<f64>> {
+    pub(crate) fn feasible(&self, mut unknowns: DVector<f64>) -> Option<DVector<f64>> {
         for _ in 0..40 {
             if self.pass(&unknowns).is_ok() {
                 return Some(unknowns);
@@ -99,7 +99,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
 
     /// The solver options with F's (and G's) typical values and bounds
     /// set from the `start` unknowns.
-    pub(super) fn prepared(&self, start: &DVector<f64>, mut options: Options) -> Options {
+    pub(crate) fn prepared(&self, start: &DVector<f64>, mut options: Options) -> Options {
         let aero = self.free.len();
         options.typical.resize(self.unknown_count(), 1e-3);
         options
@@ -113,7 +113,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
 
     /// One fit from `theta` with R as `full_wanted` says (docs/methods.md,
     /// Filter error).
-    pub(super) fn fit_once(&mut self, theta: &DVector<f64>, options: Options) -> Result<FitResult> {
+    pub(crate) fn fit_once(&mut self, theta: &DVector<f64>, options: Options) -> Result<FitResult> {
         let (start, start_factor) = self.start(theta)?;
         let aero = self.free.len();
         self.scale = start

@@ -12,9 +12,9 @@ use super::*;
 /// each correcting alone).
 #[derive(Debug, Clone, PartialEq)]
 pub struct InnovationCovariance {
-    pub(super) matrix: DMatrix<f64>,
+    pub(crate) matrix: DMatrix<f64>,
     /// L⁻¹ (R = L·Lᵀ) and ln det R of a full R; None for a diagonal one.
-    pub(super) whitening: Option<(DMatrix<f64>, f64)>,
+    pub(crate) whitening: Option<(DMatrix<f64>, f64)>,
 }
 
 impl InnovationCovariance {
@@ -53,7 +53,7 @@ impl InnovationCovariance {
     /// place: each grid point's block by L⁻¹ where R is full and the point
     /// measures every output, else each row by 1/√R_oo. ½ of the squared
     /// sum of whitened innovations is ½·Σ νᵀR⁻¹ν.
-    pub(super) fn whiten(&self, observations: &Observations, rows: &mut DMatrix<f64>) {
+    pub(crate) fn whiten(&self, observations: &Observations, rows: &mut DMatrix<f64>) {
         let outputs = self.matrix.nrows();
         let mut row = 0;
         for present in &observations.at {
@@ -82,7 +82,7 @@ impl InnovationCovariance {
 }
 
 /// L of S = L·Lᵀ and ln det S; an error when S is not positive definite.
-pub(super) fn lower_root(covariance: DMatrixView<'_, f64>) -> Result<(DMatrix<f64>, f64)> {
+pub(crate) fn lower_root(covariance: DMatrixView<'_, f64>) -> Result<(DMatrix<f64>, f64)> {
     let root = covariance
         .clone_owned()
         .cholesky()
@@ -93,4 +93,4 @@ pub(super) fn lower_root(covariance: DMatrixView<'_, f64>) -> Result<(DMatrix<f6
 }
 
 /// R's diagonal and, where it is full, the whole R.
-pub(super) type Relaxed = (DVector<f64>, Option<InnovationCovariance>);
+pub(crate) type Relaxed = (DVector<f64>, Option<InnovationCovariance>);

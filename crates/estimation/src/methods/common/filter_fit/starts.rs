@@ -5,13 +5,13 @@
 use super::*;
 
 /// The factors of F_ref tried for the start of F (docs/methods.md, Filter error).
-pub(super) const START_FACTORS: [f64; 5] = [1.0, 0.3, 0.1, 0.03, 0.01];
+pub(crate) const START_FACTORS: [f64; 5] = [1.0, 0.3, 0.1, 0.03, 0.01];
 
 impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// F_ref (docs/methods.md, Filter error): the process noise whose one-step
     /// spread equals the residual level seen through C = ∂h/∂x at the
     /// first point.
-    pub(super) fn reference_distribution(&self, c: &DMatrix<f64>) -> DVector<f64> {
+    pub(crate) fn reference_distribution(&self, c: &DMatrix<f64>) -> DVector<f64> {
         let step = (self.model.time(1) - self.model.time(0)) * self.observations.stride() as f64;
         let mut reference = DVector::zeros(self.model.state_count());
         for &i in &self.noisy {
@@ -30,7 +30,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// Sets R from the innovations with no process noise at θ and chooses
     /// the start of F (docs/methods.md, Filter error); returns the start unknowns
     /// and the factor chosen.
-    pub(super) fn start(&mut self, theta: &DVector<f64>) -> Result<(DVector<f64>, f64)> {
+    pub(crate) fn start(&mut self, theta: &DVector<f64>) -> Result<(DVector<f64>, f64)> {
         let zero = DVector::zeros(self.model.state_count());
         // R starts diagonal, from the simulation's output errors: those of
         // a model without its filter drift together, and a full R of them
@@ -89,16 +89,16 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
 }
 
 /// Equation error's estimates as a start (the free parameters, within
-/// their bounds, [`equation_error::start_estimate`]); None with a note
+/// their bounds, [`start_estimate`]); None with a note
 /// when there is none.
-pub(super) fn regression_start(
+pub(crate) fn regression_start(
     record: &FlightRecord,
     structure: &ModelStructure,
     given: Option<&Estimate>,
     file: &DVector<f64>,
     notes: &mut Vec<String>,
 ) -> Option<DVector<f64>> {
-    match equation_error::start_estimate(record, structure, given) {
+    match start_estimate(record, structure, given) {
         Ok(estimate) => {
             let names = structure.aircraft.aero.parameters.names();
             let mut theta = file.clone();

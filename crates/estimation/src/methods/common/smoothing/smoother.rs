@@ -42,7 +42,7 @@ use super::inputs::{
 use super::settings::SmoothedRegressionSettings;
 use super::smoothed::Smoothed;
 use crate::estimator::Refusal;
-use crate::methods::equation_error::{self, Plan};
+use crate::methods::common::regression::{self, Plan};
 use crate::model::coefficient_states::{
     self, COEFFICIENT_NAMES, CoefficientStates, H, P, PHI, PSI, STATE_COUNT, THETA, U,
 };
@@ -260,7 +260,7 @@ pub fn smooth(
     structure: &ModelStructure,
     settings: &SmoothedRegressionSettings,
 ) -> Result<Smoothed> {
-    let plans = equation_error::plans(structure, METHOD).unwrap_or_default();
+    let plans = regression::plans(structure, METHOD).unwrap_or_default();
     smooth_with(
         record,
         structure,
@@ -301,7 +301,7 @@ impl SmootherSetup {
         structure: &ModelStructure,
         settings: &SmoothedRegressionSettings,
     ) -> Result<SmootherSetup> {
-        let plans = equation_error::plans(structure, METHOD).unwrap_or_default();
+        let plans = regression::plans(structure, METHOD).unwrap_or_default();
         SmootherSetup::with_plans(record, structure, settings, &plans)
     }
 

@@ -1,4 +1,4 @@
-//! Equation error (method `ee`, [`super::equation_error`]) on a linear
+//! Equation error (method `ee`, [`crate::methods::equation_error`]) on a linear
 //! structure ([`LinearStructure`]): least squares on each state equation
 //! ẋ_i = Σ_j A_ij·x_j + Σ_j B_ij·u_j + b_i and each output equation
 //! y_o = Σ_j C_oj·x_j + Σ_j D_oj·u_j + c_o that has a free entry
@@ -27,12 +27,11 @@
 //! bias is not in the Cramér–Rao bound (tests/estimators/linear_models.rs measures
 //! it on the linear lateral flight).
 
+use super::coefficient_fit::METHOD;
+use super::regression::{CoefficientResult, assemble_named, white_bound_notes_named};
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{MissingChannel, Refusal};
 use crate::linear_structure::LinearStructure;
-use crate::methods::equation_error::{
-    CoefficientResult, METHOD, assemble_named, white_bound_notes_named,
-};
 use crate::model::linear::Matrix;
 use crate::model::state_space::{fitting_window, integration_step};
 use crate::reconstruction;

@@ -1,8 +1,7 @@
-//! Output error and filter error on a linear structure ([`linear_fit`]),
-//! and the refusals other methods share: [`free_parameters`],
-//! [`enough_data`].
+//! Output error and filter error on a linear structure ([`linear_fit`]).
 
 use super::*;
+use crate::methods::common::linear_data::{LinearData, linear_data};
 
 /// How [`linear_fit`] fits a linear structure.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,18 +33,14 @@ pub(crate) fn linear_fit(
     options: &LinearFitOptions,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
-    let free = free_parameters(
-        method,
-        record,
-        structure.missing_channels(record),
-        &structure.name,
-        &structure.free,
-    )?;
+    let LinearData {
+        free,
+        model,
+        initial,
+        step,
+        observations,
+    } = linear_data(method, record, structure, options.step, options.window)?;
     let noisy = noisy_states_named(method, structure, options.process_noise.as_deref())?;
-    let (model, initial) = structure.for_record(record, options.step, options.window)?;
-    let step = model.time(1) - model.time(0);
-    let observations =
-        Observations::from_record(record, &structure.outputs, model.time(0), step, model.len())?;
     enough_data(method, &observations, free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
     notes.push("linear model, started from the model file's values".to_string());
@@ -119,45 +114,4 @@ fn noisy_states_named(
             })
         })
         .collect()
-}
-
-/// The free parameters' indices (`free` per parameter of model `model`),
-/// or the refusal of `method`: channels `missing` from the record, or
-/// nothing to estimate.
-pub(crate) fn free_parameters(
-    method: &str,
-    record: &FlightRecord,
-    missing: Vec<MissingChannel>,
-    model: &str,
-    free: &[bool],
-) -> Result<Vec<usize>> {
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(method, missing, present) {
-        return Err(Error::Refused(refusal));
-    }
-    let free: Vec<usize> = (0..free.len()).filter(|&i| free[i]).collect();
-    if free.is_empty() {
-        return Err(Error::Refused(Refusal::NothingToEstimate {
-            method: method.to_string(),
-            model: model.to_string(),
-        }));
-    }
-    Ok(free)
-}
-
-/// The refusal of `method` when `observations` hold fewer data than `unknowns`.
-pub(crate) fn enough_data(
-    method: &str,
-    observations: &Observations,
-    unknowns: usize,
-) -> Result<()> {
-    let data: usize = observations.counts().iter().sum();
-    if data < unknowns {
-        return Err(Error::Refused(Refusal::TooFewData {
-            method: method.to_string(),
-            data,
-            unknowns,
-        }));
-    }
-    Ok(())
 }

@@ -118,7 +118,7 @@ impl Default for SmoothedRegressionSettings {
     }
 }
 
-pub(super) const SETTINGS: &[(&str, &str)] = &[
+pub(crate) const SETTINGS: &[(&str, &str)] = &[
     (
         "observations",
         "channels the filter compares, each needed: any of nx, ny, nz, roll, pitch, yaw, airspeed, altitude, alpha, beta, p, q, r (Eq. 8)",

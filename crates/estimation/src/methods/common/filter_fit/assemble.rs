@@ -6,7 +6,7 @@ use crate::estimate::ParameterEstimate;
 
 /// The names of the noise unknowns: F's entries of the `noisy` states and,
 /// with the time-varying gain, G's of the `outputs`.
-pub(super) fn noise_names<'a>(
+pub(crate) fn noise_names<'a>(
     noisy: impl Iterator<Item = &'a str>,
     outputs: &[String],
     gain: Gain,
@@ -24,16 +24,16 @@ pub(super) fn noise_names<'a>(
 
 /// The names of a fit's unknowns: the free parameters, then F's entries
 /// (and G's, time-varying gain).
-pub(super) struct Names {
-    pub(super) parameters: Vec<String>,
-    pub(super) noise: Vec<String>,
+pub(crate) struct Names {
+    pub(crate) parameters: Vec<String>,
+    pub(crate) noise: Vec<String>,
     /// The model's integrated states, in x's order.
-    pub(super) states: Vec<String>,
+    pub(crate) states: Vec<String>,
 }
 
 impl Names {
     /// Every unknown's name in θ's order.
-    pub(super) fn unknowns(&self) -> Vec<String> {
+    pub(crate) fn unknowns(&self) -> Vec<String> {
         self.parameters.iter().chain(&self.noise).cloned().collect()
     }
 }
@@ -41,7 +41,7 @@ impl Names {
 /// The estimate of a fit by `method` of model `name` with `outputs`: the
 /// model's parameters with their block of the Cramér–Rao covariance; F and
 /// R in the notes and details.
-pub(super) fn assemble<M: StateSpaceModel + ?Sized>(
+pub(crate) fn assemble<M: StateSpaceModel + ?Sized>(
     (method, name, outputs): (&str, &str, &[String]),
     record: &FlightRecord,
     fit: &FilterErrorFit<'_, M>,

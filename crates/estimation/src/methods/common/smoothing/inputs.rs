@@ -7,7 +7,7 @@
 use super::METHOD;
 use super::settings::SmoothedRegressionSettings;
 use crate::estimator::{MissingChannel, Refusal};
-use crate::methods::equation_error::Plan;
+use crate::methods::common::regression::Plan;
 use crate::model::coefficient_states::Output;
 use crate::model::driven::ALTITUDE_SUBSTITUTES;
 use crate::structure::ModelStructure;

@@ -19,12 +19,12 @@ use super::*;
 /// fit converges in 19 iterations. With the floor at 10⁻²⁴ of the mean
 /// square, as the steady gain's, S_k lost positive definiteness
 /// (`diverged`).
-pub(super) const NOISE_ROUNDING: f64 = 1e-8;
+pub(crate) const NOISE_ROUNDING: f64 = 1e-8;
 
 impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// The steady filter's R: the full R where it is kept (its diagonal
     /// `variances`), else diag(`variances`).
-    pub(super) fn innovation_covariance(&self, variances: &DVector<f64>) -> InnovationCovariance {
+    pub(crate) fn innovation_covariance(&self, variances: &DVector<f64>) -> InnovationCovariance {
         self.full
             .clone()
             .unwrap_or_else(|| InnovationCovariance::diagonal(variances))
@@ -36,7 +36,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// diagonal (None where it is not positive definite: the diagonal
     /// serves). Without process noise the fit is output error, whose R is
     /// diagonal as the `oem` method's.
-    pub(super) fn covariance_of(&self, innovations: &[f64]) -> Relaxed {
+    pub(crate) fn covariance_of(&self, innovations: &[f64]) -> Relaxed {
         let variances = self.variances_of(innovations);
         let outputs = self.model.output_count();
         if self.gain != Gain::Steady
@@ -69,7 +69,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
 
     /// The diagonal R of a pass's innovations: each output's mean square,
     /// floored (see [`FilterErrorFit::floors`]).
-    pub(super) fn variances_of(&self, innovations: &[f64]) -> DVector<f64> {
+    pub(crate) fn variances_of(&self, innovations: &[f64]) -> DVector<f64> {
         let count = self.model.output_count();
         let mut sums = vec![(0.0, 0usize); count];
         for (&o, &nu) in self.outputs.iter().zip(innovations) {
@@ -89,7 +89,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// Time-varying gain: the rounding floor of G·Gᵀ, [`NOISE_ROUNDING`] of
     /// the output's variance about its mean (docs/methods.md, Filter error, "Exact
     /// fits").
-    pub(super) fn floors(&self) -> DVector<f64> {
+    pub(crate) fn floors(&self) -> DVector<f64> {
         if self.gain == Gain::TimeVarying {
             return self.measured_variances() * NOISE_ROUNDING;
         }
@@ -112,7 +112,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// g_o = ½·Σ_k ((S⁻¹νν ᵀS⁻¹)_oo − (S⁻¹)_oo), M_op = ½·Σ_k ((S⁻¹)_op)²
     /// over the grid points where o (and p) are measured; a step is cut to
     /// keep V above a tenth of its value, and V above its floor.
-    pub(super) fn measurement_noise_of(&self, pass: &TimeVaryingPass) -> DVector<f64> {
+    pub(crate) fn measurement_noise_of(&self, pass: &TimeVaryingPass) -> DVector<f64> {
         let count = self.model.output_count();
         let mut gradient = DVector::<f64>::zeros(count);
         let mut information = DMatrix::<f64>::zeros(count, count);
@@ -151,7 +151,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// likelihood's optimum with the predicted covariances held in one step,
     /// where the Gauss–Newton step, linear in G, would take many on
     /// noise-free data.
-    pub(super) fn relax_jointly(&mut self, unknowns: &DVector<f64>) -> Option<DVector<f64>> {
+    pub(crate) fn relax_jointly(&mut self, unknowns: &DVector<f64>) -> Option<DVector<f64>> {
         let Relaxation::Joint { proposed } = &mut self.relaxation else {
             return None;
         };
@@ -174,7 +174,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// `gradient` asking for less: those outputs are fitted to rounding, and
     /// their G is held where it is (its row and column of the normal
     /// equations zero: no step, and an infinite bound).
-    pub(super) fn held_at_rounding(
+    pub(crate) fn held_at_rounding(
         &self,
         unknowns: &DVector<f64>,
         gradient: &DVector<f64>,
@@ -211,14 +211,14 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
 
     /// The joint fit's noise floors: a hundredth of `variances`, at least
     /// [`FilterErrorFit::floors`].
-    pub(super) fn noise_floors(&self, variances: &DVector<f64>) -> DVector<f64> {
+    pub(crate) fn noise_floors(&self, variances: &DVector<f64>) -> DVector<f64> {
         let floors = self.floors();
         DVector::from_fn(variances.len(), |o, _| (0.01 * variances[o]).max(floors[o]))
     }
 
     /// The relaxation of the noise covariance the filter is given: R from
     /// the innovations (steady gain), a scoring step of G·Gᵀ (time-varying).
-    pub(super) fn relaxed(&self, pass: &FilterPass) -> Relaxed {
+    pub(crate) fn relaxed(&self, pass: &FilterPass) -> Relaxed {
         match pass {
             FilterPass::Steady(pass) => self.covariance_of(&pass.innovations),
             FilterPass::TimeVarying(pass) => (self.measurement_noise_of(pass), None),
@@ -231,7 +231,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// (S ≥ G·Gᵀ ≥ D, so the root is real); ½ of their squares summed is
     /// the negative log-likelihood less ½·Σ_k ln det D, a constant between
     /// re-weightings.
-    pub(super) fn time_varying_residuals(&self, pass: &TimeVaryingPass) -> Result<DVector<f64>> {
+    pub(crate) fn time_varying_residuals(&self, pass: &TimeVaryingPass) -> Result<DVector<f64>> {
         let mut residuals = Vec::with_capacity(pass.innovations.len() + pass.spans.len());
         for (rows, innovation, covariance) in pass.updates() {
             let (root, log_det) = lower_root(covariance)?;
@@ -248,7 +248,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// Each output's variance about its mean over its measurements (a
     /// floor of 10⁻¹² of its mean square), the start of R when the model
     /// cannot be simulated without the filter.
-    pub(super) fn measured_variances(&self) -> DVector<f64> {
+    pub(crate) fn measured_variances(&self) -> DVector<f64> {
         let count = self.model.output_count();
         let mut sums = vec![(0.0, 0.0, 0usize); count];
         for (&o, &z) in self.outputs.iter().zip(&self.measured) {
@@ -269,7 +269,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// ½·Σ_o N_o·ln R_oo (R diagonal) or ½·N·ln det R (R full, N the
     /// grid points measured): the likelihood with R estimated, up to a
     /// constant.
-    pub(super) fn determinant_cost(&self) -> f64 {
+    pub(crate) fn determinant_cost(&self) -> f64 {
         if let Some((_, log_det)) = self.full.as_ref().and_then(|full| full.whitening.as_ref()) {
             let points = self
                 .observations
