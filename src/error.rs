@@ -14,6 +14,10 @@ pub enum Error {
     #[error(transparent)]
     Core(#[from] aeroid_core::Error),
 
+    /// An error of estimation (`aeroid_estimation`).
+    #[error(transparent)]
+    Estimation(#[from] aeroid_estimation::Error),
+
     /// An error of recording or preparing data (`aeroid_record`).
     #[error(transparent)]
     Record(#[from] aeroid_record::error::Error),
@@ -37,6 +41,7 @@ impl Error {
     pub fn refusal(&self) -> Option<&Refusal> {
         match self {
             Error::Core(error) => error.refusal(),
+            Error::Estimation(error) => error.refusal(),
             Error::Eval(error) => error.refusal(),
             _ => None,
         }
@@ -47,6 +52,7 @@ impl Error {
     pub fn problems(&self) -> Option<&[Problem]> {
         match self {
             Error::Core(error) => error.problems(),
+            Error::Estimation(error) => error.problems(),
             Error::Eval(error) => error.problems(),
             #[cfg(feature = "jsbsim")]
             Error::Jsbsim(aeroid_jsbsim::Error::Core(error)) => error.problems(),

@@ -12,6 +12,14 @@ pub enum Error {
     #[error(transparent)]
     Core(#[from] aeroid_core::Error),
 
+    /// An error of estimation (`aeroid_estimation`).
+    #[error(transparent)]
+    Estimation(#[from] aeroid_estimation::Error),
+
+    /// An error of recording or preparing data (`aeroid_record`).
+    #[error(transparent)]
+    Record(#[from] aeroid_record::error::Error),
+
     /// Samples or an order that ERA cannot fit.
     #[error("ERA needs {need}")]
     EraInput { need: &'static str },

@@ -8,6 +8,7 @@
 
 pub mod compatibility;
 pub mod diagnosis;
+pub mod error;
 pub mod estimate;
 pub mod estimator;
 pub mod fit_quality;
@@ -56,4 +57,4 @@ pub const CHANNELS_READ: &[&str] = &[
     "chi",
 ];
 
-pub use aeroid_core::error::{Error, Result};
+pub use error::{Error, Result};

@@ -13,6 +13,10 @@ pub enum Error {
     #[error(transparent)]
     Core(#[from] aeroid_core::Error),
 
+    /// An error of estimation (`aeroid_estimation`).
+    #[error(transparent)]
+    Estimation(#[from] aeroid_estimation::Error),
+
     /// An error of recording or preparing data (`aeroid_record`).
     #[error(transparent)]
     Record(#[from] aeroid_record::error::Error),
@@ -81,6 +85,7 @@ impl Error {
     pub fn refusal(&self) -> Option<&Refusal> {
         match self {
             Error::Core(error) => error.refusal(),
+            Error::Estimation(error) => error.refusal(),
             _ => None,
         }
     }
@@ -90,6 +95,7 @@ impl Error {
     pub fn problems(&self) -> Option<&[aeroid_core::error::Problem]> {
         match self {
             Error::Core(error) => error.problems(),
+            Error::Estimation(error) => error.problems(),
             _ => None,
         }
     }

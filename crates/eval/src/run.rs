@@ -132,6 +132,7 @@ pub fn run(
             &scenario.path,
             &field,
         )
+        .map_err(aeroid_estimation::Error::from)
         .and_then(|path| Structure::load(&path.to_string_lossy()));
         let outcomes = match &structure {
             Ok(structure) => estimate_each(

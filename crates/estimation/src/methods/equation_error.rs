@@ -62,6 +62,7 @@
 //! [`super::common::regression`] (the least-squares step), which the other
 //! regression methods and the starts of the iterative methods share.
 
+use crate::error::Result;
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};
 use crate::methods::common::coefficient_fit::{
@@ -73,7 +74,6 @@ pub use crate::methods::common::coefficient_fit::{
 pub use crate::methods::common::linear_regression::linear_equation_error;
 use crate::problem::EstimationProblem;
 use crate::structure::Structure;
-use aeroid_core::error::Result;
 
 /// Equation error as a registered method.
 pub struct EquationError;

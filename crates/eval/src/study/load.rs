@@ -114,7 +114,7 @@ fn load_files(
     let scenarios = load_each("scenarios", &file.scenarios, problems, |r| {
         let scenario = Scenario::load(&resolved(r, catalog::SCENARIO_FOLDER)?)?;
         registry.validate_tables(&scenario.methods, &scenario.path)?;
-        Ok::<_, aeroid_core::Error>(scenario)
+        Ok::<_, crate::Error>(scenario)
     });
     let models = load_each("models", &file.models, problems, |r| {
         Structure::load(&resolved(r, catalog::MODEL_FOLDER)?)
