@@ -41,16 +41,34 @@ fn input_scenario_with(test: &str, edit: impl Fn(String) -> String) -> PathBuf {
     )
 }
 
+/// An error of a file that does not validate, from the simulator or the
+/// recorder: its problems and its message.
+trait Validation: std::fmt::Display {
+    fn problem_list(&self) -> Option<&[aeroid::error::Problem]>;
+}
+
+impl Validation for aeroid::sim::Error {
+    fn problem_list(&self) -> Option<&[aeroid::error::Problem]> {
+        self.problems()
+    }
+}
+
+impl Validation for aeroid::record::Error {
+    fn problem_list(&self) -> Option<&[aeroid::error::Problem]> {
+        self.problems()
+    }
+}
+
 /// The problems of a validation error as `field: message` lines.
-fn problems(error: &Error) -> Vec<String> {
-    match error {
-        Error::Invalid { problems, .. } => problems.iter().map(|p| p.to_string()).collect(),
-        other => panic!("expected a validation error, got {other}"),
+fn problems(error: &impl Validation) -> Vec<String> {
+    match error.problem_list() {
+        Some(problems) => problems.iter().map(|p| p.to_string()).collect(),
+        None => panic!("expected a validation error, got {error}"),
     }
 }
 
 /// The one problem of a validation error, which must name `path`.
-fn only_problem(error: &Error, path: &std::path::Path) -> String {
+fn only_problem(error: &impl Validation, path: &std::path::Path) -> String {
     let message = error.to_string();
     assert!(
         message.starts_with(&path.display().to_string()),

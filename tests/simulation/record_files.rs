@@ -6,7 +6,6 @@
 use crate::common;
 use aeroid::record::recorder::{Profile, profile_for};
 use aeroid::record::{Channel, FlightRecord};
-use aeroid::sim::Error;
 use aeroid::sim::scenario::Scenario;
 use aeroid::sim::truth::{RunTruth, TruthKind};
 use aeroid::units::{DEG, FOOT, KNOT};
@@ -200,12 +199,12 @@ fn csv_error(
     result: aeroid::record::Result<aeroid::record::import::ImportOutcome>,
 ) -> (u64, String, String) {
     match result {
-        Err(Error::Csv {
+        Err(aeroid::record::Error::Core(aeroid_core::Error::Csv {
             line,
             column,
             message,
             ..
-        }) => (line, column, message),
+        })) => (line, column, message),
         other => panic!("expected a CSV error, got {other:?}"),
     }
 }
@@ -242,7 +241,8 @@ fn import_non_monotonic_time_is_named() {
 fn import_duplicate_channel_is_named() {
     let map = FLIGHT_MAP.replace("name = \"yaw\"", "name = \"alpha\"");
     match common::import_case("duplicate", FLIGHT_CSV, &map) {
-        Err(Error::Invalid { problems, .. }) => {
+        Err(error) if error.problems().is_some() => {
+            let problems = error.problems().unwrap_or_default();
             assert_eq!(problems.len(), 1, "{problems:?}");
             assert_eq!(problems[0].field, "channels[4].name");
             assert!(

@@ -12,6 +12,10 @@ pub enum Error {
     #[error(transparent)]
     Core(#[from] aeroid_core::Error),
 
+    /// An error of the numerical kernels (`aeroid_numerics`).
+    #[error(transparent)]
+    Numerics(#[from] aeroid_numerics::Error),
+
     /// An error of estimation (`aeroid_estimation`).
     #[error(transparent)]
     Estimation(#[from] aeroid_estimation::Error),

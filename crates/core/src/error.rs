@@ -155,33 +155,11 @@ pub enum Error {
     #[error("JSBSim: {context}: {message}")]
     Jsbsim { context: String, message: String },
 
-    /// An estimator cannot run on this record or model; the refusal says
-    /// what is missing, as data.
-    #[error("{0}")]
-    Refused(crate::refusal::Refusal),
-
-    /// A square-root filter's Cholesky downdate that would leave its
-    /// covariance factor without a positive diagonal: the covariance it
-    /// stands for would no longer be positive definite. `step` names the
-    /// filter step.
-    #[error(
-        "at t = {time} s: the {step} would leave the covariance not positive definite (a Cholesky downdate)"
-    )]
-    Downdate { time: f64, step: &'static str },
-
     #[error("{0}")]
     Other(String),
 }
 
 impl Error {
-    /// The refusal of an estimator, when this is one.
-    pub fn refusal(&self) -> Option<&crate::refusal::Refusal> {
-        match self {
-            Error::Refused(refusal) => Some(refusal),
-            _ => None,
-        }
-    }
-
     /// The problems found in a file that does not validate.
     pub fn problems(&self) -> Option<&[Problem]> {
         match self {

@@ -15,6 +15,10 @@ pub enum Error {
     #[error(transparent)]
     Core(#[from] aeroid_core::Error),
 
+    /// An error of the numerical kernels (`aeroid_numerics`).
+    #[error(transparent)]
+    Numerics(#[from] aeroid_numerics::Error),
+
     /// An error of the simulator's own (`aeroid_sim`).
     #[error(transparent)]
     Sim(#[from] aeroid_sim::error::Error),
@@ -76,7 +80,6 @@ impl Error {
     pub fn refusal(&self) -> Option<&Refusal> {
         match self {
             Error::Refused(refusal) => Some(refusal),
-            Error::Core(error) => error.refusal(),
             _ => None,
         }
     }
@@ -85,6 +88,7 @@ impl Error {
     pub fn problems(&self) -> Option<&[aeroid_core::error::Problem]> {
         match self {
             Error::Core(error) => error.problems(),
+            Error::Record(error) => error.problems(),
             _ => None,
         }
     }

@@ -567,7 +567,7 @@ fn common_times(
     let spans = needs
         .keys()
         .map(|name| record.channel(name))
-        .collect::<aeroid_core::Result<Vec<_>>>()?;
+        .collect::<aeroid_record::Result<Vec<_>>>()?;
     for channel in spans {
         let (first, last) = valid_span(channel).ok_or_else(|| Error::Data {
             reason: format!("channel '{}' has no valid sample", channel.name),

@@ -13,6 +13,10 @@ pub enum Error {
     #[error(transparent)]
     Core(#[from] aeroid_core::Error),
 
+    /// An error of the numerical kernels (`aeroid_numerics`).
+    #[error(transparent)]
+    Numerics(#[from] aeroid_numerics::Error),
+
     /// An error of estimation (`aeroid_estimation`).
     #[error(transparent)]
     Estimation(#[from] aeroid_estimation::Error),
@@ -84,7 +88,6 @@ impl Error {
     /// The refusal of an estimator, wherever it was wrapped.
     pub fn refusal(&self) -> Option<&Refusal> {
         match self {
-            Error::Core(error) => error.refusal(),
             Error::Estimation(error) => error.refusal(),
             _ => None,
         }
@@ -96,6 +99,7 @@ impl Error {
         match self {
             Error::Core(error) => error.problems(),
             Error::Estimation(error) => error.problems(),
+            Error::Record(error) => error.problems(),
             _ => None,
         }
     }

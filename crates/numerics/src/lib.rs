@@ -5,6 +5,7 @@
 //! of wider vector instructions.
 
 pub mod dual;
+pub mod error;
 pub mod fourier;
 pub mod gauss_newton;
 pub mod kalman;
@@ -15,4 +16,4 @@ pub mod status;
 pub use kalman::kept;
 pub use status::Status;
 
-pub use aeroid_core::error::{Error, Result};
+pub use error::{Error, Result};

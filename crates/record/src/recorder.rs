@@ -45,9 +45,10 @@
 //! for bit.
 
 use crate::derived::{self, Context, GeographicOrigin, Measurand};
+use crate::error::{Error, Result};
 use crate::{Channel, FlightRecord};
 use aeroid_core::catalog;
-use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::limits;
 use aeroid_core::random::{self, streams};
 use aeroid_core::units::{Dimension, Quantity, unit_factor};
@@ -241,7 +242,7 @@ impl Profile {
             absent: file.absent.clone(),
             channels,
         };
-        problems.finish(path, profile)
+        Ok(problems.finish(path, profile)?)
     }
 
     /// The same profile without its random and discontinuous errors (noise,
@@ -278,9 +279,9 @@ impl Profile {
         seed: u64,
     ) -> Result<FlightRecord> {
         if trace.samples.len() < 2 {
-            return Err(Error::Other(
-                "a truth trace needs at least two samples to be recorded".into(),
-            ));
+            return Err(Error::Recording {
+                reason: "a truth trace needs at least two samples to be recorded",
+            });
         }
         let context = Context {
             mass: aircraft.mass.mass,
@@ -303,7 +304,7 @@ impl Profile {
             samples,
             2 * std::mem::size_of::<f64>(),
         )
-        .map_err(|message| Error::Invalid {
+        .map_err(|message| aeroid_core::Error::Invalid {
             path: self.path.clone(),
             problems: vec![aeroid_core::error::Problem {
                 field: "channels.rate".into(),
@@ -351,9 +352,9 @@ impl Profile {
         seed: u64,
     ) -> Result<FlightRecord> {
         if grid.len() < 2 || signals.iter().any(|(_, s)| s.len() != grid.len()) {
-            return Err(Error::Other(
-                "signals to record need at least two samples, one per grid point".into(),
-            ));
+            return Err(Error::Recording {
+                reason: "signals to record need at least two samples, one per grid point",
+            });
         }
         let mut rng = random::stream(seed, streams::RECORDER);
         let mut channels = Vec::new();
@@ -459,7 +460,7 @@ struct FrameLayout {
     words: Option<u32>,
 }
 
-fn positive(value: Result<f64>, field: &str, problems: &mut Problems) -> f64 {
+fn positive(value: aeroid_core::Result<f64>, field: &str, problems: &mut Problems) -> f64 {
     match value {
         Ok(v) if v > 0.0 => v,
         Ok(v) => {
@@ -598,7 +599,7 @@ impl FieldReader<'_> {
     fn check(
         &mut self,
         field: &str,
-        value: Result<f64>,
+        value: aeroid_core::Result<f64>,
         valid: impl Fn(f64) -> bool,
         requirement: &str,
     ) -> f64 {
@@ -737,7 +738,7 @@ pub fn rate_limit_message(rate: f64) -> String {
 }
 
 /// A rate as written in a profile: a number (Hz), `"25 Hz"`, `"0.5"`, or a fraction `"1/64 Hz"`.
-pub fn parse_rate(q: &Quantity) -> Result<f64> {
+pub fn parse_rate(q: &Quantity) -> aeroid_core::Result<f64> {
     let Quantity::Text(text) = q else {
         return q.si(Dimension::Frequency);
     };
@@ -834,9 +835,7 @@ impl ChannelModel {
             first_order_lag(grid, &mut signal, self.lag);
         }
         if let Some(cutoff) = self.anti_alias {
-            butterworth(&mut signal, cutoff, step).map_err(|message| {
-                Error::Other(format!("channel {}: {message}", self.measurand.name))
-            })?;
+            butterworth(&mut signal, cutoff, step, self.measurand.name)?;
         }
         Ok(signal)
     }
@@ -944,13 +943,10 @@ fn first_order_lag(grid: &[f64], signal: &mut [f64], time_constant: f64) {
 
 /// Second-order Butterworth low-pass (bilinear transform with pre-warping) on
 /// a uniform grid of `step`, starting in equilibrium.
-fn butterworth(
-    signal: &mut [f64],
-    cutoff: f64,
-    step: f64,
-) -> std::result::Result<(), crate::error::Error> {
+fn butterworth(signal: &mut [f64], cutoff: f64, step: f64, channel: &str) -> Result<()> {
     if cutoff >= 0.5 / step {
-        return Err(crate::error::Error::AntiAlias {
+        return Err(Error::AntiAlias {
+            channel: channel.into(),
             cutoff,
             nyquist: 0.5 / step,
         });

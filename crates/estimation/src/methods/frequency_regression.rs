@@ -503,12 +503,12 @@ fn transform_recursively(signals: &Signals, omegas: &[f64], grid: &Grid) -> Resu
     }
     let columns: Vec<Vec<Complex<f64>>> = (0..matrix.ncols())
         .map(|i| running.transform(i))
-        .collect::<aeroid_core::Result<_>>()?;
+        .collect::<aeroid_numerics::Result<_>>()?;
     let mut plans = split(signals, &columns);
     if let Some(first) = signals.rates {
         let derivatives: Vec<Vec<Complex<f64>>> = (first..first + 3)
             .map(|i| running.derivative(i))
-            .collect::<aeroid_core::Result<_>>()?;
+            .collect::<aeroid_numerics::Result<_>>()?;
         add_angular_accelerations(&mut plans, signals, &derivatives);
     }
     Ok(Transformed {

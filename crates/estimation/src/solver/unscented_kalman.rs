@@ -46,7 +46,7 @@
 //! K = (P_xy/S_yᵀ)/S_y; x⁺ = x⁻ + K·(z − ŷ); U = K·S_y and
 //! S⁺ = cholupdate(S⁻, U, −1), one downdate per column of U. A downdate
 //! that would leave a factor without a positive diagonal (the matrix it
-//! stands for no longer positive definite) is an [`aeroid_core::Error::Downdate`]
+//! stands for no longer positive definite) is an [`aeroid_numerics::Error::Downdate`]
 //! naming the step and time, never a loaded or repaired factor. The
 //! pass's observation matrix is the statistical H = P_xyᵀ·P⁻⁻¹, again a
 //! central difference, H·S⁻ = (Y_{1…n} − Y_{n+1…2n})/(2c); the innovation
@@ -487,7 +487,7 @@ fn time_update<M: StateSpaceModel + ?Sized>(
         &mut zero.as_mut_slice()[..n],
         weights.covariance_zero,
     )
-    .map_err(|()| aeroid_core::Error::Downdate {
+    .map_err(|()| aeroid_numerics::Error::Downdate {
         time: previous,
         step: "time update's zeroth sigma point (W₀ᶜ < 0)",
     })?)
@@ -582,7 +582,7 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
         *z = outputs[(i, 0)] - predicted[i];
     }
     zeroth_point(innovation_factor, zero, weights.covariance_zero).map_err(|()| {
-        aeroid_core::Error::Downdate {
+        aeroid_numerics::Error::Downdate {
             time: t,
             step: "innovation covariance's zeroth sigma point (W₀ᶜ < 0)",
         }
@@ -623,7 +623,7 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     for j in 0..m {
         column.rows_mut(0, n).copy_from(&work.spread.column(j));
         cholupdate(factor, &mut column.as_mut_slice()[..n], -1.0).map_err(|()| {
-            aeroid_core::Error::Downdate {
+            aeroid_numerics::Error::Downdate {
                 time: t,
                 step: "measurement update (S⁺ = cholupdate(S⁻, K·S_y, −1))",
             }

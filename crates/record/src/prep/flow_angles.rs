@@ -50,8 +50,8 @@
 //! What the formula predicts and what the gusts add is measured in
 //! `tests/simulation/flow_angles.rs` (docs/cli.md, `derive`).
 
+use crate::error::{Error, Result};
 use crate::{Channel, FlightRecord, derived};
-use aeroid_core::error::{Error, Result};
 use aeroid_sim::state::ned_to_body;
 use nalgebra::Vector3;
 
@@ -250,10 +250,12 @@ pub fn geometric_flow_angles(record: &FlightRecord, wind: Wind) -> Result<Geomet
     });
     let times = crate::shared_instants(&channels, reference);
     if times.is_empty() {
-        return Err(Error::Other(format!(
-            "geometric angle of attack and sideslip: the channels {} share no time span",
-            needed.join(", ")
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "geometric angle of attack and sideslip: the channels {} share no time span",
+                needed.join(", ")
+            ),
+        });
     }
     let columns: Vec<Vec<f64>> = channels
         .iter()
@@ -406,10 +408,12 @@ fn needed_channels<'a>(
             }
             _ => "",
         };
-        return Err(Error::Other(format!(
-            "geometric angle of attack and sideslip need the channel(s) {}, which the record lacks{hint}",
-            missing.join(", ")
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "geometric angle of attack and sideslip need the channel(s) {}, which the record lacks{hint}",
+                missing.join(", ")
+            ),
+        });
     }
     needed
         .iter()
@@ -417,10 +421,10 @@ fn needed_channels<'a>(
             let channel = record.channel(name)?;
             let unit = derived::measurand(name).map_or("", |m| m.unit);
             if channel.unit != unit {
-                return Err(Error::Other(format!(
+                return Err(Error::Derivation { reason: format!(
                     "channel '{name}' is in '{}'; geometric angle of attack and sideslip read it in '{unit}'",
                     channel.unit
-                )));
+                ) });
             }
             Ok(channel)
         })

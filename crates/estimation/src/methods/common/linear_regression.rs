@@ -144,12 +144,12 @@ pub fn linear_equation_error(
         .states
         .iter()
         .map(|s| values(s))
-        .collect::<aeroid_core::Result<_>>()?;
+        .collect::<aeroid_record::Result<_>>()?;
     let inputs: Vec<Vec<f64>> = structure
         .inputs
         .iter()
         .map(|u| values(u))
-        .collect::<aeroid_core::Result<_>>()?;
+        .collect::<aeroid_record::Result<_>>()?;
     let steps = reconstruction::control_corners(record);
     let mut notes = vec![format!(
         "linear model: {} state and {} output equation(s) by least squares on {} grid points of {step} s; state rates not recorded as rate outputs by differentiation ({})",

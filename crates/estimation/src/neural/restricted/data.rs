@@ -254,7 +254,7 @@ pub(super) fn assemble(
     let motion_series = motion_names
         .iter()
         .map(|name| record.channel(name)?.values_at(times))
-        .collect::<aeroid_core::Result<Vec<_>>>()?;
+        .collect::<aeroid_record::Result<Vec<_>>>()?;
     let [alpha, beta, airspeed, mach, p, q, r] =
         ["alpha", "beta", "airspeed", "mach", "p", "q", "r"].map(channel);
     let (alpha, beta, airspeed, mach) = (alpha?, beta?, airspeed?, mach?);
