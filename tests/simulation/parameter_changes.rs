@@ -12,12 +12,12 @@ use aeroid::sim::{Simulation, fly};
 const SCENARIO: &str = "attas-cm-alpha-step";
 
 fn problems_of(error: &Error) -> Vec<(String, String)> {
-    match error {
-        Error::Invalid { problems, .. } => problems
+    match error.problems() {
+        Some(problems) => problems
             .iter()
             .map(|p| (p.field.clone(), p.message.clone()))
             .collect(),
-        other => panic!("expected a validation error, got {other}"),
+        None => panic!("expected a validation error, got {error}"),
     }
 }
 

@@ -16,6 +16,10 @@ pub enum Error {
     #[error(transparent)]
     Numerics(#[from] aeroid_numerics::Error),
 
+    /// An error of the simulator (`aeroid_sim`).
+    #[error(transparent)]
+    Sim(#[from] aeroid_sim::Error),
+
     /// An error of estimation (`aeroid_estimation`).
     #[error(transparent)]
     Estimation(#[from] aeroid_estimation::Error),

@@ -141,22 +141,18 @@ pub enum Error {
         budget: crate::limits::Budget,
     },
 
-    #[error("no trim: {0}")]
-    Trim(String),
-
-    /// The flight left its limits; whoever flew it keeps the trace up to
-    /// the departure (`aeroid_sim::Flight`).
-    #[error("simulation departed at t = {time:.3} s: {reason}")]
-    Departed { time: f64, reason: String },
-
-    /// A JSBSim call failed (a C++ exception or a failure status, turned into
-    /// an error at the FFI boundary). `context` names the aircraft, property
-    /// or operation.
-    #[error("JSBSim: {context}: {message}")]
-    Jsbsim { context: String, message: String },
-
-    #[error("{0}")]
-    Other(String),
+    /// A file reference, given in a file under `base`, that would leave
+    /// that folder (an absolute path or a `..` component).
+    #[error(
+        "{kind} '{reference}' {reason}; name a file inside {} by a relative path, or a bundled name",
+        base.display()
+    )]
+    Reference {
+        kind: &'static str,
+        reference: String,
+        reason: &'static str,
+        base: PathBuf,
+    },
 }
 
 impl Error {

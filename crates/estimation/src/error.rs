@@ -89,6 +89,7 @@ impl Error {
         match self {
             Error::Core(error) => error.problems(),
             Error::Record(error) => error.problems(),
+            Error::Sim(error) => error.problems(),
             _ => None,
         }
     }
@@ -96,7 +97,7 @@ impl Error {
     /// The time and reason of a simulation that departed, when this is one.
     pub fn departure(&self) -> Option<(f64, &str)> {
         match self {
-            Error::Core(aeroid_core::Error::Departed { time, reason }) => Some((*time, reason)),
+            Error::Sim(error) => error.departure(),
             _ => None,
         }
     }

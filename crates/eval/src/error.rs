@@ -17,6 +17,10 @@ pub enum Error {
     #[error(transparent)]
     Numerics(#[from] aeroid_numerics::Error),
 
+    /// An error of the simulator (`aeroid_sim`).
+    #[error(transparent)]
+    Sim(#[from] aeroid_sim::Error),
+
     /// An error of estimation (`aeroid_estimation`).
     #[error(transparent)]
     Estimation(#[from] aeroid_estimation::Error),
@@ -100,6 +104,7 @@ impl Error {
             Error::Core(error) => error.problems(),
             Error::Estimation(error) => error.problems(),
             Error::Record(error) => error.problems(),
+            Error::Sim(error) => error.problems(),
             _ => None,
         }
     }

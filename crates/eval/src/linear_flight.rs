@@ -164,7 +164,7 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
                 x += factor * draws;
             }
             if !x.iter().all(|v| v.is_finite()) {
-                return Err(aeroid_core::Error::Departed {
+                return Err(aeroid_sim::Error::Departed {
                     time: t,
                     reason: format!("the linear model '{}' diverged", structure.name),
                 }

@@ -12,6 +12,10 @@ pub enum Error {
     #[error(transparent)]
     Core(#[from] aeroid_core::Error),
 
+    /// An error of the simulator (`aeroid_sim`).
+    #[error(transparent)]
+    Sim(#[from] aeroid_sim::Error),
+
     /// A JSBSim call failed. `context` names the aircraft, property or
     /// operation; `message` is JSBSim's own.
     #[error("JSBSim: {context}: {message}")]
@@ -32,16 +36,14 @@ pub enum Error {
 }
 
 impl Error {
-    /// The error as an `aeroid_core` error, for the simulator layer that
-    /// flies JSBSim's aircraft through [`aeroid_sim::source::ForeignSimulator`].
-    pub(crate) fn into_core(self) -> aeroid_core::Error {
+    /// The error as the simulator layer's, which flies JSBSim's aircraft
+    /// through [`aeroid_sim::source::ForeignSimulator`]: its own errors as
+    /// they are, JSBSim's as a foreign simulator's.
+    pub(crate) fn into_sim(self) -> aeroid_sim::Error {
         match self {
-            Error::Core(error) => error,
-            Error::Jsbsim { context, message } => aeroid_core::Error::Jsbsim { context, message },
-            other => aeroid_core::Error::Jsbsim {
-                context: "aircraft".into(),
-                message: other.to_string(),
-            },
+            Error::Sim(error) => error,
+            Error::Core(error) => error.into(),
+            other => aeroid_sim::Error::Foreign(Box::new(other)),
         }
     }
 }

@@ -34,8 +34,8 @@ impl aeroid_sim::source::ForeignSimulator for Jsbsim {
     fn fly(
         &self,
         scenario: &aeroid_sim::scenario::Scenario,
-    ) -> aeroid_core::Result<aeroid_sim::Flight> {
-        own::fly(scenario).map_err(Error::into_core)
+    ) -> aeroid_sim::Result<aeroid_sim::Flight> {
+        own::fly(scenario).map_err(Error::into_sim)
     }
 }
 

@@ -1,6 +1,8 @@
-//! The errors of the simulator that are its own: a wind that cannot be
-//! generated, a parameter that cannot be tied, changed or defined. A unit or number that does not read is `aeroid_core`'s,
-//! wrapped whole so that its message reads the same.
+//! The errors of the simulator: a trim that does not exist, a flight that
+//! departed, a wind that cannot be generated, a parameter that cannot be
+//! tied, changed or defined, a foreign simulator's failure. File and data
+//! errors are `aeroid_core`'s, wrapped whole so that their messages read
+//! the same.
 
 use aeroid_core::error::Problem;
 use aeroid_core::limits;
@@ -16,9 +18,22 @@ fn joined(problems: &[Problem]) -> String {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// A unit or number that does not read (`aeroid_core`).
+    /// A file or data error (`aeroid_core`).
     #[error(transparent)]
     Core(#[from] aeroid_core::Error),
+
+    /// No trim at the flight condition; the reason says which condition.
+    #[error("no trim: {0}")]
+    Trim(String),
+
+    /// The flight left its limits; whoever flew it keeps the trace up to
+    /// the departure (`aeroid_sim::Flight`).
+    #[error("simulation departed at t = {time:.3} s: {reason}")]
+    Departed { time: f64, reason: String },
+
+    /// A truth that cannot be written as TOML.
+    #[error("{reason}")]
+    Serialize { reason: String },
 
     /// The problems of a wind table, said on one line.
     #[error("{}", joined(problems))]
@@ -78,3 +93,23 @@ pub enum Error {
     #[error("parameter '{name}' is defined twice")]
     DefinedTwice { name: String },
 }
+
+impl Error {
+    /// The problems found in a file that does not validate.
+    pub fn problems(&self) -> Option<&[Problem]> {
+        match self {
+            Error::Core(error) => error.problems(),
+            _ => None,
+        }
+    }
+
+    /// The time and reason of a flight that departed, when this is one.
+    pub fn departure(&self) -> Option<(f64, &str)> {
+        match self {
+            Error::Departed { time, reason } => Some((*time, reason)),
+            _ => None,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
