@@ -32,7 +32,10 @@ type Pairs = (Vec<Vec<f64>>, Vec<Vec<f64>>);
 struct Capture(Mutex<Option<Pairs>>);
 
 impl Trainer for Capture {
-    fn train(&self, set: &TrainingSet) -> aeroid::Result<(Box<dyn Network>, NetworkReport)> {
+    fn train(
+        &self,
+        set: &TrainingSet,
+    ) -> aeroid::estimation::Result<(Box<dyn Network>, NetworkReport)> {
         if let Ok(mut kept) = self.0.lock() {
             *kept = Some((set.inputs.clone(), set.targets.clone()));
         }

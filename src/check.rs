@@ -2,7 +2,7 @@
 //! reporting every problem at once; a valid scenario is also trimmed, so that
 //! a flight condition with no trim is found before a long run.
 
-use aeroid_core::error::{Error, Result, parse_toml, read_text};
+use crate::error::{Result, parse_toml, read_text};
 use aeroid_estimation::registry::Registry;
 use aeroid_estimation::structure::ModelStructure;
 use aeroid_eval::study::{Study, StudyFile};
@@ -76,7 +76,7 @@ pub fn check_file(registry: &Registry, path: &Path) -> Result<CheckReport> {
         let file: ProfileFile = parse_toml(path, &text)?;
         Ok(describe_profile(&Profile::from_file(&file, path)?))
     } else {
-        Err(Error::Invalid {
+        Err(aeroid_core::Error::Invalid {
             path: path.to_path_buf(),
             problems: vec![aeroid_core::error::Problem {
                 field: "(file)".into(),
@@ -84,7 +84,8 @@ pub fn check_file(registry: &Registry, path: &Path) -> Result<CheckReport> {
                           a recorder profile (no [[channels]]) nor a study (no runs and methods)"
                     .into(),
             }],
-        })
+        }
+        .into())
     }
 }
 

@@ -40,9 +40,10 @@
 //! ```
 
 pub mod check;
+pub mod error;
 
 pub use aeroid_analysis as analysis;
-pub use aeroid_core::{Error, Result, catalog, error, limits, paths, random, refusal, units};
+pub use aeroid_core::{catalog, limits, paths, random, refusal, units};
 pub use aeroid_estimation as estimation;
 pub use aeroid_eval as eval;
 #[cfg(feature = "jsbsim")]
@@ -52,3 +53,4 @@ pub use aeroid_numerics::dual;
 pub use aeroid_record as record;
 pub use aeroid_record::prep;
 pub use aeroid_sim as sim;
+pub use error::{Error, Result};

@@ -6,7 +6,7 @@
 
 mod common;
 
-use aeroid::Error;
+use aeroid::jsbsim::Error;
 use aeroid::jsbsim::export::{ExportOptions, aircraft_xml, export, model_name};
 use aeroid::jsbsim::{Exec, FT, InitialConditions, InitialSpeed, TrimMode};
 use aeroid::sim::aircraft::Aircraft;
@@ -34,13 +34,13 @@ fn exported_attas(test: &str, extra: &str) -> (PathBuf, String) {
     (folder, model)
 }
 
-fn load(folder: &Path, model: &str, allow_io: bool) -> aeroid::Result<Exec> {
+fn load(folder: &Path, model: &str, allow_io: bool) -> aeroid::jsbsim::Result<Exec> {
     let mut exec = Exec::new()?;
     exec.load_model_in(folder, model, allow_io)?;
     Ok(exec)
 }
 
-fn message(error: &Error) -> String {
+fn message(error: &impl std::fmt::Display) -> String {
     error.to_string()
 }
 

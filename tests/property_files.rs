@@ -497,18 +497,25 @@ impl Kind {
     fn load(self, path: &Path) -> Result<(), String> {
         let reference = path.to_str().unwrap();
         let outcome = match self {
-            Kind::Aircraft => Aircraft::load(path).map(drop),
-            Kind::Scenario => Scenario::load(reference).map(drop),
-            Kind::Model => Structure::load(reference).map(drop),
-            Kind::Profile => Profile::load(reference, None).map(drop),
+            Kind::Aircraft => Aircraft::load(path).map(drop).map_err(aeroid::Error::from),
+            Kind::Scenario => Scenario::load(reference)
+                .map(drop)
+                .map_err(aeroid::Error::from),
+            Kind::Model => Structure::load(reference)
+                .map(drop)
+                .map_err(aeroid::Error::from),
+            Kind::Profile => Profile::load(reference, None)
+                .map(drop)
+                .map_err(aeroid::Error::from),
             Kind::Study => Study::load(
                 &aeroid::estimation::registry::Registry::built_in(),
                 reference,
             )
-            .map(drop),
-            Kind::Gates => {
-                gate::load(&aeroid::estimation::registry::Registry::built_in(), path).map(drop)
-            }
+            .map(drop)
+            .map_err(aeroid::Error::from),
+            Kind::Gates => gate::load(&aeroid::estimation::registry::Registry::built_in(), path)
+                .map(drop)
+                .map_err(aeroid::Error::from),
         };
         outcome.map_err(|e| e.to_string())
     }

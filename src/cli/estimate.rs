@@ -96,7 +96,7 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
     let records = record_folders
         .iter()
         .map(|folder| aeroid::record::FlightRecord::read(folder))
-        .collect::<aeroid::Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, _>>()?;
     let other = check_on
         .as_deref()
         .map(aeroid::record::FlightRecord::read)
@@ -119,8 +119,7 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
                 .six_dof(methods::smoothed_regression::METHOD)?,
             &settings,
         )?
-        .write_csv(path)
-        .map_err(aeroid::Error::as_write)?;
+        .write_csv(path)?;
         outln!(
             "smoothed coefficient histories written to {}",
             path.display()
@@ -174,9 +173,7 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
     }
     if let Some(out) = out {
         std::fs::create_dir_all(&out).map_err(|e| aeroid::error::write_error(&out, e))?;
-        estimate
-            .write_json(&out.join("estimate.json"))
-            .map_err(aeroid::Error::as_write)?;
+        estimate.write_json(&out.join("estimate.json"))?;
         score::write_csv(&scores, &out.join("estimate.csv"))?;
         outln!(
             "written: {}/estimate.json, {}/estimate.csv",

@@ -197,9 +197,7 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
         for run in &report.runs {
             if let Outcome::Estimated { estimate, scores } = &run.outcome {
                 let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
-                estimate
-                    .write_json(&out.join(format!("{stem}.json")))
-                    .map_err(aeroid::Error::as_write)?;
+                estimate.write_json(&out.join(format!("{stem}.json")))?;
                 aeroid::eval::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
             }
         }

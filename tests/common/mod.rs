@@ -33,7 +33,7 @@ pub fn import_case(
     test: &str,
     csv: &str,
     map: &str,
-) -> aeroid::Result<aeroid::record::import::ImportOutcome> {
+) -> aeroid::record::Result<aeroid::record::import::ImportOutcome> {
     let folder = temp_folder(test);
     let data = write(&folder, "flight.csv", csv);
     let map = write(&folder, "map.toml", map);

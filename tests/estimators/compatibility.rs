@@ -176,7 +176,7 @@ fn a_one_sample_record_is_refused() {
         channel.values.truncate(1);
     }
     match flight_path_reconstruction(&record, 30) {
-        Err(aeroid::Error::Refused(refusal)) => assert_eq!(
+        Err(aeroid::estimation::Error::Refused(refusal)) => assert_eq!(
             refusal.kind(),
             aeroid::estimation::estimator::RefusalKind::TooFewData,
             "{refusal}"

@@ -4,7 +4,7 @@
 
 use adskalman::{ObservationModel, StateAndCovariance, TransitionModelLinearNoControl};
 use aeroid::analysis::linearize::{self, LATERAL};
-use aeroid::error::Result;
+use aeroid::estimation::Result;
 use aeroid::estimation::estimate::Status;
 use aeroid::estimation::methods::filter_error::{
     FilterErrorFit, FilterErrorOptions, Gain, InnovationCovariance, filter_error,

@@ -16,7 +16,7 @@
 //! show what output error's diagnoses say beside its status.
 
 use crate::common;
-use aeroid::error::Error;
+use aeroid::estimation::Error;
 use aeroid::estimation::estimate::{DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status};
 use aeroid::estimation::estimator::{Refusal, RefusalKind};
 use aeroid::estimation::structure::ModelStructure;
@@ -25,12 +25,12 @@ use aeroid::record::FlightRecord;
 use aeroid::record::recorder::{Profile, record_scenario};
 use aeroid::sim::scenario::Scenario;
 
-fn oem(record: FlightRecord, structure: &ModelStructure) -> aeroid::Result<Estimate> {
+fn oem(record: FlightRecord, structure: &ModelStructure) -> aeroid::estimation::Result<Estimate> {
     let problem = crate::common::registry().problem("oem", vec![record], structure.clone(), &[])?;
     crate::common::registry().estimate(&problem, None)
 }
 
-fn refusal(result: aeroid::Result<Estimate>) -> Refusal {
+fn refusal(result: aeroid::estimation::Result<Estimate>) -> Refusal {
     match result {
         Err(Error::Refused(refusal)) => refusal,
         Err(other) => panic!("an error, not a refusal: {other}"),

@@ -28,7 +28,7 @@ fn repeats() -> &'static [FlightRecord; 2] {
     })
 }
 
-fn fit(method: &str, records: Vec<FlightRecord>) -> aeroid::Result<Estimate> {
+fn fit(method: &str, records: Vec<FlightRecord>) -> aeroid::estimation::Result<Estimate> {
     let structure = ModelStructure::load("attas-longitudinal").unwrap();
     let problem = crate::common::registry().problem(method, records, structure, &[])?;
     crate::common::registry().estimate(&problem, None)
@@ -94,7 +94,7 @@ fn one_record_methods_refuse_several() {
     );
     for method in one_record {
         let error = fit(method, repeats().to_vec()).unwrap_err();
-        let aeroid::Error::Refused(refusal) = &error else {
+        let aeroid::estimation::Error::Refused(refusal) = &error else {
             panic!("{method}: not a refusal: {error}");
         };
         assert_eq!(refusal.kind(), RefusalKind::OneRecordOnly, "{refusal}");

@@ -28,7 +28,7 @@ fn estimate(
     method: &str,
     record: &aeroid::record::FlightRecord,
     model: &str,
-) -> aeroid::Result<aeroid::estimation::estimate::Estimate> {
+) -> aeroid::estimation::Result<aeroid::estimation::estimate::Estimate> {
     let structure = Structure::load(model)?;
     let problem =
         crate::common::registry().problem(method, vec![record.clone()], structure, &[])?;
@@ -150,7 +150,7 @@ fn six_dof_methods_refuse_a_linear_structure() {
     let (record, _) = record_flight(&scenario, &profile, 1).unwrap();
     for method in ["swr", "ebm"] {
         match estimate(method, &record, "linear-short-period-attas") {
-            Err(aeroid::Error::Refused(refusal)) => {
+            Err(aeroid::estimation::Error::Refused(refusal)) => {
                 assert_eq!(
                     refusal.kind(),
                     RefusalKind::StructureKind,

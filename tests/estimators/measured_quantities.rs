@@ -27,7 +27,11 @@ fn ideal_without(folder: &Path, without: &[&str]) -> Profile {
     })
 }
 
-fn fit(method: &str, record: &FlightRecord, layers: &[&MethodTables]) -> aeroid::Result<Estimate> {
+fn fit(
+    method: &str,
+    record: &FlightRecord,
+    layers: &[&MethodTables],
+) -> aeroid::estimation::Result<Estimate> {
     let structure = Structure::load("attas-longitudinal").unwrap();
     let problem =
         crate::common::registry().problem(method, vec![record.clone()], structure, layers)?;

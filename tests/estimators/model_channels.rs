@@ -75,7 +75,11 @@ fn model_with(test: &str, line: &str) -> PathBuf {
     common::write(&common::temp_folder(test), "model.toml", &text)
 }
 
-fn fit(method: &str, record: FlightRecord, model: &std::path::Path) -> aeroid::Result<Estimate> {
+fn fit(
+    method: &str,
+    record: FlightRecord,
+    model: &std::path::Path,
+) -> aeroid::estimation::Result<Estimate> {
     let structure = ModelStructure::load(model.to_str().unwrap()).unwrap();
     let problem = crate::common::registry().problem(method, vec![record], structure, &[])?;
     crate::common::registry().estimate(&problem, None)
@@ -139,7 +143,7 @@ fn undeclared_or_impossible_zero_channels_are_refused() {
     let error = fit("oem", longitudinal, &plain).unwrap_err();
     let text = error.to_string();
     assert!(
-        matches!(&error, aeroid::Error::Refused(r) if r.kind() == RefusalKind::MissingChannels),
+        matches!(&error, aeroid::estimation::Error::Refused(r) if r.kind() == RefusalKind::MissingChannels),
         "{text}"
     );
     for name in LATERAL {

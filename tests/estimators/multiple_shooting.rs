@@ -398,7 +398,7 @@ fn the_unstable_attas_is_flown_closed_loop() {
     scenario.feedback = None;
     let open = aeroid::sim::fly(&scenario);
     assert!(
-        matches!(open, Err(aeroid::Error::Departed { .. })),
+        matches!(open, Err(aeroid::sim::Error::Departed { .. })),
         "the open loop did not depart"
     );
 }

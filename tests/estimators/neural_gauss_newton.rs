@@ -209,7 +209,7 @@ fn refusals_name_what_is_missing() {
     let error = crate::common::registry()
         .estimate(&problem, None)
         .unwrap_err();
-    let aeroid::Error::Refused(refusal) = error else {
+    let aeroid::estimation::Error::Refused(refusal) = error else {
         panic!("{error}")
     };
     assert_eq!(refusal.kind(), RefusalKind::StructureKind);
@@ -224,7 +224,7 @@ fn refusals_name_what_is_missing() {
     let error = crate::common::registry()
         .estimate(&problem, None)
         .unwrap_err();
-    let aeroid::Error::Refused(refusal) = error else {
+    let aeroid::estimation::Error::Refused(refusal) = error else {
         panic!("{error}")
     };
     assert_eq!(refusal.kind(), RefusalKind::MissingChannels);

@@ -6,7 +6,7 @@
 //! (`cargo test --test estimators -- --nocapture`).
 
 use crate::common;
-use aeroid::error::Error;
+use aeroid::estimation::Error;
 use aeroid::estimation::estimate::{Estimate, ParameterDistribution, Status};
 use aeroid::estimation::estimator::RefusalKind;
 use aeroid::estimation::methods::rbf_delta::{CoefficientSource, RbfDeltaSettings, rbf_delta};

@@ -5,7 +5,7 @@
 //! refused when wrong; and the estimation problem's JSON reads back
 //! identically for every bundled model on every bundled scenario.
 
-use aeroid::error::Result;
+use aeroid::estimation::Result;
 use aeroid::estimation::estimate::{Estimate, ParameterEstimate, Status};
 use aeroid::estimation::estimator::{Capabilities, Description, Method};
 use aeroid::estimation::problem::EstimationProblem;

@@ -360,7 +360,8 @@ fn missing_channels_and_nonlinear_models_are_refused() {
     let problem = crate::common::registry()
         .problem("ebm", vec![record.clone()], structure, &[])
         .unwrap();
-    let Err(aeroid::Error::Refused(refusal)) = crate::common::registry().estimate(&problem, None)
+    let Err(aeroid::estimation::Error::Refused(refusal)) =
+        crate::common::registry().estimate(&problem, None)
     else {
         panic!("not refused");
     };
@@ -375,7 +376,8 @@ fn missing_channels_and_nonlinear_models_are_refused() {
     let problem = crate::common::registry()
         .problem("ebm", vec![record], stall, &[])
         .unwrap();
-    let Err(aeroid::Error::Refused(refusal)) = crate::common::registry().estimate(&problem, None)
+    let Err(aeroid::estimation::Error::Refused(refusal)) =
+        crate::common::registry().estimate(&problem, None)
     else {
         panic!("not refused");
     };

@@ -2,7 +2,7 @@
 //! a panic — and a departing simulation keeps the trace computed so far.
 
 use crate::common;
-use aeroid::Error;
+use aeroid::sim::Error;
 use aeroid::sim::aircraft::Aircraft;
 use aeroid::sim::scenario::Scenario;
 use std::path::Path;
@@ -15,9 +15,9 @@ fn load_aircraft_text(test: &str, text: &str) -> (std::path::PathBuf, Error) {
 }
 
 fn problem_fields(error: &Error) -> Vec<String> {
-    match error {
-        Error::Invalid { problems, .. } => problems.iter().map(|p| p.field.clone()).collect(),
-        other => panic!("expected a validation error, got {other}"),
+    match error.problems() {
+        Some(problems) => problems.iter().map(|p| p.field.clone()).collect(),
+        None => panic!("expected a validation error, got {error}"),
     }
 }
 
@@ -30,7 +30,10 @@ fn malformed_toml_names_file_and_line() {
         .unwrap();
     let (path, error) = load_aircraft_text("malformed", &text);
     let message = error.to_string();
-    assert!(matches!(error, Error::Toml { .. }), "{message}");
+    assert!(
+        matches!(error, Error::Core(aeroid_core::Error::Toml { .. })),
+        "{message}"
+    );
     assert!(
         message.contains(&path.display().to_string())
             && message.contains(&format!("line {line}, column 8")),

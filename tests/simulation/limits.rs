@@ -6,9 +6,9 @@
 //! channels, infinite cells, an empty record) is refused, not flown.
 
 use crate::common;
-use aeroid::Error;
 use aeroid::record::FlightRecord;
 use aeroid::record::recorder::Profile;
+use aeroid::sim::Error;
 use aeroid::sim::aircraft::Aircraft;
 use aeroid::sim::scenario::Scenario;
 use aeroid::units::DEG;
@@ -41,16 +41,34 @@ fn input_scenario_with(test: &str, edit: impl Fn(String) -> String) -> PathBuf {
     )
 }
 
+/// An error of a file that does not validate, from the simulator or the
+/// recorder: its problems and its message.
+trait Validation: std::fmt::Display {
+    fn problem_list(&self) -> Option<&[aeroid::error::Problem]>;
+}
+
+impl Validation for aeroid::sim::Error {
+    fn problem_list(&self) -> Option<&[aeroid::error::Problem]> {
+        self.problems()
+    }
+}
+
+impl Validation for aeroid::record::Error {
+    fn problem_list(&self) -> Option<&[aeroid::error::Problem]> {
+        self.problems()
+    }
+}
+
 /// The problems of a validation error as `field: message` lines.
-fn problems(error: &Error) -> Vec<String> {
-    match error {
-        Error::Invalid { problems, .. } => problems.iter().map(|p| p.to_string()).collect(),
-        other => panic!("expected a validation error, got {other}"),
+fn problems(error: &impl Validation) -> Vec<String> {
+    match error.problem_list() {
+        Some(problems) => problems.iter().map(|p| p.to_string()).collect(),
+        None => panic!("expected a validation error, got {error}"),
     }
 }
 
 /// The one problem of a validation error, which must name `path`.
-fn only_problem(error: &Error, path: &std::path::Path) -> String {
+fn only_problem(error: &impl Validation, path: &std::path::Path) -> String {
     let message = error.to_string();
     assert!(
         message.starts_with(&path.display().to_string()),
@@ -214,7 +232,10 @@ fn cli_simulate_with_a_tiny_step_fails_cleanly() {
 
 // --- Recorder profiles -------------------------------------------------------
 
-fn profile_with(test: &str, edit: impl Fn(String) -> String) -> (PathBuf, aeroid::Result<Profile>) {
+fn profile_with(
+    test: &str,
+    edit: impl Fn(String) -> String,
+) -> (PathBuf, aeroid::record::Result<Profile>) {
     let folder = common::temp_folder(test);
     let path = common::write(
         &folder,
@@ -345,15 +366,33 @@ fn a_study_with_billions_of_runs_is_refused() {
     );
     let error = aeroid::eval::study::Study::load(crate::common::registry(), path.to_str().unwrap())
         .unwrap_err();
+    let message = error.to_string();
+    assert!(
+        message.starts_with(&path.display().to_string()),
+        "{message}"
+    );
+    let problems_of_study: Vec<String> = error
+        .problems()
+        .expect("a validation error")
+        .iter()
+        .map(|p| p.to_string())
+        .collect();
+    assert_eq!(problems_of_study.len(), 1, "{problems_of_study:?}");
     assert_eq!(
-        only_problem(&error, &path),
+        problems_of_study[0],
         "runs: 4000000000 is above the most runs per sweep point, 1000000 (statistics of a thousand runs are within a few percent; a million runs of a one-second fit take eleven days of one core)"
     );
     let mut study =
         aeroid::eval::study::Study::load(crate::common::registry(), "attas-lateral-acceptance")
             .unwrap();
     let error = study.set_runs(0, "--runs").unwrap_err();
-    assert_eq!(problems(&error), ["--runs: must be at least 1"]);
+    let problems_of_runs: Vec<String> = error
+        .problems()
+        .expect("a validation error")
+        .iter()
+        .map(|p| p.to_string())
+        .collect();
+    assert_eq!(problems_of_runs, ["--runs: must be at least 1"]);
     study.set_runs(3, "--runs").unwrap();
     assert_eq!(study.runs, 3);
 }

@@ -4,7 +4,7 @@
 //! reported with the file and key.
 
 use crate::common;
-use aeroid::Error;
+use aeroid::sim::Error;
 use aeroid::sim::scenario::{ParameterChange, Scenario};
 use aeroid::sim::truth::RunTruth;
 use aeroid::sim::{Simulation, fly};
@@ -12,17 +12,17 @@ use aeroid::sim::{Simulation, fly};
 const SCENARIO: &str = "attas-cm-alpha-step";
 
 fn problems_of(error: &Error) -> Vec<(String, String)> {
-    match error {
-        Error::Invalid { problems, .. } => problems
+    match error.problems() {
+        Some(problems) => problems
             .iter()
             .map(|p| (p.field.clone(), p.message.clone()))
             .collect(),
-        other => panic!("expected a validation error, got {other}"),
+        None => panic!("expected a validation error, got {error}"),
     }
 }
 
 /// The elevator 3211 scenario with `tables` appended, written to a fresh folder.
-fn scenario_with(test: &str, tables: &str) -> (std::path::PathBuf, aeroid::Result<Scenario>) {
+fn scenario_with(test: &str, tables: &str) -> (std::path::PathBuf, aeroid::sim::Result<Scenario>) {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/scenarios/attas-elevator-3211.toml"

@@ -4,7 +4,6 @@
 //! scenario's default profile, and `check` on a profile.
 
 use crate::common;
-use aeroid::Error;
 use aeroid::record::recorder::{Profile, profile_for};
 use aeroid::record::{Channel, FlightRecord};
 use aeroid::sim::scenario::Scenario;
@@ -197,15 +196,15 @@ fn import_converts_units_to_si() {
 }
 
 fn csv_error(
-    result: aeroid::Result<aeroid::record::import::ImportOutcome>,
+    result: aeroid::record::Result<aeroid::record::import::ImportOutcome>,
 ) -> (u64, String, String) {
     match result {
-        Err(Error::Csv {
+        Err(aeroid::record::Error::Core(aeroid_core::Error::Csv {
             line,
             column,
             message,
             ..
-        }) => (line, column, message),
+        })) => (line, column, message),
         other => panic!("expected a CSV error, got {other:?}"),
     }
 }
@@ -242,7 +241,8 @@ fn import_non_monotonic_time_is_named() {
 fn import_duplicate_channel_is_named() {
     let map = FLIGHT_MAP.replace("name = \"yaw\"", "name = \"alpha\"");
     match common::import_case("duplicate", FLIGHT_CSV, &map) {
-        Err(Error::Invalid { problems, .. }) => {
+        Err(error) if error.problems().is_some() => {
+            let problems = error.problems().unwrap_or_default();
             assert_eq!(problems.len(), 1, "{problems:?}");
             assert_eq!(problems[0].field, "channels[4].name");
             assert!(

@@ -38,8 +38,8 @@
 //! exceeds the channels' fastest rate is marked "below the rule" (advice,
 //! not part of the verdict).
 
+use crate::error::{Error, Result};
 use crate::linearize::{ModeKind, find, linearize};
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::gauss_newton::{pseudo_inverse_or_infinite, unit_diagonal_scale};
 use aeroid_record::FlightRecord;
 use aeroid_record::recorder::Profile;
@@ -387,18 +387,17 @@ pub fn analyse(
     if let Some(segment) = options.segment
         && !(segment.is_finite() && segment >= scenario.step)
     {
-        return Err(Error::Other(format!(
-            "segment length {segment} s: a segment must be at least one integration step ({} s of {}) long",
-            scenario.step,
-            scenario.path.display()
-        )));
+        return Err(Error::Segment {
+            length: segment,
+            step: scenario.step,
+            scenario: scenario.path.clone(),
+        });
     }
     if !scenario.parameter_changes.is_empty() {
-        return Err(Error::Other(format!(
-            "identifiability of '{}' ({}): its parameters change during the flight ([[parameter_changes]]); the analysis is of constant parameters",
-            scenario.name,
-            scenario.path.display()
-        )));
+        return Err(Error::ChangingParameters {
+            scenario: scenario.name.clone(),
+            path: scenario.path.clone(),
+        });
     }
     let simulation = Simulation::prepare(scenario)?;
     let aero = &scenario.aircraft.aero;
@@ -409,11 +408,14 @@ pub fn analyse(
     let (mut names, mut truths) = (Vec::new(), Vec::new());
     let mut parameters_left_out = Vec::new();
     for name in requested {
-        let index = aero.parameters.index(&name).ok_or_else(|| Error::Unknown {
-            kind: "parameter",
-            name: name.clone(),
-            known: aero.parameters.names().to_vec(),
-        })?;
+        let index = aero
+            .parameters
+            .index(&name)
+            .ok_or_else(|| aeroid_core::Error::Unknown {
+                kind: "parameter",
+                name: name.clone(),
+                known: aero.parameters.names().to_vec(),
+            })?;
         let truth = aero.parameters.values()[index];
         // A parameter the central differences cannot move both ways
         // without changing the model (τ1 = 0 makes χ algebraic).
@@ -427,13 +429,15 @@ pub fn analyse(
                 truths.push(truth);
             }
             Some(reason) if options.parameters.is_none() => {
-                parameters_left_out.push((name, reason));
+                parameters_left_out.push((name, reason.to_string()));
             }
             Some(reason) => {
-                return Err(Error::Other(format!(
-                    "identifiability of '{}': parameter {name} = {truth} cannot be moved by ±{h:.1e} for its sensitivity: {reason}",
-                    scenario.name
-                )));
+                return Err(Error::Identifiability {
+                    scenario: scenario.name.clone(),
+                    reason: format!(
+                        "parameter {name} = {truth} cannot be moved by ±{h:.1e} for its sensitivity: {reason}"
+                    ),
+                });
             }
         }
     }
@@ -468,13 +472,11 @@ pub fn analyse(
                     None => nominal_states[k],
                 })
             })
-            .map_err(|error| {
-                Error::Other(format!(
-                    "identifiability of '{}': a perturbed flight failed: {error}",
-                    scenario.name
-                ))
+            .map_err(|error| Error::Identifiability {
+                scenario: scenario.name.clone(),
+                reason: format!("a perturbed flight failed: {error}"),
             })?;
-        clean.record(&trace, &scenario.aircraft, scenario.seed)
+        Ok::<_, Error>(clean.record(&trace, &scenario.aircraft, scenario.seed)?)
     };
     // The nominal record: the flight already flown (a restart at its own state changes nothing).
     let nominal = clean.record(&nominal_trace, &scenario.aircraft, scenario.seed)?;
@@ -564,11 +566,9 @@ pub fn analyse(
      -> Result<DVector<f64>> {
         let trace = flight
             .run_with_restarts(|k| (k % segment_steps == 0).then(|| states[k]))
-            .map_err(|error| {
-                Error::Other(format!(
-                    "identifiability of '{}': the flight {what} failed: {error}",
-                    scenario.name
-                ))
+            .map_err(|error| Error::Identifiability {
+                scenario: scenario.name.clone(),
+                reason: format!("the flight {what} failed: {error}"),
             })?;
         let modelled = clean.record(&trace, &scenario.aircraft, scenario.seed)?;
         // (nominal − modelled)/(2·1): `difference` divides by 2h.
@@ -851,7 +851,7 @@ fn usable_channels(profile: &Profile, wanted: Option<&[String]>) -> Result<Chann
                 .iter()
                 .any(|c| c.measurand.name == name.as_str())
             {
-                return Err(Error::Unknown {
+                return Err(aeroid_core::Error::Unknown {
                     kind: "channel",
                     name: name.clone(),
                     known: profile
@@ -859,7 +859,8 @@ fn usable_channels(profile: &Profile, wanted: Option<&[String]>) -> Result<Chann
                         .iter()
                         .map(|c| c.measurand.name.to_string())
                         .collect(),
-                });
+                }
+                .into());
             }
         }
     }
@@ -891,10 +892,9 @@ fn usable_channels(profile: &Profile, wanted: Option<&[String]>) -> Result<Chann
         }
     }
     if used.is_empty() {
-        return Err(Error::Other(format!(
-            "profile '{}': no channel with a finite error model to analyse",
-            profile.name
-        )));
+        return Err(Error::NoChannels {
+            profile: profile.name.clone(),
+        });
     }
     Ok((used, excluded))
 }

@@ -213,7 +213,7 @@ fn is_kinematic(state: &str, column: &str) -> bool {
 pub fn linearise_scenario(
     scenario: &aeroid_sim::scenario::Scenario,
     axes: Axes,
-) -> aeroid_core::error::Result<LinearFile> {
+) -> crate::Result<LinearFile> {
     let simulation = aeroid_sim::Simulation::prepare(scenario)?;
     let linear =
         super::linearize::linearize(&simulation.model, &simulation.trim, &simulation.winds[0]);
@@ -230,7 +230,9 @@ pub fn linearise_scenario(
 }
 
 /// The file as TOML.
-pub fn to_toml(file: &LinearFile) -> aeroid_core::error::Result<String> {
-    toml::to_string(file)
-        .map_err(|e| aeroid_core::error::Error::Other(format!("linear model as TOML: {e}")))
+pub fn to_toml(file: &LinearFile) -> crate::Result<String> {
+    toml::to_string(file).map_err(|e| crate::Error::Format {
+        what: "linear model",
+        reason: e.to_string(),
+    })
 }

@@ -37,8 +37,8 @@
 //! For noise-free data of a linear system of order ≤ n the realisation is
 //! exact: the eigenvalues are recovered to round-off.
 
+use crate::error::{Error, Result};
 use crate::linearize::{damping_ratio, eigenvectors, natural_frequency};
-use aeroid_core::error::{Error, Result};
 use nalgebra::{Complex, DMatrix, DVector};
 
 /// ERA settings: the model order and the Hankel matrix size.
@@ -115,23 +115,26 @@ impl Era {
         let (count, channels) = samples.shape();
         let n = self.order;
         if n == 0 || channels == 0 {
-            return Err(Error::Other(
-                "ERA needs an order ≥ 1 and at least one output".into(),
-            ));
+            return Err(Error::EraInput {
+                need: "an order ≥ 1 and at least one output",
+            });
         }
         if step.is_nan() || step <= 0.0 || !samples.iter().all(|v| v.is_finite()) {
-            return Err(Error::Other(
-                "ERA needs a positive sample step and finite samples".into(),
-            ));
+            return Err(Error::EraInput {
+                need: "a positive sample step and finite samples",
+            });
         }
         let rows = self
             .block_rows
             .unwrap_or_else(|| (10 * n).div_ceil(channels).min(count / 3))
             .max(1);
         if rows * channels < n || count < rows + n + 1 {
-            return Err(Error::Other(format!(
-                "ERA of order {n} with {rows} block rows of {channels} outputs needs more than {count} samples"
-            )));
+            return Err(Error::EraSamples {
+                order: n,
+                rows,
+                channels,
+                samples: count,
+            });
         }
         let columns = count - rows;
         let scales: Vec<f64> = (0..channels)
@@ -150,16 +153,18 @@ impl Era {
         let h1 = hankel(1);
         let svd = h0.svd(true, true);
         let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-            return Err(Error::Other("ERA: the SVD did not converge".into()));
+            return Err(Error::Era {
+                reason: "the SVD did not converge".into(),
+            });
         };
         let singular_values: Vec<f64> = svd.singular_values.iter().copied().collect();
         if singular_values.len() < n
             || singular_values[n - 1].is_nan()
             || singular_values[n - 1] <= 0.0
         {
-            return Err(Error::Other(format!(
-                "ERA: the Hankel matrix has rank below the order {n}"
-            )));
+            return Err(Error::Era {
+                reason: format!("the Hankel matrix has rank below the order {n}"),
+            });
         }
         let u1 = u.columns(0, n);
         let v1 = v_t.rows(0, n).transpose();

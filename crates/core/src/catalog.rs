@@ -92,11 +92,12 @@ pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<Pat
     if let Some(base) = base
         && let Some(reason) = paths::escape_reason(reference)
     {
-        return Err(Error::Other(format!(
-            "{} '{reference}' {reason}; name a file inside {} by a relative path, or a bundled name",
-            kind(folder),
-            paths::shown(base).display()
-        )));
+        return Err(Error::Reference {
+            kind: kind(folder),
+            reference: reference.into(),
+            reason,
+            base: paths::shown(base).to_path_buf(),
+        });
     }
     find(reference, folder, base)
 }

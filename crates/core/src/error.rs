@@ -24,10 +24,10 @@ impl fmt::Display for Problem {
 pub struct Problems(pub Vec<Problem>);
 
 impl Problems {
-    pub fn push(&mut self, field: impl Into<String>, message: impl Into<String>) {
+    pub fn push(&mut self, field: impl Into<String>, message: impl fmt::Display) {
         self.0.push(Problem {
             field: field.into(),
-            message: message.into(),
+            message: message.to_string(),
         });
     }
 
@@ -104,39 +104,68 @@ pub enum Error {
         message: String,
     },
 
-    #[error("no trim: {0}")]
-    Trim(String),
+    /// A unit that is not one of a dimension's (`dimension` as its label).
+    #[error("unit '{unit}' is not a unit of {dimension}; accepted: {accepted}")]
+    Unit {
+        unit: String,
+        dimension: &'static str,
+        accepted: String,
+    },
 
-    /// The flight left its limits; whoever flew it keeps the trace up to
-    /// the departure (`aeroid_sim::Flight`).
-    #[error("simulation departed at t = {time:.3} s: {reason}")]
-    Departed { time: f64, reason: String },
+    /// A quantity's text that does not start with a number.
+    #[error("'{text}' does not start with a number")]
+    NotANumber { text: String },
 
-    /// A JSBSim call failed (a C++ exception or a failure status, turned into
-    /// an error at the FFI boundary). `context` names the aircraft, property
-    /// or operation.
-    #[error("JSBSim: {context}: {message}")]
-    Jsbsim { context: String, message: String },
+    /// A value that is not a finite number (`value` as written).
+    #[error("{value} is not a finite number")]
+    NotFinite { value: String },
 
-    /// An estimator cannot run on this record or model; the refusal says
-    /// what is missing, as data.
-    #[error("{0}")]
-    Refused(crate::refusal::Refusal),
-
-    /// A square-root filter's Cholesky downdate that would leave its
-    /// covariance factor without a positive diagonal: the covariance it
-    /// stands for would no longer be positive definite. `step` names the
-    /// filter step.
+    /// A memory budget variable that does not hold a size.
     #[error(
-        "at t = {time} s: the {step} would leave the covariance not positive definite (a Cholesky downdate)"
+        "{variable}='{text}' is not a memory size; give bytes or a number with kB, MB, GB, TB, KiB, MiB, GiB or TiB"
     )]
-    Downdate { time: f64, step: &'static str },
+    MemoryBudget {
+        variable: &'static str,
+        text: String,
+    },
 
-    #[error("{0}")]
-    Other(String),
+    /// `count` items of `item_bytes` each that do not fit the memory budget.
+    #[error(
+        "{what} would need {} × {item_bytes} bytes = {}, more than the memory budget of {budget}",
+        crate::limits::count_text(*count),
+        crate::limits::bytes_text(*bytes)
+    )]
+    Memory {
+        what: String,
+        count: f64,
+        item_bytes: usize,
+        bytes: f64,
+        budget: crate::limits::Budget,
+    },
+
+    /// A file reference, given in a file under `base`, that would leave
+    /// that folder (an absolute path or a `..` component).
+    #[error(
+        "{kind} '{reference}' {reason}; name a file inside {} by a relative path, or a bundled name",
+        base.display()
+    )]
+    Reference {
+        kind: &'static str,
+        reference: String,
+        reason: &'static str,
+        base: PathBuf,
+    },
 }
 
 impl Error {
+    /// The problems found in a file that does not validate.
+    pub fn problems(&self) -> Option<&[Problem]> {
+        match self {
+            Error::Invalid { problems, .. } => Some(problems),
+            _ => None,
+        }
+    }
+
     /// The error of a write: a failure of the file system reported as a
     /// read ([`Error::Io`]) becomes a [`Error::Write`].
     pub fn as_write(self) -> Error {

@@ -62,17 +62,16 @@ impl fmt::Display for Budget {
 /// The memory budget: [`BUDGET_VARIABLE`] if set, else half of the
 /// machine's memory, else [`FALLBACK_BUDGET`]. An unreadable variable is an
 /// error that says what it holds.
-pub fn memory_budget() -> Result<Budget, String> {
+pub fn memory_budget() -> crate::Result<Budget> {
     if let Ok(text) = std::env::var(BUDGET_VARIABLE) {
         return parse_bytes(&text)
             .map(|bytes| Budget {
                 bytes,
                 source: format!("{BUDGET_VARIABLE}={}", text.trim()),
             })
-            .ok_or_else(|| {
-                format!(
-                    "{BUDGET_VARIABLE}='{text}' is not a memory size; give bytes or a number with kB, MB, GB, TB, KiB, MiB, GiB or TiB"
-                )
+            .ok_or(crate::Error::MemoryBudget {
+                variable: BUDGET_VARIABLE,
+                text: text.clone(),
             });
     }
     Ok(match machine_memory() {
@@ -93,17 +92,19 @@ pub fn memory_budget() -> Result<Budget, String> {
 /// Checks that `count` items of `item_bytes` each fit the memory budget;
 /// the refusal names what, how many, the bytes and the budget. `count` is
 /// a float so that a count beyond `usize` is refused, not wrapped.
-pub fn check_memory(what: &str, count: f64, item_bytes: usize) -> Result<(), String> {
+pub fn check_memory(what: &str, count: f64, item_bytes: usize) -> crate::Result<()> {
     let budget = memory_budget()?;
     let bytes = count * item_bytes as f64;
     if bytes.is_finite() && bytes <= budget.bytes as f64 && count < usize::MAX as f64 {
         Ok(())
     } else {
-        Err(format!(
-            "{what} would need {} × {item_bytes} bytes = {}, more than the memory budget of {budget}",
-            count_text(count),
-            bytes_text(bytes)
-        ))
+        Err(crate::Error::Memory {
+            what: what.into(),
+            count,
+            item_bytes,
+            bytes,
+            budget,
+        })
     }
 }
 
@@ -162,7 +163,7 @@ pub fn number(value: f64) -> String {
 }
 
 /// A count for a message: exact below 10¹², else in scientific notation.
-fn count_text(count: f64) -> String {
+pub(crate) fn count_text(count: f64) -> String {
     if count < 1e12 && count.fract() == 0.0 {
         format!("{count:.0}")
     } else {
@@ -208,7 +209,9 @@ mod tests {
 
     #[test]
     fn a_request_beyond_the_budget_gives_the_numbers() {
-        let message = check_memory("the simulation", 1e11, 400).unwrap_err();
+        let message = check_memory("the simulation", 1e11, 400)
+            .unwrap_err()
+            .to_string();
         assert!(
             message.starts_with(
                 "the simulation would need 100000000000 × 400 bytes = 40.0 TB, more than the memory budget of "

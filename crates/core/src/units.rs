@@ -215,7 +215,7 @@ impl Dimension {
 }
 
 /// Factor from `unit` to SI for a dimension, or an error listing accepted units.
-pub fn unit_factor(unit: &str, dimension: Dimension) -> Result<f64, String> {
+pub fn unit_factor(unit: &str, dimension: Dimension) -> crate::Result<f64> {
     let unit = unit.trim();
     dimension
         .units()
@@ -224,12 +224,10 @@ pub fn unit_factor(unit: &str, dimension: Dimension) -> Result<f64, String> {
             name.eq_ignore_ascii_case(unit) && (unit == *name || !is_case_sensitive(name))
         })
         .map(|(_, factor)| *factor)
-        .ok_or_else(|| {
-            format!(
-                "unit '{unit}' is not a unit of {}; accepted: {}",
-                dimension.label(),
-                dimension.accepted()
-            )
+        .ok_or_else(|| crate::Error::Unit {
+            unit: unit.into(),
+            dimension: dimension.label(),
+            accepted: dimension.accepted(),
         })
 }
 
@@ -303,7 +301,7 @@ impl fmt::Display for Quantity {
 
 impl Quantity {
     /// The value in SI units (radians for angles). Rejects NaN and infinities.
-    pub fn si(&self, dimension: Dimension) -> Result<f64, String> {
+    pub fn si(&self, dimension: Dimension) -> crate::Result<f64> {
         let value = match self {
             Quantity::Number(v) => *v,
             Quantity::Text(text) => parse_with_unit(text, dimension)?,
@@ -311,12 +309,14 @@ impl Quantity {
         if value.is_finite() {
             Ok(value)
         } else {
-            Err(format!("{self} is not a finite number"))
+            Err(crate::Error::NotFinite {
+                value: self.to_string(),
+            })
         }
     }
 }
 
-fn parse_with_unit(text: &str, dimension: Dimension) -> Result<f64, String> {
+fn parse_with_unit(text: &str, dimension: Dimension) -> crate::Result<f64> {
     let text = text.trim();
     let split = text
         .char_indices()
@@ -330,7 +330,7 @@ fn parse_with_unit(text: &str, dimension: Dimension) -> Result<f64, String> {
     let value: f64 = number
         .trim()
         .parse()
-        .map_err(|_| format!("'{text}' does not start with a number"))?;
+        .map_err(|_| crate::Error::NotANumber { text: text.into() })?;
     Ok(value * unit_factor(unit, dimension)?)
 }
 
@@ -364,7 +364,7 @@ mod tests {
 
     #[test]
     fn numbers_are_si_and_strings_carry_units() {
-        assert_eq!(Quantity::Number(2.0).si(Dimension::Angle), Ok(2.0));
+        assert_eq!(Quantity::Number(2.0).si(Dimension::Angle).unwrap(), 2.0);
         let deg = Quantity::Text("5 deg".into()).si(Dimension::Angle).unwrap();
         assert!((deg - 5.0 * DEG).abs() < 1e-15);
         let kt = Quantity::Text("100kt".into()).si(Dimension::Speed).unwrap();
@@ -374,8 +374,10 @@ mod tests {
             .unwrap();
         assert!((ft + 457.2).abs() < 1e-9);
         assert_eq!(
-            Quantity::Text("3 g".into()).si(Dimension::Acceleration),
-            Ok(3.0 * STANDARD_GRAVITY)
+            Quantity::Text("3 g".into())
+                .si(Dimension::Acceleration)
+                .unwrap(),
+            3.0 * STANDARD_GRAVITY
         );
     }
 
@@ -383,7 +385,8 @@ mod tests {
     fn wrong_unit_and_nan_are_rejected() {
         let err = Quantity::Text("5 kt".into())
             .si(Dimension::Angle)
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("'kt'") && err.contains("deg"), "{err}");
         assert!(Quantity::Number(f64::NAN).si(Dimension::Length).is_err());
     }
@@ -526,7 +529,7 @@ mod tests {
         // Known values: 1 slug/ft³ is 515.379 kg/m³; 29.92 inHg is 1013.2 hPa;
         // FL100 is 3048 m; 1 psf is 47.88 Pa.
         assert!((29.92 * unit_factor("inHg", Pressure).unwrap() - 101_320.76).abs() < 0.01);
-        let error = unit_factor("kg/m3", Dimensionless).unwrap_err();
+        let error = unit_factor("kg/m3", Dimensionless).unwrap_err().to_string();
         assert!(
             error.starts_with("unit 'kg/m3' is not a unit of a dimensionless quantity"),
             "{error}"

@@ -19,10 +19,10 @@
 //! the result includes a corrected record: nx, ny, nz, p, q, r, α and β with
 //! the estimated errors removed.
 
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::Refusal;
 use crate::methods::output_error::{diagonal_weights, interpolate};
-use aeroid_core::error::{Error, Result};
 use aeroid_core::units::STANDARD_GRAVITY;
 use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
 use aeroid_record::{Channel, FlightRecord};
@@ -114,10 +114,12 @@ impl Problem {
             .collect();
         for required in [0, 3, 4] {
             if !outputs.contains(&required) {
-                return Err(Error::Other(format!(
-                    "flight path reconstruction needs the '{}' channel",
-                    OUTPUTS[required]
-                )));
+                return Err(Error::Data {
+                    reason: format!(
+                        "flight path reconstruction needs the '{}' channel",
+                        OUTPUTS[required]
+                    ),
+                });
             }
         }
         let (start, end) = (

@@ -32,8 +32,8 @@
 
 use crate::diagnosis::process_noise_signature;
 pub use crate::diagnosis::{Diagnosis, DiagnosisKind};
+use crate::error::{Error, Result};
 pub use crate::fit_quality::{CORRELATED_LAG_ONE, OutputFit, STRUCTURED_LIMIT, WHITENESS_LAGS};
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::gauss_newton::Solution;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -380,17 +380,17 @@ impl Estimate {
     }
 
     pub fn write_json(&self, path: &Path) -> Result<()> {
-        let text = serde_json::to_string_pretty(self)
-            .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
-        std::fs::write(path, text).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        let text = serde_json::to_string_pretty(self).map_err(|e| Error::File {
+            reason: format!("{}: {e}", path.display()),
+        })?;
+        Ok(aeroid_core::error::write_text(path, &text)?)
     }
 
     pub fn read_json(path: &Path) -> Result<Estimate> {
         let text = aeroid_core::error::read_text(path)?;
-        serde_json::from_str(&text).map_err(|e| Error::Other(format!("{}: {e}", path.display())))
+        serde_json::from_str(&text).map_err(|e| Error::File {
+            reason: format!("{}: {e}", path.display()),
+        })
     }
 }
 

@@ -17,10 +17,10 @@
 //! a problem outside it is refused before the method runs
 //! ([`check_capabilities`]).
 
+use crate::error::{Error, Result};
 use crate::estimate::Estimate;
 use crate::problem::EstimationProblem;
 use crate::structure::{ModelStructure, Structure};
-use aeroid_core::error::{Error, Result};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
@@ -381,8 +381,8 @@ pub fn refuse_for_linear(
     if refused.is_empty() {
         return Ok(());
     }
-    Err(Error::Other(format!(
-        "[methods.{method}]: not for the linear model '{model}': {}",
-        refused.join("; ")
-    )))
+    Err(Error::Settings {
+        method: method.to_string(),
+        reason: format!("not for the linear model '{model}': {}", refused.join("; ")),
+    })
 }

@@ -37,7 +37,7 @@
 //! converged within 1.5σ on the roll derivatives; taken linearly, spread
 //! over two seconds, it ends at the iteration limit with Cl_β 5.9σ off.
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use aeroid_record::prep::differentiation::transitions;
 use aeroid_sim::integrator::Interpolation;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
@@ -215,7 +215,10 @@ impl InputInterpolation {
     pub fn check_controls(&self, method: &str) -> Result<()> {
         let controls = aeroid_sim::state::Control::ALL.map(|c| c.name());
         self.check_channels(&controls)
-            .map_err(|error| Error::Other(format!("[methods.{method}] {error}")))
+            .map_err(|error| Error::Setting {
+                method: method.to_string(),
+                reason: error.to_string(),
+            })
     }
 
     /// An error naming the channels of a per-channel table that are not
@@ -232,11 +235,13 @@ impl InputInterpolation {
         if unknown.is_empty() {
             return Ok(());
         }
-        Err(Error::Other(format!(
-            "interpolation: no input named {} (the inputs: {})",
-            unknown.join(", "),
-            inputs.join(", ")
-        )))
+        Err(Error::Method {
+            reason: format!(
+                "interpolation: no input named {} (the inputs: {})",
+                unknown.join(", "),
+                inputs.join(", ")
+            ),
+        })
     }
 }
 

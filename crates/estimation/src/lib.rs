@@ -8,6 +8,7 @@
 
 pub mod compatibility;
 pub mod diagnosis;
+pub mod error;
 pub mod estimate;
 pub mod estimator;
 pub mod fit_quality;
@@ -55,3 +56,5 @@ pub const CHANNELS_READ: &[&str] = &[
     "density",
     "chi",
 ];
+
+pub use error::{Error, Result};

@@ -34,10 +34,11 @@
 //! start values are the model's own values: a linear flight
 //! (`aeroid_eval::linear_flight`) flies them as its truth.
 
+use crate::error::Result;
 use crate::input_timing::InputInterpolation;
 use crate::settings::MethodTables;
 use aeroid_core::catalog;
-use aeroid_core::error::{Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_record::FlightRecord;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -254,7 +255,7 @@ impl LinearStructure {
             bounds,
             methods: file.methods.clone(),
         };
-        problems.finish(path, structure)
+        Ok(problems.finish(path, structure)?)
     }
 
     /// The parameters' start values: the model's own, a linear flight's truth.

@@ -31,11 +31,12 @@
 //! its stderr — in a study a counted failure, never an abort. The work
 //! folder is removed afterwards.
 
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, ParameterEstimate, Status};
 use crate::estimator::{Capabilities, Estimator, MethodInfo, Refusal, SettingInfo, Settings};
 use crate::problem::EstimationProblem;
 use crate::sandbox::Sandbox;
-use aeroid_core::error::{Error, Result, read_text, write_error};
+use aeroid_core::error::{read_text, write_error};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -191,7 +192,7 @@ impl Plugin {
     /// Reads and checks a plug-in file.
     pub fn load(path: &Path) -> Result<Plugin> {
         let file: PluginFile = aeroid_core::error::parse_toml(path, &read_text(path)?)?;
-        let invalid = |field: &str, message: String| Error::Invalid {
+        let invalid = |field: &str, message: String| aeroid_core::Error::Invalid {
             path: path.to_path_buf(),
             problems: vec![aeroid_core::error::Problem {
                 field: field.into(),
@@ -211,13 +212,14 @@ impl Plugin {
             return Err(invalid(
                 "name",
                 format!("'{name}': a method name is letters, digits, '-' and '_'"),
-            ));
+            )
+            .into());
         }
         if file.command.is_empty() || file.command[0].trim().is_empty() {
-            return Err(invalid("command", "must name a program".into()));
+            return Err(invalid("command", "must name a program".into()).into());
         }
         if !(file.time_limit > 0.0 && file.time_limit.is_finite()) {
-            return Err(invalid("time_limit", "must be positive".into()));
+            return Err(invalid("time_limit", "must be positive".into()).into());
         }
         let base = path.parent().unwrap_or(Path::new("."));
         let working_directory = match &file.working_directory {
@@ -229,7 +231,8 @@ impl Plugin {
             return Err(invalid(
                 "working_directory",
                 format!("{} is not a folder", working_directory.display()),
-            ));
+            )
+            .into());
         }
         let leak = |text: String| -> &'static str { Box::leak(text.into_boxed_str()) };
         Ok(Plugin {
@@ -289,8 +292,8 @@ impl Plugin {
         };
         let outcome = self.execute(&work.path, sandbox)?;
         let stderr = tail(&work.path.join("stderr.txt"));
-        let failure = |reason: String| {
-            Error::Other(format!(
+        let failure = |reason: String| Error::Plugin {
+            reason: format!(
                 "plug-in {}: {reason}{}",
                 self.name,
                 if stderr.is_empty() {
@@ -298,7 +301,7 @@ impl Plugin {
                 } else {
                     format!("; its stderr ends: {stderr}")
                 }
-            ))
+            ),
         };
         match outcome {
             Outcome::TimedOut => {
@@ -364,13 +367,13 @@ impl Plugin {
                 command.pre_exec(move || rules.enter());
             }
         }
-        let mut child = command.spawn().map_err(|e| {
-            Error::Other(format!(
+        let mut child = command.spawn().map_err(|e| Error::Plugin {
+            reason: format!(
                 "plug-in {}: cannot start '{}' (from {}): {e}",
                 self.name,
                 self.command[0],
                 self.path.display()
-            ))
+            ),
         })?;
         // A thread blocks in wait() and reports the exit at once; this one
         // waits for that report until the time limit.
@@ -390,10 +393,12 @@ impl Plugin {
                         libc::killpg(group, libc::SIGKILL);
                     }
                 }
-                Error::Other(format!(
-                    "plug-in {}: no thread to wait for it ({e}): killed",
-                    self.name
-                ))
+                Error::Plugin {
+                    reason: format!(
+                        "plug-in {}: no thread to wait for it ({e}): killed",
+                        self.name
+                    ),
+                }
             })?;
         let limit = Duration::from_secs_f64(self.time_limit);
         let timed_out = matches!(
@@ -412,19 +417,15 @@ impl Plugin {
                 }
             }
         }
-        let status = waiter.join().map_err(|_| {
-            Error::Other(format!(
-                "plug-in {}: the thread waiting for it failed",
-                self.name
-            ))
+        let status = waiter.join().map_err(|_| Error::Plugin {
+            reason: format!("plug-in {}: the thread waiting for it failed", self.name),
         })?;
         match status {
             _ if timed_out => Ok(Outcome::TimedOut),
             Ok(status) => Ok(Outcome::Exited(status.code())),
-            Err(e) => Err(Error::Other(format!(
-                "plug-in {}: waiting for it: {e}",
-                self.name
-            ))),
+            Err(e) => Err(Error::Plugin {
+                reason: format!("plug-in {}: waiting for it: {e}", self.name),
+            }),
         }
     }
 
@@ -653,11 +654,13 @@ impl Estimator for Plugin {
             return Ok(());
         };
         match settings.keys().find(|key| !known.contains(key)) {
-            Some(key) => Err(Error::Other(format!(
-                "[methods.{}]: unknown setting '{key}'; the plug-in takes: {}",
-                self.name,
-                known.join(", ")
-            ))),
+            Some(key) => Err(Error::Plugin {
+                reason: format!(
+                    "[methods.{}]: unknown setting '{key}'; the plug-in takes: {}",
+                    self.name,
+                    known.join(", ")
+                ),
+            }),
             None => Ok(()),
         }
     }
@@ -677,12 +680,14 @@ impl Estimator for Plugin {
 
     fn estimate(&self, problem: &EstimationProblem, _start: Option<&Estimate>) -> Result<Estimate> {
         if self.records == Records::One && problem.records.len() > 1 {
-            return Err(Error::Other(format!(
-                "plug-in {} takes one record ({}: records = \"one\"); {} were given",
-                self.name,
-                self.path.display(),
-                problem.records.len()
-            )));
+            return Err(Error::Plugin {
+                reason: format!(
+                    "plug-in {} takes one record ({}: records = \"one\"); {} were given",
+                    self.name,
+                    self.path.display(),
+                    problem.records.len()
+                ),
+            });
         }
         self.run(problem)
     }

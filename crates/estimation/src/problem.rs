@@ -25,10 +25,10 @@
 //!                  "rate": 25.0, "times": [ … ], "values": [ … ] } ] } ] }
 //! ```
 
+use crate::error::{Error, Result};
 use crate::linear_structure::{LinearFile, LinearStructure};
 use crate::settings::{MethodTables, Settings, merge_settings};
 use crate::structure::{ModelStructure, Structure, StructureFile, ZERO_SOURCE};
-use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 use aeroid_sim::aircraft::AircraftFile;
 use serde::{Deserialize, Serialize};
@@ -93,10 +93,9 @@ impl EstimationProblem {
         all.extend_from_slice(layers);
         let settings = merge_settings(method, &all);
         if records.is_empty() {
-            return Err(Error::Other(format!(
-                "{method} on model '{}': no record given",
-                structure.name()
-            )));
+            return Err(Error::File {
+                reason: format!("{method} on model '{}': no record given", structure.name()),
+            });
         }
         let mut records = match &structure {
             Structure::SixDof(six_dof) => six_dof.with_zero_channels(records),
@@ -145,10 +144,12 @@ impl EstimationProblem {
     /// The problem as JSON (see the module documentation).
     pub fn to_json(&self) -> Result<String> {
         let mut text = Vec::new();
-        self.serialize_into(&mut text)
-            .map_err(|e| Error::Other(format!("estimation problem as JSON: {e}")))?;
-        String::from_utf8(text)
-            .map_err(|e| Error::Other(format!("estimation problem as JSON: {e}")))
+        self.serialize_into(&mut text).map_err(|e| Error::File {
+            reason: format!("estimation problem as JSON: {e}"),
+        })?;
+        String::from_utf8(text).map_err(|e| Error::File {
+            reason: format!("estimation problem as JSON: {e}"),
+        })
     }
 
     /// Writes the JSON of [`EstimationProblem::to_json`] to `writer`: the
@@ -177,20 +178,22 @@ impl EstimationProblem {
     /// names the file in errors. The structure is rebuilt from the files
     /// the JSON carries and must agree with its resolved view.
     pub fn from_json(text: &str, origin: &Path) -> Result<EstimationProblem> {
-        let document: Document = serde_json::from_str(text).map_err(|e| {
-            Error::Other(format!(
+        let document: Document = serde_json::from_str(text).map_err(|e| Error::File {
+            reason: format!(
                 "{}: not an estimation problem: line {}, column {}: {e}",
                 origin.display(),
                 e.line(),
                 e.column()
-            ))
+            ),
         })?;
         if document.format != FORMAT {
-            return Err(Error::Other(format!(
-                "{}: format '{}' is not '{FORMAT}'",
-                origin.display(),
-                document.format
-            )));
+            return Err(Error::File {
+                reason: format!(
+                    "{}: format '{}' is not '{FORMAT}'",
+                    origin.display(),
+                    document.format
+                ),
+            });
         }
         let path = PathBuf::from(&document.model.path);
         let structure = document.model.structure(&path)?;
@@ -203,13 +206,17 @@ impl EstimationProblem {
             Structure::Linear(_) => document.aircraft.is_none(),
         };
         if resolved != document.parameters || !aircraft_agrees {
-            return Err(Error::Other(format!(
-                "{}: the parameters or the aircraft do not agree with the model files they came with",
-                origin.display()
-            )));
+            return Err(Error::File {
+                reason: format!(
+                    "{}: the parameters or the aircraft do not agree with the model files they came with",
+                    origin.display()
+                ),
+            });
         }
         if document.records.is_empty() {
-            return Err(Error::Other(format!("{}: no record", origin.display())));
+            return Err(Error::File {
+                reason: format!("{}: no record", origin.display()),
+            });
         }
         for record in document.records.iter() {
             record.validate(origin)?;
@@ -224,17 +231,19 @@ impl EstimationProblem {
 
     /// Writes [`EstimationProblem::to_json`] into the file `path`.
     pub fn write_json(&self, path: &Path) -> Result<()> {
-        let io = |source: std::io::Error| Error::Io {
+        let io = |source: std::io::Error| aeroid_core::Error::Io {
             path: path.to_path_buf(),
             source,
         };
         let mut writer = std::fs::File::create(path).map_err(io)?;
         self.serialize_into(&mut writer)
             .map_err(|e| match e.io_error_kind() {
-                Some(kind) => io(std::io::Error::new(kind, e.to_string())),
-                None => Error::Other(format!("estimation problem as JSON: {e}")),
+                Some(kind) => io(std::io::Error::new(kind, e.to_string())).into(),
+                None => Error::File {
+                    reason: format!("estimation problem as JSON: {e}"),
+                },
             })?;
-        std::io::Write::flush(&mut writer).map_err(io)
+        Ok(std::io::Write::flush(&mut writer).map_err(io)?)
     }
 
     pub fn read_json(path: &Path) -> Result<EstimationProblem> {
@@ -298,10 +307,12 @@ impl ModelDocument {
             (None, None, Some(linear)) => {
                 LinearStructure::from_file(linear, path).map(|s| Structure::Linear(Box::new(s)))
             }
-            _ => Err(Error::Other(format!(
-                "{}: the model holds either `structure` and `aircraft` (6-DOF) or `linear`",
-                path.display()
-            ))),
+            _ => Err(Error::File {
+                reason: format!(
+                    "{}: the model holds either `structure` and `aircraft` (6-DOF) or `linear`",
+                    path.display()
+                ),
+            }),
         }
     }
 }

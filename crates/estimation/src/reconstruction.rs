@@ -42,7 +42,7 @@
 //! dropouts bridged), inside the span where every channel and derivative
 //! exists. Samples where anything needed is not finite, or q̄ ≤ 0, are left out.
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use aeroid_core::refusal::{MissingChannel, Refusal};
 use aeroid_core::units::STANDARD_GRAVITY;
 use aeroid_record::prep::differentiation::{Differentiator, corner_times, step_times};
@@ -530,7 +530,7 @@ fn reference_channel<'a>(
     options: &ReconstructionOptions,
 ) -> Result<&'a Channel> {
     if let Some(name) = &options.reference_channel {
-        return record.channel(name);
+        return Ok(record.channel(name)?);
     }
     let primary = ["nx", "ny", "nz", "p", "q", "r"];
     let fastest = |names: Vec<&str>| -> Option<&'a Channel> {
@@ -548,7 +548,9 @@ fn reference_channel<'a>(
         .collect();
     fastest(used_primary)
         .or_else(|| fastest(needs.keys().copied().collect()))
-        .ok_or_else(|| Error::Other("nothing to reconstruct: no channel is needed".into()))
+        .ok_or_else(|| Error::Data {
+            reason: "nothing to reconstruct: no channel is needed".into(),
+        })
 }
 
 /// The reference instants inside the span covered by every channel and derivative.
@@ -565,19 +567,19 @@ fn common_times(
     let spans = needs
         .keys()
         .map(|name| record.channel(name))
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<aeroid_record::Result<Vec<_>>>()?;
     for channel in spans {
-        let (first, last) = valid_span(channel).ok_or_else(|| {
-            Error::Other(format!("channel '{}' has no valid sample", channel.name))
+        let (first, last) = valid_span(channel).ok_or_else(|| Error::Data {
+            reason: format!("channel '{}' has no valid sample", channel.name),
         })?;
         start = start.max(first);
         end = end.min(last);
     }
     for (name, derivative) in derivatives {
         let (first, last) = valid_span(derivative).ok_or_else(|| {
-            Error::Other(format!(
+            Error::Data { reason: format!(
                 "channel '{name}' cannot be differentiated: it is shorter than the differentiator's window or has too many dropouts"
-            ))
+            ) }
         })?;
         start = start.max(first);
         end = end.min(last);

@@ -10,12 +10,13 @@
 //! progress or a fit worse than the mean is not "converged", whichever
 //! method made it.
 
+use crate::error::{Error, Result};
 use crate::estimate::Estimate;
 use crate::estimator::{Estimator, check_model_features};
 use crate::problem::EstimationProblem;
 use crate::settings::{MethodTables, Settings, overlay};
 use crate::structure::{ModelStructure, Structure};
-use aeroid_core::error::{Error, Problems, Result};
+use aeroid_core::error::Problems;
 use aeroid_record::FlightRecord;
 use std::sync::Arc;
 
@@ -97,9 +98,9 @@ impl Registry {
     pub fn add(&mut self, estimator: Arc<dyn Estimator>) -> Result<()> {
         let name = estimator.name();
         if self.estimators.iter().any(|e| e.name() == name) {
-            return Err(Error::Other(format!(
-                "a method named '{name}' exists already"
-            )));
+            return Err(Error::Method {
+                reason: format!("a method named '{name}' exists already"),
+            });
         }
         self.estimators.push(estimator);
         Ok(())
@@ -125,14 +126,15 @@ impl Registry {
 
     /// The estimator named `name`.
     pub fn find(&self, name: &str) -> Result<&Arc<dyn Estimator>> {
-        self.estimators
+        Ok(self
+            .estimators
             .iter()
             .find(|e| e.name() == name)
-            .ok_or_else(|| Error::Unknown {
+            .ok_or_else(|| aeroid_core::Error::Unknown {
                 kind: "method",
                 name: name.to_string(),
                 known: self.names(),
-            })
+            })?)
     }
 
     /// Checks a file's `[methods.NAME]` tables: each names a registered
@@ -161,7 +163,7 @@ impl Registry {
     pub fn validate_tables(&self, tables: &MethodTables, path: &std::path::Path) -> Result<()> {
         let mut problems = Problems::default();
         self.check_tables(tables, &mut problems);
-        problems.finish(path, ())
+        Ok(problems.finish(path, ())?)
     }
 
     /// The problem of `method` on `records` ([`EstimationProblem::new`]).

@@ -4,7 +4,7 @@
 //! settings type ([`parse_settings`], which names the method and the
 //! offending key), and described for `aeroid methods` ([`setting_infos`]).
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::collections::BTreeMap;
@@ -27,8 +27,12 @@ pub struct SettingInfo {
 /// Parses a settings table into a method's settings type, naming the
 /// method and the offending key in the error.
 pub fn parse_settings<T: DeserializeOwned>(method: &str, settings: &Settings) -> Result<T> {
-    serde_json::from_value(serde_json::Value::Object(settings.clone()))
-        .map_err(|error| Error::Other(format!("[methods.{method}]: {error}")))
+    serde_json::from_value(serde_json::Value::Object(settings.clone())).map_err(|error| {
+        Error::Settings {
+            method: method.to_string(),
+            reason: error.to_string(),
+        }
+    })
 }
 
 /// The settings list of [`crate::estimator::MethodInfo`]: each key named in `meanings` with

@@ -32,10 +32,11 @@
 //! output_biases = ["ny"]
 //! ```
 
+use crate::error::{Error, Result};
 use crate::linear_structure::{self, LinearStructure};
 use crate::settings::MethodTables;
 use aeroid_core::catalog;
-use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::refusal::Refusal;
 use aeroid_record::{Channel, FlightRecord};
 use aeroid_sim::aero::{AeroModel, AeroSpec};
@@ -211,7 +212,7 @@ impl ModelStructure {
             bounds,
             methods: file.methods.clone(),
         };
-        problems.finish(path, structure)
+        Ok(problems.finish(path, structure)?)
     }
 
     /// Names of the free aerodynamic parameters.
@@ -301,7 +302,7 @@ impl Structure {
                 LinearStructure::from_file(&parse_toml(&path, &text)?, &path)
                     .map(|s| Structure::Linear(Box::new(s)))
             }
-            Some(other) => Err(Error::Invalid {
+            Some(other) => Err(aeroid_core::Error::Invalid {
                 path,
                 problems: vec![aeroid_core::error::Problem {
                     field: "kind".into(),
@@ -311,7 +312,8 @@ impl Structure {
                         linear_structure::KIND
                     ),
                 }],
-            }),
+            }
+            .into()),
         }
     }
 

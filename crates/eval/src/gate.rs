@@ -29,8 +29,9 @@
 //! `diagnoses`. A case may instead require the estimator to refuse the
 //! record with a given refusal.
 
+use crate::error::{Error, Result};
 use crate::run::{self, Outcome};
-use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_estimation::estimate::{DiagnosisKind, Estimate};
 use aeroid_estimation::estimator::{MethodTables, Refusal, RefusalKind};
 use aeroid_estimation::registry::Registry;
@@ -446,7 +447,7 @@ pub fn load(registry: &Registry, path: &Path) -> Result<GateFile> {
             "the file holds no [[case]]: a gate file gates at least one case",
         );
     }
-    problems.finish(path, file)
+    Ok(problems.finish(path, file)?)
 }
 
 /// The tolerances, overrides, thresholds and declarations of a case: finite
@@ -588,7 +589,10 @@ pub fn fly_case(registry: &Registry, case: &GateCase) -> Result<Flown> {
             estimate: None,
             truths: BTreeMap::new(),
         }),
-        Outcome::Failed(message) => Err(Error::Other(format!("{}: {message}", case.method))),
+        Outcome::Failed(reason) => Err(Error::Failed {
+            method: case.method.clone(),
+            reason,
+        }),
     }
 }
 

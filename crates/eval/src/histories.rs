@@ -13,7 +13,8 @@
 //! a shard's files are copied unchanged by `aeroid study merge`, so the
 //! merged folder holds the same bytes as a one-machine run's.
 
-use aeroid_core::error::{Error, Result, read_text, write_error};
+use crate::error::{Error, Result};
+use aeroid_core::error::{read_text, write_error};
 use aeroid_estimation::estimate::{Estimate, History};
 use aeroid_estimation::methods::output_error;
 use aeroid_estimation::model::coefficient_states::COEFFICIENT_NAMES;
@@ -161,7 +162,7 @@ impl CaseHistories {
         let text = serde_json::to_string(self).map_err(|e| write_error(&path, e))?;
         let temporary = path.with_extension("json.partial");
         std::fs::write(&temporary, text).map_err(|e| write_error(&temporary, e))?;
-        std::fs::rename(&temporary, &path).map_err(|e| write_error(&path, e))
+        std::fs::rename(&temporary, &path).map_err(|e| write_error(&path, e).into())
     }
 
     /// Every point's histories in `folder`, in point order (none when the
@@ -170,8 +171,11 @@ impl CaseHistories {
         let mut all = Vec::new();
         for path in history_files(folder)? {
             let text = read_text(&path)?;
-            let histories: CaseHistories = serde_json::from_str(&text)
-                .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
+            let histories: CaseHistories =
+                serde_json::from_str(&text).map_err(|e| Error::Json {
+                    path: path.clone(),
+                    reason: e.to_string(),
+                })?;
             all.push(histories);
         }
         all.sort_by_key(|h| h.point);
@@ -185,14 +189,14 @@ fn history_files(folder: &Path) -> Result<Vec<PathBuf>> {
     if !dir.is_dir() {
         return Ok(Vec::new());
     }
-    let entries = std::fs::read_dir(&dir).map_err(|source| Error::Io {
+    let entries = std::fs::read_dir(&dir).map_err(|source| aeroid_core::Error::Io {
         path: dir.clone(),
         source,
     })?;
     let mut files = Vec::new();
     for entry in entries {
         let path = entry
-            .map_err(|source| Error::Io {
+            .map_err(|source| aeroid_core::Error::Io {
                 path: dir.clone(),
                 source,
             })?

@@ -18,8 +18,9 @@
 //! Shard K of N holds the cases whose index i (point·runs + run) has
 //! i mod N = K − 1.
 
+use crate::error::{Error, Result};
 use crate::row::Row;
-use aeroid_core::error::{Error, Result, write_error};
+use aeroid_core::error::write_error;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -49,11 +50,7 @@ impl Default for Shard {
 impl Shard {
     /// Parses `K/N` (1 ≤ K ≤ N).
     pub fn parse(text: &str) -> Result<Shard> {
-        let invalid = || {
-            Error::Other(format!(
-                "--shard '{text}': expected K/N with 1 ≤ K ≤ N, e.g. 2/8"
-            ))
-        };
+        let invalid = || Error::Shard { text: text.into() };
         let (index, count) = text.split_once('/').ok_or_else(invalid)?;
         let index: usize = index.trim().parse().map_err(|_| invalid())?;
         let count: usize = count.trim().parse().map_err(|_| invalid())?;
@@ -119,11 +116,8 @@ impl Journal {
             .create_new(true)
             .open(&path)
             .map_err(|e| match e.kind() {
-                std::io::ErrorKind::AlreadyExists => Error::Other(format!(
-                    "{} holds a study already: resume it with --resume, or write to another folder",
-                    path.display()
-                )),
-                _ => write_error(&path, e),
+                std::io::ErrorKind::AlreadyExists => Error::JournalExists { path: path.clone() },
+                _ => write_error(&path, e).into(),
             })?;
         let line = serde_json::to_string(header).map_err(|e| write_error(&path, e))?;
         writeln!(file, "{line}")
@@ -143,16 +137,18 @@ impl Journal {
         let index = index_journal(&path)?;
         let found = &index.header;
         if *found != *header {
-            return Err(Error::Other(format!(
-                "{}: the journal is of another study or shard (study '{}', shard {}, fingerprint {}; this run: study '{}', shard {}, fingerprint {}); a study resumes only with the files, seed, runs and shard it started with",
-                path.display(),
-                found.study,
-                found.shard,
-                found.fingerprint,
-                header.study,
-                header.shard,
-                header.fingerprint
-            )));
+            return Err(Error::Journal {
+                reason: format!(
+                    "the journal is of another study or shard (study '{}', shard {}, fingerprint {}; this run: study '{}', shard {}, fingerprint {}); a study resumes only with the files, seed, runs and shard it started with",
+                    found.study,
+                    found.shard,
+                    found.fingerprint,
+                    header.study,
+                    header.shard,
+                    header.fingerprint
+                ),
+                path,
+            });
         }
         let file = OpenOptions::new()
             .write(true)
@@ -178,13 +174,13 @@ impl Journal {
         let entry = EntryRef { case, rows };
         let mut line = serde_json::to_string(&entry).map_err(|e| write_error(&self.path, e))?;
         line.push('\n');
-        let mut file = self
-            .file
-            .lock()
-            .map_err(|_| Error::Other(format!("{}: a writer panicked", self.path.display())))?;
+        let mut file = self.file.lock().map_err(|_| Error::Journal {
+            path: self.path.clone(),
+            reason: "a writer panicked".into(),
+        })?;
         file.write_all(line.as_bytes())
             .and_then(|_| file.flush())
-            .map_err(|e| write_error(&self.path, e))
+            .map_err(|e| write_error(&self.path, e).into())
     }
 
     /// The journal's path.
@@ -217,28 +213,32 @@ struct Index {
 /// Indexes a journal, checking every line (each is parsed, then only its
 /// place kept).
 fn index_journal(path: &Path) -> Result<Index> {
-    let file = File::open(path).map_err(|source| Error::Io {
+    let file = File::open(path).map_err(|source| aeroid_core::Error::Io {
         path: path.to_path_buf(),
         source,
     })?;
     let size = file
         .metadata()
-        .map_err(|source| Error::Io {
+        .map_err(|source| aeroid_core::Error::Io {
             path: path.to_path_buf(),
             source,
         })?
         .len();
     let mut reader = BufReader::new(file);
-    let malformed = |number: usize, reason: String| {
-        Error::Other(format!("{}:{number}: {reason}", path.display()))
+    let malformed = |line: usize, reason: String| Error::JournalLine {
+        path: path.to_path_buf(),
+        line,
+        reason,
     };
     let mut line = String::new();
     let mut read_line = |line: &mut String| {
         line.clear();
-        reader.read_line(line).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        reader
+            .read_line(line)
+            .map_err(|source| aeroid_core::Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })
     };
     if read_line(&mut line)? == 0 {
         return Err(malformed(1, "an empty journal (no header)".into()));
@@ -320,12 +320,14 @@ impl Cases {
             handle
                 .seek(SeekFrom::Start(offset))
                 .and_then(|_| handle.read_exact(&mut buffer))
-                .map_err(|source| Error::Io {
+                .map_err(|source| aeroid_core::Error::Io {
                     path: path.clone(),
                     source,
                 })?;
-            let entry: Entry = serde_json::from_slice(&buffer)
-                .map_err(|e| Error::Other(format!("{}: case {case}: {e}", path.display())))?;
+            let entry: Entry = serde_json::from_slice(&buffer).map_err(|e| Error::Journal {
+                path: path.clone(),
+                reason: format!("case {case}: {e}"),
+            })?;
             each(case, entry.rows)?;
         }
         Ok(())
@@ -351,35 +353,38 @@ pub fn open(folders: &[PathBuf]) -> Result<Cases> {
         match &merged {
             None => merged = Some(whole),
             Some(first) if *first != whole => {
-                return Err(Error::Other(format!(
-                    "{}: a shard of another study (study '{}', fingerprint {}; the first folder's: '{}', {})",
-                    path.display(),
-                    header.study,
-                    header.fingerprint,
-                    first.study,
-                    first.fingerprint
-                )));
+                return Err(Error::Journal {
+                    reason: format!(
+                        "a shard of another study (study '{}', fingerprint {}; the first folder's: '{}', {})",
+                        header.study, header.fingerprint, first.study, first.fingerprint
+                    ),
+                    path,
+                });
             }
             Some(_) => {}
         }
         if let Some(other) = seen.insert(header.shard.index, path.clone()) {
-            return Err(Error::Other(format!(
-                "shard {} is both in {} and in {}",
-                header.shard,
-                other.display(),
-                path.display()
-            )));
+            return Err(Error::Merge {
+                reason: format!(
+                    "shard {} is both in {} and in {}",
+                    header.shard,
+                    other.display(),
+                    path.display()
+                ),
+            });
         }
         let expected = (0..header.cases).filter(|&c| header.shard.holds(c)).count();
         if index.entries.len() != expected {
-            return Err(Error::Other(format!(
-                "{}: shard {} has {} of its {expected} cases: finish it with --resume first",
-                path.display(),
-                header.shard,
-                index.entries.len()
-            )));
+            return Err(Error::Journal {
+                reason: format!(
+                    "shard {} has {} of its {expected} cases: finish it with --resume first",
+                    header.shard,
+                    index.entries.len()
+                ),
+                path,
+            });
         }
-        let file = File::open(&path).map_err(|source| Error::Io {
+        let file = File::open(&path).map_err(|source| aeroid_core::Error::Io {
             path: path.clone(),
             source,
         })?;
@@ -389,18 +394,22 @@ pub fn open(folders: &[PathBuf]) -> Result<Cases> {
         files.push((path, file));
     }
     let Some(header) = merged else {
-        return Err(Error::Other("no shard folders given to merge".into()));
+        return Err(Error::Merge {
+            reason: "no shard folders given to merge".into(),
+        });
     };
     if places.len() != header.cases {
         let missing: Vec<usize> = (0..header.cases)
             .filter(|c| !places.contains_key(c))
             .take(5)
             .collect();
-        return Err(Error::Other(format!(
-            "the shards hold {} of the study's {} cases; missing shards hold cases such as {missing:?}",
-            places.len(),
-            header.cases
-        )));
+        return Err(Error::Merge {
+            reason: format!(
+                "the shards hold {} of the study's {} cases; missing shards hold cases such as {missing:?}",
+                places.len(),
+                header.cases
+            ),
+        });
     }
     Ok(Cases {
         header,

@@ -40,6 +40,7 @@
 //! ```
 
 pub mod axis;
+pub mod error;
 pub mod gate;
 pub mod histories;
 pub mod journal;
@@ -50,3 +51,5 @@ pub mod run;
 pub mod score;
 pub mod study;
 pub mod summary;
+
+pub use error::{Error, Result};

@@ -31,7 +31,7 @@
 //! - Record: the profile's channels whose quantity is a state, input or
 //!   output of the model, named as in the file ([`Profile::record_signals`]).
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use aeroid_core::random::{self, streams};
 use aeroid_estimation::linear_structure::LinearStructure;
 use aeroid_estimation::model::linear::LinearStateSpace;
@@ -164,10 +164,11 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
                 x += factor * draws;
             }
             if !x.iter().all(|v| v.is_finite()) {
-                return Err(Error::Departed {
+                return Err(aeroid_sim::Error::Departed {
                     time: t,
                     reason: format!("the linear model '{}' diverged", structure.name),
-                });
+                }
+                .into());
             }
         }
         if let Some((column, gains, frame)) = &augmentation {
@@ -207,9 +208,12 @@ fn augmentation(
     feedback: &Feedback,
     structure: &LinearStructure,
 ) -> Result<(usize, DVector<f64>, usize)> {
-    let invalid = |field: String, message: String| Error::Invalid {
-        path: scenario.path.clone(),
-        problems: vec![aeroid_core::error::Problem { field, message }],
+    let invalid = |field: String, message: String| -> Error {
+        aeroid_core::Error::Invalid {
+            path: scenario.path.clone(),
+            problems: vec![aeroid_core::error::Problem { field, message }],
+        }
+        .into()
     };
     let Some(column) = structure.inputs.iter().position(|i| *i == feedback.control) else {
         return Err(invalid(
@@ -258,12 +262,15 @@ fn gust_inputs(
     structure: &LinearStructure,
     count: usize,
 ) -> Result<(DMatrix<f64>, Vec<[f64; 3]>)> {
-    let invalid = |field: &str, message: String| Error::Invalid {
-        path: scenario.path.clone(),
-        problems: vec![aeroid_core::error::Problem {
-            field: field.to_string(),
-            message,
-        }],
+    let invalid = |field: &str, message: String| -> Error {
+        aeroid_core::Error::Invalid {
+            path: scenario.path.clone(),
+            problems: vec![aeroid_core::error::Problem {
+                field: field.to_string(),
+                message,
+            }],
+        }
+        .into()
     };
     let n = structure.states.len();
     if spec.matrix.len() != n || spec.matrix.iter().any(|row| row.len() != 3) {
@@ -287,7 +294,7 @@ fn gust_inputs(
     };
     let samples = wind
         .generate(&conditions, scenario.step, count, scenario.seed)
-        .map_err(|message| invalid("linear.gusts", message))?;
+        .map_err(|message| invalid("linear.gusts", message.to_string()))?;
     Ok((
         g,
         samples
@@ -306,7 +313,7 @@ fn process_noise(
     let mut distribution = DVector::zeros(structure.states.len());
     for (state, &value) in &linear.process_noise {
         let Some(i) = structure.states.iter().position(|s| s == state) else {
-            return Err(Error::Invalid {
+            return Err(aeroid_core::Error::Invalid {
                 path: scenario.path.clone(),
                 problems: vec![aeroid_core::error::Problem {
                     field: format!("linear.process_noise.{state}"),
@@ -316,7 +323,8 @@ fn process_noise(
                         structure.states.join(", ")
                     ),
                 }],
-            });
+            }
+            .into());
         };
         distribution[i] = value;
     }

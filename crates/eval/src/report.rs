@@ -30,12 +30,13 @@
 //! drawn elements that have a size on screen (`data-drawn`), which a
 //! headless browser can read back to check that the page was drawn.
 
+use crate::error::{Error, Result};
 use crate::histories::CaseHistories;
 use crate::journal::{self, JOURNAL_FILE};
 use crate::row::{Row, RowStatus};
 use crate::study::StudyResult;
 use crate::summary::SummaryRow;
-use aeroid_core::error::{Error, Result, read_text, write_error};
+use aeroid_core::error::{read_text, write_error};
 use aeroid_estimation::estimate::History;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
@@ -103,8 +104,11 @@ impl StudyFolder {
     /// journal's header from `folder`.
     pub fn read(folder: &Path) -> Result<StudyFolder> {
         let path = folder.join("study.json");
-        let result: StudyResult = serde_json::from_str(&read_text(&path)?)
-            .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
+        let result: StudyResult =
+            serde_json::from_str(&read_text(&path)?).map_err(|e| Error::Json {
+                path: path.clone(),
+                reason: e.to_string(),
+            })?;
         let path = folder.join("runs.csv");
         let mut reader = csv::Reader::from_path(&path).map_err(|e| csv_error(&path, e))?;
         let mut rows = Vec::new();
@@ -132,14 +136,17 @@ impl StudyFolder {
 }
 
 fn csv_error(path: &Path, error: csv::Error) -> Error {
-    let at = error
-        .position()
-        .map_or(String::new(), |p| format!(":{}", p.line()));
-    Error::Other(format!("{}{at}: {error}", path.display()))
+    Error::Table {
+        path: path.to_path_buf(),
+        line: error.position().map(|p| p.line()),
+        reason: error.to_string(),
+    }
 }
 
 fn plot_error(error: impl std::fmt::Display) -> Error {
-    Error::Other(format!("drawing a plot: {error}"))
+    Error::Plot {
+        reason: error.to_string(),
+    }
 }
 
 /// A series key: method, scenario with its recorder profile, noise scale.

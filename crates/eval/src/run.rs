@@ -7,8 +7,8 @@
 //! another's estimate (output error from equation error's) gets it when
 //! that method ran on the same model before it.
 
+use crate::error::{Error, Result};
 use crate::score::{self, ParameterScore};
-use aeroid_core::error::{Error, Result};
 use aeroid_estimation::estimate::Estimate;
 use aeroid_estimation::estimator::{MethodTables, Refusal};
 use aeroid_estimation::registry::Registry;
@@ -40,8 +40,10 @@ impl Outcome {
                 estimate: Box::new(estimate),
                 scores,
             },
-            Err(Error::Refused(refusal)) => Outcome::Refused(refusal),
-            Err(error) => Outcome::Failed(error.to_string()),
+            Err(error) => match error.refusal() {
+                Some(refusal) => Outcome::Refused(refusal.clone()),
+                None => Outcome::Failed(error.to_string()),
+            },
         }
     }
 
@@ -130,6 +132,7 @@ pub fn run(
             &scenario.path,
             &field,
         )
+        .map_err(aeroid_estimation::Error::from)
         .and_then(|path| Structure::load(&path.to_string_lossy()));
         let outcomes = match &structure {
             Ok(structure) => estimate_each(
@@ -203,6 +206,7 @@ pub fn estimate_scored(
         registry
             .problem(method, vec![record.clone()], structure.clone(), layers)
             .and_then(|problem| registry.estimate(&problem, start))
+            .map_err(Error::from)
             .map(|estimate| {
                 let scores = score::score(&estimate, Some(truth), structure.score_kind());
                 (estimate, scores)

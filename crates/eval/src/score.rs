@@ -4,7 +4,7 @@
 //! the truth model's local derivative at the trim point) is carried into
 //! every row so that a report says what it was scored against.
 
-use aeroid_core::error::Result;
+use crate::error::Result;
 use aeroid_estimation::estimate::Estimate;
 use aeroid_sim::aero::ModelKind;
 use aeroid_sim::truth::{RunTruth, TruthKind};
@@ -101,7 +101,7 @@ pub fn write_csv(scores: &[ParameterScore], path: &Path) -> Result<()> {
     }
     writer
         .flush()
-        .map_err(|e| aeroid_core::error::write_error(path, e))
+        .map_err(|e| aeroid_core::error::write_error(path, e).into())
 }
 
 /// A fixed-width table for the terminal.

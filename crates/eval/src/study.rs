@@ -46,15 +46,15 @@ mod result;
 #[cfg(test)]
 mod tests;
 
-use self::check::check_runs;
+use self::check::runs_problem;
 pub use self::execute::JournaledRun;
 pub use self::file::{StudyFile, StudyMethods, SweepSpec};
 pub use self::result::{StudyResult, assemble};
 pub use crate::axis::{Axis, AxisValues};
 use crate::axis::{channel_rates_text, settings_text};
+use crate::error::{Error, Result};
 pub use crate::row::{Row, RowStatus};
 pub use crate::summary::{Ending, Summariser, SummaryRow, summarise};
-use aeroid_core::error::{Error, Result};
 use aeroid_core::limits;
 use aeroid_estimation::estimator::MethodTables;
 use aeroid_estimation::registry::Registry;
@@ -165,7 +165,9 @@ impl Study {
     /// [`limits::MAX_RUNS`] and the memory budget; `field` names where the
     /// number comes from in the refusal.
     pub fn set_runs(&mut self, runs: usize, field: &str) -> Result<()> {
-        check_runs(runs).map_err(|message| self.invalid(field, message))?;
+        if let Some(message) = runs_problem(runs) {
+            return Err(self.invalid(field, message));
+        }
         self.runs = runs;
         self.check_size(field)
     }
@@ -188,17 +190,18 @@ impl Study {
             cases,
             std::mem::size_of::<Case>() + rows_per_case as usize * std::mem::size_of::<Row>(),
         )
-        .map_err(|message| self.invalid(field, message))
+        .map_err(|message| self.invalid(field, message.to_string()))
     }
 
     fn invalid(&self, field: &str, message: String) -> Error {
-        Error::Invalid {
+        aeroid_core::Error::Invalid {
             path: self.path.clone(),
             problems: vec![aeroid_core::error::Problem {
                 field: field.into(),
                 message,
             }],
         }
+        .into()
     }
 
     /// Every case, point by point, run by run.

@@ -12,7 +12,7 @@
 use super::export::{CONTROL_PROPERTIES, ExportOptions, export, model_name};
 use super::flight::{ControlCommand, ControlReading, JsbsimFlight};
 use super::{Exec, FT, InitialConditions, InitialSpeed};
-use aeroid_core::error::Result;
+use crate::error::Result;
 use aeroid_sim::Simulation;
 use aeroid_sim::scenario::Scenario;
 use aeroid_sim::state::{self, Controls};

@@ -32,7 +32,7 @@
 //!   [`aeroid_sim::aero::AeroModel::local_derivatives`] does.
 
 use super::{Exec, InitialConditions, InitialSpeed};
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Perturbation of each variable: 1e-4 rad, 1e-4 of a normalised rate, or
 /// 1e-4 of a surface's command.

@@ -40,7 +40,7 @@ use super::{FT, LBF, SLUG};
 
 /// The avoirdupois pound (kg): JSBSim's weight unit, exact in its unit table.
 const POUND: f64 = 0.453_592_37;
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use aeroid_sim::aero::{ForceAxes, ModelKind, RateNormalization, RateSpeed};
 use aeroid_sim::aircraft::Aircraft;
 use aeroid_sim::atmosphere::{

@@ -36,7 +36,7 @@
 
 use super::derivatives::coefficients;
 use super::{Exec, FT, LBF, Property, SLUG};
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use aeroid_sim::aero::{AeroCoefficients, AeroInput};
 use aeroid_sim::atmosphere::{Air, SEA_LEVEL_DENSITY};
 use aeroid_sim::dynamics::{AirData, Evaluation};

@@ -22,6 +22,7 @@
 
 pub mod crosscheck;
 pub mod derivatives;
+pub mod error;
 pub mod export;
 pub mod flight;
 pub mod own;
@@ -30,14 +31,17 @@ pub mod own;
 struct Jsbsim;
 
 impl aeroid_sim::source::ForeignSimulator for Jsbsim {
-    fn fly(&self, scenario: &aeroid_sim::scenario::Scenario) -> Result<aeroid_sim::Flight> {
-        own::fly(scenario)
+    fn fly(
+        &self,
+        scenario: &aeroid_sim::scenario::Scenario,
+    ) -> aeroid_sim::Result<aeroid_sim::Flight> {
+        own::fly(scenario).map_err(Error::into_sim)
     }
 }
 
 impl aeroid_sim::foreign::AircraftCatalog for Jsbsim {
-    fn check_model(&self, model: &str) -> std::result::Result<(), String> {
-        own::check_model(model)
+    fn check_model(&self, model: &str) -> std::result::Result<(), aeroid_sim::error::Error> {
+        own::check_model(model).map_err(|error| aeroid_sim::error::Error::Foreign(Box::new(error)))
     }
 }
 
@@ -48,7 +52,7 @@ pub fn register() {
     aeroid_sim::source::register_jsbsim(&Jsbsim);
 }
 
-use aeroid_core::error::{Error, Result};
+pub use error::{Error, Result};
 use jsbsim_sys as sys;
 use std::ffi::{CStr, CString, c_int, c_void};
 use std::marker::PhantomData;

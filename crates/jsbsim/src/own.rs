@@ -40,7 +40,8 @@ use super::derivatives::{LocalDerivatives, SurfaceBinding, local_derivatives};
 use super::export::write_planet;
 use super::flight::{ControlCommand, ControlReading, JsbsimFlight};
 use super::{Exec, FT, InitialConditions, InitialSpeed, LBF, SLUG, TrimMode};
-use aeroid_core::error::{Error, Problem, Result};
+use crate::error::{Error, Result};
+use aeroid_core::error::Problem;
 use aeroid_sim::aircraft::Aircraft;
 use aeroid_sim::scenario::Scenario;
 use aeroid_sim::state::{CONTROL_COUNT, Control, Controls};
@@ -66,9 +67,9 @@ pub const SURFACES: [(&str, &str, f64); 3] = [
 /// rounded to five significant digits).
 pub const RIGID_BODY_TOLERANCE: f64 = 1e-3;
 
-/// `Ok` when JSBSim's root has `aircraft/MODEL/MODEL.xml`; else a message
+/// `Ok` when JSBSim's root has `aircraft/MODEL/MODEL.xml`; else an error
 /// naming the file looked for and the aircraft there are.
-pub fn check_model(model: &str) -> std::result::Result<(), String> {
+pub fn check_model(model: &str) -> Result<()> {
     let aircraft = super::default_root().join("aircraft");
     let file = aircraft.join(model).join(format!("{model}.xml"));
     if !model.is_empty() && !model.contains(['/', '\\']) && file.is_file() {
@@ -84,11 +85,11 @@ pub fn check_model(model: &str) -> std::result::Result<(), String> {
         })
         .unwrap_or_default();
     known.sort();
-    Err(format!(
-        "JSBSim has no aircraft '{model}' (no file {}); its aircraft: {}",
-        file.display(),
-        known.join(", ")
-    ))
+    Err(Error::NoAircraft {
+        model: model.into(),
+        file,
+        known,
+    })
 }
 
 /// A JSBSim aircraft trimmed at a scenario's condition.
@@ -108,13 +109,14 @@ pub struct Trimmed {
 }
 
 fn invalid(scenario: &Scenario, field: &str, message: impl Into<String>) -> Error {
-    Error::Invalid {
+    aeroid_core::Error::Invalid {
         path: scenario.path.clone(),
         problems: vec![Problem {
             field: field.into(),
             message: message.into(),
         }],
     }
+    .into()
 }
 
 /// Loads the scenario's JSBSim aircraft over aeroid's flat earth, sets it up
@@ -131,7 +133,7 @@ pub fn trim(scenario: &Scenario) -> Result<Trimmed> {
             "a JSBSim aircraft's flaps are set with [jsbsim] properties (e.g. \"fcs/flap-cmd-norm\")",
         ));
     }
-    check_model(&jsbsim.model).map_err(|message| invalid(scenario, "aircraft", message))?;
+    check_model(&jsbsim.model).map_err(|error| invalid(scenario, "aircraft", error.to_string()))?;
     let mut exec = Exec::new()?;
     exec.load_model(&jsbsim.model)?;
     load_flat_earth(&mut exec, scenario.environment.gravity)?;
@@ -385,7 +387,7 @@ pub fn check_rigid_body(scenario: &Scenario, exec: &Exec) -> Result<()> {
     if problems.is_empty() {
         return Ok(());
     }
-    Err(Error::Invalid {
+    Err(aeroid_core::Error::Invalid {
         path: scenario.aircraft_path.clone(),
         problems: problems
             .into_iter()
@@ -394,7 +396,8 @@ pub fn check_rigid_body(scenario: &Scenario, exec: &Exec) -> Result<()> {
                 message,
             })
             .collect(),
-    })
+    }
+    .into())
 }
 
 /// Flies a JSBSim scenario: trim, the rigid-body check, the local derivatives

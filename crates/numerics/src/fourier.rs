@@ -39,7 +39,7 @@
 //! Simpson's weights). The batch transform ([`FourierTransform`]) collects
 //! the same weights into a matrix and evaluates every signal at once.
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use nalgebra::{Complex, DMatrix};
 
 /// Phasors are re-anchored to the library's sine and cosine this often
@@ -244,19 +244,23 @@ pub fn breaks_at(start: f64, step: f64, count: usize, instants: &[f64]) -> Vec<u
 
 fn check_grid(frequencies: &[f64], start: f64, step: f64, count: usize) -> Result<()> {
     if count < 2 {
-        return Err(Error::Other(format!(
-            "a finite Fourier transform needs at least 2 samples, has {count}"
-        )));
+        return Err(Error::Input {
+            reason: format!("a finite Fourier transform needs at least 2 samples, has {count}"),
+        });
     }
     if !(step > 0.0 && step.is_finite() && start.is_finite()) {
-        return Err(Error::Other(format!(
-            "a finite Fourier transform needs a positive sample step, has {step} s from {start} s"
-        )));
+        return Err(Error::Input {
+            reason: format!(
+                "a finite Fourier transform needs a positive sample step, has {step} s from {start} s"
+            ),
+        });
     }
     if let Some(bad) = frequencies.iter().find(|w| !(w.is_finite() && **w >= 0.0)) {
-        return Err(Error::Other(format!(
-            "a frequency of a finite Fourier transform must be finite and not negative, is {bad} rad/s"
-        )));
+        return Err(Error::Input {
+            reason: format!(
+                "a frequency of a finite Fourier transform must be finite and not negative, is {bad} rad/s"
+            ),
+        });
     }
     Ok(())
 }
@@ -380,11 +384,13 @@ impl FourierTransform {
     /// complex value per frequency.
     pub fn transform_columns(&self, signals: &DMatrix<f64>) -> Result<Vec<Vec<C64>>> {
         if signals.nrows() != self.samples {
-            return Err(Error::Other(format!(
-                "a finite Fourier transform of {} samples was given {}",
-                self.samples,
-                signals.nrows()
-            )));
+            return Err(Error::Input {
+                reason: format!(
+                    "a finite Fourier transform of {} samples was given {}",
+                    self.samples,
+                    signals.nrows()
+                ),
+            });
         }
         // Many signals: the general matrix product on a transposed copy
         // (blocked and vectorised); a few: one dot product per entry.
@@ -510,11 +516,13 @@ impl RunningTransform {
     /// jump between the previous sample and this one's instant.
     pub fn push(&mut self, values: &[f64], after_break: bool) -> Result<()> {
         if values.len() != self.signals {
-            return Err(Error::Other(format!(
-                "a running Fourier transform of {} signals was given {} values",
-                self.signals,
-                values.len()
-            )));
+            return Err(Error::Input {
+                reason: format!(
+                    "a running Fourier transform of {} signals was given {} values",
+                    self.signals,
+                    values.len()
+                ),
+            });
         }
         let k = self.received;
         // The phasor of sample k.
@@ -607,10 +615,12 @@ impl RunningTransform {
     /// before two are in.
     pub fn transform(&self, i: usize) -> Result<Vec<C64>> {
         if self.received < 2 {
-            return Err(Error::Other(format!(
-                "a running Fourier transform is read after {} samples; it needs 2",
-                self.received
-            )));
+            return Err(Error::Input {
+                reason: format!(
+                    "a running Fourier transform is read after {} samples; it needs 2",
+                    self.received
+                ),
+            });
         }
         let open = self.open_end();
         Ok(self.closed[i]

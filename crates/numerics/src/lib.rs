@@ -5,6 +5,7 @@
 //! of wider vector instructions.
 
 pub mod dual;
+pub mod error;
 pub mod fourier;
 pub mod gauss_newton;
 pub mod kalman;
@@ -14,3 +15,5 @@ pub mod status;
 
 pub use kalman::kept;
 pub use status::Status;
+
+pub use error::{Error, Result};

@@ -18,9 +18,10 @@
 //! listed in the outcome.
 
 use crate::derived;
+use crate::error::Result;
 use crate::{Channel, FlightRecord, check_name};
 use aeroid_core::csv_table::{CsvTable, Delimiter, Layout, first_disorder};
-use aeroid_core::error::{Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::units::{Dimension, Quantity, unit_factor};
 use aeroid_sim::atmosphere::Atmosphere;
 use serde::{Deserialize, Serialize};
@@ -300,8 +301,8 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
 /// The index of a mapped column in the data file.
 fn column_index(table: &CsvTable, column: &ColumnRef) -> Result<usize> {
     match column {
-        ColumnRef::Number(n) => table.column_by_number(u64::try_from(*n).unwrap_or(0)),
-        ColumnRef::Name(name) => table.column_index(name),
+        ColumnRef::Number(n) => Ok(table.column_by_number(u64::try_from(*n).unwrap_or(0))?),
+        ColumnRef::Name(name) => Ok(table.column_index(name)?),
     }
 }
 
@@ -416,7 +417,8 @@ fn check_converted_times(times: &[f64], column: &ColumnRef, map_path: &Path) -> 
                     }
                 ),
             }],
-        }),
+        }
+        .into()),
     }
 }
 
@@ -438,7 +440,8 @@ fn check_rate(channel: &Channel, index: usize, map_path: &Path) -> Result<()> {
                 crate::rate_text(channel.rate)
             ),
         }],
-    })
+    }
+    .into())
 }
 
 /// The rate implied by the median sample interval (1 Hz with fewer than two samples).
@@ -506,7 +509,7 @@ fn validate_map(file: &ColumnMapFile, path: &Path) -> Result<(Conversion, Vec<Ma
         }
         channels.push(map_channel(spec, columns, &field, &mut problems));
     }
-    problems.finish(path, (time, channels))
+    Ok(problems.finish(path, (time, channels))?)
 }
 
 /// A column number is at least 1; a file without a header has only numbers.

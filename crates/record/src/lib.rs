@@ -21,6 +21,7 @@
 //! never omitted, so a channel's time base shows where a sample was due).
 
 pub mod derived;
+pub mod error;
 pub mod import;
 pub mod prep;
 pub mod quality;
@@ -28,8 +29,9 @@ pub mod recorder;
 
 use aeroid_core::csv_table::CsvTable;
 use aeroid_core::csv_table::first_disorder;
-use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::paths;
+pub use error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -160,8 +162,8 @@ impl Channel {
                 .iter()
                 .map(|&t| self.value_held_at(t))
                 .collect::<Option<Vec<f64>>>()
-                .ok_or_else(|| {
-                    Error::Other(format!("channel '{}' has no valid sample", self.name))
+                .ok_or_else(|| Error::NoValidSample {
+                    channel: self.name.clone(),
                 }),
         }
     }
@@ -186,7 +188,9 @@ impl Channel {
                 self.value_after(t, after)
             })
             .collect::<Option<Vec<f64>>>()
-            .ok_or_else(|| Error::Other(format!("channel '{}' has no valid sample", self.name)))
+            .ok_or_else(|| Error::NoValidSample {
+                channel: self.name.clone(),
+            })
     }
 
     /// Values at many instants by linear interpolation between the two
@@ -289,14 +293,15 @@ impl FlightRecord {
 
     /// The channel with this name, or an error listing the channels present.
     pub fn channel(&self, name: &str) -> Result<&Channel> {
-        self.channels
+        Ok(self
+            .channels
             .iter()
             .find(|c| c.name == name)
-            .ok_or_else(|| Error::Unknown {
+            .ok_or_else(|| aeroid_core::Error::Unknown {
                 kind: "channel",
                 name: name.to_string(),
                 known: self.channels.iter().map(|c| c.name.clone()).collect(),
-            })
+            })?)
     }
 
     /// Checks what the file format relies on: at least one channel, each
@@ -347,7 +352,7 @@ impl FlightRecord {
                 );
             }
         }
-        problems.finish(path, ())
+        Ok(problems.finish(path, ())?)
     }
 
     /// Writes the record into `folder` (created if needed): `record.toml` and one CSV per time base.
@@ -356,7 +361,7 @@ impl FlightRecord {
         if let Some(seed) = self.seed
             && i64::try_from(seed).is_err()
         {
-            return Err(Error::Invalid {
+            return Err(aeroid_core::Error::Invalid {
                 path: folder.join(RECORD_FILE),
                 problems: vec![aeroid_core::error::Problem {
                     field: "seed".into(),
@@ -365,7 +370,8 @@ impl FlightRecord {
                         i64::MAX
                     ),
                 }],
-            });
+            }
+            .into());
         }
         std::fs::create_dir_all(folder).map_err(|e| aeroid_core::error::write_error(folder, e))?;
         let bases = self.time_bases();
@@ -386,8 +392,10 @@ impl FlightRecord {
             channels: entries.into_iter().map(|(_, e)| e).collect(),
         };
         let path = folder.join(RECORD_FILE);
-        let text = toml::to_string(&file).map_err(|e| Error::Other(e.to_string()))?;
-        aeroid_core::error::write_text(&path, &text)
+        let text = toml::to_string(&file).map_err(|e| Error::Serialize {
+            reason: e.to_string(),
+        })?;
+        Ok(aeroid_core::error::write_text(&path, &text)?)
     }
 
     /// Reads a record folder written by [`FlightRecord::write`] (or by hand in the same layout).
@@ -395,13 +403,14 @@ impl FlightRecord {
         let path = folder.join(RECORD_FILE);
         let file: RecordFile = parse_toml(&path, &read_text(&path)?)?;
         if file.format != FORMAT {
-            return Err(Error::Invalid {
+            return Err(aeroid_core::Error::Invalid {
                 path,
                 problems: vec![aeroid_core::error::Problem {
                     field: "format".into(),
                     message: format!("'{}' is not '{FORMAT}'", file.format),
                 }],
-            });
+            }
+            .into());
         }
         let mut tables: Vec<(String, CsvTable, Vec<f64>)> = Vec::new();
         let mut channels = Vec::with_capacity(file.channels.len());
@@ -516,7 +525,7 @@ impl FlightRecord {
             }
             text.push(b'\n');
         }
-        std::fs::write(path, text).map_err(|e| aeroid_core::error::write_error(path, e))
+        Ok(std::fs::write(path, text).map_err(|e| aeroid_core::error::write_error(path, e))?)
     }
 
     /// The `aeroid inspect` table: every channel with its unit, rate,
@@ -689,12 +698,10 @@ pub(crate) fn shortest(digits: &mut zmij::Buffer, value: f64) -> &str {
 }
 
 /// A channel name must be usable as a CSV header and file name.
-pub(crate) fn check_name(name: &str) -> Result<(), String> {
+pub(crate) fn check_name(name: &str) -> std::result::Result<(), error::Error> {
     let allowed = |c: char| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.');
     if name.is_empty() || !name.chars().all(allowed) {
-        Err(format!(
-            "channel name '{name}' must be non-empty and use only letters, digits, '_', '-' and '.'"
-        ))
+        Err(error::Error::ChannelName { name: name.into() })
     } else {
         Ok(())
     }

@@ -45,9 +45,10 @@
 //! for bit.
 
 use crate::derived::{self, Context, GeographicOrigin, Measurand};
+use crate::error::{Error, Result};
 use crate::{Channel, FlightRecord};
 use aeroid_core::catalog;
-use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::limits;
 use aeroid_core::random::{self, streams};
 use aeroid_core::units::{Dimension, Quantity, unit_factor};
@@ -279,7 +280,7 @@ impl Profile {
             absent: file.absent.clone(),
             channels,
         };
-        problems.finish(path, profile)
+        Ok(problems.finish(path, profile)?)
     }
 
     /// The same profile without its random and discontinuous errors (noise,
@@ -316,9 +317,9 @@ impl Profile {
         seed: u64,
     ) -> Result<FlightRecord> {
         if trace.samples.len() < 2 {
-            return Err(Error::Other(
-                "a truth trace needs at least two samples to be recorded".into(),
-            ));
+            return Err(Error::Recording {
+                reason: "a truth trace needs at least two samples to be recorded",
+            });
         }
         let context = Context {
             mass: aircraft.mass.mass,
@@ -341,11 +342,11 @@ impl Profile {
             samples,
             2 * std::mem::size_of::<f64>(),
         )
-        .map_err(|message| Error::Invalid {
+        .map_err(|message| aeroid_core::Error::Invalid {
             path: self.path.clone(),
             problems: vec![aeroid_core::error::Problem {
                 field: "channels.rate".into(),
-                message,
+                message: message.to_string(),
             }],
         })?;
         let mut rng = random::stream(seed, streams::RECORDER);
@@ -389,9 +390,9 @@ impl Profile {
         seed: u64,
     ) -> Result<FlightRecord> {
         if grid.len() < 2 || signals.iter().any(|(_, s)| s.len() != grid.len()) {
-            return Err(Error::Other(
-                "signals to record need at least two samples, one per grid point".into(),
-            ));
+            return Err(Error::Recording {
+                reason: "signals to record need at least two samples, one per grid point",
+            });
         }
         let mut rng = random::stream(seed, streams::RECORDER);
         let mut channels = Vec::new();
@@ -451,15 +452,16 @@ impl Profile {
     pub fn with_channel_rates(
         &self,
         rates: &[(String, f64)],
-    ) -> std::result::Result<Profile, String> {
+    ) -> std::result::Result<Profile, crate::error::Error> {
         let mut profile = self.clone();
         for (name, rate) in rates {
             let channel = profile
                 .channels
                 .iter_mut()
                 .find(|c| c.measurand.name == name)
-                .ok_or_else(|| {
-                    format!("the profile '{}' records no channel '{name}'", self.name)
+                .ok_or_else(|| crate::error::Error::NoChannel {
+                    profile: self.name.clone(),
+                    channel: name.clone(),
                 })?;
             channel.rate = *rate;
             profile.name += &format!("@{name}:{rate}Hz");
@@ -470,16 +472,16 @@ impl Profile {
     /// The same profile without the channels `missing`, which the record
     /// then states as absent, named `NAME−CHANNEL,…`; an error names a
     /// channel the profile does not record.
-    pub fn without(&self, missing: &[String]) -> std::result::Result<Profile, String> {
+    pub fn without(&self, missing: &[String]) -> std::result::Result<Profile, crate::error::Error> {
         let mut profile = self.clone();
         for name in missing {
             let before = profile.channels.len();
             profile.channels.retain(|c| c.measurand.name != name);
             if profile.channels.len() == before {
-                return Err(format!(
-                    "the profile '{}' records no channel '{name}'",
-                    self.name
-                ));
+                return Err(crate::error::Error::NoChannel {
+                    profile: self.name.clone(),
+                    channel: name.clone(),
+                });
             }
             profile.absent.push(name.clone());
         }
@@ -496,7 +498,7 @@ struct FrameLayout {
     words: Option<u32>,
 }
 
-fn positive(value: Result<f64, String>, field: &str, problems: &mut Problems) -> f64 {
+fn positive(value: aeroid_core::Result<f64>, field: &str, problems: &mut Problems) -> f64 {
     match value {
         Ok(v) if v > 0.0 => v,
         Ok(v) => {
@@ -627,7 +629,7 @@ struct FieldReader<'a> {
 }
 
 impl FieldReader<'_> {
-    fn push(&mut self, field: &str, message: impl Into<String>) {
+    fn push(&mut self, field: &str, message: impl std::fmt::Display) {
         self.problems
             .push(format!("{}.{field}", self.prefix), message);
     }
@@ -635,7 +637,7 @@ impl FieldReader<'_> {
     fn check(
         &mut self,
         field: &str,
-        value: Result<f64, String>,
+        value: aeroid_core::Result<f64>,
         valid: impl Fn(f64) -> bool,
         requirement: &str,
     ) -> f64 {
@@ -774,7 +776,7 @@ pub fn rate_limit_message(rate: f64) -> String {
 }
 
 /// A rate as written in a profile: a number (Hz), `"25 Hz"`, `"0.5"`, or a fraction `"1/64 Hz"`.
-pub fn parse_rate(q: &Quantity) -> Result<f64, String> {
+pub fn parse_rate(q: &Quantity) -> aeroid_core::Result<f64> {
     let Quantity::Text(text) = q else {
         return q.si(Dimension::Frequency);
     };
@@ -871,9 +873,7 @@ impl ChannelModel {
             first_order_lag(grid, &mut signal, self.lag);
         }
         if let Some(cutoff) = self.anti_alias {
-            butterworth(&mut signal, cutoff, step).map_err(|message| {
-                Error::Other(format!("channel {}: {message}", self.measurand.name))
-            })?;
+            butterworth(&mut signal, cutoff, step, self.measurand.name)?;
         }
         Ok(signal)
     }
@@ -981,12 +981,13 @@ fn first_order_lag(grid: &[f64], signal: &mut [f64], time_constant: f64) {
 
 /// Second-order Butterworth low-pass (bilinear transform with pre-warping) on
 /// a uniform grid of `step`, starting in equilibrium.
-fn butterworth(signal: &mut [f64], cutoff: f64, step: f64) -> Result<(), String> {
+fn butterworth(signal: &mut [f64], cutoff: f64, step: f64, channel: &str) -> Result<()> {
     if cutoff >= 0.5 / step {
-        return Err(format!(
-            "the anti-alias cut-off {cutoff} Hz is not below the simulator's Nyquist frequency {} Hz",
-            0.5 / step
-        ));
+        return Err(Error::AntiAlias {
+            channel: channel.into(),
+            cutoff,
+            nyquist: 0.5 / step,
+        });
     }
     let k = (std::f64::consts::PI * cutoff * step).tan();
     let root2 = std::f64::consts::SQRT_2;

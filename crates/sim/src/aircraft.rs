@@ -4,8 +4,9 @@
 //! plain number is SI. Validation reports every problem at once.
 
 use crate::aero::{AeroModel, AeroSpec, ReferenceGeometry};
+use crate::error::Result;
 use crate::state::{CONTROL_COUNT, Control};
-use aeroid_core::error::{Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::units::{Dimension, Quantity};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -183,7 +184,7 @@ impl Aircraft {
             limits,
             aero,
         };
-        problems.finish(path, aircraft)
+        Ok(problems.finish(path, aircraft)?)
     }
 
     /// Saturates controls to the aircraft's limits.

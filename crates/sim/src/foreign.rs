@@ -8,9 +8,9 @@ use std::sync::OnceLock;
 
 /// The aircraft a foreign simulator has.
 pub trait AircraftCatalog: Send + Sync {
-    /// `Ok` when the simulator has the aircraft `model`; else a message
-    /// naming what was looked for.
-    fn check_model(&self, model: &str) -> std::result::Result<(), String>;
+    /// `Ok` when the simulator has the aircraft `model`; else an error
+    /// naming what was looked for ([`crate::error::Error::Foreign`]).
+    fn check_model(&self, model: &str) -> std::result::Result<(), crate::error::Error>;
 }
 
 static JSBSIM_AIRCRAFT: OnceLock<&'static dyn AircraftCatalog> = OnceLock::new();

@@ -38,6 +38,7 @@ pub mod aircraft;
 pub mod atmosphere;
 pub mod dynamics;
 pub mod engine;
+pub mod error;
 pub mod feedback;
 pub mod foreign;
 pub mod inputs;
@@ -61,7 +62,7 @@ use crate::trace::{TruthSample, TruthTrace};
 use crate::trim::{Trim, trim};
 use crate::truth::RunTruth;
 use crate::wind::{FlightConditions, WindSample};
-use aeroid_core::error::{Error, Result};
+pub use error::{Error, Result};
 
 /// A scenario made ready to fly: trimmed, with its signals sampled at every step.
 #[derive(Debug, Clone)]
@@ -88,13 +89,13 @@ impl Simulation {
     /// Trims the aircraft and samples inputs and wind for the whole run.
     pub fn prepare(scenario: &Scenario) -> Result<Simulation> {
         if let FlightSource::Jsbsim(_) = scenario.source() {
-            return Err(Error::Invalid {
+            return Err(aeroid_core::Error::Invalid {
                 path: scenario.path.clone(),
                 problems: vec![aeroid_core::error::Problem {
                     field: "aircraft".into(),
                     message: "is one of JSBSim's own aircraft: aeroid's simulator does not fly it; `aeroid simulate`, `record` and `run` fly it in JSBSim".into(),
                 }],
-            });
+            }.into());
         }
         scenario.check_size()?;
         let model = FlightModel::new(scenario.aircraft.clone(), scenario.environment);
@@ -106,11 +107,11 @@ impl Simulation {
         let winds = scenario
             .wind
             .generate(&conditions, scenario.step, steps + 1, scenario.seed)
-            .map_err(|message| Error::Invalid {
+            .map_err(|message| aeroid_core::Error::Invalid {
                 path: scenario.path.clone(),
                 problems: vec![aeroid_core::error::Problem {
                     field: "wind".into(),
-                    message,
+                    message: message.to_string(),
                 }],
             })?;
         let steady = WindSample {

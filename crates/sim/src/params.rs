@@ -14,9 +14,9 @@ pub struct ParameterSet {
 
 impl ParameterSet {
     /// Adds a parameter, returning its index; a repeated name is an error.
-    pub fn add(&mut self, name: &str, value: f64) -> Result<usize, String> {
+    pub fn add(&mut self, name: &str, value: f64) -> Result<usize, crate::error::Error> {
         if self.index(name).is_some() {
-            return Err(format!("parameter '{name}' is defined twice"));
+            return Err(crate::error::Error::DefinedTwice { name: name.into() });
         }
         self.names.push(name.to_string());
         self.values.push(value);

@@ -38,13 +38,14 @@
 
 use crate::aircraft::Aircraft;
 use crate::dynamics::Environment;
+use crate::error::Result;
 use crate::feedback::{Augmentation, Feedback, FeedbackSpec};
 use crate::inputs::{InputSchedule, InputSpec};
 use crate::integrator::Interpolation;
 use crate::trim::TrimCondition;
 use crate::wind::WindSpec;
 use aeroid_core::catalog;
-use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::limits;
 use aeroid_core::units::{DEG, Dimension, Quantity};
 use serde::{Deserialize, Serialize};
@@ -441,8 +442,8 @@ impl Scenario {
         let inputs = InputSchedule::build(&file.inputs, base, path);
         let inputs = match (problems.is_empty(), inputs) {
             (_, Ok(inputs)) => inputs,
-            (true, Err(error)) => return Err(error),
-            (false, Err(Error::Invalid { problems: more, .. })) => {
+            (true, Err(error)) => return Err((error).into()),
+            (false, Err(aeroid_core::Error::Invalid { problems: more, .. })) => {
                 problems.0.extend(more);
                 InputSchedule::default()
             }
@@ -474,7 +475,7 @@ impl Scenario {
             linear,
             feedback,
         };
-        problems.finish(path, scenario)
+        Ok(problems.finish(path, scenario)?)
     }
 
     /// Number of integration steps.
@@ -483,14 +484,14 @@ impl Scenario {
     }
 
     /// The bounds of duration and step and the memory budget, for a scenario
-    /// changed after loading: an [`Error::Invalid`] naming the field.
+    /// changed after loading: an [`aeroid_core::Error::Invalid`] naming the field.
     pub fn check_size(&self) -> Result<()> {
         let mut problems = Problems::default();
         check_ranges(&self.trim, self.duration, self.step, &mut problems);
         problems
             .0
             .retain(|p| p.field == "duration" || p.field == "step");
-        problems.finish(&self.path, ())
+        Ok(problems.finish(&self.path, ())?)
     }
 }
 
@@ -499,7 +500,7 @@ impl Scenario {
 /// `jsbsim` feature, JSBSim has the aircraft, and the flight is in still air
 /// with no parameter changes.
 fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAircraft>> {
-    let invalid = |field: &str, message: String| Error::Invalid {
+    let invalid = |field: &str, message: String| aeroid_core::Error::Invalid {
         path: path.to_path_buf(),
         problems: vec![aeroid_core::error::Problem {
             field: field.into(),
@@ -513,7 +514,8 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
                 format!(
                     "only a scenario whose aircraft is \"{JSBSIM_PREFIX}NAME\" has a [jsbsim] table"
                 ),
-            )),
+            )
+            .into()),
             None => Ok(None),
         };
     };
@@ -521,7 +523,7 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
         return Err(invalid(
             "parameter_changes",
             "a JSBSim aircraft flies JSBSim's own aerodynamic tables: aeroid cannot change its parameters during the flight".into(),
-        ));
+        ).into());
     }
     let Some(simulator) = crate::foreign::jsbsim() else {
         return Err(invalid(
@@ -530,7 +532,7 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
                 "'{}' is one of JSBSim's own aircraft, and this aeroid has no JSBSim: build it with `--features jsbsim` (cargo run --release --features jsbsim -- ...); a library user also calls aeroid::jsbsim::register()",
                 file.aircraft
             ),
-        ));
+        ).into());
     };
     let Some(spec) = &file.jsbsim else {
         return Err(invalid(
@@ -538,19 +540,19 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
             format!(
                 "a JSBSim aircraft needs a [jsbsim] table with `rigid_body`, the aeroid aircraft file of {model}'s mass, inertia, geometry and thrust line (e.g. aircraft/b737-jsbsim.toml)"
             ),
-        ));
+        ).into());
     };
     simulator
         .check_model(model)
-        .map_err(|message| invalid("aircraft", message))?;
+        .map_err(|error| invalid("aircraft", error.to_string()))?;
     let calm = file.wind.gusts.is_empty()
         && file.wind.turbulence.is_none()
-        && file.wind.speed.si(Dimension::Speed) == Ok(0.0);
+        && file.wind.speed.si(Dimension::Speed).ok() == Some(0.0);
     if !calm {
         return Err(invalid(
             "wind",
             "a JSBSim aircraft flies in still air here: aeroid does not feed wind, gusts or turbulence to JSBSim".into(),
-        ));
+        ).into());
     }
     Ok(Some(JsbsimAircraft {
         model: model.to_owned(),
@@ -650,21 +652,17 @@ fn same_step(a: f64, b: f64, step: f64) -> bool {
 
 /// A change time inside the run (0 < time < duration) on the step grid (a
 /// duration or step that is itself invalid is reported on its own).
-fn check_change_time(time: f64, duration: f64, step: f64) -> Result<f64, String> {
+fn check_change_time(
+    time: f64,
+    duration: f64,
+    step: f64,
+) -> std::result::Result<f64, crate::error::Error> {
     if !(time > 0.0 && time.is_finite()) || time >= duration {
-        return Err(format!(
-            "{} s is outside the run: a change happens after 0 s and before the duration, {} s",
-            limits::number(time),
-            limits::number(duration)
-        ));
+        return Err(crate::error::Error::ChangeOutsideRun { time, duration });
     }
     let steps = time / step;
     if step > 0.0 && step.is_finite() && (steps - steps.round()).abs() > 1e-6 {
-        return Err(format!(
-            "{} s is not a multiple of the step {} s: a change happens at an integration step",
-            limits::number(time),
-            limits::number(step)
-        ));
+        return Err(crate::error::Error::ChangeOffStep { time, step });
     }
     Ok(time)
 }
@@ -770,10 +768,10 @@ pub const BYTES_PER_STEP: usize = std::mem::size_of::<crate::dynamics::Exogenous
     + std::mem::size_of::<crate::trace::TruthSample>();
 
 /// Checks that a simulation of `steps` steps fits the memory budget.
-pub fn check_simulation_size(steps: f64) -> Result<(), String> {
-    limits::check_memory(
+pub fn check_simulation_size(steps: f64) -> Result<()> {
+    Ok(limits::check_memory(
         "the simulation (duration / step + 1 samples)",
         steps.round() + 1.0,
         BYTES_PER_STEP,
-    )
+    )?)
 }

@@ -9,11 +9,11 @@
 //! feature does, through `aeroid::jsbsim::register`).
 
 use crate::Simulation;
+use crate::error::{Error, Result};
 pub use crate::foreign::AircraftCatalog;
 use crate::scenario::{JsbsimAircraft, Scenario};
 use crate::trace::TruthTrace;
 use crate::truth::RunTruth;
-use aeroid_core::error::{Error, Result};
 use std::sync::OnceLock;
 
 /// A simulator other than aeroid's that flies the scenarios whose aircraft
@@ -124,13 +124,13 @@ impl FlightSource<'_> {
             }
             FlightSource::Jsbsim(_) => match jsbsim() {
                 Some(simulator) => simulator.fly(scenario),
-                None => Err(Error::Invalid {
+                None => Err(aeroid_core::Error::Invalid {
                     path: scenario.path.clone(),
                     problems: vec![aeroid_core::error::Problem {
                         field: "aircraft".into(),
                         message: "is one of JSBSim's own aircraft, and no JSBSim is registered: the aeroid program built with `--features jsbsim` flies it (a library user calls aeroid::jsbsim::register())".into(),
                     }],
-                }),
+                }.into()),
             },
         }
     }

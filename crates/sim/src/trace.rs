@@ -5,9 +5,9 @@
 //! unit (`alpha [rad]`).
 
 use crate::dynamics::Evaluation;
+use crate::error::Result;
 use crate::state::{self, EulerAngles, StateVector};
 use crate::wind::WindSample;
-use aeroid_core::error::{Error, Result};
 use std::path::Path;
 
 /// One row of the truth trace.
@@ -135,14 +135,14 @@ pub struct TruthTrace {
 impl TruthTrace {
     /// The column with this name, or an error listing the known names.
     pub fn column(name: &str) -> Result<&'static Column> {
-        COLUMNS
+        Ok(COLUMNS
             .iter()
             .find(|c| c.name == name)
-            .ok_or_else(|| Error::Unknown {
+            .ok_or_else(|| aeroid_core::Error::Unknown {
                 kind: "truth column",
                 name: name.to_string(),
                 known: COLUMNS.iter().map(|c| c.name.to_string()).collect(),
-            })
+            })?)
     }
 
     /// All values of a named column.
@@ -167,6 +167,6 @@ impl TruthTrace {
                 .write_record(COLUMNS.iter().map(|c| (c.value)(sample).to_string()))
                 .map_err(|e| io_error(e.into()))?;
         }
-        writer.flush().map_err(io_error)
+        Ok(writer.flush().map_err(io_error)?)
     }
 }

@@ -11,9 +11,9 @@
 //! reported as no trim, with the values it would need.
 
 use crate::dynamics::{Exogenous, FlightModel};
+use crate::error::{Error, Result};
 use crate::state::{self, CHI, Control, Controls, DOWN, EulerAngles, StateVector, U};
 use crate::wind::WindSample;
-use aeroid_core::error::{Error, Result};
 use nalgebra::{SMatrix, SVector, Vector3};
 
 /// The flight condition to trim at (SI, rad).

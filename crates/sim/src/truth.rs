@@ -17,9 +17,10 @@
 //! [`RunTruth::parameter_at`] gives a parameter's value at any time,
 //! [`RunTruth::final_parameters`] the values after every change.
 
+use crate::error::{Error, Result};
 use crate::scenario::{ParameterChange, Scenario};
 use crate::trim::Trim;
-use aeroid_core::error::{Error, Result, parse_toml, read_text};
+use aeroid_core::error::{parse_toml, read_text};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -174,12 +175,14 @@ impl RunTruth {
     }
 
     pub fn write(&self, path: &Path) -> Result<()> {
-        let text = toml::to_string(self).map_err(|e| Error::Other(e.to_string()))?;
-        aeroid_core::error::write_text(path, &text)
+        let text = toml::to_string(self).map_err(|e| Error::Serialize {
+            reason: e.to_string(),
+        })?;
+        Ok(aeroid_core::error::write_text(path, &text)?)
     }
 
     pub fn read(path: &Path) -> Result<RunTruth> {
-        parse_toml(path, &read_text(path)?)
+        Ok(parse_toml(path, &read_text(path)?)?)
     }
 }
 

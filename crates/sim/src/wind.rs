@@ -97,15 +97,16 @@ impl WindSpec {
         step: f64,
         count: usize,
         seed: u64,
-    ) -> Result<Vec<WindSample>, String> {
+    ) -> Result<Vec<WindSample>, crate::error::Error> {
         let mut problems = Problems::default();
         self.validate(&mut problems);
         if !problems.is_empty() {
-            let list: Vec<String> = problems.0.iter().map(ToString::to_string).collect();
-            return Err(list.join("; "));
+            return Err(crate::error::Error::WindProblems {
+                problems: problems.0,
+            });
         }
         if !(step.is_finite() && step > 0.0) {
-            return Err(format!("wind: step {step} s is not a positive number"));
+            return Err(crate::error::Error::WindStep { step });
         }
         let steady = self.steady_velocity()?;
         let gusts = self
@@ -137,7 +138,7 @@ impl WindSpec {
     }
 
     /// NED velocity of the steady air mass.
-    fn steady_velocity(&self) -> Result<Vector3<f64>, String> {
+    fn steady_velocity(&self) -> aeroid_core::Result<Vector3<f64>> {
         let speed = self.speed.si(Dimension::Speed)?;
         let from = self.from_direction.si(Dimension::Angle)?;
         Ok(Vector3::new(-speed * from.cos(), -speed * from.sin(), 0.0))

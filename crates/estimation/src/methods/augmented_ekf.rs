@@ -8,6 +8,7 @@
 //! its filter pass, the continuous–discrete EKF with exact discretisation
 //! ([`extended_kalman::filter_with`]).
 
+use crate::error::Result;
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};
 pub use crate::methods::common::augmented_filter::*;
@@ -16,7 +17,6 @@ use crate::model::observations::Observations;
 use crate::model::state_space::StateSpaceModel;
 use crate::problem::EstimationProblem;
 use crate::solver::extended_kalman::{self, Discretisation, Keep, Noise, Pass};
-use aeroid_core::error::Result;
 use aeroid_numerics::kalman::Gaussian;
 
 /// Method name in estimates.

@@ -23,13 +23,13 @@
 //!   results of EEM"), else the model file's values; an estimate passed in
 //!   (`aeroid run` passes equation error's) is used first.
 
+use crate::error::Result;
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};
 use crate::methods::common::coefficient_fit::EQUATION_ERROR;
 pub use crate::methods::common::elm_fit::{ElmSettings, Start};
 use crate::methods::common::elm_fit::{SHARED_SETTINGS, estimate_with};
 use crate::problem::EstimationProblem;
-use aeroid_core::error::Result;
 
 /// Method name in estimates.
 pub const METHOD: &str = "elm-gn";

@@ -39,6 +39,7 @@
 //! [`super::common::coefficient_fit`], [`super::common::linear_regression`]
 //! and [`super::common::regression`], shared with the other regression methods.
 
+use crate::error::Result;
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};
 use crate::methods::common::coefficient_fit::{
@@ -50,7 +51,6 @@ pub use crate::methods::common::coefficient_fit::{
 pub use crate::methods::common::linear_regression::linear_equation_error;
 use crate::problem::EstimationProblem;
 use crate::structure::Structure;
-use aeroid_core::error::Result;
 
 /// Equation error as a registered method.
 pub struct EquationError;

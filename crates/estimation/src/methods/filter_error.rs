@@ -11,6 +11,7 @@
 //! linear structures; here are the registered method, its `[methods.fem]`
 //! settings and the fit of a 6-DOF structure from equation error's start.
 
+use crate::error::{Error, Result};
 use crate::estimate::Estimate;
 use crate::estimator::{
     Capabilities, Description, Method, Settings, merge_settings, parse_settings,
@@ -26,7 +27,6 @@ use crate::model::observations::Observations;
 use crate::model::state_space::{DrivenStateSpace, StateSpaceModel};
 use crate::problem::EstimationProblem;
 use crate::structure::{ModelStructure, Structure};
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::gauss_newton::Options;
 use aeroid_record::FlightRecord;
 use nalgebra::DVector;

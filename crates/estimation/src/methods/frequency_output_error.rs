@@ -35,6 +35,7 @@
 //! q̄ variations the nonlinear model follows); measured inputs enter
 //! without their noise being modelled (output error's assumption).
 
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
 use crate::input_timing::{self, InputInterpolation};
@@ -48,7 +49,6 @@ use crate::model::transfer::{LinearisedFlight, TransferModel};
 use crate::problem::EstimationProblem;
 use crate::reconstruction::control_steps;
 use crate::structure::{ModelStructure, Structure};
-use aeroid_core::error::{Error, Result};
 use aeroid_core::units::Quantity;
 use aeroid_numerics::fourier::{FourierTransform, breaks_at};
 use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options, Solution};
@@ -110,9 +110,10 @@ impl FrequencyOutputErrorSettings {
     /// The settings in SI, checked.
     pub fn options(&self) -> Result<FrequencyOutputErrorOptions> {
         if self.max_iterations == 0 {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: max_iterations must be at least 1"
-            )));
+            return Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: "max_iterations must be at least 1".to_string(),
+            });
         }
         Ok(FrequencyOutputErrorOptions {
             band: BandOptions::read(
@@ -224,12 +225,14 @@ impl FrequencyData {
     pub fn predicted(&self, [a, b, c, d]: &[DMatrix<f64>; 4]) -> Result<Vec<Vec<Complex<f64>>>> {
         let (n, m, l) = (a.nrows(), b.ncols(), c.nrows());
         if m != self.inputs.len() || l != self.outputs.len() || n != self.ends.len() {
-            return Err(Error::Other(format!(
-                "a model with {n} states, {m} inputs and {l} outputs does not match transforms of {} states, {} inputs and {} outputs",
-                self.ends.len(),
-                self.inputs.len(),
-                self.outputs.len()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "a model with {n} states, {m} inputs and {l} outputs does not match transforms of {} states, {} inputs and {} outputs",
+                    self.ends.len(),
+                    self.inputs.len(),
+                    self.outputs.len()
+                ),
+            });
         }
         let complex = |matrix: &DMatrix<f64>| matrix.map(|v| Complex::new(v, 0.0));
         let (a, b, c, d) = (complex(a), complex(b), complex(c), complex(d));
@@ -245,11 +248,14 @@ impl FrequencyData {
                 };
                 diagonal - a[(i, j)]
             });
-            let x = resolvent.lu().solve(&(&b * &u - e)).ok_or_else(|| {
-                Error::Other(format!(
-                    "jωI − A is singular at ω = {omega} rad/s (a pole on the imaginary axis)"
-                ))
-            })?;
+            let x = resolvent
+                .lu()
+                .solve(&(&b * &u - e))
+                .ok_or_else(|| Error::Numerical {
+                    reason: format!(
+                        "jωI − A is singular at ω = {omega} rad/s (a pole on the imaginary axis)"
+                    ),
+                })?;
             let y = &c * x + &d * u;
             for (o, series) in predicted.iter_mut().enumerate() {
                 series[f] = y[o];
@@ -352,11 +358,13 @@ pub fn fit_transfer(
     options: &Options,
 ) -> Result<TransferFit> {
     if start.len() != model.parameter_count() {
-        return Err(Error::Other(format!(
-            "{} start values for a model of {} parameters",
-            start.len(),
-            model.parameter_count()
-        )));
+        return Err(Error::Method {
+            reason: format!(
+                "{} start values for a model of {} parameters",
+                start.len(),
+                model.parameter_count()
+            ),
+        });
     }
     let mut problem = FrequencyProblem {
         model,
@@ -676,10 +684,12 @@ fn measured_outputs(
     for (o, name) in outputs.iter().enumerate() {
         let values = record.channel(name)?.values_at(times)?;
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-            return Err(Error::Other(format!(
-                "{METHOD}: channel '{name}' has no value at {:.3} s; the Fourier transform needs every sample",
-                times[k]
-            )));
+            return Err(Error::Data {
+                reason: format!(
+                    "{METHOD}: channel '{name}' has no value at {:.3} s; the Fourier transform needs every sample",
+                    times[k]
+                ),
+            });
         }
         measured.set_column(o, &DVector::from_vec(values));
     }

@@ -39,6 +39,7 @@
 //! the signals dominate the noise reduces but does not remove; the samples
 //! must be uniformly spaced; α̇ terms need α differentiated in the time domain.
 
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit, Status};
 use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
 use crate::linear_structure::LinearStructure;
@@ -54,7 +55,6 @@ use crate::reconstruction::{
     Reconstruction, ReconstructionOptions, check_channels, control_steps, reconstruct,
 };
 use crate::structure::{ModelStructure, Structure};
-use aeroid_core::error::{Error, Result};
 use aeroid_core::units::Quantity;
 use aeroid_numerics::fourier::{FourierTransform, RunningTransform, breaks_at};
 use aeroid_record::FlightRecord;
@@ -284,19 +284,23 @@ impl Signals {
 fn uniform_grid(data: &Reconstruction, record: &FlightRecord) -> Result<(f64, f64)> {
     let times = &data.times;
     if times.len() < 3 {
-        return Err(Error::Other(format!(
-            "{METHOD}: {} usable instants in the record ({}); a finite Fourier transform needs at least 3",
-            times.len(),
-            regression::record_name(record)
-        )));
+        return Err(Error::Data {
+            reason: format!(
+                "{METHOD}: {} usable instants in the record ({}); a finite Fourier transform needs at least 3",
+                times.len(),
+                regression::record_name(record)
+            ),
+        });
     }
     let step = 1.0 / data.rate;
     for (k, pair) in times.windows(2).enumerate() {
         if ((pair[1] - pair[0]) - step).abs() > 1e-6 * step.max(1.0) {
-            return Err(Error::Other(format!(
-                "{METHOD}: the instants of channel '{}' are not uniformly spaced: {:.4} s to {:.4} s after instant {k} (a dropout, or a value not finite); the finite Fourier transform needs uniform samples — use a window without it",
-                data.reference_channel, pair[0], pair[1]
-            )));
+            return Err(Error::Numerical {
+                reason: format!(
+                    "{METHOD}: the instants of channel '{}' are not uniformly spaced: {:.4} s to {:.4} s after instant {k} (a dropout, or a value not finite); the finite Fourier transform needs uniform samples — use a window without it",
+                    data.reference_channel, pair[0], pair[1]
+                ),
+            });
         }
     }
     Ok((times[0], step))
@@ -476,12 +480,12 @@ fn transform_recursively(signals: &Signals, omegas: &[f64], grid: &Grid) -> Resu
     }
     let columns: Vec<Vec<Complex<f64>>> = (0..matrix.ncols())
         .map(|i| running.transform(i))
-        .collect::<Result<_>>()?;
+        .collect::<aeroid_numerics::Result<_>>()?;
     let mut plans = split(signals, &columns);
     if let Some(first) = signals.rates {
         let derivatives: Vec<Vec<Complex<f64>>> = (first..first + 3)
             .map(|i| running.derivative(i))
-            .collect::<Result<_>>()?;
+            .collect::<aeroid_numerics::Result<_>>()?;
         add_angular_accelerations(&mut plans, signals, &derivatives);
     }
     Ok(Transformed {
@@ -649,10 +653,12 @@ pub fn linear_frequency_regression(
         .flat_map(|k| (0..signals.ncols()).map(move |i| (k, i)))
         .find(|&(k, i)| !signals[(k, i)].is_finite())
     {
-        return Err(Error::Other(format!(
-            "{METHOD}: a channel of the linear model has no value at {:.3} s (column {i}); the Fourier transform needs every sample",
-            times[k]
-        )));
+        return Err(Error::Data {
+            reason: format!(
+                "{METHOD}: a channel of the linear model has no value at {:.3} s (column {i}); the Fourier transform needs every sample",
+                times[k]
+            ),
+        });
     }
     let constant_free = (0..structure.names.len()).any(|i| {
         structure.free[i]

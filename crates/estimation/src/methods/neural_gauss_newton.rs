@@ -39,13 +39,13 @@
 //! extrapolating network (`tests/estimators/neural_gauss_newton.rs`,
 //! docs/findings.md).
 
+use crate::error::{Error, Result};
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
 use crate::methods::common::coefficient_fit::DIFFERENTIATOR_SETTING;
 use crate::neural::feedforward::{LevenbergMarquardt, SizeSearch};
 use crate::neural::restricted::{self, RestrictedOptions, Trainer};
 use crate::problem::EstimationProblem;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::prep::differentiation::Differentiator;
 use serde::{Deserialize, Serialize};
 
@@ -119,7 +119,12 @@ impl NeuralGaussNewtonSettings {
 
     /// Checks the values' ranges, naming the offending key.
     pub fn check(&self) -> Result<()> {
-        let bad = |message: &str| Err(Error::Other(format!("[methods.{METHOD}]: {message}")));
+        let bad = |message: &str| {
+            Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: message.to_string(),
+            })
+        };
         if self.hidden == Some(0) {
             return bad("hidden must be at least 1");
         }

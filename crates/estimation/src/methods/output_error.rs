@@ -38,6 +38,7 @@
 //! `linear_shooting` for linear models and the piecewise fit here for
 //! 6-DOF ones. Settings: [`OutputErrorOptions`].
 
+use crate::error::{Error, Result};
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{
@@ -59,7 +60,6 @@ use crate::model::state_space::{
 };
 use crate::problem::EstimationProblem;
 use crate::structure::{FLIGHT_PATH_STATES, ModelStructure, Structure};
-use aeroid_core::error::{Error, Result};
 use aeroid_core::units::Quantity;
 use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, NormalEquations, Options};
 use aeroid_numerics::regression;

@@ -40,6 +40,7 @@
 //! factors, MSE and R², Verma & Peyada 2020 Eqs. 21–22) and the
 //! distributions (`distributions`). No random numbers: the seed is 0.
 
+use crate::error::{Error, Result};
 use crate::estimate::{
     Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterDistribution, ParameterEstimate, Status,
 };
@@ -53,7 +54,6 @@ use crate::reconstruction::{
     Reconstruction, ReconstructionOptions, Request, missing_channels, reconstruct,
 };
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 use aeroid_sim::aero::{Coefficient, Regressor};
 use serde::{Deserialize, Serialize};
@@ -192,9 +192,10 @@ impl RbfDeltaSettings {
     /// Checks the values' ranges, naming the offending key.
     pub fn check(&self) -> Result<()> {
         let refuse = |key: &str, message: String| {
-            Err(Error::Other(format!(
-                "[methods.{METHOD}]: {key}: {message}"
-            )))
+            Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: format!("{key}: {message}"),
+            })
         };
         let positive = |v: f64| v > 0.0 && v.is_finite();
         if !positive(self.radius) {
@@ -233,8 +234,10 @@ impl RbfDeltaSettings {
             .ok()
             .and_then(|v| v.as_object().cloned())
             .unwrap_or_default();
-        SmoothedRegressionSettings::read(&smoother)
-            .map_err(|e| Error::Other(format!("[methods.{METHOD}]: smoother: {e}")))?;
+        SmoothedRegressionSettings::read(&smoother).map_err(|e| Error::Settings {
+            method: METHOD.to_string(),
+            reason: format!("smoother: {e}"),
+        })?;
         Ok(())
     }
 
@@ -562,7 +565,9 @@ fn train_and_differentiate(
 ) -> Result<Delta> {
     let names: Vec<String> = data.inputs.iter().map(|r| r.key().to_string()).collect();
     let network = RbfNetwork::train(&data.rows, &names, &data.targets, &settings.network())
-        .map_err(|e| Error::Other(format!("{METHOD}: {} network: {e}", data.name)))?;
+        .map_err(|e| Error::Method {
+            reason: format!("{METHOD}: {} network: {e}", data.name),
+        })?;
     let m = data.inputs.len();
     let n = data.rows.len();
     let factors: Vec<f64> = (0..m).map(|j| network.derivative_factor(j)).collect();
@@ -680,7 +685,9 @@ pub fn rbf_delta(
         let plan = plans
             .iter()
             .find(|p| p.coefficient == training.coefficient)
-            .ok_or_else(|| Error::Other(format!("{METHOD}: no plan for {}", training.name)))?;
+            .ok_or_else(|| Error::Method {
+                reason: format!("{METHOD}: no plan for {}", training.name),
+            })?;
         deltas.push(train_and_differentiate(training, plan, settings)?);
     }
     let aero = &structure.aircraft.aero;

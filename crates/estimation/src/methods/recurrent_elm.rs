@@ -36,12 +36,12 @@
 //! train the same network; they differ in the paper they follow, the
 //! report's kind and the stall model they are applied to here.
 
+use crate::error::Result;
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};
 use crate::methods::common::coefficient_fit::EQUATION_ERROR;
 use crate::methods::common::elm_fit::{ElmSettings, SHARED_SETTINGS, estimate_with};
 use crate::problem::EstimationProblem;
-use aeroid_core::error::Result;
 
 /// Method name in estimates.
 pub const METHOD: &str = "relm-gn";

@@ -40,6 +40,7 @@
 //! The smoother and the regression of its histories are the common module
 //! [`crate::methods::common::smoothing`], which the RBF Δ-method shares.
 
+use crate::error::Result;
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method};
 use crate::methods::common::smoothing::SETTINGS;
@@ -48,7 +49,6 @@ pub use crate::methods::common::smoothing::{
     smooth_and_regress,
 };
 use crate::problem::EstimationProblem;
-use aeroid_core::error::Result;
 
 /// Estimation before modelling as a registered method.
 pub struct SmoothedRegression;

@@ -39,6 +39,7 @@
 //! rounding error. On flight data with coloured residuals F = 4 admits too
 //! much (SIDPAC's swr.m uses F = 20): raise `f_to_enter` there.
 
+use crate::error::{Error, Result};
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
@@ -52,7 +53,6 @@ use crate::reconstruction::{
     reconstruct,
 };
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::regression::LeastSquares;
 use aeroid_record::FlightRecord;
 use aeroid_record::prep::differentiation::Differentiator;
@@ -194,7 +194,12 @@ impl Method for StepwiseRegression {
 
     fn validate(parsed: &StepwiseSettings) -> Result<()> {
         check_settings(METHOD, &parsed.differentiator, parsed.correlation_lag)?;
-        let invalid = |message: String| Err(Error::Other(format!("[methods.{METHOD}]: {message}")));
+        let invalid = |message: String| {
+            Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: message.to_string(),
+            })
+        };
         if !(parsed.f_to_enter > 0.0 && parsed.f_to_remove > 0.0)
             || parsed.f_to_remove > parsed.f_to_enter
         {
@@ -262,7 +267,9 @@ impl Candidate {
                 )),
                 _ => Ok(m),
             })
-            .map_err(|message| Error::Other(format!("candidate term '{text}': {message}")))?;
+            .map_err(|message| Error::Method {
+                reason: format!("candidate term '{text}': {message}"),
+            })?;
         Ok(Candidate {
             name: text.to_string(),
             factors: monomial.factors().to_vec(),
@@ -356,10 +363,12 @@ pub fn stepwise(
     }
     let data = reconstruct(record, aircraft, &request, &options.reconstruction, METHOD)?;
     if data.times.len() < 3 {
-        return Err(Error::Other(format!(
-            "stepwise regression of {name}: {} usable samples",
-            data.times.len()
-        )));
+        return Err(Error::Data {
+            reason: format!(
+                "stepwise regression of {name}: {} usable samples",
+                data.times.len()
+            ),
+        });
     }
     notes.extend(data.notes.clone());
     notes.extend(product_means_note(&data, &candidates));

@@ -18,6 +18,7 @@
 //! and covariance are exact to second order in the state's spread where
 //! the EKF's are to first.
 
+use crate::error::{Error, Result};
 use crate::estimate::Estimate;
 use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
 use crate::methods::common::augmented_filter::{
@@ -26,7 +27,6 @@ use crate::methods::common::augmented_filter::{
 use crate::methods::common::coefficient_fit::EQUATION_ERROR;
 use crate::problem::EstimationProblem;
 use crate::solver::unscented_kalman;
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::kalman::Unscented;
 use serde::{Deserialize, Serialize};
 
@@ -167,22 +167,22 @@ impl Method for UnscentedFilter {
         settings.filter.check(METHOD)?;
         let sigma = &settings.sigma;
         if !(sigma.alpha > 0.0 && sigma.alpha <= 1.0) {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}] alpha: must be in (0, 1], is {}",
-                sigma.alpha
-            )));
+            return Err(Error::Setting {
+                method: METHOD.to_string(),
+                reason: format!("alpha: must be in (0, 1], is {}", sigma.alpha),
+            });
         }
         if !(sigma.beta >= 0.0 && sigma.beta.is_finite()) {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}] beta: must be at least 0, is {}",
-                sigma.beta
-            )));
+            return Err(Error::Setting {
+                method: METHOD.to_string(),
+                reason: format!("beta: must be at least 0, is {}", sigma.beta),
+            });
         }
         if !(sigma.kappa >= 0.0 && sigma.kappa.is_finite()) {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}] kappa: must be at least 0, is {}",
-                sigma.kappa
-            )));
+            return Err(Error::Setting {
+                method: METHOD.to_string(),
+                reason: format!("kappa: must be at least 0, is {}", sigma.kappa),
+            });
         }
         Ok(())
     }

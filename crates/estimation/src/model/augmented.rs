@@ -7,7 +7,7 @@
 //! the filter's process noise).
 
 use super::state_space::{Jacobians, Points, Scratch, StateSpaceModel};
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
 /// `base` with the parameters `augmented` (indices into its θ) as states
@@ -46,17 +46,19 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
     /// wrong length.
     pub fn new(base: &'a M, theta: &[f64], augmented: Vec<usize>) -> Result<Augmented<'a, M>> {
         if theta.len() != base.parameter_count() {
-            return Err(Error::Other(format!(
-                "θ has {} values; the model has {} parameters",
-                theta.len(),
-                base.parameter_count()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "θ has {} values; the model has {} parameters",
+                    theta.len(),
+                    base.parameter_count()
+                ),
+            });
         }
         for (i, &j) in augmented.iter().enumerate() {
             if j >= theta.len() || augmented[..i].contains(&j) {
-                return Err(Error::Other(format!(
-                    "parameter index {j} is outside θ or repeated"
-                )));
+                return Err(Error::Shape {
+                    reason: format!("parameter index {j} is outside θ or repeated"),
+                });
             }
         }
         Ok(Augmented {
@@ -88,11 +90,13 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
     fn split_into<'z>(&self, z: &'z [f64], theta: &mut Vec<f64>) -> Result<&'z [f64]> {
         let n = self.base.state_count();
         if z.len() != n + self.augmented.len() {
-            return Err(Error::Other(format!(
-                "the augmented state has {} values; expected {}",
-                z.len(),
-                n + self.augmented.len()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "the augmented state has {} values; expected {}",
+                    z.len(),
+                    n + self.augmented.len()
+                ),
+            });
         }
         // Only the augmented entries are ever written: the others are
         // the held θ's once copied.
@@ -112,10 +116,12 @@ impl<'a, M: StateSpaceModel + ?Sized> Augmented<'a, M> {
         let n = self.base.state_count();
         let size = n + self.augmented.len();
         if points.rows() != size {
-            return Err(Error::Other(format!(
-                "the augmented state has {} values; expected {size}",
-                points.rows()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "the augmented state has {} values; expected {size}",
+                    points.rows()
+                ),
+            });
         }
         let p = self.theta.len();
         if thetas.len() != p * points.len() {

@@ -44,7 +44,7 @@
 //! linear between grid points.
 
 use super::state_space::{Jacobians, StateSpaceModel};
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use aeroid_core::units::STANDARD_GRAVITY;
 use aeroid_numerics::kalman::resize_vector;
 use aeroid_sim::aircraft::Aircraft;
@@ -205,14 +205,12 @@ impl CoefficientStates {
         outputs: Vec<Output>,
     ) -> Result<CoefficientStates> {
         if throttle.len() < 2 || !(step > 0.0 && step.is_finite()) {
-            return Err(Error::Other(
-                "the coefficient-state model needs a grid of at least two points and a positive step".into(),
-            ));
+            return Err(Error::Grid { reason: "the coefficient-state model needs a grid of at least two points and a positive step".into(), });
         }
         if throttle.iter().any(|v| !v.is_finite()) {
-            return Err(Error::Other(
-                "the throttle is not finite at every grid point".into(),
-            ));
+            return Err(Error::Numerical {
+                reason: "the throttle is not finite at every grid point".into(),
+            });
         }
         Ok(CoefficientStates {
             aircraft,
@@ -323,10 +321,12 @@ impl CoefficientStates {
         if x.len() == STATE_COUNT {
             Ok(())
         } else {
-            Err(Error::Other(format!(
-                "x has {} values; the coefficient-state model has {STATE_COUNT}",
-                x.len()
-            )))
+            Err(Error::Shape {
+                reason: format!(
+                    "x has {} values; the coefficient-state model has {STATE_COUNT}",
+                    x.len()
+                ),
+            })
         }
     }
 
@@ -617,10 +617,12 @@ impl StateSpaceModel for CoefficientStates {
     ) -> Result<()> {
         self.check(x)?;
         if k + 1 >= self.len() {
-            return Err(Error::Other(format!(
-                "no integration step from grid point {k}: the grid has {} points",
-                self.len()
-            )));
+            return Err(Error::Grid {
+                reason: format!(
+                    "no integration step from grid point {k}: the grid has {} points",
+                    self.len()
+                ),
+            });
         }
         let (start, end) = (self.throttle[k], self.throttle[k + 1]);
         let state = State::from_column_slice(x);
@@ -628,10 +630,12 @@ impl StateSpaceModel for CoefficientStates {
             self.derivative(x.as_slice(), start + (end - start) * theta)
         });
         if !next.iter().all(|v| v.is_finite()) || next[U] <= 0.0 {
-            return Err(Error::Other(format!(
-                "the coefficient-state model departed after t = {} s (a state not finite, or u ≤ 0)",
-                self.time(k)
-            )));
+            return Err(Error::Numerical {
+                reason: format!(
+                    "the coefficient-state model departed after t = {} s (a state not finite, or u ≤ 0)",
+                    self.time(k)
+                ),
+            });
         }
         resize_vector(into, STATE_COUNT);
         into.copy_from(&next);

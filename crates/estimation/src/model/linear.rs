@@ -19,10 +19,10 @@
 
 use super::state_space::{Jacobians, StateSpaceModel};
 use super::state_space::{fitting_window, observation_step};
+use crate::error::{Error, Result};
 use crate::input_timing::Chosen;
 use crate::linear_structure::LinearStructure;
 pub use crate::linear_structure::{Entry, Matrices, Matrix};
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::kalman::{discretise, discretise_first_order_hold};
 use aeroid_record::FlightRecord;
 use aeroid_sim::integrator::Interpolation;
@@ -166,32 +166,36 @@ impl LinearStateSpace {
             && self.holds.len() == m
             && self.inputs.iter().all(|u| u.len() == m);
         if !shapes_agree {
-            return Err(Error::Other(format!(
-                "a linear model's matrices do not agree: A {}×{}, B {}×{}, C {}×{}, D {}×{}, b of {}, c of {}, inputs of {m}",
-                a.nrows(),
-                a.ncols(),
-                b.nrows(),
-                b.ncols(),
-                c.nrows(),
-                c.ncols(),
-                d.nrows(),
-                d.ncols(),
-                self.state_bias.len(),
-                self.output_bias.len(),
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "a linear model's matrices do not agree: A {}×{}, B {}×{}, C {}×{}, D {}×{}, b of {}, c of {}, inputs of {m}",
+                    a.nrows(),
+                    a.ncols(),
+                    b.nrows(),
+                    b.ncols(),
+                    c.nrows(),
+                    c.ncols(),
+                    d.nrows(),
+                    d.ncols(),
+                    self.state_bias.len(),
+                    self.output_bias.len(),
+                ),
+            });
         }
         if self.inputs.len() < 2 || !(self.step > 0.0 && self.step.is_finite()) {
-            return Err(Error::Other(
-                "a linear model needs at least two grid points and a positive step".into(),
-            ));
+            return Err(Error::Grid {
+                reason: "a linear model needs at least two grid points and a positive step".into(),
+            });
         }
         for entry in &self.parameters {
             let (rows, columns) = self.shape(entry.matrix);
             if entry.row >= rows || entry.column >= columns {
-                return Err(Error::Other(format!(
-                    "parameter entry ({}, {}) lies outside {:?} ({rows}×{columns})",
-                    entry.row, entry.column, entry.matrix,
-                )));
+                return Err(Error::Method {
+                    reason: format!(
+                        "parameter entry ({}, {}) lies outside {:?} ({rows}×{columns})",
+                        entry.row, entry.column, entry.matrix,
+                    ),
+                });
             }
         }
         Ok(self)
@@ -230,11 +234,13 @@ impl LinearStateSpace {
     /// The matrices with θ written in.
     pub fn at(&self, theta: &[f64]) -> Result<Matrices> {
         if theta.len() != self.parameters.len() {
-            return Err(Error::Other(format!(
-                "θ has {} values; the linear model has {} parameters",
-                theta.len(),
-                self.parameters.len()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "θ has {} values; the linear model has {} parameters",
+                    theta.len(),
+                    self.parameters.len()
+                ),
+            });
         }
         let mut matrices = Matrices {
             a: self.a.clone(),
@@ -256,9 +262,9 @@ impl LinearStateSpace {
         let position = (t - self.start) / self.step;
         let last = self.inputs.len() - 1;
         if !position.is_finite() || position < -1e-9 || position > last as f64 + 1e-9 {
-            return Err(Error::Other(format!(
-                "t = {t} s is outside the linear model's grid"
-            )));
+            return Err(Error::Grid {
+                reason: format!("t = {t} s is outside the linear model's grid"),
+            });
         }
         let k = ((position + 1e-9).floor().max(0.0) as usize).min(last);
         let fraction = (position - k as f64).clamp(0.0, 1.0);
@@ -272,11 +278,13 @@ impl LinearStateSpace {
 
     fn check_state(&self, x: &[f64]) -> Result<()> {
         if x.len() != self.a.nrows() {
-            return Err(Error::Other(format!(
-                "x has {} values; the linear model has {} states",
-                x.len(),
-                self.a.nrows()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "x has {} values; the linear model has {} states",
+                    x.len(),
+                    self.a.nrows()
+                ),
+            });
         }
         Ok(())
     }
@@ -419,10 +427,12 @@ impl StateSpaceModel for LinearStateSpace {
     fn step_into(&self, k: usize, x: &[f64], theta: &[f64], into: &mut DVector<f64>) -> Result<()> {
         self.check_state(x)?;
         if k + 1 >= self.inputs.len() {
-            return Err(Error::Other(format!(
-                "no step from grid point {k}: the grid has {} points",
-                self.inputs.len()
-            )));
+            return Err(Error::Grid {
+                reason: format!(
+                    "no step from grid point {k}: the grid has {} points",
+                    self.inputs.len()
+                ),
+            });
         }
         let discrete = self.discrete(theta)?;
         let u = &self.inputs[k];

@@ -7,7 +7,7 @@
 //! samples (dropouts) are left out; two samples of one channel at one
 //! grid point keep the later.
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use aeroid_record::FlightRecord;
 
 /// Measurements per grid point: (output index, value), outputs in the
@@ -55,9 +55,9 @@ impl Observations {
         len: usize,
     ) -> Result<Observations> {
         if len == 0 || !(step > 0.0 && step.is_finite()) {
-            return Err(Error::Other(
-                "observations need a grid with points and a positive step".into(),
-            ));
+            return Err(Error::Grid {
+                reason: "observations need a grid with points and a positive step".into(),
+            });
         }
         let mut at: Vec<Vec<(usize, f64)>> = vec![Vec::new(); len];
         let mut moved = 0;

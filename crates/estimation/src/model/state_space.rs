@@ -25,10 +25,10 @@ use super::driven::{
     self, Ambient, DrivenSimulation, FLIGHT_PATH_SIZE, FlightPathState, LinearisationBuffers,
     Observable, PointMemo, PseudoRates,
 };
+use crate::error::{Error, Result};
 use crate::input_timing::InputInterpolation;
 use crate::structure::FLIGHT_PATH_STATES;
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 use aeroid_sim::dynamics::FlightModel;
 use aeroid_sim::integrator::rk4_linear_step;
@@ -53,15 +53,19 @@ pub fn fitting_window(
             channel.times.last().copied(),
         );
         let (Some(first), Some(last)) = (first, last) else {
-            return Err(Error::Other(format!("channel '{name}' is empty")));
+            return Err(Error::Data {
+                reason: format!("channel '{name}' is empty"),
+            });
         };
         range = (range.0.max(first), range.1.min(last));
     }
     if range.1 <= range.0 {
-        return Err(Error::Other(format!(
-            "record '{}': the output channels share no time window",
-            record.scenario
-        )));
+        return Err(Error::Data {
+            reason: format!(
+                "record '{}': the output channels share no time window",
+                record.scenario
+            ),
+        });
     }
     Ok(range)
 }
@@ -72,11 +76,11 @@ pub fn observables(structure: &ModelStructure) -> Result<Vec<Observable>> {
         .outputs
         .iter()
         .map(|name| {
-            Observable::parse(name).ok_or_else(|| {
-                Error::Other(format!(
+            Observable::parse(name).ok_or_else(|| Error::Method {
+                reason: format!(
                     "model '{}': output '{name}' is not a model output",
                     structure.name
-                ))
+                ),
             })
         })
         .collect()
@@ -494,12 +498,14 @@ impl<'a> Points<'a> {
         parameter_rows: usize,
     ) -> Result<Points<'a>> {
         if rows > self.rows || parameters.len() != parameter_rows * self.count {
-            return Err(Error::Other(format!(
-                "{} points of {} states: no {rows} states with {} parameters of {parameter_rows}",
-                self.count,
-                self.rows,
-                parameters.len()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "{} points of {} states: no {rows} states with {} parameters of {parameter_rows}",
+                    self.count,
+                    self.rows,
+                    parameters.len()
+                ),
+            });
         }
         Ok(Points {
             rows,
@@ -548,10 +554,12 @@ impl<'a> Points<'a> {
     pub fn check_into(&self, len: usize, stride: usize, rows: usize) -> Result<()> {
         let needed = self.count.saturating_sub(1) * stride + rows;
         if self.count > 0 && (stride < rows || len < needed) {
-            return Err(Error::Other(format!(
-                "{} points: {len} values do not hold columns of {rows} values {stride} apart",
-                self.count
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "{} points: {len} values do not hold columns of {rows} values {stride} apart",
+                    self.count
+                ),
+            });
         }
         Ok(())
     }
@@ -634,9 +642,9 @@ impl DrivenStateSpace {
         outputs: Vec<Observable>,
     ) -> Result<DrivenStateSpace> {
         if simulation.len() < 2 {
-            return Err(Error::Other(
-                "a state-space view needs at least two grid points".into(),
-            ));
+            return Err(Error::Grid {
+                reason: "a state-space view needs at least two grid points".into(),
+            });
         }
         let mask = simulation.mask(&model);
         let states = (0..FLIGHT_PATH_SIZE).filter(|&i| mask[i] == 1.0).collect();
@@ -721,10 +729,12 @@ impl DrivenStateSpace {
     fn write_parameters(&self, model: &mut FlightModel, theta: &[f64]) -> Result<()> {
         let count = self.parameter_count();
         if theta.len() != count {
-            return Err(Error::Other(format!(
-                "θ has {} values; the model has {count} parameters",
-                theta.len()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "θ has {} values; the model has {count} parameters",
+                    theta.len()
+                ),
+            });
         }
         model
             .aircraft
@@ -733,10 +743,11 @@ impl DrivenStateSpace {
             .values_mut()
             .copy_from_slice(theta);
         if !self.simulation.gives_mask(model, &self.mask) {
-            return Err(Error::Other(
-                "θ changes which states the model integrates (χ is a state only while τ1 > 0)"
-                    .into(),
-            ));
+            return Err(Error::Method {
+                reason:
+                    "θ changes which states the model integrates (χ is a state only while τ1 > 0)"
+                        .into(),
+            });
         }
         Ok(())
     }
@@ -823,12 +834,14 @@ impl DrivenStateSpace {
     #[inline(always)]
     fn full(&self, x: &[f64], measured: &FlightPathState) -> Result<FlightPathState> {
         if x.len() != self.states.len() {
-            return Err(Error::Other(format!(
-                "x has {} values; the model has {} states ({})",
-                x.len(),
-                self.states.len(),
-                self.state_names().join(", ")
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "x has {} values; the model has {} states ({})",
+                    x.len(),
+                    self.states.len(),
+                    self.state_names().join(", ")
+                ),
+            });
         }
         let mut full = *measured;
         for (&i, &value) in self.states.iter().zip(x) {
@@ -844,11 +857,13 @@ impl DrivenStateSpace {
         let last = simulation.len() - 1;
         let position = (t - simulation.start) / simulation.step;
         if !position.is_finite() || position < -TIME_SNAP || position > last as f64 + TIME_SNAP {
-            return Err(Error::Other(format!(
-                "t = {t} s is outside the record's integration grid ({} s to {} s)",
-                simulation.time(0),
-                simulation.time(last)
-            )));
+            return Err(Error::Grid {
+                reason: format!(
+                    "t = {t} s is outside the record's integration grid ({} s to {} s)",
+                    simulation.time(0),
+                    simulation.time(last)
+                ),
+            });
         }
         let halves = (2.0 * position).round();
         let position = if (position - 0.5 * halves).abs() <= TIME_SNAP {
@@ -986,10 +1001,12 @@ impl StateSpaceModel for DrivenStateSpace {
         let next = self.step(k, x, theta)?;
         let (n, m) = (self.states.len(), columns.len());
         if sensitivity.shape() != (n, m) || columns.iter().flatten().any(|&p| p >= theta.len()) {
-            return Err(Error::Other(format!(
-                "the sensitivities are {:?} for {n} states and {m} unknowns",
-                sensitivity.shape()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "the sensitivities are {:?} for {n} states and {m} unknowns",
+                    sensitivity.shape()
+                ),
+            });
         }
         let simulation = &self.simulation;
         let h = simulation.step;
@@ -1018,9 +1035,10 @@ impl StateSpaceModel for DrivenStateSpace {
                     false,
                     buffers,
                 );
-                let (rates, by_state, by_parameter) = buffers
-                    .rates_and_jacobians()
-                    .ok_or_else(|| Error::Other("no linearisation".into()))?;
+                let (rates, by_state, by_parameter) =
+                    buffers.rates_and_jacobians().ok_or_else(|| Error::Shape {
+                        reason: "no linearisation".into(),
+                    })?;
                 a[i].copy_from(by_state);
                 for (j, column) in columns.iter().enumerate() {
                     if let Some(p) = *column {
@@ -1079,10 +1097,12 @@ impl StateSpaceModel for DrivenStateSpace {
     ) -> Result<()> {
         let simulation = &self.simulation;
         if k + 1 >= simulation.len() {
-            return Err(Error::Other(format!(
-                "no integration step from grid point {k}: the grid has {} points",
-                simulation.len()
-            )));
+            return Err(Error::Grid {
+                reason: format!(
+                    "no integration step from grid point {k}: the grid has {} points",
+                    simulation.len()
+                ),
+            });
         }
         let n = self.states.len();
         points.check_into(into.len(), stride, n)?;
@@ -1090,9 +1110,11 @@ impl StateSpaceModel for DrivenStateSpace {
         let measured = &simulation.measured()[k];
         self.with_points(points, |model, j, x, _| {
             let full = self.full(x, measured)?;
-            driven::check_departure(&full, simulation.time(k)).map_err(Error::Other)?;
+            driven::check_departure(&full, simulation.time(k))
+                .map_err(|reason| Error::Numerical { reason })?;
             let next = steps.step(model, &full);
-            driven::check_departure(&next, simulation.time(k + 1)).map_err(Error::Other)?;
+            driven::check_departure(&next, simulation.time(k + 1))
+                .map_err(|reason| Error::Numerical { reason })?;
             for (into, &i) in into[j * stride..j * stride + n]
                 .iter_mut()
                 .zip(&self.states)

@@ -24,8 +24,8 @@
 use super::driven::{self, Ambient, FlightPathState, PseudoRates};
 use super::linear::LinearStateSpace;
 use super::state_space::DrivenStateSpace;
+use crate::error::{Error, Result};
 use crate::structure::FLIGHT_PATH_STATES;
-use aeroid_core::error::{Error, Result};
 use aeroid_sim::state::{Control, Controls};
 use nalgebra::DMatrix;
 
@@ -99,18 +99,22 @@ impl<'a> LinearisedFlight<'a> {
     pub fn new(view: &'a DrivenStateSpace, k: usize, x: &[f64]) -> Result<LinearisedFlight<'a>> {
         let simulation = view.simulation();
         if k >= simulation.len() {
-            return Err(Error::Other(format!(
-                "no grid point {k} to linearise about: the grid has {}",
-                simulation.len()
-            )));
+            return Err(Error::Grid {
+                reason: format!(
+                    "no grid point {k} to linearise about: the grid has {}",
+                    simulation.len()
+                ),
+            });
         }
         let mut reference = simulation.measured()[k];
         if x.len() != view.states().len() {
-            return Err(Error::Other(format!(
-                "x has {} values; the model has {} states",
-                x.len(),
-                view.states().len()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "x has {} values; the model has {} states",
+                    x.len(),
+                    view.states().len()
+                ),
+            });
         }
         for (&i, &value) in view.states().iter().zip(x) {
             reference[i] = value;
@@ -251,9 +255,9 @@ impl TransferModel for LinearisedFlight<'_> {
             }
         }
         if matrices.iter().any(|m| m.iter().any(|v| !v.is_finite())) {
-            return Err(Error::Other(
-                "the linearised model is not finite at the reference point".into(),
-            ));
+            return Err(Error::Numerical {
+                reason: "the linearised model is not finite at the reference point".into(),
+            });
         }
         Ok(matrices)
     }

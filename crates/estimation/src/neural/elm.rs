@@ -28,7 +28,7 @@
 
 use super::restricted::{Network, Trainer, TrainingSet};
 use super::{NetworkReport, fit_metrics, log_sigmoid};
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use nalgebra::DMatrix;
 use rand::RngExt;
 use rand_distr::StandardNormal;
@@ -103,13 +103,13 @@ impl Elm {
         let svd = h.svd(true, true);
         let largest = svd.singular_values.max();
         let tolerance = largest * inputs.len().max(self.hidden) as f64 * f64::EPSILON;
-        let w = svd
-            .solve(&z, tolerance)
-            .map_err(|e| Error::Other(format!("the ELM's pseudo-inverse failed: {e}")))?;
+        let w = svd.solve(&z, tolerance).map_err(|e| Error::Network {
+            reason: format!("the ELM's pseudo-inverse failed: {e}"),
+        })?;
         if w.iter().any(|v| !v.is_finite()) {
-            return Err(Error::Other(
-                "the ELM's output weights are not finite".into(),
-            ));
+            return Err(Error::Network {
+                reason: "the ELM's output weights are not finite".into(),
+            });
         }
         for j in 0..self.hidden {
             for k in 0..self.outputs {
@@ -281,12 +281,12 @@ impl ElmTrainer {
         let (test_x, test_z) = split(false);
         let (inputs, outputs) = dimensions(set)?;
         let trainable = |size: usize| size > 0 && size < train_x.len();
-        let none = || {
-            Error::Other(format!(
+        let none = || Error::Network {
+            reason: format!(
                 "no hidden-layer size of {:?} can be trained on {} samples",
                 self.hidden_sizes,
                 train_x.len()
-            ))
+            ),
         };
         let largest = self
             .hidden_sizes
@@ -311,11 +311,13 @@ impl ElmTrainer {
                 svd.singular_values.max() * train_x.len().max(size) as f64 * f64::EPSILON;
             let w = svd
                 .solve(&qtz.rows(0, size), tolerance)
-                .map_err(|e| Error::Other(format!("the ELM's pseudo-inverse failed: {e}")))?;
+                .map_err(|e| Error::Network {
+                    reason: format!("the ELM's pseudo-inverse failed: {e}"),
+                })?;
             if w.iter().any(|v| !v.is_finite()) {
-                return Err(Error::Other(
-                    "the ELM's output weights are not finite".into(),
-                ));
+                return Err(Error::Network {
+                    reason: "the ELM's output weights are not finite".into(),
+                });
             }
             // The held-out mean square residual, each prediction summed as
             // `Elm::predict` sums it.
@@ -360,9 +362,11 @@ fn dimensions(set: &TrainingSet) -> Result<(usize, usize)> {
         || set.targets.iter().any(|row| row.len() != outputs)
         || set.inputs.len() != set.targets.len();
     if set.inputs.is_empty() || ragged || inputs == 0 || outputs == 0 {
-        return Err(Error::Other(format!(
-            "the network's training set is empty or its rows do not match its {inputs} inputs and {outputs} outputs"
-        )));
+        return Err(Error::Network {
+            reason: format!(
+                "the network's training set is empty or its rows do not match its {inputs} inputs and {outputs} outputs"
+            ),
+        });
     }
     Ok((inputs, outputs))
 }

@@ -35,10 +35,10 @@
 //! stored Jacobian (`accumulate`) and the damped system solved with the
 //! output weights eliminated first (`damped_step`).
 
+use crate::error::{Error, Result};
 use crate::neural::elm::{SizeScores, choose_by_held_out};
 use crate::neural::restricted::{Network, Trainer, TrainingSet};
 use crate::neural::{NetworkReport, fit_metrics};
-use aeroid_core::error::{Error, Result};
 use aeroid_core::random::{stream, streams};
 use nalgebra::{DMatrix, DMatrixView, DVector, Dyn};
 use rand::RngExt;
@@ -66,10 +66,12 @@ impl FeedForward {
     /// seed gives the same network, bit for bit.
     pub fn new(inputs: usize, hidden: usize, outputs: usize, seed: u64) -> Result<FeedForward> {
         if inputs == 0 || hidden == 0 || outputs == 0 {
-            return Err(Error::Other(format!(
-                "a feed-forward network needs inputs, hidden neurons and outputs \
+            return Err(Error::Network {
+                reason: format!(
+                    "a feed-forward network needs inputs, hidden neurons and outputs \
                  (given {inputs}, {hidden}, {outputs})"
-            )));
+                ),
+            });
         }
         let mut rng = stream(seed, streams::NETWORK_WEIGHTS);
         let beta = 0.7 * (hidden as f64).powf(1.0 / inputs as f64);
@@ -259,10 +261,8 @@ impl SizeSearch {
     ) -> Result<(FeedForward, Training, SizeScores)> {
         let every = self.training.held_out_every;
         if every < 2 {
-            return Err(Error::Other(
-                "choosing the hidden-layer size needs held-out samples (held_out_every of 2 or more)"
-                    .into(),
-            ));
+            return Err(Error::Network { reason: "choosing the hidden-layer size needs held-out samples (held_out_every of 2 or more)"
+                    .into(), });
         }
         let n = inputs.first().map_or(0, Vec::len);
         let outputs = targets.first().map_or(0, Vec::len);
@@ -284,11 +284,11 @@ impl SizeSearch {
                 .unwrap_or(f64::NAN);
             Ok(Some(((network, training), held_out)))
         })?;
-        let (_, (network, training), scores) = chosen.ok_or_else(|| {
-            Error::Other(format!(
+        let (_, (network, training), scores) = chosen.ok_or_else(|| Error::Network {
+            reason: format!(
                 "no hidden-layer size of {:?} can be trained on {trained_on} samples",
                 self.hidden_sizes
-            ))
+            ),
         })?;
         Ok((network, training, scores))
     }
@@ -505,10 +505,11 @@ impl LevenbergMarquardt {
             || inputs.iter().any(|x| x.len() != n)
             || targets.iter().any(|t| t.len() != outputs)
         {
-            return Err(Error::Other(
-                "the network's inputs and targets have different numbers of samples or columns"
-                    .into(),
-            ));
+            return Err(Error::Network {
+                reason:
+                    "the network's inputs and targets have different numbers of samples or columns"
+                        .into(),
+            });
         }
         let damping_valid = self.damping > 0.0
             && self.damping_factor > 1.0
@@ -516,9 +517,10 @@ impl LevenbergMarquardt {
             && self.damping.is_finite()
             && self.damping_factor.is_finite();
         if !damping_valid {
-            return Err(Error::Other(
-                "Levenberg–Marquardt needs a damping above 0 and a damping factor above 1".into(),
-            ));
+            return Err(Error::Network {
+                reason: "Levenberg–Marquardt needs a damping above 0 and a damping factor above 1"
+                    .into(),
+            });
         }
         let mut network = FeedForward::new(n, self.hidden, outputs, self.seed)?;
         let held = |k: usize| {
@@ -532,10 +534,12 @@ impl LevenbergMarquardt {
         };
         let parameters = network.weights.len();
         if samples.training.len() * outputs < parameters {
-            return Err(Error::Other(format!(
-                "{} training samples of {outputs} outputs cannot determine {parameters} weights",
-                samples.training.len()
-            )));
+            return Err(Error::Network {
+                reason: format!(
+                    "{} training samples of {outputs} outputs cannot determine {parameters} weights",
+                    samples.training.len()
+                ),
+            });
         }
         let mut work = Workspace::new(n, self.hidden, outputs, samples.training.len());
         let count = |set: &[usize]| (set.len() * outputs).max(1) as f64;

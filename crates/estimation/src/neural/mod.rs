@@ -20,7 +20,7 @@ pub mod elm;
 pub mod rbf;
 pub mod restricted;
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
 pub mod feedforward;
@@ -50,16 +50,20 @@ impl Scaling {
         for row in rows {
             for (c, &x) in row.iter().enumerate().take(columns) {
                 if !x.is_finite() {
-                    return Err(Error::Other(format!(
-                        "the network's training data has a non-finite value in '{}'",
-                        names[c]
-                    )));
+                    return Err(Error::Network {
+                        reason: format!(
+                            "the network's training data has a non-finite value in '{}'",
+                            names[c]
+                        ),
+                    });
                 }
                 range[c] = (range[c].0.min(x), range[c].1.max(x));
             }
         }
         if rows.is_empty() {
-            return Err(Error::Other("the network has no training data".into()));
+            return Err(Error::Network {
+                reason: "the network has no training data".into(),
+            });
         }
         Ok(Scaling { range, low, high })
     }

@@ -26,8 +26,8 @@
 //! differences (Eq. 33) are [`RbfNetwork::central_difference`].
 //! No evaluation allocates: callers pass the sample's buffers.
 
+use crate::error::{Error, Result};
 use crate::neural::Scaling;
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::regression::LeastSquares;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -181,10 +181,12 @@ impl RbfNetwork {
         let centres = cluster(&samples, dimension, options.radius);
         let count = centres.len() / dimension.max(1);
         if count == 0 || count >= rows.len() {
-            return Err(Error::Other(format!(
-                "the RBF network has {count} centres for {} samples: choose another cluster radius",
-                rows.len()
-            )));
+            return Err(Error::Network {
+                reason: format!(
+                    "the RBF network has {count} centres for {} samples: choose another cluster radius",
+                    rows.len()
+                ),
+            });
         }
         let mut network = RbfNetwork {
             input_scaling,
@@ -220,10 +222,12 @@ impl RbfNetwork {
         };
         let count = self.centres.len() / dimension;
         if fit_rows.len() <= count || score_rows.is_empty() {
-            return Err(Error::Other(format!(
-                "the RBF width search has {} samples to fit {count} centres",
-                fit_rows.len()
-            )));
+            return Err(Error::Network {
+                reason: format!(
+                    "the RBF width search has {} samples to fit {count} centres",
+                    fit_rows.len()
+                ),
+            });
         }
         // ‖xₖ − cⱼ‖² of the picked samples, in the design's column-major
         // order: computed once, reused at every λ.
@@ -290,9 +294,9 @@ impl RbfNetwork {
         self.width_factor = best.exp();
         self.search_history = history;
         if !self.width_factor.is_finite() || !fc.min(fd).is_finite() {
-            return Err(Error::Other(
-                "the RBF width search found no finite cost".into(),
-            ));
+            return Err(Error::Network {
+                reason: "the RBF width search found no finite cost".into(),
+            });
         }
         Ok(())
     }

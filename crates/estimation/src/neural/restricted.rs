@@ -39,6 +39,7 @@
 //! outside the range the network was trained on are extrapolated; the
 //! estimate's notes count such samples. User reference: docs/methods.md.
 
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{MissingChannel, Refusal};
 use crate::neural::{NetworkReport, Scaling};
@@ -48,7 +49,6 @@ use crate::reconstruction::{
     reconstruct,
 };
 use crate::structure::{FLIGHT_PATH_STATES, ModelStructure};
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
 use aeroid_record::FlightRecord;
 use aeroid_record::prep::differentiation::Differentiator;
@@ -552,13 +552,15 @@ pub fn estimate(
     if network.inputs() != data.motion_count() + data.coefficient_count()
         || network.outputs() != data.output_count()
     {
-        return Err(Error::Other(format!(
-            "{method}: the trained network has {} inputs and {} outputs, the restricted model {} and {}",
-            network.inputs(),
-            network.outputs(),
-            data.motion_count() + data.coefficient_count(),
-            data.output_count()
-        )));
+        return Err(Error::Network {
+            reason: format!(
+                "{method}: the trained network has {} inputs and {} outputs, the restricted model {} and {}",
+                network.inputs(),
+                network.outputs(),
+                data.motion_count() + data.coefficient_count(),
+                data.output_count()
+            ),
+        });
     }
     let mut fit = Fit::new(&data, network.as_ref(), structure, options.feedback);
     let names = structure.free_names();

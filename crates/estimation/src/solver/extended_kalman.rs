@@ -40,9 +40,9 @@
 //! [`kalman::update_from`]), not copied there. A step allocates nothing
 //! once its buffers have grown.
 
+use crate::error::{Error, Result};
 use crate::model::observations::Observations;
 use crate::model::state_space::{Jacobians, StateSpaceModel};
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::kalman::{
     self, Exponential, Gaussian, ProcessNoise, SequentialWorkspace, SparseRows, UpdateWorkspace,
     resize,
@@ -757,7 +757,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                     &innovation,
                     workspace,
                 )
-                .map_err(|e| at_time(e, t))?;
+                .map_err(|e| at_time((e).into(), t))?;
                 pass.negative_log_likelihood += 0.5 * workspace.log_likelihood_term();
                 for (i, &(o, _)) in present.iter().enumerate() {
                     pass.innovations[o].push(Innovation {
@@ -805,7 +805,7 @@ pub fn filter_with<M: StateSpaceModel + ?Sized>(
                     &innovation,
                     &mut update_workspace,
                 )
-                .map_err(|e| at_time(e, t))?;
+                .map_err(|e| at_time((e).into(), t))?;
                 if let Some(mean) = mean {
                     finite(t, &state)?;
                     mean.copy_from_slice(state.as_slice());
@@ -891,9 +891,9 @@ fn finite(t: f64, state: &DVector<f64>) -> Result<()> {
     if state.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
-        Err(Error::Other(format!(
-            "the filter's state went non-finite at t = {t} s"
-        )))
+        Err(Error::Numerical {
+            reason: format!("the filter's state went non-finite at t = {t} s"),
+        })
     }
 }
 
@@ -926,22 +926,26 @@ pub(crate) fn check_sizes<M: StateSpaceModel + ?Sized>(
     if fits {
         Ok(())
     } else {
-        Err(Error::Other(format!(
-            "the {filter}'s sizes do not agree: {n} states and {outputs} outputs on {} grid points; initial {} and {:?}, process noise {:?}, {} measurement variances, observations of {} outputs on {} points",
-            model.len(),
-            initial.mean.len(),
-            initial.covariance.shape(),
-            noise.process.shape(),
-            noise.measurement.len(),
-            observations.names.len(),
-            observations.at.len()
-        )))
+        Err(Error::Shape {
+            reason: format!(
+                "the {filter}'s sizes do not agree: {n} states and {outputs} outputs on {} grid points; initial {} and {:?}, process noise {:?}, {} measurement variances, observations of {} outputs on {} points",
+                model.len(),
+                initial.mean.len(),
+                initial.covariance.shape(),
+                noise.process.shape(),
+                noise.measurement.len(),
+                observations.names.len(),
+                observations.at.len()
+            ),
+        })
     }
 }
 
 /// An error with the time it happened at.
 pub(crate) fn at_time(error: Error, t: f64) -> Error {
-    Error::Other(format!("at t = {t} s: {error}"))
+    Error::Method {
+        reason: format!("at t = {t} s: {error}"),
+    }
 }
 
 #[cfg(test)]

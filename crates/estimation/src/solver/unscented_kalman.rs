@@ -26,8 +26,8 @@
 //! S_y = qr([√W₁·(Y_{1…2n} − ŷ), √R])ᵀ updated by Y₀ − ŷ,
 //! K = (P_xy/S_yᵀ)/S_y, x⁺ = x⁻ + K·(z − ŷ), S⁺ = cholupdate(S⁻, K·S_y, −1).
 //! A downdate that would leave a factor not positive definite is an
-//! [`Error::Downdate`] naming the step and time, never a repaired factor.
-//! The pass keeps the statistical H = P_xyᵀ·P⁻⁻¹ and the innovation
+//! [`aeroid_numerics::Error::Downdate`] naming the step and time, never a
+//! repaired factor. The pass keeps the statistical H = P_xyᵀ·P⁻⁻¹ and the innovation
 //! covariance S_y·S_yᵀ.
 //!
 //! On a linear model the transform is exact and the pass is the linear
@@ -35,11 +35,11 @@
 //! No step allocates (`Work`; tests/no_allocation.rs). The user reference
 //! is docs/methods.md, "Augmented-state unscented Kalman filter".
 
+use crate::error::{Error, Result};
 use crate::model::observations::Observations;
 use crate::model::state_space::{Points, StateSpaceModel};
 use crate::solver::extended_kalman::Innovation;
 use crate::solver::extended_kalman::{Noise, Pass, at_time, check_sizes};
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::kalman::{
     Gaussian, Unscented, UpdateWorkspace, multiply, resize, resize_vector,
 };
@@ -66,8 +66,8 @@ pub fn filter<M: StateSpaceModel + ?Sized>(
     let mut pass = Pass::with_capacity(len, model.output_count());
     let mut state = initial.mean;
     let mut factor = Cholesky::new(initial.covariance)
-        .ok_or_else(|| {
-            Error::Other("the UKF's initial covariance is not positive definite".into())
+        .ok_or_else(|| Error::Numerical {
+            reason: "the UKF's initial covariance is not positive definite".into(),
         })?
         .unpack();
     for k in 0..len {
@@ -150,7 +150,9 @@ impl Weights {
     /// its points of (0, I): χ₁ = c·e₁.
     fn of(unscented: &Unscented, n: usize) -> Result<Weights> {
         if n == 0 {
-            return Err(Error::Other("the UKF's model has no states".into()));
+            return Err(Error::Shape {
+                reason: "the UKF's model has no states".into(),
+            });
         }
         let unit = unscented.points(&DVector::zeros(n), &DMatrix::identity(n, n))?;
         Ok(Weights {
@@ -471,15 +473,15 @@ fn time_update<M: StateSpaceModel + ?Sized>(
     for i in 0..n {
         zero[i] = work.moved[(i, 0)] - state[i];
     }
-    zeroth_point(
+    Ok(zeroth_point(
         factor,
         &mut zero.as_mut_slice()[..n],
         weights.covariance_zero,
     )
-    .map_err(|()| Error::Downdate {
+    .map_err(|()| aeroid_numerics::Error::Downdate {
         time: previous,
         step: "time update's zeroth sigma point (W₀ᶜ < 0)",
-    })
+    })?)
 }
 
 /// Φ·G into `into` (n × r) for a Φ whose rows p… are the identity's:
@@ -521,7 +523,7 @@ fn transition_times(
 /// K = (P_xy/S_yᵀ)/S_y; x⁺ = x⁻ + K·(z − ŷ); U = K·S_y and
 /// S⁺ = cholupdate(S⁻, U, −1), one downdate per column of U. A downdate
 /// that would leave a factor without a positive diagonal is an
-/// [`Error::Downdate`]. The statistical H = P_xyᵀ·P⁻⁻¹ is again a central
+/// [`aeroid_numerics::Error::Downdate`]. The statistical H = P_xyᵀ·P⁻⁻¹ is again a central
 /// difference, H·S⁻ = (Y_{1…n} − Y_{n+1…2n})/(2c).
 #[allow(clippy::too_many_arguments)]
 fn measurement_update<M: StateSpaceModel + ?Sized>(
@@ -583,7 +585,7 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
         *z = outputs[(i, 0)] - predicted[i];
     }
     zeroth_point(innovation_factor, zero, weights.covariance_zero).map_err(|()| {
-        Error::Downdate {
+        aeroid_numerics::Error::Downdate {
             time: t,
             step: "innovation covariance's zeroth sigma point (W₀ᶜ < 0)",
         }
@@ -593,9 +595,7 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     work.observation.transpose_to(&mut work.difference);
     multiply_lower(factor, &work.difference, &mut work.cross);
     let singular = || {
-        Error::Other(
-            "the innovation covariance is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
-        )
+        Error::Numerical { reason: "the innovation covariance is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(), }
     };
     if !(0..m).all(|i| {
         let d = innovation_factor[(i, i)];
@@ -626,7 +626,7 @@ fn measurement_update<M: StateSpaceModel + ?Sized>(
     for j in 0..m {
         column.rows_mut(0, n).copy_from(&work.spread.column(j));
         cholupdate(factor, &mut column.as_mut_slice()[..n], -1.0).map_err(|()| {
-            Error::Downdate {
+            aeroid_numerics::Error::Downdate {
                 time: t,
                 step: "measurement update (S⁺ = cholupdate(S⁻, K·S_y, −1))",
             }
@@ -969,7 +969,9 @@ fn cholupdate(l: &mut DMatrix<f64>, x: &mut [f64], sign: f64) -> Result<(), ()> 
 /// rounding).
 fn process_root(process: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     let n = process.nrows();
-    let negative = || Error::Other("the process noise is not positive semi-definite".into());
+    let negative = || Error::Numerical {
+        reason: "the process noise is not positive semi-definite".into(),
+    };
     let diagonal = (0..n).all(|i| (0..n).all(|j| i == j || process[(i, j)] == 0.0));
     if diagonal {
         if process.diagonal().iter().any(|&q| q.is_nan() || q < 0.0) {

@@ -4,10 +4,10 @@
 //! method, and the fits as rows. A failure is a row, never an error.
 
 use super::{Case, Row, RowStatus, Study, SweepPoint};
+use crate::error::Result;
 use crate::histories::CaseHistories;
 use crate::run::{self, Outcome};
 use crate::score::ParameterScore;
-use aeroid_core::error::Result;
 use aeroid_core::random;
 use aeroid_estimation::estimate::Estimate;
 use aeroid_estimation::structure::Structure;
@@ -51,6 +51,7 @@ impl Study {
                     Some(derive) if derive.applies_to(&point.recorder) => {
                         aeroid_record::prep::derive::derive(&record, &derive.options())
                             .map(|derived| (derived.record, truth, trace))
+                            .map_err(Into::into)
                     }
                     _ => Ok((record, truth, trace)),
                 });

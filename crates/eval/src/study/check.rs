@@ -3,7 +3,7 @@
 //! values turned into the grid's (an empty axis is its one default value).
 
 use super::file::{StudyFile, StudyMethods};
-use aeroid_core::error::{Problems, Result};
+use aeroid_core::error::Problems;
 use aeroid_core::limits;
 use aeroid_core::units::Quantity;
 use aeroid_estimation::estimator::MethodTables;
@@ -25,7 +25,7 @@ pub(super) fn missing_axis(
     for (i, missing) in spec.iter().enumerate() {
         for profile in profiles {
             if let Err(message) = profile.without(missing) {
-                problems.push(format!("sweep.missing[{i}]"), message);
+                problems.push(format!("sweep.missing[{i}]"), message.to_string());
             }
         }
     }
@@ -64,7 +64,7 @@ pub(super) fn channel_rate_axis(
                 .collect();
             for profile in profiles {
                 if let Err(message) = profile.with_channel_rates(&rates) {
-                    problems.push(format!("sweep.channel_rate[{i}]"), message);
+                    problems.push(format!("sweep.channel_rate[{i}]"), message.to_string());
                 }
             }
             rates
@@ -131,11 +131,11 @@ pub(super) fn study_profiles(
 }
 
 /// Loads every reference of a list field, recording each failure under `field[i]`.
-pub(super) fn load_each<T>(
+pub(super) fn load_each<T, E: std::fmt::Display>(
     field: &str,
     references: &[String],
     problems: &mut Problems,
-    load: impl Fn(&str) -> Result<T>,
+    load: impl Fn(&str) -> std::result::Result<T, E>,
 ) -> Vec<T> {
     if references.is_empty() {
         problems.push(field, "must name at least one");
@@ -165,17 +165,18 @@ pub(super) fn check_methods(methods: &StudyMethods, registry: &Registry, problem
     }
 }
 
-/// Runs per sweep point within 1..=[`limits::MAX_RUNS`].
-pub(super) fn check_runs(runs: usize) -> Result<(), String> {
+/// What is wrong with a number of runs per sweep point, if it is not
+/// within 1..=[`limits::MAX_RUNS`].
+pub(super) fn runs_problem(runs: usize) -> Option<String> {
     if runs == 0 {
-        Err("must be at least 1".into())
+        Some("must be at least 1".into())
     } else if runs > limits::MAX_RUNS {
-        Err(format!(
+        Some(format!(
             "{runs} is above the most runs per sweep point, {} (statistics of a thousand runs are within a few percent; a million runs of a one-second fit take eleven days of one core)",
             limits::MAX_RUNS
         ))
     } else {
-        Ok(())
+        None
     }
 }
 

@@ -6,9 +6,10 @@
 use super::result::StudyResult;
 use super::{Case, Row, Study, Summariser};
 use crate::axis::Axis;
+use crate::error::{Error, Result};
 use crate::histories::CaseHistories;
 use crate::journal::{self, Finished, Header, Journal, Shard};
-use aeroid_core::error::{Error, Result, read_text};
+use aeroid_core::error::read_text;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -22,9 +23,7 @@ impl Study {
         let ordered = std::sync::Mutex::new((0usize, BTreeMap::new(), Summariser::default()));
         self.run_cases(&cases, threads, false, &|position, rows, _| {
             progress(&rows);
-            let mut guard = ordered
-                .lock()
-                .map_err(|_| Error::Other("a study thread panicked".into()))?;
+            let mut guard = ordered.lock().map_err(|_| Error::Panicked)?;
             let (next, pending, summariser) = &mut *guard;
             pending.insert(position, rows);
             while let Some(rows) = pending.remove(next) {
@@ -33,9 +32,7 @@ impl Study {
             }
             Ok(())
         })?;
-        let (_, _, summariser) = ordered
-            .into_inner()
-            .map_err(|_| Error::Other("a study thread panicked".into()))?;
+        let (_, _, summariser) = ordered.into_inner().map_err(|_| Error::Panicked)?;
         Ok(StudyResult::of(
             &self.name,
             self.seed,
@@ -89,7 +86,7 @@ impl Study {
         match failure.into_inner() {
             Ok(None) => Ok(()),
             Ok(Some(error)) => Err(error),
-            Err(_) => Err(Error::Other("a study thread panicked".into())),
+            Err(_) => Err(Error::Panicked),
         }
     }
 
@@ -145,9 +142,10 @@ impl Study {
             identity += &read_text(&profile.path)?;
         }
         for model in &self.models {
-            identity += &model
-                .files_json()
-                .map_err(|e| Error::Other(format!("model '{}': {e}", model.name())))?;
+            identity += &model.files_json().map_err(|e| Error::Model {
+                name: model.name().to_string(),
+                reason: e.to_string(),
+            })?;
         }
         let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
         for byte in identity.bytes() {

@@ -4,13 +4,14 @@
 
 use super::Study;
 use super::check::{
-    channel_rate_axis, check_methods, check_runs, load_each, missing_axis, sample_rates,
+    channel_rate_axis, check_methods, load_each, missing_axis, runs_problem, sample_rates,
     scale_axis, settings_axis, study_profiles, turbulence_axis,
 };
 use super::file::StudyFile;
 use super::points::Grid;
+use crate::error::Result;
 use aeroid_core::catalog;
-use aeroid_core::error::{Error, Problems, Result, parse_toml, read_text};
+use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_estimation::registry::Registry;
 use aeroid_estimation::structure::Structure;
 use aeroid_record::recorder::Profile;
@@ -46,16 +47,16 @@ impl Study {
         let profiles = study_profiles(file, base, &mut problems);
         check_methods(&file.methods, registry, &mut problems);
         registry.check_tables(&file.methods.tables(), &mut problems);
-        if let Err(message) = check_runs(file.runs) {
+        if let Some(message) = runs_problem(file.runs) {
             problems.push("runs", message);
         }
         let plain = plain_axes(file, &mut problems);
-        let invalid = |problems: Problems| Error::Invalid {
+        let invalid = |problems: Problems| aeroid_core::Error::Invalid {
             path: path.to_path_buf(),
             problems: problems.0,
         };
         let Some(profiles) = profiles else {
-            return Err(invalid(problems));
+            return Err(invalid(problems).into());
         };
         check_derive(file, &profiles, &mut problems);
         let sweep = &file.sweep;
@@ -63,7 +64,7 @@ impl Study {
         let channel_rates = channel_rate_axis(&sweep.channel_rate, &profiles, &mut problems);
         let variants = settings_axis(&sweep.settings, registry, &mut problems);
         if !problems.is_empty() {
-            return Err(invalid(problems));
+            return Err(invalid(problems).into());
         }
         let points = Grid {
             scenarios: scenarios.len(),
@@ -113,7 +114,7 @@ fn load_files(
     let scenarios = load_each("scenarios", &file.scenarios, problems, |r| {
         let scenario = Scenario::load(&resolved(r, catalog::SCENARIO_FOLDER)?)?;
         registry.validate_tables(&scenario.methods, &scenario.path)?;
-        Ok(scenario)
+        Ok::<_, crate::Error>(scenario)
     });
     let models = load_each("models", &file.models, problems, |r| {
         Structure::load(&resolved(r, catalog::MODEL_FOLDER)?)

@@ -6,7 +6,7 @@
 
 use super::SweepPoint;
 use crate::axis::Axis;
-use aeroid_core::error::{Error, Result};
+use crate::error::Result;
 use aeroid_estimation::estimator::MethodTables;
 use aeroid_record::recorder::Profile;
 
@@ -114,13 +114,10 @@ impl Grid<'_> {
     /// the resolution scaled.
     fn profile(&self, index: &Index, channel_rates: &[(String, f64)]) -> Result<Profile> {
         let at = |axis: Axis| index[axis.index()];
-        let kept = self.profiles[at(Axis::Profile)]
-            .without(&self.missing[at(Axis::Missing)])
-            .map_err(Error::Other)?;
+        let kept = self.profiles[at(Axis::Profile)].without(&self.missing[at(Axis::Missing)])?;
         let rated = self.sample_rates[at(Axis::SampleRate)]
             .map_or_else(|| kept.clone(), |r| kept.with_rate(r))
-            .with_channel_rates(channel_rates)
-            .map_err(Error::Other)?;
+            .with_channel_rates(channel_rates)?;
         let noise_scale = self.noise_scales[at(Axis::NoiseScale)];
         let noisy = if noise_scale == 1.0 {
             rated

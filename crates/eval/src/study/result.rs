@@ -2,9 +2,9 @@
 //! ended, `summary.csv` and `study.json`, the terminal table; and
 //! [`assemble`], the result of a study from its journals.
 
+use crate::error::{Error, Result};
 use crate::journal;
 use crate::summary::{Ending, Summariser, SummaryRow};
-use aeroid_core::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -85,9 +85,11 @@ impl StudyResult {
         std::fs::create_dir_all(folder).map_err(|e| io(folder, e))?;
         write_csv(&folder.join("summary.csv"), &self.summary)?;
         let path = folder.join("study.json");
-        let text = serde_json::to_string_pretty(self)
-            .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
-        std::fs::write(&path, text).map_err(|e| io(&path, e))
+        let text = serde_json::to_string_pretty(self).map_err(|e| Error::Json {
+            path: path.clone(),
+            reason: e.to_string(),
+        })?;
+        std::fs::write(&path, text).map_err(|e| io(&path, e).into())
     }
 
     /// The summary as a fixed-width table for the terminal.
@@ -169,5 +171,5 @@ fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
     }
     writer
         .flush()
-        .map_err(|e| aeroid_core::error::write_error(path, e))
+        .map_err(|e| aeroid_core::error::write_error(path, e).into())
 }

@@ -5,7 +5,7 @@
 //! of a series' autocorrelations (Box & Jenkins; Jategaonkar, "Flight
 //! Vehicle System Identification", 2nd ed., §6.5.1; [`whiteness`]).
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
 /// What Mehra's residual-correlation method estimates ([`residual_correlation`]).
@@ -52,9 +52,11 @@ pub fn residual_correlation(
 ) -> Result<ResidualCorrelation> {
     let (n, m, count) = (transition.nrows(), observation.nrows(), innovations.len());
     if lags == 0 || count <= lags {
-        return Err(Error::Other(format!(
-            "the residual-correlation method needs at least one lag and more innovations than lags ({count} innovations, {lags} lags)"
-        )));
+        return Err(Error::Input {
+            reason: format!(
+                "the residual-correlation method needs at least one lag and more innovations than lags ({count} innovations, {lags} lags)"
+            ),
+        });
     }
     let autocorrelation = |j: usize| {
         let mut sum = DMatrix::zeros(m, m);
@@ -79,7 +81,10 @@ pub fn residual_correlation(
     let solved = stacked
         .svd(true, true)
         .solve(&measured, 1e-12)
-        .map_err(|e| Error::Other(format!("the residual-correlation least squares: {e}")))?;
+        .map_err(|e| Error::LeastSquares {
+            what: "the residual-correlation least squares",
+            reason: e.to_string(),
+        })?;
     let cross = gain * zero + solved;
     let measurement = zero - observation * &cross;
     let measurement = (&measurement + measurement.transpose()) * 0.5;
@@ -105,9 +110,12 @@ fn process_noise_diagonal(
     noisy: &[usize],
 ) -> Result<DVector<f64>> {
     let (n, m) = (transition.nrows(), observation.nrows());
-    let inverse = transition.clone().try_inverse().ok_or_else(|| {
-        Error::Other("the residual-correlation method needs an invertible transition".into())
-    })?;
+    let inverse = transition
+        .clone()
+        .try_inverse()
+        .ok_or_else(|| Error::Singular {
+            reason: "the residual-correlation method needs an invertible transition".into(),
+        })?;
     let omega = transition
         * (gain * zero * gain.transpose() - gain * cross.transpose() - cross * gain.transpose())
         * transition.transpose();
@@ -146,7 +154,10 @@ fn process_noise_diagonal(
     let entries = design
         .svd(true, true)
         .solve(&right, 1e-12)
-        .map_err(|e| Error::Other(format!("the residual-correlation least squares: {e}")))?;
+        .map_err(|e| Error::LeastSquares {
+            what: "the residual-correlation least squares",
+            reason: e.to_string(),
+        })?;
     let mut process = DVector::zeros(n);
     for (c, &i) in noisy.iter().enumerate() {
         process[i] = entries[c].max(0.0);

@@ -8,7 +8,7 @@
 //! Algebra Appl. 396, 2005, Eq. 2.5), quadratically convergent; and the
 //! one for a given innovation covariance by Newton's method from it.
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// The steady state of a time-invariant filter.
@@ -37,8 +37,9 @@ pub fn steady_state(
 ) -> Result<SteadyState> {
     let n = transition.nrows();
     let noise_inverse = Cholesky::new(noise.clone())
-        .ok_or_else(|| {
-            Error::Other("the measurement noise covariance R is not positive definite".into())
+        .ok_or_else(|| Error::NotPositiveDefinite {
+            what: "the measurement noise covariance R".into(),
+            why: "",
         })?
         .inverse();
     let identity = DMatrix::<f64>::identity(n, n);
@@ -51,9 +52,9 @@ pub fn steady_state(
         let lu = w.lu();
         let solve = |m: &DMatrix<f64>| lu.solve(m);
         let (Some(wa), Some(wg)) = (solve(&a), solve(&g)) else {
-            return Err(Error::Other(
-                "the Riccati equation's doubling met a singular matrix".into(),
-            ));
+            return Err(Error::Singular {
+                reason: "the Riccati equation's doubling met a singular matrix".into(),
+            });
         };
         let next_x = &x + a.transpose() * &x * &wa;
         let next_g = &g + &a * wg * a.transpose();
@@ -68,10 +69,9 @@ pub fn steady_state(
         if change <= 1e-14 * x.norm().max(f64::MIN_POSITIVE) {
             let s = observation * &x * observation.transpose() + noise;
             let s_inverse = Cholesky::new(s.clone())
-                .ok_or_else(|| {
-                    Error::Other(
-                        "the steady-state innovation covariance is not positive definite".into(),
-                    )
+                .ok_or_else(|| Error::NotPositiveDefinite {
+                    what: "the steady-state innovation covariance".into(),
+                    why: "",
                 })?
                 .inverse();
             let gain = &x * observation.transpose() * s_inverse;
@@ -86,9 +86,7 @@ pub fn steady_state(
             });
         }
     }
-    Err(Error::Other(
-        "the steady-state Riccati equation has no solution: the system is not detectable through the outputs, or not stabilisable by the process noise".into(),
-    ))
+    Err(Error::NoSolution { reason: "the steady-state Riccati equation has no solution: the system is not detectable through the outputs, or not stabilisable by the process noise".into() })
 }
 
 /// Newton iterations of [`steady_state_for_innovation`] before it gives up.
@@ -119,7 +117,10 @@ pub fn steady_state_for_innovation(
 ) -> Result<(SteadyState, DMatrix<f64>)> {
     let n = transition.nrows();
     let innovation_inverse = Cholesky::new(innovation.clone())
-        .ok_or_else(|| Error::Other("the innovation covariance R is not positive definite".into()))?
+        .ok_or_else(|| Error::NotPositiveDefinite {
+            what: "the innovation covariance R".into(),
+            why: "",
+        })?
         .inverse();
     let weight = observation.transpose() * &innovation_inverse * observation;
     let identity = DMatrix::<f64>::identity(n, n);
@@ -153,9 +154,9 @@ pub fn steady_state_for_innovation(
         residual = residual_of(&p);
     }
     let refuse = |why: &str| {
-        Err(Error::Other(format!(
-            "no steady-state filter has this innovation covariance: {why}"
-        )))
+        Err(Error::NoSolution {
+            reason: format!("no steady-state filter has this innovation covariance: {why}"),
+        })
     };
     if !converged {
         return refuse("the Riccati equation's Newton iteration did not converge");

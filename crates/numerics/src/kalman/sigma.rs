@@ -4,7 +4,7 @@
 //! λ = α²·(n + κ) − n, weights W₀ᵐ = λ/(n + λ),
 //! W₀ᶜ = W₀ᵐ + 1 − α² + β, Wᵢ = 1/(2(n + λ)).
 
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// The scaled unscented transform's parameters (Wan & van der Merwe 2000).
@@ -43,8 +43,9 @@ impl Unscented {
         let lambda = self.alpha * self.alpha * (n as f64 + self.kappa) - n as f64;
         let scale = n as f64 + lambda;
         let root = Cholesky::<f64, Dyn>::new(covariance * scale)
-            .ok_or_else(|| {
-                Error::Other("the UKF's state covariance is not positive definite".into())
+            .ok_or_else(|| Error::NotPositiveDefinite {
+                what: "the UKF's state covariance".into(),
+                why: "",
             })?
             .unpack();
         let mut points = Vec::with_capacity(2 * n + 1);

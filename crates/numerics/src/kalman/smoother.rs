@@ -28,7 +28,7 @@ use super::kept::{
 };
 use super::sparse::SparseRows;
 use super::update::Gaussian;
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// The RTS smoother over a filter's pass: `filtered[k]` = (x, P)_{k|k}
@@ -54,19 +54,18 @@ pub fn rts_smooth(
                 .is_some_and(|g| g.covariance.nrows() == dimension)
         });
     if !complete {
-        return Err(Error::Other(
-            "the RTS smoother needs every filtered and predicted covariance and every transition"
-                .into(),
-        ));
+        return Err(Error::Input { reason: "the RTS smoother needs every filtered and predicted covariance and every transition"
+                .into() });
     }
     for k in (0..n - 1).rev() {
         let prior = predicted.get(k + 1).expect("checked above");
         let inverse = Cholesky::new(prior.covariance.into_owned())
-            .ok_or_else(|| {
-                Error::Other(format!(
-                    "the RTS smoother: the predicted covariance at step {} is not positive definite",
+            .ok_or_else(|| Error::NotPositiveDefinite {
+                what: format!(
+                    "the RTS smoother: the predicted covariance at step {}",
                     k + 1
-                ))
+                ),
+                why: "",
             })?
             .inverse();
         let phi = transitions.get(k).expect("checked above");

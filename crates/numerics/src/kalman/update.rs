@@ -22,7 +22,7 @@
 
 use super::dense::{combine_columns, resize};
 use super::sparse::SparseRows;
-use aeroid_core::error::{Error, Result};
+use crate::error::{Error, Result};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use std::cell::Cell;
 
@@ -175,11 +175,11 @@ pub fn update_from(
     sparse.set(observation);
     sparse.times_transposed_values(predicted.unwrap_or(into), n, cross);
     innovation_covariance(m, sparse, cross, noise, s);
-    *log_det = inverse_by_root(s, root_inverse, inverse).ok_or_else(|| {
-        Error::Other(
-            "the innovation covariance H·P·Hᵀ + R is not positive definite (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
-        )
-    })?;
+    *log_det =
+        inverse_by_root(s, root_inverse, inverse).ok_or_else(|| Error::NotPositiveDefinite {
+            what: "the innovation covariance H·P·Hᵀ + R".into(),
+            why: " (a measurement noise variance of zero, or a covariance gone non-finite)",
+        })?;
     gain_and_half(n, m, cross, inverse, s, gain, half);
     state.gemv(1.0, gain, innovation, 1.0);
     gain_times_half(n, m, gain, half, product);
@@ -493,9 +493,10 @@ pub fn sequential_update_with(
     if positive {
         Ok(())
     } else {
-        Err(Error::Other(
-            "an innovation variance hᵀ·P·h + r is not positive (a measurement noise variance of zero, or a covariance gone non-finite)".into(),
-        ))
+        Err(Error::NotPositive {
+            what: "an innovation variance hᵀ·P·h + r".into(),
+            why: " (a measurement noise variance of zero, or a covariance gone non-finite)",
+        })
     }
 }
 

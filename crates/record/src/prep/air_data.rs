@@ -19,8 +19,8 @@
 //! (kg/m³). A record that has `density` keeps it.
 
 use crate::derived::mach_from_calibrated_airspeed;
+use crate::error::Result;
 use crate::{Channel, FlightRecord, put_channel};
-use aeroid_core::error::Result;
 use aeroid_sim::atmosphere::{Atmosphere, GAS_CONSTANT};
 
 /// Adds `static_pressure`, `temperature` and `density` where the record

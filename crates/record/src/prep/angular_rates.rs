@@ -40,9 +40,9 @@
 //! ≈ 0.08 Hz and half as large at ≈ 0.23 Hz, so the Dutch roll (≈ 0.24 Hz)
 //! and turbulence are lost; measured in `tests/simulation/angular_rates.rs`.
 
+use crate::error::{Error, Result};
 use crate::prep::differentiation::Differentiator;
 use crate::{Channel, FlightRecord};
-use aeroid_core::error::{Error, Result};
 
 /// The differentiator the derive step applies to the attitude unless told
 /// otherwise: a quartic over ±0.5 s. On 25 Hz attitude with 0.1° noise its
@@ -137,7 +137,9 @@ pub fn kinematic_rates(
     differentiator: &Differentiator,
 ) -> Result<KinematicRates> {
     if let Some(problem) = differentiator.problems() {
-        return Err(Error::Other(format!("angular rates: {problem}")));
+        return Err(Error::Derivation {
+            reason: format!("angular rates: {problem}"),
+        });
     }
     let missing: Vec<&str> = ATTITUDE_CHANNELS
         .iter()
@@ -145,19 +147,23 @@ pub fn kinematic_rates(
         .filter(|name| record.channel(name).is_err())
         .collect();
     if !missing.is_empty() {
-        return Err(Error::Other(format!(
-            "angular rates from the attitude need the channel(s) {}, which the record lacks",
-            missing.join(", ")
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "angular rates from the attitude need the channel(s) {}, which the record lacks",
+                missing.join(", ")
+            ),
+        });
     }
     let mut angles = Vec::with_capacity(3);
     for name in ATTITUDE_CHANNELS {
         let channel = record.channel(name)?;
         if channel.unit != "rad" {
-            return Err(Error::Other(format!(
-                "channel '{name}' is in '{}'; angular rates read it in 'rad'",
-                channel.unit
-            )));
+            return Err(Error::Derivation {
+                reason: format!(
+                    "channel '{name}' is in '{}'; angular rates read it in 'rad'",
+                    channel.unit
+                ),
+            });
         }
         let mut channel = channel.clone();
         if name == "yaw" {
@@ -170,11 +176,13 @@ pub fn kinematic_rates(
         .map(|c| differentiator.differentiate(c))
         .collect();
     if let Some(short) = derivatives.iter().find(|d| d.times.is_empty()) {
-        return Err(Error::Other(format!(
-            "angular rates: channel '{}' has too few samples for the differentiator (±{} samples)",
-            short.name.trim_end_matches("_dot"),
-            differentiator.half_window(short.rate)
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "angular rates: channel '{}' has too few samples for the differentiator (±{} samples)",
+                short.name.trim_end_matches("_dot"),
+                differentiator.half_window(short.rate)
+            ),
+        });
     }
     let reference = (0..3).fold(0, |best, i| {
         if angles[i].rate > angles[best].rate {
@@ -185,9 +193,10 @@ pub fn kinematic_rates(
     });
     let times = crate::shared_instants(&derivatives.iter().collect::<Vec<_>>(), reference);
     if times.is_empty() {
-        return Err(Error::Other(
-            "angular rates: the derivatives of pitch, roll and yaw share no time span".to_string(),
-        ));
+        return Err(Error::Derivation {
+            reason: "angular rates: the derivatives of pitch, roll and yaw share no time span"
+                .to_string(),
+        });
     }
     let at = |c: &Channel| c.values_at_unbridged(&times);
     let (pitch, roll) = (at(&angles[0]), at(&angles[1]));

@@ -9,13 +9,13 @@
 //! channel names its method and inputs in its `source`.
 
 use crate::FlightRecord;
+use crate::error::Result;
 use crate::prep::air_data::with_air_density;
 use crate::prep::angular_rates::{KinematicRates, with_kinematic_rates};
 use crate::prep::differentiation::Differentiator;
 use crate::prep::flow_angles::{GeometricFlowAngles, Wind, with_geometric_flow_angles};
 use crate::prep::surfaces::with_combined_surfaces;
 use crate::prep::thrust::{FuelFlowThrust, with_thrust_from_fuel_flow};
-use aeroid_core::error::Result;
 
 /// When the body rates are derived.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -37,8 +37,8 @@
 //! the QAR of Wang et al. Table 1, σ_α ≈ 0.105° and σ_β ≈ 0.30°: the 1°
 //! track resolution dominates β (`tests/simulation/flow_angles.rs`).
 
+use crate::error::{Error, Result};
 use crate::{Channel, FlightRecord, derived};
-use aeroid_core::error::{Error, Result};
 use aeroid_sim::state::ned_to_body;
 use nalgebra::Vector3;
 
@@ -254,10 +254,12 @@ pub fn geometric_flow_angles(record: &FlightRecord, wind: Wind) -> Result<Geomet
     });
     let times = crate::shared_instants(&channels, reference);
     if times.is_empty() {
-        return Err(Error::Other(format!(
-            "geometric angle of attack and sideslip: the channels {} share no time span",
-            needed.join(", ")
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "geometric angle of attack and sideslip: the channels {} share no time span",
+                needed.join(", ")
+            ),
+        });
     }
     let columns: Vec<Vec<f64>> = channels
         .iter()
@@ -410,10 +412,12 @@ fn needed_channels<'a>(
             }
             _ => "",
         };
-        return Err(Error::Other(format!(
-            "geometric angle of attack and sideslip need the channel(s) {}, which the record lacks{hint}",
-            missing.join(", ")
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "geometric angle of attack and sideslip need the channel(s) {}, which the record lacks{hint}",
+                missing.join(", ")
+            ),
+        });
     }
     needed
         .iter()
@@ -421,10 +425,10 @@ fn needed_channels<'a>(
             let channel = record.channel(name)?;
             let unit = derived::measurand(name).map_or("", |m| m.unit);
             if channel.unit != unit {
-                return Err(Error::Other(format!(
+                return Err(Error::Derivation { reason: format!(
                     "channel '{name}' is in '{}'; geometric angle of attack and sideslip read it in '{unit}'",
                     channel.unit
-                )));
+                ) });
             }
             Ok(channel)
         })

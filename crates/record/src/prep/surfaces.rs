@@ -9,8 +9,8 @@
 //! quantized to the same resolution r give a combination on a grid of r/2,
 //! which is its declared resolution.
 
+use crate::error::{Error, Result};
 use crate::{Channel, FlightRecord};
-use aeroid_core::error::{Error, Result};
 
 /// A split surface: the combined channel, its two sides, and the sign of
 /// the right side in `(left ± right)/2`.
@@ -51,10 +51,12 @@ pub fn combine(record: &FlightRecord, surface: &SplitSurface) -> Result<Channel>
     );
     for side in [left, right] {
         if side.unit != "rad" {
-            return Err(Error::Other(format!(
-                "channel '{}' is in '{}'; combining it into '{}' reads it in 'rad'",
-                side.name, side.unit, surface.combined
-            )));
+            return Err(Error::Derivation {
+                reason: format!(
+                    "channel '{}' is in '{}'; combining it into '{}' reads it in 'rad'",
+                    side.name, side.unit, surface.combined
+                ),
+            });
         }
     }
     let span = |c: &Channel| c.times.first().zip(c.times.last()).map(|(a, b)| (*a, *b));
@@ -69,10 +71,12 @@ pub fn combine(record: &FlightRecord, surface: &SplitSurface) -> Result<Channel>
         .filter(|t| (start..=end).contains(t))
         .collect();
     if times.is_empty() {
-        return Err(Error::Other(format!(
-            "'{}' and '{}' share no time span",
-            surface.left, surface.right
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "'{}' and '{}' share no time span",
+                surface.left, surface.right
+            ),
+        });
     }
     let (left_values, right_values) = (
         left.values_at_unbridged(&times),

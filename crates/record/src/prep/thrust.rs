@@ -21,8 +21,8 @@
 //! any engine's flow is a dropout of the thrust. The resolution of the sum
 //! is Σ LSB_i/c, the first-order effect of the flows' quantization.
 
+use crate::error::{Error, Result};
 use crate::{Channel, FlightRecord, put_channel};
-use aeroid_core::error::{Error, Result};
 
 /// The fuel-flow engine model of the derive step (module documentation).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,14 +59,18 @@ pub fn with_thrust_from_fuel_flow(
         idle_fuel_flow: idle,
     } = *model;
     if !(c.is_finite() && c > 0.0) {
-        return Err(Error::Other(format!(
-            "thrust from fuel flow: the specific fuel consumption {c} kg/(N·s) must be a positive finite number"
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "thrust from fuel flow: the specific fuel consumption {c} kg/(N·s) must be a positive finite number"
+            ),
+        });
     }
     if !(idle.is_finite() && idle >= 0.0) {
-        return Err(Error::Other(format!(
-            "thrust from fuel flow: the idle fuel flow {idle} kg/s must be a non-negative finite number"
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "thrust from fuel flow: the idle fuel flow {idle} kg/s must be a non-negative finite number"
+            ),
+        });
     }
     let mut derived = record.clone();
     if record.channel("thrust").is_ok() {
@@ -77,21 +81,25 @@ pub fn with_thrust_from_fuel_flow(
     }
     let engines = fuel_flow_channels(record);
     let Some(base) = engines.first() else {
-        return Err(Error::Other(format!(
-            "thrust from fuel flow: the record has no 'fuel_flow' or 'fuel_flow_*' channel; channels present: {}",
-            record
-                .channels
-                .iter()
-                .map(|c| c.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "thrust from fuel flow: the record has no 'fuel_flow' or 'fuel_flow_*' channel; channels present: {}",
+                record
+                    .channels
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        });
     };
     if let Some(other) = engines.iter().find(|c| c.unit != "kg/s") {
-        return Err(Error::Other(format!(
-            "thrust from fuel flow: channel '{}' is in '{}', not kg/s",
-            other.name, other.unit
-        )));
+        return Err(Error::Derivation {
+            reason: format!(
+                "thrust from fuel flow: channel '{}' is in '{}', not kg/s",
+                other.name, other.unit
+            ),
+        });
     }
     let mut values = vec![0.0; base.times.len()];
     for engine in &engines {

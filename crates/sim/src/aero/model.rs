@@ -385,25 +385,30 @@ impl AeroModel {
     /// number, a positive Oswald factor `e`, and a `tau1` that keeps χ what
     /// it was at the start, a state (τ1 > 0) or algebraic (τ1 = 0), since
     /// the state vector cannot gain or lose χ mid-flight.
-    pub fn check_replacement(&self, name: &str, value: f64) -> Result<(), String> {
+    pub fn check_replacement(&self, name: &str, value: f64) -> Result<(), crate::error::Error> {
         if !value.is_finite() {
-            return Err(format!("{value} is not a finite number"));
+            return Err(aeroid_core::Error::NotFinite {
+                value: value.to_string(),
+            }
+            .into());
         }
         let index = self.parameters.index(name);
         if index.is_some() && index == self.oswald && value <= 0.0 {
-            return Err(format!("the Oswald factor e must be positive, got {value}"));
+            return Err(crate::error::Error::Replacement {
+                reason: "the Oswald factor e must be positive",
+                value,
+            });
         }
         if let Some(s) = self.stall
             && index == Some(s.tau1)
             && (value > 0.0) != self.chi_is_state()
         {
-            return Err(match self.chi_is_state() {
-                true => {
-                    format!("tau1 must stay positive (χ is a state of this aircraft), got {value}")
-                }
-                false => {
-                    format!("tau1 must stay 0 (χ is algebraic for this aircraft), got {value}")
-                }
+            return Err(crate::error::Error::Replacement {
+                reason: match self.chi_is_state() {
+                    true => "tau1 must stay positive (χ is a state of this aircraft)",
+                    false => "tau1 must stay 0 (χ is algebraic for this aircraft)",
+                },
+                value,
             });
         }
         Ok(())

@@ -150,23 +150,23 @@ pub struct MomentReferenceSpec {
 impl MomentReferenceSpec {
     /// The offset from the CG to the reference point (body axes, m) for a
     /// chord `chord`, or what is wrong with the table.
-    pub(super) fn offset(&self, chord: f64) -> Result<Vector3<f64>, String> {
+    pub(super) fn offset(&self, chord: f64) -> Result<Vector3<f64>, crate::error::Error> {
+        let fail = |reason| Err(crate::error::Error::MomentReference { reason });
         let offset = match (&self.offset, self.point_mac, self.cg_mac) {
             (Some(offset), None, None) => match offset[..] {
                 [x, y, z] => Vector3::new(x, y, z),
-                _ => return Err("offset must be three numbers [x, y, z] (m)".into()),
+                _ => return fail("offset must be three numbers [x, y, z] (m)"),
             },
             (None, Some(point), Some(cg)) => Vector3::new((cg - point) * chord, 0.0, 0.0),
             _ => {
-                return Err(
-                    "give either offset = [x, y, z] (m) or both point_mac and cg_mac (fractions of c̄)"
-                        .into(),
+                return fail(
+                    "give either offset = [x, y, z] (m) or both point_mac and cg_mac (fractions of c̄)",
                 );
             }
         };
         match offset.iter().all(|v| v.is_finite()) {
             true => Ok(offset),
-            false => Err("the offset must be finite numbers".into()),
+            false => fail("the offset must be finite numbers"),
         }
     }
 }

@@ -10,40 +10,41 @@ impl AeroModel {
     /// θ_tied = factor·θ_master + offset, and sets θ_tied so. Errors: either
     /// is not a term's parameter, they are the same, the master is tied
     /// itself, the tied one is already tied or is another's master.
-    pub fn tie(&mut self, tied: usize, tie: Tie) -> Result<(), String> {
+    pub fn tie(&mut self, tied: usize, tie: Tie) -> Result<(), crate::error::Error> {
+        let fail = |reason: String| Err(crate::error::Error::Tie { reason });
         let names = self.parameters.names();
         let name = |i: usize| names[i].clone();
         if !(tie.factor.is_finite() && tie.offset.is_finite()) {
-            return Err("the factor and offset must be finite numbers".into());
+            return fail("the factor and offset must be finite numbers".into());
         }
         if tie.master == tied {
-            return Err(format!("'{}' cannot be tied to itself", name(tied)));
+            return fail(format!("'{}' cannot be tied to itself", name(tied)));
         }
         let is_term = |i: usize| self.terms.iter().flatten().any(|t| t.parameter == i);
         for (i, role) in [(tied, "tied"), (tie.master, "a master")] {
             if !is_term(i) {
-                return Err(format!(
+                return fail(format!(
                     "'{}' is not a term's parameter ({{coefficient}}_{{term}}): only those can be {role}",
                     name(i)
                 ));
             }
         }
         if let Some(other) = self.tie_of(tie.master) {
-            return Err(format!(
+            return fail(format!(
                 "the master '{}' is tied itself (to '{}'): tie to a free or fixed parameter",
                 name(tie.master),
                 name(other.master)
             ));
         }
         if let Some(other) = self.tie_of(tied) {
-            return Err(format!(
+            return fail(format!(
                 "'{}' is tied already (to '{}')",
                 name(tied),
                 name(other.master)
             ));
         }
         if let Some(dependent) = self.dependents(tied).next() {
-            return Err(format!(
+            return fail(format!(
                 "'{}' is the master of '{}': a master cannot be tied itself",
                 name(tied),
                 name(dependent)

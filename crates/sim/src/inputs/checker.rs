@@ -14,7 +14,7 @@ pub(super) struct Checker<'a> {
 }
 
 impl Checker<'_> {
-    pub(super) fn push(&mut self, field: &str, message: impl Into<String>) {
+    pub(super) fn push(&mut self, field: &str, message: impl std::fmt::Display) {
         self.problems
             .push(format!("{}.{field}", self.prefix), message);
     }

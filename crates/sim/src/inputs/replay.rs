@@ -8,7 +8,6 @@ use super::checker::Checker;
 use super::signal::{Polyline, Signal};
 use super::spec::CsvSpec;
 use aeroid_core::csv_table::CsvTable;
-use aeroid_core::error::Error;
 use aeroid_core::units::{Dimension, unit_factor};
 use std::path::{Path, PathBuf};
 
@@ -92,7 +91,7 @@ fn read_csv_columns(
     let times = table.time_column(time_index)?;
     let values = table.finite_numbers(value_index)?;
     if times.len() < 2 {
-        return Err(Error::Csv {
+        return Err(aeroid_core::Error::Csv {
             path: path.to_path_buf(),
             line: times.len() as u64 + 1,
             column: time_column.to_string(),

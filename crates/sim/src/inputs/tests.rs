@@ -4,7 +4,6 @@
 
 use super::*;
 use crate::state::{Control, Controls};
-use aeroid_core::error::Error;
 use aeroid_core::units::{DEG, Quantity};
 use serde::Deserialize;
 use std::f64::consts::TAU;
@@ -26,7 +25,7 @@ fn schedule(text: &str) -> InputSchedule {
 
 fn problems(text: &str) -> Vec<aeroid_core::error::Problem> {
     match InputSchedule::build(&parse(text), Path::new("."), Path::new("test.toml")) {
-        Err(Error::Invalid { problems, .. }) => problems,
+        Err(aeroid_core::Error::Invalid { problems, .. }) => problems,
         other => panic!("expected Error::Invalid, got {other:?}"),
     }
 }
@@ -383,7 +382,7 @@ impl Drop for TemporaryCsv {
 
 fn csv_line_and_column(result: aeroid_core::Result<InputSchedule>) -> (u64, String, String) {
     match result {
-        Err(Error::Csv {
+        Err(aeroid_core::Error::Csv {
             line,
             column,
             message,

@@ -168,17 +168,17 @@ impl Turbulence {
         conditions: &FlightConditions,
         step: f64,
         rng: &mut ChaCha8Rng,
-    ) -> Result<Turbulence, String> {
+    ) -> Result<Turbulence, crate::error::Error> {
         let FlightConditions { airspeed, altitude } = *conditions;
         if !(airspeed.is_finite() && airspeed > 0.0) {
-            return Err(format!(
-                "wind.turbulence: airspeed {airspeed} m/s is not positive"
-            ));
+            return Err(crate::error::Error::TurbulenceConditions {
+                reason: format!("airspeed {airspeed} m/s is not positive"),
+            });
         }
         if !altitude.is_finite() {
-            return Err(format!(
-                "wind.turbulence: altitude {altitude} m is not finite"
-            ));
+            return Err(crate::error::Error::TurbulenceConditions {
+                reason: format!("altitude {altitude} m is not finite"),
+            });
         }
         let TurbulenceParameters { sigma, length } = spec.parameters(altitude)?;
         let theta = length.map(|length| airspeed * step / length);

@@ -92,13 +92,17 @@ pub(super) struct Gust {
 }
 
 impl Gust {
-    pub(super) fn resolve(spec: &GustSpec) -> Result<Gust, String> {
+    pub(super) fn resolve(spec: &GustSpec) -> Result<Gust, crate::error::Error> {
         Ok(Gust {
             start: spec.start.si(Dimension::Time)?,
             duration: spec.duration.si(Dimension::Time)?,
             amplitude: spec.amplitude.si(Dimension::Speed)?,
-            direction: gust_direction(&spec.direction)
-                .ok_or_else(|| format!("unknown gust direction '{}'", spec.direction))?,
+            direction: gust_direction(&spec.direction).ok_or_else(|| {
+                crate::error::Error::WindName {
+                    kind: "gust direction",
+                    name: spec.direction.clone(),
+                }
+            })?,
         })
     }
 

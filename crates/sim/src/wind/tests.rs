@@ -144,7 +144,7 @@ fn validation_collects_every_problem_at_once() {
         ],
         "{problems:?}"
     );
-    let error = spec.generate(&CRUISE, 0.01, 10, 1).unwrap_err();
+    let error = spec.generate(&CRUISE, 0.01, 10, 1).unwrap_err().to_string();
     assert!(
         error.contains("wind.gusts[1].direction") && error.contains("sideways"),
         "{error}"

@@ -126,11 +126,14 @@ impl TurbulenceSpec {
 
     /// σ and L of the three components at `altitude` (m), by the intensity or
     /// altitude rules where not given explicitly. Expects a validated table.
-    pub fn parameters(&self, altitude: f64) -> Result<TurbulenceParameters, String> {
+    pub fn parameters(&self, altitude: f64) -> Result<TurbulenceParameters, crate::error::Error> {
         let altitude_ft = altitude / FOOT;
         let sigma = match &self.intensity {
             Some(name) => Intensity::parse(name)
-                .ok_or_else(|| format!("unknown turbulence intensity '{name}'"))?
+                .ok_or_else(|| crate::error::Error::WindName {
+                    kind: "turbulence intensity",
+                    name: name.clone(),
+                })?
                 .sigmas(altitude_ft),
             None => explicit_values(self.sigmas(), Dimension::Speed, [None; 3])?,
         };
@@ -145,13 +148,13 @@ fn explicit_values(
     fields: [(&'static str, Option<&Quantity>); 3],
     dimension: Dimension,
     defaults: [Option<f64>; 3],
-) -> Result<[f64; 3], String> {
+) -> Result<[f64; 3], crate::error::Error> {
     let mut values = [0.0; 3];
     for ((value, (name, quantity)), default) in values.iter_mut().zip(fields).zip(defaults) {
         *value = match (quantity, default) {
             (Some(quantity), _) => quantity.si(dimension)?,
             (None, Some(default)) => default,
-            (None, None) => return Err(format!("wind.turbulence.{name} is missing")),
+            (None, None) => return Err(crate::error::Error::TurbulenceMissing { name }),
         };
     }
     Ok(values)

@@ -40,6 +40,7 @@
 //! σ₀/√2); innovations beyond [`CONSISTENT`] are a diagnosis. **Histories**:
 //! θ_a and σ at every grid point of the last pass ([`History::write_csv`]).
 
+use crate::error::{Error, Result};
 use crate::estimate::{Diagnosis, DiagnosisKind, Estimate, OutputFit, ParameterEstimate, Status};
 use crate::estimator::{Refusal, Settings, parse_settings};
 use crate::input_timing::{self, InputInterpolation};
@@ -54,7 +55,6 @@ use crate::model::state_space::{DrivenStateSpace, StateSpaceModel, fitting_windo
 use crate::problem::EstimationProblem;
 use crate::solver::extended_kalman::{Innovation, Noise, Pass};
 use crate::structure::{ModelStructure, Structure};
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::kalman::Gaussian;
 use aeroid_record::{Channel, FlightRecord};
 use nalgebra::{DMatrix, DVector};
@@ -213,7 +213,10 @@ impl FilterSettings {
     /// Checks the values of a settings table of `method`, naming a bad key.
     pub fn check(&self, method: &str) -> Result<()> {
         let bad = |key: &str, message: String| {
-            Err(Error::Other(format!("[methods.{method}] {key}: {message}")))
+            Err(Error::Setting {
+                method: method.to_string(),
+                reason: format!("{key}: {message}"),
+            })
         };
         let non_negative = |v: f64| v >= 0.0 && v.is_finite();
         if !(self.initial_uncertainty > 0.0 && self.initial_uncertainty.is_finite()) {
@@ -521,10 +524,13 @@ impl Setup {
             .keys()
             .find(|name| !structure.free_names().contains(name))
         {
-            return Err(Error::Other(format!(
-                "[methods.{method}] pseudonoise_for: '{name}' is not a free parameter of model '{}'",
-                structure.name()
-            )));
+            return Err(Error::Setting {
+                method: method.to_string(),
+                reason: format!(
+                    "pseudonoise_for: '{name}' is not a free parameter of model '{}'",
+                    structure.name()
+                ),
+            });
         }
         let View {
             model: view,

@@ -9,6 +9,7 @@
 
 use super::linear_regression::linear_equation_error;
 use super::regression::{Plan, plans, regress, request};
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, Status};
 use crate::estimator::{Settings, merge_settings, parse_settings};
 use crate::linear_structure::LinearStructure;
@@ -16,7 +17,6 @@ use crate::reconstruction::{
     AngularAccelerations, Reconstruction, ReconstructionOptions, check_channels, reconstruct,
 };
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 use aeroid_record::prep::differentiation::Differentiator;
 
@@ -106,7 +106,10 @@ pub(crate) fn check_settings(
             .then(|| format!("correlation_lag must be at least 0 s, is {correlation_lag} s"))
     });
     match problem {
-        Some(message) => Err(Error::Other(format!("[methods.{method}]: {message}"))),
+        Some(message) => Err(Error::Settings {
+            method: method.to_string(),
+            reason: message.to_string(),
+        }),
         None => Ok(()),
     }
 }

@@ -6,13 +6,13 @@
 //! Verma & Peyada, Aeronautical J. 2020, Eqs. 12–26).
 
 use super::coefficient_fit::{DIFFERENTIATOR_SETTING, EquationErrorOptions, equation_error};
+use crate::error::{Error, Result};
 use crate::estimate::Estimate;
 use crate::estimator::{Settings, parse_settings};
 use crate::neural::elm::ElmTrainer;
 use crate::neural::restricted::{self, Feedback, RestrictedOptions};
 use crate::problem::EstimationProblem;
 use crate::reconstruction::ReconstructionOptions;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::prep::differentiation::Differentiator;
 use serde::{Deserialize, Serialize};
 
@@ -114,7 +114,10 @@ impl ElmSettings {
             self.differentiator.problems()
         };
         match problem {
-            Some(message) => Err(Error::Other(format!("[methods.{method}]: {message}"))),
+            Some(message) => Err(Error::Settings {
+                method: method.to_string(),
+                reason: message.to_string(),
+            }),
             None => Ok(()),
         }
     }

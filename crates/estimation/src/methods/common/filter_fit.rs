@@ -42,6 +42,7 @@
 //! 0.01. Cramér–Rao bounds from M = Σ (∂ν/∂θ)ᵀR⁻¹(∂ν/∂θ); convergence at a
 //! predicted decrease below 10⁻⁴, as output error.
 
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit};
 use crate::input_timing::{self};
 use crate::linear_structure::LinearStructure;
@@ -51,7 +52,6 @@ use crate::model::observations::Observations;
 use crate::model::state_space::{Jacobians, StateSpaceModel};
 use crate::solver::extended_kalman::{self, Discretisation, Keep, Noise};
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
 use aeroid_numerics::kalman::{self, Gaussian, SteadyState};
 use aeroid_record::FlightRecord;

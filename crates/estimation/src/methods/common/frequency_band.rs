@@ -5,8 +5,8 @@
 //! (Klein & Morelli, "Aircraft System Identification", AIAA 2006, §7.2;
 //! the transform is [`aeroid_numerics::fourier`]).
 
+use crate::error::{Error, Result};
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_core::units::{Dimension, Quantity};
 use aeroid_numerics::fourier::FourierTransform;
 use aeroid_sim::aero::{Coefficient, Regressor};
@@ -59,7 +59,10 @@ impl BandOptions {
         resolution: Option<&Quantity>,
         input_threshold: f64,
     ) -> Result<BandOptions> {
-        let bad = |message: String| Error::Other(format!("[methods.{method}]: {message}"));
+        let bad = |message: String| Error::Settings {
+            method: method.to_string(),
+            reason: message.to_string(),
+        };
         let hertz = |q: &Quantity, what: &str| {
             q.si(Dimension::Frequency)
                 .map_err(|e| bad(format!("{what}: {e}")))
@@ -115,9 +118,7 @@ impl BandOptions {
             Some((low, high)) => (low, high.min(highest_allowed), "given".to_string()),
             None => {
                 if controls.is_empty() {
-                    return Err(Error::Other(format!(
-                        "[methods.{method}]: the model has no control term to choose the band from; give band = [low, high]"
-                    )));
+                    return Err(Error::Settings { method: method.to_string(), reason: "the model has no control term to choose the band from; give band = [low, high]".to_string() });
                 }
                 // At most 100 candidates: the band's top to 1 % of the
                 // highest allowed frequency is enough.
@@ -147,10 +148,12 @@ impl BandOptions {
                 }
                 if high == 0.0 {
                     let names: Vec<&str> = controls.iter().map(|(n, _)| *n).collect();
-                    return Err(Error::Other(format!(
-                        "{method}: no control of the model ({}) moves in this record; give band = [low, high]",
-                        names.join(", ")
-                    )));
+                    return Err(Error::Data {
+                        reason: format!(
+                            "{method}: no control of the model ({}) moves in this record; give band = [low, high]",
+                            names.join(", ")
+                        ),
+                    });
                 }
                 (
                     spacing,
@@ -174,9 +177,11 @@ impl BandOptions {
         }
         let count = list.len() - usize::from(zero);
         if count == 0 {
-            return Err(Error::Other(format!(
-                "{method}: no frequency of the {spacing:.4} Hz grid lies in the band {low:.4}–{high:.4} Hz"
-            )));
+            return Err(Error::Grid {
+                reason: format!(
+                    "{method}: no frequency of the {spacing:.4} Hz grid lies in the band {low:.4}–{high:.4} Hz"
+                ),
+            });
         }
         let description = format!(
             "{count} frequencies from {:.4} Hz to {:.4} Hz every {:.4} Hz (band {how}){}",

@@ -6,11 +6,11 @@
 //! observations of the compared outputs on its grid.
 
 use super::refusals::free_parameters;
+use crate::error::Result;
 use crate::linear_structure::LinearStructure;
 use crate::model::linear::LinearStateSpace;
 use crate::model::observations::Observations;
 use crate::model::state_space::StateSpaceModel;
-use aeroid_core::error::Result;
 use aeroid_record::FlightRecord;
 use nalgebra::DVector;
 

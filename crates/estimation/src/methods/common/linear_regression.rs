@@ -29,13 +29,13 @@
 
 use super::EQUATION_ERROR as METHOD;
 use super::regression::{CoefficientResult, assemble_named, white_bound_notes_named};
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::{MissingChannel, Refusal};
 use crate::linear_structure::LinearStructure;
 use crate::model::linear::Matrix;
 use crate::model::state_space::{fitting_window, integration_step};
 use crate::reconstruction;
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::regression::{LagWindow, LeastSquares};
 use aeroid_record::FlightRecord;
 use aeroid_record::prep::differentiation::Differentiator;
@@ -144,12 +144,12 @@ pub fn linear_equation_error(
         .states
         .iter()
         .map(|s| values(s))
-        .collect::<Result<_>>()?;
+        .collect::<aeroid_record::Result<_>>()?;
     let inputs: Vec<Vec<f64>> = structure
         .inputs
         .iter()
         .map(|u| values(u))
-        .collect::<Result<_>>()?;
+        .collect::<aeroid_record::Result<_>>()?;
     let steps = reconstruction::control_corners(record);
     let mut notes = vec![format!(
         "linear model: {} state and {} output equation(s) by least squares on {} grid points of {step} s; state rates not recorded as rate outputs by differentiation ({})",
@@ -219,15 +219,15 @@ fn state_rate(
         .filter(|output| record.channel(output).is_ok());
     if let Some(output) = rate_output {
         notes.push(format!("{name}_dot: the recorded rate output '{output}'"));
-        return record.channel(output)?.values_at(times);
+        return Ok(record.channel(output)?.values_at(times)?);
     }
     let derivative = differentiator.differentiate_with_breaks(record.channel(name)?, steps);
     let (first, last) = match (derivative.times.first(), derivative.times.last()) {
         (Some(&first), Some(&last)) => (first, last),
         _ => {
-            return Err(Error::Other(format!(
-                "channel '{name}' is too short to differentiate"
-            )));
+            return Err(Error::Data {
+                reason: format!("channel '{name}' is too short to differentiate"),
+            });
         }
     };
     let inside = derivative.values_at_unbridged(times);

@@ -3,11 +3,11 @@
 //! record lacks ([`missing_channels`]), nothing free to estimate
 //! ([`free_parameters`]) and fewer data than unknowns ([`enough_data`]).
 
+use crate::error::{Error, Result};
 use crate::estimator::{MissingChannel, Refusal};
 use crate::model::driven::ALTITUDE_SUBSTITUTES;
 use crate::model::observations::Observations;
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 
 /// Refuses a structure output error (or another method that simulates or

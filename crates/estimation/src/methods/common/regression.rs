@@ -23,12 +23,12 @@
 //! residuals (Morelli & Klein 1997); the estimate is block-diagonal (the
 //! coefficients are fitted separately).
 
+use crate::error::{Error, Result};
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
 use crate::estimator::Refusal;
 use crate::reconstruction::{Reconstruction, Request};
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::regression::{LagWindow, LeastSquares};
 use aeroid_record::FlightRecord;
 use aeroid_sim::aero::{Coefficient, ForceAxes, ModelKind, Monomial, Regressor};

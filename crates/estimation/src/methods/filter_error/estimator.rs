@@ -136,17 +136,19 @@ pub(super) fn noisy_states(
         None => Ok((0..names.len())
             .filter(|&i| !NOISELESS_STATES.contains(&names[i]))
             .collect()),
-        Some(chosen) => chosen
-            .iter()
-            .map(|name| {
-                names.iter().position(|n| n == name).ok_or_else(|| {
-                    Error::Other(format!(
-                        "[methods.{METHOD}] process_noise: '{name}' is not an integrated state of the model ({})",
+        Some(chosen) => {
+            chosen
+                .iter()
+                .map(|name| {
+                    names.iter().position(|n| n == name).ok_or_else(|| {
+                    Error::Setting { method: METHOD.to_string(), reason: format!(
+                        "process_noise: '{name}' is not an integrated state of the model ({})",
                         names.join(", ")
-                    ))
+                    ) }
                 })
-            })
-            .collect(),
+                })
+                .collect()
+        }
     }
 }
 

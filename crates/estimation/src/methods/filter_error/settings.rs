@@ -72,9 +72,7 @@ impl FilterErrorOptions {
         if self.gain == Gain::TimeVarying
             && self.innovation_covariance == Some(InnovationForm::Full)
         {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}] innovation_covariance = \"full\" needs gain = \"steady\": the time-varying filter's innovation covariance C·P̃·Cᵀ + G·Gᵀ is full already"
-            )));
+            return Err(Error::Setting { method: METHOD.to_string(), reason: "innovation_covariance = \"full\" needs gain = \"steady\": the time-varying filter's innovation covariance C·P̃·Cᵀ + G·Gᵀ is full already".to_string() });
         }
         Ok(())
     }

@@ -33,27 +33,34 @@ pub fn output_error_from(
         .iter()
         .find(|name| !structure.outputs.contains(name))
     {
-        return Err(Error::Other(format!(
-            "[methods.{METHOD}] output_biases: '{name}' is not among the outputs of model '{}' ({})",
-            structure.name,
-            structure.outputs.join(", ")
-        )));
+        return Err(Error::Setting {
+            method: METHOD.to_string(),
+            reason: format!(
+                "output_biases: '{name}' is not among the outputs of model '{}' ({})",
+                structure.name,
+                structure.outputs.join(", ")
+            ),
+        });
     }
     unsuitable(METHOD, structure)?;
     let input_noise = options.input_sigmas()?;
     let inputs = driving_channels(structure);
     for (name, _) in &input_noise {
         if !inputs.contains(&name.as_str()) {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}] input_noise: '{name}' is not an input of model '{}' (its inputs: {})",
-                structure.name,
-                inputs.join(", ")
-            )));
+            return Err(Error::Setting {
+                method: METHOD.to_string(),
+                reason: format!(
+                    "input_noise: '{name}' is not an input of model '{}' (its inputs: {})",
+                    structure.name,
+                    inputs.join(", ")
+                ),
+            });
         }
         if records.iter().all(|record| record.channel(name).is_err()) {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}] input_noise: no record has a '{name}' channel"
-            )));
+            return Err(Error::Setting {
+                method: METHOD.to_string(),
+                reason: format!("input_noise: no record has a '{name}' channel"),
+            });
         }
     }
     let mut problem = Problem::new(records, structure, options)?;

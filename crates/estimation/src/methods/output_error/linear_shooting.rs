@@ -31,6 +31,7 @@
 //! length over `segment`, rounded, equal pieces, a sample on a boundary
 //! belonging to the later piece.
 
+use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit};
 use crate::linear_structure::LinearStructure;
 use crate::methods::common::linear_data::{LinearData, linear_data};
@@ -38,7 +39,6 @@ use crate::methods::common::refusals::enough_data;
 use crate::model::linear::LinearStateSpace;
 use crate::model::observations::Observations;
 use crate::model::state_space::StateSpaceModel;
-use aeroid_core::error::{Error, Result};
 use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
 use aeroid_record::FlightRecord;
 use nalgebra::DVector;
@@ -100,7 +100,9 @@ pub(crate) fn fit(
         weights: vec![1.0; structure.outputs.len()],
         names: names.clone(),
     };
-    problem.reweight(&start).map_err(Error::Other)?;
+    problem
+        .reweight(&start)
+        .map_err(|reason| Error::Numerical { reason })?;
     let mut solver = Options::new(start.len());
     solver.max_iterations = options.max_iterations;
     solver.decrease_tolerance = Some(options.decrease);
@@ -174,12 +176,15 @@ fn pieces(
                 .filter(|point| point.iter().any(|(output, _)| *output == o))
                 .count();
             if samples < 2 {
-                return Err(Error::Other(format!(
-                    "[methods.{method}] segment = {segment} s: the piece {:.3}–{:.3} s of '{}' holds {samples} sample(s) of '{name}'; give a longer segment",
-                    first as f64 * step,
-                    last as f64 * step,
-                    record.scenario
-                )));
+                return Err(Error::Setting {
+                    method: method.to_string(),
+                    reason: format!(
+                        "segment = {segment} s: the piece {:.3}–{:.3} s of '{}' holds {samples} sample(s) of '{name}'; give a longer segment",
+                        first as f64 * step,
+                        last as f64 * step,
+                        record.scenario
+                    ),
+                });
             }
         }
     }

@@ -65,8 +65,8 @@ pub fn match_histories(
     problem
         .resolve_steps(&nothing)
         .and_then(|_| problem.predict(&nothing))
-        .map_err(|reason| {
-            Error::Other(format!("proof of match on '{}': {reason}", record.scenario))
+        .map_err(|reason| Error::Method {
+            reason: format!("proof of match on '{}': {reason}", record.scenario),
         })?;
     let predicted = &problem.predictions()[0];
     Ok(problem.segments[0]

@@ -35,10 +35,13 @@ pub(super) fn pieces(
                 .filter(|t| **t >= from && **t <= to)
                 .count();
             if samples < 2 {
-                return Err(Error::Other(format!(
-                    "[methods.{METHOD}] segment = {length} s: the piece {from:.3}–{to:.3} s of '{}' holds {samples} sample(s) of '{name}'; give a longer segment",
-                    record.scenario
-                )));
+                return Err(Error::Setting {
+                    method: METHOD.to_string(),
+                    reason: format!(
+                        "segment = {length} s: the piece {from:.3}–{to:.3} s of '{}' holds {samples} sample(s) of '{name}'; give a longer segment",
+                        record.scenario
+                    ),
+                });
             }
         }
     }

@@ -100,35 +100,42 @@ impl OutputErrorOptions {
     pub fn check(&self) -> Result<()> {
         check_iterations(METHOD, self.step, self.max_iterations)?;
         if self.starts == 0 {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: starts must be at least 1"
-            )));
+            return Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: "starts must be at least 1".to_string(),
+            });
         }
         if self
             .segment
             .is_some_and(|length| !(length > 0.0 && length.is_finite()))
         {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: segment must be a positive duration"
-            )));
+            return Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: "segment must be a positive duration".to_string(),
+            });
         }
         if !(self.correlation_lag >= 0.0 && self.correlation_lag.is_finite()) {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: correlation_lag must be a duration of 0 s or more"
-            )));
+            return Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: "correlation_lag must be a duration of 0 s or more".to_string(),
+            });
         }
         self.input_sigmas()?;
         self.interpolation.check_controls(METHOD)?;
         if !self.input_noise.is_empty() && self.input_noise_draws < 2 {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: input_noise_draws must be at least 2"
-            )));
+            return Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: "input_noise_draws must be at least 2".to_string(),
+            });
         }
         if !(self.start_spread > 0.0 && self.start_spread.is_finite()) {
-            return Err(Error::Other(format!(
-                "[methods.{METHOD}]: start_spread must be a positive fraction, is {}",
-                self.start_spread
-            )));
+            return Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: format!(
+                    "start_spread must be a positive fraction, is {}",
+                    self.start_spread
+                ),
+            });
         }
         Ok(())
     }
@@ -139,18 +146,22 @@ impl OutputErrorOptions {
         self.input_noise
             .iter()
             .map(|(name, noise)| {
-                let measurand = aeroid_record::derived::measurand(name).ok_or_else(|| {
-                    Error::Other(format!(
-                        "[methods.{METHOD}] input_noise: unknown channel '{name}'"
-                    ))
-                })?;
-                let sigma = noise.si(measurand.dimension).map_err(|e| {
-                    Error::Other(format!("[methods.{METHOD}] input_noise.{name}: {e}"))
+                let measurand =
+                    aeroid_record::derived::measurand(name).ok_or_else(|| Error::Setting {
+                        method: METHOD.to_string(),
+                        reason: format!("input_noise: unknown channel '{name}'"),
+                    })?;
+                let sigma = noise.si(measurand.dimension).map_err(|e| Error::Setting {
+                    method: METHOD.to_string(),
+                    reason: format!("input_noise.{name}: {e}"),
                 })?;
                 if sigma < 0.0 {
-                    return Err(Error::Other(format!(
-                        "[methods.{METHOD}] input_noise.{name}: a standard deviation must not be negative"
-                    )));
+                    return Err(Error::Setting {
+                        method: METHOD.to_string(),
+                        reason: format!(
+                            "input_noise.{name}: a standard deviation must not be negative"
+                        ),
+                    });
                 }
                 Ok((name.clone(), sigma))
             })

@@ -6,8 +6,8 @@
 //! (local polynomial differentiation, not across a control step); and
 //! the air, thrust and α̇ one evaluation takes ([`Surroundings`]).
 
+use crate::error::{Error, Result};
 use crate::reconstruction::control_steps;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 use aeroid_record::prep::differentiation::Differentiator;
 use aeroid_sim::atmosphere::{Air, Atmosphere, SEA_LEVEL_DENSITY};
@@ -140,15 +140,19 @@ pub(super) fn measured_ambient(
     };
     for (&t, a) in times.iter().zip(&ambient) {
         if bad(a.density, true) {
-            return Err(Error::Other(format!(
-                "the measured air density at t = {t:.3} s is {}: it must be finite and positive (channel '{density}', or 2·q̄/V² from 'dynamic_pressure' and 'airspeed')",
-                a.density.unwrap_or(f64::NAN)
-            )));
+            return Err(Error::Data {
+                reason: format!(
+                    "the measured air density at t = {t:.3} s is {}: it must be finite and positive (channel '{density}', or 2·q̄/V² from 'dynamic_pressure' and 'airspeed')",
+                    a.density.unwrap_or(f64::NAN)
+                ),
+            });
         }
         if bad(a.thrust, false) {
-            return Err(Error::Other(format!(
-                "the record's '{thrust}' channel has no finite value at t = {t:.3} s"
-            )));
+            return Err(Error::Data {
+                reason: format!(
+                    "the record's '{thrust}' channel has no finite value at t = {t:.3} s"
+                ),
+            });
         }
     }
     Ok((ambient, notes))
@@ -167,9 +171,7 @@ pub(super) fn measured_alpha_dot(
     ambient: &mut [Ambient],
 ) -> Result<String> {
     let alpha = record.channel("alpha").map_err(|_| {
-        Error::Other(
-            "the stall model takes α̇ from the measured α (`alpha_dot = \"measured\"`), but the record has no 'alpha' channel".into(),
-        )
+        Error::Data { reason: "the stall model takes α̇ from the measured α (`alpha_dot = \"measured\"`), but the record has no 'alpha' channel".into(), }
     })?;
     let differentiator = Differentiator::default();
     let steps = control_steps(record);

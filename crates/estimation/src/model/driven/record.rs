@@ -9,9 +9,9 @@ use super::measured::{ALTITUDE_SUBSTITUTES, Ambient, measured_alpha_dot, measure
 use super::memo::Frozen;
 use super::simulation::DrivenSimulation;
 use super::{FLIGHT_PATH_SIZE, FlightPathState};
+use crate::error::{Error, Result};
 use crate::input_timing::{self, Chosen, InputInterpolation};
 use crate::structure::FLIGHT_PATH_STATES;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 use aeroid_sim::atmosphere::Atmosphere;
 use aeroid_sim::integrator::Interpolation;
@@ -182,14 +182,18 @@ fn sampled_states(
 }
 
 fn missing_altitude() -> Error {
-    Error::Other(format!(
-        "the model needs the measured channel 'altitude' (it is not integrated), or '{}', '{}' or '{}' instead, but the record has none",
-        ALTITUDE_SUBSTITUTES[0], ALTITUDE_SUBSTITUTES[1], ALTITUDE_SUBSTITUTES[2]
-    ))
+    Error::Data {
+        reason: format!(
+            "the model needs the measured channel 'altitude' (it is not integrated), or '{}', '{}' or '{}' instead, but the record has none",
+            ALTITUDE_SUBSTITUTES[0], ALTITUDE_SUBSTITUTES[1], ALTITUDE_SUBSTITUTES[2]
+        ),
+    }
 }
 
 pub(super) fn missing(name: &str) -> Error {
-    Error::Other(format!(
-        "the model needs the measured channel '{name}' (it is not integrated), but the record has none"
-    ))
+    Error::Data {
+        reason: format!(
+            "the model needs the measured channel '{name}' (it is not integrated), but the record has none"
+        ),
+    }
 }

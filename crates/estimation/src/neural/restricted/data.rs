@@ -143,7 +143,7 @@ pub(super) fn sampled(
     times: &[f64],
 ) -> Result<Option<Vec<f64>>> {
     match record.channel(name) {
-        Ok(channel) => channel.values_at(times).map(Some),
+        Ok(channel) => Ok(channel.values_at(times).map(Some)?),
         Err(_) => Ok(None),
     }
 }
@@ -254,7 +254,7 @@ pub(super) fn assemble(
     let motion_series = motion_names
         .iter()
         .map(|name| record.channel(name)?.values_at(times))
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<aeroid_record::Result<Vec<_>>>()?;
     let [alpha, beta, airspeed, mach, p, q, r] =
         ["alpha", "beta", "airspeed", "mach", "p", "q", "r"].map(channel);
     let (alpha, beta, airspeed, mach) = (alpha?, beta?, airspeed?, mach?);

@@ -70,9 +70,11 @@ impl History {
     }
 
     pub fn write_csv(&self, path: &Path) -> Result<()> {
-        std::fs::write(path, self.to_csv()).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        Ok(
+            std::fs::write(path, self.to_csv()).map_err(|source| aeroid_core::Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?,
+        )
     }
 }

@@ -148,9 +148,10 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
             || free.iter().any(|&i| i >= parameters)
             || noisy.iter().any(|&i| i >= n)
         {
-            return Err(Error::Other(
-                "a filter-error fit's parameters or noisy states do not match the model".into(),
-            ));
+            return Err(Error::Shape {
+                reason: "a filter-error fit's parameters or noisy states do not match the model"
+                    .into(),
+            });
         }
         let (outputs, measured) = observations.at.iter().flatten().copied().unzip();
         Ok(FilterErrorFit {
@@ -193,10 +194,12 @@ impl<'a, M: StateSpaceModel + ?Sized> FilterErrorFit<'a, M> {
     pub fn with_time_varying_gain(mut self, initial_covariance: DMatrix<f64>) -> Result<Self> {
         let n = self.model.state_count();
         if initial_covariance.shape() != (n, n) {
-            return Err(Error::Other(format!(
-                "the initial covariance is {:?} for {n} states",
-                initial_covariance.shape()
-            )));
+            return Err(Error::Shape {
+                reason: format!(
+                    "the initial covariance is {:?} for {n} states",
+                    initial_covariance.shape()
+                ),
+            });
         }
         self.gain = Gain::TimeVarying;
         self.initial_covariance = initial_covariance;

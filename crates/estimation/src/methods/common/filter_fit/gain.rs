@@ -37,17 +37,18 @@ pub(crate) fn check_initial_variance(
     initial_variance: &BTreeMap<String, f64>,
 ) -> Result<()> {
     if gain == Gain::Steady && !initial_variance.is_empty() {
-        return Err(Error::Other(format!(
-            "[methods.{method}] initial_variance needs gain = \"time_varying\": the steady-state filter has no initial covariance"
-        )));
+        return Err(Error::Setting { method: method.to_string(), reason: "initial_variance needs gain = \"time_varying\": the steady-state filter has no initial covariance".to_string() });
     }
     match initial_variance
         .iter()
         .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
     {
-        Some((name, v)) => Err(Error::Other(format!(
-            "[methods.{method}] initial_variance.{name} = {v}: a variance must be finite and not below zero"
-        ))),
+        Some((name, v)) => Err(Error::Setting {
+            method: method.to_string(),
+            reason: format!(
+                "initial_variance.{name} = {v}: a variance must be finite and not below zero"
+            ),
+        }),
         None => Ok(()),
     }
 }
@@ -61,12 +62,16 @@ pub(crate) fn initial_covariance(
 ) -> Result<DMatrix<f64>> {
     let mut covariance = DMatrix::zeros(names.len(), names.len());
     for (name, &variance) in initial_variance {
-        let i = names.iter().position(|n| n == name).ok_or_else(|| {
-            Error::Other(format!(
-                "[methods.{method}] initial_variance: '{name}' is not an integrated state of the model ({})",
-                names.join(", ")
-            ))
-        })?;
+        let i = names
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| Error::Setting {
+                method: method.to_string(),
+                reason: format!(
+                    "initial_variance: '{name}' is not an integrated state of the model ({})",
+                    names.join(", ")
+                ),
+            })?;
         covariance[(i, i)] = variance;
     }
     Ok(covariance)

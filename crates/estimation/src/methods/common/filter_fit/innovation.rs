@@ -32,7 +32,9 @@ impl InnovationCovariance {
         let n = root.nrows();
         let inverse = root
             .solve_lower_triangular(&DMatrix::identity(n, n))
-            .ok_or_else(|| Error::Other("a singular innovation covariance".into()))?;
+            .ok_or_else(|| Error::Numerical {
+                reason: "a singular innovation covariance".into(),
+            })?;
         Ok(InnovationCovariance {
             matrix,
             whitening: Some((inverse, log_det)),
@@ -86,7 +88,9 @@ pub(crate) fn lower_root(covariance: DMatrixView<'_, f64>) -> Result<(DMatrix<f6
     let root = covariance
         .clone_owned()
         .cholesky()
-        .ok_or_else(|| Error::Other("an innovation covariance is not positive definite".into()))?
+        .ok_or_else(|| Error::Numerical {
+            reason: "an innovation covariance is not positive definite".into(),
+        })?
         .unpack();
     let log_det = 2.0 * root.diagonal().iter().map(|d| d.ln()).sum::<f64>();
     Ok((root, log_det))

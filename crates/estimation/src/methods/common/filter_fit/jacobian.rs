@@ -20,9 +20,9 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
         options: &Options,
     ) -> Result<gauss_newton::NormalEquations> {
         let FilterPass::TimeVarying(here) = self.pass(unknowns)? else {
-            return Err(Error::Other(
-                "fisher_scoring needs the time-varying gain".into(),
-            ));
+            return Err(Error::Method {
+                reason: "fisher_scoring needs the time-varying gain".into(),
+            });
         };
         let roots = here
             .updates()
@@ -54,9 +54,9 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
                 }
             };
             let FilterPass::TimeVarying(moved_pass) = moved_pass else {
-                return Err(Error::Other(
-                    "fisher_scoring needs the time-varying gain".into(),
-                ));
+                return Err(Error::Method {
+                    reason: "fisher_scoring needs the time-varying gain".into(),
+                });
             };
             let mut column = Vec::with_capacity(pseudo.len());
             for (((_, nu, s), (_, moved_nu, moved_s)), root) in

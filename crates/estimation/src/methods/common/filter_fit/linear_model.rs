@@ -106,12 +106,17 @@ fn noisy_states_named(
         .copied()
         .flatten()
         .map(|name| {
-            structure.states.iter().position(|s| s == name).ok_or_else(|| {
-                Error::Other(format!(
-                    "[methods.{method}] process_noise: '{name}' is not a state of the model ({})",
-                    structure.states.join(", ")
-                ))
-            })
+            structure
+                .states
+                .iter()
+                .position(|s| s == name)
+                .ok_or_else(|| Error::Setting {
+                    method: method.to_string(),
+                    reason: format!(
+                        "process_noise: '{name}' is not a state of the model ({})",
+                        structure.states.join(", ")
+                    ),
+                })
         })
         .collect()
 }

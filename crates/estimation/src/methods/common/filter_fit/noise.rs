@@ -235,9 +235,11 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
         let mut residuals = Vec::with_capacity(pass.innovations.len() + pass.spans.len());
         for (rows, innovation, covariance) in pass.updates() {
             let (root, log_det) = lower_root(covariance)?;
-            let whitened = root
-                .solve_lower_triangular(&innovation)
-                .ok_or_else(|| Error::Other("a singular innovation covariance".into()))?;
+            let whitened =
+                root.solve_lower_triangular(&innovation)
+                    .ok_or_else(|| Error::Numerical {
+                        reason: "a singular innovation covariance".into(),
+                    })?;
             residuals.extend(whitened.iter());
             let noise: f64 = rows.iter().map(|&o| self.noise_floor[o].ln()).sum();
             residuals.push((log_det - noise).max(0.0).sqrt());

@@ -48,19 +48,21 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
         || observations.at.len() != model.len()
         || model.len() < 2
     {
-        return Err(Error::Other(format!(
-            "the filter's sizes do not agree: {n} states, {outputs} outputs on {} grid points; initial state of {}, {} F entries, {} variances, observations on {} points",
-            model.len(),
-            initial.len(),
-            distribution.len(),
-            variances.len(),
-            observations.at.len()
-        )));
+        return Err(Error::Shape {
+            reason: format!(
+                "the filter's sizes do not agree: {n} states, {outputs} outputs on {} grid points; initial state of {}, {} F entries, {} variances, observations on {} points",
+                model.len(),
+                initial.len(),
+                distribution.len(),
+                variances.len(),
+                observations.at.len()
+            ),
+        });
     }
     if !variances.iter().all(|v| *v > 0.0 && v.is_finite()) {
-        return Err(Error::Other(
-            "the innovation variances must be positive and finite".into(),
-        ));
+        return Err(Error::Method {
+            reason: "the innovation variances must be positive and finite".into(),
+        });
     }
     let start = model.time(0);
     let jacobians = model.jacobians(start, initial.as_slice(), theta)?;
@@ -73,10 +75,12 @@ pub fn steady_state_pass<M: StateSpaceModel + ?Sized>(
     let c = jacobians.outputs_by_state;
     let kc = &steady.gain * &c;
     if let Some(i) = (0..n).find(|&i| kc[(i, i)] > 1.0) {
-        return Err(Error::Other(format!(
-            "the gain violates diag(K·C) ≤ 1 (Jategaonkar §5.3): entry {i} is {:.4}",
-            kc[(i, i)]
-        )));
+        return Err(Error::Numerical {
+            reason: format!(
+                "the gain violates diag(K·C) ≤ 1 (Jategaonkar §5.3): entry {i} is {:.4}",
+                kc[(i, i)]
+            ),
+        });
     }
     let count: usize = observations.at.iter().map(Vec::len).sum();
     let mut pass = SteadyPass {
@@ -124,7 +128,12 @@ pub(crate) fn steady_gain(
     }
     let spectral = DMatrix::from_diagonal(&distribution.map(|f| f * f));
     let discrete = kalman::discretise(a, &DMatrix::zeros(n, 0), Some(&spectral), interval);
-    kalman::steady_state_for_innovation(&discrete.transition, c, &discrete.process_noise, &r)
+    Ok(kalman::steady_state_for_innovation(
+        &discrete.transition,
+        c,
+        &discrete.process_noise,
+        &r,
+    )?)
 }
 
 /// The sensitivities a steady-state pass carries (Jategaonkar §5.5 style:
@@ -261,9 +270,9 @@ pub(crate) fn filter_steadily<M: StateSpaceModel + ?Sized>(
             sensitivity += &correction;
         }
         if !state.iter().all(|v| v.is_finite()) {
-            return Err(Error::Other(format!(
-                "the filter's state went non-finite at t = {t} s"
-            )));
+            return Err(Error::Numerical {
+                reason: format!("the filter's state went non-finite at t = {t} s"),
+            });
         }
     }
     Ok(true)
@@ -321,16 +330,18 @@ pub fn time_varying_pass<M: StateSpaceModel + ?Sized>(
     observations: &Observations,
 ) -> Result<TimeVaryingPass> {
     if distribution.len() != model.state_count() {
-        return Err(Error::Other(format!(
-            "the filter's sizes do not agree: {} states, {} F entries",
-            model.state_count(),
-            distribution.len()
-        )));
+        return Err(Error::Shape {
+            reason: format!(
+                "the filter's sizes do not agree: {} states, {} F entries",
+                model.state_count(),
+                distribution.len()
+            ),
+        });
     }
     if !measurement_noise.iter().all(|v| *v > 0.0 && v.is_finite()) {
-        return Err(Error::Other(
-            "the measurement noise variances must be positive and finite".into(),
-        ));
+        return Err(Error::Method {
+            reason: "the measurement noise variances must be positive and finite".into(),
+        });
     }
     let noise = Noise {
         process: DMatrix::from_diagonal(&distribution.map(|f| f * f)),
@@ -377,7 +388,9 @@ pub fn time_varying_pass<M: StateSpaceModel + ?Sized>(
 }
 
 pub(crate) fn at_time(error: Error, t: f64) -> Error {
-    Error::Other(format!("at t = {t} s: {error}"))
+    Error::Method {
+        reason: format!("at t = {t} s: {error}"),
+    }
 }
 
 /// A pass of the filter in the loop.

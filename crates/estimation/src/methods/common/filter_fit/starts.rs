@@ -83,7 +83,9 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
                 (self.variances, self.full) = relaxed;
                 Ok((self.join(theta, &(&reference * factor)), factor))
             }
-            None => Err(failure.unwrap_or_else(|| Error::Other("no start for F".into()))),
+            None => Err(failure.unwrap_or_else(|| Error::Shape {
+                reason: "no start for F".into(),
+            })),
         }
     }
 }

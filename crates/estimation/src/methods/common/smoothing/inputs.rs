@@ -6,12 +6,12 @@
 
 use super::METHOD;
 use super::settings::SmoothedRegressionSettings;
+use crate::error::{Error, Result};
 use crate::estimator::{MissingChannel, Refusal};
 use crate::methods::common::regression::Plan;
 use crate::model::coefficient_states::Output;
 use crate::model::driven::ALTITUDE_SUBSTITUTES;
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_record::FlightRecord;
 use aeroid_sim::aero::Regressor;
 use aeroid_sim::state::Control;

@@ -5,9 +5,9 @@
 //! read and checked, a bad value refused naming its key.
 
 use super::METHOD;
+use crate::error::{Error, Result};
 use crate::estimator::{Settings, parse_settings};
 use crate::model::coefficient_states::Output;
-use aeroid_core::error::{Error, Result};
 use std::collections::BTreeMap;
 
 /// The `[methods.ebm]` table.
@@ -295,7 +295,8 @@ impl SmoothedRegressionSettings {
 
 /// The refusal of the `[methods.ebm]` table's value under `key`.
 fn refuse(key: &str, message: String) -> Result<()> {
-    Err(Error::Other(format!(
-        "[methods.{METHOD}]: {key}: {message}"
-    )))
+    Err(Error::Settings {
+        method: METHOD.to_string(),
+        reason: format!("{key}: {message}"),
+    })
 }

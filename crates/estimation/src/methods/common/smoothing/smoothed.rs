@@ -3,9 +3,9 @@
 //! √diag P_{k|N}, the coefficients as an estimate's histories and as CSV,
 //! CL = CX·sin α − CZ·cos α and CD = −CX·cos α − CZ·sin α for the wind axes.
 
+use crate::error::Result;
 use crate::estimate::History;
 use crate::model::coefficient_states::{self, COEFFICIENT_NAMES, H, P, PHI, PSI, THETA, U};
-use aeroid_core::error::Result;
 use nalgebra::DVector;
 use std::path::Path;
 
@@ -109,7 +109,7 @@ impl Smoothed {
             row.extend((0..6).map(|i| sigma[coefficient_states::coefficient(i)].to_string()));
             writer.write_record(&row).map_err(|e| io_error(e.into()))?;
         }
-        writer.flush().map_err(io_error)
+        Ok(writer.flush().map_err(io_error)?)
     }
 
     /// The smoothed value of a body-axis coefficient (0 CX … 5 Cn) at each grid point.

@@ -41,6 +41,7 @@ use super::inputs::{
 };
 use super::settings::SmoothedRegressionSettings;
 use super::smoothed::Smoothed;
+use crate::error::{Error, Result};
 use crate::estimator::Refusal;
 use crate::methods::common::regression::{self, Plan};
 use crate::model::coefficient_states::{
@@ -50,7 +51,6 @@ use crate::model::observations::Observations;
 use crate::model::state_space::{StateSpaceModel, fitting_window};
 use crate::solver::extended_kalman::{self, Discretisation, Keep, Noise};
 use crate::structure::ModelStructure;
-use aeroid_core::error::{Error, Result};
 use aeroid_core::units::STANDARD_GRAVITY;
 use aeroid_numerics::kalman::{self, Gaussian};
 use aeroid_record::FlightRecord;
@@ -421,9 +421,9 @@ impl Grid {
             fastest = fastest.max(record.channel(name)?.rate);
         }
         if !(fastest > 0.0 && fastest.is_finite()) {
-            return Err(Error::Other(
-                "ebm: the observations have no sample rate".into(),
-            ));
+            return Err(Error::Data {
+                reason: "ebm: the observations have no sample rate".into(),
+            });
         }
         let period = 1.0 / fastest;
         let parts = ((period / settings.max_step) - 1e-9).ceil().max(1.0) as usize;

@@ -1,0 +1,106 @@
+//! The errors of estimation: a method that refuses a record or model (a
+//! [`Refusal`], as data), settings a method does not take, a record that
+//! lacks what a model needs, sizes or grids that do not agree, a numerical
+//! failure of a filter or fit, a network that cannot be trained, a plug-in
+//! that fails, an estimation problem file that does not read. The errors
+//! of the crates below are wrapped whole, so that their messages read the
+//! same.
+
+use aeroid_core::refusal::Refusal;
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file or data error (`aeroid_core`).
+    #[error(transparent)]
+    Core(#[from] aeroid_core::Error),
+
+    /// An error of the numerical kernels (`aeroid_numerics`).
+    #[error(transparent)]
+    Numerics(#[from] aeroid_numerics::Error),
+
+    /// An error of the simulator's own (`aeroid_sim`).
+    #[error(transparent)]
+    Sim(#[from] aeroid_sim::error::Error),
+
+    /// An error of recording or preparing data (`aeroid_record`).
+    #[error(transparent)]
+    Record(#[from] aeroid_record::error::Error),
+
+    /// An estimator cannot run on this record or model; the refusal says
+    /// what is missing, as data.
+    #[error("{0}")]
+    Refused(Refusal),
+
+    /// A method's settings that it does not take (`[methods.NAME]: …`).
+    #[error("[methods.{method}]: {reason}")]
+    Settings { method: String, reason: String },
+
+    /// One setting of a method that it does not take (`[methods.NAME] key…`).
+    #[error("[methods.{method}] {reason}")]
+    Setting { method: String, reason: String },
+
+    /// Sizes that do not agree: parameters, states, outputs, matrices.
+    #[error("{reason}")]
+    Shape { reason: String },
+
+    /// A time grid too short, or a time outside it.
+    #[error("{reason}")]
+    Grid { reason: String },
+
+    /// A record that lacks a channel or samples a model or method needs.
+    #[error("{reason}")]
+    Data { reason: String },
+
+    /// A numerical failure: a covariance not positive definite, a singular
+    /// matrix, a state gone non-finite, a model that departed.
+    #[error("{reason}")]
+    Numerical { reason: String },
+
+    /// A neural network that cannot be built or trained.
+    #[error("{reason}")]
+    Network { reason: String },
+
+    /// A plug-in estimator that cannot be run or fails.
+    #[error("{reason}")]
+    Plugin { reason: String },
+
+    /// An estimation problem or estimate file that cannot be read or written.
+    #[error("{reason}")]
+    File { reason: String },
+
+    /// A method that cannot be set up on this problem: a start, a plan, a
+    /// registration.
+    #[error("{reason}")]
+    Method { reason: String },
+}
+
+impl Error {
+    /// The refusal of an estimator, when this is one.
+    pub fn refusal(&self) -> Option<&Refusal> {
+        match self {
+            Error::Refused(refusal) => Some(refusal),
+            _ => None,
+        }
+    }
+
+    /// The problems found in a file that does not validate.
+    pub fn problems(&self) -> Option<&[aeroid_core::error::Problem]> {
+        match self {
+            Error::Core(error) => error.problems(),
+            Error::Record(error) => error.problems(),
+            Error::Sim(error) => error.problems(),
+            _ => None,
+        }
+    }
+
+    /// The time and reason of a simulation that departed, when this is one.
+    pub fn departure(&self) -> Option<(f64, &str)> {
+        match self {
+            Error::Sim(error) => error.departure(),
+            _ => None,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
