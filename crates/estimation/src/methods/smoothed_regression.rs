@@ -25,7 +25,7 @@
 //!    of the smoothed coefficient on the structure's terms, the regressors
 //!    from the smoothed states (α, β, V, p̂, q̂, r̂, α̇, Mach) and the recorded
 //!    controls — the regression equation error runs
-//!    ([`crate::methods::common::regression::regress`]), with its coloured-residual
+//!    (`crate::methods::common::regression::regress`), with its coloured-residual
 //!    Cramér–Rao bounds.
 //!
 //! Outputs: an [`Estimate`] of the structure's free parameters, and on

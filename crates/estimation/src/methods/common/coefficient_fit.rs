@@ -3,7 +3,7 @@
 //! (reflex-wing UAV paper, Eqs. 17–24; [`crate::reconstruction`]), then the
 //! least-squares regressions of [`super::regression`] (Eqs. 25–27; Klein &
 //! Morelli, "Aircraft System Identification", AIAA 2006, ch. 5). Here too
-//! the `[methods.ee]` settings and [`start_estimate`], equation error's
+//! the `[methods.ee]` settings and `start_estimate`, equation error's
 //! estimate as the start of the iterative methods (output error, filter
 //! error, the augmented filters, the neural Gauss–Newton fits).
 
@@ -124,7 +124,7 @@ impl Default for EquationErrorOptions {
 }
 
 /// Where the iterations start of an iterative method: the model file's values or
-/// equation error's estimate ([`start_estimate`]).
+/// equation error's estimate (`start_estimate`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Start {
     /// The model file's values; initial states first held (two stages).

@@ -1,7 +1,7 @@
 //! The filter-error fit, maximum likelihood with a Kalman filter in the
 //! loop, that filter error runs on 6-DOF and linear structures and output
 //! error runs on linear ones (no process noise: the filter is the exact
-//! simulation, [`linear_fit`]). For flights with process noise
+//! simulation, `linear_fit`). For flights with process noise
 //! (turbulence) as well as measurement noise
 //! (Maine & Iliff, "Identification of dynamic systems", NASA RP-1138,
 //! 1985, ch. 9; Jategaonkar, "Flight Vehicle System Identification", 2nd

@@ -3,7 +3,7 @@
 //! sibling method (tests/house_rules.rs checks).
 
 /// Equation error's name: the method the iterative methods start from
-/// ([`coefficient_fit::start_estimate`]), by regression of the
+/// (`coefficient_fit::start_estimate`), by regression of the
 /// coefficients (six-degree-of-freedom models) or of the state equations
 /// (linear models, [`linear_regression`]).
 pub const EQUATION_ERROR: &str = "ee";

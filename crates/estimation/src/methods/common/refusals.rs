@@ -1,7 +1,7 @@
 //! The refusals the methods that simulate or filter a model share: a
-//! structure they cannot fit as stated ([`unsuitable`]), the channels a
-//! record lacks ([`missing_channels`]), nothing free to estimate
-//! ([`free_parameters`]) and fewer data than unknowns ([`enough_data`]).
+//! structure they cannot fit as stated (`unsuitable`), the channels a
+//! record lacks (`missing_channels`), nothing free to estimate
+//! (`free_parameters`) and fewer data than unknowns (`enough_data`).
 
 use crate::error::{Error, Result};
 use crate::estimator::{MissingChannel, Refusal};
