@@ -137,7 +137,7 @@ pub struct Description {
 /// scenario, study or gate case):
 ///
 /// ```
-/// use aeroid_core::Result;
+/// use aeroid_estimation::Result;
 /// use aeroid_estimation::estimate::{Estimate, ParameterEstimate, Status};
 /// use aeroid_estimation::estimator::{Capabilities, Description, Method, MethodTables};
 /// use aeroid_estimation::{problem::EstimationProblem, registry::Registry, structure::Structure};

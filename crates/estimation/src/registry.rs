@@ -47,7 +47,7 @@ use std::sync::Arc;
 ///     let truth = truth.parameters[&parameter.name];
 ///     assert!((parameter.value - truth).abs() <= 1e-3 * truth.abs(), "{}", parameter.name);
 /// }
-/// # Ok::<(), aeroid_core::Error>(())
+/// # Ok::<(), aeroid_estimation::Error>(())
 /// ```
 #[derive(Clone)]
 pub struct Registry {

@@ -36,7 +36,7 @@
 //!     .collect();
 //! assert!(covered[0] < 10);
 //! assert_eq!(covered[1], 10);
-//! # Ok::<(), aeroid_core::Error>(())
+//! # Ok::<(), aeroid_eval::Error>(())
 //! ```
 
 pub mod axis;

@@ -214,7 +214,7 @@ pub struct ChannelModel {
 /// record.write(&folder)?;
 /// assert_eq!(FlightRecord::read(&folder)?, record);
 /// # std::fs::remove_dir_all(&folder).unwrap();
-/// # Ok::<(), aeroid_core::Error>(())
+/// # Ok::<(), aeroid_record::error::Error>(())
 /// ```
 #[derive(Debug, Clone)]
 pub struct Profile {

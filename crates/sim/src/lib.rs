@@ -30,7 +30,7 @@
 //! assert!(q.iter().any(|q| q.abs() > 0.02));
 //! // The truth an estimate is scored against: the aircraft file's values.
 //! assert_eq!(truth.parameters["Cm_alpha"], -0.176);
-//! # Ok::<(), aeroid_core::Error>(())
+//! # Ok::<(), aeroid_sim::Error>(())
 //! ```
 
 pub mod aero;

@@ -13,5 +13,6 @@ pub mod jacobians;
 pub mod linear;
 pub mod modes;
 pub mod observations;
+pub mod points;
 pub mod state_space;
 pub mod transfer;
