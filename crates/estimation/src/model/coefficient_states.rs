@@ -38,7 +38,7 @@
 //! it), φ, θ, ψ, V = √(u² + v² + w²), h; and, when asked, α = atan2(w, u),
 //! β = asin(v/V), p, q, r. No angular rate is needed.
 //!
-//! The Jacobians are analytic (written out in [`CoefficientStates::jacobians`];
+//! The Jacobians are analytic (written out in [`CoefficientStates::jacobians_into`];
 //! checked against central differences in the tests); one step is the
 //! project's RK4 ([`aeroid_sim::integrator::rk4_step`]) with the throttle
 //! linear between grid points.
@@ -362,14 +362,15 @@ impl CoefficientStates {
         }
     }
 
-    /// ∂f/∂x at `x` into `a` and, when given, ∂h/∂x into `outputs`
-    /// ([`CoefficientStates::jacobians`]' equations), every entry written.
+    /// ∂f/∂x at `x` into `a` and ∂h/∂x into `outputs`
+    /// ([`StateSpaceModel::jacobians_into`]'s equations), every entry
+    /// written.
     fn linearise(
         &self,
         x: &[f64],
         loads: &Loads,
         a: &mut DMatrix<f64>,
-        outputs: Option<&mut DMatrix<f64>>,
+        outputs: &mut DMatrix<f64>,
     ) {
         let mass = &self.aircraft.mass;
         let (force, moment) = Self::coefficients(x);
@@ -465,9 +466,6 @@ impl CoefficientStates {
             a[(c + 1, c + 2)] = 1.0;
         }
         // Outputs.
-        let Some(outputs) = outputs else {
-            return;
-        };
         zeroed(outputs, self.outputs.len(), STATE_COUNT);
         let weight = mass.mass * g;
         let speed_squared = u * u + v * v + w * w;
@@ -584,7 +582,7 @@ impl StateSpaceModel for CoefficientStates {
             x,
             &loads,
             &mut into.rates_by_state,
-            Some(&mut into.outputs_by_state),
+            &mut into.outputs_by_state,
         );
         zeroed(&mut into.rates_by_parameter, STATE_COUNT, 0);
         zeroed(&mut into.outputs_by_parameter, self.outputs.len(), 0);

@@ -583,17 +583,13 @@ impl DrivenStateSpace {
         Ok(())
     }
 
-    /// `f` on the model at θ ([`DrivenStateSpace::model_at`]) and the
-    /// linearisation's buffers, from the view's scratch: θ is written into
-    /// a kept copy of the model instead of a fresh clone.
-    /// The driven model linearised at (t, x) with θ written in (its
-    /// outputs' derivatives too when `with_outputs`), handed to `read`.
+    /// The driven model linearised at (t, x) with θ written in, its
+    /// outputs' derivatives too, handed to `read`.
     fn linearised<R>(
         &self,
         t: f64,
         x: &[f64],
         theta: &[f64],
-        with_outputs: bool,
         read: impl FnOnce(&LinearisationBuffers) -> R,
     ) -> Result<R> {
         let (full, (controls, pseudo, ambient)) = self.point(t, x)?;
@@ -604,13 +600,16 @@ impl DrivenStateSpace {
                 (&controls, pseudo, ambient),
                 &self.states,
                 &self.outputs,
-                with_outputs,
+                true,
                 buffers,
             );
             read(buffers)
         })
     }
 
+    /// `f` on the model at θ ([`DrivenStateSpace::model_at`]) and the
+    /// linearisation's buffers, from the view's scratch: θ is written into
+    /// a kept copy of the model instead of a fresh clone.
     fn with_model<R>(
         &self,
         theta: &[f64],
@@ -811,9 +810,7 @@ impl StateSpaceModel for DrivenStateSpace {
         into: &mut Jacobians,
         outputs: Option<&mut DVector<f64>>,
     ) -> Result<()> {
-        self.linearised(t, x, theta, true, |buffers| {
-            buffers.copy_into(into, outputs)
-        })
+        self.linearised(t, x, theta, |buffers| buffers.copy_into(into, outputs))
     }
 
     /// The step's exact derivative: the sensitivity equations

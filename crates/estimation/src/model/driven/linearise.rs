@@ -503,7 +503,7 @@ impl LinearisationBuffers {
     }
 
     /// The last linearisation's ∂f/∂x and ∂f/∂θ into `into`.
-    pub(in crate::model) fn copy_rates_into(&self, into: &mut Jacobians) {
+    fn copy_rates_into(&self, into: &mut Jacobians) {
         let Some((_, _, linearization)) = &self.made else {
             return;
         };
