@@ -226,7 +226,7 @@ impl Problem {
     }
 
     /// Predicted outputs (in measured form) on the grid: [output][k].
-    fn simulate(&self, theta: &DVector<f64>) -> std::result::Result<Vec<Vec<f64>>, String> {
+    fn simulate(&self, theta: &DVector<f64>) -> crate::Result<Vec<Vec<f64>>> {
         let errors = self.full_errors(theta);
         let corrections = Kinematic::from_column_slice(&errors[..6]);
         let n = self.unknown_errors.len();
@@ -234,10 +234,9 @@ impl Problem {
         let mut grid = vec![Vec::with_capacity(self.inputs.len()); self.outputs.len()];
         for k in 0..self.inputs.len() {
             if !x.iter().all(|v| v.is_finite()) || x[0] <= 0.0 {
-                return Err(format!(
-                    "the reconstructed flight path diverged at t = {:.2} s",
-                    self.start + k as f64 * self.step
-                ));
+                return Err(Error::PathDiverged {
+                    time: self.start + k as f64 * self.step,
+                });
             }
             for (values, &o) in grid.iter_mut().zip(&self.outputs) {
                 values.push(output(o, &x, &errors));
@@ -255,7 +254,7 @@ impl Problem {
         Ok(grid)
     }
 
-    fn errors(&self, theta: &DVector<f64>) -> std::result::Result<Vec<Vec<f64>>, String> {
+    fn errors(&self, theta: &DVector<f64>) -> crate::Result<Vec<Vec<f64>>> {
         let grid = self.simulate(theta)?;
         Ok(self
             .measured
@@ -363,7 +362,9 @@ fn correct(channel: &mut Channel, offset: f64, scale: f64) {
 }
 
 impl LeastSquaresProblem for Problem {
-    fn residuals(&mut self, theta: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
+    type Error = crate::Error;
+
+    fn residuals(&mut self, theta: &DVector<f64>) -> crate::Result<DVector<f64>> {
         let errors = self.errors(theta)?;
         let total = errors.iter().map(Vec::len).sum();
         Ok(DVector::from_iterator(
@@ -375,7 +376,7 @@ impl LeastSquaresProblem for Problem {
         ))
     }
 
-    fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
+    fn reweight(&mut self, theta: &DVector<f64>) -> crate::Result<bool> {
         let errors = self.errors(theta)?;
         let measured: Vec<Vec<f64>> = self
             .measured

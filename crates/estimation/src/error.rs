@@ -57,6 +57,53 @@ pub enum Error {
     #[error("{reason}")]
     Numerical { reason: String },
 
+    /// The model being fitted departed while simulated at an estimate
+    /// (non-finite, |α| or |β| beyond 90°, airspeed not positive).
+    #[error("the postulated model departed at t = {time:.3} s")]
+    ModelDeparted { time: f64 },
+
+    /// Equation error could not give a start for a fit.
+    #[error("no equation-error start ({0})")]
+    NoStart(Box<Error>),
+
+    /// Equation error's estimate, as a start for a fit, did not converge.
+    #[error("equation error ended {0}")]
+    StartNotConverged(aeroid_numerics::Status),
+
+    /// A piece of a multiple-shooting fit whose simulation departed.
+    #[error("the simulation of piece {piece} departed at t = {time:.3} s")]
+    PieceDeparted { piece: usize, time: f64 },
+
+    /// A stall model's τ1 that crossed 0 during a fit (χ is a state only
+    /// while τ1 > 0, so the model's state vector would change).
+    #[error("τ1 must stay on the side of 0 it starts on (χ is a state only while τ1 > 0)")]
+    Tau1Sign,
+
+    /// A model whose fastest mode is beyond what the fit's RK4 steps
+    /// integrate (h·|λ| above `reach`); `finest`: the finest sub-division
+    /// a fit takes, when the steps are already at it.
+    #[error(
+        "the model's fastest mode (|λ| = {fastest:.1}/s) is beyond RK4 steps of {step:.5} s (h·|λ| = {:.2} > {reach}){}",
+        step * fastest,
+        finest.map(|n| format!(", the finest a fit takes ({n} per grid interval)")).unwrap_or_default()
+    )]
+    BeyondStepReach {
+        fastest: f64,
+        step: f64,
+        reach: f64,
+        finest: Option<usize>,
+    },
+
+    /// The flight path that flight-path reconstruction integrates went
+    /// non-finite or to a non-positive airspeed.
+    #[error("the reconstructed flight path diverged at t = {time:.2} s")]
+    PathDiverged { time: f64 },
+
+    /// Values of the model that are not finite at the estimate being
+    /// evaluated (`what`: "the model's coefficients").
+    #[error("{what} are not finite at this Θ")]
+    NotFinite { what: &'static str },
+
     /// A neural network that cannot be built or trained.
     #[error("{reason}")]
     Network { reason: String },
@@ -98,6 +145,7 @@ impl Error {
     pub fn departure(&self) -> Option<(f64, &str)> {
         match self {
             Error::Sim(error) => error.departure(),
+            Error::ModelDeparted { time } => Some((*time, "the postulated model departed")),
             _ => None,
         }
     }

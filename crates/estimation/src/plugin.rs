@@ -434,13 +434,10 @@ impl Plugin {
         &self,
         problem: &EstimationProblem,
         text: &str,
-    ) -> std::result::Result<Estimate, String> {
-        let written: Written = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    ) -> std::result::Result<Estimate, WrittenError> {
+        let written: Written = serde_json::from_str(text)?;
         if written.format != ESTIMATE_FORMAT {
-            return Err(format!(
-                "format '{}', expected '{ESTIMATE_FORMAT}'",
-                written.format
-            ));
+            return Err(WrittenError::Format(written.format));
         }
         let structure = &problem.structure;
         let free_names = structure.free_names();
@@ -449,27 +446,30 @@ impl Plugin {
         let mut parameters = Vec::with_capacity(free.len());
         for (i, p) in written.parameters.iter().enumerate() {
             if !free.contains(&p.name.as_str()) {
-                return Err(format!(
-                    "parameters[{i}]: '{}' is not a free parameter of model '{}' (free: {})",
-                    p.name,
-                    structure.name(),
-                    free.join(", ")
-                ));
+                return Err(WrittenError::NotFree {
+                    index: i,
+                    name: p.name.clone(),
+                    model: structure.name().to_string(),
+                    free: free.join(", "),
+                });
             }
             if written.parameters[..i].iter().any(|q| q.name == p.name) {
-                return Err(format!("parameters[{i}]: '{}' is given twice", p.name));
+                return Err(WrittenError::Twice {
+                    index: i,
+                    name: p.name.clone(),
+                });
             }
             if !p.value.is_finite() {
-                return Err(format!(
-                    "parameters[{i}] ('{}'): value is not a finite number",
-                    p.name
-                ));
+                return Err(WrittenError::Value {
+                    index: i,
+                    name: p.name.clone(),
+                });
             }
             if p.standard_error.is_nan() || p.standard_error < 0.0 {
-                return Err(format!(
-                    "parameters[{i}] ('{}'): standard_error must be ≥ 0 or \"inf\"",
-                    p.name
-                ));
+                return Err(WrittenError::StandardError {
+                    index: i,
+                    name: p.name.clone(),
+                });
             }
             let start = names
                 .iter()
@@ -488,16 +488,16 @@ impl Plugin {
             .copied()
             .collect();
         if !missing.is_empty() {
-            return Err(format!("free parameters missing: {}", missing.join(", ")));
+            return Err(WrittenError::Missing(missing.join(", ")));
         }
         let n = parameters.len();
         let covariance = match written.covariance {
             Some(covariance) => {
                 if covariance.len() != n || covariance.iter().any(|row| row.len() != n) {
-                    return Err(format!("covariance: expected {n}×{n}"));
+                    return Err(WrittenError::CovarianceShape(n));
                 }
                 if covariance.iter().flatten().any(|v| v.is_nan()) {
-                    return Err("covariance: holds NaN".into());
+                    return Err(WrittenError::CovarianceNan);
                 }
                 covariance
             }
@@ -515,9 +515,7 @@ impl Plugin {
             "diverged" => Status::Diverged(reason),
             "no_progress" => Status::NoProgress,
             other => {
-                return Err(format!(
-                    "status '{other}': expected converged, iteration_limit, diverged or no_progress"
-                ));
+                return Err(WrittenError::Status(other.to_string()));
             }
         };
         Ok(Estimate {
@@ -724,4 +722,36 @@ pub fn discover() -> (Vec<Plugin>, Vec<Error>) {
         }
     }
     (plugins, problems)
+}
+
+/// What is wrong with the estimate a plug-in wrote (`estimate.json`).
+#[derive(Debug, thiserror::Error)]
+enum WrittenError {
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    #[error("format '{0}', expected '{ESTIMATE_FORMAT}'")]
+    Format(String),
+    #[error(
+        "parameters[{index}]: '{name}' is not a free parameter of model '{model}' (free: {free})"
+    )]
+    NotFree {
+        index: usize,
+        name: String,
+        model: String,
+        free: String,
+    },
+    #[error("parameters[{index}]: '{name}' is given twice")]
+    Twice { index: usize, name: String },
+    #[error("parameters[{index}] ('{name}'): value is not a finite number")]
+    Value { index: usize, name: String },
+    #[error("parameters[{index}] ('{name}'): standard_error must be ≥ 0 or \"inf\"")]
+    StandardError { index: usize, name: String },
+    #[error("free parameters missing: {0}")]
+    Missing(String),
+    #[error("covariance: expected {0}×{0}")]
+    CovarianceShape(usize),
+    #[error("covariance: holds NaN")]
+    CovarianceNan,
+    #[error("status '{0}': expected converged, iteration_limit, diverged or no_progress")]
+    Status(String),
 }

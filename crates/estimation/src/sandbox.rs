@@ -24,7 +24,37 @@ pub enum Sandbox {
     /// A Landlock rule set to enter in the plug-in's process.
     Landlock(landlock::RuleSet),
     /// No sandbox, and why.
-    Unavailable(String),
+    Unavailable(Unavailable),
+}
+
+/// Why a plug-in runs without a sandbox.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Unavailable {
+    /// The kernel has no Landlock (too old, or calls filtered).
+    #[error("this kernel has no Landlock ({0})")]
+    NoLandlock(std::io::Error),
+    /// The kernel refused to create the rule set.
+    #[error("Landlock refused a rule set: {0}")]
+    RuleSet(std::io::Error),
+    /// A folder the rules name cannot be opened.
+    #[error("{}: {source}", path.display())]
+    Open {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    /// A path that cannot be passed to the kernel.
+    #[error("{}: a path with a NUL byte", .0.display())]
+    NulByte(std::path::PathBuf),
+    /// The kernel refused the rule for a folder.
+    #[error("Landlock refused the rule for {}: {source}", path.display())]
+    Rule {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    /// A system other than Linux.
+    #[error("Landlock is Linux's; this system has no sandbox for plug-ins")]
+    NotLinux,
 }
 
 impl Sandbox {
@@ -41,6 +71,7 @@ impl Sandbox {
 pub mod landlock {
     //! The three Landlock system calls and their structures (the kernel's
     //! include/uapi/linux/landlock.h).
+    use super::Unavailable;
     use std::ffi::CString;
     use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
     use std::os::unix::ffi::OsStrExt;
@@ -83,7 +114,7 @@ pub mod landlock {
     impl RuleSet {
         /// The rule set of the module header for the work folder `work`;
         /// the reason when the kernel cannot give one.
-        pub fn new(work: &Path) -> Result<RuleSet, String> {
+        pub fn new(work: &Path) -> Result<RuleSet, Unavailable> {
             // SAFETY: the version query takes no pointer (NULL, size 0).
             let version = unsafe {
                 libc::syscall(
@@ -94,10 +125,7 @@ pub mod landlock {
                 )
             };
             if version < 1 {
-                return Err(format!(
-                    "this kernel has no Landlock ({})",
-                    std::io::Error::last_os_error()
-                ));
+                return Err(Unavailable::NoLandlock(std::io::Error::last_os_error()));
             }
             let mut writes = WRITE_FILE
                 | REMOVE_DIR
@@ -128,10 +156,7 @@ pub mod landlock {
                 )
             };
             if fd < 0 {
-                return Err(format!(
-                    "Landlock refused a rule set: {}",
-                    std::io::Error::last_os_error()
-                ));
+                return Err(Unavailable::RuleSet(std::io::Error::last_os_error()));
             }
             // SAFETY: the call returned a new file descriptor we own.
             let rules = RuleSet {
@@ -143,17 +168,16 @@ pub mod landlock {
         }
 
         /// Grants `access` beneath `path`.
-        fn allow(&self, path: &Path, access: u64) -> Result<(), String> {
+        fn allow(&self, path: &Path, access: u64) -> Result<(), Unavailable> {
             let name = CString::new(path.as_os_str().as_bytes())
-                .map_err(|_| format!("{}: a path with a NUL byte", path.display()))?;
+                .map_err(|_| Unavailable::NulByte(path.to_path_buf()))?;
             // SAFETY: name is a NUL-terminated path.
             let raw = unsafe { libc::open(name.as_ptr(), libc::O_PATH | libc::O_CLOEXEC) };
             if raw < 0 {
-                return Err(format!(
-                    "{}: {}",
-                    path.display(),
-                    std::io::Error::last_os_error()
-                ));
+                return Err(Unavailable::Open {
+                    path: path.to_path_buf(),
+                    source: std::io::Error::last_os_error(),
+                });
             }
             // SAFETY: open returned a new file descriptor we own.
             let parent = unsafe { OwnedFd::from_raw_fd(raw) };
@@ -172,11 +196,10 @@ pub mod landlock {
                 )
             };
             if result < 0 {
-                return Err(format!(
-                    "Landlock refused the rule for {}: {}",
-                    path.display(),
-                    std::io::Error::last_os_error()
-                ));
+                return Err(Unavailable::Rule {
+                    path: path.to_path_buf(),
+                    source: std::io::Error::last_os_error(),
+                });
             }
             Ok(())
         }
@@ -206,8 +229,8 @@ pub mod landlock {
     pub struct RuleSet;
 
     impl RuleSet {
-        pub fn new(_work: &Path) -> Result<RuleSet, String> {
-            Err("Landlock is Linux's; this system has no sandbox for plug-ins".into())
+        pub fn new(_work: &Path) -> Result<RuleSet, super::Unavailable> {
+            Err(super::Unavailable::NotLinux)
         }
 
         pub fn enter(&self) -> std::io::Result<()> {

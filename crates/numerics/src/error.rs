@@ -38,6 +38,15 @@ pub enum Error {
     #[error("{reason}")]
     Input { reason: String },
 
+    /// Residuals that are not all finite at the estimate being evaluated.
+    #[error("the residuals are not finite")]
+    NonFiniteResiduals,
+
+    /// Sensitivities that are not finite, named by their unknowns (a model
+    /// evaluated where it has no derivative).
+    #[error("the sensitivities to {} are not finite", unknowns.join(", "))]
+    NonFiniteSensitivities { unknowns: Vec<String> },
+
     /// A least-squares solve inside a kernel that failed.
     #[error("{what}: {reason}")]
     LeastSquares { what: &'static str, reason: String },

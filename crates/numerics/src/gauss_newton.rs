@@ -34,8 +34,14 @@ use nalgebra::{DMatrix, DVector};
 
 /// A nonlinear least-squares problem in weighted residual form.
 pub trait LeastSquaresProblem {
-    /// Weighted residuals at θ; an error string when the model cannot be evaluated there.
-    fn residuals(&mut self, theta: &DVector<f64>) -> Result<DVector<f64>, String>;
+    /// Why the model cannot be evaluated at a θ (a departing simulation, a
+    /// covariance that is not positive definite); the solver's own findings
+    /// (residuals or sensitivities that are not finite) convert into it. A
+    /// fit that meets one ends [`Status::Diverged`] with its message.
+    type Error: std::fmt::Display + From<crate::Error>;
+
+    /// Weighted residuals at θ; an error when the model cannot be evaluated there.
+    fn residuals(&mut self, theta: &DVector<f64>) -> Result<DVector<f64>, Self::Error>;
 
     /// For a problem with inequality constraints on its unknowns (filter
     /// error's diag(K·C) ≤ 1): the Gauss–Newton step at θ subject to them,
@@ -66,7 +72,7 @@ pub trait LeastSquaresProblem {
     /// Called at the start of each iteration with the current estimate and its
     /// unweighted state; a problem that re-estimates its weights (output error's
     /// R) does so here. Returns true when the weights changed.
-    fn reweight(&mut self, _theta: &DVector<f64>) -> Result<bool, String> {
+    fn reweight(&mut self, _theta: &DVector<f64>) -> Result<bool, Self::Error> {
         Ok(false)
     }
 
@@ -118,7 +124,7 @@ pub trait LeastSquaresProblem {
         &mut self,
         theta: &DVector<f64>,
         options: &Options,
-    ) -> Result<DMatrix<f64>, String> {
+    ) -> Result<DMatrix<f64>, Self::Error> {
         finite_difference_jacobian(self, theta, options)
     }
 
@@ -134,7 +140,7 @@ pub trait LeastSquaresProblem {
         theta: &DVector<f64>,
         residuals: &DVector<f64>,
         options: &Options,
-    ) -> Result<NormalEquations, String> {
+    ) -> Result<NormalEquations, Self::Error> {
         let jacobian = self.jacobian(theta, options)?;
         Ok(NormalEquations {
             gradient: jacobian.tr_mul(residuals),
@@ -260,13 +266,17 @@ pub struct Solution {
 
 impl Solution {
     /// A run whose model could not be evaluated: the last good θ and the reason.
-    fn diverged(theta: DVector<f64>, history: Vec<Iteration>, reason: String) -> Solution {
+    fn diverged(
+        theta: DVector<f64>,
+        history: Vec<Iteration>,
+        reason: impl std::fmt::Display,
+    ) -> Solution {
         Solution {
             information: DMatrix::zeros(theta.len(), theta.len()),
             residuals: DVector::zeros(0),
             theta,
             cost: f64::NAN,
-            status: Status::Diverged(reason),
+            status: Status::Diverged(reason.to_string()),
             history,
         }
     }
@@ -329,7 +339,7 @@ pub fn finite_difference_jacobian<P: LeastSquaresProblem + ?Sized>(
     problem: &mut P,
     theta: &DVector<f64>,
     options: &Options,
-) -> Result<DMatrix<f64>, String> {
+) -> Result<DMatrix<f64>, P::Error> {
     let mut columns = Vec::with_capacity(theta.len());
     for j in 0..theta.len() {
         let h = options.difference_step(theta, j);
@@ -376,7 +386,10 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
             .reweight(&theta)
             .map(|changed| compensate(problem, &mut theta, changed, options))
             .and_then(|_| problem.residuals(&theta))
-            .and_then(|r| finite_cost(&r).map(|cost| (r, cost)))
+            .and_then(|r| {
+                let cost = finite_cost(&r)?;
+                Ok((r, cost))
+            })
             .and_then(|(r, cost)| {
                 let normal = problem.normal_equations(&theta, &r, options)?;
                 let normal = finite_normal(normal, |j| problem.unknown_name(j))?;
@@ -526,7 +539,7 @@ fn refine<P: LeastSquaresProblem + ?Sized>(problem: &mut P, held: &mut Option<f6
 fn finite_normal(
     normal: NormalEquations,
     name: impl Fn(usize) -> Option<String>,
-) -> Result<NormalEquations, String> {
+) -> Result<NormalEquations, crate::Error> {
     let n = normal.gradient.len();
     let column = |j: usize| normal.information.column(j).iter().all(|v| v.is_finite());
     if (0..n).all(|j| normal.gradient[j].is_finite() && column(j)) {
@@ -539,22 +552,19 @@ fn finite_normal(
     if bad.is_empty() {
         bad = (0..n).filter(|&j| !column(j)).collect();
     }
-    let bad: Vec<String> = bad
+    let unknowns = bad
         .into_iter()
         .map(|j| name(j).unwrap_or_else(|| format!("#{j} (by position)")))
         .collect();
-    Err(format!(
-        "the sensitivities to {} are not finite",
-        bad.join(", ")
-    ))
+    Err(crate::Error::NonFiniteSensitivities { unknowns })
 }
 
-fn finite_cost(residuals: &DVector<f64>) -> Result<f64, String> {
+fn finite_cost(residuals: &DVector<f64>) -> Result<f64, crate::Error> {
     let cost = cost_of(residuals);
     if cost.is_finite() {
         Ok(cost)
     } else {
-        Err("the residuals are not finite".into())
+        Err(crate::Error::NonFiniteResiduals)
     }
 }
 

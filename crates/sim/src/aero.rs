@@ -45,5 +45,5 @@ pub use spec::{
 };
 pub use terms::{
     Coefficient, ForceAxes, MAX_DEGREE, MAX_PRODUCTS, Monomial, REGRESSOR_COUNT, Regressor,
-    TermRegressors, Tie,
+    TermError, TermRegressors, Tie,
 };

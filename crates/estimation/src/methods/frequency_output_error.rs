@@ -298,13 +298,10 @@ impl FrequencyProblem<'_> {
     }
 
     /// ṽ = Z̃ − Ỹ at θ (free parameters), [output][frequency].
-    fn errors(&self, free: &DVector<f64>) -> std::result::Result<Vec<Vec<Complex<f64>>>, String> {
+    fn errors(&self, free: &DVector<f64>) -> crate::Result<Vec<Vec<Complex<f64>>>> {
         let theta = self.theta(free);
-        let matrices = self
-            .model
-            .matrices(theta.as_slice())
-            .map_err(|e| e.to_string())?;
-        let predicted = self.data.predicted(&matrices).map_err(|e| e.to_string())?;
+        let matrices = self.model.matrices(theta.as_slice())?;
+        let predicted = self.data.predicted(&matrices)?;
         Ok(self
             .data
             .outputs
@@ -324,7 +321,9 @@ fn spectral_density(errors: &[Vec<Complex<f64>>]) -> Vec<f64> {
 }
 
 impl LeastSquaresProblem for FrequencyProblem<'_> {
-    fn residuals(&mut self, theta: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
+    type Error = crate::Error;
+
+    fn residuals(&mut self, theta: &DVector<f64>) -> crate::Result<DVector<f64>> {
         let errors = self.errors(theta)?;
         let count = 2 * errors.iter().map(Vec::len).sum::<usize>();
         let mut residuals = Vec::with_capacity(count);
@@ -335,7 +334,7 @@ impl LeastSquaresProblem for FrequencyProblem<'_> {
         Ok(DVector::from_vec(residuals))
     }
 
-    fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
+    fn reweight(&mut self, theta: &DVector<f64>) -> crate::Result<bool> {
         let density = spectral_density(&self.errors(theta)?);
         // A noise-free output keeps a floor (1e-20 of the largest) so that
         // its weight stays finite.

@@ -56,7 +56,7 @@ use crate::structure::ModelStructure;
 use aeroid_numerics::regression::LeastSquares;
 use aeroid_record::FlightRecord;
 use aeroid_record::prep::differentiation::Differentiator;
-use aeroid_sim::aero::{Coefficient, ForceAxes, Monomial, Regressor};
+use aeroid_sim::aero::{Coefficient, ForceAxes, Monomial, Regressor, TermError};
 use nalgebra::{DMatrix, DVector};
 use std::fmt;
 
@@ -261,10 +261,7 @@ impl Candidate {
         let text = text.trim();
         let monomial = Monomial::parse(text)
             .and_then(|m| match m.single() {
-                Some(Regressor::Constant) => Err(format!(
-                    "the constant '0' is always in the model; keys: {}",
-                    Regressor::ALL.map(Regressor::key).join(", ")
-                )),
+                Some(Regressor::Constant) => Err(TermError::Constant),
                 _ => Ok(m),
             })
             .map_err(|message| Error::Method {

@@ -938,11 +938,9 @@ impl StateSpaceModel for DrivenStateSpace {
         let measured = &simulation.measured()[k];
         self.with_points(points, |model, j, x, _| {
             let full = self.full(x, measured)?;
-            driven::check_departure(&full, simulation.time(k))
-                .map_err(|reason| Error::Numerical { reason })?;
+            driven::check_departure(&full, simulation.time(k))?;
             let next = steps.step(model, &full);
-            driven::check_departure(&next, simulation.time(k + 1))
-                .map_err(|reason| Error::Numerical { reason })?;
+            driven::check_departure(&next, simulation.time(k + 1))?;
             for (into, &i) in into[j * stride..j * stride + n]
                 .iter_mut()
                 .zip(&self.states)

@@ -230,7 +230,7 @@ impl<'a> Fit<'a> {
     /// equations: Eq. 3 with α̇ from the differentiated α channel when
     /// τ1 = 0, else Eq. 2 integrated along the record from χ∞ at the start
     /// of each contiguous stretch by the project's RK4 (`separation`).
-    fn evaluate_coefficients(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
+    fn evaluate_coefficients(&mut self, theta: &DVector<f64>) -> crate::Result<()> {
         self.predicted_at = None;
         for (j, &i) in self.free.iter().enumerate() {
             self.model.parameters.values_mut()[i] = theta[j];
@@ -256,7 +256,9 @@ impl<'a> Fit<'a> {
         }
         match self.coefficients.iter().all(|v| v.is_finite()) {
             true => Ok(()),
-            false => Err("the model's coefficients are not finite at this Θ".into()),
+            false => Err(crate::Error::NotFinite {
+                what: "the model's coefficients",
+            }),
         }
     }
 
@@ -288,7 +290,7 @@ impl<'a> Fit<'a> {
     }
 
     /// The scaled predictions of every pair at Θ (Eq. 11 or 23).
-    fn predict(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
+    fn predict(&mut self, theta: &DVector<f64>) -> crate::Result<()> {
         if self.predicted_at.as_ref() == Some(theta) {
             return Ok(());
         }
@@ -316,14 +318,16 @@ impl<'a> Fit<'a> {
             previous = Some(k);
         }
         if !self.predictions.iter().all(|v| v.is_finite()) {
-            return Err("the network's predictions are not finite at this Θ".into());
+            return Err(crate::Error::NotFinite {
+                what: "the network's predictions",
+            });
         }
         self.predicted_at = Some(theta.clone());
         Ok(())
     }
 
     /// Z − Y, pair by pair (scaled).
-    fn errors(&mut self, theta: &DVector<f64>) -> std::result::Result<Vec<f64>, String> {
+    fn errors(&mut self, theta: &DVector<f64>) -> crate::Result<Vec<f64>> {
         self.predict(theta)?;
         Ok(self
             .targets
@@ -335,7 +339,9 @@ impl<'a> Fit<'a> {
 }
 
 impl LeastSquaresProblem for Fit<'_> {
-    fn residuals(&mut self, theta: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
+    type Error = crate::Error;
+
+    fn residuals(&mut self, theta: &DVector<f64>) -> crate::Result<DVector<f64>> {
         let errors = self.errors(theta)?;
         let n = self.data.output_count();
         let mut residuals = DVector::zeros(errors.len());
@@ -349,7 +355,7 @@ impl LeastSquaresProblem for Fit<'_> {
 
     /// R = (1/N)·Σ E·Eᵀ at Θ (Eq. 13), its diagonal floored at 10⁻¹² of
     /// its mean so that a near-perfect fit stays finite.
-    fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
+    fn reweight(&mut self, theta: &DVector<f64>) -> crate::Result<bool> {
         let errors = self.errors(theta)?;
         let n = self.data.output_count();
         let count = self.data.pairs.len() as f64;
@@ -365,11 +371,16 @@ impl LeastSquaresProblem for Fit<'_> {
         }
         let cholesky = r
             .cholesky()
-            .ok_or_else(|| "the residual covariance R is not positive definite".to_string())?;
+            .ok_or_else(|| aeroid_numerics::Error::NotPositiveDefinite {
+                what: "the residual covariance R".into(),
+                why: "",
+            })?;
         let factor = cholesky.l();
         self.whitening = factor
             .solve_lower_triangular(&DMatrix::identity(n, n))
-            .ok_or_else(|| "the residual covariance R cannot be inverted".to_string())?;
+            .ok_or_else(|| aeroid_numerics::Error::Singular {
+                reason: "the residual covariance R cannot be inverted".into(),
+            })?;
         Ok(true)
     }
 
@@ -381,11 +392,7 @@ impl LeastSquaresProblem for Fit<'_> {
     /// once per coefficient (3 instead of n_Θ network passes). With
     /// predicted feedback Θ also reaches Y(i+1) through Y(i): the whole
     /// free-running prediction is differenced per parameter.
-    fn jacobian(
-        &mut self,
-        theta: &DVector<f64>,
-        options: &Options,
-    ) -> std::result::Result<DMatrix<f64>, String> {
+    fn jacobian(&mut self, theta: &DVector<f64>, options: &Options) -> crate::Result<DMatrix<f64>> {
         let step = |j: usize| {
             options.relative_step
                 * theta[j]
@@ -440,7 +447,7 @@ impl Fit<'_> {
         &mut self,
         theta: &DVector<f64>,
         step: impl Fn(usize) -> f64,
-    ) -> std::result::Result<Vec<f64>, String> {
+    ) -> crate::Result<Vec<f64>> {
         let data = self.data;
         let (m, c) = (data.motion_count(), data.coefficient_count());
         let scale: Vec<f64> = (0..c)
@@ -479,7 +486,7 @@ impl Fit<'_> {
     /// scaled range: pair by pair, output by output, coefficient by
     /// coefficient. Expects the coefficients at Θ (see
     /// [`Fit::coefficient_slopes`]); the predictions at Θ are kept.
-    fn network_slopes(&mut self, theta: &DVector<f64>) -> std::result::Result<Vec<f64>, String> {
+    fn network_slopes(&mut self, theta: &DVector<f64>) -> crate::Result<Vec<f64>> {
         self.predict(theta)?;
         let data = self.data;
         let (m, c, n) = (

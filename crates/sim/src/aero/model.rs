@@ -8,7 +8,7 @@
 use super::spec::{
     AeroSpec, ModelKind, RateNormalization, RateSpeed, ReferenceGeometry, StallOptions,
 };
-use super::terms::{Coefficient, ForceAxes, MAX_PRODUCTS, Monomial, Regressor, Term};
+use super::terms::{Coefficient, ForceAxes, MAX_PRODUCTS, Monomial, Regressor, Term, TermError};
 use crate::params::ParameterSet;
 use crate::state::Controls;
 use aeroid_core::error::Problems;
@@ -204,30 +204,29 @@ impl AeroModel {
         coefficient: Coefficient,
         key: &str,
         value: f64,
-    ) -> Result<Monomial, String> {
+    ) -> Result<Monomial, TermError> {
         let monomial = match Regressor::from_key(key) {
             Some(regressor) => Monomial::from(regressor),
             None if key.contains(['*', '^']) => Monomial::parse(key)?,
             None => {
-                return Err(format!(
-                    "unknown term '{key}'; known: {} and their products ('alpha^2', 'alpha*de')",
-                    Regressor::keys()
-                ));
+                return Err(TermError::UnknownTerm {
+                    key: key.to_string(),
+                });
             }
         };
         if !value.is_finite() {
-            return Err(format!("{value} is not a finite number"));
+            return Err(TermError::NotFinite(value));
         }
         let lift_squared = monomial.contains(Regressor::LiftSquared);
         if lift_squared && (coefficient != Coefficient::Drag || self.force_axes != ForceAxes::Wind)
         {
-            return Err("CL2 is a drag term of a wind-axis model".into());
+            return Err(TermError::LiftSquaredAxes);
         }
         if lift_squared && monomial.single().is_none() {
-            return Err("CL2 cannot be a factor of a product".into());
+            return Err(TermError::LiftSquaredProduct);
         }
         if monomial.contains(Regressor::Separation) && self.kind != ModelKind::Stall {
-            return Err("chi terms need model = \"stall\"".into());
+            return Err(TermError::SeparationNeedsStall);
         }
         Ok(monomial)
     }

@@ -120,50 +120,44 @@ impl Monomial {
     /// Parses a coefficient-table key: a regressor key, or factors
     /// `key` / `key^n` joined by `*`, in canonical form (the error names
     /// the canonical spelling of a key that is otherwise valid).
-    pub fn parse(text: &str) -> Result<Monomial, String> {
+    pub fn parse(text: &str) -> Result<Monomial, TermError> {
         let mut factors = Vec::new();
         for factor in text.split('*') {
             let (key, power) = match factor.split_once('^') {
                 Some((key, power)) => (key, power),
                 None => (factor, "1"),
             };
-            let regressor = Regressor::from_key(key.trim()).ok_or_else(|| {
-                format!(
-                    "unknown regressor '{}' in term '{text}'; known: {}",
-                    key.trim(),
-                    Regressor::keys()
-                )
-            })?;
+            let regressor =
+                Regressor::from_key(key.trim()).ok_or_else(|| TermError::UnknownRegressor {
+                    key: key.trim().to_string(),
+                    term: text.to_string(),
+                })?;
             let power: usize = match power.trim().parse::<i64>() {
                 Ok(power) if power >= 1 => power as usize,
                 _ => {
-                    return Err(format!(
-                        "the power '{}' of '{}' in term '{text}' must be an integer ≥ 1",
-                        power.trim(),
-                        key.trim()
-                    ));
+                    return Err(TermError::Power {
+                        power: power.trim().to_string(),
+                        key: key.trim().to_string(),
+                        term: text.to_string(),
+                    });
                 }
             };
             factors.extend(std::iter::repeat_n(regressor, power.min(MAX_DEGREE + 1)));
             if factors.len() > MAX_DEGREE {
-                return Err(format!(
-                    "term '{text}' has a degree above {MAX_DEGREE}, the most a term may have"
-                ));
+                return Err(TermError::Degree(text.to_string()));
             }
         }
         if factors.len() > 1 && factors.contains(&Regressor::Constant) {
-            return Err(format!(
-                "term '{text}': the constant 0 cannot be a factor of a product"
-            ));
+            return Err(TermError::ConstantFactor(text.to_string()));
         }
         let monomial = Monomial::from_factors(&factors)
-            .ok_or_else(|| format!("term '{text}' has no factor"))?;
+            .ok_or_else(|| TermError::NoFactor(text.to_string()))?;
         let canonical = monomial.key();
         if canonical != text {
-            return Err(format!(
-                "write term '{text}' as '{canonical}' (factors in the order {}, a repeated factor once with its power ^n)",
-                Regressor::keys()
-            ));
+            return Err(TermError::NotCanonical {
+                term: text.to_string(),
+                canonical,
+            });
         }
         Ok(monomial)
     }
@@ -353,4 +347,47 @@ impl Default for TermRegressors {
         values[TermRegressors::ONE] = 1.0;
         TermRegressors { values }
     }
+}
+
+/// Why a coefficient-table key or value is not a term the model can take.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TermError {
+    #[error(
+        "unknown regressor '{key}' in term '{term}'; known: {}",
+        Regressor::keys()
+    )]
+    UnknownRegressor { key: String, term: String },
+    #[error(
+        "unknown term '{key}'; known: {} and their products ('alpha^2', 'alpha*de')",
+        Regressor::keys()
+    )]
+    UnknownTerm { key: String },
+    #[error("the power '{power}' of '{key}' in term '{term}' must be an integer ≥ 1")]
+    Power {
+        power: String,
+        key: String,
+        term: String,
+    },
+    #[error("term '{0}' has a degree above {MAX_DEGREE}, the most a term may have")]
+    Degree(String),
+    #[error("term '{0}': the constant 0 cannot be a factor of a product")]
+    ConstantFactor(String),
+    #[error("term '{0}' has no factor")]
+    NoFactor(String),
+    #[error(
+        "write term '{term}' as '{canonical}' (factors in the order {}, a repeated factor once with its power ^n)",
+        Regressor::keys()
+    )]
+    NotCanonical { term: String, canonical: String },
+    #[error("the constant '0' is always in the model; keys: {}", Regressor::keys())]
+    Constant,
+    #[error("{0} is not a finite number")]
+    NotFinite(f64),
+    #[error("CL2 is a drag term of a wind-axis model")]
+    LiftSquaredAxes,
+    #[error("CL2 cannot be a factor of a product")]
+    LiftSquaredProduct,
+    #[error("chi terms need model = \"stall\"")]
+    SeparationNeedsStall,
 }

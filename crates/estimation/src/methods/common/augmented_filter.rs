@@ -386,7 +386,7 @@ impl Filtered<'_> {
         &self,
         record: &FlightRecord,
         given: Option<&Estimate>,
-    ) -> std::result::Result<Estimate, String> {
+    ) -> crate::Result<Estimate> {
         match self {
             Filtered::SixDof(structure) => start_estimate(record, structure, given),
             Filtered::Linear(structure) => linear_start_estimate(record, structure, given),

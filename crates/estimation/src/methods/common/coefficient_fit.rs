@@ -153,7 +153,7 @@ pub(crate) fn start_estimate(
     record: &FlightRecord,
     structure: &ModelStructure,
     given: Option<&Estimate>,
-) -> std::result::Result<Estimate, String> {
+) -> crate::Result<Estimate> {
     let table = merge_settings(METHOD, &[&structure.methods]);
     let options = EquationErrorOptions {
         correlation_lag: 0.0,
@@ -164,11 +164,11 @@ pub(crate) fn start_estimate(
     let estimate = match given {
         Some(estimate) => estimate.clone(),
         None => equation_error(record, structure, &options)
-            .map_err(|error| format!("no equation-error start ({error})"))?,
+            .map_err(|error| crate::Error::NoStart(Box::new(error)))?,
     };
     match &estimate.status {
         Status::Converged => Ok(estimate),
-        status => Err(format!("equation error ended {status}")),
+        status => Err(crate::Error::StartNotConverged(status.clone())),
     }
 }
 
@@ -215,18 +215,18 @@ pub(crate) fn linear_start_estimate(
     record: &FlightRecord,
     structure: &LinearStructure,
     given: Option<&Estimate>,
-) -> std::result::Result<Estimate, String> {
+) -> crate::Result<Estimate> {
     let estimate = match given {
         Some(estimate) => estimate.clone(),
         None => {
             let table = merge_settings(METHOD, &[&structure.methods]);
             let settings = EquationErrorSettings::read(&table).unwrap_or_default();
             linear_equation_error(record, structure, &settings.differentiator, 0.0)
-                .map_err(|error| format!("no equation-error start ({error})"))?
+                .map_err(|error| crate::Error::NoStart(Box::new(error)))?
         }
     };
     match &estimate.status {
         Status::Converged => Ok(estimate),
-        status => Err(format!("equation error ended {status}")),
+        status => Err(crate::Error::StartNotConverged(status.clone())),
     }
 }

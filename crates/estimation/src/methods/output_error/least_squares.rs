@@ -3,6 +3,8 @@
 use super::*;
 
 impl LeastSquaresProblem for Problem<'_> {
+    type Error = crate::Error;
+
     fn unknown_name(&self, index: usize) -> Option<String> {
         self.unknowns.get(index).map(|&unknown| self.name(unknown))
     }
@@ -43,7 +45,7 @@ impl LeastSquaresProblem for Problem<'_> {
         }
     }
 
-    fn residuals(&mut self, theta: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
+    fn residuals(&mut self, theta: &DVector<f64>) -> crate::Result<DVector<f64>> {
         let errors = self.errors(theta)?;
         let weighted = errors
             .iter()
@@ -60,7 +62,7 @@ impl LeastSquaresProblem for Problem<'_> {
     /// It first re-chooses the integration sub-steps for the model at θ
     /// ([`Problem::resolve_steps`]): a fit whose parameters speed up a mode
     /// (τ1 of the stall model's χ falling) integrates it as the model asks.
-    fn reweight(&mut self, theta: &DVector<f64>) -> std::result::Result<bool, String> {
+    fn reweight(&mut self, theta: &DVector<f64>) -> crate::Result<bool> {
         self.resolve_steps(theta)?;
         let errors = self.errors(theta)?;
         let measured: Vec<Vec<f64>> = (0..self.outputs.len())
@@ -83,7 +85,7 @@ impl LeastSquaresProblem for Problem<'_> {
         &mut self,
         theta: &DVector<f64>,
         _options: &Options,
-    ) -> std::result::Result<DMatrix<f64>, String> {
+    ) -> crate::Result<DMatrix<f64>> {
         let (weights, assembled) = self.sensitivities_at(theta)?;
         let mut jacobian = DMatrix::zeros(
             assembled.rows.last().map_or(0, |rows| rows.end),
@@ -109,7 +111,7 @@ impl LeastSquaresProblem for Problem<'_> {
         theta: &DVector<f64>,
         residuals: &DVector<f64>,
         _options: &Options,
-    ) -> std::result::Result<NormalEquations, String> {
+    ) -> crate::Result<NormalEquations> {
         let (weights, assembled) = self.sensitivities_at(theta)?;
         let columns = assembled.unknowns.len();
         let mut gradient = DVector::zeros(columns);
@@ -307,7 +309,7 @@ impl Problem<'_> {
             .collect();
         // The outputs at the samples, output after output and segment
         // after segment (the Jacobian's rows), driven by `records`.
-        let outputs = |records: &[FlightRecord]| -> std::result::Result<Vec<f64>, String> {
+        let outputs = |records: &[FlightRecord]| -> crate::Result<Vec<f64>> {
             let mut by_output = vec![Vec::new(); self.outputs.len()];
             for (segment, &r) in self.segments.iter().zip(&record_of) {
                 let simulation = DrivenSimulation::from_record(
@@ -319,8 +321,7 @@ impl Problem<'_> {
                     segment.simulation.step,
                     segment.window,
                     self.alpha_dot,
-                )
-                .map_err(|e| e.to_string())?;
+                )?;
                 let mut grid = vec![Vec::with_capacity(simulation.len()); self.outputs.len()];
                 simulation.simulate(
                     &self.model,
@@ -410,7 +411,7 @@ impl Problem<'_> {
     pub(super) fn sensitivities_at(
         &mut self,
         theta: &DVector<f64>,
-    ) -> std::result::Result<(Vec<f64>, &Assembled), String> {
+    ) -> crate::Result<(Vec<f64>, &Assembled)> {
         if self.held.is_none() && !self.is_simulated(theta, Some(self.linearise)) {
             self.simulate(theta, true)?;
         }

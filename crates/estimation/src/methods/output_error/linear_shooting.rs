@@ -100,9 +100,7 @@ pub(crate) fn fit(
         weights: vec![1.0; structure.outputs.len()],
         names: names.clone(),
     };
-    problem
-        .reweight(&start)
-        .map_err(|reason| Error::Numerical { reason })?;
+    problem.reweight(&start)?;
     let mut solver = Options::new(start.len());
     solver.max_iterations = options.max_iterations;
     solver.decrease_tolerance = Some(options.decrease);
@@ -212,7 +210,7 @@ type Series = (Vec<Vec<f64>>, Vec<Vec<f64>>);
 impl Shooting<'_> {
     /// Every output's measured and predicted samples at the unknowns `u`;
     /// an error where a piece's simulation is not finite.
-    fn predicted(&self, u: &DVector<f64>) -> std::result::Result<Series, String> {
+    fn predicted(&self, u: &DVector<f64>) -> crate::Result<Series> {
         let mut theta = self.theta.clone();
         for (j, &i) in self.free.iter().enumerate() {
             theta[i] = u[j];
@@ -227,10 +225,7 @@ impl Shooting<'_> {
             );
             for k in first..=last {
                 if k > first {
-                    x = self
-                        .model
-                        .step(k - 1, x.as_slice(), theta.as_slice())
-                        .map_err(|e| e.to_string())?;
+                    x = self.model.step(k - 1, x.as_slice(), theta.as_slice())?;
                 }
                 let present = &self.observations.at[k];
                 if present.is_empty() {
@@ -238,14 +233,13 @@ impl Shooting<'_> {
                 }
                 let y = self
                     .model
-                    .outputs(self.model.time(k), x.as_slice(), theta.as_slice())
-                    .map_err(|e| e.to_string())?;
+                    .outputs(self.model.time(k), x.as_slice(), theta.as_slice())?;
                 for &(o, z) in present {
                     if !y[o].is_finite() {
-                        return Err(format!(
-                            "the simulation of piece {i} departed at t = {:.3} s",
-                            self.model.time(k)
-                        ));
+                        return Err(Error::PieceDeparted {
+                            piece: i,
+                            time: self.model.time(k),
+                        });
                     }
                     measured[o].push(z);
                     predicted[o].push(y[o]);
@@ -257,7 +251,9 @@ impl Shooting<'_> {
 }
 
 impl LeastSquaresProblem for Shooting<'_> {
-    fn residuals(&mut self, u: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
+    type Error = crate::Error;
+
+    fn residuals(&mut self, u: &DVector<f64>) -> crate::Result<DVector<f64>> {
         let (measured, predicted) = self.predicted(u)?;
         Ok(DVector::from_iterator(
             measured.iter().map(Vec::len).sum(),
@@ -273,7 +269,7 @@ impl LeastSquaresProblem for Shooting<'_> {
         self.names.get(index).cloned()
     }
 
-    fn reweight(&mut self, u: &DVector<f64>) -> std::result::Result<bool, String> {
+    fn reweight(&mut self, u: &DVector<f64>) -> crate::Result<bool> {
         let (measured, predicted) = self.predicted(u)?;
         let errors: Vec<Vec<f64>> = measured
             .iter()

@@ -199,13 +199,10 @@ impl<'a> Problem<'a> {
     /// Re-chooses each segment's RK4 sub-steps for the model at θ
     /// ([`Segment::resolve`]); a changed grid drops the simulations made
     /// on the old one. Returns whether any grid changed.
-    pub(super) fn resolve_steps(
-        &mut self,
-        theta: &DVector<f64>,
-    ) -> std::result::Result<bool, String> {
+    pub(super) fn resolve_steps(&mut self, theta: &DVector<f64>) -> crate::Result<bool> {
         self.apply(theta);
         if self.model.aircraft.aero.chi_is_state() != self.chi_is_state {
-            return Err(tau1_sign());
+            return Err(crate::Error::Tau1Sign);
         }
         let mut changed = false;
         for segment in &mut self.segments {
@@ -299,7 +296,7 @@ impl<'a> Problem<'a> {
         &mut self,
         theta: &DVector<f64>,
         sensitivities: bool,
-    ) -> std::result::Result<f64, String> {
+    ) -> crate::Result<f64> {
         self.simulate(theta, sensitivities)?;
         let errors = self.errors(theta)?;
         Ok(errors
@@ -374,11 +371,7 @@ impl<'a> Problem<'a> {
 
     /// Simulates segment `index` at the applied θ: outputs on the grid, with
     /// their sensitivities to every unknown when `sensitivities`.
-    pub(super) fn grid(
-        &self,
-        index: usize,
-        sensitivities: bool,
-    ) -> std::result::Result<Grid, String> {
+    pub(super) fn grid(&self, index: usize, sensitivities: bool) -> crate::Result<Grid> {
         let segment = &self.segments[index];
         let columns = if sensitivities {
             self.columns(index)
@@ -414,11 +407,11 @@ impl<'a> Problem<'a> {
         &mut self,
         theta: &DVector<f64>,
         sensitivities: bool,
-    ) -> std::result::Result<(), String> {
+    ) -> crate::Result<()> {
         self.simulated = None;
         let biases = self.apply(theta);
         if self.model.aircraft.aero.chi_is_state() != self.chi_is_state {
-            return Err(tau1_sign());
+            return Err(crate::Error::Tau1Sign);
         }
         for segment in &self.segments {
             segment.check_reach(&self.model)?;
@@ -460,7 +453,7 @@ impl<'a> Problem<'a> {
     /// A new θ is simulated with sensitivities (the solver asks for the
     /// Jacobian at every step it accepts, and most steps are accepted),
     /// except while a Jacobian is held: then plainly.
-    pub(super) fn predict(&mut self, theta: &DVector<f64>) -> std::result::Result<(), String> {
+    pub(super) fn predict(&mut self, theta: &DVector<f64>) -> crate::Result<()> {
         if !self.is_simulated(theta, None) {
             let sensitivities = !self.unknowns.is_empty() && self.held.is_none();
             self.simulate(theta, sensitivities)?;
@@ -494,10 +487,7 @@ impl<'a> Problem<'a> {
     }
 
     /// Unweighted residuals z − y per output, all segments concatenated.
-    pub(super) fn errors(
-        &mut self,
-        theta: &DVector<f64>,
-    ) -> std::result::Result<Vec<Vec<f64>>, String> {
+    pub(super) fn errors(&mut self, theta: &DVector<f64>) -> crate::Result<Vec<Vec<f64>>> {
         self.predict(theta)?;
         let mut errors = vec![Vec::new(); self.outputs.len()];
         for (segment, predicted) in self.segments.iter().zip(self.predictions()) {
@@ -568,10 +558,7 @@ impl<'a> Problem<'a> {
         self.try_fits(theta).unwrap_or_default()
     }
 
-    pub(super) fn try_fits(
-        &mut self,
-        theta: &DVector<f64>,
-    ) -> std::result::Result<Vec<OutputFit>, String> {
+    pub(super) fn try_fits(&mut self, theta: &DVector<f64>) -> crate::Result<Vec<OutputFit>> {
         self.predict(theta)?;
         let predictions = self.predictions();
         Ok((0..self.outputs.len())
@@ -586,9 +573,4 @@ impl<'a> Problem<'a> {
             })
             .collect())
     }
-}
-
-/// Why a θ cannot be simulated whose τ1 changes whether χ is a state.
-pub(super) fn tau1_sign() -> String {
-    "τ1 must stay on the side of 0 it starts on (χ is a state only while τ1 > 0)".to_string()
 }

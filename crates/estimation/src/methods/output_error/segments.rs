@@ -165,12 +165,11 @@ impl Segment<'_> {
         integrate: &[usize],
         interpolation: &InputInterpolation,
         alpha_dot: bool,
-    ) -> std::result::Result<bool, String> {
+    ) -> crate::Result<bool> {
         let Some((period, current)) = self.substeps else {
             return Ok(false);
         };
-        let fastest =
-            fastest_mode(&self.simulation, model, &self.initial).map_err(|e| e.to_string())?;
+        let fastest = fastest_mode(&self.simulation, model, &self.initial)?;
         let needed = period * fastest / RK4_STEP_LIMIT;
         if !needed.is_finite()
             || (needed <= REFINE_BEYOND * current as f64
@@ -189,8 +188,7 @@ impl Segment<'_> {
             period / substeps as f64,
             self.window,
             alpha_dot,
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         simulation.notes.extend(self.grid_notes.iter().cloned());
         self.simulation = simulation;
         self.substeps = Some((period, substeps));
@@ -202,23 +200,19 @@ impl Segment<'_> {
 
     /// An error when `model`'s fastest mode at the segment's initial state
     /// is beyond what the grid's RK4 steps integrate ([`RK4_STEP_REACH`]).
-    pub(super) fn check_reach(&self, model: &FlightModel) -> std::result::Result<(), String> {
+    pub(super) fn check_reach(&self, model: &FlightModel) -> crate::Result<()> {
         let Some((period, substeps)) = self.substeps else {
             return Ok(());
         };
         let step = period / substeps as f64;
-        let fastest =
-            fastest_mode(&self.simulation, model, &self.initial).map_err(|e| e.to_string())?;
+        let fastest = fastest_mode(&self.simulation, model, &self.initial)?;
         if step * fastest > RK4_STEP_REACH {
-            return Err(format!(
-                "the model's fastest mode (|λ| = {fastest:.1}/s) is beyond RK4 steps of {step:.5} s (h·|λ| = {:.2} > {RK4_STEP_REACH}){}",
-                step * fastest,
-                if substeps >= MAX_SUBSTEPS {
-                    format!(", the finest a fit takes ({MAX_SUBSTEPS} per grid interval)")
-                } else {
-                    String::new()
-                }
-            ));
+            return Err(crate::Error::BeyondStepReach {
+                fastest,
+                step,
+                reach: RK4_STEP_REACH,
+                finest: (substeps >= MAX_SUBSTEPS).then_some(MAX_SUBSTEPS),
+            });
         }
         Ok(())
     }

@@ -17,6 +17,7 @@ use super::observables::Column;
 use super::{AIRSPEED, ALPHA, BETA, CHI, FLIGHT_PATH_SIZE, FlightPathState};
 use crate::input_timing::{Chosen, InputInterpolation};
 use crate::structure::Observable;
+use crate::{Error, Result};
 use aeroid_sim::atmosphere::Atmosphere;
 use aeroid_sim::dynamics::{FlightModel, Forcing, Kinematics};
 use aeroid_sim::integrator::{Interpolation, affine, rk4_linear_step, rk4_step};
@@ -329,7 +330,7 @@ impl DrivenSimulation {
         columns: &[Column],
         linearise: Linearise,
         mut sink: impl FnMut(usize, &[f64], &DMatrix<f64>),
-    ) -> std::result::Result<(), String> {
+    ) -> Result<()> {
         // One pass over the grid: the state, S and the two grid points'
         // linearisations advance together, and the stage closure borrows
         // the stage linearisations; the setup of S and the outputs, and the
@@ -694,17 +695,14 @@ fn mean(a: &DMatrix<f64>, b: &DMatrix<f64>, into: &mut DMatrix<f64>) {
         .for_each(|(into, (a, b))| *into = 0.5 * (a + b));
 }
 
-pub(in crate::model) fn check_departure(
-    x: &FlightPathState,
-    time: f64,
-) -> std::result::Result<(), String> {
+pub(in crate::model) fn check_departure(x: &FlightPathState, time: f64) -> Result<()> {
     let limit = std::f64::consts::FRAC_PI_2;
     if !x.iter().all(|v| v.is_finite())
         || x[ALPHA].abs() > limit
         || x[BETA].abs() > limit
         || x[AIRSPEED] <= 0.0
     {
-        return Err(format!("the postulated model departed at t = {time:.3} s"));
+        return Err(Error::ModelDeparted { time });
     }
     Ok(())
 }

@@ -94,7 +94,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
         &mut self,
         unknowns: &DVector<f64>,
         options: &Options,
-    ) -> std::result::Result<DMatrix<f64>, String> {
+    ) -> crate::Result<DMatrix<f64>> {
         let here = self.residuals(unknowns)?;
         let mut columns = Vec::with_capacity(unknowns.len());
         for j in 0..unknowns.len() {

@@ -6,6 +6,8 @@
 use super::*;
 
 impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> {
+    type Error = crate::Error;
+
     fn unknown_name(&self, index: usize) -> Option<String> {
         self.names.get(index).cloned()
     }
@@ -13,13 +15,11 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
     /// The innovations whitened by R ([`InnovationCovariance`]: L⁻¹·ν at a
     /// point where R is full, ν/√R_oo otherwise; steady gain); the time-varying
     /// pass's whitened residuals (`FilterErrorFit::time_varying_residuals`).
-    fn residuals(&mut self, unknowns: &DVector<f64>) -> std::result::Result<DVector<f64>, String> {
-        let pass = match self.pass(unknowns).map_err(|e| e.to_string())? {
+    fn residuals(&mut self, unknowns: &DVector<f64>) -> crate::Result<DVector<f64>> {
+        let pass = match self.pass(unknowns)? {
             FilterPass::Steady(pass) => pass,
             FilterPass::TimeVarying(pass) => {
-                return self
-                    .time_varying_residuals(&pass)
-                    .map_err(|e| e.to_string());
+                return self.time_varying_residuals(&pass);
             }
         };
         let innovation = self.innovation_covariance(&self.variances);
@@ -37,12 +37,10 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         &mut self,
         unknowns: &DVector<f64>,
         options: &Options,
-    ) -> std::result::Result<DMatrix<f64>, String> {
+    ) -> crate::Result<DMatrix<f64>> {
         if self.gain == Gain::Steady
             && !self.differences
-            && let Some(jacobian) = self
-                .sensitivity_jacobian(unknowns, options)
-                .map_err(|e| e.to_string())?
+            && let Some(jacobian) = self.sensitivity_jacobian(unknowns, options)?
         {
             return Ok(jacobian);
         }
@@ -53,14 +51,13 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
     /// a scoring step of G·Gᵀ (time-varying gain). Either is followed by
     /// the compensation of F ([`LeastSquaresProblem::compensate`]) with C
     /// at the first grid point.
-    fn reweight(&mut self, unknowns: &DVector<f64>) -> std::result::Result<bool, String> {
+    fn reweight(&mut self, unknowns: &DVector<f64>) -> crate::Result<bool> {
         if self.joint() {
             // G is estimated with θ and F; its floors move, and the
             // relaxation step of G·Gᵀ is proposed to `compensate`.
             let noise = self.noise_of(unknowns);
             self.noise_floor = self.noise_floors(&noise);
-            let FilterPass::TimeVarying(pass) = self.pass(unknowns).map_err(|e| e.to_string())?
-            else {
+            let FilterPass::TimeVarying(pass) = self.pass(unknowns)? else {
                 return Ok(false);
             };
             self.variances = noise;
@@ -69,7 +66,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
             };
             return Ok(true);
         }
-        let pass = self.pass(unknowns).map_err(|e| e.to_string())?;
+        let pass = self.pass(unknowns)?;
         let (variances, full) = self.relaxed(&pass);
         let changed = variances != self.variances || full != self.full;
         let previous = (
@@ -85,8 +82,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
                         self.model.time(0),
                         self.initial.as_slice(),
                         theta.as_slice(),
-                    )
-                    .map_err(|e| e.to_string())?
+                    )?
                     .outputs_by_state
             }
         };
@@ -103,7 +99,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         unknowns: &DVector<f64>,
         residuals: &DVector<f64>,
         options: &Options,
-    ) -> std::result::Result<gauss_newton::NormalEquations, String> {
+    ) -> crate::Result<gauss_newton::NormalEquations> {
         match self.gain {
             Gain::Steady => {
                 let jacobian = self.jacobian(unknowns, options)?;
@@ -113,9 +109,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
                 })
             }
             Gain::TimeVarying => {
-                let mut normal = self
-                    .fisher_scoring(unknowns, options)
-                    .map_err(|e| e.to_string())?;
+                let mut normal = self.fisher_scoring(unknowns, options)?;
                 for j in self.held_at_rounding(unknowns, &normal.gradient) {
                     normal.gradient[j] = 0.0;
                     normal.information.row_mut(j).fill(0.0);
