@@ -78,7 +78,7 @@ pub fn check_file(registry: &Registry, path: &Path) -> Result<CheckReport> {
     } else {
         Err(aeroid_core::Error::Invalid {
             path: path.to_path_buf(),
-            problems: vec![aeroid_core::error::Problem {
+            problems: vec![aeroid_core::error::FieldError {
                 field: "(file)".into(),
                 message: "neither a scenario (no [trim] table), an aircraft or model structure (no [aero] table), \
                           a recorder profile (no [[channels]]) nor a study (no runs and methods)"

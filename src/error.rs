@@ -4,7 +4,9 @@
 //! the problems of a file). The helpers for reading and writing files
 //! are core's.
 
-pub use aeroid_core::error::{Problem, Problems, parse_toml, read_text, write_error, write_text};
+pub use aeroid_core::error::{
+    FieldError, FieldErrors, parse_toml, read_text, write_error, write_text,
+};
 use aeroid_core::refusal::Refusal;
 
 #[derive(Debug, thiserror::Error)]
@@ -56,15 +58,15 @@ impl Error {
 
     /// The problems found in a file that does not validate, wherever the
     /// error was wrapped.
-    pub fn problems(&self) -> Option<&[Problem]> {
+    pub fn field_errors(&self) -> Option<&[FieldError]> {
         match self {
-            Error::Core(error) => error.problems(),
-            Error::Estimation(error) => error.problems(),
-            Error::Record(error) => error.problems(),
-            Error::Sim(error) => error.problems(),
-            Error::Eval(error) => error.problems(),
+            Error::Core(error) => error.field_errors(),
+            Error::Estimation(error) => error.field_errors(),
+            Error::Record(error) => error.field_errors(),
+            Error::Sim(error) => error.field_errors(),
+            Error::Eval(error) => error.field_errors(),
             #[cfg(feature = "jsbsim")]
-            Error::Jsbsim(aeroid_jsbsim::Error::Core(error)) => error.problems(),
+            Error::Jsbsim(aeroid_jsbsim::Error::Core(error)) => error.field_errors(),
             _ => None,
         }
     }

@@ -984,7 +984,7 @@ fn time_varying_gain_on_dryden_turbulence() {
 /// within 3σ for both forms, the forms within 0.25σ of each other.
 #[test]
 fn filter_error_converges_with_the_gain_constraint_active() {
-    use aeroid::numerics::gauss_newton::LeastSquaresProblem;
+    use aeroid::numerics::gauss_newton::LeastSquaresObjective;
     let (model, a, truth, distribution) = lateral_with_process_noise();
     let measurement = DVector::from_vec(vec![0.01, 0.0, 1e-6, 1e-5]);
     let initial = DVector::zeros(4);

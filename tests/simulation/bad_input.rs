@@ -15,7 +15,7 @@ fn load_aircraft_text(test: &str, text: &str) -> (std::path::PathBuf, Error) {
 }
 
 fn problem_fields(error: &Error) -> Vec<String> {
-    match error.problems() {
+    match error.field_errors() {
         Some(problems) => problems.iter().map(|p| p.field.clone()).collect(),
         None => panic!("expected a validation error, got {error}"),
     }

@@ -44,18 +44,18 @@ fn input_scenario_with(test: &str, edit: impl Fn(String) -> String) -> PathBuf {
 /// An error of a file that does not validate, from the simulator or the
 /// recorder: its problems and its message.
 trait Validation: std::fmt::Display {
-    fn problem_list(&self) -> Option<&[aeroid::error::Problem]>;
+    fn problem_list(&self) -> Option<&[aeroid::error::FieldError]>;
 }
 
 impl Validation for aeroid::sim::Error {
-    fn problem_list(&self) -> Option<&[aeroid::error::Problem]> {
-        self.problems()
+    fn problem_list(&self) -> Option<&[aeroid::error::FieldError]> {
+        self.field_errors()
     }
 }
 
 impl Validation for aeroid::record::Error {
-    fn problem_list(&self) -> Option<&[aeroid::error::Problem]> {
-        self.problems()
+    fn problem_list(&self) -> Option<&[aeroid::error::FieldError]> {
+        self.field_errors()
     }
 }
 
@@ -372,7 +372,7 @@ fn a_study_with_billions_of_runs_is_refused() {
         "{message}"
     );
     let problems_of_study: Vec<String> = error
-        .problems()
+        .field_errors()
         .expect("a validation error")
         .iter()
         .map(|p| p.to_string())
@@ -387,7 +387,7 @@ fn a_study_with_billions_of_runs_is_refused() {
             .unwrap();
     let error = study.set_runs(0, "--runs").unwrap_err();
     let problems_of_runs: Vec<String> = error
-        .problems()
+        .field_errors()
         .expect("a validation error")
         .iter()
         .map(|p| p.to_string())

@@ -12,7 +12,7 @@ use aeroid::sim::{Simulation, fly};
 const SCENARIO: &str = "attas-cm-alpha-step";
 
 fn problems_of(error: &Error) -> Vec<(String, String)> {
-    match error.problems() {
+    match error.field_errors() {
         Some(problems) => problems
             .iter()
             .map(|p| (p.field.clone(), p.message.clone()))

@@ -241,8 +241,8 @@ fn import_non_monotonic_time_is_named() {
 fn import_duplicate_channel_is_named() {
     let map = FLIGHT_MAP.replace("name = \"yaw\"", "name = \"alpha\"");
     match common::import_case("duplicate", FLIGHT_CSV, &map) {
-        Err(error) if error.problems().is_some() => {
-            let problems = error.problems().unwrap_or_default();
+        Err(error) if error.field_errors().is_some() => {
+            let problems = error.field_errors().unwrap_or_default();
             assert_eq!(problems.len(), 1, "{problems:?}");
             assert_eq!(problems[0].field, "channels[4].name");
             assert!(

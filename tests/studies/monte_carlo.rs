@@ -145,7 +145,7 @@ sample_rate = ["fast", "0 Hz"]
     let path = study_file("mc-bad", text);
     let error = Study::load(crate::common::registry(), path.to_str().unwrap()).unwrap_err();
     let message = error.to_string();
-    let Some(problems) = error.problems() else {
+    let Some(problems) = error.field_errors() else {
         panic!("expected a validation error, got {message}");
     };
     assert!(
@@ -585,7 +585,7 @@ fn derive_names_the_studys_profiles() {
     let path = study_file("mc-derive", &text);
     let error = Study::load(crate::common::registry(), path.to_str().unwrap()).unwrap_err();
     let message = error.to_string();
-    let Some(problems) = error.problems() else {
+    let Some(problems) = error.field_errors() else {
         panic!("expected a validation error, got {message}");
     };
     assert_eq!(problems.len(), 1, "{message}");

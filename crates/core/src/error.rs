@@ -8,12 +8,12 @@ use std::path::PathBuf;
 
 /// One problem found while validating a file: the dotted field path and what is wrong.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Problem {
+pub struct FieldError {
     pub field: String,
     pub message: String,
 }
 
-impl fmt::Display for Problem {
+impl fmt::Display for FieldError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}: {}", self.field, self.message)
     }
@@ -21,11 +21,11 @@ impl fmt::Display for Problem {
 
 /// Collects every problem of a file so that a user sees all of them at once.
 #[derive(Debug, Default, Clone)]
-pub struct Problems(pub Vec<Problem>);
+pub struct FieldErrors(pub Vec<FieldError>);
 
-impl Problems {
+impl FieldErrors {
     pub fn push(&mut self, field: impl Into<String>, message: impl fmt::Display) {
-        self.0.push(Problem {
+        self.0.push(FieldError {
             field: field.into(),
             message: message.to_string(),
         });
@@ -48,7 +48,7 @@ impl Problems {
     }
 }
 
-fn list_problems(problems: &[Problem]) -> String {
+fn list_problems(problems: &[FieldError]) -> String {
     problems
         .iter()
         .map(|p| format!("\n  - {p}"))
@@ -86,7 +86,7 @@ pub enum Error {
     #[error("{path}: {} problem(s):{}", problems.len(), list_problems(problems))]
     Invalid {
         path: PathBuf,
-        problems: Vec<Problem>,
+        problems: Vec<FieldError>,
     },
 
     #[error("unknown {kind} '{name}'; known: {}", known.join(", "))]
@@ -159,7 +159,7 @@ pub enum Error {
 
 impl Error {
     /// The problems found in a file that does not validate.
-    pub fn problems(&self) -> Option<&[Problem]> {
+    pub fn field_errors(&self) -> Option<&[FieldError]> {
         match self {
             Error::Invalid { problems, .. } => Some(problems),
             _ => None,

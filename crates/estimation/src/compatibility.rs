@@ -24,7 +24,7 @@ use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::Refusal;
 use crate::methods::output_error::{diagonal_weights, interpolate};
 use aeroid_core::units::STANDARD_GRAVITY;
-use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
+use aeroid_numerics::gauss_newton::{self, LeastSquaresObjective, Options};
 use aeroid_record::{Channel, FlightRecord};
 use aeroid_sim::integrator::rk4_step;
 use aeroid_sim::state;
@@ -56,7 +56,7 @@ pub struct Compatibility {
     pub corrected: FlightRecord,
 }
 
-struct Problem {
+struct PathObjective {
     start: f64,
     step: f64,
     /// Measured accelerations (m/s²) and rates on the grid.
@@ -74,7 +74,7 @@ pub fn flight_path_reconstruction(
     max_iterations: usize,
 ) -> Result<Compatibility> {
     let started = std::time::Instant::now();
-    let mut problem = Problem::new(record)?;
+    let mut problem = PathObjective::new(record)?;
     let start = problem.start_values(record)?;
     let data = problem.residuals(&start).map_or(0, |r| r.len());
     if data < start.len() {
@@ -106,8 +106,8 @@ pub fn flight_path_reconstruction(
     })
 }
 
-impl Problem {
-    fn new(record: &FlightRecord) -> Result<Problem> {
+impl PathObjective {
+    fn new(record: &FlightRecord) -> Result<PathObjective> {
         let reference = record.channel("nx")?;
         let outputs: Vec<usize> = (0..OUTPUTS.len())
             .filter(|&o| record.channel(OUTPUTS[o]).is_ok())
@@ -164,7 +164,7 @@ impl Problem {
             })
             .collect::<Result<Vec<_>>>()?;
         let weights = vec![1.0; outputs.len()];
-        Ok(Problem {
+        Ok(PathObjective {
             start,
             step,
             inputs,
@@ -361,7 +361,7 @@ fn correct(channel: &mut Channel, offset: f64, scale: f64) {
     );
 }
 
-impl LeastSquaresProblem for Problem {
+impl LeastSquaresObjective for PathObjective {
     type Error = crate::Error;
 
     fn residuals(&mut self, theta: &DVector<f64>) -> crate::Result<DVector<f64>> {

@@ -38,7 +38,7 @@ use crate::error::Result;
 use crate::input_timing::InputInterpolation;
 use crate::settings::MethodTables;
 use aeroid_core::catalog;
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_record::FlightRecord;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -140,7 +140,7 @@ impl LinearStructure {
     /// Validates a parsed file; every problem is reported at once, named
     /// by its key (`A[1][2]`, `parameters.Lp`, `rate_outputs.p_dot`).
     pub fn from_file(file: &LinearFile, path: &Path) -> Result<LinearStructure> {
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         if file.kind != KIND {
             problems.push(
                 "kind",
@@ -304,7 +304,7 @@ fn entry_of<'a>(matrices: &'a mut Matrices, entry: &Entry) -> &'a mut f64 {
 }
 
 /// Names must be present and distinct.
-fn check_names(field: &str, names: &[String], problems: &mut Problems) {
+fn check_names(field: &str, names: &[String], problems: &mut FieldErrors) {
     let mut seen = BTreeSet::new();
     for (i, name) in names.iter().enumerate() {
         if name.trim().is_empty() {
@@ -319,7 +319,7 @@ fn check_names(field: &str, names: &[String], problems: &mut Problems) {
 struct Reader<'a> {
     parameters: &'a BTreeMap<String, LinearParameter>,
     used: BTreeMap<String, Entry>,
-    problems: &'a mut Problems,
+    problems: &'a mut FieldErrors,
 }
 
 impl Reader<'_> {

@@ -194,7 +194,7 @@ impl Plugin {
         let file: PluginFile = aeroid_core::error::parse_toml(path, &read_text(path)?)?;
         let invalid = |field: &str, message: String| aeroid_core::Error::Invalid {
             path: path.to_path_buf(),
-            problems: vec![aeroid_core::error::Problem {
+            problems: vec![aeroid_core::error::FieldError {
                 field: field.into(),
                 message,
             }],

@@ -16,7 +16,7 @@ use crate::estimator::{Estimator, check_model_features};
 use crate::problem::EstimationProblem;
 use crate::settings::{MethodTables, Settings, overlay};
 use crate::structure::{ModelStructure, Structure};
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_record::FlightRecord;
 use std::sync::Arc;
 
@@ -140,7 +140,7 @@ impl Registry {
     /// Checks a file's `[methods.NAME]` tables: each names a registered
     /// method and holds settings that method accepts. Problems are named
     /// `methods.NAME`.
-    pub fn check_tables(&self, tables: &MethodTables, problems: &mut Problems) {
+    pub fn check_tables(&self, tables: &MethodTables, problems: &mut FieldErrors) {
         for (name, table) in tables {
             let field = format!("methods.{name}");
             match self.find(name) {
@@ -161,7 +161,7 @@ impl Registry {
     /// [`Registry::check_tables`] for a file read elsewhere (a scenario, a
     /// model): an error naming `path` and each table's problem.
     pub fn validate_tables(&self, tables: &MethodTables, path: &std::path::Path) -> Result<()> {
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         self.check_tables(tables, &mut problems);
         Ok(problems.finish(path, ())?)
     }

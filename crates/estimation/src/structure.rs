@@ -36,7 +36,7 @@ use crate::error::{Error, Result};
 use crate::linear_structure::{self, LinearStructure};
 use crate::settings::MethodTables;
 use aeroid_core::catalog;
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_core::refusal::Refusal;
 use aeroid_record::{Channel, FlightRecord};
 use aeroid_sim::aero::{AeroModel, AeroSpec};
@@ -162,7 +162,7 @@ impl ModelStructure {
         path: &Path,
     ) -> Result<ModelStructure> {
         let mut aircraft = Aircraft::from_file(aircraft_file, path)?;
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         aircraft.aero = AeroModel::from_spec(&file.aero, aircraft.geometry, "aero", &mut problems);
         let integrate = state_indices(&file.integrate, "integrate", &mut problems);
         let zero_when_absent =
@@ -304,7 +304,7 @@ impl Structure {
             }
             Some(other) => Err(aeroid_core::Error::Invalid {
                 path,
-                problems: vec![aeroid_core::error::Problem {
+                problems: vec![aeroid_core::error::FieldError {
                     field: "kind".into(),
                     message: format!(
                         "is {}; a model file is \"{}\" or has no kind (the 6-DOF equations)",
@@ -409,7 +409,7 @@ impl Structure {
     }
 }
 
-fn state_indices(names: &[String], field: &str, problems: &mut Problems) -> Vec<usize> {
+fn state_indices(names: &[String], field: &str, problems: &mut FieldErrors) -> Vec<usize> {
     names
         .iter()
         .enumerate()
@@ -434,7 +434,7 @@ fn state_indices(names: &[String], field: &str, problems: &mut Problems) -> Vec<
 fn tie_parameters(
     aero: &mut AeroModel,
     settings: &BTreeMap<String, ParameterSpec>,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) {
     for (name, spec) in settings {
         let (Some(tie), Some(tied)) = (&spec.tie, aero.parameters.index(name)) else {
@@ -466,7 +466,7 @@ fn tie_parameters(
 fn parameter_settings(
     aero: &AeroModel,
     settings: &BTreeMap<String, ParameterSpec>,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> (Vec<bool>, Vec<(f64, f64)>) {
     let count = aero.parameters.len();
     let (mut free, mut bounds) = (

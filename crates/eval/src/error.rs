@@ -99,12 +99,12 @@ impl Error {
 
     /// The problems found in a file that does not validate, wherever the
     /// error was wrapped.
-    pub fn problems(&self) -> Option<&[aeroid_core::error::Problem]> {
+    pub fn field_errors(&self) -> Option<&[aeroid_core::error::FieldError]> {
         match self {
-            Error::Core(error) => error.problems(),
-            Error::Estimation(error) => error.problems(),
-            Error::Record(error) => error.problems(),
-            Error::Sim(error) => error.problems(),
+            Error::Core(error) => error.field_errors(),
+            Error::Estimation(error) => error.field_errors(),
+            Error::Record(error) => error.field_errors(),
+            Error::Sim(error) => error.field_errors(),
             _ => None,
         }
     }

@@ -31,7 +31,7 @@
 
 use crate::error::{Error, Result};
 use crate::run::{self, Outcome};
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_estimation::estimate::{DiagnosisKind, Estimate};
 use aeroid_estimation::estimator::{MethodTables, Refusal, RefusalKind};
 use aeroid_estimation::registry::Registry;
@@ -394,7 +394,7 @@ impl GateResult {
 /// Loads and validates a gate file.
 pub fn load(registry: &Registry, path: &Path) -> Result<GateFile> {
     let file: GateFile = parse_toml(path, &read_text(path)?)?;
-    let mut problems = Problems::default();
+    let mut problems = FieldErrors::default();
     for (i, case) in file.cases.iter().enumerate() {
         let field = format!("case[{i}] ({})", case.name);
         if let Err(error) = registry.find(&case.method) {
@@ -412,7 +412,7 @@ pub fn load(registry: &Registry, path: &Path) -> Result<GateFile> {
                 );
             }
         }
-        let mut tables = Problems::default();
+        let mut tables = FieldErrors::default();
         registry.check_tables(&case.methods, &mut tables);
         for problem in tables.0 {
             problems.push(format!("{field}.{}", problem.field), problem.message);
@@ -453,7 +453,7 @@ pub fn load(registry: &Registry, path: &Path) -> Result<GateFile> {
 /// The tolerances, overrides, thresholds and declarations of a case: finite
 /// and positive, each with its reason, none that would let an error of half
 /// the truth pass.
-fn check_tolerances(case: &GateCase, field: &str, problems: &mut Problems) {
+fn check_tolerances(case: &GateCase, field: &str, problems: &mut FieldErrors) {
     let positive = |t: f64| t.is_finite() && t > 0.0;
     let numbers = [
         case.relative_tolerance,
@@ -859,7 +859,7 @@ mod tests {
             "{needless:?}"
         );
 
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         let mut half = case(Some(0.5));
         half.tolerance.insert(
             "a".into(),

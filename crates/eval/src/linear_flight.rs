@@ -211,7 +211,7 @@ fn augmentation(
     let invalid = |field: String, message: String| -> Error {
         aeroid_core::Error::Invalid {
             path: scenario.path.clone(),
-            problems: vec![aeroid_core::error::Problem { field, message }],
+            problems: vec![aeroid_core::error::FieldError { field, message }],
         }
         .into()
     };
@@ -265,7 +265,7 @@ fn gust_inputs(
     let invalid = |field: &str, message: String| -> Error {
         aeroid_core::Error::Invalid {
             path: scenario.path.clone(),
-            problems: vec![aeroid_core::error::Problem {
+            problems: vec![aeroid_core::error::FieldError {
                 field: field.to_string(),
                 message,
             }],
@@ -315,7 +315,7 @@ fn process_noise(
         let Some(i) = structure.states.iter().position(|s| s == state) else {
             return Err(aeroid_core::Error::Invalid {
                 path: scenario.path.clone(),
-                problems: vec![aeroid_core::error::Problem {
+                problems: vec![aeroid_core::error::FieldError {
                     field: format!("linear.process_noise.{state}"),
                     message: format!(
                         "not a state of '{}' ({})",

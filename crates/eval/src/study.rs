@@ -196,7 +196,7 @@ impl Study {
     fn invalid(&self, field: &str, message: String) -> Error {
         aeroid_core::Error::Invalid {
             path: self.path.clone(),
-            problems: vec![aeroid_core::error::Problem {
+            problems: vec![aeroid_core::error::FieldError {
                 field: field.into(),
                 message,
             }],

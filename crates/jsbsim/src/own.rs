@@ -41,7 +41,7 @@ use super::export::write_planet;
 use super::flight::{ControlCommand, ControlReading, JsbsimFlight};
 use super::{Exec, FT, InitialConditions, InitialSpeed, LBF, SLUG, TrimMode};
 use crate::error::{Error, Result};
-use aeroid_core::error::Problem;
+use aeroid_core::error::FieldError;
 use aeroid_sim::aircraft::Aircraft;
 use aeroid_sim::scenario::Scenario;
 use aeroid_sim::state::{CONTROL_COUNT, Control, Controls};
@@ -111,7 +111,7 @@ pub struct Trimmed {
 fn invalid(scenario: &Scenario, field: &str, message: impl Into<String>) -> Error {
     aeroid_core::Error::Invalid {
         path: scenario.path.clone(),
-        problems: vec![Problem {
+        problems: vec![FieldError {
             field: field.into(),
             message: message.into(),
         }],
@@ -391,7 +391,7 @@ pub fn check_rigid_body(scenario: &Scenario, exec: &Exec) -> Result<()> {
         path: scenario.aircraft_path.clone(),
         problems: problems
             .into_iter()
-            .map(|message| Problem {
+            .map(|message| FieldError {
                 field: format!("rigid body of JSBSim's {}", aircraft.name),
                 message,
             })

@@ -11,7 +11,7 @@
 //! the normal equations Jᵀr and JᵀJ are formed (from the Jacobian,
 //! analytic if the problem gives it, else by finite differences with a
 //! documented relative step; or directly by a problem that knows a cheaper
-//! way, [`LeastSquaresProblem::normal_equations`]), and the Gauss–Newton
+//! way, [`LeastSquaresObjective::normal_equations`]), and the Gauss–Newton
 //! step `Δθ = −(JᵀJ)⁻¹·Jᵀr` is solved by SVD (near-singular directions are
 //! dropped, so unidentifiable combinations do not blow up). If the cost does
 //! not fall, the step is halved (up to 10 times); if that fails, a
@@ -33,7 +33,7 @@ use crate::Status;
 use nalgebra::{DMatrix, DVector};
 
 /// A nonlinear least-squares problem in weighted residual form.
-pub trait LeastSquaresProblem {
+pub trait LeastSquaresObjective {
     /// Why the model cannot be evaluated at a θ (a departing simulation, a
     /// covariance that is not positive definite); the solver's own findings
     /// (residuals or sensitivities that are not finite) convert into it. A
@@ -76,7 +76,7 @@ pub trait LeastSquaresProblem {
         Ok(false)
     }
 
-    /// Called after a [`LeastSquaresProblem::reweight`] that changed the
+    /// Called after a [`LeastSquaresObjective::reweight`] that changed the
     /// weights, for a problem whose parameters are tied to them (filter
     /// error: the process-noise matrix F is scaled with the change of the
     /// innovation covariance R, Jategaonkar, "Flight Vehicle System
@@ -104,7 +104,7 @@ pub trait LeastSquaresProblem {
     /// (output error: a simulation with sensitivities against a plain one):
     /// keep the Jacobian just computed, whose step's predicted decrease is
     /// `predicted`, if the problem judges it good enough to steer by, and
-    /// until [`LeastSquaresProblem::release`] (or a refinement, which
+    /// until [`LeastSquaresObjective::release`] (or a refinement, which
     /// releases it) evaluate residuals alone and return that Jacobian
     /// (re-weighted) from `jacobian`: simplified Gauss–Newton. Returns true
     /// when it holds. The solver then takes steps
@@ -114,7 +114,7 @@ pub trait LeastSquaresProblem {
         false
     }
 
-    /// Ends a [`LeastSquaresProblem::hold`]: the next Jacobian is computed
+    /// Ends a [`LeastSquaresObjective::hold`]: the next Jacobian is computed
     /// at its θ.
     fn release(&mut self) {}
 
@@ -131,7 +131,7 @@ pub trait LeastSquaresProblem {
     /// The normal equations at θ with the `residuals` r just evaluated
     /// there: the gradient Jᵀr and the information matrix JᵀJ of the
     /// Jacobian at θ (or the held one, re-weighted). The default forms
-    /// them from [`LeastSquaresProblem::jacobian`]. A problem that knows a
+    /// them from [`LeastSquaresObjective::jacobian`]. A problem that knows a
     /// cheaper way may override it (output error: JᵀJ is a weighted sum of
     /// per-output Gram matrices computed once per simulation, and Jᵀr a
     /// weighted sum of per-output products, with no weighted copy of J).
@@ -177,7 +177,7 @@ pub struct Options {
     /// iterations that only confirm convergence. None: not used (residuals
     /// whose scale means nothing).
     pub decrease_tolerance: Option<f64>,
-    /// Ask the problem to [`LeastSquaresProblem::refine`] its Jacobian
+    /// Ask the problem to [`LeastSquaresObjective::refine`] its Jacobian
     /// before a step whose predicted decrease is below this (None: never).
     pub refine_below: Option<f64>,
     /// Relative finite-difference step (default 1e-6: central differences
@@ -335,7 +335,7 @@ fn cost_of(residuals: &DVector<f64>) -> f64 {
 }
 
 /// Central-difference Jacobian of the problem's residuals.
-pub fn finite_difference_jacobian<P: LeastSquaresProblem + ?Sized>(
+pub fn finite_difference_jacobian<P: LeastSquaresObjective + ?Sized>(
     problem: &mut P,
     theta: &DVector<f64>,
     options: &Options,
@@ -354,7 +354,7 @@ pub fn finite_difference_jacobian<P: LeastSquaresProblem + ?Sized>(
 
 /// The most a step's predicted decrease on a held Jacobian may be, as a
 /// fraction of the one before, for the Jacobian to stay held (see
-/// [`LeastSquaresProblem::hold`]); also the fall on fresh Jacobians that
+/// [`LeastSquaresObjective::hold`]); also the fall on fresh Jacobians that
 /// allows holding again after a release. Simplified Gauss–Newton converges
 /// linearly, at a rate set by how far the Jacobian has moved since it was
 /// computed. A held step costs a fraction of a fresh one (output error: a
@@ -364,7 +364,7 @@ pub fn finite_difference_jacobian<P: LeastSquaresProblem + ?Sized>(
 pub const HELD_CONTRACTION: f64 = 0.5;
 
 /// Minimises the problem's cost from `start`.
-pub fn solve<P: LeastSquaresProblem + ?Sized>(
+pub fn solve<P: LeastSquaresObjective + ?Sized>(
     problem: &mut P,
     start: &DVector<f64>,
     options: &Options,
@@ -510,8 +510,8 @@ pub fn solve<P: LeastSquaresProblem + ?Sized>(
 }
 
 /// After a re-weighting that `changed` the weights, moves θ where the
-/// problem's [`LeastSquaresProblem::compensate`] says (within the bounds).
-fn compensate<P: LeastSquaresProblem + ?Sized>(
+/// problem's [`LeastSquaresObjective::compensate`] says (within the bounds).
+fn compensate<P: LeastSquaresObjective + ?Sized>(
     problem: &mut P,
     theta: &mut DVector<f64>,
     changed: bool,
@@ -525,7 +525,7 @@ fn compensate<P: LeastSquaresProblem + ?Sized>(
 
 /// Asks the problem to refine its Jacobian; a refinement releases a held
 /// one (`held`, the solver's record of it).
-fn refine<P: LeastSquaresProblem + ?Sized>(problem: &mut P, held: &mut Option<f64>) -> bool {
+fn refine<P: LeastSquaresObjective + ?Sized>(problem: &mut P, held: &mut Option<f64>) -> bool {
     let refined = problem.refine();
     if refined {
         *held = None;
@@ -612,7 +612,7 @@ impl GaussNewton {
 /// The Gauss–Newton step with halving, then Levenberg–Marquardt; None when
 /// no step lowers the cost. On a `held` Jacobian only the full step is
 /// tried (if it fails, the Jacobian is what has gone stale).
-fn improving_step<P: LeastSquaresProblem + ?Sized>(
+fn improving_step<P: LeastSquaresObjective + ?Sized>(
     problem: &mut P,
     theta: &DVector<f64>,
     gauss_newton: &GaussNewton,
@@ -681,7 +681,7 @@ fn solve_symmetric(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     y.component_mul(&scale)
 }
 
-fn finish<P: LeastSquaresProblem + ?Sized>(
+fn finish<P: LeastSquaresObjective + ?Sized>(
     problem: &mut P,
     mut theta: DVector<f64>,
     history: Vec<Iteration>,

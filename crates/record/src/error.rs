@@ -58,9 +58,9 @@ pub enum Error {
 
 impl Error {
     /// The problems found in a file that does not validate.
-    pub fn problems(&self) -> Option<&[aeroid_core::error::Problem]> {
+    pub fn field_errors(&self) -> Option<&[aeroid_core::error::FieldError]> {
         match self {
-            Error::Core(error) => error.problems(),
+            Error::Core(error) => error.field_errors(),
             _ => None,
         }
     }

@@ -21,7 +21,7 @@ use crate::derived;
 use crate::error::Result;
 use crate::{Channel, FlightRecord, check_name};
 use aeroid_core::csv_table::{CsvTable, Delimiter, Layout, first_disorder};
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_core::units::{Dimension, Quantity, unit_factor};
 use aeroid_sim::atmosphere::Atmosphere;
 use serde::{Deserialize, Serialize};
@@ -404,7 +404,7 @@ fn check_converted_times(times: &[f64], column: &ColumnRef, map_path: &Path) -> 
         None => Ok(()),
         Some(k) => Err(aeroid_core::error::Error::Invalid {
             path: map_path.to_path_buf(),
-            problems: vec![aeroid_core::error::Problem {
+            problems: vec![aeroid_core::error::FieldError {
                 field: "time".into(),
                 message: format!(
                     "column {column} converted to seconds is {} at data row {}{}: \
@@ -431,7 +431,7 @@ fn check_rate(channel: &Channel, index: usize, map_path: &Path) -> Result<()> {
     }
     Err(aeroid_core::error::Error::Invalid {
         path: map_path.to_path_buf(),
-        problems: vec![aeroid_core::error::Problem {
+        problems: vec![aeroid_core::error::FieldError {
             field: format!("channels[{index}].rate"),
             message: format!(
                 "channel '{}': its median sample interval gives a rate of {} Hz; \
@@ -456,7 +456,7 @@ fn median_rate(times: &[f64]) -> f64 {
 
 /// Validates the whole map, reporting every problem at once.
 fn validate_map(file: &ColumnMapFile, path: &Path) -> Result<(Conversion, Vec<MappedChannel>)> {
-    let mut problems = Problems::default();
+    let mut problems = FieldErrors::default();
     let (time, _) = conversion(
         "time",
         &format!("column {}", file.time.column),
@@ -513,7 +513,7 @@ fn validate_map(file: &ColumnMapFile, path: &Path) -> Result<(Conversion, Vec<Ma
 }
 
 /// A column number is at least 1; a file without a header has only numbers.
-fn check_column(column: &ColumnRef, header: bool, field: &str, problems: &mut Problems) {
+fn check_column(column: &ColumnRef, header: bool, field: &str, problems: &mut FieldErrors) {
     match column {
         ColumnRef::Number(n) if *n < 1 => {
             problems.push(field, format!("column numbers start at 1, not {n}"))
@@ -533,7 +533,7 @@ fn check_column(column: &ColumnRef, header: bool, field: &str, problems: &mut Pr
 fn channel_columns(
     spec: &ChannelColumnSpec,
     field: &str,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Vec<ColumnRef> {
     match (&spec.column, &spec.columns, spec.combine) {
         (Some(column), None, None) => vec![column.clone()],
@@ -584,7 +584,7 @@ fn map_channel(
     spec: &ChannelColumnSpec,
     columns: Vec<ColumnRef>,
     field: &str,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> MappedChannel {
     let known = derived::measurand(&spec.name).map(|m| m.dimension);
     let described: Vec<String> = columns.iter().map(ToString::to_string).collect();
@@ -657,7 +657,7 @@ fn conversion(
     scale: Option<f64>,
     offset: Option<f64>,
     known: Option<Dimension>,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> (Conversion, Dimension) {
     let unit = unit.unwrap_or("").trim();
     let dimension = known.unwrap_or_else(|| {

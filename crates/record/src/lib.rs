@@ -29,7 +29,7 @@ pub mod recorder;
 
 use aeroid_core::csv_table::CsvTable;
 use aeroid_core::csv_table::first_disorder;
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_core::paths;
 pub use error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -309,7 +309,7 @@ impl FlightRecord {
     /// strictly increasing times, positive rates, finite values (NaN is a
     /// dropout).
     pub fn validate(&self, path: &Path) -> Result<()> {
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         if self.channels.is_empty() {
             problems.push(
                 "channels",
@@ -363,7 +363,7 @@ impl FlightRecord {
         {
             return Err(aeroid_core::Error::Invalid {
                 path: folder.join(RECORD_FILE),
-                problems: vec![aeroid_core::error::Problem {
+                problems: vec![aeroid_core::error::FieldError {
                     field: "seed".into(),
                     message: format!(
                         "{seed} is above {}, the largest integer record.toml can hold",
@@ -405,7 +405,7 @@ impl FlightRecord {
         if file.format != FORMAT {
             return Err(aeroid_core::Error::Invalid {
                 path,
-                problems: vec![aeroid_core::error::Problem {
+                problems: vec![aeroid_core::error::FieldError {
                     field: "format".into(),
                     message: format!("'{}' is not '{FORMAT}'", file.format),
                 }],

@@ -48,7 +48,7 @@ use crate::derived::{self, Context, GeographicOrigin, Measurand};
 use crate::error::{Error, Result};
 use crate::{Channel, FlightRecord};
 use aeroid_core::catalog;
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_core::limits;
 use aeroid_core::random::{self, streams};
 use aeroid_core::units::{Dimension, Quantity, unit_factor};
@@ -236,7 +236,7 @@ impl Profile {
 
     /// Validates a parsed profile, reporting every problem at once.
     pub fn from_file(file: &ProfileFile, path: &Path) -> Result<Profile> {
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         if file.name.trim().is_empty() {
             problems.push("name", "must not be empty");
         }
@@ -344,7 +344,7 @@ impl Profile {
         )
         .map_err(|message| aeroid_core::Error::Invalid {
             path: self.path.clone(),
-            problems: vec![aeroid_core::error::Problem {
+            problems: vec![aeroid_core::error::FieldError {
                 field: "channels.rate".into(),
                 message: message.to_string(),
             }],
@@ -498,7 +498,7 @@ struct FrameLayout {
     words: Option<u32>,
 }
 
-fn positive(value: aeroid_core::Result<f64>, field: &str, problems: &mut Problems) -> f64 {
+fn positive(value: aeroid_core::Result<f64>, field: &str, problems: &mut FieldErrors) -> f64 {
     match value {
         Ok(v) if v > 0.0 => v,
         Ok(v) => {
@@ -512,7 +512,7 @@ fn positive(value: aeroid_core::Result<f64>, field: &str, problems: &mut Problem
     }
 }
 
-fn read_origin(spec: Option<&OriginSpec>, problems: &mut Problems) -> GeographicOrigin {
+fn read_origin(spec: Option<&OriginSpec>, problems: &mut FieldErrors) -> GeographicOrigin {
     let Some(spec) = spec else {
         return GeographicOrigin::default();
     };
@@ -533,7 +533,7 @@ fn read_origin(spec: Option<&OriginSpec>, problems: &mut Problems) -> Geographic
     }
 }
 
-fn check_absent(absent: &[String], recorded: &BTreeSet<&str>, problems: &mut Problems) {
+fn check_absent(absent: &[String], recorded: &BTreeSet<&str>, problems: &mut FieldErrors) {
     for name in absent {
         if derived::measurand(name).is_none() {
             problems.push(
@@ -553,7 +553,7 @@ fn check_absent(absent: &[String], recorded: &BTreeSet<&str>, problems: &mut Pro
 fn read_channel(
     spec: &ChannelSpec,
     layout: &FrameLayout,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Option<ChannelModel> {
     let prefix = format!("channels.{}", spec.name);
     let Some(measurand) = derived::measurand(&spec.name) else {
@@ -625,7 +625,7 @@ fn read_channel(
 /// Reads the fields of one channel, recording problems under `channels.NAME.`.
 struct FieldReader<'a> {
     prefix: &'a str,
-    problems: &'a mut Problems,
+    problems: &'a mut FieldErrors,
 }
 
 impl FieldReader<'_> {

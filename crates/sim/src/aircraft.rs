@@ -6,7 +6,7 @@
 use crate::aero::{AeroModel, AeroSpec, ReferenceGeometry};
 use crate::error::Result;
 use crate::state::{CONTROL_COUNT, Control};
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_core::units::{Dimension, Quantity};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -128,7 +128,7 @@ impl Aircraft {
 
     /// Validates a parsed file; `path` is named in errors.
     pub fn from_file(file: &AircraftFile, path: &Path) -> Result<Aircraft> {
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         let mut read = |field: &str, q: &Quantity, dimension: Dimension| {
             q.si(dimension).unwrap_or_else(|message| {
                 problems.push(field, message);
@@ -232,7 +232,7 @@ fn read_propulsion(
 
 fn read_limits(
     spec: &BTreeMap<String, [Quantity; 2]>,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> [(f64, f64); CONTROL_COUNT] {
     let mut limits = [(f64::NEG_INFINITY, f64::INFINITY); CONTROL_COUNT];
     limits[Control::Throttle.index()] = (0.0, 1.0);
@@ -263,7 +263,7 @@ fn read_limits(
 fn inertia_matrix(
     [ixx, iyy, izz, ixz]: [f64; 4],
     accepted: &Option<String>,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Matrix3<f64> {
     let inertia = Matrix3::new(ixx, 0.0, -ixz, 0.0, iyy, 0.0, -ixz, 0.0, izz);
     if ![ixx, iyy, izz, ixz].iter().all(|v| v.is_finite()) {

@@ -4,10 +4,10 @@
 //! errors are `aeroid_core`'s, wrapped whole so that their messages read
 //! the same.
 
-use aeroid_core::error::Problem;
+use aeroid_core::error::FieldError;
 use aeroid_core::limits;
 
-fn joined(problems: &[Problem]) -> String {
+fn joined(problems: &[FieldError]) -> String {
     problems
         .iter()
         .map(ToString::to_string)
@@ -37,7 +37,7 @@ pub enum Error {
 
     /// The problems of a wind table, said on one line.
     #[error("{}", joined(problems))]
-    WindProblems { problems: Vec<Problem> },
+    WindProblems { problems: Vec<FieldError> },
 
     /// A wind generated on a step that is not a positive number.
     #[error("wind: step {step} s is not a positive number")]
@@ -96,9 +96,9 @@ pub enum Error {
 
 impl Error {
     /// The problems found in a file that does not validate.
-    pub fn problems(&self) -> Option<&[Problem]> {
+    pub fn field_errors(&self) -> Option<&[FieldError]> {
         match self {
-            Error::Core(error) => error.problems(),
+            Error::Core(error) => error.field_errors(),
             _ => None,
         }
     }

@@ -14,7 +14,7 @@
 
 use crate::dynamics::Evaluation;
 use crate::state::{self, Control, StateVector};
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_core::units::{Dimension, Quantity};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -49,7 +49,7 @@ impl Feedback {
         spec: &FeedbackSpec,
         step: f64,
         key: &str,
-        problems: &mut Problems,
+        problems: &mut FieldErrors,
     ) -> Option<Feedback> {
         let mut valid = true;
         for (variable, gain) in &spec.gains {
@@ -90,7 +90,7 @@ impl Feedback {
 
     /// The 6-DOF form: the control and the variables by name, checked
     /// (problems under `feedback`).
-    pub fn for_six_dof(&self, problems: &mut Problems) -> Option<Augmentation> {
+    pub fn for_six_dof(&self, problems: &mut FieldErrors) -> Option<Augmentation> {
         let control = Control::ALL.into_iter().find(|c| c.name() == self.control);
         if control.is_none() {
             problems.push(

@@ -38,7 +38,7 @@ pub use spec::{
 };
 
 use crate::state::Controls;
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use checker::Checker;
 use replay::CsvRequest;
 use signal::Signal;
@@ -72,7 +72,7 @@ impl InputSchedule {
         base_dir: &Path,
         scenario_path: &Path,
     ) -> aeroid_core::Result<InputSchedule> {
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         let pending: Vec<Pending> = specs
             .iter()
             .enumerate()

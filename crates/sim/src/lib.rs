@@ -91,7 +91,7 @@ impl Simulation {
         if let FlightSource::Jsbsim(_) = scenario.source() {
             return Err(aeroid_core::Error::Invalid {
                 path: scenario.path.clone(),
-                problems: vec![aeroid_core::error::Problem {
+                problems: vec![aeroid_core::error::FieldError {
                     field: "aircraft".into(),
                     message: "is one of JSBSim's own aircraft: aeroid's simulator does not fly it; `aeroid simulate`, `record` and `run` fly it in JSBSim".into(),
                 }],
@@ -109,7 +109,7 @@ impl Simulation {
             .generate(&conditions, scenario.step, steps + 1, scenario.seed)
             .map_err(|message| aeroid_core::Error::Invalid {
                 path: scenario.path.clone(),
-                problems: vec![aeroid_core::error::Problem {
+                problems: vec![aeroid_core::error::FieldError {
                     field: "wind".into(),
                     message: message.to_string(),
                 }],

@@ -45,7 +45,7 @@ use crate::integrator::Interpolation;
 use crate::trim::TrimCondition;
 use crate::wind::WindSpec;
 use aeroid_core::catalog;
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_core::limits;
 use aeroid_core::units::{DEG, Dimension, Quantity};
 use serde::{Deserialize, Serialize};
@@ -144,7 +144,7 @@ pub struct LinearGusts {
 
 impl LinearGusts {
     /// Reads a `gusts` table, its problems named under `linear.gusts`.
-    fn read(table: &toml::Table, problems: &mut Problems) -> Option<LinearGusts> {
+    fn read(table: &toml::Table, problems: &mut FieldErrors) -> Option<LinearGusts> {
         let mut rest = table.clone();
         let matrix = match rest.remove("matrix").map(|m| m.try_into::<Vec<Vec<f64>>>()) {
             Some(Ok(matrix)) => matrix,
@@ -347,7 +347,7 @@ impl Scenario {
         let aircraft_path =
             catalog::resolve_named(aircraft_reference, catalog::AIRCRAFT_FOLDER, path, field)?;
         let aircraft = Aircraft::load(&aircraft_path)?;
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         let mut read = |field: &str, q: &Quantity, dimension: Dimension| {
             q.si(dimension).unwrap_or_else(|message| {
                 problems.push(field, message);
@@ -486,7 +486,7 @@ impl Scenario {
     /// The bounds of duration and step and the memory budget, for a scenario
     /// changed after loading: an [`aeroid_core::Error::Invalid`] naming the field.
     pub fn check_size(&self) -> Result<()> {
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         check_ranges(&self.trim, self.duration, self.step, &mut problems);
         problems
             .0
@@ -502,7 +502,7 @@ impl Scenario {
 fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAircraft>> {
     let invalid = |field: &str, message: String| aeroid_core::Error::Invalid {
         path: path.to_path_buf(),
-        problems: vec![aeroid_core::error::Problem {
+        problems: vec![aeroid_core::error::FieldError {
             field: field.into(),
             message,
         }],
@@ -568,7 +568,7 @@ fn read_parameter_changes(
     aircraft: &Aircraft,
     duration: f64,
     step: f64,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Vec<ParameterChange> {
     let mut changes: Vec<ParameterChange> = Vec::with_capacity(specs.len());
     for (index, spec) in specs.iter().enumerate() {
@@ -709,7 +709,7 @@ fn read_departure(
     }
 }
 
-fn check_ranges(trim: &TrimCondition, duration: f64, step: f64, problems: &mut Problems) {
+fn check_ranges(trim: &TrimCondition, duration: f64, step: f64, problems: &mut FieldErrors) {
     if trim.airspeed <= 0.0 {
         problems.push("trim.airspeed", "must be positive");
     }

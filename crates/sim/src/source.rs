@@ -126,7 +126,7 @@ impl FlightSource<'_> {
                 Some(simulator) => simulator.fly(scenario),
                 None => Err(aeroid_core::Error::Invalid {
                     path: scenario.path.clone(),
-                    problems: vec![aeroid_core::error::Problem {
+                    problems: vec![aeroid_core::error::FieldError {
                         field: "aircraft".into(),
                         message: "is one of JSBSim's own aircraft, and no JSBSim is registered: the aeroid program built with `--features jsbsim` flies it (a library user calls aeroid::jsbsim::register())".into(),
                     }],

@@ -49,7 +49,7 @@ pub fn trim(model: &FlightModel, condition: &TrimCondition, wind: &WindSample) -
     check_condition(condition)?;
     let mut unlimited = model.clone();
     unlimited.aircraft.limits = [(f64::NEG_INFINITY, f64::INFINITY); crate::state::CONTROL_COUNT];
-    let solver = TrimProblem {
+    let solver = TrimEquations {
         model: &unlimited,
         condition,
         wind,
@@ -126,13 +126,13 @@ fn check_limits(model: &FlightModel, controls: &Controls) -> Result<()> {
     Ok(())
 }
 
-struct TrimProblem<'a> {
+struct TrimEquations<'a> {
     model: &'a FlightModel,
     condition: &'a TrimCondition,
     wind: &'a WindSample,
 }
 
-impl TrimProblem<'_> {
+impl TrimEquations<'_> {
     fn pitch(&self, z: &Unknowns) -> f64 {
         z[0] + (self.condition.flight_path_angle.sin() / z[1].cos())
             .clamp(-1.0, 1.0)

@@ -31,7 +31,7 @@ mod tests;
 pub use gust::GustSpec;
 pub use turbulence::{FlightConditions, TurbulenceParameters, TurbulenceSpec};
 
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_core::random;
 use aeroid_core::units::{Dimension, Quantity};
 use check::quantity_value;
@@ -67,7 +67,7 @@ pub struct WindSample {
 
 impl WindSpec {
     /// Collects every problem into `problems` with field paths prefixed "wind.".
-    pub fn validate(&self, problems: &mut Problems) {
+    pub fn validate(&self, problems: &mut FieldErrors) {
         let speed = quantity_value(problems, "wind.speed", &self.speed, Dimension::Speed);
         if speed.is_some_and(|speed| speed < 0.0) {
             problems.push(
@@ -98,7 +98,7 @@ impl WindSpec {
         count: usize,
         seed: u64,
     ) -> Result<Vec<WindSample>, crate::error::Error> {
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         self.validate(&mut problems);
         if !problems.is_empty() {
             return Err(crate::error::Error::WindProblems {

@@ -51,7 +51,7 @@ use crate::reconstruction::control_steps;
 use crate::structure::{ModelStructure, Structure};
 use aeroid_core::units::Quantity;
 use aeroid_numerics::fourier::{FourierTransform, breaks_at};
-use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options, Solution};
+use aeroid_numerics::gauss_newton::{self, LeastSquaresObjective, Options, Solution};
 use aeroid_record::FlightRecord;
 use aeroid_sim::aero::Regressor;
 use nalgebra::{Complex, DMatrix, DVector};
@@ -279,7 +279,7 @@ pub struct TransferFit {
 }
 
 /// The least-squares problem of the frequency-domain cost.
-struct FrequencyProblem<'a> {
+struct FrequencyObjective<'a> {
     model: &'a dyn TransferModel,
     data: &'a FrequencyData,
     full: DVector<f64>,
@@ -288,7 +288,7 @@ struct FrequencyProblem<'a> {
     weights: Vec<f64>,
 }
 
-impl FrequencyProblem<'_> {
+impl FrequencyObjective<'_> {
     fn theta(&self, free: &DVector<f64>) -> DVector<f64> {
         let mut full = self.full.clone();
         for (&i, &value) in self.free.iter().zip(free.iter()) {
@@ -320,7 +320,7 @@ fn spectral_density(errors: &[Vec<Complex<f64>>]) -> Vec<f64> {
         .collect()
 }
 
-impl LeastSquaresProblem for FrequencyProblem<'_> {
+impl LeastSquaresObjective for FrequencyObjective<'_> {
     type Error = crate::Error;
 
     fn residuals(&mut self, theta: &DVector<f64>) -> crate::Result<DVector<f64>> {
@@ -365,7 +365,7 @@ pub fn fit_transfer(
             ),
         });
     }
-    let mut problem = FrequencyProblem {
+    let mut problem = FrequencyObjective {
         model,
         data,
         full: start.clone(),

@@ -150,7 +150,7 @@ impl NeuralGaussNewtonSettings {
         if self.max_iterations == 0 {
             return bad("max_iterations must be at least 1");
         }
-        if let Some(problem) = self.differentiator.problems() {
+        if let Some(problem) = self.differentiator.field_errors() {
             return bad(&problem);
         }
         Ok(())

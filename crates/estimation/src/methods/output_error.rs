@@ -18,9 +18,9 @@
 //! x. Far from the optimum the model is linearised at the grid points
 //! ([`Linearise::GridPoints`]), near it at every RK4 stage (the exact
 //! derivative of the discrete simulation,
-//! [`LeastSquaresProblem::refine`]); a Jacobian is held while its steps'
+//! [`LeastSquaresObjective::refine`]); a Jacobian is held while its steps'
 //! predicted decreases halve (simplified Gauss–Newton,
-//! [`LeastSquaresProblem::hold`]). ∂f/∂x and ∂g/∂x come from dual numbers
+//! [`LeastSquaresObjective::hold`]). ∂f/∂x and ∂g/∂x come from dual numbers
 //! ([`aeroid_numerics::dual`]); ∂f/∂θ of a coefficient term is exact because f is
 //! affine in the coefficients.
 //!
@@ -61,7 +61,7 @@ use crate::model::state_space::{
 use crate::problem::EstimationProblem;
 use crate::structure::{FLIGHT_PATH_STATES, ModelStructure, Structure};
 use aeroid_core::units::Quantity;
-use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, NormalEquations, Options};
+use aeroid_numerics::gauss_newton::{self, LeastSquaresObjective, NormalEquations, Options};
 use aeroid_numerics::regression;
 use aeroid_record::FlightRecord;
 use aeroid_sim::dynamics::FlightModel;
@@ -93,7 +93,7 @@ const STAGE_DECREASE: f64 = 10.0;
 const REFINE_DECREASE: f64 = 20.0;
 
 /// The predicted decrease on the exact Jacobian below which it is held for
-/// the last steps ([`LeastSquaresProblem::hold`]): a step under 1.4σ, so
+/// the last steps ([`LeastSquaresObjective::hold`]): a step under 1.4σ, so
 /// the information matrix of a fit that stops on the held Jacobian is that
 /// of a point within 1.4σ of the estimate. A bound moves with the Jacobian
 /// by about the parameter's relative σ per σ of distance: measured within
@@ -109,7 +109,7 @@ mod estimator;
 mod fit;
 mod least_squares;
 mod linear;
-mod problem;
+mod objective;
 mod proof;
 mod sampling;
 mod segments;
@@ -119,7 +119,7 @@ mod starts;
 pub use estimator::*;
 pub use fit::*;
 use linear::*;
-use problem::*;
+use objective::*;
 pub use proof::*;
 pub(crate) use sampling::*;
 use segments::*;
@@ -159,7 +159,7 @@ mod tests {
                 window: Some((20.0, 28.0)),
                 ..model_options(&structure)
             };
-            let mut problem = Problem::new(&[&record], &structure, &options).unwrap();
+            let mut problem = Objective::new(&[&record], &structure, &options).unwrap();
             problem.linearise = Linearise::Stages;
             let theta = problem.current();
             problem.reweight(&theta).unwrap();
@@ -205,7 +205,7 @@ mod tests {
         };
         for (record, structure) in [lateral_benchmark(), stall] {
             let mut problem =
-                Problem::new(&[&record], &structure, &model_options(&structure)).unwrap();
+                Objective::new(&[&record], &structure, &model_options(&structure)).unwrap();
             for linearise in [Linearise::GridPoints, Linearise::Stages] {
                 problem.linearise = linearise;
                 let wide = problem.grid(0, true).unwrap();
@@ -229,11 +229,12 @@ mod tests {
     #[test]
     fn normal_equations_from_output_blocks_are_jtj_and_jtr() {
         let (record, structure) = lateral_benchmark();
-        let mut problem = Problem::new(&[&record], &structure, &model_options(&structure)).unwrap();
+        let mut problem =
+            Objective::new(&[&record], &structure, &model_options(&structure)).unwrap();
         let theta = problem.current();
         let options = Options::new(theta.len());
         problem.reweight(&theta).unwrap();
-        let check = |problem: &mut Problem| {
+        let check = |problem: &mut Objective| {
             let jacobian = problem.jacobian(&theta, &options).unwrap();
             let residuals = problem.residuals(&theta).unwrap();
             let expected = jacobian.transpose() * &jacobian;
@@ -292,7 +293,8 @@ mod tests {
         let (record, structure) = lateral_benchmark();
         let estimate = output_error(&[&record], &structure, &model_options(&structure)).unwrap();
         assert_eq!(estimate.status, Status::Converged);
-        let mut problem = Problem::new(&[&record], &structure, &model_options(&structure)).unwrap();
+        let mut problem =
+            Objective::new(&[&record], &structure, &model_options(&structure)).unwrap();
         let value = |name: &str| {
             let p = estimate.parameters.iter().find(|p| p.name == name);
             p.expect("an estimated unknown").value
@@ -339,7 +341,8 @@ mod tests {
     #[test]
     fn grid_point_jacobian_is_close_on_the_lateral_case() {
         let (record, structure) = lateral_benchmark();
-        let mut problem = Problem::new(&[&record], &structure, &model_options(&structure)).unwrap();
+        let mut problem =
+            Objective::new(&[&record], &structure, &model_options(&structure)).unwrap();
         let theta = problem.current();
         problem.reweight(&theta).unwrap();
         let solver = Options::new(theta.len());

@@ -369,7 +369,7 @@ pub fn stepwise(
     }
     notes.extend(data.notes.clone());
     notes.extend(product_means_note(&data, &candidates));
-    let problem = Problem::new(&data, coefficient, &candidates);
+    let problem = SearchData::new(&data, coefficient, &candidates);
     let search = problem.search(options);
     let lag = (options.correlation_lag * data.rate).round() as usize;
     let report = StepwiseReport {
@@ -476,7 +476,7 @@ fn product_means_note(data: &Reconstruction, candidates: &[Candidate]) -> Option
 }
 
 /// The data of the search: z, the constant and every candidate's column.
-struct Problem<'a> {
+struct SearchData<'a> {
     z: DVector<f64>,
     columns: DMatrix<f64>,
     /// The regressors' means removed from the factors of products.
@@ -499,7 +499,7 @@ struct Search {
     stop_reason: String,
 }
 
-impl<'a> Problem<'a> {
+impl<'a> SearchData<'a> {
     fn new(data: &Reconstruction, coefficient: Coefficient, candidates: &'a [Candidate]) -> Self {
         let measured = data.coefficient(coefficient);
         let z = DVector::from_column_slice(measured);
@@ -508,7 +508,7 @@ impl<'a> Problem<'a> {
             candidates[j].value(&data.regressors[k], &means)
         });
         let mean = z.mean();
-        Problem {
+        SearchData {
             total_sum_of_squares: z.iter().map(|v| (v - mean).powi(2)).sum(),
             z,
             columns,
@@ -675,7 +675,7 @@ impl<'a> Problem<'a> {
     }
 
     /// Fills in the selected terms' estimates, bounds and fit, in the
-    /// plain basis ([`Problem::plain_basis`]).
+    /// plain basis ([`SearchData::plain_basis`]).
     fn finish(&self, mut report: StepwiseReport, model: &[usize], lag: usize) -> StepwiseReport {
         let x = self.matrix(model);
         let fit = LeastSquares::fit(&x, &self.z);

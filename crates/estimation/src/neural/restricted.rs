@@ -49,7 +49,7 @@ use crate::reconstruction::{
     reconstruct,
 };
 use crate::structure::{FLIGHT_PATH_STATES, ModelStructure};
-use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
+use aeroid_numerics::gauss_newton::{self, LeastSquaresObjective, Options};
 use aeroid_record::FlightRecord;
 use aeroid_record::prep::differentiation::Differentiator;
 use aeroid_sim::aero::{AeroInput, AeroModel, Coefficient, ModelKind, Regressor};
@@ -338,7 +338,7 @@ impl<'a> Fit<'a> {
     }
 }
 
-impl LeastSquaresProblem for Fit<'_> {
+impl LeastSquaresObjective for Fit<'_> {
     type Error = crate::Error;
 
     fn residuals(&mut self, theta: &DVector<f64>) -> crate::Result<DVector<f64>> {

@@ -3,7 +3,7 @@
 //! values turned into the grid's (an empty axis is its one default value).
 
 use super::file::{StudyFile, StudyMethods};
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_core::limits;
 use aeroid_core::units::Quantity;
 use aeroid_estimation::estimator::MethodTables;
@@ -17,7 +17,7 @@ use std::path::Path;
 pub(super) fn missing_axis(
     spec: &[Vec<String>],
     profiles: &[Profile],
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Vec<Vec<String>> {
     if spec.is_empty() {
         return vec![Vec::new()];
@@ -37,7 +37,7 @@ pub(super) fn missing_axis(
 pub(super) fn channel_rate_axis(
     spec: &[BTreeMap<String, Quantity>],
     profiles: &[Profile],
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Vec<Vec<(String, f64)>> {
     if spec.is_empty() {
         return vec![Vec::new()];
@@ -78,13 +78,13 @@ pub(super) fn channel_rate_axis(
 pub(super) fn settings_axis(
     spec: &[MethodTables],
     registry: &Registry,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Vec<MethodTables> {
     if spec.is_empty() {
         return vec![MethodTables::new()];
     }
     for (i, variant) in spec.iter().enumerate() {
-        let mut found = Problems::default();
+        let mut found = FieldErrors::default();
         registry.check_tables(variant, &mut found);
         for problem in found.0 {
             problems.push(
@@ -101,7 +101,7 @@ pub(super) fn settings_axis(
 pub(super) fn study_profiles(
     file: &StudyFile,
     base: &Path,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Option<Vec<Profile>> {
     let load = |reference: &str| Profile::load(reference, Some(base));
     match (&file.profile, file.sweep.profile.is_empty()) {
@@ -134,7 +134,7 @@ pub(super) fn study_profiles(
 pub(super) fn load_each<T, E: std::fmt::Display>(
     field: &str,
     references: &[String],
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
     load: impl Fn(&str) -> std::result::Result<T, E>,
 ) -> Vec<T> {
     if references.is_empty() {
@@ -151,7 +151,11 @@ pub(super) fn load_each<T, E: std::fmt::Display>(
         .collect()
 }
 
-pub(super) fn check_methods(methods: &StudyMethods, registry: &Registry, problems: &mut Problems) {
+pub(super) fn check_methods(
+    methods: &StudyMethods,
+    registry: &Registry,
+    problems: &mut FieldErrors,
+) {
     let names = methods.names(registry);
     if names.is_empty() {
         problems.push("methods", "must name at least one");
@@ -181,7 +185,7 @@ pub(super) fn runs_problem(runs: usize) -> Option<String> {
 }
 
 /// The sample-rate axis in Hz; `[None]` (the profile's rates) when empty.
-pub(super) fn sample_rates(spec: &[Quantity], problems: &mut Problems) -> Vec<Option<f64>> {
+pub(super) fn sample_rates(spec: &[Quantity], problems: &mut FieldErrors) -> Vec<Option<f64>> {
     if spec.is_empty() {
         return vec![None];
     }
@@ -217,7 +221,7 @@ pub(super) fn scale_axis(
     name: &str,
     spec: &[f64],
     positive: bool,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> Vec<f64> {
     if spec.is_empty() {
         return vec![1.0];
@@ -238,7 +242,7 @@ pub(super) fn scale_axis(
 }
 
 /// The turbulence axis; `[None]` (the scenarios' own wind) when empty.
-pub(super) fn turbulence_axis(spec: &[String], problems: &mut Problems) -> Vec<Option<String>> {
+pub(super) fn turbulence_axis(spec: &[String], problems: &mut FieldErrors) -> Vec<Option<String>> {
     if spec.is_empty() {
         return vec![None];
     }

@@ -11,7 +11,7 @@ use super::file::StudyFile;
 use super::points::Grid;
 use crate::error::Result;
 use aeroid_core::catalog;
-use aeroid_core::error::{Problems, parse_toml, read_text};
+use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_estimation::registry::Registry;
 use aeroid_estimation::structure::Structure;
 use aeroid_record::recorder::Profile;
@@ -39,7 +39,7 @@ impl Study {
     /// problem at once under its field.
     pub fn from_file(registry: &Registry, file: &StudyFile, path: &Path) -> Result<Study> {
         let base = path.parent().unwrap_or(Path::new("."));
-        let mut problems = Problems::default();
+        let mut problems = FieldErrors::default();
         if file.name.trim().is_empty() {
             problems.push("name", "must not be empty");
         }
@@ -51,7 +51,7 @@ impl Study {
             problems.push("runs", message);
         }
         let plain = plain_axes(file, &mut problems);
-        let invalid = |problems: Problems| aeroid_core::Error::Invalid {
+        let invalid = |problems: FieldErrors| aeroid_core::Error::Invalid {
             path: path.to_path_buf(),
             problems: problems.0,
         };
@@ -105,7 +105,7 @@ fn load_files(
     registry: &Registry,
     file: &StudyFile,
     base: &Path,
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
 ) -> (Vec<Scenario>, Vec<Structure>) {
     let resolved = |reference: &str, folder: &str| {
         catalog::resolve(reference, folder, Some(base))
@@ -123,7 +123,7 @@ fn load_files(
 }
 
 /// The sample-rate, scale and turbulence axes, checked.
-fn plain_axes(file: &StudyFile, problems: &mut Problems) -> PlainAxes {
+fn plain_axes(file: &StudyFile, problems: &mut FieldErrors) -> PlainAxes {
     let sweep = &file.sweep;
     let sample_rates = sample_rates(&sweep.sample_rate, problems);
     let noise_scales = scale_axis("noise_scale", &sweep.noise_scale, false, problems);
@@ -141,7 +141,7 @@ fn plain_axes(file: &StudyFile, problems: &mut Problems) -> PlainAxes {
 }
 
 /// Every profile the derive step names is one of the study's.
-fn check_derive(file: &StudyFile, profiles: &[Profile], problems: &mut Problems) {
+fn check_derive(file: &StudyFile, profiles: &[Profile], problems: &mut FieldErrors) {
     for name in file.derive.iter().flat_map(|d| &d.profiles) {
         if !profiles.iter().any(|p| &p.name == name) {
             problems.push(

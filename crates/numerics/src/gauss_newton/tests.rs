@@ -7,7 +7,7 @@ struct ExponentialFit {
     evaluations: usize,
 }
 
-impl LeastSquaresProblem for ExponentialFit {
+impl LeastSquaresObjective for ExponentialFit {
     type Error = crate::Error;
     fn residuals(&mut self, theta: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
         self.evaluations += 1;
@@ -53,7 +53,7 @@ fn recovers_noise_free_exponential() {
 /// Rosenbrock's valley as residuals (10(y − x²), 1 − x): plain Gauss–Newton
 /// overshoots from (−1.2, 1); halving and LM must still reach (1, 1).
 struct Rosenbrock;
-impl LeastSquaresProblem for Rosenbrock {
+impl LeastSquaresObjective for Rosenbrock {
     type Error = crate::Error;
     fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
         Ok(DVector::from_vec(vec![
@@ -96,7 +96,7 @@ fn respects_bounds() {
 
 /// A model that fails beyond θ = 3 from a start beyond it: diverged, with a reason, no panic.
 struct Failing;
-impl LeastSquaresProblem for Failing {
+impl LeastSquaresObjective for Failing {
     type Error = crate::Error;
     fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
         if t[0] > 3.0 {
@@ -134,7 +134,7 @@ fn non_finite_sensitivities_are_diverged_by_name() {
     struct Kinked {
         named: bool,
     }
-    impl LeastSquaresProblem for Kinked {
+    impl LeastSquaresObjective for Kinked {
         type Error = crate::Error;
         fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
             Ok(DVector::from_vec(vec![t[0] - 1.0, t[1] - 2.0, t[0] + t[1]]))
@@ -174,7 +174,7 @@ fn non_finite_sensitivities_are_diverged_by_name() {
 #[test]
 fn no_step_from_the_start_is_no_progress() {
     struct Misleading(f64);
-    impl LeastSquaresProblem for Misleading {
+    impl LeastSquaresObjective for Misleading {
         type Error = crate::Error;
         fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
             Ok(DVector::from_element(1, t[0] - 1.0))
@@ -205,7 +205,7 @@ fn no_step_from_the_start_is_no_progress() {
 #[test]
 fn a_stall_after_progress_is_no_progress() {
     struct Stalling(usize);
-    impl LeastSquaresProblem for Stalling {
+    impl LeastSquaresObjective for Stalling {
         type Error = crate::Error;
         fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
             Ok(DVector::from_element(1, t[0] - 1.0))
@@ -238,7 +238,7 @@ fn a_stall_after_progress_is_no_progress() {
 #[test]
 fn covariance_is_inverse_information_and_flags_unidentifiable() {
     struct Line;
-    impl LeastSquaresProblem for Line {
+    impl LeastSquaresObjective for Line {
         type Error = crate::Error;
         fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
             Ok(DVector::from_iterator(
@@ -257,7 +257,7 @@ fn covariance_is_inverse_information_and_flags_unidentifiable() {
     assert!((solution.covariance() - expected).norm() < 1e-9);
 
     struct Collinear;
-    impl LeastSquaresProblem for Collinear {
+    impl LeastSquaresObjective for Collinear {
         type Error = crate::Error;
         fn residuals(&mut self, t: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
             Ok(DVector::from_iterator(
@@ -292,7 +292,7 @@ fn held_jacobian_reaches_the_same_optimum_with_fewer_jacobians() {
         jacobians: usize,
         releases: usize,
     }
-    impl LeastSquaresProblem for Holding {
+    impl LeastSquaresObjective for Holding {
         type Error = crate::Error;
         fn residuals(&mut self, theta: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
             self.fit.residuals(theta)
@@ -360,7 +360,7 @@ fn stops_only_on_the_refined_jacobian() {
         exact: bool,
         refinements: usize,
     }
-    impl LeastSquaresProblem for Approximate {
+    impl LeastSquaresObjective for Approximate {
         type Error = crate::Error;
         fn residuals(&mut self, theta: &DVector<f64>) -> Result<DVector<f64>, crate::Error> {
             self.fit.residuals(theta)

@@ -136,7 +136,7 @@ pub fn kinematic_rates(
     record: &FlightRecord,
     differentiator: &Differentiator,
 ) -> Result<KinematicRates> {
-    if let Some(problem) = differentiator.problems() {
+    if let Some(problem) = differentiator.field_errors() {
         return Err(Error::Derivation {
             reason: format!("angular rates: {problem}"),
         });

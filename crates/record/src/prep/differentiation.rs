@@ -58,7 +58,7 @@ pub struct Differentiator {
 
 impl Differentiator {
     /// Problems with a differentiator read from a settings table.
-    pub fn problems(&self) -> Option<String> {
+    pub fn field_errors(&self) -> Option<String> {
         if !(self.half_width > 0.0 && self.half_width.is_finite()) {
             Some(format!(
                 "differentiator.half_width must be positive, is {} s",

@@ -11,7 +11,7 @@ use super::spec::{
 use super::terms::{Coefficient, ForceAxes, MAX_PRODUCTS, Monomial, Regressor, Term, TermError};
 use crate::params::ParameterSet;
 use crate::state::Controls;
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_numerics::dual::Real;
 use nalgebra::Vector3;
 
@@ -133,7 +133,7 @@ impl AeroModel {
         spec: &AeroSpec,
         geometry: ReferenceGeometry,
         prefix: &str,
-        problems: &mut Problems,
+        problems: &mut FieldErrors,
     ) -> AeroModel {
         let mut model = AeroModel {
             kind: spec.model,
@@ -163,7 +163,7 @@ impl AeroModel {
         model
     }
 
-    fn read_coefficients(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+    fn read_coefficients(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut FieldErrors) {
         let known: Vec<&str> = Coefficient::ALL
             .iter()
             .map(|c| c.name(self.force_axes))
@@ -233,7 +233,7 @@ impl AeroModel {
 
     /// Registers a product's slot in [`TermRegressors`](super::TermRegressors)
     /// (once per distinct product).
-    fn add_product(&mut self, monomial: Monomial, field: &str, problems: &mut Problems) {
+    fn add_product(&mut self, monomial: Monomial, field: &str, problems: &mut FieldErrors) {
         if monomial.single().is_some() || self.products.contains(&monomial) {
             return;
         }
@@ -252,7 +252,7 @@ impl AeroModel {
         name: &str,
         value: f64,
         field: &str,
-        problems: &mut Problems,
+        problems: &mut FieldErrors,
     ) -> usize {
         self.parameters.add(name, value).unwrap_or_else(|message| {
             problems.push(field, message);
@@ -260,7 +260,7 @@ impl AeroModel {
         })
     }
 
-    fn read_extras(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+    fn read_extras(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut FieldErrors) {
         if let Some(e) = spec.oswald_efficiency {
             if !(e.is_finite() && e > 0.0) || self.force_axes != ForceAxes::Wind {
                 problems.push(
@@ -280,7 +280,7 @@ impl AeroModel {
         }
     }
 
-    fn read_stall(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+    fn read_stall(&mut self, spec: &AeroSpec, prefix: &str, problems: &mut FieldErrors) {
         match (self.kind, &spec.stall) {
             (ModelKind::Stall, Some(stall)) => {
                 if self.force_axes != ForceAxes::Wind {
@@ -349,7 +349,7 @@ impl AeroModel {
         }
     }
 
-    fn check_references(&self, spec: &AeroSpec, prefix: &str, problems: &mut Problems) {
+    fn check_references(&self, spec: &AeroSpec, prefix: &str, problems: &mut FieldErrors) {
         let uses = |regressor: Regressor| {
             self.terms
                 .iter()

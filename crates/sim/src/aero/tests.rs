@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::state::Control;
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 
 fn geometry() -> ReferenceGeometry {
     ReferenceGeometry {
@@ -13,9 +13,9 @@ fn geometry() -> ReferenceGeometry {
     }
 }
 
-fn parse(text: &str) -> (AeroModel, Problems) {
+fn parse(text: &str) -> (AeroModel, FieldErrors) {
     let spec: AeroSpec = toml::from_str(text).unwrap();
-    let mut problems = Problems::default();
+    let mut problems = FieldErrors::default();
     let model = AeroModel::from_spec(&spec, geometry(), "aero", &mut problems);
     (model, problems)
 }

@@ -4,12 +4,12 @@
 //! under `inputs[i].field` so that all of them are reported at once.
 
 use crate::state::Control;
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_core::units::{Dimension, Quantity};
 
 /// Reads a spec's quantities, pushing a problem under `prefix.field` for each bad one.
 pub(super) struct Checker<'a> {
-    pub(super) problems: &'a mut Problems,
+    pub(super) problems: &'a mut FieldErrors,
     pub(super) prefix: String,
 }
 

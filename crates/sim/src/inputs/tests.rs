@@ -23,7 +23,7 @@ fn schedule(text: &str) -> InputSchedule {
         .expect("valid inputs")
 }
 
-fn problems(text: &str) -> Vec<aeroid_core::error::Problem> {
+fn problems(text: &str) -> Vec<aeroid_core::error::FieldError> {
     match InputSchedule::build(&parse(text), Path::new("."), Path::new("test.toml")) {
         Err(aeroid_core::Error::Invalid { problems, .. }) => problems,
         other => panic!("expected Error::Invalid, got {other:?}"),

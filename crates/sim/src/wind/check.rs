@@ -2,12 +2,12 @@
 //! dimension, and a condition on it, each failure recorded as a problem
 //! under its field path so that all of them are reported at once.
 
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_core::units::{Dimension, Quantity};
 
 /// The SI value of `quantity`, or `None` after recording why it has none.
 pub(super) fn quantity_value(
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
     field: &str,
     quantity: &Quantity,
     dimension: Dimension,
@@ -20,7 +20,7 @@ pub(super) fn quantity_value(
 
 /// Checks `quantity` and that its value satisfies `condition`, else records `requirement`.
 pub(super) fn require(
-    problems: &mut Problems,
+    problems: &mut FieldErrors,
     field: &str,
     quantity: &Quantity,
     dimension: Dimension,

@@ -6,7 +6,7 @@
 //! Gusts add to the steady wind in [`WindSample::ned`](super::WindSample::ned).
 
 use super::check::{FieldCheck, is_not_negative, is_positive, require};
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_core::units::{Dimension, Quantity};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -45,7 +45,7 @@ fn gust_direction(name: &str) -> Option<Vector3<f64>> {
 
 impl GustSpec {
     /// Records the problems of this gust under `path` (e.g. "wind.gusts[1]").
-    pub(super) fn validate(&self, path: &str, problems: &mut Problems) {
+    pub(super) fn validate(&self, path: &str, problems: &mut FieldErrors) {
         let field = |name: &str| format!("{path}.{name}");
         let checks: [FieldCheck; 3] = [
             (

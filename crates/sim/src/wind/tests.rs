@@ -2,7 +2,7 @@
 //! intensity and altitude rules, and the seeds.
 
 use super::*;
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_core::units::{FOOT, KNOT};
 use nalgebra::Vector3;
 use serde::Deserialize;
@@ -97,7 +97,7 @@ fn documented_example_is_valid() {
         .expect("docs/files.md holds a [wind] example")
         .to_string();
     let spec = parse(&example);
-    let mut problems = Problems::default();
+    let mut problems = FieldErrors::default();
     spec.validate(&mut problems);
     assert!(problems.is_empty(), "{problems:?}");
     assert_eq!(spec.gusts.len(), 1);
@@ -126,7 +126,7 @@ fn validation_collects_every_problem_at_once() {
         length_w = 0.0
         "#,
     );
-    let mut problems = Problems::default();
+    let mut problems = FieldErrors::default();
     spec.validate(&mut problems);
     let fields: Vec<&str> = problems
         .0
@@ -154,7 +154,7 @@ fn validation_collects_every_problem_at_once() {
 #[test]
 fn partial_explicit_sigmas_and_unknown_fields_are_rejected() {
     let spec = parse("[wind.turbulence]\nsigma_u = 1.0\n");
-    let mut problems = Problems::default();
+    let mut problems = FieldErrors::default();
     spec.validate(&mut problems);
     let fields: Vec<&str> = problems
         .0

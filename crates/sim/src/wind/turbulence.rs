@@ -6,7 +6,7 @@
 
 use super::check::{is_not_negative, is_positive, require};
 use super::intensity::{Intensity, scale_lengths};
-use aeroid_core::error::Problems;
+use aeroid_core::error::FieldErrors;
 use aeroid_core::units::{Dimension, FOOT, Quantity};
 use serde::{Deserialize, Serialize};
 
@@ -71,7 +71,7 @@ impl TurbulenceSpec {
     }
 
     /// Records the problems of this table under `path` ("wind.turbulence").
-    pub fn validate(&self, path: &str, problems: &mut Problems) {
+    pub fn validate(&self, path: &str, problems: &mut FieldErrors) {
         let field = |name: &str| format!("{path}.{name}");
         let given_sigmas = self
             .sigmas()

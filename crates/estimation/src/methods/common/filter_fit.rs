@@ -23,7 +23,7 @@
 //! **Cost and relaxation** (§5.3): ½·Σ_k (ν_kᵀR⁻¹ν_k + ln det R); R =
 //! (1/N)·Σ ν·νᵀ (Eq. 5.37; full where the outputs share one time base,
 //! fitted from the diagonal R's estimate, `stages`), then F compensated
-//! (Eq. 5.41, [`LeastSquaresProblem::compensate`]) and one Gauss–Newton step
+//! (Eq. 5.41, [`LeastSquaresObjective::compensate`]) and one Gauss–Newton step
 //! on θ and F with R held ([`gauss_newton`]), subject to diag(K·C) ≤ 1
 //! (§5.3, `kcle1`; an active-set quadratic program with second-order
 //! corrections, Nocedal & Wright, "Numerical Optimization", §16.5, §18.3:
@@ -52,7 +52,7 @@ use crate::model::observations::Observations;
 use crate::model::state_space::{Jacobians, StateSpaceModel};
 use crate::solver::extended_kalman::{self, Discretisation, Keep, Noise};
 use crate::structure::ModelStructure;
-use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
+use aeroid_numerics::gauss_newton::{self, LeastSquaresObjective, Options};
 use aeroid_numerics::kalman::{self, Gaussian, SteadyState};
 use aeroid_record::FlightRecord;
 use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView};

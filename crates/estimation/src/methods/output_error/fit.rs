@@ -63,7 +63,7 @@ pub fn output_error_from(
             });
         }
     }
-    let mut problem = Problem::new(records, structure, options)?;
+    let mut problem = Objective::new(records, structure, options)?;
     let data: usize = problem
         .segments
         .iter()
@@ -137,7 +137,7 @@ pub fn output_error_from(
     // Iterations steer with the grid-point linearisation (half the cost).
     // Once a step is predicted to decrease the cost by less than
     // REFINE_DECREASE, its simulation is made with the exact derivative of
-    // the discrete simulation ([`LeastSquaresProblem::refine`]), and the fit
+    // the discrete simulation ([`LeastSquaresObjective::refine`]), and the fit
     // stops only when the exact Gauss–Newton step is under 0.014σ; the
     // information matrix and Cramér–Rao bounds are the exact ones.
     let mut final_options = solver_options(&problem.unknowns, CONVERGED_DECREASE);

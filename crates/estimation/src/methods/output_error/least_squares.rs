@@ -2,7 +2,7 @@
 
 use super::*;
 
-impl LeastSquaresProblem for Problem<'_> {
+impl LeastSquaresObjective for Objective<'_> {
     type Error = crate::Error;
 
     fn unknown_name(&self, index: usize) -> Option<String> {
@@ -60,7 +60,7 @@ impl LeastSquaresProblem for Problem<'_> {
     /// R = diag(mean square residual per output) at θ (Verma & Peyada 2020, Eq. 8), with a
     /// floor of 10⁻¹² of the output's RMS so that a noise-free fit stays finite.
     /// It first re-chooses the integration sub-steps for the model at θ
-    /// ([`Problem::resolve_steps`]): a fit whose parameters speed up a mode
+    /// ([`Objective::resolve_steps`]): a fit whose parameters speed up a mode
     /// (τ1 of the stall model's χ falling) integrates it as the model asks.
     fn reweight(&mut self, theta: &DVector<f64>) -> crate::Result<bool> {
         self.resolve_steps(theta)?;
@@ -137,7 +137,7 @@ impl LeastSquaresProblem for Problem<'_> {
     }
 }
 
-impl Problem<'_> {
+impl Objective<'_> {
     /// Replaces the estimate's white Cramér–Rao bounds by the bounds
     /// corrected for coloured residuals (Morelli & Klein 1997, Eq. 19 for
     /// output error: Cov = M⁻¹·[Σᵢ Σⱼ Jᵢᵀ·R_rr(i − j)·Jⱼ]·M⁻¹, J the
@@ -405,7 +405,7 @@ impl Problem<'_> {
         )
     }
 
-    /// The weights 1/σ and ∂y/∂θ at the samples ([`Problem::assembled`])
+    /// The weights 1/σ and ∂y/∂θ at the samples ([`Objective::assembled`])
     /// for the Jacobian at θ: the held simulation's, else θ's (simulated
     /// with sensitivities if it was not).
     pub(super) fn sensitivities_at(

@@ -39,7 +39,7 @@ use crate::methods::common::refusals::enough_data;
 use crate::model::linear::LinearStateSpace;
 use crate::model::observations::Observations;
 use crate::model::state_space::StateSpaceModel;
-use aeroid_numerics::gauss_newton::{self, LeastSquaresProblem, Options};
+use aeroid_numerics::gauss_newton::{self, LeastSquaresObjective, Options};
 use aeroid_record::FlightRecord;
 use nalgebra::DVector;
 
@@ -250,7 +250,7 @@ impl Shooting<'_> {
     }
 }
 
-impl LeastSquaresProblem for Shooting<'_> {
+impl LeastSquaresObjective for Shooting<'_> {
     type Error = crate::Error;
 
     fn residuals(&mut self, u: &DVector<f64>) -> crate::Result<DVector<f64>> {

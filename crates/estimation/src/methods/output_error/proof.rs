@@ -42,7 +42,7 @@ pub fn match_histories(
     }
     let options = OutputErrorOptions::for_structure(structure)?;
     let segment = segment(record, structure, &options)?;
-    let mut problem = Problem {
+    let mut problem = Objective {
         model: FlightModel::new(aircraft, Default::default()),
         all: Vec::new(),
         unknowns: Vec::new(),

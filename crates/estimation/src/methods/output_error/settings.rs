@@ -49,7 +49,7 @@ pub struct OutputErrorOptions {
     pub correlation_lag: f64,
     /// The standard deviation of each recorded input's noise, by channel
     /// (e.g. `elevator = "0.01 deg"`): the Cramér–Rao bounds then include
-    /// what that noise does to the estimates (`Problem::input_noise_bounds`);
+    /// what that noise does to the estimates (`Objective::input_noise_bounds`);
     /// empty: the inputs are taken as exact, as output error's likelihood
     /// takes them.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]

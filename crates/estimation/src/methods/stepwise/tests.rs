@@ -63,7 +63,7 @@ fn redundant_early_term_is_removed() {
         .iter()
         .map(|n| Candidate::parse(n).unwrap())
         .collect();
-    let problem = Problem::new(&data, Coefficient::Pitch, &candidates);
+    let problem = SearchData::new(&data, Coefficient::Pitch, &candidates);
     let search = problem.search(&StepwiseOptions::default());
     let actions: Vec<(Action, Option<&str>)> = search
         .steps
@@ -110,7 +110,7 @@ fn quadratic_data(z: impl Fn(f64, usize) -> f64) -> Reconstruction {
 
 /// The estimates of a model, in the plain basis, with the white covariance.
 fn plain_estimates(
-    problem: &Problem,
+    problem: &SearchData,
     model: &[usize],
 ) -> (Vec<String>, DVector<f64>, DMatrix<f64>) {
     let fit = LeastSquares::fit(&problem.matrix(model), &problem.z);
@@ -128,7 +128,7 @@ fn squares_are_reported_in_the_plain_basis() {
         .iter()
         .map(|n| Candidate::parse(n).unwrap())
         .collect();
-    let problem = Problem::new(&data, Coefficient::Drag, &candidates);
+    let problem = SearchData::new(&data, Coefficient::Drag, &candidates);
     let (terms, theta, _) = plain_estimates(&problem, &[0, 1]);
     assert_eq!(terms, ["0", "alpha", "alpha^2"]);
     for (value, truth) in theta.iter().zip([0.02, 0.1, 0.8]) {
@@ -138,7 +138,7 @@ fn squares_are_reported_in_the_plain_basis() {
     // part −2ᾱ·0.8·α is carried by an added alpha term.
     let mean = problem.means[Regressor::Alpha as usize];
     let data = quadratic_data(|alpha, _| 0.02 + 0.8 * (alpha - mean).powi(2));
-    let problem = Problem::new(&data, Coefficient::Drag, &candidates[1..]);
+    let problem = SearchData::new(&data, Coefficient::Drag, &candidates[1..]);
     let (terms, theta, _) = plain_estimates(&problem, &[0]);
     assert_eq!(terms, ["0", "alpha^2", "alpha"]);
     let expected = [0.02 + 0.8 * mean * mean, 0.8, -1.6 * mean];
@@ -160,7 +160,7 @@ fn cubes_are_reported_in_the_plain_basis() {
         / 400.0;
     let data = quadratic_data(|alpha, _| 0.02 + 2.0 * (alpha - mean).powi(3));
     let candidates = [Candidate::parse("alpha^3").unwrap()];
-    let problem = Problem::new(&data, Coefficient::Drag, &candidates);
+    let problem = SearchData::new(&data, Coefficient::Drag, &candidates);
     let (terms, theta, _) = plain_estimates(&problem, &[0]);
     assert_eq!(terms, ["0", "alpha^3", "alpha", "alpha^2"]);
     let expected = [
@@ -189,7 +189,7 @@ fn the_plain_basis_covariance_is_that_of_the_plain_regression() {
         .iter()
         .map(|n| Candidate::parse(n).unwrap())
         .collect();
-    let problem = Problem::new(&data, Coefficient::Drag, &candidates);
+    let problem = SearchData::new(&data, Coefficient::Drag, &candidates);
     let (_, theta, covariance) = plain_estimates(&problem, &[0, 1]);
     let x = DMatrix::from_fn(data.times.len(), 3, |k, j| {
         data.regressors[k][Regressor::Alpha as usize].powi(j as i32)

@@ -67,14 +67,14 @@ pub(crate) enum Relaxation {
     /// ν·νᵀ, or a scoring step of G·Gᵀ), F compensated after each update
     /// (Jategaonkar Eq. 5.41). `previous`: R (diagonal and full) before
     /// the last update and the C of that update's pass, taken by
-    /// [`LeastSquaresProblem::compensate`].
+    /// [`LeastSquaresObjective::compensate`].
     Between {
         previous: Option<(Relaxed, DMatrix<f64>)>,
     },
     /// Time-varying gain, once started: G (one entry per output, G·Gᵀ =
     /// diag(G²)) is among the unknowns, after F. `proposed`: the relaxed
     /// G·Gᵀ proposed at the last re-weighting, taken by
-    /// [`LeastSquaresProblem::compensate`] where it lowers the cost.
+    /// [`LeastSquaresObjective::compensate`] where it lowers the cost.
     Joint { proposed: Option<DVector<f64>> },
 }
 

@@ -13,7 +13,7 @@ impl<M: StateSpaceModel + ?Sized> FilterErrorFit<'_, M> {
     /// Jᵀρ is the gradient of the negative log-likelihood and JᵀJ its
     /// Fisher information Σ_k (∂νᵀS⁻¹∂ν + ½·tr(S⁻¹∂S·S⁻¹∂S)). The
     /// derivatives by forward differences of whole passes (backward where
-    /// the forward pass fails), steps as [`LeastSquaresProblem::jacobian`].
+    /// the forward pass fails), steps as [`LeastSquaresObjective::jacobian`].
     pub(crate) fn fisher_scoring(
         &self,
         unknowns: &DVector<f64>,

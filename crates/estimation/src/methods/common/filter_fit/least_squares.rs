@@ -5,7 +5,7 @@
 
 use super::*;
 
-impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> {
+impl<M: StateSpaceModel + ?Sized> LeastSquaresObjective for FilterErrorFit<'_, M> {
     type Error = crate::Error;
 
     fn unknown_name(&self, index: usize) -> Option<String> {
@@ -49,7 +49,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
 
     /// R = (1/N)·Σ ν·νᵀ ([`InnovationCovariance`]) at the current (θ, F) (steady gain);
     /// a scoring step of G·Gᵀ (time-varying gain). Either is followed by
-    /// the compensation of F ([`LeastSquaresProblem::compensate`]) with C
+    /// the compensation of F ([`LeastSquaresObjective::compensate`]) with C
     /// at the first grid point.
     fn reweight(&mut self, unknowns: &DVector<f64>) -> crate::Result<bool> {
         if self.joint() {
@@ -92,7 +92,7 @@ impl<M: StateSpaceModel + ?Sized> LeastSquaresProblem for FilterErrorFit<'_, M> 
         Ok(changed)
     }
 
-    /// JᵀJ and Jᵀr of [`LeastSquaresProblem::jacobian`] (steady gain);
+    /// JᵀJ and Jᵀr of [`LeastSquaresObjective::jacobian`] (steady gain);
     /// Fisher scoring (`FilterErrorFit::fisher_scoring`, time-varying).
     fn normal_equations(
         &mut self,

@@ -42,7 +42,7 @@ pub(super) struct Segment<'a> {
     pub(super) fastest: f64,
 }
 
-pub(super) struct Problem<'a> {
+pub(super) struct Objective<'a> {
     pub(super) model: FlightModel,
     pub(super) segments: Vec<Segment<'a>>,
     /// Every unknown of the fit: the simulations' sensitivity columns.
@@ -74,7 +74,7 @@ pub(super) struct Problem<'a> {
     pub(super) alpha_dot: bool,
     /// Whether χ is a state (τ1 > 0): a θ that changes it cannot be simulated.
     pub(super) chi_is_state: bool,
-    /// Whether the last re-weighting re-chose a grid ([`Problem::resolve_steps`]).
+    /// Whether the last re-weighting re-chose a grid ([`Objective::resolve_steps`]).
     pub(super) regridded: bool,
 }
 
@@ -82,7 +82,7 @@ pub(super) struct Problem<'a> {
 /// sensitivities to every unknown (in the `Linearise` mode recorded) when
 /// computed.
 pub(super) struct Simulated {
-    /// The values of all unknowns ([`Problem::values`]).
+    /// The values of all unknowns ([`Objective::values`]).
     pub(super) key: DVector<f64>,
     pub(super) predictions: Predictions,
     pub(super) grids: Option<(Vec<Grid>, Linearise)>,
@@ -153,12 +153,12 @@ pub(super) fn unknowns(
     unknowns
 }
 
-impl<'a> Problem<'a> {
+impl<'a> Objective<'a> {
     pub(super) fn new(
         records: &[&'a FlightRecord],
         structure: &ModelStructure,
         options: &OutputErrorOptions,
-    ) -> Result<Problem<'a>> {
+    ) -> Result<Objective<'a>> {
         let observables = observables(structure)?;
         let mut segments = Vec::with_capacity(records.len());
         for record in records {
@@ -176,7 +176,7 @@ impl<'a> Problem<'a> {
             }
         }
         let all = unknowns(structure, options, &segments);
-        Ok(Problem {
+        Ok(Objective {
             model: FlightModel::new(structure.aircraft.clone(), Default::default()),
             unknowns: all.clone(),
             all,
@@ -229,7 +229,7 @@ impl<'a> Problem<'a> {
     /// Moves the aerodynamic values to equation error's estimates on
     /// `record` (white bounds only: they are not used) when the structure
     /// allows equation error and they fit better than the current values
-    /// ([`Problem::start_cost`]); returns whether it did, with a note either way.
+    /// ([`Objective::start_cost`]); returns whether it did, with a note either way.
     pub(super) fn start_from_equation_error(
         &mut self,
         record: &FlightRecord,
@@ -481,7 +481,7 @@ impl<'a> Problem<'a> {
         }
     }
 
-    /// The predictions of the last simulation ([`Problem::predict`]).
+    /// The predictions of the last simulation ([`Objective::predict`]).
     pub(super) fn predictions(&self) -> &Predictions {
         &self.simulated.as_ref().expect("predicted").predictions
     }
