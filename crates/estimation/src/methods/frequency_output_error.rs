@@ -248,14 +248,19 @@ impl FrequencyData {
                 };
                 diagonal - a[(i, j)]
             });
-            let x = resolvent
-                .lu()
-                .solve(&(&b * &u - e))
-                .ok_or_else(|| Error::Numerical {
-                    reason: format!(
-                        "jωI − A is singular at ω = {omega} rad/s (a pole on the imaginary axis)"
-                    ),
-                })?;
+            // No state (`integrate = []`): y = D·u (nalgebra's LU does not take 0×0).
+            let x = if n == 0 {
+                DVector::zeros(0)
+            } else {
+                resolvent
+                    .lu()
+                    .solve(&(&b * &u - e))
+                    .ok_or_else(|| Error::Numerical {
+                        reason: format!(
+                            "jωI − A is singular at ω = {omega} rad/s (a pole on the imaginary axis)"
+                        ),
+                    })?
+            };
             let y = &c * x + &d * u;
             for (o, series) in predicted.iter_mut().enumerate() {
                 series[f] = y[o];

@@ -263,6 +263,10 @@ pub fn mode_eigenvalues(
     let a = view
         .jacobians(simulation.start, x0.as_slice(), theta.as_slice())?
         .rates_by_state;
+    // No integrated state (`integrate = []`): no mode.
+    if a.is_empty() {
+        return Ok(Vec::new());
+    }
     Ok(a.complex_eigenvalues().iter().copied().collect())
 }
 
