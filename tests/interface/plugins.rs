@@ -393,3 +393,29 @@ fn a_study_with_a_plugin_is_deterministic_and_resumable() {
     assemble(std::slice::from_ref(&resumed), &resumed).unwrap();
     assert_eq!(written(&resumed), written(&one));
 }
+
+/// A time limit no clock can count (1e300 s), or zero, is a clear error
+/// naming the file and the key when the plug-in is loaded, never a panic
+/// when it runs; a week is the longest a plug-in may set.
+#[test]
+fn a_time_limit_beyond_a_week_or_not_positive_is_refused_at_load() {
+    let folder = common::temp_folder("plugin_time_limit");
+    for limit in ["1e300 s", "0 s", "-5 s", "604801 s"] {
+        let path = common::write(
+            &folder,
+            "limited.toml",
+            &format!("command = [\"sh\", \"limited.sh\"]\ntime_limit = \"{limit}\"\n"),
+        );
+        let error = Plugin::load(&path).unwrap_err().to_string();
+        assert!(
+            error.contains("limited.toml") && error.contains("time_limit"),
+            "{limit}: {error}"
+        );
+    }
+    let path = common::write(
+        &folder,
+        "limited.toml",
+        "command = [\"sh\", \"limited.sh\"]\ntime_limit = \"604800 s\"\n",
+    );
+    Plugin::load(&path).unwrap();
+}

@@ -167,6 +167,10 @@ fn yes() -> bool {
     true
 }
 
+/// The longest time limit a plug-in may set (a week, in seconds): a
+/// longer one is a typo, and beyond about 1.8e19 s no clock can count it.
+pub const MAX_TIME_LIMIT: f64 = 7.0 * 24.0 * 3600.0;
+
 fn default_time_limit() -> f64 {
     60.0
 }
@@ -218,8 +222,15 @@ impl Plugin {
         if file.command.is_empty() || file.command[0].trim().is_empty() {
             return Err(invalid("command", "must name a program".into()).into());
         }
-        if !(file.time_limit > 0.0 && file.time_limit.is_finite()) {
-            return Err(invalid("time_limit", "must be positive".into()).into());
+        if !(file.time_limit > 0.0 && file.time_limit <= MAX_TIME_LIMIT) {
+            return Err(invalid(
+                "time_limit",
+                format!(
+                    "{} s: must be positive and at most {MAX_TIME_LIMIT} s (a week)",
+                    file.time_limit
+                ),
+            )
+            .into());
         }
         let base = path.parent().unwrap_or(Path::new("."));
         let working_directory = match &file.working_directory {
