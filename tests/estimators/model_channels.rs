@@ -247,3 +247,31 @@ fn a_model_without_integrated_states_fits_or_is_refused_never_panics() {
         );
     }
 }
+
+/// A model file whose start value makes a mode too fast for any grid a
+/// fit takes (Cm_q = −1e30) is refused with the mode and the step named,
+/// by every method that simulates the model, whatever its start (output
+/// error's `start = "model"` here) — not a panic on a grid of 10³⁰ points.
+#[test]
+fn a_start_value_that_no_grid_integrates_is_refused_with_the_mode_named() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/attas-longitudinal.toml"),
+    )
+    .unwrap()
+    .replacen("q = -10.0", "q = -1e30", 1);
+    assert!(text.contains("q = -1e30"), "the bundled model changed");
+    let text = text.replacen("[methods.oem]", "[methods.oem]\nstart = \"model\"", 1);
+    let model = common::write(&common::temp_folder("too_fast_start"), "model.toml", &text);
+    let (full, _) = records();
+    for method in ["oem", "fem", "ekf", "ukf", "fdoe"] {
+        let outcome = std::panic::catch_unwind(|| fit(method, full.clone(), &model));
+        let Ok(result) = outcome else {
+            panic!("{method} panicked on a start value of 1e30");
+        };
+        let error = result.err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(
+            error.contains("fastest mode") && error.contains("e28/s"),
+            "{method}: {error}"
+        );
+    }
+}

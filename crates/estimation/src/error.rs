@@ -83,8 +83,9 @@ pub enum Error {
     /// integrate (h·|λ| above `reach`); `finest`: the finest sub-division
     /// a fit takes, when the steps are already at it.
     #[error(
-        "the model's fastest mode (|λ| = {fastest:.1}/s) is beyond RK4 steps of {step:.5} s (h·|λ| = {:.2} > {reach}){}",
-        step * fastest,
+        "the model's fastest mode (|λ| = {}/s) is beyond RK4 steps of {step:.5} s (h·|λ| = {} > {reach}){}",
+        readable(*fastest, 1),
+        readable(step * fastest, 2),
         finest.map(|n| format!(", the finest a fit takes ({n} per grid interval)")).unwrap_or_default()
     )]
     BeyondStepReach {
@@ -148,6 +149,16 @@ impl Error {
             Error::ModelDeparted { time } => Some((*time, "the postulated model departed")),
             _ => None,
         }
+    }
+}
+
+/// `value` with `decimals` decimals, or in exponent form beyond a million
+/// (a mode of 1e30/s reads as one).
+fn readable(value: f64, decimals: usize) -> String {
+    if value.abs() < 1e6 {
+        format!("{value:.decimals$}")
+    } else {
+        format!("{value:.3e}")
     }
 }
 

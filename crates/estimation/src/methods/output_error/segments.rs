@@ -125,21 +125,6 @@ pub(super) const RECHOSEN_MARGIN: f64 = 1.25;
 /// path; a fit whose modes move a little keeps the grid it started on.
 pub(super) const REFINE_BEYOND: f64 = 2.0;
 
-/// The largest h·|λ| of the model's fastest mode at which a θ is simulated
-/// on the grid of the iteration's start: RK4 is stable to 2.78 and, from
-/// the grid's h·|λ| of 0.4 to 1, this lets a step speed the mode up two-
-/// to fivefold (τ1 fall to a half or a fifth); beyond it the simulation is
-/// refused and the step shortened. The next iteration's grid resolves the
-/// new θ.
-pub(super) const RK4_STEP_REACH: f64 = 2.0;
-
-/// The most RK4 steps a grid interval is divided into as the parameters
-/// move: every grid point's sensitivities are kept, so the memory grows
-/// with them (32 on a 60 s record at 100 Hz with 17 unknowns and 6
-/// outputs: about 160 MB per simulation). A θ whose fastest mode needs
-/// more is not simulated, and a fit that goes there stops at that edge.
-pub(super) const MAX_SUBSTEPS: usize = 32;
-
 impl Segment<'_> {
     /// Where each output sample lies on the simulation's grid.
     pub(super) fn locate_samples(&mut self) {
