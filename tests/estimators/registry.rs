@@ -332,3 +332,57 @@ fn a_broken_problem_file_is_refused() {
         "{error}"
     );
 }
+
+/// Settings without an upper bound once asked for more memory or time
+/// than any machine has (a differentiator's window of 1e9 s, a degree of
+/// 1e11, a step of 1e-9 s, 1e8 starts or noise draws, a spread of 1e308):
+/// each is refused by the method's settings check, naming the key and
+/// the range, before anything is allocated.
+#[test]
+fn unbounded_settings_are_refused_with_their_range() {
+    let refused = |method: &str, key: &str, value: serde_json::Value, range: &str| {
+        let mut settings = aeroid::estimation::estimator::Settings::new();
+        settings.insert(key.to_string(), value);
+        if key == "input_noise_draws" {
+            settings.insert(
+                "input_noise".into(),
+                serde_json::json!({ "elevator": "0.01 deg" }),
+            );
+        }
+        let error = crate::common::registry()
+            .find(method)
+            .unwrap()
+            .check_settings(&settings)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains(key) && error.contains(range),
+            "{method} {key}: {error}"
+        );
+    };
+    for method in ["ee", "swr"] {
+        refused(
+            method,
+            "differentiator",
+            serde_json::json!({ "half_width": "1e9 s", "degree": 4 }),
+            "at most 10 s",
+        );
+        refused(
+            method,
+            "differentiator",
+            serde_json::json!({ "half_width": "0.1 s", "degree": 100_000_000_000u64 }),
+            "from 1 to 10",
+        );
+    }
+    for method in ["oem", "fem", "ekf", "ukf"] {
+        refused(method, "step", "1e-9 s".into(), "at least 0.00001 s");
+    }
+    refused("oem", "starts", 100_000_000.into(), "from 1 to 1000");
+    refused("oem", "start_spread", 1e308.into(), "at most 10");
+    refused(
+        "oem",
+        "input_noise_draws",
+        100_000_000.into(),
+        "from 2 to 100000",
+    );
+}

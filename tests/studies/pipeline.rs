@@ -152,7 +152,7 @@ fn a_scenario_with_wrong_method_settings_is_refused() {
         ),
         (
             "[methods.oem]\nstep = \"-1 s\"\n",
-            "methods.oem: step must be positive",
+            "methods.oem: step must be at least 0.00001 s, is -1 s",
         ),
     ] {
         let path = folder.join("scenario.toml");

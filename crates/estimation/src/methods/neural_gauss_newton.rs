@@ -150,7 +150,7 @@ impl NeuralGaussNewtonSettings {
         if self.max_iterations == 0 {
             return bad("max_iterations must be at least 1");
         }
-        if let Some(problem) = self.differentiator.field_errors() {
+        if let Some(problem) = self.differentiator.check() {
             return bad(&problem);
         }
         Ok(())

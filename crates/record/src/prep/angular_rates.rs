@@ -136,7 +136,7 @@ pub fn kinematic_rates(
     record: &FlightRecord,
     differentiator: &Differentiator,
 ) -> Result<KinematicRates> {
-    if let Some(problem) = differentiator.field_errors() {
+    if let Some(problem) = differentiator.check() {
         return Err(Error::Derivation {
             reason: format!("angular rates: {problem}"),
         });

@@ -57,20 +57,35 @@ pub struct Differentiator {
 }
 
 impl Differentiator {
-    /// Problems with a differentiator read from a settings table.
-    pub fn field_errors(&self) -> Option<String> {
-        if !(self.half_width > 0.0 && self.half_width.is_finite()) {
+    /// What is wrong with a differentiator read from a settings table or
+    /// the command line, if anything: a half-width that is not positive or
+    /// beyond [`MAX_HALF_WIDTH`], a degree of 0 or beyond [`MAX_DEGREE`].
+    pub fn check(&self) -> Option<String> {
+        if !(self.half_width > 0.0 && self.half_width <= MAX_HALF_WIDTH) {
             Some(format!(
-                "differentiator.half_width must be positive, is {} s",
+                "differentiator.half_width must be positive and at most {MAX_HALF_WIDTH} s, is {} s",
                 self.half_width
             ))
-        } else if self.degree == 0 {
-            Some("differentiator.degree must be at least 1".to_string())
+        } else if !(1..=MAX_DEGREE).contains(&self.degree) {
+            Some(format!(
+                "differentiator.degree must be from 1 to {MAX_DEGREE}, is {}",
+                self.degree
+            ))
         } else {
             None
         }
     }
 }
+
+/// The widest half-window a differentiator takes, in seconds: a local
+/// polynomial over more than 20 s smooths away every manoeuvre, and a
+/// window of 1e9 s would ask for more memory than any machine has.
+pub const MAX_HALF_WIDTH: f64 = 10.0;
+
+/// The highest degree of a differentiator's local polynomial: beyond it the
+/// least-squares fit on equidistant samples is ill-conditioned (Runge) and
+/// its noise gain grows without bound.
+pub const MAX_DEGREE: usize = 10;
 
 impl Default for Differentiator {
     fn default() -> Self {

@@ -46,6 +46,7 @@ use crate::estimator::{Refusal, Settings, parse_settings};
 use crate::input_timing::{self, InputInterpolation};
 use crate::linear_structure::LinearStructure;
 use crate::methods::common::coefficient_fit::{Start, linear_start_estimate, start_estimate};
+use crate::methods::common::iterations::{MIN_STEP, step_in_range};
 use crate::methods::common::refusals::{
     enough_data, free_parameters, missing_channels, unsuitable,
 };
@@ -251,8 +252,11 @@ impl FilterSettings {
         if self.passes == 0 {
             return bad("passes", "must be at least 1".into());
         }
-        if self.step.is_some_and(|s| !(s > 0.0 && s.is_finite())) {
-            return bad("step", "must be positive".into());
+        if let Some(step) = self.step.filter(|&step| !step_in_range(step)) {
+            return bad(
+                "step",
+                format!("must be at least {MIN_STEP} s, is {step} s"),
+            );
         }
         Ok(())
     }

@@ -101,7 +101,7 @@ pub(crate) fn check_settings(
     differentiator: &Differentiator,
     correlation_lag: f64,
 ) -> Result<()> {
-    let problem = differentiator.field_errors().or_else(|| {
+    let problem = differentiator.check().or_else(|| {
         (!(correlation_lag >= 0.0 && correlation_lag.is_finite()))
             .then(|| format!("correlation_lag must be at least 0 s, is {correlation_lag} s"))
     });

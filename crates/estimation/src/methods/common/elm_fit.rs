@@ -111,7 +111,7 @@ impl ElmSettings {
         } else if self.max_iterations == 0 {
             Some("max_iterations must be at least 1".to_string())
         } else {
-            self.differentiator.field_errors()
+            self.differentiator.check()
         };
         match problem {
             Some(message) => Err(Error::Settings {

@@ -61,6 +61,19 @@ pub struct OutputErrorOptions {
     pub input_noise_seed: u64,
 }
 
+/// The most starts a fit takes: a thousand fits of a second each take a
+/// quarter of an hour; more is a typo.
+pub const MAX_STARTS: usize = 1000;
+
+/// The widest spread of the extra starts, as a fraction of each
+/// parameter's magnitude: tenfold; beyond it a start is no longer near the
+/// model file's values.
+pub const MAX_START_SPREAD: f64 = 10.0;
+
+/// The most simulated draws of the inputs' noise: 100 000 put the share's
+/// standard deviations within 0.2 %; more only costs time.
+pub const MAX_DRAWS: usize = 100_000;
+
 impl Default for OutputErrorOptions {
     fn default() -> Self {
         OutputErrorOptions {
@@ -99,10 +112,10 @@ impl OutputErrorOptions {
     /// Checks the values' ranges and combinations.
     pub fn check(&self) -> Result<()> {
         check_iterations(METHOD, self.step, self.max_iterations)?;
-        if self.starts == 0 {
+        if !(1..=MAX_STARTS).contains(&self.starts) {
             return Err(Error::Settings {
                 method: METHOD.to_string(),
-                reason: "starts must be at least 1".to_string(),
+                reason: format!("starts must be from 1 to {MAX_STARTS}, is {}", self.starts),
             });
         }
         if self
@@ -122,17 +135,20 @@ impl OutputErrorOptions {
         }
         self.input_sigmas()?;
         self.interpolation.check_controls(METHOD)?;
-        if !self.input_noise.is_empty() && self.input_noise_draws < 2 {
-            return Err(Error::Settings {
-                method: METHOD.to_string(),
-                reason: "input_noise_draws must be at least 2".to_string(),
-            });
-        }
-        if !(self.start_spread > 0.0 && self.start_spread.is_finite()) {
+        if !self.input_noise.is_empty() && !(2..=MAX_DRAWS).contains(&self.input_noise_draws) {
             return Err(Error::Settings {
                 method: METHOD.to_string(),
                 reason: format!(
-                    "start_spread must be a positive fraction, is {}",
+                    "input_noise_draws must be from 2 to {MAX_DRAWS}, is {}",
+                    self.input_noise_draws
+                ),
+            });
+        }
+        if !(self.start_spread > 0.0 && self.start_spread <= MAX_START_SPREAD) {
+            return Err(Error::Settings {
+                method: METHOD.to_string(),
+                reason: format!(
+                    "start_spread must be a positive fraction of at most {MAX_START_SPREAD}, is {}",
                     self.start_spread
                 ),
             });
