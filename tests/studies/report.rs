@@ -283,4 +283,18 @@ fn the_report_plots_a_bounded_share_of_the_runs() {
     let per_case = read.rows.iter().filter(|r| r.run == 0).count();
     assert!(per_case > 0);
     assert_eq!(read.rows.len(), SHOWN_RUNS * per_case);
+    // A runs.csv cut after its last full row, or emptied, is refused: it
+    // no longer holds the rows study.json summarises.
+    let runs = folder.join("runs.csv");
+    let text = std::fs::read_to_string(&runs).unwrap();
+    let cut = &text[..text[..text.len() - 1].rfind('\n').unwrap() + 1];
+    for (what, content) in [("cut", cut), ("empty", "")] {
+        std::fs::write(&runs, content).unwrap();
+        let error = StudyFolder::read(&folder).err().map(|e| e.to_string());
+        let error = error.unwrap_or_else(|| panic!("a {what} runs.csv was read"));
+        assert!(
+            error.contains("runs.csv") && error.contains("study.json summarises"),
+            "{what}: {error}"
+        );
+    }
 }

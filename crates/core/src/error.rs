@@ -198,10 +198,7 @@ pub fn write_error(path: &std::path::Path, error: impl fmt::Display) -> Error {
     }
 }
 
-/// Writes a text file, naming it in the error.
-pub fn write_text(path: &std::path::Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| write_error(path, e))
-}
+pub use crate::atomic::write_text;
 
 /// Parses TOML into `T`, reporting the file, line and column of a syntax or type error.
 pub fn parse_toml<T: serde::de::DeserializeOwned>(path: &std::path::Path, text: &str) -> Result<T> {

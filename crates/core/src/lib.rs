@@ -2,6 +2,7 @@
 //! refusals, the data folders and the paths inside them, units, limits on
 //! what a file may ask for, the seeded random streams and CSV tables.
 
+pub mod atomic;
 pub mod catalog;
 pub mod csv_table;
 pub mod error;

@@ -40,6 +40,14 @@ pub enum Error {
     )]
     JournalExists { path: PathBuf },
 
+    /// A journal another aeroid process is writing (a second `--resume`
+    /// on the same folder while the first runs).
+    #[error(
+        "{}: another aeroid study is writing this journal; wait for it to end, or give this run another folder",
+        path.display()
+    )]
+    JournalBusy { path: PathBuf },
+
     /// A journal that is of another study or shard, incomplete, or whose
     /// writer failed.
     #[error("{}: {reason}", path.display())]

@@ -119,6 +119,7 @@ impl Journal {
                 std::io::ErrorKind::AlreadyExists => Error::JournalExists { path: path.clone() },
                 _ => write_error(&path, e).into(),
             })?;
+        lock(&file, &path)?;
         let line = serde_json::to_string(header).map_err(|e| write_error(&path, e))?;
         writeln!(file, "{line}")
             .and_then(|_| file.flush())
@@ -134,6 +135,18 @@ impl Journal {
     /// line cut short, and returns the journal with the cases it holds.
     pub fn resume(folder: &Path, header: &Header) -> Result<(Journal, Finished)> {
         let path = folder.join(JOURNAL_FILE);
+        // Locked before it is read: a second resume on the same folder
+        // would otherwise cut and append through its own handle.
+        let mut file = match OpenOptions::new().write(true).open(&path) {
+            Ok(file) => file,
+            // A missing journal is said by the index, with its own message.
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                index_journal(&path)?;
+                return Err(write_error(&path, e).into());
+            }
+            Err(e) => return Err(write_error(&path, e).into()),
+        };
+        lock(&file, &path)?;
         let index = index_journal(&path)?;
         let found = &index.header;
         if *found != *header {
@@ -150,13 +163,8 @@ impl Journal {
                 path,
             });
         }
-        let file = OpenOptions::new()
-            .write(true)
-            .open(&path)
-            .map_err(|e| write_error(&path, e))?;
         file.set_len(index.complete_length)
             .map_err(|e| write_error(&path, e))?;
-        let mut file = file;
         use std::io::Seek;
         file.seek(std::io::SeekFrom::End(0))
             .map_err(|e| write_error(&path, e))?;
@@ -186,6 +194,19 @@ impl Journal {
     /// The journal's path.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+}
+
+/// Takes the journal's exclusive lock for as long as `file` is open (an
+/// advisory lock: every aeroid process asks for it), or says that another
+/// process holds it.
+fn lock(file: &File, path: &Path) -> Result<()> {
+    match file.try_lock() {
+        Ok(()) => Ok(()),
+        Err(std::fs::TryLockError::WouldBlock) => Err(Error::JournalBusy {
+            path: path.to_path_buf(),
+        }),
+        Err(std::fs::TryLockError::Error(e)) => Err(write_error(path, e).into()),
     }
 }
 
@@ -416,4 +437,42 @@ pub fn open(folders: &[PathBuf]) -> Result<Cases> {
         files,
         places,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header() -> Header {
+        Header {
+            format: FORMAT.into(),
+            study: "locked".into(),
+            seed: 1,
+            runs: 2,
+            fingerprint: "f".into(),
+            cases: 4,
+            shard: Shard::default(),
+        }
+    }
+
+    /// While one study writes a journal, a second resume of the same folder
+    /// is refused (it would cut and append through its own handle) and the
+    /// journal keeps every case; once the first has ended it resumes.
+    #[test]
+    fn a_journal_in_use_is_not_resumed_by_a_second_study() {
+        let folder =
+            std::env::temp_dir().join(format!("aeroid-journal-lock-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&folder);
+        let first = Journal::create(&folder, &header()).unwrap();
+        first.append(0, &[]).unwrap();
+        let error = Journal::resume(&folder, &header()).unwrap_err();
+        assert!(matches!(error, Error::JournalBusy { .. }), "{error}");
+        assert!(error.to_string().contains(JOURNAL_FILE), "{error}");
+        first.append(1, &[]).unwrap();
+        drop(first);
+        let (second, finished) = Journal::resume(&folder, &header()).unwrap();
+        assert_eq!(finished, [0, 1].into());
+        drop(second);
+        std::fs::remove_dir_all(&folder).unwrap();
+    }
 }

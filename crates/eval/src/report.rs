@@ -112,11 +112,25 @@ impl StudyFolder {
         let path = folder.join("runs.csv");
         let mut reader = csv::Reader::from_path(&path).map_err(|e| csv_error(&path, e))?;
         let mut rows = Vec::new();
+        let mut count = 0;
         for row in reader.deserialize::<Row>() {
             let row = row.map_err(|e| csv_error(&path, e))?;
+            count += 1;
             if row.run < SHOWN_RUNS {
                 rows.push(row);
             }
+        }
+        // An empty or cut runs.csv, or one from another run of the study,
+        // does not hold the rows study.json summarises.
+        if count != result.rows {
+            return Err(Error::Table {
+                path,
+                line: None,
+                reason: format!(
+                    "holds {count} rows where study.json summarises {}: the file is cut short or is not this result's; run `aeroid merge` again",
+                    result.rows
+                ),
+            });
         }
         let copy = folder.join(STUDY_COPY);
         let study_file = copy.exists().then(|| read_text(&copy)).transpose()?;

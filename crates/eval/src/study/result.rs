@@ -5,6 +5,7 @@
 use crate::error::{Error, Result};
 use crate::journal;
 use crate::summary::{Ending, Summariser, SummaryRow};
+use aeroid_core::atomic::AtomicFile;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -32,9 +33,13 @@ pub fn assemble(folders: &[PathBuf], out: &Path) -> Result<StudyResult> {
     let header = cases.header().clone();
     std::fs::create_dir_all(out).map_err(|e| aeroid_core::error::write_error(out, e))?;
     crate::histories::copy_all(folders, out)?;
+    // runs.csv, summary.csv and study.json are each written whole or not
+    // at all, study.json last: a kill leaves the folder's old result (or
+    // none), never a runs.csv cut mid-field.
     let path = out.join("runs.csv");
     let io_error = |e: csv::Error| aeroid_core::error::write_error(&path, e);
-    let mut writer = csv::Writer::from_path(&path).map_err(io_error)?;
+    let mut atomic = AtomicFile::create(&path)?;
+    let mut writer = csv::Writer::from_writer(atomic.file());
     let mut summariser = Summariser::default();
     cases.for_each(|_, rows| {
         for row in &rows {
@@ -46,6 +51,8 @@ pub fn assemble(folders: &[PathBuf], out: &Path) -> Result<StudyResult> {
     writer
         .flush()
         .map_err(|e| aeroid_core::error::write_error(&path, e))?;
+    drop(writer);
+    atomic.commit()?;
     let result = StudyResult::of(
         &header.study,
         header.seed,
@@ -89,7 +96,7 @@ impl StudyResult {
             path: path.clone(),
             reason: e.to_string(),
         })?;
-        std::fs::write(&path, text).map_err(|e| io(&path, e).into())
+        Ok(aeroid_core::error::write_text(&path, &text)?)
     }
 
     /// The summary as a fixed-width table for the terminal.
@@ -165,11 +172,14 @@ impl StudyResult {
 
 fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
     let io_error = |e: csv::Error| aeroid_core::error::write_error(path, e);
-    let mut writer = csv::Writer::from_path(path).map_err(io_error)?;
+    let mut atomic = AtomicFile::create(path)?;
+    let mut writer = csv::Writer::from_writer(atomic.file());
     for row in rows {
         writer.serialize(row).map_err(io_error)?;
     }
     writer
         .flush()
-        .map_err(|e| aeroid_core::error::write_error(path, e).into())
+        .map_err(|e| aeroid_core::error::write_error(path, e))?;
+    drop(writer);
+    Ok(atomic.commit()?)
 }
