@@ -93,6 +93,15 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
     if let Some(out) = &out {
         aeroid::paths::check_output_folder(out)?;
     }
+    // Every file this command writes is checked before any work, and none
+    // may be a file it reads (the model, a record's files).
+    let mut inputs: Vec<&std::path::Path> = record_folders.iter().map(PathBuf::as_path).collect();
+    inputs.push(std::path::Path::new(&model));
+    inputs.extend(check_on.as_deref());
+    for output in [&write_problem, &write_smoothed].into_iter().flatten() {
+        aeroid::paths::check_output_file(output)?;
+        aeroid::paths::check_not_input(output, &inputs, &[])?;
+    }
     let records = record_folders
         .iter()
         .map(|folder| aeroid::record::FlightRecord::read(folder))

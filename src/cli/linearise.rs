@@ -34,6 +34,7 @@ pub fn run(args: Args) -> Result<()> {
         name,
     } = args;
     aeroid::paths::check_output_file(&model_out)?;
+    aeroid::paths::check_not_input(&model_out, &[std::path::Path::new(&scenario)], &[])?;
     let scenario = aeroid::sim::scenario::Scenario::load(&scenario)?;
     let mut file = linearise_scenario(&scenario, axes)?;
     if let Some(name) = name {

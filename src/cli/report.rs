@@ -23,6 +23,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.out {
         aeroid::paths::check_output_file(out)?;
+        aeroid::paths::check_not_input(out, &[&args.folder], &[".html"])?;
     }
     let path = aeroid::eval::report::write_report(&args.folder, args.out.as_deref())?;
     outln!("written: {}", path.display());

@@ -21,6 +21,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let Args { scenario, out } = args;
     aeroid::paths::check_output_file(&out)?;
+    aeroid::paths::check_not_input(&out, &[std::path::Path::new(&scenario)], &[])?;
     let scenario = Scenario::load(&scenario)?;
     let started = std::time::Instant::now();
     let flight = aeroid::sim::simulate(&scenario)?;

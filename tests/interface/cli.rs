@@ -442,3 +442,62 @@ fn derive_names_the_missing_channels() {
         assert!(!folder.join("out").exists());
     }
 }
+
+/// No command overwrites what it reads: `--write-problem` naming the model
+/// file or a record's own `record.toml`, and `report --out` naming the
+/// study's `runs.csv`, are refused before any work, naming the file, and
+/// the input is left byte for byte as it was.
+#[test]
+fn an_output_that_names_an_input_is_refused_and_the_input_kept() {
+    let folder = common::temp_folder("output-names-input");
+    let record = folder.join("rec");
+    stdout_of(
+        aeroid()
+            .args(["record", "attas-elevator-3211", "--out"])
+            .arg(&record),
+    );
+    let model = folder.join("model.toml");
+    std::fs::copy(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/attas-longitudinal.toml"),
+        &model,
+    )
+    .unwrap();
+    let record_toml = record.join("record.toml");
+    for target in [&model, &record_toml] {
+        let before = std::fs::read(target).unwrap();
+        let output = aeroid()
+            .arg("estimate")
+            .arg(&record)
+            .arg("--model")
+            .arg(&model)
+            .args(["--method", "ee", "--write-problem"])
+            .arg(target)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let name = target.file_name().unwrap().to_str().unwrap();
+        assert!(
+            !output.status.success() && stderr.contains(name) && stderr.contains("reads"),
+            "{stderr}"
+        );
+        assert_eq!(std::fs::read(target).unwrap(), before, "{name} changed");
+    }
+    let study = folder.join("study");
+    std::fs::create_dir_all(&study).unwrap();
+    let runs = common::write(&study, "runs.csv", "point,run\n");
+    common::write(&study, "study.json", "{}");
+    let output = aeroid()
+        .arg("report")
+        .arg(&study)
+        .arg("--out")
+        .arg(&runs)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && stderr.contains("runs.csv") && stderr.contains("reads"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read_to_string(&runs).unwrap(), "point,run\n");
+    std::fs::remove_dir_all(&folder).unwrap();
+}

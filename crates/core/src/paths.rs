@@ -104,6 +104,40 @@ pub fn check_output_file(path: &Path) -> Result<()> {
     }
 }
 
+/// An error when writing the file `output` would overwrite an input the
+/// command reads: one of the `inputs` files, or a file inside one of the
+/// `inputs` folders other than those whose names end with one of
+/// `allowed_suffixes` (a study folder's own `.html` report). An output that
+/// does not exist yet overwrites nothing.
+pub fn check_not_input(output: &Path, inputs: &[&Path], allowed_suffixes: &[&str]) -> Result<()> {
+    let Ok(written) = output.canonicalize() else {
+        return Ok(());
+    };
+    for input in inputs {
+        let Ok(read) = input.canonicalize() else {
+            continue;
+        };
+        let name = written.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if written == read {
+            return Err(write_error(
+                output,
+                "it is a file this command reads; name another file",
+            ));
+        }
+        let allowed = allowed_suffixes.iter().any(|suffix| name.ends_with(suffix));
+        if read.is_dir() && written.starts_with(&read) && !allowed {
+            return Err(write_error(
+                output,
+                format!(
+                    "it is inside {}, which this command reads; name a file outside it",
+                    input.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Checks before any work that `path` can be written as a folder: not an
 /// existing file, and its nearest existing ancestor is a folder that takes
 /// new files. Nothing is left behind.

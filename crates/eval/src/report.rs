@@ -36,7 +36,7 @@ use crate::journal::{self, JOURNAL_FILE};
 use crate::row::{Row, RowStatus};
 use crate::study::StudyResult;
 use crate::summary::SummaryRow;
-use aeroid_core::error::{read_text, write_error};
+use aeroid_core::error::read_text;
 use aeroid_estimation::estimate::History;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
@@ -804,6 +804,6 @@ pub fn write_report(folder: &Path, out: Option<&Path>) -> Result<PathBuf> {
     let study = StudyFolder::read(folder)?;
     let page = html(&study)?;
     let path = out.map_or_else(|| folder.join(REPORT_FILE), Path::to_path_buf);
-    std::fs::write(&path, page).map_err(|e| write_error(&path, e))?;
+    aeroid_core::error::write_text(&path, &page)?;
     Ok(path)
 }
