@@ -238,3 +238,31 @@ fn cli_shards_merge_to_the_one_machine_files() {
     assert!(!output.status.success());
     assert!(String::from_utf8_lossy(&output.stderr).contains("missing"));
 }
+
+/// The fingerprint that shards and resumes must share covers what a
+/// scenario reads, not only its file: a pilot-input CSV edited between
+/// two shards changes it, so the shards are not merged across the edit.
+#[test]
+fn the_fingerprint_covers_a_pilot_input_csv() {
+    let folder = common::temp_folder("fingerprint_csv");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/attas-elevator-3211.toml"
+    ))
+    .unwrap();
+    let text = format!(
+        "{text}\n[[inputs]]\nkind = \"csv\"\ncontrol = \"rudder\"\nfile = \"pilot.csv\"\ncolumn = \"rudder\"\nunit = \"deg\"\n"
+    );
+    let scenario = common::write(&folder, "replayed.toml", &text);
+    let fingerprint = |csv: &str| {
+        common::write(&folder, "pilot.csv", csv);
+        let mut study = study();
+        study.scenarios =
+            vec![aeroid::sim::scenario::Scenario::load(scenario.to_str().unwrap()).unwrap()];
+        study.fingerprint().unwrap()
+    };
+    let first = fingerprint("time,rudder\n0,0\n10,1\n20,0\n");
+    assert_eq!(first, fingerprint("time,rudder\n0,0\n10,1\n20,0\n"));
+    assert_ne!(first, fingerprint("time,rudder\n0,0\n10,2\n20,0\n"));
+    std::fs::remove_dir_all(&folder).unwrap();
+}

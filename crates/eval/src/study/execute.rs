@@ -134,6 +134,9 @@ impl Study {
         for scenario in &self.scenarios {
             identity += &read_text(&scenario.path)?;
             identity += &read_text(&scenario.aircraft_path)?;
+            // The inputs as loaded: a pilot-input CSV the scenario names is
+            // in its values, not in the scenario file's text.
+            identity += &format!("{:?}", scenario.inputs);
             if let Some(linear) = &scenario.linear {
                 identity += &read_text(&linear.model_path)?;
             }
