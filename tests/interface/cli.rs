@@ -501,3 +501,35 @@ fn an_output_that_names_an_input_is_refused_and_the_input_kept() {
     assert_eq!(std::fs::read_to_string(&runs).unwrap(), "point,run\n");
     std::fs::remove_dir_all(&folder).unwrap();
 }
+
+/// A plug-in file that does not load is named with its reason when its
+/// method is asked for, not only as an unknown method.
+#[test]
+fn a_plugin_that_did_not_load_is_explained_where_it_is_asked_for() {
+    let folder = common::temp_folder("plugin-not-loaded");
+    let plugins = folder.join("estimators");
+    std::fs::create_dir_all(&plugins).unwrap();
+    common::write(&plugins, "broken.toml", "command = []\n");
+    let record = folder.join("rec");
+    stdout_of(
+        aeroid()
+            .args(["record", "attas-lateral-multistep", "--out"])
+            .arg(&record),
+    );
+    let output = aeroid()
+        .env("AEROID_ESTIMATORS", &plugins)
+        .arg("estimate")
+        .arg(&record)
+        .args(["--model", "attas-lateral", "--method", "broken"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success()
+            && stderr.contains("broken.toml")
+            && stderr.contains("did not load")
+            && stderr.contains("command"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&folder).unwrap();
+}

@@ -137,6 +137,8 @@ fn cy_beta_model(folder: &Path) -> ModelStructure {
             let name = format!("{coefficient}_{term}");
             if name != "CY_beta" {
                 text += &format!("[parameters.{name}]\nfixed = true\n");
+            } else {
+                text += "[parameters.CY_beta]\nlower = -5.0\nupper = 5.0\n";
             }
         }
     }
@@ -211,6 +213,39 @@ fn every_fault_is_an_error_with_its_reason_and_a_counted_failure() {
             "estimate.json",
         ),
         ("fault-nan", good("NaN"), "10 s", "estimate.json"),
+        (
+            "fault-fifo",
+            "mkfifo \"$1/estimate.json\"\n".to_string(),
+            "10 s",
+            "not a plain file",
+        ),
+        (
+            "fault-zero",
+            "ln -s /dev/zero \"$1/estimate.json\"\n".to_string(),
+            "10 s",
+            "not a plain file",
+        ),
+        (
+            "fault-stderr",
+            "head -c 20000000 /dev/zero | tr '\\0' x >&2; exit 3\n".to_string(),
+            "10 s",
+            "exited with status 3",
+        ),
+        (
+            "fault-bounds",
+            good("7.0"),
+            "10 s",
+            "outside the model's bounds [-5, 5]",
+        ),
+        (
+            "fault-variance",
+            good("-0.9").replace(
+                "\"standard_error\": 0.01}]",
+                "\"standard_error\": 0.01}], \"covariance\": [[-0.0001]]",
+            ),
+            "10 s",
+            "a variance must not be negative",
+        ),
         (
             "fault-unknown",
             good("-0.9").replace("CY_beta", "CY_gamma"),

@@ -113,6 +113,10 @@ pub enum Error {
     #[error("{reason}")]
     Plugin { reason: String },
 
+    /// A method asked for by name whose plug-in file did not load.
+    #[error("method '{name}' is not available: its plug-in file did not load: {reason}")]
+    PluginNotLoaded { name: String, reason: String },
+
     /// An estimation problem or estimate file that cannot be read or written.
     #[error("{reason}")]
     File { reason: String },

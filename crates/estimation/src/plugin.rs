@@ -328,19 +328,21 @@ impl Plugin {
             Outcome::Exited(None) => return Err(failure("killed by a signal".into())),
         }
         let refusal_path = work.path.join("refusal.json");
-        if refusal_path.exists() {
-            let text = read_text(&refusal_path)?;
+        if refusal_path.symlink_metadata().is_ok() {
+            let text =
+                read_written(&refusal_path).map_err(|e| failure(format!("refusal.json: {e}")))?;
             let refusal: Refusal =
                 serde_json::from_str(&text).map_err(|e| failure(format!("refusal.json: {e}")))?;
             return Err(Error::Refused(refusal));
         }
         let estimate_path = work.path.join("estimate.json");
-        if !estimate_path.exists() {
+        if estimate_path.symlink_metadata().is_err() {
             return Err(failure(
                 "wrote neither estimate.json nor refusal.json in the work folder".into(),
             ));
         }
-        let text = read_text(&estimate_path)?;
+        let text =
+            read_written(&estimate_path).map_err(|e| failure(format!("estimate.json: {e}")))?;
         let mut estimate = self
             .estimate_from(problem, &text)
             .map_err(|reason| failure(format!("estimate.json: {reason}")))?;
@@ -482,10 +484,19 @@ impl Plugin {
                     name: p.name.clone(),
                 });
             }
-            let start = names
-                .iter()
-                .position(|n| n == &p.name)
-                .map_or(f64::NAN, |j| values[j]);
+            let position = names.iter().position(|n| n == &p.name);
+            if let Some((low, high)) = position.map(|j| structure.bounds()[j])
+                && !(low..=high).contains(&p.value)
+            {
+                return Err(WrittenError::Bounds {
+                    index: i,
+                    name: p.name.clone(),
+                    value: p.value,
+                    low,
+                    high,
+                });
+            }
+            let start = position.map_or(f64::NAN, |j| values[j]);
             parameters.push(ParameterEstimate {
                 name: p.name.clone(),
                 value: p.value,
@@ -509,6 +520,24 @@ impl Plugin {
                 }
                 if covariance.iter().flatten().any(|v| v.is_nan()) {
                     return Err(WrittenError::CovarianceNan);
+                }
+                if let Some(i) = (0..n).find(|&i| covariance[i][i] < 0.0) {
+                    return Err(WrittenError::NegativeVariance {
+                        index: i,
+                        value: covariance[i][i],
+                    });
+                }
+                // Symmetric to the rounding of a printed number.
+                let asymmetric = |i: usize, j: usize| {
+                    let (a, b) = (covariance[i][j], covariance[j][i]);
+                    let scale = (covariance[i][i] * covariance[j][j]).sqrt().max(a.abs());
+                    (a - b).abs() > 1e-9 * scale && !(a.is_infinite() && a == b)
+                };
+                if let Some((i, j)) = (0..n)
+                    .flat_map(|i| (0..i).map(move |j| (i, j)))
+                    .find(|&(i, j)| asymmetric(i, j))
+                {
+                    return Err(WrittenError::Asymmetric { row: i, column: j });
                 }
                 covariance
             }
@@ -627,8 +656,62 @@ impl Drop for WorkFolder {
 }
 
 /// The last 500 characters of a file, on one line (empty if none).
+/// The most bytes of a plug-in's stderr that are read (its end).
+const STDERR_TAIL: u64 = 64 * 1024;
+
+/// The largest estimate.json or refusal.json a plug-in may write: a
+/// thousand parameters with their covariance take about 20 MB.
+const MAX_WRITTEN: u64 = 64 * 1024 * 1024;
+
+/// A file a plug-in wrote, read if it is a plain file (not a link, FIFO
+/// or device, which could block or never end) of at most [`MAX_WRITTEN`]
+/// bytes.
+fn read_written(path: &Path) -> std::result::Result<String, Unreadable> {
+    use std::io::Read;
+    if !std::fs::symlink_metadata(path)?.file_type().is_file() {
+        return Err(Unreadable::NotPlain);
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(MAX_WRITTEN + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_WRITTEN {
+        return Err(Unreadable::TooLarge);
+    }
+    String::from_utf8(bytes).map_err(|_| Unreadable::NotText)
+}
+
+/// Why a file a plug-in wrote is not read.
+#[derive(Debug, thiserror::Error)]
+enum Unreadable {
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    #[error(
+        "not a plain file (a link, FIFO or device): aeroid reads only files the plug-in writes"
+    )]
+    NotPlain,
+    #[error("larger than {MAX_WRITTEN} bytes")]
+    TooLarge,
+    #[error("not UTF-8 text")]
+    NotText,
+}
+
 fn tail(path: &Path) -> String {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
+    use std::io::{Read, Seek, SeekFrom};
+    // Only the end of a plain file is read: a plug-in's stderr may be
+    // gigabytes, or replaced by a FIFO that never ends.
+    let read = || -> std::io::Result<String> {
+        if !std::fs::symlink_metadata(path)?.file_type().is_file() {
+            return Ok(String::new());
+        }
+        let mut file = std::fs::File::open(path)?;
+        let length = file.metadata()?.len();
+        file.seek(SeekFrom::Start(length.saturating_sub(STDERR_TAIL)))?;
+        let mut bytes = Vec::new();
+        file.take(STDERR_TAIL).read_to_end(&mut bytes)?;
+        Ok(String::from_utf8_lossy(&bytes).into_owned())
+    };
+    let text = read().unwrap_or_default();
     let text = text.trim();
     let start = text.char_indices().rev().nth(499).map_or(0, |(i, _)| i);
     text[start..].replace('\n', " | ")
@@ -763,6 +846,22 @@ enum WrittenError {
     CovarianceShape(usize),
     #[error("covariance: holds NaN")]
     CovarianceNan,
+    #[error("covariance[{index}][{index}] = {value}: a variance must not be negative")]
+    NegativeVariance { index: usize, value: f64 },
+    #[error(
+        "covariance[{row}][{column}] differs from covariance[{column}][{row}]: a covariance is symmetric"
+    )]
+    Asymmetric { row: usize, column: usize },
+    #[error(
+        "parameters[{index}] ('{name}'): {value} is outside the model's bounds [{low}, {high}]"
+    )]
+    Bounds {
+        index: usize,
+        name: String,
+        value: f64,
+        low: f64,
+        high: f64,
+    },
     #[error("status '{0}': expected converged, iteration_limit, diverged or no_progress")]
     Status(String),
 }

@@ -126,15 +126,28 @@ impl Registry {
 
     /// The estimator named `name`.
     pub fn find(&self, name: &str) -> Result<&Arc<dyn Estimator>> {
-        Ok(self
-            .estimators
-            .iter()
-            .find(|e| e.name() == name)
-            .ok_or_else(|| aeroid_core::Error::Unknown {
-                kind: "method",
+        if let Some(found) = self.estimators.iter().find(|e| e.name() == name) {
+            return Ok(found);
+        }
+        // A plug-in file of that name that did not load: its reason, not
+        // only "unknown method".
+        let file = format!("{name}.toml");
+        if let Some(problem) = self.plugin_problems.iter().find(|p| {
+            p.split(':')
+                .next()
+                .is_some_and(|path| path.ends_with(&format!("/{file}")) || path == file)
+        }) {
+            return Err(Error::PluginNotLoaded {
                 name: name.to_string(),
-                known: self.names(),
-            })?)
+                reason: problem.clone(),
+            });
+        }
+        Err(aeroid_core::Error::Unknown {
+            kind: "method",
+            name: name.to_string(),
+            known: self.names(),
+        }
+        .into())
     }
 
     /// Checks a file's `[methods.NAME]` tables: each names a registered

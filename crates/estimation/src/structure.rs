@@ -360,6 +360,15 @@ impl Structure {
         }
     }
 
+    /// Every parameter's bounds (low, high), in the order of
+    /// [`Structure::parameters`].
+    pub fn bounds(&self) -> &[(f64, f64)] {
+        match self {
+            Structure::SixDof(s) => &s.bounds,
+            Structure::Linear(s) => &s.bounds,
+        }
+    }
+
     /// The names of the free parameters.
     pub fn free_names(&self) -> Vec<String> {
         match self {
