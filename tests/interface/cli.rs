@@ -502,8 +502,9 @@ fn an_output_that_names_an_input_is_refused_and_the_input_kept() {
     std::fs::remove_dir_all(&folder).unwrap();
 }
 
-/// A plug-in file that does not load is named with its reason when its
-/// method is asked for, not only as an unknown method.
+/// A plug-in file that does not load, or whose name another plug-in file
+/// also has, is named with its reason when its method is asked for, not
+/// only as an unknown method.
 #[test]
 fn a_plugin_that_did_not_load_is_explained_where_it_is_asked_for() {
     let folder = common::temp_folder("plugin-not-loaded");
@@ -529,6 +530,27 @@ fn a_plugin_that_did_not_load_is_explained_where_it_is_asked_for() {
             && stderr.contains("broken.toml")
             && stderr.contains("did not load")
             && stderr.contains("command"),
+        "{stderr}"
+    );
+    // Two plug-in files of one name in two folders: neither is run.
+    let other = folder.join("more");
+    std::fs::create_dir_all(&other).unwrap();
+    for place in [&plugins, &other] {
+        common::write(place, "twin.toml", "command = [\"sh\", \"twin.sh\"]\n");
+    }
+    let output = aeroid()
+        .env(
+            "AEROID_ESTIMATORS",
+            format!("{}:{}", plugins.display(), other.display()),
+        )
+        .arg("estimate")
+        .arg(&record)
+        .args(["--model", "attas-lateral", "--method", "twin"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && stderr.contains("both are left out"),
         "{stderr}"
     );
     std::fs::remove_dir_all(&folder).unwrap();

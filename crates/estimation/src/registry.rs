@@ -76,19 +76,41 @@ impl Registry {
     }
 
     /// The built-in estimators, then the plug-ins of the plug-in folders
-    /// (the data folder's `plugins/` and those of `AEROID_PLUGINS`); a
-    /// plug-in named like an earlier method is left out, with a problem.
+    /// (the data folder's `estimators/` and those of `AEROID_ESTIMATORS`).
+    /// A plug-in named like a built-in method, and every plug-in whose
+    /// name another plug-in file also has, is left out with a problem that
+    /// `aeroid methods` lists and [`Registry::find`] gives for that name.
     pub fn with_plugins() -> Registry {
         let mut registry = Registry::built_in();
         let (plugins, problems) = crate::plugin::discover();
         registry.plugin_problems = problems.iter().map(ToString::to_string).collect();
-        for plugin in plugins {
-            let path = plugin.path().to_path_buf();
-            if let Err(error) = registry.add(Arc::new(plugin)) {
+        for plugin in &plugins {
+            let name = Estimator::name(plugin);
+            let path = plugin.path().display();
+            let namesakes: Vec<String> = plugins
+                .iter()
+                .filter(|other| Estimator::name(*other) == name && other.path() != plugin.path())
+                .map(|other| other.path().display().to_string())
+                .collect();
+            if registry.estimators.iter().any(|e| e.name() == name) {
                 registry.plugin_problems.push(format!(
-                    "{}: {error}; the plug-in is left out",
-                    path.display()
+                    "{path}: '{name}' is a built-in method; the plug-in is left out (rename its file)"
                 ));
+            } else if !namesakes.is_empty() {
+                registry.plugin_problems.push(format!(
+                    "{path}: the plug-in name '{name}' is also {}; both are left out (rename one)",
+                    namesakes.join(", ")
+                ));
+            }
+        }
+        for plugin in plugins {
+            let path = plugin.path().display().to_string();
+            let left_out = registry
+                .plugin_problems
+                .iter()
+                .any(|p| p.starts_with(&format!("{path}:")));
+            if !left_out && let Err(error) = registry.add(Arc::new(plugin)) {
+                registry.plugin_problems.push(format!("{path}: {error}"));
             }
         }
         registry
