@@ -105,6 +105,26 @@ fn negative_mass_nan_and_bad_unit_are_all_reported_at_once() {
     );
 }
 
+/// A mass of 1e308 kg or an inertia of 1e300 kg·m² (a unit slip or a
+/// typo) is refused with the key, the value as a number and the range,
+/// not accepted and printed as a 309-digit number.
+#[test]
+fn a_mass_or_inertia_beyond_any_aircraft_is_refused_with_its_range() {
+    let text = common::attas_with(|t| {
+        t.replace("mass = \"17631 kg\"", "mass = \"1e308 kg\"")
+            .replace("1.14420e4 kg*m2", "1e300 kg*m2")
+    });
+    let (_, error) = load_aircraft_text("heavy", &text);
+    let fields = problem_fields(&error);
+    assert!(fields.contains(&"mass.mass".to_string()), "{fields:?}");
+    let message = error.to_string();
+    assert!(
+        message.contains("mass.mass: must be positive and at most 1e7 kg, is 1e308 kg")
+            && message.contains("at most 1e10 kg·m² in magnitude, is 1e300 kg·m²"),
+        "{message}"
+    );
+}
+
 #[test]
 fn inertia_must_be_positive_definite() {
     let (_, error) = load_aircraft_text(

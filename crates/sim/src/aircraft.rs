@@ -97,6 +97,17 @@ impl Propulsion {
     }
 }
 
+/// The largest mass an aircraft file may give (kg, with its unit): fifteen
+/// times the heaviest aircraft flown (640 t); a larger one is a unit slip.
+const LARGEST_MASS: (f64, &str) = (1e7, "kg");
+/// The largest wing area (m²): twenty times the largest wing built.
+const LARGEST_AREA: (f64, &str) = (1e4, "m²");
+/// The largest span or chord (m).
+const LARGEST_LENGTH: (f64, &str) = (1e3, "m");
+/// The largest moment or product of inertia (kg·m²): a hundred times the
+/// largest aircraft's yaw inertia.
+const LARGEST_INERTIA: (f64, &str) = (1e10, "kg·m²");
+
 /// Reference geometry and mass properties.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MassProperties {
@@ -151,14 +162,29 @@ impl Aircraft {
         ];
         let propulsion = read_propulsion(&file.propulsion, &mut read);
         let limits = read_limits(&file.limits, &mut problems);
-        for (field, value) in [
-            ("geometry.wing_area", wing_area),
-            ("geometry.span", span),
-            ("geometry.chord", chord),
-            ("mass.mass", mass),
+        for (field, value, (largest, unit)) in [
+            ("geometry.wing_area", wing_area, LARGEST_AREA),
+            ("geometry.span", span, LARGEST_LENGTH),
+            ("geometry.chord", chord, LARGEST_LENGTH),
+            ("mass.mass", mass, LARGEST_MASS),
         ] {
-            if value <= 0.0 {
-                problems.push(field, format!("must be positive, is {value}"));
+            if value <= 0.0 || value > largest {
+                problems.push(
+                    field,
+                    format!("must be positive and at most {largest:e} {unit}, is {value:e} {unit}"),
+                );
+            }
+        }
+        for (field, value) in ["mass.ixx", "mass.iyy", "mass.izz", "mass.ixz"]
+            .into_iter()
+            .zip(moments)
+        {
+            let (largest, unit) = LARGEST_INERTIA;
+            if value.abs() > largest {
+                problems.push(
+                    field,
+                    format!("must be at most {largest:e} {unit} in magnitude, is {value:e} {unit}"),
+                );
             }
         }
         let inertia = inertia_matrix(moments, &file.mass.impossible_inertia, &mut problems);
