@@ -5,6 +5,7 @@
 
 use std::path::PathBuf;
 
+/// Every error of the analysis: each variant says what went wrong and names the file, field or value.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -79,4 +80,5 @@ pub enum Error {
     Format { what: &'static str, reason: String },
 }
 
+/// A result whose error is this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -8,6 +8,7 @@
 
 use aeroid_core::refusal::Refusal;
 
+/// Every error of the estimation: each variant says what went wrong and names the file, field or value.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -166,4 +167,5 @@ fn readable(value: f64, decimals: usize) -> String {
     }
 }
 
+/// A result whose error is this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -6,6 +6,7 @@
 use aeroid_core::refusal::Refusal;
 use std::path::PathBuf;
 
+/// Every error of the evaluation (scores, gates, studies, reports): each variant says what went wrong and names the file, field or value.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -118,4 +119,5 @@ impl Error {
     }
 }
 
+/// A result whose error is this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -4,6 +4,7 @@
 //! definiteness, a smoother or a Fourier transform given data it cannot
 //! use.
 
+/// Every error of the numerical kernels: each variant says what went wrong and names the file, field or value.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -52,4 +53,5 @@ pub enum Error {
     LeastSquares { what: &'static str, reason: String },
 }
 
+/// A result whose error is this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -5,6 +5,7 @@
 //! derived channel that cannot be made from the record. The errors of the
 //! crates below are wrapped whole, so that their messages read the same.
 
+/// Every error of the recording and preparing flight data: each variant says what went wrong and names the file, field or value.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -66,4 +67,5 @@ impl Error {
     }
 }
 
+/// A result whose error is this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;

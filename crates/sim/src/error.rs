@@ -15,6 +15,7 @@ fn joined(problems: &[FieldError]) -> String {
         .join("; ")
 }
 
+/// Every error of the simulator: each variant says what went wrong and names the file, field or value.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -112,4 +113,5 @@ impl Error {
     }
 }
 
+/// A result whose error is this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
