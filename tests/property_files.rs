@@ -2,7 +2,8 @@
 //! (aircraft, scenarios, model structures, recorder profiles, studies, the
 //! gate file), an import column map with its CSV or its headerless ASCII file (comments,
 //! BOM, CRLF, numbered and combined columns), a scenario replaying an
-//! input CSV, and record folders, each
+//! input CSV, record folders, every method's settings table and a study's
+//! journal (lines truncated, duplicated, deleted, reordered), each
 //! mutated (a key or table deleted, an array element duplicated, a value's
 //! type swapped, extreme numbers, NaN and infinities as TOML floats and as
 //! quantities with units, empty values, a line duplicated or deleted, the
@@ -1235,4 +1236,206 @@ fn mutated_replayed_inputs_load_or_fail_cleanly() {
             })
         },
     );
+}
+
+// ------------------------------------------------------- method settings
+
+/// A value a user might write for a setting: numbers at and beyond every
+/// edge, non-finite floats, quantities with absurd magnitudes or units,
+/// and the wrong types.
+fn setting_value() -> impl Strategy<Value = serde_json::Value> {
+    use serde_json::json;
+    prop_oneof![
+        prop::sample::select(vec![
+            json!(0),
+            json!(-1),
+            json!(1),
+            json!(i64::MAX),
+            json!(u64::MAX),
+            json!(1e308),
+            json!(-1e308),
+            json!(1e-300),
+            json!(0.5),
+            json!("NaN"),
+            json!("inf"),
+            json!("1e-9 s"),
+            json!("1e300 s"),
+            json!("-5 s"),
+            json!("0.1 parsec"),
+            json!(""),
+            json!(true),
+            json!([]),
+            json!([1, 2, 3]),
+            json!({ "half_width": "1e9 s", "degree": 4 }),
+            json!({ "half_width": "0.1 s", "degree": 100_000_000_000u64 }),
+            json!({ "elevator": "1e300 deg" }),
+        ]),
+        any::<f64>().prop_map(|v| json!(v)),
+        any::<i64>().prop_map(|v| json!(v)),
+    ]
+}
+
+/// Every built-in method's settings check, given its own keys (and an
+/// unknown one) with any value: an accepted table or a clean error naming
+/// the method, never a panic or a hang.
+#[test]
+fn any_method_settings_are_accepted_or_refused_cleanly() {
+    let registry = aeroid::estimation::registry::Registry::built_in();
+    let methods: Vec<(String, Vec<String>)> = registry
+        .names()
+        .into_iter()
+        .map(|name| {
+            let keys = registry
+                .find(&name)
+                .unwrap()
+                .info()
+                .settings
+                .iter()
+                .map(|s| s.name.to_string())
+                .chain(["no_such_key".to_string()])
+                .collect();
+            (name, keys)
+        })
+        .collect();
+    let strategy = (
+        0..methods.len(),
+        prop::collection::vec((any::<usize>(), setting_value()), 1..4),
+    );
+    check_property("method settings", strategy, |(method, entries)| {
+        let (name, keys) = methods[method].clone();
+        let mut settings = aeroid::estimation::estimator::Settings::new();
+        for (key, value) in entries {
+            settings.insert(keys[key % keys.len()].clone(), value);
+        }
+        let input = format!("[methods.{name}] {settings:?}");
+        guarded(&input, move || {
+            let registry = aeroid::estimation::registry::Registry::built_in();
+            match registry.find(&name).unwrap().check_settings(&settings) {
+                Ok(()) => Ok(Outcome::Accepted),
+                Err(error) if error.to_string().trim().is_empty() => {
+                    Err("an error without a message".into())
+                }
+                Err(_) => Ok(Outcome::Refused),
+            }
+        })
+    });
+}
+
+// ------------------------------------------------------------ journals
+
+/// A line-level edit of a study journal: what an interrupted, copied or
+/// hand-edited journal may look like.
+#[derive(Debug, Clone)]
+enum JournalEdit {
+    Truncate(u16),
+    DuplicateLine(u16),
+    DeleteLine(u16),
+    SwapLines(u16, u16),
+    InsertBytes(u16, Vec<u8>),
+}
+
+fn journal_edit() -> impl Strategy<Value = JournalEdit> {
+    prop_oneof![
+        any::<u16>().prop_map(JournalEdit::Truncate),
+        any::<u16>().prop_map(JournalEdit::DuplicateLine),
+        any::<u16>().prop_map(JournalEdit::DeleteLine),
+        (any::<u16>(), any::<u16>()).prop_map(|(a, b)| JournalEdit::SwapLines(a, b)),
+        (any::<u16>(), prop::collection::vec(any::<u8>(), 1..6))
+            .prop_map(|(at, bytes)| JournalEdit::InsertBytes(at, bytes)),
+    ]
+}
+
+/// A journal's bytes with `edit` applied.
+fn edit_journal(bytes: &mut Vec<u8>, edit: &JournalEdit) {
+    let mut lines: Vec<Vec<u8>> = bytes
+        .split_inclusive(|&b| b == b'\n')
+        .map(<[u8]>::to_vec)
+        .collect();
+    let pick = |i: u16, n: usize| (i as usize) % n.max(1);
+    match edit {
+        JournalEdit::Truncate(at) => {
+            let at = pick(*at, bytes.len());
+            bytes.truncate(at);
+            return;
+        }
+        JournalEdit::InsertBytes(at, inserted) => {
+            let at = pick(*at, bytes.len() + 1);
+            bytes.splice(at..at, inserted.iter().copied());
+            return;
+        }
+        JournalEdit::DuplicateLine(i) if !lines.is_empty() => {
+            let i = pick(*i, lines.len());
+            lines.insert(i, lines[i].clone());
+        }
+        JournalEdit::DeleteLine(i) if !lines.is_empty() => {
+            lines.remove(pick(*i, lines.len()));
+        }
+        JournalEdit::SwapLines(a, b) if !lines.is_empty() => {
+            let n = lines.len();
+            lines.swap(pick(*a, n), pick(*b, n));
+        }
+        _ => {}
+    }
+    *bytes = lines.concat();
+}
+
+/// A study journal truncated, with lines duplicated, deleted, reordered or
+/// bytes inserted, is read and resumed either as a journal of cases of its
+/// study, or refused cleanly naming the file — never a panic or a hang.
+#[test]
+fn edited_study_journals_read_or_fail_cleanly() {
+    use aeroid::eval::journal::{self, FORMAT, Header, JOURNAL_FILE, Journal, Shard};
+    let header = Header {
+        format: FORMAT.into(),
+        study: "fuzzed".into(),
+        seed: 7,
+        runs: 3,
+        fingerprint: "0123456789abcdef".into(),
+        cases: 6,
+        shard: Shard::default(),
+    };
+    let original = {
+        let folder = CaseFolder::new("journal-original");
+        let written = Journal::create(&folder.0, &header).unwrap();
+        for case in [0, 2, 1, 5] {
+            written.append(case, &[]).unwrap();
+        }
+        drop(written);
+        std::fs::read(folder.0.join(JOURNAL_FILE)).unwrap()
+    };
+    let strategy = prop::collection::vec(journal_edit(), 1..4);
+    check_property("study journal", strategy, |edits| {
+        let mut bytes = original.clone();
+        for edit in &edits {
+            edit_journal(&mut bytes, edit);
+        }
+        let input = format!("{edits:?}:\n{}", String::from_utf8_lossy(&bytes));
+        let header = header.clone();
+        guarded(&input, move || {
+            let folder = CaseFolder::new("journal");
+            let path = folder.0.join(JOURNAL_FILE);
+            std::fs::write(&path, &bytes).unwrap();
+            let read = journal::read(&folder.0);
+            let resumed = Journal::resume(&folder.0, &header).map(|(_, finished)| finished);
+            for result in [
+                &read.as_ref().map(|(_, f)| f.clone()),
+                &resumed.as_ref().cloned(),
+            ] {
+                match result {
+                    Ok(finished) if finished.iter().any(|&case| case >= header.cases) => {
+                        return Err(format!("accepted cases beyond the study's: {finished:?}"));
+                    }
+                    Err(error) if !error.to_string().contains(JOURNAL_FILE) => {
+                        return Err(format!("an error that does not name the journal: {error}"));
+                    }
+                    _ => {}
+                }
+            }
+            Ok(if resumed.is_ok() {
+                Outcome::Accepted
+            } else {
+                Outcome::Refused
+            })
+        })
+    });
 }
