@@ -752,6 +752,7 @@ fn record() -> impl Strategy<Value = FlightRecord> {
                         }
                     })
                     .collect(),
+                bridge_gaps: false,
             }
         })
 }

@@ -25,13 +25,37 @@ pub struct Args {
     /// The record folder to write.
     #[arg(long)]
     out: PathBuf,
+    /// Let estimators interpolate across the record's gaps (stretches
+    /// without any sample, longer than ten sample periods) instead of
+    /// fitting the pieces between them as separate manoeuvres.
+    #[arg(long)]
+    bridge_gaps: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let Args { data, map, out } = args;
+    let Args {
+        data,
+        map,
+        out,
+        bridge_gaps,
+    } = args;
     aeroid::paths::check_output_folder(&out)?;
-    let outcome = aeroid::record::import::import(&data, &map, aeroid::estimation::CHANNELS_READ)?;
+    let mut outcome =
+        aeroid::record::import::import(&data, &map, aeroid::estimation::CHANNELS_READ)?;
+    outcome.record.bridge_gaps = bridge_gaps;
     outcome.record.write(&out)?;
+    let gaps = outcome.record.time_gaps();
+    if !gaps.is_empty() {
+        outln!(
+            "{} gap(s) without any sample: estimators {}",
+            gaps.len(),
+            if bridge_gaps {
+                "interpolate across them (--bridge-gaps)"
+            } else {
+                "fit the pieces between them as separate manoeuvres (--bridge-gaps to interpolate)"
+            }
+        );
+    }
     outln!(
         "{}: {} channels imported into {}",
         data.display(),

@@ -13,6 +13,7 @@ mod equation_error;
 mod filter_error;
 mod frame_skew;
 mod frequency_domain;
+mod gaps;
 mod honest_status;
 mod identifiability;
 mod joint_fit;

@@ -92,6 +92,7 @@ fn record_round_trip_is_lossless() {
                 )
             },
         ],
+        bridge_gaps: false,
     };
     record.write(&folder).unwrap();
     let mut files: Vec<String> = std::fs::read_dir(&folder)
@@ -440,6 +441,7 @@ fn record_seed_beyond_toml_integers_is_refused() {
         profile: "test".into(),
         absent: Vec::new(),
         channels: vec![channel("q", "rad/s", 1.0, vec![0.0, 1.0], vec![0.1, 0.2])],
+        bridge_gaps: false,
     };
     record.validate(&folder).unwrap();
     let error = record.write(&folder.join("rec")).unwrap_err().to_string();
@@ -472,6 +474,7 @@ fn extreme_rates_give_short_file_names() {
             channel("p", "rad/s", 1e-300, vec![0.5, 2.0], vec![0.1, 0.2]),
             channel("nz", "-", 1e-300, vec![0.5, 2.0], vec![1.0, 1.0]),
         ],
+        bridge_gaps: false,
     };
     let data = folder.join("rec");
     record.write(&data).unwrap();

@@ -74,6 +74,9 @@ pub struct EstimationProblem {
     pub structure: Structure,
     /// The method's settings: the merged `[methods.NAME]` tables.
     pub settings: Settings,
+    /// A note per record split at its gaps into separate manoeuvres
+    /// ([`FlightRecord::split_at_gaps`]).
+    pub gap_notes: Vec<String>,
 }
 
 impl EstimationProblem {
@@ -97,6 +100,16 @@ impl EstimationProblem {
                 reason: format!("{method} on model '{}': no record given", structure.name()),
             });
         }
+        // A record with gaps is fitted as the manoeuvres between them.
+        let mut gap_notes = Vec::new();
+        let records: Vec<FlightRecord> = records
+            .into_iter()
+            .flat_map(|record| {
+                let (pieces, note) = record.split_at_gaps();
+                gap_notes.extend(note);
+                pieces
+            })
+            .collect();
         let mut records = match &structure {
             Structure::SixDof(six_dof) => six_dof.with_zero_channels(records),
             Structure::Linear(_) => records,
@@ -107,6 +120,7 @@ impl EstimationProblem {
             records,
             structure,
             settings,
+            gap_notes,
         })
     }
 
@@ -114,26 +128,24 @@ impl EstimationProblem {
     /// zeros the model's `zero_when_absent` put in a record, and per
     /// heading or direction it unwrapped.
     pub fn notes(&self) -> Vec<String> {
-        self.records
-            .iter()
-            .flat_map(|record| {
-                record.channels.iter().filter_map(|c| {
-                    if c.source.starts_with(ZERO_SOURCE) {
-                        Some(format!(
-                            "no '{}' channel in '{}': held at 0 (the model's zero_when_absent)",
-                            c.name, record.scenario
-                        ))
-                    } else if c.source.ends_with(UNWRAPPED_SOURCE) {
-                        Some(format!(
-                            "'{}' in '{}': unwrapped (the record wraps it at 360°; the estimator sees a continuous angle)",
-                            c.name, record.scenario
-                        ))
-                    } else {
-                        None
-                    }
-                })
+        let changed = self.records.iter().flat_map(|record| {
+            record.channels.iter().filter_map(|c| {
+                if c.source.starts_with(ZERO_SOURCE) {
+                    Some(format!(
+                        "no '{}' channel in '{}': held at 0 (the model's zero_when_absent)",
+                        c.name, record.scenario
+                    ))
+                } else if c.source.ends_with(UNWRAPPED_SOURCE) {
+                    Some(format!(
+                        "'{}' in '{}': unwrapped (the record wraps it at 360°; the estimator sees a continuous angle)",
+                        c.name, record.scenario
+                    ))
+                } else {
+                    None
+                }
             })
-            .collect()
+        });
+        self.gap_notes.iter().cloned().chain(changed).collect()
     }
 
     /// The first (or only) record.
@@ -226,6 +238,7 @@ impl EstimationProblem {
             records: document.records,
             structure,
             settings: document.settings,
+            gap_notes: Vec::new(),
         })
     }
 
@@ -783,6 +796,7 @@ mod tests {
                 channel("pitch", degrees(&[-179.0, 179.0, 0.0, 1.0, 2.0, 3.0])),
                 channel("track", degrees(&[10.0, 11.0, 12.0, 13.0, 14.0, 15.0])),
             ],
+            bridge_gaps: false,
         }];
         unwrap_headings(&mut records);
         let yaw = &records[0].channels[0];
@@ -843,6 +857,7 @@ mod tests {
                     ..channel("roll", base.clone(), vec![-0.0, 0.0, 2.0])
                 },
             ],
+            bridge_gaps: false,
         };
         let second = FlightRecord {
             seed: None,

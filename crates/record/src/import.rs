@@ -287,6 +287,7 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
         profile: format!("import:{}", map_path.display()),
         absent: Vec::new(),
         channels: record_channels,
+        bridge_gaps: false,
     };
     // What the record format relies on (a channel whose cells are all
     // skipped has no samples), said of the data file before anything is written.

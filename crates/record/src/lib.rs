@@ -22,6 +22,7 @@
 
 pub mod derived;
 pub mod error;
+pub mod gaps;
 pub mod import;
 pub mod prep;
 pub mod quality;
@@ -242,6 +243,15 @@ pub struct FlightRecord {
     /// Quantities the recorder does not have, by design (QAR: no angular rates).
     pub absent: Vec<String>,
     pub channels: Vec<Channel>,
+    /// Whether estimators interpolate across the record's gaps instead of
+    /// fitting the pieces between them as separate manoeuvres
+    /// ([`gaps`], `aeroid import --bridge-gaps`).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub bridge_gaps: bool,
+}
+
+fn is_false(value: &bool) -> bool {
+    !value
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -258,6 +268,8 @@ struct RecordFile {
     absent: Vec<String>,
     #[serde(default)]
     channels: Vec<ChannelEntry>,
+    #[serde(default, skip_serializing_if = "is_false")]
+    bridge_gaps: bool,
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -390,6 +402,7 @@ impl FlightRecord {
             profile: self.profile.clone(),
             absent: self.absent.clone(),
             channels: entries.into_iter().map(|(_, e)| e).collect(),
+            bridge_gaps: self.bridge_gaps,
         };
         let path = folder.join(RECORD_FILE);
         let text = toml::to_string(&file).map_err(|e| Error::Serialize {
@@ -447,6 +460,7 @@ impl FlightRecord {
             profile: file.profile,
             absent: file.absent,
             channels,
+            bridge_gaps: file.bridge_gaps,
         };
         record.validate(&path)?;
         Ok(record)

@@ -366,6 +366,7 @@ impl Profile {
             profile: self.name.clone(),
             absent: self.absent.clone(),
             channels,
+            bridge_gaps: false,
         };
         // Settings within their bounds can still overflow together (a huge
         // scale factor on a huge bias): the profile is named, with the

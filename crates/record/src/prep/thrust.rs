@@ -159,6 +159,7 @@ mod tests {
             profile: "test".into(),
             absent: Vec::new(),
             channels,
+            bridge_gaps: false,
         }
     }
 
