@@ -87,3 +87,21 @@ fn a_gap_splits_the_record_into_two_manoeuvres() {
         "bridging the gap left every estimate at the truth (worst {worst:.1e})"
     );
 }
+
+/// A method that fits one record at a time refuses the split record and
+/// says that the two records are the pieces of one.
+#[test]
+fn a_one_record_method_says_the_record_was_split() {
+    let (record, _) = gapped();
+    let structure = ModelStructure::load("attas-longitudinal").unwrap();
+    let problem = common::registry()
+        .problem("ekf", vec![record], structure, &[])
+        .unwrap();
+    let error = common::registry().estimate(&problem, None).unwrap_err();
+    assert!(error.refusal().is_some(), "{error}");
+    let message = error.to_string();
+    assert!(
+        message.contains("given 2") && message.contains("separate manoeuvres"),
+        "{message}"
+    );
+}

@@ -102,7 +102,8 @@ fn one_record_methods_refuse_several() {
             refusal,
             &Refusal::OneRecordOnly {
                 method: method.to_string(),
-                records: 2
+                records: 2,
+                gaps: None,
             }
         );
         assert!(

@@ -54,6 +54,10 @@ pub enum Refusal {
         method: String,
         /// How many records it was given.
         records: usize,
+        /// Where the records came from when one record was split at its
+        /// gaps (the problem's note).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        gaps: Option<String>,
     },
 }
 
@@ -179,11 +183,21 @@ impl fmt::Display for Refusal {
                 f,
                 "{method} fits {needs}; '{model}' is a {structure} model structure: fit it with a method that serves linear structures (ee, oem, fem, ekf, ukf, fdee, fdoe)"
             ),
-            Refusal::OneRecordOnly { method, records } => write!(
-                f,
-                "{method} fits one record at a time, and was given {records}: \
-                 run it on each record, or fit them jointly with output error (oem)"
-            ),
+            Refusal::OneRecordOnly {
+                method,
+                records,
+                gaps,
+            } => {
+                write!(
+                    f,
+                    "{method} fits one record at a time, and was given {records}: \
+                     run it on each record, or fit them jointly with output error (oem)"
+                )?;
+                match gaps {
+                    Some(gaps) => write!(f, " ({gaps})"),
+                    None => Ok(()),
+                }
+            }
         }
     }
 }

@@ -355,6 +355,7 @@ pub fn one_record(method: &str, problem: &EstimationProblem) -> Result<()> {
         records => Err(Error::Refused(Refusal::OneRecordOnly {
             method: method.to_string(),
             records,
+            gaps: (!problem.gap_notes.is_empty()).then(|| problem.gap_notes.join("; ")),
         })),
     }
 }
