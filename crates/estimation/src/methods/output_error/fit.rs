@@ -39,20 +39,6 @@ pub fn output_error_from(
     let from_equation_error = options.start == Start::EquationError
         && problem.start_from_equation_error(records[0], structure, regression, &mut notes);
     let original_start = problem.current();
-    // With the initial state among the unknowns, a first fit holds it at
-    // the first samples: from a-priori start values the full problem can
-    // fall into a wrong minimum (the stall model did: τ2 0.35 for 0.9),
-    // while the aerodynamic fit alone is robust and leaves the initial
-    // state a small correction. That first fit is only a start, biased by
-    // the held initial state, so it stops at a predicted decrease of
-    // STAGE_DECREASE (a step of about 4.5σ).
-    // Its simulations carry the initial states' sensitivities too, so that
-    // the second stage starts from the first's last simulation.
-    // The stall's τ1 (χ a state) is held at its start value there too:
-    // from a-priori values the full problem runs τ1 to 0 on the stall
-    // flight, ideal record included (a valley toward the algebraic limit,
-    // where τ2 alone makes the lag), while from the first fit's a1, α* and
-    // τ2 it reaches the truth (docs/findings.md, "τ1 in c̄/V").
     let aero = &structure.aircraft.aero;
     let lag = aero
         .parameters
@@ -71,6 +57,38 @@ pub fn output_error_from(
             }
         }
     }
+    let solution = final_fit(&mut problem, structure, options, &start);
+    let mut estimate = problem.estimate(
+        structure,
+        records,
+        &original_start,
+        &solution,
+        started.elapsed().as_secs_f64(),
+    );
+    estimate.notes.extend(notes);
+    describe(&mut problem, structure, options, &solution, &mut estimate);
+    corrected_bounds(
+        &mut problem,
+        records,
+        options,
+        (&solution, &input_noise),
+        &mut estimate,
+    );
+    if let Some((unknowns, _, iterations)) = staged {
+        let note = staged_note(&problem, &unknowns, lag, iterations);
+        estimate.notes.push(note);
+    }
+    Ok(estimate.assess_residuals())
+}
+
+/// The fit of every unknown from `start`, refined near the minimum and
+/// gone on with after a re-chosen grid (the comments within).
+fn final_fit(
+    problem: &mut Problem,
+    structure: &ModelStructure,
+    options: &OutputErrorOptions,
+    start: &DVector<f64>,
+) -> gauss_newton::Solution {
     // Iterations steer with the grid-point linearisation (half the cost).
     // Once a step is predicted to decrease the cost by less than
     // REFINE_DECREASE, its simulation is made with the exact derivative of
@@ -81,7 +99,7 @@ pub fn output_error_from(
         solver_options(structure, options, &problem.unknowns, CONVERGED_DECREASE);
     final_options.refine_below = Some(REFINE_DECREASE);
     problem.refinable = true;
-    let mut solution = gauss_newton::solve(&mut problem, &start, &final_options);
+    let mut solution = gauss_newton::solve(problem, start, &final_options);
     // The solver re-weights once more where it stops: a grid re-chosen
     // there leaves θ the optimum of the grid before, so the fit goes on
     // from it on the new grid (at most twice more).
@@ -90,46 +108,11 @@ pub fn output_error_from(
             break;
         }
         let mut history = solution.history;
-        solution = gauss_newton::solve(&mut problem, &solution.theta, &final_options);
+        solution = gauss_newton::solve(problem, &solution.theta, &final_options);
         history.append(&mut solution.history);
         solution.history = history;
     }
-    let mut estimate = problem.estimate(
-        structure,
-        records,
-        &original_start,
-        &solution,
-        started.elapsed().as_secs_f64(),
-    );
-    estimate.notes.extend(notes);
-    describe(&mut problem, structure, options, &solution, &mut estimate);
-    // M⁻¹ before any correction: the input-noise share's projection.
-    let white = (!input_noise.is_empty()).then(|| estimate.covariance.clone());
-    if options.correlation_lag > 0.0 && !matches!(solution.status, Status::Diverged(_)) {
-        let note = problem.coloured_bounds(&solution, options.correlation_lag, &mut estimate);
-        estimate.notes.push(note);
-    }
-    if let Some(white) = white
-        && !matches!(solution.status, Status::Diverged(_))
-    {
-        let note = problem.input_noise_bounds(
-            records,
-            &solution,
-            &white,
-            (
-                &input_noise,
-                options.input_noise_draws,
-                options.input_noise_seed,
-            ),
-            &mut estimate,
-        );
-        estimate.notes.push(note);
-    }
-    if let Some((unknowns, _, iterations)) = staged {
-        let note = staged_note(&problem, &unknowns, lag, iterations);
-        estimate.notes.push(note);
-    }
-    Ok(estimate.assess_residuals())
+    solution
 }
 
 /// An error unless every record has the channels the fit needs, the
@@ -206,10 +189,25 @@ fn solver_options(
     solver_options
 }
 
-/// The first fit with the initial state and the stall's τ1 (`lag`) held
-/// (the comment at its call): the unknowns it fitted, its estimate and
-/// iterations; None when nothing is held or it diverged. The problem's
-/// unknowns are all of them again after it.
+/// The first fit with the initial state and the stall's τ1 (`lag`) held:
+/// the unknowns it fitted, its estimate and iterations; None when nothing
+/// is held or it diverged. The problem's unknowns are all of them again
+/// after it.
+///
+/// With the initial state among the unknowns, a first fit holds it at
+/// the first samples: from a-priori start values the full problem can
+/// fall into a wrong minimum (the stall model did: τ2 0.35 for 0.9),
+/// while the aerodynamic fit alone is robust and leaves the initial
+/// state a small correction. That first fit is only a start, biased by
+/// the held initial state, so it stops at a predicted decrease of
+/// STAGE_DECREASE (a step of about 4.5σ).
+/// Its simulations carry the initial states' sensitivities too, so that
+/// the second stage starts from the first's last simulation.
+/// The stall's τ1 (χ a state) is held at its start value there too:
+/// from a-priori values the full problem runs τ1 to 0 on the stall
+/// flight, ideal record included (a valley toward the algebraic limit,
+/// where τ2 alone makes the lag), while from the first fit's a1, α* and
+/// τ2 it reaches the truth (docs/findings.md, "τ1 in c̄/V").
 fn first_stage(
     problem: &mut Problem,
     structure: &ModelStructure,
@@ -231,6 +229,41 @@ fn first_stage(
         .then(|| (problem.unknowns.clone(), first.theta, first.history.len()));
     problem.unknowns = all;
     staged
+}
+
+/// The estimate's bounds corrected for coloured residuals
+/// (`correlation_lag`) and for the noise of the inputs (`input_noise`,
+/// projected from M⁻¹ before any correction), each with its note; none
+/// for a diverged fit.
+fn corrected_bounds(
+    problem: &mut Problem,
+    records: &[&FlightRecord],
+    options: &OutputErrorOptions,
+    (solution, input_noise): (&gauss_newton::Solution, &[(String, f64)]),
+    estimate: &mut Estimate,
+) {
+    // M⁻¹ before any correction: the input-noise share's projection.
+    let white = (!input_noise.is_empty()).then(|| estimate.covariance.clone());
+    if options.correlation_lag > 0.0 && !matches!(solution.status, Status::Diverged(_)) {
+        let note = problem.coloured_bounds(solution, options.correlation_lag, estimate);
+        estimate.notes.push(note);
+    }
+    if let Some(white) = white
+        && !matches!(solution.status, Status::Diverged(_))
+    {
+        let note = problem.input_noise_bounds(
+            records,
+            solution,
+            &white,
+            (
+                input_noise,
+                options.input_noise_draws,
+                options.input_noise_seed,
+            ),
+            estimate,
+        );
+        estimate.notes.push(note);
+    }
 }
 
 /// The estimate's mode diagnoses at the solution and, for multiple
