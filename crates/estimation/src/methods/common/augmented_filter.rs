@@ -507,6 +507,50 @@ fn start_values(
     }
 }
 
+/// An error when `pseudonoise_for` names a parameter that is not free.
+fn check_pseudonoise(method: &str, structure: Filtered, settings: &FilterSettings) -> Result<()> {
+    match settings
+        .pseudonoise_for
+        .keys()
+        .find(|name| !structure.free_names().contains(name))
+    {
+        Some(name) => Err(Error::Setting {
+            method: method.to_string(),
+            reason: format!(
+                "pseudonoise_for: '{name}' is not a free parameter of model '{}'",
+                structure.name()
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Each output's measurement noise variance from its spectrum above the
+/// motion's band, with its floor, and a note per output (σ, and the
+/// Fourier estimate's).
+fn measurement_noise(
+    record: &FlightRecord,
+    outputs: &[String],
+    settings: &FilterSettings,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<String>)> {
+    let window = fitting_window(record, outputs, None)?;
+    let mut measurement = Vec::new();
+    let mut floors = Vec::new();
+    let mut notes = Vec::new();
+    for name in outputs {
+        let channel = record.channel(name)?;
+        let (variance, fourier, floor) = channel_noise(channel, window, settings.motion_bandwidth);
+        measurement.push(variance);
+        floors.push(floor);
+        notes.push(format!(
+            "{name} {:.3e} (Fourier {:.3e})",
+            variance.sqrt(),
+            fourier.sqrt()
+        ));
+    }
+    Ok((measurement, floors, notes))
+}
+
 impl Setup {
     fn new(
         method: &str,
@@ -519,19 +563,7 @@ impl Setup {
         let parameters = structure.parameters();
         let (names_all, free_flags) = (parameters.names, parameters.free);
         let outputs = structure.outputs();
-        if let Some(name) = settings
-            .pseudonoise_for
-            .keys()
-            .find(|name| !structure.free_names().contains(name))
-        {
-            return Err(Error::Setting {
-                method: method.to_string(),
-                reason: format!(
-                    "pseudonoise_for: '{name}' is not a free parameter of model '{}'",
-                    structure.name()
-                ),
-            });
-        }
+        check_pseudonoise(method, structure, settings)?;
         let View {
             model: view,
             x0,
@@ -552,22 +584,7 @@ impl Setup {
         let observations =
             Observations::from_record(record, outputs, view.time(0), step, view.len())?;
         enough_data(method, &observations, free.len())?;
-        let window = fitting_window(record, outputs, None)?;
-        let mut measurement = Vec::new();
-        let mut floors = Vec::new();
-        let mut noise_notes = Vec::new();
-        for name in outputs {
-            let channel = record.channel(name)?;
-            let (variance, fourier, floor) =
-                channel_noise(channel, window, settings.motion_bandwidth);
-            measurement.push(variance);
-            floors.push(floor);
-            noise_notes.push(format!(
-                "{name} {:.3e} (Fourier {:.3e})",
-                variance.sqrt(),
-                fourier.sqrt()
-            ));
-        }
+        let (measurement, floors, noise_notes) = measurement_noise(record, outputs, settings)?;
         let scale = |v: f64| v.abs().max(PARAMETER_SCALE);
         let n = x0.len();
         let mut prior = DMatrix::zeros(n + free.len(), n + free.len());
@@ -635,75 +652,26 @@ pub fn augmented_estimate<'a>(
     let mut setup = Setup::new(method, record, structure, settings, start)?;
     let n = setup.x0.len();
     let len = setup.view.len();
-    let step = setup.view.time(1) - setup.view.time(0);
     let start_values: Vec<f64> = setup.free.iter().map(|&i| setup.theta[i]).collect();
-    let mut process_states = vec![0.0; n];
-    let mut costs = Vec::new();
-    let mut report = String::from("pass  −ln L  mean ν²/S per output\n");
+    let mut passes = Passes {
+        process_states: vec![0.0; n],
+        theta: setup.theta.clone(),
+        lags: settings.correlation_lags.unwrap_or(n),
+        best: None,
+        rejected: None,
+        mehra_failed: false,
+        costs: Vec::new(),
+        report: String::from("pass  −ln L  mean ν²/S per output\n"),
+    };
     let mut last = None;
-    let mut mehra_failed = false;
-    let mut theta = setup.theta.clone();
-    let mut lags = settings.correlation_lags.unwrap_or(n);
-    // What the best pass so far ran with and ended with, for a pass whose
-    // noise makes the record less likely (module header, Noise 2).
-    let mut best: Option<Best> = None;
-    let mut rejected = None;
     let mut pass_number = 0;
     while pass_number < settings.passes {
         pass_number += 1;
-        let augmented = Augmented::new(setup.view.as_ref(), &theta, setup.free.clone())?;
-        let initial = Gaussian {
-            mean: augmented.state(setup.x0.as_slice()),
-            covariance: setup.prior.clone(),
-        };
-        let noise = Noise {
-            process: DMatrix::from_diagonal(&DVector::from_iterator(
-                n + setup.free.len(),
-                process_states.iter().chain(&setup.pseudonoise).copied(),
-            )),
-            measurement: DVector::from_column_slice(&setup.measurement),
-        };
-        let outcome = run(&augmented, initial, &noise, &setup.observations);
-        let worse = match (&outcome, &best) {
-            (Ok(pass), Some(best)) => !matches!(
-                pass.negative_log_likelihood
-                    .partial_cmp(&best.pass.negative_log_likelihood),
-                Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
-            ),
-            (Err(_), Some(_)) => true,
-            (_, None) => false,
-        };
-        if worse && lags > 0 && rejected.is_none() {
-            // Mehra's noise made the record less likely than the noise it
-            // replaced: back to the best pass, the zero-lag update from it.
-            let best = best.take().expect("a best pass");
-            costs.push(match &outcome {
-                Ok(pass) => pass.negative_log_likelihood,
-                Err(_) => f64::INFINITY,
-            });
-            report += &format!(
-                "{pass_number:>4}  rejected: the record less likely than after pass {}\n",
-                best.number
-            );
-            rejected = Some(pass_number);
-            setup.measurement = best.measurement.clone();
-            process_states = best.process.clone();
-            theta = best.theta.clone();
-            lags = 0;
+        let noise = pass_noise(&setup, &passes.process_states);
+        let outcome = run_pass(&setup, &passes.theta, &noise, run)?;
+        if worse(&outcome, passes.best.as_ref()) && passes.lags > 0 && passes.rejected.is_none() {
+            passes.reject(pass_number, &outcome, &mut setup, settings);
             pass_number -= 1;
-            tuning::update(
-                &best.pass,
-                len,
-                step,
-                n,
-                0,
-                &mut setup.measurement,
-                &setup.floors,
-                settings
-                    .tune_process_noise
-                    .then_some(&mut process_states[..]),
-            );
-            advance(&mut theta, &best.pass, &setup.free, n, len);
             continue;
         }
         let pass = match outcome {
@@ -711,79 +679,267 @@ pub fn augmented_estimate<'a>(
             Err(error) => {
                 return Ok(FilterRun {
                     estimate: diverged(method, structure, record, &setup, &start_values, error),
-                    history: History {
-                        names: setup.names.clone(),
-                        times: Vec::new(),
-                        values: Vec::new(),
-                        sigmas: Vec::new(),
-                    },
+                    history: History::empty(&setup.names),
                     innovations: Vec::new(),
                 });
             }
         };
-        costs.push(pass.negative_log_likelihood);
+        passes.costs.push(pass.negative_log_likelihood);
         let ratios = normalised_innovations(&pass, len);
-        report += &format!(
-            "{pass_number:>4}  {:.1}  {}\n",
-            pass.negative_log_likelihood,
-            ratios
-                .iter()
-                .zip(structure.outputs())
-                .map(|(r, o)| format!("{o} {r:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+        passes.report += &report_line(pass_number, &pass, &ratios, structure.outputs());
         let consistent = ratios.iter().all(|r| (r - 1.0).abs() <= TUNED);
         let done = consistent || pass_number == settings.passes;
         if !done {
-            let ran_with = Best {
-                number: pass_number,
-                pass: pass.clone(),
-                measurement: setup.measurement.clone(),
-                process: process_states.clone(),
-                theta: theta.clone(),
-            };
-            let update = tuning::update(
-                &pass,
-                len,
-                step,
-                n,
-                lags,
-                &mut setup.measurement,
-                &setup.floors,
-                settings
-                    .tune_process_noise
-                    .then_some(&mut process_states[..]),
-            );
-            if update == tuning::Update::ZeroLagFallback {
-                mehra_failed = true;
-            }
-            advance(&mut theta, &pass, &setup.free, n, len);
-            if lags > 0 {
-                best = Some(ran_with);
-            }
+            passes.tune(pass_number, &pass, &mut setup, settings);
         }
         last = Some((pass, ratios, noise));
         if done {
             break;
         }
     }
-    let (pass, ratios, noise) = last.expect("at least one pass");
-    let times: Vec<f64> = (0..len).map(|k| setup.view.time(k)).collect();
-    let history = History::of(&pass, &setup.names, times, n);
-    let mut estimate = assemble(
+    let last = last.expect("at least one pass");
+    let mut filter_run = finish(
         method,
         structure,
         record,
         &setup,
         &start_values,
+        last,
+        passes,
+    );
+    filter_run.estimate.wall_time = started.elapsed().as_secs_f64();
+    Ok(filter_run)
+}
+
+/// The estimate of the last pass (`last`: the pass, its outputs' mean
+/// ν²/S and the noise it ran with), its notes and report, and its
+/// parameter histories.
+fn finish(
+    method: &str,
+    structure: Filtered,
+    record: &FlightRecord,
+    setup: &Setup,
+    start_values: &[f64],
+    (pass, ratios, noise): (Pass, Vec<f64>, Noise),
+    passes: Passes,
+) -> FilterRun {
+    let n = setup.x0.len();
+    let times: Vec<f64> = (0..setup.view.len()).map(|k| setup.view.time(k)).collect();
+    let history = History::of(&pass, &setup.names, times, n);
+    let mut estimate = assemble(
+        method,
+        structure,
+        record,
+        setup,
+        start_values,
         &pass,
         &ratios,
         &history,
     );
-    estimate.cost_history = costs;
+    estimate.cost_history = passes.costs;
     estimate.iterations = estimate.cost_history.len();
-    estimate.wall_time = started.elapsed().as_secs_f64();
+    noise_notes(
+        &mut estimate,
+        structure,
+        setup,
+        &noise,
+        passes.rejected,
+        passes.mehra_failed.then_some(passes.lags),
+    );
+    estimate.details = passes.report;
+    FilterRun {
+        estimate,
+        history,
+        innovations: pass.innovations,
+    }
+}
+
+/// What the residual-correlation passes carry from pass to pass.
+struct Passes {
+    /// The states' process noise intensities and θ the next pass runs
+    /// with.
+    process_states: Vec<f64>,
+    theta: Vec<f64>,
+    /// Mehra's lags (0: the zero-lag update).
+    lags: usize,
+    /// What the best pass so far ran with and ended with, for a pass whose
+    /// noise makes the record less likely (module header, Noise 2).
+    best: Option<Best>,
+    /// The pass rejected, by its number.
+    rejected: Option<usize>,
+    /// Whether Mehra's method did not serve a pass.
+    mehra_failed: bool,
+    /// Each pass's −ln L, and the report's lines.
+    costs: Vec<f64>,
+    report: String,
+}
+
+impl Passes {
+    /// Mehra's noise made the record less likely than the noise it
+    /// replaced (pass `number`, its `outcome`): back to the best pass, the
+    /// zero-lag update from it.
+    fn reject(
+        &mut self,
+        number: usize,
+        outcome: &Result<Pass>,
+        setup: &mut Setup,
+        settings: &FilterSettings,
+    ) {
+        let best = self.best.take().expect("a best pass");
+        self.costs.push(match outcome {
+            Ok(pass) => pass.negative_log_likelihood,
+            Err(_) => f64::INFINITY,
+        });
+        self.report += &format!(
+            "{number:>4}  rejected: the record less likely than after pass {}\n",
+            best.number
+        );
+        self.rejected = Some(number);
+        self.lags = 0;
+        back_to_best(
+            &best,
+            setup,
+            settings,
+            &mut self.process_states,
+            &mut self.theta,
+        );
+    }
+
+    /// The noise and θ for the pass after `pass` (number `number`), what
+    /// it ran with kept as the best so far while Mehra's method tunes.
+    fn tune(&mut self, number: usize, pass: &Pass, setup: &mut Setup, settings: &FilterSettings) {
+        let ran_with = Best {
+            number,
+            pass: pass.clone(),
+            measurement: setup.measurement.clone(),
+            process: self.process_states.clone(),
+            theta: self.theta.clone(),
+        };
+        let update = next_noise_and_theta(
+            pass,
+            setup,
+            settings,
+            self.lags,
+            &mut self.process_states,
+            &mut self.theta,
+        );
+        if update == tuning::Update::ZeroLagFallback {
+            self.mehra_failed = true;
+        }
+        if self.lags > 0 {
+            self.best = Some(ran_with);
+        }
+    }
+}
+
+/// One pass of the filter `run` over the record with the parameters
+/// `theta` (the free ones among the states) and `noise`: its outcome; an
+/// error when the augmented model cannot be made.
+fn run_pass(setup: &Setup, theta: &[f64], noise: &Noise, run: &FilterPass) -> Result<Result<Pass>> {
+    let augmented = Augmented::new(setup.view.as_ref(), theta, setup.free.clone())?;
+    let initial = Gaussian {
+        mean: augmented.state(setup.x0.as_slice()),
+        covariance: setup.prior.clone(),
+    };
+    Ok(run(&augmented, initial, noise, &setup.observations))
+}
+
+/// Whether a pass's outcome makes the record less likely than the best
+/// pass so far (a failed pass does; none is worse without a best pass).
+fn worse(outcome: &Result<Pass>, best: Option<&Best>) -> bool {
+    match (outcome, best) {
+        (Ok(pass), Some(best)) => !matches!(
+            pass.negative_log_likelihood
+                .partial_cmp(&best.pass.negative_log_likelihood),
+            Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+        ),
+        (Err(_), Some(_)) => true,
+        (_, None) => false,
+    }
+}
+
+/// The noise of a pass: the process noise intensities of the states
+/// (`process_states`) and the parameters' pseudonoise, the measurement
+/// variances.
+fn pass_noise(setup: &Setup, process_states: &[f64]) -> Noise {
+    Noise {
+        process: DMatrix::from_diagonal(&DVector::from_iterator(
+            setup.x0.len() + setup.free.len(),
+            process_states.iter().chain(&setup.pseudonoise).copied(),
+        )),
+        measurement: DVector::from_column_slice(&setup.measurement),
+    }
+}
+
+/// After a rejected pass: the noise and θ the best pass ran with, then
+/// the zero-lag update from the best pass and θ advanced to where it
+/// ended.
+fn back_to_best(
+    best: &Best,
+    setup: &mut Setup,
+    settings: &FilterSettings,
+    process_states: &mut Vec<f64>,
+    theta: &mut Vec<f64>,
+) {
+    setup.measurement = best.measurement.clone();
+    *process_states = best.process.clone();
+    *theta = best.theta.clone();
+    next_noise_and_theta(&best.pass, setup, settings, 0, process_states, theta);
+}
+
+/// The next pass's noise from `pass` by Mehra's method with `lags` lags
+/// (0: the zero-lag update), the process noise only if the settings tune
+/// it, and θ advanced to where `pass` ended.
+fn next_noise_and_theta(
+    pass: &Pass,
+    setup: &mut Setup,
+    settings: &FilterSettings,
+    lags: usize,
+    process_states: &mut [f64],
+    theta: &mut [f64],
+) -> tuning::Update {
+    let (n, len) = (setup.x0.len(), setup.view.len());
+    let step = setup.view.time(1) - setup.view.time(0);
+    let update = tuning::update(
+        pass,
+        len,
+        step,
+        n,
+        lags,
+        &mut setup.measurement,
+        &setup.floors,
+        settings.tune_process_noise.then_some(process_states),
+    );
+    advance(theta, pass, &setup.free, n, len);
+    update
+}
+
+/// The report's line of a pass: its −ln L and each output's mean ν²/S.
+fn report_line(number: usize, pass: &Pass, ratios: &[f64], outputs: &[String]) -> String {
+    format!(
+        "{number:>4}  {:.1}  {}\n",
+        pass.negative_log_likelihood,
+        ratios
+            .iter()
+            .zip(outputs)
+            .map(|(r, o)| format!("{o} {r:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+/// The estimate's notes on the final noise, on a rejected pass
+/// (`rejected`, its number) and on a pass Mehra's method with the lags
+/// `mehra_failed` did not serve.
+fn noise_notes(
+    estimate: &mut Estimate,
+    structure: Filtered,
+    setup: &Setup,
+    noise: &Noise,
+    rejected: Option<usize>,
+    mehra_failed: Option<usize>,
+) {
+    let n = setup.x0.len();
     estimate.notes.push(format!(
         "final noise: R σ {}; process noise intensity on {} {}",
         structure
@@ -804,17 +960,11 @@ pub fn augmented_estimate<'a>(
             "residual correlation: the noise Mehra's method gave made the record less likely (pass {number}, rejected); the passes from there used the zero-lag update"
         ));
     }
-    if mehra_failed {
+    if let Some(lags) = mehra_failed {
         estimate.notes.push(format!(
             "residual correlation: Mehra's method with {lags} lags did not serve a pass (too few points with every output measured, or no transitions kept); that pass used the zero-lag update"
         ));
     }
-    estimate.details = report;
-    Ok(FilterRun {
-        estimate,
-        history,
-        innovations: pass.innovations,
-    })
 }
 
 /// A pass the residual-correlation passes may return to, with the noise
