@@ -655,41 +655,98 @@ fn trim_index(times: &[f64], trim: Option<f64>) -> usize {
     })
 }
 
-/// Estimates the structure's derivatives from `record` by RBF networks and
-/// the Delta method (module header).
-pub fn rbf_delta(
-    record: &FlightRecord,
+/// The network of one coefficient's training data, trained and
+/// differentiated ([`train_and_differentiate`]); a refusal when the data
+/// are fewer than twice the unknowns or have no input.
+fn train(training: TrainingData, plans: &[Plan], settings: &RbfDeltaSettings) -> Result<Delta> {
+    let unknowns = training.inputs.len() + 1;
+    if training.rows.len() < 2 * unknowns || training.inputs.is_empty() {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: METHOD.to_string(),
+            data: training.rows.len(),
+            unknowns,
+        }));
+    }
+    let plan = plans
+        .iter()
+        .find(|p| p.coefficient == training.coefficient)
+        .ok_or_else(|| Error::Method {
+            reason: format!("{METHOD}: no plan for {}", training.name),
+        })?;
+    train_and_differentiate(training, plan, settings)
+}
+
+/// The local values of the parameter of the term with `regressor` (None:
+/// a product, which is no network input, so its parameter is not
+/// estimated): ∂C/∂x of its input, or C₀ for the constant when every
+/// other term of the coefficient is an input (one whose regressor is no
+/// input, CL² or the Oswald factor, would stay in C₀).
+fn local_values<'d>(
     structure: &ModelStructure,
-    settings: &RbfDeltaSettings,
-) -> Result<Estimate> {
-    let plans = regression::plans(structure, METHOD)?;
-    let mut notes = Vec::new();
-    // The Mach input is Mach − the structure's reference Mach; a structure
-    // without a Mach term has none, and the input is the Mach number.
-    let mut inputs_structure = structure.clone();
-    let reference_mach = &mut inputs_structure.aircraft.aero.reference_mach;
-    if reference_mach.is_nan() {
-        *reference_mach = 0.0;
+    plan: &Plan,
+    delta: &'d Delta,
+    regressor: Option<Regressor>,
+) -> Option<&'d Vec<f64>> {
+    if regressor == Some(Regressor::Constant) {
+        let complete = plan.columns(structure).iter().all(|&i| {
+            plan.terms.iter().any(|&(r, t)| {
+                t == i
+                    && r.single()
+                        .is_some_and(|r| r == Regressor::Constant || delta.data.inputs.contains(&r))
+            })
+        });
+        complete.then_some(&delta.bias)
+    } else {
+        let position = (delta.data.inputs.iter()).position(|&r| Some(r) == regressor);
+        position.map(|j| &delta.derivatives[j])
     }
-    let data = coefficient_data(record, &inputs_structure, &plans, settings, &mut notes)?;
-    let mut deltas = Vec::new();
-    for training in data {
-        let unknowns = training.inputs.len() + 1;
-        if training.rows.len() < 2 * unknowns || training.inputs.is_empty() {
-            return Err(Error::Refused(Refusal::TooFewData {
-                method: METHOD.to_string(),
-                data: training.rows.len(),
-                unknowns,
-            }));
-        }
-        let plan = plans
+}
+
+/// The note on the network of coefficient `name`: its data, centres,
+/// width, fit and trim point (sample `trim`).
+fn network_note(name: &str, delta: &Delta, settings: &RbfDeltaSettings, trim: usize) -> String {
+    format!(
+        "{name} network: {} samples from {:.3} s, {} inputs ({}), {} centres (radius {}), width factor λ = {:.4} (σ = {:.4}), MSE {:.3e}, R² {:.6}; trim point at {:.3} s",
+        delta.data.rows.len(),
+        delta.data.times.first().copied().unwrap_or(f64::NAN),
+        delta.data.inputs.len(),
+        delta
+            .data
+            .inputs
             .iter()
-            .find(|p| p.coefficient == training.coefficient)
-            .ok_or_else(|| Error::Method {
-                reason: format!("{METHOD}: no plan for {}", training.name),
-            })?;
-        deltas.push(train_and_differentiate(training, plan, settings)?);
-    }
+            .map(|r| r.key())
+            .collect::<Vec<_>>()
+            .join(", "),
+        delta.network.centre_count(),
+        settings.radius,
+        delta.network.width_factor,
+        delta.network.width(),
+        delta.mse,
+        delta.r_squared,
+        delta.data.times.get(trim).copied().unwrap_or(f64::NAN),
+    )
+}
+
+/// The parameters the networks estimate, with the distributions of their
+/// local values, the derivatives' names among them, and the free
+/// parameters not estimated.
+struct Local {
+    parameters: Vec<ParameterEstimate>,
+    distributions: Vec<ParameterDistribution>,
+    derivative_names: Vec<String>,
+    not_estimated: Vec<String>,
+}
+
+/// Each coefficient's parameters from its network's local values (the
+/// median and spread of each over the record), a note on each network and
+/// on its width search pushed to `notes`.
+fn local_estimates(
+    structure: &ModelStructure,
+    plans: &[Plan],
+    deltas: &[Delta],
+    settings: &RbfDeltaSettings,
+    notes: &mut Vec<String>,
+) -> Local {
     let aero = &structure.aircraft.aero;
     let (names, starts) = (aero.parameters.names(), aero.parameters.values());
     let axes = aero.force_axes;
@@ -697,7 +754,7 @@ pub fn rbf_delta(
     let mut distributions = Vec::new();
     let mut derivative_names = Vec::new();
     let mut not_estimated = Vec::new();
-    for plan in &plans {
+    for plan in plans {
         let Some(delta) = deltas
             .iter()
             .find(|d| d.data.coefficient == plan.coefficient)
@@ -710,25 +767,10 @@ pub fn rbf_delta(
             if !structure.free[index] {
                 continue;
             }
-            // A product is no network input: its parameter is not estimated.
             let regressor = term.single();
-            let values = if regressor == Some(Regressor::Constant) {
-                // C₀ needs every other term of the coefficient: one whose
-                // regressor is no input (CL², the Oswald factor) stays in it.
-                let complete = plan.columns(structure).iter().all(|&i| {
-                    plan.terms.iter().any(|&(r, t)| {
-                        t == i
-                            && r.single().is_some_and(|r| {
-                                r == Regressor::Constant || delta.data.inputs.contains(&r)
-                            })
-                    })
-                });
-                complete.then_some(&delta.bias)
-            } else {
-                let position = (delta.data.inputs.iter()).position(|&r| Some(r) == regressor);
-                position.map(|j| &delta.derivatives[j])
+            let Some(values) = local_values(structure, plan, delta, regressor) else {
+                continue;
             };
-            let Some(values) = values else { continue };
             let spread = distribution(&names[index], values, trim);
             parameters.push(ParameterEstimate {
                 name: names[index].clone(),
@@ -748,20 +790,11 @@ pub fn rbf_delta(
                 .filter(|i| !covered.contains(i))
                 .map(|i| names[i].clone()),
         );
-        notes.push(format!(
-            "{} network: {} samples from {:.3} s, {} inputs ({}), {} centres (radius {}), width factor λ = {:.4} (σ = {:.4}), MSE {:.3e}, R² {:.6}; trim point at {:.3} s",
+        notes.push(network_note(
             plan.coefficient.name(axes),
-            delta.data.rows.len(),
-            delta.data.times.first().copied().unwrap_or(f64::NAN),
-            delta.data.inputs.len(),
-            delta.data.inputs.iter().map(|r| r.key()).collect::<Vec<_>>().join(", "),
-            delta.network.centre_count(),
-            settings.radius,
-            delta.network.width_factor,
-            delta.network.width(),
-            delta.mse,
-            delta.r_squared,
-            delta.data.times.get(trim).copied().unwrap_or(f64::NAN),
+            delta,
+            settings,
+            trim,
         ));
         notes.push(search_note(
             plan.coefficient.name(axes),
@@ -769,6 +802,41 @@ pub fn rbf_delta(
             settings,
         ));
     }
+    Local {
+        parameters,
+        distributions,
+        derivative_names,
+        not_estimated,
+    }
+}
+
+/// Estimates the structure's derivatives from `record` by RBF networks and
+/// the Delta method (module header).
+pub fn rbf_delta(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    settings: &RbfDeltaSettings,
+) -> Result<Estimate> {
+    let plans = regression::plans(structure, METHOD)?;
+    let mut notes = Vec::new();
+    // The Mach input is Mach − the structure's reference Mach; a structure
+    // without a Mach term has none, and the input is the Mach number.
+    let mut inputs_structure = structure.clone();
+    let reference_mach = &mut inputs_structure.aircraft.aero.reference_mach;
+    if reference_mach.is_nan() {
+        *reference_mach = 0.0;
+    }
+    let data = coefficient_data(record, &inputs_structure, &plans, settings, &mut notes)?;
+    let deltas = data
+        .into_iter()
+        .map(|training| train(training, &plans, settings))
+        .collect::<Result<Vec<_>>>()?;
+    let Local {
+        parameters,
+        distributions,
+        derivative_names,
+        not_estimated,
+    } = local_estimates(structure, &plans, &deltas, settings, &mut notes);
     if !not_estimated.is_empty() {
         notes.push(format!(
             "not estimated (their regressors are not network inputs or are constant on the record, or, for a bias, another term of its coefficient is not estimated): {}",
