@@ -413,27 +413,7 @@ pub fn reconstruct(
         .iter()
         .all(|name| needs.contains_key(name));
     let differentiated = differentiated_channels(request, options, measured_accelerations);
-    // The differentiator's windows stop at the corners of the control
-    // steps and ramps: only looked for when something is differentiated.
-    let breaks = if differentiated.is_empty() {
-        Vec::new()
-    } else {
-        match options.step_breaks {
-            StepBreaks::Corners => control_corners(record),
-            StepBreaks::NewValue => control_steps(record),
-        }
-    };
-    let derivatives: BTreeMap<&str, Channel> = differentiated
-        .into_iter()
-        .map(|name| {
-            let channel = record.channel(name)?;
-            let derivative = options
-                .differentiator
-                .unwrap_or_default()
-                .differentiate_with_breaks(channel, &breaks);
-            Ok((name, derivative))
-        })
-        .collect::<Result<_>>()?;
+    let derivatives = derivatives(record, differentiated, options)?;
     let reference = reference_channel(record, &needs, options)?;
     let times = common_times(record, &needs, &derivatives, reference, options)?;
     let mut sampled: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
@@ -476,50 +456,116 @@ pub fn reconstruct(
             None => dropped += 1,
         }
     }
-    if measured_accelerations {
-        reconstruction.notes.push(
-            "angular accelerations: the record's p_dot, q_dot, r_dot (`angular_accelerations = \"differentiated\"` differentiates the rates instead)".into(),
-        );
+    let sources = Sources {
+        needs: &needs,
+        derivatives: &derivatives,
+        measured_accelerations,
+        reference,
+    };
+    reconstruction
+        .notes
+        .extend(sources.notes(record, options, &times, dropped));
+    Ok(reconstruction)
+}
+
+/// What a reconstruction took from the record: the channels it needed,
+/// those it differentiated, whether the angular accelerations were
+/// measured, and the channel whose instants are the time base.
+struct Sources<'a> {
+    needs: &'a Needs,
+    derivatives: &'a BTreeMap<&'a str, Channel>,
+    measured_accelerations: bool,
+    reference: &'a Channel,
+}
+
+impl Sources<'_> {
+    /// The reconstruction's notes: where the angular accelerations, thrust
+    /// and density came from, the differentiator, and the time base
+    /// (`times`, of which `dropped` instants were left out).
+    fn notes(
+        &self,
+        record: &FlightRecord,
+        options: &ReconstructionOptions,
+        times: &[f64],
+        dropped: usize,
+    ) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.measured_accelerations {
+            notes.push(
+                "angular accelerations: the record's p_dot, q_dot, r_dot (`angular_accelerations = \"differentiated\"` differentiates the rates instead)".into(),
+            );
+        }
+        if !self.measured_accelerations
+            && self.derivatives.contains_key("p")
+            && has_angular_accelerations(record)
+        {
+            notes.push(
+                "the record has p_dot, q_dot, r_dot: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates".into(),
+            );
+        }
+        if self.needs.contains_key("thrust") {
+            notes.push(
+                "thrust: the record's 'thrust' channel, along the aircraft's thrust line".into(),
+            );
+        }
+        if self.needs.contains_key("density") {
+            notes.push(
+                "air density: the record's 'density' channel, not the ISA at the altitude channel"
+                    .into(),
+            );
+        }
+        if !self.derivatives.is_empty() {
+            notes.push(
+                options
+                    .differentiator
+                    .unwrap_or_default()
+                    .describe(self.reference.rate),
+            );
+        }
+        notes.push(format!(
+            "common time base: the {} instants of channel '{}' ({} Hz) from {:.3} s to {:.3} s{}",
+            times.len() - dropped,
+            self.reference.name,
+            aeroid_record::rate_text(self.reference.rate),
+            times.first().copied().unwrap_or(f64::NAN),
+            times.last().copied().unwrap_or(f64::NAN),
+            if dropped > 0 {
+                format!("; {dropped} instants left out (a value not finite, or q̄ ≤ 0)")
+            } else {
+                String::new()
+            }
+        ));
+        notes
     }
-    if !measured_accelerations && derivatives.contains_key("p") && has_angular_accelerations(record)
-    {
-        reconstruction.notes.push(
-            "the record has p_dot, q_dot, r_dot: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates".into(),
-        );
-    }
-    if needs.contains_key("thrust") {
-        reconstruction
-            .notes
-            .push("thrust: the record's 'thrust' channel, along the aircraft's thrust line".into());
-    }
-    if needs.contains_key("density") {
-        reconstruction.notes.push(
-            "air density: the record's 'density' channel, not the ISA at the altitude channel"
-                .into(),
-        );
-    }
-    if !derivatives.is_empty() {
-        reconstruction.notes.push(
-            options
+}
+
+/// The derivatives of the channels `differentiated`, the differentiator's
+/// windows stopping at the corners of the control steps and ramps (only
+/// looked for when something is differentiated).
+fn derivatives<'a>(
+    record: &FlightRecord,
+    differentiated: Vec<&'a str>,
+    options: &ReconstructionOptions,
+) -> Result<BTreeMap<&'a str, Channel>> {
+    let breaks = if differentiated.is_empty() {
+        Vec::new()
+    } else {
+        match options.step_breaks {
+            StepBreaks::Corners => control_corners(record),
+            StepBreaks::NewValue => control_steps(record),
+        }
+    };
+    differentiated
+        .into_iter()
+        .map(|name| {
+            let channel = record.channel(name)?;
+            let derivative = options
                 .differentiator
                 .unwrap_or_default()
-                .describe(reference.rate),
-        );
-    }
-    reconstruction.notes.push(format!(
-        "common time base: the {} instants of channel '{}' ({} Hz) from {:.3} s to {:.3} s{}",
-        reconstruction.times.len(),
-        reference.name,
-        aeroid_record::rate_text(reference.rate),
-        times.first().copied().unwrap_or(f64::NAN),
-        times.last().copied().unwrap_or(f64::NAN),
-        if dropped > 0 {
-            format!("; {dropped} instants left out (a value not finite, or q̄ ≤ 0)")
-        } else {
-            String::new()
-        }
-    ));
-    Ok(reconstruction)
+                .differentiate_with_breaks(channel, &breaks);
+            Ok((name, derivative))
+        })
+        .collect()
 }
 
 /// The reference channel: the option, else the fastest accelerometer or rate
