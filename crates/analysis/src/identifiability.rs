@@ -213,30 +213,7 @@ impl Identifiability {
             "verdict"
         );
         for row in &self.rows {
-            text += &format!(
-                "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e} {:>12}  {:<24} {}{}\n",
-                row.parameter,
-                row.truth,
-                row.sigma,
-                row.relative_sigma(),
-                row.input_error / row.truth.abs(),
-                row.wind_error / row.truth.abs(),
-                row.calm.map_or("-".to_string(), |(s, _)| format!(
-                    "{:.3e}",
-                    s / row.truth.abs()
-                )),
-                row.mode.as_ref().map_or("-".to_string(), |m| format!(
-                    "{}, {:.2} Hz",
-                    m.kind.name(),
-                    m.rule_rate()
-                )),
-                verdict(row, self.threshold),
-                if row.below_rule(self.rate) {
-                    ", below the rule"
-                } else {
-                    ""
-                }
-            );
+            text += &self.table_line(row);
         }
         let count = self.rows.iter().filter(|r| r.identifiable).count();
         let gusts = self
@@ -285,6 +262,34 @@ impl Identifiability {
             text += &format!("left out: {name}: {reason}\n");
         }
         text
+    }
+
+    /// The table's line of one parameter.
+    fn table_line(&self, row: &IdentifiabilityRow) -> String {
+        format!(
+            "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e} {:>12}  {:<24} {}{}\n",
+            row.parameter,
+            row.truth,
+            row.sigma,
+            row.relative_sigma(),
+            row.input_error / row.truth.abs(),
+            row.wind_error / row.truth.abs(),
+            row.calm.map_or("-".to_string(), |(s, _)| format!(
+                "{:.3e}",
+                s / row.truth.abs()
+            )),
+            row.mode.as_ref().map_or("-".to_string(), |m| format!(
+                "{}, {:.2} Hz",
+                m.kind.name(),
+                m.rule_rate()
+            )),
+            verdict(row, self.threshold),
+            if row.below_rule(self.rate) {
+                ", below the rule"
+            } else {
+                ""
+            }
+        )
     }
 
     /// Rounded relative bounds and verdicts, one per line, for snapshots.
