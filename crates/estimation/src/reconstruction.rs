@@ -196,64 +196,12 @@ fn needed_channels(
     let mut needs = Needs::new();
     let measured_accelerations =
         !options.omit_angular_accelerations && options.angular_accelerations.measured(record);
-    let axes = aircraft.aero.force_axes;
     let mut wants_dynamic_pressure = false;
     let mut wants_thrust = false;
     for &coefficient in &request.coefficients {
-        let name = coefficient.name(axes);
         wants_dynamic_pressure = true;
-        // Thrust enters a coefficient only through its component along that
-        // axis: a thrust line in the symmetry plane makes no side force, and
-        // its moment about the centre of gravity is a pitching moment only.
-        let direction = aircraft.propulsion.direction;
-        let moment = aircraft.propulsion.position.cross(&direction);
-        match coefficient {
-            Coefficient::Lift | Coefficient::Drag => {
-                wants_thrust |= match (axes, coefficient) {
-                    (ForceAxes::Body, Coefficient::Lift) => direction.z != 0.0,
-                    (ForceAxes::Body, _) => direction.x != 0.0,
-                    _ => direction.x != 0.0 || direction.z != 0.0,
-                };
-                if axes == ForceAxes::Wind {
-                    for channel in ["nx", "nz", "alpha"] {
-                        need(&mut needs, channel, name);
-                    }
-                } else if coefficient == Coefficient::Lift {
-                    need(&mut needs, "nz", name);
-                } else {
-                    need(&mut needs, "nx", name);
-                }
-            }
-            Coefficient::Side => {
-                wants_thrust |= direction.y != 0.0;
-                need(&mut needs, "ny", name);
-            }
-            Coefficient::Roll | Coefficient::Pitch | Coefficient::Yaw => {
-                let axis = match coefficient {
-                    Coefficient::Roll => 0,
-                    Coefficient::Pitch => 1,
-                    _ => 2,
-                };
-                wants_thrust |= moment[axis] != 0.0;
-                for channel in ["p", "q", "r"] {
-                    need(&mut needs, channel, name);
-                }
-                if measured_accelerations {
-                    for channel in ANGULAR_ACCELERATION_CHANNELS {
-                        need(&mut needs, channel, name);
-                    }
-                }
-                // A moment taken about a point other than the CG: the
-                // measured forces carry it there.
-                let transfer = aircraft.aero.transfer_uses(coefficient);
-                for (axis, channel) in ["nx", "ny", "nz"].into_iter().enumerate() {
-                    if transfer[axis] {
-                        wants_thrust |= direction[axis] != 0.0;
-                        need(&mut needs, channel, "moment reference point");
-                    }
-                }
-            }
-        }
+        wants_thrust |=
+            coefficient_needs(aircraft, coefficient, measured_accelerations, &mut needs);
     }
     for &regressor in &request.regressors {
         regressor_needs(aircraft, regressor, &mut needs);
@@ -278,6 +226,73 @@ fn needed_channels(
         need(&mut needs, "dynamic_pressure", "dynamic pressure");
     }
     needs
+}
+
+/// The channels coefficient `coefficient` needs, pushed to `needs`
+/// (the angular accelerations where they are `measured_accelerations`);
+/// whether it wants the thrust.
+fn coefficient_needs(
+    aircraft: &Aircraft,
+    coefficient: Coefficient,
+    measured_accelerations: bool,
+    needs: &mut Needs,
+) -> bool {
+    let axes = aircraft.aero.force_axes;
+    let name = coefficient.name(axes);
+    let mut wants_thrust = false;
+    // Thrust enters a coefficient only through its component along that
+    // axis: a thrust line in the symmetry plane makes no side force, and
+    // its moment about the centre of gravity is a pitching moment only.
+    let direction = aircraft.propulsion.direction;
+    let moment = aircraft.propulsion.position.cross(&direction);
+    match coefficient {
+        Coefficient::Lift | Coefficient::Drag => {
+            wants_thrust |= match (axes, coefficient) {
+                (ForceAxes::Body, Coefficient::Lift) => direction.z != 0.0,
+                (ForceAxes::Body, _) => direction.x != 0.0,
+                _ => direction.x != 0.0 || direction.z != 0.0,
+            };
+            if axes == ForceAxes::Wind {
+                for channel in ["nx", "nz", "alpha"] {
+                    need(needs, channel, name);
+                }
+            } else if coefficient == Coefficient::Lift {
+                need(needs, "nz", name);
+            } else {
+                need(needs, "nx", name);
+            }
+        }
+        Coefficient::Side => {
+            wants_thrust |= direction.y != 0.0;
+            need(needs, "ny", name);
+        }
+        Coefficient::Roll | Coefficient::Pitch | Coefficient::Yaw => {
+            let axis = match coefficient {
+                Coefficient::Roll => 0,
+                Coefficient::Pitch => 1,
+                _ => 2,
+            };
+            wants_thrust |= moment[axis] != 0.0;
+            for channel in ["p", "q", "r"] {
+                need(needs, channel, name);
+            }
+            if measured_accelerations {
+                for channel in ANGULAR_ACCELERATION_CHANNELS {
+                    need(needs, channel, name);
+                }
+            }
+            // A moment taken about a point other than the CG: the
+            // measured forces carry it there.
+            let transfer = aircraft.aero.transfer_uses(coefficient);
+            for (axis, channel) in ["nx", "ny", "nz"].into_iter().enumerate() {
+                if transfer[axis] {
+                    wants_thrust |= direction[axis] != 0.0;
+                    need(needs, channel, "moment reference point");
+                }
+            }
+        }
+    }
+    wants_thrust
 }
 
 fn regressor_needs(aircraft: &Aircraft, regressor: Regressor, needs: &mut Needs) {
