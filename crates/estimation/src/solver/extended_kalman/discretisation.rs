@@ -311,6 +311,7 @@ impl TimeUpdate {
     /// given (n × n, column-major: a pass's kept transition): the exact Φ
     /// there instead of into `transition`, the second-order one from its
     /// non-zeros.
+    // The time update at every grid point of a pass: either form writes Φ and Q_d in place in the update's buffers; split, each step would be one more call per grid point taking them.
     pub(super) fn discretise_into(
         &mut self,
         discretisation: Discretisation,
