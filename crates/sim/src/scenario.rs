@@ -491,6 +491,43 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
     }))
 }
 
+/// The value a parameter change sets: `value`, or `scale` times the
+/// aircraft's `original`, checked as a replacement; None (the problem
+/// recorded under `parameter_changes[index]`) when neither or both are
+/// given or the model refuses it.
+fn new_value(
+    spec: &ParameterChangeSpec,
+    original: f64,
+    aircraft: &Aircraft,
+    index: usize,
+    problems: &mut Problems,
+) -> Option<f64> {
+    let field = |key: &str| format!("parameter_changes[{index}].{key}");
+    let value = match (spec.value, spec.scale) {
+        (Some(value), None) => Some(("value", value)),
+        (None, Some(scale)) => Some(("scale", scale * original)),
+        (Some(_), Some(_)) => {
+            problems.push(field("scale"), "give either `value` or `scale`, not both");
+            None
+        }
+        (None, None) => {
+            problems.push(
+                field("value"),
+                "missing: give the new `value` or a `scale` of the aircraft's value",
+            );
+            None
+        }
+    };
+    value.and_then(|(key, value)| {
+        aircraft
+            .aero
+            .check_replacement(&spec.parameter, value)
+            .map(|()| value)
+            .map_err(|message| problems.push(field(key), message))
+            .ok()
+    })
+}
+
 /// The `[[parameter_changes]]` tables, checked against the aircraft, the
 /// duration and the step (each problem under `parameter_changes[i].KEY`),
 /// sorted by time.
@@ -526,29 +563,7 @@ fn read_parameter_changes(
             );
             continue;
         };
-        let value = match (spec.value, spec.scale) {
-            (Some(value), None) => Some(("value", value)),
-            (None, Some(scale)) => Some(("scale", scale * original)),
-            (Some(_), Some(_)) => {
-                problems.push(field("scale"), "give either `value` or `scale`, not both");
-                None
-            }
-            (None, None) => {
-                problems.push(
-                    field("value"),
-                    "missing: give the new `value` or a `scale` of the aircraft's value",
-                );
-                None
-            }
-        };
-        let value = value.and_then(|(key, value)| {
-            aircraft
-                .aero
-                .check_replacement(&spec.parameter, value)
-                .map(|()| value)
-                .map_err(|message| problems.push(field(key), message))
-                .ok()
-        });
+        let value = new_value(spec, original, aircraft, index, problems);
         let (Some(time), Some(value)) = (time, value) else {
             continue;
         };
