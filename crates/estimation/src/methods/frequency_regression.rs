@@ -365,13 +365,10 @@ pub fn frequency_regression(
         .collect();
     let mut estimate = assemble(record, structure, METHOD, &results);
     estimate.notes.extend(data.notes.iter().cloned());
-    estimate.notes.push(format!(
-        "finite Fourier transforms by Filon–Simpson quadrature over {} samples{}: {band_note}",
+    estimate.notes.push(transforms_note(
         transformed.samples,
-        match grid.breaks.len() {
-            0 => String::new(),
-            n => format!(", integrated piecewise across {n} control steps"),
-        }
+        grid.breaks.len(),
+        &band_note,
     ));
     if options.recursive {
         estimate
@@ -543,6 +540,18 @@ fn fit_plan(
         (&xs, &zs),
         zs.as_slice(),
         Bound::RowVariances(&variances),
+    )
+}
+
+/// The note on the transforms: the samples, the control steps
+/// integrated across (`breaks`) and the band.
+fn transforms_note(samples: usize, breaks: usize, band_note: &str) -> String {
+    format!(
+        "finite Fourier transforms by Filon–Simpson quadrature over {samples} samples{}: {band_note}",
+        match breaks {
+            0 => String::new(),
+            n => format!(", integrated piecewise across {n} control steps"),
+        }
     )
 }
 

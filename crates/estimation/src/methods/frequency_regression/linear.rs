@@ -5,7 +5,7 @@
 //! (the state derivatives' transforms by fourier Eq. 3, not by
 //! differentiation; Klein & Morelli §7.3, the form of SIDPAC's `fdoe`).
 
-use super::{FrequencyRegressionOptions, METHOD, local_variances};
+use super::{FrequencyRegressionOptions, METHOD, local_variances, transforms_note};
 use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate, Status};
 use crate::estimator::Refusal;
@@ -80,14 +80,7 @@ pub fn linear_frequency_regression(
     {
         fitted.extend(equations.fit(state, row, &mut problems));
     }
-    let note = format!(
-        "finite Fourier transforms by Filon–Simpson quadrature over {} samples{}: {band_note}",
-        transform.samples,
-        match breaks.len() {
-            0 => String::new(),
-            n => format!(", integrated piecewise across {n} control steps"),
-        }
-    );
+    let note = transforms_note(transform.samples, breaks.len(), &band_note);
     let mut estimate = estimate(record, structure, fitted, problems, note);
     estimate.wall_time = started.elapsed().as_secs_f64();
     Ok(estimate.assess())
