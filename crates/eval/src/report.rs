@@ -334,6 +334,35 @@ const PANEL_HEIGHT: u32 = 190;
 /// Width of the legend column beside the panels of a history plot.
 const LEGEND_WIDTH: u32 = 130;
 
+/// The legend beside the panels: `panel`'s lines with a label, one a row.
+fn draw_legend(
+    legend: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    panel: &Panel,
+) -> Result<()> {
+    for (row, line) in panel
+        .lines
+        .iter()
+        .filter(|l| !l.label.is_empty())
+        .enumerate()
+    {
+        let y = 20 + 18 * row as i32;
+        legend
+            .draw(&PathElement::new(
+                vec![(4, y), (24, y)],
+                line.colour.stroke_width(2),
+            ))
+            .map_err(plot_error)?;
+        legend
+            .draw(&Text::new(
+                line.label.clone(),
+                (30, y - 7),
+                ("sans-serif", 12),
+            ))
+            .map_err(plot_error)?;
+    }
+    Ok(())
+}
+
 /// The SVG of panels stacked under one title, each a quantity against
 /// time with its lines, and beside them the legend (the first panel's
 /// lines with a label).
@@ -347,27 +376,7 @@ fn panels_svg(title: &str, panels: &[Panel]) -> Result<String> {
         let root = root.titled(title, ("sans-serif", 16)).map_err(plot_error)?;
         let (plots, legend) = root.split_horizontally(WIDTH);
         if let Some(first) = panels.first() {
-            for (row, line) in first
-                .lines
-                .iter()
-                .filter(|l| !l.label.is_empty())
-                .enumerate()
-            {
-                let y = 20 + 18 * row as i32;
-                legend
-                    .draw(&PathElement::new(
-                        vec![(4, y), (24, y)],
-                        line.colour.stroke_width(2),
-                    ))
-                    .map_err(plot_error)?;
-                legend
-                    .draw(&Text::new(
-                        line.label.clone(),
-                        (30, y - 7),
-                        ("sans-serif", 12),
-                    ))
-                    .map_err(plot_error)?;
-            }
+            draw_legend(&legend, first)?;
         }
         let areas = plots.split_evenly((panels.len().max(1), 1));
         for (panel, area) in panels.iter().zip(&areas) {

@@ -552,6 +552,7 @@ fn measurement_noise(
 }
 
 impl Setup {
+    // The setup in the order each part needs the one before (view, start, free parameters, observations, noise, prior); its checks and noise are steps already.
     fn new(
         method: &str,
         record: &FlightRecord,
