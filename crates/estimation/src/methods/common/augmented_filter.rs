@@ -552,7 +552,6 @@ fn measurement_noise(
 }
 
 impl Setup {
-    // The setup in the order each part needs the one before (view, start, free parameters, observations, noise, prior); its checks and noise are steps already.
     fn new(
         method: &str,
         record: &FlightRecord,
@@ -586,30 +585,6 @@ impl Setup {
             Observations::from_record(record, outputs, view.time(0), step, view.len())?;
         enough_data(method, &observations, free.len())?;
         let (measurement, floors, noise_notes) = measurement_noise(record, outputs, settings)?;
-        let scale = |v: f64| v.abs().max(PARAMETER_SCALE);
-        let n = x0.len();
-        let mut prior = DMatrix::zeros(n + free.len(), n + free.len());
-        for (i, state) in state_names.iter().enumerate() {
-            prior[(i, i)] = outputs
-                .iter()
-                .position(|o| o == state)
-                .map_or(0.01, |o| measurement[o]);
-        }
-        for (j, &i) in free.iter().enumerate() {
-            prior[(n + j, n + j)] = (settings.initial_uncertainty * scale(theta[i])).powi(2);
-        }
-        let pseudonoise = free
-            .iter()
-            .zip(&names)
-            .map(|(&i, name)| {
-                let relative = settings
-                    .pseudonoise_for
-                    .get(name)
-                    .copied()
-                    .unwrap_or(settings.pseudonoise);
-                (relative * scale(theta[i])).powi(2)
-            })
-            .collect();
         let mut notes = vec![
             start_note,
             format!(
@@ -620,7 +595,7 @@ impl Setup {
         ];
         notes.extend(observations.note(step));
         notes.extend(view_notes);
-        Ok(Setup {
+        let setup = Setup {
             view,
             state_names,
             x0,
@@ -628,12 +603,48 @@ impl Setup {
             free,
             names,
             observations,
-            prior,
-            pseudonoise,
+            prior: DMatrix::zeros(0, 0),
+            pseudonoise: Vec::new(),
             measurement,
             floors,
             notes,
-        })
+        };
+        Ok(setup.with_prior(outputs, settings))
+    }
+
+    /// The setup with its prior covariance (a state's measurement variance
+    /// where it is an output, else 0.01; a free parameter's initial
+    /// uncertainty relative to its start) and each free parameter's
+    /// pseudonoise.
+    fn with_prior(mut self, outputs: &[String], settings: &FilterSettings) -> Setup {
+        let (free, theta) = (&self.free, &self.theta);
+        let scale = |v: f64| v.abs().max(PARAMETER_SCALE);
+        let n = self.x0.len();
+        let mut prior = DMatrix::zeros(n + free.len(), n + free.len());
+        for (i, state) in self.state_names.iter().enumerate() {
+            prior[(i, i)] = outputs
+                .iter()
+                .position(|o| o == state)
+                .map_or(0.01, |o| self.measurement[o]);
+        }
+        for (j, &i) in free.iter().enumerate() {
+            prior[(n + j, n + j)] = (settings.initial_uncertainty * scale(theta[i])).powi(2);
+        }
+        let pseudonoise: Vec<f64> = free
+            .iter()
+            .zip(&self.names)
+            .map(|(&i, name)| {
+                let relative = settings
+                    .pseudonoise_for
+                    .get(name)
+                    .copied()
+                    .unwrap_or(settings.pseudonoise);
+                (relative * scale(theta[i])).powi(2)
+            })
+            .collect();
+        self.prior = prior;
+        self.pseudonoise = pseudonoise;
+        self
     }
 }
 
