@@ -364,7 +364,11 @@ pub fn analyse(
 ) -> Result<Identifiability> {
     check_scenario(scenario, options)?;
     let simulation = Simulation::prepare(scenario)?;
-    let (names, truths, parameters_left_out) = chosen_parameters(scenario, options)?;
+    let Chosen {
+        names,
+        truths,
+        left_out: parameters_left_out,
+    } = chosen_parameters(scenario, options)?;
     let (channels, excluded) = usable_channels(profile, options.channels.as_deref())?;
     let clean = profile.without_random_errors();
     let nominal_trace = simulation.run()?;
@@ -391,10 +395,10 @@ pub fn analyse(
         segment_steps,
         columns: names.len() + NUISANCE * segments,
     };
-    let (sigmas, input_error, solve) =
+    let (sigmas, input_error, solver) =
         flights.analyse_flight(&simulation, &nominal_trace, &nominal_states, &nominal)?;
     let calm = without_gusts(scenario, &simulation)?;
-    let wind_error = solve(&flights.errors(
+    let wind_error = solver.solve(&flights.errors(
         &calm,
         &nominal_states,
         &nominal,
@@ -484,13 +488,18 @@ fn check_scenario(scenario: &Scenario, options: &IdentifiabilityOptions) -> Resu
     Ok(())
 }
 
+/// The parameters analysed with their truths, and those left out with
+/// the reason.
+struct Chosen {
+    names: Vec<String>,
+    truths: Vec<f64>,
+    left_out: Vec<(String, String)>,
+}
+
 /// The parameters analysed and their truths: the options' (an error for
 /// one the central differences cannot move), else every one the
 /// differences can move, those left out with the reason.
-fn chosen_parameters(
-    scenario: &Scenario,
-    options: &IdentifiabilityOptions,
-) -> Result<(Vec<String>, Vec<f64>, Vec<(String, String)>)> {
+fn chosen_parameters(scenario: &Scenario, options: &IdentifiabilityOptions) -> Result<Chosen> {
     let aero = &scenario.aircraft.aero;
     let requested: Vec<String> = match &options.parameters {
         Some(names) => names.clone(),
@@ -532,7 +541,11 @@ fn chosen_parameters(
             }
         }
     }
-    Ok((names, truths, parameters_left_out))
+    Ok(Chosen {
+        names,
+        truths,
+        left_out: parameters_left_out,
+    })
 }
 
 /// The channels used, with √R_c and their samples in the nominal record,

@@ -12,7 +12,7 @@ use aeroid_sim::Simulation;
 use aeroid_sim::scenario::Scenario;
 use aeroid_sim::state::{self, CONTROL_COUNT, Control, StateVector};
 use aeroid_sim::trace::TruthTrace;
-use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, DVector, Dyn, SVD, UnitQuaternion, Vector3};
 
 /// What the flights of one analysis share: the scenario, the profile and
 /// its deterministic parts (`clean`), the parameters and their truths,
@@ -177,25 +177,21 @@ impl Flights<'_> {
         trace: &TruthTrace,
         states: &[StateVector],
         record: &FlightRecord,
-    ) -> Result<(
-        Vec<f64>,
-        DVector<f64>,
-        impl Fn(&DVector<f64>) -> DVector<f64> + use<>,
-    )> {
+    ) -> Result<(Vec<f64>, DVector<f64>, LeastSquares)> {
         let sensitivities = self.sensitivities(simulation, states)?;
-        let solve = least_squares_solver(&sensitivities);
+        let solver = LeastSquares::new(&sensitivities);
         let controls = self.profile.without_noise().record(
             trace,
             &self.scenario.aircraft,
             self.scenario.seed,
         )?;
-        let input_error = solve(&self.errors(
+        let input_error = solver.solve(&self.errors(
             &with_recorded_inputs(simulation, &controls)?,
             states,
             record,
             "with the inputs as recorded",
         )?);
-        Ok((self.bounds(&sensitivities), input_error, solve))
+        Ok((self.bounds(&sensitivities), input_error, solver))
     }
 }
 
@@ -233,26 +229,43 @@ fn nuisance_step(component: usize) -> f64 {
 /// unknown (parameters, then the segments' initial states) of a
 /// least-squares fit, by the SVD of S with unit-norm columns; directions
 /// the data cannot separate (σ = ∞) drop out.
-fn least_squares_solver(
-    sensitivities: &DMatrix<f64>,
-) -> impl Fn(&DVector<f64>) -> DVector<f64> + use<> {
-    let norms: Vec<f64> = sensitivities
-        .column_iter()
-        .map(|c| {
-            let n = c.norm();
-            if n > 0.0 { 1.0 / n } else { 0.0 }
-        })
-        .collect();
-    let scaled = DMatrix::from_fn(sensitivities.nrows(), sensitivities.ncols(), |i, j| {
-        sensitivities[(i, j)] * norms[j]
-    });
-    let svd = scaled.svd(true, true);
-    let tolerance = 1e-12 * svd.singular_values.max();
-    move |residual: &DVector<f64>| {
-        let solution = svd
-            .solve(residual, tolerance)
+pub(super) struct LeastSquares {
+    /// 1/‖column‖ of S (0 for a zero column).
+    norms: Vec<f64>,
+    svd: SVD<f64, Dyn, Dyn>,
+    tolerance: f64,
+}
+
+impl LeastSquares {
+    /// The solver of the sensitivities S.
+    fn new(sensitivities: &DMatrix<f64>) -> LeastSquares {
+        let norms: Vec<f64> = sensitivities
+            .column_iter()
+            .map(|c| {
+                let n = c.norm();
+                if n > 0.0 { 1.0 / n } else { 0.0 }
+            })
+            .collect();
+        let scaled = DMatrix::from_fn(sensitivities.nrows(), sensitivities.ncols(), |i, j| {
+            sensitivities[(i, j)] * norms[j]
+        });
+        let svd = scaled.svd(true, true);
+        let tolerance = 1e-12 * svd.singular_values.max();
+        LeastSquares {
+            norms,
+            svd,
+            tolerance,
+        }
+    }
+
+    /// δ = S⁺·r.
+    pub(super) fn solve(&self, residual: &DVector<f64>) -> DVector<f64> {
+        let norms = &self.norms;
+        let solution = self
+            .svd
+            .solve(residual, self.tolerance)
             .unwrap_or_else(|_| DVector::zeros(norms.len()));
-        DVector::from_iterator(norms.len(), solution.iter().zip(&norms).map(|(x, n)| x * n))
+        DVector::from_iterator(norms.len(), solution.iter().zip(norms).map(|(x, n)| x * n))
     }
 }
 
