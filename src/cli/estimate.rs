@@ -4,7 +4,7 @@
 use aeroid::estimation::estimator::MethodTables;
 use aeroid::estimation::registry::Registry;
 use anyhow::{Context, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Estimate a model's parameters from one or several records.
 ///
@@ -119,54 +119,13 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
     }
     let estimate = registry.estimate(&problem, None)?;
     if let Some(path) = &write_smoothed {
-        use methods::smoothed_regression::{SmoothedRegressionSettings, smooth};
-        let settings = SmoothedRegressionSettings::read(&problem.settings)?;
-        smooth(
-            problem.record(),
-            problem
-                .structure
-                .six_dof(methods::smoothed_regression::METHOD)?,
-            &settings,
-        )?
-        .write_csv(path)?;
-        outln!(
-            "smoothed coefficient histories written to {}",
-            path.display()
-        );
+        write_smoothed_histories(&problem, path)?;
     }
     let structure = &problem.structure;
     out!("{}", estimate.details);
     let truth = shared_truth(&record_folders);
     let scores = score::score(&estimate, truth.as_ref(), structure.score_kind());
-    outln!(
-        "{} on {} with model {}: {} after {} iterations, {:.3} s",
-        estimate.method,
-        estimate.record,
-        estimate.model,
-        estimate.status,
-        estimate.iterations,
-        estimate.wall_time
-    );
-    for diagnosis in &estimate.diagnoses {
-        outln!("diagnosis {diagnosis}");
-    }
-    out!("{}", score::table(&scores));
-    for fit in &estimate.fits {
-        outln!(
-            "  fit {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}  ρ₁ {:.3}  outside band {:.0} %  structured {:.4}  quiet share {:.2}",
-            fit.channel,
-            fit.rms,
-            fit.r_squared,
-            fit.theil,
-            fit.lag_one,
-            100.0 * fit.outside_band,
-            fit.structured,
-            fit.quiet_share
-        );
-    }
-    for note in &estimate.notes {
-        outln!("  note: {note}");
-    }
+    print_estimate(&estimate, &scores)?;
     if let Some(other) = other {
         outln!("proof of match on {} (nothing adjusted):", other.scenario);
         let structure = structure.six_dof("proof of match (--check-on)")?;
@@ -230,4 +189,64 @@ fn shared_truth(folders: &[PathBuf]) -> Option<aeroid::sim::truth::RunTruth> {
         }
     }
     shared
+}
+
+/// Writes the smoothed coefficient histories of the problem's record
+/// (the method `smoothed-regression`'s) to `path`.
+fn write_smoothed_histories(
+    problem: &aeroid::estimation::problem::EstimationProblem,
+    path: &Path,
+) -> Result<()> {
+    use aeroid::estimation::methods::smoothed_regression::{
+        METHOD, SmoothedRegressionSettings, smooth,
+    };
+    let settings = SmoothedRegressionSettings::read(&problem.settings)?;
+    smooth(
+        problem.record(),
+        problem.structure.six_dof(METHOD)?,
+        &settings,
+    )?
+    .write_csv(path)?;
+    outln!(
+        "smoothed coefficient histories written to {}",
+        path.display()
+    );
+    Ok(())
+}
+
+/// The estimate: its status, diagnoses, scores, output fits and notes.
+fn print_estimate(
+    estimate: &aeroid::estimation::estimate::Estimate,
+    scores: &[aeroid::eval::score::ParameterScore],
+) -> Result<()> {
+    outln!(
+        "{} on {} with model {}: {} after {} iterations, {:.3} s",
+        estimate.method,
+        estimate.record,
+        estimate.model,
+        estimate.status,
+        estimate.iterations,
+        estimate.wall_time
+    );
+    for diagnosis in &estimate.diagnoses {
+        outln!("diagnosis {diagnosis}");
+    }
+    out!("{}", aeroid::eval::score::table(scores));
+    for fit in &estimate.fits {
+        outln!(
+            "  fit {:<12} rms {:.4e}  R² {:.5}  TIC {:.4}  ρ₁ {:.3}  outside band {:.0} %  structured {:.4}  quiet share {:.2}",
+            fit.channel,
+            fit.rms,
+            fit.r_squared,
+            fit.theil,
+            fit.lag_one,
+            100.0 * fit.outside_band,
+            fit.structured,
+            fit.quiet_share
+        );
+    }
+    for note in &estimate.notes {
+        outln!("  note: {note}");
+    }
+    Ok(())
 }

@@ -1,10 +1,11 @@
 //! `aeroid run`: the whole harness on one scenario.
 
 use aeroid::estimation::registry::Registry;
-use aeroid::eval::run::Outcome;
+use aeroid::eval::run::{Outcome, RunReport};
+use aeroid::prep::derive::Options as DeriveOptions;
 use aeroid::sim::scenario::Scenario;
 use anyhow::Result;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The widest status the summary table shows in full.
 const STATUS_WIDTH: usize = 40;
@@ -61,6 +62,18 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
         &profile,
         derive.then_some(&derive_options),
     )?;
+    print_header(&report, &derive_options)?;
+    print_table(&report, &scenario, verbose)?;
+    if let Some(out) = out {
+        write_out(&report, &out)?;
+    }
+    Ok(())
+}
+
+/// The run's first lines: the scenario, the recorder and the truth, the
+/// derive step's summary and the parameter changes scored against their
+/// start values.
+fn print_header(report: &RunReport, derive_options: &DeriveOptions) -> Result<()> {
     let truth = match report.truth.kind {
         aeroid::sim::truth::TruthKind::Exact => format!(
             "exact, the parameters {} flew ({})",
@@ -87,7 +100,7 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
     );
     if let Some(derived) = &report.derived {
         outln!("the derive step:");
-        crate::cli::derive::print_summary(derived, &derive_options)?;
+        crate::cli::derive::print_summary(derived, derive_options)?;
     }
     for change in &report.truth.parameter_changes {
         outln!(
@@ -102,35 +115,13 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
                 .map_or(f64::NAN, |v| *v),
         );
     }
-    // Columns as wide as their longest entry; a status longer than
-    // STATUS_WIDTH is cut with an ellipsis (the estimate files keep it).
-    let model_width = report
-        .runs
-        .iter()
-        .map(|r| r.model.chars().count())
-        .fold(22, usize::max);
-    let method_width = report
-        .runs
-        .iter()
-        .map(|r| r.method.chars().count())
-        .fold(6, usize::max);
-    let status_of = |status: String| {
-        if status.chars().count() > STATUS_WIDTH {
-            status.chars().take(STATUS_WIDTH - 1).chain(['…']).collect()
-        } else {
-            status
-        }
-    };
-    let status_width = report
-        .runs
-        .iter()
-        .filter_map(|r| match &r.outcome {
-            Outcome::Estimated { estimate, .. } => {
-                Some(status_of(estimate.status.to_string()).chars().count())
-            }
-            _ => None,
-        })
-        .fold(16, usize::max);
+    Ok(())
+}
+
+/// The table of the estimators' runs, a line each (with --verbose each
+/// parameter's score beneath).
+fn print_table(report: &RunReport, scenario: &Scenario, verbose: bool) -> Result<()> {
+    let (model_width, method_width, status_width) = column_widths(report);
     if scenario.models.is_empty() {
         outln!("the scenario names no model structures (`models = [...]`): nothing to estimate");
     } else {
@@ -189,19 +180,59 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
             }
         }
     }
-    if let Some(out) = out {
-        report.record.write(&out)?;
-        report
-            .truth
-            .write(&out.join(aeroid::sim::truth::TRUTH_FILE))?;
-        for run in &report.runs {
-            if let Outcome::Estimated { estimate, scores } = &run.outcome {
-                let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
-                estimate.write_json(&out.join(format!("{stem}.json")))?;
-                aeroid::eval::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
+    Ok(())
+}
+
+/// The widths of the model, method and status columns: as wide as their
+/// longest entry ([`status_of`]'s for the status).
+fn column_widths(report: &RunReport) -> (usize, usize, usize) {
+    let model_width = report
+        .runs
+        .iter()
+        .map(|r| r.model.chars().count())
+        .fold(22, usize::max);
+    let method_width = report
+        .runs
+        .iter()
+        .map(|r| r.method.chars().count())
+        .fold(6, usize::max);
+    let status_width = report
+        .runs
+        .iter()
+        .filter_map(|r| match &r.outcome {
+            Outcome::Estimated { estimate, .. } => {
+                Some(status_of(estimate.status.to_string()).chars().count())
             }
-        }
-        outln!("record, truth and estimates written to {}", out.display());
+            _ => None,
+        })
+        .fold(16, usize::max);
+    (model_width, method_width, status_width)
+}
+
+/// A status as the table shows it: one longer than STATUS_WIDTH is cut
+/// with an ellipsis (the estimate files keep it).
+fn status_of(status: String) -> String {
+    if status.chars().count() > STATUS_WIDTH {
+        status.chars().take(STATUS_WIDTH - 1).chain(['…']).collect()
+    } else {
+        status
     }
+}
+
+/// Writes the record, the truth and each estimate with its scores into
+/// the folder `out`.
+fn write_out(report: &RunReport, out: &Path) -> Result<()> {
+    report.record.write(out)?;
+    report
+        .truth
+        .write(&out.join(aeroid::sim::truth::TRUTH_FILE))?;
+    for run in &report.runs {
+        if let Outcome::Estimated { estimate, scores } = &run.outcome {
+            let stem = format!("{}-{}", run.model.replace(['/', '.'], "_"), run.method);
+            estimate.write_json(&out.join(format!("{stem}.json")))?;
+            aeroid::eval::score::write_csv(scores, &out.join(format!("{stem}.csv")))?;
+        }
+    }
+    outln!("record, truth and estimates written to {}", out.display());
     Ok(())
 }

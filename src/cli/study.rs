@@ -1,9 +1,11 @@
 //! `aeroid study`: a Monte Carlo study.
 
 use aeroid::estimation::registry::Registry;
+use aeroid::eval::journal::Shard;
 use aeroid::eval::row::RowStatus;
+use aeroid::eval::study::Study;
 use anyhow::{Context, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Run a Monte Carlo study, on one machine or in shards.
 ///
@@ -84,21 +86,7 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
         study.set_runs(runs, "--runs")?;
     }
     let cases = study.cases().len();
-    outln!(
-        "study {}: {} sweep point(s) × {} runs = {} cases; models {}; methods {}; seed {}",
-        study.name,
-        study.points.len(),
-        study.runs,
-        cases,
-        study
-            .models
-            .iter()
-            .map(|m| m.name())
-            .collect::<Vec<_>>()
-            .join(", "),
-        study.methods.join(", "),
-        study.seed
-    );
+    describe(&study, cases)?;
     let started = std::time::Instant::now();
     let Some(out) = out else {
         let progress = Progress::new(cases)?;
@@ -107,20 +95,7 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
         outln!("{cases} cases in {:.1} s", started.elapsed().as_secs_f64());
         return report(&result, None, false);
     };
-    let remaining = {
-        let header = study.journal_header(shard)?;
-        let finished = if resume {
-            aeroid::eval::journal::read(&out)
-                .ok()
-                .filter(|(found, _)| *found == header)
-                .map(|(_, f)| f)
-                .unwrap_or_default()
-        } else {
-            Default::default()
-        };
-        study.remaining(shard, &finished).len()
-    };
-    let progress = Progress::new(remaining)?;
+    let progress = Progress::new(remaining_cases(&study, &out, shard, resume)?)?;
     let journaled = study.run_journaled(&out, shard, resume, threads, &|rows| progress.case(rows));
     progress.finish();
     let journaled = journaled?;
@@ -141,19 +116,62 @@ pub fn run(args: Args, registry: &Registry) -> Result<()> {
     );
     keep_study_file(&study.path, &out)?;
     if shard.count > 1 {
-        outln!(
-            "shard {shard} journaled in {}; when every shard is done: aeroid study merge --out DIR SHARD_DIR…",
-            out.join(aeroid::eval::journal::JOURNAL_FILE).display()
-        );
-        if write_html {
-            outln!(
-                "the report is written by the merge: aeroid study merge --report --out DIR SHARD_DIR…"
-            );
-        }
-        return Ok(());
+        return shard_done(shard, &out, write_html);
     }
     let result = aeroid::eval::study::assemble(std::slice::from_ref(&out), &out)?;
     report(&result, Some(&out), write_html)
+}
+
+/// The study's first line: its sweep points, runs, cases, models,
+/// methods and seed.
+fn describe(study: &Study, cases: usize) -> Result<()> {
+    outln!(
+        "study {}: {} sweep point(s) × {} runs = {} cases; models {}; methods {}; seed {}",
+        study.name,
+        study.points.len(),
+        study.runs,
+        cases,
+        study
+            .models
+            .iter()
+            .map(|m| m.name())
+            .collect::<Vec<_>>()
+            .join(", "),
+        study.methods.join(", "),
+        study.seed
+    );
+    Ok(())
+}
+
+/// The cases of `shard` still to run: all of them, or with --resume
+/// those the journal in `out` (of the same study and shard) lacks.
+fn remaining_cases(study: &Study, out: &Path, shard: Shard, resume: bool) -> Result<usize> {
+    let header = study.journal_header(shard)?;
+    let finished = if resume {
+        aeroid::eval::journal::read(out)
+            .ok()
+            .filter(|(found, _)| *found == header)
+            .map(|(_, f)| f)
+            .unwrap_or_default()
+    } else {
+        Default::default()
+    };
+    Ok(study.remaining(shard, &finished).len())
+}
+
+/// A shard's last lines: where it is journaled, and that the merge
+/// writes the report.
+fn shard_done(shard: Shard, out: &Path, write_html: bool) -> Result<()> {
+    outln!(
+        "shard {shard} journaled in {}; when every shard is done: aeroid study merge --out DIR SHARD_DIR…",
+        out.join(aeroid::eval::journal::JOURNAL_FILE).display()
+    );
+    if write_html {
+        outln!(
+            "the report is written by the merge: aeroid study merge --report --out DIR SHARD_DIR…"
+        );
+    }
+    Ok(())
 }
 
 /// Copies the study file into its output folder (`study.toml`, which the

@@ -40,14 +40,17 @@
 
 use crate::error::{Error, Result};
 use crate::linearize::{ModeKind, find, linearize};
-use aeroid_numerics::gauss_newton::{pseudo_inverse_or_infinite, unit_diagonal_scale};
 use aeroid_record::FlightRecord;
 use aeroid_record::recorder::Profile;
 use aeroid_sim::Simulation;
 use aeroid_sim::scenario::Scenario;
-use aeroid_sim::state::{self, CONTROL_COUNT, Control, StateVector};
+use aeroid_sim::state::StateVector;
 use aeroid_sim::wind::WindSample;
-use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
+use nalgebra::DVector;
+
+mod flights;
+
+use flights::{Flights, NUISANCE, without_gusts};
 
 /// Settings of an identifiability analysis.
 #[derive(Debug, Clone, PartialEq)]
@@ -210,30 +213,7 @@ impl Identifiability {
             "verdict"
         );
         for row in &self.rows {
-            text += &format!(
-                "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e} {:>12}  {:<24} {}{}\n",
-                row.parameter,
-                row.truth,
-                row.sigma,
-                row.relative_sigma(),
-                row.input_error / row.truth.abs(),
-                row.wind_error / row.truth.abs(),
-                row.calm.map_or("-".to_string(), |(s, _)| format!(
-                    "{:.3e}",
-                    s / row.truth.abs()
-                )),
-                row.mode.as_ref().map_or("-".to_string(), |m| format!(
-                    "{}, {:.2} Hz",
-                    m.kind.name(),
-                    m.rule_rate()
-                )),
-                verdict(row, self.threshold),
-                if row.below_rule(self.rate) {
-                    ", below the rule"
-                } else {
-                    ""
-                }
-            );
+            text += &self.table_line(row);
         }
         let count = self.rows.iter().filter(|r| r.identifiable).count();
         let gusts = self
@@ -282,6 +262,34 @@ impl Identifiability {
             text += &format!("left out: {name}: {reason}\n");
         }
         text
+    }
+
+    /// The table's line of one parameter.
+    fn table_line(&self, row: &IdentifiabilityRow) -> String {
+        format!(
+            "{:<14} {:>12.6} {:>11.3e} {:>10.3e} {:>12.2e} {:>12.2e} {:>12}  {:<24} {}{}\n",
+            row.parameter,
+            row.truth,
+            row.sigma,
+            row.relative_sigma(),
+            row.input_error / row.truth.abs(),
+            row.wind_error / row.truth.abs(),
+            row.calm.map_or("-".to_string(), |(s, _)| format!(
+                "{:.3e}",
+                s / row.truth.abs()
+            )),
+            row.mode.as_ref().map_or("-".to_string(), |m| format!(
+                "{}, {:.2} Hz",
+                m.kind.name(),
+                m.rule_rate()
+            )),
+            verdict(row, self.threshold),
+            if row.below_rule(self.rate) {
+                ", below the rule"
+            } else {
+                ""
+            }
+        )
     }
 
     /// Rounded relative bounds and verdicts, one per line, for snapshots.
@@ -347,36 +355,6 @@ fn verdict(row: &IdentifiabilityRow, threshold: f64) -> &'static str {
     }
 }
 
-/// Unknown initial-state components of a segment: u, v, w, p, q, r, three
-/// small body-axis rotations of the attitude, and the altitude.
-const NUISANCE: usize = 10;
-
-/// The state `x` with nuisance component `component` moved by `delta`.
-fn perturbed_state(x: &StateVector, component: usize, delta: f64) -> StateVector {
-    let mut x = *x;
-    match component {
-        0..=5 => x[state::U + component] += delta,
-        6..=8 => {
-            let mut axis = Vector3::zeros();
-            axis[component - 6] = delta;
-            let attitude = state::attitude(&x) * UnitQuaternion::from_scaled_axis(axis);
-            state::set_attitude(&mut x, &attitude);
-        }
-        _ => x[state::DOWN] -= delta,
-    }
-    x
-}
-
-/// Central-difference step of nuisance component `component` (m/s, rad/s, rad, m).
-fn nuisance_step(component: usize) -> f64 {
-    match component {
-        0..=2 => 1e-2,
-        3..=5 => 1e-4,
-        6..=8 => 1e-4,
-        _ => 0.1,
-    }
-}
-
 /// Analyses which of the scenario aircraft's parameters the profile's
 /// channels can identify (see the module documentation).
 pub fn analyse(
@@ -384,6 +362,114 @@ pub fn analyse(
     profile: &Profile,
     options: &IdentifiabilityOptions,
 ) -> Result<Identifiability> {
+    check_scenario(scenario, options)?;
+    let simulation = Simulation::prepare(scenario)?;
+    let Chosen {
+        names,
+        truths,
+        left_out: parameters_left_out,
+    } = chosen_parameters(scenario, options)?;
+    let (channels, excluded) = usable_channels(profile, options.channels.as_deref())?;
+    let clean = profile.without_random_errors();
+    let nominal_trace = simulation.run()?;
+    let nominal_states: Vec<StateVector> = nominal_trace.samples.iter().map(|s| s.state).collect();
+    let duration = nominal_trace.samples.last().map_or(0.0, |s| s.time);
+    let segment = options
+        .segment
+        .filter(|t| *t < duration)
+        .unwrap_or(duration.max(simulation.step));
+    let segment_steps = ((segment / simulation.step).round() as usize).max(1);
+    let segments = nominal_states.len().div_ceil(segment_steps);
+    // The nominal record: the flight already flown (a restart at its own state changes nothing).
+    let nominal = clean.record(&nominal_trace, &scenario.aircraft, scenario.seed)?;
+    let (uses, segment_of_row) = channel_uses(&nominal, &channels, segment, segments)?;
+    let flights = Flights {
+        scenario,
+        profile,
+        options,
+        clean,
+        names: &names,
+        truths: &truths,
+        uses: &uses,
+        segment_of_row: &segment_of_row,
+        segment_steps,
+        columns: names.len() + NUISANCE * segments,
+    };
+    let (sigmas, input_error, solver) =
+        flights.analyse_flight(&simulation, &nominal_trace, &nominal_states, &nominal)?;
+    let calm = without_gusts(scenario, &simulation)?;
+    let wind_error = solver.solve(&flights.errors(
+        &calm,
+        &nominal_states,
+        &nominal,
+        "without gusts and turbulence",
+    )?);
+    // The same flight without its gusts and turbulence: what the controls
+    // alone give.
+    let gusty = !scenario.wind.gusts.is_empty() || scenario.wind.turbulence.is_some();
+    let calm = gusty.then(|| flights.analyse_calm(&calm)).transpose()?;
+    let modes = governing_modes(scenario, &simulation, &names, &truths)?;
+    let rate = uses.iter().try_fold(0.0f64, |rate, channel| {
+        Ok::<_, Error>(rate.max(nominal.channel(&channel.name)?.rate))
+    })?;
+    let rows = rows(
+        (&names, &truths, modes),
+        (&sigmas, &input_error, &wind_error),
+        calm.as_ref(),
+        options.threshold,
+    );
+    Ok(Identifiability {
+        scenario: scenario.name.clone(),
+        profile: profile.name.clone(),
+        threshold: options.threshold,
+        segment,
+        channels: uses,
+        rate,
+        parameters_left_out,
+        excluded,
+        notes: gusty
+            .then(|| geometric_flow_angles_note(profile))
+            .flatten()
+            .into_iter()
+            .collect(),
+        rows,
+    })
+}
+
+/// The rows of the parameters (`names`, their truths and modes): each
+/// one's bound, recorded inputs' and wind's errors, the calm flight's
+/// bound and inputs' error, and the verdict at `threshold`.
+fn rows(
+    (names, truths, modes): (&[String], &[f64], Vec<Option<GoverningMode>>),
+    (sigmas, input_error, wind_error): (&[f64], &DVector<f64>, &DVector<f64>),
+    calm: Option<&(Vec<f64>, DVector<f64>)>,
+    threshold: f64,
+) -> Vec<IdentifiabilityRow> {
+    names
+        .iter()
+        .zip(truths)
+        .zip(modes)
+        .enumerate()
+        .map(|(j, ((name, &truth), mode))| {
+            let sigma = sigmas[j];
+            IdentifiabilityRow {
+                parameter: name.clone(),
+                truth,
+                sigma,
+                calm: calm.map(|(sigmas, errors)| (sigmas[j], errors[j])),
+                input_error: input_error[j],
+                wind_error: wind_error[j],
+                identifiable: sigma < threshold * truth.abs()
+                    && input_error[j].abs() < 2.0 * threshold * truth.abs(),
+                mode,
+            }
+        })
+        .collect()
+}
+
+/// An error when the segment is shorter than a step or not finite, or
+/// the scenario changes parameters in flight.
+fn check_scenario(scenario: &Scenario, options: &IdentifiabilityOptions) -> Result<()> {
     if let Some(segment) = options.segment
         && !(segment.is_finite() && segment >= scenario.step)
     {
@@ -399,7 +485,21 @@ pub fn analyse(
             path: scenario.path.clone(),
         });
     }
-    let simulation = Simulation::prepare(scenario)?;
+    Ok(())
+}
+
+/// The parameters analysed with their truths, and those left out with
+/// the reason.
+struct Chosen {
+    names: Vec<String>,
+    truths: Vec<f64>,
+    left_out: Vec<(String, String)>,
+}
+
+/// The parameters analysed and their truths: the options' (an error for
+/// one the central differences cannot move), else every one the
+/// differences can move, those left out with the reason.
+fn chosen_parameters(scenario: &Scenario, options: &IdentifiabilityOptions) -> Result<Chosen> {
     let aero = &scenario.aircraft.aero;
     let requested: Vec<String> = match &options.parameters {
         Some(names) => names.clone(),
@@ -441,54 +541,25 @@ pub fn analyse(
             }
         }
     }
-    let (channels, excluded) = usable_channels(profile, options.channels.as_deref())?;
-    let clean = profile.without_random_errors();
-    let nominal_trace = simulation.run()?;
-    let nominal_states: Vec<StateVector> = nominal_trace.samples.iter().map(|s| s.state).collect();
-    let duration = nominal_trace.samples.last().map_or(0.0, |s| s.time);
-    let segment = options
-        .segment
-        .filter(|t| *t < duration)
-        .unwrap_or(duration.max(simulation.step));
-    let segment_steps = ((segment / simulation.step).round() as usize).max(1);
-    let segments = nominal_states.len().div_ceil(segment_steps);
-    // Flies `simulation` with one parameter changed or one initial-state
-    // component moved in every segment, restarting every segment from the
-    // nominal flight's state there.
-    let fly = |simulation: &Simulation,
-               nominal_states: &[StateVector],
-               parameter: Option<(&str, f64)>,
-               nuisance: Option<(usize, f64)>| {
-        let mut simulation = simulation.clone();
-        if let Some((name, value)) = parameter {
-            simulation.model.aircraft.aero.parameters.set(name, value)?;
-        }
-        let trace = simulation
-            .run_with_restarts(|k| {
-                (k % segment_steps == 0).then(|| match nuisance {
-                    Some((component, delta)) => {
-                        perturbed_state(&nominal_states[k], component, delta)
-                    }
-                    None => nominal_states[k],
-                })
-            })
-            .map_err(|error| Error::Identifiability {
-                scenario: scenario.name.clone(),
-                reason: format!("a perturbed flight failed: {error}"),
-            })?;
-        Ok::<_, Error>(clean.record(&trace, &scenario.aircraft, scenario.seed)?)
-    };
-    // The nominal record: the flight already flown (a restart at its own state changes nothing).
-    let nominal = clean.record(&nominal_trace, &scenario.aircraft, scenario.seed)?;
-    let wraps = |name: &str| {
-        profile
-            .channels
-            .iter()
-            .any(|c| c.measurand.name == name && c.measurand.wraps)
-    };
+    Ok(Chosen {
+        names,
+        truths,
+        left_out: parameters_left_out,
+    })
+}
+
+/// The channels used, with √R_c and their samples in the nominal record,
+/// and the segment of each of their samples in order (the rows of the
+/// sensitivities).
+fn channel_uses(
+    nominal: &FlightRecord,
+    channels: &[(String, f64)],
+    segment: f64,
+    segments: usize,
+) -> Result<(Vec<ChannelUse>, Vec<usize>)> {
     let mut uses = Vec::new();
     let mut segment_of_row = Vec::new();
-    for (name, sigma) in &channels {
+    for (name, sigma) in channels {
         let channel = nominal.channel(name)?;
         segment_of_row.extend(
             channel
@@ -502,161 +573,7 @@ pub fn analyse(
             samples: channel.values.len(),
         });
     }
-    let rows_total = segment_of_row.len();
-    let columns = names.len() + NUISANCE * segments;
-    // Weighted central difference of the recorded channels, row by row.
-    let difference = |plus: &FlightRecord, minus: &FlightRecord, h: f64| -> Result<Vec<f64>> {
-        let mut column = Vec::with_capacity(rows_total);
-        for channel in &uses {
-            let (up, down) = (plus.channel(&channel.name)?, minus.channel(&channel.name)?);
-            let angle = wraps(&channel.name);
-            for (a, b) in up.values.iter().zip(&down.values) {
-                let mut d = a - b;
-                if angle {
-                    // Heading-like channels wrap at 2π; a tiny perturbation never moves π.
-                    d -= std::f64::consts::TAU * (d / std::f64::consts::TAU).round();
-                }
-                column.push(d / (2.0 * h) / channel.sigma);
-            }
-        }
-        Ok(column)
-    };
-    // The weighted sensitivities of a flight (its simulation and states)
-    // to the parameters, then to each segment's initial state.
-    let sensitivities_of = |simulation: &Simulation, states: &[StateVector]| {
-        let mut sensitivities = DMatrix::zeros(rows_total, columns);
-        for (j, (name, truth)) in names.iter().zip(&truths).enumerate() {
-            let h = options.parameter_step(*truth);
-            let plus = fly(simulation, states, Some((name, truth + h)), None)?;
-            let minus = fly(simulation, states, Some((name, truth - h)), None)?;
-            for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
-                sensitivities[(row, j)] = value;
-            }
-        }
-        // An initial-state component moved in every segment at once:
-        // segments are independent, so each row's difference belongs to
-        // its own segment's unknown.
-        for component in 0..NUISANCE {
-            let h = nuisance_step(component);
-            let plus = fly(simulation, states, None, Some((component, h)))?;
-            let minus = fly(simulation, states, None, Some((component, -h)))?;
-            for (row, value) in difference(&plus, &minus, h)?.into_iter().enumerate() {
-                let column = names.len() + NUISANCE * segment_of_row[row] + component;
-                sensitivities[(row, column)] = value;
-            }
-        }
-        Ok::<_, Error>(sensitivities)
-    };
-    // The bounds σ_j of the parameters from a flight's sensitivities.
-    let bounds = |sensitivities: &DMatrix<f64>| {
-        let information = sensitivities.transpose() * sensitivities;
-        let covariance =
-            pseudo_inverse_or_infinite(&marginal_information(&information, names.len()));
-        (0..names.len())
-            .map(|j| covariance[(j, j)].max(0.0).sqrt())
-            .collect::<Vec<f64>>()
-    };
-    // The model errors: the record of a flight (its states and record)
-    // minus the record of the flight an estimator's model flies, weighted
-    // as the sensitivities.
-    let errors = |flight: &Simulation,
-                  states: &[StateVector],
-                  nominal: &FlightRecord,
-                  what: &str|
-     -> Result<DVector<f64>> {
-        let trace = flight
-            .run_with_restarts(|k| (k % segment_steps == 0).then(|| states[k]))
-            .map_err(|error| Error::Identifiability {
-                scenario: scenario.name.clone(),
-                reason: format!("the flight {what} failed: {error}"),
-            })?;
-        let modelled = clean.record(&trace, &scenario.aircraft, scenario.seed)?;
-        // (nominal − modelled)/(2·1): `difference` divides by 2h.
-        Ok(DVector::from_vec(difference(nominal, &modelled, 0.5)?))
-    };
-    // A flight's bounds, its least-squares solver and the first-order
-    // error of the controls as the recorder writes them (at their rate,
-    // slot, delay and lag, and quantized to their resolution), from the
-    // flight's trace, its states and its record.
-    let analyse_flight = |simulation: &Simulation,
-                          trace: &aeroid_sim::trace::TruthTrace,
-                          states: &[StateVector],
-                          record: &FlightRecord| {
-        let sensitivities = sensitivities_of(simulation, states)?;
-        let solve = least_squares_solver(&sensitivities);
-        let controls = profile
-            .without_noise()
-            .record(trace, &scenario.aircraft, scenario.seed)?;
-        let input_error = solve(&errors(
-            &with_recorded_inputs(simulation, &controls)?,
-            states,
-            record,
-            "with the inputs as recorded",
-        )?);
-        Ok::<_, Error>((bounds(&sensitivities), input_error, solve))
-    };
-    let (sigmas, input_error, solve) =
-        analyse_flight(&simulation, &nominal_trace, &nominal_states, &nominal)?;
-    let calm = without_gusts(scenario, &simulation)?;
-    let wind_error = solve(&errors(
-        &calm,
-        &nominal_states,
-        &nominal,
-        "without gusts and turbulence",
-    )?);
-    // The same flight without its gusts and turbulence: what the controls
-    // alone give.
-    let gusty = !scenario.wind.gusts.is_empty() || scenario.wind.turbulence.is_some();
-    let calm = match gusty {
-        true => {
-            let trace = calm.run()?;
-            let states: Vec<StateVector> = trace.samples.iter().map(|s| s.state).collect();
-            let record = clean.record(&trace, &scenario.aircraft, scenario.seed)?;
-            let (sigmas, input_error, _) = analyse_flight(&calm, &trace, &states, &record)?;
-            Some((sigmas, input_error))
-        }
-        false => None,
-    };
-    let modes = governing_modes(scenario, &simulation, &names, &truths)?;
-    let rate = uses.iter().try_fold(0.0f64, |rate, channel| {
-        Ok::<_, Error>(rate.max(nominal.channel(&channel.name)?.rate))
-    })?;
-    let rows = names
-        .iter()
-        .zip(&truths)
-        .zip(modes)
-        .enumerate()
-        .map(|(j, ((name, &truth), mode))| {
-            let sigma = sigmas[j];
-            IdentifiabilityRow {
-                parameter: name.clone(),
-                truth,
-                sigma,
-                calm: calm.as_ref().map(|(sigmas, errors)| (sigmas[j], errors[j])),
-                input_error: input_error[j],
-                wind_error: wind_error[j],
-                identifiable: sigma < options.threshold * truth.abs()
-                    && input_error[j].abs() < 2.0 * options.threshold * truth.abs(),
-                mode,
-            }
-        })
-        .collect();
-    Ok(Identifiability {
-        scenario: scenario.name.clone(),
-        profile: profile.name.clone(),
-        threshold: options.threshold,
-        segment,
-        channels: uses,
-        rate,
-        parameters_left_out,
-        excluded,
-        notes: gusty
-            .then(|| geometric_flow_angles_note(profile))
-            .flatten()
-            .into_iter()
-            .collect(),
-        rows,
-    })
+    Ok((uses, segment_of_row))
 }
 
 /// The note for a gusty flight on a record without a usable angle of
@@ -741,103 +658,6 @@ fn governing_modes(
                 .filter(|m| m.elasticity >= GOVERNING_ELASTICITY))
         })
         .collect()
-}
-
-/// δ = S⁺·r for a weighted output error r: the first-order move of every
-/// unknown (parameters, then the segments' initial states) of a
-/// least-squares fit, by the SVD of S with unit-norm columns; directions
-/// the data cannot separate (σ = ∞) drop out.
-fn least_squares_solver(
-    sensitivities: &DMatrix<f64>,
-) -> impl Fn(&DVector<f64>) -> DVector<f64> + use<> {
-    let norms: Vec<f64> = sensitivities
-        .column_iter()
-        .map(|c| {
-            let n = c.norm();
-            if n > 0.0 { 1.0 / n } else { 0.0 }
-        })
-        .collect();
-    let scaled = DMatrix::from_fn(sensitivities.nrows(), sensitivities.ncols(), |i, j| {
-        sensitivities[(i, j)] * norms[j]
-    });
-    let svd = scaled.svd(true, true);
-    let tolerance = 1e-12 * svd.singular_values.max();
-    move |residual: &DVector<f64>| {
-        let solution = svd
-            .solve(residual, tolerance)
-            .unwrap_or_else(|_| DVector::zeros(norms.len()));
-        DVector::from_iterator(norms.len(), solution.iter().zip(&norms).map(|(x, n)| x * n))
-    }
-}
-
-/// The flight with the controls an estimator knows: each control channel
-/// of the (noise-free) record, split surfaces combined, reconstructed at
-/// every simulation step by the scenario's interpolation; a control the
-/// record lacks stays as flown.
-fn with_recorded_inputs(simulation: &Simulation, record: &FlightRecord) -> Result<Simulation> {
-    let (record, _) = aeroid_record::prep::surfaces::with_combined_surfaces(record)?;
-    let times: Vec<f64> = (0..simulation.exogenous.len())
-        .map(|k| k as f64 * simulation.step)
-        .collect();
-    let mut flight = simulation.clone();
-    for control in Control::ALL {
-        let Ok(channel) = record.channel(control.name()) else {
-            continue;
-        };
-        let values = channel.sampled_at(&times, simulation.interpolation)?;
-        for (exogenous, value) in flight.exogenous.iter_mut().zip(values) {
-            if value.is_finite() {
-                exogenous[control.index()] = value;
-            }
-        }
-    }
-    Ok(flight)
-}
-
-/// The flight in the scenario's steady wind, without gusts or turbulence,
-/// the controls as flown.
-fn without_gusts(scenario: &Scenario, simulation: &Simulation) -> Result<Simulation> {
-    let mut calm = scenario.clone();
-    calm.wind.gusts.clear();
-    calm.wind.turbulence = None;
-    let calm = Simulation::prepare(&calm)?;
-    let mut flight = simulation.clone();
-    for (exogenous, steady) in flight.exogenous.iter_mut().zip(&calm.exogenous) {
-        for i in CONTROL_COUNT..exogenous.len() {
-            exogenous[i] = steady[i];
-        }
-    }
-    flight.winds = calm.winds;
-    Ok(flight)
-}
-
-/// The information about the first `count` unknowns with the others
-/// (nuisance initial states) marginalised: the Schur complement
-/// M_θθ − M_θn·M_nn⁺·M_nθ. Nuisance directions that the data cannot
-/// separate (two initial-state components with the same effect) drop out of
-/// the pseudo-inverse instead of making parameters look unidentifiable.
-fn marginal_information(information: &DMatrix<f64>, count: usize) -> DMatrix<f64> {
-    let total = information.nrows();
-    if total == count {
-        return information.clone();
-    }
-    let nuisance = information
-        .view((count, count), (total - count, total - count))
-        .into_owned();
-    let scale = unit_diagonal_scale(&nuisance);
-    let scaled = DMatrix::from_fn(total - count, total - count, |i, j| {
-        nuisance[(i, j)] * scale[i] * scale[j]
-    });
-    let svd = scaled.svd(true, true);
-    let tolerance = 1e-12 * svd.singular_values.max();
-    let inverse = svd
-        .pseudo_inverse(tolerance)
-        .unwrap_or_else(|_| DMatrix::zeros(total - count, total - count));
-    let inverse = DMatrix::from_fn(total - count, total - count, |i, j| {
-        inverse[(i, j)] * scale[i] * scale[j]
-    });
-    let cross = information.view((0, count), (count, total - count));
-    information.view((0, 0), (count, count)) - cross * inverse * cross.transpose()
 }
 
 /// The profile's channels that carry information, with √R_c, and those left out with why.

@@ -109,9 +109,11 @@ impl Era {
         self
     }
 
-    /// Fits the free response `samples` (one row per sample instant, one
-    /// column per output channel) taken every `step` seconds.
-    pub fn fit(&self, samples: &DMatrix<f64>, step: f64) -> Result<EraFit> {
+    /// The block rows of the Hankel matrices for `samples` (given, else
+    /// about 10·order outputs' worth, at most a third of the samples); an
+    /// error for an order of 0, no output, a step that is not positive,
+    /// samples that are not finite, or too few samples.
+    fn block_rows_for(&self, samples: &DMatrix<f64>, step: f64) -> Result<usize> {
         let (count, channels) = samples.shape();
         let n = self.order;
         if n == 0 || channels == 0 {
@@ -136,6 +138,15 @@ impl Era {
                 samples: count,
             });
         }
+        Ok(rows)
+    }
+
+    /// Fits the free response `samples` (one row per sample instant, one
+    /// column per output channel) taken every `step` seconds.
+    pub fn fit(&self, samples: &DMatrix<f64>, step: f64) -> Result<EraFit> {
+        let (count, channels) = samples.shape();
+        let n = self.order;
+        let rows = self.block_rows_for(samples, step)?;
         let columns = count - rows;
         let scales: Vec<f64> = (0..channels)
             .map(|j| {
@@ -179,26 +190,7 @@ impl Era {
         let mut modes: Vec<FittedMode> = a
             .complex_eigenvalues()
             .iter()
-            .map(|&z| {
-                let eigenvalue = z.ln() / step;
-                let (right, left) = eigenvectors(&a, z);
-                let x0 = initial_state.map(Complex::from);
-                let projection = left.transpose() * &x0;
-                let normal = left.transpose() * &right;
-                let shape = c_scaled.map(Complex::from) * &right;
-                let amplitude = if normal[0].norm() > 0.0 {
-                    projection[0].norm() * shape.norm() / normal[0].norm()
-                } else {
-                    f64::NAN
-                };
-                FittedMode {
-                    discrete: z,
-                    eigenvalue,
-                    natural_frequency: natural_frequency(eigenvalue),
-                    damping_ratio: damping_ratio(eigenvalue),
-                    amplitude,
-                }
-            })
+            .map(|&z| fitted_mode(&a, &c_scaled, &initial_state, z, step))
             .collect();
         modes.sort_by(|a, b| {
             b.natural_frequency
@@ -212,6 +204,37 @@ impl Era {
             c,
             initial_state,
         })
+    }
+}
+
+/// The mode of the discrete eigenvalue z of the realisation (`a`, the
+/// scaled output matrix `c_scaled`, `initial_state`) sampled every
+/// `step`: its continuous eigenvalue, frequency, damping and amplitude in
+/// the response.
+fn fitted_mode(
+    a: &DMatrix<f64>,
+    c_scaled: &DMatrix<f64>,
+    initial_state: &DVector<f64>,
+    z: Complex<f64>,
+    step: f64,
+) -> FittedMode {
+    let eigenvalue = z.ln() / step;
+    let (right, left) = eigenvectors(a, z);
+    let x0 = initial_state.map(Complex::from);
+    let projection = left.transpose() * &x0;
+    let normal = left.transpose() * &right;
+    let shape = c_scaled.map(Complex::from) * &right;
+    let amplitude = if normal[0].norm() > 0.0 {
+        projection[0].norm() * shape.norm() / normal[0].norm()
+    } else {
+        f64::NAN
+    };
+    FittedMode {
+        discrete: z,
+        eigenvalue,
+        natural_frequency: natural_frequency(eigenvalue),
+        damping_ratio: damping_ratio(eigenvalue),
+        amplitude,
     }
 }
 

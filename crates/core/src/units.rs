@@ -65,6 +65,7 @@ impl Dimension {
     ];
 
     /// Units accepted for this dimension with their factor to SI.
+    // A table, one arm per dimension: the units and their factors are data, not steps.
     fn units(self) -> &'static [(&'static str, f64)] {
         use Dimension::*;
         match self {

@@ -170,55 +170,14 @@ impl LinearStructure {
         let state_bias = reader.vector("state_bias", &file.state_bias, n);
         let output_bias = reader.vector("output_bias", &file.output_bias, l);
         let used = std::mem::take(&mut reader.used);
-        let mut outputs = file.outputs.clone();
-        let mut rate_states = Vec::new();
-        for (output, state) in &file.rate_outputs {
-            let field = format!("rate_outputs.{output}");
-            match file.states.iter().position(|s| s == state) {
-                Some(i) => rate_states.push(i),
-                None => problems.push(
-                    field.clone(),
-                    format!(
-                        "unknown state '{state}'; states: {}",
-                        file.states.join(", ")
-                    ),
-                ),
-            }
-            if outputs.contains(output) || file.inputs.contains(output) {
-                problems.push(field, format!("'{output}' is named twice"));
-            }
-            outputs.push(output.clone());
-        }
-        if outputs.is_empty() {
-            problems.push("outputs", "a linear model needs at least one output");
-        }
-        let mut names = Vec::new();
-        let (mut entries, mut starts, mut free, mut bounds) = (vec![], vec![], vec![], vec![]);
-        for (name, spec) in &file.parameters {
-            let field = format!("parameters.{name}");
-            let Some(&entry) = used.get(name) else {
-                problems.push(field, "is not used in any matrix entry");
-                continue;
-            };
-            let range = (
-                spec.lower.unwrap_or(f64::NEG_INFINITY),
-                spec.upper.unwrap_or(f64::INFINITY),
-            );
-            if !spec.start.is_finite()
-                || range.0 >= range.1
-                || !(range.0..=range.1).contains(&spec.start)
-            {
-                problems.push(
-                    field,
-                    "the start value must be finite and the bounds ordered around it",
-                );
-            }
-            names.push(name.clone());
-            entries.push(entry);
-            starts.push(spec.start);
-            free.push(!spec.fixed);
-            bounds.push(range);
-        }
+        let (outputs, rate_states) = read_rate_outputs(file, &mut problems);
+        let Parameters {
+            names,
+            entries,
+            starts,
+            free,
+            bounds,
+        } = read_parameters(file, &used, &mut problems);
         let inputs: Vec<&str> = file.inputs.iter().map(String::as_str).collect();
         if let Err(error) = file.interpolation.check_channels(&inputs) {
             let text = error.to_string();
@@ -312,6 +271,88 @@ fn check_names(field: &str, names: &[String], problems: &mut FieldErrors) {
         } else if !seen.insert(name) {
             problems.push(format!("{field}[{i}]"), format!("'{name}' is named twice"));
         }
+    }
+}
+
+/// The outputs with the rate outputs appended, and the state of each
+/// rate output.
+fn read_rate_outputs(file: &LinearFile, problems: &mut FieldErrors) -> (Vec<String>, Vec<usize>) {
+    let mut outputs = file.outputs.clone();
+    let mut rate_states = Vec::new();
+    for (output, state) in &file.rate_outputs {
+        let field = format!("rate_outputs.{output}");
+        match file.states.iter().position(|s| s == state) {
+            Some(i) => rate_states.push(i),
+            None => problems.push(
+                field.clone(),
+                format!(
+                    "unknown state '{state}'; states: {}",
+                    file.states.join(", ")
+                ),
+            ),
+        }
+        if outputs.contains(output) || file.inputs.contains(output) {
+            problems.push(field, format!("'{output}' is named twice"));
+        }
+        outputs.push(output.clone());
+    }
+    if outputs.is_empty() {
+        problems.push("outputs", "a linear model needs at least one output");
+    }
+    (outputs, rate_states)
+}
+
+/// The parameters of a linear model file, in the file's order: each
+/// name, the matrix entry it sets, its start value, whether it is free
+/// and its bounds.
+struct Parameters {
+    names: Vec<String>,
+    entries: Vec<Entry>,
+    starts: Vec<f64>,
+    free: Vec<bool>,
+    bounds: Vec<(f64, f64)>,
+}
+
+/// The file's parameters that set a matrix entry (`used`), their start
+/// values and bounds checked.
+fn read_parameters(
+    file: &LinearFile,
+    used: &BTreeMap<String, Entry>,
+    problems: &mut FieldErrors,
+) -> Parameters {
+    let mut names = Vec::new();
+    let (mut entries, mut starts, mut free, mut bounds) = (vec![], vec![], vec![], vec![]);
+    for (name, spec) in &file.parameters {
+        let field = format!("parameters.{name}");
+        let Some(&entry) = used.get(name) else {
+            problems.push(field, "is not used in any matrix entry");
+            continue;
+        };
+        let range = (
+            spec.lower.unwrap_or(f64::NEG_INFINITY),
+            spec.upper.unwrap_or(f64::INFINITY),
+        );
+        if !spec.start.is_finite()
+            || range.0 >= range.1
+            || !(range.0..=range.1).contains(&spec.start)
+        {
+            problems.push(
+                field,
+                "the start value must be finite and the bounds ordered around it",
+            );
+        }
+        names.push(name.clone());
+        entries.push(entry);
+        starts.push(spec.start);
+        free.push(!spec.fixed);
+        bounds.push(range);
+    }
+    Parameters {
+        names,
+        entries,
+        starts,
+        free,
+        bounds,
     }
 }
 

@@ -641,41 +641,7 @@ impl serde_json::ser::Formatter for Layout {
 /// test checks it); a channel's times equal to the channel's before are
 /// copied as text.
 fn write_records(records: &[FlightRecord], depth: usize, out: &mut Vec<u8>) {
-    fn newline(out: &mut Vec<u8>, depth: usize) {
-        out.push(b'\n');
-        for _ in 0..depth {
-            out.extend_from_slice(Layout::INDENT);
-        }
-    }
-    fn string(out: &mut Vec<u8>, text: &str) {
-        // Writing a string into a Vec cannot fail.
-        let _ = serde_json::to_writer(&mut *out, text);
-    }
-    fn number(out: &mut Vec<u8>, digits: &mut zmij::Buffer, value: f64) {
-        if value.is_finite() {
-            out.extend_from_slice(digits.format_finite(value).as_bytes());
-        } else {
-            out.extend_from_slice(b"null");
-        }
-    }
-    fn numbers(out: &mut Vec<u8>, digits: &mut zmij::Buffer, values: &[f64]) {
-        out.push(b'[');
-        for (k, &value) in values.iter().enumerate() {
-            if k > 0 {
-                out.extend_from_slice(b", ");
-            }
-            number(out, digits, value);
-        }
-        out.push(b']');
-    }
-    fn key(out: &mut Vec<u8>, depth: usize, first: bool, name: &str) {
-        if !first {
-            out.push(b',');
-        }
-        newline(out, depth);
-        string(out, name);
-        out.extend_from_slice(b": ");
-    }
+    use json_text::{key, newline, string};
     let mut digits = zmij::Buffer::new();
     if records.is_empty() {
         out.extend_from_slice(b"[]");
@@ -714,55 +680,118 @@ fn write_records(records: &[FlightRecord], depth: usize, out: &mut Vec<u8>) {
             out.push(b']');
         }
         key(out, inner, false, "channels");
-        if record.channels.is_empty() {
-            out.extend_from_slice(b"[]");
-        } else {
-            out.push(b'[');
-            let mut times: Option<(&[f64], std::ops::Range<usize>)> = None;
-            for (c, channel) in record.channels.iter().enumerate() {
-                if c > 0 {
-                    out.push(b',');
-                }
-                newline(out, inner + 1);
-                out.push(b'{');
-                let fields = inner + 2;
-                key(out, fields, true, "name");
-                string(out, &channel.name);
-                key(out, fields, false, "unit");
-                string(out, &channel.unit);
-                key(out, fields, false, "rate");
-                number(out, &mut digits, channel.rate);
-                key(out, fields, false, "resolution");
-                match channel.resolution {
-                    Some(resolution) => number(out, &mut digits, resolution),
-                    None => out.extend_from_slice(b"null"),
-                }
-                key(out, fields, false, "source");
-                string(out, &channel.source);
-                key(out, fields, false, "times");
-                match &times {
-                    Some((previous, text)) if *previous == channel.times.as_slice() => {
-                        out.extend_from_within(text.clone());
-                    }
-                    _ => {
-                        let start = out.len();
-                        numbers(out, &mut digits, &channel.times);
-                        times = Some((&channel.times, start..out.len()));
-                    }
-                }
-                key(out, fields, false, "values");
-                numbers(out, &mut digits, &channel.values);
-                newline(out, inner + 1);
-                out.push(b'}');
-            }
-            newline(out, inner);
-            out.push(b']');
-        }
+        write_channels(&record.channels, inner, out, &mut digits);
         newline(out, depth + 1);
         out.push(b'}');
     }
     newline(out, depth);
     out.push(b']');
+}
+
+/// A record's `channels` as a JSON array, `inner` levels in (the
+/// record's fields' depth).
+fn write_channels(
+    channels: &[aeroid_record::Channel],
+    inner: usize,
+    out: &mut Vec<u8>,
+    digits: &mut zmij::Buffer,
+) {
+    use json_text::{key, newline, number, numbers, string};
+    if channels.is_empty() {
+        out.extend_from_slice(b"[]");
+    } else {
+        out.push(b'[');
+        let mut times: Option<(&[f64], std::ops::Range<usize>)> = None;
+        for (c, channel) in channels.iter().enumerate() {
+            if c > 0 {
+                out.push(b',');
+            }
+            newline(out, inner + 1);
+            out.push(b'{');
+            let fields = inner + 2;
+            key(out, fields, true, "name");
+            string(out, &channel.name);
+            key(out, fields, false, "unit");
+            string(out, &channel.unit);
+            key(out, fields, false, "rate");
+            number(out, digits, channel.rate);
+            key(out, fields, false, "resolution");
+            match channel.resolution {
+                Some(resolution) => number(out, digits, resolution),
+                None => out.extend_from_slice(b"null"),
+            }
+            key(out, fields, false, "source");
+            string(out, &channel.source);
+            key(out, fields, false, "times");
+            match &times {
+                Some((previous, text)) if *previous == channel.times.as_slice() => {
+                    out.extend_from_within(text.clone());
+                }
+                _ => {
+                    let start = out.len();
+                    numbers(out, digits, &channel.times);
+                    times = Some((&channel.times, start..out.len()));
+                }
+            }
+            key(out, fields, false, "values");
+            numbers(out, digits, &channel.values);
+            newline(out, inner + 1);
+            out.push(b'}');
+        }
+        newline(out, inner);
+        out.push(b']');
+    }
+}
+
+/// The pieces of the JSON [`write_records`] writes by hand.
+mod json_text {
+    use super::Layout;
+
+    /// A new line, `depth` levels in.
+    pub(super) fn newline(out: &mut Vec<u8>, depth: usize) {
+        out.push(b'\n');
+        for _ in 0..depth {
+            out.extend_from_slice(Layout::INDENT);
+        }
+    }
+
+    /// `text` as a JSON string.
+    pub(super) fn string(out: &mut Vec<u8>, text: &str) {
+        // Writing a string into a Vec cannot fail.
+        let _ = serde_json::to_writer(&mut *out, text);
+    }
+
+    /// `value` in its shortest round-trip digits (null when not finite).
+    pub(super) fn number(out: &mut Vec<u8>, digits: &mut zmij::Buffer, value: f64) {
+        if value.is_finite() {
+            out.extend_from_slice(digits.format_finite(value).as_bytes());
+        } else {
+            out.extend_from_slice(b"null");
+        }
+    }
+
+    /// `values` as a JSON array on one line.
+    pub(super) fn numbers(out: &mut Vec<u8>, digits: &mut zmij::Buffer, values: &[f64]) {
+        out.push(b'[');
+        for (k, &value) in values.iter().enumerate() {
+            if k > 0 {
+                out.extend_from_slice(b", ");
+            }
+            number(out, digits, value);
+        }
+        out.push(b']');
+    }
+
+    /// The key `name` of an object's field, `depth` levels in, after a comma
+    /// unless it is the `first`.
+    pub(super) fn key(out: &mut Vec<u8>, depth: usize, first: bool, name: &str) {
+        if !first {
+            out.push(b',');
+        }
+        newline(out, depth);
+        string(out, name);
+        out.extend_from_slice(b": ");
+    }
 }
 
 #[cfg(test)]

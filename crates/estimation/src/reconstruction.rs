@@ -196,64 +196,12 @@ fn needed_channels(
     let mut needs = Needs::new();
     let measured_accelerations =
         !options.omit_angular_accelerations && options.angular_accelerations.measured(record);
-    let axes = aircraft.aero.force_axes;
     let mut wants_dynamic_pressure = false;
     let mut wants_thrust = false;
     for &coefficient in &request.coefficients {
-        let name = coefficient.name(axes);
         wants_dynamic_pressure = true;
-        // Thrust enters a coefficient only through its component along that
-        // axis: a thrust line in the symmetry plane makes no side force, and
-        // its moment about the centre of gravity is a pitching moment only.
-        let direction = aircraft.propulsion.direction;
-        let moment = aircraft.propulsion.position.cross(&direction);
-        match coefficient {
-            Coefficient::Lift | Coefficient::Drag => {
-                wants_thrust |= match (axes, coefficient) {
-                    (ForceAxes::Body, Coefficient::Lift) => direction.z != 0.0,
-                    (ForceAxes::Body, _) => direction.x != 0.0,
-                    _ => direction.x != 0.0 || direction.z != 0.0,
-                };
-                if axes == ForceAxes::Wind {
-                    for channel in ["nx", "nz", "alpha"] {
-                        need(&mut needs, channel, name);
-                    }
-                } else if coefficient == Coefficient::Lift {
-                    need(&mut needs, "nz", name);
-                } else {
-                    need(&mut needs, "nx", name);
-                }
-            }
-            Coefficient::Side => {
-                wants_thrust |= direction.y != 0.0;
-                need(&mut needs, "ny", name);
-            }
-            Coefficient::Roll | Coefficient::Pitch | Coefficient::Yaw => {
-                let axis = match coefficient {
-                    Coefficient::Roll => 0,
-                    Coefficient::Pitch => 1,
-                    _ => 2,
-                };
-                wants_thrust |= moment[axis] != 0.0;
-                for channel in ["p", "q", "r"] {
-                    need(&mut needs, channel, name);
-                }
-                if measured_accelerations {
-                    for channel in ANGULAR_ACCELERATION_CHANNELS {
-                        need(&mut needs, channel, name);
-                    }
-                }
-                // A moment taken about a point other than the CG: the
-                // measured forces carry it there.
-                let transfer = aircraft.aero.transfer_uses(coefficient);
-                for (axis, channel) in ["nx", "ny", "nz"].into_iter().enumerate() {
-                    if transfer[axis] {
-                        wants_thrust |= direction[axis] != 0.0;
-                        need(&mut needs, channel, "moment reference point");
-                    }
-                }
-            }
-        }
+        wants_thrust |=
+            coefficient_needs(aircraft, coefficient, measured_accelerations, &mut needs);
     }
     for &regressor in &request.regressors {
         regressor_needs(aircraft, regressor, &mut needs);
@@ -278,6 +226,73 @@ fn needed_channels(
         need(&mut needs, "dynamic_pressure", "dynamic pressure");
     }
     needs
+}
+
+/// The channels coefficient `coefficient` needs, pushed to `needs`
+/// (the angular accelerations where they are `measured_accelerations`);
+/// whether it wants the thrust.
+fn coefficient_needs(
+    aircraft: &Aircraft,
+    coefficient: Coefficient,
+    measured_accelerations: bool,
+    needs: &mut Needs,
+) -> bool {
+    let axes = aircraft.aero.force_axes;
+    let name = coefficient.name(axes);
+    let mut wants_thrust = false;
+    // Thrust enters a coefficient only through its component along that
+    // axis: a thrust line in the symmetry plane makes no side force, and
+    // its moment about the centre of gravity is a pitching moment only.
+    let direction = aircraft.propulsion.direction;
+    let moment = aircraft.propulsion.position.cross(&direction);
+    match coefficient {
+        Coefficient::Lift | Coefficient::Drag => {
+            wants_thrust |= match (axes, coefficient) {
+                (ForceAxes::Body, Coefficient::Lift) => direction.z != 0.0,
+                (ForceAxes::Body, _) => direction.x != 0.0,
+                _ => direction.x != 0.0 || direction.z != 0.0,
+            };
+            if axes == ForceAxes::Wind {
+                for channel in ["nx", "nz", "alpha"] {
+                    need(needs, channel, name);
+                }
+            } else if coefficient == Coefficient::Lift {
+                need(needs, "nz", name);
+            } else {
+                need(needs, "nx", name);
+            }
+        }
+        Coefficient::Side => {
+            wants_thrust |= direction.y != 0.0;
+            need(needs, "ny", name);
+        }
+        Coefficient::Roll | Coefficient::Pitch | Coefficient::Yaw => {
+            let axis = match coefficient {
+                Coefficient::Roll => 0,
+                Coefficient::Pitch => 1,
+                _ => 2,
+            };
+            wants_thrust |= moment[axis] != 0.0;
+            for channel in ["p", "q", "r"] {
+                need(needs, channel, name);
+            }
+            if measured_accelerations {
+                for channel in ANGULAR_ACCELERATION_CHANNELS {
+                    need(needs, channel, name);
+                }
+            }
+            // A moment taken about a point other than the CG: the
+            // measured forces carry it there.
+            let transfer = aircraft.aero.transfer_uses(coefficient);
+            for (axis, channel) in ["nx", "ny", "nz"].into_iter().enumerate() {
+                if transfer[axis] {
+                    wants_thrust |= direction[axis] != 0.0;
+                    need(needs, channel, "moment reference point");
+                }
+            }
+        }
+    }
+    wants_thrust
 }
 
 fn regressor_needs(aircraft: &Aircraft, regressor: Regressor, needs: &mut Needs) {
@@ -413,27 +428,7 @@ pub fn reconstruct(
         .iter()
         .all(|name| needs.contains_key(name));
     let differentiated = differentiated_channels(request, options, measured_accelerations);
-    // The differentiator's windows stop at the corners of the control
-    // steps and ramps: only looked for when something is differentiated.
-    let breaks = if differentiated.is_empty() {
-        Vec::new()
-    } else {
-        match options.step_breaks {
-            StepBreaks::Corners => control_corners(record),
-            StepBreaks::NewValue => control_steps(record),
-        }
-    };
-    let derivatives: BTreeMap<&str, Channel> = differentiated
-        .into_iter()
-        .map(|name| {
-            let channel = record.channel(name)?;
-            let derivative = options
-                .differentiator
-                .unwrap_or_default()
-                .differentiate_with_breaks(channel, &breaks);
-            Ok((name, derivative))
-        })
-        .collect::<Result<_>>()?;
+    let derivatives = derivatives(record, differentiated, options)?;
     let reference = reference_channel(record, &needs, options)?;
     let times = common_times(record, &needs, &derivatives, reference, options)?;
     let mut sampled: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
@@ -476,50 +471,116 @@ pub fn reconstruct(
             None => dropped += 1,
         }
     }
-    if measured_accelerations {
-        reconstruction.notes.push(
-            "angular accelerations: the record's p_dot, q_dot, r_dot (`angular_accelerations = \"differentiated\"` differentiates the rates instead)".into(),
-        );
+    let sources = Sources {
+        needs: &needs,
+        derivatives: &derivatives,
+        measured_accelerations,
+        reference,
+    };
+    reconstruction
+        .notes
+        .extend(sources.notes(record, options, &times, dropped));
+    Ok(reconstruction)
+}
+
+/// What a reconstruction took from the record: the channels it needed,
+/// those it differentiated, whether the angular accelerations were
+/// measured, and the channel whose instants are the time base.
+struct Sources<'a> {
+    needs: &'a Needs,
+    derivatives: &'a BTreeMap<&'a str, Channel>,
+    measured_accelerations: bool,
+    reference: &'a Channel,
+}
+
+impl Sources<'_> {
+    /// The reconstruction's notes: where the angular accelerations, thrust
+    /// and density came from, the differentiator, and the time base
+    /// (`times`, of which `dropped` instants were left out).
+    fn notes(
+        &self,
+        record: &FlightRecord,
+        options: &ReconstructionOptions,
+        times: &[f64],
+        dropped: usize,
+    ) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.measured_accelerations {
+            notes.push(
+                "angular accelerations: the record's p_dot, q_dot, r_dot (`angular_accelerations = \"differentiated\"` differentiates the rates instead)".into(),
+            );
+        }
+        if !self.measured_accelerations
+            && self.derivatives.contains_key("p")
+            && has_angular_accelerations(record)
+        {
+            notes.push(
+                "the record has p_dot, q_dot, r_dot: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates".into(),
+            );
+        }
+        if self.needs.contains_key("thrust") {
+            notes.push(
+                "thrust: the record's 'thrust' channel, along the aircraft's thrust line".into(),
+            );
+        }
+        if self.needs.contains_key("density") {
+            notes.push(
+                "air density: the record's 'density' channel, not the ISA at the altitude channel"
+                    .into(),
+            );
+        }
+        if !self.derivatives.is_empty() {
+            notes.push(
+                options
+                    .differentiator
+                    .unwrap_or_default()
+                    .describe(self.reference.rate),
+            );
+        }
+        notes.push(format!(
+            "common time base: the {} instants of channel '{}' ({} Hz) from {:.3} s to {:.3} s{}",
+            times.len() - dropped,
+            self.reference.name,
+            aeroid_record::rate_text(self.reference.rate),
+            times.first().copied().unwrap_or(f64::NAN),
+            times.last().copied().unwrap_or(f64::NAN),
+            if dropped > 0 {
+                format!("; {dropped} instants left out (a value not finite, or q̄ ≤ 0)")
+            } else {
+                String::new()
+            }
+        ));
+        notes
     }
-    if !measured_accelerations && derivatives.contains_key("p") && has_angular_accelerations(record)
-    {
-        reconstruction.notes.push(
-            "the record has p_dot, q_dot, r_dot: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates".into(),
-        );
-    }
-    if needs.contains_key("thrust") {
-        reconstruction
-            .notes
-            .push("thrust: the record's 'thrust' channel, along the aircraft's thrust line".into());
-    }
-    if needs.contains_key("density") {
-        reconstruction.notes.push(
-            "air density: the record's 'density' channel, not the ISA at the altitude channel"
-                .into(),
-        );
-    }
-    if !derivatives.is_empty() {
-        reconstruction.notes.push(
-            options
+}
+
+/// The derivatives of the channels `differentiated`, the differentiator's
+/// windows stopping at the corners of the control steps and ramps (only
+/// looked for when something is differentiated).
+fn derivatives<'a>(
+    record: &FlightRecord,
+    differentiated: Vec<&'a str>,
+    options: &ReconstructionOptions,
+) -> Result<BTreeMap<&'a str, Channel>> {
+    let breaks = if differentiated.is_empty() {
+        Vec::new()
+    } else {
+        match options.step_breaks {
+            StepBreaks::Corners => control_corners(record),
+            StepBreaks::NewValue => control_steps(record),
+        }
+    };
+    differentiated
+        .into_iter()
+        .map(|name| {
+            let channel = record.channel(name)?;
+            let derivative = options
                 .differentiator
                 .unwrap_or_default()
-                .describe(reference.rate),
-        );
-    }
-    reconstruction.notes.push(format!(
-        "common time base: the {} instants of channel '{}' ({} Hz) from {:.3} s to {:.3} s{}",
-        reconstruction.times.len(),
-        reference.name,
-        aeroid_record::rate_text(reference.rate),
-        times.first().copied().unwrap_or(f64::NAN),
-        times.last().copied().unwrap_or(f64::NAN),
-        if dropped > 0 {
-            format!("; {dropped} instants left out (a value not finite, or q̄ ≤ 0)")
-        } else {
-            String::new()
-        }
-    ));
-    Ok(reconstruction)
+                .differentiate_with_breaks(channel, &breaks);
+            Ok((name, derivative))
+        })
+        .collect()
 }
 
 /// The reference channel: the option, else the fastest accelerometer or rate

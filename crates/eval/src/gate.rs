@@ -685,6 +685,7 @@ fn judge_known(known: &KnownFailure, measure: f64, passes: bool) -> Check {
 }
 
 /// One parameter's row (module header).
+// One verdict: its cases (not identifiable, a known failure, within, near, beyond) read the same error, allowance and measure; split, each case would take them all.
 fn judge_row(
     case: &GateCase,
     p: &aeroid_estimation::estimate::ParameterEstimate,

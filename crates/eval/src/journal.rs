@@ -231,9 +231,8 @@ struct Index {
     complete_length: u64,
 }
 
-/// Indexes a journal, checking every line (each is parsed, then only its
-/// place kept).
-fn index_journal(path: &Path) -> Result<Index> {
+/// The journal at `path` to read line by line, and its length in bytes.
+fn open_journal(path: &Path) -> Result<(BufReader<File>, u64)> {
     let file = File::open(path).map_err(|source| aeroid_core::Error::Io {
         path: path.to_path_buf(),
         source,
@@ -245,7 +244,13 @@ fn index_journal(path: &Path) -> Result<Index> {
             source,
         })?
         .len();
-    let mut reader = BufReader::new(file);
+    Ok((BufReader::new(file), size))
+}
+
+/// Indexes a journal, checking every line (each is parsed, then only its
+/// place kept).
+fn index_journal(path: &Path) -> Result<Index> {
+    let (mut reader, size) = open_journal(path)?;
     let malformed = |line: usize, reason: String| Error::JournalLine {
         path: path.to_path_buf(),
         line,

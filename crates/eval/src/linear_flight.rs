@@ -97,15 +97,11 @@ pub fn record_flight_traced(
 }
 
 /// Flies the linear model of a scenario's `[linear]` table.
+// The model's setup, then one simulation pass: state, process noise, feedback command and outputs advance together step by step.
 pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
     let structure = LinearStructure::load(&linear.model_path.to_string_lossy())?;
     let count = scenario.step_count() + 1;
     let times: Vec<f64> = (0..count).map(|k| k as f64 * scenario.step).collect();
-    let controls: Vec<Option<usize>> = structure
-        .inputs
-        .iter()
-        .map(|name| Control::ALL.iter().position(|c| c.name() == name))
-        .collect();
     let (distribution, gusts) = match &linear.gusts {
         Some(spec) => {
             let (g, gusts) = gust_inputs(scenario, spec, &structure, count)?;
@@ -113,22 +109,7 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
         }
         None => (None, Vec::new()),
     };
-    let inputs: Vec<DVector<f64>> = times
-        .iter()
-        .enumerate()
-        .map(|(k, &t)| {
-            let deviation = scenario.inputs.deviation(t);
-            let gust = gusts.get(k).map_or(&[][..], |g| &g[..]);
-            DVector::from_iterator(
-                controls.len() + gust.len(),
-                controls
-                    .iter()
-                    .map(|c| c.map_or(0.0, |i| deviation[i]))
-                    .chain(gust.iter().copied()),
-            )
-        })
-        .collect();
-    let mut inputs = inputs;
+    let mut inputs = scheduled_inputs(scenario, &structure, &times, &gusts);
     let mut model =
         structure.model_disturbed(0.0, scenario.step, inputs.clone(), distribution.as_ref())?;
     let augmentation = linear
@@ -198,6 +179,37 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
         gusts,
         truth: truth(scenario, &structure),
     })
+}
+
+/// The model's inputs at `times`: each control input's deviation from
+/// trim in the scenario's schedule (0 for an input that is no control),
+/// then the gust inputs `gusts` (per time, if any).
+fn scheduled_inputs(
+    scenario: &Scenario,
+    structure: &LinearStructure,
+    times: &[f64],
+    gusts: &[[f64; 3]],
+) -> Vec<DVector<f64>> {
+    let controls: Vec<Option<usize>> = structure
+        .inputs
+        .iter()
+        .map(|name| Control::ALL.iter().position(|c| c.name() == name))
+        .collect();
+    times
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| {
+            let deviation = scenario.inputs.deviation(t);
+            let gust = gusts.get(k).map_or(&[][..], |g| &g[..]);
+            DVector::from_iterator(
+                controls.len() + gust.len(),
+                controls
+                    .iter()
+                    .map(|c| c.map_or(0.0, |i| deviation[i]))
+                    .chain(gust.iter().copied()),
+            )
+        })
+        .collect()
 }
 
 /// The moved input's index, the gains over the model's states and the

@@ -348,6 +348,35 @@ const PANEL_HEIGHT: u32 = 190;
 /// Width of the legend column beside the panels of a history plot.
 const LEGEND_WIDTH: u32 = 130;
 
+/// The legend beside the panels: `panel`'s lines with a label, one a row.
+fn draw_legend(
+    legend: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    panel: &Panel,
+) -> Result<()> {
+    for (row, line) in panel
+        .lines
+        .iter()
+        .filter(|l| !l.label.is_empty())
+        .enumerate()
+    {
+        let y = 20 + 18 * row as i32;
+        legend
+            .draw(&PathElement::new(
+                vec![(4, y), (24, y)],
+                line.colour.stroke_width(2),
+            ))
+            .map_err(plot_error)?;
+        legend
+            .draw(&Text::new(
+                line.label.clone(),
+                (30, y - 7),
+                ("sans-serif", 12),
+            ))
+            .map_err(plot_error)?;
+    }
+    Ok(())
+}
+
 /// The SVG of panels stacked under one title, each a quantity against
 /// time with its lines, and beside them the legend (the first panel's
 /// lines with a label).
@@ -361,27 +390,7 @@ fn panels_svg(title: &str, panels: &[Panel]) -> Result<String> {
         let root = root.titled(title, ("sans-serif", 16)).map_err(plot_error)?;
         let (plots, legend) = root.split_horizontally(WIDTH);
         if let Some(first) = panels.first() {
-            for (row, line) in first
-                .lines
-                .iter()
-                .filter(|l| !l.label.is_empty())
-                .enumerate()
-            {
-                let y = 20 + 18 * row as i32;
-                legend
-                    .draw(&PathElement::new(
-                        vec![(4, y), (24, y)],
-                        line.colour.stroke_width(2),
-                    ))
-                    .map_err(plot_error)?;
-                legend
-                    .draw(&Text::new(
-                        line.label.clone(),
-                        (30, y - 7),
-                        ("sans-serif", 12),
-                    ))
-                    .map_err(plot_error)?;
-            }
+            draw_legend(&legend, first)?;
         }
         let areas = plots.split_evenly((panels.len().max(1), 1));
         for (panel, area) in panels.iter().zip(&areas) {
@@ -676,30 +685,10 @@ fn figures(page: &mut String, plots: &[Plot]) {
     }
 }
 
-/// The report page of a study folder.
-pub fn html(folder: &StudyFolder) -> Result<String> {
-    let result = &folder.result;
-    let plots = plots(folder)?;
-    let mut page = String::new();
-    let title = format!("aeroid study {}", escape(&result.study));
-    let _ = write!(
-        page,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{title}</title>\n<style>body{{font-family:sans-serif;margin:2em;}}table{{border-collapse:collapse;font-size:90%;}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right;}}td.text,th.text{{text-align:left;}}figure{{display:inline-block;margin:0.5em;}}pre{{background:#f6f6f6;padding:1em;}}</style></head><body>\n<h1>{title}</h1>\n"
-    );
-    let _ = writeln!(
-        page,
-        "<p>aeroid {}; seed {}; {} runs per sweep point; {} cases; {} rows{}.</p>",
-        env!("CARGO_PKG_VERSION"),
-        result.seed,
-        result.runs,
-        result.cases,
-        result.rows,
-        folder
-            .fingerprint
-            .as_ref()
-            .map_or(String::new(), |f| format!("; fingerprint {}", escape(f)))
-    );
-    page += "<h2>How the fits ended</h2>\n<table><tr><th class=\"text\">status</th><th>fits</th><th class=\"text\">first (point, run, model, method): reason</th></tr>\n";
+/// The table of how the fits ended: per status, the count and the first
+/// fit's reason (its table left open).
+fn endings_table(page: &mut String, result: &StudyResult) {
+    *page += "<h2>How the fits ended</h2>\n<table><tr><th class=\"text\">status</th><th>fits</th><th class=\"text\">first (point, run, model, method): reason</th></tr>\n";
     for ending in &result.endings {
         let first = &ending.first;
         let _ = writeln!(
@@ -714,26 +703,12 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
             escape(&first.reason)
         );
     }
-    page += "</table>\n<h2>Plots</h2>\n";
-    figures(&mut page, &plots);
-    let histories = history_plots(folder)?;
-    if !histories.is_empty() {
-        page += "<h2>Time histories of each sweep point's first run</h2>\n";
-        figures(&mut page, &histories);
-    }
-    for h in &folder.histories {
-        for m in h.methods.iter().filter(|m| !m.note.is_empty()) {
-            let _ = writeln!(
-                page,
-                "<p>{}: {} on {}: {}</p>",
-                escape(&h.label),
-                escape(&m.method),
-                escape(&m.model),
-                escape(&m.note)
-            );
-        }
-    }
-    page += "<h2>Summary</h2>\n<table><tr>";
+}
+
+/// The summary table, a row per sweep point, model, method and parameter
+/// (its table left open).
+fn summary_table(page: &mut String, result: &StudyResult) {
+    *page += "<h2>Summary</h2>\n<table><tr>";
     for header in [
         "point",
         "scenario",
@@ -759,7 +734,7 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
     ] {
         let _ = write!(page, "<th>{header}</th>");
     }
-    page += "</tr>\n";
+    *page += "</tr>\n";
     for s in &result.summary {
         let _ = writeln!(
             page,
@@ -789,6 +764,52 @@ pub fn html(folder: &StudyFolder) -> Result<String> {
             escape(&s.identifiability)
         );
     }
+}
+
+/// The report page of a study folder.
+pub fn html(folder: &StudyFolder) -> Result<String> {
+    let result = &folder.result;
+    let plots = plots(folder)?;
+    let mut page = String::new();
+    let title = format!("aeroid study {}", escape(&result.study));
+    let _ = write!(
+        page,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{title}</title>\n<style>body{{font-family:sans-serif;margin:2em;}}table{{border-collapse:collapse;font-size:90%;}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right;}}td.text,th.text{{text-align:left;}}figure{{display:inline-block;margin:0.5em;}}pre{{background:#f6f6f6;padding:1em;}}</style></head><body>\n<h1>{title}</h1>\n"
+    );
+    let _ = writeln!(
+        page,
+        "<p>aeroid {}; seed {}; {} runs per sweep point; {} cases; {} rows{}.</p>",
+        env!("CARGO_PKG_VERSION"),
+        result.seed,
+        result.runs,
+        result.cases,
+        result.rows,
+        folder
+            .fingerprint
+            .as_ref()
+            .map_or(String::new(), |f| format!("; fingerprint {}", escape(f)))
+    );
+    endings_table(&mut page, result);
+    page += "</table>\n<h2>Plots</h2>\n";
+    figures(&mut page, &plots);
+    let histories = history_plots(folder)?;
+    if !histories.is_empty() {
+        page += "<h2>Time histories of each sweep point's first run</h2>\n";
+        figures(&mut page, &histories);
+    }
+    for h in &folder.histories {
+        for m in h.methods.iter().filter(|m| !m.note.is_empty()) {
+            let _ = writeln!(
+                page,
+                "<p>{}: {} on {}: {}</p>",
+                escape(&h.label),
+                escape(&m.method),
+                escape(&m.model),
+                escape(&m.note)
+            );
+        }
+    }
+    summary_table(&mut page, result);
     page += "</table>\n";
     if let Some(text) = &folder.study_file {
         let _ = writeln!(page, "<h2>Study file</h2>\n<pre>{}</pre>", escape(text));

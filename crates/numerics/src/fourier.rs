@@ -293,6 +293,7 @@ impl FourierTransform {
 
     /// The transform with the signals allowed to jump at the samples
     /// `breaks` (module documentation).
+    // The transform's kernel: per group of LANES frequencies the phasor chains fill one buffer that the lanes' quadrature weights then read; split, each step would pass it and the lanes between calls.
     pub fn with_breaks(
         frequencies: &[f64],
         start: f64,

@@ -354,33 +354,10 @@ impl Scenario {
                 f64::NAN
             })
         };
-        let trim = TrimCondition {
-            airspeed: read("trim.airspeed", &file.trim.airspeed, Dimension::Speed),
-            altitude: read("trim.altitude", &file.trim.altitude, Dimension::Length),
-            flight_path_angle: read(
-                "trim.flight_path_angle",
-                &file.trim.flight_path_angle,
-                Dimension::Angle,
-            ),
-            heading: read("trim.heading", &file.trim.heading, Dimension::Angle),
-            flap: read("trim.flap", &file.trim.flap, Dimension::Angle),
-        };
+        let trim = read_trim(&file.trim, &mut read);
         let duration = read("duration", &file.duration, Dimension::Time);
         let step = read("step", &file.step, Dimension::Time);
-        let environment = Environment {
-            atmosphere: crate::atmosphere::Atmosphere::new(read(
-                "environment.temperature_offset",
-                &file.environment.temperature_offset,
-                Dimension::TemperatureDifference,
-            )),
-            gravity: file
-                .environment
-                .gravity
-                .as_ref()
-                .map_or(aeroid_core::units::STANDARD_GRAVITY, |g| {
-                    read("environment.gravity", g, Dimension::Acceleration)
-                }),
-        };
+        let environment = read_environment(&file.environment, &mut read);
         let departure = read_departure(&file.departure, trim.airspeed, &mut read);
         check_ranges(&trim, duration, step, &mut problems);
         let parameter_changes = read_parameter_changes(
@@ -391,44 +368,10 @@ impl Scenario {
             &mut problems,
         );
         file.wind.validate(&mut problems);
-        let linear = match &file.linear {
-            None => None,
-            Some(spec) => {
-                for (state, value) in &spec.process_noise {
-                    if !(value.is_finite() && *value >= 0.0) {
-                        problems.push(
-                            format!("linear.process_noise.{state}"),
-                            "must be finite and not negative",
-                        );
-                    }
-                }
-                let gusts = spec
-                    .gusts
-                    .as_ref()
-                    .and_then(|table| LinearGusts::read(table, &mut problems));
-                let feedback = spec
-                    .feedback
-                    .as_ref()
-                    .and_then(|spec| Feedback::read(spec, step, "linear.feedback", &mut problems));
-                match catalog::resolve_named(
-                    &spec.model,
-                    catalog::MODEL_FOLDER,
-                    path,
-                    "linear.model",
-                ) {
-                    Ok(model_path) => Some(LinearFlight {
-                        model_path,
-                        process_noise: spec.process_noise.clone(),
-                        gusts,
-                        feedback,
-                    }),
-                    Err(error) => {
-                        problems.push("linear.model", error.to_string());
-                        None
-                    }
-                }
-            }
-        };
+        let linear = file
+            .linear
+            .as_ref()
+            .and_then(|spec| read_linear(spec, step, path, &mut problems));
         let feedback = file.feedback.as_ref().and_then(|spec| {
             if file.linear.is_some() || jsbsim.is_some() {
                 problems.push(
@@ -439,19 +382,7 @@ impl Scenario {
             }
             Feedback::read(spec, step, "feedback", &mut problems)?.for_six_dof(&mut problems)
         });
-        let inputs = InputSchedule::build(&file.inputs, base, path);
-        let inputs = match (problems.is_empty(), inputs) {
-            (_, Ok(inputs)) => inputs,
-            (true, Err(error)) => return Err((error).into()),
-            (false, Err(aeroid_core::Error::Invalid { problems: more, .. })) => {
-                problems.0.extend(more);
-                InputSchedule::default()
-            }
-            (false, Err(other)) => {
-                problems.push("inputs", other.to_string());
-                InputSchedule::default()
-            }
-        };
+        let inputs = read_inputs(file, base, path, &mut problems)?;
         let scenario = Scenario {
             name: file.name.clone(),
             description: file.description.clone(),
@@ -560,6 +491,43 @@ fn jsbsim_aircraft(file: &ScenarioFile, path: &Path) -> Result<Option<JsbsimAirc
     }))
 }
 
+/// The value a parameter change sets: `value`, or `scale` times the
+/// aircraft's `original`, checked as a replacement; None (the problem
+/// recorded under `parameter_changes[index]`) when neither or both are
+/// given or the model refuses it.
+fn new_value(
+    spec: &ParameterChangeSpec,
+    original: f64,
+    aircraft: &Aircraft,
+    index: usize,
+    problems: &mut FieldErrors,
+) -> Option<f64> {
+    let field = |key: &str| format!("parameter_changes[{index}].{key}");
+    let value = match (spec.value, spec.scale) {
+        (Some(value), None) => Some(("value", value)),
+        (None, Some(scale)) => Some(("scale", scale * original)),
+        (Some(_), Some(_)) => {
+            problems.push(field("scale"), "give either `value` or `scale`, not both");
+            None
+        }
+        (None, None) => {
+            problems.push(
+                field("value"),
+                "missing: give the new `value` or a `scale` of the aircraft's value",
+            );
+            None
+        }
+    };
+    value.and_then(|(key, value)| {
+        aircraft
+            .aero
+            .check_replacement(&spec.parameter, value)
+            .map(|()| value)
+            .map_err(|message| problems.push(field(key), message))
+            .ok()
+    })
+}
+
 /// The `[[parameter_changes]]` tables, checked against the aircraft, the
 /// duration and the step (each problem under `parameter_changes[i].KEY`),
 /// sorted by time.
@@ -595,29 +563,7 @@ fn read_parameter_changes(
             );
             continue;
         };
-        let value = match (spec.value, spec.scale) {
-            (Some(value), None) => Some(("value", value)),
-            (None, Some(scale)) => Some(("scale", scale * original)),
-            (Some(_), Some(_)) => {
-                problems.push(field("scale"), "give either `value` or `scale`, not both");
-                None
-            }
-            (None, None) => {
-                problems.push(
-                    field("value"),
-                    "missing: give the new `value` or a `scale` of the aircraft's value",
-                );
-                None
-            }
-        };
-        let value = value.and_then(|(key, value)| {
-            aircraft
-                .aero
-                .check_replacement(&spec.parameter, value)
-                .map(|()| value)
-                .map_err(|message| problems.push(field(key), message))
-                .ok()
-        });
+        let value = new_value(spec, original, aircraft, index, problems);
         let (Some(time), Some(value)) = (time, value) else {
             continue;
         };
@@ -665,6 +611,107 @@ fn check_change_time(
         return Err(crate::error::Error::ChangeOffStep { time, step });
     }
     Ok(time)
+}
+
+/// The `[linear]` table: a linear flight of the model it names, with its
+/// process noise, gusts and feedback; None (the problems recorded) when
+/// the model cannot be found.
+fn read_linear(
+    spec: &LinearFlightSpec,
+    step: f64,
+    path: &Path,
+    problems: &mut FieldErrors,
+) -> Option<LinearFlight> {
+    for (state, value) in &spec.process_noise {
+        if !(value.is_finite() && *value >= 0.0) {
+            problems.push(
+                format!("linear.process_noise.{state}"),
+                "must be finite and not negative",
+            );
+        }
+    }
+    let gusts = spec
+        .gusts
+        .as_ref()
+        .and_then(|table| LinearGusts::read(table, problems));
+    let feedback = spec
+        .feedback
+        .as_ref()
+        .and_then(|spec| Feedback::read(spec, step, "linear.feedback", problems));
+    match catalog::resolve_named(&spec.model, catalog::MODEL_FOLDER, path, "linear.model") {
+        Ok(model_path) => Some(LinearFlight {
+            model_path,
+            process_noise: spec.process_noise.clone(),
+            gusts,
+            feedback,
+        }),
+        Err(error) => {
+            problems.push("linear.model", error.to_string());
+            None
+        }
+    }
+}
+
+/// The input schedule of `inputs` (files relative to `base`); its problems
+/// joined to those found before, or its error when there were none.
+fn read_inputs(
+    file: &ScenarioFile,
+    base: &Path,
+    path: &Path,
+    problems: &mut FieldErrors,
+) -> Result<InputSchedule> {
+    let inputs = InputSchedule::build(&file.inputs, base, path);
+    Ok(match (problems.is_empty(), inputs) {
+        (_, Ok(inputs)) => inputs,
+        (true, Err(error)) => return Err((error).into()),
+        (false, Err(aeroid_core::Error::Invalid { problems: more, .. })) => {
+            problems.0.extend(more);
+            InputSchedule::default()
+        }
+        (false, Err(other)) => {
+            problems.push("inputs", other.to_string());
+            InputSchedule::default()
+        }
+    })
+}
+
+/// The trim condition in SI.
+fn read_trim(
+    spec: &TrimSpec,
+    read: &mut impl FnMut(&str, &Quantity, Dimension) -> f64,
+) -> TrimCondition {
+    TrimCondition {
+        airspeed: read("trim.airspeed", &spec.airspeed, Dimension::Speed),
+        altitude: read("trim.altitude", &spec.altitude, Dimension::Length),
+        flight_path_angle: read(
+            "trim.flight_path_angle",
+            &spec.flight_path_angle,
+            Dimension::Angle,
+        ),
+        heading: read("trim.heading", &spec.heading, Dimension::Angle),
+        flap: read("trim.flap", &spec.flap, Dimension::Angle),
+    }
+}
+
+/// The environment in SI: the atmosphere's temperature offset, gravity
+/// (standard by default).
+fn read_environment(
+    spec: &EnvironmentSpec,
+    read: &mut impl FnMut(&str, &Quantity, Dimension) -> f64,
+) -> Environment {
+    Environment {
+        atmosphere: crate::atmosphere::Atmosphere::new(read(
+            "environment.temperature_offset",
+            &spec.temperature_offset,
+            Dimension::TemperatureDifference,
+        )),
+        gravity: spec
+            .gravity
+            .as_ref()
+            .map_or(aeroid_core::units::STANDARD_GRAVITY, |g| {
+                read("environment.gravity", g, Dimension::Acceleration)
+            }),
+    }
 }
 
 fn read_departure(

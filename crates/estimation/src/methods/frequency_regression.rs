@@ -40,16 +40,14 @@
 //! must be uniformly spaced; α̇ terms need α differentiated in the time domain.
 
 use crate::error::{Error, Result};
-use crate::estimate::{Estimate, OutputFit, Status};
-use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
-use crate::linear_structure::LinearStructure;
+use crate::estimate::{Estimate, Status};
+use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
 pub use crate::methods::common::frequency_band::BandOptions;
 use crate::methods::common::frequency_band::{BAND_SETTINGS, model_controls};
 use crate::methods::common::regression::{
     self, Bound, CoefficientResult, Plan, assemble, failed_coefficient, fit_regression,
     outside_bounds_notes, regression_problem, white_bound_notes,
 };
-use crate::model::linear::Matrix;
 use crate::problem::EstimationProblem;
 use crate::reconstruction::{
     Reconstruction, ReconstructionOptions, check_channels, control_steps, reconstruct,
@@ -61,6 +59,10 @@ use aeroid_record::FlightRecord;
 use aeroid_sim::aero::{Coefficient, Regressor};
 use nalgebra::{Complex, DMatrix, DVector};
 use serde::{Deserialize, Serialize};
+
+mod linear;
+
+pub use linear::linear_frequency_regression;
 
 /// Method name in estimates.
 pub const METHOD: &str = "fdee";
@@ -363,13 +365,10 @@ pub fn frequency_regression(
         .collect();
     let mut estimate = assemble(record, structure, METHOD, &results);
     estimate.notes.extend(data.notes.iter().cloned());
-    estimate.notes.push(format!(
-        "finite Fourier transforms by Filon–Simpson quadrature over {} samples{}: {band_note}",
+    estimate.notes.push(transforms_note(
         transformed.samples,
-        match grid.breaks.len() {
-            0 => String::new(),
-            n => format!(", integrated piecewise across {n} control steps"),
-        }
+        grid.breaks.len(),
+        &band_note,
     ));
     if options.recursive {
         estimate
@@ -544,6 +543,18 @@ fn fit_plan(
     )
 }
 
+/// The note on the transforms: the samples, the control steps
+/// integrated across (`breaks`) and the band.
+fn transforms_note(samples: usize, breaks: usize, band_note: &str) -> String {
+    format!(
+        "finite Fourier transforms by Filon–Simpson quadrature over {samples} samples{}: {band_note}",
+        match breaks {
+            0 => String::new(),
+            n => format!(", integrated piecewise across {n} control steps"),
+        }
+    )
+}
+
 /// Frequencies on each side whose residual power is averaged into one
 /// frequency's variance.
 const VARIANCE_HALF_WIDTH: usize = 8;
@@ -588,282 +599,4 @@ fn local_variances(
             }
         })
         .collect()
-}
-
-/// Fourier-transform regression of a linear structure (`kind = "linear"`)
-/// whose states are all measured: per state i with a free entry in row i
-/// of A, B or b, `(ẋ_i)~ − fixed terms = Σ A_ij·x̃_j + Σ B_ik·ũ_k + b_i·1̃`
-/// with (ẋ)~ from the state's transform (fourier Eq. 3, no
-/// differentiation; Klein & Morelli §7.3, the form of SIDPAC's `fdoe`),
-/// and per output o with a free entry in C, D or c, `ỹ_o − fixed terms =
-/// Σ C_oj·x̃_j + Σ D_ok·ũ_k + c_o·1̃`. Complex least squares and bounds as
-/// for the 6-DOF equations.
-pub fn linear_frequency_regression(
-    record: &FlightRecord,
-    structure: &LinearStructure,
-    options: &FrequencyRegressionOptions,
-) -> Result<Estimate> {
-    let started = std::time::Instant::now();
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(METHOD, structure.missing_channels(record), present) {
-        return Err(Error::Refused(refusal));
-    }
-    let unmeasured: Vec<&str> = structure
-        .states
-        .iter()
-        .filter(|s| record.channel(s).is_err())
-        .map(String::as_str)
-        .collect();
-    if !unmeasured.is_empty() {
-        return Err(Error::Refused(Refusal::UnsuitableModel {
-            method: METHOD.into(),
-            model: structure.name.clone(),
-            reason: format!(
-                "equation error needs every state measured; no channel records {}",
-                unmeasured.join(", ")
-            ),
-        }));
-    }
-    let (model, _) = structure.for_record(record, None, None)?;
-    let (start, step, count) = (model.start, model.step, model.inputs.len());
-    let times: Vec<f64> = (0..count).map(|k| start + k as f64 * step).collect();
-    let (n, m) = (structure.states.len(), structure.inputs.len());
-    let direct = structure.outputs.len() - structure.rate_states.len();
-    // Columns: states, inputs, the direct outputs, then the constant 1.
-    let mut signals = DMatrix::zeros(count, n + m + direct + 1);
-    for (i, name) in structure.states.iter().enumerate() {
-        signals.set_column(
-            i,
-            &DVector::from_vec(record.channel(name)?.values_at(&times)?),
-        );
-    }
-    for k in 0..count {
-        for j in 0..m {
-            signals[(k, n + j)] = model.inputs[k][j];
-        }
-        signals[(k, n + m + direct)] = 1.0;
-    }
-    for (o, name) in structure.outputs.iter().take(direct).enumerate() {
-        signals.set_column(
-            n + m + o,
-            &DVector::from_vec(record.channel(name)?.values_at(&times)?),
-        );
-    }
-    if let Some((k, i)) = (0..count)
-        .flat_map(|k| (0..signals.ncols()).map(move |i| (k, i)))
-        .find(|&(k, i)| !signals[(k, i)].is_finite())
-    {
-        return Err(Error::Data {
-            reason: format!(
-                "{METHOD}: a channel of the linear model has no value at {:.3} s (column {i}); the Fourier transform needs every sample",
-                times[k]
-            ),
-        });
-    }
-    let constant_free = (0..structure.names.len()).any(|i| {
-        structure.free[i]
-            && matches!(
-                structure.entries[i].matrix,
-                Matrix::StateBias | Matrix::OutputBias
-            )
-    });
-    let controls: Vec<(&str, Vec<f64>)> = structure
-        .inputs
-        .iter()
-        .enumerate()
-        .map(|(j, name)| {
-            (
-                name.as_str(),
-                signals.column(n + j).iter().copied().collect(),
-            )
-        })
-        .collect();
-    let zero = options.zero_frequency.unwrap_or(constant_free);
-    let (omegas, band_note) =
-        options
-            .band
-            .frequencies(METHOD, &controls, (start, step, count), zero)?;
-    let breaks = breaks_at(start, step, count, &control_steps(record));
-    let transform = FourierTransform::with_breaks(&omegas, start, step, count, &breaks)?;
-    let columns = transform.transform_columns(&signals)?;
-    let starts = structure.parameter_values();
-    // One regression per equation: (is a state equation, row).
-    let equations: Vec<(bool, usize)> = (0..n)
-        .map(|i| (true, i))
-        .chain((0..direct).map(|o| (false, o)))
-        .collect();
-    let mut parameters: Vec<(usize, f64, f64)> = Vec::new();
-    let mut blocks: Vec<(Vec<usize>, DMatrix<f64>)> = Vec::new();
-    let mut fits = Vec::new();
-    let mut problems = Vec::new();
-    for (state, row) in equations {
-        let of_equation = |matrix: Matrix| {
-            matches!(
-                (state, matrix),
-                (true, Matrix::A | Matrix::B | Matrix::StateBias)
-                    | (false, Matrix::C | Matrix::D | Matrix::OutputBias)
-            )
-        };
-        let entries: Vec<usize> = (0..structure.names.len())
-            .filter(|&i| {
-                structure.entries[i].row == row && of_equation(structure.entries[i].matrix)
-            })
-            .collect();
-        let free: Vec<usize> = entries
-            .iter()
-            .copied()
-            .filter(|&i| structure.free[i])
-            .collect();
-        if free.is_empty() {
-            continue;
-        }
-        let regressor = |i: usize| -> &Vec<Complex<f64>> {
-            let entry = &structure.entries[i];
-            match entry.matrix {
-                Matrix::A | Matrix::C => &columns[entry.column],
-                Matrix::B | Matrix::D => &columns[n + entry.column],
-                _ => &columns[n + m + direct],
-            }
-        };
-        // The equation's left side, then every term it has: the matrices'
-        // fixed entries at their values, free ones as regressors.
-        let mut z: Vec<Complex<f64>> = if state {
-            let series: Vec<f64> = signals.column(row).iter().copied().collect();
-            transform.derivative(&columns[row], &series)
-        } else {
-            columns[n + m + row].clone()
-        };
-        let matrices = &structure.matrices;
-        let fixed = |matrix: Matrix, j: usize| -> f64 {
-            match matrix {
-                Matrix::A => matrices.a[(row, j)],
-                Matrix::B => matrices.b[(row, j)],
-                Matrix::C => matrices.c[(row, j)],
-                Matrix::D => matrices.d[(row, j)],
-                Matrix::StateBias => matrices.state_bias[row],
-                Matrix::OutputBias => matrices.output_bias[row],
-            }
-        };
-        let terms: Vec<(Matrix, usize, &Vec<Complex<f64>>)> = if state {
-            (0..n)
-                .map(|j| (Matrix::A, j, &columns[j]))
-                .chain((0..m).map(|j| (Matrix::B, j, &columns[n + j])))
-                .chain(std::iter::once((
-                    Matrix::StateBias,
-                    0,
-                    &columns[n + m + direct],
-                )))
-                .collect()
-        } else {
-            (0..n)
-                .map(|j| (Matrix::C, j, &columns[j]))
-                .chain((0..m).map(|j| (Matrix::D, j, &columns[n + j])))
-                .chain(std::iter::once((
-                    Matrix::OutputBias,
-                    0,
-                    &columns[n + m + direct],
-                )))
-                .collect()
-        };
-        for (matrix, j, series) in terms {
-            let is_free = free.iter().any(|&i| {
-                let e = &structure.entries[i];
-                e.matrix == matrix && e.column == j
-            });
-            let value = fixed(matrix, j);
-            if !is_free && value != 0.0 {
-                for (zv, x) in z.iter_mut().zip(series) {
-                    *zv -= x * value;
-                }
-            }
-        }
-        let rows: Vec<(usize, bool)> = omegas
-            .iter()
-            .enumerate()
-            .flat_map(|(f, &w)| std::iter::once((f, false)).chain((w > 0.0).then_some((f, true))))
-            .collect();
-        let part = |c: Complex<f64>, imaginary: bool| if imaginary { c.im } else { c.re };
-        let name = if state {
-            format!("d{}/dt", structure.states[row])
-        } else {
-            structure.outputs[row].clone()
-        };
-        if rows.len() <= free.len() {
-            problems.push(format!(
-                "{name}: {} real equations for {} parameters",
-                rows.len(),
-                free.len()
-            ));
-            continue;
-        }
-        let x = DMatrix::from_fn(rows.len(), free.len(), |r, c| {
-            part(regressor(free[c])[rows[r].0], rows[r].1)
-        });
-        let zs = DVector::from_fn(rows.len(), |r, _| part(z[rows[r].0], rows[r].1));
-        let fit = aeroid_numerics::regression::LeastSquares::fit(&x, &zs);
-        let covariance = fit.weighted_covariance(
-            &x,
-            &local_variances(&rows, &fit.residuals, omegas.len(), free.len()),
-        );
-        let predicted: Vec<f64> = (0..zs.len()).map(|r| zs[r] - fit.residuals[r]).collect();
-        fits.push(OutputFit::new(
-            &format!("{name} (Fourier transforms)"),
-            zs.as_slice(),
-            &predicted,
-        ));
-        for (c, &i) in free.iter().enumerate() {
-            parameters.push((i, fit.theta[c], covariance[(c, c)].sqrt()));
-        }
-        blocks.push((free, covariance));
-    }
-    parameters.sort_by_key(|p| p.0);
-    let position = |i: usize| parameters.iter().position(|p| p.0 == i).unwrap_or(0);
-    let mut covariance = vec![vec![0.0; parameters.len()]; parameters.len()];
-    for (indices, block) in &blocks {
-        for (a, &i) in indices.iter().enumerate() {
-            for (b, &j) in indices.iter().enumerate() {
-                covariance[position(i)][position(j)] = block[(a, b)];
-            }
-        }
-    }
-    let estimate = Estimate {
-        method: METHOD.to_string(),
-        model: structure.name.clone(),
-        record: regression::record_name(record),
-        diagnoses: Vec::new(),
-        status: if problems.is_empty() {
-            Status::Converged
-        } else {
-            Status::Diverged(problems.join("; "))
-        },
-        parameters: parameters
-            .iter()
-            .map(
-                |&(i, value, standard_error)| crate::estimate::ParameterEstimate {
-                    name: structure.names[i].clone(),
-                    value,
-                    standard_error,
-                    start: starts[i],
-                },
-            )
-            .collect(),
-        covariance,
-        fits,
-        iterations: 1,
-        cost_history: Vec::new(),
-        wall_time: started.elapsed().as_secs_f64(),
-        notes: vec![format!(
-            "finite Fourier transforms by Filon–Simpson quadrature over {} samples{}: {band_note}",
-            transform.samples,
-            match breaks.len() {
-                0 => String::new(),
-                n => format!(", integrated piecewise across {n} control steps"),
-            }
-        )],
-        details: String::new(),
-        network: None,
-        distributions: Vec::new(),
-        histories: Vec::new(),
-    };
-    Ok(estimate.assess())
 }

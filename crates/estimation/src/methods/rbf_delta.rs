@@ -58,6 +58,10 @@ use aeroid_record::FlightRecord;
 use aeroid_sim::aero::{Coefficient, Regressor};
 use serde::{Deserialize, Serialize};
 
+mod data;
+
+use data::{TrainingData, coefficient_data};
+
 /// Method name in estimates.
 pub const METHOD: &str = "rbf-delta";
 
@@ -293,253 +297,6 @@ impl Method for RbfDelta {
     }
 }
 
-/// One network's training data.
-struct TrainingData {
-    coefficient: Coefficient,
-    /// The coefficient's name in the structure's axes.
-    name: &'static str,
-    times: Vec<f64>,
-    /// The inputs kept (varying on the record).
-    inputs: Vec<Regressor>,
-    /// One row of input values per sample (regressor units).
-    rows: Vec<Vec<f64>>,
-    targets: Vec<f64>,
-}
-
-/// A refusal of the smoother's names this method.
-fn as_own(error: Error) -> Error {
-    match error {
-        Error::Refused(mut refusal) => {
-            match &mut refusal {
-                Refusal::MissingChannels { method, .. }
-                | Refusal::TooFewData { method, .. }
-                | Refusal::UnsuitableModel { method, .. }
-                | Refusal::NotLinearInParameters { method, .. }
-                | Refusal::NothingToEstimate { method, .. }
-                | Refusal::StructureKind { method, .. }
-                | Refusal::OneRecordOnly { method, .. } => *method = METHOD.to_string(),
-            }
-            Error::Refused(refusal)
-        }
-        other => other,
-    }
-}
-
-/// Whether the record has what reconstructing the plans' coefficients
-/// needs (accelerations, α, β, rates, dynamic pressure, thrust).
-fn can_reconstruct(record: &FlightRecord, structure: &ModelStructure, plans: &[Plan]) -> bool {
-    let measured_rates = ["p", "q", "r"].iter().all(|name| {
-        record
-            .channel(name)
-            .is_ok_and(|c| !aeroid_record::prep::derive::is_derived(&c.source))
-    });
-    if !measured_rates {
-        return false;
-    }
-    let mut request = Request {
-        coefficients: plans.iter().map(|p| p.coefficient).collect(),
-        regressors: vec![Regressor::Alpha, Regressor::Beta],
-    };
-    for plan in plans {
-        for rate in [
-            Regressor::PitchRate,
-            Regressor::RollRate,
-            Regressor::YawRate,
-        ] {
-            if inputs_of(plan.coefficient).contains(&rate) {
-                request.regressors.push(rate);
-            }
-        }
-    }
-    missing_channels(record, &structure.aircraft, &request).is_empty()
-}
-
-/// The inputs of `coefficient` whose channels the record has.
-fn recorded_inputs(
-    record: &FlightRecord,
-    structure: &ModelStructure,
-    coefficient: Coefficient,
-) -> Vec<Regressor> {
-    inputs_of(coefficient)
-        .iter()
-        .copied()
-        .filter(|&r| {
-            let request = Request {
-                coefficients: Vec::new(),
-                regressors: vec![r],
-            };
-            missing_channels(record, &structure.aircraft, &request).is_empty()
-        })
-        .collect()
-}
-
-/// The coefficient data of every plan, with notes on the source.
-fn coefficient_data(
-    record: &FlightRecord,
-    structure: &ModelStructure,
-    plans: &[Plan],
-    settings: &RbfDeltaSettings,
-    notes: &mut Vec<String>,
-) -> Result<Vec<TrainingData>> {
-    let reconstructed = match settings.coefficients {
-        CoefficientSource::Reconstructed => true,
-        CoefficientSource::Smoothed => false,
-        CoefficientSource::Auto => can_reconstruct(record, structure, plans),
-    };
-    let mut data = Vec::new();
-    if reconstructed {
-        notes.push(
-            "coefficients reconstructed from the measured accelerations and angular accelerations"
-                .into(),
-        );
-        // Forces and moments apart, as equation error: only the moments
-        // need differentiated rates, whose windows skip control steps.
-        let (forces, moments): (Vec<&Plan>, Vec<&Plan>) =
-            plans.iter().partition(|p| p.coefficient.is_force());
-        for group in [forces, moments].into_iter().filter(|g| !g.is_empty()) {
-            let mut request = Request::default();
-            for plan in &group {
-                request.coefficients.push(plan.coefficient);
-                for r in recorded_inputs(record, structure, plan.coefficient) {
-                    if !request.regressors.contains(&r) {
-                        request.regressors.push(r);
-                    }
-                }
-            }
-            let reconstruction = reconstruct(
-                record,
-                &structure.aircraft,
-                &request,
-                &ReconstructionOptions::default(),
-                METHOD,
-            )?;
-            for plan in &group {
-                let inputs = recorded_inputs(record, structure, plan.coefficient);
-                data.push(training_data(
-                    named(structure, plan.coefficient),
-                    &inputs,
-                    &reconstruction,
-                    notes,
-                ));
-            }
-            extend_unique(notes, &reconstruction.notes);
-        }
-    } else {
-        notes.push("coefficients from the EKF + modified Bryson–Frazier smoother (Wang et al. 2012, Eqs. 7–24)".into());
-        let smoothed = smoothing::smooth(record, structure, &settings.smoother).map_err(as_own)?;
-        let reconstruction = smoothing::regression_data(
-            record,
-            structure,
-            &smoothed,
-            plans,
-            settings.smoother.step_margin,
-        )?;
-        extend_unique(notes, &smoothed.notes);
-        extend_unique(notes, &reconstruction.notes);
-        for plan in plans {
-            let inputs = inputs_of(plan.coefficient).to_vec();
-            data.push(training_data(
-                named(structure, plan.coefficient),
-                &inputs,
-                &reconstruction,
-                notes,
-            ));
-        }
-    }
-    Ok(data)
-}
-
-/// A coefficient with its name in the structure's axes.
-fn named(structure: &ModelStructure, coefficient: Coefficient) -> (Coefficient, &'static str) {
-    (
-        coefficient,
-        coefficient.name(structure.aircraft.aero.force_axes),
-    )
-}
-
-fn extend_unique(notes: &mut Vec<String>, more: &[String]) {
-    for note in more {
-        if !notes.contains(note) {
-            notes.push(note.clone());
-        }
-    }
-}
-
-/// One coefficient's rows: the samples where the target and every input
-/// are finite; inputs constant on them are left out with a note.
-fn training_data(
-    (coefficient, name): (Coefficient, &'static str),
-    inputs: &[Regressor],
-    reconstruction: &Reconstruction,
-    notes: &mut Vec<String>,
-) -> TrainingData {
-    let targets_all = reconstruction.coefficient(coefficient);
-    let mut times = Vec::new();
-    let mut rows: Vec<Vec<f64>> = Vec::new();
-    let mut targets = Vec::new();
-    for (k, regressors) in reconstruction.regressors.iter().enumerate() {
-        let row: Vec<f64> = inputs.iter().map(|&r| regressors[r as usize]).collect();
-        let target = targets_all.get(k).copied().unwrap_or(f64::NAN);
-        if target.is_finite() && row.iter().all(|v| v.is_finite()) {
-            times.push(reconstruction.times[k]);
-            rows.push(row);
-            targets.push(target);
-        }
-    }
-    let varying: Vec<bool> = (0..inputs.len())
-        .map(|j| {
-            let first = rows.first().map_or(0.0, |r| r[j]);
-            rows.iter().any(|r| r[j] != first)
-        })
-        .collect();
-    let dropped: Vec<&str> = inputs
-        .iter()
-        .zip(&varying)
-        .filter(|(_, v)| !**v)
-        .map(|(r, _)| r.key())
-        .collect();
-    let missing: Vec<&str> = inputs_of(coefficient)
-        .iter()
-        .filter(|r| !inputs.contains(r))
-        .map(|r| r.key())
-        .collect();
-    if !dropped.is_empty() || !missing.is_empty() {
-        notes.push(format!(
-            "{name} network: inputs left out (constant on the record: {}; no channel: {})",
-            list_or_none(&dropped),
-            list_or_none(&missing)
-        ));
-    }
-    for row in &mut rows {
-        let mut j = 0;
-        row.retain(|_| {
-            j += 1;
-            varying[j - 1]
-        });
-    }
-    TrainingData {
-        coefficient,
-        name,
-        times,
-        inputs: inputs
-            .iter()
-            .zip(&varying)
-            .filter(|(_, v)| **v)
-            .map(|(r, _)| *r)
-            .collect(),
-        rows,
-        targets,
-    }
-}
-
-fn list_or_none(items: &[&str]) -> String {
-    if items.is_empty() {
-        "none".into()
-    } else {
-        items.join(", ")
-    }
-}
-
 /// A trained network and its Delta-method results.
 struct Delta {
     data: TrainingData,
@@ -655,41 +412,98 @@ fn trim_index(times: &[f64], trim: Option<f64>) -> usize {
     })
 }
 
-/// Estimates the structure's derivatives from `record` by RBF networks and
-/// the Delta method (module header).
-pub fn rbf_delta(
-    record: &FlightRecord,
+/// The network of one coefficient's training data, trained and
+/// differentiated ([`train_and_differentiate`]); a refusal when the data
+/// are fewer than twice the unknowns or have no input.
+fn train(training: TrainingData, plans: &[Plan], settings: &RbfDeltaSettings) -> Result<Delta> {
+    let unknowns = training.inputs.len() + 1;
+    if training.rows.len() < 2 * unknowns || training.inputs.is_empty() {
+        return Err(Error::Refused(Refusal::TooFewData {
+            method: METHOD.to_string(),
+            data: training.rows.len(),
+            unknowns,
+        }));
+    }
+    let plan = plans
+        .iter()
+        .find(|p| p.coefficient == training.coefficient)
+        .ok_or_else(|| Error::Method {
+            reason: format!("{METHOD}: no plan for {}", training.name),
+        })?;
+    train_and_differentiate(training, plan, settings)
+}
+
+/// The local values of the parameter of the term with `regressor` (None:
+/// a product, which is no network input, so its parameter is not
+/// estimated): ∂C/∂x of its input, or C₀ for the constant when every
+/// other term of the coefficient is an input (one whose regressor is no
+/// input, CL² or the Oswald factor, would stay in C₀).
+fn local_values<'d>(
     structure: &ModelStructure,
-    settings: &RbfDeltaSettings,
-) -> Result<Estimate> {
-    let plans = regression::plans(structure, METHOD)?;
-    let mut notes = Vec::new();
-    // The Mach input is Mach − the structure's reference Mach; a structure
-    // without a Mach term has none, and the input is the Mach number.
-    let mut inputs_structure = structure.clone();
-    let reference_mach = &mut inputs_structure.aircraft.aero.reference_mach;
-    if reference_mach.is_nan() {
-        *reference_mach = 0.0;
+    plan: &Plan,
+    delta: &'d Delta,
+    regressor: Option<Regressor>,
+) -> Option<&'d Vec<f64>> {
+    if regressor == Some(Regressor::Constant) {
+        let complete = plan.columns(structure).iter().all(|&i| {
+            plan.terms.iter().any(|&(r, t)| {
+                t == i
+                    && r.single()
+                        .is_some_and(|r| r == Regressor::Constant || delta.data.inputs.contains(&r))
+            })
+        });
+        complete.then_some(&delta.bias)
+    } else {
+        let position = (delta.data.inputs.iter()).position(|&r| Some(r) == regressor);
+        position.map(|j| &delta.derivatives[j])
     }
-    let data = coefficient_data(record, &inputs_structure, &plans, settings, &mut notes)?;
-    let mut deltas = Vec::new();
-    for training in data {
-        let unknowns = training.inputs.len() + 1;
-        if training.rows.len() < 2 * unknowns || training.inputs.is_empty() {
-            return Err(Error::Refused(Refusal::TooFewData {
-                method: METHOD.to_string(),
-                data: training.rows.len(),
-                unknowns,
-            }));
-        }
-        let plan = plans
+}
+
+/// The note on the network of coefficient `name`: its data, centres,
+/// width, fit and trim point (sample `trim`).
+fn network_note(name: &str, delta: &Delta, settings: &RbfDeltaSettings, trim: usize) -> String {
+    format!(
+        "{name} network: {} samples from {:.3} s, {} inputs ({}), {} centres (radius {}), width factor λ = {:.4} (σ = {:.4}), MSE {:.3e}, R² {:.6}; trim point at {:.3} s",
+        delta.data.rows.len(),
+        delta.data.times.first().copied().unwrap_or(f64::NAN),
+        delta.data.inputs.len(),
+        delta
+            .data
+            .inputs
             .iter()
-            .find(|p| p.coefficient == training.coefficient)
-            .ok_or_else(|| Error::Method {
-                reason: format!("{METHOD}: no plan for {}", training.name),
-            })?;
-        deltas.push(train_and_differentiate(training, plan, settings)?);
-    }
+            .map(|r| r.key())
+            .collect::<Vec<_>>()
+            .join(", "),
+        delta.network.centre_count(),
+        settings.radius,
+        delta.network.width_factor,
+        delta.network.width(),
+        delta.mse,
+        delta.r_squared,
+        delta.data.times.get(trim).copied().unwrap_or(f64::NAN),
+    )
+}
+
+/// The parameters the networks estimate, with the distributions of their
+/// local values, the derivatives' names among them, and the free
+/// parameters not estimated.
+struct Local {
+    parameters: Vec<ParameterEstimate>,
+    distributions: Vec<ParameterDistribution>,
+    derivative_names: Vec<String>,
+    not_estimated: Vec<String>,
+}
+
+/// Each coefficient's parameters from its network's local values (the
+/// median and spread of each over the record), a note on each network and
+/// on its width search pushed to `notes`.
+fn local_estimates(
+    structure: &ModelStructure,
+    plans: &[Plan],
+    deltas: &[Delta],
+    settings: &RbfDeltaSettings,
+    notes: &mut Vec<String>,
+) -> Local {
     let aero = &structure.aircraft.aero;
     let (names, starts) = (aero.parameters.names(), aero.parameters.values());
     let axes = aero.force_axes;
@@ -697,7 +511,7 @@ pub fn rbf_delta(
     let mut distributions = Vec::new();
     let mut derivative_names = Vec::new();
     let mut not_estimated = Vec::new();
-    for plan in &plans {
+    for plan in plans {
         let Some(delta) = deltas
             .iter()
             .find(|d| d.data.coefficient == plan.coefficient)
@@ -710,25 +524,10 @@ pub fn rbf_delta(
             if !structure.free[index] {
                 continue;
             }
-            // A product is no network input: its parameter is not estimated.
             let regressor = term.single();
-            let values = if regressor == Some(Regressor::Constant) {
-                // C₀ needs every other term of the coefficient: one whose
-                // regressor is no input (CL², the Oswald factor) stays in it.
-                let complete = plan.columns(structure).iter().all(|&i| {
-                    plan.terms.iter().any(|&(r, t)| {
-                        t == i
-                            && r.single().is_some_and(|r| {
-                                r == Regressor::Constant || delta.data.inputs.contains(&r)
-                            })
-                    })
-                });
-                complete.then_some(&delta.bias)
-            } else {
-                let position = (delta.data.inputs.iter()).position(|&r| Some(r) == regressor);
-                position.map(|j| &delta.derivatives[j])
+            let Some(values) = local_values(structure, plan, delta, regressor) else {
+                continue;
             };
-            let Some(values) = values else { continue };
             let spread = distribution(&names[index], values, trim);
             parameters.push(ParameterEstimate {
                 name: names[index].clone(),
@@ -748,20 +547,11 @@ pub fn rbf_delta(
                 .filter(|i| !covered.contains(i))
                 .map(|i| names[i].clone()),
         );
-        notes.push(format!(
-            "{} network: {} samples from {:.3} s, {} inputs ({}), {} centres (radius {}), width factor λ = {:.4} (σ = {:.4}), MSE {:.3e}, R² {:.6}; trim point at {:.3} s",
+        notes.push(network_note(
             plan.coefficient.name(axes),
-            delta.data.rows.len(),
-            delta.data.times.first().copied().unwrap_or(f64::NAN),
-            delta.data.inputs.len(),
-            delta.data.inputs.iter().map(|r| r.key()).collect::<Vec<_>>().join(", "),
-            delta.network.centre_count(),
-            settings.radius,
-            delta.network.width_factor,
-            delta.network.width(),
-            delta.mse,
-            delta.r_squared,
-            delta.data.times.get(trim).copied().unwrap_or(f64::NAN),
+            delta,
+            settings,
+            trim,
         ));
         notes.push(search_note(
             plan.coefficient.name(axes),
@@ -769,6 +559,41 @@ pub fn rbf_delta(
             settings,
         ));
     }
+    Local {
+        parameters,
+        distributions,
+        derivative_names,
+        not_estimated,
+    }
+}
+
+/// Estimates the structure's derivatives from `record` by RBF networks and
+/// the Delta method (module header).
+pub fn rbf_delta(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    settings: &RbfDeltaSettings,
+) -> Result<Estimate> {
+    let plans = regression::plans(structure, METHOD)?;
+    let mut notes = Vec::new();
+    // The Mach input is Mach − the structure's reference Mach; a structure
+    // without a Mach term has none, and the input is the Mach number.
+    let mut inputs_structure = structure.clone();
+    let reference_mach = &mut inputs_structure.aircraft.aero.reference_mach;
+    if reference_mach.is_nan() {
+        *reference_mach = 0.0;
+    }
+    let data = coefficient_data(record, &inputs_structure, &plans, settings, &mut notes)?;
+    let deltas = data
+        .into_iter()
+        .map(|training| train(training, &plans, settings))
+        .collect::<Result<Vec<_>>>()?;
+    let Local {
+        parameters,
+        distributions,
+        derivative_names,
+        not_estimated,
+    } = local_estimates(structure, &plans, &deltas, settings, &mut notes);
     if !not_estimated.is_empty() {
         notes.push(format!(
             "not estimated (their regressors are not network inputs or are constant on the record, or, for a bias, another term of its coefficient is not estimated): {}",

@@ -365,6 +365,7 @@ impl CoefficientStates {
     /// ∂f/∂x at `x` into `a` and ∂h/∂x into `outputs`
     /// ([`StateSpaceModel::jacobians_into`]'s equations), every entry
     /// written.
+    // Called at every grid point of a filter pass: the state and output Jacobians share the loads' derivatives (force, thrust_by_h, the speeds); split, each part would recompute or carry them.
     fn linearise(
         &self,
         x: &[f64],

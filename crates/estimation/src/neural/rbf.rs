@@ -275,25 +275,10 @@ impl RbfNetwork {
         };
         let (lower, upper) = options.width_factors;
         // The search runs on ln λ: the cost varies over decades of width.
-        let (mut a, mut b) = (lower.ln(), upper.ln());
-        let ratio = (5f64.sqrt() - 1.0) / 2.0;
-        let (mut c, mut d) = (b - ratio * (b - a), a + ratio * (b - a));
-        let (mut fc, mut fd) = (cost(c.exp()), cost(d.exp()));
-        while b - a > 1e-3 {
-            if fc <= fd {
-                (b, d, fd) = (d, c, fc);
-                c = b - ratio * (b - a);
-                fc = cost(c.exp());
-            } else {
-                (a, c, fc) = (c, d, fd);
-                d = a + ratio * (b - a);
-                fd = cost(d.exp());
-            }
-        }
-        let best = if fc <= fd { c } else { d };
+        let (best, least) = golden_section((lower.ln(), upper.ln()), |x| cost(x.exp()));
         self.width_factor = best.exp();
         self.search_history = history;
-        if !self.width_factor.is_finite() || !fc.min(fd).is_finite() {
+        if !self.width_factor.is_finite() || !least.is_finite() {
             return Err(Error::Network {
                 reason: "the RBF width search found no finite cost".into(),
             });
@@ -367,6 +352,25 @@ impl RbfNetwork {
     }
 }
 
+/// The golden-section search for the least of `cost` on [a, b], to a
+/// bracket of 10⁻³: the point kept and its cost.
+fn golden_section((mut a, mut b): (f64, f64), mut cost: impl FnMut(f64) -> f64) -> (f64, f64) {
+    let ratio = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - ratio * (b - a), a + ratio * (b - a));
+    let (mut fc, mut fd) = (cost(c), cost(d));
+    while b - a > 1e-3 {
+        if fc <= fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - ratio * (b - a);
+            fc = cost(c);
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + ratio * (b - a);
+            fd = cost(d);
+        }
+    }
+    if fc <= fd { (c, fc) } else { (d, fd) }
+}
 #[cfg(test)]
 mod tests {
     use super::*;

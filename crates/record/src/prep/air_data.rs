@@ -42,52 +42,10 @@ pub fn with_air_density(record: &FlightRecord) -> Result<(FlightRecord, Vec<Stri
             static_temperature.values_at(times)?,
             "the temperature channel".to_string(),
         ),
-        Err(_) => {
-            let Ok(total) = record.channel("total_air_temperature") else {
-                return Ok((derived, notes));
-            };
-            let (mach, mach_source) = match (
-                record.channel("calibrated_airspeed"),
-                record.channel("mach"),
-            ) {
-                (Ok(calibrated), _) => (
-                    calibrated
-                        .values_at(times)?
-                        .iter()
-                        .zip(&altitude.values)
-                        .map(|(&v, &h)| mach_from_calibrated_airspeed(v, Atmosphere::standard(h).1))
-                        .collect(),
-                    "mach from calibrated_airspeed and static_pressure",
-                ),
-                (Err(_), Ok(mach)) => (mach.values_at(times)?, "mach"),
-                _ => return Ok((derived, notes)),
-            };
-            let total = total.values_at(times)?;
-            let values: Vec<f64> = total
-                .iter()
-                .zip(&mach)
-                .map(|(t, m)| t / (1.0 + 0.2 * m * m))
-                .collect();
-            put_channel(
-                &mut derived,
-                derived_channel(
-                    altitude,
-                    "temperature",
-                    "K",
-                    values.clone(),
-                    &format!(
-                        "derived: total_air_temperature/(1 + 0.2·M²), M the {mach_source}, at the pressure_altitude instants"
-                    ),
-                ),
-            );
-            notes.push(format!(
-                "temperature: added, total_air_temperature/(1 + 0.2·M²) (recovery factor 1), M the {mach_source}"
-            ));
-            (
-                values,
-                format!("total_air_temperature/(1 + 0.2·M²), M the {mach_source}"),
-            )
-        }
+        Err(_) => match temperature_from_total(record, altitude, &mut derived, &mut notes)? {
+            Some(temperature) => temperature,
+            None => return Ok((derived, notes)),
+        },
     };
     let pressure: Vec<f64> = altitude
         .values
@@ -124,6 +82,63 @@ pub fn with_air_density(record: &FlightRecord) -> Result<(FlightRecord, Vec<Stri
         "density: added, static_pressure/(R·T) with T from {temperature_source}"
     ));
     Ok((derived, notes))
+}
+
+/// The static temperature from the total air temperature and the Mach
+/// number (from calibrated_airspeed and the ISA pressure, else the mach
+/// channel) at the pressure altitude's instants, added to `derived` with
+/// its note, and where it came from; None when the record has neither.
+fn temperature_from_total(
+    record: &FlightRecord,
+    altitude: &Channel,
+    derived: &mut FlightRecord,
+    notes: &mut Vec<String>,
+) -> Result<Option<(Vec<f64>, String)>> {
+    let times = &altitude.times;
+    let Ok(total) = record.channel("total_air_temperature") else {
+        return Ok(None);
+    };
+    let (mach, mach_source) = match (
+        record.channel("calibrated_airspeed"),
+        record.channel("mach"),
+    ) {
+        (Ok(calibrated), _) => (
+            calibrated
+                .values_at(times)?
+                .iter()
+                .zip(&altitude.values)
+                .map(|(&v, &h)| mach_from_calibrated_airspeed(v, Atmosphere::standard(h).1))
+                .collect(),
+            "mach from calibrated_airspeed and static_pressure",
+        ),
+        (Err(_), Ok(mach)) => (mach.values_at(times)?, "mach"),
+        _ => return Ok(None),
+    };
+    let total = total.values_at(times)?;
+    let values: Vec<f64> = total
+        .iter()
+        .zip(&mach)
+        .map(|(t, m)| t / (1.0 + 0.2 * m * m))
+        .collect();
+    put_channel(
+        derived,
+        derived_channel(
+            altitude,
+            "temperature",
+            "K",
+            values.clone(),
+            &format!(
+                "derived: total_air_temperature/(1 + 0.2·M²), M the {mach_source}, at the pressure_altitude instants"
+            ),
+        ),
+    );
+    notes.push(format!(
+        "temperature: added, total_air_temperature/(1 + 0.2·M²) (recovery factor 1), M the {mach_source}"
+    ));
+    Ok(Some((
+        values,
+        format!("total_air_temperature/(1 + 0.2·M²), M the {mach_source}"),
+    )))
 }
 
 /// A channel on the instants of `base` (its rate; no resolution).

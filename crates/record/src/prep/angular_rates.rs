@@ -129,18 +129,9 @@ impl KinematicRates {
     }
 }
 
-/// Computes p, q, r of a record from its attitude (see the module
-/// documentation). An error names every attitude channel the record lacks,
-/// or one not in radians.
-pub fn kinematic_rates(
-    record: &FlightRecord,
-    differentiator: &Differentiator,
-) -> Result<KinematicRates> {
-    if let Some(problem) = differentiator.check() {
-        return Err(Error::Derivation {
-            reason: format!("angular rates: {problem}"),
-        });
-    }
+/// The attitude channels (pitch, roll, yaw), yaw unwrapped; an error
+/// names every one the record lacks, or one not in radians.
+fn attitude(record: &FlightRecord) -> Result<Vec<Channel>> {
     let missing: Vec<&str> = ATTITUDE_CHANNELS
         .iter()
         .copied()
@@ -171,6 +162,22 @@ pub fn kinematic_rates(
         }
         angles.push(channel);
     }
+    Ok(angles)
+}
+
+/// Computes p, q, r of a record from its attitude (see the module
+/// documentation). An error names every attitude channel the record lacks,
+/// or one not in radians.
+pub fn kinematic_rates(
+    record: &FlightRecord,
+    differentiator: &Differentiator,
+) -> Result<KinematicRates> {
+    if let Some(problem) = differentiator.check() {
+        return Err(Error::Derivation {
+            reason: format!("angular rates: {problem}"),
+        });
+    }
+    let angles = attitude(record)?;
     let derivatives: Vec<Channel> = angles
         .iter()
         .map(|c| differentiator.differentiate(c))

@@ -278,17 +278,7 @@ pub fn geometric_flow_angles(record: &FlightRecord, wind: Wind) -> Result<Geomet
     for (slot, channel) in resolutions.iter_mut().zip(&channels) {
         *slot = channel.resolution.unwrap_or(0.0);
     }
-    let interpolated_resolutions: Vec<[f64; 8]> = times
-        .iter()
-        .map(|&t| {
-            let mut scaled = resolutions;
-            for (slot, channel) in scaled.iter_mut().zip(&channels) {
-                let w = interpolation_weight(&channel.times, t);
-                *slot *= (w * w + (1.0 - w) * (1.0 - w)).sqrt();
-            }
-            scaled
-        })
-        .collect();
+    let interpolated_resolutions = interpolated(&channels, resolutions, &times);
     let (alpha, beta): (Vec<f64>, Vec<f64>) = inputs.iter().map(|x| flow_angles(x, wind)).unzip();
     let predicted_sigma = rms_sigma(&inputs, wind, &interpolated_resolutions);
     let source = format!(
@@ -320,6 +310,23 @@ pub fn geometric_flow_angles(record: &FlightRecord, wind: Wind) -> Result<Geomet
         interpolated_resolutions,
         predicted_sigma,
     })
+}
+
+/// Per instant of `times`, each channel's resolution scaled by
+/// √(w² + (1 − w)²), w the weight of its later sample in the
+/// interpolation.
+fn interpolated(channels: &[&Channel], resolutions: [f64; 8], times: &[f64]) -> Vec<[f64; 8]> {
+    times
+        .iter()
+        .map(|&t| {
+            let mut scaled = resolutions;
+            for (slot, channel) in scaled.iter_mut().zip(channels) {
+                let w = interpolation_weight(&channel.times, t);
+                *slot *= (w * w + (1.0 - w) * (1.0 - w)).sqrt();
+            }
+            scaled
+        })
+        .collect()
 }
 
 /// A record with the geometric angles in it, and what was done, per channel.

@@ -45,6 +45,29 @@ fn fuel_flow_channels(record: &FlightRecord) -> Vec<&Channel> {
     channels
 }
 
+impl FuelFlowThrust {
+    /// An error unless the specific fuel consumption is positive and the
+    /// idle fuel flow non-negative, both finite.
+    fn check(&self) -> Result<()> {
+        let (c, idle) = (self.specific_fuel_consumption, self.idle_fuel_flow);
+        if !(c.is_finite() && c > 0.0) {
+            return Err(Error::Derivation {
+                reason: format!(
+                    "thrust from fuel flow: the specific fuel consumption {c} kg/(N·s) must be a positive finite number"
+                ),
+            });
+        }
+        if !(idle.is_finite() && idle >= 0.0) {
+            return Err(Error::Derivation {
+                reason: format!(
+                    "thrust from fuel flow: the idle fuel flow {idle} kg/s must be a non-negative finite number"
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Adds the `thrust` channel from the fuel flow (module documentation); a
 /// record that has `thrust` keeps it. An error names what is wrong: a model
 /// constant that is not a positive (idle: non-negative) finite number, a
@@ -58,20 +81,7 @@ pub fn with_thrust_from_fuel_flow(
         specific_fuel_consumption: c,
         idle_fuel_flow: idle,
     } = *model;
-    if !(c.is_finite() && c > 0.0) {
-        return Err(Error::Derivation {
-            reason: format!(
-                "thrust from fuel flow: the specific fuel consumption {c} kg/(N·s) must be a positive finite number"
-            ),
-        });
-    }
-    if !(idle.is_finite() && idle >= 0.0) {
-        return Err(Error::Derivation {
-            reason: format!(
-                "thrust from fuel flow: the idle fuel flow {idle} kg/s must be a non-negative finite number"
-            ),
-        });
-    }
+    model.check()?;
     let mut derived = record.clone();
     if record.channel("thrust").is_ok() {
         return Ok((

@@ -68,9 +68,13 @@ use tuning::normalised_innovations;
 
 mod fourier_noise;
 mod history;
+mod passes;
+mod setup;
 mod status;
 pub use fourier_noise::*;
 pub use history::*;
+use passes::{Passes, noise_notes, pass_noise, report_line, run_pass, worse};
+use setup::Setup;
 use status::*;
 
 /// The innovations are consistent when every output's mean normalised
@@ -435,194 +439,6 @@ impl Filtered<'_> {
     }
 }
 
-/// What every pass shares: the model view, the start, the prior, the
-/// observations and the noise floors.
-struct Setup {
-    view: Box<dyn StateSpaceModel>,
-    state_names: Vec<String>,
-    x0: DVector<f64>,
-    /// Every aerodynamic parameter, the free ones at their start.
-    theta: Vec<f64>,
-    /// Indices of the free parameters in θ.
-    free: Vec<usize>,
-    names: Vec<String>,
-    observations: Observations,
-    prior: DMatrix<f64>,
-    /// Pseudonoise intensity per free parameter.
-    pseudonoise: Vec<f64>,
-    /// Fourier R per output and its floor.
-    measurement: Vec<f64>,
-    floors: Vec<f64>,
-    notes: Vec<String>,
-}
-
-/// Refuses what no augmented filter can run on.
-fn check(method: &str, record: &FlightRecord, structure: Filtered) -> Result<()> {
-    let missing = match structure {
-        Filtered::SixDof(s) => missing_channels(record, s),
-        Filtered::Linear(s) => s.missing_channels(record),
-    };
-    let free = structure.parameters().free;
-    free_parameters(method, record, missing, structure.name(), free)?;
-    if let Filtered::SixDof(s) = structure {
-        unsuitable(method, s)?;
-    }
-    Ok(())
-}
-
-/// The start θ and a note saying which: equation error's estimate
-/// (`start = "ee"`) when that method serves the structure. The EKF is
-/// linearised about its running estimate, and a start near the optimum
-/// keeps the early transient, where a wide prior makes large gains act on
-/// a poor linearisation, short; regression costs a fraction of a pass. The
-/// prior σ of each parameter state is `initial_uncertainty` times
-/// max(|θ₀|, 0.1), wide enough that the data, not the start, decide.
-fn start_values(
-    record: &FlightRecord,
-    structure: Filtered,
-    settings: &FilterSettings,
-    given: Option<&Estimate>,
-) -> (Vec<f64>, String) {
-    let Parameters {
-        names,
-        values,
-        free,
-        bounds,
-    } = structure.parameters();
-    let mut theta = values.to_vec();
-    if settings.start == Start::Model {
-        return (theta, "θ started from the model file's values".into());
-    }
-    match structure.equation_error_start(record, given) {
-        Ok(estimate) => {
-            for (i, name) in names.iter().enumerate() {
-                if let (true, Some(p)) = (free[i], estimate.parameter(name))
-                    && p.value.is_finite()
-                {
-                    theta[i] = p.value.clamp(bounds[i].0, bounds[i].1);
-                }
-            }
-            (theta, "θ started from equation error's estimate".into())
-        }
-        Err(reason) => (
-            theta,
-            format!("θ started from the model file's values: {reason}"),
-        ),
-    }
-}
-
-impl Setup {
-    fn new(
-        method: &str,
-        record: &FlightRecord,
-        structure: Filtered,
-        settings: &FilterSettings,
-        start: Option<&Estimate>,
-    ) -> Result<Setup> {
-        check(method, record, structure)?;
-        let parameters = structure.parameters();
-        let (names_all, free_flags) = (parameters.names, parameters.free);
-        let outputs = structure.outputs();
-        if let Some(name) = settings
-            .pseudonoise_for
-            .keys()
-            .find(|name| !structure.free_names().contains(name))
-        {
-            return Err(Error::Setting {
-                method: method.to_string(),
-                reason: format!(
-                    "pseudonoise_for: '{name}' is not a free parameter of model '{}'",
-                    structure.name()
-                ),
-            });
-        }
-        let View {
-            model: view,
-            x0,
-            state_names,
-            notes: view_notes,
-        } = structure.view(record, settings)?;
-        if view.len() < 2 {
-            return Err(Error::Refused(Refusal::TooFewData {
-                method: method.to_string(),
-                data: view.len(),
-                unknowns: 2,
-            }));
-        }
-        let (theta, start_note) = start_values(record, structure, settings, start);
-        let free: Vec<usize> = (0..theta.len()).filter(|&i| free_flags[i]).collect();
-        let names: Vec<String> = free.iter().map(|&i| names_all[i].clone()).collect();
-        let step = view.time(1) - view.time(0);
-        let observations =
-            Observations::from_record(record, outputs, view.time(0), step, view.len())?;
-        enough_data(method, &observations, free.len())?;
-        let window = fitting_window(record, outputs, None)?;
-        let mut measurement = Vec::new();
-        let mut floors = Vec::new();
-        let mut noise_notes = Vec::new();
-        for name in outputs {
-            let channel = record.channel(name)?;
-            let (variance, fourier, floor) =
-                channel_noise(channel, window, settings.motion_bandwidth);
-            measurement.push(variance);
-            floors.push(floor);
-            noise_notes.push(format!(
-                "{name} {:.3e} (Fourier {:.3e})",
-                variance.sqrt(),
-                fourier.sqrt()
-            ));
-        }
-        let scale = |v: f64| v.abs().max(PARAMETER_SCALE);
-        let n = x0.len();
-        let mut prior = DMatrix::zeros(n + free.len(), n + free.len());
-        for (i, state) in state_names.iter().enumerate() {
-            prior[(i, i)] = outputs
-                .iter()
-                .position(|o| o == state)
-                .map_or(0.01, |o| measurement[o]);
-        }
-        for (j, &i) in free.iter().enumerate() {
-            prior[(n + j, n + j)] = (settings.initial_uncertainty * scale(theta[i])).powi(2);
-        }
-        let pseudonoise = free
-            .iter()
-            .zip(&names)
-            .map(|(&i, name)| {
-                let relative = settings
-                    .pseudonoise_for
-                    .get(name)
-                    .copied()
-                    .unwrap_or(settings.pseudonoise);
-                (relative * scale(theta[i])).powi(2)
-            })
-            .collect();
-        let mut notes = vec![
-            start_note,
-            format!(
-                "measurement noise σ from the spectrum above {} Hz: {}",
-                settings.motion_bandwidth,
-                noise_notes.join(", ")
-            ),
-        ];
-        notes.extend(observations.note(step));
-        notes.extend(view_notes);
-        Ok(Setup {
-            view,
-            state_names,
-            x0,
-            theta,
-            free,
-            names,
-            observations,
-            prior,
-            pseudonoise,
-            measurement,
-            floors,
-            notes,
-        })
-    }
-}
-
 /// Runs the augmented filter `run` with the residual-correlation passes and
 /// assembles the estimate and the last pass's parameter histories (module
 /// header). Shared by the EKF and the UKF.
@@ -639,75 +455,26 @@ pub fn augmented_estimate<'a>(
     let mut setup = Setup::new(method, record, structure, settings, start)?;
     let n = setup.x0.len();
     let len = setup.view.len();
-    let step = setup.view.time(1) - setup.view.time(0);
     let start_values: Vec<f64> = setup.free.iter().map(|&i| setup.theta[i]).collect();
-    let mut process_states = vec![0.0; n];
-    let mut costs = Vec::new();
-    let mut report = String::from("pass  −ln L  mean ν²/S per output\n");
+    let mut passes = Passes {
+        process_states: vec![0.0; n],
+        theta: setup.theta.clone(),
+        lags: settings.correlation_lags.unwrap_or(n),
+        best: None,
+        rejected: None,
+        mehra_failed: false,
+        costs: Vec::new(),
+        report: String::from("pass  −ln L  mean ν²/S per output\n"),
+    };
     let mut last = None;
-    let mut mehra_failed = false;
-    let mut theta = setup.theta.clone();
-    let mut lags = settings.correlation_lags.unwrap_or(n);
-    // What the best pass so far ran with and ended with, for a pass whose
-    // noise makes the record less likely (module header, Noise 2).
-    let mut best: Option<Best> = None;
-    let mut rejected = None;
     let mut pass_number = 0;
     while pass_number < settings.passes {
         pass_number += 1;
-        let augmented = Augmented::new(setup.view.as_ref(), &theta, setup.free.clone())?;
-        let initial = Gaussian {
-            mean: augmented.state(setup.x0.as_slice()),
-            covariance: setup.prior.clone(),
-        };
-        let noise = Noise {
-            process: DMatrix::from_diagonal(&DVector::from_iterator(
-                n + setup.free.len(),
-                process_states.iter().chain(&setup.pseudonoise).copied(),
-            )),
-            measurement: DVector::from_column_slice(&setup.measurement),
-        };
-        let outcome = run(&augmented, initial, &noise, &setup.observations);
-        let worse = match (&outcome, &best) {
-            (Ok(pass), Some(best)) => !matches!(
-                pass.negative_log_likelihood
-                    .partial_cmp(&best.pass.negative_log_likelihood),
-                Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
-            ),
-            (Err(_), Some(_)) => true,
-            (_, None) => false,
-        };
-        if worse && lags > 0 && rejected.is_none() {
-            // Mehra's noise made the record less likely than the noise it
-            // replaced: back to the best pass, the zero-lag update from it.
-            let best = best.take().expect("a best pass");
-            costs.push(match &outcome {
-                Ok(pass) => pass.negative_log_likelihood,
-                Err(_) => f64::INFINITY,
-            });
-            report += &format!(
-                "{pass_number:>4}  rejected: the record less likely than after pass {}\n",
-                best.number
-            );
-            rejected = Some(pass_number);
-            setup.measurement = best.measurement.clone();
-            process_states = best.process.clone();
-            theta = best.theta.clone();
-            lags = 0;
+        let noise = pass_noise(&setup, &passes.process_states);
+        let outcome = run_pass(&setup, &passes.theta, &noise, run)?;
+        if worse(&outcome, passes.best.as_ref()) && passes.lags > 0 && passes.rejected.is_none() {
+            passes.reject(pass_number, &outcome, &mut setup, settings);
             pass_number -= 1;
-            tuning::update(
-                &best.pass,
-                len,
-                step,
-                n,
-                0,
-                &mut setup.measurement,
-                &setup.floors,
-                settings
-                    .tune_process_noise
-                    .then_some(&mut process_states[..]),
-            );
-            advance(&mut theta, &best.pass, &setup.free, n, len);
             continue;
         }
         let pass = match outcome {
@@ -715,133 +482,78 @@ pub fn augmented_estimate<'a>(
             Err(error) => {
                 return Ok(FilterRun {
                     estimate: diverged(method, structure, record, &setup, &start_values, error),
-                    history: History {
-                        names: setup.names.clone(),
-                        times: Vec::new(),
-                        values: Vec::new(),
-                        sigmas: Vec::new(),
-                    },
+                    history: History::empty(&setup.names),
                     innovations: Vec::new(),
                 });
             }
         };
-        costs.push(pass.negative_log_likelihood);
+        passes.costs.push(pass.negative_log_likelihood);
         let ratios = normalised_innovations(&pass, len);
-        report += &format!(
-            "{pass_number:>4}  {:.1}  {}\n",
-            pass.negative_log_likelihood,
-            ratios
-                .iter()
-                .zip(structure.outputs())
-                .map(|(r, o)| format!("{o} {r:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+        passes.report += &report_line(pass_number, &pass, &ratios, structure.outputs());
         let consistent = ratios.iter().all(|r| (r - 1.0).abs() <= TUNED);
         let done = consistent || pass_number == settings.passes;
         if !done {
-            let ran_with = Best {
-                number: pass_number,
-                pass: pass.clone(),
-                measurement: setup.measurement.clone(),
-                process: process_states.clone(),
-                theta: theta.clone(),
-            };
-            let update = tuning::update(
-                &pass,
-                len,
-                step,
-                n,
-                lags,
-                &mut setup.measurement,
-                &setup.floors,
-                settings
-                    .tune_process_noise
-                    .then_some(&mut process_states[..]),
-            );
-            if update == tuning::Update::ZeroLagFallback {
-                mehra_failed = true;
-            }
-            advance(&mut theta, &pass, &setup.free, n, len);
-            if lags > 0 {
-                best = Some(ran_with);
-            }
+            passes.tune(pass_number, &pass, &mut setup, settings);
         }
         last = Some((pass, ratios, noise));
         if done {
             break;
         }
     }
-    let (pass, ratios, noise) = last.expect("at least one pass");
-    let times: Vec<f64> = (0..len).map(|k| setup.view.time(k)).collect();
-    let history = History::of(&pass, &setup.names, times, n);
-    let mut estimate = assemble(
+    let last = last.expect("at least one pass");
+    let mut filter_run = finish(
         method,
         structure,
         record,
         &setup,
         &start_values,
+        last,
+        passes,
+    );
+    filter_run.estimate.wall_time = started.elapsed().as_secs_f64();
+    Ok(filter_run)
+}
+
+/// The estimate of the last pass (`last`: the pass, its outputs' mean
+/// ν²/S and the noise it ran with), its notes and report, and its
+/// parameter histories.
+fn finish(
+    method: &str,
+    structure: Filtered,
+    record: &FlightRecord,
+    setup: &Setup,
+    start_values: &[f64],
+    (pass, ratios, noise): (Pass, Vec<f64>, Noise),
+    passes: Passes,
+) -> FilterRun {
+    let n = setup.x0.len();
+    let times: Vec<f64> = (0..setup.view.len()).map(|k| setup.view.time(k)).collect();
+    let history = History::of(&pass, &setup.names, times, n);
+    let mut estimate = assemble(
+        method,
+        structure,
+        record,
+        setup,
+        start_values,
         &pass,
         &ratios,
         &history,
     );
-    estimate.cost_history = costs;
+    estimate.cost_history = passes.costs;
     estimate.iterations = estimate.cost_history.len();
-    estimate.wall_time = started.elapsed().as_secs_f64();
-    estimate.notes.push(format!(
-        "final noise: R σ {}; process noise intensity on {} {}",
-        structure
-            .outputs()
-            .iter()
-            .zip(noise.measurement.iter())
-            .map(|(o, r)| format!("{o} {:.3e}", r.sqrt()))
-            .collect::<Vec<_>>()
-            .join(", "),
-        setup.state_names.join(", "),
-        (0..n)
-            .map(|i| format!("{:.3e}", noise.process[(i, i)]))
-            .collect::<Vec<_>>()
-            .join(", ")
-    ));
-    if let Some(number) = rejected {
-        estimate.notes.push(format!(
-            "residual correlation: the noise Mehra's method gave made the record less likely (pass {number}, rejected); the passes from there used the zero-lag update"
-        ));
-    }
-    if mehra_failed {
-        estimate.notes.push(format!(
-            "residual correlation: Mehra's method with {lags} lags did not serve a pass (too few points with every output measured, or no transitions kept); that pass used the zero-lag update"
-        ));
-    }
-    estimate.details = report;
-    Ok(FilterRun {
+    noise_notes(
+        &mut estimate,
+        structure,
+        setup,
+        &noise,
+        passes.rejected,
+        passes.mehra_failed.then_some(passes.lags),
+    );
+    estimate.details = passes.report;
+    FilterRun {
         estimate,
         history,
         innovations: pass.innovations,
-    })
-}
-
-/// A pass the residual-correlation passes may return to, with the noise
-/// and θ it ran with.
-struct Best {
-    number: usize,
-    pass: Pass,
-    measurement: Vec<f64>,
-    process: Vec<f64>,
-    theta: Vec<f64>,
-}
-
-/// θ for the next pass: the free parameters where `pass` ended.
-fn advance(theta: &mut [f64], pass: &Pass, free: &[usize], states: usize, len: usize) {
-    let end = pass
-        .filtered
-        .get(len - 1)
-        .expect("a pass keeps every point")
-        .mean;
-    for (j, &i) in free.iter().enumerate() {
-        if end[states + j].is_finite() {
-            theta[i] = end[states + j];
-        }
     }
 }
 

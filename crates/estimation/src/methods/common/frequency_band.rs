@@ -116,54 +116,14 @@ impl BandOptions {
         let highest_allowed = 0.25 / step;
         let (low, high, how) = match self.band {
             Some((low, high)) => (low, high.min(highest_allowed), "given".to_string()),
-            None => {
-                if controls.is_empty() {
-                    return Err(Error::Settings { method: method.to_string(), reason: "the model has no control term to choose the band from; give band = [low, high]".to_string() });
-                }
-                // At most 100 candidates: the band's top to 1 % of the
-                // highest allowed frequency is enough.
-                let coarse = spacing.max(highest_allowed / 100.0);
-                let candidates: Vec<f64> = (1..)
-                    .map(|m| m as f64 * coarse)
-                    .take_while(|f| *f <= highest_allowed)
-                    .collect();
-                let omegas: Vec<f64> = candidates.iter().map(|f| 2.0 * PI * f).collect();
-                let transform = FourierTransform::new(&omegas, start, step, samples)?;
-                let means: Vec<f64> = controls
-                    .iter()
-                    .map(|(_, v)| v.iter().sum::<f64>() / v.len() as f64)
-                    .collect();
-                let centred =
-                    DMatrix::from_fn(samples, controls.len(), |k, i| controls[i].1[k] - means[i]);
-                let mut high: f64 = 0.0;
-                for spectrum in transform.transform_columns(&centred)? {
-                    let amplitude: Vec<f64> = spectrum.iter().map(|c| c.norm()).collect();
-                    let peak = amplitude.iter().copied().fold(0.0, f64::max);
-                    if let Some(last) = amplitude
-                        .iter()
-                        .rposition(|&a| peak > 0.0 && a >= self.input_threshold * peak)
-                    {
-                        high = high.max(candidates[last]);
-                    }
-                }
-                if high == 0.0 {
-                    let names: Vec<&str> = controls.iter().map(|(n, _)| *n).collect();
-                    return Err(Error::Data {
-                        reason: format!(
-                            "{method}: no control of the model ({}) moves in this record; give band = [low, high]",
-                            names.join(", ")
-                        ),
-                    });
-                }
-                (
-                    spacing,
-                    high,
-                    format!(
-                        "from the inputs' spectra (controls above {} of their peak amplitude)",
-                        self.input_threshold
-                    ),
-                )
-            }
+            None => (
+                spacing,
+                self.automatic_top(method, controls, (start, step, samples), spacing)?,
+                format!(
+                    "from the inputs' spectra (controls above {} of their peak amplitude)",
+                    self.input_threshold
+                ),
+            ),
         };
         let mut list: Vec<f64> = Vec::new();
         if zero {
@@ -195,6 +155,63 @@ impl BandOptions {
             }
         );
         Ok((list, description))
+    }
+
+    /// The automatic band's top: the highest frequency at which some
+    /// control's amplitude spectrum reaches `input_threshold` of its peak,
+    /// on a grid of at most 100 candidates up to a quarter of the sample
+    /// rate; an error when the model has no control or none moves.
+    fn automatic_top(
+        &self,
+        method: &str,
+        controls: &[(&str, Vec<f64>)],
+        (start, step, samples): (f64, f64, usize),
+        spacing: f64,
+    ) -> Result<f64> {
+        let highest_allowed = 0.25 / step;
+        if controls.is_empty() {
+            return Err(Error::Settings {
+                method: method.to_string(),
+                reason:
+                    "the model has no control term to choose the band from; give band = [low, high]"
+                        .to_string(),
+            });
+        }
+        // At most 100 candidates: the band's top to 1 % of the
+        // highest allowed frequency is enough.
+        let coarse = spacing.max(highest_allowed / 100.0);
+        let candidates: Vec<f64> = (1..)
+            .map(|m| m as f64 * coarse)
+            .take_while(|f| *f <= highest_allowed)
+            .collect();
+        let omegas: Vec<f64> = candidates.iter().map(|f| 2.0 * PI * f).collect();
+        let transform = FourierTransform::new(&omegas, start, step, samples)?;
+        let means: Vec<f64> = controls
+            .iter()
+            .map(|(_, v)| v.iter().sum::<f64>() / v.len() as f64)
+            .collect();
+        let centred = DMatrix::from_fn(samples, controls.len(), |k, i| controls[i].1[k] - means[i]);
+        let mut high: f64 = 0.0;
+        for spectrum in transform.transform_columns(&centred)? {
+            let amplitude: Vec<f64> = spectrum.iter().map(|c| c.norm()).collect();
+            let peak = amplitude.iter().copied().fold(0.0, f64::max);
+            if let Some(last) = amplitude
+                .iter()
+                .rposition(|&a| peak > 0.0 && a >= self.input_threshold * peak)
+            {
+                high = high.max(candidates[last]);
+            }
+        }
+        if high == 0.0 {
+            let names: Vec<&str> = controls.iter().map(|(n, _)| *n).collect();
+            return Err(Error::Data {
+                reason: format!(
+                    "{method}: no control of the model ({}) moves in this record; give band = [low, high]",
+                    names.join(", ")
+                ),
+            });
+        }
+        Ok(high)
     }
 }
 

@@ -109,32 +109,7 @@ pub fn linear_equation_error(
             model: structure.name.clone(),
         }));
     }
-    let mut needed: Vec<(&String, &str)> = structure
-        .states
-        .iter()
-        .map(|s| (s, "a state, measured: a regressor of equation error"))
-        .chain(
-            structure
-                .inputs
-                .iter()
-                .map(|u| (u, "an input of the linear model")),
-        )
-        .collect();
-    for equation in equations.iter().filter(|e| !e.state) {
-        needed.push((&structure.outputs[equation.row], "a fitted output equation"));
-    }
-    let missing: Vec<MissingChannel> = needed
-        .iter()
-        .filter(|(name, _)| record.channel(name).is_err())
-        .map(|(name, purpose)| MissingChannel {
-            name: name.to_string(),
-            purpose: purpose.to_string(),
-        })
-        .collect();
-    let present = record.channels.iter().map(|c| c.name.clone()).collect();
-    if let Some(refusal) = Refusal::missing(METHOD, missing, present) {
-        return Err(Error::Refused(refusal));
-    }
+    check_channels(record, structure, &equations)?;
     let window = fitting_window(record, &structure.states, None)?;
     let step = integration_step(record, &structure.states, None)?;
     let count = ((window.1 - window.0) / step + 1e-9).floor() as usize + 1;
@@ -199,6 +174,42 @@ pub fn linear_equation_error(
     Ok(estimate)
 }
 
+/// A refusal unless the record has every state, every input and every
+/// fitted output's channel.
+fn check_channels(
+    record: &FlightRecord,
+    structure: &LinearStructure,
+    equations: &[Equation],
+) -> Result<()> {
+    let mut needed: Vec<(&String, &str)> = structure
+        .states
+        .iter()
+        .map(|s| (s, "a state, measured: a regressor of equation error"))
+        .chain(
+            structure
+                .inputs
+                .iter()
+                .map(|u| (u, "an input of the linear model")),
+        )
+        .collect();
+    for equation in equations.iter().filter(|e| !e.state) {
+        needed.push((&structure.outputs[equation.row], "a fitted output equation"));
+    }
+    let missing: Vec<MissingChannel> = needed
+        .iter()
+        .filter(|(name, _)| record.channel(name).is_err())
+        .map(|(name, purpose)| MissingChannel {
+            name: name.to_string(),
+            purpose: purpose.to_string(),
+        })
+        .collect();
+    let present = record.channels.iter().map(|c| c.name.clone()).collect();
+    match Refusal::missing(METHOD, missing, present) {
+        Some(refusal) => Err(Error::Refused(refusal)),
+        None => Ok(()),
+    }
+}
+
 /// ẋ_i on the grid: its rate output when recorded, else its channel
 /// differentiated with breaks at the control steps' corners (NaN where no window fits).
 fn state_rate(
@@ -244,13 +255,14 @@ fn state_rate(
         .collect())
 }
 
-fn fit_equation(
+/// Per sample, the sum of the row's fixed entries' terms (the fixed
+/// entries at their values, the free ones at 0).
+fn fixed_terms(
     structure: &LinearStructure,
     equation: &Equation,
-    left: &[f64],
     (states, inputs): (&[Vec<f64>], &[Vec<f64>]),
-    lag: usize,
-) -> CoefficientResult {
+    len: usize,
+) -> Vec<f64> {
     // The fixed entries of the row at their values, the free ones at 0.
     let m = &structure.matrices;
     let free_here = |matrix: Matrix, column: usize| {
@@ -276,20 +288,57 @@ fn fit_equation(
             m.output_bias[equation.row],
         )
     };
-    let fixed = |k: usize| -> f64 {
-        let mut sum = if free_here(bias_matrix, 0) { 0.0 } else { bias };
-        for (j, x) in states.iter().enumerate() {
-            if !free_here(state_matrix, j) {
-                sum += state_row[j] * x[k];
+    (0..len)
+        .map(|k| {
+            let mut sum = if free_here(bias_matrix, 0) { 0.0 } else { bias };
+            for (j, x) in states.iter().enumerate() {
+                if !free_here(state_matrix, j) {
+                    sum += state_row[j] * x[k];
+                }
             }
-        }
-        for (j, u) in inputs.iter().enumerate() {
-            if !free_here(input_matrix, j) {
-                sum += input_row[j] * u[k];
+            for (j, u) in inputs.iter().enumerate() {
+                if !free_here(input_matrix, j) {
+                    sum += input_row[j] * u[k];
+                }
             }
-        }
-        sum
-    };
+            sum
+        })
+        .collect()
+}
+
+/// The result of an equation with no more usable samples (`usable`) than
+/// parameters: no estimate, infinite bounds.
+fn too_few_samples(equation: &Equation, usable: usize) -> CoefficientResult {
+    let width = equation.columns.len();
+    CoefficientResult {
+        parameters: equation
+            .columns
+            .iter()
+            .map(|&p| (p, f64::NAN, f64::INFINITY, f64::INFINITY))
+            .collect(),
+        covariance: DMatrix::from_element(width, width, f64::INFINITY),
+        fit: OutputFit::new(&equation.name, &[], &[]),
+        problem: Some(format!(
+            "{}: {usable} usable samples for {width} parameters",
+            equation.name
+        )),
+        window_note: None,
+    }
+}
+
+/// The least-squares fit of one equation: its left side `left` less the
+/// fixed entries' terms on the free entries' regressors, over the samples
+/// where all are finite, with the bounds corrected for residual
+/// correlation up to `lag` samples.
+fn fit_equation(
+    structure: &LinearStructure,
+    equation: &Equation,
+    left: &[f64],
+    (states, inputs): (&[Vec<f64>], &[Vec<f64>]),
+    lag: usize,
+) -> CoefficientResult {
+    let fixed = fixed_terms(structure, equation, (states, inputs), left.len());
+    let fixed = |k: usize| fixed[k];
     let regressor = |r: Regressor, k: usize| match r {
         Regressor::State(j) => states[j][k],
         Regressor::Input(j) => inputs[j][k],
@@ -307,21 +356,7 @@ fn fit_equation(
         .collect();
     let width = equation.columns.len();
     if rows.len() <= width {
-        return CoefficientResult {
-            parameters: equation
-                .columns
-                .iter()
-                .map(|&p| (p, f64::NAN, f64::INFINITY, f64::INFINITY))
-                .collect(),
-            covariance: DMatrix::from_element(width, width, f64::INFINITY),
-            fit: OutputFit::new(&equation.name, &[], &[]),
-            problem: Some(format!(
-                "{}: {} usable samples for {width} parameters",
-                equation.name,
-                rows.len()
-            )),
-            window_note: None,
-        };
+        return too_few_samples(equation, rows.len());
     }
     let x = DMatrix::from_fn(rows.len(), width, |r, j| {
         regressor(equation.regressors[j], rows[r])

@@ -56,7 +56,7 @@ pub(super) struct Objective<'a> {
     pub(super) weights: Vec<f64>,
     /// Where the sensitivity equations are linearised (see [`Linearise`]).
     pub(super) linearise: Linearise,
-    /// Whether [`LeastSquaresProblem::refine`] may switch the linearisation
+    /// Whether [`LeastSquaresObjective::refine`] may switch the linearisation
     /// to [`Linearise::Stages`] (the last stage of a fit).
     pub(super) refinable: bool,
     /// The last θ simulated, its predictions and its grids: the solver asks
@@ -64,7 +64,7 @@ pub(super) struct Objective<'a> {
     /// then for the Jacobian there, which the grids' sensitivities give.
     pub(super) simulated: Option<Simulated>,
     /// The simulation whose Jacobian is held
-    /// ([`LeastSquaresProblem::hold`]): while Some, simulations are plain
+    /// ([`LeastSquaresObjective::hold`]): while Some, simulations are plain
     /// and the Jacobian is its grids'.
     pub(super) held: Option<Simulated>,
     /// How the segments are simulated: the integrated states, the inputs'

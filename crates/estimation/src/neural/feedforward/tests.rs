@@ -1,6 +1,10 @@
 //! Tests of `feedforward`.
 
+use super::levenberg_marquardt::{
+    Samples, Workspace, accumulate, damped_step, information, training_sum_of_squares,
+};
 use super::*;
+use nalgebra::DVector;
 
 /// Inputs in [−1, 1]³ from an additive recurrence (quasi-random, no RNG).
 fn inputs(count: usize) -> Vec<Vec<f64>> {

@@ -239,18 +239,9 @@ pub(super) fn assemble(
     (motion_names, coefficients): (Vec<String>, Vec<Coefficient>),
     reconstruction: Reconstruction,
 ) -> Result<Data> {
-    let aero = &structure.aircraft.aero;
     let times = &reconstruction.times;
     let channel = |name: &str| sampled(record, name, times);
-    let alpha_dot = if needs_alpha_dot(aero) {
-        let alpha = record.channel("alpha")?;
-        let derivative = options
-            .differentiator
-            .differentiate_with_breaks(alpha, &control_steps(record));
-        Some(derivative.values_at_unbridged(times))
-    } else {
-        None
-    };
+    let alpha_dot = alpha_dot(record, structure, options, times)?;
     let motion_series = motion_names
         .iter()
         .map(|name| record.channel(name)?.values_at(times))
@@ -264,33 +255,12 @@ pub(super) fn assemble(
         .map(|c| channel(c.name()))
         .collect::<Result<Vec<_>>>()?;
     let value = |series: &Option<Vec<f64>>, k: usize| series.as_ref().map_or(f64::NAN, |s| s[k]);
-    let axes = aero.force_axes;
-    let mut data = Data {
-        coefficient_names: coefficients
-            .iter()
-            .map(|c| c.name(axes).to_string())
-            .collect(),
-        motion_names,
-        coefficients,
-        times: Vec::new(),
-        conditions: Vec::new(),
-        motion: Vec::new(),
-        measured: Vec::new(),
-        pairs: Vec::new(),
-        period: 1.0 / reconstruction.rate,
-        input_scaling: Scaling {
-            range: Vec::new(),
-            low: 0.0,
-            high: 1.0,
-        },
-        output_scaling: Scaling {
-            range: Vec::new(),
-            low: 0.0,
-            high: 1.0,
-        },
-        coefficient_outputs: options.coefficient_outputs,
-        notes: reconstruction.notes.clone(),
-    };
+    let mut data = Data::empty(
+        structure,
+        options,
+        (motion_names, coefficients),
+        &reconstruction,
+    );
     let mut left_out = 0;
     for (k, &time) in times.iter().enumerate() {
         let condition = AeroInput {
@@ -339,6 +309,64 @@ pub(super) fn assemble(
     }
     fit_scalings(&mut data, options.scaling)?;
     Ok(data)
+}
+
+/// α̇ on the reconstruction's instants `times` where the model needs it:
+/// the α channel differentiated with breaks at the control steps.
+fn alpha_dot(
+    record: &FlightRecord,
+    structure: &ModelStructure,
+    options: &RestrictedOptions,
+    times: &[f64],
+) -> Result<Option<Vec<f64>>> {
+    if !needs_alpha_dot(&structure.aircraft.aero) {
+        return Ok(None);
+    }
+    let alpha = record.channel("alpha")?;
+    let derivative = options
+        .differentiator
+        .differentiate_with_breaks(alpha, &control_steps(record));
+    Ok(Some(derivative.values_at_unbridged(times)))
+}
+
+impl Data {
+    /// Data of the motion variables and coefficients named, with no
+    /// instant yet: the reconstruction's period and notes, scalings still
+    /// to fit.
+    fn empty(
+        structure: &ModelStructure,
+        options: &RestrictedOptions,
+        (motion_names, coefficients): (Vec<String>, Vec<Coefficient>),
+        reconstruction: &Reconstruction,
+    ) -> Data {
+        let axes = structure.aircraft.aero.force_axes;
+        Data {
+            coefficient_names: coefficients
+                .iter()
+                .map(|c| c.name(axes).to_string())
+                .collect(),
+            motion_names,
+            coefficients,
+            times: Vec::new(),
+            conditions: Vec::new(),
+            motion: Vec::new(),
+            measured: Vec::new(),
+            pairs: Vec::new(),
+            period: 1.0 / reconstruction.rate,
+            input_scaling: Scaling {
+                range: Vec::new(),
+                low: 0.0,
+                high: 1.0,
+            },
+            output_scaling: Scaling {
+                range: Vec::new(),
+                low: 0.0,
+                high: 1.0,
+            },
+            coefficient_outputs: options.coefficient_outputs,
+            notes: reconstruction.notes.clone(),
+        }
+    }
 }
 
 /// The input and output scalings from the training pairs (Eq. 3).

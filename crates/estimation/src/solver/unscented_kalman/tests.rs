@@ -1,5 +1,6 @@
 //! Tests of `unscented_kalman`.
 
+use super::factors::solve_right_lower_any;
 use super::*;
 use crate::model::linear::LinearStateSpace;
 use crate::solver::extended_kalman;

@@ -14,6 +14,17 @@ pub struct History {
 }
 
 impl History {
+    /// A history of the parameters `names` with no grid point (a
+    /// diverged run's).
+    pub(super) fn empty(names: &[String]) -> History {
+        History {
+            names: names.to_vec(),
+            times: Vec::new(),
+            values: Vec::new(),
+            sigmas: Vec::new(),
+        }
+    }
+
     /// The history of the parameter states (after the `states` kinematic
     /// ones) of a pass.
     pub(super) fn of(pass: &Pass, names: &[String], times: Vec<f64>, states: usize) -> History {
