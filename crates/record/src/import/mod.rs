@@ -1,6 +1,7 @@
-//! Bringing real flight data in: a data file (headed CSV, or headerless
-//! whitespace- or comma-separated ASCII with columns known by number) and a
-//! column-map file (TOML) that says which column is which channel, in which
+//! Bringing real flight data in: a data file (headed CSV, headerless
+//! whitespace- or comma-separated ASCII with columns known by number, or a
+//! MATLAB level-5 MAT-file: a matrix's columns by number, vectors by name)
+//! and a column-map file (TOML) that says which column is which channel, in which
 //! unit, with which scale and offset, and how several columns form one
 //! channel. Values are converted to SI with angles in radians on load:
 //! `SI = (raw·scale + offset)·unit factor`, and a temperature in `degC` also
@@ -17,14 +18,17 @@
 //! Columns the map does not mention, and channels no estimator reads, are
 //! listed in the outcome.
 
+mod source;
+
 use crate::derived;
 use crate::error::Result;
 use crate::{Channel, FlightRecord, check_name};
-use aeroid_core::csv_table::{CsvTable, Delimiter, Layout, first_disorder};
+use aeroid_core::csv_table::{Delimiter, first_disorder};
 use aeroid_core::error::{Problems, parse_toml, read_text};
 use aeroid_core::units::{Dimension, Quantity, unit_factor};
 use aeroid_sim::atmosphere::Atmosphere;
 use serde::{Deserialize, Serialize};
+use source::Source;
 use std::fmt;
 use std::path::Path;
 
@@ -46,7 +50,7 @@ pub struct ColumnMapFile {
 }
 
 /// The `[file]` table of a column map.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FileLayout {
     /// Whether the first line that is not a comment names the columns.
@@ -54,6 +58,10 @@ pub struct FileLayout {
     pub header: bool,
     #[serde(default)]
     pub delimiter: Delimiter,
+    /// In a MAT-file, the variable whose columns are numbered (needed when
+    /// the file holds several matrices).
+    #[serde(default)]
+    pub matrix: Option<String>,
 }
 
 fn with_header() -> bool {
@@ -65,6 +73,7 @@ impl Default for FileLayout {
         FileLayout {
             header: true,
             delimiter: Delimiter::Auto,
+            matrix: None,
         }
     }
 }
@@ -240,28 +249,23 @@ pub struct ImportOutcome {
 pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutcome> {
     let file: ColumnMapFile = parse_toml(map_path, &read_text(map_path)?)?;
     let (time, channels) = validate_map(&file, map_path)?;
-    let layout = Layout {
-        header: file.file.header,
-        delimiter: file.file.delimiter,
-    };
-    let table = CsvTable::read_layout(data, layout)?;
-    table.require_rows()?;
-    let time_index = column_index(&table, &file.time.column)?;
-    let times: Vec<f64> = table
-        .time_column(time_index)?
-        .into_iter()
-        .map(|t| time.apply(t))
-        .collect();
+    let table = Source::read(data, &file.file)?;
+    let headers = table.headers();
+    let time_index = table.index(&file.time.column)?;
+    let raw_times = table.times(time_index)?;
+    let rows = raw_times.len();
+    let times: Vec<f64> = raw_times.into_iter().map(|t| time.apply(t)).collect();
     check_converted_times(&times, &file.time.column, map_path)?;
     let mut used = vec![time_index];
     let mut record_channels = Vec::with_capacity(channels.len());
     for (i, mapped) in channels.iter().enumerate() {
         let mut columns = Vec::with_capacity(mapped.columns.len());
         for column in &mapped.columns {
-            let index = column_index(&table, column)?;
+            let index = table.index(column)?;
             used.push(index);
-            columns.push(table.measurements(
+            columns.push(table.cells(
                 index,
+                rows,
                 mapped.non_finite == NonFiniteCell::Dropout,
                 &format!(
                     "to record such cells as dropouts, set non_finite = \"dropout\" for channel '{}' in {}",
@@ -270,13 +274,13 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
                 ),
             )?);
         }
-        let channel = build_channel(mapped, &times, &columns, &table.headers, data);
+        let channel = build_channel(mapped, &times, &columns, &headers, data);
         check_rate(&channel, i, map_path)?;
         record_channels.push(channel);
     }
-    let unmapped = (0..table.headers.len())
+    let unmapped = (0..headers.len())
         .filter(|i| !used.contains(i))
-        .map(|i| table.headers[i].clone())
+        .map(|i| headers[i].clone())
         .collect();
     let stem = data
         .file_stem()
@@ -296,14 +300,6 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
         unmapped,
         warnings: warnings(&channels, read),
     })
-}
-
-/// The index of a mapped column in the data file.
-fn column_index(table: &CsvTable, column: &ColumnRef) -> Result<usize> {
-    match column {
-        ColumnRef::Number(n) => Ok(table.column_by_number(u64::try_from(*n).unwrap_or(0))?),
-        ColumnRef::Name(name) => Ok(table.column_index(name)?),
-    }
 }
 
 /// Channels not among `read`, and altitudes whose density is the standard day's.
