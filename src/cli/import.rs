@@ -46,6 +46,9 @@ pub fn run(args: Args) -> Result<()> {
             outcome.unmapped.join(", ")
         );
     }
+    for note in &outcome.notes {
+        outln!("note: {note}");
+    }
     for warning in &outcome.warnings {
         eprintln!("warning: {warning}");
     }

@@ -118,6 +118,10 @@ pub struct ChannelColumnSpec {
     /// The one column of the channel ...
     #[serde(default)]
     pub column: Option<ColumnRef>,
+    /// ... or a constant, in `unit`, at every time of the time column
+    /// (a density or Mach the flight did not record) ...
+    #[serde(default)]
+    pub value: Option<f64>,
     /// ... or several, combined as `combine` says.
     #[serde(default)]
     pub columns: Option<Vec<ColumnRef>>,
@@ -211,8 +215,12 @@ impl Conversion {
 struct MappedChannel {
     name: String,
     columns: Vec<ColumnRef>,
+    /// A constant in the map's unit, in place of columns.
+    constant: Option<f64>,
     combine: Option<Combine>,
     unit: String,
+    /// The unit as the map writes it.
+    map_unit: String,
     conversion: Conversion,
     rate: Option<f64>,
     resolution: Option<f64>,
@@ -234,13 +242,15 @@ impl fmt::Display for ImportWarning {
     }
 }
 
-/// The imported record, the data file's columns the map did not use, and
-/// warnings (channels no estimator reads, the altitude convention's limits).
+/// The imported record, the data file's columns the map did not use,
+/// warnings (channels no estimator reads, the altitude convention's limits)
+/// and notes (channels the map states as constants).
 #[derive(Debug, Clone)]
 pub struct ImportOutcome {
     pub record: FlightRecord,
     pub unmapped: Vec<String>,
     pub warnings: Vec<ImportWarning>,
+    pub notes: Vec<String>,
 }
 
 /// Reads `data` with the column map at `map_path` into a flight record;
@@ -259,7 +269,10 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
     let mut used = vec![time_index];
     let mut record_channels = Vec::with_capacity(channels.len());
     for (i, mapped) in channels.iter().enumerate() {
-        let mut columns = Vec::with_capacity(mapped.columns.len());
+        let mut columns = Vec::with_capacity(mapped.columns.len().max(1));
+        if let Some(value) = mapped.constant {
+            columns.push(vec![Some(value); rows]);
+        }
         for column in &mapped.columns {
             let index = table.index(column)?;
             used.push(index);
@@ -295,11 +308,35 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
     // What the record format relies on (a channel whose cells are all
     // skipped has no samples), said of the data file before anything is written.
     record.validate(data)?;
+    let notes = channels
+        .iter()
+        .zip(&record.channels)
+        .filter_map(|(mapped, channel)| {
+            let value = mapped.constant?;
+            Some(format!(
+                "channel '{}': the constant {value}{} stated by the map ({} {}) at each of the {} times",
+                mapped.name,
+                unit_suffix(&mapped.map_unit),
+                crate::significant(channel.values[0], 6),
+                channel.unit,
+                channel.times.len()
+            ))
+        })
+        .collect();
     Ok(ImportOutcome {
         record,
         unmapped,
         warnings: warnings(&channels, read),
+        notes,
     })
+}
+
+/// A unit after a number: ` kg/m3`, nothing for a dimensionless one.
+fn unit_suffix(unit: &str) -> String {
+    match unit {
+        "" | "-" => String::new(),
+        unit => format!(" {unit}"),
+    }
 }
 
 /// Channels not among `read`, and altitudes whose density is the standard day's.
@@ -369,9 +406,13 @@ fn build_channel(
                 .map_or_else(|| n.to_string(), |h| h.clone()),
         })
         .collect();
-    let source = match mapped.combine {
-        None => format!("import: column {} of {}", described[0], data.display()),
-        Some(combine) => format!(
+    let source = match (mapped.constant, mapped.combine) {
+        (Some(value), _) => format!(
+            "import: the constant {value}{} of the column map",
+            unit_suffix(&mapped.map_unit)
+        ),
+        (None, None) => format!("import: column {} of {}", described[0], data.display()),
+        (None, Some(combine)) => format!(
             "import: {} of columns {} of {}",
             serde_json::to_value(combine)
                 .ok()
@@ -531,6 +572,15 @@ fn channel_columns(
     field: &str,
     problems: &mut Problems,
 ) -> Vec<ColumnRef> {
+    if spec.value.is_some() {
+        if spec.column.is_some() || spec.columns.is_some() || spec.combine.is_some() {
+            problems.push(
+                field,
+                "give `value` (a constant) or `column`/`columns`, not both",
+            );
+        }
+        return Vec::new();
+    }
     match (&spec.column, &spec.columns, spec.combine) {
         (Some(column), None, None) => vec![column.clone()],
         (Some(_), Some(_), _) => {
@@ -540,7 +590,7 @@ fn channel_columns(
         (None, None, _) => {
             problems.push(
                 field,
-                "no column: give `column` (or `columns` with `combine`)",
+                "no column: give `column` (or `columns` with `combine`, or a constant `value`)",
             );
             Vec::new()
         }
@@ -586,18 +636,46 @@ fn map_channel(
     let described: Vec<String> = columns.iter().map(ToString::to_string).collect();
     let (conversion, dimension) = conversion(
         field,
-        &format!(
-            "channel '{}', column{} {}",
-            spec.name,
-            if described.len() > 1 { "s" } else { "" },
-            described.join(", ")
-        ),
+        &match spec.value {
+            Some(value) => format!("channel '{}', constant value {value}", spec.name),
+            None => format!(
+                "channel '{}', column{} {}",
+                spec.name,
+                if described.len() > 1 { "s" } else { "" },
+                described.join(", ")
+            ),
+        },
         spec.unit.as_deref(),
         spec.scale,
         spec.offset,
         known,
         problems,
     );
+    if let Some(value) = spec.value {
+        if !value.is_finite() {
+            problems.push(
+                format!("{field}.value"),
+                format!("must be a finite number, is {value}"),
+            );
+        }
+        for (key, given) in [
+            ("scale", spec.scale.is_some()),
+            ("offset", spec.offset.is_some()),
+            ("resolution", spec.resolution.is_some()),
+            ("empty", spec.empty != EmptyCell::default()),
+            ("non_finite", spec.non_finite != NonFiniteCell::default()),
+        ] {
+            if given {
+                problems.push(
+                    format!("{field}.{key}"),
+                    format!(
+                        "is for a column; channel '{}' is the constant `value` (state it in its `unit`)",
+                        spec.name
+                    ),
+                );
+            }
+        }
+    }
     if spec.convention.is_some() && spec.name != "altitude" {
         problems.push(
             format!("{field}.convention"),
@@ -633,8 +711,10 @@ fn map_channel(
     MappedChannel {
         name: spec.name.clone(),
         columns,
+        constant: spec.value,
         combine: spec.combine,
         unit,
+        map_unit: spec.unit.as_deref().unwrap_or("").trim().to_string(),
         conversion,
         rate: positive("rate", &spec.rate, Dimension::Frequency),
         resolution: positive("resolution", &spec.resolution, dimension),
