@@ -37,7 +37,7 @@ fn with_flap(flap: impl Fn(usize) -> f64) -> FlightRecord {
 #[test]
 fn one_lsb_flips_of_an_unused_flap_move_no_estimate() {
     let lsb = 0.01 * DEG;
-    let flip = |k: usize| (k.wrapping_mul(2_654_435_761) >> 7) % 8 == 0;
+    let flip = |k: usize| (k.wrapping_mul(2_654_435_761) >> 7).is_multiple_of(8);
     let still = with_flap(|_| 0.0);
     let flipping = with_flap(|k| if flip(k) { lsb } else { 0.0 });
     let flips = flipping

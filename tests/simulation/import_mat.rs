@@ -83,8 +83,7 @@ fn bits(values: &[f64]) -> Vec<u64> {
 
 fn import_error(data: &Path, map: &Path) -> String {
     import(data, map, aeroid::estimation::CHANNELS_READ)
-        .err()
-        .expect("the import must fail")
+        .expect_err("the import must fail")
         .to_string()
 }
 

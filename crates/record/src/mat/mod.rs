@@ -60,10 +60,11 @@ pub fn sniff(path: &Path) -> Result<DataFormat> {
         ));
     }
     if named_mat {
-        return refuse(format!(
+        return refuse(
             "not a MATLAB level-5 file (its first 128 bytes are not a level-5 header); aeroid reads \
              level-5 MAT-files (save with '-v7' or '-v6'), CSV and whitespace-separated ASCII"
-        ));
+                .to_string(),
+        );
     }
     match std::str::from_utf8(&bytes) {
         Ok(_) => Ok(DataFormat::Text),
