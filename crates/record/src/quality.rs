@@ -52,8 +52,9 @@ pub const MIN_SAMPLES: usize = 10;
 pub const DITHER_STEPS: f64 = 4.0;
 /// One-spacing changes that make a grid of values a quantisation ([`quantum`]).
 pub const LSB_FLIPS: usize = 20;
-/// A transition moving a channel by at most this many LSB is quantisation,
-/// not a control step ([`crate::prep::differentiation::transitions`]).
+/// A channel whose range spans at most this many LSB is near-constant: its
+/// changes are quantisation, not control steps
+/// ([`crate::prep::differentiation::transitions`]).
 pub const FEW_LSB: f64 = 3.0;
 /// A jump this many times the typical jump around it is out of place.
 pub const NEIGHBOURHOOD_FACTOR: f64 = 10.0;

@@ -313,12 +313,18 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
         .zip(&record.channels)
         .filter_map(|(mapped, channel)| {
             let value = mapped.constant?;
+            let si = match mapped.map_unit == channel.unit || mapped.map_unit.is_empty() {
+                true => String::new(),
+                false => format!(
+                    " ({}{})",
+                    crate::significant(channel.values[0], 6),
+                    unit_suffix(&channel.unit)
+                ),
+            };
             Some(format!(
-                "channel '{}': the constant {value}{} stated by the map ({} {}) at each of the {} times",
+                "channel '{}': the constant {value}{} stated by the map{si} at each of the {} times",
                 mapped.name,
                 unit_suffix(&mapped.map_unit),
-                crate::significant(channel.values[0], 6),
-                channel.unit,
                 channel.times.len()
             ))
         })

@@ -24,10 +24,9 @@ pub enum DataFormat {
     Mat5,
 }
 
-/// The format of `path`: a level-5 MAT-file by its header, text otherwise;
-/// an HDF5 (MATLAB v7.3) file, a level-4 MAT-file, a `.mat` file without a
-/// level-5 header or a binary file that is not valid UTF-8 is an error
-/// that says what the file is.
+/// The format of `path`: a level-5 MAT-file by its header, text when it is
+/// valid UTF-8 (whatever its name); an HDF5 (MATLAB v7.3) file, a level-4
+/// MAT-file or other binary data is an error that says what the file is.
 pub fn sniff(path: &Path) -> Result<DataFormat> {
     let bytes = std::fs::read(path).map_err(|source| aeroid_core::Error::Io {
         path: path.to_path_buf(),
@@ -59,16 +58,15 @@ pub fn sniff(path: &Path) -> Result<DataFormat> {
             "not a MATLAB level-5 file: it looks like a level-4 MAT-file, which aeroid does not read; {save_as}"
         ));
     }
-    if named_mat {
-        return refuse(
+    match (std::str::from_utf8(&bytes), named_mat) {
+        // Text, whatever its name (`save -ascii` writes text into a .mat).
+        (Ok(_), _) => Ok(DataFormat::Text),
+        (Err(_), true) => refuse(
             "not a MATLAB level-5 file (its first 128 bytes are not a level-5 header); aeroid reads \
              level-5 MAT-files (save with '-v7' or '-v6'), CSV and whitespace-separated ASCII"
                 .to_string(),
-        );
-    }
-    match std::str::from_utf8(&bytes) {
-        Ok(_) => Ok(DataFormat::Text),
-        Err(e) => refuse(format!(
+        ),
+        (Err(e), false) => refuse(format!(
             "not a MATLAB level-5 file, nor text (not UTF-8 at byte {}); aeroid reads level-5 \
              MAT-files, CSV and whitespace-separated ASCII",
             e.valid_up_to()
