@@ -7,16 +7,18 @@ use std::path::PathBuf;
 ///
 /// Bring real flight data in: a data file and a column map (TOML) become a record folder.
 ///
-/// The data file is a CSV with a header row, or headerless ASCII
-/// (whitespace- or comma-separated) whose columns the map names by number;
-/// comment lines (`#`, `%`), CRLF line ends and a UTF-8 byte-order mark are
-/// accepted. The map names each channel's column (or columns, summed,
+/// The data file is a CSV with a header row, headerless ASCII
+/// (whitespace- or comma-separated) whose columns the map names by number,
+/// or a MATLAB level-5 MAT-file (a matrix's columns by number, vector
+/// variables by name; v7.3 files are refused); comment lines (`#`, `%`),
+/// CRLF line ends and a UTF-8 byte-order mark are accepted. The map names each channel's column (or columns, summed,
 /// averaged or half-differenced), unit, scale, offset and, for altitude, its
 /// convention. The map format, every channel name with its unit and
 /// meaning, and every accepted unit are in docs/import.md.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The data file: headed CSV, or headerless ASCII (see docs/import.md).
+    /// The data file: headed CSV, headerless ASCII or a level-5 MAT-file
+    /// (see docs/import.md).
     data: PathBuf,
     /// The column map: time column, and per channel its column(s), unit,
     /// scale and offset (format in docs/import.md).
@@ -67,6 +69,9 @@ pub fn run(args: Args) -> Result<()> {
             "columns not in the map (not imported): {}",
             outcome.unmapped.join(", ")
         );
+    }
+    for note in &outcome.notes {
+        outln!("note: {note}");
     }
     for warning in &outcome.warnings {
         eprintln!("warning: {warning}");

@@ -24,6 +24,7 @@ pub mod check;
 pub mod crosscheck;
 pub mod derive;
 pub mod estimate;
+pub mod export;
 #[cfg(feature = "jsbsim")]
 pub mod export_jsbsim;
 #[cfg(not(feature = "jsbsim"))]

@@ -25,6 +25,7 @@ mod model_terms;
 mod multiple_shooting;
 mod neural_gauss_newton;
 mod output_error;
+mod quantised_inputs;
 mod rbf_delta;
 mod registry;
 mod residual_correlation;

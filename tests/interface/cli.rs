@@ -555,3 +555,87 @@ fn a_plugin_that_did_not_load_is_explained_where_it_is_asked_for() {
     );
     std::fs::remove_dir_all(&folder).unwrap();
 }
+
+/// `aeroid export` writes a record as one MAT-file or CSV: the format from
+/// `--format` or the extension; the CSV holds every channel on the union
+/// of their instants (empty where a channel has no sample, NaN for a
+/// dropout). It refuses a file inside the record folder (the record is
+/// only read, and is left as it was) and a name without a format.
+#[test]
+fn export_writes_one_file_outside_the_record() {
+    use aeroid::record::{Channel, FlightRecord};
+    let folder = common::temp_folder("cli-export");
+    let channel = |name: &str, times: Vec<f64>, values: Vec<f64>| Channel {
+        name: name.into(),
+        unit: "rad".into(),
+        rate: 1.0 / (times[1] - times[0]),
+        resolution: None,
+        source: "test".into(),
+        times,
+        values,
+    };
+    let record = FlightRecord {
+        scenario: "export".into(),
+        seed: None,
+        profile: "test".into(),
+        absent: Vec::new(),
+        channels: vec![
+            channel("alpha", vec![0.0, 0.5, 1.0], vec![0.1, f64::NAN, 0.3]),
+            channel("pitch", vec![0.0, 1.0], vec![0.05, 0.06]),
+        ],
+        bridge_gaps: false,
+    };
+    let rec = folder.join("rec");
+    record.write(&rec).unwrap();
+    let before: Vec<(std::path::PathBuf, Vec<u8>)> = std::fs::read_dir(&rec)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|p| (p.clone(), std::fs::read(&p).unwrap()))
+        .collect();
+    let csv = folder.join("out.csv");
+    let text = stdout_of(aeroid().arg("export").arg(&rec).arg("--out").arg(&csv));
+    assert!(text.contains("2 channels exported"), "{text}");
+    assert_eq!(
+        std::fs::read_to_string(&csv).unwrap(),
+        "time [s],alpha [rad],pitch [rad]\n0,0.1,0.05\n0.5,NaN,\n1,0.3,0.06\n"
+    );
+    let mat = folder.join("out.data");
+    let text = stdout_of(
+        aeroid()
+            .arg("export")
+            .arg(&rec)
+            .args(["--format", "mat", "--out"])
+            .arg(&mat),
+    );
+    assert!(
+        text.contains("data_alpha: 3 × 2 double") && text.contains("data_pitch: 2 × 2 double"),
+        "{text}"
+    );
+    assert!(
+        std::fs::read(&mat)
+            .unwrap()
+            .starts_with(b"MATLAB 5.0 MAT-file")
+    );
+    for (out, expected) in [
+        (rec.join("alpha.csv"), "inside the record folder"),
+        (rec.join("copy.mat"), "inside the record folder"),
+        (folder.join("out.txt"), "say the format with --format mat"),
+    ] {
+        let output = aeroid()
+            .arg("export")
+            .arg(&rec)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            !output.status.success() && stderr.contains(expected),
+            "{stderr}"
+        );
+    }
+    assert!(!rec.join("copy.mat").exists() && !folder.join("out.txt").exists());
+    for (path, bytes) in before {
+        assert_eq!(std::fs::read(&path).unwrap(), bytes, "{}", path.display());
+    }
+}

@@ -487,3 +487,65 @@ fn headed_csv_with_comments_crlf_bom_and_numbered_columns() {
     .to_string();
     assert!(cell.contains("line 4, column 'AOA'"), "{cell}");
 }
+
+/// A flight without density or altitude (the HFB-320 file) takes ρ from a
+/// constant the map states in its unit: the density channel holds its SI
+/// value at every time of the data file, its source and the import's notes
+/// say it is the map's constant; a Mach stated without a unit is kept as
+/// it is. A constant that is not finite, in a unit of another dimension,
+/// given beside a column or with a column's scale is refused, naming the
+/// map's field.
+#[test]
+fn a_map_states_constant_channels() {
+    let data = "0 80 2.5\n0.1 81 2.6\n0.2 82 2.4\n";
+    let head = "[file]\nheader = false\n[time]\ncolumn = 1\n[[channels]]\nname = \"airspeed\"\ncolumn = 2\n[[channels]]\nname = \"alpha\"\ncolumn = 3\nunit = \"deg\"\n";
+    let map = format!(
+        "{head}[[channels]]\nname = \"density\"\nvalue = 0.0015\nunit = \"slug/ft3\"\n[[channels]]\nname = \"mach\"\nvalue = 0.792\n"
+    );
+    let outcome = import_files("constant-density", data, &map, "asc");
+    let density = outcome.record.channel("density").unwrap();
+    let si = 0.0015 * SLUG / (FOOT * FOOT * FOOT);
+    assert_eq!(density.values, [si; 3]);
+    assert_eq!(density.times, [0.0, 0.1, 0.2]);
+    assert_eq!(density.unit, "kg/m3");
+    assert!(
+        density.source.contains("constant 0.0015 slug/ft3"),
+        "{}",
+        density.source
+    );
+    assert_eq!(outcome.record.channel("mach").unwrap().values, [0.792; 3]);
+    let notes = outcome.notes.join("\n");
+    assert!(
+        notes.contains("channel 'density': the constant 0.0015 slug/ft3 stated by the map (0.773")
+            && notes.contains("channel 'mach': the constant 0.792 stated by the map"),
+        "{notes}"
+    );
+    for (test, channel, expected) in [
+        (
+            "constant-nan",
+            "name = \"density\"\nvalue = nan\nunit = \"kg/m3\"",
+            "channels[2].value: must be a finite number, is NaN",
+        ),
+        (
+            "constant-unit",
+            "name = \"density\"\nvalue = 1.2\nunit = \"m/s\"",
+            "channel 'density', constant value 1.2: unit 'm/s' is not a unit of density",
+        ),
+        (
+            "constant-and-column",
+            "name = \"density\"\nvalue = 1.2\ncolumn = 2",
+            "give `value` (a constant) or `column`/`columns`, not both",
+        ),
+        (
+            "constant-scale",
+            "name = \"density\"\nvalue = 1.2\nscale = 2.0",
+            "channels[2].scale: is for a column; channel 'density' is the constant `value`",
+        ),
+    ] {
+        let error = import_error(test, data, &format!("{head}[[channels]]\n{channel}\n"));
+        assert!(
+            error.contains("map.toml") && error.contains(expected),
+            "{test}: {error}"
+        );
+    }
+}

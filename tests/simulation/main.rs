@@ -11,6 +11,7 @@ mod angular_rates;
 mod bad_input;
 mod flow_angles;
 mod import_formats;
+mod import_mat;
 mod limits;
 mod linear_modes;
 mod parameter_changes;

@@ -144,7 +144,7 @@ pub struct Chosen {
 /// (NaN dropouts left out).
 pub fn classify(values: &[f64]) -> (Interpolation, Reason) {
     let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    let runs = transitions(&finite);
+    let runs = transitions(&finite, None);
     let change = |j: usize| finite[j + 1] - finite[j];
     // Two or more samples inside one transition, moving one way: a ramp
     // the samples resolve (three consecutive changes of one sign).

@@ -309,6 +309,7 @@ impl JsbsimFlight {
             density,
             speed_of_sound: self.read(R_SOUND)? * FT,
             log_density_ratio: (density / SEA_LEVEL_DENSITY).ln(),
+            mach: None,
         };
         let alpha = self.read(R_ALPHA)?;
         let air_data = AirData {

@@ -31,6 +31,15 @@ pub enum Error {
     #[error("{reason}")]
     Derivation { reason: String },
 
+    /// A data file the import cannot read: a MAT-file of another format
+    /// than level 5, binary data that is no text, a MAT-file variable that
+    /// cannot be a column.
+    #[error("{}: {reason}", path.display())]
+    DataFormat {
+        path: std::path::PathBuf,
+        reason: String,
+    },
+
     /// A record that cannot be written as TOML.
     #[error("{reason}")]
     Serialize { reason: String },

@@ -22,8 +22,10 @@
 
 pub mod derived;
 pub mod error;
+pub mod export;
 pub mod gaps;
 pub mod import;
+pub mod mat;
 pub mod prep;
 pub mod quality;
 pub mod recorder;
@@ -287,9 +289,9 @@ struct ChannelEntry {
 }
 
 /// Channels sharing one time base, written to one CSV.
-struct TimeBase {
-    file: String,
-    channels: Vec<usize>,
+pub(crate) struct TimeBase {
+    pub(crate) file: String,
+    pub(crate) channels: Vec<usize>,
 }
 
 impl FlightRecord {
@@ -480,7 +482,7 @@ impl FlightRecord {
     }
 
     /// Groups channels with identical sample times and names each group's file.
-    fn time_bases(&self) -> Vec<TimeBase> {
+    pub(crate) fn time_bases(&self) -> Vec<TimeBase> {
         let mut bases: Vec<TimeBase> = Vec::new();
         for (i, channel) in self.channels.iter().enumerate() {
             match bases

@@ -50,6 +50,12 @@ use aeroid_sim::state::Control;
 pub const MIN_SAMPLES: usize = 10;
 /// Levels at most this many declared resolutions apart are a dither.
 pub const DITHER_STEPS: f64 = 4.0;
+/// One-spacing changes that make a grid of values a quantisation ([`quantum`]).
+pub const LSB_FLIPS: usize = 20;
+/// A channel whose range spans at most this many LSB is near-constant: its
+/// changes are quantisation, not control steps
+/// ([`crate::prep::differentiation::transitions`]).
+pub const FEW_LSB: f64 = 3.0;
 /// A jump this many times the typical jump around it is out of place.
 pub const NEIGHBOURHOOD_FACTOR: f64 = 10.0;
 /// Intervals on each side whose jumps make the neighbourhood.
@@ -248,10 +254,39 @@ fn inferred_resolution(valid: &[(f64, f64)]) -> Option<f64> {
     if values.len() < 3 {
         return None;
     }
-    let spacings: Vec<f64> = values.windows(2).map(|w| w[1] - w[0]).collect();
+    grid_spacing(&values)
+}
+
+/// The smallest spacing of ascending distinct values (two at least) when
+/// every spacing is a whole multiple of it, to 1e-3 of it.
+fn grid_spacing(levels: &[f64]) -> Option<f64> {
+    let spacings: Vec<f64> = levels.windows(2).map(|w| w[1] - w[0]).collect();
     let step = spacings.iter().copied().fold(f64::INFINITY, f64::min);
     let whole = |s: &f64| ((s / step) - (s / step).round()).abs() < 1e-3;
-    (step > 0.0 && spacings.iter().all(whole)).then_some(step)
+    (step.is_finite() && step > 0.0 && spacings.iter().all(whole)).then_some(step)
+}
+
+/// The least significant bit of a sampled channel (finite values, in
+/// order) for telling quantisation from control steps: the declared
+/// resolution, else the smallest spacing of the distinct values when they
+/// lie on a grid of it and at least [`LSB_FLIPS`] consecutive samples
+/// differ by exactly that spacing. A designed input changes level a few
+/// times; a near-constant quantised channel at a level's edge flips by one
+/// LSB again and again. Values on a grid that seldom move by one spacing
+/// (a step input's few levels) have no LSB.
+pub fn quantum(values: &[f64], declared: Option<f64>) -> Option<f64> {
+    if let Some(resolution) = declared.filter(|r| r.is_finite() && *r > 0.0) {
+        return Some(resolution);
+    }
+    let mut levels = values.to_vec();
+    levels.sort_by(f64::total_cmp);
+    levels.dedup();
+    let step = grid_spacing(&levels)?;
+    let flips = values
+        .windows(2)
+        .filter(|w| ((w[1] - w[0]).abs() - step).abs() < 1e-3 * step)
+        .count();
+    (flips >= LSB_FLIPS).then_some(step)
 }
 
 /// Two or three levels changing at random, further apart than a dither.

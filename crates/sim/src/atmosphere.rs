@@ -24,6 +24,9 @@ pub struct Air {
     pub speed_of_sound: f64,
     /// ln(ρ/ρ0), for power laws in density without `powf`.
     pub log_density_ratio: f64,
+    /// A measured Mach number that stands for V/a (a record's `mach`
+    /// channel); None: Mach is the airspeed over `speed_of_sound`.
+    pub mach: Option<f64>,
 }
 
 /// ISA with a temperature offset `temperature_offset` (K).
@@ -84,6 +87,7 @@ impl Atmosphere {
             density: pressure / (GAS_CONSTANT * temperature),
             speed_of_sound: (HEAT_CAPACITY_RATIO * GAS_CONSTANT * temperature).sqrt(),
             log_density_ratio,
+            mach: None,
         }
     }
 

@@ -145,7 +145,10 @@ impl<T: Real> AirData<T> {
             alpha,
             alpha_sin_cos,
             beta,
-            mach: airspeed / air.speed_of_sound,
+            mach: match air.mach {
+                Some(mach) => T::constant(mach),
+                None => airspeed / air.speed_of_sound,
+            },
             dynamic_pressure: airspeed * (0.5 * air.density) * airspeed,
             velocity,
         }

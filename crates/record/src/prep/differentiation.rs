@@ -33,6 +33,7 @@
 //! gets no derivative (a dropout, which the estimators leave out).
 
 use crate::Channel;
+use crate::quality::{FEW_LSB, quantum};
 
 /// Settings of the local polynomial differentiator (a settings table
 /// writes them as `differentiator = { half_width = "0.1 s", degree = 4 }`).
@@ -284,7 +285,7 @@ impl Differentiator {
 }
 
 /// Instants where `channel` steps or turns a fast ramp's corner
-/// ([`transitions`]): a transition of one change is a step, its instant
+/// ([`transitions`], with the channel's declared resolution): a transition of one change is a step, its instant
 /// the first sample with the new value; a longer one is a surface moving
 /// through an actuator's ramp, its instants the last sample before the
 /// motion and the first after it. A slow ramp, whose changes stay below
@@ -293,7 +294,7 @@ impl Differentiator {
 pub fn step_times(channel: &Channel) -> Vec<f64> {
     let finite = finite_samples(channel);
     let values: Vec<f64> = finite.iter().map(|(_, v)| *v).collect();
-    transitions(&values)
+    transitions(&values, channel.resolution)
         .into_iter()
         .flat_map(|run| {
             let before = (run.len() > 1).then(|| finite[run.start].0);
@@ -314,7 +315,7 @@ pub fn step_times(channel: &Channel) -> Vec<f64> {
 pub fn corner_times(channel: &Channel) -> Vec<f64> {
     let finite = finite_samples(channel);
     let values: Vec<f64> = finite.iter().map(|(_, v)| *v).collect();
-    transitions(&values)
+    transitions(&values, channel.resolution)
         .into_iter()
         .flat_map(|run| [finite[run.start].0, finite[run.end].0])
         .collect()
@@ -341,8 +342,12 @@ fn finite_samples(channel: &Channel) -> Vec<(f64, f64)> {
 /// the signal's range (quantization steps stay below it). A *transition*
 /// is a run of consecutive changes above half that threshold holding at
 /// least one large change: one change, a step sampled (or a ramp within
-/// one sample interval); more, a ramp through samples.
-pub fn transitions(values: &[f64]) -> Vec<std::ops::Range<usize>> {
+/// one sample interval); more, a ramp through samples. A channel whose
+/// whole range is at most [`FEW_LSB`] least significant bits ([`quantum`]:
+/// `resolution` when declared, else inferred from the values) is a
+/// near-constant quantised channel, whose changes are quantisation: it has
+/// no transitions (an unused flap at a level's edge that flips by one LSB).
+pub fn transitions(values: &[f64], resolution: Option<f64>) -> Vec<std::ops::Range<usize>> {
     if values.len() < 3 {
         return Vec::new();
     }
@@ -374,6 +379,12 @@ pub fn transitions(values: &[f64]) -> Vec<std::ops::Range<usize>> {
         if changes[first..i].iter().any(|&c| c > threshold) {
             runs.push(first..i);
         }
+    }
+    let near_constant = !runs.is_empty()
+        && quantum(values, resolution)
+            .is_some_and(|lsb| high - low <= FEW_LSB * lsb * (1.0 + 1e-9));
+    if near_constant {
+        runs.clear();
     }
     runs
 }
@@ -651,5 +662,59 @@ mod tests {
             .map(|t| ((t * 0.3).sin() * 20.0).round() / 20.0)
             .collect();
         assert!(step_times(&channel(times, quantized)).is_empty());
+    }
+
+    /// A near-constant quantised channel (an unused flap at a level's edge,
+    /// LSB 0.01°) that flips by one LSB 300 times, at random, and by two
+    /// now and then, has no steps and no corners, its LSB inferred from the
+    /// values or declared. A 2° step on the same channel is still found,
+    /// once (the flips stay below 5 % of its range), and a clean step input
+    /// of two levels (which changes level only twice: no quantisation)
+    /// keeps its steps.
+    #[test]
+    fn quantisation_flips_are_not_steps() {
+        let lsb = 0.01 * std::f64::consts::PI / 180.0;
+        let times: Vec<f64> = (0..3000).map(|k| k as f64 * 0.02).collect();
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut flips = 0;
+        let dither: Vec<f64> = (0..3000)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                match state % 10 {
+                    0 => {
+                        flips += 1;
+                        lsb
+                    }
+                    1 => 2.0 * lsb,
+                    _ => 0.0,
+                }
+            })
+            .collect();
+        assert!(flips > 250, "{flips} flips");
+        let mut flap = channel(times.clone(), dither.clone());
+        assert!(
+            step_times(&flap).is_empty(),
+            "{:?}",
+            &step_times(&flap)[..5]
+        );
+        assert!(corner_times(&flap).is_empty());
+        flap.resolution = Some(lsb);
+        assert!(step_times(&flap).is_empty());
+        let deployed: Vec<f64> = dither
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v + if k >= 1500 { 2.0 * 100.0 * lsb } else { 0.0 })
+            .collect();
+        let deployed = channel(times.clone(), deployed);
+        assert_eq!(step_times(&deployed), vec![times[1500]]);
+        let two_levels: Vec<f64> = (0..3000)
+            .map(|k| if (1000..2000).contains(&k) { lsb } else { 0.0 })
+            .collect();
+        assert_eq!(
+            step_times(&channel(times.clone(), two_levels)),
+            vec![times[1000], times[2000]]
+        );
     }
 }

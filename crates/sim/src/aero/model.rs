@@ -369,9 +369,9 @@ impl AeroModel {
             _ => {}
         }
         match spec.reference_mach {
-            Some(m) if !(m.is_finite() && m > 0.0) => problems.push(
+            Some(m) if !(m.is_finite() && m >= 0.0) => problems.push(
                 format!("{prefix}.reference_mach"),
-                "must be a positive Mach number",
+                "must be a Mach number, zero or more (0 for terms in Mach itself)",
             ),
             None if uses(Regressor::Mach) => {
                 problems.push(format!("{prefix}.reference_mach"), "needed by dMach terms")

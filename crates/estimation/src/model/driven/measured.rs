@@ -1,6 +1,8 @@
 //! What the record measures in place of part of the model ([`Ambient`]):
 //! the air density ρ (the `density` channel, or 2·q̄/V² from the dynamic
 //! pressure and the airspeed) instead of the ISA's at the altitude, the
+//! Mach number (the `mach` channel) instead of V over the ISA's speed of
+//! sound at the altitude, the
 //! thrust (the `thrust` channel, along the thrust line) instead of
 //! δT·Tmax·(ρ/ρ0)ⁿ, and α̇ of the separation equation from the measured α
 //! (local polynomial differentiation, not across a control step); and
@@ -16,13 +18,15 @@ use aeroid_sim::atmosphere::{Air, Atmosphere, SEA_LEVEL_DENSITY};
 /// instant: the air density ρ (kg/m³, the `density` channel) instead of
 /// the ISA's at the altitude, and the thrust (N, the `thrust` channel,
 /// along the aircraft's thrust line) instead of the throttle and engine
-/// model δT·Tmax·(ρ/ρ0)ⁿ; None where the record has no such channel. And
+/// model δT·Tmax·(ρ/ρ0)ⁿ, and the Mach number (the `mach` channel)
+/// instead of V/a; None where the record has no such channel. And
 /// the derivative of the measured α (rad/s) for a stall model whose
 /// separation takes it (`measured_alpha_dot`), None for any other.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Ambient {
     pub density: Option<f64>,
     pub thrust: Option<f64>,
+    pub mach: Option<f64>,
     pub alpha_dot: Option<f64>,
 }
 
@@ -34,16 +38,18 @@ impl Ambient {
         Ambient {
             density: mix(self.density, end.density),
             thrust: mix(self.thrust, end.thrust),
+            mach: mix(self.mach, end.mach),
             alpha_dot: mix(self.alpha_dot, end.alpha_dot),
         }
     }
 
     /// The air at `altitude`: the atmosphere's, its density (and ln(ρ/ρ0),
-    /// which the thrust lapse reads) the measured one when there is one.
-    /// Temperature, pressure and speed of sound stay the atmosphere's at
-    /// the altitude.
+    /// which the thrust lapse reads) the measured one when there is one,
+    /// and the measured Mach number when there is one. Temperature,
+    /// pressure and speed of sound stay the atmosphere's at the altitude.
     pub fn air(self, atmosphere: &Atmosphere, altitude: f64) -> Air {
         let mut air = atmosphere.at(altitude);
+        air.mach = self.mach;
         if let Some(density) = self.density {
             air.density = density;
             air.log_density_ratio = (density / SEA_LEVEL_DENSITY).ln();
@@ -82,7 +88,7 @@ impl From<Air> for Surroundings {
 
 /// The record's measured quantities the model takes instead of its own
 /// ([`Ambient`]).
-pub const MEASURED_QUANTITIES: [&str; 2] = ["density", "thrust"];
+pub const MEASURED_QUANTITIES: [&str; 3] = ["density", "thrust", "mach"];
 
 /// The channels that stand in for a missing `altitude` pseudo-control, in
 /// order: pressure altitude, else the density altitude of the measured
@@ -90,7 +96,7 @@ pub const MEASURED_QUANTITIES: [&str; 2] = ["density", "thrust"];
 /// airspeed ([`DrivenSimulation::from_record`](super::DrivenSimulation::from_record)).
 pub const ALTITUDE_SUBSTITUTES: [&str; 3] = ["pressure_altitude", "density", "dynamic_pressure"];
 
-/// The record's measured density and thrust on the grid (linear between
+/// The record's measured density, thrust and Mach on the grid (linear between
 /// samples, as the measured pseudo-controls), and the notes saying so.
 pub(super) fn measured_ambient(
     record: &FlightRecord,
@@ -98,7 +104,7 @@ pub(super) fn measured_ambient(
 ) -> Result<(Vec<Ambient>, Vec<String>)> {
     let mut ambient = vec![Ambient::default(); times.len()];
     let mut notes = Vec::new();
-    let [density, thrust] = MEASURED_QUANTITIES;
+    let [density, thrust, mach] = MEASURED_QUANTITIES;
     if let Ok(channel) = record.channel(density) {
         for (into, value) in ambient.iter_mut().zip(channel.values_at(times)?) {
             into.density = Some(value);
@@ -135,6 +141,15 @@ pub(super) fn measured_ambient(
                 .into(),
         );
     }
+    if let Ok(channel) = record.channel(mach) {
+        for (into, value) in ambient.iter_mut().zip(channel.values_at(times)?) {
+            into.mach = Some(value);
+        }
+        notes.push(
+            "Mach: the record's 'mach' channel, not the airspeed over the ISA's speed of sound at the altitude"
+                .into(),
+        );
+    }
     let bad = |value: Option<f64>, positive: bool| {
         value.is_some_and(|v| !v.is_finite() || (positive && v <= 0.0))
     };
@@ -144,6 +159,14 @@ pub(super) fn measured_ambient(
                 reason: format!(
                     "the measured air density at t = {t:.3} s is {}: it must be finite and positive (channel '{density}', or 2·q̄/V² from 'dynamic_pressure' and 'airspeed')",
                     a.density.unwrap_or(f64::NAN)
+                ),
+            });
+        }
+        if bad(a.mach, false) || a.mach.is_some_and(|m| m < 0.0) {
+            return Err(Error::Data {
+                reason: format!(
+                    "the record's '{mach}' channel is {} at t = {t:.3} s: it must be finite and not negative",
+                    a.mach.unwrap_or(f64::NAN)
                 ),
             });
         }

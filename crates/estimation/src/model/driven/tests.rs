@@ -6,7 +6,7 @@ use super::kinematics::{
 };
 use super::linearise::evaluate;
 use super::measured::{Ambient, Surroundings};
-use super::{ALTITUDE, FLIGHT_PATH_SIZE, FlightPathState};
+use super::{AIRSPEED, ALTITUDE, FLIGHT_PATH_SIZE, FlightPathState};
 use crate::structure::Observable;
 use crate::structure::{ModelStructure, stall_test_structure};
 use aeroid_core::units::STANDARD_GRAVITY;
@@ -61,6 +61,7 @@ fn measured_density_and_thrust_replace_the_models() {
     let measured = Ambient {
         density: Some(air.density),
         thrust: Some(thrust),
+        mach: None,
         alpha_dot: None,
     };
     let (same_rates, same) = at(measured, &controls);
@@ -87,6 +88,83 @@ fn measured_density_and_thrust_replace_the_models() {
     let mut throttled = controls;
     throttled[Control::Throttle.index()] = 0.9;
     assert_eq!(at(stronger, &throttled), at(stronger, &controls));
+}
+
+/// The ATTAS longitudinal model with a term in Mach itself, CL_dMach =
+/// 0.5 about `reference_mach` (as the structure file writes it).
+fn with_mach_term(reference: &str) -> crate::error::Result<ModelStructure> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/attas-longitudinal.toml"
+    );
+    let text = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("[aero.CL]\n0 = 0.2\n", "[aero.CL]\n0 = 0.2\ndMach = 0.5\n")
+        .replace(
+            "oswald_efficiency = 0.8\n",
+            &format!("oswald_efficiency = 0.8\nreference_mach = {reference}\n"),
+        );
+    assert!(text.contains("dMach") && text.contains("reference_mach"));
+    let file = std::env::temp_dir().join(format!(
+        "aeroid-mach-{reference}-{}.toml",
+        std::process::id()
+    ));
+    std::fs::write(&file, text).unwrap();
+    let structure = ModelStructure::load(file.to_str().unwrap());
+    std::fs::remove_file(&file).unwrap();
+    structure
+}
+
+/// A recorded Mach replaces V/a ([`Ambient`]), and `reference_mach = 0`
+/// states a term in Mach itself: with the ISA's V/a given as measured the
+/// outputs are the model's own (1e-12); a measured Mach 2 % higher is the
+/// model's Mach exactly and moves CL by CL_dMach × the difference
+/// (1e-12). A negative reference is refused, naming the field.
+#[test]
+fn measured_mach_replaces_v_over_a_about_a_zero_reference() {
+    let structure = with_mach_term("0").unwrap();
+    assert_eq!(structure.aircraft.aero.reference_mach, 0.0);
+    let model = FlightModel::new(structure.aircraft.clone(), Default::default());
+    let (x, controls) = test_point();
+    let outputs = ["mach", "CL"].map(|name| Observable::parse(name).unwrap());
+    let at = |ambient: Ambient| {
+        evaluate(
+            &model,
+            &x,
+            &controls,
+            PseudoRates::default(),
+            ambient,
+            &outputs,
+        )
+        .1
+    };
+    let own = at(Ambient::default());
+    let air = model.environment.atmosphere.at(x[ALTITUDE]);
+    let v_over_a = own[0];
+    assert!((v_over_a - x[AIRSPEED] / air.speed_of_sound).abs() < 1e-12);
+    let same = at(Ambient {
+        mach: Some(v_over_a),
+        ..Ambient::default()
+    });
+    for (a, b) in same.iter().zip(&own) {
+        assert!((a - b).abs() <= 1e-12 * b.abs(), "{a} vs {b}");
+    }
+    let recorded = 1.02 * v_over_a;
+    let measured = at(Ambient {
+        mach: Some(recorded),
+        ..Ambient::default()
+    });
+    assert_eq!(measured[0], recorded);
+    let moved = measured[1] - own[1];
+    assert!(
+        (moved - 0.5 * (recorded - v_over_a)).abs() <= 1e-12,
+        "CL moved by {moved}"
+    );
+    let error = with_mach_term("-0.1").unwrap_err().to_string();
+    assert!(
+        error.contains("reference_mach: must be a Mach number, zero or more"),
+        "{error}"
+    );
 }
 
 /// [`rotated`] against the library's sine and cosine, over base angles

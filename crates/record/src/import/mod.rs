@@ -1,6 +1,7 @@
-//! Bringing real flight data in: a data file (headed CSV, or headerless
-//! whitespace- or comma-separated ASCII with columns known by number) and a
-//! column-map file (TOML) that says which column is which channel, in which
+//! Bringing real flight data in: a data file (headed CSV, headerless
+//! whitespace- or comma-separated ASCII with columns known by number, or a
+//! MATLAB level-5 MAT-file: a matrix's columns by number, vectors by name)
+//! and a column-map file (TOML) that says which column is which channel, in which
 //! unit, with which scale and offset, and how several columns form one
 //! channel. Values are converted to SI with angles in radians on load:
 //! `SI = (raw·scale + offset)·unit factor`, and a temperature in `degC` also
@@ -17,14 +18,17 @@
 //! Columns the map does not mention, and channels no estimator reads, are
 //! listed in the outcome.
 
+mod source;
+
 use crate::derived;
 use crate::error::Result;
 use crate::{Channel, FlightRecord, check_name};
-use aeroid_core::csv_table::{CsvTable, Delimiter, Layout, first_disorder};
+use aeroid_core::csv_table::{Delimiter, first_disorder};
 use aeroid_core::error::{FieldErrors, parse_toml, read_text};
 use aeroid_core::units::{Dimension, Quantity, unit_factor};
 use aeroid_sim::atmosphere::Atmosphere;
 use serde::{Deserialize, Serialize};
+use source::Source;
 use std::fmt;
 use std::path::Path;
 
@@ -46,7 +50,7 @@ pub struct ColumnMapFile {
 }
 
 /// The `[file]` table of a column map.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FileLayout {
     /// Whether the first line that is not a comment names the columns.
@@ -54,6 +58,10 @@ pub struct FileLayout {
     pub header: bool,
     #[serde(default)]
     pub delimiter: Delimiter,
+    /// In a MAT-file, the variable whose columns are numbered (needed when
+    /// the file holds several matrices).
+    #[serde(default)]
+    pub matrix: Option<String>,
 }
 
 fn with_header() -> bool {
@@ -65,6 +73,7 @@ impl Default for FileLayout {
         FileLayout {
             header: true,
             delimiter: Delimiter::Auto,
+            matrix: None,
         }
     }
 }
@@ -109,6 +118,10 @@ pub struct ChannelColumnSpec {
     /// The one column of the channel ...
     #[serde(default)]
     pub column: Option<ColumnRef>,
+    /// ... or a constant, in `unit`, at every time of the time column
+    /// (a density or Mach the flight did not record) ...
+    #[serde(default)]
+    pub value: Option<f64>,
     /// ... or several, combined as `combine` says.
     #[serde(default)]
     pub columns: Option<Vec<ColumnRef>>,
@@ -202,8 +215,12 @@ impl Conversion {
 struct MappedChannel {
     name: String,
     columns: Vec<ColumnRef>,
+    /// A constant in the map's unit, in place of columns.
+    constant: Option<f64>,
     combine: Option<Combine>,
     unit: String,
+    /// The unit as the map writes it.
+    map_unit: String,
     conversion: Conversion,
     rate: Option<f64>,
     resolution: Option<f64>,
@@ -225,13 +242,15 @@ impl fmt::Display for ImportWarning {
     }
 }
 
-/// The imported record, the data file's columns the map did not use, and
-/// warnings (channels no estimator reads, the altitude convention's limits).
+/// The imported record, the data file's columns the map did not use,
+/// warnings (channels no estimator reads, the altitude convention's limits)
+/// and notes (channels the map states as constants).
 #[derive(Debug, Clone)]
 pub struct ImportOutcome {
     pub record: FlightRecord,
     pub unmapped: Vec<String>,
     pub warnings: Vec<ImportWarning>,
+    pub notes: Vec<String>,
 }
 
 /// Reads `data` with the column map at `map_path` into a flight record;
@@ -240,28 +259,26 @@ pub struct ImportOutcome {
 pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutcome> {
     let file: ColumnMapFile = parse_toml(map_path, &read_text(map_path)?)?;
     let (time, channels) = validate_map(&file, map_path)?;
-    let layout = Layout {
-        header: file.file.header,
-        delimiter: file.file.delimiter,
-    };
-    let table = CsvTable::read_layout(data, layout)?;
-    table.require_rows()?;
-    let time_index = column_index(&table, &file.time.column)?;
-    let times: Vec<f64> = table
-        .time_column(time_index)?
-        .into_iter()
-        .map(|t| time.apply(t))
-        .collect();
+    let table = Source::read(data, &file.file)?;
+    let headers = table.headers();
+    let time_index = table.index(&file.time.column)?;
+    let raw_times = table.times(time_index)?;
+    let rows = raw_times.len();
+    let times: Vec<f64> = raw_times.into_iter().map(|t| time.apply(t)).collect();
     check_converted_times(&times, &file.time.column, map_path)?;
     let mut used = vec![time_index];
     let mut record_channels = Vec::with_capacity(channels.len());
     for (i, mapped) in channels.iter().enumerate() {
-        let mut columns = Vec::with_capacity(mapped.columns.len());
+        let mut columns = Vec::with_capacity(mapped.columns.len().max(1));
+        if let Some(value) = mapped.constant {
+            columns.push(vec![Some(value); rows]);
+        }
         for column in &mapped.columns {
-            let index = column_index(&table, column)?;
+            let index = table.index(column)?;
             used.push(index);
-            columns.push(table.measurements(
+            columns.push(table.cells(
                 index,
+                rows,
                 mapped.non_finite == NonFiniteCell::Dropout,
                 &format!(
                     "to record such cells as dropouts, set non_finite = \"dropout\" for channel '{}' in {}",
@@ -270,13 +287,13 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
                 ),
             )?);
         }
-        let channel = build_channel(mapped, &times, &columns, &table.headers, data);
+        let channel = build_channel(mapped, &times, &columns, &headers, data);
         check_rate(&channel, i, map_path)?;
         record_channels.push(channel);
     }
-    let unmapped = (0..table.headers.len())
+    let unmapped = (0..headers.len())
         .filter(|i| !used.contains(i))
-        .map(|i| table.headers[i].clone())
+        .map(|i| headers[i].clone())
         .collect();
     let stem = data
         .file_stem()
@@ -292,18 +309,40 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
     // What the record format relies on (a channel whose cells are all
     // skipped has no samples), said of the data file before anything is written.
     record.validate(data)?;
+    let notes = channels
+        .iter()
+        .zip(&record.channels)
+        .filter_map(|(mapped, channel)| {
+            let value = mapped.constant?;
+            let si = match mapped.map_unit == channel.unit || mapped.map_unit.is_empty() {
+                true => String::new(),
+                false => format!(
+                    " ({}{})",
+                    crate::significant(channel.values[0], 6),
+                    unit_suffix(&channel.unit)
+                ),
+            };
+            Some(format!(
+                "channel '{}': the constant {value}{} stated by the map{si} at each of the {} times",
+                mapped.name,
+                unit_suffix(&mapped.map_unit),
+                channel.times.len()
+            ))
+        })
+        .collect();
     Ok(ImportOutcome {
         record,
         unmapped,
         warnings: warnings(&channels, read),
+        notes,
     })
 }
 
-/// The index of a mapped column in the data file.
-fn column_index(table: &CsvTable, column: &ColumnRef) -> Result<usize> {
-    match column {
-        ColumnRef::Number(n) => Ok(table.column_by_number(u64::try_from(*n).unwrap_or(0))?),
-        ColumnRef::Name(name) => Ok(table.column_index(name)?),
+/// A unit after a number: ` kg/m3`, nothing for a dimensionless one.
+fn unit_suffix(unit: &str) -> String {
+    match unit {
+        "" | "-" => String::new(),
+        unit => format!(" {unit}"),
     }
 }
 
@@ -374,9 +413,13 @@ fn build_channel(
                 .map_or_else(|| n.to_string(), |h| h.clone()),
         })
         .collect();
-    let source = match mapped.combine {
-        None => format!("import: column {} of {}", described[0], data.display()),
-        Some(combine) => format!(
+    let source = match (mapped.constant, mapped.combine) {
+        (Some(value), _) => format!(
+            "import: the constant {value}{} of the column map",
+            unit_suffix(&mapped.map_unit)
+        ),
+        (None, None) => format!("import: column {} of {}", described[0], data.display()),
+        (None, Some(combine)) => format!(
             "import: {} of columns {} of {}",
             serde_json::to_value(combine)
                 .ok()
@@ -536,6 +579,15 @@ fn channel_columns(
     field: &str,
     problems: &mut FieldErrors,
 ) -> Vec<ColumnRef> {
+    if spec.value.is_some() {
+        if spec.column.is_some() || spec.columns.is_some() || spec.combine.is_some() {
+            problems.push(
+                field,
+                "give `value` (a constant) or `column`/`columns`, not both",
+            );
+        }
+        return Vec::new();
+    }
     match (&spec.column, &spec.columns, spec.combine) {
         (Some(column), None, None) => vec![column.clone()],
         (Some(_), Some(_), _) => {
@@ -545,7 +597,7 @@ fn channel_columns(
         (None, None, _) => {
             problems.push(
                 field,
-                "no column: give `column` (or `columns` with `combine`)",
+                "no column: give `column` (or `columns` with `combine`, or a constant `value`)",
             );
             Vec::new()
         }
@@ -591,18 +643,46 @@ fn map_channel(
     let described: Vec<String> = columns.iter().map(ToString::to_string).collect();
     let (conversion, dimension) = conversion(
         field,
-        &format!(
-            "channel '{}', column{} {}",
-            spec.name,
-            if described.len() > 1 { "s" } else { "" },
-            described.join(", ")
-        ),
+        &match spec.value {
+            Some(value) => format!("channel '{}', constant value {value}", spec.name),
+            None => format!(
+                "channel '{}', column{} {}",
+                spec.name,
+                if described.len() > 1 { "s" } else { "" },
+                described.join(", ")
+            ),
+        },
         spec.unit.as_deref(),
         spec.scale,
         spec.offset,
         known,
         problems,
     );
+    if let Some(value) = spec.value {
+        if !value.is_finite() {
+            problems.push(
+                format!("{field}.value"),
+                format!("must be a finite number, is {value}"),
+            );
+        }
+        for (key, given) in [
+            ("scale", spec.scale.is_some()),
+            ("offset", spec.offset.is_some()),
+            ("resolution", spec.resolution.is_some()),
+            ("empty", spec.empty != EmptyCell::default()),
+            ("non_finite", spec.non_finite != NonFiniteCell::default()),
+        ] {
+            if given {
+                problems.push(
+                    format!("{field}.{key}"),
+                    format!(
+                        "is for a column; channel '{}' is the constant `value` (state it in its `unit`)",
+                        spec.name
+                    ),
+                );
+            }
+        }
+    }
     if spec.convention.is_some() && spec.name != "altitude" {
         problems.push(
             format!("{field}.convention"),
@@ -638,8 +718,10 @@ fn map_channel(
     MappedChannel {
         name: spec.name.clone(),
         columns,
+        constant: spec.value,
         combine: spec.combine,
         unit,
+        map_unit: spec.unit.as_deref().unwrap_or("").trim().to_string(),
         conversion,
         rate: positive("rate", &spec.rate, Dimension::Frequency),
         resolution: positive("resolution", &spec.resolution, dimension),
