@@ -4,9 +4,8 @@
 //! the problems of a file). The helpers for reading and writing files
 //! are core's.
 
-pub use aeroid_core::error::{
-    FieldError, FieldErrors, parse_toml, read_text, write_error, write_text,
-};
+pub use aeroid_core::atomic::write_text;
+pub use aeroid_core::error::{FieldError, FieldErrors, parse_toml, read_text, write_error};
 use aeroid_core::refusal::Refusal;
 
 #[derive(Debug, thiserror::Error)]

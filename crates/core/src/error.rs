@@ -198,8 +198,6 @@ pub fn write_error(path: &std::path::Path, error: impl fmt::Display) -> Error {
     }
 }
 
-pub use crate::atomic::write_text;
-
 /// Parses TOML into `T`, reporting the file, line and column of a syntax or type error.
 pub fn parse_toml<T: serde::de::DeserializeOwned>(path: &std::path::Path, text: &str) -> Result<T> {
     toml::from_str(text).map_err(|e| Error::Toml {

@@ -383,7 +383,7 @@ impl Estimate {
         let text = serde_json::to_string_pretty(self).map_err(|e| Error::File {
             reason: format!("{}: {e}", path.display()),
         })?;
-        Ok(aeroid_core::error::write_text(path, &text)?)
+        Ok(aeroid_core::atomic::write_text(path, &text)?)
     }
 
     pub fn read_json(path: &Path) -> Result<Estimate> {

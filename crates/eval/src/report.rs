@@ -825,6 +825,6 @@ pub fn write_report(folder: &Path, out: Option<&Path>) -> Result<PathBuf> {
     let study = StudyFolder::read(folder)?;
     let page = html(&study)?;
     let path = out.map_or_else(|| folder.join(REPORT_FILE), Path::to_path_buf);
-    aeroid_core::error::write_text(&path, &page)?;
+    aeroid_core::atomic::write_text(&path, &page)?;
     Ok(path)
 }

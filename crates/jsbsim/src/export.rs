@@ -113,7 +113,7 @@ pub fn export(aircraft: &Aircraft, options: &ExportOptions, dir: &Path) -> Resul
     let folder = dir.join(&model);
     std::fs::create_dir_all(&folder).map_err(|e| aeroid_core::error::write_error(&folder, e))?;
     let file = folder.join(format!("{model}.xml"));
-    aeroid_core::error::write_text(&file, &xml)?;
+    aeroid_core::atomic::write_text(&file, &xml)?;
     Ok(file)
 }
 

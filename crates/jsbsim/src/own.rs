@@ -236,7 +236,7 @@ fn load_flat_earth(exec: &mut Exec, gravity: f64) -> Result<()> {
     ));
     let mut text = String::from("<?xml version=\"1.0\"?>\n");
     write_planet(&mut text, gravity);
-    aeroid_core::error::write_text(&file, &text)?;
+    aeroid_core::atomic::write_text(&file, &text)?;
     let result = exec.load_planet(&file);
     // The file is read completely while loading; a file left behind is harmless.
     let _ = std::fs::remove_file(&file);

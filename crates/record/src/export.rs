@@ -60,7 +60,7 @@ pub fn export(record: &FlightRecord, format: ExportFormat, out: &Path) -> Result
         }
         ExportFormat::Csv => {
             let text = csv_text(record);
-            aeroid_core::error::write_text(out, &text)?;
+            aeroid_core::atomic::write_text(out, &text)?;
             Ok(vec![format!(
                 "{} columns: time and {} channels",
                 record.channels.len() + 1,

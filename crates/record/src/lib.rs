@@ -410,7 +410,7 @@ impl FlightRecord {
         let text = toml::to_string(&file).map_err(|e| Error::Serialize {
             reason: e.to_string(),
         })?;
-        Ok(aeroid_core::error::write_text(&path, &text)?)
+        Ok(aeroid_core::atomic::write_text(&path, &text)?)
     }
 
     /// Reads a record folder written by [`FlightRecord::write`] (or by hand in the same layout).

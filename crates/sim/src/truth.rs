@@ -178,7 +178,7 @@ impl RunTruth {
         let text = toml::to_string(self).map_err(|e| Error::Serialize {
             reason: e.to_string(),
         })?;
-        Ok(aeroid_core::error::write_text(path, &text)?)
+        Ok(aeroid_core::atomic::write_text(path, &text)?)
     }
 
     pub fn read(path: &Path) -> Result<RunTruth> {

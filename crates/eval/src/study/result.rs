@@ -96,7 +96,7 @@ impl StudyResult {
             path: path.clone(),
             reason: e.to_string(),
         })?;
-        Ok(aeroid_core::error::write_text(&path, &text)?)
+        Ok(aeroid_core::atomic::write_text(&path, &text)?)
     }
 
     /// The summary as a fixed-width table for the terminal.
