@@ -100,10 +100,10 @@ pub struct ChannelUse {
 
 /// The factor of the sampling rule: a mode wants at least this many
 /// samples a period (module documentation, "The sampling rule").
-pub const RULE_FACTOR: f64 = 25.0;
+pub(crate) const RULE_FACTOR: f64 = 25.0;
 
 /// The least elasticity for a mode to count as a parameter's.
-pub const GOVERNING_ELASTICITY: f64 = 0.1;
+pub(crate) const GOVERNING_ELASTICITY: f64 = 0.1;
 
 /// The mode a parameter moves furthest (module documentation, "The
 /// sampling rule").
@@ -139,7 +139,7 @@ pub struct IdentifiabilityRow {
     pub calm: Option<(f64, f64)>,
     pub identifiable: bool,
     /// The mode the parameter moves furthest, when by
-    /// [`GOVERNING_ELASTICITY`] or more; None otherwise (control
+    /// `GOVERNING_ELASTICITY` or more; None otherwise (control
     /// derivatives).
     pub mode: Option<GoverningMode>,
 }

@@ -122,7 +122,7 @@ fn in_record_states(linear: &Linearization) -> (DMatrix<f64>, DMatrix<f64>, DVec
 
 /// The linear model file of `linear` (a linearisation at a trim) for `axes`,
 /// named `name`; `description` says where it came from.
-pub fn linear_model_file(
+pub(crate) fn linear_model_file(
     linear: &Linearization,
     axes: Axes,
     name: &str,

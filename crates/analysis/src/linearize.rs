@@ -21,7 +21,7 @@
 //! Eq. 1.4-4): `φ̇ = p + tan θ·(q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`,
 //! `ψ̇ = (q sin φ + r cos φ)/cos θ`.
 //! Column j of `A = ∂f_e/∂x_e` (and of `B = ∂f_e/∂δ`) is the central difference
-//! `(f_e(x + δ_j e_j) − f_e(x − δ_j e_j)) / (2 δ_j)` ([`RELATIVE_STEP`]).
+//! `(f_e(x + δ_j e_j) − f_e(x − δ_j e_j)) / (2 δ_j)` (`RELATIVE_STEP`).
 //! Exogenous wind is held at the given steady sample, with zero rate.
 //!
 //! # Modes
@@ -53,10 +53,10 @@ pub const THETA: usize = 7;
 pub const PSI: usize = 8;
 pub const H: usize = 9;
 /// Index of χ, present only when the stall model integrates it.
-pub const CHI_E: usize = 10;
+pub(crate) const CHI_E: usize = 10;
 
 /// Names of the Euler-angle state entries, in order (χ last, when present).
-pub const EULER_STATE_NAMES: [&str; 11] = [
+pub(crate) const EULER_STATE_NAMES: [&str; 11] = [
     "u", "v", "w", "p", "q", "r", "phi", "theta", "psi", "h", "chi",
 ];
 
@@ -73,7 +73,7 @@ pub const LATERAL: [usize; 4] = [V, P, R, PHI];
 /// angles, height and χ; 1 rad (or full throttle) for controls. The control
 /// limits are lifted while differencing, so that a control sitting on its
 /// stop (flap at 0°) gets its two-sided derivative rather than half of it.
-pub const RELATIVE_STEP: f64 = 1e-5;
+pub(crate) const RELATIVE_STEP: f64 = 1e-5;
 
 /// A linear model `ẋ_e = A·x_e + B·δ` about an operating point.
 #[derive(Debug, Clone, PartialEq)]
@@ -172,7 +172,7 @@ pub fn linearize(model: &FlightModel, trim: &Trim, wind: &WindSample) -> Lineari
 
 /// Linearises `model` at any state and controls (the derivative there need
 /// not vanish; the linear model is then the tangent one).
-pub fn linearize_at(
+pub(crate) fn linearize_at(
     model: &FlightModel,
     reference: &StateVector,
     controls: &Controls,
@@ -232,7 +232,7 @@ fn typical_size(j: usize, airspeed: f64) -> f64 {
 }
 
 /// The Euler-angle state of a simulator state (χ appended when `with_chi`).
-pub fn euler_state(x: &StateVector, with_chi: bool) -> DVector<f64> {
+pub(crate) fn euler_state(x: &StateVector, with_chi: bool) -> DVector<f64> {
     let euler = state::euler(x);
     let mut e = DVector::zeros(if with_chi { 11 } else { 10 });
     e.rows_mut(0, 6).copy_from(&x.fixed_rows::<6>(0));
@@ -248,7 +248,7 @@ pub fn euler_state(x: &StateVector, with_chi: bool) -> DVector<f64> {
 
 /// The simulator state of an Euler-angle state: `reference` with u…r, the
 /// attitude, the height and (when present) χ replaced.
-pub fn full_state(e: &DVector<f64>, reference: &StateVector) -> StateVector {
+pub(crate) fn full_state(e: &DVector<f64>, reference: &StateVector) -> StateVector {
     let mut x = *reference;
     x.fixed_rows_mut::<6>(0).copy_from(&e.rows(0, 6));
     let attitude = state::quaternion_from_euler(EulerAngles {

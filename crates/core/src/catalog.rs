@@ -29,7 +29,7 @@ pub const LISTED_FOLDERS: [&str; 5] = [
 ];
 
 /// The environment variable that names the data folder.
-pub const DATA_VARIABLE: &str = "AEROID_DATA";
+pub(crate) const DATA_VARIABLE: &str = "AEROID_DATA";
 
 /// The data folder holding `aircraft/` and `scenarios/`.
 pub fn data_folder() -> PathBuf {

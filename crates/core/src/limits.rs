@@ -3,18 +3,18 @@
 //! allocated. Each bound states its reason; a refusal gives the numbers.
 //!
 //! The memory budget is half of the machine's memory (`MemTotal` of
-//! `/proc/meminfo` on Linux, [`FALLBACK_BUDGET`] elsewhere), or the value of
-//! the environment variable [`BUDGET_VARIABLE`]: bytes, or a number with
+//! `/proc/meminfo` on Linux, 4 GiB elsewhere), or the value of
+//! the environment variable `AEROID_MEMORY_BUDGET`: bytes, or a number with
 //! `kB`, `MB`, `GB`, `TB`, `KiB`, `MiB`, `GiB` or `TiB` (`AEROID_MEMORY_BUDGET=2GB`).
 
 use std::fmt;
 
 /// The environment variable that overrides the memory budget.
-pub const BUDGET_VARIABLE: &str = "AEROID_MEMORY_BUDGET";
+pub(crate) const BUDGET_VARIABLE: &str = "AEROID_MEMORY_BUDGET";
 
 /// The budget when the machine's memory cannot be read: 4 GiB, what any
 /// machine that builds aeroid has.
-pub const FALLBACK_BUDGET: u64 = 4 << 30;
+pub(crate) const FALLBACK_BUDGET: u64 = 4 << 30;
 
 /// Smallest integration step, 1 µs: a thousand times below the fastest
 /// aircraft mode's time constant (a few ms for actuators and small UAVs),
@@ -62,7 +62,7 @@ impl fmt::Display for Budget {
 /// The memory budget: [`BUDGET_VARIABLE`] if set, else half of the
 /// machine's memory, else [`FALLBACK_BUDGET`]. An unreadable variable is an
 /// error that says what it holds.
-pub fn memory_budget() -> crate::Result<Budget> {
+pub(crate) fn memory_budget() -> crate::Result<Budget> {
     if let Ok(text) = std::env::var(BUDGET_VARIABLE) {
         return parse_bytes(&text)
             .map(|bytes| Budget {
@@ -129,7 +129,7 @@ fn read_machine_memory() -> Option<u64> {
 }
 
 /// Bytes from `"123"`, `"2GB"`, `"1.5 GiB"`; `None` when not a positive size.
-pub fn parse_bytes(text: &str) -> Option<u64> {
+pub(crate) fn parse_bytes(text: &str) -> Option<u64> {
     let text = text.trim();
     let split = text
         .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == 'e' || c == 'E'))
@@ -172,7 +172,7 @@ pub(crate) fn count_text(count: f64) -> String {
 }
 
 /// Bytes for a message, in decimal units.
-pub fn bytes_text(bytes: f64) -> String {
+pub(crate) fn bytes_text(bytes: f64) -> String {
     if !bytes.is_finite() {
         return "more bytes than a number holds".into();
     }

@@ -15,7 +15,7 @@ pub const POUND_FORCE: f64 = 4.448_221_615_260_5;
 /// The slug (kg): one pound-force accelerates it by one foot per second squared.
 pub const SLUG: f64 = POUND_FORCE / FOOT;
 /// One inch of mercury at 0 °C (Pa).
-pub const INCH_OF_MERCURY: f64 = 3_386.389;
+pub(crate) const INCH_OF_MERCURY: f64 = 3_386.389;
 
 /// The physical dimension a field expects.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -249,7 +249,7 @@ pub enum Quantity {
 }
 
 /// What a quantity field takes, in the words of an error about anything else.
-pub const QUANTITY_EXPECTED: &str = "a quantity (a number or a string such as \"5 deg\")";
+pub(crate) const QUANTITY_EXPECTED: &str = "a quantity (a number or a string such as \"5 deg\")";
 
 impl<'de> Deserialize<'de> for Quantity {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {

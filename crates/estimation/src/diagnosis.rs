@@ -7,14 +7,14 @@
 //! ([`OutputFit::is_structured`]):
 //! - they move together across outputs: process noise drives every output
 //!   through the dynamics, while sensor noise is independent from sensor to
-//!   sensor. The largest cross-correlation over ±[`COHERENCE_LAGS`] lags is
-//!   compared with [`COHERENT`] standard deviations of the cross-correlation
+//!   sensor. The largest cross-correlation over ±`COHERENCE_LAGS` lags is
+//!   compared with `COHERENT` standard deviations of the cross-correlation
 //!   of two independent first-order processes with the residuals' lag-1
 //!   autocorrelations ρ_a, ρ_b, √((1 + ρ_a·ρ_b)/(N·(1 − ρ_a·ρ_b)))
 //!   (Bartlett's formula: Box, Jenkins & Reinsel, "Time Series Analysis",
 //!   Eq. 11.1.7);
 //! - they are as large where the predicted motion is quiet as where it is
-//!   not ([`OutputFit::quiet_share`] at least [`PROCESS_NOISE_SHARE`] on
+//!   not ([`OutputFit::quiet_share`] at least `PROCESS_NOISE_SHARE` on
 //!   every structured output): a model error is a function of the motion.
 //!
 //! The methods built for process noise are filter error (Maine & Iliff
@@ -111,7 +111,7 @@ impl std::fmt::Display for Diagnosis {
 /// a model error. Measured on output error's fits (flight-test-25hz): the
 /// turbulence flights 0.28–0.75 on every output; the stall flight fitted
 /// with a linear model 0.15 on α (its other outputs 0.36–0.73).
-pub const PROCESS_NOISE_SHARE: f64 = 0.25;
+pub(crate) const PROCESS_NOISE_SHARE: f64 = 0.25;
 
 /// The outputs whose structured residuals carry the signature of process
 /// noise, with their quiet shares; empty when the signature is absent.
@@ -141,11 +141,11 @@ pub(crate) fn process_noise_signature(structured: &[&OutputFit]) -> Vec<(String,
 }
 
 /// Lags (samples, either way) over which two outputs' residuals are compared.
-pub const COHERENCE_LAGS: usize = 50;
+pub(crate) const COHERENCE_LAGS: usize = 50;
 
 /// Standard deviations of the sample cross-correlation of two independent
 /// series beyond which two outputs' residuals are taken to move together.
-pub const COHERENT: f64 = 4.0;
+pub(crate) const COHERENT: f64 = 4.0;
 
 /// Whether two outputs' residuals (sampled alike) are correlated beyond
 /// chance: the largest |cross-correlation| over lags within

@@ -123,7 +123,7 @@ pub struct ParameterDistribution {
 
 /// The covariance of uncorrelated estimates with these standard errors:
 /// diag(σ²), as the rows of [`Estimate::covariance`].
-pub fn diagonal_covariance(standard_errors: &[f64]) -> Vec<Vec<f64>> {
+pub(crate) fn diagonal_covariance(standard_errors: &[f64]) -> Vec<Vec<f64>> {
     let n = standard_errors.len();
     (0..n)
         .map(|i| {

@@ -15,7 +15,7 @@
 //! ([`Method::Settings`], [`parse_settings`]) and checked
 //! ([`Method::validate`]). What a method fits is data ([`Capabilities`]):
 //! a problem outside it is refused before the method runs
-//! ([`check_capabilities`]).
+//! (`check_capabilities`).
 
 use crate::error::{Error, Result};
 use crate::estimate::Estimate;
@@ -47,7 +47,7 @@ pub struct MethodInfo {
 
 /// What a method fits, as data: the command line shows it, `run` reads
 /// [`Capabilities::starts_from`], and a problem outside it is refused
-/// before the method runs ([`check_capabilities`]).
+/// before the method runs (`check_capabilities`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Capabilities {
     /// Fits 6-DOF structures (non-dimensional coefficients).
@@ -297,7 +297,7 @@ impl<M: Method> Estimator for M {
 /// A refusal of a problem outside a method's capabilities: a model feature
 /// it does not fit ([`check_model_features`]), several records to a method
 /// of one, a structure kind it does not fit.
-pub fn check_capabilities(
+pub(crate) fn check_capabilities(
     method: &str,
     capabilities: &Capabilities,
     problem: &EstimationProblem,
@@ -326,7 +326,7 @@ pub fn check_capabilities(
 
 /// Refuses a model that uses a feature the method does not fit (tied
 /// parameters, a moment reference point off the CG).
-pub fn check_model_features(
+pub(crate) fn check_model_features(
     method: &str,
     capabilities: &Capabilities,
     structure: &ModelStructure,
@@ -364,7 +364,7 @@ pub fn one_record(method: &str, problem: &EstimationProblem) -> Result<()> {
 /// why) that a linear structure `model` does not take, so that a setting
 /// is refused, never silently unused; Ok when there is none. `start =
 /// "model"` is what a linear fit does, and is accepted.
-pub fn refuse_for_linear(
+pub(crate) fn refuse_for_linear(
     method: &str,
     settings: &Settings,
     model: &str,

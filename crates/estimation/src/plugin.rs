@@ -45,11 +45,11 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 /// The folder of plug-in files inside the data folder.
-pub const PLUGIN_FOLDER: &str = "estimators";
+pub(crate) const PLUGIN_FOLDER: &str = "estimators";
 /// Extra folders of plug-in files, separated by ':'.
-pub const PLUGIN_VARIABLE: &str = "AEROID_ESTIMATORS";
+pub(crate) const PLUGIN_VARIABLE: &str = "AEROID_ESTIMATORS";
 /// The format tag of a plug-in's estimate.
-pub const ESTIMATE_FORMAT: &str = "aeroid-plugin-estimate-1";
+pub(crate) const ESTIMATE_FORMAT: &str = "aeroid-plugin-estimate-1";
 
 /// JSON Schema of `estimate.json`.
 pub const ESTIMATE_SCHEMA: &str = r#"{
@@ -129,7 +129,7 @@ pub enum Records {
 /// A plug-in file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct PluginFile {
+pub(crate) struct PluginFile {
     /// Default: the file's stem.
     #[serde(default)]
     pub name: Option<String>,
@@ -169,7 +169,7 @@ fn yes() -> bool {
 
 /// The longest time limit a plug-in may set (a week, in seconds): a
 /// longer one is a typo, and beyond about 1.8e19 s no clock can count it.
-pub const MAX_TIME_LIMIT: f64 = 7.0 * 24.0 * 3600.0;
+pub(crate) const MAX_TIME_LIMIT: f64 = 7.0 * 24.0 * 3600.0;
 
 fn default_time_limit() -> f64 {
     60.0
@@ -788,7 +788,7 @@ impl Estimator for Plugin {
 /// Every plug-in file in the data folder's `estimators/` and the folders
 /// of `AEROID_ESTIMATORS`, loaded; a file that cannot be loaded is an
 /// error beside the others.
-pub fn discover() -> (Vec<Plugin>, Vec<Error>) {
+pub(crate) fn discover() -> (Vec<Plugin>, Vec<Error>) {
     let mut folders = vec![aeroid_core::catalog::data_folder().join(PLUGIN_FOLDER)];
     if let Ok(extra) = std::env::var(PLUGIN_VARIABLE) {
         folders.extend(

@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 pub const FORMAT: &str = "aeroid-estimation-problem-1";
 
 /// The end of a channel's source once the problem has unwrapped it.
-pub const UNWRAPPED_SOURCE: &str = "unwrapped for the estimators";
+pub(crate) const UNWRAPPED_SOURCE: &str = "unwrapped for the estimators";
 
 /// Unwraps every heading or direction channel (yaw, track, wind direction:
 /// recorders wrap them at 360°) whose successive samples jump by more than
@@ -267,7 +267,7 @@ impl EstimationProblem {
 /// One parameter of the model as the problem states it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ProblemParameter {
+pub(crate) struct ProblemParameter {
     pub name: String,
     pub start: f64,
     pub free: bool,
@@ -358,7 +358,7 @@ struct Document {
 /// `reference_airspeed`, m/s, null when the model sets none).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct AircraftView {
+pub(crate) struct AircraftView {
     pub mass: f64,
     pub wing_area: f64,
     pub span: f64,

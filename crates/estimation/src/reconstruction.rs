@@ -382,7 +382,7 @@ pub fn missing_channels(
 
 /// Checks that the record has every channel `request` needs; the error
 /// names all missing ones and what each is for.
-pub fn check_channels(
+pub(crate) fn check_channels(
     record: &FlightRecord,
     aircraft: &Aircraft,
     request: &Request,

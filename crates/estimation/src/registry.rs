@@ -1,6 +1,6 @@
 //! The registry of estimators: a value built once — the built-in methods
 //! ([`crate::methods::built_in`]), then the plug-ins of the plug-in folders
-//! ([`crate::plugin::discover`]), then those a program adds — and passed to
+//! (`crate::plugin::discover`), then those a program adds — and passed to
 //! whatever runs a method (the command line, `run`, `gate`, `study`).
 //!
 //! It turns a method name into an [`Estimator`], builds the
@@ -245,7 +245,7 @@ impl Registry {
 /// error from its master's estimate (σ = |c|·σ_master). A tied parameter
 /// is not in the estimate's parameters, so it is not scored as if it had
 /// been estimated independently (as a fixed one is not).
-pub fn tied_notes(structure: &ModelStructure, estimate: &Estimate) -> Vec<String> {
+pub(crate) fn tied_notes(structure: &ModelStructure, estimate: &Estimate) -> Vec<String> {
     let aero = &structure.aircraft.aero;
     let names = aero.parameters.names();
     (0..names.len())

@@ -20,7 +20,7 @@
 use std::path::Path;
 
 /// The outcome of preparing the sandbox: the rules, or why there are none.
-pub enum Sandbox {
+pub(crate) enum Sandbox {
     /// A Landlock rule set to enter in the plug-in's process.
     Landlock(landlock::RuleSet),
     /// No sandbox, and why.
@@ -30,7 +30,7 @@ pub enum Sandbox {
 /// Why a plug-in runs without a sandbox.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum Unavailable {
+pub(crate) enum Unavailable {
     /// The kernel has no Landlock (too old, or calls filtered).
     #[error("this kernel has no Landlock ({0})")]
     NoLandlock(std::io::Error),
@@ -53,6 +53,7 @@ pub enum Unavailable {
         source: std::io::Error,
     },
     /// A system other than Linux.
+    #[cfg(not(target_os = "linux"))]
     #[error("Landlock is Linux's; this system has no sandbox for plug-ins")]
     NotLinux,
 }
@@ -68,7 +69,7 @@ impl Sandbox {
 }
 
 #[cfg(target_os = "linux")]
-pub mod landlock {
+pub(crate) mod landlock {
     //! The three Landlock system calls and their structures (the kernel's
     //! include/uapi/linux/landlock.h).
     use super::Unavailable;
@@ -222,7 +223,7 @@ pub mod landlock {
 }
 
 #[cfg(not(target_os = "linux"))]
-pub mod landlock {
+pub(crate) mod landlock {
     //! Landlock is Linux's: elsewhere there are no rules.
     use std::path::Path;
 

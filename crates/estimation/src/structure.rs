@@ -47,12 +47,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Flight-path states a simulating estimator can integrate, named as record channels.
-pub const FLIGHT_PATH_STATES: [&str; 11] = [
+pub(crate) const FLIGHT_PATH_STATES: [&str; 11] = [
     "airspeed", "alpha", "beta", "p", "q", "r", "roll", "pitch", "yaw", "altitude", "chi",
 ];
 
 /// How a channel of zeros put in for `zero_when_absent` names its source.
-pub const ZERO_SOURCE: &str = "zero_when_absent of";
+pub(crate) const ZERO_SOURCE: &str = "zero_when_absent of";
 
 /// The flight-path states a model may hold at 0 when a record lacks them
 /// (`zero_when_absent`): the angles and rates of the other axis.
@@ -123,10 +123,10 @@ pub struct ModelStructure {
     /// The aircraft whose mass, inertia, geometry and propulsion the model uses,
     /// with its aerodynamic model replaced by the postulated one.
     pub aircraft: Aircraft,
-    /// Indices (into [`FLIGHT_PATH_STATES`]) of the integrated states.
+    /// Indices (into `FLIGHT_PATH_STATES`) of the integrated states.
     pub integrate: Vec<usize>,
     pub outputs: Vec<String>,
-    /// Indices (into [`FLIGHT_PATH_STATES`]) of the pseudo-controls a
+    /// Indices (into `FLIGHT_PATH_STATES`) of the pseudo-controls a
     /// record may lack (held at 0).
     pub zero_when_absent: Vec<usize>,
     /// Per aero parameter (same order as `aircraft.aero.parameters`): free?
@@ -226,7 +226,7 @@ impl ModelStructure {
 
     /// `records` with a channel of zeros for each of the model's
     /// `zero_when_absent` states a record lacks, on the times of the
-    /// record's densest channel, its source [`ZERO_SOURCE`].
+    /// record's densest channel, its source `ZERO_SOURCE`.
     pub fn with_zero_channels(&self, mut records: Vec<FlightRecord>) -> Vec<FlightRecord> {
         for record in &mut records {
             let absent: Vec<&'static str> = self

@@ -147,7 +147,7 @@ impl AxisValues {
 }
 
 /// A point's channel rates as `channel:rate Hz` comma-separated.
-pub fn channel_rates_text(rates: &[(String, f64)]) -> String {
+pub(crate) fn channel_rates_text(rates: &[(String, f64)]) -> String {
     rates
         .iter()
         .map(|(channel, rate)| format!("{channel}:{} Hz", aeroid_record::rate_text(*rate)))
@@ -156,7 +156,7 @@ pub fn channel_rates_text(rates: &[(String, f64)]) -> String {
 }
 
 /// A settings variant as `method.key=value` comma-separated.
-pub fn settings_text(tables: &MethodTables) -> String {
+pub(crate) fn settings_text(tables: &MethodTables) -> String {
     tables
         .iter()
         .flat_map(|(method, table)| {

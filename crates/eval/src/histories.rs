@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The folder of the histories inside a study's folder.
-pub const HISTORIES_FOLDER: &str = "histories";
+pub(crate) const HISTORIES_FOLDER: &str = "histories";
 
 /// One method's histories on one model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -212,7 +212,7 @@ fn history_files(folder: &Path) -> Result<Vec<PathBuf>> {
 
 /// Copies the histories of the study folders `from` into `out` (a shard's
 /// files unchanged); a folder that is `out` itself is skipped.
-pub fn copy_all(from: &[PathBuf], out: &Path) -> Result<()> {
+pub(crate) fn copy_all(from: &[PathBuf], out: &Path) -> Result<()> {
     let target = out.join(HISTORIES_FOLDER);
     for folder in from {
         let same = match (folder.canonicalize(), out.canonicalize()) {

@@ -96,7 +96,7 @@ struct Entry {
 }
 
 /// The cases a journal holds.
-pub type Finished = std::collections::BTreeSet<usize>;
+pub(crate) type Finished = std::collections::BTreeSet<usize>;
 
 /// An open journal, appended to by the threads of a study.
 #[derive(Debug)]

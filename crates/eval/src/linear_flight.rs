@@ -74,7 +74,7 @@ pub fn record_flight(
 
 /// [`record_flight`], and the simulator's truth trace when the simulator
 /// flew (none for a linear model's flight).
-pub fn record_flight_traced(
+pub(crate) fn record_flight_traced(
     scenario: &Scenario,
     profile: &Profile,
     recorder_seed: u64,

@@ -47,7 +47,7 @@ use std::path::{Path, PathBuf};
 /// The copy of the study file a study writes beside its results.
 pub const STUDY_COPY: &str = "study.toml";
 /// The report's default file name inside the study's folder.
-pub const REPORT_FILE: &str = "report.html";
+pub(crate) const REPORT_FILE: &str = "report.html";
 
 /// Runs per sweep point whose estimates the report plots one by one: the
 /// page and the memory it takes stay bounded whatever the number of runs
@@ -167,7 +167,7 @@ fn plot_error(error: impl std::fmt::Display) -> Error {
 type SeriesKey = (String, String, String);
 
 /// The error-against-sweep plot of one model's parameter.
-pub fn error_plot(model: &str, parameter: &str, summary: &[&SummaryRow]) -> Result<Plot> {
+pub(crate) fn error_plot(model: &str, parameter: &str, summary: &[&SummaryRow]) -> Result<Plot> {
     let by_rate = summary.iter().all(|s| s.sample_rate.is_some());
     let x_of = |s: &SummaryRow| s.sample_rate.unwrap_or(s.point as f64);
     let mut series: BTreeMap<SeriesKey, Vec<(f64, f64, f64)>> = BTreeMap::new();
@@ -239,7 +239,12 @@ pub fn error_plot(model: &str, parameter: &str, summary: &[&SummaryRow]) -> Resu
 }
 
 /// The scatter of one model's parameter estimates by case and method.
-pub fn estimates_plot(model: &str, parameter: &str, rows: &[&Row], runs: usize) -> Result<Plot> {
+pub(crate) fn estimates_plot(
+    model: &str,
+    parameter: &str,
+    rows: &[&Row],
+    runs: usize,
+) -> Result<Plot> {
     let case = |r: &Row| (r.point * runs + r.run) as f64;
     let used: Vec<&&Row> = rows
         .iter()
@@ -445,7 +450,7 @@ fn panels_svg(title: &str, panels: &[Panel]) -> Result<String> {
 /// The proof of match of one model at one sweep point: per output, the
 /// measured samples and each method's prediction; none when no method
 /// has one.
-pub fn match_plot(histories: &CaseHistories, model: &str) -> Result<Option<Plot>> {
+pub(crate) fn match_plot(histories: &CaseHistories, model: &str) -> Result<Option<Plot>> {
     let methods: Vec<_> = histories
         .methods
         .iter()
@@ -491,7 +496,7 @@ pub fn match_plot(histories: &CaseHistories, model: &str) -> Result<Option<Plot>
 
 /// The coefficient histories one method estimated at one sweep point,
 /// with ±1.96σ and the simulator's true coefficients.
-pub fn smoothed_plot(histories: &CaseHistories, index: usize) -> Result<Option<Plot>> {
+pub(crate) fn smoothed_plot(histories: &CaseHistories, index: usize) -> Result<Option<Plot>> {
     let method = &histories.methods[index];
     if method.estimated.is_empty() {
         return Ok(None);
@@ -604,7 +609,7 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 
 /// Every plot of a study folder's histories: per sweep point, each
 /// model's proof of match and each method's smoothed coefficients.
-pub fn history_plots(folder: &StudyFolder) -> Result<Vec<Plot>> {
+pub(crate) fn history_plots(folder: &StudyFolder) -> Result<Vec<Plot>> {
     let mut plots = Vec::new();
     for histories in &folder.histories {
         let mut models: Vec<&str> = Vec::new();

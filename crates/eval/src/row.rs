@@ -1,7 +1,7 @@
 //! One row of a study's `runs.csv` and `journal.jsonl`: one parameter of
 //! one fit of one case, or the fit's failure, with how the fit ended
 //! ([`RowStatus`]). Numbers are written so that NaN and infinities survive
-//! CSV and JSON ([`float_text`]).
+//! CSV and JSON (`float_text`).
 
 use crate::axis::AxisValues;
 use aeroid_numerics::Status;
@@ -206,7 +206,7 @@ impl Row {
 /// Serde for numbers that may be non-finite: finite ones as JSON numbers,
 /// NaN and ±∞ as the strings "NaN", "inf", "-inf" (CSV writes the same
 /// text either way).
-pub mod float_text {
+pub(crate) mod float_text {
     use serde::{Deserialize, Deserializer, Serializer};
 
     #[derive(Deserialize)]

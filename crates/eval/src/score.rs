@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The half-width of a two-sided 95 % Gaussian interval, in σ.
-pub const Z_95: f64 = 1.959_963_984_540_054;
+pub(crate) const Z_95: f64 = 1.959_963_984_540_054;
 
 /// One estimated parameter scored against the truth (a row of [`score`]):
 /// its error in absolute, relative and σ units and whether the 95 % interval holds the truth.

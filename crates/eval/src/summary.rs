@@ -119,7 +119,7 @@ pub struct SummaryRow {
 }
 
 /// |correlation| above which two parameters are reported as entangled.
-pub const CORRELATED: f64 = 0.9;
+pub(crate) const CORRELATED: f64 = 0.9;
 
 /// The identifiability of a parameter from its summary: `not identifiable`
 /// when no fit converged or its Cramér–Rao bound exceeds its size

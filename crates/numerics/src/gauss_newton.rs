@@ -109,7 +109,7 @@ pub trait LeastSquaresObjective {
     /// (re-weighted) from `jacobian`: simplified Gauss–Newton. Returns true
     /// when it holds. The solver then takes steps
     /// Δθ = −(J₀ᵀJ₀)⁻¹·J₀ᵀr(θ) while each predicted decrease is at most
-    /// [`HELD_CONTRACTION`] of the one before, and releases it otherwise.
+    /// `HELD_CONTRACTION` of the one before, and releases it otherwise.
     fn hold(&mut self, _predicted: f64) -> bool {
         false
     }
@@ -361,7 +361,7 @@ pub fn finite_difference_jacobian<P: LeastSquaresObjective + ?Sized>(
 /// plain simulation against 3.5 to 7), so it pays even where it gains less
 /// per step; a half (0.7 of the distance per step) is where it has moved
 /// too far to be worth keeping.
-pub const HELD_CONTRACTION: f64 = 0.5;
+pub(crate) const HELD_CONTRACTION: f64 = 0.5;
 
 /// Minimises the problem's cost from `start`.
 pub fn solve<P: LeastSquaresObjective + ?Sized>(

@@ -31,7 +31,7 @@ pub fn baseline<R>(f: impl FnOnce() -> R) -> R {
 /// standard library checks once and caches the answer).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn avx2() -> bool {
+pub(crate) fn avx2() -> bool {
     #[cfg(any(test, feature = "test-baseline"))]
     if BASELINE.get() {
         return false;
@@ -39,7 +39,7 @@ pub fn avx2() -> bool {
     std::arch::is_x86_feature_detected!("avx2")
 }
 
-/// Runs `f` compiled for AVX2 when this CPU has it ([`avx2`]), else as
+/// Runs `f` compiled for AVX2 when this CPU has it (`avx2`), else as
 /// built. `f` must be an `#[inline(always)]` closure, and whatever it calls
 /// that should be compiled the same way `#[inline(always)]` too: code that
 /// is not inlined into the AVX2 copy keeps the build's instruction set.

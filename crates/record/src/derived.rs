@@ -38,7 +38,7 @@ use aeroid_sim::trace::TruthSample;
 use nalgebra::Vector3;
 
 /// Mean earth radius (m) for latitude and longitude.
-pub const EARTH_RADIUS: f64 = 6_371_000.0;
+pub(crate) const EARTH_RADIUS: f64 = 6_371_000.0;
 
 /// Where the flat earth's origin lies on the globe.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -230,7 +230,7 @@ pub fn measurand(name: &str) -> Option<&'static Measurand> {
 }
 
 /// Names of all measurands, for error messages.
-pub fn measurand_names() -> Vec<String> {
+pub(crate) fn measurand_names() -> Vec<String> {
     MEASURANDS.iter().map(|m| m.name.to_string()).collect()
 }
 
@@ -255,7 +255,7 @@ pub fn calibrated_airspeed(mach: f64, pressure: f64) -> f64 {
 /// `pressure` is `calibrated` (m/s): the inverse of [`calibrated_airspeed`]
 /// through the impact pressure q_c = p0·((1 + 0.2·(V_c/a0)²)^3.5 − 1),
 /// M = √(5·((q_c/p + 1)^(2/7) − 1)).
-pub fn mach_from_calibrated_airspeed(calibrated: f64, pressure: f64) -> f64 {
+pub(crate) fn mach_from_calibrated_airspeed(calibrated: f64, pressure: f64) -> f64 {
     let sea_level_sound = (HEAT_CAPACITY_RATIO * GAS_CONSTANT * SEA_LEVEL_TEMPERATURE).sqrt();
     let ratio = calibrated / sea_level_sound;
     let impact = SEA_LEVEL_PRESSURE * ((1.0 + 0.2 * ratio * ratio).powf(3.5) - 1.0);

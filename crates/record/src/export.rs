@@ -71,7 +71,7 @@ pub fn export(record: &FlightRecord, format: ExportFormat, out: &Path) -> Result
 }
 
 /// The variables of the MAT export (module documentation).
-pub fn mat_variables(record: &FlightRecord) -> Result<Vec<Variable>> {
+pub(crate) fn mat_variables(record: &FlightRecord) -> Result<Vec<Variable>> {
     let bases = record.time_bases();
     let mut variables = Vec::with_capacity(3 * bases.len());
     let mut used: Vec<String> = Vec::new();

@@ -1,5 +1,5 @@
 //! Gaps in a record: a stretch of time in which no channel has a sample,
-//! longer than [`GAP_FACTOR`] sample periods of the fastest channel (two
+//! longer than `GAP_FACTOR` sample periods of the fastest channel (two
 //! manoeuvres joined in one file, a recorder switched off). An estimator
 //! that interpolated across one would integrate or differentiate through
 //! time nobody recorded; the estimation problem therefore splits a record
@@ -14,12 +14,12 @@ use crate::FlightRecord;
 /// How many sample periods of the record's fastest channel a stretch
 /// without any sample must exceed to be a gap: up to nine lost frames in a
 /// row are interpolated; a tenth is a recorder that stopped.
-pub const GAP_FACTOR: f64 = 10.0;
+pub(crate) const GAP_FACTOR: f64 = 10.0;
 
 impl FlightRecord {
     /// The gaps of the record, each from the last sample before it to the
     /// first after it (s), in time order: a stretch with no sample of any
-    /// channel, longer than [`GAP_FACTOR`] sample periods of every channel
+    /// channel, longer than `GAP_FACTOR` sample periods of every channel
     /// whose samples lie on both sides of it (a channel that starts later
     /// or ends earlier says nothing of it).
     pub fn time_gaps(&self) -> Vec<(f64, f64)> {

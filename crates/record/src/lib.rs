@@ -40,11 +40,11 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 /// The metadata file of a record folder.
-pub const RECORD_FILE: &str = "record.toml";
+pub(crate) const RECORD_FILE: &str = "record.toml";
 /// The format tag written into `record.toml`.
 pub const FORMAT: &str = "aeroid-record-1";
 /// The header of the time column of every record CSV.
-pub const TIME_HEADER: &str = "time [s]";
+pub(crate) const TIME_HEADER: &str = "time [s]";
 
 /// One recorded channel. In JSON (an estimation problem) a dropout is `null`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -659,7 +659,7 @@ pub fn significant(value: f64, digits: usize) -> String {
 
 /// Puts a derived channel into a record: it replaces the record's channel of
 /// the same name, or is added, and its name leaves the `absent` list.
-pub fn put_channel(record: &mut FlightRecord, channel: Channel) {
+pub(crate) fn put_channel(record: &mut FlightRecord, channel: Channel) {
     record.absent.retain(|a| *a != channel.name);
     match record.channels.iter_mut().find(|c| c.name == channel.name) {
         Some(existing) => *existing = channel,
@@ -670,7 +670,7 @@ pub fn put_channel(record: &mut FlightRecord, channel: Channel) {
 /// The sample instants of `channels[reference]` inside the span that every
 /// one of `channels` covers (from the latest first sample to the earliest
 /// last one); empty when they share none or a channel has no sample.
-pub fn shared_instants(channels: &[&Channel], reference: usize) -> Vec<f64> {
+pub(crate) fn shared_instants(channels: &[&Channel], reference: usize) -> Vec<f64> {
     if channels.iter().any(|c| c.times.is_empty()) {
         return Vec::new();
     }

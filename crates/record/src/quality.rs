@@ -2,16 +2,16 @@
 //! cannot be trusted for before any estimator reads it. Four checks, each
 //! from the channel's own samples:
 //!
-//! - **stuck**, two kinds. *Levels*: at least [`MIN_SAMPLES`] valid
+//! - **stuck**, two kinds. *Levels*: at least `MIN_SAMPLES` valid
 //!   samples that take only two or three distinct values and change between
 //!   them in at least a quarter of the intervals, the values further apart
-//!   than [`DITHER_STEPS`] declared resolutions (or no resolution declared):
+//!   than `DITHER_STEPS` declared resolutions (or no resolution declared):
 //!   a moving quantity passes through the values between, a one-step dither
 //!   of a quantized quantity is quantization. This is the angle-of-attack
 //!   channel of Wang et al. 2012 (Sec. 4), which reads only 109.70° or
 //!   108.30°. *Frozen*: a channel that never repeats a value exactly
 //!   elsewhere (fewer than 5 % of its other intervals, as a noisy sensor)
-//!   but holds one value for at least [`MIN_SAMPLES`] samples and a tenth
+//!   but holds one value for at least `MIN_SAMPLES` samples and a tenth
 //!   of the record. A noise-free quantized channel repeats values as a
 //!   matter of course, so there a frozen sensor cannot be told from a
 //!   quantity that holds still, and a channel constant throughout (a rudder
@@ -24,9 +24,9 @@
 //!   run;
 //! - **implausible steps**: a jump between consecutive valid samples larger
 //!   than what the quantity can physically change in the interval
-//!   ([`rate_limit`] × interval) plus [`NEIGHBOURHOOD_FACTOR`] times the
+//!   (`rate_limit` × interval) plus `NEIGHBOURHOOD_FACTOR` times the
 //!   typical jump around it (the median of the |jumps| within
-//!   ±[`NEIGHBOURHOOD`] intervals, at least two resolutions: the noise and
+//!   ±`NEIGHBOURHOOD` intervals, at least two resolutions: the noise and
 //!   quantization the channel shows). Neither term alone will do: at 1 Hz
 //!   an attitude moves degrees per sample, and at 25 Hz the noise alone
 //!   exceeds a rate limit's share of a sample now and then. Headings and
@@ -39,7 +39,7 @@
 //!
 //! A channel is *flagged* when it is stuck, has dropouts or implausible
 //! steps; it is *unusable* when stuck or stepping, and the geometric
-//! angle-of-attack step ([`crate::prep::flow_angles::with_geometric_flow_angles`])
+//! angle-of-attack step (`crate::prep::flow_angles::with_geometric_flow_angles`)
 //! replaces an unusable `alpha` or `beta` channel and says so.
 
 use crate::{Channel, FlightRecord, derived, rounded};
@@ -47,19 +47,19 @@ use aeroid_core::units::{DEG, Dimension};
 use aeroid_sim::state::Control;
 
 /// The fewest valid samples a stuck verdict is made on.
-pub const MIN_SAMPLES: usize = 10;
+pub(crate) const MIN_SAMPLES: usize = 10;
 /// Levels at most this many declared resolutions apart are a dither.
-pub const DITHER_STEPS: f64 = 4.0;
+pub(crate) const DITHER_STEPS: f64 = 4.0;
 /// One-spacing changes that make a grid of values a quantisation ([`quantum`]).
-pub const LSB_FLIPS: usize = 20;
+pub(crate) const LSB_FLIPS: usize = 20;
 /// A channel whose range spans at most this many LSB is near-constant: its
 /// changes are quantisation, not control steps
 /// ([`crate::prep::differentiation::transitions`]).
-pub const FEW_LSB: f64 = 3.0;
+pub(crate) const FEW_LSB: f64 = 3.0;
 /// A jump this many times the typical jump around it is out of place.
-pub const NEIGHBOURHOOD_FACTOR: f64 = 10.0;
+pub(crate) const NEIGHBOURHOOD_FACTOR: f64 = 10.0;
 /// Intervals on each side whose jumps make the neighbourhood.
-pub const NEIGHBOURHOOD: usize = 10;
+pub(crate) const NEIGHBOURHOOD: usize = 10;
 
 /// What is wrong with a stuck channel.
 #[derive(Debug, Clone, PartialEq)]
@@ -217,7 +217,7 @@ pub fn assess(record: &FlightRecord) -> QualityReport {
 }
 
 /// Assesses one channel.
-pub fn assess_channel(channel: &Channel) -> ChannelQuality {
+pub(crate) fn assess_channel(channel: &Channel) -> ChannelQuality {
     let valid: Vec<(f64, f64)> = channel
         .times
         .iter()
@@ -274,7 +274,7 @@ fn grid_spacing(levels: &[f64]) -> Option<f64> {
 /// times; a near-constant quantised channel at a level's edge flips by one
 /// LSB again and again. Values on a grid that seldom move by one spacing
 /// (a step input's few levels) have no LSB.
-pub fn quantum(values: &[f64], declared: Option<f64>) -> Option<f64> {
+pub(crate) fn quantum(values: &[f64], declared: Option<f64>) -> Option<f64> {
     if let Some(resolution) = declared.filter(|r| r.is_finite() && *r > 0.0) {
         return Some(resolution);
     }
@@ -349,7 +349,7 @@ fn dropouts(channel: &Channel) -> Option<Dropouts> {
 /// roll, 60°/s; 2 g along the path; 5 g/s; 100 m/s vertically; 100°/s² of
 /// angular acceleration; a Mach number, 1 per second), if one is known. Channels of other dimensions
 /// (temperatures, masses, flows, pressures) are not checked for steps.
-pub fn rate_limit(dimension: Dimension) -> Option<f64> {
+pub(crate) fn rate_limit(dimension: Dimension) -> Option<f64> {
     match dimension {
         Dimension::Dimensionless => Some(1.0),
         Dimension::Angle => Some(60.0 * DEG),

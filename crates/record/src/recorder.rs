@@ -69,7 +69,7 @@ use reading::{FrameLayout, check_absent, positive, read_channel, read_origin};
 pub use reading::{parse_rate, rate_limit_message};
 
 /// The profile used when neither the command line nor the scenario names one.
-pub const DEFAULT_PROFILE: &str = "ideal";
+pub(crate) const DEFAULT_PROFILE: &str = "ideal";
 
 /// A recorder profile file (`recorders/*.toml`) as written (the keys are in
 /// the module docs), before it is checked ([`Profile::from_file`]).
@@ -497,7 +497,7 @@ impl Profile {
 }
 
 /// The profile to record a scenario with: `reference` if given, else the
-/// scenario's `recorder`, else [`DEFAULT_PROFILE`].
+/// scenario's `recorder`, else `DEFAULT_PROFILE`.
 pub fn profile_for(scenario: &Scenario, reference: Option<&str>) -> Result<Profile> {
     match (reference, &scenario.recorder) {
         (Some(reference), _) => Profile::load(reference, None),

@@ -54,9 +54,9 @@ pub struct Exogenous {
 }
 
 /// Exogenous signals packed as one vector for interpolation: controls, wind NED, turbulence body.
-pub const EXOGENOUS_SIZE: usize = CONTROL_COUNT + 6;
+pub(crate) const EXOGENOUS_SIZE: usize = CONTROL_COUNT + 6;
 /// An [`Exogenous`] packed as one vector (see [`EXOGENOUS_SIZE`]).
-pub type ExogenousVector = SVector<f64, EXOGENOUS_SIZE>;
+pub(crate) type ExogenousVector = SVector<f64, EXOGENOUS_SIZE>;
 
 impl Exogenous {
     pub fn pack(controls: &Controls, wind: &WindSample) -> ExogenousVector {

@@ -14,13 +14,13 @@
 //!   (≈ 0.7 lb/(lbf·h), a low-bypass turbofan)
 //! - EGT = T_static + 200 K + 450 K·c
 //!
-//! The thrust is split equally over [`ENGINE_COUNT`] engines (ASSUMED twin).
+//! The thrust is split equally over `ENGINE_COUNT` engines (ASSUMED twin).
 
 use crate::aircraft::Propulsion;
 use crate::atmosphere::SEA_LEVEL_DENSITY;
 
 /// Number of engines the thrust is split over (ASSUMED: a twin, as Wang et al. 2012's airplane and ATTAS).
-pub const ENGINE_COUNT: f64 = 2.0;
+pub(crate) const ENGINE_COUNT: f64 = 2.0;
 /// Thrust-specific fuel consumption, kg/(N·s) (ASSUMED).
 const SPECIFIC_FUEL_CONSUMPTION: f64 = 2.0e-5;
 /// Fuel flow at zero thrust, kg/s per engine (ASSUMED idle flow).

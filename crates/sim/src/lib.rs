@@ -43,7 +43,7 @@ pub mod feedback;
 pub mod foreign;
 pub mod inputs;
 pub mod integrator;
-pub mod params;
+pub(crate) mod params;
 pub mod scenario;
 pub mod source;
 pub mod state;

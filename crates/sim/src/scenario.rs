@@ -815,7 +815,7 @@ pub const BYTES_PER_STEP: usize = std::mem::size_of::<crate::dynamics::Exogenous
     + std::mem::size_of::<crate::trace::TruthSample>();
 
 /// Checks that a simulation of `steps` steps fits the memory budget.
-pub fn check_simulation_size(steps: f64) -> Result<()> {
+pub(crate) fn check_simulation_size(steps: f64) -> Result<()> {
     Ok(limits::check_memory(
         "the simulation (duration / step + 1 samples)",
         steps.round() + 1.0,

@@ -23,7 +23,7 @@ use aeroid_numerics::kalman::Gaussian;
 pub const METHOD: &str = "ekf";
 
 /// The augmented-state EKF as a registered method.
-pub struct AugmentedEkf;
+pub(crate) struct AugmentedEkf;
 
 impl Method for AugmentedEkf {
     const NAME: &'static str = METHOD;

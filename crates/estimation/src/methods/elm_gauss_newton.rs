@@ -35,7 +35,7 @@ use crate::problem::EstimationProblem;
 pub const METHOD: &str = "elm-gn";
 
 /// ELM-GN as a registered method.
-pub struct ElmGaussNewton;
+pub(crate) struct ElmGaussNewton;
 
 impl Method for ElmGaussNewton {
     const NAME: &'static str = METHOD;

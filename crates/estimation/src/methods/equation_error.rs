@@ -36,7 +36,7 @@
 //! attenuate the estimates towards zero (errors in variables, the
 //! reflex-wing UAV paper's finding), and the moments need differentiated
 //! rates ([`aeroid_record::prep::differentiation`]). The fit lives in
-//! [`super::common::coefficient_fit`], [`super::common::linear_regression`]
+//! `super::common::coefficient_fit`, `super::common::linear_regression`
 //! and [`super::common::regression`], shared with the other regression methods.
 
 use crate::error::Result;

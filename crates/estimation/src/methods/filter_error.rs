@@ -7,7 +7,7 @@
 //!
 //! The fit (the filters, their sensitivities, the relaxation of R, the
 //! gain constraint, the starts of F and R, the linear model's fit) is
-//! [`crate::methods::common::filter_fit`], which output error shares on
+//! `crate::methods::common::filter_fit`, which output error shares on
 //! linear structures; here are the registered method, its `[methods.fem]`
 //! settings and the fit of a 6-DOF structure from equation error's start.
 

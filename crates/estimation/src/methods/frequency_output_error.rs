@@ -128,7 +128,7 @@ impl FrequencyOutputErrorSettings {
 }
 
 /// Frequency-domain output error as a registered method.
-pub struct FrequencyOutputError;
+pub(crate) struct FrequencyOutputError;
 
 impl Method for FrequencyOutputError {
     const NAME: &'static str = METHOD;

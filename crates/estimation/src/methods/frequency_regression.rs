@@ -129,7 +129,7 @@ impl FrequencyRegressionSettings {
 }
 
 /// Fourier-transform regression as a registered method.
-pub struct FrequencyRegression;
+pub(crate) struct FrequencyRegression;
 
 impl Method for FrequencyRegression {
     const NAME: &'static str = METHOD;

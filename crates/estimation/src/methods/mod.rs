@@ -15,7 +15,7 @@ pub mod frequency_regression;
 pub mod neural_gauss_newton;
 pub mod output_error;
 pub mod rbf_delta;
-pub mod recurrent_elm;
+pub(crate) mod recurrent_elm;
 pub mod smoothed_regression;
 pub mod stepwise;
 pub mod unscented;

@@ -30,7 +30,7 @@
 //! The hidden layer's size is chosen from the data unless `hidden` fixes
 //! it: of `hidden_sizes` (default 10 and 20), the one with the least
 //! held-out error is kept — the residual criterion of the ELM paper's
-//! Eq. 6 ([`crate::neural::elm::choose_by_held_out`]); why these
+//! Eq. 6 (`crate::neural::elm::choose_by_held_out`); why these
 //! candidates is in docs/methods.md, "Neural Gauss–Newton".
 //!
 //! The network approximates the one-step map, so the estimate carries its
@@ -41,7 +41,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimate::Estimate;
-use crate::estimator::{Capabilities, Description, Method, Settings, parse_settings};
+use crate::estimator::{Capabilities, Description, Method};
 use crate::methods::common::coefficient_fit::DIFFERENTIATOR_SETTING;
 use crate::neural::feedforward::{LevenbergMarquardt, SizeSearch};
 use crate::neural::restricted::{self, RestrictedOptions, Trainer};
@@ -53,12 +53,12 @@ use serde::{Deserialize, Serialize};
 pub const METHOD: &str = "ngn";
 
 /// The default candidate numbers of hidden neurons.
-pub const HIDDEN_SIZES: [usize; 2] = [10, 20];
+pub(crate) const HIDDEN_SIZES: [usize; 2] = [10, 20];
 
 /// The `[methods.ngn]` table.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct NeuralGaussNewtonSettings {
+pub(crate) struct NeuralGaussNewtonSettings {
     /// Neurons in the hidden layer; None: chosen from `hidden_sizes` by
     /// the held-out error.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -110,13 +110,6 @@ impl Default for NeuralGaussNewtonSettings {
 }
 
 impl NeuralGaussNewtonSettings {
-    /// The settings of a `[methods.ngn]` table, checked.
-    pub fn read(settings: &Settings) -> Result<NeuralGaussNewtonSettings> {
-        let parsed: NeuralGaussNewtonSettings = parse_settings(METHOD, settings)?;
-        parsed.check()?;
-        Ok(parsed)
-    }
-
     /// Checks the values' ranges, naming the offending key.
     pub fn check(&self) -> Result<()> {
         let bad = |message: &str| {
@@ -178,7 +171,7 @@ impl NeuralGaussNewtonSettings {
 }
 
 /// The neural Gauss–Newton estimator.
-pub struct NeuralGaussNewton;
+pub(crate) struct NeuralGaussNewton;
 
 impl Method for NeuralGaussNewton {
     const NAME: &'static str = METHOD;

@@ -116,7 +116,7 @@ mod segments;
 mod settings;
 mod starts;
 
-pub use estimator::*;
+pub(crate) use estimator::*;
 pub use fit::*;
 use linear::*;
 use objective::*;

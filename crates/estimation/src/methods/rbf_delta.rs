@@ -256,7 +256,7 @@ impl RbfDeltaSettings {
 }
 
 /// The RBF network + Delta method as a registered method.
-pub struct RbfDelta;
+pub(crate) struct RbfDelta;
 
 impl Method for RbfDelta {
     const NAME: &'static str = METHOD;

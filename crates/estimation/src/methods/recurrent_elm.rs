@@ -47,7 +47,7 @@ use crate::problem::EstimationProblem;
 pub const METHOD: &str = "relm-gn";
 
 /// RELM-GN as a registered method.
-pub struct RecurrentElm;
+pub(crate) struct RecurrentElm;
 
 impl Method for RecurrentElm {
     const NAME: &'static str = METHOD;

@@ -51,7 +51,7 @@ pub use crate::methods::common::smoothing::{
 use crate::problem::EstimationProblem;
 
 /// Estimation before modelling as a registered method.
-pub struct SmoothedRegression;
+pub(crate) struct SmoothedRegression;
 
 impl Method for SmoothedRegression {
     const NAME: &'static str = METHOD;
@@ -101,7 +101,7 @@ impl Method for SmoothedRegression {
 
 /// Which parameters the record determined: those with a standard error
 /// below 10 % of their value (a ±2σ interval of ±20 %), and the others.
-pub fn determined_note(estimate: &Estimate) -> String {
+pub(crate) fn determined_note(estimate: &Estimate) -> String {
     let (determined, not): (Vec<_>, Vec<_>) = estimate
         .parameters
         .iter()

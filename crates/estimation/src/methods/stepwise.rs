@@ -42,7 +42,7 @@
 use crate::error::{Error, Result};
 use crate::estimate::Status;
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate};
-use crate::estimator::{Capabilities, Description, Method, Refusal, Settings, parse_settings};
+use crate::estimator::{Capabilities, Description, Method, Refusal};
 use crate::methods::common::coefficient_fit::{
     ANGULAR_ACCELERATIONS_SETTING, DIFFERENTIATOR_SETTING, check_settings,
 };
@@ -67,7 +67,7 @@ mod report;
 pub use report::*;
 
 /// The products offered besides the single regressors when no candidate list is given.
-pub const DEFAULT_PRODUCTS: [&str; 4] = ["alpha^2", "alpha*beta", "beta^2", "alpha*de"];
+pub(crate) const DEFAULT_PRODUCTS: [&str; 4] = ["alpha^2", "alpha*beta", "beta^2", "alpha*de"];
 
 /// Settings of stepwise regression.
 #[derive(Debug, Clone, PartialEq)]
@@ -84,7 +84,7 @@ pub struct StepwiseOptions {
     /// `f_to_enter` or this there.
     pub min_r_squared_gain: f64,
     /// Candidate terms; None: every regressor key the record can supply
-    /// (except the constant, which is always in, and `chi`), plus [`DEFAULT_PRODUCTS`].
+    /// (except the constant, which is always in, and `chi`), plus `DEFAULT_PRODUCTS`.
     pub candidates: Option<Vec<String>>,
     pub max_steps: usize,
     pub reconstruction: ReconstructionOptions,
@@ -95,7 +95,7 @@ pub struct StepwiseOptions {
 /// The `[methods.swr]` table.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct StepwiseSettings {
+pub(crate) struct StepwiseSettings {
     pub differentiator: Differentiator,
     #[serde(deserialize_with = "aeroid_core::units::seconds")]
     pub correlation_lag: f64,
@@ -125,13 +125,6 @@ impl Default for StepwiseSettings {
 }
 
 impl StepwiseSettings {
-    /// Reads and checks a `[methods.swr]` table.
-    pub fn read(settings: &Settings) -> Result<StepwiseSettings> {
-        let parsed: StepwiseSettings = parse_settings(METHOD, settings)?;
-        StepwiseRegression::validate(&parsed)?;
-        Ok(parsed)
-    }
-
     pub fn options(&self) -> StepwiseOptions {
         StepwiseOptions {
             f_to_enter: self.f_to_enter,
@@ -151,7 +144,7 @@ impl StepwiseSettings {
 
 /// Stepwise regression as a registered method: every coefficient the
 /// model has terms in, the selected terms estimated together.
-pub struct StepwiseRegression;
+pub(crate) struct StepwiseRegression;
 
 impl Method for StepwiseRegression {
     const NAME: &'static str = METHOD;
@@ -250,7 +243,7 @@ impl Default for StepwiseOptions {
 /// A candidate term: one regressor, or a product of regressors with
 /// integer powers, spelt as a model file's term ([`Monomial`]).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Candidate {
+pub(crate) struct Candidate {
     pub name: String,
     pub factors: Vec<Regressor>,
 }
@@ -289,7 +282,7 @@ impl Candidate {
 /// Stepwise regression on every coefficient the structure has terms in: the
 /// reports, and one estimate of all selected terms (covariance block-diagonal:
 /// the coefficients are fitted independently).
-pub fn stepwise_all(
+pub(crate) fn stepwise_all(
     record: &FlightRecord,
     structure: &ModelStructure,
     options: &StepwiseOptions,

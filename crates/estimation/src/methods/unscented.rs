@@ -36,7 +36,7 @@ pub const METHOD: &str = "ukf";
 /// The sigma-point keys of `[methods.ukf]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct SigmaSettings {
+pub(crate) struct SigmaSettings {
     pub alpha: f64,
     pub beta: f64,
     pub kappa: f64,
@@ -71,7 +71,7 @@ const SIGMA_KEYS: [(&str, &str); 3] = [
 /// The `[methods.ukf]` table: the sigma-point keys (`alpha`, `beta`, `kappa`), the
 /// rest the EKF's settings (a key neither knows is refused by name).
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct UnscentedSettings {
+pub(crate) struct UnscentedSettings {
     pub filter: FilterSettings,
     pub sigma: SigmaSettings,
 }
@@ -138,7 +138,7 @@ pub fn read(settings: &Settings) -> Result<(FilterSettings, Unscented)> {
 }
 
 /// The augmented-state UKF as a registered method.
-pub struct UnscentedFilter;
+pub(crate) struct UnscentedFilter;
 
 impl Method for UnscentedFilter {
     const NAME: &'static str = METHOD;

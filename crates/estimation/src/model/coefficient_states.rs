@@ -52,7 +52,7 @@ use aeroid_sim::atmosphere::{Air, Atmosphere, GAS_CONSTANT};
 use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
 
 /// The number of states.
-pub const STATE_COUNT: usize = 28;
+pub(crate) const STATE_COUNT: usize = 28;
 /// The state vector.
 pub type State = SVector<f64, STATE_COUNT>;
 

@@ -57,7 +57,7 @@ use nalgebra::SVector;
 
 pub const FLIGHT_PATH_SIZE: usize = 11;
 /// A flight-path state x = [V, α, β, p, q, r, φ, θ, ψ, h, χ] (SI, angles in rad).
-pub type FlightPathState = SVector<f64, FLIGHT_PATH_SIZE>;
+pub(crate) type FlightPathState = SVector<f64, FLIGHT_PATH_SIZE>;
 
 pub(super) const AIRSPEED: usize = 0;
 const ALPHA: usize = 1;

@@ -1,7 +1,7 @@
 //! The modes of a fitted model and the instability they show
 //! ([`DiagnosisKind::Unstable`]): for a linear structure the eigenvalues
 //! of A at the estimate, for a 6-DOF structure those of ∂f/∂x at the
-//! record's start ([`super::state_space::mode_eigenvalues`], the Jacobian
+//! record's start (`super::state_space::mode_eigenvalues`, the Jacobian
 //! the integration step is chosen by).
 //!
 //! A mode λ with Re λ > 0 grows as e^{Re λ·t}: it doubles in
@@ -65,7 +65,7 @@ fn name(lambda: Complex<f64>, short_period: bool) -> String {
 /// Diagnoses `estimate` [`DiagnosisKind::Unstable`] when a mode among
 /// `eigenvalues` doubles within `horizon` s, the length of one simulation
 /// (`segmented`: a piece of `segment`, else the record).
-pub fn diagnose(
+pub(crate) fn diagnose(
     estimate: &mut Estimate,
     eigenvalues: &[Complex<f64>],
     states: &[String],
@@ -107,7 +107,10 @@ fn shorter(value: f64) -> f64 {
 
 /// The eigenvalues of A of `structure` with the estimate's values of its
 /// parameters (the file's for those it does not hold).
-pub fn linear_eigenvalues(structure: &LinearStructure, estimate: &Estimate) -> Vec<Complex<f64>> {
+pub(crate) fn linear_eigenvalues(
+    structure: &LinearStructure,
+    estimate: &Estimate,
+) -> Vec<Complex<f64>> {
     let mut a = structure.matrices.a.clone();
     for (i, entry) in structure.entries.iter().enumerate() {
         if entry.matrix == Matrix::A {

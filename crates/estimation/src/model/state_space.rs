@@ -41,7 +41,7 @@ pub(crate) use super::points::Scratch;
 
 /// The window of a record where every channel in `outputs` has samples,
 /// inside `limit` if given.
-pub fn fitting_window(
+pub(crate) fn fitting_window(
     record: &FlightRecord,
     outputs: &[String],
     limit: Option<(f64, f64)>,
@@ -72,7 +72,7 @@ pub fn fitting_window(
 }
 
 /// The model outputs a structure compares, parsed.
-pub fn observables(structure: &ModelStructure) -> Result<Vec<Observable>> {
+pub(crate) fn observables(structure: &ModelStructure) -> Result<Vec<Observable>> {
     structure
         .outputs
         .iter()
@@ -89,7 +89,7 @@ pub fn observables(structure: &ModelStructure) -> Result<Vec<Observable>> {
 
 /// The integration step: `step` if given, else the period of the fastest
 /// channel in `outputs`.
-pub fn integration_step(
+pub(crate) fn integration_step(
     record: &FlightRecord,
     outputs: &[String],
     step: Option<f64>,
@@ -106,11 +106,11 @@ pub fn integration_step(
 
 /// The most sub-steps of the fastest output's period [`observation_step`]
 /// tries.
-pub const MAX_OBSERVATION_SUBDIVISION: usize = 8;
+pub(crate) const MAX_OBSERVATION_SUBDIVISION: usize = 8;
 
 /// The grid step of a fit: `step` if given, else the fastest output's
 /// period divided into the fewest equal parts (at most
-/// [`MAX_OBSERVATION_SUBDIVISION`]) for which every sample of the outputs
+/// `MAX_OBSERVATION_SUBDIVISION`) for which every sample of the outputs
 /// and of the `inputs` (the channels that drive the model; those the
 /// record lacks are skipped) inside the window starting at `start` falls
 /// on a grid point. A channel sampled later in the recorder's frame
@@ -161,7 +161,7 @@ pub fn observation_step(
 /// controls, the flight-path states it does not integrate and the
 /// measured quantities that replace the model's own
 /// ([`DrivenSimulation::from_record`]).
-pub fn driving_channels(structure: &ModelStructure) -> Vec<&'static str> {
+pub(crate) fn driving_channels(structure: &ModelStructure) -> Vec<&'static str> {
     Control::ALL
         .iter()
         .map(|c| c.name())
@@ -180,7 +180,7 @@ pub fn driving_channels(structure: &ModelStructure) -> Vec<&'static str> {
 /// model's fastest eigenvalue: RK4's error over one step is
 /// (hλ)⁵/120 relative, 2.6e-4 at 0.5, and the estimates then move by
 /// well under 0.1σ when the step is halved.
-pub const RK4_STEP_LIMIT: f64 = 0.5;
+pub(crate) const RK4_STEP_LIMIT: f64 = 0.5;
 
 /// The largest h·|λ| of the model's fastest mode at which a θ is simulated
 /// on the grid of the iteration's start: RK4 is stable to 2.78 and, from
@@ -188,14 +188,14 @@ pub const RK4_STEP_LIMIT: f64 = 0.5;
 /// to fivefold (τ1 fall to a half or a fifth); beyond it the simulation is
 /// refused and the step shortened. The next iteration's grid resolves the
 /// new θ.
-pub const RK4_STEP_REACH: f64 = 2.0;
+pub(crate) const RK4_STEP_REACH: f64 = 2.0;
 
 /// The most RK4 steps a grid interval is divided into as the parameters
 /// move: every grid point's sensitivities are kept, so the memory grows
 /// with them (32 on a 60 s record at 100 Hz with 17 unknowns and 6
 /// outputs: about 160 MB per simulation). A θ whose fastest mode needs
 /// more is not simulated, and a fit that goes there stops at that edge.
-pub const MAX_SUBSTEPS: usize = 32;
+pub(crate) const MAX_SUBSTEPS: usize = 32;
 
 /// The simulation of `structure` driven by `record` over `window`, on a
 /// grid of `step` if the user gave one, else of the fastest output's
@@ -205,7 +205,7 @@ pub const MAX_SUBSTEPS: usize = 32;
 /// ([`fastest_mode`]). Returns it and the notes that say why the sample
 /// period is divided, if it is: the channels' instants, then the model's
 /// fastest mode ([`substep_note`]).
-pub fn driven_simulation(
+pub(crate) fn driven_simulation(
     record: &FlightRecord,
     structure: &ModelStructure,
     interpolation: &InputInterpolation,
@@ -265,7 +265,7 @@ pub fn driven_simulation(
 /// The largest |λ| of `model` (with its parameters' values) driven as
 /// `simulation` drives it, linearised at the simulation's start at the
 /// flight-path state `initial` (reading its first grid points only).
-pub fn fastest_mode(
+pub(crate) fn fastest_mode(
     simulation: &DrivenSimulation,
     model: &FlightModel,
     initial: &FlightPathState,
@@ -279,7 +279,7 @@ pub fn fastest_mode(
 /// The eigenvalues of ∂f/∂x of `model` driven as `simulation` drives it,
 /// at its start and the flight-path state `initial` (as [`fastest_mode`]):
 /// the modes of the model linearised there, over its integrated states.
-pub fn mode_eigenvalues(
+pub(crate) fn mode_eigenvalues(
     simulation: &DrivenSimulation,
     model: &FlightModel,
     initial: &FlightPathState,
@@ -300,7 +300,7 @@ pub fn mode_eigenvalues(
 /// The fewest equal RK4 steps of a grid interval `period` that keep
 /// h·|λ| within [`RK4_STEP_LIMIT`] for the fastest mode |λ| = `fastest`;
 /// 1 where one step does, or `fastest` is not a number.
-pub fn rk4_substeps(period: f64, fastest: f64) -> usize {
+pub(crate) fn rk4_substeps(period: f64, fastest: f64) -> usize {
     let substeps = (period * fastest / RK4_STEP_LIMIT).ceil();
     if substeps > 1.0 && substeps.is_finite() {
         substeps as usize
@@ -312,7 +312,7 @@ pub fn rk4_substeps(period: f64, fastest: f64) -> usize {
 /// The note of a grid interval `period` integrated in `substeps` RK4
 /// steps for the model's fastest mode |λ| = `fastest` (`when`: at the
 /// start, at the estimate).
-pub fn substep_note(period: f64, substeps: usize, fastest: f64, when: &str) -> String {
+pub(crate) fn substep_note(period: f64, substeps: usize, fastest: f64, when: &str) -> String {
     format!(
         "integration step {:.4} s: the grid step {period} s would be h·|λ| = {:.2} for the model's fastest mode (|λ| = {fastest:.2}/s {when}), so each grid interval is integrated in {substeps} RK4 steps (`step` sets it)",
         period / substeps as f64,
@@ -324,7 +324,7 @@ pub fn substep_note(period: f64, substeps: usize, fastest: f64, when: &str) -> S
 /// `start`: the integrated states as recorded there (0 where a channel is
 /// absent), the others the simulation's measured values, χ at its
 /// steady value for the recorded α.
-pub fn recorded_initial_state(
+pub(crate) fn recorded_initial_state(
     record: &FlightRecord,
     structure: &ModelStructure,
     simulation: &DrivenSimulation,
@@ -472,7 +472,7 @@ struct ModelScratch {
 
 /// The state-space view of a nonlinear postulated model driven by a
 /// record ([`DrivenSimulation`]). x holds the integrated flight-path states
-/// in the order of [`FLIGHT_PATH_STATES`] (with χ wherever the aerodynamic
+/// in the order of `FLIGHT_PATH_STATES` (with χ wherever the aerodynamic
 /// model makes it a state); the others are the record's measured
 /// pseudo-controls. θ holds every aerodynamic parameter of the model, in
 /// the order of its parameter set. The inputs at t: each control held or
@@ -522,11 +522,11 @@ impl DrivenStateSpace {
 
     /// The view of `structure` driven by `record` as output error drives
     /// it: over the window where every output has samples (inside `limit`),
-    /// on [`driven_simulation`]'s grid (`step` if given, else the fastest
+    /// on `driven_simulation`'s grid (`step` if given, else the fastest
     /// output's period divided for the channels' instants and for RK4's
     /// accuracy on the model's fastest mode; the simulation's notes say
     /// why when it is divided), with the state x₀ the record gives at
-    /// the window's start ([`recorded_initial_state`]). Returns the view
+    /// the window's start (`recorded_initial_state`). Returns the view
     /// and x₀.
     pub fn for_record(
         record: &FlightRecord,
@@ -547,7 +547,7 @@ impl DrivenStateSpace {
         Ok((view, x0))
     }
 
-    /// The flight-path states in x (indices into [`FLIGHT_PATH_STATES`]).
+    /// The flight-path states in x (indices into `FLIGHT_PATH_STATES`).
     pub fn states(&self) -> &[usize] {
         &self.states
     }

@@ -9,7 +9,7 @@
 //!
 //! Two sources: a [`LinearStateSpace`] (dimensional derivatives as entries),
 //! and a nonlinear postulated model linearised about one grid point of its
-//! record-driven view ([`LinearisedFlight`]): the integrated flight-path
+//! record-driven view (`LinearisedFlight`): the integrated flight-path
 //! states are δx; the controls and the measured pseudo-controls (the
 //! flight-path states the model does not integrate, e.g. V, α, q, θ under a
 //! lateral model) and the record's measured density and thrust where they
@@ -63,7 +63,7 @@ impl TransferModel for LinearStateSpace {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Input {
     Control(Control),
-    /// A measured flight-path state (index into [`FLIGHT_PATH_STATES`]).
+    /// A measured flight-path state (index into `FLIGHT_PATH_STATES`).
     Measured(usize),
     /// The record's measured air density, where it replaces the ISA's.
     Density,
@@ -84,7 +84,7 @@ impl Input {
 
 /// A record-driven postulated model linearised about grid point `k`.
 #[derive(Debug, Clone)]
-pub struct LinearisedFlight<'a> {
+pub(crate) struct LinearisedFlight<'a> {
     view: &'a DrivenStateSpace,
     reference: FlightPathState,
     controls: Controls,

@@ -21,7 +21,7 @@
 //!   always falls as neurons are added, so it cannot choose the size; the
 //!   held-out residual rises again once the network fits the noise. The
 //!   chosen size is then trained on every sample;
-//! - MSE and R² of the trained network (Eqs. 9–10; [`super::fit_metrics`]).
+//! - MSE and R² of the trained network (Eqs. 9–10; `super::fit_metrics`).
 //!
 //! Prediction allocates nothing: each hidden neuron's output is added into
 //! the outputs as it is computed.
@@ -218,7 +218,7 @@ fn mean_square_error(network: &Elm, inputs: &[&[f64]], targets: &[&[f64]]) -> f6
 }
 
 /// The held-out residual of each candidate size tried, in the order tried.
-pub type SizeScores = Vec<(usize, f64)>;
+pub(crate) type SizeScores = Vec<(usize, f64)>;
 
 /// The held-out residual criterion of the ELM paper's Eq. 6, shared by
 /// every network whose hidden-layer size is chosen from the data (the ELM
@@ -229,7 +229,7 @@ pub type SizeScores = Vec<(usize, f64)>;
 /// sizes). `train` returns None for a size the data cannot train (too
 /// many neurons), else what it trained and its held-out residual; what
 /// the chosen size trained is returned with the scores of every size tried.
-pub fn choose_by_held_out<T>(
+pub(crate) fn choose_by_held_out<T>(
     sizes: &[usize],
     mut train: impl FnMut(usize) -> Result<Option<(T, f64)>>,
 ) -> Result<Option<(usize, T, SizeScores)>> {
@@ -253,7 +253,7 @@ pub fn choose_by_held_out<T>(
 
 impl ElmTrainer {
     /// The held-out mean square residual of each candidate size, and the
-    /// size with the least (ties: the smaller; [`choose_by_held_out`]).
+    /// size with the least (ties: the smaller; `choose_by_held_out`).
     ///
     /// The candidates share their neurons: a network of n neurons from the
     /// seed has the first n neurons of a larger one (the draws are neuron by

@@ -249,7 +249,7 @@ impl Trainer for LevenbergMarquardt {
 /// is the one that criterion trained; nothing is trained again. Sizes
 /// with more weights than the training pairs determine are skipped.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SizeSearch {
+pub(crate) struct SizeSearch {
     pub training: LevenbergMarquardt,
     /// Candidate numbers of hidden neurons, ascending (ties go to the first).
     pub hidden_sizes: Vec<usize>,

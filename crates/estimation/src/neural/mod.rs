@@ -27,7 +27,7 @@ pub mod feedforward;
 
 /// The log-sigmoid activation.
 #[inline]
-pub fn log_sigmoid(s: f64) -> f64 {
+pub(crate) fn log_sigmoid(s: f64) -> f64 {
     1.0 / (1.0 + (-s).exp())
 }
 
@@ -107,7 +107,7 @@ impl Scaling {
 /// How well a network reproduces its targets: MSE and R² (Eqs. 21–22),
 /// over `targets` and `predictions` given sample by sample (rows), each
 /// row with the same number of outputs. Non-finite pairs are skipped.
-pub fn fit_metrics<R: AsRef<[f64]>>(targets: &[R], predictions: &[R]) -> (f64, f64) {
+pub(crate) fn fit_metrics<R: AsRef<[f64]>>(targets: &[R], predictions: &[R]) -> (f64, f64) {
     let outputs = targets.first().map_or(0, |row| row.as_ref().len());
     if outputs == 0 {
         return (f64::NAN, f64::NAN);

@@ -13,7 +13,7 @@
 //! pass ends, so that the next pass would touch every page of them afresh
 //! (about 4 300 page faults, half again the pass's own time). A dropped
 //! pass's buffers are kept instead for the next pass on the same thread
-//! (at most [`SPARE_BUFFERS`] of them).
+//! (at most `SPARE_BUFFERS` of them).
 
 use super::sparse::SparseRows;
 use super::update::{Gaussian, Measured};
@@ -22,7 +22,7 @@ use std::borrow::Borrow;
 use std::cell::RefCell;
 
 /// How many buffers of dropped passes a thread keeps for its next ones.
-pub const SPARE_BUFFERS: usize = 8;
+pub(crate) const SPARE_BUFFERS: usize = 8;
 
 thread_local! {
     /// The buffers of this thread's dropped passes.

@@ -39,7 +39,7 @@ const CELSIUS_ZERO: f64 = 273.15;
 /// time column and one entry per channel (`docs/import.md`).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ColumnMapFile {
+pub(crate) struct ColumnMapFile {
     #[serde(default)]
     pub name: Option<String>,
     /// How the data file is laid out; a headed CSV when absent.
@@ -52,7 +52,7 @@ pub struct ColumnMapFile {
 /// The `[file]` table of a column map.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct FileLayout {
+pub(crate) struct FileLayout {
     /// Whether the first line that is not a comment names the columns.
     #[serde(default = "with_header")]
     pub header: bool,
@@ -81,7 +81,7 @@ impl Default for FileLayout {
 /// A column of the data file: its header, or its number (1 is the first).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(untagged)]
-pub enum ColumnRef {
+pub(crate) enum ColumnRef {
     Number(i64),
     Name(String),
 }
@@ -99,7 +99,7 @@ impl fmt::Display for ColumnRef {
 /// column of a column map.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ColumnSpec {
+pub(crate) struct ColumnSpec {
     pub column: ColumnRef,
     #[serde(default)]
     pub unit: Option<String>,
@@ -113,7 +113,7 @@ pub struct ColumnSpec {
 /// which column or columns, and how its raw values become SI.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ChannelColumnSpec {
+pub(crate) struct ChannelColumnSpec {
     pub name: String,
     /// The one column of the channel ...
     #[serde(default)]
@@ -149,7 +149,7 @@ pub struct ChannelColumnSpec {
 /// How several columns form one channel (each converted to SI first).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Combine {
+pub(crate) enum Combine {
     /// a + b + …: two engines' thrust.
     Sum,
     /// (a + b + …)/n: two vanes.
@@ -162,7 +162,7 @@ pub enum Combine {
 /// the altitude the ISA is evaluated at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum AltitudeConvention {
+pub(crate) enum AltitudeConvention {
     /// Kept as it is.
     #[default]
     Geopotential,
@@ -176,7 +176,7 @@ pub enum AltitudeConvention {
 /// What a cell that reads as NaN or an infinity means.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum NonFiniteCell {
+pub(crate) enum NonFiniteCell {
     /// The import fails, naming the file, line and column.
     #[default]
     Error,
@@ -187,7 +187,7 @@ pub enum NonFiniteCell {
 /// What an empty cell of a channel column means.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum EmptyCell {
+pub(crate) enum EmptyCell {
     /// A sample was due but lost: kept as NaN.
     #[default]
     Dropout,
@@ -197,7 +197,7 @@ pub enum EmptyCell {
 
 /// A raw-to-SI conversion: `(raw·scale + offset)·factor + shift`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Conversion {
+pub(crate) struct Conversion {
     pub scale: f64,
     pub offset: f64,
     pub factor: f64,

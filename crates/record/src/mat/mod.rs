@@ -1,7 +1,7 @@
 //! MATLAB MAT-files, level 5 (what `save` writes with `-v6` or `-v7`,
 //! compressed or not): the variables of a file read as columns for the
 //! import ([`MatTable`], through the `matfile` crate), and the writer of
-//! aeroid's exports ([`write`]). The level-5 layout is MathWorks' "MAT-File
+//! aeroid's exports ([`mod@write`]). The level-5 layout is MathWorks' "MAT-File
 //! Format" (a 128-byte header, then tagged data elements, each 8-byte
 //! aligned). HDF5-based v7.3 files and level-4 files are recognised by
 //! their first bytes and refused with the format named.
@@ -17,7 +17,7 @@ const HDF5_SIGNATURE: &[u8] = b"\x89HDF\r\n\x1a\n";
 
 /// What a data file for the import is, from its first bytes and its name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DataFormat {
+pub(crate) enum DataFormat {
     /// Text: CSV or whitespace-separated ASCII.
     Text,
     /// A MATLAB level-5 MAT-file.
@@ -27,7 +27,7 @@ pub enum DataFormat {
 /// The format of `path`: a level-5 MAT-file by its header, text when it is
 /// valid UTF-8 (whatever its name); an HDF5 (MATLAB v7.3) file, a level-4
 /// MAT-file or other binary data is an error that says what the file is.
-pub fn sniff(path: &Path) -> Result<DataFormat> {
+pub(crate) fn sniff(path: &Path) -> Result<DataFormat> {
     let bytes = std::fs::read(path).map_err(|source| aeroid_core::Error::Io {
         path: path.to_path_buf(),
         source,

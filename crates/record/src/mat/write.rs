@@ -74,7 +74,7 @@ impl Variable {
 
 /// Whether `name` is a MATLAB variable name: a letter, then letters,
 /// digits and underscores, 63 characters at most.
-pub fn is_variable_name(name: &str) -> bool {
+pub(crate) fn is_variable_name(name: &str) -> bool {
     name.len() <= 63
         && name.starts_with(|c: char| c.is_ascii_alphabetic())
         && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
@@ -82,7 +82,7 @@ pub fn is_variable_name(name: &str) -> bool {
 
 /// The bytes of a MAT-file holding `variables`, with `description` in the
 /// header text (cut to fit).
-pub fn mat_bytes(variables: &[Variable], description: &str) -> Result<Vec<u8>> {
+pub(crate) fn mat_bytes(variables: &[Variable], description: &str) -> Result<Vec<u8>> {
     let mut out = Vec::new();
     let mut text = format!("MATLAB 5.0 MAT-file, {description}");
     text.truncate(116);

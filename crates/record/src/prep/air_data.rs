@@ -6,7 +6,7 @@
 //! 1, γ = 1.4); the density is the gas law ρ = p/(R·T). No ISA temperature
 //! is assumed: a hot or cold day is in T. The Mach number comes from the
 //! calibrated airspeed and p where the record has it (the air-data
-//! computer's relation, [`mach_from_calibrated_airspeed`]: a QAR keeps the
+//! computer's relation, `mach_from_calibrated_airspeed`: a QAR keeps the
 //! airspeed at 1 Hz and the Mach number much slower, 1/36 Hz on
 //! qar-seed000, too slow for a decelerating approach), else from the
 //! `mach` channel.
@@ -27,7 +27,7 @@ use aeroid_sim::atmosphere::{Atmosphere, GAS_CONSTANT};
 /// lacks them and has what they are computed from (module documentation);
 /// one note per added channel. A record without pressure altitude or a
 /// temperature is returned as it is, with no note.
-pub fn with_air_density(record: &FlightRecord) -> Result<(FlightRecord, Vec<String>)> {
+pub(crate) fn with_air_density(record: &FlightRecord) -> Result<(FlightRecord, Vec<String>)> {
     let mut derived = record.clone();
     let mut notes = Vec::new();
     if record.channel("density").is_ok() {

@@ -57,11 +57,11 @@ pub const DEFAULT_DIFFERENTIATOR: Differentiator = Differentiator {
 
 /// The attitude channels the rates are derived from, in the order that
 /// breaks ties for the time base.
-pub const ATTITUDE_CHANNELS: [&str; 3] = ["pitch", "roll", "yaw"];
+pub(crate) const ATTITUDE_CHANNELS: [&str; 3] = ["pitch", "roll", "yaw"];
 
 /// The body rates (p, q, r) from the Euler angles φ, θ and their
 /// derivatives φ̇, θ̇, ψ̇ (all rad, rad/s).
-pub fn body_rates(
+pub(crate) fn body_rates(
     roll: f64,
     pitch: f64,
     roll_dot: f64,
@@ -251,7 +251,7 @@ pub fn kinematic_rates(
 /// rate the record lacks is added; a recorded one is kept and the kinematic
 /// one added as `p_kinematic` (`q_kinematic`, `r_kinematic`), unless
 /// `replace`. An added rate leaves the record's `absent` list.
-pub fn with_kinematic_rates(
+pub(crate) fn with_kinematic_rates(
     record: &FlightRecord,
     differentiator: &Differentiator,
     replace: bool,

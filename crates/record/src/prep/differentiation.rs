@@ -60,7 +60,7 @@ pub struct Differentiator {
 impl Differentiator {
     /// What is wrong with a differentiator read from a settings table or
     /// the command line, if anything: a half-width that is not positive or
-    /// beyond [`MAX_HALF_WIDTH`], a degree of 0 or beyond [`MAX_DEGREE`].
+    /// beyond `MAX_HALF_WIDTH`, a degree of 0 or beyond [`MAX_DEGREE`].
     pub fn check(&self) -> Option<String> {
         if !(self.half_width > 0.0 && self.half_width <= MAX_HALF_WIDTH) {
             Some(format!(
@@ -81,7 +81,7 @@ impl Differentiator {
 /// The widest half-window a differentiator takes, in seconds: a local
 /// polynomial over more than 20 s smooths away every manoeuvre, and a
 /// window of 1e9 s would ask for more memory than any machine has.
-pub const MAX_HALF_WIDTH: f64 = 10.0;
+pub(crate) const MAX_HALF_WIDTH: f64 = 10.0;
 
 /// The highest degree of a differentiator's local polynomial: beyond it the
 /// least-squares fit on equidistant samples is ill-conditioned (Runge) and
@@ -343,7 +343,7 @@ fn finite_samples(channel: &Channel) -> Vec<(f64, f64)> {
 /// is a run of consecutive changes above half that threshold holding at
 /// least one large change: one change, a step sampled (or a ramp within
 /// one sample interval); more, a ramp through samples. A channel whose
-/// whole range is at most [`FEW_LSB`] least significant bits ([`quantum`]:
+/// whole range is at most `FEW_LSB` least significant bits (`quantum`:
 /// `resolution` when declared, else inferred from the values) is a
 /// near-constant quantised channel, whose changes are quantisation: it has
 /// no transitions (an unused flap at a level's edge that flips by one LSB).

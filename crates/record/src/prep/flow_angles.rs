@@ -331,7 +331,7 @@ fn interpolated(channels: &[&Channel], resolutions: [f64; 8], times: &[f64]) -> 
 
 /// A record with the geometric angles in it, and what was done, per channel.
 #[derive(Debug, Clone)]
-pub struct Derivation {
+pub(crate) struct Derivation {
     pub record: FlightRecord,
     pub angles: GeometricFlowAngles,
     /// One line per angle: added, replaced (and why) or added beside the recorded one.
@@ -346,7 +346,7 @@ pub struct Derivation {
 /// wrong; a usable recorded channel is kept and the geometric one added as
 /// `alpha_geometric` (`beta_geometric`), unless `replace`. An added angle
 /// leaves the record's `absent` list.
-pub fn with_geometric_flow_angles(
+pub(crate) fn with_geometric_flow_angles(
     record: &FlightRecord,
     wind: Wind,
     replace: bool,

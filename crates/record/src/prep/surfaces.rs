@@ -22,7 +22,7 @@ pub struct SplitSurface {
 }
 
 /// The split surfaces the derive step combines.
-pub const SPLIT_SURFACES: [SplitSurface; 3] = [
+pub(crate) const SPLIT_SURFACES: [SplitSurface; 3] = [
     SplitSurface {
         combined: "aileron",
         left: "aileron_left",

@@ -73,7 +73,7 @@ impl FuelFlowThrust {
 /// constant that is not a positive (idle: non-negative) finite number, a
 /// record without a fuel-flow channel, or a fuel-flow channel in another
 /// unit than kg/s.
-pub fn with_thrust_from_fuel_flow(
+pub(crate) fn with_thrust_from_fuel_flow(
     record: &FlightRecord,
     model: &FuelFlowThrust,
 ) -> Result<(FlightRecord, Vec<String>)> {

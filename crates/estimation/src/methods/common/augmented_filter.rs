@@ -23,7 +23,7 @@
 //! **Noise** (the note's "EKF for parameter estimation" section):
 //! 1. R by Fourier decomposition (the note's ref. 7; Klein & Morelli 2006,
 //!    §11.2): σ² = (Σ_{f_k > f_c} |X_k|²)/(N·M) over the M bins above the
-//!    motion's bandwidth f_c ([`fourier_noise_variance`]).
+//!    motion's bandwidth f_c (`fourier_noise_variance`).
 //! 2. The residual-correlation method (the note's ref. 6, Mehra, "On the
 //!    identification of variances and adaptive Kalman filtering", IEEE TAC
 //!    15(2), 1970, §IV, Eqs. 13, 29, 30, 33; `tuning`): after each pass the
@@ -31,13 +31,13 @@
 //!    process noise for the next; a pass that makes the record less likely
 //!    (−ln L = ½·Σ(νᵀS⁻¹ν + ln det 2πS)) is discarded for zero-lag
 //!    covariance matching. The passes stop when every output's mean ν²/S
-//!    is within [`TUNED`] of 1, or after `passes`.
+//!    is within `TUNED` of 1, or after `passes`.
 //!
 //! **Estimate**: the final filtered augmented state and covariance, θ
 //! started from equation error (`start = "ee"`) where it serves. **Status**:
 //! converged when every parameter has settled over the last
-//! [`SETTLING_FRACTION`] of the record and the data identified it (σ below
-//! σ₀/√2); innovations beyond [`CONSISTENT`] are a diagnosis. **Histories**:
+//! `SETTLING_FRACTION` of the record and the data identified it (σ below
+//! σ₀/√2); innovations beyond `CONSISTENT` are a diagnosis. **Histories**:
 //! θ_a and σ at every grid point of the last pass ([`History::write_csv`]).
 
 use crate::error::{Error, Result};
@@ -71,7 +71,7 @@ mod history;
 mod passes;
 mod setup;
 mod status;
-pub use fourier_noise::*;
+pub(crate) use fourier_noise::*;
 pub use history::*;
 use passes::{Passes, noise_notes, pass_noise, report_line, run_pass, worse};
 use setup::Setup;
@@ -81,19 +81,19 @@ use status::*;
 /// squared innovation over the second half of the record is within this
 /// of 1. Its sampling scatter is √(2/N) ≈ 0.05 for the 750 samples of a
 /// 60 s, 25 Hz half-record; 0.25 leaves room for the linearisation.
-pub const CONSISTENT: f64 = 0.25;
+pub(crate) const CONSISTENT: f64 = 0.25;
 
 /// The residual-correlation passes stop once every output's mean
 /// normalised squared innovation is within this of 1 (2 sampling σ of a
 /// 60 s, 25 Hz half-record).
-pub const TUNED: f64 = 0.1;
+pub(crate) const TUNED: f64 = 0.1;
 
 /// The last part of the record over which a parameter must have settled.
-pub const SETTLING_FRACTION: f64 = 0.1;
+pub(crate) const SETTLING_FRACTION: f64 = 0.1;
 
 /// Parameters of magnitude below this get this as the scale of their prior
 /// σ and pseudonoise (aerodynamic derivatives are O(0.01–10) per radian).
-pub const PARAMETER_SCALE: f64 = 0.1;
+pub(crate) const PARAMETER_SCALE: f64 = 0.1;
 
 /// The smallest measurement noise σ, relative to a channel's standard
 /// deviation: a noise-free record still needs a positive R, and one much
@@ -269,7 +269,7 @@ impl FilterSettings {
 /// On a linear structure, an error naming the settings of `method` it
 /// does not take (the augmented filters' `interpolation`: a linear model
 /// states it in its file).
-pub fn refuse_for_linear(method: &str, problem: &EstimationProblem) -> Result<()> {
+pub(crate) fn refuse_for_linear(method: &str, problem: &EstimationProblem) -> Result<()> {
     match &problem.structure {
         Structure::Linear(structure) => crate::estimator::refuse_for_linear(
             method,

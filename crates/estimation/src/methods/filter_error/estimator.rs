@@ -8,7 +8,7 @@ use super::*;
 pub(super) const NOISELESS_STATES: [&str; 5] = ["roll", "pitch", "yaw", "altitude", "chi"];
 
 /// Filter error as a registered method.
-pub struct FilterError;
+pub(crate) struct FilterError;
 
 impl Method for FilterError {
     const NAME: &'static str = METHOD;
@@ -154,7 +154,7 @@ pub(super) fn noisy_states(
 
 /// Filter error with equation error's estimate on the record given (else
 /// computed when the start asks for it).
-pub fn filter_error_from(
+pub(crate) fn filter_error_from(
     record: &FlightRecord,
     structure: &ModelStructure,
     options: &FilterErrorOptions,

@@ -3,7 +3,7 @@
 use super::*;
 
 /// Output error as a registered method.
-pub struct OutputError;
+pub(crate) struct OutputError;
 
 impl Method for OutputError {
     const NAME: &'static str = METHOD;

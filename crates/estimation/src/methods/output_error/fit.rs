@@ -13,7 +13,7 @@ pub fn output_error(
 
 /// Output error with equation error's estimate on the first record given
 /// (else computed when the start asks for it).
-pub fn output_error_from(
+pub(crate) fn output_error_from(
     records: &[&FlightRecord],
     structure: &ModelStructure,
     options: &OutputErrorOptions,

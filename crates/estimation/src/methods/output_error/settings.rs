@@ -10,7 +10,7 @@ pub struct OutputErrorOptions {
     pub max_iterations: usize,
     /// Integration step (s); None: the fastest compared channel's period,
     /// in equal sub-steps where the model's fastest mode needs them
-    /// ([`crate::model::state_space::driven_simulation`]),
+    /// (`crate::model::state_space::driven_simulation`),
     /// re-chosen at every iteration for the parameters there.
     #[serde(
         deserialize_with = "aeroid_core::units::optional_seconds",
@@ -63,16 +63,16 @@ pub struct OutputErrorOptions {
 
 /// The most starts a fit takes: a thousand fits of a second each take a
 /// quarter of an hour; more is a typo.
-pub const MAX_STARTS: usize = 1000;
+pub(crate) const MAX_STARTS: usize = 1000;
 
 /// The widest spread of the extra starts, as a fraction of each
 /// parameter's magnitude: tenfold; beyond it a start is no longer near the
 /// model file's values.
-pub const MAX_START_SPREAD: f64 = 10.0;
+pub(crate) const MAX_START_SPREAD: f64 = 10.0;
 
 /// The most simulated draws of the inputs' noise: 100 000 put the share's
 /// standard deviations within 0.2 %; more only costs time.
-pub const MAX_DRAWS: usize = 100_000;
+pub(crate) const MAX_DRAWS: usize = 100_000;
 
 impl Default for OutputErrorOptions {
     fn default() -> Self {

@@ -6,7 +6,7 @@ use super::*;
 /// decomposition (module header, Noise 1): the mean power of the spectrum
 /// above `bandwidth` (Hz), at least the upper quarter of the band. Dropouts
 /// are bridged linearly. NaN for fewer than 16 samples.
-pub fn fourier_noise_variance(values: &[f64], rate: f64, bandwidth: f64) -> f64 {
+pub(crate) fn fourier_noise_variance(values: &[f64], rate: f64, bandwidth: f64) -> f64 {
     let x = bridged(values);
     let n = x.len();
     if n < 16 {

@@ -89,7 +89,7 @@ pub fn update(
 
 /// Per output: the mean normalised squared innovation ν²/S over the second
 /// half of the record.
-pub fn normalised_innovations(pass: &Pass, len: usize) -> Vec<f64> {
+pub(crate) fn normalised_innovations(pass: &Pass, len: usize) -> Vec<f64> {
     pass.innovations
         .iter()
         .map(|innovations| {
