@@ -54,9 +54,9 @@ pub(crate) use crate::methods::common::refusals::{missing_channels, unsuitable};
 use crate::model::driven::{Column, DrivenSimulation, FlightPathState, Linearise, Observable};
 use crate::model::modes;
 use crate::model::state_space::{
-    MAX_SUBSTEPS, RK4_STEP_LIMIT, RK4_STEP_REACH, driven_simulation, driving_channels,
-    fastest_mode, fitting_window, mode_eigenvalues, observables, observation_step,
-    recorded_initial_state, rk4_substeps, substep_note,
+    MAX_SUBSTEPS, RK4_STEP_LIMIT, RK4_STEP_REACH, check_step_reach, driven_simulation,
+    driving_channels, fastest_mode, fitting_window, mode_eigenvalues, observables,
+    observation_step, recorded_initial_state, rk4_substeps, substep_note,
 };
 use crate::problem::EstimationProblem;
 use crate::structure::{FLIGHT_PATH_STATES, ModelStructure, Structure};

@@ -243,18 +243,10 @@ pub(crate) fn driven_simulation(
     let model = FlightModel::new(structure.aircraft.clone(), Default::default());
     let fastest = fastest_mode(&simulation, &model, &initial)?;
     let substeps = rk4_substeps(period, fastest).min(MAX_SUBSTEPS);
-    let step = period / substeps as f64;
     // A model file whose start values make a mode too fast for the finest
     // grid (a derivative of 1e30) is refused here, before a grid of
     // billions of points is allocated.
-    if step * fastest > RK4_STEP_REACH {
-        return Err(Error::BeyondStepReach {
-            fastest,
-            step,
-            reach: RK4_STEP_REACH,
-            finest: (substeps == MAX_SUBSTEPS).then_some(MAX_SUBSTEPS),
-        });
-    }
+    check_step_reach(period, substeps, fastest)?;
     if substeps == 1 {
         return Ok((simulation, notes));
     }
@@ -295,6 +287,22 @@ pub(crate) fn mode_eigenvalues(
         return Ok(Vec::new());
     }
     Ok(a.complex_eigenvalues().iter().copied().collect())
+}
+
+/// An error when the fastest mode |λ| = `fastest` is beyond what RK4
+/// steps of `period`/`substeps` integrate (h·|λ| above [`RK4_STEP_REACH`]),
+/// saying so when the steps are already the finest a fit takes.
+pub fn check_step_reach(period: f64, substeps: usize, fastest: f64) -> Result<()> {
+    let step = period / substeps as f64;
+    if step * fastest > RK4_STEP_REACH {
+        return Err(Error::BeyondStepReach {
+            fastest,
+            step,
+            reach: RK4_STEP_REACH,
+            finest: (substeps >= MAX_SUBSTEPS).then_some(MAX_SUBSTEPS),
+        });
+    }
+    Ok(())
 }
 
 /// The fewest equal RK4 steps of a grid interval `period` that keep

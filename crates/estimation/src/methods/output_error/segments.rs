@@ -189,17 +189,8 @@ impl Segment<'_> {
         let Some((period, substeps)) = self.substeps else {
             return Ok(());
         };
-        let step = period / substeps as f64;
         let fastest = fastest_mode(&self.simulation, model, &self.initial)?;
-        if step * fastest > RK4_STEP_REACH {
-            return Err(crate::Error::BeyondStepReach {
-                fastest,
-                step,
-                reach: RK4_STEP_REACH,
-                finest: (substeps >= MAX_SUBSTEPS).then_some(MAX_SUBSTEPS),
-            });
-        }
-        Ok(())
+        check_step_reach(period, substeps, fastest)
     }
 
     /// The note on a grid whose sub-steps were re-chosen.
