@@ -176,8 +176,30 @@ impl<'a> Objective<'a> {
             }
         }
         let all = unknowns(structure, options, &segments);
-        Ok(Objective {
-            model: FlightModel::new(structure.aircraft.clone(), Default::default()),
+        let model = FlightModel::new(structure.aircraft.clone(), Default::default());
+        Ok(Objective::from_segments(
+            model,
+            segments,
+            all,
+            observables,
+            structure,
+            options,
+        ))
+    }
+
+    /// The objective of `model` over `segments` with the unknowns `all`,
+    /// all of them free, comparing `observables` (the structure's outputs),
+    /// every output weighted 1, nothing simulated yet.
+    pub(super) fn from_segments(
+        model: FlightModel,
+        segments: Vec<Segment<'a>>,
+        all: Vec<Unknown>,
+        observables: Vec<Observable>,
+        structure: &ModelStructure,
+        options: &OutputErrorOptions,
+    ) -> Objective<'a> {
+        Objective {
+            model,
             unknowns: all.clone(),
             all,
             segments,
@@ -193,7 +215,7 @@ impl<'a> Objective<'a> {
             alpha_dot: structure.aircraft.aero.takes_measured_alpha_dot(),
             chi_is_state: structure.aircraft.aero.chi_is_state(),
             regridded: false,
-        })
+        }
     }
 
     /// Re-chooses each segment's RK4 sub-steps for the model at θ

@@ -42,24 +42,16 @@ pub fn match_histories(
     }
     let options = OutputErrorOptions::for_structure(structure)?;
     let segment = segment(record, structure, &options)?;
-    let mut problem = Objective {
-        model: FlightModel::new(aircraft, Default::default()),
-        all: Vec::new(),
-        unknowns: Vec::new(),
-        segments: vec![segment],
-        outputs: structure.outputs.clone(),
-        observables: observables(structure)?,
-        weights: vec![1.0; structure.outputs.len()],
-        linearise: Linearise::GridPoints,
-        refinable: false,
-        simulated: None,
-        held: None,
-        integrate: structure.integrate.clone(),
-        interpolation: options.interpolation.clone(),
-        alpha_dot: structure.aircraft.aero.takes_measured_alpha_dot(),
-        chi_is_state: structure.aircraft.aero.chi_is_state(),
-        regridded: false,
-    };
+    let model = FlightModel::new(aircraft, Default::default());
+    let observables = observables(structure)?;
+    let mut problem = Objective::from_segments(
+        model,
+        vec![segment],
+        Vec::new(),
+        observables,
+        structure,
+        &options,
+    );
     // The grid for the estimate's values, not the model file's.
     let nothing = DVector::zeros(0);
     problem
