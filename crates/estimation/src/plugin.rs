@@ -786,9 +786,9 @@ impl Estimator for Plugin {
 }
 
 /// Every plug-in file in the data folder's `estimators/` and the folders
-/// of `AEROID_ESTIMATORS`, loaded; a file that cannot be loaded is an
-/// error beside the others.
-pub(crate) fn discover() -> (Vec<Plugin>, Vec<Error>) {
+/// of `AEROID_ESTIMATORS`, loaded; a file that cannot be loaded is its
+/// path and error beside the others.
+pub(crate) fn discover() -> (Vec<Plugin>, Vec<(PathBuf, Error)>) {
     let mut folders = vec![aeroid_core::catalog::data_folder().join(PLUGIN_FOLDER)];
     if let Ok(extra) = std::env::var(PLUGIN_VARIABLE) {
         folders.extend(
@@ -811,7 +811,7 @@ pub(crate) fn discover() -> (Vec<Plugin>, Vec<Error>) {
         for file in files {
             match Plugin::load(&file) {
                 Ok(plugin) => plugins.push(plugin),
-                Err(error) => problems.push(error),
+                Err(error) => problems.push((file, error)),
             }
         }
     }

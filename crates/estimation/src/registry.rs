@@ -18,6 +18,7 @@ use crate::settings::{MethodTables, Settings, overlay};
 use crate::structure::{ModelStructure, Structure};
 use aeroid_core::error::FieldErrors;
 use aeroid_record::FlightRecord;
+use std::path::PathBuf;
 use std::sync::Arc;
 
 /// The estimators a program can run, in the order `aeroid run` runs them.
@@ -52,9 +53,9 @@ use std::sync::Arc;
 #[derive(Clone)]
 pub struct Registry {
     estimators: Vec<Arc<dyn Estimator>>,
-    /// Plug-in files that could not be loaded or were left out, each with
-    /// its reason.
-    plugin_problems: Vec<String>,
+    /// Plug-in files that could not be loaded or were left out: each
+    /// file's path and the message that says why.
+    plugin_problems: Vec<(PathBuf, String)>,
 }
 
 impl std::fmt::Debug for Registry {
@@ -83,34 +84,42 @@ impl Registry {
     pub fn with_plugins() -> Registry {
         let mut registry = Registry::built_in();
         let (plugins, problems) = crate::plugin::discover();
-        registry.plugin_problems = problems.iter().map(ToString::to_string).collect();
+        registry.plugin_problems = problems
+            .into_iter()
+            .map(|(path, error)| (path, error.to_string()))
+            .collect();
         for plugin in &plugins {
             let name = Estimator::name(plugin);
-            let path = plugin.path().display();
+            let file = plugin.path().to_path_buf();
+            let path = file.display();
             let namesakes: Vec<String> = plugins
                 .iter()
                 .filter(|other| Estimator::name(*other) == name && other.path() != plugin.path())
                 .map(|other| other.path().display().to_string())
                 .collect();
-            if registry.estimators.iter().any(|e| e.name() == name) {
-                registry.plugin_problems.push(format!(
+            let reason = if registry.estimators.iter().any(|e| e.name() == name) {
+                format!(
                     "{path}: '{name}' is a built-in method; the plug-in is left out (rename its file)"
-                ));
+                )
             } else if !namesakes.is_empty() {
-                registry.plugin_problems.push(format!(
+                format!(
                     "{path}: the plug-in name '{name}' is also {}; both are left out (rename one)",
                     namesakes.join(", ")
-                ));
-            }
+                )
+            } else {
+                continue;
+            };
+            registry.plugin_problems.push((file, reason));
         }
         for plugin in plugins {
-            let path = plugin.path().display().to_string();
+            let file = plugin.path().to_path_buf();
             let left_out = registry
                 .plugin_problems
                 .iter()
-                .any(|p| p.starts_with(&format!("{path}:")));
+                .any(|(path, _)| *path == file);
             if !left_out && let Err(error) = registry.add(Arc::new(plugin)) {
-                registry.plugin_problems.push(format!("{path}: {error}"));
+                let reason = format!("{}: {error}", file.display());
+                registry.plugin_problems.push((file, reason));
             }
         }
         registry
@@ -142,8 +151,10 @@ impl Registry {
     }
 
     /// The plug-in files left out of the registry, and why.
-    pub fn plugin_problems(&self) -> &[String] {
-        &self.plugin_problems
+    pub fn plugin_problems(&self) -> impl Iterator<Item = &str> {
+        self.plugin_problems
+            .iter()
+            .map(|(_, reason)| reason.as_str())
     }
 
     /// The estimator named `name`.
@@ -153,15 +164,14 @@ impl Registry {
         }
         // A plug-in file of that name that did not load: its reason, not
         // only "unknown method".
-        let file = format!("{name}.toml");
-        if let Some(problem) = self.plugin_problems.iter().find(|p| {
-            p.split(':')
-                .next()
-                .is_some_and(|path| path.ends_with(&format!("/{file}")) || path == file)
-        }) {
+        if let Some((_, reason)) = self
+            .plugin_problems
+            .iter()
+            .find(|(path, _)| path.file_stem().is_some_and(|stem| stem == name))
+        {
             return Err(Error::PluginNotLoaded {
                 name: name.to_string(),
-                reason: problem.clone(),
+                reason: reason.clone(),
             });
         }
         Err(aeroid_core::Error::Unknown {
