@@ -113,18 +113,18 @@ pub fn check_not_input(output: &Path, inputs: &[&Path], allowed_suffixes: &[&str
     let Ok(written) = output.canonicalize() else {
         return Ok(());
     };
+    let name = written.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    let allowed = allowed_suffixes.iter().any(|suffix| name.ends_with(suffix));
     for input in inputs {
         let Ok(read) = input.canonicalize() else {
             continue;
         };
-        let name = written.file_name().and_then(|n| n.to_str()).unwrap_or("");
         if written == read {
             return Err(write_error(
                 output,
                 "it is a file this command reads; name another file",
             ));
         }
-        let allowed = allowed_suffixes.iter().any(|suffix| name.ends_with(suffix));
         if read.is_dir() && written.starts_with(&read) && !allowed {
             return Err(write_error(
                 output,
