@@ -1,13 +1,17 @@
 //! `aeroid derive`: add the channels a recorder lacks (combined surfaces,
-//! geometric angle of attack and sideslip, body rates) to a record.
+//! geometric angle of attack and sideslip, body rates) to a record, and on
+//! request the aerodynamic coefficients from the measured accelerations.
 
+use aeroid::estimation::coefficient_channels::coefficient_channels;
+use aeroid::estimation::reconstruction::{AngularAccelerations, ReconstructionOptions};
 use aeroid::prep::angular_rates::DEFAULT_DIFFERENTIATOR;
 use aeroid::prep::derive::{Options, RatesChoice, derive};
 use aeroid::prep::differentiation::Differentiator;
 use aeroid::prep::flow_angles::Wind;
 use aeroid::prep::thrust::FuelFlowThrust;
 use aeroid::units::DEG;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
+use nalgebra::Vector3;
 use std::path::PathBuf;
 
 /// Add the channels a recorder lacks (flow angles, rates, combined surfaces, thrust).
@@ -20,7 +24,9 @@ use std::path::PathBuf;
 /// differentiated attitude. A recorded alpha or beta that the quality
 /// check finds stuck or stepping is replaced; a usable one is kept and the
 /// geometric one added as alpha_geometric, beta_geometric (unless
-/// --replace); on request the thrust from the fuel flow. See docs/cli.md.
+/// --replace); on request the thrust from the fuel flow, and with
+/// --coefficients the aerodynamic coefficients CX, CY, CZ, CL, CD, Cl, Cm,
+/// Cn from the measured accelerations. See docs/cli.md.
 #[derive(clap::Args)]
 pub struct Args {
     /// The record folder.
@@ -30,6 +36,95 @@ pub struct Args {
     out: PathBuf,
     #[command(flatten)]
     options: DeriveFlags,
+    #[command(flatten)]
+    coefficients: CoefficientFlags,
+}
+
+/// The options of the coefficients from the measured accelerations.
+#[derive(clap::Args)]
+pub struct CoefficientFlags {
+    /// Add the aerodynamic coefficients CX, CY, CZ, CL, CD, Cl, Cm, Cn
+    /// computed from the measured accelerations with this aircraft's mass,
+    /// inertia, geometry and engine (a bundled name or a file).
+    #[arg(long, value_name = "AIRCRAFT")]
+    coefficients: Option<String>,
+    /// The accelerometers' position relative to the centre of gravity,
+    /// body axes, in metres ("x,y,z"; x forward, y right, z down): the
+    /// load factors are carried to the CG. Default: at the CG.
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        requires = "coefficients",
+        allow_hyphen_values = true
+    )]
+    accelerometer_position: Option<String>,
+    /// Where the angular accelerations of the moments come from:
+    /// `differentiated` (the rates, by the smoothing differentiator),
+    /// `measured` (the record's p_dot, q_dot, r_dot) or `auto` (measured
+    /// when the record has all three).
+    #[arg(
+        long,
+        value_name = "SOURCE",
+        default_value = "differentiated",
+        requires = "coefficients"
+    )]
+    angular_accelerations: String,
+    /// Half-width of the rates' differentiator window, in seconds.
+    #[arg(long, value_name = "S", requires = "coefficients")]
+    acceleration_half_width: Option<f64>,
+    /// Degree of the rates' differentiator's local polynomial.
+    #[arg(long, value_name = "D", requires = "coefficients")]
+    acceleration_degree: Option<usize>,
+}
+
+impl CoefficientFlags {
+    /// The reconstruction's options these flags state.
+    fn options(&self) -> Result<ReconstructionOptions> {
+        let angular_accelerations = match self.angular_accelerations.as_str() {
+            "differentiated" => AngularAccelerations::Differentiated,
+            "measured" => AngularAccelerations::Measured,
+            "auto" => AngularAccelerations::Auto,
+            other => bail!(
+                "--angular-accelerations {other:?}: expected differentiated, measured or auto"
+            ),
+        };
+        let accelerometer_position = match &self.accelerometer_position {
+            None => Vector3::zeros(),
+            Some(text) => parse_position(text)?,
+        };
+        let mut differentiator = Differentiator::default();
+        if let Some(half_width) = self.acceleration_half_width {
+            differentiator.half_width = half_width;
+        }
+        if let Some(degree) = self.acceleration_degree {
+            differentiator.degree = degree;
+        }
+        if let Some(problem) = differentiator.check() {
+            bail!("--acceleration-half-width / --acceleration-degree: {problem}");
+        }
+        Ok(ReconstructionOptions {
+            differentiator: Some(differentiator),
+            angular_accelerations,
+            accelerometer_position,
+            ..ReconstructionOptions::default()
+        })
+    }
+}
+
+/// "x,y,z" in metres, each finite.
+fn parse_position(text: &str) -> Result<Vector3<f64>> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let numbers: Vec<f64> = parts.iter().filter_map(|p| p.parse().ok()).collect();
+    match numbers[..] {
+        [x, y, z]
+            if parts.len() == 3 && numbers.iter().all(|v| v.is_finite() && v.abs() <= 1e3) =>
+        {
+            Ok(Vector3::new(x, y, z))
+        }
+        _ => bail!(
+            "--accelerometer-position {text:?}: expected three distances in metres, \"x,y,z\", each within ±1000 m"
+        ),
+    }
 }
 
 /// The derive step's options, shared by `aeroid derive` and `aeroid run --derive`.
@@ -101,12 +196,61 @@ impl DeriveFlags {
 
 pub fn run(args: Args) -> Result<()> {
     aeroid::paths::check_output_folder(&args.out)?;
+    let coefficient_options = args.coefficients.options()?;
+    let aircraft = match &args.coefficients.coefficients {
+        Some(reference) => {
+            let path = aeroid::catalog::resolve(reference, aeroid::catalog::AIRCRAFT_FOLDER, None)?;
+            Some(aeroid::sim::aircraft::Aircraft::load(&path)?)
+        }
+        None => None,
+    };
     let record = aeroid::record::FlightRecord::read(&args.record)?;
     let options = args.options.options();
-    let derived = derive(&record, &options).with_context(|| args.record.display().to_string())?;
-    derived.record.write(&args.out)?;
+    let mut derived =
+        derive(&record, &options).with_context(|| args.record.display().to_string())?;
     print_summary(&derived, &options)?;
+    if let Some(aircraft) = &aircraft {
+        let computed = coefficient_channels(&derived.record, aircraft, &coefficient_options)
+            .with_context(|| args.record.display().to_string())?;
+        print_coefficients(&computed, &aircraft.name)?;
+        if computed.channels.is_empty() {
+            bail!(
+                "{}: no coefficient can be computed from this record (the channels each lacks are listed above)",
+                args.record.display()
+            );
+        }
+        for line in computed.add_to(&mut derived.record, options.replace) {
+            outln!("  {line}");
+        }
+    }
+    derived.record.write(&args.out)?;
     outln!("record written to {}", args.out.display());
+    Ok(())
+}
+
+/// What the coefficient step computed, from what, and what it left out.
+fn print_coefficients(
+    computed: &aeroid::estimation::coefficient_channels::CoefficientChannels,
+    aircraft: &str,
+) -> Result<()> {
+    let names: Vec<&str> = computed.channels.iter().map(|c| c.name.as_str()).collect();
+    outln!(
+        "aerodynamic coefficients from the measured accelerations ({aircraft}'s mass, inertia and geometry): {}",
+        if names.is_empty() {
+            "none".to_string()
+        } else {
+            names.join(", ")
+        }
+    );
+    for note in &computed.notes {
+        outln!("  {note}");
+    }
+    for (name, missing) in &computed.left_out {
+        outln!(
+            "  {name}: left out, the record has no {}",
+            missing.join(", ")
+        );
+    }
     Ok(())
 }
 

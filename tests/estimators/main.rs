@@ -7,6 +7,7 @@
 mod common;
 
 mod augmented_filters;
+mod coefficients_from_accelerations;
 mod compatibility;
 mod elm_gauss_newton;
 mod equation_error;

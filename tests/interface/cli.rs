@@ -639,3 +639,88 @@ fn export_writes_one_file_outside_the_record() {
         assert_eq!(std::fs::read(&path).unwrap(), bytes, "{}", path.display());
     }
 }
+
+/// `derive --coefficients`: the stall record by the flight-test profile
+/// gets the eight coefficient channels (each said on its own line, with
+/// the accelerometers' transfer and the differentiator in the notes); the
+/// written record holds them; a position that is not three distances and
+/// an unknown source of the angular accelerations are errors naming the
+/// flag, and nothing is written.
+#[test]
+fn derive_adds_the_coefficients_from_the_accelerations() {
+    let folder = common::temp_folder("cli_derive_coefficients");
+    let record = folder.join("rec");
+    stdout_of(
+        aeroid()
+            .args([
+                "record",
+                "attas-stall",
+                "--profile",
+                "flight-test-25hz",
+                "--out",
+            ])
+            .arg(&record),
+    );
+    let out = folder.join("coefficients");
+    let printed = stdout_of(
+        aeroid()
+            .arg("derive")
+            .arg(&record)
+            .arg("--out")
+            .arg(&out)
+            .args([
+                "--no-flow-angles",
+                "--no-rates",
+                "--coefficients",
+                "attas-stall",
+            ])
+            .args(["--accelerometer-position", "6,1.5,-0.8"]),
+    );
+    assert!(
+        printed.contains("carried to the CG from the accelerometers at (6, 1.5, -0.8) m"),
+        "{printed}"
+    );
+    assert!(
+        printed.contains("angular accelerations by local polynomial"),
+        "{printed}"
+    );
+    let written = aeroid::record::FlightRecord::read(&out).unwrap();
+    for name in ["CX", "CY", "CZ", "CL", "CD", "Cl", "Cm", "Cn"] {
+        assert!(
+            printed.contains(&format!("  {name}: added")),
+            "{name}: {printed}"
+        );
+        let channel = written.channel(name).unwrap();
+        assert!(
+            channel.values.iter().filter(|v| v.is_finite()).count() > 1000,
+            "{name}"
+        );
+    }
+    for (flags, says) in [
+        (
+            ["--accelerometer-position", "6,1.5"],
+            "--accelerometer-position \"6,1.5\"",
+        ),
+        (
+            ["--angular-accelerations", "guessed"],
+            "--angular-accelerations \"guessed\"",
+        ),
+    ] {
+        let bad = folder.join("bad");
+        let output = aeroid()
+            .arg("derive")
+            .arg(&record)
+            .arg("--out")
+            .arg(&bad)
+            .args(["--coefficients", "attas-stall"])
+            .args(flags)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            !output.status.success() && stderr.contains(says),
+            "{stderr}"
+        );
+        assert!(!bad.exists(), "nothing is written on an error");
+    }
+}

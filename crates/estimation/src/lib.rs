@@ -6,6 +6,7 @@
 //! coefficient reconstruction (`reconstruction`) and the least-squares
 //! solution with its error bounds (`solver::regression`).
 
+pub mod coefficient_channels;
 pub mod compatibility;
 pub mod diagnosis;
 pub mod error;

@@ -36,6 +36,7 @@ use crate::estimate::{Estimate, ParameterEstimate, Status};
 use crate::estimator::{Capabilities, Estimator, MethodInfo, Refusal, SettingInfo, Settings};
 use crate::problem::EstimationProblem;
 use crate::sandbox::Sandbox;
+use crate::structure::Structure;
 use aeroid_core::error::{read_text, write_error};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -400,12 +401,7 @@ impl Plugin {
                 status
             })
             .map_err(|e| {
-                if let Some(group) = group.filter(|&g| g > 1) {
-                    // SAFETY: killpg only sends a signal; it touches no memory.
-                    unsafe {
-                        libc::killpg(group, libc::SIGKILL);
-                    }
-                }
+                kill_group(group);
                 Error::Plugin {
                     reason: format!(
                         "plug-in {}: no thread to wait for it ({e}): killed",
@@ -423,12 +419,7 @@ impl Plugin {
             // system call: the group is the child's own (process_group(0)
             // above), never aeroid's. Had the child ended in the instant
             // between, the signal finds at most its leftover children.
-            if let Some(group) = group.filter(|&g| g > 1) {
-                // SAFETY: killpg only sends a signal; it touches no memory.
-                unsafe {
-                    libc::killpg(group, libc::SIGKILL);
-                }
-            }
+            kill_group(group);
         }
         let status = waiter.join().map_err(|_| Error::Plugin {
             reason: format!("plug-in {}: the thread waiting for it failed", self.name),
@@ -453,94 +444,9 @@ impl Plugin {
             return Err(WrittenError::Format(written.format));
         }
         let structure = &problem.structure;
-        let free_names = structure.free_names();
-        let free: Vec<&str> = free_names.iter().map(String::as_str).collect();
-        let (names, values) = structure.parameters();
-        let mut parameters = Vec::with_capacity(free.len());
-        for (i, p) in written.parameters.iter().enumerate() {
-            if !free.contains(&p.name.as_str()) {
-                return Err(WrittenError::NotFree {
-                    index: i,
-                    name: p.name.clone(),
-                    model: structure.name().to_string(),
-                    free: free.join(", "),
-                });
-            }
-            if written.parameters[..i].iter().any(|q| q.name == p.name) {
-                return Err(WrittenError::Twice {
-                    index: i,
-                    name: p.name.clone(),
-                });
-            }
-            if !p.value.is_finite() {
-                return Err(WrittenError::Value {
-                    index: i,
-                    name: p.name.clone(),
-                });
-            }
-            if p.standard_error.is_nan() || p.standard_error < 0.0 {
-                return Err(WrittenError::StandardError {
-                    index: i,
-                    name: p.name.clone(),
-                });
-            }
-            let position = names.iter().position(|n| n == &p.name);
-            if let Some((low, high)) = position.map(|j| structure.bounds()[j])
-                && !(low..=high).contains(&p.value)
-            {
-                return Err(WrittenError::Bounds {
-                    index: i,
-                    name: p.name.clone(),
-                    value: p.value,
-                    low,
-                    high,
-                });
-            }
-            let start = position.map_or(f64::NAN, |j| values[j]);
-            parameters.push(ParameterEstimate {
-                name: p.name.clone(),
-                value: p.value,
-                standard_error: p.standard_error,
-                start,
-            });
-        }
-        let missing: Vec<&str> = free
-            .iter()
-            .filter(|n| !written.parameters.iter().any(|p| p.name == **n))
-            .copied()
-            .collect();
-        if !missing.is_empty() {
-            return Err(WrittenError::Missing(missing.join(", ")));
-        }
-        let n = parameters.len();
+        let parameters = written_parameters(structure, &written.parameters)?;
         let covariance = match written.covariance {
-            Some(covariance) => {
-                if covariance.len() != n || covariance.iter().any(|row| row.len() != n) {
-                    return Err(WrittenError::CovarianceShape(n));
-                }
-                if covariance.iter().flatten().any(|v| v.is_nan()) {
-                    return Err(WrittenError::CovarianceNan);
-                }
-                if let Some(i) = (0..n).find(|&i| covariance[i][i] < 0.0) {
-                    return Err(WrittenError::NegativeVariance {
-                        index: i,
-                        value: covariance[i][i],
-                    });
-                }
-                // Symmetric to the rounding of a printed number.
-                let asymmetric = |i: usize, j: usize| {
-                    let (a, b) = (covariance[i][j], covariance[j][i]);
-                    let scale = (covariance[i][i] * covariance[j][j]).sqrt().max(a.abs());
-                    (a - b).abs() > 1e-9 * scale && !(a.is_infinite() && a == b)
-                };
-                if let Some((i, j)) = (0..n)
-                    .flat_map(|i| (0..i).map(move |j| (i, j)))
-                    .find(|&(i, j)| asymmetric(i, j))
-                {
-                    return Err(WrittenError::Asymmetric { row: i, column: j });
-                }
-                covariance
-            }
+            Some(covariance) => checked_covariance(covariance, parameters.len())?,
             None => crate::estimate::diagonal_covariance(
                 &parameters
                     .iter()
@@ -581,6 +487,118 @@ impl Plugin {
             distributions: Vec::new(),
             histories: Vec::new(),
         })
+    }
+}
+
+/// The written parameters checked against the model: each free, named
+/// once, finite, with a standard error ≥ 0 and inside its bounds, and
+/// every free parameter there.
+fn written_parameters(
+    structure: &Structure,
+    written: &[WrittenParameter],
+) -> std::result::Result<Vec<ParameterEstimate>, WrittenError> {
+    let free_names = structure.free_names();
+    let free: Vec<&str> = free_names.iter().map(String::as_str).collect();
+    let (names, values) = structure.parameters();
+    let mut parameters = Vec::with_capacity(free.len());
+    for (i, p) in written.iter().enumerate() {
+        let name = || p.name.clone();
+        if !free.contains(&p.name.as_str()) {
+            return Err(WrittenError::NotFree {
+                index: i,
+                name: name(),
+                model: structure.name().to_string(),
+                free: free.join(", "),
+            });
+        }
+        if written[..i].iter().any(|q| q.name == p.name) {
+            return Err(WrittenError::Twice {
+                index: i,
+                name: name(),
+            });
+        }
+        if !p.value.is_finite() {
+            return Err(WrittenError::Value {
+                index: i,
+                name: name(),
+            });
+        }
+        if p.standard_error.is_nan() || p.standard_error < 0.0 {
+            return Err(WrittenError::StandardError {
+                index: i,
+                name: name(),
+            });
+        }
+        let position = names.iter().position(|n| n == &p.name);
+        if let Some((low, high)) = position.map(|j| structure.bounds()[j])
+            && !(low..=high).contains(&p.value)
+        {
+            return Err(WrittenError::Bounds {
+                index: i,
+                name: name(),
+                value: p.value,
+                low,
+                high,
+            });
+        }
+        parameters.push(ParameterEstimate {
+            name: name(),
+            value: p.value,
+            standard_error: p.standard_error,
+            start: position.map_or(f64::NAN, |j| values[j]),
+        });
+    }
+    let missing: Vec<&str> = free
+        .iter()
+        .filter(|n| !written.iter().any(|p| p.name == **n))
+        .copied()
+        .collect();
+    if !missing.is_empty() {
+        return Err(WrittenError::Missing(missing.join(", ")));
+    }
+    Ok(parameters)
+}
+
+/// A written covariance of `n` parameters checked: n × n, no NaN, no
+/// negative variance, symmetric to the rounding of a printed number.
+fn checked_covariance(
+    covariance: Vec<Vec<f64>>,
+    n: usize,
+) -> std::result::Result<Vec<Vec<f64>>, WrittenError> {
+    if covariance.len() != n || covariance.iter().any(|row| row.len() != n) {
+        return Err(WrittenError::CovarianceShape(n));
+    }
+    if covariance.iter().flatten().any(|v| v.is_nan()) {
+        return Err(WrittenError::CovarianceNan);
+    }
+    if let Some(i) = (0..n).find(|&i| covariance[i][i] < 0.0) {
+        return Err(WrittenError::NegativeVariance {
+            index: i,
+            value: covariance[i][i],
+        });
+    }
+    let asymmetric = |i: usize, j: usize| {
+        let (a, b) = (covariance[i][j], covariance[j][i]);
+        let scale = (covariance[i][i] * covariance[j][j]).sqrt().max(a.abs());
+        (a - b).abs() > 1e-9 * scale && !(a.is_infinite() && a == b)
+    };
+    if let Some((i, j)) = (0..n)
+        .flat_map(|i| (0..i).map(move |j| (i, j)))
+        .find(|&(i, j)| asymmetric(i, j))
+    {
+        return Err(WrittenError::Asymmetric { row: i, column: j });
+    }
+    Ok(covariance)
+}
+
+/// Kills process group `group` (a plug-in's own group, never aeroid's:
+/// groups 0 and 1 are left alone).
+fn kill_group(group: Option<libc::pid_t>) {
+    if let Some(group) = group.filter(|&g| g > 1) {
+        // SAFETY: killpg only sends a signal; it touches no memory.
+        unsafe {
+            libc::killpg(group, libc::SIGKILL);
+        }
     }
 }
 

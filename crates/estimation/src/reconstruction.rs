@@ -11,6 +11,11 @@
 //! - `CY = (m·g0·ny − T_y)/(q̄·S)`                                   (Eq. 22)
 //! - `CL = CX·sin α − CZ·cos α`, `CD = −CX·cos α − CZ·sin α`          (Eqs. 19, 20)
 //!
+//! Accelerometers at r from the CG (body axes) read the specific force
+//! there, a = a_cg + ω̇×r + ω×(ω×r); with an accelerometer position stated
+//! the load factors are carried back to the CG before Eqs. 17–22 (ω̇ as
+//! for the moments below).
+//!
 //! with T along the thrust line: the record's `thrust` channel (N) when it
 //! has one, else `T = δT·Tmax·(ρ/ρ0)^n` from the throttle channel, ρ the
 //! record's `density` channel when it has one, else the ISA at the
@@ -72,6 +77,11 @@ pub struct ReconstructionOptions {
     pub angular_accelerations: AngularAccelerations,
     /// Where the differentiator breaks at a control step.
     pub step_breaks: StepBreaks,
+    /// The accelerometers' position relative to the centre of gravity,
+    /// body axes (m): the load factors are carried to the CG,
+    /// a_cg = a − ω̇×r − ω×(ω×r), with ω̇ as for the moments. Zero: they
+    /// were measured at the CG.
+    pub accelerometer_position: Vector3<f64>,
 }
 
 /// Where the differentiator breaks at a control transition of one sample
@@ -202,6 +212,16 @@ fn needed_channels(
         wants_dynamic_pressure = true;
         wants_thrust |=
             coefficient_needs(aircraft, coefficient, measured_accelerations, &mut needs);
+    }
+    if transfers_load_factors(request, options) {
+        for channel in ["p", "q", "r"] {
+            need(&mut needs, channel, "accelerometer position");
+        }
+        if measured_accelerations {
+            for channel in ANGULAR_ACCELERATION_CHANNELS {
+                need(&mut needs, channel, "accelerometer position");
+            }
+        }
     }
     for &regressor in &request.regressors {
         regressor_needs(aircraft, regressor, &mut needs);
@@ -348,8 +368,16 @@ fn control_instants(record: &FlightRecord, each: fn(&Channel) -> Vec<f64>) -> Ve
     instants
 }
 
-/// The channels that are differentiated: the rates for moments (unless
-/// the record's angular accelerations are used), α for α̇ terms.
+/// Whether the load factors are read away from the CG: an accelerometer
+/// position is stated and something reads them (a force coefficient, or
+/// a moment taken about a point other than the CG).
+fn transfers_load_factors(request: &Request, options: &ReconstructionOptions) -> bool {
+    options.accelerometer_position != Vector3::zeros() && !request.coefficients.is_empty()
+}
+
+/// The channels that are differentiated: the rates for moments and for
+/// the accelerometers' transfer to the CG (unless the record's angular
+/// accelerations are used), α for α̇ terms.
 fn differentiated_channels(
     request: &Request,
     options: &ReconstructionOptions,
@@ -357,7 +385,8 @@ fn differentiated_channels(
 ) -> Vec<&'static str> {
     let moments = !options.omit_angular_accelerations
         && !measured_accelerations
-        && request.coefficients.iter().any(|c| !c.is_force());
+        && (request.coefficients.iter().any(|c| !c.is_force())
+            || transfers_load_factors(request, options));
     let mut names = Vec::new();
     if moments {
         names.extend(["p", "q", "r"]);
@@ -373,8 +402,9 @@ pub fn missing_channels(
     record: &FlightRecord,
     aircraft: &Aircraft,
     request: &Request,
+    options: &ReconstructionOptions,
 ) -> Vec<&'static str> {
-    needed_channels(record, aircraft, request, &ReconstructionOptions::default())
+    needed_channels(record, aircraft, request, options)
         .into_keys()
         .filter(|name| record.channel(name).is_err())
         .collect()
@@ -455,7 +485,13 @@ pub fn reconstruct(
     }
     let mut dropped = 0;
     for (k, &time) in times.iter().enumerate() {
-        match sample(aircraft, request, &signals, k) {
+        match sample(
+            aircraft,
+            request,
+            &signals,
+            k,
+            &options.accelerometer_position,
+        ) {
             Some((coefficients, regressors)) => {
                 reconstruction.times.push(time);
                 reconstruction
@@ -517,6 +553,13 @@ impl Sources<'_> {
             notes.push(
                 "the record has p_dot, q_dot, r_dot: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates".into(),
             );
+        }
+        let arm = options.accelerometer_position;
+        if arm != Vector3::zeros() {
+            notes.push(format!(
+                "load factors carried to the CG from the accelerometers at ({}, {}, {}) m, body axes: a_cg = a − ω̇×r − ω×(ω×r)",
+                arm.x, arm.y, arm.z
+            ));
         }
         if self.needs.contains_key("thrust") {
             notes.push(
@@ -727,19 +770,28 @@ impl<'a> Signals<'a> {
 }
 
 /// The coefficients (all six, unrequested ones NaN) and regressors at
-/// instant k; None when a requested value is not finite or q̄ ≤ 0.
+/// instant k, the load factors read at `accelerometer` (body axes, m, from
+/// the CG); None when a requested value is not finite or q̄ ≤ 0.
 fn sample(
     aircraft: &Aircraft,
     request: &Request,
     signals: &Signals,
     k: usize,
+    accelerometer: &Vector3<f64>,
 ) -> Option<([f64; 6], [f64; REGRESSOR_COUNT])> {
     let dynamic_pressure = dynamic_pressure(signals, k);
     if dynamic_pressure.is_nan() || dynamic_pressure <= 0.0 {
         return None;
     }
     let thrust = thrust_force(aircraft, signals, k);
-    let force = force_coefficients(aircraft, signals, k, dynamic_pressure, &thrust);
+    let force = force_coefficients(
+        aircraft,
+        signals,
+        k,
+        dynamic_pressure,
+        &thrust,
+        accelerometer,
+    );
     let moment = moment_coefficients(aircraft, signals, k, dynamic_pressure, &thrust)
         - moment_transfer(aircraft, request, &force);
     let alpha = at(signals.alpha, k);
@@ -823,17 +875,27 @@ fn thrust_force(aircraft: &Aircraft, signals: &Signals, k: usize) -> Vector3<f64
     propulsion.direction * propulsion.thrust(throttle[k], log_density_ratio)
 }
 
-/// CX, CY, CZ (Eqs. 17, 22, 18); components whose channel was not needed are NaN.
+/// CX, CY, CZ (Eqs. 17, 22, 18) from the load factors measured at
+/// `accelerometer` (body axes, m, from the CG), carried to the CG:
+/// a_cg = a − ω̇×r − ω×(ω×r). Components whose channel was not needed are NaN.
 fn force_coefficients(
     aircraft: &Aircraft,
     signals: &Signals,
     k: usize,
     dynamic_pressure: f64,
     thrust: &Vector3<f64>,
+    accelerometer: &Vector3<f64>,
 ) -> Vector3<f64> {
     let weight = aircraft.mass.mass * STANDARD_GRAVITY;
     let [nx, ny, nz] = signals.load_factors.map(|n| at(n, k));
-    let aerodynamic = Vector3::new(weight * nx, weight * ny, -weight * nz) - thrust;
+    let mut measured = Vector3::new(weight * nx, weight * ny, -weight * nz);
+    if *accelerometer != Vector3::zeros() {
+        let omega = signals.rates(k);
+        let omega_dot = Vector3::from_fn(|i, _| signals.rate_derivatives[i].map_or(0.0, |v| v[k]));
+        measured -= (omega_dot.cross(accelerometer) + omega.cross(&omega.cross(accelerometer)))
+            * aircraft.mass.mass;
+    }
+    let aerodynamic = measured - thrust;
     aerodynamic / (dynamic_pressure * aircraft.wing_area)
 }
 
@@ -892,6 +954,20 @@ mod tests {
     /// the engine 1.5 m above the centre of gravity, nz positive up).
     #[test]
     fn reconstruction_inverts_the_equations_of_motion() {
+        inverts_the_equations_of_motion(Vector3::zeros());
+    }
+
+    /// The same with the accelerometers 6 m ahead of, 1.5 m right of and
+    /// 0.8 m above the CG: the load factors the recorder writes there
+    /// (`aeroid_record::derived::load_factor`) carried back to the CG give
+    /// the coefficients to 1e-12 (read as if at the CG, CZ would be off
+    /// by Δa·m/(q̄S), which the check below shows is not small).
+    #[test]
+    fn reconstruction_carries_the_accelerometers_to_the_cg() {
+        inverts_the_equations_of_motion(Vector3::new(6.0, 1.5, -0.8));
+    }
+
+    fn inverts_the_equations_of_motion(arm: Vector3<f64>) {
         let scenario = aeroid_sim::scenario::Scenario::load("attas-trim").unwrap();
         let simulation = aeroid_sim::Simulation::prepare(&scenario).unwrap();
         let aircraft = &scenario.aircraft;
@@ -906,7 +982,17 @@ mod tests {
             ..Default::default()
         };
         let evaluation = simulation.model.evaluate(&x, &exogenous);
-        let f = evaluation.specific_force / STANDARD_GRAVITY;
+        let omega = Vector3::new(x[P], x[Q], x[R]);
+        let at_sensor = evaluation.specific_force
+            + evaluation.angular_acceleration.cross(&arm)
+            + omega.cross(&omega.cross(&arm));
+        let shift = (at_sensor - evaluation.specific_force) * aircraft.mass.mass
+            / (evaluation.air_data.dynamic_pressure * aircraft.wing_area);
+        assert!(
+            arm == Vector3::zeros() || shift.norm() > 1e-3,
+            "the sensor's place matters: {shift}"
+        );
+        let f = at_sensor / STANDARD_GRAVITY;
         let air = &evaluation.air_data;
         let values = [
             ("nx", f.x),
@@ -940,7 +1026,7 @@ mod tests {
             coefficients: Coefficient::ALL.to_vec(),
             regressors: vec![Regressor::Beta, Regressor::RollRate, Regressor::Aileron],
         };
-        let (measured, regressors) = sample(aircraft, &request, &signals, 0).unwrap();
+        let (measured, regressors) = sample(aircraft, &request, &signals, 0, &arm).unwrap();
         let c = &evaluation.coefficients;
         let expected = [
             c.lift, c.force.y, c.drag, c.moment.x, c.moment.y, c.moment.z,

@@ -373,28 +373,8 @@ pub fn solve<P: LeastSquaresObjective + ?Sized>(
     options.project(&mut theta);
     let mut history = Vec::new();
     let mut quiet_iterations = 0;
-    // While the Jacobian is held: the last step's predicted decrease.
-    let mut held: Option<f64> = None;
-    // Whether the next fresh Jacobian may be held: at first, and after a
-    // step on a fresh Jacobian whose predicted decrease fell by
-    // HELD_CONTRACTION (Gauss–Newton converging), not after a release.
-    let mut may_hold = true;
-    let mut fresh_predicted: Option<f64> = None;
-    problem.release();
+    let mut holding = Holding::new(problem);
     for _ in 0..options.max_iterations {
-        let evaluated = problem
-            .reweight(&theta)
-            .map(|changed| compensate(problem, &mut theta, changed, options))
-            .and_then(|_| problem.residuals(&theta))
-            .and_then(|r| {
-                let cost = finite_cost(&r)?;
-                Ok((r, cost))
-            })
-            .and_then(|(r, cost)| {
-                let normal = problem.normal_equations(&theta, &r, options)?;
-                let normal = finite_normal(normal, |j| problem.unknown_name(j))?;
-                Ok((r, cost, normal))
-            });
         let (
             residuals,
             cost,
@@ -402,63 +382,39 @@ pub fn solve<P: LeastSquaresObjective + ?Sized>(
                 gradient,
                 information,
             },
-        ) = match evaluated {
+        ) = match evaluate(problem, &mut theta, options) {
             Ok(evaluated) => evaluated,
             Err(reason) => return Solution::diverged(theta, history, reason),
         };
-        let mut gauss_newton = GaussNewton::of(gradient, &information);
-        if let Some(delta) = problem.constrained_step(
-            &theta,
-            &gauss_newton.gradient,
-            &information,
-            &gauss_newton.delta,
-            options,
-        ) {
-            gauss_newton = GaussNewton::constrained(gauss_newton.gradient, &information, delta);
-        }
+        let gauss_newton = gauss_newton_step(problem, &theta, gradient, &information, options);
         let predicted = gauss_newton.predicted;
         let converged = options.decrease_tolerance.is_some_and(|t| predicted <= t);
-        match held {
-            Some(previous) if !converged && predicted > HELD_CONTRACTION * previous => {
-                // The held Jacobian no longer steers well: a fresh one at θ.
-                problem.release();
-                (held, may_hold) = (None, false);
-                continue;
-            }
-            Some(_) => {}
-            None => {
-                may_hold |= fresh_predicted.is_some_and(|p| predicted <= HELD_CONTRACTION * p);
-                fresh_predicted = Some(predicted);
-            }
+        if !holding.still_steers(predicted, converged) {
+            // The held Jacobian no longer steers well: a fresh one at θ.
+            holding.release(problem);
+            continue;
         }
         let step = if converged {
             None
         } else {
-            // A refinement releases a held Jacobian: the next simulation
-            // brings the refined one.
-            let refined =
-                options.refine_below.is_some_and(|r| predicted <= r) && refine(problem, &mut held);
-            if !refined && (held.is_some() || (may_hold && problem.hold(predicted))) {
-                held = Some(predicted);
-            }
+            holding.decide(problem, predicted, options);
             improving_step(
                 problem,
                 &theta,
                 &gauss_newton,
                 &information,
                 cost,
-                held.is_some(),
+                holding.held.is_some(),
                 options,
             )
         };
         let Some(step) = step else {
-            if !converged && held.is_some() {
+            if !converged && holding.held.is_some() {
                 // The held Jacobian's step does not lower the cost: a fresh one.
-                problem.release();
-                (held, may_hold) = (None, false);
+                holding.release(problem);
                 continue;
             }
-            if refine(problem, &mut held) {
+            if holding.refine(problem) {
                 continue;
             }
             // Converged at θ when the predicted decrease is below the
@@ -471,10 +427,10 @@ pub fn solve<P: LeastSquaresObjective + ?Sized>(
             return Solution {
                 theta,
                 cost,
-                status: if !at_optimum {
-                    Status::NoProgress
-                } else {
+                status: if at_optimum {
                     Status::Converged
+                } else {
+                    Status::NoProgress
                 },
                 history,
                 information,
@@ -496,7 +452,7 @@ pub fn solve<P: LeastSquaresObjective + ?Sized>(
             0
         };
         if quiet_iterations >= 2 || small_step {
-            if refine(problem, &mut held) {
+            if holding.refine(problem) {
                 quiet_iterations = 0;
                 continue;
             }
@@ -504,9 +460,126 @@ pub fn solve<P: LeastSquaresObjective + ?Sized>(
         }
     }
     // The information matrix at the limit is the refined one at θ.
-    refine(problem, &mut held);
+    holding.refine(problem);
     problem.release();
     finish(problem, theta, history, Status::IterationLimit, options)
+}
+
+/// One evaluation at θ: re-weighting (and the compensating move of θ it
+/// asks for), the residuals, the cost and the normal equations, each
+/// checked finite.
+fn evaluate<P: LeastSquaresObjective + ?Sized>(
+    problem: &mut P,
+    theta: &mut DVector<f64>,
+    options: &Options,
+) -> Result<(DVector<f64>, f64, NormalEquations), P::Error> {
+    let changed = problem.reweight(theta)?;
+    compensate(problem, theta, changed, options);
+    let residuals = problem.residuals(theta)?;
+    let cost = finite_cost(&residuals)?;
+    let normal = problem.normal_equations(theta, &residuals, options)?;
+    let normal = finite_normal(normal, |j| problem.unknown_name(j))?;
+    Ok((residuals, cost, normal))
+}
+
+/// The Gauss–Newton step at θ, or the problem's constrained step where it
+/// gives one.
+fn gauss_newton_step<P: LeastSquaresObjective + ?Sized>(
+    problem: &mut P,
+    theta: &DVector<f64>,
+    gradient: DVector<f64>,
+    information: &DMatrix<f64>,
+    options: &Options,
+) -> GaussNewton {
+    let gauss_newton = GaussNewton::of(gradient, information);
+    match problem.constrained_step(
+        theta,
+        &gauss_newton.gradient,
+        information,
+        &gauss_newton.delta,
+        options,
+    ) {
+        Some(delta) => GaussNewton::constrained(gauss_newton.gradient, information, delta),
+        None => gauss_newton,
+    }
+}
+
+/// The solver's record of a held Jacobian (simplified Gauss–Newton, see
+/// [`LeastSquaresObjective::hold`]).
+struct Holding {
+    /// While the Jacobian is held: the last step's predicted decrease.
+    held: Option<f64>,
+    /// Whether the next fresh Jacobian may be held: at first, and after a
+    /// step on a fresh Jacobian whose predicted decrease fell by
+    /// HELD_CONTRACTION (Gauss–Newton converging), not after a release.
+    may_hold: bool,
+    /// The predicted decrease of the last step on a fresh Jacobian.
+    fresh_predicted: Option<f64>,
+}
+
+impl Holding {
+    /// Nothing held; the problem's Jacobian released.
+    fn new<P: LeastSquaresObjective + ?Sized>(problem: &mut P) -> Holding {
+        problem.release();
+        Holding {
+            held: None,
+            may_hold: true,
+            fresh_predicted: None,
+        }
+    }
+
+    /// Whether a held Jacobian still steers (its step's `predicted`
+    /// decrease fell by HELD_CONTRACTION, or the fit `converged`); on a
+    /// fresh one, notes whether holding may start.
+    fn still_steers(&mut self, predicted: f64, converged: bool) -> bool {
+        match self.held {
+            Some(previous) => {
+                // (A NaN prediction keeps the hold, as a comparison would.)
+                let bound = HELD_CONTRACTION * previous;
+                converged || predicted.partial_cmp(&bound) != Some(std::cmp::Ordering::Greater)
+            }
+            None => {
+                self.may_hold |= self
+                    .fresh_predicted
+                    .is_some_and(|p| predicted <= HELD_CONTRACTION * p);
+                self.fresh_predicted = Some(predicted);
+                true
+            }
+        }
+    }
+
+    /// Before a step: refines the Jacobian when the predicted decrease is
+    /// below `refine_below` (which releases a held one), else holds it when
+    /// held already or when the problem takes it.
+    fn decide<P: LeastSquaresObjective + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        predicted: f64,
+        options: &Options,
+    ) {
+        // A refinement releases a held Jacobian: the next simulation
+        // brings the refined one.
+        let refined = options.refine_below.is_some_and(|r| predicted <= r) && self.refine(problem);
+        if !refined && (self.held.is_some() || (self.may_hold && problem.hold(predicted))) {
+            self.held = Some(predicted);
+        }
+    }
+
+    /// Ends a hold: the next Jacobian is fresh, and is not held at once.
+    fn release<P: LeastSquaresObjective + ?Sized>(&mut self, problem: &mut P) {
+        problem.release();
+        (self.held, self.may_hold) = (None, false);
+    }
+
+    /// Asks the problem to refine its Jacobian; a refinement releases a
+    /// held one.
+    fn refine<P: LeastSquaresObjective + ?Sized>(&mut self, problem: &mut P) -> bool {
+        let refined = problem.refine();
+        if refined {
+            self.held = None;
+        }
+        refined
+    }
 }
 
 /// After a re-weighting that `changed` the weights, moves θ where the
@@ -521,16 +594,6 @@ fn compensate<P: LeastSquaresObjective + ?Sized>(
         *theta = compensated;
         options.project(theta);
     }
-}
-
-/// Asks the problem to refine its Jacobian; a refinement releases a held
-/// one (`held`, the solver's record of it).
-fn refine<P: LeastSquaresObjective + ?Sized>(problem: &mut P, held: &mut Option<f64>) -> bool {
-    let refined = problem.refine();
-    if refined {
-        *held = None;
-    }
-    refined
 }
 
 /// The normal equations if every entry is finite; else the unknowns whose

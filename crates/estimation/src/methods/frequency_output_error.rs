@@ -43,6 +43,7 @@ use crate::linear_structure::LinearStructure;
 use crate::methods::common::frequency_band::{BAND_SETTINGS, BandOptions, model_controls};
 use crate::methods::common::refusals::{missing_channels, unsuitable};
 use crate::methods::common::regression::record_name;
+use crate::model::driven::DrivenSimulation;
 use crate::model::linear::Matrix;
 use crate::model::state_space::{DrivenStateSpace, recorded_initial_state};
 use crate::model::transfer::{LinearisedFlight, TransferModel};
@@ -432,20 +433,7 @@ pub fn frequency_output_error(
     let (start, step) = (simulation.start, simulation.step);
     let linearised = LinearisedFlight::new(&view, 0, x0.as_slice())?;
     let inputs = linearised.input_perturbations();
-    let controls: Vec<(&str, Vec<f64>)> = model_controls(structure)
-        .into_iter()
-        .filter_map(|r| {
-            let control = regressor_control(r)?;
-            Some((
-                control.name(),
-                simulation
-                    .controls
-                    .iter()
-                    .map(|u| u[control.index()])
-                    .collect(),
-            ))
-        })
-        .collect();
+    let controls = control_series(structure, simulation);
     let (omegas, band_note) =
         options
             .band
@@ -466,19 +454,8 @@ pub fn frequency_output_error(
         .collect();
     let first = vec![0.0; reference.len()];
     let data = FrequencyData::new(&transform, &inputs, &measured, (&first, &last))?;
-    let aero = &structure.aircraft.aero;
-    let names = aero.parameters.names().to_vec();
-    let held: Vec<usize> = (0..names.len())
-        .filter(|&i| {
-            structure.free[i]
-                && aero
-                    .term_of(i)
-                    .is_some_and(|(_, r)| r.single() == Some(Regressor::Constant))
-        })
-        .collect();
-    let free: Vec<usize> = (0..names.len())
-        .filter(|&i| structure.free[i] && !held.contains(&i))
-        .collect();
+    let names = structure.aircraft.aero.parameters.names().to_vec();
+    let (free, held) = free_and_held(structure);
     let start_values = view.parameters();
     let fitted = Fitted {
         method_model_record: (METHOD, structure.name.clone(), record_name(record)),
@@ -503,6 +480,46 @@ pub fn frequency_output_error(
     let mut estimate = fitted.fit(&linearised, &data, options, notes)?;
     estimate.wall_time = started.elapsed().as_secs_f64();
     Ok(estimate)
+}
+
+/// Each control the model's terms use, with its values on the grid.
+fn control_series(
+    structure: &ModelStructure,
+    simulation: &DrivenSimulation,
+) -> Vec<(&'static str, Vec<f64>)> {
+    model_controls(structure)
+        .into_iter()
+        .filter_map(|r| {
+            let control = regressor_control(r)?;
+            Some((
+                control.name(),
+                simulation
+                    .controls
+                    .iter()
+                    .map(|u| u[control.index()])
+                    .collect(),
+            ))
+        })
+        .collect()
+}
+
+/// The free parameters fitted, and those held: the constant terms, which a
+/// perturbation model about the record's start does not see.
+fn free_and_held(structure: &ModelStructure) -> (Vec<usize>, Vec<usize>) {
+    let aero = &structure.aircraft.aero;
+    let count = aero.parameters.names().len();
+    let held: Vec<usize> = (0..count)
+        .filter(|&i| {
+            structure.free[i]
+                && aero
+                    .term_of(i)
+                    .is_some_and(|(_, r)| r.single() == Some(Regressor::Constant))
+        })
+        .collect();
+    let free = (0..count)
+        .filter(|&i| structure.free[i] && !held.contains(&i))
+        .collect();
+    (free, held)
 }
 
 /// The note on the transforms.

@@ -421,7 +421,7 @@ fn candidate_pool(
             coefficients: Vec::new(),
             regressors: candidate.factors.clone(),
         };
-        if missing_channels(record, &structure.aircraft, &probe).is_empty() {
+        if missing_channels(record, &structure.aircraft, &probe, &Default::default()).is_empty() {
             candidates.push(candidate);
         } else {
             left_out.push(name);

@@ -556,19 +556,7 @@ pub fn estimate(
     }
     let data = prepare(method, record, structure, options)?;
     let (network, report) = trainer.train(&data.training_set())?;
-    if network.inputs() != data.motion_count() + data.coefficient_count()
-        || network.outputs() != data.output_count()
-    {
-        return Err(Error::Network {
-            reason: format!(
-                "{method}: the trained network has {} inputs and {} outputs, the restricted model {} and {}",
-                network.inputs(),
-                network.outputs(),
-                data.motion_count() + data.coefficient_count(),
-                data.output_count()
-            ),
-        });
-    }
+    check_network(method, network.as_ref(), &data)?;
     let mut fit = Fit::new(&data, network.as_ref(), structure, options.feedback);
     let names = structure.free_names();
     let values = structure.aircraft.aero.parameters.values();
@@ -596,26 +584,58 @@ pub fn estimate(
         &solution,
     );
     estimate.fits = output_fits(&mut fit, &solution.theta);
-    estimate.notes = data.notes.clone();
-    estimate.notes.push(format!(
+    estimate.notes = notes(&data, options.feedback, start, &fit.coefficients);
+    estimate.network = Some(report);
+    estimate.wall_time = started.elapsed().as_secs_f64();
+    Ok(estimate)
+}
+
+/// An error unless the trained network takes the restricted model's
+/// motion and coefficients and gives its outputs.
+fn check_network(method: &str, network: &dyn Network, data: &Data) -> Result<()> {
+    let inputs = data.motion_count() + data.coefficient_count();
+    if network.inputs() == inputs && network.outputs() == data.output_count() {
+        return Ok(());
+    }
+    Err(Error::Network {
+        reason: format!(
+            "{method}: the trained network has {} inputs and {} outputs, the restricted model {inputs} and {}",
+            network.inputs(),
+            network.outputs(),
+            data.output_count()
+        ),
+    })
+}
+
+/// The estimate's notes: the data's, the restricted model's inputs and
+/// outputs, where Gauss–Newton started, and the coefficients the network
+/// extrapolates.
+fn notes(
+    data: &Data,
+    feedback: Feedback,
+    start: Option<&Estimate>,
+    coefficients: &[f64],
+) -> Vec<String> {
+    let mut notes = data.notes.clone();
+    notes.push(format!(
         "restricted neural model: inputs {} at sample i, outputs {} at i+1; {} training pairs; motion fed back: {}",
         data.input_names().join(", "),
         data.output_names().join(", "),
         data.pairs.len(),
-        match options.feedback {
+        match feedback {
             Feedback::Measured => "measured (Eq. 11 / 23)",
             Feedback::Predicted => "predicted (free-running)",
         }
     ));
     if let Some(start) = start {
-        estimate.notes.push(format!(
+        notes.push(format!(
             "Gauss–Newton started from the {} estimate's values",
             start.method
         ));
     }
-    let outside = extrapolated(&data, &fit.coefficients);
+    let outside = extrapolated(data, coefficients);
     if !outside.is_empty() {
-        estimate.notes.push(format!(
+        notes.push(format!(
             "model coefficients outside the network's training range (extrapolated), samples: {}",
             outside
                 .iter()
@@ -624,9 +644,7 @@ pub fn estimate(
                 .join(", ")
         ));
     }
-    estimate.network = Some(report);
-    estimate.wall_time = started.elapsed().as_secs_f64();
-    Ok(estimate)
+    notes
 }
 
 /// Fits of each output in physical units at Θ (empty when Θ cannot be evaluated).

@@ -658,31 +658,7 @@ fn map_channel(
         known,
         problems,
     );
-    if let Some(value) = spec.value {
-        if !value.is_finite() {
-            problems.push(
-                format!("{field}.value"),
-                format!("must be a finite number, is {value}"),
-            );
-        }
-        for (key, given) in [
-            ("scale", spec.scale.is_some()),
-            ("offset", spec.offset.is_some()),
-            ("resolution", spec.resolution.is_some()),
-            ("empty", spec.empty != EmptyCell::default()),
-            ("non_finite", spec.non_finite != NonFiniteCell::default()),
-        ] {
-            if given {
-                problems.push(
-                    format!("{field}.{key}"),
-                    format!(
-                        "is for a column; channel '{}' is the constant `value` (state it in its `unit`)",
-                        spec.name
-                    ),
-                );
-            }
-        }
-    }
+    check_constant(spec, field, problems);
     if spec.convention.is_some() && spec.name != "altitude" {
         problems.push(
             format!("{field}.convention"),
@@ -728,6 +704,37 @@ fn map_channel(
         empty: spec.empty,
         non_finite: spec.non_finite,
         convention: spec.convention,
+    }
+}
+
+/// A constant channel (`value`) must be finite and state none of a
+/// column's keys (scale, offset, resolution, empty, non_finite).
+fn check_constant(spec: &ChannelColumnSpec, field: &str, problems: &mut FieldErrors) {
+    let Some(value) = spec.value else {
+        return;
+    };
+    if !value.is_finite() {
+        problems.push(
+            format!("{field}.value"),
+            format!("must be a finite number, is {value}"),
+        );
+    }
+    for (key, given) in [
+        ("scale", spec.scale.is_some()),
+        ("offset", spec.offset.is_some()),
+        ("resolution", spec.resolution.is_some()),
+        ("empty", spec.empty != EmptyCell::default()),
+        ("non_finite", spec.non_finite != NonFiniteCell::default()),
+    ] {
+        if given {
+            problems.push(
+                format!("{field}.{key}"),
+                format!(
+                    "is for a column; channel '{}' is the constant `value` (state it in its `unit`)",
+                    spec.name
+                ),
+            );
+        }
     }
 }
 

@@ -137,6 +137,54 @@ pub struct MatTable {
     columns: Vec<(String, Vec<f64>)>,
 }
 
+/// A variable of a MAT-file: its name, size and values (column-major).
+type Variable = (String, Vec<usize>, Vec<f64>);
+
+/// Whether a size is a row or column vector.
+fn is_vector(size: &[usize]) -> bool {
+    size.len() == 2 && (size[0] == 1 || size[1] == 1)
+}
+
+/// The variable whose columns are numbered: Ok(Ok(index)), or Ok(Err(why
+/// there is none)) when the map names none and the file has no single
+/// matrix; Err when the map names a variable the file does not hold.
+fn numbered_matrix(
+    arrays: &[Variable],
+    matrix: Option<&str>,
+) -> std::result::Result<std::result::Result<usize, String>, String> {
+    let names: Vec<&str> = arrays.iter().map(|(name, _, _)| name.as_str()).collect();
+    if let Some(name) = matrix {
+        return match arrays.iter().position(|(n, _, _)| n == name) {
+            Some(i) => Ok(Ok(i)),
+            None => Err(format!(
+                "no numeric variable '{name}' (file.matrix of the map); numeric variables: {}",
+                names.join(", ")
+            )),
+        };
+    }
+    let matrices: Vec<usize> = (0..arrays.len())
+        .filter(|&i| !is_vector(&arrays[i].1))
+        .collect();
+    Ok(match (matrices.as_slice(), arrays.len()) {
+        ([one], _) => Ok(*one),
+        ([], 1) => Ok(0),
+        ([], 0) => Err("the file holds no numeric variable".to_string()),
+        ([], _) => Err(format!(
+            "the file holds no matrix, only vectors ({}): name them in the map",
+            names.join(", ")
+        )),
+        (several, _) => Err(format!(
+            "the file holds several matrices ({}): say which one's columns are numbered with \
+             matrix = \"NAME\" in the map's [file] table",
+            several
+                .iter()
+                .map(|&i| arrays[i].0.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+    })
+}
+
 impl MatTable {
     /// Reads a level-5 MAT-file; `matrix` names the variable whose columns
     /// are numbered (else the file's one numeric variable that is not a
@@ -163,42 +211,7 @@ impl MatTable {
                 .map_err(|reason| refuse(format!("variable '{}': {reason}", array.name())))?;
             arrays.push((array.name().to_string(), array.size().clone(), values));
         }
-        let is_vector = |size: &[usize]| size.len() == 2 && (size[0] == 1 || size[1] == 1);
-        let names: Vec<&str> = arrays.iter().map(|(name, _, _)| name.as_str()).collect();
-        let chosen = match matrix {
-            Some(name) => match arrays.iter().position(|(n, _, _)| n == name) {
-                Some(i) => Ok(i),
-                None => {
-                    return Err(refuse(format!(
-                        "no numeric variable '{name}' (file.matrix of the map); numeric variables: {}",
-                        names.join(", ")
-                    )));
-                }
-            },
-            None => {
-                let matrices: Vec<usize> = (0..arrays.len())
-                    .filter(|&i| !is_vector(&arrays[i].1))
-                    .collect();
-                match (matrices.as_slice(), arrays.len()) {
-                    ([one], _) => Ok(*one),
-                    ([], 1) => Ok(0),
-                    ([], 0) => Err("the file holds no numeric variable".to_string()),
-                    ([], _) => Err(format!(
-                        "the file holds no matrix, only vectors ({}): name them in the map",
-                        names.join(", ")
-                    )),
-                    (several, _) => Err(format!(
-                        "the file holds several matrices ({}): say which one's columns are numbered with \
-                         matrix = \"NAME\" in the map's [file] table",
-                        several
-                            .iter()
-                            .map(|&i| arrays[i].0.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )),
-                }
-            }
-        };
+        let chosen = numbered_matrix(&arrays, matrix).map_err(refuse)?;
         let mut columns = Vec::new();
         let (matrix, no_matrix) = match chosen {
             Ok(i) => {

@@ -159,32 +159,7 @@ impl Objective<'_> {
         if (0..m).any(|j| !white[(j, j)].is_finite()) {
             return "Cramér–Rao bounds left white: a parameter is unidentifiable".to_string();
         }
-        // Each output's pieces (rows per segment) and its lag in samples.
-        let counts: Vec<Vec<usize>> = (0..self.outputs.len())
-            .map(|o| {
-                self.segments
-                    .iter()
-                    .map(|s| s.outputs[o].times.len())
-                    .collect()
-            })
-            .collect();
-        let lags: Vec<usize> = (0..self.outputs.len())
-            .map(|o| {
-                let (span, intervals) = self
-                    .segments
-                    .iter()
-                    .map(|s| &s.outputs[o].times)
-                    .filter(|t| t.len() > 1)
-                    .fold((0.0, 0usize), |(span, n), t| {
-                        (span + (t[t.len() - 1] - t[0]), n + t.len() - 1)
-                    });
-                if intervals == 0 {
-                    0
-                } else {
-                    ((lag * intervals as f64 / span).round() as usize).max(1)
-                }
-            })
-            .collect();
+        let (counts, lags) = self.pieces_and_lags(lag);
         let residuals = solution.residuals.clone();
         let Ok((weights, assembled)) = self.sensitivities_at(&solution.theta) else {
             return "Cramér–Rao bounds left white: no Jacobian at the solution".to_string();
@@ -195,27 +170,7 @@ impl Objective<'_> {
             return "Cramér–Rao bounds left white: the residuals do not match the Jacobian"
                 .to_string();
         }
-        // Whitened Jacobian rows (the sign of J drops out of the products).
-        let blocks: Vec<Vec<(DMatrix<f64>, std::ops::Range<usize>)>> = assembled
-            .rows
-            .iter()
-            .zip(&weights)
-            .zip(&counts)
-            .map(|((rows, weight), counts)| {
-                let mut start = rows.start;
-                counts
-                    .iter()
-                    .map(|&count| {
-                        let range = start..start + count;
-                        start += count;
-                        let x = DMatrix::from_fn(count, m, |i, j| {
-                            weight * assembled.row(range.start + i)[j]
-                        });
-                        (x, range)
-                    })
-                    .collect()
-            })
-            .collect();
+        let blocks = whitened_blocks(assembled, &weights, &counts);
         let middle = |window| {
             let mut middle = DMatrix::zeros(m, m);
             for (output, lag) in blocks.iter().zip(&lags) {
@@ -243,6 +198,37 @@ impl Objective<'_> {
             largest.0,
             largest.1
         )
+    }
+
+    /// Each output's pieces (its rows per segment) and `lag` seconds in
+    /// samples at its mean interval (at least one; 0 without intervals).
+    fn pieces_and_lags(&self, lag: f64) -> (Vec<Vec<usize>>, Vec<usize>) {
+        let counts = (0..self.outputs.len())
+            .map(|o| {
+                self.segments
+                    .iter()
+                    .map(|s| s.outputs[o].times.len())
+                    .collect()
+            })
+            .collect();
+        let lags = (0..self.outputs.len())
+            .map(|o| {
+                let (span, intervals) = self
+                    .segments
+                    .iter()
+                    .map(|s| &s.outputs[o].times)
+                    .filter(|t| t.len() > 1)
+                    .fold((0.0, 0usize), |(span, n), t| {
+                        (span + (t[t.len() - 1] - t[0]), n + t.len() - 1)
+                    });
+                if intervals == 0 {
+                    0
+                } else {
+                    ((lag * intervals as f64 / span).round() as usize).max(1)
+                }
+            })
+            .collect();
+        (counts, lags)
     }
 
     /// Adds to the estimate's covariance the share of the recorded inputs'
@@ -307,40 +293,8 @@ impl Objective<'_> {
                     .unwrap_or(0)
             })
             .collect();
-        // The outputs at the samples, output after output and segment
-        // after segment (the Jacobian's rows), driven by `records`.
-        let outputs = |records: &[FlightRecord]| -> crate::Result<Vec<f64>> {
-            let mut by_output = vec![Vec::new(); self.outputs.len()];
-            for (segment, &r) in self.segments.iter().zip(&record_of) {
-                let simulation = DrivenSimulation::from_record(
-                    &records[r],
-                    &self.integrate,
-                    // The choice made on the recorded inputs, not remade
-                    // on each draw of their noise.
-                    &segment.simulation.fixed_interpolation(),
-                    segment.simulation.step,
-                    segment.window,
-                    self.alpha_dot,
-                )?;
-                let mut grid = vec![Vec::with_capacity(simulation.len()); self.outputs.len()];
-                simulation.simulate(
-                    &self.model,
-                    &segment.initial,
-                    &self.observables,
-                    &[],
-                    self.linearise,
-                    |_, y, _| grid.iter_mut().zip(y).for_each(|(g, y)| g.push(*y)),
-                )?;
-                for ((into, measured), values) in
-                    by_output.iter_mut().zip(&segment.outputs).zip(&grid)
-                {
-                    into.extend(measured.brackets.iter().map(|&at| on_grid(values, at)));
-                }
-            }
-            Ok(by_output.concat())
-        };
         let exact: Vec<FlightRecord> = records.iter().map(|r| (*r).clone()).collect();
-        let nominal = match outputs(&exact) {
+        let nominal = match self.outputs_driven_by(&exact, &record_of) {
             Ok(nominal) if nominal.len() == rows.last().map_or(0, |r| r.end) => nominal,
             _ => {
                 return "Cramér–Rao bounds without the inputs' noise: the recorded inputs' simulation failed"
@@ -350,30 +304,10 @@ impl Objective<'_> {
         let shifts: Vec<Option<DVector<f64>>> = (0..draws)
             .into_par_iter()
             .map(|draw| {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed);
-                rng.set_stream(draw as u64);
-                let mut noised = exact.clone();
-                for record in &mut noised {
-                    for (name, sigma) in noise {
-                        if let Some(channel) = record.channels.iter_mut().find(|c| &c.name == name)
-                        {
-                            for value in &mut channel.values {
-                                *value += sigma * rng.sample::<f64, _>(StandardNormal);
-                            }
-                        }
-                    }
-                }
-                let moved = outputs(&noised).ok()?;
-                let mut gradient = DVector::zeros(m);
-                for (range, weight) in rows.iter().zip(&weights) {
-                    let w2 = weight * weight;
-                    for i in range.clone() {
-                        let dy = (moved[i] - nominal[i]) * w2;
-                        for (g, s) in gradient.iter_mut().zip(&sensitivities[i * m..(i + 1) * m]) {
-                            *g += s * dy;
-                        }
-                    }
-                }
+                let noised = with_input_noise(&exact, noise, seed, draw);
+                let moved = self.outputs_driven_by(&noised, &record_of).ok()?;
+                let gradient =
+                    weighted_gradient(&moved, &nominal, &rows, &weights, (&sensitivities, m));
                 Some(&inverse * gradient)
             })
             .collect();
@@ -384,11 +318,9 @@ impl Objective<'_> {
                 draws - valid.len()
             );
         }
-        let mut share = DMatrix::zeros(m, m);
-        for shift in &valid {
-            share += *shift * shift.transpose();
-        }
-        share /= valid.len() as f64;
+        let share = valid.iter().fold(DMatrix::zeros(m, m), |share, shift| {
+            share + *shift * shift.transpose()
+        }) / valid.len() as f64;
         let held = DMatrix::from_fn(m, m, |i, j| estimate.covariance[i][j]);
         let covariance = held + share;
         let largest = replace_covariance(estimate, &covariance, |j| finite[j]);
@@ -403,6 +335,43 @@ impl Objective<'_> {
             largest.0,
             largest.1
         )
+    }
+
+    /// The outputs at the samples, output after output and segment after
+    /// segment (the Jacobian's rows), each segment driven by
+    /// `records[record_of[segment]]`, at the θ last applied.
+    fn outputs_driven_by(
+        &self,
+        records: &[FlightRecord],
+        record_of: &[usize],
+    ) -> crate::Result<Vec<f64>> {
+        let mut by_output = vec![Vec::new(); self.outputs.len()];
+        for (segment, &r) in self.segments.iter().zip(record_of) {
+            let simulation = DrivenSimulation::from_record(
+                &records[r],
+                &self.integrate,
+                // The choice made on the recorded inputs, not remade on
+                // each draw of their noise.
+                &segment.simulation.fixed_interpolation(),
+                segment.simulation.step,
+                segment.window,
+                self.alpha_dot,
+            )?;
+            let mut grid = vec![Vec::with_capacity(simulation.len()); self.outputs.len()];
+            simulation.simulate(
+                &self.model,
+                &segment.initial,
+                &self.observables,
+                &[],
+                self.linearise,
+                |_, y, _| grid.iter_mut().zip(y).for_each(|(g, y)| g.push(*y)),
+            )?;
+            for ((into, measured), values) in by_output.iter_mut().zip(&segment.outputs).zip(&grid)
+            {
+                into.extend(measured.brackets.iter().map(|&at| on_grid(values, at)));
+            }
+        }
+        Ok(by_output.concat())
     }
 
     /// The weights 1/σ and ∂y/∂θ at the samples ([`Objective::assembled`])
@@ -565,4 +534,81 @@ pub(super) fn assemble(
         rows,
         grams,
     }
+}
+
+/// The whitened Jacobian's rows per output and piece (`counts`), each with
+/// its rows' range (the sign of J drops out of the products).
+fn whitened_blocks(
+    assembled: &Assembled,
+    weights: &[f64],
+    counts: &[Vec<usize>],
+) -> Vec<Vec<(DMatrix<f64>, std::ops::Range<usize>)>> {
+    let m = assembled.unknowns.len();
+    assembled
+        .rows
+        .iter()
+        .zip(weights)
+        .zip(counts)
+        .map(|((rows, weight), counts)| {
+            let mut start = rows.start;
+            counts
+                .iter()
+                .map(|&count| {
+                    let range = start..start + count;
+                    start += count;
+                    let x = DMatrix::from_fn(count, m, |i, j| {
+                        weight * assembled.row(range.start + i)[j]
+                    });
+                    (x, range)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Σ (∂y/∂θ)ᵀ·R⁻¹·δy over the samples: δy = `moved` − `nominal`, R⁻¹ the
+/// weights squared per output's `rows`, ∂y/∂θ the rows of `sensitivities`
+/// (row-major, a row of the m unknowns per sample).
+fn weighted_gradient(
+    moved: &[f64],
+    nominal: &[f64],
+    rows: &[std::ops::Range<usize>],
+    weights: &[f64],
+    (sensitivities, m): (&[f64], usize),
+) -> DVector<f64> {
+    let mut gradient = DVector::zeros(m);
+    for (range, weight) in rows.iter().zip(weights) {
+        let w2 = weight * weight;
+        for i in range.clone() {
+            let dy = (moved[i] - nominal[i]) * w2;
+            for (g, s) in gradient.iter_mut().zip(&sensitivities[i * m..(i + 1) * m]) {
+                *g += s * dy;
+            }
+        }
+    }
+    gradient
+}
+
+/// The records with white noise of `noise`'s σ added to each named
+/// channel: draw `draw` of the stream `seed` (a stream per draw, so the
+/// numbers do not depend on the thread count).
+fn with_input_noise(
+    exact: &[FlightRecord],
+    noise: &[(String, f64)],
+    seed: u64,
+    draw: usize,
+) -> Vec<FlightRecord> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(draw as u64);
+    let mut noised = exact.to_vec();
+    for record in &mut noised {
+        for (name, sigma) in noise {
+            if let Some(channel) = record.channels.iter_mut().find(|c| &c.name == name) {
+                for value in &mut channel.values {
+                    *value += sigma * rng.sample::<f64, _>(StandardNormal);
+                }
+            }
+        }
+    }
+    noised
 }

@@ -63,7 +63,7 @@ fn can_reconstruct(record: &FlightRecord, structure: &ModelStructure, plans: &[P
             }
         }
     }
-    missing_channels(record, &structure.aircraft, &request).is_empty()
+    missing_channels(record, &structure.aircraft, &request, &Default::default()).is_empty()
 }
 
 /// The inputs of `coefficient` whose channels the record has.
@@ -80,7 +80,7 @@ fn recorded_inputs(
                 coefficients: Vec::new(),
                 regressors: vec![r],
             };
-            missing_channels(record, &structure.aircraft, &request).is_empty()
+            missing_channels(record, &structure.aircraft, &request, &Default::default()).is_empty()
         })
         .collect()
 }
