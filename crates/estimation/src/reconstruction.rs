@@ -37,9 +37,10 @@
 //!
 //! q̄ is the `dynamic_pressure` channel when the record has it, else
 //! ½·ρ·V² from the airspeed channel and ρ as above. ṗ, q̇, ṙ are the
-//! record's `p_dot`, `q_dot`, `r_dot` channels when asked
+//! record's `p_dot`, `q_dot`, `r_dot` channels when asked, each where a
+//! requested equation reads it (q̇ for Cm, ṗ and ṙ for Cl and Cn)
 //! ([`AngularAccelerations`]; by default the rates are differentiated and
-//! the notes say when the record has all three); otherwise they (and α̇
+//! the notes say when the record has them); otherwise they (and α̇
 //! for `alpha_dot` terms) come from [`Differentiator`] applied to each channel on
 //! its own time base, with no window across a step in any control channel
 //! ([`control_steps`]: the accelerations jump there). Every channel is then read at the sample instants of
@@ -107,14 +108,15 @@ pub enum StepBreaks {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AngularAccelerations {
-    /// The record's `p_dot`, `q_dot`, `r_dot` when it has all three, else
+    /// The record's `p_dot`, `q_dot`, `r_dot` (those the requested
+    /// equations read) when it has them, else
     /// the differentiated rates.
     Auto,
     /// The record's `p_dot`, `q_dot`, `r_dot` (a record without them is
     /// refused, naming them).
     Measured,
     /// The rates differentiated, whatever the record has (the default:
-    /// the estimate's notes say when the record has all three).
+    /// the estimate's notes say when the record has them).
     #[default]
     Differentiated,
 }
@@ -122,18 +124,43 @@ pub enum AngularAccelerations {
 /// The channels of measured angular accelerations.
 const ANGULAR_ACCELERATION_CHANNELS: [&str; 3] = ["p_dot", "q_dot", "r_dot"];
 
-/// Whether the record has all three measured angular accelerations.
-fn has_angular_accelerations(record: &FlightRecord) -> bool {
-    ANGULAR_ACCELERATION_CHANNELS
-        .iter()
-        .all(|name| record.channel(name).is_ok())
+/// The measured angular accelerations a request reads: q̇ for Cm (the
+/// pitch equation has no ṗ or ṙ), ṗ and ṙ for Cl and Cn (coupled by
+/// Ixz), all three for load factors carried from the accelerometers'
+/// position (ω̇×r).
+fn wanted_accelerations(request: &Request, options: &ReconstructionOptions) -> Vec<&'static str> {
+    let all = transfers_load_factors(request, options);
+    let pitch = all || request.coefficients.contains(&Coefficient::Pitch);
+    let lateral = all
+        || request
+            .coefficients
+            .iter()
+            .any(|c| matches!(c, Coefficient::Roll | Coefficient::Yaw));
+    let [p, q, r] = ANGULAR_ACCELERATION_CHANNELS;
+    let mut wanted = Vec::new();
+    if lateral {
+        wanted.push(p);
+    }
+    if pitch {
+        wanted.push(q);
+    }
+    if lateral {
+        wanted.push(r);
+    }
+    wanted
+}
+
+/// Whether the record has every channel of `names`.
+fn has_all(record: &FlightRecord, names: &[&str]) -> bool {
+    names.iter().all(|name| record.channel(name).is_ok())
 }
 
 impl AngularAccelerations {
-    /// Whether `record`'s measured angular accelerations are used.
-    fn measured(self, record: &FlightRecord) -> bool {
+    /// Whether `record`'s measured angular accelerations (those `wanted`)
+    /// are used.
+    fn measured(self, record: &FlightRecord, wanted: &[&str]) -> bool {
         match self {
-            AngularAccelerations::Auto => has_angular_accelerations(record),
+            AngularAccelerations::Auto => !wanted.is_empty() && has_all(record, wanted),
             AngularAccelerations::Measured => true,
             AngularAccelerations::Differentiated => false,
         }
@@ -204,8 +231,9 @@ fn needed_channels(
     options: &ReconstructionOptions,
 ) -> Needs {
     let mut needs = Needs::new();
-    let measured_accelerations =
-        !options.omit_angular_accelerations && options.angular_accelerations.measured(record);
+    let wanted = wanted_accelerations(request, options);
+    let measured_accelerations = !options.omit_angular_accelerations
+        && options.angular_accelerations.measured(record, &wanted);
     let mut wants_dynamic_pressure = false;
     let mut wants_thrust = false;
     for &coefficient in &request.coefficients {
@@ -297,7 +325,9 @@ fn coefficient_needs(
                 need(needs, channel, name);
             }
             if measured_accelerations {
-                for channel in ANGULAR_ACCELERATION_CHANNELS {
+                let [p, q, r] = ANGULAR_ACCELERATION_CHANNELS;
+                let channels = if axis == 1 { vec![q] } else { vec![p, r] };
+                for channel in channels {
                     need(needs, channel, name);
                 }
             }
@@ -456,7 +486,7 @@ pub fn reconstruct(
     check_present(record, &needs, method)?;
     let measured_accelerations = ANGULAR_ACCELERATION_CHANNELS
         .iter()
-        .all(|name| needs.contains_key(name));
+        .any(|name| needs.contains_key(name));
     let differentiated = differentiated_channels(request, options, measured_accelerations);
     let derivatives = derivatives(record, differentiated, options)?;
     let reference = reference_channel(record, &needs, options)?;
@@ -511,6 +541,7 @@ pub fn reconstruct(
         needs: &needs,
         derivatives: &derivatives,
         measured_accelerations,
+        wanted_accelerations: wanted_accelerations(request, options),
         reference,
     };
     reconstruction
@@ -526,6 +557,8 @@ struct Sources<'a> {
     needs: &'a Needs,
     derivatives: &'a BTreeMap<&'a str, Channel>,
     measured_accelerations: bool,
+    /// The measured angular accelerations the request reads, if measured.
+    wanted_accelerations: Vec<&'static str>,
     reference: &'a Channel,
 }
 
@@ -541,18 +574,20 @@ impl Sources<'_> {
         dropped: usize,
     ) -> Vec<String> {
         let mut notes = Vec::new();
+        let wanted = self.wanted_accelerations.join(", ");
         if self.measured_accelerations {
-            notes.push(
-                "angular accelerations: the record's p_dot, q_dot, r_dot (`angular_accelerations = \"differentiated\"` differentiates the rates instead)".into(),
-            );
+            notes.push(format!(
+                "angular accelerations: the record's {wanted} (`angular_accelerations = \"differentiated\"` differentiates the rates instead)"
+            ));
         }
         if !self.measured_accelerations
             && self.derivatives.contains_key("p")
-            && has_angular_accelerations(record)
+            && !self.wanted_accelerations.is_empty()
+            && has_all(record, &self.wanted_accelerations)
         {
-            notes.push(
-                "the record has p_dot, q_dot, r_dot: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates".into(),
-            );
+            notes.push(format!(
+                "the record has {wanted}: `angular_accelerations = \"measured\"` (or \"auto\") uses them instead of differentiating the rates"
+            ));
         }
         let arm = options.accelerometer_position;
         if arm != Vector3::zeros() {
@@ -755,10 +790,11 @@ impl<'a> Signals<'a> {
             throttle: get("throttle"),
             load_factors: ["nx", "ny", "nz"].map(get),
             rates: ["p", "q", "r"].map(get),
-            rate_derivatives: match ANGULAR_ACCELERATION_CHANNELS.map(get) {
-                [Some(p), Some(q), Some(r)] => [Some(p), Some(q), Some(r)],
-                _ => ["p", "q", "r"].map(rate),
-            },
+            // Each axis's measured ṗ, q̇ or ṙ where the request reads it,
+            // else the differentiated rate.
+            rate_derivatives: std::array::from_fn(|i| {
+                get(ANGULAR_ACCELERATION_CHANNELS[i]).or_else(|| rate(["p", "q", "r"][i]))
+            }),
             alpha_dot: rate("alpha"),
             controls,
         }

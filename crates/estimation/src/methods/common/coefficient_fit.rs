@@ -72,7 +72,7 @@ pub(crate) const CORRELATION_LAG_SETTING: (&str, &str) = (
 );
 pub(crate) const ANGULAR_ACCELERATIONS_SETTING: (&str, &str) = (
     "angular_accelerations",
-    "where ṗ, q̇, ṙ come from: \"differentiated\" (the rates), \"measured\" (the record's p_dot, q_dot, r_dot) or \"auto\" (measured when the record has all three)",
+    "where ṗ, q̇, ṙ come from: \"differentiated\" (the rates), \"measured\" (the record's q_dot for Cm, p_dot and r_dot for Cl and Cn) or \"auto\" (measured when the record has those)",
 );
 
 impl EquationErrorSettings {
