@@ -60,8 +60,9 @@ pub struct CoefficientFlags {
     accelerometer_position: Option<String>,
     /// Where the angular accelerations of the moments come from:
     /// `differentiated` (the rates, by the smoothing differentiator),
-    /// `measured` (the record's p_dot, q_dot, r_dot) or `auto` (measured
-    /// when the record has all three).
+    /// `measured` (the record's q_dot for Cm, p_dot and r_dot for Cl and
+    /// Cn, all three with an accelerometer position) or `auto` (measured
+    /// when the record has them).
     #[arg(
         long,
         value_name = "SOURCE",
