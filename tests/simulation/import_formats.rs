@@ -217,8 +217,10 @@ fn headerless_ascii_in_mixed_units_imports_like_its_headed_si_twin() {
             .map(|w| w.channel.as_str())
             .collect::<Vec<_>>()
     );
+    // Equation error reads the angular accelerations, the derive step
+    // the temperature: neither is "read by nothing".
     for name in ["p_dot", "q_dot", "r_dot", "temperature"] {
-        assert!(warned.contains(&name), "{name}: {warned:?}");
+        assert!(!warned.contains(&name), "{name}: {warned:?}");
     }
     // Measured thrust and density are read (equation error, output error
     // and the filters).
@@ -548,4 +550,54 @@ fn a_map_states_constant_channels() {
             "{test}: {error}"
         );
     }
+}
+
+/// The import warns of a channel only when nothing reads it: not the
+/// angular accelerations (equation error's `angular_accelerations`), the
+/// coefficients (a model's outputs), the derive step's inputs (ground
+/// speed, split surfaces, a fuel flow per engine, total air temperature);
+/// an engine's exhaust gas temperature, which nothing reads, is named with
+/// what could still read it.
+#[test]
+fn only_channels_nothing_reads_are_warned_of() {
+    let names = [
+        "q_dot",
+        "CL",
+        "ground_speed",
+        "aileron_left",
+        "fuel_flow_left",
+        "total_air_temperature",
+        "egt_left",
+    ];
+    let mut map = "[file]\nheader = false\n[time]\ncolumn = 1\n".to_string();
+    for (i, name) in names.iter().enumerate() {
+        map += &format!(
+            "[[channels]]\nname = \"{name}\"\ncolumn = {}\nunit = \"-\"\n",
+            i + 2
+        );
+    }
+    let data = "0 1 2 3 4 5 6 7\n0.1 1 2 3 4 5 6 7\n0.2 1 2 3 4 5 6 7\n";
+    let map = map
+        .replace(
+            "name = \"q_dot\"\ncolumn = 2\nunit = \"-\"",
+            "name = \"q_dot\"\ncolumn = 2\nunit = \"rad/s2\"",
+        )
+        .replace("column = 4\nunit = \"-\"", "column = 4\nunit = \"m/s\"")
+        .replace("column = 5\nunit = \"-\"", "column = 5\nunit = \"rad\"")
+        .replace("column = 6\nunit = \"-\"", "column = 6\nunit = \"kg/s\"")
+        .replace("column = 7\nunit = \"-\"", "column = 7\nunit = \"K\"")
+        .replace("column = 8\nunit = \"-\"", "column = 8\nunit = \"K\"");
+    let outcome = import_files("warned-channels", data, &map, "asc");
+    let warned: Vec<(&str, &str)> = outcome
+        .warnings
+        .iter()
+        .map(|w| (w.channel.as_str(), w.message.as_str()))
+        .collect();
+    assert_eq!(warned.len(), 1, "{warned:?}");
+    assert_eq!(warned[0].0, "egt_left");
+    assert!(
+        warned[0].1.contains("a linear model may name it"),
+        "{}",
+        warned[0].1
+    );
 }

@@ -15,7 +15,8 @@
 //! empty cell becomes a dropout unless the map says `empty = "skip"` for that
 //! channel; a cell that reads as NaN or an infinity is an error unless the
 //! map says `non_finite = "dropout"`; a file without data rows is an error.
-//! Columns the map does not mention, and channels no estimator reads, are
+//! Columns the map does not mention, and channels that neither an estimator
+//! nor the derive step reads, are
 //! listed in the outcome.
 
 mod source;
@@ -243,7 +244,7 @@ impl fmt::Display for ImportWarning {
 }
 
 /// The imported record, the data file's columns the map did not use,
-/// warnings (channels no estimator reads, the altitude convention's limits)
+/// warnings (channels nothing reads, the altitude convention's limits)
 /// and notes (channels the map states as constants).
 #[derive(Debug, Clone)]
 pub struct ImportOutcome {
@@ -350,10 +351,13 @@ fn unit_suffix(unit: &str) -> String {
 fn warnings(channels: &[MappedChannel], read: &[&str]) -> Vec<ImportWarning> {
     let mut warnings = Vec::new();
     for mapped in channels {
-        if !read.contains(&mapped.name.as_str()) {
+        if !read.contains(&mapped.name.as_str()) && !crate::prep::derive::reads(&mapped.name) {
             warnings.push(ImportWarning {
                 channel: mapped.name.clone(),
-                message: "no estimator reads this channel; it is kept in the record".into(),
+                message: "no estimator of a 6-DOF model and no step of `aeroid derive` reads this \
+                          channel (a linear model may name it as an input or output); it is kept \
+                          in the record"
+                    .into(),
             });
         }
         if mapped.convention == Some(AltitudeConvention::Pressure) {

@@ -53,6 +53,26 @@ impl Default for Options {
     }
 }
 
+/// Whether some step of `aeroid derive` reads channel `name`: the flow
+/// angles' inputs, the split surfaces, the air data (pressure altitude,
+/// temperatures, calibrated airspeed, Mach), the fuel flow of each engine.
+pub fn reads(name: &str) -> bool {
+    const AIR_DATA: [&str; 5] = [
+        "pressure_altitude",
+        "temperature",
+        "total_air_temperature",
+        "calibrated_airspeed",
+        "mach",
+    ];
+    crate::prep::flow_angles::INPUT_CHANNELS.contains(&name)
+        || AIR_DATA.contains(&name)
+        || crate::prep::surfaces::SPLIT_SURFACES
+            .iter()
+            .any(|s| s.left == name || s.right == name)
+        || name == "fuel_flow"
+        || name.starts_with("fuel_flow_")
+}
+
 /// Whether a channel's source says the derive step computed it from other
 /// channels: the geometric flow angles and airspeed ("geometric (Wang et
 /// al. …"), the kinematic rates ("kinematic (p = …"). A measured channel,
