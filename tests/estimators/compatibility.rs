@@ -185,3 +185,50 @@ fn a_one_sample_record_is_refused() {
         Ok(result) => panic!("reconstructed: {}", result.estimate.status),
     }
 }
+
+/// Calibrations a manoeuvre does not separate are diagnosed: on the
+/// lateral multistep α barely moves, so the α vane's scale factor cannot be
+/// told from its offset (their estimates correlate beyond 0.95, each bound
+/// then at least 3.2 times what it would be with the other known); on the
+/// multisine, which moves α, neither is diagnosed.
+#[test]
+fn calibrations_the_manoeuvre_does_not_separate_are_diagnosed() {
+    use aeroid::estimation::diagnosis::DiagnosisKind;
+    let inseparable = |scenario: &str| -> Vec<(String, f64)> {
+        let scenario = Scenario::load(scenario).unwrap();
+        let profile = biased_profile(&format!("fpr-separate-{}", scenario.name), "25 Hz", true);
+        let (record, _) = record_scenario(&scenario, &profile).unwrap();
+        let result = flight_path_reconstruction(&record, 30).unwrap();
+        let estimate = &result.estimate;
+        for (i, p) in estimate.parameters.iter().enumerate() {
+            eprintln!(
+                "{} {}: {:?}",
+                scenario.name,
+                p.name,
+                estimate.strongest_correlation(i)
+            );
+        }
+        estimate
+            .diagnoses
+            .iter()
+            .filter(|d| d.kind == DiagnosisKind::Inseparable)
+            .flat_map(|d| d.about.iter().cloned().zip(d.measures.iter().copied()))
+            .collect()
+    };
+    let lateral = inseparable("attas-lateral-multistep");
+    eprintln!("lateral: {lateral:?}");
+    assert!(
+        lateral
+            .iter()
+            .any(|(name, r)| name.starts_with("K_alpha") && *r > 0.95),
+        "{lateral:?}"
+    );
+    let multisine = inseparable("attas-multisine");
+    eprintln!("multisine: {multisine:?}");
+    assert!(
+        !multisine
+            .iter()
+            .any(|(name, _)| name.starts_with("K_alpha")),
+        "{multisine:?}"
+    );
+}

@@ -17,8 +17,14 @@
 //! at the centre of gravity, and a_z = −g0·nz (nz positive up). The fit is
 //! output error with R re-estimated each iteration on the shared core, and
 //! the result includes a corrected record: nx, ny, nz, p, q, r, α and β with
-//! the estimated errors removed.
+//! the estimated errors removed. A calibration whose estimate correlates
+//! beyond 0.95 with another unknown's is diagnosed
+//! ([`DiagnosisKind::Inseparable`]): the manoeuvre does not separate them
+//! (a vane's scale factor from its offset without an excursion of the
+//! angle), and each bound is then at least 3.2 times what it would be with
+//! the other known.
 
+use crate::diagnosis::{Diagnosis, DiagnosisKind};
 use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit};
 use crate::estimator::Refusal;
@@ -93,16 +99,45 @@ pub fn flight_path_reconstruction(
         "kinematic compatibility".to_string(),
         record.scenario.clone(),
     );
-    let estimate = Estimate {
+    let mut estimate = Estimate {
         fits: problem.fits(&solution.theta),
         wall_time: started.elapsed().as_secs_f64(),
         notes: vec!["still air, accelerometer at the centre of gravity, R diagonal".into()],
         ..Estimate::from_solution(label, &problem.names(), &start, &solution)
     }
     .assess();
+    if let Some(diagnosis) = inseparable_calibrations(&estimate) {
+        estimate.diagnose(diagnosis);
+    }
     Ok(Compatibility {
         corrected: corrected_record(record, &errors),
         estimate,
+    })
+}
+
+/// The |correlation| beyond which two estimates are not separated by the
+/// data: each one's bound is then at least 1/√(1 − 0.95²) ≈ 3.2 times
+/// what it would be with the other known.
+pub const INSEPARABLE: f64 = 0.95;
+
+/// The calibrations (sensor errors) whose estimate correlates beyond
+/// [`INSEPARABLE`] with another unknown's, each named with that one.
+fn inseparable_calibrations(estimate: &Estimate) -> Option<Diagnosis> {
+    let (about, measures): (Vec<String>, Vec<f64>) = (estimate.parameters.iter().enumerate())
+        .filter(|(_, p)| ERRORS.contains(&p.name.as_str()))
+        .filter_map(|(i, p)| {
+            let (other, correlation) = estimate.strongest_correlation(i)?;
+            (correlation > INSEPARABLE).then(|| (format!("{} (with {other})", p.name), correlation))
+        })
+        .unzip();
+    (!about.is_empty()).then(|| Diagnosis {
+        kind: DiagnosisKind::Inseparable,
+        about,
+        measures,
+        advice: "the manoeuvre does not separate these calibrations from another unknown: a \
+                 vane's scale factor needs an excursion of its angle, a bias a change of what \
+                 it drives; fly a manoeuvre that excites them, or hold one of the pair"
+            .into(),
     })
 }
 

@@ -53,6 +53,9 @@ pub enum DiagnosisKind {
     /// Estimates from several starts disagree beyond their bounds; measure:
     /// the largest difference in σ.
     StartsDisagree,
+    /// Parameters the data do not separate from another unknown (their
+    /// estimates' correlation beyond 0.95); measure: the |correlation|.
+    Inseparable,
 }
 
 impl DiagnosisKind {
@@ -66,6 +69,7 @@ impl DiagnosisKind {
             DiagnosisKind::Unstable => "unstable",
             DiagnosisKind::InconsistentInnovations => "inconsistent_innovations",
             DiagnosisKind::StartsDisagree => "starts_disagree",
+            DiagnosisKind::Inseparable => "inseparable",
         }
     }
 }
