@@ -139,11 +139,15 @@ fn ascii_twin(record: &FlightRecord) -> (String, String) {
     }
     let mut map = "name = \"twin\"\n[file]\nheader = false\n[time]\ncolumn = 1\n".to_string();
     for (i, c) in columns.iter().enumerate() {
+        // A dimensionless channel's unit is left out (an empty one is refused).
+        let unit = match c.unit {
+            "" => String::new(),
+            unit => format!("unit = \"{unit}\"\n"),
+        };
         map += &format!(
-            "[[channels]]\nname = \"{}\"\ncolumn = {}\nunit = \"{}\"\n",
+            "[[channels]]\nname = \"{}\"\ncolumn = {}\n{unit}",
             c.channel,
             i + 2,
-            c.unit
         );
     }
     let n = columns.len() + 2;
@@ -600,4 +604,56 @@ fn only_channels_nothing_reads_are_warned_of() {
         "{}",
         warned[0].1
     );
+}
+
+/// Physical sanity at import: a temperature below absolute zero (a
+/// column in °C mapped as K), an altitude below the Earth's centre (a
+/// scale off by thousands), a column combined with itself and an empty
+/// unit are refused, each naming the channel, the column or the map's key,
+/// and the value where there is one.
+#[test]
+fn unphysical_channels_and_degenerate_maps_are_refused() {
+    let data = "0 80 -300 10\n0.1 81 -280 11\n0.2 82 -290 12\n";
+    let head = "[file]\nheader = false\n[time]\ncolumn = 1\n[[channels]]\nname = \"airspeed\"\ncolumn = 2\n";
+    for (case, channel, says) in [
+        (
+            "below-zero-kelvin",
+            "name = \"temperature\"\ncolumn = 3\nunit = \"K\"",
+            &[
+                "channel 'temperature' (import: column 3",
+                "reads -300 K at t = 0 s, below absolute zero",
+            ][..],
+        ),
+        (
+            "inside-the-earth",
+            "name = \"altitude\"\ncolumn = 3\nunit = \"km\"\nscale = 30",
+            &[
+                "channel 'altitude'",
+                "reads -9000000 m",
+                "below the Earth's centre",
+            ],
+        ),
+        (
+            "combined-with-itself",
+            "name = \"thrust\"\ncolumns = [4, 4]\ncombine = \"sum\"",
+            &["channels[1].columns: column 4 is combined with itself"],
+        ),
+        (
+            "empty-unit",
+            "name = \"elevator\"\ncolumn = 4\nunit = \"\"",
+            &["channels[1].unit: is empty", "channel 'elevator'"],
+        ),
+    ] {
+        let map = format!("{head}[[channels]]\n{channel}\n");
+        let error = common::import_case(case, data, &map)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        for text in says {
+            assert!(error.contains(text), "{case}: expected '{text}' in {error}");
+        }
+    }
+    // In °C the same column is a plausible temperature.
+    let map = format!("{head}[[channels]]\nname = \"temperature\"\ncolumn = 4\nunit = \"degC\"\n");
+    common::import_case("celsius", data, &map).unwrap();
 }

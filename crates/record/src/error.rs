@@ -40,6 +40,22 @@ pub enum Error {
         reason: String,
     },
 
+    /// An imported channel whose value cannot be physical (a temperature
+    /// below absolute zero, an altitude below the Earth's centre).
+    #[error(
+        "channel '{channel}' ({origin}) reads {value} {unit} at t = {time} s, {what}: check its unit, scale and offset in the map"
+    )]
+    Unphysical {
+        /// The data file.
+        path: std::path::PathBuf,
+        channel: String,
+        origin: String,
+        time: f64,
+        value: f64,
+        unit: String,
+        what: &'static str,
+    },
+
     /// A record that cannot be written as TOML.
     #[error("{reason}")]
     Serialize { reason: String },

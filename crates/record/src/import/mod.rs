@@ -289,6 +289,7 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
             )?);
         }
         let channel = build_channel(mapped, &times, &columns, &headers, data);
+        check_physical(&channel, data)?;
         check_rate(&channel, i, map_path)?;
         record_channels.push(channel);
     }
@@ -371,6 +372,32 @@ fn warnings(channels: &[MappedChannel], read: &[&str]) -> Vec<ImportWarning> {
         }
     }
     warnings
+}
+
+/// The Earth's mean radius (m): an altitude below −R is inside the Earth.
+const EARTH_RADIUS: f64 = 6.371e6;
+
+/// A channel whose values cannot be physical is refused, naming the first
+/// such sample: a temperature (K) below absolute zero, an altitude below
+/// the Earth's centre.
+fn check_physical(channel: &Channel, data: &Path) -> Result<()> {
+    let (limit, what) = match channel.unit.as_str() {
+        "K" => (0.0, "below absolute zero"),
+        "m" if channel.name.contains("altitude") => (-EARTH_RADIUS, "below the Earth's centre"),
+        _ => return Ok(()),
+    };
+    let Some(k) = channel.values.iter().position(|v| *v < limit) else {
+        return Ok(());
+    };
+    Err(crate::Error::Unphysical {
+        path: data.to_path_buf(),
+        channel: channel.name.clone(),
+        origin: channel.source.clone(),
+        time: channel.times[k],
+        value: channel.values[k],
+        unit: channel.unit.clone(),
+        what,
+    })
 }
 
 /// A channel from its columns' cells (`None`: empty), combined when
@@ -632,6 +659,14 @@ fn channel_columns(
                 ),
                 _ => {}
             }
+            for (i, column) in columns.iter().enumerate() {
+                if columns[..i].contains(column) {
+                    problems.push(
+                        format!("{field}.columns"),
+                        format!("column {column} is combined with itself"),
+                    );
+                }
+            }
             columns.clone()
         }
     }
@@ -663,6 +698,19 @@ fn map_channel(
         problems,
     );
     check_constant(spec, field, problems);
+    if spec
+        .unit
+        .as_deref()
+        .is_some_and(|unit| unit.trim().is_empty())
+    {
+        problems.push(
+            format!("{field}.unit"),
+            format!(
+                "is empty: leave `unit` out for the SI unit of channel '{}', or name its unit",
+                spec.name
+            ),
+        );
+    }
     if spec.convention.is_some() && spec.name != "altitude" {
         problems.push(
             format!("{field}.convention"),
