@@ -46,13 +46,12 @@ pub enum Error {
         "channel '{channel}' ({origin}) reads {value} {unit} at t = {time} s, {what}: check its unit, scale and offset in the map"
     )]
     Unphysical {
-        /// The data file.
-        path: std::path::PathBuf,
         channel: String,
+        /// Where it came from: the data file's column, or the map's constant.
         origin: String,
         time: f64,
         value: f64,
-        unit: String,
+        unit: &'static str,
         what: &'static str,
     },
 

@@ -289,7 +289,7 @@ pub fn import(data: &Path, map_path: &Path, read: &[&str]) -> Result<ImportOutco
             )?);
         }
         let channel = build_channel(mapped, &times, &columns, &headers, data);
-        check_physical(&channel, data)?;
+        check_physical(&channel)?;
         check_rate(&channel, i, map_path)?;
         record_channels.push(channel);
     }
@@ -380,22 +380,23 @@ const EARTH_RADIUS: f64 = 6.371e6;
 /// A channel whose values cannot be physical is refused, naming the first
 /// such sample: a temperature (K) below absolute zero, an altitude below
 /// the Earth's centre.
-fn check_physical(channel: &Channel, data: &Path) -> Result<()> {
-    let (limit, what) = match channel.unit.as_str() {
-        "K" => (0.0, "below absolute zero"),
-        "m" if channel.name.contains("altitude") => (-EARTH_RADIUS, "below the Earth's centre"),
+fn check_physical(channel: &Channel) -> Result<()> {
+    let (limit, unit, what) = match channel.unit.as_str() {
+        "K" => (0.0, "K", "below absolute zero"),
+        "m" if channel.name.contains("altitude") => {
+            (-EARTH_RADIUS, "m", "below the Earth's centre")
+        }
         _ => return Ok(()),
     };
     let Some(k) = channel.values.iter().position(|v| *v < limit) else {
         return Ok(());
     };
     Err(crate::Error::Unphysical {
-        path: data.to_path_buf(),
         channel: channel.name.clone(),
         origin: channel.source.clone(),
         time: channel.times[k],
         value: channel.values[k],
-        unit: channel.unit.clone(),
+        unit,
         what,
     })
 }
