@@ -9,3 +9,4 @@ mod common;
 mod cli;
 mod cli_contracts;
 mod plugins;
+mod stall_example;
