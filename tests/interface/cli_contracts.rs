@@ -428,3 +428,51 @@ fn a_scenario_aircraft_linked_from_outside_is_refused() {
         "{stderr}"
     );
 }
+
+/// One path rule for every file that names another: a model structure's
+/// aircraft and a study's scenario reached through a symbolic link that
+/// leads out of the naming file's folder are refused as a scenario's
+/// aircraft is, by `check` as by the command that would read them.
+#[cfg(unix)]
+#[test]
+fn a_model_or_study_naming_a_linked_file_from_outside_is_refused() {
+    let root = common::temp_folder("contracts-linked-model");
+    let folder = root.join("inner");
+    std::fs::create_dir_all(&folder).unwrap();
+    let plane = common::write(&root, "plane.toml", &common::attas_with(|t| t));
+    std::os::unix::fs::symlink(&plane, folder.join("plane.toml")).unwrap();
+    let model_text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/attas-lateral.toml"),
+    )
+    .unwrap()
+    .replacen("aircraft = \"attas\"", "aircraft = \"plane.toml\"", 1);
+    assert!(
+        model_text.contains("aircraft = \"plane.toml\""),
+        "the bundled model changed"
+    );
+    let model = common::write(&folder, "m.toml", &model_text);
+    let stderr = refused_at_once(aeroid().arg("check").arg(&model));
+    assert!(
+        stderr.contains("aircraft 'plane.toml' leads to")
+            && stderr.contains("through a symbolic link, outside the folder"),
+        "{stderr}"
+    );
+    let scenario = common::write(
+        &root,
+        "s.toml",
+        "name = \"s\"\naircraft = \"attas\"\nduration = \"3 s\"\nstep = \"0.01 s\"\nseed = 1\n\n\
+         [trim]\nairspeed = \"103 m/s\"\naltitude = \"4877 m\"\n",
+    );
+    std::os::unix::fs::symlink(&scenario, folder.join("s.toml")).unwrap();
+    let study = common::write(
+        &folder,
+        "study.toml",
+        "name = \"linked\"\nscenarios = [\"s.toml\"]\nprofile = \"ideal\"\nmodels = [\"attas-lateral\"]\nmethods = [\"ee\"]\nruns = 1\nseed = 1\n",
+    );
+    let stderr = refused_at_once(aeroid().arg("check").arg(&study));
+    assert!(
+        stderr.contains("scenario 's.toml' leads to")
+            && stderr.contains("through a symbolic link, outside the folder"),
+        "{stderr}"
+    );
+}

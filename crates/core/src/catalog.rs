@@ -87,17 +87,26 @@ fn kind(folder: &str) -> &'static str {
 /// an existing path, else a bundled name in `folder`. With `base` (the
 /// folder of the file that names it): a path inside `base`, a name in the
 /// `folder` beside `base`, a path inside the data folder or a bundled name;
-/// an absolute path or a `..` component is refused.
+/// an absolute path, a `..` component or a file inside `base` that a
+/// symbolic link takes out of it is refused — the rule of
+/// [`paths::inside`] for every file that names another.
 pub fn resolve(reference: &str, folder: &str, base: Option<&Path>) -> Result<PathBuf> {
-    if let Some(base) = base
-        && let Some(reason) = paths::escape_reason(reference)
-    {
-        return Err(Error::Reference {
+    if let Some(base) = base {
+        let refuse = |reason: String| Error::Reference {
             kind: kind(folder),
             reference: reference.into(),
             reason,
             base: paths::shown(base).to_path_buf(),
-        });
+        };
+        if let Some(reason) = paths::escape_reason(reference) {
+            return Err(refuse(reason.to_string()));
+        }
+        if let Some(target) = paths::leads_out(base, reference) {
+            return Err(refuse(format!(
+                "leads to {} through a symbolic link, outside the folder",
+                target.display()
+            )));
+        }
     }
     find(reference, folder, base)
 }

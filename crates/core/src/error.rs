@@ -144,7 +144,8 @@ pub enum Error {
     },
 
     /// A file reference, given in a file under `base`, that would leave
-    /// that folder (an absolute path or a `..` component).
+    /// that folder (an absolute path, a `..` component, or a symbolic link
+    /// that leads out).
     #[error(
         "{kind} '{reference}' {reason}; name a file inside {} by a relative path, or a bundled name",
         base.display()
@@ -152,7 +153,7 @@ pub enum Error {
     Reference {
         kind: &'static str,
         reference: String,
-        reason: &'static str,
+        reason: String,
         base: PathBuf,
     },
 }

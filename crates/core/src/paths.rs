@@ -47,17 +47,23 @@ pub fn inside(folder: &Path, reference: &str, naming_file: &Path, field: &str) -
             shown.display()
         )));
     }
-    let path = folder.join(reference);
-    if let (Ok(target), Ok(root)) = (path.canonicalize(), shown.canonicalize())
-        && !target.starts_with(&root)
-    {
+    if let Some(target) = leads_out(folder, reference) {
         return Err(escape(format!(
             "leads to {}, outside {}; name a file inside it",
             target.display(),
             shown.display()
         )));
     }
-    Ok(path)
+    Ok(folder.join(reference))
+}
+
+/// Where `reference`, an existing file inside `folder` by its words,
+/// really is when a symbolic link takes it out of `folder`; None when it
+/// stays inside or does not exist.
+pub(crate) fn leads_out(folder: &Path, reference: &str) -> Option<PathBuf> {
+    let target = folder.join(reference).canonicalize().ok()?;
+    let root = shown(folder).canonicalize().ok()?;
+    (!target.starts_with(&root)).then_some(target)
 }
 
 /// A folder as shown in messages: `.` for the current folder.
