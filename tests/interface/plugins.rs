@@ -454,3 +454,54 @@ fn a_time_limit_beyond_a_week_or_not_positive_is_refused_at_load() {
     );
     Plugin::load(&path).unwrap();
 }
+
+/// A plug-in that leaves a process running outside its process group
+/// (`setsid`, the way a daemon detaches) has it ended when its run ends,
+/// at the time limit as when it answers; the estimate says so. Linux
+/// only: elsewhere the process group alone is ended (docs/plugins.md).
+#[cfg(target_os = "linux")]
+#[test]
+fn processes_a_plugin_detaches_are_ended_with_its_run() {
+    let folder = common::temp_folder("plugin_detached");
+    let structure = cy_beta_model(&folder);
+    let record = record();
+    let alive = |pid: u32| {
+        std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+            stat.rsplit(") ")
+                .next()
+                .is_some_and(|rest| !rest.starts_with('Z'))
+        })
+    };
+    let answer = "cat > \"$1/estimate.json\" <<'END'\n{\"format\": \"aeroid-plugin-estimate-1\", \"status\": \"converged\", \"parameters\": [{\"name\": \"CY_beta\", \"value\": -0.9, \"standard_error\": 0.01}]}\nEND\n";
+    // The detached process writes its pid to the plug-in's stderr, whose
+    // end aeroid reports (the sandbox lets nothing be written elsewhere).
+    for (name, tail, limit) in [
+        ("detach-answer", answer, "20 s"),
+        ("detach-hang", "sleep 30\n", "1 s"),
+    ] {
+        let script = format!(
+            "setsid sh -c 'echo \"detached=$$\" >&2; exec sleep 300' &\nwhile ! grep -q detached= \"$1/stderr.txt\"; do sleep 0.05; done\n{tail}"
+        );
+        let method = fault(&folder, name, &script, limit);
+        let said = match estimate(&method, &record, &structure) {
+            Ok(estimate) => estimate.notes.join("; "),
+            Err(error) => error.to_string(),
+        };
+        let pid: u32 = said
+            .split("detached=")
+            .nth(1)
+            .and_then(|rest| rest.split(|c: char| !c.is_ascii_digit()).next())
+            .and_then(|digits| digits.parse().ok())
+            .unwrap_or_else(|| panic!("{name}: no pid in {said}"));
+        // SIGKILL is delivered at once; give the kernel a moment to end it.
+        let ended = (0..50).any(|_| {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            !alive(pid)
+        });
+        assert!(ended, "{name}: the detached process {pid} is still running");
+        assert!(
+            said.contains("1 process(es) the plug-in left running"),
+            "{name}: {said}"
+        );
+    }
+}

@@ -26,7 +26,8 @@
 //! the format tag, every field's type, every free parameter once and no
 //! other, finite values, non-negative standard errors, a square covariance
 //! of the parameters' size. A plug-in past its time limit is killed with its
-//! whole process group; a non-zero exit, a crash, a missing or malformed
+//! whole process group, and when a run ends every process it left running
+//! is ended, those that left the group too ([`processes`]); a non-zero exit, a crash, a missing or malformed
 //! result is an error naming the plug-in and the reason, with the end of
 //! its stderr — in a study a counted failure, never an abort. The work
 //! folder is removed afterwards.
@@ -44,6 +45,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
+
+mod processes;
 
 /// The folder of plug-in files inside the data folder.
 pub(crate) const PLUGIN_FOLDER: &str = "estimators";
@@ -302,12 +305,20 @@ impl Plugin {
             )),
             _ => None,
         };
-        let outcome = self.execute(&work.path, sandbox)?;
+        let outcome = self.execute(&work.path, sandbox);
+        let left = processes::end_run(&work.run());
+        let outcome = outcome?;
+        let left_note = (left > 0).then(|| {
+            format!("{left} process(es) the plug-in left running (outside its process group) ended")
+        });
         let stderr = tail(&work.path.join("stderr.txt"));
         let failure = |reason: String| Error::Plugin {
             reason: format!(
-                "plug-in {}: {reason}{}",
+                "plug-in {}: {reason}{}{}",
                 self.name,
+                left_note
+                    .as_ref()
+                    .map_or(String::new(), |note| format!("; {note}")),
                 if stderr.is_empty() {
                     String::new()
                 } else {
@@ -351,6 +362,7 @@ impl Plugin {
             estimate.notes.push(format!("plug-in stderr: {stderr}"));
         }
         estimate.notes.extend(unsandboxed);
+        estimate.notes.extend(left_note.clone());
         estimate.wall_time = started.elapsed().as_secs_f64();
         Ok(estimate)
     }
@@ -370,16 +382,25 @@ impl Plugin {
             .current_dir(&self.working_directory)
             .envs(&self.environment)
             .env("TMPDIR", work)
+            .env(processes::MARKER, run_of(work))
             .stdin(Stdio::null())
             .stdout(output("stdout.txt")?)
             .stderr(output("stderr.txt")?)
             .process_group(0);
-        if let Some(Sandbox::Landlock(rules)) = sandbox {
-            // SAFETY: `enter` makes system calls only (no allocation, no
-            // lock), as the time between fork and exec requires.
-            unsafe {
-                command.pre_exec(move || rules.enter());
-            }
+        let rules = match sandbox {
+            Some(Sandbox::Landlock(rules)) => Some(rules),
+            _ => None,
+        };
+        // SAFETY: `die_with_parent` and `enter` make system calls only (no
+        // allocation, no lock), as the time between fork and exec requires.
+        unsafe {
+            command.pre_exec(move || {
+                processes::die_with_parent()?;
+                match &rules {
+                    Some(rules) => rules.enter(),
+                    None => Ok(()),
+                }
+            });
         }
         let mut child = command.spawn().map_err(|e| Error::Plugin {
             reason: format!(
@@ -665,6 +686,20 @@ impl WorkFolder {
         std::fs::create_dir_all(&path).map_err(|e| write_error(&path, e))?;
         Ok(WorkFolder { path })
     }
+}
+
+impl WorkFolder {
+    /// The run's name (the work folder's), which marks its processes.
+    fn run(&self) -> String {
+        run_of(&self.path)
+    }
+}
+
+/// The run whose work folder is `work`: the folder's name.
+fn run_of(work: &Path) -> String {
+    work.file_name()
+        .map(|name| name.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
 
 impl Drop for WorkFolder {
