@@ -211,9 +211,11 @@ fn shooting_note(records: &[&FlightRecord], pieces: &[Piece], segment: Option<f6
                     .filter(|&i| pieces[i].flight == f)
                     .collect();
                 match (numbers.first(), numbers.last()) {
-                    (Some(a), Some(b)) if a != b => format!("'{}' x0[{a}–{b}]", record.scenario),
-                    (Some(a), _) => format!("'{}' x0[{a}]", record.scenario),
-                    _ => format!("'{}' none", record.scenario),
+                    (Some(a), Some(b)) if a != b => {
+                        format!("record {} '{}' x0[{a}–{b}]", f + 1, record.scenario)
+                    }
+                    (Some(a), _) => format!("record {} '{}' x0[{a}]", f + 1, record.scenario),
+                    _ => format!("record {} '{}' none", f + 1, record.scenario),
                 }
             })
             .collect();
