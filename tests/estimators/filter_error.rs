@@ -159,21 +159,21 @@ fn oracle_case() -> OracleCase {
     let (a, b) = attas_lateral();
     let points = 1500;
     let parameters = vec![
-        Entry {
+        vec![Entry {
             matrix: Matrix::A,
             row: 1,
             column: 1,
-        },
-        Entry {
+        }],
+        vec![Entry {
             matrix: Matrix::A,
             row: 2,
             column: 2,
-        },
-        Entry {
+        }],
+        vec![Entry {
             matrix: Matrix::B,
             row: 1,
             column: 0,
-        },
+        }],
     ];
     let model = LinearStateSpace::new(
         [
@@ -256,7 +256,8 @@ fn adskalman_pass(
     } = case;
     let points = model.len();
     let mut matrices = (a.clone(), b.clone());
-    for (entry, value) in model.parameters.iter().zip(theta.iter()) {
+    for (entries, value) in model.parameters.iter().zip(theta.iter()) {
+        let entry = &entries[0];
         match entry.matrix {
             Matrix::A => matrices.0[(entry.row, entry.column)] = *value,
             _ => matrices.1[(entry.row, entry.column)] = *value,

@@ -154,11 +154,11 @@ fn lateral_model() -> (LinearStateSpace, DVector<f64>) {
     let mut parameters = Vec::new();
     for (row, columns) in [(0, vec![0, 2]), (1, vec![0, 1, 2]), (2, vec![0, 1, 2])] {
         for column in columns {
-            parameters.push(entry(Matrix::A, row, column));
+            parameters.push(vec![entry(Matrix::A, row, column)]);
         }
     }
     for (row, column) in [(0, 1), (1, 0), (1, 1), (2, 0), (2, 1)] {
-        parameters.push(entry(Matrix::B, row, column));
+        parameters.push(vec![entry(Matrix::B, row, column)]);
     }
     let model = LinearStateSpace::new(
         [a, b, DMatrix::identity(4, 4), DMatrix::zeros(4, 2)],

@@ -1027,11 +1027,6 @@ fn linear_models_refuse_the_settings_they_do_not_take() {
             "input_noise",
         ),
         ("oem", "correlation_lag = \"1 s\"", "correlation_lag"),
-        (
-            "oem",
-            "estimate_initial_state = true",
-            "estimate_initial_state",
-        ),
         ("fem", "start = \"ee\"", "start"),
         ("fem", "interpolation = \"linear\"", "interpolation"),
         ("ekf", "interpolation = \"linear\"", "interpolation"),

@@ -20,6 +20,7 @@ mod identifiability;
 mod joint_fit;
 mod kalman_oracle;
 mod linear_models;
+mod linear_textbook;
 mod measured_quantities;
 mod model_channels;
 mod model_terms;

@@ -194,6 +194,7 @@ pub(crate) fn linear_model_file(
         d: Vec::new(),
         state_bias: bias.iter().map(|&v| Cell::Number(v)).collect(),
         output_bias: Vec::new(),
+        initial_state: None,
         parameters,
         methods: BTreeMap::new(),
     }

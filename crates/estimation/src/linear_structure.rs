@@ -3,8 +3,13 @@
 //! y = C·x + D·u + c, with named states, inputs and outputs, whose entries
 //! are fixed numbers or named parameters. The inputs and outputs are record
 //! channels (SI units, as every record channel: rad, rad/s, rad/s², load
-//! factors); a state named like a record channel starts, in a fit, from
-//! that channel's value at the first grid point, any other from 0.
+//! factors). A fit starts the states from `initial_state` when the file
+//! states it (whatever the states' names); without it, a state named like
+//! a record channel starts from that channel's value at the first grid
+//! point, any other from 0. Output error can estimate them instead
+//! (`[methods.oem] estimate_initial_state = true`), and does so when a
+//! state would start from a channel that carries a free output bias
+//! ([`LinearStructure::started_through_a_bias`]).
 //!
 //! ```toml
 //! kind = "linear"
@@ -20,6 +25,7 @@
 //! D = [[0, 0], [0, 0], [0, 0], [0, "Cydr"]]   # default zeros
 //! state_bias = [0, 0, 0]                    # b, default zeros
 //! output_bias = [0, 0, 0, "ny0"]            # c, default zeros
+//! initial_state = [0.0, 0.0, 0.0]           # x0, one number per state; default from the record
 //! [parameters.Lp]
 //! start = -2.0
 //! lower = -10.0                             # optional bounds
@@ -29,7 +35,8 @@
 //! fixed = true                              # a parameter held at its start value
 //! ```
 //!
-//! A parameter appears in exactly one entry. The model is continuous in
+//! A parameter may set several entries (Z_w in A and in a_z's row of C);
+//! each entry holds its value. The model is continuous in
 //! time and discretised exactly ([`crate::model::linear::LinearStateSpace`]). The parameters'
 //! start values are the model's own values: a linear flight
 //! (`aeroid_eval::linear_flight`) flies them as its truth.
@@ -99,6 +106,9 @@ pub struct LinearFile {
     pub state_bias: Vec<Cell>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub output_bias: Vec<Cell>,
+    /// x₀, one number per state; None: from the record (module header).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_state: Option<Vec<f64>>,
     #[serde(default)]
     pub parameters: BTreeMap<String, LinearParameter>,
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
@@ -119,10 +129,13 @@ pub struct LinearStructure {
     pub matrices: Matrices,
     /// The states whose rates are outputs (after C's), in `outputs` order.
     pub rate_states: Vec<usize>,
+    /// x₀ as the file states it; None: from the record.
+    pub initial_state: Option<DVector<f64>>,
     pub interpolation: InputInterpolation,
-    /// Parameter names, in file (alphabetical) order, with their entries.
+    /// Parameter names, in file (alphabetical) order, with the entries
+    /// each sets (one or more, in file order: A, B, C, D, b, c).
     pub names: Vec<String>,
-    pub entries: Vec<Entry>,
+    pub entries: Vec<Vec<Entry>>,
     pub starts: Vec<f64>,
     pub free: Vec<bool>,
     pub bounds: Vec<(f64, f64)>,
@@ -170,6 +183,7 @@ impl LinearStructure {
         let state_bias = reader.vector("state_bias", &file.state_bias, n);
         let output_bias = reader.vector("output_bias", &file.output_bias, l);
         let used = std::mem::take(&mut reader.used);
+        let initial_state = read_initial_state(file.initial_state.as_deref(), n, &mut problems);
         let (outputs, rate_states) = read_rate_outputs(file, &mut problems);
         let Parameters {
             names,
@@ -194,8 +208,10 @@ impl LinearStructure {
             state_bias,
             output_bias,
         };
-        for (entry, &start) in entries.iter().zip(&starts) {
-            *entry_of(&mut matrices, entry) = start;
+        for (set, &start) in entries.iter().zip(&starts) {
+            for entry in set {
+                *matrices.entry_mut(entry) = start;
+            }
         }
         let structure = LinearStructure {
             name: file.name.clone(),
@@ -206,6 +222,7 @@ impl LinearStructure {
             outputs,
             matrices,
             rate_states,
+            initial_state,
             interpolation: file.interpolation.clone(),
             names,
             entries,
@@ -230,6 +247,33 @@ impl LinearStructure {
             .collect()
     }
 
+    /// The states a fit would start from a recorded channel that carries a
+    /// free output bias: with no `initial_state` in the file, a state named
+    /// like an output of C whose `output_bias` entry is a free parameter
+    /// (y = x + c: the record holds x + c, not x).
+    pub fn started_through_a_bias(&self) -> Vec<&str> {
+        if self.initial_state.is_some() {
+            return Vec::new();
+        }
+        let biased = |o: usize| {
+            self.entries.iter().zip(&self.free).any(|(set, &free)| {
+                free && set
+                    .iter()
+                    .any(|e| e.matrix == Matrix::OutputBias && e.row == o)
+            })
+        };
+        self.states
+            .iter()
+            .filter(|state| {
+                self.outputs[..self.matrices.c.nrows()]
+                    .iter()
+                    .position(|o| o == *state)
+                    .is_some_and(biased)
+            })
+            .map(String::as_str)
+            .collect()
+    }
+
     /// The channels `record` lacks that a fit needs: the inputs and the outputs.
     pub fn missing_channels(
         &self,
@@ -251,15 +295,25 @@ impl LinearStructure {
     }
 }
 
-fn entry_of<'a>(matrices: &'a mut Matrices, entry: &Entry) -> &'a mut f64 {
-    match entry.matrix {
-        Matrix::A => &mut matrices.a[(entry.row, entry.column)],
-        Matrix::B => &mut matrices.b[(entry.row, entry.column)],
-        Matrix::C => &mut matrices.c[(entry.row, entry.column)],
-        Matrix::D => &mut matrices.d[(entry.row, entry.column)],
-        Matrix::StateBias => &mut matrices.state_bias[entry.row],
-        Matrix::OutputBias => &mut matrices.output_bias[entry.row],
+/// `initial_state` as a vector: one finite number per state.
+fn read_initial_state(
+    values: Option<&[f64]>,
+    states: usize,
+    problems: &mut FieldErrors,
+) -> Option<DVector<f64>> {
+    let values = values?;
+    if values.len() != states {
+        problems.push(
+            "initial_state",
+            format!(
+                "must have {states} entries, one per state; it has {}",
+                values.len()
+            ),
+        );
+    } else if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        problems.push(format!("initial_state[{i}]"), "must be finite");
     }
+    Some(DVector::from_column_slice(values))
 }
 
 /// Names must be present and distinct.
@@ -303,11 +357,11 @@ fn read_rate_outputs(file: &LinearFile, problems: &mut FieldErrors) -> (Vec<Stri
 }
 
 /// The parameters of a linear model file, in the file's order: each
-/// name, the matrix entry it sets, its start value, whether it is free
+/// name, the matrix entries it sets, its start value, whether it is free
 /// and its bounds.
 struct Parameters {
     names: Vec<String>,
-    entries: Vec<Entry>,
+    entries: Vec<Vec<Entry>>,
     starts: Vec<f64>,
     free: Vec<bool>,
     bounds: Vec<(f64, f64)>,
@@ -317,14 +371,14 @@ struct Parameters {
 /// values and bounds checked.
 fn read_parameters(
     file: &LinearFile,
-    used: &BTreeMap<String, Entry>,
+    used: &BTreeMap<String, Vec<Entry>>,
     problems: &mut FieldErrors,
 ) -> Parameters {
     let mut names = Vec::new();
     let (mut entries, mut starts, mut free, mut bounds) = (vec![], vec![], vec![], vec![]);
     for (name, spec) in &file.parameters {
         let field = format!("parameters.{name}");
-        let Some(&entry) = used.get(name) else {
+        let Some(set) = used.get(name) else {
             problems.push(field, "is not used in any matrix entry");
             continue;
         };
@@ -342,7 +396,7 @@ fn read_parameters(
             );
         }
         names.push(name.clone());
-        entries.push(entry);
+        entries.push(set.clone());
         starts.push(spec.start);
         free.push(!spec.fixed);
         bounds.push(range);
@@ -356,10 +410,10 @@ fn read_parameters(
     }
 }
 
-/// Reads matrices, recording which entry each parameter sets.
+/// Reads matrices, recording which entries each parameter sets.
 struct Reader<'a> {
     parameters: &'a BTreeMap<String, LinearParameter>,
-    used: BTreeMap<String, Entry>,
+    used: BTreeMap<String, Vec<Entry>>,
     problems: &'a mut FieldErrors,
 }
 
@@ -449,11 +503,8 @@ impl Reader<'_> {
                         field,
                         format!("'{name}' is not a declared parameter ([parameters.{name}] with its start value)"),
                     );
-                } else if self.used.insert(name.clone(), entry).is_some() {
-                    self.problems.push(
-                        field,
-                        format!("parameter '{name}' is used twice; a parameter sets one entry"),
-                    );
+                } else {
+                    self.used.entry(name.clone()).or_default().push(entry);
                 }
                 0.0
             }
@@ -474,12 +525,23 @@ pub enum Matrix {
     OutputBias,
 }
 
-/// A parameter: entry (row, column) of one of the matrices.
+/// An entry (row, column) of one of the matrices that a parameter sets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Entry {
     pub matrix: Matrix,
     pub row: usize,
     pub column: usize,
+}
+
+impl std::fmt::Display for Entry {
+    /// As the model file names it: `A[1][0]`, `state_bias[2]`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.matrix {
+            Matrix::StateBias => write!(f, "state_bias[{}]", self.row),
+            Matrix::OutputBias => write!(f, "output_bias[{}]", self.row),
+            matrix => write!(f, "{matrix:?}[{}][{}]", self.row, self.column),
+        }
+    }
 }
 
 /// A, B, C, D, b, c with θ written in.
@@ -557,6 +619,41 @@ fixed = true
         assert_eq!(s.free, [true, true, true, true, false]);
         assert_eq!(s.bounds[2], (-10.0, 0.0));
         assert_eq!(s.rate_states, [1]);
+        assert_eq!(s.initial_state, None);
+        let stated = parse(&GOOD.replace(
+            "[parameters.Za]",
+            "initial_state = [0.1, -0.2]\n[parameters.Za]",
+        ))
+        .unwrap();
+        assert_eq!(stated.initial_state.unwrap().as_slice(), [0.1, -0.2]);
+    }
+
+    /// A parameter may set several entries (Z_w in A and in C, Z_δe in B
+    /// and in D): every one of them holds its value.
+    #[test]
+    fn a_parameter_may_set_several_entries() {
+        let text = GOOD
+            .replace(
+                r#"outputs = ["alpha", "q"]"#,
+                r#"outputs = ["alpha", "q", "az"]"#,
+            )
+            .replace("C = [[1, 0], [0, 1]]", r#"C = [[1, 0], [0, 1], ["Za", 0]]"#)
+            .replace(
+                r#"output_bias = [0.0, "q0"]"#,
+                r#"output_bias = [0.0, "q0", 0.0]"#,
+            )
+            .replace(
+                "B = [[0.0], [\"Mde\"]]",
+                "B = [[0.0], [\"Mde\"]]\nD = [[0.0], [0.0], [\"Mde\"]]",
+            );
+        let s = parse(&text).unwrap();
+        let za = s.names.iter().position(|n| n == "Za").unwrap();
+        let mde = s.names.iter().position(|n| n == "Mde").unwrap();
+        let named: Vec<String> = s.entries[za].iter().map(Entry::to_string).collect();
+        assert_eq!(named, ["A[0][0]", "C[2][0]"]);
+        assert_eq!(s.entries[mde].len(), 2);
+        assert_eq!((s.matrices.a[(0, 0)], s.matrices.c[(2, 0)]), (-1.0, -1.0));
+        assert_eq!((s.matrices.b[(1, 0)], s.matrices.d[(2, 0)]), (-8.0, -8.0));
     }
 
     /// Every kind of mistake is reported, named by its key, all at once.
@@ -567,10 +664,6 @@ fixed = true
             (
                 GOOD.replace(r#"q_dot = "q""#, r#"q_dot = "w""#),
                 "rate_outputs.q_dot: unknown state 'w'",
-            ),
-            (
-                GOOD.replace(r#"["Ma", "Mq"]"#, r#"["Ma", "Ma"]"#),
-                "A[1][1]: parameter 'Ma' is used twice",
             ),
             (
                 GOOD.replace(r#"["Mde"]"#, r#"["Mdx"]"#),
@@ -598,6 +691,10 @@ fixed = true
             (
                 GOOD.replace(r#"kind = "linear""#, r#"kind = "lineal""#),
                 "kind: is 'lineal'",
+            ),
+            (
+                GOOD.replace("[parameters.Za]", "initial_state = [0.1]\n[parameters.Za]"),
+                "initial_state: must have 2 entries",
             ),
         ];
         for (text, expected) in cases {

@@ -7,8 +7,9 @@
 //! - Inputs: a model input named like a control (`elevator`, `aileron`,
 //!   `rudder`, `flap`, `throttle`) is the scenario's `[[inputs]]` signal on
 //!   that control (the deviation from trim), any other input 0.
-//! - Initial state: the equilibrium of the inputs at t = 0,
-//!   A·x₀ = −(B·u₀ + b) (x₀ = 0 when A is singular).
+//! - Initial state: the model file's `initial_state` when it states one,
+//!   else the equilibrium of the inputs at t = 0, A·x₀ = −(B·u₀ + b)
+//!   (x₀ = 0 when A is singular).
 //! - Process noise: white, F = diag(`process_noise`) over the named
 //!   states; per step w_k ~ N(0, Q_d), Q_d = ∫₀ʰ e^{A·s}·F·Fᵀ·e^{Aᵀ·s} ds
 //!   (Van Loan, [`aeroid_numerics::kalman::discretise`]), drawn
@@ -128,10 +129,13 @@ pub fn fly(scenario: &Scenario, linear: &LinearFlight) -> Result<LinearTrace> {
     if let Some((column, gains, _)) = &augmentation {
         closed += matrices.b.column(*column) * gains.transpose();
     }
-    let mut x = equilibrium(
-        &closed,
-        &(matrices.b.columns(0, structure.inputs.len()) * controls_at_start + &matrices.state_bias),
-    );
+    let mut x = structure.initial_state.clone().unwrap_or_else(|| {
+        equilibrium(
+            &closed,
+            &(matrices.b.columns(0, structure.inputs.len()) * controls_at_start
+                + &matrices.state_bias),
+        )
+    });
     let mut command = 0.0;
     let mut rng = random::stream(scenario.seed, streams::PROCESS_NOISE);
     let n = structure.states.len();

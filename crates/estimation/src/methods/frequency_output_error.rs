@@ -664,10 +664,9 @@ pub fn linear_frequency_output_error(
     let held: Vec<usize> = (0..structure.names.len())
         .filter(|&i| {
             structure.free[i]
-                && matches!(
-                    structure.entries[i].matrix,
-                    Matrix::StateBias | Matrix::OutputBias
-                )
+                && structure.entries[i]
+                    .iter()
+                    .any(|e| matches!(e.matrix, Matrix::StateBias | Matrix::OutputBias))
         })
         .collect();
     let free: Vec<usize> = (0..structure.names.len())

@@ -4,8 +4,10 @@
 //!
 //! b a constant term per state, c one per output, and (ẋ)_R the rates of
 //! the states R that are outputs themselves (ṗ, ṙ as measured angular
-//! accelerations). θ is a list of entries of A, B, C, D, b and c
-//! (dimensional derivatives such as Z_w, M_q, M_δe, and biases). The
+//! accelerations). Each θ_j sets one or more entries of A, B, C, D, b
+//! and c (dimensional derivatives such as Z_w, M_q, M_δe, and biases; Z_w
+//! both in A and in the a_z row of C), so ∂f/∂θ_j and ∂y/∂θ_j sum over
+//! its entries. The
 //! inputs u are given at the grid points, each held over a step
 //! (zero-order hold) or interpolated linearly between them (first-order
 //! hold), as [`crate::input_timing`] chooses per input: W the diagonal
@@ -73,8 +75,8 @@ pub struct LinearStateSpace {
     /// The inputs' names, interpolations and why (empty unless set by
     /// [`LinearStateSpace::with_input_timing`]).
     pub input_timing: Vec<Chosen>,
-    /// θ: the entries it sets (θ_j overrides entry j).
-    pub parameters: Vec<Entry>,
+    /// θ: the entries each θ_j sets (it overrides every one of them).
+    pub parameters: Vec<Vec<Entry>>,
     pub start: f64,
     pub step: f64,
     /// u at each grid point.
@@ -84,11 +86,11 @@ pub struct LinearStateSpace {
 
 impl LinearStateSpace {
     /// A model with no biases, no rate outputs and held inputs; an error
-    /// when the shapes do not agree, an entry lies outside its matrix, or
-    /// the grid has fewer than two points.
+    /// when the shapes do not agree, a parameter sets no entry or one
+    /// outside its matrix, or the grid has fewer than two points.
     pub fn new(
         [a, b, c, d]: [DMatrix<f64>; 4],
-        parameters: Vec<Entry>,
+        parameters: Vec<Vec<Entry>>,
         start: f64,
         step: f64,
         inputs: Vec<DVector<f64>>,
@@ -187,15 +189,22 @@ impl LinearStateSpace {
                 reason: "a linear model needs at least two grid points and a positive step".into(),
             });
         }
-        for entry in &self.parameters {
-            let (rows, columns) = self.shape(entry.matrix);
-            if entry.row >= rows || entry.column >= columns {
+        for (j, set) in self.parameters.iter().enumerate() {
+            if set.is_empty() {
                 return Err(Error::Method {
-                    reason: format!(
-                        "parameter entry ({}, {}) lies outside {:?} ({rows}×{columns})",
-                        entry.row, entry.column, entry.matrix,
-                    ),
+                    reason: format!("parameter {j} of the linear model sets no entry"),
                 });
+            }
+            for entry in set {
+                let (rows, columns) = self.shape(entry.matrix);
+                if entry.row >= rows || entry.column >= columns {
+                    return Err(Error::Method {
+                        reason: format!(
+                            "parameter entry {entry} lies outside {:?} ({rows}×{columns})",
+                            entry.matrix,
+                        ),
+                    });
+                }
             }
         }
         Ok(self)
@@ -223,11 +232,11 @@ impl LinearStateSpace {
         }
     }
 
-    /// θ as the matrices hold it.
+    /// θ as the matrices hold it (each θ_j from its first entry).
     pub fn parameter_values(&self) -> DVector<f64> {
         DVector::from_iterator(
             self.parameters.len(),
-            self.parameters.iter().map(|e| self.value(e)),
+            self.parameters.iter().map(|set| self.value(&set[0])),
         )
     }
 
@@ -250,8 +259,10 @@ impl LinearStateSpace {
             state_bias: self.state_bias.clone(),
             output_bias: self.output_bias.clone(),
         };
-        for (entry, &value) in self.parameters.iter().zip(theta) {
-            *matrices.entry_mut(entry) = value;
+        for (set, &value) in self.parameters.iter().zip(theta) {
+            for entry in set {
+                *matrices.entry_mut(entry) = value;
+            }
         }
         Ok(matrices)
     }
@@ -384,7 +395,12 @@ impl StateSpaceModel for LinearStateSpace {
         let direct = matrices.c.nrows();
         let mut rates_by_parameter = DMatrix::zeros(n, p);
         let mut outputs_by_parameter = DMatrix::zeros(l, p);
-        for (j, entry) in self.parameters.iter().enumerate() {
+        for (j, entry) in self
+            .parameters
+            .iter()
+            .enumerate()
+            .flat_map(|(j, set)| set.iter().map(move |entry| (j, entry)))
+        {
             let factor = match entry.matrix {
                 Matrix::A | Matrix::C => x[entry.column],
                 Matrix::B | Matrix::D => u[entry.column],
@@ -519,8 +535,8 @@ impl LinearStructure {
     /// The model driven by `record`: over the window where every output has
     /// samples (inside `limit`), on a grid of `step` (else
     /// [`observation_step`]'s), its inputs the input channels at the grid points
-    /// (linear between samples), x₀ the record's value of each state named
-    /// like a channel at the window's start, else 0.
+    /// (linear between samples), x₀ the file's `initial_state`, else
+    /// [`LinearStructure::recorded_state`] at the window's start.
     pub fn for_record(
         &self,
         record: &FlightRecord,
@@ -543,17 +559,26 @@ impl LinearStructure {
             }
             chosen.push(choice);
         }
-        let initial = DVector::from_iterator(
+        let initial = self
+            .initial_state
+            .clone()
+            .unwrap_or_else(|| self.recorded_state(record, window.0));
+        Ok((self.build(window.0, step, inputs, None, chosen)?, initial))
+    }
+
+    /// The state at `t` as the record gives it: each state named like a
+    /// channel that channel's value, any other 0.
+    pub fn recorded_state(&self, record: &FlightRecord, t: f64) -> DVector<f64> {
+        DVector::from_iterator(
             self.states.len(),
             self.states.iter().map(|name| {
                 record
                     .channel(name)
                     .ok()
-                    .and_then(|c| c.value_at(window.0))
+                    .and_then(|c| c.value_at(t))
                     .unwrap_or(0.0)
             }),
-        );
-        Ok((self.build(window.0, step, inputs, None, chosen)?, initial))
+        )
     }
 }
 
@@ -571,16 +596,16 @@ mod tests {
             .map(|k| DVector::from_element(1, if (10..20).contains(&k) { 0.05 } else { 0.0 }))
             .collect();
         let parameters = vec![
-            Entry {
+            vec![Entry {
                 matrix: Matrix::A,
                 row: 1,
                 column: 1,
-            },
-            Entry {
+            }],
+            vec![Entry {
                 matrix: Matrix::B,
                 row: 1,
                 column: 0,
-            },
+            }],
         ];
         LinearStateSpace::new([a, b, c, d], parameters, 0.0, 0.04, inputs).unwrap()
     }
@@ -618,15 +643,67 @@ mod tests {
         assert_eq!(j.rates_by_parameter[(0, 0)], 0.0);
     }
 
+    /// Z_w in A and in a_z's row of C, Z_δe in B and in D (the textbook
+    /// short period), and q̇ a rate output: ∂f/∂θ and ∂y/∂θ are the sums
+    /// over each parameter's entries, as central differences give them
+    /// (f and y are linear in θ: the differences are exact to rounding).
+    #[test]
+    fn a_parameter_in_several_entries_has_the_summed_jacobian() {
+        let entry = |matrix, row, column| Entry {
+            matrix,
+            row,
+            column,
+        };
+        let a = DMatrix::from_row_slice(2, 2, &[-1.2, 1.0, -8.0, -2.1]);
+        let b = DMatrix::from_row_slice(2, 1, &[-0.1, -9.0]);
+        let c = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 1.0, -1.2, 0.0]);
+        let d = DMatrix::from_row_slice(3, 1, &[0.0, 0.0, -0.1]);
+        let parameters = vec![
+            vec![entry(Matrix::A, 0, 0), entry(Matrix::C, 2, 0)],
+            vec![entry(Matrix::B, 0, 0), entry(Matrix::D, 2, 0)],
+            vec![entry(Matrix::A, 1, 1)],
+        ];
+        let inputs = vec![DVector::from_element(1, 0.03); 10];
+        let model = LinearStateSpace::new([a, b, c, d], parameters, 0.0, 0.04, inputs)
+            .unwrap()
+            .with_rate_outputs(vec![1])
+            .unwrap();
+        let theta = [-1.5, -0.2, -2.5];
+        let x = [0.02, -0.1];
+        let t = model.time(3);
+        let j = model.jacobians(t, &x, &theta).unwrap();
+        assert_eq!(model.at(&theta).unwrap().c[(2, 0)], -1.5);
+        assert_eq!(model.at(&theta).unwrap().d[(2, 0)], -0.2);
+        for p in 0..theta.len() {
+            let (mut up, mut down) = (theta, theta);
+            up[p] += 1e-6;
+            down[p] -= 1e-6;
+            let rates =
+                (model.rates(t, &x, &up).unwrap() - model.rates(t, &x, &down).unwrap()) / 2e-6;
+            let outputs =
+                (model.outputs(t, &x, &up).unwrap() - model.outputs(t, &x, &down).unwrap()) / 2e-6;
+            assert!(
+                (rates - j.rates_by_parameter.column(p)).amax() < 1e-9,
+                "{p}"
+            );
+            assert!(
+                (outputs - j.outputs_by_parameter.column(p)).amax() < 1e-9,
+                "{p}"
+            );
+        }
+        assert_eq!(j.outputs_by_parameter[(2, 0)], 0.02);
+        assert_eq!(j.rates_by_parameter[(0, 0)], 0.02);
+    }
+
     #[test]
     fn bad_shapes_and_entries_are_refused() {
         let m = model();
         let mut parameters = m.parameters.clone();
-        parameters.push(Entry {
+        parameters.push(vec![Entry {
             matrix: Matrix::D,
             row: 5,
             column: 0,
-        });
+        }]);
         let matrices = [m.a.clone(), m.b.clone(), m.c.clone(), m.d.clone()];
         assert!(LinearStateSpace::new(matrices, parameters, 0.0, 0.04, m.inputs.clone()).is_err());
         let matrices = [m.a.clone(), m.b.clone(), m.c.clone(), DMatrix::zeros(1, 1)];

@@ -112,11 +112,12 @@ pub(crate) fn linear_eigenvalues(
     estimate: &Estimate,
 ) -> Vec<Complex<f64>> {
     let mut a = structure.matrices.a.clone();
-    for (i, entry) in structure.entries.iter().enumerate() {
-        if entry.matrix == Matrix::A {
-            a[(entry.row, entry.column)] = estimate
-                .parameter(&structure.names[i])
-                .map_or(structure.starts[i], |p| p.value);
+    for (i, set) in structure.entries.iter().enumerate() {
+        let value = estimate
+            .parameter(&structure.names[i])
+            .map_or(structure.starts[i], |p| p.value);
+        for entry in set.iter().filter(|e| e.matrix == Matrix::A) {
+            a[(entry.row, entry.column)] = value;
         }
     }
     if !a.iter().all(|v| v.is_finite()) {

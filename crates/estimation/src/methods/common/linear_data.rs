@@ -19,7 +19,8 @@ pub(crate) struct LinearData {
     /// Indices of the free parameters.
     pub free: Vec<usize>,
     pub model: LinearStateSpace,
-    /// The record's value of each state named like a channel, else 0.
+    /// x₀: the file's `initial_state`, else the record's value of each
+    /// state named like a channel, else 0.
     pub initial: DVector<f64>,
     /// The grid step (s).
     pub step: f64,

@@ -9,6 +9,8 @@
 //!   input from its channel, a column of ones for a free bias, on the grid
 //!   of the states' fastest channel over the window where they all have
 //!   samples. z is the equation's left side minus its fixed entries' terms.
+//!   A free parameter that sets several entries (even in one row) is
+//!   refused ([`super::refusals::one_entry_each`]): output error fits it.
 //! - State derivatives: a rate output of the state (`rate_outputs`, e.g.
 //!   `p_dot` for `p`) when the record has it; otherwise the state's channel
 //!   differentiated by the local polynomial differentiator
@@ -71,6 +73,7 @@ fn equations(structure: &LinearStructure) -> Vec<Equation> {
             .entries
             .iter()
             .enumerate()
+            .filter_map(|(p, set)| Some((p, set.first()?)))
             .filter(|(p, entry)| structure.free[*p] && entry.row == row)
             .filter_map(|(p, entry)| {
                 let regressor = match (entry.matrix, state) {
@@ -102,6 +105,7 @@ pub fn linear_equation_error(
     correlation_lag: f64,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
+    super::refusals::one_entry_each(METHOD, structure)?;
     let equations = equations(structure);
     if equations.is_empty() {
         return Err(Error::Refused(Refusal::NothingToEstimate {
@@ -266,8 +270,11 @@ fn fixed_terms(
     // The fixed entries of the row at their values, the free ones at 0.
     let m = &structure.matrices;
     let free_here = |matrix: Matrix, column: usize| {
-        structure.entries.iter().enumerate().any(|(p, e)| {
-            structure.free[p] && e.matrix == matrix && e.row == equation.row && e.column == column
+        structure.entries.iter().enumerate().any(|(p, set)| {
+            structure.free[p]
+                && set
+                    .iter()
+                    .any(|e| e.matrix == matrix && e.row == equation.row && e.column == column)
         })
     };
     let (state_matrix, input_matrix, bias_matrix) = if equation.state {

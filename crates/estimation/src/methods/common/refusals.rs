@@ -1,14 +1,43 @@
 //! The refusals the methods that simulate or filter a model share: a
 //! structure they cannot fit as stated (`unsuitable`), the channels a
 //! record lacks (`missing_channels`), nothing free to estimate
-//! (`free_parameters`) and fewer data than unknowns (`enough_data`).
+//! (`free_parameters`) and fewer data than unknowns (`enough_data`); and
+//! the refusal of the methods that regress a linear model one equation at
+//! a time of a parameter set in several entries (`one_entry_each`).
 
 use crate::error::{Error, Result};
 use crate::estimator::{MissingChannel, Refusal};
+use crate::linear_structure::LinearStructure;
 use crate::model::driven::ALTITUDE_SUBSTITUTES;
 use crate::model::observations::Observations;
 use crate::structure::ModelStructure;
 use aeroid_record::FlightRecord;
+
+/// Refuses a linear structure with a free parameter that sets several
+/// entries (`Z_w` in A and in C): a method that regresses one equation at
+/// a time (`method`) estimates each entry on its own and cannot tie them,
+/// even within one row. The refusal names every such parameter with its
+/// entries and points to the methods that fit the whole model.
+pub(crate) fn one_entry_each(method: &str, structure: &LinearStructure) -> Result<()> {
+    let shared: Vec<String> = (0..structure.names.len())
+        .filter(|&i| structure.free[i] && structure.entries[i].len() > 1)
+        .map(|i| {
+            let entries: Vec<String> = structure.entries[i].iter().map(|e| e.to_string()).collect();
+            format!("'{}' ({})", structure.names[i], entries.join(", "))
+        })
+        .collect();
+    if shared.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Refused(Refusal::UnsuitableModel {
+        method: method.to_string(),
+        model: structure.name.clone(),
+        reason: format!(
+            "free parameters that set several entries: {}; {method} regresses one equation at a time and cannot tie a parameter's entries: fit the model with output error (oem) or filter error (fem), or fix the parameter",
+            shared.join(", ")
+        ),
+    }))
+}
 
 /// Refuses a structure output error (or another method that simulates or
 /// filters it, `method`) cannot fit as stated: no output to compare, or an
@@ -102,13 +131,17 @@ pub(crate) fn free_parameters(
     Ok(free)
 }
 
-/// The refusal of `method` when `observations` hold fewer data than `unknowns`.
+/// The refusal of `method` when `observations` (of one record or several)
+/// hold fewer data than `unknowns`.
 pub(crate) fn enough_data(
     method: &str,
-    observations: &Observations,
+    observations: &[&Observations],
     unknowns: usize,
 ) -> Result<()> {
-    let data: usize = observations.counts().iter().sum();
+    let data: usize = observations
+        .iter()
+        .map(|o| o.counts().iter().sum::<usize>())
+        .sum();
     if data < unknowns {
         return Err(Error::Refused(Refusal::TooFewData {
             method: method.to_string(),

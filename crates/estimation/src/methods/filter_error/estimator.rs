@@ -180,7 +180,7 @@ pub(crate) fn filter_error_from(
     let step = view.time(1) - view.time(0);
     let observations =
         Observations::from_record(record, &structure.outputs, view.time(0), step, view.len())?;
-    enough_data(METHOD, &observations, free.len() + noisy.len())?;
+    enough_data(METHOD, &[&observations], free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
     notes.extend(view.simulation().notes.iter().cloned());
     let file = view.parameters();

@@ -4,13 +4,15 @@
 //! output, on the transforms of the measured states, inputs and outputs
 //! (the state derivatives' transforms by fourier Eq. 3, not by
 //! differentiation; Klein & Morelli §7.3, the form of SIDPAC's `fdoe`).
+//! A free parameter that sets several entries is refused
+//! ([`refusals::one_entry_each`]): each regression holds one equation.
 
 use super::{FrequencyRegressionOptions, METHOD, local_variances, transforms_note};
 use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit, ParameterEstimate, Status};
 use crate::estimator::Refusal;
 use crate::linear_structure::LinearStructure;
-use crate::methods::common::regression;
+use crate::methods::common::{refusals, regression};
 use crate::model::linear::Matrix;
 use crate::reconstruction::control_steps;
 use aeroid_numerics::fourier::{FourierTransform, breaks_at};
@@ -31,6 +33,7 @@ pub fn linear_frequency_regression(
     options: &FrequencyRegressionOptions,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
+    refusals::one_entry_each(METHOD, structure)?;
     check_measured(record, structure)?;
     let (model, _) = structure.for_record(record, None, None)?;
     let (start, step, count) = (model.start, model.step, model.inputs.len());
@@ -39,7 +42,7 @@ pub fn linear_frequency_regression(
     let constant_free = (0..structure.names.len()).any(|i| {
         structure.free[i]
             && matches!(
-                structure.entries[i].matrix,
+                structure.entries[i][0].matrix,
                 Matrix::StateBias | Matrix::OutputBias
             )
     });
@@ -196,7 +199,8 @@ impl Equations<'_> {
         };
         let free: Vec<usize> = (0..structure.names.len())
             .filter(|&i| {
-                structure.entries[i].row == row && of_equation(structure.entries[i].matrix)
+                let entry = &structure.entries[i][0];
+                entry.row == row && of_equation(entry.matrix)
             })
             .filter(|&i| structure.free[i])
             .collect();
@@ -204,7 +208,7 @@ impl Equations<'_> {
             return None;
         }
         let regressor = |i: usize| -> &Vec<Complex<f64>> {
-            let entry = &structure.entries[i];
+            let entry = &structure.entries[i][0];
             match entry.matrix {
                 Matrix::A | Matrix::C => &columns[entry.column],
                 Matrix::B | Matrix::D => &columns[n + entry.column],
@@ -290,7 +294,7 @@ impl Equations<'_> {
             .chain(std::iter::once((constant, 0, &columns[n + m + direct])));
         for (matrix, j, series) in terms {
             let is_free = free.iter().any(|&i| {
-                let e = &structure.entries[i];
+                let e = &structure.entries[i][0];
                 e.matrix == matrix && e.column == j
             });
             let value = fixed(matrix, j);

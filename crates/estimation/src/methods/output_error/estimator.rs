@@ -31,7 +31,7 @@ impl Method for OutputError {
                 ),
                 (
                     "estimate_initial_state",
-                    "initial values of the integrated states as unknowns, per manoeuvre",
+                    "initial values of the integrated states as unknowns, per manoeuvre (a linear model's states, per record)",
                 ),
                 (
                     "output_biases",

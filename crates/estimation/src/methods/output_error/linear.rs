@@ -4,39 +4,48 @@ use super::*;
 
 /// Output error on a linear structure: the filter-error fit with no
 /// process noise, whose filter is the model's exact simulation
-/// ([`filter_fit::linear_fit`]), or with `segment` multiple shooting
-/// ([`linear_shooting`]); then the fitted model's modes
-/// ([`modes::diagnose`]). The settings a linear model does not take are
-/// refused by name ([`LINEAR_UNSUPPORTED`]).
+/// ([`filter_fit::linear_fit`]); with `segment`, `estimate_initial_state`
+/// or several records (fitted jointly, θ shared), multiple shooting
+/// ([`linear_shooting`]), each piece or record from its own estimated
+/// initial state, as also when a state would start from a channel that
+/// carries a free output bias ([`LinearStructure::started_through_a_bias`]);
+/// then the fitted model's modes ([`modes::diagnose`]).
+/// The settings a linear model does not take are refused by name
+/// ([`LINEAR_UNSUPPORTED`]).
 pub(super) fn linear_output_error(
     problem: &EstimationProblem,
     structure: &LinearStructure,
     options: &OutputErrorOptions,
 ) -> Result<Estimate> {
-    crate::estimator::one_record(METHOD, problem)?;
     crate::estimator::refuse_for_linear(
         METHOD,
         &problem.settings,
         &structure.name,
         LINEAR_UNSUPPORTED,
     )?;
-    let record = problem.record();
-    let mut estimate = match options.segment {
-        Some(segment) => linear_shooting::fit(
+    let records: Vec<&FlightRecord> = problem.records.iter().collect();
+    let biased = structure.started_through_a_bias();
+    let shooting = options.segment.is_some()
+        || options.estimate_initial_state
+        || records.len() > 1
+        || !biased.is_empty();
+    let mut estimate = if shooting {
+        linear_shooting::fit(
             METHOD,
-            record,
+            &records,
             structure,
             &linear_shooting::ShootingOptions {
                 max_iterations: options.max_iterations,
                 step: options.step,
                 window: options.window,
-                segment,
+                segment: options.segment,
                 decrease: CONVERGED_DECREASE,
             },
-        )?,
-        None => filter_fit::linear_fit(
+        )?
+    } else {
+        filter_fit::linear_fit(
             METHOD,
-            record,
+            problem.record(),
             structure,
             &filter_fit::LinearFitOptions {
                 max_iterations: options.max_iterations,
@@ -47,10 +56,20 @@ pub(super) fn linear_output_error(
                 initial_variance: Default::default(),
                 innovation_covariance: filter_fit::InnovationForm::Diagonal,
             },
-        )?,
+        )?
     };
-    let (from, to) = fitting_window(record, &structure.outputs, options.window)?;
-    let horizon = options.segment.map_or(to - from, |s| s.min(to - from));
+    if !biased.is_empty() && !options.estimate_initial_state {
+        estimate.notes.push(format!(
+            "the initial state is estimated: the recorded {} carry their outputs' free biases, so they are not the states' start",
+            biased.join(", ")
+        ));
+    }
+    // The longest stretch simulated from one initial state.
+    let mut horizon: f64 = 0.0;
+    for record in &records {
+        let (from, to) = fitting_window(record, &structure.outputs, options.window)?;
+        horizon = horizon.max(options.segment.map_or(to - from, |s| s.min(to - from)));
+    }
     let eigenvalues = modes::linear_eigenvalues(structure, &estimate);
     modes::diagnose(
         &mut estimate,
@@ -71,10 +90,6 @@ pub(super) const LINEAR_UNSUPPORTED: &[(&str, &str)] = &[
     (
         "interpolation",
         "a linear model states its inputs' interpolation in its file",
-    ),
-    (
-        "estimate_initial_state",
-        "a linear model's states start from the record; with `segment` each piece's initial state is estimated",
     ),
     (
         "output_biases",

@@ -1,9 +1,12 @@
-//! Stabilised output error on a linear structure by multiple shooting
-//! (`segment`; Jategaonkar, "Flight Vehicle System Identification", 2nd
-//! ed., ch. 9, the multiple-shooting method for unstable aircraft; Bock's
-//! multiple shooting): the fitting window is cut into pieces of about
-//! `segment` seconds, and each piece i is simulated from its own initial
-//! state x₀ⁱ, an unknown of the fit beside the model's free parameters θ:
+//! Output error on a linear structure with estimated initial states, by
+//! multiple shooting (`segment`; Jategaonkar, "Flight Vehicle System
+//! Identification", 2nd ed., ch. 9, the multiple-shooting method for
+//! unstable aircraft; Bock's multiple shooting): each record's fitting
+//! window is cut into pieces of about `segment` seconds (one piece per
+//! record without it: `estimate_initial_state`, or several records fitted
+//! jointly), and each piece i is simulated from its own initial state x₀ⁱ,
+//! an unknown of the fit beside the model's free parameters θ, shared by
+//! every record:
 //!
 //!   x_{s_i} = x₀ⁱ,   x_{k+1} = Φ(θ)·x_k + Γ₀(θ)·(u_k, 1)   (s_i ≤ k < e_i),
 //!   y_k = C·x_k + D·u_k + c,
@@ -27,9 +30,12 @@
 //! differences of the pieces' simulations (step 10⁻⁶·max(|u|, typical)).
 //! Cramér–Rao bounds from the information matrix at the solution, the
 //! initial states' among the unknowns (they are in the estimate as
-//! `x0[i].state`). The pieces are those of the 6-DOF path: the window's
-//! length over `segment`, rounded, equal pieces, a sample on a boundary
-//! belonging to the later piece.
+//! `x0[i].state`, pieces numbered through the records in turn). Each
+//! record keeps its own grid and inputs. The pieces are those of the
+//! 6-DOF path: the window's length over `segment`, rounded, equal pieces,
+//! a sample on a boundary belonging to the later piece. A record's first
+//! piece starts the search from the file's `initial_state` (else the
+//! record's states), a later piece from the record's states.
 
 use crate::error::{Error, Result};
 use crate::estimate::{Estimate, OutputFit};
@@ -48,51 +54,95 @@ pub(crate) struct ShootingOptions {
     pub max_iterations: usize,
     pub step: Option<f64>,
     pub window: Option<(f64, f64)>,
-    /// The pieces' length (s).
-    pub segment: f64,
+    /// The pieces' length (s); None: one piece per record.
+    pub segment: Option<f64>,
     /// The convergence threshold on the predicted decrease.
     pub decrease: f64,
 }
 
-/// Output error with multiple shooting on `structure` (module documentation).
+/// One record's model (its grid and inputs) and observations.
+struct Flight {
+    model: LinearStateSpace,
+    observations: Observations,
+}
+
+/// A piece: the record it is of, its first and last grid points.
+#[derive(Debug, Clone, Copy)]
+struct Piece {
+    flight: usize,
+    first: usize,
+    last: usize,
+}
+
+/// Output error with multiple shooting on `structure` over `records`, θ
+/// shared (module documentation).
 pub(crate) fn fit(
     method: &str,
-    record: &FlightRecord,
+    records: &[&FlightRecord],
     structure: &LinearStructure,
     options: &ShootingOptions,
 ) -> Result<Estimate> {
     let started = std::time::Instant::now();
-    let LinearData {
-        free,
-        model,
-        step,
-        observations,
-        ..
-    } = linear_data(method, record, structure, options.step, options.window)?;
-    let pieces = pieces(method, record, &observations, step, options.segment)?;
-    let n = structure.states.len();
-    enough_data(method, &observations, free.len() + n * pieces.len())?;
-    let theta = structure.parameter_values();
-    // Each piece starts from the record's values of the states it names.
-    let mut start: Vec<f64> = free.iter().map(|&i| theta[i]).collect();
-    for &(first, _) in &pieces {
-        let t = model.time(first);
-        start.extend(structure.states.iter().map(|name| {
-            record
-                .channel(name)
-                .ok()
-                .and_then(|c| c.value_at(t))
-                .unwrap_or(0.0)
-        }));
+    let mut flights = Vec::new();
+    let mut pieces = Vec::new();
+    let mut start = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
+    let mut free = Vec::new();
+    for (f, record) in records.iter().enumerate() {
+        let LinearData {
+            free: free_here,
+            model,
+            initial,
+            step,
+            observations,
+        } = linear_data(method, record, structure, options.step, options.window)?;
+        free = free_here;
+        let cut = match options.segment {
+            Some(segment) => pieces_of(method, record, &observations, step, segment)?,
+            None => vec![(0, observations.at.len() - 1)],
+        };
+        for (first, last) in cut {
+            let x0 = if first == 0 {
+                initial.clone()
+            } else {
+                structure.recorded_state(record, model.time(first))
+            };
+            start.push(x0);
+            pieces.push(Piece {
+                flight: f,
+                first,
+                last,
+            });
+        }
+        notes.extend(observations.note(step));
+        let timing = format!(
+            "linear model, {}, started from the model file's values",
+            crate::input_timing::note(&model.input_timing)
+        );
+        if !notes.contains(&timing) {
+            notes.push(timing);
+        }
+        flights.push(Flight {
+            model,
+            observations,
+        });
     }
-    let start = DVector::from_vec(start);
+    let n = structure.states.len();
+    let observed: Vec<&Observations> = flights.iter().map(|f| &f.observations).collect();
+    enough_data(method, &observed, free.len() + n * pieces.len())?;
+    let theta = structure.parameter_values();
+    let start = DVector::from_iterator(
+        free.len() + n * pieces.len(),
+        free.iter()
+            .map(|&i| theta[i])
+            .chain(start.iter().flat_map(|x0| x0.iter().copied())),
+    );
     let mut names: Vec<String> = free.iter().map(|&i| structure.names[i].clone()).collect();
     for i in 0..pieces.len() {
         names.extend(structure.states.iter().map(|s| format!("x0[{i}].{s}")));
     }
     let mut problem = Shooting {
-        model: &model,
-        observations: &observations,
+        flights: &flights,
         pieces: &pieces,
         theta,
         free: free.clone(),
@@ -117,26 +167,22 @@ pub(crate) fn fit(
                 .collect()
         })
         .unwrap_or_default();
-    let mut notes: Vec<String> = observations.note(step).into_iter().collect();
-    notes.push(format!(
-        "linear model, {}, started from the model file's values",
-        crate::input_timing::note(&model.input_timing)
-    ));
-    notes.push(format!(
-        "multiple shooting: {} pieces of about {} s, each simulated from its own estimated initial state",
-        pieces.len(),
-        options.segment
-    ));
+    notes.push(shooting_note(records, &pieces, options.segment));
     let determinant: f64 = problem.weights.iter().map(|w| w.powi(-2)).product();
     notes.push(format!(
         "R is diagonal; det(R) = {determinant:.4e} at the solution"
     ));
+    let record = records
+        .iter()
+        .map(|r| r.scenario.clone())
+        .collect::<Vec<_>>()
+        .join(", ");
     Ok(Estimate {
         fits,
         notes,
         wall_time: started.elapsed().as_secs_f64(),
         ..Estimate::from_solution(
-            (method, structure.name.clone(), record.scenario.clone()),
+            (method, structure.name.clone(), record),
             &names,
             &start,
             &solution,
@@ -144,10 +190,47 @@ pub(crate) fn fit(
     })
 }
 
+/// What the pieces are, and with several records which are whose.
+fn shooting_note(records: &[&FlightRecord], pieces: &[Piece], segment: Option<f64>) -> String {
+    let how = match segment {
+        Some(segment) => format!(
+            "multiple shooting: {} pieces of about {segment} s",
+            pieces.len()
+        ),
+        None => format!(
+            "initial states estimated: {} piece(s), one per record",
+            pieces.len()
+        ),
+    };
+    let whose = (records.len() > 1).then(|| {
+        let per_record: Vec<String> = records
+            .iter()
+            .enumerate()
+            .map(|(f, record)| {
+                let numbers: Vec<usize> = (0..pieces.len())
+                    .filter(|&i| pieces[i].flight == f)
+                    .collect();
+                match (numbers.first(), numbers.last()) {
+                    (Some(a), Some(b)) if a != b => {
+                        format!("record {} '{}' x0[{a}–{b}]", f + 1, record.scenario)
+                    }
+                    (Some(a), _) => format!("record {} '{}' x0[{a}]", f + 1, record.scenario),
+                    _ => format!("record {} '{}' none", f + 1, record.scenario),
+                }
+            })
+            .collect();
+        format!(" ({})", per_record.join(", "))
+    });
+    format!(
+        "{how}, each simulated from its own estimated initial state{}",
+        whose.unwrap_or_default()
+    )
+}
+
 /// The pieces' first and last grid points: the window's length over
 /// `segment`, rounded (at least 1), in equal pieces; an error naming the
 /// setting when a piece holds fewer than two samples of an output.
-fn pieces(
+fn pieces_of(
     method: &str,
     record: &FlightRecord,
     observations: &Observations,
@@ -192,9 +275,8 @@ fn pieces(
 /// The least-squares problem: unknowns θ's free entries, then each piece's
 /// initial state.
 struct Shooting<'a> {
-    model: &'a LinearStateSpace,
-    observations: &'a Observations,
-    pieces: &'a [(usize, usize)],
+    flights: &'a [Flight],
+    pieces: &'a [Piece],
     /// Every parameter's value; the free ones are overwritten from the unknowns.
     theta: DVector<f64>,
     free: Vec<usize>,
@@ -218,27 +300,29 @@ impl Shooting<'_> {
         let outputs = self.weights.len();
         let (mut measured, mut predicted) = (vec![Vec::new(); outputs], vec![Vec::new(); outputs]);
         let p = self.free.len();
-        for (i, &(first, last)) in self.pieces.iter().enumerate() {
+        for (i, piece) in self.pieces.iter().enumerate() {
+            let Flight {
+                model,
+                observations,
+            } = &self.flights[piece.flight];
             let mut x = DVector::from_iterator(
                 self.states,
                 u.rows(p + i * self.states, self.states).iter().copied(),
             );
-            for k in first..=last {
-                if k > first {
-                    x = self.model.step(k - 1, x.as_slice(), theta.as_slice())?;
+            for k in piece.first..=piece.last {
+                if k > piece.first {
+                    x = model.step(k - 1, x.as_slice(), theta.as_slice())?;
                 }
-                let present = &self.observations.at[k];
+                let present = &observations.at[k];
                 if present.is_empty() {
                     continue;
                 }
-                let y = self
-                    .model
-                    .outputs(self.model.time(k), x.as_slice(), theta.as_slice())?;
+                let y = model.outputs(model.time(k), x.as_slice(), theta.as_slice())?;
                 for &(o, z) in present {
                     if !y[o].is_finite() {
                         return Err(Error::PieceDeparted {
                             piece: i,
-                            time: self.model.time(k),
+                            time: model.time(k),
                         });
                     }
                     measured[o].push(z);

@@ -157,7 +157,7 @@ impl Setup {
         let step = view.time(1) - view.time(0);
         let observations =
             Observations::from_record(record, outputs, view.time(0), step, view.len())?;
-        enough_data(method, &observations, free.len())?;
+        enough_data(method, &[&observations], free.len())?;
         let (measurement, floors, noise_notes) = measurement_noise(record, outputs, settings)?;
         let mut notes = vec![
             start_note,

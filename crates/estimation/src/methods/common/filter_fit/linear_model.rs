@@ -24,7 +24,8 @@ pub(crate) struct LinearFitOptions {
 /// Output error (no process noise) or filter error on a linear structure:
 /// the [`FilterErrorFit`] of its exact discrete model driven by the
 /// record's input channels, from the file's parameter values, the initial
-/// state the record's value of each state named like a channel (else 0).
+/// state the file's `initial_state`, else the record's value of each state
+/// named like a channel (else 0).
 /// `method` names the estimate.
 pub(crate) fn linear_fit(
     method: &str,
@@ -41,13 +42,20 @@ pub(crate) fn linear_fit(
         observations,
     } = linear_data(method, record, structure, options.step, options.window)?;
     let noisy = noisy_states_named(method, structure, options.process_noise.as_deref())?;
-    enough_data(method, &observations, free.len() + noisy.len())?;
+    enough_data(method, &[&observations], free.len() + noisy.len())?;
     let mut notes: Vec<String> = observations.note(step).into_iter().collect();
     notes.push("linear model, started from the model file's values".to_string());
     notes.push(format!(
         "{} (the model file's `interpolation`)",
         input_timing::note(&model.input_timing)
     ));
+    let biased = structure.started_through_a_bias();
+    if !biased.is_empty() {
+        notes.push(format!(
+            "the states {} start from their recorded channels, which carry their outputs' free biases: the estimates are biased by them; state the model's `initial_state`, or fit with oem, which estimates it",
+            biased.join(", ")
+        ));
+    }
     let theta = structure.parameter_values();
     let names = Names {
         parameters: free.iter().map(|&i| structure.names[i].clone()).collect(),
