@@ -107,14 +107,19 @@ fn linear_fits_follow_ramped_inputs_by_default() {
             "{method}"
         );
         // Noise-free, the augmented filters end unsettled (their
-        // innovations far below any noise they could weigh).
-        let converged = estimate.status == aeroid::estimation::estimate::Status::Converged;
+        // innovations far below any noise they could weigh), and filter
+        // error, on its exact sensitivities, lowers the likelihood from the
+        // truth by 3.5 % (the noise it estimates goes to zero) until no step
+        // lowers it: "no progress", at the truth all the same.
+        use aeroid::estimation::estimate::Status;
+        let converged = estimate.status == Status::Converged;
+        let stalled = method == "fem" && estimate.status == Status::NoProgress;
         assert!(
-            converged || ["ekf", "ukf"].contains(&method),
+            converged || stalled || ["ekf", "ukf"].contains(&method),
             "{method}: {}",
             estimate.status
         );
-        if converged {
+        if converged || stalled {
             let missed = misses(&estimate);
             assert!(missed.is_empty(), "{method}: {missed:#?}");
         }
