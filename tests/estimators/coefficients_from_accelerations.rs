@@ -20,26 +20,28 @@ use std::sync::OnceLock;
 /// a transport's CG).
 const ARM: [f64; 3] = [6.0, 1.5, -0.8];
 
+/// The bundled recorder profile `base` with its load factors measured at
+/// [`ARM`], written to a folder named after `test`.
+fn with_arm(test: &str, base: &str) -> aeroid::record::recorder::Profile {
+    let position = format!(
+        "position = [\"{} m\", \"{} m\", \"{} m\"]\n",
+        ARM[0], ARM[1], ARM[2]
+    );
+    common::profile_variant(&common::temp_folder(test), base, "", |name, table| {
+        Some(if ["nx", "ny", "nz"].contains(&name) {
+            format!("{}\n{position}", table.trim_end_matches('\n'))
+        } else {
+            table.to_string()
+        })
+    })
+}
+
 /// The ATTAS stall manoeuvre recorded by the ideal recorder (100 Hz, no
 /// error) with the load factors measured at [`ARM`], and the truth trace.
 fn ideal_stall() -> &'static (FlightRecord, TruthTrace, Scenario) {
     static RECORD: OnceLock<(FlightRecord, TruthTrace, Scenario)> = OnceLock::new();
     RECORD.get_or_init(|| {
-        let folder = common::temp_folder("coefficients_ideal");
-        let position = format!(
-            "position = [\"{} m\", \"{} m\", \"{} m\"]\n",
-            ARM[0], ARM[1], ARM[2]
-        );
-        let profile = common::profile_variant(&folder, "ideal", "", |name, table| {
-            Some(if ["nx", "ny", "nz"].contains(&name) {
-                format!(
-                    "{}{position}",
-                    table.trim_end_matches('\n').to_string() + "\n"
-                )
-            } else {
-                table.to_string()
-            })
-        });
+        let profile = with_arm("coefficients_ideal", "ideal");
         let scenario = Scenario::load("attas-stall").unwrap();
         let (record, trace) = common::fly_and_record(&scenario, &profile);
         (record, trace, scenario)
@@ -124,32 +126,14 @@ fn the_coefficients_are_the_simulators_with_the_accelerometers_carried_to_the_cg
     );
 }
 
-/// The stall model of `models/attas-stall.toml` with no state integrated
-/// (α, q, V and the controls fed in from the record, χ the one state) and
-/// the coefficients as its outputs — the book's way of fitting the
+/// The bundled example's stall model (`examples/stall-flight/`): the
+/// structure of `models/attas-stall.toml` with no state integrated (α, q,
+/// V and the controls fed in from the record, χ the one state) and the
+/// coefficients as its outputs — the book's way of fitting the
 /// quasi-steady stall model to flight data.
-fn coefficient_model(folder: &str) -> ModelStructure {
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/attas-stall.toml"),
-    )
-    .unwrap()
-    .replace(
-        "integrate = [\"airspeed\", \"alpha\", \"q\", \"pitch\"]",
-        "integrate = []",
-    )
-    .replace(
-        "outputs = [\"airspeed\", \"alpha\", \"q\", \"pitch\", \"nx\", \"nz\"]",
-        "outputs = [\"CD\", \"CL\", \"Cm\"]",
-    );
-    assert!(
-        text.contains("outputs = [\"CD\""),
-        "the bundled model changed"
-    );
-    let path = common::write(
-        &common::temp_folder(folder),
-        "stall-coefficients.toml",
-        &text,
-    );
+fn coefficient_model() -> ModelStructure {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/stall-flight/stall-coefficients.toml");
     ModelStructure::load(path.to_str().unwrap()).unwrap()
 }
 
@@ -168,7 +152,7 @@ fn the_stall_model_fitted_to_the_coefficients_recovers_the_truth() {
     )
     .unwrap()
     .add_to(&mut record, false);
-    let structure = coefficient_model("coefficients_fit");
+    let structure = coefficient_model();
     let problem = common::registry()
         .problem("oem", vec![record], structure, &[])
         .unwrap();
@@ -210,23 +194,9 @@ fn differentiated_rates_give_the_coefficients_within_the_differentiators_gain() 
 #[test]
 fn the_stall_model_fitted_to_noisy_coefficients_lies_within_its_bounds() {
     let scenario = &ideal_stall().2;
-    let folder = common::temp_folder("coefficients_noisy");
-    let position = format!(
-        "position = [\"{} m\", \"{} m\", \"{} m\"]\n",
-        ARM[0], ARM[1], ARM[2]
-    );
-    let profile = common::profile_variant(&folder, "flight-test-25hz", "", |name, table| {
-        Some(if ["nx", "ny", "nz"].contains(&name) {
-            format!(
-                "{}{position}",
-                table.trim_end_matches('\n').to_string() + "\n"
-            )
-        } else {
-            table.to_string()
-        })
-    });
+    let profile = with_arm("coefficients_noisy", "flight-test-25hz");
     let (trace, _) = aeroid::sim::fly(scenario).unwrap();
-    let structure = coefficient_model("coefficients_noisy_fit");
+    let structure = coefficient_model();
     let mut worst = (0.0, String::new());
     for seed in 0..8 {
         let mut record = profile.record(&trace, &scenario.aircraft, seed).unwrap();

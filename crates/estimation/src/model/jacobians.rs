@@ -4,8 +4,9 @@
 //! sensitivity equations integrate and an extended Kalman filter
 //! linearises). The models compute them ([`super::driven`],
 //! [`super::linear`], ...); [`super::state_space::StateSpaceModel`] hands
-//! them out.
+//! them out; the shape every sensitivity step checks is here too.
 
+use crate::error::{Error, Result};
 use nalgebra::DMatrix;
 
 /// The Jacobians of a state-space model at one point (t, x, θ).
@@ -32,4 +33,24 @@ impl Jacobians {
             outputs_by_parameter: DMatrix::zeros(0, 0),
         }
     }
+}
+
+/// An error unless `sensitivity` is n × (one column per unknown) and every
+/// unknown that is a parameter indexes one of `parameters`.
+pub(crate) fn check_sensitivity_shape(
+    sensitivity: &DMatrix<f64>,
+    n: usize,
+    columns: &[Option<usize>],
+    parameters: usize,
+) -> Result<()> {
+    let m = columns.len();
+    if sensitivity.shape() != (n, m) || columns.iter().flatten().any(|&p| p >= parameters) {
+        return Err(Error::Shape {
+            reason: format!(
+                "the sensitivities are {:?} for {n} states and {m} unknowns",
+                sensitivity.shape()
+            ),
+        });
+    }
+    Ok(())
 }

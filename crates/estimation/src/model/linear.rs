@@ -19,6 +19,7 @@
 //! checked against. The discrete matrices of the last θ are kept, so a
 //! pass over the grid computes them once.
 
+use super::jacobians::check_sensitivity_shape;
 use super::state_space::{Jacobians, StateSpaceModel};
 use super::state_space::{fitting_window, observation_step};
 use crate::error::{Error, Result};
@@ -522,15 +523,7 @@ impl StateSpaceModel for LinearStateSpace {
     ) -> Result<Option<DVector<f64>>> {
         let mut next = DVector::zeros(self.state_count());
         self.step_into(k, x, theta, &mut next)?;
-        let (n, m) = (self.state_count(), columns.len());
-        if sensitivity.shape() != (n, m) || columns.iter().flatten().any(|&p| p >= theta.len()) {
-            return Err(Error::Shape {
-                reason: format!(
-                    "the sensitivities are {:?} for {n} states and {m} unknowns",
-                    sensitivity.shape()
-                ),
-            });
-        }
+        check_sensitivity_shape(sensitivity, self.state_count(), columns, theta.len())?;
         self.propagate_sensitivity(k, x, theta, columns, sensitivity)?;
         Ok(Some(next))
     }

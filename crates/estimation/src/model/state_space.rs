@@ -867,14 +867,7 @@ impl StateSpaceModel for DrivenStateSpace {
     ) -> Result<Option<DVector<f64>>> {
         let next = self.step(k, x, theta)?;
         let (n, m) = (self.states.len(), columns.len());
-        if sensitivity.shape() != (n, m) || columns.iter().flatten().any(|&p| p >= theta.len()) {
-            return Err(Error::Shape {
-                reason: format!(
-                    "the sensitivities are {:?} for {n} states and {m} unknowns",
-                    sensitivity.shape()
-                ),
-            });
-        }
+        super::jacobians::check_sensitivity_shape(sensitivity, n, columns, theta.len())?;
         let simulation = &self.simulation;
         let h = simulation.step;
         let ends = (simulation.pseudo_rates(k), simulation.pseudo_rates(k + 1));
