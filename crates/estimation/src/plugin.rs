@@ -27,7 +27,7 @@
 //! other, finite values, non-negative standard errors, a square covariance
 //! of the parameters' size. A plug-in past its time limit is killed with its
 //! whole process group, and when a run ends every process it left running
-//! is ended, those that left the group too ([`processes`]); a non-zero exit, a crash, a missing or malformed
+//! is ended, those that left the group too (module `processes`); a non-zero exit, a crash, a missing or malformed
 //! result is an error naming the plug-in and the reason, with the end of
 //! its stderr — in a study a counted failure, never an abort. The work
 //! folder is removed afterwards.

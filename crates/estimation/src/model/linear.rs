@@ -512,7 +512,7 @@ impl StateSpaceModel for LinearStateSpace {
         Ok(())
     }
 
-    /// The exact step with its exact sensitivities ([`sensitivity`]).
+    /// The exact step with its exact sensitivities (module `sensitivity`).
     fn step_sensitivity(
         &self,
         k: usize,

@@ -290,7 +290,7 @@ pub(crate) fn mode_eigenvalues(
 }
 
 /// An error when the fastest mode |λ| = `fastest` is beyond what RK4
-/// steps of `period`/`substeps` integrate (h·|λ| above [`RK4_STEP_REACH`]),
+/// steps of `period`/`substeps` integrate (h·|λ| above `RK4_STEP_REACH`),
 /// saying so when the steps are already the finest a fit takes.
 pub fn check_step_reach(period: f64, substeps: usize, fastest: f64) -> Result<()> {
     let step = period / substeps as f64;
