@@ -641,18 +641,9 @@ impl serde_json::ser::Formatter for Layout {
 /// test checks it); a channel's times equal to the channel's before are
 /// copied as text.
 fn write_records(records: &[FlightRecord], depth: usize, out: &mut Vec<u8>) {
-    use json_text::{key, newline, string};
+    use json_text::{array, key, newline, string};
     let mut digits = zmij::Buffer::new();
-    if records.is_empty() {
-        out.extend_from_slice(b"[]");
-        return;
-    }
-    out.push(b'[');
-    for (r, record) in records.iter().enumerate() {
-        if r > 0 {
-            out.push(b',');
-        }
-        newline(out, depth + 1);
+    array(out, depth, records, |out, record| {
         out.push(b'{');
         let inner = depth + 2;
         key(out, inner, true, "scenario");
@@ -665,27 +656,12 @@ fn write_records(records: &[FlightRecord], depth: usize, out: &mut Vec<u8>) {
         key(out, inner, false, "profile");
         string(out, &record.profile);
         key(out, inner, false, "absent");
-        if record.absent.is_empty() {
-            out.extend_from_slice(b"[]");
-        } else {
-            out.push(b'[');
-            for (k, name) in record.absent.iter().enumerate() {
-                if k > 0 {
-                    out.push(b',');
-                }
-                newline(out, inner + 1);
-                string(out, name);
-            }
-            newline(out, inner);
-            out.push(b']');
-        }
+        array(out, inner, &record.absent, |out, name| string(out, name));
         key(out, inner, false, "channels");
         write_channels(&record.channels, inner, out, &mut digits);
         newline(out, depth + 1);
         out.push(b'}');
-    }
-    newline(out, depth);
-    out.push(b']');
+    });
 }
 
 /// A record's `channels` as a JSON array, `inner` levels in (the
@@ -696,51 +672,40 @@ fn write_channels(
     out: &mut Vec<u8>,
     digits: &mut zmij::Buffer,
 ) {
-    use json_text::{key, newline, number, numbers, string};
-    if channels.is_empty() {
-        out.extend_from_slice(b"[]");
-    } else {
-        out.push(b'[');
-        let mut times: Option<(&[f64], std::ops::Range<usize>)> = None;
-        for (c, channel) in channels.iter().enumerate() {
-            if c > 0 {
-                out.push(b',');
-            }
-            newline(out, inner + 1);
-            out.push(b'{');
-            let fields = inner + 2;
-            key(out, fields, true, "name");
-            string(out, &channel.name);
-            key(out, fields, false, "unit");
-            string(out, &channel.unit);
-            key(out, fields, false, "rate");
-            number(out, digits, channel.rate);
-            key(out, fields, false, "resolution");
-            match channel.resolution {
-                Some(resolution) => number(out, digits, resolution),
-                None => out.extend_from_slice(b"null"),
-            }
-            key(out, fields, false, "source");
-            string(out, &channel.source);
-            key(out, fields, false, "times");
-            match &times {
-                Some((previous, text)) if *previous == channel.times.as_slice() => {
-                    out.extend_from_within(text.clone());
-                }
-                _ => {
-                    let start = out.len();
-                    numbers(out, digits, &channel.times);
-                    times = Some((&channel.times, start..out.len()));
-                }
-            }
-            key(out, fields, false, "values");
-            numbers(out, digits, &channel.values);
-            newline(out, inner + 1);
-            out.push(b'}');
+    use json_text::{array, key, newline, number, numbers, string};
+    let mut times: Option<(&[f64], std::ops::Range<usize>)> = None;
+    array(out, inner, channels, |out, channel| {
+        out.push(b'{');
+        let fields = inner + 2;
+        key(out, fields, true, "name");
+        string(out, &channel.name);
+        key(out, fields, false, "unit");
+        string(out, &channel.unit);
+        key(out, fields, false, "rate");
+        number(out, digits, channel.rate);
+        key(out, fields, false, "resolution");
+        match channel.resolution {
+            Some(resolution) => number(out, digits, resolution),
+            None => out.extend_from_slice(b"null"),
         }
-        newline(out, inner);
-        out.push(b']');
-    }
+        key(out, fields, false, "source");
+        string(out, &channel.source);
+        key(out, fields, false, "times");
+        match &times {
+            Some((previous, text)) if *previous == channel.times.as_slice() => {
+                out.extend_from_within(text.clone());
+            }
+            _ => {
+                let start = out.len();
+                numbers(out, digits, &channel.times);
+                times = Some((&channel.times, start..out.len()));
+            }
+        }
+        key(out, fields, false, "values");
+        numbers(out, digits, &channel.values);
+        newline(out, inner + 1);
+        out.push(b'}');
+    });
 }
 
 /// The pieces of the JSON [`write_records`] writes by hand.
@@ -768,6 +733,30 @@ mod json_text {
         } else {
             out.extend_from_slice(b"null");
         }
+    }
+
+    /// `items` as a JSON array `depth` levels in, each on a line of its own
+    /// one level further in, written by `item`; `[]` when empty.
+    pub(super) fn array<'a, T>(
+        out: &mut Vec<u8>,
+        depth: usize,
+        items: &'a [T],
+        mut item: impl FnMut(&mut Vec<u8>, &'a T),
+    ) {
+        if items.is_empty() {
+            out.extend_from_slice(b"[]");
+            return;
+        }
+        out.push(b'[');
+        for (i, each) in items.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            newline(out, depth + 1);
+            item(out, each);
+        }
+        newline(out, depth);
+        out.push(b']');
     }
 
     /// `values` as a JSON array on one line.
