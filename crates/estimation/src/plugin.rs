@@ -306,7 +306,7 @@ impl Plugin {
             _ => None,
         };
         let outcome = self.execute(&work.path, sandbox);
-        let left = processes::end_run(&work.run());
+        let left = processes::end_run(&run_of(&work.path));
         let outcome = outcome?;
         let left_note = (left > 0).then(|| {
             format!("{left} process(es) the plug-in left running (outside its process group) ended")
@@ -362,7 +362,7 @@ impl Plugin {
             estimate.notes.push(format!("plug-in stderr: {stderr}"));
         }
         estimate.notes.extend(unsandboxed);
-        estimate.notes.extend(left_note.clone());
+        estimate.notes.extend(left_note);
         estimate.wall_time = started.elapsed().as_secs_f64();
         Ok(estimate)
     }
@@ -685,13 +685,6 @@ impl WorkFolder {
         ));
         std::fs::create_dir_all(&path).map_err(|e| write_error(&path, e))?;
         Ok(WorkFolder { path })
-    }
-}
-
-impl WorkFolder {
-    /// The run's name (the work folder's), which marks its processes.
-    fn run(&self) -> String {
-        run_of(&self.path)
     }
 }
 

@@ -346,7 +346,7 @@ impl LinearStateSpace {
         if let Some(discrete) = self.cache.get(theta) {
             return Ok(discrete);
         }
-        let matrices = self.at(theta)?;
+        let matrices = self.matrices(theta)?;
         let (n, m) = matrices.b.shape();
         let mut driven = DMatrix::zeros(n, m + 1);
         driven.view_mut((0, 0), (n, m)).copy_from(&matrices.b);

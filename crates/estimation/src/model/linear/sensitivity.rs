@@ -44,7 +44,7 @@ impl LinearStateSpace {
         if let Some(cached) = self.derivatives.get(theta) {
             return Ok(cached);
         }
-        let matrices = self.at(theta)?;
+        let matrices = self.matrices(theta)?;
         let (n, m) = matrices.b.shape();
         let ramp = self
             .holds
