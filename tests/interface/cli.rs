@@ -5,12 +5,12 @@ use crate::common;
 use std::io::Read;
 use std::process::{Command, Stdio};
 
-fn aeroid() -> Command {
+pub(crate) fn aeroid() -> Command {
     Command::new(env!("CARGO_BIN_EXE_aeroid"))
 }
 
 /// The output of a command that must succeed.
-fn stdout_of(command: &mut Command) -> String {
+pub(crate) fn stdout_of(command: &mut Command) -> String {
     let output = command.output().unwrap();
     assert!(
         output.status.success(),

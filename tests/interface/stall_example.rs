@@ -6,32 +6,19 @@
 //! (`examples/stall-flight/`), the aerodynamic coefficients computed from
 //! the accelerations, and the stall model fitted to them.
 
+use crate::cli::stdout_of;
 use crate::common;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 const FOOT: f64 = 0.3048;
 const G0: f64 = 9.80665;
 
-fn aeroid(args: &[&str], paths: &[&Path]) -> String {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_aeroid"));
+/// aeroid run from the project's folder (where the example's files are).
+fn aeroid() -> std::process::Command {
+    let mut command = crate::cli::aeroid();
     command.current_dir(env!("CARGO_MANIFEST_DIR"));
-    // Arguments: `args` with each "{}" replaced by the next path.
-    let mut paths = paths.iter();
-    for arg in args {
-        match *arg {
-            "{}" => command.arg(paths.next().unwrap()),
-            arg => command.arg(arg),
-        };
-    }
-    let output = command.output().unwrap();
-    assert!(
-        output.status.success(),
-        "aeroid {args:?}: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    String::from_utf8(output.stdout).unwrap()
+    command
 }
 
 /// The record as a whitespace ASCII file with a header row in the
@@ -105,18 +92,18 @@ fn the_stall_example_goes_from_the_files_to_the_fitted_model() {
     let folder = common::temp_folder("stall_example");
     let path = |name: &str| -> PathBuf { folder.join(name) };
     let (flight, mat, ascii) = (path("stall"), path("stall.mat"), path("stall.asc"));
-    aeroid(
-        &[
-            "record",
-            "attas-stall",
-            "--profile",
-            "flight-test-25hz",
-            "--out",
-            "{}",
-        ],
-        &[&flight],
+    stdout_of(
+        aeroid()
+            .args([
+                "record",
+                "attas-stall",
+                "--profile",
+                "flight-test-25hz",
+                "--out",
+            ])
+            .arg(&flight),
     );
-    aeroid(&["export", "{}", "--out", "{}"], &[&flight, &mat]);
+    stdout_of(aeroid().arg("export").arg(&flight).arg("--out").arg(&mat));
     let record = aeroid::record::FlightRecord::read(&flight).unwrap();
     std::fs::write(&ascii, textbook_ascii(&record)).unwrap();
     let mut fits = Vec::new();
@@ -128,33 +115,41 @@ fn the_stall_example_goes_from_the_files_to_the_fitted_model() {
             path(&format!("{name}-coefficients")),
             path(&format!("{name}-fit")),
         );
-        aeroid(
-            &["import", "{}", "--map", "{}", "--out", "{}"],
-            &[file, &map, &imported],
+        stdout_of(
+            aeroid()
+                .arg("import")
+                .arg(file)
+                .arg("--map")
+                .arg(&map)
+                .arg("--out")
+                .arg(&imported),
         );
-        let derived = aeroid(
-            &[
-                "derive",
-                "{}",
-                "--out",
-                "{}",
-                "--no-flow-angles",
-                "--no-rates",
-                "--coefficients",
-                "attas-stall",
-            ],
-            &[&imported, &coefficients],
+        let derived = stdout_of(
+            aeroid()
+                .arg("derive")
+                .arg(&imported)
+                .arg("--out")
+                .arg(&coefficients)
+                .args([
+                    "--no-flow-angles",
+                    "--no-rates",
+                    "--coefficients",
+                    "attas-stall",
+                ]),
         );
         assert!(
             derived.contains("CX, CY, CZ, CL, CD, Cl, Cm, Cn"),
             "{derived}"
         );
         let model = Path::new("examples/stall-flight/stall-coefficients.toml");
-        let printed = aeroid(
-            &[
-                "estimate", "{}", "--model", "{}", "--method", "oem", "--out", "{}",
-            ],
-            &[&coefficients, model, &fitted],
+        let printed = stdout_of(
+            aeroid()
+                .arg("estimate")
+                .arg(&coefficients)
+                .arg("--model")
+                .arg(model)
+                .args(["--method", "oem", "--out"])
+                .arg(&fitted),
         );
         assert!(
             printed.contains("Converged") || printed.contains("converged"),
